@@ -1,0 +1,348 @@
+"""The staged pipeline with a cache per stage, and its Result.
+
+| stage    | depends on                          | output                                   |
+|----------|-------------------------------------|------------------------------------------|
+| frame    | the leaf                            | PCA frame, 2D polygon, 2D veins, heights |
+| implicit | frame, mpu_tolerance                | the MPU implicit g                       |
+| grid     | frame, grid                         | the regular grid                         |
+| guide    | implicit, grid                      | g and p(x) on the grid                   |
+| gmm      | guide, k, samples, seed             | the EM mixture                           |
+| surface  | gmm, taper, refine                         | amplitudes, z on the kept grid nodes     |
+| mesh     | surface, mesher, radius_factor      | the triangle mesh in world coordinates   |
+
+A stage reruns only when a value it depends on changed, so moving K reruns gmm, surface and mesh.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+import pyvista as pv
+
+from leafstudio.core import analysis, mesher
+from leafstudio.core.gmm import Mixture, fit_mixture, sample_guide
+from leafstudio.core.grid import Grid, make_grid
+from leafstudio.core.height import height_guide
+from leafstudio.core.mpu import MPUImplicit, build_mpu
+from leafstudio.core.outline import contains, distinct_indices, leaf_polygon, outward_normals
+from leafstudio.core.plane import Frame, fit_frame
+from leafstudio.core.surface import HeightSurface, fit_surface
+from leafstudio.errors import LeafError
+from leafstudio.model import Leaf, Params
+
+STAGES = ("frame", "implicit", "grid", "guide", "gmm", "surface", "mesh")
+STAGE_KEYS: dict[str, tuple[str, ...]] = {
+    "frame": (),
+    "implicit": ("mpu_tolerance",),
+    "grid": ("grid",),
+    "guide": ("mpu_tolerance", "grid"),
+    "gmm": ("mpu_tolerance", "grid", "k", "samples", "seed"),
+    "surface": ("mpu_tolerance", "grid", "k", "samples", "seed", "taper", "refine"),
+    "mesh": (
+        "mpu_tolerance",
+        "grid",
+        "k",
+        "samples",
+        "seed",
+        "taper",
+        "refine",
+        "mesher",
+        "radius_factor",
+    ),
+}
+VEIN_OUTSIDE_TOLERANCE = 0.01  # vein points may stray this fraction of the leaf length outside
+
+
+class Cancelled(Exception):
+    """Raised inside `Pipeline.run` when its `should_stop` callback says so."""
+
+
+@dataclass(frozen=True)
+class FrameStage:
+    """Step 1 output: the plane frame and everything projected onto it."""
+
+    frame: Frame
+    polygon: np.ndarray  # (b, 2) counter-clockwise leaf outline
+    veins: list[np.ndarray]  # (m_i, 2) per vein
+    heights: list[np.ndarray]  # (m_i,) signed heights per vein
+    length: float  # leaf length along its main axis
+
+    @property
+    def vein_xy(self) -> np.ndarray:
+        return np.vstack(self.veins) if self.veins else np.zeros((0, 2))
+
+    @property
+    def vein_h(self) -> np.ndarray:
+        return np.concatenate(self.heights) if self.heights else np.zeros(0)
+
+
+@dataclass(frozen=True)
+class GuideStage:
+    """g and p on the grid; `inside` marks the nodes kept (g >= 0)."""
+
+    g: np.ndarray
+    p: np.ndarray
+    inside: np.ndarray
+
+
+@dataclass(frozen=True)
+class SurfaceStage:
+    """The fitted height surface and its values on the kept grid nodes."""
+
+    surface: HeightSurface
+    z: np.ndarray
+
+
+@dataclass
+class Result:
+    """Everything one run produced; the mesh is in the input's (world) coordinates."""
+
+    leaf: Leaf
+    params: Params
+    frame: Frame
+    polygon: np.ndarray
+    grid: Grid
+    g_grid: np.ndarray  # (ny * nx,) g at every grid node
+    p_grid: np.ndarray  # (ny * nx,) the probability map, 0 outside
+    inside: np.ndarray  # (ny * nx,) bool, g >= 0
+    em_samples: np.ndarray  # (s, 2) points drawn from p for EM
+    surface: HeightSurface
+    surface_points: np.ndarray  # (n, 3) the GMM samples: kept grid nodes lifted, world coords
+    mesh: pv.PolyData
+    length: float
+    timings: dict[str, float] = field(default_factory=dict)
+    ran: tuple[str, ...] = ()
+    warnings: list[str] = field(default_factory=list)
+
+    def height(self, xy: np.ndarray) -> np.ndarray:
+        """z of the surface at (n, 2) plane points (differentiable; see surface.py)."""
+        return self.surface(np.atleast_2d(np.asarray(xy, dtype=float)))
+
+    @cached_property
+    def metrics(self) -> dict[str, Any]:
+        """The paper's Table 1 distances and the mesh's facts (see analysis.table_metrics)."""
+        return analysis.table_metrics(self.mesh, self.leaf)
+
+
+def _frame_stage(leaf: Leaf) -> tuple[FrameStage, list[str]]:
+    notes: list[str] = []
+    frame = fit_frame(leaf.boundary, leaf.vein_points)
+    xy, _ = frame.to_plane(leaf.boundary)
+    polygon = leaf_polygon(xy)
+    length = float(np.ptp(polygon[:, 0]))
+    veins, heights = [], []
+    for i, vein in enumerate(leaf.veins):
+        v_xy, v_h = frame.to_plane(vein)
+        keep = distinct_indices(v_xy, length)
+        v_xy = v_xy[keep]
+        outside = ~contains(polygon, v_xy)
+        if outside.any():
+            from shapely import LinearRing, distance, points
+
+            gap = distance(LinearRing(polygon), points(v_xy[outside])).max()
+            if gap > VEIN_OUTSIDE_TOLERANCE * length:
+                raise LeafError(
+                    f"vein {i + 1}: {outside.sum()} of {len(v_xy)} points lie outside the "
+                    f"boundary (up to {gap / length:.1%} of the leaf length)"
+                )
+        veins.append(v_xy)
+        heights.append(v_h[keep])
+    if not veins:
+        notes.append("no veins given: the leaf is flat")
+    elif all(np.allclose(h, 0, atol=1e-9 * length) for h in heights):
+        notes.append("all veins lie in the boundary's plane: the leaf is flat")
+    stage = FrameStage(frame=frame, polygon=polygon, veins=veins, heights=heights, length=length)
+    return stage, notes
+
+
+def _flat_mixture(center: np.ndarray) -> Mixture:
+    """A mixture of amplitude zero: the surface of a leaf without relief."""
+    return Mixture(
+        weights=np.ones(1),
+        means=center[None].copy(),
+        covariances=np.eye(2)[None].copy(),
+        amplitudes=np.zeros(1),
+    )
+
+
+class Pipeline:
+    """The staged reconstruction of one leaf, caching each stage's last output.
+
+    Examples
+    --------
+    >>> import leafstudio as ls
+    >>> pipe = ls.Pipeline(ls.demo("nested"))
+    >>> r1 = pipe.run(ls.Params(k=3, grid=64))
+    >>> r2 = pipe.run(ls.Params(k=4, grid=64))
+    >>> r2.ran
+    ('gmm', 'surface', 'mesh')
+    """
+
+    def __init__(self, leaf: Leaf) -> None:
+        self.leaf = leaf
+        self._cache: dict[str, tuple[tuple[Any, ...], Any]] = {}
+
+    def run(
+        self,
+        params: Params,
+        on_stage: Callable[[str], None] | None = None,
+        should_stop: Callable[[], bool] | None = None,
+    ) -> Result:
+        """Run the stages whose inputs changed since the last run and return the Result.
+
+        Parameters
+        ----------
+        params : Params
+        on_stage : callable, optional
+            Called with a stage's name just before it runs.
+        should_stop : callable, optional
+            Polled between stages; when it returns True the run raises Cancelled.
+        """
+        timings: dict[str, float] = {}
+        ran: list[str] = []
+
+        def stage(name: str, compute: Callable[[], Any]) -> Any:
+            key = tuple(getattr(params, k) for k in STAGE_KEYS[name])
+            cached = self._cache.get(name)
+            if cached is not None and cached[0] == key:
+                return cached[1]
+            if should_stop is not None and should_stop():
+                raise Cancelled
+            if on_stage is not None:
+                on_stage(name)
+            start = time.perf_counter()
+            value = compute()
+            timings[name] = time.perf_counter() - start
+            ran.append(name)
+            self._cache[name] = (key, value)
+            return value
+
+        fs, notes = stage("frame", lambda: _frame_stage(self.leaf))
+        tol = params.mpu_tolerance * fs.length
+        implicit: MPUImplicit = stage(
+            "implicit",
+            lambda: build_mpu(
+                fs.polygon, outward_normals(fs.polygon), tol, lambda q: contains(fs.polygon, q)
+            ),
+        )
+        grid: Grid = stage("grid", lambda: make_grid(fs.polygon, params.grid))
+        guide: GuideStage = stage("guide", lambda: _guide_stage(fs, implicit, grid))
+        flat = not fs.veins or not np.any(np.abs(fs.vein_h) > 1e-9 * fs.length)
+        nodes = grid.points[guide.inside]
+        samples, mixture = stage("gmm", lambda: _gmm_stage(fs, guide, grid, nodes, params, flat))
+        surf: SurfaceStage = stage(
+            "surface", lambda: _surface_stage(fs, implicit, guide, nodes, mixture, params)
+        )
+        mesh: pv.PolyData = stage(
+            "mesh", lambda: _mesh_stage(fs, implicit, grid, guide, surf, params)
+        )
+        return Result(
+            leaf=self.leaf,
+            params=params,
+            frame=fs.frame,
+            polygon=fs.polygon,
+            grid=grid,
+            g_grid=guide.g,
+            p_grid=guide.p,
+            inside=guide.inside,
+            em_samples=samples,
+            surface=surf.surface,
+            surface_points=fs.frame.to_world(nodes, surf.z),
+            mesh=mesh,
+            length=fs.length,
+            timings=timings,
+            ran=tuple(ran),
+            warnings=list(notes),
+        )
+
+
+def _guide_stage(fs: FrameStage, implicit: MPUImplicit, grid: Grid) -> GuideStage:
+    nodes = grid.points
+    g = implicit(nodes)
+    inside = g >= 0
+    p = np.zeros(len(nodes))
+    p[inside] = height_guide(nodes[inside], fs.polygon, fs.veins, fs.heights)
+    return GuideStage(g=g, p=p, inside=inside)
+
+
+def _gmm_stage(
+    fs: FrameStage, guide: GuideStage, grid: Grid, nodes: np.ndarray, params: Params, flat: bool
+) -> tuple[np.ndarray, Mixture]:
+    if flat:
+        return np.zeros((0, 2)), _flat_mixture(fs.polygon.mean(axis=0))
+    p_in = guide.p[guide.inside]
+    samples = sample_guide(nodes, p_in, params.samples, grid.spacing, params.seed)
+    return samples, fit_mixture(samples, params.k, params.seed)
+
+
+def _surface_stage(
+    fs: FrameStage,
+    implicit: MPUImplicit,
+    guide: GuideStage,
+    nodes: np.ndarray,
+    mixture: Mixture,
+    params: Params,
+) -> SurfaceStage:
+    g_in = guide.g[guide.inside]
+    surface = fit_surface(
+        mixture,
+        implicit,
+        nodes,
+        g_in,
+        guide.p[guide.inside],
+        fs.vein_xy,
+        fs.vein_h,
+        params.taper,
+        params.refine,
+        params.seed,
+    )
+    return SurfaceStage(surface=surface, z=surface(nodes, g_in))
+
+
+def _mesh_stage(
+    fs: FrameStage,
+    implicit: MPUImplicit,
+    grid: Grid,
+    guide: GuideStage,
+    surf: SurfaceStage,
+    params: Params,
+) -> pv.PolyData:
+    nodes = grid.points[guide.inside]
+    n_outline = len(fs.polygon)
+    if params.mesher == "conforming":
+        keep = mesher.inner_nodes(fs.polygon, nodes, grid.spacing)
+        keep &= contains(fs.polygon, nodes)
+        xy, triangles = mesher.conforming_mesh(fs.polygon, nodes[keep])
+        z = surf.surface(xy)
+        z[:n_outline] = 0.0  # the margin lies in the plane (eq. 3: the boundary's height is 0)
+    else:
+        xy = np.vstack([fs.polygon, nodes])
+        z = np.concatenate([np.zeros(n_outline), surf.z])
+        grad = surf.surface.gradient(xy)
+        normals = fs.frame.to_world(-grad, np.ones(len(xy))) - fs.frame.origin
+        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+        world = fs.frame.to_world(xy, z)
+        triangles = mesher.ball_pivoting(world, normals, grid.spacing, params.radius_factor)
+    world = fs.frame.to_world(xy, z)
+    faces = np.column_stack([np.full(len(triangles), 3), triangles]).ravel()
+    mesh = pv.PolyData(world, faces=faces)
+    mesh.point_data["height"] = z
+    return mesh
+
+
+def reconstruct(leaf: Leaf, params: Params | None = None) -> Result:
+    """Reconstruct a leaf's surface in one call (a fresh Pipeline).
+
+    Warnings (such as a leaf without veins being flat) are issued with `warnings.warn` and kept in
+    `Result.warnings`.
+    """
+    result = Pipeline(leaf).run(params or Params())
+    for note in result.warnings:
+        warnings.warn(note, stacklevel=2)
+    return result

@@ -1,0 +1,80 @@
+"""Step 1: the PCA plane of the boundary, the 2D frame on it, and signed vein heights (eq. 3)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from leafstudio.errors import LeafError
+
+
+@dataclass(frozen=True)
+class Frame:
+    """An orthonormal frame on the boundary's PCA plane.
+
+    Attributes
+    ----------
+    origin : (3,) float array
+        Mean of the boundary points; the plane passes through it.
+    u, v : (3,) float arrays
+        In-plane axes: u along the leaf's length (largest variance), v across it.
+    normal : (3,) float array
+        Plane normal, oriented so that the veins' mean height is positive.
+    """
+
+    origin: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    normal: np.ndarray
+
+    def to_plane(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Project (n, 3) points: their (n, 2) plane coordinates and (n,) signed heights (eq. 3)."""
+        rel = np.asarray(points, dtype=float) - self.origin
+        return np.column_stack([rel @ self.u, rel @ self.v]), rel @ self.normal
+
+    def to_world(self, xy: np.ndarray, z: np.ndarray) -> np.ndarray:
+        """Map plane coordinates (n, 2) and heights (n,) back to (n, 3) world points."""
+        xy = np.asarray(xy, dtype=float)
+        return (
+            self.origin
+            + np.outer(xy[:, 0], self.u)
+            + np.outer(xy[:, 1], self.v)
+            + np.outer(z, self.normal)
+        )
+
+
+def fit_frame(boundary: np.ndarray, vein_points: np.ndarray) -> Frame:
+    """PCA plane of the boundary points (paper, step 1), normal oriented toward the veins.
+
+    Parameters
+    ----------
+    boundary : (n, 3) float array
+    vein_points : (m, 3) float array
+        May be empty; then the normal points along the world axis it is closest to, positively.
+
+    Raises
+    ------
+    LeafError
+        If there are fewer than 3 distinct boundary points, or they lie on one line.
+    """
+    distinct = np.unique(np.round(boundary, 12), axis=0)
+    if len(distinct) < 3:
+        raise LeafError(f"the boundary needs at least 3 distinct points, got {len(distinct)}")
+    origin = boundary.mean(axis=0)
+    _, sing, vt = np.linalg.svd(boundary - origin, full_matrices=False)
+    if sing[0] <= 0 or sing[1] <= 1e-6 * sing[0]:
+        raise LeafError("the boundary points lie on one line (or one point): no leaf plane")
+    u, normal = vt[0], vt[2]
+    if len(vein_points):
+        side = float(np.mean((vein_points - origin) @ normal))
+    else:
+        side = float(normal[np.argmax(np.abs(normal))])
+    if side < 0:
+        normal = -normal
+    # A deterministic in-plane direction: u points toward the boundary's farther extreme.
+    along = (boundary - origin) @ u
+    if along.max() < -along.min():
+        u = -u
+    v = np.cross(normal, u)
+    return Frame(origin=origin, u=u, v=v, normal=normal)

@@ -1,0 +1,188 @@
+"""The leaf's height surface z(x): the scaled GMM, tapered so that it vanishes on the margin.
+
+A Gaussian mixture never reaches zero, so on its own it cannot pass through the boundary. We
+multiply it by a smooth taper of the implicit g:
+
+    z(x) = T(g(x) / δ) · Σ_k a_k N(x | μ_k, Σ_k),     T(s) = tanh(s) for s >= 0
+
+T(0) = 0, so z = 0 exactly where g = 0 (the margin, which lies at height 0 in the plane); T rises
+with slope 1 and levels off at 1 deep inside, so the GMM's shape is kept there. g is C1 (MPU's
+B-spline weights) and tanh is smooth, so z is C1 everywhere inside and smooth wherever g is C2
+(everywhere except on the circles where a cell's support ends). δ is a fraction `taper` of the
+leaf's inscribed radius (max g). The amplitudes a_k are fitted by least squares to p(x) over the
+inside grid nodes, with the vein points as extra rows so that the surface follows the veins.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from leafstudio.core.gmm import Mixture
+from leafstudio.core.mpu import MPUImplicit
+
+VEIN_WEIGHT = 10.0  # the vein rows together weigh this much relative to all grid rows
+RIDGE = 1e-10
+REFINE_ROWS = 1500  # grid nodes drawn for the refinement (all vein points are used)
+REFINE_STEPS = 200
+
+
+@dataclass(frozen=True)
+class HeightSurface:
+    """z(x) = T(g(x)/δ) Σ a_k N_k(x); see the module docstring."""
+
+    mixture: Mixture
+    implicit: MPUImplicit
+    delta: float
+
+    def taper(self, g: np.ndarray) -> np.ndarray:
+        """T(g / δ), zero outside the leaf."""
+        return np.tanh(np.maximum(g, 0.0) / self.delta)
+
+    def __call__(self, xy: np.ndarray, g: np.ndarray | None = None) -> np.ndarray:
+        """z at (n, 2) plane points; pass `g` if it is already known there."""
+        g = self.implicit(xy) if g is None else g
+        return self.taper(g) * self.mixture.value(xy)
+
+    def gradient(self, xy: np.ndarray) -> np.ndarray:
+        """(n, 2) ∇z = T'(g/δ) ∇g M / δ + T ∇M, in closed form."""
+        g, grad_g = self.implicit.evaluate(xy, gradient=True)
+        m, grad_m, _ = self.mixture.derivatives(xy)
+        t = self.taper(g)
+        slope = np.where(g > 0, 1 - t**2, 0.0) / self.delta
+        return (slope * m)[:, None] * grad_g + t[:, None] * grad_m
+
+
+def _least_squares_rows(
+    surface: HeightSurface,
+    inside_xy: np.ndarray,
+    inside_g: np.ndarray,
+    inside_p: np.ndarray,
+    vein_xy: np.ndarray,
+    vein_h: np.ndarray,
+    max_rows: int | None,
+    seed: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Points, row weights and targets of the fit: grid nodes (p) and vein points (h_v)."""
+    if max_rows is not None and len(inside_xy) > max_rows:
+        pick = np.random.default_rng(seed).choice(len(inside_xy), max_rows, replace=False)
+        inside_xy, inside_g, inside_p = inside_xy[pick], inside_g[pick], inside_p[pick]
+    taper = surface.taper(inside_g)
+    xy, weight, target = inside_xy, np.ones(len(inside_xy)), inside_p
+    if len(vein_xy):
+        scale = np.sqrt(VEIN_WEIGHT * len(inside_xy) / len(vein_xy))
+        xy = np.vstack([xy, vein_xy])
+        weight = np.concatenate([weight, np.full(len(vein_xy), scale)])
+        target = np.concatenate([target, vein_h])
+        taper = np.concatenate([taper, surface.taper(surface.implicit(vein_xy))])
+    return xy, weight * taper, weight * target
+
+
+def _fit_amplitudes(mixture: Mixture, xy: np.ndarray, row_scale: np.ndarray, target: np.ndarray):
+    """Linear least squares for a_k (rows already weighted and tapered)."""
+    rows = row_scale[:, None] * mixture.components(xy)
+    gram = rows.T @ rows
+    gram[np.diag_indices_from(gram)] += RIDGE * np.trace(gram) + 1e-300
+    return np.linalg.solve(gram, rows.T @ target)
+
+
+def _pack(mixture: Mixture) -> np.ndarray:
+    """Mixture -> parameter vector: per component a, μx, μy, log r11, r21, log r22, with the
+    precision Σ⁻¹ = R Rᵀ and R lower triangular (so Σ stays positive definite)."""
+    r = np.linalg.cholesky(mixture.precisions)
+    return np.column_stack(
+        [mixture.amplitudes, mixture.means, np.log(r[:, 0, 0]), r[:, 1, 0], np.log(r[:, 1, 1])]
+    ).ravel()
+
+
+def _unpack(theta: np.ndarray, weights: np.ndarray) -> Mixture:
+    t = theta.reshape(-1, 6)
+    r = np.zeros((len(t), 2, 2))
+    r[:, 0, 0], r[:, 1, 0], r[:, 1, 1] = np.exp(t[:, 3]), t[:, 4], np.exp(t[:, 5])
+    covariances = np.linalg.inv(r @ r.transpose(0, 2, 1))
+    return Mixture(weights, t[:, 1:3].copy(), covariances, t[:, 0].copy())
+
+
+def _refine(mixture: Mixture, xy: np.ndarray, row_scale: np.ndarray, target: np.ndarray) -> Mixture:
+    """Gauss-Newton (Levenberg-Marquardt) on all of a_k, μ_k, Σ_k so that z follows the targets,
+    started from EM's mixture; closed-form Jacobian."""
+
+    def parts(theta: np.ndarray):
+        t = theta.reshape(-1, 6)
+        d = xy[:, None, :] - t[None, :, 1:3]
+        r11, r21, r22 = np.exp(t[:, 3]), t[:, 4], np.exp(t[:, 5])
+        e1 = r11 * d[..., 0] + r21 * d[..., 1]
+        e2 = r22 * d[..., 1]
+        dens = (r11 * r22 / (2 * np.pi)) * np.exp(-0.5 * (e1**2 + e2**2))
+        return t, d, r11, r21, r22, e1, e2, dens
+
+    def residual(theta: np.ndarray) -> np.ndarray:
+        t, *_, dens = parts(theta)
+        return row_scale * (dens @ t[:, 0]) - target
+
+    def jacobian(theta: np.ndarray) -> np.ndarray:
+        t, d, r11, r21, r22, e1, e2, dens = parts(theta)
+        scaled = row_scale[:, None] * dens * t[None, :, 0]  # ∂z/∂log N per component
+        jac = np.empty((len(xy), len(t), 6))
+        jac[..., 0] = row_scale[:, None] * dens
+        jac[..., 1] = scaled * (r11 * e1)
+        jac[..., 2] = scaled * (r21 * e1 + r22 * e2)
+        jac[..., 3] = scaled * (1 - e1 * r11 * d[..., 0])
+        jac[..., 4] = scaled * (-e1 * d[..., 1])
+        jac[..., 5] = scaled * (1 - e2 * r22 * d[..., 1])
+        return jac.reshape(len(xy), -1)
+
+    start = _pack(mixture)
+    solution = least_squares(residual, start, jac=jacobian, method="lm", max_nfev=REFINE_STEPS)
+    refined = _unpack(solution.x, mixture.weights)
+    if not np.all(np.isfinite(refined.covariances)) or solution.cost > 0.5 * np.sum(
+        residual(start) ** 2
+    ):
+        return mixture
+    return refined
+
+
+def fit_surface(
+    mixture: Mixture,
+    implicit: MPUImplicit,
+    inside_xy: np.ndarray,
+    inside_g: np.ndarray,
+    inside_p: np.ndarray,
+    vein_xy: np.ndarray,
+    vein_h: np.ndarray,
+    taper: float,
+    refine: bool = True,
+    seed: int = 0,
+) -> HeightSurface:
+    """Fit the amplitudes a_k (and, with `refine`, the means and covariances) so that z follows p
+    inside the leaf and h_v on the veins.
+
+    Parameters
+    ----------
+    inside_xy, inside_g, inside_p : (n, 2), (n,), (n,) float arrays
+        Grid nodes with g >= 0, and g and p there.
+    vein_xy, vein_h : (m, 2), (m,) float arrays
+        Vein points in the plane and their signed heights.
+    taper : float
+        δ as a fraction of the inscribed radius max(g).
+    refine : bool, default: True
+        After the linear fit of the amplitudes, refine every parameter by Levenberg-Marquardt
+        (the paper stops after EM; refining brings z several times closer to the veins).
+    seed : int, default: 0
+        Seed for the choice of grid rows used by the refinement.
+    """
+    delta = taper * max(float(inside_g.max()), 1e-12)
+    surface = HeightSurface(mixture=mixture, implicit=implicit, delta=delta)
+    xy, row_scale, target = _least_squares_rows(
+        surface, inside_xy, inside_g, inside_p, vein_xy, vein_h, None, seed
+    )
+    amplitudes = _fit_amplitudes(mixture, xy, row_scale, target)
+    fitted = Mixture(mixture.weights, mixture.means, mixture.covariances, amplitudes)
+    if refine:
+        xy, row_scale, target = _least_squares_rows(
+            surface, inside_xy, inside_g, inside_p, vein_xy, vein_h, REFINE_ROWS, seed
+        )
+        fitted = _refine(fitted, xy, row_scale, target)
+    return HeightSurface(mixture=fitted, implicit=implicit, delta=delta)

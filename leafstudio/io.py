@@ -1,0 +1,271 @@
+"""Leaf files in and out (.csv/.txt/.xyz, .ply with labels, .leaf.json) and mesh export.
+
+Point lists: one point per line, `x y z [label]`, comma or whitespace separated, an optional header
+line; label 0 is the boundary and 1..n are veins. A file without labels is a boundary.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from leafstudio.errors import LeafError
+from leafstudio.model import Leaf, Params
+
+POINT_SUFFIXES = (".csv", ".txt", ".xyz")
+LEAF_SUFFIXES = (*POINT_SUFFIXES, ".ply", ".leaf.json", ".json")
+MESH_SUFFIXES = (".ply", ".obj", ".stl", ".vtp", ".vtk")
+FORMAT_NAME, FORMAT_VERSION = "leafstudio", 1
+
+
+def _suffix(path: Path) -> str:
+    name = path.name.lower()
+    return ".leaf.json" if name.endswith(".leaf.json") else path.suffix.lower()
+
+
+def _read_text(path: Path) -> str:
+    try:
+        return path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise LeafError("no such file", str(path)) from None
+    except IsADirectoryError:
+        raise LeafError("is a folder, not a file", str(path)) from None
+    except UnicodeDecodeError:
+        raise LeafError("is not a text file", str(path)) from None
+    except OSError as exc:
+        raise LeafError(f"cannot be read ({exc.strerror})", str(path)) from None
+
+
+def read_point_table(path: Path, columns: Sequence[int] = (3, 4)) -> np.ndarray:
+    """Numbers from a point list, (n, c) with c one of `columns`; header and blank lines skipped."""
+    rows: list[list[float]] = []
+    width = None
+    for number, line in enumerate(_read_text(path).splitlines(), start=1):
+        text = line.split("#", 1)[0].strip()
+        if not text:
+            continue
+        fields = [f for f in text.replace(",", " ").replace(";", " ").split()]
+        try:
+            values = [float(f) for f in fields]
+        except ValueError:
+            if not rows and width is None:  # a header line
+                width = -1
+                continue
+            raise LeafError(f"line {number}: not a number in {text!r}", str(path)) from None
+        if len(values) not in columns:
+            expected = " or ".join(str(c) for c in columns)
+            raise LeafError(
+                f"line {number}: expected {expected} columns (x y z [label]), got {len(values)}",
+                str(path),
+            )
+        if rows and len(values) != len(rows[0]):
+            raise LeafError(
+                f"line {number}: {len(values)} columns where earlier lines have {len(rows[0])}",
+                str(path),
+            )
+        if not all(math.isfinite(v) for v in values):
+            raise LeafError(f"line {number}: NaN or infinite value", str(path))
+        rows.append(values)
+    if not rows:
+        raise LeafError("holds no points", str(path))
+    return np.asarray(rows, dtype=float)
+
+
+def _split_labels(xyz: np.ndarray, labels: np.ndarray | None, source: str) -> Leaf:
+    if labels is None:
+        return _checked_leaf(xyz, [], source)
+    if (
+        not np.all(np.isfinite(labels))
+        or not np.all(labels == np.round(labels))
+        or labels.min() < 0
+    ):
+        raise LeafError("labels must be whole numbers >= 0 (0 boundary, 1..n veins)", source)
+    labels = labels.astype(int)
+    veins = [xyz[labels == lab] for lab in np.unique(labels[labels > 0])]
+    return _checked_leaf(xyz[labels == 0], veins, source)
+
+
+def _checked_leaf(boundary: np.ndarray, veins: list[np.ndarray], source: str) -> Leaf:
+    if len(boundary) < 3:
+        raise LeafError(f"needs at least 3 boundary points (label 0), got {len(boundary)}", source)
+    try:
+        return Leaf(boundary=boundary, veins=veins)
+    except LeafError as exc:
+        raise LeafError(exc.problem, source) from None
+
+
+def _read_ply(path: Path) -> Leaf:
+    from plyfile import PlyData, PlyParseError
+
+    try:
+        ply = PlyData.read(str(path))
+    except FileNotFoundError:
+        raise LeafError("no such file", str(path)) from None
+    except (PlyParseError, ValueError, EOFError, OSError) as exc:
+        raise LeafError(f"not a readable PLY file ({exc})", str(path)) from None
+    if "vertex" not in ply:
+        raise LeafError("PLY file has no vertex element", str(path))
+    vertex = ply["vertex"]
+    names = vertex.data.dtype.names or ()
+    if not {"x", "y", "z"} <= set(names):
+        raise LeafError("PLY vertices need x, y and z properties", str(path))
+    if len(vertex.data) == 0:
+        raise LeafError("holds no points", str(path))
+    xyz = np.column_stack([vertex[c] for c in "xyz"]).astype(float)
+    if not np.all(np.isfinite(xyz)):
+        raise LeafError("NaN or infinite coordinates", str(path))
+    labels = np.asarray(vertex["label"], dtype=float) if "label" in names else None
+    return _split_labels(xyz, labels, str(path))
+
+
+def _read_project(path: Path) -> dict[str, Any]:
+    try:
+        data = json.loads(_read_text(path))
+    except json.JSONDecodeError as exc:
+        raise LeafError(f"not valid JSON (line {exc.lineno}: {exc.msg})", str(path)) from None
+    if not isinstance(data, dict) or data.get("format") != FORMAT_NAME:
+        raise LeafError(f'not a LeafStudio project (no "format": "{FORMAT_NAME}")', str(path))
+    if data.get("version", 0) > FORMAT_VERSION:
+        raise LeafError(f"written by a newer LeafStudio (version {data['version']})", str(path))
+    return data
+
+
+def load_project(path: str | os.PathLike) -> tuple[Leaf, Params | None, dict[str, Any]]:
+    """A .leaf.json project: its leaf, its parameters (None if absent) and its sketch."""
+    path = Path(path)
+    data = _read_project(path)
+    try:
+        boundary = np.asarray(data.get("boundary", []), dtype=float).reshape(-1, 3)
+        veins = [np.asarray(v, dtype=float).reshape(-1, 3) for v in data.get("veins", [])]
+    except (TypeError, ValueError):
+        raise LeafError("boundary and veins must be lists of [x, y, z]", str(path)) from None
+    leaf = _checked_leaf(boundary, veins, str(path))
+    try:
+        params = Params.from_dict(data["params"]) if data.get("params") else None
+    except (TypeError, LeafError) as exc:
+        raise LeafError(f"bad params: {exc}", str(path)) from None
+    return leaf, params, dict(data.get("sketch") or {})
+
+
+def load_leaf(path: str | os.PathLike, veins: Sequence[str | os.PathLike] = ()) -> Leaf:
+    """Read a leaf from a point list, a labelled PLY or a project; `veins` adds one vein per file.
+
+    Raises
+    ------
+    LeafError
+        With the file's name and the problem, for anything unreadable or malformed.
+    """
+    path = Path(path)
+    suffix = _suffix(path)
+    if suffix in POINT_SUFFIXES:
+        table = read_point_table(path)
+        leaf = _split_labels(table[:, :3], table[:, 3] if table.shape[1] == 4 else None, str(path))
+    elif suffix == ".ply":
+        leaf = _read_ply(path)
+    elif suffix in (".leaf.json", ".json"):
+        leaf = load_project(path)[0]
+    else:
+        raise LeafError(
+            f"unknown file type {suffix or '(none)'!r}; use one of {', '.join(LEAF_SUFFIXES)}",
+            str(path),
+        )
+    extra = [_read_vein(Path(v)) for v in veins]
+    return Leaf(boundary=leaf.boundary, veins=[*leaf.veins, *extra]) if extra else leaf
+
+
+def _read_vein(path: Path) -> np.ndarray:
+    if _suffix(path) == ".ply":
+        return _read_ply(path).boundary
+    return read_point_table(path, columns=(3,))
+
+
+def _write_atomically(path: Path, text: str | bytes) -> None:
+    """Write to a temporary file beside `path`, then rename it over `path`."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    handle, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(handle, "wb") as out:
+            out.write(text.encode("utf-8") if isinstance(text, str) else text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def project_dict(
+    leaf: Leaf, params: Params | None = None, sketch: dict[str, Any] | None = None
+) -> dict[str, Any]:
+    """The .leaf.json content for a leaf."""
+    return {
+        "format": FORMAT_NAME,
+        "version": FORMAT_VERSION,
+        "boundary": leaf.boundary.tolist(),
+        "veins": [v.tolist() for v in leaf.veins],
+        "params": params.to_dict() if params else {},
+        "sketch": sketch or {},
+    }
+
+
+def save_leaf(
+    leaf: Leaf,
+    path: str | os.PathLike,
+    params: Params | None = None,
+    sketch: dict[str, Any] | None = None,
+) -> None:
+    """Write a leaf as .leaf.json (with params and sketch), a labelled point list or PLY."""
+    path = Path(path)
+    suffix = _suffix(path)
+    labels = np.concatenate(
+        [np.zeros(len(leaf.boundary))] + [np.full(len(v), i + 1) for i, v in enumerate(leaf.veins)]
+    ).astype(int)
+    xyz = np.vstack([leaf.boundary, *leaf.veins])
+    if suffix in (".leaf.json", ".json"):
+        _write_atomically(path, json.dumps(project_dict(leaf, params, sketch), indent=1))
+    elif suffix in POINT_SUFFIXES:
+        sep = "," if suffix == ".csv" else " "
+        lines = [sep.join(["x", "y", "z", "label"])]
+        lines += [
+            sep.join([f"{x:.9g}", f"{y:.9g}", f"{z:.9g}", str(lab)])
+            for (x, y, z), lab in zip(xyz, labels, strict=True)
+        ]
+        _write_atomically(path, "\n".join(lines) + "\n")
+    elif suffix == ".ply":
+        from plyfile import PlyData, PlyElement
+
+        data = np.empty(len(xyz), dtype=[("x", "f8"), ("y", "f8"), ("z", "f8"), ("label", "i4")])
+        data["x"], data["y"], data["z"], data["label"] = xyz[:, 0], xyz[:, 1], xyz[:, 2], labels
+        import io as _io
+
+        buffer = _io.BytesIO()
+        PlyData([PlyElement.describe(data, "vertex")], text=False).write(buffer)
+        _write_atomically(path, buffer.getvalue())
+    else:
+        raise LeafError(f"cannot write a leaf as {suffix or '(none)'!r}", str(path))
+
+
+def save_mesh(result_or_mesh: Any, path: str | os.PathLike) -> None:
+    """Write a Result's mesh (or a pyvista mesh) as .ply, .obj, .stl, .vtp or .vtk by extension."""
+    path = Path(path)
+    suffix = _suffix(path)
+    if suffix not in MESH_SUFFIXES:
+        raise LeafError(
+            f"unknown mesh type {suffix or '(none)'!r}; use one of {', '.join(MESH_SUFFIXES)}",
+            str(path),
+        )
+    mesh = getattr(result_or_mesh, "mesh", result_or_mesh)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    handle, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=suffix)
+    os.close(handle)
+    try:
+        mesh.save(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
