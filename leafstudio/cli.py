@@ -1,0 +1,148 @@
+"""The command line: `leafstudio [gui|reconstruct|demo] ...` (see DESIGN.md).
+
+Every failure is one line on stderr naming the file and the problem, with exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import warnings
+from collections.abc import Sequence
+from pathlib import Path
+
+from leafstudio.errors import LeafError
+
+EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT = 0, 1, 2
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports usage errors as one line with exit code 2."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise LeafError(f"{message} (see leafstudio {self.prog.split()[-1]} --help)")
+
+
+def _k_value(text: str) -> int | str:
+    if text == "auto":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"K must be a whole number or 'auto', got {text!r}"
+        ) from None
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with its subcommands."""
+    parser = _Parser(
+        prog="leafstudio", description="Smooth 3D leaf surfaces from boundaries and veins."
+    )
+    sub = parser.add_subparsers(dest="command", parser_class=_Parser)
+
+    gui = sub.add_parser("gui", help="open the app (on FILE, or on the nested demo)")
+    gui.add_argument("file", nargs="?", help="a leaf file to open")
+    gui.add_argument(
+        "--screenshot", metavar="PNG", help="save the window once reconstructed, then exit"
+    )
+
+    rec = sub.add_parser("reconstruct", help="reconstruct a leaf and write its mesh")
+    rec.add_argument("input", help="leaf file: .csv, .txt, .xyz, .ply or .leaf.json")
+    rec.add_argument(
+        "-o", "--output", required=True, metavar="MESH", help=".ply, .obj, .stl, .vtp or .vtk"
+    )
+    rec.add_argument("--k", type=_k_value, default=None, help="number of Gaussians (default 3)")
+    rec.add_argument(
+        "--grid", type=int, default=None, help="grid nodes along the leaf (default 128)"
+    )
+    rec.add_argument("--mesher", choices=("conforming", "bpa"), default=None)
+    rec.add_argument("--seed", type=int, default=None, help="random seed (default 0)")
+    rec.add_argument(
+        "--vein", action="append", default=[], metavar="FILE", help="a vein file (repeatable)"
+    )
+    rec.add_argument(
+        "--metrics", metavar="JSON", help="write Table-1 distances and mesh facts here"
+    )
+
+    dem = sub.add_parser("demo", help="write a built-in leaf")
+    dem.add_argument("name", help="nested or parallel")
+    dem.add_argument(
+        "-o", "--output", required=True, metavar="FILE", help=".leaf.json, .csv, .txt, .xyz or .ply"
+    )
+    return parser
+
+
+def _params_for(args: argparse.Namespace, base: object | None):
+    from leafstudio.model import Params
+
+    params = base if isinstance(base, Params) else Params()
+    changes = {name: getattr(args, name) for name in ("k", "grid", "mesher", "seed")}
+    return params.with_(**{k: v for k, v in changes.items() if v is not None})
+
+
+def _reconstruct(args: argparse.Namespace) -> int:
+    from leafstudio.core.pipeline import Pipeline
+    from leafstudio.io import MESH_SUFFIXES, load_leaf, load_project, save_mesh
+
+    out = Path(args.output)
+    if not out.name.lower().endswith(MESH_SUFFIXES):
+        raise LeafError(f"unknown mesh type; use one of {', '.join(MESH_SUFFIXES)}", str(out))
+    leaf = load_leaf(args.input, veins=args.vein)
+    saved = load_project(args.input)[1] if args.input.lower().endswith(".json") else None
+    try:
+        params = _params_for(args, saved)
+        result = Pipeline(leaf).run(params)
+    except LeafError as exc:
+        raise LeafError(exc.problem, args.input) from None
+    for note in result.warnings:
+        print(f"leafstudio: warning: {args.input}: {note}", file=sys.stderr)
+    save_mesh(result, out)
+    if args.metrics:
+        metrics = {"input": args.input, "params": params.to_dict(), **result.metrics}
+        Path(args.metrics).write_text(json.dumps(metrics, indent=2) + "\n", encoding="utf-8")
+    return EXIT_OK
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from leafstudio.demos import demo
+    from leafstudio.io import save_leaf
+
+    save_leaf(demo(args.name), args.output)
+    return EXIT_OK
+
+
+def _gui(args: argparse.Namespace) -> int:
+    from leafstudio.gui.app import run_app
+
+    return run_app(getattr(args, "file", None), getattr(args, "screenshot", None))
+
+
+COMMANDS = {"gui": _gui, "reconstruct": _reconstruct, "demo": _demo}
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the `leafstudio` console script; returns the exit code."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        args = build_parser().parse_args(argv)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # library chatter; our own notes are printed
+            return COMMANDS[args.command or "gui"](args)
+    except LeafError as exc:
+        print(f"leafstudio: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except OSError as exc:
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"leafstudio: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        return 130
+    except Exception as exc:  # never a traceback: one line, and a distinct code
+        print(f"leafstudio: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
+        return EXIT_INTERNAL
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
