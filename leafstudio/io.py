@@ -264,8 +264,33 @@ def save_mesh(result_or_mesh: Any, path: str | os.PathLike) -> None:
     handle, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=suffix)
     os.close(handle)
     try:
-        mesh.save(tmp)
+        if suffix == ".ply":
+            _write_mesh_ply(mesh, tmp)
+        else:
+            mesh.save(tmp)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def _write_mesh_ply(mesh: Any, path: str) -> None:
+    """A triangle mesh as binary PLY with every scalar point array (height, curvatures) as a
+    vertex property; VTK's PLY writer drops them."""
+    from plyfile import PlyData, PlyElement
+
+    arrays = {
+        name: np.asarray(mesh.point_data[name])
+        for name in mesh.point_data
+        if np.asarray(mesh.point_data[name]).ndim == 1 and name not in ("x", "y", "z")
+    }
+    vertex = np.empty(mesh.n_points, dtype=[(c, "f8") for c in ("x", "y", "z", *arrays)])
+    for i, c in enumerate("xyz"):
+        vertex[c] = mesh.points[:, i]
+    for name, values in arrays.items():
+        vertex[name] = values
+    triangles = mesh.faces.reshape(-1, 4)[:, 1:]
+    face = np.empty(len(triangles), dtype=[("vertex_indices", "i4", (3,))])
+    face["vertex_indices"] = triangles
+    elements = [PlyElement.describe(vertex, "vertex"), PlyElement.describe(face, "face")]
+    PlyData(elements, text=False).write(path)

@@ -26,6 +26,7 @@ import numpy as np
 import pyvista as pv
 
 from leafstudio.core import analysis, mesher
+from leafstudio.core.curvature import surface_curvatures
 from leafstudio.core.gmm import Mixture, fit_mixture, sample_guide
 from leafstudio.core.grid import Grid, make_grid
 from leafstudio.core.height import height_guide
@@ -333,6 +334,8 @@ def _mesh_stage(
     faces = np.column_stack([np.full(len(triangles), 3), triangles]).ravel()
     mesh = pv.PolyData(world, faces=faces)
     mesh.point_data["height"] = z
+    on_margin = np.arange(len(xy)) < n_outline  # both meshers put the outline first
+    mesh.point_data.update(surface_curvatures(surf.surface, xy, on_margin))
     return mesh
 
 

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
+from leafstudio.core.curvature import implicit_derivatives, product_derivatives, taper_derivatives
 from leafstudio.core.gmm import Mixture
 from leafstudio.core.mpu import MPUImplicit
 
@@ -53,6 +54,15 @@ class HeightSurface:
         t = self.taper(g)
         slope = np.where(g > 0, 1 - t**2, 0.0) / self.delta
         return (slope * m)[:, None] * grad_g + t[:, None] * grad_m
+
+    def derivatives(
+        self, xy: np.ndarray, margin: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """z (n,), ∇z (n, 2) and ∇²z (n, 2, 2) in closed form (for curvature; see curvature.py).
+        Where the (n,) bool `margin` is set, the limits from inside the leaf."""
+        xy = np.atleast_2d(np.asarray(xy, dtype=float))
+        taper = taper_derivatives(*implicit_derivatives(self.implicit, xy), self.delta, margin)
+        return product_derivatives(taper, self.mixture.derivatives(xy))
 
 
 def _least_squares_rows(

@@ -1,0 +1,171 @@
+"""Curvature of the leaf: closed-form derivatives of z(x) = T(g/δ)·M(x) and of its graph.
+
+The paper's point is a differentiable surface (section 4: "using differentials as curvatures").
+Everything here is exact calculus on the fitted functions, no mesh-based estimates:
+
+- the MPU implicit g = N / D with N = Σ w_i f_i, D = Σ w_i (eq. 1), f_i linear and w_i the
+  quadratic B-spline of t = 1.5 |x − c_i| / r_i (eq. 2), so
+  ∇²g = (∇²N − g ∇²D − ∇g ∇Dᵀ − ∇D ∇gᵀ) / D;
+- the taper T(s) = tanh(s), T' = 1 − T², T'' = −2 T T';
+- the mixture's Hessian (Mixture.derivatives).
+
+The graph (x, y, z(x, y)) with p = z_x, q = z_y, W = 1 + p² + q² has (upward normal (−p, −q, 1))
+
+    K = (z_xx z_yy − z_xy²) / W²
+    H = ((1 + q²) z_xx − 2 p q z_xy + (1 + p²) z_yy) / (2 W^{3/2})
+    k1, k2 = H ± √(H² − K)
+
+so a dome (a vein ridge seen from above) has H < 0. The plane frame is orthonormal, so these are
+the curvatures of the leaf in world units as well.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+
+from leafstudio.core.mpu import MPUImplicit, _bspline_slope_over_t, bspline_weight
+
+CURVATURE_ARRAYS = ("mean_curvature", "gaussian_curvature", "k1", "k2")
+
+
+class Differentiable(Protocol):
+    """A height function of plane points with closed-form derivatives."""
+
+    def derivatives(
+        self, xy: np.ndarray, margin: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Value (n,), gradient (n, 2) and Hessian (n, 2, 2) at (n, 2) points; where the (n,) bool
+        `margin` is set, the limits from inside the leaf."""
+        ...
+
+
+def _bspline_curl(t: np.ndarray) -> np.ndarray:
+    """(d/dt (b'(t)/t)) / t: the radial part of ∇²w (0 on the inner piece, 2.25/t³ outside it)."""
+    t = np.abs(t)
+    safe = np.where(t > 0, t, 1.0)
+    return np.where((t >= 1 / 3) & (t < 1), 2.25 / safe**3, 0.0)
+
+
+def implicit_derivatives(
+    implicit: MPUImplicit, xy: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """g, ∇g and ∇²g of the MPU implicit at (n, 2) points, in closed form.
+
+    Returns
+    -------
+    g : (n,) float array
+    gradient : (n, 2) float array
+    hessian : (n, 2, 2) float array
+        Piecewise: the B-splines are C1, so ∇²g jumps where a point crosses t = 1/3 or t = 1 of
+        some cell. Far from the leaf (no support covers the point) g is minus the distance to the
+        nearest boundary point and the Hessian is that of −|x − b|.
+    """
+    xy = np.atleast_2d(np.asarray(xy, dtype=float))
+    n = len(xy)
+    g, grad = implicit.evaluate(xy, gradient=True)
+    hess = np.zeros((n, 2, 2))
+    q, c = implicit._pairs(xy)
+    d = xy[q] - implicit.centers[c]
+    scale = 1.5 / implicit.radii[c]
+    t = np.linalg.norm(d, axis=1) * scale
+    w = bspline_weight(t)
+    f = np.einsum("ij,ij->i", xy[q], implicit.coef[c, :2]) + implicit.coef[c, 2]
+    grad_f = implicit.coef[c, :2]
+    dw = (_bspline_slope_over_t(t) * scale**2)[:, None] * d
+    outer = d[:, :, None] * d[:, None, :]
+    hw = (_bspline_slope_over_t(t) * scale**2)[:, None, None] * np.eye(2) + (
+        _bspline_curl(t) * scale**4
+    )[:, None, None] * outer
+    cross = dw[:, :, None] * grad_f[:, None, :]
+    hn = hw * f[:, None, None] + cross + cross.transpose(0, 2, 1)
+
+    def total(values: np.ndarray) -> np.ndarray:
+        """Σ over the cells covering each query point, for per-pair (p, ...) values."""
+        width = int(np.prod(values.shape[1:]))
+        flat = values.reshape(len(q), width)
+        sums = np.column_stack([np.bincount(q, flat[:, j], minlength=n) for j in range(width)])
+        return sums.reshape((n, *values.shape[1:]))
+
+    big_d = np.bincount(q, w, minlength=n)
+    covered = big_d > 0
+    grad_d, hess_d, hess_n = total(dw), total(hw), total(hn)
+    cross_g = grad[:, :, None] * grad_d[:, None, :]
+    hess[covered] = (hess_n - g[:, None, None] * hess_d - cross_g - cross_g.transpose(0, 2, 1))[
+        covered
+    ] / big_d[covered, None, None]
+    far = ~covered
+    if far.any():  # g = −|x − b|: ∇²g = −(I − u uᵀ) / |x − b| with u = ∇g
+        u = grad[far]
+        hess[far] = (
+            -(np.eye(2) - u[:, :, None] * u[:, None, :])
+            / np.maximum(-g[far], 1e-300)[:, None, None]
+        )
+    return g, grad, hess
+
+
+def taper_derivatives(
+    g: np.ndarray,
+    grad_g: np.ndarray,
+    hess_g: np.ndarray,
+    delta: float,
+    margin: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """T(g/δ) = tanh(max(g, 0)/δ), its gradient (n, 2) and Hessian (n, 2, 2) by the chain rule.
+
+    T has a kink at g = 0 (flat outside, slope 1/δ inside). Points flagged in the (n,) bool
+    `margin` lie on the leaf's edge: they get g = 0 and the limits from inside, which is what a
+    mesh of the leaf region sees there.
+    """
+    inner = g > 0
+    if margin is not None:
+        g = np.where(margin, 0.0, g)
+        inner |= margin
+    t = np.tanh(np.maximum(g, 0.0) / delta)
+    slope = np.where(inner, 1 - t**2, 0.0)
+    bend = -2 * t * slope
+    grad = (slope / delta)[:, None] * grad_g
+    hess = (bend / delta**2)[:, None, None] * (grad_g[:, :, None] * grad_g[:, None, :]) + (
+        slope / delta
+    )[:, None, None] * hess_g
+    return t, grad, hess
+
+
+def product_derivatives(
+    a: tuple[np.ndarray, np.ndarray, np.ndarray], b: tuple[np.ndarray, np.ndarray, np.ndarray]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Value, gradient and Hessian of the product of two functions given theirs."""
+    va, ga, ha = a
+    vb, gb, hb = b
+    cross = ga[:, :, None] * gb[:, None, :]
+    hess = ha * vb[:, None, None] + va[:, None, None] * hb + cross + cross.transpose(0, 2, 1)
+    return va * vb, ga * vb[:, None] + va[:, None] * gb, hess
+
+
+def graph_curvatures(gradient: np.ndarray, hessian: np.ndarray) -> dict[str, np.ndarray]:
+    """Mean, Gaussian and principal curvatures of the graph of z from ∇z (n, 2) and ∇²z (n, 2, 2).
+
+    Returns a dict of (n,) arrays named as in CURVATURE_ARRAYS; k1 >= k2.
+    """
+    p, q = gradient[:, 0], gradient[:, 1]
+    zxx, zxy, zyy = hessian[:, 0, 0], hessian[:, 0, 1], hessian[:, 1, 1]
+    w = 1 + p**2 + q**2
+    gauss = (zxx * zyy - zxy**2) / w**2
+    mean = ((1 + q**2) * zxx - 2 * p * q * zxy + (1 + p**2) * zyy) / (2 * w**1.5)
+    spread = np.sqrt(np.maximum(mean**2 - gauss, 0.0))
+    return {
+        "mean_curvature": mean,
+        "gaussian_curvature": gauss,
+        "k1": mean + spread,
+        "k2": mean - spread,
+    }
+
+
+def surface_curvatures(
+    surface: Differentiable, xy: np.ndarray, margin: np.ndarray | None = None
+) -> dict[str, np.ndarray]:
+    """Curvatures (see graph_curvatures) of a height surface at (n, 2) plane points; `margin`
+    (n,) bool flags points on the leaf's edge (limits from inside)."""
+    _, grad, hess = surface.derivatives(np.atleast_2d(np.asarray(xy, dtype=float)), margin)
+    return graph_curvatures(grad, hess)
