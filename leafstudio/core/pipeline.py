@@ -24,8 +24,10 @@ from typing import Any
 
 import numpy as np
 import pyvista as pv
+from scipy.spatial import cKDTree
 
 from leafstudio.core import analysis, mesher
+from leafstudio.core.base import BaseSurface, fit_base
 from leafstudio.core.curvature import surface_curvatures
 from leafstudio.core.gmm import Mixture, fit_mixture, sample_guide
 from leafstudio.core.grid import Grid, make_grid
@@ -71,8 +73,10 @@ class FrameStage:
     frame: Frame
     polygon: np.ndarray  # (b, 2) counter-clockwise leaf outline
     veins: list[np.ndarray]  # (m_i, 2) per vein
-    heights: list[np.ndarray]  # (m_i,) signed heights per vein
+    heights: list[np.ndarray]  # (m_i,) signed heights per vein above the base, h_v − b(v')
     length: float  # leaf length along its main axis
+    polygon_h: np.ndarray | None = None  # (b,) the outline points' own heights; None: planar
+    base: BaseSurface | None = None  # b(x) through the outline's heights; None: b ≡ 0
 
     @property
     def vein_xy(self) -> np.ndarray:
@@ -134,9 +138,11 @@ class Result:
 def _frame_stage(leaf: Leaf) -> tuple[FrameStage, list[str]]:
     notes: list[str] = []
     frame = fit_frame(leaf.boundary, leaf.vein_points)
-    xy, _ = frame.to_plane(leaf.boundary)
+    xy, boundary_h = frame.to_plane(leaf.boundary)
     polygon = leaf_polygon(xy)
     length = float(np.ptp(polygon[:, 0]))
+    polygon_h = boundary_h[cKDTree(xy).query(polygon)[1]]  # each vertex is a boundary point
+    base = fit_base(polygon, polygon_h, length)
     veins, heights = [], []
     for i, vein in enumerate(leaf.veins):
         v_xy, v_h = frame.to_plane(vein)
@@ -153,12 +159,23 @@ def _frame_stage(leaf: Leaf) -> tuple[FrameStage, list[str]]:
                     f"boundary (up to {gap / length:.1%} of the leaf length)"
                 )
         veins.append(v_xy)
-        heights.append(v_h[keep])
-    if not veins:
+        heights.append(v_h[keep] - (base(v_xy) if base is not None else 0.0))
+    if base is not None:
+        if not veins:
+            notes.append("no veins given: the surface only follows the boundary's heights")
+    elif not veins:
         notes.append("no veins given: the leaf is flat")
     elif all(np.allclose(h, 0, atol=1e-9 * length) for h in heights):
         notes.append("all veins lie in the boundary's plane: the leaf is flat")
-    stage = FrameStage(frame=frame, polygon=polygon, veins=veins, heights=heights, length=length)
+    stage = FrameStage(
+        frame=frame,
+        polygon=polygon,
+        veins=veins,
+        heights=heights,
+        length=length,
+        polygon_h=None if base is None else polygon_h,
+        base=base,
+    )
     return stage, notes
 
 
@@ -302,6 +319,7 @@ def _surface_stage(
         params.taper,
         params.refine,
         params.seed,
+        base=fs.base,
     )
     return SurfaceStage(surface=surface, z=surface(nodes, g_in))
 
@@ -321,10 +339,12 @@ def _mesh_stage(
         keep &= contains(fs.polygon, nodes)
         xy, triangles = mesher.conforming_mesh(fs.polygon, nodes[keep])
         z = surf.surface(xy)
-        z[:n_outline] = 0.0  # the margin lies in the plane (eq. 3: the boundary's height is 0)
+        # the margin at the boundary points' own heights (0 in the plane for a planar one, eq. 3)
+        z[:n_outline] = 0.0 if fs.polygon_h is None else fs.polygon_h
     else:
         xy = np.vstack([fs.polygon, nodes])
-        z = np.concatenate([np.zeros(n_outline), surf.z])
+        rim = np.zeros(n_outline) if fs.polygon_h is None else fs.polygon_h
+        z = np.concatenate([rim, surf.z])
         grad = surf.surface.gradient(xy)
         normals = fs.frame.to_world(-grad, np.ones(len(xy))) - fs.frame.origin
         normals /= np.linalg.norm(normals, axis=1, keepdims=True)

@@ -11,6 +11,10 @@ B-spline weights) and tanh is smooth, so z is C1 everywhere inside and smooth wh
 (everywhere except on the circles where a cell's support ends). δ is a fraction `taper` of the
 leaf's inscribed radius (max g). The amplitudes a_k are fitted by least squares to p(x) over the
 inside grid nodes, with the vein points as extra rows so that the surface follows the veins.
+
+A non-planar boundary adds its base surface (base.py): z(x) = b(x) + T(g/δ) Σ a_k N_k(x), where
+b passes through the boundary's heights and the mixture fits the veins' relief h_v − b(v'),
+signed, so veins below the margin pull the surface under it.
 """
 
 from __future__ import annotations
@@ -20,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
+from leafstudio.core.base import BaseSurface
 from leafstudio.core.curvature import implicit_derivatives, product_derivatives, taper_derivatives
 from leafstudio.core.gmm import Mixture
 from leafstudio.core.mpu import MPUImplicit
@@ -32,11 +37,12 @@ REFINE_STEPS = 200
 
 @dataclass(frozen=True)
 class HeightSurface:
-    """z(x) = T(g(x)/δ) Σ a_k N_k(x); see the module docstring."""
+    """z(x) = b(x) + T(g(x)/δ) Σ a_k N_k(x); see the module docstring (b: base.py, or 0)."""
 
     mixture: Mixture
     implicit: MPUImplicit
     delta: float
+    base: BaseSurface | None = None  # the base through a non-planar boundary's heights
 
     def taper(self, g: np.ndarray) -> np.ndarray:
         """T(g / δ), zero outside the leaf."""
@@ -45,7 +51,8 @@ class HeightSurface:
     def __call__(self, xy: np.ndarray, g: np.ndarray | None = None) -> np.ndarray:
         """z at (n, 2) plane points; pass `g` if it is already known there."""
         g = self.implicit(xy) if g is None else g
-        return self.taper(g) * self.mixture.value(xy)
+        relief = self.taper(g) * self.mixture.value(xy)
+        return relief if self.base is None else self.base(xy) + relief
 
     def gradient(self, xy: np.ndarray) -> np.ndarray:
         """(n, 2) ∇z = T'(g/δ) ∇g M / δ + T ∇M, in closed form."""
@@ -53,7 +60,8 @@ class HeightSurface:
         m, grad_m, _ = self.mixture.derivatives(xy)
         t = self.taper(g)
         slope = np.where(g > 0, 1 - t**2, 0.0) / self.delta
-        return (slope * m)[:, None] * grad_g + t[:, None] * grad_m
+        grad = (slope * m)[:, None] * grad_g + t[:, None] * grad_m
+        return grad if self.base is None else grad + self.base.derivatives(xy)[1]
 
     def derivatives(
         self, xy: np.ndarray, margin: np.ndarray | None = None
@@ -62,7 +70,11 @@ class HeightSurface:
         Where the (n,) bool `margin` is set, the limits from inside the leaf."""
         xy = np.atleast_2d(np.asarray(xy, dtype=float))
         taper = taper_derivatives(*implicit_derivatives(self.implicit, xy), self.delta, margin)
-        return product_derivatives(taper, self.mixture.derivatives(xy))
+        z, grad, hess = product_derivatives(taper, self.mixture.derivatives(xy))
+        if self.base is None:
+            return z, grad, hess
+        b, grad_b, hess_b = self.base.derivatives(xy)
+        return z + b, grad + grad_b, hess + hess_b
 
 
 def _least_squares_rows(
@@ -165,6 +177,7 @@ def fit_surface(
     taper: float,
     refine: bool = True,
     seed: int = 0,
+    base: BaseSurface | None = None,
 ) -> HeightSurface:
     """Fit the amplitudes a_k (and, with `refine`, the means and covariances) so that z follows p
     inside the leaf and h_v on the veins.
@@ -182,6 +195,8 @@ def fit_surface(
         (the paper stops after EM; refining brings z several times closer to the veins).
     seed : int, default: 0
         Seed for the choice of grid rows used by the refinement.
+    base : BaseSurface, optional
+        The base b(x) under a non-planar boundary; p and vein_h are then heights above it.
     """
     delta = taper * max(float(inside_g.max()), 1e-12)
     surface = HeightSurface(mixture=mixture, implicit=implicit, delta=delta)
@@ -195,4 +210,4 @@ def fit_surface(
             surface, inside_xy, inside_g, inside_p, vein_xy, vein_h, REFINE_ROWS, seed
         )
         fitted = _refine(fitted, xy, row_scale, target)
-    return HeightSurface(mixture=fitted, implicit=implicit, delta=delta)
+    return HeightSurface(mixture=fitted, implicit=implicit, delta=delta, base=base)

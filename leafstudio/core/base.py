@@ -1,0 +1,134 @@
+"""The base surface b(x): a thin-plate spline through the boundary's heights off its plane.
+
+The paper puts the whole margin at height 0 in the boundary's PCA plane. Real margins are not
+planar: leaves curl along their length, fold along the midrib and let their margins roll up or
+down. We carry the margin's heights with a smooth base surface over the leaf region,
+
+    b(x) = Σ_i w_i φ(|x − c_i|) + a_0 + a_1 x + a_2 y,     φ(r) = r² log r,
+
+the thin-plate spline (the interpolant of least bending energy, the physics of a thin blade)
+through the boundary points' signed heights, with at most `MAX_CENTRES` centres c_i taken evenly
+along the outline so that it stays cheap (one small dense solve, then O(n · centres) to evaluate).
+The Gaussian mixture then models the veins' relief above or below b (see surface.py). For a planar
+boundary there is no base (b ≡ 0 exactly) and the paper's method is unchanged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+MAX_CENTRES = 96  # centres of the spline, taken evenly along the outline
+PLANAR = 1e-9  # boundary heights under this fraction of the leaf length count as planar
+SMOOTHING = 1e-7  # ridge on the spline's kernel (in units of the leaf length), against noise
+
+
+@dataclass(frozen=True)
+class BaseSurface:
+    """b(x) = Σ w_i φ(|x − c_i| / L) + a_0 + a_1 x̃ + a_2 ỹ, with x̃ = (x − origin) / L.
+
+    Attributes
+    ----------
+    centres : (m, 2) float array
+        Spline centres, in plane coordinates.
+    weights : (m,) float array
+        w_i.
+    affine : (3,) float array
+        a_0, a_1, a_2 (in the scaled coordinates).
+    origin : (2,) float array
+    scale : float
+        L, the leaf length; the spline works in x̃ so that its system is well conditioned.
+    """
+
+    centres: np.ndarray
+    weights: np.ndarray
+    affine: np.ndarray
+    origin: np.ndarray
+    scale: float
+
+    def __call__(self, xy: np.ndarray) -> np.ndarray:
+        """(n,) b at (n, 2) plane points."""
+        xy = np.atleast_2d(np.asarray(xy, dtype=float))
+        local = (xy - self.origin) / self.scale
+        kernel = _kernel(_scaled_distance(local, (self.centres - self.origin) / self.scale))
+        return kernel @ self.weights + self.affine[0] + local @ self.affine[1:]
+
+    def derivatives(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """b (n,), ∇b (n, 2) and ∇²b (n, 2, 2) at (n, 2) plane points, in closed form.
+
+        With d = x̃ − c̃ and r = |d|: ∇φ = (2 log r + 1) d and ∇²φ = (2 log r + 1) I + 2 d dᵀ / r²
+        (taken as 0 at a centre, where φ is only C1); each derivative divides by L once more.
+        """
+        xy = np.atleast_2d(np.asarray(xy, dtype=float))
+        local = (xy - self.origin) / self.scale
+        d = local[:, None, :] - ((self.centres - self.origin) / self.scale)[None]
+        r2 = np.einsum("nki,nki->nk", d, d)
+        safe = np.where(r2 > 0, r2, 1.0)
+        slope = np.where(r2 > 0, np.log(safe) + 1.0, 0.0) * self.weights  # (2 log r + 1) w
+        value = (0.5 * r2 * np.log(safe)) @ self.weights + self.affine[0] + local @ self.affine[1:]
+        grad = np.einsum("nk,nki->ni", slope, d) + self.affine[1:]
+        outer = 2 * d[..., :, None] * d[..., None, :] / safe[..., None, None]
+        hess = slope.sum(axis=1)[:, None, None] * np.eye(2) + np.einsum(
+            "nk,nkij->nij", np.where(r2 > 0, 1.0, 0.0) * self.weights, outer
+        )
+        return value, grad / self.scale, hess / self.scale**2
+
+
+def _scaled_distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(n, m) squared distances between (n, 2) and (m, 2) points."""
+    return np.maximum((a**2).sum(axis=1)[:, None] + (b**2).sum(axis=1)[None] - 2 * a @ b.T, 0.0)
+
+
+def _kernel(r2: np.ndarray) -> np.ndarray:
+    """φ(r) = r² log r = ½ r² log r², from squared distances (0 at r = 0)."""
+    return 0.5 * r2 * np.log(np.where(r2 > 0, r2, 1.0))
+
+
+def _even_along(polygon: np.ndarray, count: int) -> np.ndarray:
+    """Indices of `count` polygon vertices spread evenly by arc length around the outline."""
+    if len(polygon) <= count:
+        return np.arange(len(polygon))
+    steps = np.linalg.norm(np.diff(polygon, axis=0, append=polygon[:1]), axis=1)
+    arc = np.concatenate([[0.0], np.cumsum(steps)[:-1]])
+    targets = np.linspace(0.0, arc[-1] + steps[-1], count, endpoint=False)
+    return np.unique(np.clip(np.searchsorted(arc, targets), 0, len(polygon) - 1))
+
+
+def fit_base(polygon: np.ndarray, heights: np.ndarray, length: float) -> BaseSurface | None:
+    """The thin-plate spline through the outline's heights, or None if the outline is planar.
+
+    Parameters
+    ----------
+    polygon : (b, 2) float array
+        The leaf outline in the plane, in order around it.
+    heights : (b,) float array
+        Signed heights of the outline's points off the plane.
+    length : float
+        The leaf length; sets the planarity threshold and the spline's scale.
+
+    Returns
+    -------
+    BaseSurface or None
+        None when every |height| <= 1e-9 of the length (then b ≡ 0 and the paper's method holds).
+    """
+    if len(polygon) < 3 or np.max(np.abs(heights)) <= PLANAR * length:
+        return None
+    pick = _even_along(polygon, MAX_CENTRES)
+    origin = polygon.mean(axis=0)
+    centres = (polygon[pick] - origin) / length
+    m = len(centres)
+    system = np.zeros((m + 3, m + 3))
+    system[:m, :m] = _kernel(_scaled_distance(centres, centres)) + SMOOTHING * np.eye(m)
+    poly = np.column_stack([np.ones(m), centres])
+    system[:m, m:] = poly
+    system[m:, :m] = poly.T
+    rhs = np.concatenate([heights[pick], np.zeros(3)])
+    solution = np.linalg.lstsq(system, rhs, rcond=None)[0]
+    return BaseSurface(
+        centres=polygon[pick].copy(),
+        weights=solution[:m],
+        affine=solution[m:],
+        origin=origin,
+        scale=float(length),
+    )
