@@ -11,6 +11,7 @@ from leafstudio.errors import LeafError
 
 MESHERS = ("conforming", "bpa")
 K_MAX = 64
+K_AUTO = "auto"  # Params.k: choose K by BIC (core/autok.py)
 GRID_MIN, GRID_MAX = 8, 2048
 
 
@@ -68,8 +69,9 @@ class Params:
 
     Parameters
     ----------
-    k : int, default: 3
-        Number of Gaussian components (the paper's K).
+    k : int or "auto", default: 3
+        Number of Gaussian components (the paper's K); "auto" chooses 1 to 12 by BIC
+        (Result.chosen_k says which).
     grid : int, default: 128
         Grid nodes along the leaf's longer side.
     mpu_tolerance : float, default: 1e-3
@@ -88,7 +90,7 @@ class Params:
         Refine the whole mixture by least squares after EM (the paper stops after EM).
     """
 
-    k: int = 3
+    k: int | str = 3
     grid: int = 128
     mpu_tolerance: float = 1e-3
     samples: int = 4000
@@ -99,9 +101,11 @@ class Params:
     refine: bool = True
 
     def __post_init__(self) -> None:
-        if isinstance(self.k, bool) or not isinstance(self.k, (int, np.integer)):
-            raise LeafError(f"K must be a whole number, got {self.k!r}")
-        if not 1 <= self.k <= K_MAX:
+        if self.k == K_AUTO:
+            pass
+        elif isinstance(self.k, bool) or not isinstance(self.k, (int, np.integer)):
+            raise LeafError(f"K must be a whole number or {K_AUTO!r}, got {self.k!r}")
+        elif not 1 <= self.k <= K_MAX:
             raise LeafError(f"K must be between 1 and {K_MAX}, got {self.k}")
         if not GRID_MIN <= self.grid <= GRID_MAX:
             raise LeafError(f"grid must be between {GRID_MIN} and {GRID_MAX}, got {self.grid}")

@@ -27,6 +27,7 @@ import pyvista as pv
 from scipy.spatial import cKDTree
 
 from leafstudio.core import analysis, mesher
+from leafstudio.core.autok import choose_mixture
 from leafstudio.core.base import BaseSurface, fit_base
 from leafstudio.core.curvature import surface_curvatures
 from leafstudio.core.gmm import Mixture, fit_mixture, sample_guide
@@ -37,7 +38,7 @@ from leafstudio.core.outline import contains, distinct_indices, leaf_polygon, ou
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.surface import HeightSurface, fit_surface
 from leafstudio.errors import LeafError
-from leafstudio.model import Leaf, Params
+from leafstudio.model import K_AUTO, Leaf, Params
 
 STAGES = ("frame", "implicit", "grid", "guide", "gmm", "surface", "mesh")
 STAGE_KEYS: dict[str, tuple[str, ...]] = {
@@ -128,6 +129,11 @@ class Result:
     def height(self, xy: np.ndarray) -> np.ndarray:
         """z of the surface at (n, 2) plane points (differentiable; see surface.py)."""
         return self.surface(np.atleast_2d(np.asarray(xy, dtype=float)))
+
+    @property
+    def chosen_k(self) -> int:
+        """The K the surface uses: params.k, or the one chosen when params.k is "auto"."""
+        return len(self.surface.mixture.weights)
 
     @cached_property
     def metrics(self) -> dict[str, Any]:
@@ -296,6 +302,8 @@ def _gmm_stage(
         return np.zeros((0, 2)), _flat_mixture(fs.polygon.mean(axis=0))
     p_in = guide.p[guide.inside]
     samples = sample_guide(nodes, p_in, params.samples, grid.spacing, params.seed)
+    if params.k == K_AUTO:
+        return samples, choose_mixture(samples, params.seed)[0]
     return samples, fit_mixture(samples, params.k, params.seed)
 
 

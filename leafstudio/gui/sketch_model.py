@@ -1,0 +1,259 @@
+"""The sketch behind a drawn leaf: control points on the leaf plane, and the curves through them.
+
+A sketch is an immutable snapshot, so undo and redo simply swap snapshots. The boundary is a closed
+curve (a periodic cubic spline through its control points); each vein is an open curve through its
+control points, each carrying a height above the plane. Curves use centripetal parameters, which
+keep a spline from looping between close points. No Qt here: the editor in sketch.py draws it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from leafstudio.core.plane import Frame
+from leafstudio.model import Leaf
+
+BOUNDARY = -1  # curve index of the boundary; veins are 0, 1, ...
+SAMPLES_PER_SPAN = 16  # curve points per span between two control points
+MIN_BOUNDARY_SAMPLES = 120
+DERIVED_BOUNDARY_POINTS = 24  # control points when a loaded leaf becomes a sketch
+DERIVED_VEIN_POINTS = 8
+
+
+def _identity_frame() -> Frame:
+    return Frame(
+        origin=np.zeros(3), u=np.array([1.0, 0, 0]), v=np.array([0, 1.0, 0]), normal=np.eye(3)[2]
+    )
+
+
+def _centripetal(points: np.ndarray) -> np.ndarray:
+    """Cumulative centripetal parameter of (n, d) points (square root of chord lengths)."""
+    steps = np.sqrt(np.linalg.norm(np.diff(points, axis=0), axis=1))
+    return np.concatenate([[0.0], np.cumsum(steps)])
+
+
+def _drop_repeats(points: np.ndarray, closed: bool) -> np.ndarray:
+    """Control points without consecutive duplicates (a spline cannot pass twice in no time)."""
+    if len(points) < 2:
+        return points
+    ahead = np.roll(points, -1, axis=0) if closed else points[1:]
+    same = np.all(np.isclose(points[: len(ahead)], ahead, rtol=0, atol=1e-12), axis=1)
+    keep = np.ones(len(points), dtype=bool)
+    keep[: len(ahead)] &= ~same
+    return points[keep]
+
+
+def closed_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.ndarray:
+    """Points along the periodic cubic spline through (n, 2) control points, n >= 3.
+
+    Returns
+    -------
+    (s, 2) float array
+        Counter-ordered like the control points, without repeating the first point.
+    """
+    control = _drop_repeats(np.asarray(control, dtype=float), closed=True)
+    if len(control) < 3:
+        return control
+    loop = np.vstack([control, control[:1]])
+    t = _centripetal(loop)
+    spline = CubicSpline(t, loop, bc_type="periodic")
+    count = max(MIN_BOUNDARY_SAMPLES, per_span * len(control))
+    return spline(np.linspace(0.0, t[-1], count, endpoint=False))
+
+
+def open_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.ndarray:
+    """Points along the natural cubic spline through (m, d) control points (a line for m = 2)."""
+    control = _drop_repeats(np.asarray(control, dtype=float), closed=False)
+    if len(control) < 2:
+        return control
+    t = _centripetal(control)
+    s = np.linspace(0.0, t[-1], per_span * (len(control) - 1) + 1)
+    if len(control) == 2:
+        return control[0] + np.outer(s / t[-1], control[1] - control[0])
+    return CubicSpline(t, control, bc_type="natural")(s)
+
+
+def _even_by_length(points: np.ndarray, count: int, closed: bool) -> np.ndarray:
+    """`count` of the (n, d) points spread evenly by arc length along them (indices kept)."""
+    path = np.vstack([points, points[:1]]) if closed else points
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path[:, :2], axis=0), axis=1))])
+    targets = np.linspace(0.0, arc[-1], count, endpoint=not closed)
+    index = np.unique(np.clip(np.searchsorted(arc, targets), 0, len(points) - 1))
+    return points[index]
+
+
+def insert_index(control: np.ndarray, xy: np.ndarray, closed: bool) -> int:
+    """Where a new point `xy` belongs in the control polygon: after the nearest span's start.
+
+    For an open curve a point nearer an end than any span goes before the start or after the end.
+    """
+    control = np.asarray(control, dtype=float)[:, :2]
+    n = len(control)
+    if n < 2:
+        return n
+    a = control if closed else control[:-1]
+    b = np.roll(control, -1, axis=0) if closed else control[1:]
+    ab = b - a
+    length2 = np.maximum((ab**2).sum(axis=1), 1e-300)
+    t = np.clip(((xy - a) * ab).sum(axis=1) / length2, 0.0, 1.0)
+    dist = np.linalg.norm(a + t[:, None] * ab - xy, axis=1)
+    span = int(np.argmin(dist))
+    if not closed:
+        if span == 0 and t[0] == 0.0:
+            return 0
+        if span == len(a) - 1 and t[-1] == 1.0:
+            return n
+    return span + 1
+
+
+@dataclass(frozen=True, eq=False)
+class Sketch:
+    """Control points of a leaf drawn on a plane.
+
+    Parameters
+    ----------
+    boundary : (n, 2) float array
+        Boundary control points, in order around the leaf.
+    veins : tuple of (m_i, 3) float arrays
+        Per vein, its control points in order: x, y and the height above the plane.
+    frame : Frame
+        The plane the sketch lies on, mapping it to world coordinates.
+    """
+
+    boundary: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    veins: tuple[np.ndarray, ...] = ()
+    frame: Frame = field(default_factory=_identity_frame)
+
+    def __post_init__(self) -> None:
+        boundary = np.asarray(self.boundary, dtype=float).reshape(-1, 2)
+        veins = tuple(np.asarray(v, dtype=float).reshape(-1, 3) for v in self.veins)
+        object.__setattr__(self, "boundary", boundary)
+        object.__setattr__(self, "veins", veins)
+
+    # --- reading -------------------------------------------------------------------------------
+    def control(self, curve: int) -> np.ndarray:
+        """Control points of a curve: (n, 2) for the boundary, (m, 3) for vein `curve`."""
+        return self.boundary if curve == BOUNDARY else self.veins[curve]
+
+    def boundary_curve(self) -> np.ndarray:
+        """(s, 2) points along the closed boundary curve (empty below 3 control points)."""
+        return closed_curve(self.boundary) if len(self.boundary) >= 3 else np.zeros((0, 2))
+
+    def vein_curve(self, index: int) -> np.ndarray:
+        """(s, 3) points along vein `index`: x, y, height."""
+        return open_curve(self.veins[index])
+
+    def to_leaf(self) -> Leaf | None:
+        """The leaf this sketch draws, in world coordinates; None below 3 boundary points."""
+        outline = self.boundary_curve()
+        if len(outline) < 3:
+            return None
+        boundary = self.frame.to_world(outline, np.zeros(len(outline)))
+        veins = []
+        for i, vein in enumerate(self.veins):
+            if len(vein):
+                curve = self.vein_curve(i)
+                veins.append(self.frame.to_world(curve[:, :2], curve[:, 2]))
+        return Leaf(boundary=boundary, veins=veins)
+
+    def extent(self) -> float:
+        """Largest side of the control points' box (1 for an empty sketch)."""
+        points = np.vstack([self.boundary, *(v[:, :2] for v in self.veins)])
+        size = float(np.ptp(points, axis=0).max()) if len(points) > 1 else 0.0
+        return size if size > 0 else 1.0
+
+    # --- editing: each returns a new sketch ---------------------------------------------------
+    def _with_curve(self, curve: int, control: np.ndarray) -> Sketch:
+        if curve == BOUNDARY:
+            return replace(self, boundary=control)
+        veins = list(self.veins)
+        veins[curve] = control
+        return replace(self, veins=tuple(veins))
+
+    def moved(self, curve: int, index: int, xy: np.ndarray) -> Sketch:
+        """The sketch with one control point moved to plane point `xy`."""
+        control = self.control(curve).copy()
+        control[index, :2] = xy
+        return self._with_curve(curve, control)
+
+    def inserted(self, curve: int, xy: np.ndarray, height: float = 0.0) -> tuple[Sketch, int]:
+        """The sketch with a control point added where it fits best, and the point's index."""
+        control = self.control(curve)
+        index = insert_index(control, np.asarray(xy, dtype=float), closed=curve == BOUNDARY)
+        row = np.asarray(xy, dtype=float) if curve == BOUNDARY else np.array([*xy, height])
+        return self._with_curve(curve, np.insert(control, index, row, axis=0)), index
+
+    def deleted(self, curve: int, index: int) -> Sketch:
+        """The sketch without one control point."""
+        return self._with_curve(curve, np.delete(self.control(curve), index, axis=0))
+
+    def with_height(self, vein: int, index: int, height: float) -> Sketch:
+        """The sketch with a vein control point's height set."""
+        control = self.veins[vein].copy()
+        control[index, 2] = height
+        return self._with_curve(vein, control)
+
+    def with_new_vein(self) -> Sketch:
+        """The sketch with an empty vein appended (its index is len(veins) - 1)."""
+        return replace(self, veins=(*self.veins, np.zeros((0, 3))))
+
+    def default_height(self, vein: int, xy: np.ndarray) -> float:
+        """Height for a new point of a vein: that of its nearest control point, else 5% of the
+        sketch's size."""
+        control = self.veins[vein]
+        if len(control) == 0:
+            return 0.05 * self.extent()
+        return float(control[np.argmin(np.linalg.norm(control[:, :2] - xy, axis=1)), 2])
+
+    # --- files ---------------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form, stored as a project's "sketch"."""
+        return {
+            "plane": {
+                "origin": self.frame.origin.tolist(),
+                "u": self.frame.u.tolist(),
+                "v": self.frame.v.tolist(),
+                "normal": self.frame.normal.tolist(),
+            },
+            "boundary": self.boundary.tolist(),
+            "veins": [v.tolist() for v in self.veins],
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> Sketch:
+        """The sketch stored by `to_dict`.
+
+        Raises
+        ------
+        ValueError
+            If the stored arrays have the wrong shape.
+        """
+        plane = data.get("plane") or {}
+        frame = (
+            Frame(
+                **{k: np.asarray(plane[k], dtype=float).reshape(3) for k in Frame.__annotations__}
+            )
+            if plane
+            else _identity_frame()
+        )
+        return cls(
+            boundary=np.asarray(data.get("boundary", []), dtype=float).reshape(-1, 2),
+            veins=tuple(np.asarray(v, dtype=float).reshape(-1, 3) for v in data.get("veins", [])),
+            frame=frame,
+        )
+
+    @classmethod
+    def from_result(cls, result: Any) -> Sketch:
+        """A sketch approximating a reconstructed leaf: control points spread along its outline
+        and along each vein, on the leaf's own plane (the pipeline's frame)."""
+        boundary = _even_by_length(result.polygon, DERIVED_BOUNDARY_POINTS, closed=True)
+        veins = []
+        for vein in result.leaf.veins:
+            xy, h = result.frame.to_plane(vein)
+            points = np.column_stack([xy, h])
+            veins.append(_even_by_length(points, min(DERIVED_VEIN_POINTS, len(points)), False))
+        return cls(boundary=boundary, veins=tuple(veins), frame=result.frame)

@@ -1,0 +1,81 @@
+"""Automatic K: BIC on the EM samples picks the number of separate bumps, and on the paper's
+leaves a K whose surface is no farther from the input than the paper's."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from sklearn.mixture import GaussianMixture
+
+import leafstudio as ls
+from leafstudio.core.autok import bic, choose_mixture
+from leafstudio.core.gmm import fit_mixture, sample_guide
+from leafstudio.demos import PAPER_K
+
+CENTRES = np.array([[0.5, 0.5], [1.5, 0.6], [2.5, 0.4]])
+
+
+def _three_bumps(seed: int) -> np.ndarray:
+    """EM samples drawn from heights made of three well-separated Gaussian bumps."""
+    xs, ys = np.meshgrid(np.linspace(0, 3, 121), np.linspace(0, 1, 41))
+    nodes = np.column_stack([xs.ravel(), ys.ravel()])
+    heights = sum(
+        h * np.exp(-np.sum((nodes - c) ** 2, axis=1) / (2 * 0.12**2))
+        for h, c in zip((1.0, 0.6, 0.8), CENTRES, strict=True)
+    )
+    return sample_guide(nodes, heights, 4000, 0.025, seed)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_three_separate_bumps_give_three_components(seed):
+    mixture, scores = choose_mixture(_three_bumps(seed), seed)
+    assert len(mixture.weights) == 3
+    assert set(scores) == set(range(1, 13))
+    order = np.argsort(mixture.means[:, 0])
+    assert np.allclose(mixture.means[order], CENTRES, atol=0.03)
+
+
+def test_bic_is_sklearns():
+    samples = _three_bumps(0)
+    mixture = fit_mixture(samples, 2, 0)
+    reference = GaussianMixture(2, covariance_type="full", random_state=0, reg_covar=1e-6)
+    assert bic(mixture, samples) == pytest.approx(reference.fit(samples).bic(samples), rel=1e-6)
+
+
+def test_few_samples_limit_the_ks_tried():
+    samples = np.random.default_rng(0).normal(size=(20, 2))
+    mixture, scores = choose_mixture(samples, 0)
+    assert max(scores) == 4
+    assert len(mixture.weights) in scores
+
+
+@pytest.mark.parametrize("name", ["nested", "parallel"])
+def test_auto_k_is_no_worse_than_the_papers_k(name):
+    pipe = ls.Pipeline(ls.demo(name))
+    paper = pipe.run(ls.Params(k=PAPER_K[name]))
+    auto = pipe.run(ls.Params(k="auto"))
+    assert auto.ran == ("gmm", "surface", "mesh")
+    assert 1 <= auto.chosen_k <= 12
+    assert paper.chosen_k == PAPER_K[name]
+    assert auto.metrics["veins"]["mean"] <= paper.metrics["veins"]["mean"] * 1.001
+    assert auto.metrics["veins"]["max"] <= paper.metrics["veins"]["max"] * 1.001
+    assert auto.metrics["boundary"]["max"] <= paper.metrics["boundary"]["max"] + 1e-9
+
+
+def test_auto_on_a_flat_leaf_is_one_flat_component():
+    t = np.linspace(0, 2 * np.pi, 100, endpoint=False)
+    leaf = ls.Leaf(boundary=np.column_stack([np.cos(t), 0.5 * np.sin(t), np.zeros_like(t)]))
+    result = ls.Pipeline(leaf).run(ls.Params(k="auto", grid=32))
+    assert result.chosen_k == 1
+    assert np.allclose(result.mesh["height"], 0)
+
+
+@pytest.mark.parametrize("bad", ["many", "Auto", 0, 13.0, True])
+def test_params_reject_other_ks(bad):
+    with pytest.raises(ls.LeafError, match="K must be"):
+        ls.Params(k=bad)
+
+
+def test_params_accept_auto_and_round_trip():
+    params = ls.Params(k="auto")
+    assert ls.Params.from_dict(params.to_dict()) == params

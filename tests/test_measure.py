@@ -1,0 +1,86 @@
+"""Measurements against leaves with known answers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import shapely
+from scipy.spatial.transform import Rotation
+
+import leafstudio as ls
+from leafstudio.core.curvature import CURVATURE_ARRAYS
+from leafstudio.core.measure import FIELDS, format_table, leaf_measurements
+
+A, B = 1.0, 0.4  # the ellipse leaf's semi-axes
+
+
+def _ellipse(n: int = 400) -> np.ndarray:
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    return np.column_stack([A * np.cos(t), B * np.sin(t), np.zeros(n)])
+
+
+def _moved(points: np.ndarray) -> np.ndarray:
+    return Rotation.from_euler("xyz", [30, -20, 50], degrees=True).apply(points) + np.array([5.0, -3.0, 2.0])
+
+
+@pytest.fixture(scope="module")
+def flat():
+    """An ellipse leaf without veins, tilted and moved in space: flat, of known size."""
+    with pytest.warns(UserWarning, match="flat"):
+        return ls.reconstruct(ls.Leaf(boundary=_moved(_ellipse())), ls.Params(grid=48))
+
+
+@pytest.fixture(scope="module")
+def ridged():
+    """The ellipse with a raised midrib."""
+    x = np.linspace(-0.8, 0.8, 60)
+    vein = np.column_stack([x, np.zeros_like(x), 0.1 * (1 - x**2)])
+    leaf = ls.Leaf(boundary=_ellipse(), veins=[vein])
+    return ls.reconstruct(leaf, ls.Params(k=2, grid=48))
+
+
+def test_flat_ellipse_has_the_ellipse_sizes(flat):
+    m = leaf_measurements(flat)
+    polygon_area = shapely.Polygon(_ellipse()[:, :2]).area  # π a b up to the outline's sampling
+    assert m["projected_area"] == pytest.approx(polygon_area, rel=1e-9)
+    assert m["area"] == pytest.approx(polygon_area, rel=1e-9)
+    assert m["area"] == pytest.approx(np.pi * A * B, rel=1e-3)
+    ramanujan = np.pi * (3 * (A + B) - np.sqrt((3 * A + B) * (A + 3 * B)))
+    assert m["perimeter"] == pytest.approx(ramanujan, rel=1e-3)
+    assert m["length"] == pytest.approx(2 * A, rel=1e-6)
+    assert m["width"] == pytest.approx(2 * B, rel=1e-3)
+    assert m["aspect_ratio"] == pytest.approx(A / B, rel=1e-3)
+    assert m["height"] == pytest.approx(0, abs=1e-12)
+    assert m["k"] == 1
+
+
+def test_flat_leaf_has_zero_curvature(flat):
+    m = leaf_measurements(flat)
+    for name in CURVATURE_ARRAYS:
+        assert np.all(flat.mesh[name] == 0)
+        assert m["curvature"][name] == {"min": 0.0, "max": 0.0, "mean": 0.0}
+
+
+def test_ridged_leaf_area_is_the_integral_of_its_slope(ridged):
+    m = leaf_measurements(ridged)
+    assert m["projected_area"] == pytest.approx(np.pi * A * B, rel=2e-3)
+    # ∫∫ √(1 + |∇z|²) over the leaf, by the closed-form gradient on a fine grid
+    xs, ys = np.meshgrid(np.linspace(-A, A, 801), np.linspace(-B, B, 321))
+    xy = np.column_stack([xs.ravel(), ys.ravel()])
+    inside = (xy[:, 0] / A) ** 2 + (xy[:, 1] / B) ** 2 < 1
+    slope = np.sum(ridged.surface.gradient(xy[inside]) ** 2, axis=1)
+    cell = (2 * A / 800) * (2 * B / 320)
+    integral = np.sqrt(1 + slope).sum() * cell
+    assert m["area"] > m["projected_area"] * 1.01
+    assert m["area"] == pytest.approx(integral, rel=5e-3)
+    assert m["height"] == pytest.approx(0.1, rel=0.1)
+    assert m["veins"]["max"] < 0.01
+    assert m["curvature"]["mean_curvature"]["min"] < 0  # the midrib is a ridge
+
+
+def test_table_lists_every_measurement(ridged):
+    table = format_table(leaf_measurements(ridged))
+    for _, label in FIELDS:
+        assert label in table
+    assert "distance veins -> mesh" in table
+    assert len(table.splitlines()) == len(FIELDS) + 1 + len(CURVATURE_ARRAYS) + 2
