@@ -9,6 +9,7 @@ veins below the boundary's plane, that a single scale cannot.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -114,4 +115,53 @@ def fit_mixture(samples: np.ndarray, k: int, seed: int) -> Mixture:
         means=gmm.means_.copy(),
         covariances=gmm.covariances_.copy(),
         amplitudes=gmm.weights_.copy(),
+    )
+
+
+MIN_SIGN_SHARE = 0.05  # a sign of the guide with less of its mass than this gets no component
+
+
+def split_components(positive_share: float, k: int) -> tuple[int, int]:
+    """Components for the guide's positive and negative parts, in proportion to their mass.
+
+    A part holding at least MIN_SIGN_SHARE of the mass gets at least one component when k >= 2.
+    """
+    if positive_share >= 1 - MIN_SIGN_SHARE:
+        return k, 0
+    if positive_share <= MIN_SIGN_SHARE:
+        return 0, k
+    if k == 1:
+        return (1, 0) if positive_share >= 0.5 else (0, 1)
+    k_pos = int(np.clip(round(k * positive_share), 1, k - 1))
+    return k_pos, k - k_pos
+
+
+def fit_signed_mixture(
+    samples: np.ndarray,
+    positive: np.ndarray,
+    fit: Callable[[np.ndarray, int | None], Mixture],
+    k: int | None,
+) -> Mixture:
+    """One mixture for a guide that may be positive in places and negative in others.
+
+    A density cannot be negative, so the samples drawn from |p| where p > 0 and those where p < 0
+    are fitted apart (`fit(part, k_part)`; k_part is None when `k` is None, for an automatic
+    choice) and joined, each part's weights scaled by its share of the samples. The signed
+    amplitudes fitted afterwards (surface.py) then raise one part and lower the other.
+    """
+    share = float(positive.mean())
+    if k is None:
+        counts = [None if share > MIN_SIGN_SHARE else 0, None if share < 1 - MIN_SIGN_SHARE else 0]
+    else:
+        counts = list(split_components(share, k))
+    parts = [
+        (fit(samples[mask], count), mask.mean())
+        for mask, count in zip((positive, ~positive), counts, strict=True)
+        if count != 0
+    ]
+    return Mixture(
+        weights=np.concatenate([m.weights * frac for m, frac in parts]),
+        means=np.concatenate([m.means for m, _ in parts]),
+        covariances=np.concatenate([m.covariances for m, _ in parts]),
+        amplitudes=np.concatenate([m.weights * frac for m, frac in parts]),
     )
