@@ -30,7 +30,7 @@ from leafstudio.core import analysis, mesher
 from leafstudio.core.autok import choose_mixture
 from leafstudio.core.base import BaseSurface, fit_base
 from leafstudio.core.curvature import surface_curvatures
-from leafstudio.core.gmm import Mixture, fit_mixture, sample_guide
+from leafstudio.core.gmm import Mixture, fit_mixture, fit_signed_mixture, sample_guide
 from leafstudio.core.grid import Grid, make_grid
 from leafstudio.core.height import height_guide
 from leafstudio.core.mpu import MPUImplicit, build_mpu
@@ -302,9 +302,20 @@ def _gmm_stage(
         return np.zeros((0, 2)), _flat_mixture(fs.polygon.mean(axis=0))
     p_in = guide.p[guide.inside]
     samples = sample_guide(nodes, p_in, params.samples, grid.spacing, params.seed)
+    # the sign of p at each sample's node: veins above and below the plane are fitted apart
+    cell = np.rint((samples - grid.origin) / grid.spacing).astype(int)
+    ny, nx = grid.shape
+    cell = np.clip(cell, 0, [nx - 1, ny - 1])
+    positive = guide.p[cell[:, 1] * nx + cell[:, 0]] >= 0
     if params.k == K_AUTO:
-        return samples, choose_mixture(samples, params.seed)[0]
-    return samples, fit_mixture(samples, params.k, params.seed)
+        mixture = fit_signed_mixture(
+            samples, positive, lambda part, _k: choose_mixture(part, params.seed)[0], None
+        )
+    else:
+        mixture = fit_signed_mixture(
+            samples, positive, lambda part, k: fit_mixture(part, k, params.seed), params.k
+        )
+    return samples, mixture
 
 
 def _surface_stage(
