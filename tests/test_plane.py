@@ -1,0 +1,55 @@
+"""Step 1: the PCA plane and the signed heights of eq. 3."""
+
+import numpy as np
+import pytest
+
+from leafstudio.core.plane import fit_frame
+from leafstudio.errors import LeafError
+
+
+def _square(z: float = 2.0) -> np.ndarray:
+    return np.array([[0, 0, z], [4, 0, z], [4, 1, z], [0, 1, z]], dtype=float)
+
+
+def test_plane_passes_through_the_mean_with_the_least_variance_normal():
+    frame = fit_frame(_square(), np.array([[1.0, 0.5, 3.0]]))
+    np.testing.assert_allclose(frame.origin, [2, 0.5, 2])
+    np.testing.assert_allclose(np.abs(frame.normal), [0, 0, 1], atol=1e-12)
+    np.testing.assert_allclose(np.abs(frame.u), [1, 0, 0], atol=1e-12)  # the long side
+
+
+def test_eq3_height_is_the_distance_to_the_plane_signed_toward_the_veins():
+    veins = np.array([[1.0, 0.5, 2.5], [3.0, 0.5, 1.75]])
+    frame = fit_frame(_square(), veins)
+    _, h = frame.to_plane(veins)
+    # |ax + by + cz + d| / |(a, b, c)| for the plane z = 2 is |z - 2|; the mean side is up
+    np.testing.assert_allclose(h, [0.5, -0.25])
+
+
+def test_normal_flips_to_the_side_where_the_veins_are():
+    frame = fit_frame(_square(), np.array([[1.0, 0.5, 1.0]]))
+    np.testing.assert_allclose(frame.normal, [0, 0, -1], atol=1e-12)
+    _, h = frame.to_plane(np.array([[1.0, 0.5, 1.0]]))
+    assert h[0] == pytest.approx(1.0)
+
+
+def test_world_and_plane_coordinates_round_trip():
+    rng = np.random.default_rng(0)
+    boundary = rng.normal(size=(30, 3)) * [3, 1, 0.01] + [5, -2, 7]
+    frame = fit_frame(boundary, boundary[:2] + [0, 0, 1])
+    xy, h = frame.to_plane(boundary)
+    np.testing.assert_allclose(frame.to_world(xy, h), boundary, atol=1e-12)
+    assert np.allclose(np.cross(frame.u, frame.v), frame.normal)  # right-handed
+
+
+@pytest.mark.parametrize(
+    "points, message",
+    [
+        (np.array([[0, 0, 0], [1, 1, 1], [2, 2, 2], [3, 3, 3.0]]), "one line"),
+        (np.array([[1, 2, 3]] * 5, dtype=float), "at least 3 distinct"),
+        (np.array([[0, 0, 0], [1, 0, 0.0]]), "at least 3 distinct"),
+    ],
+)
+def test_degenerate_boundaries_are_refused(points, message):
+    with pytest.raises(LeafError, match=message):
+        fit_frame(points, np.zeros((0, 3)))
