@@ -1,0 +1,47 @@
+"""Step 3: the height guide p(x), eqs. 4-5, checked against values worked out by hand."""
+
+import numpy as np
+import pytest
+
+from leafstudio.core.height import height_guide
+
+# A boundary line y = 0 (densely sampled) and horizontal veins above it.
+BOUNDARY = np.column_stack([np.linspace(-5, 5, 10001), np.zeros(10001)])
+
+
+def _vein(y: float, h: float, x0: float = -5, x1: float = 5, n: int = 10001):
+    x = np.linspace(x0, x1, n)
+    return np.column_stack([x, np.full(n, y)]), np.full(n, h)
+
+
+def test_eq4_rises_linearly_from_the_margin_to_the_vein():
+    vein, h = _vein(2.0, 0.3)
+    xy = np.array([[0.0, 0.0], [0.0, 0.5], [0.0, 1.0], [0.0, 1.5], [0.0, 2.0]])
+    p = height_guide(xy, BOUNDARY, [vein], [h])
+    # p = h_v |b - x| / |b - v'| with b = (0, 0), v' = (0, 2)
+    np.testing.assert_allclose(p, [0.0, 0.075, 0.15, 0.225, 0.3], atol=1e-12)
+
+
+def test_eq4_by_hand_at_a_slanted_point():
+    """x = (1, 0.8): b = (1, 0), v' = (1, 2): |b - x| = 0.8, |b - v'| = 2, p = 0.5 * 0.4."""
+    vein, h = _vein(2.0, 0.5)
+    assert height_guide(np.array([[1.0, 0.8]]), BOUNDARY, [vein], [h])[0] == pytest.approx(0.2)
+
+
+def test_eq5_between_two_parallel_veins_dips_to_three_quarters_midway():
+    low, h_low = _vein(4.0, 0.4)
+    high, h_high = _vein(6.0, 0.4)
+    xy = np.array([[0.0, 4.0], [0.0, 4.5], [0.0, 5.0]])
+    p = height_guide(xy, BOUNDARY, [low, high], [h_low, h_high])
+    # h_v (1 - |v' - x| / (2 |v' - v''|)) with |v' - v''| = 2
+    np.testing.assert_allclose(p, [0.4, 0.4 * (1 - 0.5 / 4), 0.3], atol=1e-12)
+
+
+def test_signed_heights_give_a_negative_guide():
+    vein, h = _vein(2.0, -0.3)
+    p = height_guide(np.array([[0.0, 1.0]]), BOUNDARY, [vein], [h])
+    assert p[0] == pytest.approx(-0.15)
+
+
+def test_no_veins_gives_a_flat_guide():
+    np.testing.assert_array_equal(height_guide(np.zeros((4, 2)), BOUNDARY, [], []), 0.0)
