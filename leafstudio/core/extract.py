@@ -1,0 +1,295 @@
+"""From a leaf scan (a point cloud of its whole surface) to what the paper takes: boundary, veins.
+
+1. Clean: drop points far from their neighbours (outliers) and small detached clusters.
+2. Keep the blade: a petiole is a thin strand, so the points of the blade's interior have many
+   more neighbours within a ball of radius r than a strand's; the blade is the largest connected
+   group of such "core" points, grown back by r/2 to recover its margin and tip (a morphological
+   opening of the point set). Whatever else remains is the petiole; it marks the base.
+3. Project the blade on its PCA plane; its outline is the closing of the points' disks (a concave
+   hull that bridges scanner stripes), evenly resampled and lifted to the scan's heights by a
+   local plane fit (so the margin's heights come from the scan, not from the nearest point).
+4. Midrib: from the base to the tip, through the middle of the blade's cross-sections, lifted to
+   the surface. Side veins: straight from the midrib toward the margin at 50° to it, lifted too,
+   and cut where the scan has a gap.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import Delaunay, cKDTree
+from shapely.geometry import LineString, MultiPoint, Point, Polygon
+
+from leafstudio.errors import LeafError
+from leafstudio.model import Leaf
+
+MIN_POINTS = 50
+OUTLIER_FACTOR = 3.0  # a point whose mean neighbour distance exceeds this many medians is noise
+NEIGHBOURS = 8
+LINK = 4.0  # points closer than this many median neighbour distances are connected
+CLUSTER_SHARE = 0.1  # detached clusters smaller than this share of the largest are dropped
+BALL = 0.08  # r, the ball of the blade test, as a fraction of the scan's length
+CORE = 0.4  # core points have at least this share of the busiest balls' count
+LIFT_NEIGHBOURS = 16
+PETIOLE_SHARE = 0.02  # fewer points than this share of the blade's do not mark the base
+SIDE_STATIONS = (0.2, 0.35, 0.5, 0.65, 0.8)  # where side veins leave the midrib (arc length)
+SIDE_ANGLE = np.deg2rad(50.0)
+SIDE_REACH = 0.85  # side veins stop at this share of the way to the margin
+MIDRIB_REACH = (0.02, 0.98)  # the midrib's span along base -> tip
+AXES = {"+x": 0, "-x": 0, "+y": 1, "-y": 1, "+z": 2, "-z": 2}
+
+
+@dataclass(frozen=True)
+class Extraction:
+    """What `extract_leaf` found.
+
+    Attributes
+    ----------
+    leaf : Leaf
+        Boundary (evenly resampled, in order) and veins (midrib first), in scan coordinates.
+    blade : (n,) bool array
+        Which scan points belong to the blade (not outliers, clutter or petiole).
+    petiole : (n,) bool array
+        Which scan points were taken as the petiole.
+    length : float
+        The blade's length along its main axis, in scan units.
+    """
+
+    leaf: Leaf
+    blade: np.ndarray
+    petiole: np.ndarray
+    length: float
+
+
+def _neighbour_spacing(points: np.ndarray) -> np.ndarray:
+    """(n,) mean distance from each point to its NEIGHBOURS nearest others."""
+    dist, _ = cKDTree(points).query(points, k=min(NEIGHBOURS + 1, len(points)))
+    return dist[:, 1:].mean(axis=1)
+
+
+def _components(points: np.ndarray, radius: float) -> np.ndarray:
+    """(n,) label of each point's connected group, linking points within `radius`."""
+    pairs = cKDTree(points).query_pairs(radius, output_type="ndarray")
+    from scipy.sparse import coo_matrix
+
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(points),) * 2)
+    return connected_components(graph, directed=False)[1]
+
+
+def clean_scan(points: np.ndarray) -> np.ndarray:
+    """(n,) bool: the points kept once outliers and small detached clusters are dropped."""
+    spacing = _neighbour_spacing(points)
+    typical = float(np.median(spacing))
+    keep = spacing <= OUTLIER_FACTOR * typical
+    labels = _components(points[keep], LINK * typical)
+    sizes = np.bincount(labels)
+    big = sizes >= CLUSTER_SHARE * sizes.max()
+    kept = np.flatnonzero(keep)
+    keep[kept[~big[labels]]] = False
+    return keep
+
+
+def blade_points(points: np.ndarray) -> np.ndarray:
+    """(n,) bool: the blade among cleaned scan points, without a petiole that sticks out."""
+    centred = points - points.mean(axis=0)
+    extent = float(np.ptp(centred @ np.linalg.svd(centred, full_matrices=False)[2][0]))
+    radius = BALL * extent
+    tree = cKDTree(points)
+    counts = tree.query_ball_point(points, radius, return_length=True)
+    core = counts >= CORE * np.percentile(counts, 90)
+    typical = float(np.median(_neighbour_spacing(points)))
+    labels = _components(points[core], LINK * typical)
+    main = np.flatnonzero(core)[labels == np.argmax(np.bincount(labels))]
+    near, _ = cKDTree(points[main]).query(points, distance_upper_bound=0.5 * radius)
+    return np.isfinite(near)
+
+
+def _plane(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The PCA frame of points: origin (3,) and axes (3, 3), rows u (length), v, normal."""
+    origin = points.mean(axis=0)
+    axes = np.linalg.svd(points - origin, full_matrices=False)[2]
+    if np.linalg.det(axes) < 0:
+        axes[2] = -axes[2]
+    return origin, axes
+
+
+def lift(query: np.ndarray, xy: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """(q,) heights at (q, 2) plane points from a weighted local plane fit to the scan's (n, 2)
+    points and (n,) heights (extrapolates sensibly at the margin, smooths scanner noise)."""
+    k = min(LIFT_NEIGHBOURS, len(xy))
+    dist, idx = cKDTree(xy).query(query, k=k)
+    d = xy[idx] - query[:, None, :]
+    design = np.concatenate([np.ones((len(query), k, 1)), d], axis=2)
+    weight = 1.0 / (dist + dist[:, :1] + 1e-12)
+    normal = np.einsum("nk,nki,nkj->nij", weight, design, design)
+    scale = np.trace(normal, axis1=1, axis2=2)[:, None, None]
+    normal += 1e-6 * scale * np.eye(3)
+    rhs = np.einsum("nk,nki,nk->ni", weight, design, h[idx])
+    return np.linalg.solve(normal, rhs[..., None])[:, 0, 0]
+
+
+def _outline(xy: np.ndarray, count: int) -> np.ndarray:
+    """(count, 2) points evenly around a concave hull of the points whose edges bridge gaps of up
+    to twice the scan's typical largest point spacing (scanner stripes), and nothing longer."""
+    gaps, _ = cKDTree(xy).query(xy, k=2)
+    bridge = 4.0 * float(np.percentile(gaps[:, 1], 95))
+    simplices = Delaunay(xy).simplices
+    edges = np.linalg.norm(xy[simplices] - xy[np.roll(simplices, 1, axis=1)], axis=2)
+    lo, hi = float(edges.min()), float(edges.max())
+    ratio = float(np.clip((bridge - lo) / max(hi - lo, 1e-300), 0.0, 1.0))
+    hull = shapely.concave_hull(MultiPoint(xy), ratio=ratio)
+    polys = [g for g in getattr(hull, "geoms", [hull]) if isinstance(g, Polygon) and g.area > 0]
+    if not polys:
+        raise LeafError("the scan's points do not cover an area")
+    ring = shapely.geometry.polygon.orient(max(polys, key=lambda g: g.area)).exterior
+    steps = np.linspace(0.0, ring.length, count, endpoint=False)
+    return shapely.get_coordinates(shapely.line_interpolate_point(ring, steps))
+
+
+def _base_point(
+    base_end: str, axes: np.ndarray, outline: np.ndarray, xy: np.ndarray, petiole: np.ndarray
+) -> np.ndarray:
+    """(2,) the blade's base in the plane: where the petiole joins (auto, if there is one), else
+    the outline's extreme along the main axis at the base end (auto: the wider end)."""
+    u = outline[:, 0]
+    if base_end == "auto":
+        if len(petiole) >= PETIOLE_SHARE * len(xy):
+            joint = cKDTree(xy).query(petiole)[0]
+            attach = petiole[np.argsort(joint)[: max(3, len(petiole) // 10)]].mean(axis=0)
+            return outline[np.argmin(np.linalg.norm(outline - attach, axis=1))]
+        lo, hi = u.min(), u.max()
+        polygon = Polygon(outline)
+        width = [_chord(polygon, lo + f * (hi - lo)).length for f in (0.25, 0.75)]
+        side = 1.0 if width[1] > width[0] else -1.0
+    elif base_end in AXES:
+        sign = 1.0 if base_end[0] == "+" else -1.0
+        along = sign * axes[0, AXES[base_end]]
+        if abs(along) < 1e-6:
+            raise LeafError(f"base end {base_end}: the leaf's length lies across that axis")
+        side = float(np.sign(along))
+    else:
+        raise LeafError(f"base end must be auto or one of {', '.join(AXES)}, got {base_end!r}")
+    return outline[np.argmax(side * u)]
+
+
+def _chord(polygon: Polygon, u: float):
+    """The polygon's cross-section at plane coordinate x = u (a line or several)."""
+    lo, hi = polygon.bounds[1] - 1, polygon.bounds[3] + 1
+    return polygon.intersection(LineString([(u, lo), (u, hi)]))
+
+
+def _midline(outline: np.ndarray, base: np.ndarray, spacing: float) -> np.ndarray:
+    """(m, 2) the midrib in the plane, from the base to the tip (the outline point farthest from
+    the base) through the middles of the cross-sections square to the base-tip line."""
+    tip = outline[np.argmax(np.linalg.norm(outline - base, axis=1))]
+    along = (tip - base) / np.linalg.norm(tip - base)
+    across = np.array([-along[1], along[0]])
+    rotation = np.column_stack([along, across])  # plane -> (along, across)
+    polygon = Polygon((outline - base) @ rotation)
+    span = float(np.linalg.norm(tip - base))
+    stations = span * np.linspace(*MIDRIB_REACH, max(int(span / spacing), 8))
+    middle = []
+    previous = 0.0
+    for u in stations:
+        chord = _chord(polygon, u)
+        parts = [g for g in getattr(chord, "geoms", [chord]) if isinstance(g, LineString)]
+        parts = [p for p in parts if p.length > 0]
+        if not parts:
+            continue
+        part = min(parts, key=lambda p: p.distance(Point(u, previous)))
+        previous = part.centroid.y
+        middle.append((u, previous))
+    line = np.asarray(middle)
+    if len(line) >= 5:  # smooth the middle's wobble, keep the ends
+        smooth = np.convolve(line[:, 1], np.ones(5) / 5, mode="same")
+        line[2:-2, 1] = smooth[2:-2]
+    return base + line @ rotation.T
+
+
+def _side_veins(polygon: Polygon, midrib: np.ndarray, covered, spacing: float) -> list[np.ndarray]:
+    """(k_i, 2) side veins: from midrib stations toward the margin at SIDE_ANGLE, toward the tip,
+    up to SIDE_REACH of the way, cut at the first gap in the scan."""
+    steps = np.linalg.norm(np.diff(midrib, axis=0), axis=1)
+    arc = np.concatenate([[0.0], np.cumsum(steps)])
+    reach = 4 * float(np.hypot(*np.ptp(midrib, axis=0)))
+    veins = []
+    for station in SIDE_STATIONS:
+        i = int(np.clip(np.searchsorted(arc, station * arc[-1]), 1, len(midrib) - 2))
+        tangent = midrib[i + 1] - midrib[i - 1]
+        tangent /= np.linalg.norm(tangent)
+        for turn in (SIDE_ANGLE, -SIDE_ANGLE):
+            c, s = np.cos(turn), np.sin(turn)
+            direction = np.array([c * tangent[0] - s * tangent[1], s * tangent[0] + c * tangent[1]])
+            ray = LineString([midrib[i], midrib[i] + reach * direction])
+            hit = polygon.exterior.intersection(ray)
+            if hit.is_empty:
+                continue
+            distance = min(Point(midrib[i]).distance(p) for p in getattr(hit, "geoms", [hit]))
+            count = int(SIDE_REACH * distance / spacing)
+            if count < 4:
+                continue
+            t = np.linspace(0, SIDE_REACH * distance, count + 1)[1:]
+            path = midrib[i] + t[:, None] * direction
+            ok = covered(path)
+            stop = int(np.argmin(ok)) if not ok.all() else len(path)
+            if stop >= 4:
+                veins.append(path[:stop])
+    return veins
+
+
+def extract_leaf(points: np.ndarray, base_end: str = "auto", count: int = 200) -> Extraction:
+    """Boundary and veins of the leaf in a scan of its surface.
+
+    Parameters
+    ----------
+    points : (n, 3) float array
+        The scan's points.
+    base_end : str, default: "auto"
+        Which end of the blade is its base: "auto" (where the petiole was, else the wider end),
+        or a world direction "+x", "-x", "+y", "-y", "+z", "-z" (the base is the end that way).
+    count : int, default: 200
+        Boundary points; the veins are sampled at the same spacing.
+
+    Raises
+    ------
+    LeafError
+        If the scan has too few points or no blade can be found.
+    """
+    points = np.asarray(points, dtype=float)
+    if len(points) < MIN_POINTS:
+        raise LeafError(f"too few points for a leaf scan: {len(points)} (need {MIN_POINTS})")
+    if count < 8:
+        raise LeafError(f"the boundary needs at least 8 points, got {count}")
+    clean = clean_scan(points)
+    blade = np.zeros(len(points), dtype=bool)
+    blade[np.flatnonzero(clean)[blade_points(points[clean])]] = True
+    petiole = clean & ~blade
+    if blade.sum() < MIN_POINTS:
+        raise LeafError(f"found only {blade.sum()} blade points in the scan (need {MIN_POINTS})")
+    origin, axes = _plane(points[blade])
+    local = (points - origin) @ axes.T
+    xy, h = local[blade, :2], local[blade, 2]
+    if np.ptp(xy[:, 1]) < 1e-3 * np.ptp(xy[:, 0]):
+        raise LeafError("the scan's points lie on a line, not a leaf surface")
+    boundary_xy = _outline(xy, count)
+    polygon = Polygon(boundary_xy)
+    spacing = polygon.length / count
+    base = _base_point(base_end, axes, boundary_xy, xy, local[petiole, :2])
+    midrib = _midline(boundary_xy, base, spacing)
+    gaps = cKDTree(xy)
+    reach = 2.0 * float(np.percentile(gaps.query(xy, k=2)[0][:, 1], 95))
+
+    def covered(q: np.ndarray) -> np.ndarray:
+        return np.isfinite(gaps.query(q, distance_upper_bound=reach)[0])
+
+    veins_xy = [midrib, *_side_veins(polygon, midrib, covered, spacing)]
+
+    def world(q: np.ndarray) -> np.ndarray:
+        z = lift(q, xy, h)
+        return origin + np.column_stack([q, z]) @ axes
+
+    leaf = Leaf(boundary=world(boundary_xy), veins=[world(v) for v in veins_xy])
+    return Extraction(leaf=leaf, blade=blade, petiole=petiole, length=float(np.ptp(xy[:, 0])))

@@ -1,0 +1,57 @@
+"""How close a reconstructed surface comes to a real leaf: distances from the scan's points to the
+mesh, and how well the mesh covers the leaf's outline."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pyvista as pv
+import shapely
+
+from leafstudio.core import analysis
+from leafstudio.core.plane import Frame
+
+NEAR, FAR = 0.01, 0.02  # shares of the leaf length for the "beyond" figures
+
+
+def scan_distances(mesh: pv.PolyData, points: np.ndarray, length: float) -> dict[str, Any]:
+    """Distances from (n, 3) scan points to the mesh: mean, median, 95th percentile, maximum, and
+    the share of points beyond 1% and 2% of the leaf length (all in the scan's units).
+
+    Examples
+    --------
+    >>> import numpy as np, pyvista as pv
+    >>> plane = pv.Plane(i_resolution=4, j_resolution=4).triangulate()
+    >>> round(scan_distances(plane, np.array([[0, 0, 0.01], [0.1, 0, 0.03]]), 1.0)["mean"], 6)
+    0.02
+    """
+    d = analysis.point_to_mesh_distance(mesh, np.asarray(points, dtype=float))
+    if len(d) == 0:
+        return {"points": 0}
+    return {
+        "points": len(d),
+        "length": float(length),
+        "mean": float(d.mean()),
+        "median": float(np.median(d)),
+        "p95": float(np.percentile(d, 95)),
+        "max": float(d.max()),
+        "beyond_1pct": float(np.mean(d > NEAR * length)),
+        "beyond_2pct": float(np.mean(d > FAR * length)),
+    }
+
+
+def coverage(mesh: pv.PolyData, frame: Frame, outline: np.ndarray) -> dict[str, Any]:
+    """How the mesh, seen from along the plane normal, covers the (b, 2) outline in the frame's
+    plane: the share of the outline's area covered, the mesh area outside it (as a share of the
+    outline's area), and the number of connected pieces."""
+    triangles = analysis.triangles_of(mesh)
+    xy, _ = frame.to_plane(np.asarray(mesh.points))
+    footprint = shapely.union_all(shapely.polygons(xy[triangles]))
+    region = shapely.Polygon(outline)
+    area = region.area
+    return {
+        "covered": float(footprint.intersection(region).area / area),
+        "outside": float(footprint.difference(region).area / area),
+        "pieces": analysis.connected_pieces(triangles),
+    }

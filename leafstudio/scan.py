@@ -1,0 +1,104 @@
+"""Reading leaf scans: point clouds of a leaf's whole surface (.ply, .pcd, .xyz, .csv, .txt).
+
+Only x, y, z are read; extra columns or properties (normals, colours, intensities) are ignored.
+Leaf files with labelled boundary and veins are io.py's business; this reads raw scans.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from leafstudio.errors import LeafError
+
+SCAN_SUFFIXES = (".ply", ".pcd", ".xyz", ".csv", ".txt")
+MIN_SCAN_POINTS = 50
+
+
+def _text_rows(path: Path, text: str) -> np.ndarray:
+    """x, y, z of each numeric line of a point list (comma, semicolon or whitespace separated)."""
+    rows: list[list[float]] = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        fields = line.split("#", 1)[0].replace(",", " ").replace(";", " ").split()
+        if not fields:
+            continue
+        try:
+            values = [float(f) for f in fields[:3]]
+        except ValueError:
+            if not rows:  # a header line
+                continue
+            raise LeafError(f"line {number}: not a number in {line.strip()!r}", str(path)) from None
+        if len(values) < 3:
+            raise LeafError(f"line {number}: needs x, y and z, got {len(values)} values", str(path))
+        rows.append(values)
+    return np.asarray(rows, dtype=float).reshape(-1, 3)
+
+
+def _pcd_rows(path: Path) -> np.ndarray:
+    """x, y, z of a PCD file (ASCII or binary) through open3d, which reports nothing on failure."""
+    import open3d as o3d
+
+    with o3d.utility.VerbosityContextManager(o3d.utility.VerbosityLevel.Error):
+        cloud = o3d.io.read_point_cloud(str(path), format="pcd")
+    points = np.asarray(cloud.points, dtype=float)
+    if len(points) == 0:
+        raise LeafError("not a readable PCD file, or it holds no points", str(path))
+    return points
+
+
+def _ply_rows(path: Path) -> np.ndarray:
+    from plyfile import PlyData, PlyParseError
+
+    try:
+        ply = PlyData.read(str(path))
+    except (PlyParseError, ValueError, EOFError, OSError) as exc:
+        raise LeafError(f"not a readable PLY file ({exc})", str(path)) from None
+    if "vertex" not in ply:
+        raise LeafError("PLY file has no vertex element", str(path))
+    names = ply["vertex"].data.dtype.names or ()
+    if not {"x", "y", "z"} <= set(names):
+        raise LeafError("PLY vertices need x, y and z properties", str(path))
+    return np.column_stack([ply["vertex"][c] for c in "xyz"]).astype(float)
+
+
+def read_scan(path: str | os.PathLike) -> np.ndarray:
+    """The (n, 3) points of a leaf scan.
+
+    Raises
+    ------
+    LeafError
+        With the file's name, if it is missing, unreadable, of an unknown type, holds NaN or
+        infinite coordinates, or has fewer than MIN_SCAN_POINTS points.
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in SCAN_SUFFIXES:
+        raise LeafError(
+            f"unknown scan type {suffix or '(none)'!r}; use one of {', '.join(SCAN_SUFFIXES)}",
+            str(path),
+        )
+    if not path.exists():
+        raise LeafError("no such file", str(path))
+    if path.is_dir():
+        raise LeafError("is a folder, not a file", str(path))
+    if suffix == ".ply":
+        points = _ply_rows(path)
+    elif suffix == ".pcd":
+        points = _pcd_rows(path)
+    else:
+        try:
+            text = path.read_text(encoding="utf-8")
+        except UnicodeDecodeError:
+            raise LeafError("is not a text file", str(path)) from None
+        points = _text_rows(path, text)
+    if len(points) == 0:
+        raise LeafError("holds no points", str(path))
+    if not np.all(np.isfinite(points)):
+        raise LeafError("NaN or infinite coordinates", str(path))
+    if len(points) < MIN_SCAN_POINTS:
+        raise LeafError(
+            f"too few points for a leaf scan: {len(points)} (need {MIN_SCAN_POINTS})", str(path)
+        )
+    return points
