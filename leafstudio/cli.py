@@ -65,11 +65,31 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument(
         "--metrics", metavar="JSON", help="write Table-1 distances and mesh facts here"
     )
+    rec.add_argument(
+        "--against",
+        metavar="SCAN",
+        help="a scan of the real leaf: report the distances from its points to the surface",
+    )
 
     dem = sub.add_parser("demo", help="write a built-in leaf")
     dem.add_argument("name", help="nested or parallel")
     dem.add_argument(
         "-o", "--output", required=True, metavar="FILE", help=".leaf.json, .csv, .txt, .xyz or .ply"
+    )
+    ext = sub.add_parser("extract", help="take a leaf's boundary and veins from a 3D scan")
+    ext.add_argument("scan", help="scan: .ply, .pcd, .xyz, .csv or .txt (x y z first)")
+    ext.add_argument(
+        "-o", "--output", required=True, metavar="LEAF", help=".leaf.json, .csv, .txt, .xyz or .ply"
+    )
+    ext.add_argument(
+        "--base-end",
+        default="auto",
+        metavar="END",
+        help="where the leaf's base is: auto (the petiole's end, else the wider end) or the "
+        "world direction it lies in: +x, -x, +y, -y, +z, -z",
+    )
+    ext.add_argument(
+        "--points", type=int, default=200, metavar="N", help="boundary points (default 200)"
     )
     return parser
 
@@ -90,6 +110,11 @@ def _reconstruct(args: argparse.Namespace) -> int:
     if not out.name.lower().endswith(MESH_SUFFIXES):
         raise LeafError(f"unknown mesh type; use one of {', '.join(MESH_SUFFIXES)}", str(out))
     leaf = load_leaf(args.input, veins=args.vein)
+    scan = None
+    if args.against:
+        from leafstudio.scan import read_scan
+
+        scan = read_scan(args.against)
     saved = load_project(args.input)[1] if args.input.lower().endswith(".json") else None
     try:
         params = _params_for(args, saved)
@@ -99,8 +124,28 @@ def _reconstruct(args: argparse.Namespace) -> int:
     for note in result.warnings:
         print(f"leafstudio: warning: {args.input}: {note}", file=sys.stderr)
     save_mesh(result, out)
+    fidelity = None
+    if scan is not None:
+        from leafstudio.core.extract import split_scan
+        from leafstudio.core.fidelity import scan_distances
+
+        blade = split_scan(scan)[0]
+        fidelity = {
+            "all": scan_distances(result.mesh, scan, result.length),
+            "blade": scan_distances(result.mesh, scan[blade], result.length),
+        }
+        for part, what in (("all", "all"), ("blade", "blade (no outliers, no petiole)")):
+            f = fidelity[part]
+            print(
+                f"{args.against}: {what}: {f['points']} points to the surface: mean "
+                f"{f['mean']:.4g}, median {f['median']:.4g}, 95% {f['p95']:.4g}, max "
+                f"{f['max']:.4g}; beyond 1% of the leaf length {f['beyond_1pct']:.1%}, beyond 2% "
+                f"{f['beyond_2pct']:.1%} (leaf length {result.length:.4g})"
+            )
     if args.metrics:
         metrics = {"input": args.input, "params": params.to_dict(), **result.metrics}
+        if fidelity is not None:
+            metrics["fidelity"] = {"scan": args.against, **fidelity}
         Path(args.metrics).write_text(json.dumps(metrics, indent=2) + "\n", encoding="utf-8")
     return EXIT_OK
 
@@ -119,7 +164,29 @@ def _gui(args: argparse.Namespace) -> int:
     return run_app(getattr(args, "file", None), getattr(args, "screenshot", None))
 
 
-COMMANDS = {"gui": _gui, "reconstruct": _reconstruct, "demo": _demo}
+def _extract(args: argparse.Namespace) -> int:
+    from leafstudio.core.extract import extract_leaf
+    from leafstudio.io import LEAF_SUFFIXES, save_leaf
+    from leafstudio.scan import read_scan
+
+    if not args.output.lower().endswith(LEAF_SUFFIXES):
+        raise LeafError(f"unknown leaf type; use one of {', '.join(LEAF_SUFFIXES)}", args.output)
+    if not 8 <= args.points <= 100_000:
+        raise LeafError(f"--points must be between 8 and 100000, got {args.points}")
+    try:
+        found = extract_leaf(read_scan(args.scan), args.base_end, args.points)
+    except LeafError as exc:
+        raise LeafError(exc.problem, args.scan) from None
+    save_leaf(found.leaf, args.output)
+    print(
+        f"{args.scan}: blade of {found.blade.sum()} points ({found.petiole.sum()} petiole points "
+        f"dropped), length {found.length:.4g}; wrote {len(found.leaf.boundary)} boundary points "
+        f"and {len(found.leaf.veins)} veins to {args.output}"
+    )
+    return EXIT_OK
+
+
+COMMANDS = {"gui": _gui, "reconstruct": _reconstruct, "demo": _demo, "extract": _extract}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -107,6 +107,14 @@ def blade_points(points: np.ndarray) -> np.ndarray:
     return np.isfinite(near)
 
 
+def split_scan(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(n,) bool masks of a scan's blade and its petiole (the rest: outliers and clutter)."""
+    clean = clean_scan(points)
+    blade = np.zeros(len(points), dtype=bool)
+    blade[np.flatnonzero(clean)[blade_points(points[clean])]] = True
+    return blade, clean & ~blade
+
+
 def _plane(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The PCA frame of points: origin (3,) and axes (3, 3), rows u (length), v, normal."""
     origin = points.mean(axis=0)
@@ -263,10 +271,7 @@ def extract_leaf(points: np.ndarray, base_end: str = "auto", count: int = 200) -
         raise LeafError(f"too few points for a leaf scan: {len(points)} (need {MIN_POINTS})")
     if count < 8:
         raise LeafError(f"the boundary needs at least 8 points, got {count}")
-    clean = clean_scan(points)
-    blade = np.zeros(len(points), dtype=bool)
-    blade[np.flatnonzero(clean)[blade_points(points[clean])]] = True
-    petiole = clean & ~blade
+    blade, petiole = split_scan(points)
     if blade.sum() < MIN_POINTS:
         raise LeafError(f"found only {blade.sum()} blade points in the scan (need {MIN_POINTS})")
     origin, axes = _plane(points[blade])
