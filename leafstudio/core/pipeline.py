@@ -60,6 +60,7 @@ STAGE_KEYS: dict[str, tuple[str, ...]] = {
         "radius_factor",
     ),
 }
+MIN_NODES_PER_COMPONENT = 5
 VEIN_OUTSIDE_TOLERANCE = 0.01  # vein points may stray this fraction of the leaf length outside
 
 
@@ -301,6 +302,13 @@ def _gmm_stage(
     if flat:
         return np.zeros((0, 2)), _flat_mixture(fs.polygon.mean(axis=0))
     p_in = guide.p[guide.inside]
+    support = int(np.count_nonzero(p_in))  # grid nodes the samples can come from
+    if params.k != K_AUTO and params.k > support // MIN_NODES_PER_COMPONENT:
+        raise LeafError(
+            f"K = {params.k} is more than the data supports: the height guide covers only "
+            f"{support} grid nodes (at least {MIN_NODES_PER_COMPONENT} per component needed); "
+            f"lower K or raise the grid resolution"
+        )
     samples = sample_guide(nodes, p_in, params.samples, grid.spacing, params.seed)
     # the sign of p at each sample's node: veins above and below the plane are fitted apart
     cell = np.rint((samples - grid.origin) / grid.spacing).astype(int)
