@@ -33,7 +33,9 @@ LINK = 4.0  # points closer than this many median neighbour distances are connec
 CLUSTER_SHARE = 0.1  # detached clusters smaller than this share of the largest are dropped
 BALL = 0.08  # r, the ball of the blade test, as a fraction of the scan's length
 CORE = 0.4  # core points have at least this share of the busiest balls' count
+EDGE = 0.3  # margin points, grown back near the core, at least this share (a strand has less)
 LIFT_NEIGHBOURS = 16
+OPENING = 0.015  # the outline is opened by this share of the length (drops thin stubs)
 PETIOLE_SHARE = 0.02  # fewer points than this share of the blade's do not mark the base
 SIDE_STATIONS = (0.2, 0.35, 0.5, 0.65, 0.8)  # where side veins leave the midrib (arc length)
 SIDE_ANGLE = np.deg2rad(50.0)
@@ -99,12 +101,13 @@ def blade_points(points: np.ndarray) -> np.ndarray:
     radius = BALL * extent
     tree = cKDTree(points)
     counts = tree.query_ball_point(points, radius, return_length=True)
-    core = counts >= CORE * np.percentile(counts, 90)
+    busy = np.percentile(counts, 90)
+    core = counts >= CORE * busy
     typical = float(np.median(_neighbour_spacing(points)))
     labels = _components(points[core], LINK * typical)
     main = np.flatnonzero(core)[labels == np.argmax(np.bincount(labels))]
     near, _ = cKDTree(points[main]).query(points, distance_upper_bound=0.5 * radius)
-    return np.isfinite(near)
+    return np.isfinite(near) & (counts >= EDGE * busy)
 
 
 def split_scan(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -112,7 +115,12 @@ def split_scan(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     clean = clean_scan(points)
     blade = np.zeros(len(points), dtype=bool)
     blade[np.flatnonzero(clean)[blade_points(points[clean])]] = True
-    return blade, clean & ~blade
+    rest = np.flatnonzero(clean & ~blade)
+    petiole = np.zeros(len(points), dtype=bool)
+    if len(rest) >= PETIOLE_SHARE * blade.sum():  # the largest strand left is the petiole
+        labels = _components(points[rest], LINK * float(np.median(_neighbour_spacing(points))))
+        petiole[rest[labels == np.argmax(np.bincount(labels))]] = True
+    return blade, petiole
 
 
 def _plane(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -139,9 +147,10 @@ def lift(query: np.ndarray, xy: np.ndarray, h: np.ndarray) -> np.ndarray:
     return np.linalg.solve(normal, rhs[..., None])[:, 0, 0]
 
 
-def _outline(xy: np.ndarray, count: int) -> np.ndarray:
-    """(count, 2) points evenly around a concave hull of the points whose edges bridge gaps of up
-    to twice the scan's typical largest point spacing (scanner stripes), and nothing longer."""
+def _outline(xy: np.ndarray, length: float) -> Polygon:
+    """A concave hull of the points whose edges bridge gaps of up to four times the scan's typical
+    largest point spacing (scanner stripes) and nothing longer, opened by OPENING of the length
+    (so that a stub of petiole narrower than twice that is cut off)."""
     gaps, _ = cKDTree(xy).query(xy, k=2)
     bridge = 4.0 * float(np.percentile(gaps[:, 1], 95))
     simplices = Delaunay(xy).simplices
@@ -152,7 +161,17 @@ def _outline(xy: np.ndarray, count: int) -> np.ndarray:
     polys = [g for g in getattr(hull, "geoms", [hull]) if isinstance(g, Polygon) and g.area > 0]
     if not polys:
         raise LeafError("the scan's points do not cover an area")
-    ring = shapely.geometry.polygon.orient(max(polys, key=lambda g: g.area)).exterior
+    hull = max(polys, key=lambda g: g.area)
+    radius = OPENING * length
+    opened = hull.buffer(-radius, quad_segs=8).buffer(radius, quad_segs=8)
+    polys = [g for g in getattr(opened, "geoms", [opened]) if isinstance(g, Polygon)]
+    hull = max(polys, key=lambda g: g.area) if polys else hull
+    return shapely.geometry.polygon.orient(Polygon(hull.exterior))
+
+
+def _resample(polygon: Polygon, count: int) -> np.ndarray:
+    """(count, 2) points evenly spaced around the polygon's outline, counter-clockwise."""
+    ring = polygon.exterior
     steps = np.linspace(0.0, ring.length, count, endpoint=False)
     return shapely.get_coordinates(shapely.line_interpolate_point(ring, steps))
 
@@ -279,9 +298,13 @@ def extract_leaf(points: np.ndarray, base_end: str = "auto", count: int = 200) -
     xy, h = local[blade, :2], local[blade, 2]
     if np.ptp(xy[:, 1]) < 1e-3 * np.ptp(xy[:, 0]):
         raise LeafError("the scan's points lie on a line, not a leaf surface")
-    boundary_xy = _outline(xy, count)
-    polygon = Polygon(boundary_xy)
+    polygon = _outline(xy, float(np.ptp(xy[:, 0])))
+    boundary_xy = _resample(polygon, count)
     spacing = polygon.length / count
+    cut = ~shapely.contains_xy(polygon.buffer(spacing), local[:, 0], local[:, 1])
+    petiole |= blade & cut  # a stub of petiole trimmed by the opening
+    blade &= ~cut
+    xy, h = local[blade, :2], local[blade, 2]
     base = _base_point(base_end, axes, boundary_xy, xy, local[petiole, :2])
     midrib = _midline(boundary_xy, base, spacing)
     gaps = cKDTree(xy)
