@@ -186,6 +186,13 @@ def _read_vein(path: Path) -> np.ndarray:
     return read_point_table(path, columns=(3,))
 
 
+def _usual_permissions(path: str) -> None:
+    """Give a temporary file (created 0600) the permissions a plain new file would get."""
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(path, 0o666 & ~umask)
+
+
 def _write_atomically(path: Path, text: str | bytes) -> None:
     """Write to a temporary file beside `path`, then rename it over `path`."""
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -193,6 +200,7 @@ def _write_atomically(path: Path, text: str | bytes) -> None:
     try:
         with os.fdopen(handle, "wb") as out:
             out.write(text.encode("utf-8") if isinstance(text, str) else text)
+        _usual_permissions(tmp)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -268,6 +276,7 @@ def save_mesh(result_or_mesh: Any, path: str | os.PathLike) -> None:
             _write_mesh_ply(mesh, tmp)
         else:
             mesh.save(tmp)
+        _usual_permissions(tmp)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
