@@ -1,4 +1,4 @@
-"""The command line: `leafstudio [gui|reconstruct|demo] ...` (see DESIGN.md).
+"""The command line: `leafstudio [gui|reconstruct|measure|compare|demo|extract] ...` (DESIGN.md).
 
 Every failure is one line on stderr naming the file and the problem, with exit code 2.
 """
@@ -35,8 +35,26 @@ def _k_value(text: str) -> int | str:
         ) from None
 
 
+def _add_run_options(parser: argparse.ArgumentParser) -> None:
+    """The leaf input and reconstruction settings shared by reconstruct, measure and compare."""
+    parser.add_argument("input", help="leaf file: .csv, .txt, .xyz, .ply or .leaf.json")
+    parser.add_argument(
+        "--k", type=_k_value, default=None, help="number of Gaussians, or auto (default 3)"
+    )
+    parser.add_argument(
+        "--grid", type=int, default=None, help="grid nodes along the leaf (default 128)"
+    )
+    parser.add_argument("--mesher", choices=("conforming", "bpa"), default=None)
+    parser.add_argument("--seed", type=int, default=None, help="random seed (default 0)")
+    parser.add_argument(
+        "--vein", action="append", default=[], metavar="FILE", help="a vein file (repeatable)"
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with its subcommands."""
+    from leafstudio.figure import FIGURE_SCALARS
+
     parser = _Parser(
         prog="leafstudio", description="Smooth 3D leaf surfaces from boundaries and veins."
     )
@@ -49,18 +67,18 @@ def build_parser() -> argparse.ArgumentParser:
     )
 
     rec = sub.add_parser("reconstruct", help="reconstruct a leaf and write its mesh")
-    rec.add_argument("input", help="leaf file: .csv, .txt, .xyz, .ply or .leaf.json")
+    _add_run_options(rec)
     rec.add_argument(
         "-o", "--output", required=True, metavar="MESH", help=".ply, .obj, .stl, .vtp or .vtk"
     )
-    rec.add_argument("--k", type=_k_value, default=None, help="number of Gaussians (default 3)")
     rec.add_argument(
-        "--grid", type=int, default=None, help="grid nodes along the leaf (default 128)"
+        "--figure", metavar="PNG", help="also render iso and top views with the input points"
     )
-    rec.add_argument("--mesher", choices=("conforming", "bpa"), default=None)
-    rec.add_argument("--seed", type=int, default=None, help="random seed (default 0)")
     rec.add_argument(
-        "--vein", action="append", default=[], metavar="FILE", help="a vein file (repeatable)"
+        "--colour-by",
+        choices=FIGURE_SCALARS,
+        default="height",
+        help="what the figure's colours show (default height)",
     )
     rec.add_argument(
         "--metrics", metavar="JSON", help="write Table-1 distances and mesh facts here"
@@ -70,6 +88,16 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="SCAN",
         help="a scan of the real leaf: report the distances from its points to the surface",
     )
+
+    mea = sub.add_parser("measure", help="reconstruct a leaf and print its measurements")
+    _add_run_options(mea)
+    mea.add_argument("--json", action="store_true", help="print JSON instead of a table")
+
+    com = sub.add_parser(
+        "compare", help="our surface beside screened Poisson: distances, spill, time"
+    )
+    _add_run_options(com)
+    com.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
     dem = sub.add_parser("demo", help="write a built-in leaf")
     dem.add_argument("name", help="nested or parallel")
@@ -102,28 +130,54 @@ def _params_for(args: argparse.Namespace, base: object | None):
     return params.with_(**{k: v for k, v in changes.items() if v is not None})
 
 
-def _reconstruct(args: argparse.Namespace) -> int:
+def _settings(args: argparse.Namespace):
+    """Params from the command line, over a project's saved ones."""
+    from leafstudio.io import load_project
+
+    saved = load_project(args.input)[1] if args.input.lower().endswith(".json") else None
+    try:
+        return _params_for(args, saved)
+    except LeafError as exc:
+        raise LeafError(exc.problem, args.input) from None
+
+
+def _run(args: argparse.Namespace, leaf: object):
+    """The Params (see _settings) and the pipeline's Result; the run's notes are printed as
+    warnings, and the chosen K when K is auto."""
     from leafstudio.core.pipeline import Pipeline
-    from leafstudio.io import MESH_SUFFIXES, load_leaf, load_project, save_mesh
+
+    params = _settings(args)
+    try:
+        result = Pipeline(leaf).run(params)
+    except LeafError as exc:
+        raise LeafError(exc.problem, args.input) from None
+    for note in result.warnings:
+        print(f"leafstudio: warning: {args.input}: {note}", file=sys.stderr)
+    if params.k == "auto":
+        print(f"{args.input}: K = {result.chosen_k} (chosen by BIC)", file=sys.stderr)
+    return params, result
+
+
+def _reconstruct(args: argparse.Namespace) -> int:
+    from leafstudio.figure import check_figure_path
+    from leafstudio.io import MESH_SUFFIXES, load_leaf, save_mesh
 
     out = Path(args.output)
     if not out.name.lower().endswith(MESH_SUFFIXES):
         raise LeafError(f"unknown mesh type; use one of {', '.join(MESH_SUFFIXES)}", str(out))
+    figure = check_figure_path(args.figure) if args.figure else None
     leaf = load_leaf(args.input, veins=args.vein)
     scan = None
     if args.against:
         from leafstudio.scan import read_scan
 
         scan = read_scan(args.against)
-    saved = load_project(args.input)[1] if args.input.lower().endswith(".json") else None
-    try:
-        params = _params_for(args, saved)
-        result = Pipeline(leaf).run(params)
-    except LeafError as exc:
-        raise LeafError(exc.problem, args.input) from None
-    for note in result.warnings:
-        print(f"leafstudio: warning: {args.input}: {note}", file=sys.stderr)
+    params, result = _run(args, leaf)
     save_mesh(result, out)
+    if figure is not None:
+        from leafstudio.figure import render_figure
+
+        render_figure(result, figure, args.colour_by)
     fidelity = None
     if scan is not None:
         from leafstudio.core.extract import split_scan
@@ -143,10 +197,46 @@ def _reconstruct(args: argparse.Namespace) -> int:
                 f"{f['beyond_2pct']:.1%} (leaf length {result.length:.4g})"
             )
     if args.metrics:
-        metrics = {"input": args.input, "params": params.to_dict(), **result.metrics}
+        metrics = {
+            "input": args.input,
+            "params": params.to_dict(),
+            "k": result.chosen_k,
+            **result.metrics,
+        }
         if fidelity is not None:
             metrics["fidelity"] = {"scan": args.against, **fidelity}
         Path(args.metrics).write_text(json.dumps(metrics, indent=2) + "\n", encoding="utf-8")
+    return EXIT_OK
+
+
+def _measure(args: argparse.Namespace) -> int:
+    from leafstudio.core.measure import format_table, leaf_measurements
+    from leafstudio.io import load_leaf
+
+    _, result = _run(args, load_leaf(args.input, veins=args.vein))
+    values = leaf_measurements(result)
+    if args.json:
+        print(json.dumps({"input": args.input, **values}, indent=2))
+    else:
+        print(format_table(values))
+    return EXIT_OK
+
+
+def _compare(args: argparse.Namespace) -> int:
+    from leafstudio.core.compare import compare, format_comparison
+    from leafstudio.io import load_leaf
+
+    leaf = load_leaf(args.input, veins=args.vein)
+    params = _settings(args)
+    try:
+        report = compare(leaf, params)
+    except LeafError as exc:
+        raise LeafError(exc.problem, args.input) from None
+    report.pop("meshes")
+    if args.json:
+        print(json.dumps({"input": args.input, **report}, indent=2))
+    else:
+        print(format_comparison(report))
     return EXIT_OK
 
 
@@ -186,7 +276,14 @@ def _extract(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-COMMANDS = {"gui": _gui, "reconstruct": _reconstruct, "demo": _demo, "extract": _extract}
+COMMANDS = {
+    "gui": _gui,
+    "reconstruct": _reconstruct,
+    "demo": _demo,
+    "extract": _extract,
+    "measure": _measure,
+    "compare": _compare,
+}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 import shapely
 from scipy.spatial.transform import Rotation
 
 import leafstudio as ls
+from leafstudio.cli import main
 from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.measure import FIELDS, format_table, leaf_measurements
 
@@ -85,3 +88,36 @@ def test_table_lists_every_measurement(ridged):
         assert label in table
     assert "distance veins -> mesh" in table
     assert len(table.splitlines()) == len(FIELDS) + 1 + len(CURVATURE_ARRAYS) + 2
+
+
+def test_cli_measure_prints_a_table_and_json(tmp_path, capsys):
+    ls.save_leaf(ls.demo("parallel"), tmp_path / "p.leaf.json")
+    argv = ["measure", str(tmp_path / "p.leaf.json"), "--k", "2", "--grid", "32"]
+    assert main(argv) == 0
+    table = capsys.readouterr().out
+    assert "surface area (3D)" in table and "greatest width" in table
+    assert main([*argv, "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["k"] == 2
+    assert data["length"] == pytest.approx(1.0, rel=1e-3)  # the demos are 1 long
+    assert data["area"] > data["projected_area"]
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["measure", "missing.csv"], "missing.csv: no such file"),
+        (["measure", "LEAF", "--k", "0"], "K must be between 1 and"),
+        (["measure", "LEAF", "--grid", "100000"], "grid must be between"),
+        (["measure", "LEAF", "--k", "3.5"], "K must be a whole number or 'auto'"),
+        (["measure", "LEAF", "--grid", "many"], "argument --grid: invalid int value"),
+        (["measure"], "the following arguments are required: input"),
+    ],
+)
+def test_cli_measure_bad_input_is_one_line(tmp_path, capsys, argv, message):
+    ls.save_leaf(ls.demo("nested"), tmp_path / "n.leaf.json")
+    argv = [str(tmp_path / "n.leaf.json") if a == "LEAF" else a for a in argv]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err
+    assert len(err.strip().splitlines()) == 1
