@@ -9,7 +9,7 @@ from sklearn.mixture import GaussianMixture
 
 import leafstudio as ls
 from leafstudio.core.autok import bic, choose_mixture
-from leafstudio.core.gmm import fit_mixture, sample_guide
+from leafstudio.core.gmm import Mixture, sample_guide
 from leafstudio.demos import PAPER_K
 
 CENTRES = np.array([[0.5, 0.5], [1.5, 0.6], [2.5, 0.4]])
@@ -37,9 +37,11 @@ def test_three_separate_bumps_give_three_components(seed):
 
 def test_bic_is_sklearns():
     samples = _three_bumps(0)
-    mixture = fit_mixture(samples, 2, 0)
-    reference = GaussianMixture(2, covariance_type="full", random_state=0, reg_covar=1e-6)
-    assert bic(mixture, samples) == pytest.approx(reference.fit(samples).bic(samples), rel=1e-6)
+    reference = GaussianMixture(2, covariance_type="full", random_state=0).fit(samples)
+    mixture = Mixture(
+        reference.weights_, reference.means_, reference.covariances_, reference.weights_
+    )
+    assert bic(mixture, samples) == pytest.approx(reference.bic(samples), rel=1e-9)
 
 
 def test_few_samples_limit_the_ks_tried():
