@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-MAX_CENTRES = 96  # centres of the spline, taken evenly along the outline
+MAX_CENTRES = 48  # centres of the spline, taken evenly along the outline
 PLANAR = 1e-9  # boundary heights under this fraction of the leaf length count as planar
 SMOOTHING = 1e-7  # ridge on the spline's kernel (in units of the leaf length), against noise
 
@@ -59,19 +59,27 @@ class BaseSurface:
 
         With d = x̃ − c̃ and r = |d|: ∇φ = (2 log r + 1) d and ∇²φ = (2 log r + 1) I + 2 d dᵀ / r²
         (taken as 0 at a centre, where φ is only C1); each derivative divides by L once more.
+        Sums over the centres are written as matrix products, so nothing is (n, m, 2, 2).
         """
         xy = np.atleast_2d(np.asarray(xy, dtype=float))
-        local = (xy - self.origin) / self.scale
-        d = local[:, None, :] - ((self.centres - self.origin) / self.scale)[None]
-        r2 = np.einsum("nki,nki->nk", d, d)
-        safe = np.where(r2 > 0, r2, 1.0)
-        slope = np.where(r2 > 0, np.log(safe) + 1.0, 0.0) * self.weights  # (2 log r + 1) w
-        value = (0.5 * r2 * np.log(safe)) @ self.weights + self.affine[0] + local @ self.affine[1:]
-        grad = np.einsum("nk,nki->ni", slope, d) + self.affine[1:]
-        outer = 2 * d[..., :, None] * d[..., None, :] / safe[..., None, None]
-        hess = slope.sum(axis=1)[:, None, None] * np.eye(2) + np.einsum(
-            "nk,nkij->nij", np.where(r2 > 0, 1.0, 0.0) * self.weights, outer
-        )
+        x = (xy - self.origin) / self.scale
+        c = (self.centres - self.origin) / self.scale
+        r2 = _scaled_distance(x, c)
+        away = r2 > 0
+        log_r2 = np.log(np.where(away, r2, 1.0))
+        value = (0.5 * r2 * log_r2) @ self.weights + self.affine[0] + x @ self.affine[1:]
+        slope = np.where(away, log_r2 + 1.0, 0.0) * self.weights  # (n, m): (2 log r + 1) w
+        total = slope.sum(axis=1)
+        grad = x * total[:, None] - slope @ c + self.affine[1:]
+        q = np.where(away, 2.0 / np.where(away, r2, 1.0), 0.0) * self.weights  # 2 w / r²
+        q_sum, q_c = q.sum(axis=1), q @ c
+        hess = np.empty((len(x), 2, 2))
+        for i in range(2):
+            for j in range(i, 2):
+                # Σ q (x_i − c_i)(x_j − c_j), expanded
+                term = x[:, i] * x[:, j] * q_sum - x[:, i] * q_c[:, j] - x[:, j] * q_c[:, i]
+                term += q @ (c[:, i] * c[:, j])
+                hess[:, i, j] = hess[:, j, i] = term + (total if i == j else 0.0)
         return value, grad / self.scale, hess / self.scale**2
 
 
