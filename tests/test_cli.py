@@ -95,7 +95,9 @@ def _write(tmp_path: Path, name: str, content: str) -> Path:
         ("demo", ["--mesher", "poisson"], "invalid choice"),
     ],
 )
-def test_bad_input_is_one_line_and_exit_code_2(tmp_path, nested_csv, capsys, content, args, message):
+def test_bad_input_is_one_line_and_exit_code_2(
+    tmp_path, nested_csv, capsys, content, args, message
+):
     if content == "demo":
         source = nested_csv
     elif content is None:
@@ -107,7 +109,7 @@ def test_bad_input_is_one_line_and_exit_code_2(tmp_path, nested_csv, capsys, con
     assert code == 2
     assert line.startswith("leafstudio: error:")
     assert message in line
-    if "--mesher" not in args and "--k" not in args or "64" in args:
+    if ("--mesher" not in args and "--k" not in args) or "64" in args:
         assert str(source) in line  # names the file
 
 
@@ -132,10 +134,11 @@ def test_unknown_output_type_and_demo(tmp_path: Path, nested_csv: Path, capsys):
 
 def test_console_script_never_shows_a_traceback(tmp_path: Path):
     bad = _write(tmp_path, "bad.txt", "1 2 3\n4 5\n")
-    run = subprocess.run(
-        [sys.executable, "-m", "leafstudio", "reconstruct", str(bad), "-o", str(tmp_path / "m.ply")],
-        capture_output=True, text=True, timeout=120,
-    )  # fmt: skip
+    command = [sys.executable, "-m", "leafstudio", "reconstruct", str(bad), "-o", "m.ply"]
+    run = subprocess.run(command, capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert run.returncode == 2
     assert "Traceback" not in run.stderr
-    assert run.stderr.strip() == f"leafstudio: error: {bad}: line 2: expected 3 or 4 columns (x y z [label]), got 2"
+    assert (
+        run.stderr.strip()
+        == f"leafstudio: error: {bad}: line 2: expected 3 or 4 columns (x y z [label]), got 2"
+    )

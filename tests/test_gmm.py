@@ -58,10 +58,15 @@ def test_closed_form_gradient_and_hessian_match_finite_differences():
     _, grad, hess = KNOWN.derivatives(pts)
     eps = 1e-5
     steps = (np.array([eps, 0.0]), np.array([0.0, eps]))
-    fd_grad = np.column_stack([(KNOWN.value(pts + d) - KNOWN.value(pts - d)) / (2 * eps) for d in steps])
+    fd_grad = np.column_stack(
+        [(KNOWN.value(pts + d) - KNOWN.value(pts - d)) / (2 * eps) for d in steps]
+    )
     np.testing.assert_allclose(grad, fd_grad, atol=1e-7)
     fd_hess = np.stack(
-        [(KNOWN.derivatives(pts + d)[1] - KNOWN.derivatives(pts - d)[1]) / (2 * eps) for d in steps],
+        [
+            (KNOWN.derivatives(pts + d)[1] - KNOWN.derivatives(pts - d)[1]) / (2 * eps)
+            for d in steps
+        ],
         axis=1,
     )
     np.testing.assert_allclose(hess, fd_hess, atol=1e-6)
@@ -83,7 +88,9 @@ def test_components_split_between_raised_and_lowered_parts(share, k, expected):
 
 def test_signed_mixture_fits_each_sign_apart():
     up = _draw(Mixture(np.ones(1), np.array([[0.0, 2.0]]), np.eye(2)[None] * 0.1, np.ones(1)), 600)
-    down = _draw(Mixture(np.ones(1), np.array([[0.0, -2.0]]), np.eye(2)[None] * 0.1, np.ones(1)), 400)
+    down = _draw(
+        Mixture(np.ones(1), np.array([[0.0, -2.0]]), np.eye(2)[None] * 0.1, np.ones(1)), 400
+    )
     samples = np.vstack([up, down])
     positive = np.arange(1000) < 600
     joined = fit_signed_mixture(samples, positive, lambda s, k: fit_mixture(s, k, 0), 2)

@@ -28,7 +28,7 @@ def test_project_keeps_params_and_sketch(tmp_path: Path):
     path = tmp_path / "p.leaf.json"
     params = ls.Params(k=5, grid=64, mesher="bpa")
     save_leaf(ls.demo("parallel"), path, params=params, sketch={"boundary": [[0, 0], [1, 0]]})
-    leaf, loaded, sketch = load_project(path)
+    _, loaded, sketch = load_project(path)
     assert loaded == params
     assert sketch == {"boundary": [[0, 0], [1, 0]]}
     assert not list(tmp_path.glob(".*tmp"))  # the atomic write left nothing behind
@@ -78,7 +78,7 @@ def test_bad_point_files_say_what_is_wrong(tmp_path: Path, content: str, message
 def test_missing_unknown_and_binary_files(tmp_path: Path):
     with pytest.raises(ls.LeafError, match="no such file"):
         ls.load_leaf(tmp_path / "none.csv")
-    with pytest.raises(ls.LeafError, match="unknown file type '.dat'"):
+    with pytest.raises(ls.LeafError, match=r"unknown file type '\.dat'"):
         ls.load_leaf(tmp_path / "leaf.dat")
     binary = tmp_path / "bin.txt"
     binary.write_bytes(b"\xff\xfe\x00\x81")

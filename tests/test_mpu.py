@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from leafstudio.core.mpu import build_mpu, bspline_weight
+from leafstudio.core.mpu import bspline_weight, build_mpu
 from leafstudio.core.outline import contains, leaf_polygon, outward_normals
 from leafstudio.demos import demo
 from tests import leaves

@@ -62,7 +62,9 @@ def test_surface_is_smooth_inside(demo_result):
             (result.height(pts + [0, eps]) - result.height(pts - [0, eps])) / (2 * eps),
         ]
     )
-    np.testing.assert_allclose(result.surface.gradient(pts), fd, atol=2e-5 + 1e-4 * np.abs(fd).max())
+    np.testing.assert_allclose(
+        result.surface.gradient(pts), fd, atol=2e-5 + 1e-4 * np.abs(fd).max()
+    )
 
 
 def test_bpa_mesher_follows_the_paper(demo_result):
@@ -167,5 +169,5 @@ def test_too_many_components_for_the_data_is_an_error():
 def test_veins_outside_the_boundary_are_an_error():
     leaf = ls.demo("nested")
     far = leaf.veins[0] + [0, 0.5, 0]
-    with pytest.raises(ls.LeafError, match="vein 1: .* outside the boundary"):
+    with pytest.raises(ls.LeafError, match=r"vein 1: .* outside the boundary"):
         ls.reconstruct(ls.Leaf(boundary=leaf.boundary, veins=[far]))
