@@ -19,23 +19,123 @@ boundary's plane pulls p below zero.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
+from numba import njit
+
+from leafstudio.core.buckets import bucket_points
 
 TIE = 1e-9  # relative distance under which nearest points count as tied
+QUERIES_PER_BUCKET = 32  # query points share one candidate list per bucket of about this many
 
 
-def _nearest_with_ties(
-    tree: cKDTree, xy: np.ndarray, values: np.ndarray, k: int = 4
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Distance to the nearest point, and the mean position and value of the tied nearest points."""
-    k = min(k, tree.n)
-    dist, idx = tree.query(xy, k=k)
-    dist, idx = dist.reshape(len(xy), k), idx.reshape(len(xy), k)
-    tied = dist <= dist[:, :1] * (1 + TIE) + 1e-15
-    count = tied.sum(axis=1)
-    pos = (tree.data[idx] * tied[..., None]).sum(axis=1) / count[:, None]
-    val = (values[idx] * tied).sum(axis=1) / count
-    return dist[:, 0], pos, val
+def nearest_in_groups(
+    xy: np.ndarray, points: np.ndarray, group: np.ndarray, values: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """For each query, the nearest group of points and the next nearest other group.
+
+    Parameters
+    ----------
+    xy : (n, 2) float array
+        Query points.
+    points : (m, 2) float array
+        Data points, m >= 1.
+    group : (m,) int array
+        Group of each point (0, 1, ...): a vein's index, or all 0 for the boundary.
+    values : (m,) float array
+        A value carried by each point (a vein point's height).
+
+    Returns
+    -------
+    dist : (n,) float array
+        Distance to the nearest point.
+    position : (n, 2) float array
+        Mean position of the nearest point and the points tied with it in its group.
+    value : (n,) float array
+        Mean value of those tied points.
+    second : (n,) float array
+        Distance to the nearest point of any other group; inf with a single group.
+    """
+    xy = np.ascontiguousarray(xy, dtype=float)
+    n = len(xy)
+    dist, second, value = np.empty(n), np.empty(n), np.empty(n)
+    position = np.empty((n, 2))
+    if n == 0:
+        return dist, position, value, second
+    extent = np.ptp(xy, axis=0)
+    size = max(float(np.sqrt(extent[0] * extent[1] * QUERIES_PER_BUCKET / n)), 1e-12)
+    b = bucket_points(xy, size=max(size, float(extent.max()) / 1024))
+    _nearest_groups(
+        xy, np.ascontiguousarray(points, dtype=float), np.asarray(group, dtype=np.int64),
+        np.asarray(values, dtype=float), int(np.max(group)) + 1, b.lo, b.size, b.nx, b.ny,
+        b.starts, b.order, dist, position, value, second,
+    )  # fmt: skip
+    return dist, position, value, second
+
+
+@njit(cache=True)
+def _nearest_groups(
+    xy, points, group, values, n_groups, lo, size, nx, ny, starts, order, dist, pos, value, second
+):
+    """Per bucket of queries, a candidate list holding every point that can be the nearest of the
+    two nearest groups of any query in the bucket; then each query scans only its candidates."""
+    m = len(points)
+    bound = np.empty(n_groups)  # per group: the farthest a query in the box can be from it
+    near = np.empty(m)
+    candidates = np.empty(m, np.int64)
+    best = np.empty(n_groups)
+    for by in range(ny):
+        for bx in range(nx):
+            k = by * nx + bx
+            if starts[k] == starts[k + 1]:
+                continue
+            x0, y0 = lo[0] + bx * size, lo[1] + by * size
+            x1, y1 = x0 + size, y0 + size
+            bound[:] = np.inf
+            for j in range(m):
+                px, py = points[j, 0], points[j, 1]
+                ex = max(x0 - px, 0.0, px - x1)
+                ey = max(y0 - py, 0.0, py - y1)
+                near[j] = ex * ex + ey * ey
+                fx = max(abs(px - x0), abs(px - x1))
+                fy = max(abs(py - y0), abs(py - y1))
+                bound[group[j]] = min(bound[group[j]], fx * fx + fy * fy)
+            ranked = np.sort(bound)
+            cut = ranked[min(1, n_groups - 1)]  # the second nearest group lies within cut
+            count = 0
+            for j in range(m):
+                limit = min(bound[group[j]], cut)
+                if near[j] <= (np.sqrt(limit) * (1 + 1e-6) + 1e-12) ** 2:
+                    candidates[count] = j
+                    count += 1
+            for s in range(starts[k], starts[k + 1]):
+                i = order[s]
+                qx, qy = xy[i, 0], xy[i, 1]
+                best[:] = np.inf
+                for c in range(count):
+                    j = candidates[c]
+                    d2 = (points[j, 0] - qx) ** 2 + (points[j, 1] - qy) ** 2
+                    best[group[j]] = min(best[group[j]], d2)
+                first = 0
+                for g in range(1, n_groups):
+                    if best[g] < best[first]:
+                        first = g
+                d1 = np.sqrt(best[first])
+                d_other = np.inf
+                for g in range(n_groups):
+                    if g != first:
+                        d_other = min(d_other, best[g])
+                tie = (d1 * (1 + TIE) + 1e-15) ** 2
+                tied, sx, sy, sv = 0, 0.0, 0.0, 0.0
+                for c in range(count):
+                    j = candidates[c]
+                    if group[j] == first:
+                        d2 = (points[j, 0] - qx) ** 2 + (points[j, 1] - qy) ** 2
+                        if d2 <= tie:
+                            tied += 1
+                            sx += points[j, 0]
+                            sy += points[j, 1]
+                            sv += values[j]
+                dist[i], second[i] = d1, np.sqrt(d_other)
+                pos[i, 0], pos[i, 1], value[i] = sx / tied, sy / tied, sv / tied
 
 
 def height_guide(
@@ -65,23 +165,15 @@ def height_guide(
     xy = np.asarray(xy, dtype=float)
     if not veins:
         return np.zeros(len(xy))
-    d_b, b, _ = _nearest_with_ties(cKDTree(boundary), xy, np.zeros(len(boundary)))
-    # per vein: distance, nearest (tie-averaged) point and height
-    per_vein = [_nearest_with_ties(cKDTree(v), xy, h) for v, h in zip(veins, heights, strict=True)]
-    dist = np.column_stack([d for d, _, _ in per_vein])
-    order = np.argsort(dist, axis=1)
-    rows = np.arange(len(xy))
-    first = order[:, 0]
-    d_v = dist[rows, first]
-    v_pos = np.stack([pos for _, pos, _ in per_vein], axis=1)[rows, first]
-    h_v = np.column_stack([h for _, _, h in per_vein])[rows, first]
+    zeros = np.zeros(len(boundary))
+    d_b, b, _, _ = nearest_in_groups(xy, boundary, zeros.astype(np.int64), zeros)
+    ids = np.repeat(np.arange(len(veins)), [len(v) for v in veins])
+    d_v, v_pos, h_v, d_v2 = nearest_in_groups(xy, np.vstack(veins), ids, np.concatenate(heights))
 
     # eq. 4: between the margin and the nearest vein
     reach = np.linalg.norm(b - v_pos, axis=1)
     p = h_v * np.clip(d_b / np.maximum(reach, 1e-300), 0.0, 1.0)
-    if len(veins) > 1:  # eq. 5: between two veins, when both are nearer than the margin
-        d_v2 = dist[rows, order[:, 1]]
-        between = d_v2 < d_b
-        ratio = d_v / np.maximum(2 * (d_v + d_v2), 1e-300)
-        p = np.where(between, h_v * (1 - ratio), p)
-    return p
+    # eq. 5: between two veins, when both are nearer than the margin (d_v2 is inf for one vein)
+    between = d_v2 < d_b
+    ratio = d_v / np.maximum(2 * (d_v + d_v2), 1e-300)
+    return np.where(between, h_v * (1 - ratio), p)

@@ -15,7 +15,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from scipy.spatial import cKDTree
+
+from leafstudio.core.buckets import Buckets, bucket_points
 
 ALPHA = 0.75  # support radius = ALPHA * cell diagonal (Ohtake et al.)
 N_MIN = 6  # a ball grows until it holds this many points
@@ -61,11 +64,13 @@ class MPUImplicit:
     depth: np.ndarray
 
     def _pairs(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(query index, cell index) for every query point inside a cell's support."""
-        hits = cKDTree(xy).query_ball_point(self.centers, self.radii, return_sorted=False)
-        counts = np.fromiter((len(h) for h in hits), dtype=np.int64, count=len(hits))
-        cells = np.repeat(np.arange(len(hits)), counts)
-        queries = np.fromiter((i for h in hits for i in h), dtype=np.int64, count=counts.sum())
+        """(query index, cell index) for every query point where a cell's weight is nonzero."""
+        xy = np.ascontiguousarray(xy, dtype=float)
+        b = bucket_points(xy)
+        args = (xy, self.centers, self.radii, b.lo, b.size, b.nx, b.ny, b.starts, b.order)
+        count = _support_pairs(*args, np.empty(0, np.int64), np.empty(0, np.int64))
+        queries, cells = np.empty(count, np.int64), np.empty(count, np.int64)
+        _support_pairs(*args, queries, cells)
         return queries, cells
 
     def evaluate(self, xy: np.ndarray, gradient: bool = False):
@@ -74,16 +79,13 @@ class MPUImplicit:
         Outside every support (far from the leaf) g is minus the distance to the nearest
         boundary point, and the gradient points toward it.
         """
-        xy = np.atleast_2d(np.asarray(xy, dtype=float))
+        xy = np.ascontiguousarray(np.atleast_2d(np.asarray(xy, dtype=float)))
         n = len(xy)
-        q, c = self._pairs(xy)
-        d = xy[q] - self.centers[c]
-        scale = 1.5 / self.radii[c]
-        t = np.linalg.norm(d, axis=1) * scale
-        w = bspline_weight(t)
-        f = np.einsum("ij,ij->i", xy[q], self.coef[c, :2]) + self.coef[c, 2]
-        weight_sum = np.bincount(q, w, minlength=n)
-        value_sum = np.bincount(q, w * f, minlength=n)
+        b: Buckets = bucket_points(xy)
+        weight_sum, value_sum, grad_w, grad_f = _blend_sums(
+            xy, self.centers, self.radii, self.coef, b.lo, b.size, b.nx, b.ny, b.starts, b.order,
+            gradient,
+        )  # fmt: skip
         covered = weight_sum > 0
         g = np.empty(n)
         g[covered] = value_sum[covered] / weight_sum[covered]
@@ -96,11 +98,6 @@ class MPUImplicit:
             grad[far] = towards / np.maximum(dist, 1e-300)[:, None]
         if not gradient:
             return g
-        dw = (_bspline_slope_over_t(t) * scale**2)[:, None] * d  # ∇w_i
-        grad_w = np.column_stack([np.bincount(q, dw[:, k], minlength=n) for k in range(2)])
-        grad_f = np.column_stack(
-            [np.bincount(q, dw[:, k] * f + w * self.coef[c, k], minlength=n) for k in range(2)]
-        )
         ws = weight_sum[covered, None]
         grad[covered] = (grad_f[covered] * ws - value_sum[covered, None] * grad_w[covered]) / ws**2
         return g, grad
@@ -108,6 +105,78 @@ class MPUImplicit:
     def __call__(self, xy: np.ndarray) -> np.ndarray:
         """g at (n, 2) points."""
         return self.evaluate(xy)
+
+
+# The compiled loops below visit, for each cell, the query buckets its support disc overlaps.
+# b(t) vanishes from t = 1 on, so a cell's weight is nonzero only within radius / 1.5 (eq. 2).
+
+
+@njit(cache=True)
+def _bucket_range(c: float, reach: float, lo: float, size: float, count: int) -> tuple[int, int]:
+    first = max(int(np.floor((c - reach - lo) / size)), 0)
+    last = min(int(np.floor((c + reach - lo) / size)), count - 1)
+    return first, last
+
+
+@njit(cache=True)
+def _support_pairs(xy, centers, radii, lo, size, nx, ny, starts, order, out_q, out_c):
+    """Count the (query, cell) pairs with nonzero weight; fill out_q, out_c when they are long
+    enough to hold them."""
+    fill = len(out_q) > 0
+    count = 0
+    for c in range(len(centers)):
+        reach = radii[c] / 1.5
+        x0, x1 = _bucket_range(centers[c, 0], reach, lo[0], size, nx)
+        y0, y1 = _bucket_range(centers[c, 1], reach, lo[1], size, ny)
+        for by in range(y0, y1 + 1):
+            for bx in range(x0, x1 + 1):
+                k = by * nx + bx
+                for j in range(starts[k], starts[k + 1]):
+                    i = order[j]
+                    dx, dy = xy[i, 0] - centers[c, 0], xy[i, 1] - centers[c, 1]
+                    if dx * dx + dy * dy < reach * reach:
+                        if fill:
+                            out_q[count], out_c[count] = i, c
+                        count += 1
+    return count
+
+
+@njit(cache=True)
+def _blend_sums(xy, centers, radii, coef, lo, size, nx, ny, starts, order, gradient):
+    """Σ w_i, Σ w_i f_i (eq. 1) and, with `gradient`, Σ ∇w_i and Σ ∇(w_i f_i) at every query."""
+    n = len(xy)
+    weight_sum, value_sum = np.zeros(n), np.zeros(n)
+    grad_w, grad_f = np.zeros((n, 2)), np.zeros((n, 2))
+    for c in range(len(centers)):
+        scale = 1.5 / radii[c]
+        reach = 1.0 / scale
+        a, b, e = coef[c, 0], coef[c, 1], coef[c, 2]
+        x0, x1 = _bucket_range(centers[c, 0], reach, lo[0], size, nx)
+        y0, y1 = _bucket_range(centers[c, 1], reach, lo[1], size, ny)
+        for by in range(y0, y1 + 1):
+            for bx in range(x0, x1 + 1):
+                k = by * nx + bx
+                for j in range(starts[k], starts[k + 1]):
+                    i = order[j]
+                    dx, dy = xy[i, 0] - centers[c, 0], xy[i, 1] - centers[c, 1]
+                    d2 = dx * dx + dy * dy
+                    if d2 >= reach * reach:
+                        continue
+                    t = np.sqrt(d2) * scale
+                    if t < 1 / 3:
+                        w, slope = 0.75 - 2.25 * t * t, -4.5
+                    else:
+                        w, slope = 1.125 * (t - 1) ** 2, 2.25 * (t - 1) / t
+                    f = a * xy[i, 0] + b * xy[i, 1] + e
+                    weight_sum[i] += w
+                    value_sum[i] += w * f
+                    if gradient:
+                        slope *= scale * scale  # ∇w = b'(t)/t · scale² · d
+                        grad_w[i, 0] += slope * dx
+                        grad_w[i, 1] += slope * dy
+                        grad_f[i, 0] += slope * dx * f + w * a
+                        grad_f[i, 1] += slope * dy * f + w * b
+    return weight_sum, value_sum, grad_w, grad_f
 
 
 def _fit_cells(

@@ -22,7 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
+from numba import njit
 
 from leafstudio.core.base import BaseSurface
 from leafstudio.core.curvature import implicit_derivatives, product_derivatives, taper_derivatives
@@ -32,7 +32,8 @@ from leafstudio.core.mpu import MPUImplicit
 VEIN_WEIGHT = 10.0  # the vein rows together weigh this much relative to all grid rows
 RIDGE = 1e-10
 REFINE_ROWS = 1500  # grid nodes drawn for the refinement (all vein points are used)
-REFINE_STEPS = 200
+REFINE_STEPS = 30  # Levenberg-Marquardt iterations at most
+REFINE_GAIN = 1e-5  # stop once a step lowers the cost by less than this fraction
 
 
 @dataclass(frozen=True)
@@ -130,40 +131,89 @@ def _unpack(theta: np.ndarray, weights: np.ndarray) -> Mixture:
 def _refine(mixture: Mixture, xy: np.ndarray, row_scale: np.ndarray, target: np.ndarray) -> Mixture:
     """Gauss-Newton (Levenberg-Marquardt) on all of a_k, μ_k, Σ_k so that z follows the targets,
     started from EM's mixture; closed-form Jacobian."""
-
-    def parts(theta: np.ndarray):
-        t = theta.reshape(-1, 6)
-        d = xy[:, None, :] - t[None, :, 1:3]
-        r11, r21, r22 = np.exp(t[:, 3]), t[:, 4], np.exp(t[:, 5])
-        e1 = r11 * d[..., 0] + r21 * d[..., 1]
-        e2 = r22 * d[..., 1]
-        dens = (r11 * r22 / (2 * np.pi)) * np.exp(-0.5 * (e1**2 + e2**2))
-        return t, d, r11, r21, r22, e1, e2, dens
-
-    def residual(theta: np.ndarray) -> np.ndarray:
-        t, *_, dens = parts(theta)
-        return row_scale * (dens @ t[:, 0]) - target
-
-    def jacobian(theta: np.ndarray) -> np.ndarray:
-        t, d, r11, r21, r22, e1, e2, dens = parts(theta)
-        scaled = row_scale[:, None] * dens * t[None, :, 0]  # ∂z/∂log N per component
-        jac = np.empty((len(xy), len(t), 6))
-        jac[..., 0] = row_scale[:, None] * dens
-        jac[..., 1] = scaled * (r11 * e1)
-        jac[..., 2] = scaled * (r21 * e1 + r22 * e2)
-        jac[..., 3] = scaled * (1 - e1 * r11 * d[..., 0])
-        jac[..., 4] = scaled * (-e1 * d[..., 1])
-        jac[..., 5] = scaled * (1 - e2 * r22 * d[..., 1])
-        return jac.reshape(len(xy), -1)
-
-    start = _pack(mixture)
-    solution = least_squares(residual, start, jac=jacobian, method="lm", max_nfev=REFINE_STEPS)
-    refined = _unpack(solution.x, mixture.weights)
-    if not np.all(np.isfinite(refined.covariances)) or solution.cost > 0.5 * np.sum(
-        residual(start) ** 2
-    ):
+    xy = np.ascontiguousarray(xy, dtype=float)
+    theta = _levenberg_marquardt(
+        lambda th, full: _normal_equations(xy, row_scale, target, th.reshape(-1, 6), full),
+        _pack(mixture),
+        REFINE_STEPS,
+    )
+    refined = _unpack(theta, mixture.weights)
+    if not np.all(np.isfinite(refined.covariances)):
         return mixture
     return refined
+
+
+@njit(cache=True)
+def _normal_equations(xy, row_scale, target, t, full):
+    """Cost |r|², and with `full` JᵀJ (p, p) and Jᵀr (p,), of the rows r_i = s_i z(x_i) − y_i,
+    with z = Σ a_k N_k and θ packed as in _pack; accumulated row by row, J never stored."""
+    k = len(t)
+    p = 6 * k
+    normal, gradient = np.zeros((p, p)), np.zeros(p)
+    row = np.empty(p)
+    dens = np.empty(k)
+    cost = 0.0
+    for i in range(len(xy)):
+        value = 0.0
+        for c in range(k):
+            dx, dy = xy[i, 0] - t[c, 1], xy[i, 1] - t[c, 2]
+            r11, r21, r22 = np.exp(t[c, 3]), t[c, 4], np.exp(t[c, 5])
+            e1, e2 = r11 * dx + r21 * dy, r22 * dy
+            dens[c] = (r11 * r22 / (2 * np.pi)) * np.exp(-0.5 * (e1 * e1 + e2 * e2))
+            value += t[c, 0] * dens[c]
+            if full:
+                scaled = row_scale[i] * dens[c] * t[c, 0]  # ∂z/∂log N of this component
+                row[6 * c] = row_scale[i] * dens[c]
+                row[6 * c + 1] = scaled * (r11 * e1)
+                row[6 * c + 2] = scaled * (r21 * e1 + r22 * e2)
+                row[6 * c + 3] = scaled * (1 - e1 * r11 * dx)
+                row[6 * c + 4] = scaled * (-e1 * dy)
+                row[6 * c + 5] = scaled * (1 - e2 * r22 * dy)
+        res = row_scale[i] * value - target[i]
+        cost += res * res
+        if full:
+            for a in range(p):
+                gradient[a] += row[a] * res
+                for b in range(a, p):
+                    normal[a, b] += row[a] * row[b]
+    for a in range(p):
+        for b in range(a):
+            normal[a, b] = normal[b, a]
+    return cost, normal, gradient
+
+
+def _levenberg_marquardt(normal_equations, theta: np.ndarray, steps: int) -> np.ndarray:
+    """Minimise |r(θ)|² from θ in `steps` iterations at most (Marquardt's diagonal scaling,
+    Nielsen's damping update).
+
+    `normal_equations(θ, full)` returns |r|² and, when `full`, JᵀJ and Jᵀr. A step is kept only
+    if it lowers the cost, so the result is never worse than the start. Stops early once an
+    accepted step gains less than REFINE_GAIN of the cost.
+    """
+    cost, normal, gradient = normal_equations(theta, True)
+    damping, growth = 1e-3 * float(np.max(np.diag(normal), initial=1e-300)), 2.0
+    for _ in range(steps):
+        diag = np.diag(normal)
+        scale = np.diag(np.maximum(diag, 1e-12 * diag.max() + 1e-300))
+        try:
+            step = np.linalg.solve(normal + damping * scale, -gradient)
+        except np.linalg.LinAlgError:
+            damping, growth = damping * growth, growth * 2
+            continue
+        trial_cost = normal_equations(theta + step, False)[0]
+        predicted = -(2 * step @ gradient + step @ normal @ step)
+        ratio = (cost - trial_cost) / predicted if predicted > 0 else -1.0
+        if not ratio > 0:  # also rejects NaN
+            damping, growth = damping * growth, growth * 2
+            continue
+        gain = cost - trial_cost
+        theta = theta + step
+        cost, normal, gradient = normal_equations(theta, True)
+        damping *= max(1 / 3, 1 - (2 * ratio - 1) ** 3)
+        growth = 2.0
+        if gain < REFINE_GAIN * cost:
+            break
+    return theta
 
 
 def fit_surface(

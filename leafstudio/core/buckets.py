@@ -1,0 +1,77 @@
+"""A uniform bucket grid over 2D points, for the compiled (numba) neighbour searches in core.
+
+The MPU implicit, the height guide and the mesher ask, for many query points at once, which cells
+or data points lie near each query. Sorting the queries into square buckets once (a counting
+sort, O(n)) lets a compiled loop visit only the buckets a support disc or a search box overlaps.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+PER_BUCKET = 4  # points per bucket on average over the points' bounding box
+
+
+@dataclass(frozen=True)
+class Buckets:
+    """Points sorted into an (ny, nx) grid of square buckets of side `size` from `lo`.
+
+    The points of bucket b = iy * nx + ix are ``order[starts[b]:starts[b + 1]]``.
+    """
+
+    lo: np.ndarray  # (2,) float
+    size: float
+    nx: int
+    ny: int
+    starts: np.ndarray  # (nx * ny + 1,) int64
+    order: np.ndarray  # (n,) int64
+
+
+def bucket_points(xy: np.ndarray, size: float | None = None) -> Buckets:
+    """Sort (n, 2) points into square buckets of side `size` (default: about PER_BUCKET points
+    per bucket over their bounding box)."""
+    xy = np.asarray(xy, dtype=float)
+    lo, hi = bounds(xy) if len(xy) else (np.zeros(2), np.ones(2))
+    extent = np.maximum(hi - lo, 1e-300)
+    if size is None:
+        size = float(np.sqrt(extent[0] * extent[1] * PER_BUCKET / max(len(xy), 1)))
+        size = max(size, float(extent.max()) / 4096)
+    nx, ny = (np.floor(extent / size).astype(np.int64) + 1).tolist()
+    starts, order = _counting_sort(xy, lo, float(size), nx, ny)
+    return Buckets(lo=lo, size=float(size), nx=int(nx), ny=int(ny), starts=starts, order=order)
+
+
+@njit(cache=True)
+def bounds(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(2,) lower and upper corners of the box around (n >= 1, 2) points (numpy's min(axis=0)
+    on an (n, 2) array is many times slower)."""
+    lo, hi = xy[0].copy(), xy[0].copy()
+    for i in range(1, len(xy)):
+        for k in range(2):
+            lo[k] = min(lo[k], xy[i, k])
+            hi[k] = max(hi[k], xy[i, k])
+    return lo, hi
+
+
+@njit(cache=True)
+def _counting_sort(xy, lo, size, nx, ny):
+    """Bucket starts and the point indices sorted by bucket, stable, in O(n)."""
+    n = len(xy)
+    key = np.empty(n, np.int64)
+    starts = np.zeros(nx * ny + 1, np.int64)
+    for i in range(n):
+        ix = min(int((xy[i, 0] - lo[0]) / size), nx - 1)
+        iy = min(int((xy[i, 1] - lo[1]) / size), ny - 1)
+        key[i] = iy * nx + ix
+        starts[key[i] + 1] += 1
+    for b in range(nx * ny):
+        starts[b + 1] += starts[b]
+    fill = starts[:-1].copy()
+    order = np.empty(n, np.int64)
+    for i in range(n):
+        order[fill[key[i]]] = i
+        fill[key[i]] += 1
+    return starts, order
