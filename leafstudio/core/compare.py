@@ -19,6 +19,7 @@ import shapely
 
 from leafstudio.core.analysis import table_metrics, triangles_of
 from leafstudio.core.plane import Frame
+from leafstudio.errors import LeafError
 from leafstudio.model import Leaf, Params
 
 POISSON_DEPTH = 8
@@ -51,6 +52,8 @@ def poisson_surface(leaf: Leaf, normal: np.ndarray, depth: int = POISSON_DEPTH) 
     )
     vertices = np.asarray(mesh.vertices)
     triangles = np.asarray(mesh.triangles)
+    if len(triangles) == 0:
+        raise LeafError("screened Poisson made no surface from these points")
     faces = np.column_stack([np.full(len(triangles), 3), triangles]).ravel()
     return pv.PolyData(vertices, faces=faces)
 
