@@ -23,6 +23,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import Delaunay, cKDTree
 from shapely.geometry import LineString, MultiPoint, Point, Polygon
 
+from leafstudio.core.plane import fit_frame
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
 
@@ -319,5 +320,25 @@ def extract_leaf(points: np.ndarray, base_end: str = "auto", count: int = 200) -
         z = lift(q, xy, h)
         return origin + np.column_stack([q, z]) @ axes
 
-    leaf = Leaf(boundary=world(boundary_xy), veins=[world(v) for v in veins_xy])
-    return Extraction(leaf=leaf, blade=blade, petiole=petiole, length=float(np.ptp(xy[:, 0])))
+    boundary = world(boundary_xy)
+    veins = _inside_outline(boundary, [world(v) for v in veins_xy], spacing)
+    return Extraction(
+        leaf=Leaf(boundary=boundary, veins=veins),
+        blade=blade,
+        petiole=petiole,
+        length=float(np.ptp(xy[:, 0])),
+    )
+
+
+def _inside_outline(boundary: np.ndarray, veins: list[np.ndarray], gap: float) -> list[np.ndarray]:
+    """The veins' points that lie inside the outline, by at least `gap`, as the pipeline sees
+    them: on the boundary's own PCA plane (not the blade's), where a curled margin moves."""
+    frame = fit_frame(boundary, np.vstack(veins))
+    region = Polygon(frame.to_plane(boundary)[0]).buffer(-gap)
+    kept = []
+    for vein in veins:
+        xy = frame.to_plane(vein)[0]
+        inside = vein[shapely.contains_xy(region, xy[:, 0], xy[:, 1])]
+        if len(inside) >= 2:
+            kept.append(inside)
+    return kept
