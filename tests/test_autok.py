@@ -9,34 +9,49 @@ from sklearn.mixture import GaussianMixture
 
 import leafstudio as ls
 from leafstudio.core.autok import bic, choose_mixture
-from leafstudio.core.gmm import Mixture, sample_guide
+from leafstudio.core.gmm import Mixture, fit_mixture, fit_signed_mixture, sample_guide
 from leafstudio.demos import PAPER_K
 
 CENTRES = np.array([[0.5, 0.5], [1.5, 0.6], [2.5, 0.4]])
 
 
-def _three_bumps(seed: int) -> np.ndarray:
-    """EM samples drawn from heights made of three well-separated Gaussian bumps."""
+def _three_bumps(seed: int, signs=(1, 1, 1)) -> tuple[np.ndarray, np.ndarray]:
+    """EM samples drawn from heights made of three well-separated Gaussian bumps, and whether
+    each sample comes from a positive height."""
     xs, ys = np.meshgrid(np.linspace(0, 3, 121), np.linspace(0, 1, 41))
     nodes = np.column_stack([xs.ravel(), ys.ravel()])
     heights = sum(
-        h * np.exp(-np.sum((nodes - c) ** 2, axis=1) / (2 * 0.12**2))
-        for h, c in zip((1.0, 0.6, 0.8), CENTRES, strict=True)
+        s * h * np.exp(-np.sum((nodes - c) ** 2, axis=1) / (2 * 0.12**2))
+        for s, h, c in zip(signs, (1.0, 0.6, 0.8), CENTRES, strict=True)
     )
-    return sample_guide(nodes, heights, 4000, 0.025, seed)
+    samples = sample_guide(nodes, heights, 4000, 0.025, seed)
+    nearest = np.argmin(np.sum((samples[:, None] - CENTRES[None]) ** 2, axis=2), axis=1)
+    return samples, np.asarray(signs)[nearest] > 0
 
 
 @pytest.mark.parametrize("seed", [0, 1])
 def test_three_separate_bumps_give_three_components(seed):
-    mixture, scores = choose_mixture(_three_bumps(seed), seed)
+    samples, _ = _three_bumps(seed)
+    mixture, scores = choose_mixture(lambda k: fit_mixture(samples, k, seed), samples)
     assert len(mixture.weights) == 3
     assert set(scores) == set(range(1, 13))
     order = np.argsort(mixture.means[:, 0])
     assert np.allclose(mixture.means[order], CENTRES, atol=0.03)
 
 
+def test_bumps_of_both_signs_count_together():
+    samples, positive = _three_bumps(0, signs=(1, -1, 1))
+    fit = lambda k: fit_signed_mixture(  # noqa: E731
+        samples, positive, lambda part, k_part: fit_mixture(part, k_part, 0), k
+    )
+    mixture, scores = choose_mixture(fit, samples)
+    assert len(mixture.weights) == 3
+    assert max(scores) == 12
+    assert mixture.weights.sum() == pytest.approx(1.0)
+
+
 def test_bic_is_sklearns():
-    samples = _three_bumps(0)
+    samples, _ = _three_bumps(0)
     reference = GaussianMixture(2, covariance_type="full", random_state=0).fit(samples)
     mixture = Mixture(
         reference.weights_, reference.means_, reference.covariances_, reference.weights_
@@ -46,9 +61,15 @@ def test_bic_is_sklearns():
 
 def test_few_samples_limit_the_ks_tried():
     samples = np.random.default_rng(0).normal(size=(20, 2))
-    mixture, scores = choose_mixture(samples, 0)
-    assert max(scores) == 4
+    mixture, scores = choose_mixture(lambda k: fit_mixture(samples, k, 0), samples)
+    assert max(scores) == 4  # fit_mixture needs 5 distinct samples per component
     assert len(mixture.weights) in scores
+
+
+def test_too_few_samples_for_one_component_is_an_error():
+    samples = np.zeros((50, 2))
+    with pytest.raises(ls.LeafError, match="more than the data supports"):
+        choose_mixture(lambda k: fit_mixture(samples, k, 0), samples)
 
 
 @pytest.mark.parametrize("name", ["nested", "parallel"])

@@ -315,14 +315,13 @@ def _gmm_stage(
     ny, nx = grid.shape
     cell = np.clip(cell, 0, [nx - 1, ny - 1])
     positive = guide.p[cell[:, 1] * nx + cell[:, 0]] >= 0
-    if params.k == K_AUTO:
-        mixture = fit_signed_mixture(
-            samples, positive, lambda part, _k: choose_mixture(part, params.seed)[0], None
+    def fit(k: int) -> Mixture:
+        return fit_signed_mixture(
+            samples, positive, lambda part, k_part: fit_mixture(part, k_part, params.seed), k
         )
-    else:
-        mixture = fit_signed_mixture(
-            samples, positive, lambda part, k: fit_mixture(part, k, params.seed), params.k
-        )
+
+    # auto: K from 1 to 12 (both signs together) by the BIC of the joined fit (autok.py)
+    mixture = choose_mixture(fit, samples)[0] if params.k == K_AUTO else fit(params.k)
     return samples, mixture
 
 
