@@ -25,7 +25,7 @@ from typing import Protocol
 
 import numpy as np
 
-from leafstudio.core.mpu import MPUImplicit, _bspline_slope_over_t, bspline_weight
+from leafstudio.core.mpu import MPUImplicit
 
 CURVATURE_ARRAYS = ("mean_curvature", "gaussian_curvature", "k1", "k2")
 
@@ -41,17 +41,13 @@ class Differentiable(Protocol):
         ...
 
 
-def _bspline_curl(t: np.ndarray) -> np.ndarray:
-    """(d/dt (b'(t)/t)) / t: the radial part of ∇²w (0 on the inner piece, 2.25/t³ outside it)."""
-    t = np.abs(t)
-    safe = np.where(t > 0, t, 1.0)
-    return np.where((t >= 1 / 3) & (t < 1), 2.25 / safe**3, 0.0)
-
-
 def implicit_derivatives(
     implicit: MPUImplicit, xy: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """g, ∇g and ∇²g of the MPU implicit at (n, 2) points, in closed form.
+
+    ∇²g = (∇²N − g ∇²D − ∇g ∇Dᵀ − ∇D ∇gᵀ) / D, summed over the cells in one compiled pass (see
+    MPUImplicit.derivatives).
 
     Returns
     -------
@@ -62,47 +58,7 @@ def implicit_derivatives(
         some cell. Far from the leaf (no support covers the point) g is minus the distance to the
         nearest boundary point and the Hessian is that of −|x − b|.
     """
-    xy = np.atleast_2d(np.asarray(xy, dtype=float))
-    n = len(xy)
-    g, grad = implicit.evaluate(xy, gradient=True)
-    hess = np.zeros((n, 2, 2))
-    q, c = implicit._pairs(xy)
-    d = xy[q] - implicit.centers[c]
-    scale = 1.5 / implicit.radii[c]
-    t = np.linalg.norm(d, axis=1) * scale
-    w = bspline_weight(t)
-    f = np.einsum("ij,ij->i", xy[q], implicit.coef[c, :2]) + implicit.coef[c, 2]
-    grad_f = implicit.coef[c, :2]
-    dw = (_bspline_slope_over_t(t) * scale**2)[:, None] * d
-    outer = d[:, :, None] * d[:, None, :]
-    hw = (_bspline_slope_over_t(t) * scale**2)[:, None, None] * np.eye(2) + (
-        _bspline_curl(t) * scale**4
-    )[:, None, None] * outer
-    cross = dw[:, :, None] * grad_f[:, None, :]
-    hn = hw * f[:, None, None] + cross + cross.transpose(0, 2, 1)
-
-    def total(values: np.ndarray) -> np.ndarray:
-        """Σ over the cells covering each query point, for per-pair (p, ...) values."""
-        width = int(np.prod(values.shape[1:]))
-        flat = values.reshape(len(q), width)
-        sums = np.column_stack([np.bincount(q, flat[:, j], minlength=n) for j in range(width)])
-        return sums.reshape((n, *values.shape[1:]))
-
-    big_d = np.bincount(q, w, minlength=n)
-    covered = big_d > 0
-    grad_d, hess_d, hess_n = total(dw), total(hw), total(hn)
-    cross_g = grad[:, :, None] * grad_d[:, None, :]
-    hess[covered] = (hess_n - g[:, None, None] * hess_d - cross_g - cross_g.transpose(0, 2, 1))[
-        covered
-    ] / big_d[covered, None, None]
-    far = ~covered
-    if far.any():  # g = −|x − b|: ∇²g = −(I − u uᵀ) / |x − b| with u = ∇g
-        u = grad[far]
-        hess[far] = (
-            -(np.eye(2) - u[:, :, None] * u[:, None, :])
-            / np.maximum(-g[far], 1e-300)[:, None, None]
-        )
-    return g, grad, hess
+    return implicit.derivatives(xy)
 
 
 def taper_derivatives(

@@ -51,11 +51,8 @@ class Mixture:
 
     def components(self, xy: np.ndarray) -> np.ndarray:
         """(n, K) values of each Gaussian N(x | μ_k, Σ_k) (eq. 6), without weights."""
-        xy = np.atleast_2d(xy)
-        d = xy[:, None, :] - self.means[None]
-        maha = np.einsum("nki,kij,nkj->nk", d, self.precisions, d)
-        norm = 1.0 / (2 * np.pi * np.sqrt(np.linalg.det(self.covariances)))
-        return norm[None] * np.exp(-0.5 * maha)
+        xy = np.ascontiguousarray(np.atleast_2d(xy), dtype=float)
+        return _gaussians(xy, self.means, self.precisions)
 
     def density(self, xy: np.ndarray) -> np.ndarray:
         """The GMM of eq. 8, Σ π_k N_k(x): a probability density."""
@@ -70,14 +67,45 @@ class Mixture:
 
         ∇N = −N P d and ∇²N = N (P d dᵀ P − P), with d = x − μ and P = Σ⁻¹.
         """
-        xy = np.atleast_2d(xy)
-        comp = self.components(xy) * self.amplitudes[None]
-        prec = self.precisions
-        pd = np.einsum("kij,nkj->nki", prec, xy[:, None, :] - self.means[None])
-        grad = -np.einsum("nk,nki->ni", comp, pd)
-        outer = pd[..., :, None] * pd[..., None, :] - prec[None]
-        hess = np.einsum("nk,nkij->nij", comp, outer)
-        return comp.sum(axis=1), grad, hess
+        xy = np.ascontiguousarray(np.atleast_2d(xy), dtype=float)
+        return _weighted_derivatives(xy, self.means, self.precisions, self.amplitudes)
+
+
+@njit(cache=True)
+def _gaussian(x, y, mean, prec, k):
+    """N(x | μ_k, Σ_k) (eq. 6) from the precision P = Σ⁻¹, and P d with d = x − μ_k."""
+    dx, dy = x - mean[k, 0], y - mean[k, 1]
+    p00, p01, p11 = prec[k, 0, 0], prec[k, 0, 1], prec[k, 1, 1]
+    pdx, pdy = p00 * dx + p01 * dy, p01 * dx + p11 * dy
+    det = p00 * p11 - p01 * p01  # det P = 1 / det Σ
+    return np.sqrt(det) / (2 * np.pi) * np.exp(-0.5 * (dx * pdx + dy * pdy)), pdx, pdy
+
+
+@njit(cache=True)
+def _gaussians(xy, means, prec):
+    out = np.empty((len(xy), len(means)))
+    for i in range(len(xy)):
+        for k in range(len(means)):
+            out[i, k] = _gaussian(xy[i, 0], xy[i, 1], means, prec, k)[0]
+    return out
+
+
+@njit(cache=True)
+def _weighted_derivatives(xy, means, prec, amplitudes):
+    n = len(xy)
+    value, grad, hess = np.zeros(n), np.zeros((n, 2)), np.zeros((n, 2, 2))
+    for i in range(n):
+        for k in range(len(means)):
+            g, pdx, pdy = _gaussian(xy[i, 0], xy[i, 1], means, prec, k)
+            g *= amplitudes[k]
+            value[i] += g
+            grad[i, 0] -= g * pdx
+            grad[i, 1] -= g * pdy
+            hess[i, 0, 0] += g * (pdx * pdx - prec[k, 0, 0])
+            hess[i, 0, 1] += g * (pdx * pdy - prec[k, 0, 1])
+            hess[i, 1, 1] += g * (pdy * pdy - prec[k, 1, 1])
+        hess[i, 1, 0] = hess[i, 0, 1]
+    return value, grad, hess
 
 
 def sample_guide(

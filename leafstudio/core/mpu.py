@@ -32,13 +32,6 @@ def bspline_weight(t: np.ndarray) -> np.ndarray:
     return np.where(t < 1 / 3, 0.75 - 2.25 * t**2, np.where(t < 1, 1.125 * (t - 1) ** 2, 0.0))
 
 
-def _bspline_slope_over_t(t: np.ndarray) -> np.ndarray:
-    """b'(t) / t, finite at t = 0 (for the gradient of w)."""
-    t = np.abs(t)
-    safe = np.where(t > 0, t, 1.0)
-    return np.where(t < 1 / 3, -4.5, np.where(t < 1, 2.25 * (t - 1) / safe, 0.0))
-
-
 @dataclass(frozen=True)
 class MPUImplicit:
     """The fitted implicit: one linear function per quadtree leaf cell.
@@ -63,44 +56,65 @@ class MPUImplicit:
     points: np.ndarray
     depth: np.ndarray
 
-    def _pairs(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(query index, cell index) for every query point where a cell's weight is nonzero."""
-        xy = np.ascontiguousarray(xy, dtype=float)
-        b = bucket_points(xy)
-        args = (xy, self.centers, self.radii, b.lo, b.size, b.nx, b.ny, b.starts, b.order)
-        count = _support_pairs(*args, np.empty(0, np.int64), np.empty(0, np.int64))
-        queries, cells = np.empty(count, np.int64), np.empty(count, np.int64)
-        _support_pairs(*args, queries, cells)
-        return queries, cells
-
     def evaluate(self, xy: np.ndarray, gradient: bool = False):
         """g at (n, 2) points; with `gradient`, also its (n, 2) gradient.
 
         Outside every support (far from the leaf) g is minus the distance to the nearest
         boundary point, and the gradient points toward it.
         """
+        g, grad, _ = self._blend(xy, 1 if gradient else 0)
+        return (g, grad) if gradient else g
+
+    def derivatives(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """g (n,), ∇g (n, 2) and ∇²g (n, 2, 2) at (n, 2) points, in closed form.
+
+        With N = Σ w_i f_i and D = Σ w_i (eq. 1), ∇²g = (∇²N − g ∇²D − ∇g ∇Dᵀ − ∇D ∇gᵀ) / D.
+        Piecewise: the B-splines are C1, so ∇²g jumps where a point crosses t = 1/3 or t = 1 of
+        some cell. Far from the leaf (no support covers the point) g = −|x − b| and
+        ∇²g = −(I − u uᵀ) / |x − b| with u = ∇g.
+        """
+        return self._blend(xy, 2)
+
+    def _blend(self, xy: np.ndarray, degree: int):
+        """g and, up to `degree` (0, 1 or 2), its gradient and Hessian (zeros when not asked)."""
         xy = np.ascontiguousarray(np.atleast_2d(np.asarray(xy, dtype=float)))
         n = len(xy)
         b: Buckets = bucket_points(xy)
-        weight_sum, value_sum, grad_w, grad_f = _blend_sums(
+        big_d, big_n, grad_d, grad_n, hess_d, hess_n = _blend_sums(
             xy, self.centers, self.radii, self.coef, b.lo, b.size, b.nx, b.ny, b.starts, b.order,
-            gradient,
+            degree,
         )  # fmt: skip
-        covered = weight_sum > 0
+        covered = big_d > 0
         g = np.empty(n)
-        g[covered] = value_sum[covered] / weight_sum[covered]
+        g[covered] = big_n[covered] / big_d[covered]
         far = ~covered
-        grad = np.zeros((n, 2))
+        grad, hess = np.zeros((n, 2)), np.zeros((n, 2, 2))
         if far.any():
             dist, nearest = cKDTree(self.points).query(xy[far])
             g[far] = -dist
             towards = self.points[nearest] - xy[far]
             grad[far] = towards / np.maximum(dist, 1e-300)[:, None]
-        if not gradient:
-            return g
-        ws = weight_sum[covered, None]
-        grad[covered] = (grad_f[covered] * ws - value_sum[covered, None] * grad_w[covered]) / ws**2
-        return g, grad
+        if degree == 0:
+            return g, grad, hess
+        d = big_d[covered, None]
+        grad[covered] = (grad_n[covered] - g[covered, None] * grad_d[covered]) / d
+        if degree == 1:
+            return g, grad, hess
+        full = np.zeros((n, 2, 2))
+        for sums, sign in ((hess_n, 1.0), (hess_d, -g)):
+            full[:, 0, 0] += sign * sums[:, 0]
+            full[:, 0, 1] += sign * sums[:, 1]
+            full[:, 1, 1] += sign * sums[:, 2]
+        full[:, 1, 0] = full[:, 0, 1]
+        cross = grad[:, :, None] * grad_d[:, None, :]
+        hess[covered] = (full - cross - cross.transpose(0, 2, 1))[covered] / d[:, :, None]
+        if far.any():
+            u = grad[far]
+            hess[far] = (
+                -(np.eye(2) - u[:, :, None] * u[:, None, :])
+                / np.maximum(-g[far], 1e-300)[:, None, None]
+            )
+        return g, grad, hess
 
     def __call__(self, xy: np.ndarray) -> np.ndarray:
         """g at (n, 2) points."""
@@ -119,34 +133,13 @@ def _bucket_range(c: float, reach: float, lo: float, size: float, count: int) ->
 
 
 @njit(cache=True)
-def _support_pairs(xy, centers, radii, lo, size, nx, ny, starts, order, out_q, out_c):
-    """Count the (query, cell) pairs with nonzero weight; fill out_q, out_c when they are long
-    enough to hold them."""
-    fill = len(out_q) > 0
-    count = 0
-    for c in range(len(centers)):
-        reach = radii[c] / 1.5
-        x0, x1 = _bucket_range(centers[c, 0], reach, lo[0], size, nx)
-        y0, y1 = _bucket_range(centers[c, 1], reach, lo[1], size, ny)
-        for by in range(y0, y1 + 1):
-            for bx in range(x0, x1 + 1):
-                k = by * nx + bx
-                for j in range(starts[k], starts[k + 1]):
-                    i = order[j]
-                    dx, dy = xy[i, 0] - centers[c, 0], xy[i, 1] - centers[c, 1]
-                    if dx * dx + dy * dy < reach * reach:
-                        if fill:
-                            out_q[count], out_c[count] = i, c
-                        count += 1
-    return count
-
-
-@njit(cache=True)
-def _blend_sums(xy, centers, radii, coef, lo, size, nx, ny, starts, order, gradient):
-    """Σ w_i, Σ w_i f_i (eq. 1) and, with `gradient`, Σ ∇w_i and Σ ∇(w_i f_i) at every query."""
+def _blend_sums(xy, centers, radii, coef, lo, size, nx, ny, starts, order, degree):
+    """D = Σ w_i and N = Σ w_i f_i (eq. 1) at every query; with degree >= 1 also ∇D and ∇N, with
+    degree 2 also ∇²D and ∇²N (as xx, xy, yy)."""
     n = len(xy)
-    weight_sum, value_sum = np.zeros(n), np.zeros(n)
-    grad_w, grad_f = np.zeros((n, 2)), np.zeros((n, 2))
+    big_d, big_n = np.zeros(n), np.zeros(n)
+    grad_d, grad_n = np.zeros((n, 2)), np.zeros((n, 2))
+    hess_d, hess_n = np.zeros((n, 3)), np.zeros((n, 3))
     for c in range(len(centers)):
         scale = 1.5 / radii[c]
         reach = 1.0 / scale
@@ -164,19 +157,32 @@ def _blend_sums(xy, centers, radii, coef, lo, size, nx, ny, starts, order, gradi
                         continue
                     t = np.sqrt(d2) * scale
                     if t < 1 / 3:
-                        w, slope = 0.75 - 2.25 * t * t, -4.5
+                        w, slope, curl = 0.75 - 2.25 * t * t, -4.5, 0.0
                     else:
-                        w, slope = 1.125 * (t - 1) ** 2, 2.25 * (t - 1) / t
+                        w, slope, curl = 1.125 * (t - 1) ** 2, 2.25 * (t - 1) / t, 2.25 / t**3
                     f = a * xy[i, 0] + b * xy[i, 1] + e
-                    weight_sum[i] += w
-                    value_sum[i] += w * f
-                    if gradient:
-                        slope *= scale * scale  # ∇w = b'(t)/t · scale² · d
-                        grad_w[i, 0] += slope * dx
-                        grad_w[i, 1] += slope * dy
-                        grad_f[i, 0] += slope * dx * f + w * a
-                        grad_f[i, 1] += slope * dy * f + w * b
-    return weight_sum, value_sum, grad_w, grad_f
+                    big_d[i] += w
+                    big_n[i] += w * f
+                    if degree == 0:
+                        continue
+                    slope *= scale * scale  # ∇w = b'(t)/t · scale² · d
+                    wx, wy = slope * dx, slope * dy
+                    grad_d[i, 0] += wx
+                    grad_d[i, 1] += wy
+                    grad_n[i, 0] += wx * f + w * a
+                    grad_n[i, 1] += wy * f + w * b
+                    if degree == 1:
+                        continue
+                    # ∇²w = b'(t)/t · scale² I + (d/dt (b'(t)/t)) / t · scale⁴ d dᵀ
+                    curl *= scale**4
+                    hxx, hxy, hyy = slope + curl * dx * dx, curl * dx * dy, slope + curl * dy * dy
+                    hess_d[i, 0] += hxx
+                    hess_d[i, 1] += hxy
+                    hess_d[i, 2] += hyy
+                    hess_n[i, 0] += hxx * f + 2 * wx * a  # ∇²(w f) = ∇²w f + ∇w ∇fᵀ + ∇f ∇wᵀ
+                    hess_n[i, 1] += hxy * f + wx * b + wy * a
+                    hess_n[i, 2] += hyy * f + 2 * wy * b
+    return big_d, big_n, grad_d, grad_n, hess_d, hess_n
 
 
 def _fit_cells(

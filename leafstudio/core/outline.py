@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import shapely
+from numba import njit
 from scipy.spatial import cKDTree
 from shapely.geometry import MultiPoint, Polygon
 
@@ -108,5 +109,63 @@ def outward_normals(polygon: np.ndarray, smoothing: int = 2) -> np.ndarray:
 
 
 def contains(polygon: np.ndarray, xy: np.ndarray) -> np.ndarray:
-    """(n,) bool: which points lie inside the polygon (or on its edge)."""
-    return shapely.covers(Polygon(polygon), shapely.points(xy))
+    """(n,) bool: which points lie inside the polygon (or on its edge).
+
+    The crossing-number test, compiled: the polygon's edges are filed into horizontal bands, so
+    each point only tests the few edges of its band.
+    """
+    polygon = np.ascontiguousarray(polygon, dtype=float)
+    xy = np.ascontiguousarray(np.atleast_2d(xy), dtype=float).reshape(-1, 2)
+    n_bands = max(1, len(polygon) // 2)
+    y0, y1 = float(polygon[:, 1].min()), float(polygon[:, 1].max())
+    height = max(y1 - y0, 1e-300) / n_bands
+    tolerance = 1e-12 * float(np.ptp(polygon, axis=0).max())
+    return _inside(polygon, xy, y0, height, n_bands, tolerance)
+
+
+@njit(cache=True)
+def _band_range(ya: float, yb: float, y0: float, height: float, n_bands: int) -> tuple[int, int]:
+    first = min(max(int((min(ya, yb) - y0) / height), 0), n_bands - 1)
+    last = min(max(int((max(ya, yb) - y0) / height), 0), n_bands - 1)
+    return first, last
+
+
+@njit(cache=True)
+def _inside(polygon, xy, y0, height, n_bands, tolerance):
+    n = len(polygon)
+    starts = np.zeros(n_bands + 1, np.int64)
+    for e in range(n):
+        first, last = _band_range(polygon[e, 1], polygon[(e + 1) % n, 1], y0, height, n_bands)
+        starts[first + 1 : last + 2] += 1
+    for b in range(n_bands):
+        starts[b + 1] += starts[b]
+    edges = np.empty(starts[-1], np.int64)
+    fill = starts[:-1].copy()
+    for e in range(n):
+        first, last = _band_range(polygon[e, 1], polygon[(e + 1) % n, 1], y0, height, n_bands)
+        for b in range(first, last + 1):
+            edges[fill[b]] = e
+            fill[b] += 1
+    out = np.zeros(len(xy), np.bool_)
+    for i in range(len(xy)):
+        px, py = xy[i, 0], xy[i, 1]
+        if py < y0 - tolerance or py > y0 + height * n_bands + tolerance:
+            continue
+        band = min(max(int((py - y0) / height), 0), n_bands - 1)
+        inside = False
+        for s in range(starts[band], starts[band + 1]):
+            e = edges[s]
+            ax, ay = polygon[e, 0], polygon[e, 1]
+            bx, by = polygon[(e + 1) % n, 0], polygon[(e + 1) % n, 1]
+            # on the edge itself: covered
+            ex, ey = bx - ax, by - ay
+            length2 = ex * ex + ey * ey
+            t = ((px - ax) * ex + (py - ay) * ey) / length2 if length2 > 0 else 0.0
+            t = min(max(t, 0.0), 1.0)
+            if (ax + t * ex - px) ** 2 + (ay + t * ey - py) ** 2 <= tolerance * tolerance:
+                inside = True
+                break
+            if (ay > py) != (by > py) and px < ax + (py - ay) * ex / ey:
+                inside = not inside
+        out[i] = inside
+    return out

@@ -361,12 +361,11 @@ def _mesh_stage(
     nodes = grid.points[guide.inside]
     n_outline = len(fs.polygon)
     if params.mesher == "conforming":
-        keep = mesher.inner_nodes(fs.polygon, nodes, grid.spacing)
-        keep &= contains(fs.polygon, nodes)
-        xy, triangles = mesher.conforming_mesh(fs.polygon, nodes[keep])
-        z = surf.surface(xy)
-        # the margin at the boundary points' own heights (0 in the plane for a planar one, eq. 3)
-        z[:n_outline] = 0.0 if fs.polygon_h is None else fs.polygon_h
+        xy, triangles, kept = mesher.conforming_grid_mesh(fs.polygon, grid, guide.inside)
+        # the margin at the boundary points' own heights (0 in the plane for a planar one, eq. 3);
+        # the kept nodes' heights are already known
+        rim = np.zeros(n_outline) if fs.polygon_h is None else fs.polygon_h
+        z = np.concatenate([rim, surf.z[kept[guide.inside]]])
     else:
         xy = np.vstack([fs.polygon, nodes])
         rim = np.zeros(n_outline) if fs.polygon_h is None else fs.polygon_h

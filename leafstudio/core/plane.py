@@ -36,12 +36,8 @@ class Frame:
     def to_world(self, xy: np.ndarray, z: np.ndarray) -> np.ndarray:
         """Map plane coordinates (n, 2) and heights (n,) back to (n, 3) world points."""
         xy = np.asarray(xy, dtype=float)
-        return (
-            self.origin
-            + np.outer(xy[:, 0], self.u)
-            + np.outer(xy[:, 1], self.v)
-            + np.outer(z, self.normal)
-        )
+        axes = np.array([self.u, self.v, self.normal])
+        return xy @ axes[:2] + np.outer(z, axes[2]) + self.origin
 
 
 def fit_frame(boundary: np.ndarray, vein_points: np.ndarray) -> Frame:
