@@ -263,15 +263,18 @@ def _extract(args: argparse.Namespace) -> int:
         raise LeafError(f"unknown leaf type; use one of {', '.join(LEAF_SUFFIXES)}", args.output)
     if not 8 <= args.points <= 100_000:
         raise LeafError(f"--points must be between 8 and 100000, got {args.points}")
+    scan = read_scan(args.scan)
     try:
-        found = extract_leaf(read_scan(args.scan), args.base_end, args.points)
+        found = extract_leaf(scan, args.base_end, args.points)
     except LeafError as exc:
         raise LeafError(exc.problem, args.scan) from None
     save_leaf(found.leaf, args.output)
+    other = len(scan) - found.blade.sum() - found.petiole.sum()
     print(
-        f"{args.scan}: blade of {found.blade.sum()} points ({found.petiole.sum()} petiole points "
-        f"dropped), length {found.length:.4g}; wrote {len(found.leaf.boundary)} boundary points "
-        f"and {len(found.leaf.veins)} veins to {args.output}"
+        f"{args.scan}: blade of {found.blade.sum()} of {len(scan)} points (dropped: petiole "
+        f"{found.petiole.sum()}, outliers and clutter {other}), length {found.length:.4g}; wrote "
+        f"{len(found.leaf.boundary)} boundary points and {len(found.leaf.veins)} veins to "
+        f"{args.output}"
     )
     return EXIT_OK
 
