@@ -3,6 +3,7 @@
 | stage    | depends on                          | output                                   |
 |----------|-------------------------------------|------------------------------------------|
 | frame    | the leaf                            | PCA frame, 2D polygon, 2D veins, heights |
+|          |                                     | above the base b(x) (base.py)            |
 | implicit | frame, mpu_tolerance                | the MPU implicit g                       |
 | grid     | frame, grid                         | the regular grid                         |
 | guide    | implicit, grid                      | g and p(x) on the grid                   |
