@@ -5,7 +5,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import open3d as o3d
 import pyvista as pv
 
 from leafstudio.model import Leaf
@@ -20,6 +19,8 @@ def point_to_mesh_distance(mesh: pv.PolyData, points: np.ndarray) -> np.ndarray:
     """(n,) exact distance from each point to the nearest point on the mesh's triangles."""
     if len(points) == 0:
         return np.zeros(0)
+    import open3d as o3d  # here, not at the top: it takes seconds and 250 MB to import
+
     # open3d's scene is float32: work relative to the mesh's centre to keep leaves far from the
     # origin precise
     vertices = np.asarray(mesh.points, dtype=float)

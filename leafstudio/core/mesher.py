@@ -14,7 +14,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import open3d as o3d
 import triangle
 from numba import njit
 
@@ -203,6 +202,8 @@ def ball_pivoting(
     points: np.ndarray, normals: np.ndarray, spacing: float, factor: float
 ) -> np.ndarray:
     """open3d ball pivoting over (n, 3) points with (n, 3) normals; returns (m, 3) triangles."""
+    import open3d as o3d  # here, not at the top: it takes seconds and 250 MB to import
+
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     cloud.normals = o3d.utility.Vector3dVector(normals)
     radii = o3d.utility.DoubleVector([r * spacing * factor for r in BPA_RADII])
