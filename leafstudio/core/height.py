@@ -25,6 +25,7 @@ from leafstudio.core.buckets import bucket_points
 
 TIE = 1e-9  # relative distance under which nearest points count as tied
 QUERIES_PER_BUCKET = 32  # query points share one candidate list per bucket of about this many
+BLOCK = 4  # buckets per side of a block, whose candidate list the buckets then filter
 
 
 def nearest_in_groups(
@@ -72,70 +73,111 @@ def nearest_in_groups(
 
 
 @njit(cache=True)
+def _select(points, group, n_groups, pool, n_pool, x0, y0, x1, y1, bound, near, out):
+    """Fill `out` with the points of pool[:n_pool] that can be the nearest point of one of the
+    two nearest groups of some query in the box [x0, x1] x [y0, y1]; return their count.
+
+    bound[g] is the farthest any query in the box can be from a pool point of group g, so the
+    second nearest group of every query lies within the second smallest bound (cut); a point
+    nearer to the box than neither its group's bound nor the cut is never needed."""
+    bound[:] = np.inf
+    for s in range(n_pool):
+        j = pool[s]
+        px, py = points[j, 0], points[j, 1]
+        ex = max(x0 - px, 0.0, px - x1)
+        ey = max(y0 - py, 0.0, py - y1)
+        near[s] = ex * ex + ey * ey
+        fx = max(abs(px - x0), abs(px - x1))
+        fy = max(abs(py - y0), abs(py - y1))
+        bound[group[j]] = min(bound[group[j]], fx * fx + fy * fy)
+    cut = np.sort(bound)[min(1, n_groups - 1)]
+    count = 0
+    for s in range(n_pool):
+        j = pool[s]
+        limit = min(bound[group[j]], cut)
+        if near[s] <= (np.sqrt(limit) * (1 + 1e-6) + 1e-12) ** 2:
+            out[count] = j
+            count += 1
+    return count
+
+
+@njit(cache=True)
 def _nearest_groups(
     xy, points, group, values, n_groups, lo, size, nx, ny, starts, order, dist, pos, value, second
 ):
-    """Per bucket of queries, a candidate list holding every point that can be the nearest of the
-    two nearest groups of any query in the bucket; then each query scans only its candidates."""
+    """Per block of BLOCK x BLOCK query buckets a candidate list from all points, per bucket one
+    from its block's list (see _select: both exact), then each query scans its bucket's list."""
     m = len(points)
-    bound = np.empty(n_groups)  # per group: the farthest a query in the box can be from it
+    bound = np.empty(n_groups)
     near = np.empty(m)
+    everyone = np.arange(m)
+    pool = np.empty(m, np.int64)
     candidates = np.empty(m, np.int64)
     best = np.empty(n_groups)
-    for by in range(ny):
-        for bx in range(nx):
-            k = by * nx + bx
-            if starts[k] == starts[k + 1]:
-                continue
-            x0, y0 = lo[0] + bx * size, lo[1] + by * size
-            x1, y1 = x0 + size, y0 + size
-            bound[:] = np.inf
-            for j in range(m):
-                px, py = points[j, 0], points[j, 1]
-                ex = max(x0 - px, 0.0, px - x1)
-                ey = max(y0 - py, 0.0, py - y1)
-                near[j] = ex * ex + ey * ey
-                fx = max(abs(px - x0), abs(px - x1))
-                fy = max(abs(py - y0), abs(py - y1))
-                bound[group[j]] = min(bound[group[j]], fx * fx + fy * fy)
-            ranked = np.sort(bound)
-            cut = ranked[min(1, n_groups - 1)]  # the second nearest group lies within cut
-            count = 0
-            for j in range(m):
-                limit = min(bound[group[j]], cut)
-                if near[j] <= (np.sqrt(limit) * (1 + 1e-6) + 1e-12) ** 2:
-                    candidates[count] = j
-                    count += 1
-            for s in range(starts[k], starts[k + 1]):
-                i = order[s]
-                qx, qy = xy[i, 0], xy[i, 1]
-                best[:] = np.inf
-                for c in range(count):
-                    j = candidates[c]
-                    d2 = (points[j, 0] - qx) ** 2 + (points[j, 1] - qy) ** 2
-                    best[group[j]] = min(best[group[j]], d2)
-                first = 0
-                for g in range(1, n_groups):
-                    if best[g] < best[first]:
-                        first = g
-                d1 = np.sqrt(best[first])
-                d_other = np.inf
-                for g in range(n_groups):
-                    if g != first:
-                        d_other = min(d_other, best[g])
-                tie = (d1 * (1 + TIE) + 1e-15) ** 2
-                tied, sx, sy, sv = 0, 0.0, 0.0, 0.0
-                for c in range(count):
-                    j = candidates[c]
-                    if group[j] == first:
-                        d2 = (points[j, 0] - qx) ** 2 + (points[j, 1] - qy) ** 2
-                        if d2 <= tie:
-                            tied += 1
-                            sx += points[j, 0]
-                            sy += points[j, 1]
-                            sv += values[j]
-                dist[i], second[i] = d1, np.sqrt(d_other)
-                pos[i, 0], pos[i, 1], value[i] = sx / tied, sy / tied, sv / tied
+    for block_y in range(0, ny, BLOCK):
+        for block_x in range(0, nx, BLOCK):
+            last_y, last_x = min(block_y + BLOCK, ny), min(block_x + BLOCK, nx)
+            if starts[(last_y - 1) * nx + last_x] == starts[block_y * nx + block_x]:
+                continue  # buckets are numbered row by row: no query in the block's rows span
+            n_pool = _select(
+                points, group, n_groups, everyone, m,
+                lo[0] + block_x * size, lo[1] + block_y * size,
+                lo[0] + last_x * size, lo[1] + last_y * size,
+                bound, near, pool,
+            )  # fmt: skip
+            for by in range(block_y, last_y):
+                for bx in range(block_x, last_x):
+                    k = by * nx + bx
+                    if starts[k] == starts[k + 1]:
+                        continue
+                    x0, y0 = lo[0] + bx * size, lo[1] + by * size
+                    count = _select(
+                        points, group, n_groups, pool, n_pool, x0, y0, x0 + size, y0 + size,
+                        bound, near, candidates,
+                    )  # fmt: skip
+                    _scan(
+                        xy, points, group, values, n_groups, starts[k], starts[k + 1], order,
+                        candidates, count, best, dist, pos, value, second,
+                    )  # fmt: skip
+
+
+@njit(cache=True)
+def _scan(
+    xy, points, group, values, n_groups, first_q, end_q, order, candidates, count, best, dist,
+    pos, value, second,
+):  # fmt: skip
+    """Nearest group, tie-averaged nearest point and value, and next group's distance, for the
+    queries order[first_q:end_q] among the candidates."""
+    for s in range(first_q, end_q):
+        i = order[s]
+        qx, qy = xy[i, 0], xy[i, 1]
+        best[:] = np.inf
+        for c in range(count):
+            j = candidates[c]
+            d2 = (points[j, 0] - qx) ** 2 + (points[j, 1] - qy) ** 2
+            best[group[j]] = min(best[group[j]], d2)
+        first = 0
+        for g in range(1, n_groups):
+            if best[g] < best[first]:
+                first = g
+        d1 = np.sqrt(best[first])
+        d_other = np.inf
+        for g in range(n_groups):
+            if g != first:
+                d_other = min(d_other, best[g])
+        tie = (d1 * (1 + TIE) + 1e-15) ** 2
+        tied, sx, sy, sv = 0, 0.0, 0.0, 0.0
+        for c in range(count):
+            j = candidates[c]
+            if group[j] == first:
+                d2 = (points[j, 0] - qx) ** 2 + (points[j, 1] - qy) ** 2
+                if d2 <= tie:
+                    tied += 1
+                    sx += points[j, 0]
+                    sy += points[j, 1]
+                    sv += values[j]
+        dist[i], second[i] = d1, np.sqrt(d_other)
+        pos[i, 0], pos[i, 1], value[i] = sx / tied, sy / tied, sv / tied
 
 
 def height_guide(

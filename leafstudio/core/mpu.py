@@ -191,35 +191,89 @@ def _fit_cells(
     tree: cKDTree,
     points: np.ndarray,
     normals: np.ndarray,
+    buckets: Buckets,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Linear fits for a batch of cells: coef (m, 3), error (m,), normal agreement (m,), radii."""
-    counts = tree.query_ball_point(centers, radii, return_length=True)
-    few = counts < N_MIN
+    grid = (buckets.lo, buckets.size, buckets.nx, buckets.ny, buckets.starts, buckets.order)
+    few = _ball_counts(points, centers, radii, *grid) < N_MIN
     if few.any():  # grow the ball until it holds N_MIN points
         dist, _ = tree.query(centers[few], k=N_MIN)
         radii = radii.copy()
         radii[few] = np.maximum(radii[few], dist[:, -1] * 1.0001)
-    hits = tree.query_ball_point(centers, radii, return_sorted=False)
-    counts = np.fromiter((len(h) for h in hits), dtype=np.int64, count=len(hits))
-    cell = np.repeat(np.arange(len(hits)), counts)
-    pid = np.fromiter((i for h in hits for i in h), dtype=np.int64, count=counts.sum())
-    m = len(centers)
-    w = bspline_weight(np.linalg.norm(points[pid] - centers[cell], axis=1) * 1.5 / radii[cell])
-    w = w + 1e-3  # points at the rim of a grown ball still count
-    wsum = np.bincount(cell, w, minlength=m)
-    mean_p = np.column_stack([np.bincount(cell, w * points[pid, k], minlength=m) for k in (0, 1)])
-    mean_p /= wsum[:, None]
-    sum_n = np.column_stack([np.bincount(cell, w * normals[pid, k], minlength=m) for k in (0, 1)])
-    length = np.linalg.norm(sum_n, axis=1)
-    mean_n = sum_n / np.maximum(length, 1e-300)[:, None]
-    # f(x) = n̄ · (p̄ − x): positive on the inner side of the outward normals
-    coef = np.column_stack([-mean_n, np.einsum("ij,ij->i", mean_n, mean_p)])
-    residual = np.abs(np.einsum("ij,ij->i", points[pid] - mean_p[cell], mean_n[cell]))
-    error = np.zeros(m)
-    np.maximum.at(error, cell, residual)
-    agreement = np.full(m, 1.0)
-    np.minimum.at(agreement, cell, np.einsum("ij,ij->i", normals[pid], mean_n[cell]))
+    coef, error, agreement = _ball_fits(points, normals, centers, radii, *grid)
     return coef, error, agreement, radii
+
+
+@njit(cache=True)
+def _ball_counts(points, centers, radii, lo, size, nx, ny, starts, order):
+    """(m,) number of points within radii[c] of centers[c] (closed balls)."""
+    counts = np.zeros(len(centers), np.int64)
+    for c in range(len(centers)):
+        r = radii[c]
+        x0, x1 = _bucket_range(centers[c, 0], r, lo[0], size, nx)
+        y0, y1 = _bucket_range(centers[c, 1], r, lo[1], size, ny)
+        for by in range(y0, y1 + 1):
+            for bx in range(x0, x1 + 1):
+                k = by * nx + bx
+                for j in range(starts[k], starts[k + 1]):
+                    i = order[j]
+                    dx, dy = points[i, 0] - centers[c, 0], points[i, 1] - centers[c, 1]
+                    if dx * dx + dy * dy <= r * r:
+                        counts[c] += 1
+    return counts
+
+
+@njit(cache=True)
+def _ball_fits(points, normals, centers, radii, lo, size, nx, ny, starts, order):
+    """Per cell, the line through the B-spline-weighted mean of the points in its ball, normal to
+    their weighted mean normal; its largest residual and the smallest normal agreement."""
+    m = len(centers)
+    coef, error, agreement = np.zeros((m, 3)), np.zeros(m), np.ones(m)
+    for c in range(m):
+        r = radii[c]
+        cx, cy = centers[c, 0], centers[c, 1]
+        x0, x1 = _bucket_range(cx, r, lo[0], size, nx)
+        y0, y1 = _bucket_range(cy, r, lo[1], size, ny)
+        wsum, px, py, nx_sum, ny_sum = 0.0, 0.0, 0.0, 0.0, 0.0
+        for by in range(y0, y1 + 1):
+            for bx in range(x0, x1 + 1):
+                k = by * nx + bx
+                for j in range(starts[k], starts[k + 1]):
+                    i = order[j]
+                    dx, dy = points[i, 0] - cx, points[i, 1] - cy
+                    d2 = dx * dx + dy * dy
+                    if d2 > r * r:
+                        continue
+                    t = np.sqrt(d2) * 1.5 / r
+                    w = 1e-3  # points at the rim of a grown ball still count
+                    if t < 1 / 3:
+                        w += 0.75 - 2.25 * t * t
+                    elif t < 1:
+                        w += 1.125 * (t - 1) ** 2
+                    wsum += w
+                    px += w * points[i, 0]
+                    py += w * points[i, 1]
+                    nx_sum += w * normals[i, 0]
+                    ny_sum += w * normals[i, 1]
+        if wsum == 0:
+            continue
+        px, py = px / wsum, py / wsum
+        length = max(np.sqrt(nx_sum * nx_sum + ny_sum * ny_sum), 1e-300)
+        mx, my = nx_sum / length, ny_sum / length
+        # f(x) = n̄ · (p̄ − x): positive on the inner side of the outward normals
+        coef[c, 0], coef[c, 1], coef[c, 2] = -mx, -my, mx * px + my * py
+        for by in range(y0, y1 + 1):
+            for bx in range(x0, x1 + 1):
+                k = by * nx + bx
+                for j in range(starts[k], starts[k + 1]):
+                    i = order[j]
+                    dx, dy = points[i, 0] - cx, points[i, 1] - cy
+                    if dx * dx + dy * dy > r * r:
+                        continue
+                    residual = abs((points[i, 0] - px) * mx + (points[i, 1] - py) * my)
+                    error[c] = max(error[c], residual)
+                    agreement[c] = min(agreement[c], normals[i, 0] * mx + normals[i, 1] * my)
+    return coef, error, agreement
 
 
 def build_mpu(
@@ -247,6 +301,7 @@ def build_mpu(
     MPUImplicit
     """
     tree = cKDTree(points)
+    buckets = bucket_points(points)
     lo, hi = points.min(axis=0), points.max(axis=0)
     half = 0.6 * float((hi - lo).max())
     spacing = float(np.median(tree.query(points, k=2)[0][:, 1]))
@@ -255,8 +310,11 @@ def build_mpu(
     depth = 0
     while len(centers):
         radii = np.full(len(centers), ALPHA * 2 * np.sqrt(2) * half)
-        grown = tree.query_ball_point(centers, radii, return_length=True) < N_MIN
-        coef, error, agreement, radii = _fit_cells(centers, radii, tree, points, normals)
+        grown = (
+            _ball_counts(points, centers, radii, buckets.lo, buckets.size, buckets.nx, buckets.ny,
+                         buckets.starts, buckets.order) < N_MIN
+        )  # fmt: skip
+        coef, error, agreement, radii = _fit_cells(centers, radii, tree, points, normals, buckets)
         bad = (error > tolerance) | (agreement < MIN_NORMAL_AGREEMENT)
         wrong_sign = np.zeros(len(centers), dtype=bool)
         if grown.any():  # a far cell's line must give its own centre the right sign

@@ -7,6 +7,8 @@ given; unordered or shuffled input is ordered by a concave hull of the points.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 import shapely
 from numba import njit
@@ -21,6 +23,10 @@ _HULL_RATIOS = (0.0, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0)
 def distinct_indices(points: np.ndarray, scale: float) -> np.ndarray:
     """Indices of the points left once repeats (within 1e-9 of `scale`) are dropped, in order."""
     keys = np.round(points / (scale * 1e-9)).astype(np.int64)
+    keys -= keys.min(axis=0)
+    span = keys.max(axis=0) + 1
+    if np.prod(span.astype(float)) < 2.0**62:  # one integer per point: a 1D unique, much faster
+        keys = np.ravel_multi_index(tuple(keys.T), tuple(span.tolist()))
     _, first = np.unique(keys, axis=0, return_index=True)
     return np.sort(first)
 
@@ -116,11 +122,20 @@ def contains(polygon: np.ndarray, xy: np.ndarray) -> np.ndarray:
     """
     polygon = np.ascontiguousarray(polygon, dtype=float)
     xy = np.ascontiguousarray(np.atleast_2d(xy), dtype=float).reshape(-1, 2)
-    n_bands = max(1, len(polygon) // 2)
+    bands = _edge_bands(polygon.tobytes(), len(polygon))
+    return _inside(polygon, xy, *bands)
+
+
+@lru_cache(maxsize=8)
+def _edge_bands(key: bytes, n: int) -> tuple[float, float, int, float, np.ndarray, np.ndarray]:
+    """The polygon's edges filed by horizontal band (cached: one polygon is tested many times)."""
+    polygon = np.frombuffer(key).reshape(n, 2)
+    n_bands = max(1, n // 2)
     y0, y1 = float(polygon[:, 1].min()), float(polygon[:, 1].max())
     height = max(y1 - y0, 1e-300) / n_bands
     tolerance = 1e-12 * float(np.ptp(polygon, axis=0).max())
-    return _inside(polygon, xy, y0, height, n_bands, tolerance)
+    starts, edges = _file_edges(polygon, y0, height, n_bands)
+    return y0, height, n_bands, tolerance, starts, edges
 
 
 @njit(cache=True)
@@ -131,7 +146,8 @@ def _band_range(ya: float, yb: float, y0: float, height: float, n_bands: int) ->
 
 
 @njit(cache=True)
-def _inside(polygon, xy, y0, height, n_bands, tolerance):
+def _file_edges(polygon, y0, height, n_bands):
+    """(n_bands + 1,) starts and the edge indices of each band, edges of every band they span."""
     n = len(polygon)
     starts = np.zeros(n_bands + 1, np.int64)
     for e in range(n):
@@ -146,6 +162,12 @@ def _inside(polygon, xy, y0, height, n_bands, tolerance):
         for b in range(first, last + 1):
             edges[fill[b]] = e
             fill[b] += 1
+    return starts, edges
+
+
+@njit(cache=True)
+def _inside(polygon, xy, y0, height, n_bands, tolerance, starts, edges):
+    n = len(polygon)
     out = np.zeros(len(xy), np.bool_)
     for i in range(len(xy)):
         px, py = xy[i, 0], xy[i, 1]

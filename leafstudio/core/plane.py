@@ -40,6 +40,19 @@ class Frame:
         return xy @ axes[:2] + np.outer(z, axes[2]) + self.origin
 
 
+def _distinct_count_up_to_3(points: np.ndarray) -> int:
+    """The number of distinct rows of (n, 3) `points`, counted up to 3 (no sort: O(n))."""
+    if len(points) == 0:
+        return 0
+    count, others = 1, np.ones(len(points), dtype=bool)
+    for _ in range(2):
+        others &= np.any(points != points[np.argmax(others)], axis=1)
+        if not others.any():
+            return count
+        count += 1
+    return count
+
+
 def fit_frame(boundary: np.ndarray, vein_points: np.ndarray) -> Frame:
     """PCA plane of the boundary points (paper, step 1), normal oriented toward the veins.
 
@@ -54,9 +67,9 @@ def fit_frame(boundary: np.ndarray, vein_points: np.ndarray) -> Frame:
     LeafError
         If there are fewer than 3 distinct boundary points, or they lie on one line.
     """
-    distinct = np.unique(np.round(boundary, 12), axis=0)
-    if len(distinct) < 3:
-        raise LeafError(f"the boundary needs at least 3 distinct points, got {len(distinct)}")
+    distinct = _distinct_count_up_to_3(np.round(boundary, 12))
+    if distinct < 3:
+        raise LeafError(f"the boundary needs at least 3 distinct points, got {distinct}")
     origin = boundary.mean(axis=0)
     _, sing, vt = np.linalg.svd(boundary - origin, full_matrices=False)
     if sing[0] <= 0 or sing[1] <= 1e-6 * sing[0]:

@@ -31,7 +31,7 @@ from leafstudio.core.mpu import MPUImplicit
 
 VEIN_WEIGHT = 10.0  # the vein rows together weigh this much relative to all grid rows
 RIDGE = 1e-10
-REFINE_ROWS = 1500  # grid nodes drawn for the refinement (all vein points are used)
+REFINE_ROWS = 1500  # grid nodes drawn for the refinement, and vein points at most
 REFINE_STEPS = 30  # Levenberg-Marquardt iterations at most
 REFINE_GAIN = 1e-5  # stop once a step lowers the cost by less than this fraction
 
@@ -88,12 +88,16 @@ def _least_squares_rows(
     max_rows: int | None,
     seed: int,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Points, row weights and targets of the fit: grid nodes (p) and vein points (h_v)."""
+    """Points, row weights and targets of the fit: grid nodes (p) and vein points (h_v), at most
+    `max_rows` of each."""
     if max_rows is not None and len(inside_xy) > max_rows:
         pick = np.random.default_rng(seed).choice(len(inside_xy), max_rows, replace=False)
         inside_xy, inside_g, inside_p = inside_xy[pick], inside_g[pick], inside_p[pick]
     taper = surface.taper(inside_g)
     xy, weight, target = inside_xy, np.ones(len(inside_xy)), inside_p
+    if max_rows is not None and len(vein_xy) > max_rows:  # evenly along the veins
+        pick = np.linspace(0, len(vein_xy) - 1, max_rows).astype(np.int64)
+        vein_xy, vein_h = vein_xy[pick], vein_h[pick]
     if len(vein_xy):
         scale = np.sqrt(VEIN_WEIGHT * len(inside_xy) / len(vein_xy))
         xy = np.vstack([xy, vein_xy])
@@ -143,43 +147,40 @@ def _refine(mixture: Mixture, xy: np.ndarray, row_scale: np.ndarray, target: np.
     return refined
 
 
-@njit(cache=True)
 def _normal_equations(xy, row_scale, target, t, full):
     """Cost |r|², and with `full` JᵀJ (p, p) and Jᵀr (p,), of the rows r_i = s_i z(x_i) − y_i,
-    with z = Σ a_k N_k and θ packed as in _pack; accumulated row by row, J never stored."""
+    with z = Σ a_k N_k and θ packed as in _pack (J from a compiled loop, JᵀJ by BLAS)."""
+    res, jac = _residual_rows(xy, row_scale, target, t, full)
+    if not full:
+        return res @ res, None, None
+    return res @ res, jac.T @ jac, jac.T @ res
+
+
+@njit(cache=True)
+def _residual_rows(xy, row_scale, target, t, full):
+    """Residuals (m,) and, with `full`, the closed-form Jacobian (m, 6K) of _normal_equations."""
     k = len(t)
-    p = 6 * k
-    normal, gradient = np.zeros((p, p)), np.zeros(p)
-    row = np.empty(p)
-    dens = np.empty(k)
-    cost = 0.0
+    res = np.empty(len(xy))
+    jac = np.empty((len(xy) if full else 0, 6 * k))
+    r11, r22 = np.exp(t[:, 3]), np.exp(t[:, 5])
+    norm = r11 * r22 / (2 * np.pi)
     for i in range(len(xy)):
         value = 0.0
         for c in range(k):
             dx, dy = xy[i, 0] - t[c, 1], xy[i, 1] - t[c, 2]
-            r11, r21, r22 = np.exp(t[c, 3]), t[c, 4], np.exp(t[c, 5])
-            e1, e2 = r11 * dx + r21 * dy, r22 * dy
-            dens[c] = (r11 * r22 / (2 * np.pi)) * np.exp(-0.5 * (e1 * e1 + e2 * e2))
-            value += t[c, 0] * dens[c]
+            e1, e2 = r11[c] * dx + t[c, 4] * dy, r22[c] * dy
+            dens = norm[c] * np.exp(-0.5 * (e1 * e1 + e2 * e2))
+            value += t[c, 0] * dens
             if full:
-                scaled = row_scale[i] * dens[c] * t[c, 0]  # ∂z/∂log N of this component
-                row[6 * c] = row_scale[i] * dens[c]
-                row[6 * c + 1] = scaled * (r11 * e1)
-                row[6 * c + 2] = scaled * (r21 * e1 + r22 * e2)
-                row[6 * c + 3] = scaled * (1 - e1 * r11 * dx)
-                row[6 * c + 4] = scaled * (-e1 * dy)
-                row[6 * c + 5] = scaled * (1 - e2 * r22 * dy)
-        res = row_scale[i] * value - target[i]
-        cost += res * res
-        if full:
-            for a in range(p):
-                gradient[a] += row[a] * res
-                for b in range(a, p):
-                    normal[a, b] += row[a] * row[b]
-    for a in range(p):
-        for b in range(a):
-            normal[a, b] = normal[b, a]
-    return cost, normal, gradient
+                scaled = row_scale[i] * dens * t[c, 0]  # ∂z/∂log N of this component
+                jac[i, 6 * c] = row_scale[i] * dens
+                jac[i, 6 * c + 1] = scaled * (r11[c] * e1)
+                jac[i, 6 * c + 2] = scaled * (t[c, 4] * e1 + r22[c] * e2)
+                jac[i, 6 * c + 3] = scaled * (1 - e1 * r11[c] * dx)
+                jac[i, 6 * c + 4] = scaled * (-e1 * dy)
+                jac[i, 6 * c + 5] = scaled * (1 - e2 * r22[c] * dy)
+        res[i] = row_scale[i] * value - target[i]
+    return res, jac
 
 
 def _levenberg_marquardt(normal_equations, theta: np.ndarray, steps: int) -> np.ndarray:
