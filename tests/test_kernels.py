@@ -1,0 +1,144 @@
+"""The compiled (numba) kernels give what the plain definitions give: each is checked against a
+brute-force or reference (shapely, scikit-learn) computation on awkward input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import shapely
+from shapely.geometry import LinearRing, Polygon
+from sklearn.mixture import GaussianMixture
+
+import leafstudio as ls
+from leafstudio.core.gmm import fit_mixture
+from leafstudio.core.grid import make_grid
+from leafstudio.core.height import nearest_in_groups
+from leafstudio.core.mesher import conforming_grid_mesh, inner_nodes
+from leafstudio.core.mpu import bspline_weight, build_mpu
+from leafstudio.core.outline import contains, outward_normals
+from leafstudio.core.pipeline import _frame_stage
+from leafstudio.core.surface import _levenberg_marquardt
+
+
+def _star(n: int = 240, seed: int = 1) -> np.ndarray:
+    """A jagged star-shaped polygon, counter-clockwise."""
+    rng = np.random.default_rng(seed)
+    angle = np.sort(rng.uniform(0, 2 * np.pi, n))
+    radius = rng.uniform(0.3, 1.0, n)
+    return np.column_stack([radius * np.cos(angle), radius * np.sin(angle)])
+
+
+def _slotted_square() -> np.ndarray:
+    """A unit square with a slot 0.01 wide cut from its top edge down to y = 0.3."""
+    return np.array(
+        [[0, 0], [1, 0], [1, 1], [0.505, 1], [0.505, 0.3], [0.495, 0.3], [0.495, 1], [0, 1]],
+        dtype=float,
+    )
+
+
+@pytest.fixture(scope="module")
+def nested_frame():
+    return _frame_stage(ls.demo("nested"))[0]
+
+
+def test_mpu_value_is_eq1_summed_over_every_cell(nested_frame):
+    polygon = nested_frame.polygon
+    implicit = build_mpu(polygon, outward_normals(polygon), 1e-3, lambda q: contains(polygon, q))
+    rng = np.random.default_rng(0)
+    xy = np.vstack([rng.uniform(-0.6, 0.6, (400, 2)) * [1, 0.3], polygon[:20]])
+    dist = np.linalg.norm(xy[:, None] - implicit.centers[None], axis=2)
+    w = bspline_weight(dist * 1.5 / implicit.radii[None])
+    f = xy @ implicit.coef[:, :2].T + implicit.coef[:, 2]
+    covered = w.sum(axis=1) > 0
+    expected = (w * f).sum(axis=1)[covered] / w.sum(axis=1)[covered]
+    g, grad, hess = implicit.derivatives(xy)
+    np.testing.assert_allclose(g[covered], expected, rtol=1e-12, atol=1e-14)
+    assert np.array_equal(implicit(xy), g)
+    np.testing.assert_array_equal(implicit.evaluate(xy, gradient=True)[1], grad)
+    step = 1e-6  # the gradient is the derivative of the value
+    numeric = (implicit(xy + [step, 0]) - implicit(xy - [step, 0])) / (2 * step)
+    np.testing.assert_allclose(grad[:, 0], numeric, atol=1e-5)
+    assert np.allclose(hess, hess.transpose(0, 2, 1))
+
+
+def test_nearest_in_groups_is_the_brute_force_answer():
+    rng = np.random.default_rng(3)
+    points = rng.uniform(0, 1, (300, 2))
+    points[:40] = np.round(points[:40] * 8) / 8  # repeats: ties to average
+    group = rng.integers(0, 5, len(points))
+    values = rng.normal(size=len(points))
+    queries = np.vstack([rng.uniform(-0.2, 1.2, (2000, 2)), points[:50]])
+    dist, position, value, second = nearest_in_groups(queries, points, group, values)
+    d = np.linalg.norm(queries[:, None] - points[None], axis=2)
+    per_group = np.stack([np.where(group == k, d, np.inf).min(axis=1) for k in range(5)], axis=1)
+    first = np.argmin(per_group, axis=1)
+    np.testing.assert_allclose(dist, d.min(axis=1), rtol=1e-12)
+    np.testing.assert_allclose(second, np.sort(per_group, axis=1)[:, 1], rtol=1e-12)
+    tied = (group[None] == first[:, None]) & (d <= dist[:, None] * (1 + 1e-9) + 1e-15)
+    count = tied.sum(axis=1)
+    np.testing.assert_allclose(position, (tied @ points) / count[:, None], rtol=1e-12)
+    np.testing.assert_allclose(value, (tied @ values) / count, rtol=1e-12, atol=1e-15)
+    assert np.all(np.isinf(nearest_in_groups(queries, points, np.zeros(300, int), values)[3]))
+
+
+@pytest.mark.parametrize("polygon", [_star(), _slotted_square()], ids=["star", "slot"])
+def test_contains_and_clearance_agree_with_shapely(polygon):
+    rng = np.random.default_rng(2)
+    lo, hi = polygon.min(axis=0) - 0.1, polygon.max(axis=0) + 0.1
+    xy = rng.uniform(lo, hi, (20000, 2))
+    expected = shapely.covers(Polygon(polygon), shapely.points(xy))
+    np.testing.assert_array_equal(contains(polygon, xy), expected)
+    midpoints = (polygon + np.roll(polygon, -1, 0)) / 2  # on the edges, up to rounding
+    assert contains(polygon, np.vstack([polygon, midpoints])).all()
+    clear = shapely.distance(LinearRing(polygon), shapely.points(xy)) > 0.4 * 0.02
+    np.testing.assert_array_equal(inner_nodes(polygon, xy, 0.02), clear)
+
+
+@pytest.mark.parametrize("polygon", [_star(), _slotted_square()], ids=["star", "slot"])
+def test_grid_mesh_tiles_the_polygon_with_its_outline_as_the_only_boundary(polygon):
+    grid = make_grid(polygon, 60)
+    inside = contains(polygon, grid.points)
+    xy, triangles, kept = conforming_grid_mesh(polygon, grid, inside)
+    b = len(polygon)
+    assert np.array_equal(xy[:b], polygon) and np.array_equal(xy[b:], grid.points[kept])
+    assert np.all(inner_nodes(polygon, xy[b:], grid.spacing)) and np.all(contains(polygon, xy[b:]))
+    corners = xy[triangles]
+    u, v = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    signed = (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]) / 2
+    assert np.all(signed > 0)  # counter-clockwise, none degenerate
+    assert signed.sum() == pytest.approx(Polygon(polygon).area, rel=1e-9)
+    edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    unique, count = np.unique(edges, axis=0, return_counts=True)
+    assert count.max() == 2
+    ring = {tuple(sorted((i, (i + 1) % b))) for i in range(b)}
+    assert {tuple(e) for e in unique[count == 1]} == ring
+    assert np.array_equal(np.unique(triangles), np.arange(len(xy)))
+
+
+def test_em_repeats_for_a_seed_and_lands_where_sklearn_does():
+    rng = np.random.default_rng(4)
+    samples = np.vstack([rng.normal(c, 0.1, (700, 2)) for c in ([0, 0], [1, 0.2], [0.4, 1.0])])
+    first, again = fit_mixture(samples, 3, 7), fit_mixture(samples, 3, 7)
+    assert np.array_equal(first.means, again.means)
+    reference = GaussianMixture(3, covariance_type="full", random_state=7, reg_covar=1e-6)
+    reference.fit(samples)
+    order, ref_order = np.argsort(first.means[:, 0]), np.argsort(reference.means_[:, 0])
+    np.testing.assert_allclose(first.means[order], reference.means_[ref_order], atol=1e-3)
+    np.testing.assert_allclose(first.weights[order], reference.weights_[ref_order], atol=1e-3)
+
+
+def test_levenberg_marquardt_fits_a_curve_and_never_worsens_the_start():
+    x = np.linspace(0, 2, 50)
+    y = 1.5 * np.exp(-0.8 * x)
+
+    def equations(theta, full):
+        model = theta[0] * np.exp(-theta[1] * x)
+        res = model - y
+        jac = np.column_stack([np.exp(-theta[1] * x), -x * model])
+        return res @ res, jac.T @ jac, jac.T @ res
+
+    np.testing.assert_allclose(
+        _levenberg_marquardt(equations, np.array([1.0, 0.1]), 50), [1.5, 0.8]
+    )
+    start = np.array([1.5, 0.8])  # already optimal: stays put
+    assert equations(_levenberg_marquardt(equations, start, 5), False)[0] <= 1e-20
