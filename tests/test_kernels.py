@@ -10,14 +10,14 @@ from shapely.geometry import LinearRing, Polygon
 from sklearn.mixture import GaussianMixture
 
 import leafstudio as ls
-from leafstudio.core.gmm import fit_mixture
+from leafstudio.core.gmm import Mixture, fit_mixture
 from leafstudio.core.grid import make_grid
 from leafstudio.core.height import nearest_in_groups
 from leafstudio.core.mesher import conforming_grid_mesh, inner_nodes
 from leafstudio.core.mpu import bspline_weight, build_mpu
 from leafstudio.core.outline import contains, outward_normals
 from leafstudio.core.pipeline import _frame_stage
-from leafstudio.core.surface import _levenberg_marquardt
+from leafstudio.core.surface import _levenberg_marquardt, _pack, _residual_rows
 
 
 def _star(n: int = 240, seed: int = 1) -> np.ndarray:
@@ -127,18 +127,24 @@ def test_em_repeats_for_a_seed_and_lands_where_sklearn_does():
     np.testing.assert_allclose(first.weights[order], reference.weights_[ref_order], atol=1e-3)
 
 
-def test_levenberg_marquardt_fits_a_curve_and_never_worsens_the_start():
-    x = np.linspace(0, 2, 50)
-    y = 1.5 * np.exp(-0.8 * x)
-
-    def equations(theta, full):
-        model = theta[0] * np.exp(-theta[1] * x)
-        res = model - y
-        jac = np.column_stack([np.exp(-theta[1] * x), -x * model])
-        return res @ res, jac.T @ jac, jac.T @ res
-
-    np.testing.assert_allclose(
-        _levenberg_marquardt(equations, np.array([1.0, 0.1]), 50), [1.5, 0.8]
+def test_levenberg_marquardt_recovers_a_mixture_and_never_worsens_the_start():
+    truth = Mixture(
+        weights=np.full(2, 0.5),
+        means=np.array([[0.3, 0.1], [0.7, -0.1]]),
+        covariances=np.array([[[0.02, 0.005], [0.005, 0.01]], [[0.015, 0.0], [0.0, 0.03]]]),
+        amplitudes=np.array([0.02, 0.03]),
     )
-    start = np.array([1.5, 0.8])  # already optimal: stays put
-    assert equations(_levenberg_marquardt(equations, start, 5), False)[0] <= 1e-20
+    xy = np.random.default_rng(5).uniform([0, -0.4], [1, 0.4], (600, 2))
+    ones = np.ones(len(xy))
+    target = truth.value(xy)
+    start = Mixture(truth.weights, truth.means + 0.05, truth.covariances * 1.3, truth.amplitudes)
+
+    def cost(theta):
+        res, _ = _residual_rows(xy, ones, target, theta.reshape(-1, 6), False)
+        return res @ res
+
+    fitted = _levenberg_marquardt(xy, ones, target, _pack(start), 60, 0.0)
+    assert cost(fitted) < 1e-12 * cost(_pack(start))
+    np.testing.assert_allclose(fitted, _pack(truth), atol=1e-5)
+    exact = _levenberg_marquardt(xy, ones, target, _pack(truth), 5, 0.0)  # stays put
+    assert cost(exact) <= cost(_pack(truth))

@@ -20,6 +20,7 @@ from leafstudio.errors import LeafError
 REG_COVAR = 1e-6  # added to each covariance's diagonal, as scikit-learn does, so Σ stays invertible
 EM_TOL = 1e-3  # EM stops when the mean log-likelihood per sample changes less than this
 EM_MAX_ITER = 200
+UNDERFLOW = 600.0  # exp(-q) for q beyond this is taken as exactly 0 (no subnormals)
 KMEANS_ITER = 300  # Lloyd iterations of the k-means start at most (it stops once labels settle)
 
 
@@ -78,7 +79,10 @@ def _gaussian(x, y, mean, prec, k):
     p00, p01, p11 = prec[k, 0, 0], prec[k, 0, 1], prec[k, 1, 1]
     pdx, pdy = p00 * dx + p01 * dy, p01 * dx + p11 * dy
     det = p00 * p11 - p01 * p01  # det P = 1 / det Σ
-    return np.sqrt(det) / (2 * np.pi) * np.exp(-0.5 * (dx * pdx + dy * pdy)), pdx, pdy
+    q = 0.5 * (dx * pdx + dy * pdy)
+    if q > UNDERFLOW:  # exactly 0, not a subnormal (arithmetic on those is very slow)
+        return 0.0, pdx, pdy
+    return np.sqrt(det) / (2 * np.pi) * np.exp(-q), pdx, pdy
 
 
 @njit(cache=True)
@@ -134,8 +138,9 @@ def fit_mixture(samples: np.ndarray, k: int, seed: int) -> Mixture:
     where scikit-learn took tens and was erratic with several BLAS threads.
     """
     samples = np.ascontiguousarray(samples, dtype=float)
-    rounded = np.round(samples, 9)
-    distinct = len(np.unique(rounded[:, 0] + 1j * rounded[:, 1]))
+    distinct = _distinct_count(samples[: 5 * k])  # enough when the first 5 K already differ
+    if distinct < 5 * k:
+        distinct = _distinct_count(samples)
     if k > distinct // 5:
         raise LeafError(
             f"K = {k} is more than the data supports: the guide has only {distinct} distinct "
@@ -193,6 +198,12 @@ def fit_signed_mixture(
         covariances=np.concatenate([m.covariances for m, _ in parts]),
         amplitudes=np.concatenate([m.weights * frac for m, frac in parts]),
     )
+
+
+def _distinct_count(samples: np.ndarray) -> int:
+    """Number of distinct (n, 2) samples, to 9 decimals."""
+    rounded = np.round(samples, 9)
+    return len(np.unique(rounded[:, 0] + 1j * rounded[:, 1]))
 
 
 def _kmeans_plus_plus(x: np.ndarray, k: int, rng: np.random.RandomState) -> np.ndarray:
@@ -291,7 +302,8 @@ def _e_step(x, weights, means, cov, resp):
             top = max(top, resp[i, c])
         s = 0.0
         for c in range(k):
-            resp[i, c] = np.exp(resp[i, c] - top)
+            diff = resp[i, c] - top
+            resp[i, c] = np.exp(diff) if diff > -UNDERFLOW else 0.0
             s += resp[i, c]
         for c in range(k):
             resp[i, c] /= s

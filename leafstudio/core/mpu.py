@@ -78,42 +78,21 @@ class MPUImplicit:
     def _blend(self, xy: np.ndarray, degree: int):
         """g and, up to `degree` (0, 1 or 2), its gradient and Hessian (zeros when not asked)."""
         xy = np.ascontiguousarray(np.atleast_2d(np.asarray(xy, dtype=float)))
-        n = len(xy)
         b: Buckets = bucket_points(xy)
         big_d, big_n, grad_d, grad_n, hess_d, hess_n = _blend_sums(
             xy, self.centers, self.radii, self.coef, b.lo, b.size, b.nx, b.ny, b.starts, b.order,
             degree,
         )  # fmt: skip
-        covered = big_d > 0
-        g = np.empty(n)
-        g[covered] = big_n[covered] / big_d[covered]
-        far = ~covered
-        grad, hess = np.zeros((n, 2)), np.zeros((n, 2, 2))
+        g, grad, hess = _quotient_rule(big_d, big_n, grad_d, grad_n, hess_d, hess_n, degree)
+        far = big_d <= 0
         if far.any():
             dist, nearest = cKDTree(self.points).query(xy[far])
             g[far] = -dist
-            towards = self.points[nearest] - xy[far]
-            grad[far] = towards / np.maximum(dist, 1e-300)[:, None]
-        if degree == 0:
-            return g, grad, hess
-        d = big_d[covered, None]
-        grad[covered] = (grad_n[covered] - g[covered, None] * grad_d[covered]) / d
-        if degree == 1:
-            return g, grad, hess
-        full = np.zeros((n, 2, 2))
-        for sums, sign in ((hess_n, 1.0), (hess_d, -g)):
-            full[:, 0, 0] += sign * sums[:, 0]
-            full[:, 0, 1] += sign * sums[:, 1]
-            full[:, 1, 1] += sign * sums[:, 2]
-        full[:, 1, 0] = full[:, 0, 1]
-        cross = grad[:, :, None] * grad_d[:, None, :]
-        hess[covered] = (full - cross - cross.transpose(0, 2, 1))[covered] / d[:, :, None]
-        if far.any():
-            u = grad[far]
-            hess[far] = (
-                -(np.eye(2) - u[:, :, None] * u[:, None, :])
-                / np.maximum(-g[far], 1e-300)[:, None, None]
-            )
+            u = (self.points[nearest] - xy[far]) / np.maximum(dist, 1e-300)[:, None]
+            grad[far] = u  # toward the nearest boundary point
+            if degree == 2:  # g = −|x − b|: ∇²g = −(I − u uᵀ) / |x − b|
+                outer = u[:, :, None] * u[:, None, :]
+                hess[far] = -(np.eye(2) - outer) / np.maximum(dist, 1e-300)[:, None, None]
         return g, grad, hess
 
     def __call__(self, xy: np.ndarray) -> np.ndarray:
@@ -130,6 +109,33 @@ def _bucket_range(c: float, reach: float, lo: float, size: float, count: int) ->
     first = max(int(np.floor((c - reach - lo) / size)), 0)
     last = min(int(np.floor((c + reach - lo) / size)), count - 1)
     return first, last
+
+
+@njit(cache=True)
+def _quotient_rule(big_d, big_n, grad_d, grad_n, hess_d, hess_n, degree):
+    """g = N / D (eq. 1), ∇g = (∇N − g ∇D) / D and ∇²g = (∇²N − g ∇²D − ∇g ∇Dᵀ − ∇D ∇gᵀ) / D
+    where D > 0 (zeros elsewhere), up to `degree`."""
+    n = len(big_d)
+    g, grad, hess = np.zeros(n), np.zeros((n, 2)), np.zeros((n, 2, 2))
+    for i in range(n):
+        d = big_d[i]
+        if d <= 0:
+            continue
+        g[i] = big_n[i] / d
+        if degree == 0:
+            continue
+        gx = (grad_n[i, 0] - g[i] * grad_d[i, 0]) / d
+        gy = (grad_n[i, 1] - g[i] * grad_d[i, 1]) / d
+        grad[i, 0], grad[i, 1] = gx, gy
+        if degree == 1:
+            continue
+        hess[i, 0, 0] = (hess_n[i, 0] - g[i] * hess_d[i, 0] - 2 * gx * grad_d[i, 0]) / d
+        hess[i, 0, 1] = (
+            hess_n[i, 1] - g[i] * hess_d[i, 1] - gx * grad_d[i, 1] - grad_d[i, 0] * gy
+        ) / d
+        hess[i, 1, 0] = hess[i, 0, 1]
+        hess[i, 1, 1] = (hess_n[i, 2] - g[i] * hess_d[i, 2] - 2 * gy * grad_d[i, 1]) / d
+    return g, grad, hess
 
 
 @njit(cache=True)

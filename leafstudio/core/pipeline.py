@@ -213,6 +213,14 @@ class Pipeline:
     def __init__(self, leaf: Leaf) -> None:
         self.leaf = leaf
         self._cache: dict[str, tuple[tuple[Any, ...], Any]] = {}
+        self._layout: tuple[GuideStage, tuple[np.ndarray, ...]] | None = None
+
+    def _grid_mesh(self, fs: FrameStage, grid: Grid, guide: GuideStage) -> tuple[np.ndarray, ...]:
+        """The conforming mesh in the plane (mesher.conforming_grid_mesh), kept while the guide
+        stage's output is the same: it depends on nothing later (K and the fit only lift it)."""
+        if self._layout is None or self._layout[0] is not guide:
+            self._layout = (guide, mesher.conforming_grid_mesh(fs.polygon, grid, guide.inside))
+        return self._layout[1]
 
     def run(
         self,
@@ -266,7 +274,10 @@ class Pipeline:
             "surface", lambda: _surface_stage(fs, implicit, guide, nodes, mixture, params)
         )
         mesh: pv.PolyData = stage(
-            "mesh", lambda: _mesh_stage(fs, implicit, grid, guide, surf, params)
+            "mesh",
+            lambda: _mesh_stage(
+                fs, implicit, grid, guide, surf, params, lambda: self._grid_mesh(fs, grid, guide)
+            ),
         )
         return Result(
             leaf=self.leaf,
@@ -358,11 +369,12 @@ def _mesh_stage(
     guide: GuideStage,
     surf: SurfaceStage,
     params: Params,
+    grid_mesh: Callable[[], tuple[np.ndarray, ...]],
 ) -> pv.PolyData:
     nodes = grid.points[guide.inside]
     n_outline = len(fs.polygon)
     if params.mesher == "conforming":
-        xy, triangles, kept = mesher.conforming_grid_mesh(fs.polygon, grid, guide.inside)
+        xy, triangles, kept = grid_mesh()
         # the margin at the boundary points' own heights (0 in the plane for a planar one, eq. 3);
         # the kept nodes' heights are already known
         rim = np.zeros(n_outline) if fs.polygon_h is None else fs.polygon_h

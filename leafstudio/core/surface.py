@@ -31,8 +31,9 @@ from leafstudio.core.mpu import MPUImplicit
 
 VEIN_WEIGHT = 10.0  # the vein rows together weigh this much relative to all grid rows
 RIDGE = 1e-10
-REFINE_ROWS = 1500  # grid nodes drawn for the refinement, and vein points at most
+REFINE_ROWS = 700  # grid nodes drawn for the refinement, and vein points at most
 REFINE_STEPS = 30  # Levenberg-Marquardt iterations at most
+UNDERFLOW = 600.0  # exp(-q) for q beyond this is taken as 0 (exactly, not a subnormal)
 REFINE_GAIN = 1e-5  # stop once a step lowers the cost by less than this fraction
 
 
@@ -137,28 +138,19 @@ def _refine(mixture: Mixture, xy: np.ndarray, row_scale: np.ndarray, target: np.
     started from EM's mixture; closed-form Jacobian."""
     xy = np.ascontiguousarray(xy, dtype=float)
     theta = _levenberg_marquardt(
-        lambda th, full: _normal_equations(xy, row_scale, target, th.reshape(-1, 6), full),
-        _pack(mixture),
-        REFINE_STEPS,
-    )
+        xy, np.ascontiguousarray(row_scale, dtype=float), np.ascontiguousarray(target, dtype=float),
+        _pack(mixture), REFINE_STEPS, REFINE_GAIN,
+    )  # fmt: skip
     refined = _unpack(theta, mixture.weights)
     if not np.all(np.isfinite(refined.covariances)):
         return mixture
     return refined
 
 
-def _normal_equations(xy, row_scale, target, t, full):
-    """Cost |r|², and with `full` JᵀJ (p, p) and Jᵀr (p,), of the rows r_i = s_i z(x_i) − y_i,
-    with z = Σ a_k N_k and θ packed as in _pack (J from a compiled loop, JᵀJ by BLAS)."""
-    res, jac = _residual_rows(xy, row_scale, target, t, full)
-    if not full:
-        return res @ res, None, None
-    return res @ res, jac.T @ jac, jac.T @ res
-
-
 @njit(cache=True)
 def _residual_rows(xy, row_scale, target, t, full):
-    """Residuals (m,) and, with `full`, the closed-form Jacobian (m, 6K) of _normal_equations."""
+    """Residuals r_i = s_i z(x_i) − y_i (m,) with z = Σ a_k N_k and θ packed as in _pack, and with
+    `full` their closed-form Jacobian (m, 6K)."""
     k = len(t)
     res = np.empty(len(xy))
     jac = np.empty((len(xy) if full else 0, 6 * k))
@@ -169,7 +161,8 @@ def _residual_rows(xy, row_scale, target, t, full):
         for c in range(k):
             dx, dy = xy[i, 0] - t[c, 1], xy[i, 1] - t[c, 2]
             e1, e2 = r11[c] * dx + t[c, 4] * dy, r22[c] * dy
-            dens = norm[c] * np.exp(-0.5 * (e1 * e1 + e2 * e2))
+            q = 0.5 * (e1 * e1 + e2 * e2)
+            dens = norm[c] * np.exp(-q) if q < UNDERFLOW else 0.0  # no subnormals: they are slow
             value += t[c, 0] * dens
             if full:
                 scaled = row_scale[i] * dens * t[c, 0]  # ∂z/∂log N of this component
@@ -183,36 +176,44 @@ def _residual_rows(xy, row_scale, target, t, full):
     return res, jac
 
 
-def _levenberg_marquardt(normal_equations, theta: np.ndarray, steps: int) -> np.ndarray:
-    """Minimise |r(θ)|² from θ in `steps` iterations at most (Marquardt's diagonal scaling,
-    Nielsen's damping update).
+@njit(cache=True)
+def _levenberg_marquardt(xy, row_scale, target, theta, steps, min_gain):
+    """Minimise |r(θ)|² (see _residual_rows) from θ in `steps` iterations at most: Marquardt's
+    diagonal scaling, Nielsen's damping update, compiled whole (the loop's numpy calls cost more
+    than the rows at this size).
 
-    `normal_equations(θ, full)` returns |r|² and, when `full`, JᵀJ and Jᵀr. A step is kept only
-    if it lowers the cost, so the result is never worse than the start. Stops early once an
-    accepted step gains less than REFINE_GAIN of the cost.
+    A step is kept only if it lowers the cost, so the result is never worse than the start.
+    Stops early once an accepted step gains less than `min_gain` of the cost.
     """
-    cost, normal, gradient = normal_equations(theta, True)
-    damping, growth = 1e-3 * float(np.max(np.diag(normal), initial=1e-300)), 2.0
+    res, jac = _residual_rows(xy, row_scale, target, theta.reshape(-1, 6), True)
+    cost, normal, gradient = res @ res, jac.T @ jac, jac.T @ res
+    damping, growth = 1e-3 * max(np.max(np.diag(normal)), 1e-300), 2.0
     for _ in range(steps):
-        diag = np.diag(normal)
-        scale = np.diag(np.maximum(diag, 1e-12 * diag.max() + 1e-300))
+        diag = np.diag(normal).copy()
+        diag = np.maximum(diag, 1e-12 * diag.max() + 1e-300)
+        system = normal.copy()
+        for i in range(len(diag)):
+            system[i, i] += damping * diag[i]
         try:
-            step = np.linalg.solve(normal + damping * scale, -gradient)
-        except np.linalg.LinAlgError:
+            step = np.linalg.solve(system, -gradient)
+        except Exception:  # singular: damp harder
             damping, growth = damping * growth, growth * 2
             continue
-        trial_cost = normal_equations(theta + step, False)[0]
-        predicted = -(2 * step @ gradient + step @ normal @ step)
+        trial = theta + step
+        trial_res, _ = _residual_rows(xy, row_scale, target, trial.reshape(-1, 6), False)
+        trial_cost = trial_res @ trial_res
+        predicted = -(2 * step @ gradient + step @ (normal @ step))
         ratio = (cost - trial_cost) / predicted if predicted > 0 else -1.0
         if not ratio > 0:  # also rejects NaN
             damping, growth = damping * growth, growth * 2
             continue
         gain = cost - trial_cost
-        theta = theta + step
-        cost, normal, gradient = normal_equations(theta, True)
+        theta = trial
+        res, jac = _residual_rows(xy, row_scale, target, theta.reshape(-1, 6), True)
+        cost, normal, gradient = res @ res, jac.T @ jac, jac.T @ res
         damping *= max(1 / 3, 1 - (2 * ratio - 1) ** 3)
         growth = 2.0
-        if gain < REFINE_GAIN * cost:
+        if gain < min_gain * cost:
             break
     return theta
 
