@@ -210,8 +210,11 @@ def _kmeans_plus_plus(x: np.ndarray, k: int, rng: np.random.RandomState) -> np.n
     """(k, 2) greedy k-means++ seeds, drawn as scikit-learn draws them: each next seed is the
     best, by summed squared distance, of 2 + log k candidates drawn ∝ squared distance."""
     trials = 2 + int(np.log(k))
-    seeds = [x[rng.choice(len(x), p=np.full(len(x), 1 / len(x)))]]
-    closest = np.sum((x - seeds[0]) ** 2, axis=1)
+    # rng.choice(n, p=uniform) as RandomState draws it, without its checks of p
+    cdf = np.cumsum(np.full(len(x), 1 / len(x)))
+    first = int(np.searchsorted(cdf / cdf[-1], rng.random_sample(), side="right"))
+    seeds = [x[first]]
+    closest = (x[:, 0] - x[first, 0]) ** 2 + (x[:, 1] - x[first, 1]) ** 2
     for _ in range(1, k):
         draws = rng.uniform(size=trials) * closest.sum()
         picks = np.minimum(np.searchsorted(np.cumsum(closest), draws), len(x) - 1)

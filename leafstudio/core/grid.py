@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -15,14 +16,16 @@ class Grid:
     spacing: float
     shape: tuple[int, int]
 
-    @property
+    @cached_property
     def points(self) -> np.ndarray:
-        """(ny * nx, 2) node coordinates, x varying fastest."""
+        """(ny * nx, 2) node coordinates, x varying fastest (computed once: read-only)."""
         ny, nx = self.shape
         xs = self.origin[0] + self.spacing * np.arange(nx)
         ys = self.origin[1] + self.spacing * np.arange(ny)
         gx, gy = np.meshgrid(xs, ys)
-        return np.column_stack([gx.ravel(), gy.ravel()])
+        points = np.column_stack([gx.ravel(), gy.ravel()])
+        points.flags.writeable = False
+        return points
 
 
 def make_grid(points: np.ndarray, resolution: int) -> Grid:

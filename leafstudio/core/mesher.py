@@ -19,7 +19,6 @@ from numba import njit
 
 from leafstudio.core.buckets import bucket_points
 from leafstudio.core.grid import Grid
-from leafstudio.core.outline import contains
 from leafstudio.errors import LeafError
 
 INNER_CLEARANCE = 0.4  # grid nodes nearer the margin than this many spacings are left out
@@ -127,42 +126,15 @@ def conforming_grid_mesh(
     """
     ny, nx = grid.shape
     b = len(polygon)
-    candidates = np.flatnonzero(inside)
-    nodes = grid.points[candidates]
-    ok = inner_nodes(polygon, nodes, grid.spacing)
-    ok[ok] = contains(polygon, nodes[ok])
+    polygon = np.ascontiguousarray(polygon, dtype=float)
+    candidates = np.flatnonzero(inside & _grid_inside(polygon, grid.origin, grid.spacing, ny, nx))
     kept = np.zeros(ny * nx, dtype=bool)
-    kept[candidates[ok]] = True
-    vertex = np.full(ny * nx, -1, dtype=np.int64)
-    vertex[kept] = b + np.arange(int(kept.sum()))
-
-    k2 = kept.reshape(ny, nx)
-    cells = k2[:-1, :-1] & k2[:-1, 1:] & k2[1:, :-1] & k2[1:, 1:]
-    cells &= ~_crossed_cells(polygon, grid)
-    # grid triangles of the full cells
-    iy, ix = np.nonzero(cells)
-    a = iy * nx + ix
-    quads = vertex[np.column_stack([a, a + 1, a + nx + 1, a + nx])]
-    grid_tris = np.vstack([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    kept[candidates[inner_nodes(polygon, grid.points[candidates], grid.spacing)]] = True
+    cells = ~_crossed_cells(polygon, grid)
+    vertex, grid_tris, band, outline = _split_cells(kept.reshape(ny, nx), cells, b)
 
     # the band: the polygon, the kept nodes not surrounded by full cells, the full cells' outline
-    padded = np.zeros((ny + 1, nx + 1), dtype=bool)
-    padded[1:-1, 1:-1] = cells
-    surrounded = padded[:-1, :-1] & padded[:-1, 1:] & padded[1:, :-1] & padded[1:, 1:]
-    band = np.flatnonzero(kept & ~surrounded.ravel())
-    horizontal = padded[:-1, 1:-1] != padded[1:, 1:-1]  # (ny, nx - 1): edge (i, j)-(i, j + 1)
-    vertical = padded[1:-1, :-1] != padded[1:-1, 1:]  # (ny - 1, nx): edge (i, j)-(i + 1, j)
-    hy, hx = np.nonzero(horizontal)
-    vy, vx = np.nonzero(vertical)
-    outline = np.vstack(
-        [
-            np.column_stack([hy * nx + hx, hy * nx + hx + 1]),
-            np.column_stack([vy * nx + vx, (vy + 1) * nx + vx]),
-        ]
-    )
-    local = np.full(ny * nx, -1, dtype=np.int64)
-    local[band] = b + np.arange(len(band))
-    segments = np.vstack([_ring(b), local[outline]])
+    segments = np.vstack([_ring(b), outline])
     xy_band, tris = _triangulate(np.vstack([polygon, grid.points[band]]), segments)
     if len(xy_band) != b + len(band):
         raise LeafError("the leaf outline crosses itself: it could not be triangulated")
@@ -172,8 +144,115 @@ def conforming_grid_mesh(
     in_cells = (cx >= 0) & (cy >= 0) & (cx < nx - 1) & (cy < ny - 1)
     in_cells[in_cells] = cells[cy[in_cells], cx[in_cells]]
     to_mesh = np.concatenate([np.arange(b), vertex[band]])
-    triangles = np.vstack([to_mesh[tris[~in_cells]], grid_tris])
-    return np.vstack([polygon, grid.points[kept]]), triangles, kept
+    triangles = np.concatenate([to_mesh[tris[~in_cells]], grid_tris])
+    return np.concatenate([polygon, grid.points[kept]]), triangles, kept
+
+
+@njit(cache=True)
+def _split_cells(kept, cells, b):
+    """From the (ny, nx) kept nodes and the (ny - 1, nx - 1) cells no polygon edge crosses:
+
+    - vertex (ny * nx,): each kept node's vertex index (b, b + 1, ... in grid order), else -1;
+    - the two counter-clockwise triangles of each full cell (four kept corners, not crossed;
+      `cells` is narrowed to those in place);
+    - band: the kept nodes not surrounded by four full cells, in grid order;
+    - outline (s, 2): the full cells' outline edges as indices into [polygon, band nodes].
+    """
+    ny, nx = kept.shape
+    vertex = np.full(ny * nx, -1, np.int64)
+    count = b
+    for i in range(ny):
+        for j in range(nx):
+            if kept[i, j]:
+                vertex[i * nx + j] = count
+                count += 1
+    n_full = 0
+    for i in range(ny - 1):
+        for j in range(nx - 1):
+            full = cells[i, j] and kept[i, j] and kept[i, j + 1]
+            cells[i, j] = full and kept[i + 1, j] and kept[i + 1, j + 1]
+            n_full += cells[i, j]
+    tris = np.empty((2 * n_full, 3), np.int64)
+    t = 0
+    for i in range(ny - 1):
+        for j in range(nx - 1):
+            if cells[i, j]:
+                a = i * nx + j
+                v0, v1, v2, v3 = vertex[a], vertex[a + 1], vertex[a + nx + 1], vertex[a + nx]
+                tris[t, 0], tris[t, 1], tris[t, 2] = v0, v1, v2
+                tris[t + 1, 0], tris[t + 1, 1], tris[t + 1, 2] = v0, v2, v3
+                t += 2
+    local = np.full(ny * nx, -1, np.int64)
+    band = np.empty(count - b, np.int64)
+    n_band = 0
+    for i in range(ny):
+        for j in range(nx):
+            if not kept[i, j]:
+                continue
+            surrounded = (
+                0 < i < ny - 1 and 0 < j < nx - 1 and cells[i - 1, j - 1] and cells[i - 1, j]
+                and cells[i, j - 1] and cells[i, j]
+            )  # fmt: skip
+            if not surrounded:
+                local[i * nx + j] = b + n_band
+                band[n_band] = i * nx + j
+                n_band += 1
+    outline = np.empty((4 * n_full, 2), np.int64)  # each full cell has at most 4 outline edges
+    n_out = 0
+    for i in range(ny):
+        for j in range(nx):
+            if j < nx - 1:  # edge (i, j)-(i, j + 1) between cells (i - 1, j) and (i, j)
+                below = i > 0 and cells[i - 1, j]
+                above = i < ny - 1 and cells[i, j]
+                if below != above:
+                    outline[n_out, 0], outline[n_out, 1] = local[i * nx + j], local[i * nx + j + 1]
+                    n_out += 1
+            if i < ny - 1:  # edge (i, j)-(i + 1, j) between cells (i, j - 1) and (i, j)
+                left = j > 0 and cells[i, j - 1]
+                right = j < nx - 1 and cells[i, j]
+                if left != right:
+                    outline[n_out, 0], outline[n_out, 1] = local[i * nx + j], local[i * nx + nx + j]
+                    n_out += 1
+    return vertex, tris, band[:n_band], outline[:n_out]
+
+
+@njit(cache=True)
+def _grid_inside(polygon, origin, spacing, ny, nx):
+    """(ny * nx,) bool: grid nodes inside the closed polygon, by the crossing rule along each
+    row (a node on an edge may go either way; the mesher's clearance drops those anyway)."""
+    n = len(polygon)
+    counts = np.zeros(ny + 1, np.int64)
+    for pass_ in range(2):
+        if pass_ == 1:
+            for i in range(ny):
+                counts[i + 1] += counts[i]
+            crossings = np.empty(counts[ny], np.float64)
+            fill = counts[:ny].copy()
+        for e in range(n):
+            ax, ay = polygon[e, 0], polygon[e, 1]
+            bx, by = polygon[(e + 1) % n, 0], polygon[(e + 1) % n, 1]
+            if ay == by:
+                continue
+            first = max(int(np.ceil((min(ay, by) - origin[1]) / spacing)) - 1, 0)
+            last = min(int(np.floor((max(ay, by) - origin[1]) / spacing)) + 1, ny - 1)
+            for i in range(first, last + 1):
+                y = origin[1] + i * spacing
+                if (ay > y) != (by > y):
+                    if pass_ == 0:
+                        counts[i + 1] += 1
+                    else:
+                        crossings[fill[i]] = ax + (y - ay) * (bx - ax) / (by - ay)
+                        fill[i] += 1
+    out = np.zeros(ny * nx, np.bool_)
+    for i in range(ny):
+        row = np.sort(crossings[counts[i] : counts[i + 1]])
+        k = 0  # crossings at or left of the node
+        for j in range(nx):
+            x = origin[0] + j * spacing
+            while k < len(row) and row[k] <= x:
+                k += 1
+            out[i * nx + j] = (len(row) - k) % 2 == 1
+    return out
 
 
 def _crossed_cells(polygon: np.ndarray, grid: Grid) -> np.ndarray:
