@@ -121,3 +121,11 @@ def test_cli_measure_bad_input_is_one_line(tmp_path, capsys, argv, message):
     err = capsys.readouterr().err
     assert message in err
     assert len(err.strip().splitlines()) == 1
+
+
+def test_result_metrics_carry_the_measurements(ridged):
+    metrics = ridged.metrics
+    assert set(metrics["leaf"]) == {key for key, _ in FIELDS} | {"k"}
+    assert set(metrics["curvature"]) == set(CURVATURE_ARRAYS)
+    assert metrics["leaf"]["k"] == ridged.chosen_k == 2
+    json.dumps(metrics)  # plain numbers only: the CLI writes them with --metrics

@@ -15,6 +15,7 @@ import pyvista as pv
 
 from leafstudio.core.analysis import surface_area, triangles_of
 from leafstudio.core.curvature import CURVATURE_ARRAYS
+from leafstudio.core.plane import Frame
 
 #: (key, label) of the scalar measurements, in the order a table shows them
 FIELDS = (
@@ -50,41 +51,55 @@ def curvature_summary(mesh: pv.PolyData) -> dict[str, dict[str, float]]:
     return summary
 
 
-def leaf_measurements(result: Any) -> dict[str, Any]:
-    """Every measurement of a Result (see FIELDS), its curvature ranges and Table-1 distances.
+def shape_measurements(mesh: pv.PolyData, frame: Frame, polygon: np.ndarray) -> dict[str, float]:
+    """The FIELDS measurements of a leaf mesh.
 
     Parameters
     ----------
-    result : Result
-        A pipeline result; uses its mesh, frame, polygon (the (b, 2) outline in plane
-        coordinates) and metrics.
+    mesh : pyvista.PolyData
+        The leaf's triangle mesh in world coordinates, its first len(polygon) vertices the
+        outline in order (as both meshers make it), with the point array "height".
+    frame : Frame
+        The leaf's plane frame (u: the main axis).
+    polygon : (b, 2) float array
+        The outline in plane coordinates.
 
     Returns
     -------
     dict
-        The FIELDS keys as floats, "k" (the K used), "curvature" (curvature_summary) and
-        "boundary"/"veins" (the Table-1 min, max and mean distances).
+        The FIELDS keys as floats (aspect_ratio None for an outline of no width).
     """
-    mesh = result.mesh
     points = np.asarray(mesh.points)
     triangles = triangles_of(mesh)
-    plane_xy, _ = result.frame.to_plane(points)
-    outline = points[: len(result.polygon)]
-    perimeter = float(np.linalg.norm(outline - np.roll(outline, 1, axis=0), axis=1).sum())
-    length = float(np.ptp(result.polygon[:, 0]))
-    width = float(np.ptp(result.polygon[:, 1]))
-    heights = np.asarray(mesh.point_data["height"])
-    metrics = result.metrics
+    plane_xy, _ = frame.to_plane(points)
+    outline = points[: len(polygon)]
+    length = float(np.ptp(polygon[:, 0]))
+    width = float(np.ptp(polygon[:, 1]))
     return {
         "area": surface_area(points, triangles),
         "projected_area": surface_area(plane_xy, triangles),
-        "perimeter": perimeter,
+        "perimeter": float(np.linalg.norm(outline - np.roll(outline, 1, axis=0), axis=1).sum()),
         "length": length,
         "width": width,
-        "aspect_ratio": length / width if width > 0 else float("inf"),
-        "height": float(np.ptp(heights)),
-        "k": len(result.surface.mixture.weights),
-        "curvature": curvature_summary(mesh),
+        "aspect_ratio": length / width if width > 0 else None,
+        "height": float(np.ptp(np.asarray(mesh.point_data["height"]))),
+    }
+
+
+def leaf_measurements(result: Any) -> dict[str, Any]:
+    """Every measurement of a Result: its shape (FIELDS), the K used, its curvature ranges and
+    the Table-1 distances, all from `result.metrics` (which holds them; see Result.metrics).
+
+    Returns
+    -------
+    dict
+        The FIELDS keys, "k", "curvature" (curvature_summary) and "boundary"/"veins" (the
+        Table-1 min, max and mean distances).
+    """
+    metrics = result.metrics
+    return {
+        **metrics["leaf"],
+        "curvature": metrics["curvature"],
         "boundary": metrics["boundary"],
         "veins": metrics["veins"],
     }

@@ -34,6 +34,7 @@ from leafstudio.core.curvature import surface_curvatures
 from leafstudio.core.gmm import Mixture, fit_mixture, fit_signed_mixture, sample_guide
 from leafstudio.core.grid import Grid, make_grid
 from leafstudio.core.height import height_guide
+from leafstudio.core.measure import curvature_summary, shape_measurements
 from leafstudio.core.mpu import MPUImplicit, build_mpu
 from leafstudio.core.outline import contains, distinct_indices, leaf_polygon, outward_normals
 from leafstudio.core.plane import Frame, fit_frame
@@ -139,8 +140,17 @@ class Result:
 
     @cached_property
     def metrics(self) -> dict[str, Any]:
-        """The paper's Table 1 distances and the mesh's facts (see analysis.table_metrics)."""
-        return analysis.table_metrics(self.mesh, self.leaf)
+        """The paper's Table 1 distances and the mesh's facts (see analysis.table_metrics), the
+        leaf's measurements with the K used ("leaf") and its curvature ranges ("curvature"; see
+        measure.py)."""
+        return {
+            **analysis.table_metrics(self.mesh, self.leaf),
+            "leaf": {
+                **shape_measurements(self.mesh, self.frame, self.polygon),
+                "k": self.chosen_k,
+            },
+            "curvature": curvature_summary(self.mesh),
+        }
 
 
 def _frame_stage(leaf: Leaf) -> tuple[FrameStage, list[str]]:
