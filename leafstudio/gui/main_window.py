@@ -226,11 +226,11 @@ class MainWindow(QMainWindow):
         self._action(files, "&Quit", self.close, keys.Quit)
 
         edit = bar.addMenu("&Edit")
-        undo = self.undo_stack.createUndoAction(self, "&Undo")
-        undo.setShortcut(QKeySequence(keys.Undo))
-        redo = self.undo_stack.createRedoAction(self, "&Redo")
-        redo.setShortcut(QKeySequence(keys.Redo))
-        edit.addActions([undo, redo])
+        self.undo_action = self.undo_stack.createUndoAction(self, "&Undo")
+        self.undo_action.setShortcut(QKeySequence(keys.Undo))
+        self.redo_action = self.undo_stack.createRedoAction(self, "&Redo")
+        self.redo_action.setShortcut(QKeySequence(keys.Redo))
+        edit.addActions([self.undo_action, self.redo_action])
 
         view = bar.addMenu("&View")
         for i, preset in enumerate(CAMERAS, start=1):
@@ -341,7 +341,8 @@ class MainWindow(QMainWindow):
 
     def _switch(self, doc: Doc, path: str | None, title: str, params: Params | None) -> None:
         """Make `doc` the document, keeping the current one to fall back to if it fails."""
-        if self.doc.leaf is not None and self.result is not None:
+        self._fallback = None
+        if doc.leaf is not None and self.doc.leaf is not None and self.result is not None:
             self._fallback = (self.doc, self.path, self.panel.params(), 0)
         self.doc, self.path, self._title = doc, path, title
         self._derived, self._edit_base = None, None
@@ -397,7 +398,6 @@ class MainWindow(QMainWindow):
         """File > New sketch: an empty sketch to draw a leaf in."""
         if not self._confirm_discard():
             return
-        self._fallback = None
         self._switch(Doc(None, Sketch()), None, "new sketch", None)
         self.editor.set_sketch(Sketch(), fit=True)
         self.sketch_dock.show()
@@ -558,7 +558,11 @@ class MainWindow(QMainWindow):
         self.status_text.setStyleSheet("color: #b00020")
         self.status_text.setText(f"Failed: {message}")
         self.viewport.set_message(message)
-        if self._fallback is not None and request_id >= self._fallback[3]:
+        if (
+            self._fallback is not None
+            and request_id >= self._fallback[3]
+            and self.result is not None
+        ):
             doc, path, params, _ = self._fallback
             self._fallback = None
             self.doc, self.path = doc, path

@@ -47,6 +47,12 @@ def _drop_repeats(points: np.ndarray, closed: bool) -> np.ndarray:
     return points[keep]
 
 
+def _span_samples(t: np.ndarray, per_span: int) -> np.ndarray:
+    """Parameters spaced evenly within each span [t_i, t_i+1], every t_i included."""
+    inner = np.linspace(0.0, 1.0, per_span, endpoint=False)
+    return np.append((t[:-1, None] + np.diff(t)[:, None] * inner).ravel(), t[-1])
+
+
 def closed_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.ndarray:
     """Points along the periodic cubic spline through (n, 2) control points, n >= 3.
 
@@ -61,8 +67,8 @@ def closed_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.nd
     loop = np.vstack([control, control[:1]])
     t = _centripetal(loop)
     spline = CubicSpline(t, loop, bc_type="periodic")
-    count = max(MIN_BOUNDARY_SAMPLES, per_span * len(control))
-    return spline(np.linspace(0.0, t[-1], count, endpoint=False))
+    per_span = max(per_span, -(-MIN_BOUNDARY_SAMPLES // len(control)))
+    return spline(_span_samples(t, per_span)[:-1])
 
 
 def open_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.ndarray:
@@ -71,7 +77,7 @@ def open_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.ndar
     if len(control) < 2:
         return control
     t = _centripetal(control)
-    s = np.linspace(0.0, t[-1], per_span * (len(control) - 1) + 1)
+    s = _span_samples(t, per_span)
     if len(control) == 2:
         return control[0] + np.outer(s / t[-1], control[1] - control[0])
     return CubicSpline(t, control, bc_type="natural")(s)
@@ -87,9 +93,11 @@ def _even_by_length(points: np.ndarray, count: int, closed: bool) -> np.ndarray:
 
 
 def insert_index(control: np.ndarray, xy: np.ndarray, closed: bool) -> int:
-    """Where a new point `xy` belongs in the control polygon: after the nearest span's start.
+    """Where a new point `xy` belongs in the control polygon: the place that lengthens it least.
 
-    For an open curve a point nearer an end than any span goes before the start or after the end.
+    Between two neighbours a and b that costs |a - p| + |p - b| - |a - b|; an open curve may also
+    grow at either end, costing the distance to that end. Clicking around an outline in order
+    thus appends, and clicking beside a span inserts into it.
     """
     control = np.asarray(control, dtype=float)[:, :2]
     n = len(control)
@@ -97,17 +105,14 @@ def insert_index(control: np.ndarray, xy: np.ndarray, closed: bool) -> int:
         return n
     a = control if closed else control[:-1]
     b = np.roll(control, -1, axis=0) if closed else control[1:]
-    ab = b - a
-    length2 = np.maximum((ab**2).sum(axis=1), 1e-300)
-    t = np.clip(((xy - a) * ab).sum(axis=1) / length2, 0.0, 1.0)
-    dist = np.linalg.norm(a + t[:, None] * ab - xy, axis=1)
-    span = int(np.argmin(dist))
+    dist = lambda p, q: np.linalg.norm(p - q, axis=-1)  # noqa: E731
+    costs = dist(a, xy) + dist(xy, b) - dist(a, b)
+    best = int(np.argmin(costs))
     if not closed:
-        if span == 0 and t[0] == 0.0:
-            return 0
-        if span == len(a) - 1 and t[-1] == 1.0:
-            return n
-    return span + 1
+        ends = (dist(control[0], xy), dist(control[-1], xy))
+        if min(ends) < costs[best]:
+            return 0 if ends[0] < ends[1] else n
+    return best + 1
 
 
 @dataclass(frozen=True, eq=False)

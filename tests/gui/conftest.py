@@ -1,0 +1,55 @@
+"""A real main window under Xvfb, with settings in a temporary file (never the user's)."""
+
+from __future__ import annotations
+
+import pytest
+from PySide6.QtCore import QSettings
+from PySide6.QtWidgets import QMessageBox
+
+from leafstudio.gui.main_window import MainWindow
+from leafstudio.model import Params
+
+FAST = Params(k=3, grid=48, samples=1500)  # small enough for quick runs, same code paths
+WAIT_MS = 60_000
+
+
+def make_window(qtbot, settings_path) -> MainWindow:
+    settings = QSettings(str(settings_path), QSettings.Format.IniFormat)
+    window = MainWindow(settings)
+    qtbot.addWidget(window)
+    window.show()
+    qtbot.waitExposed(window)
+    return window
+
+
+def wait_result(qtbot, window: MainWindow, check=lambda outcome: True) -> object:
+    """Wait until the worker is idle and the shown outcome passes `check`; return it."""
+    qtbot.waitUntil(
+        lambda: window.outcome is not None and window.worker.is_idle() and check(window.outcome),
+        timeout=WAIT_MS,
+    )
+    return window.outcome
+
+
+def close_window(window: MainWindow) -> None:
+    window.undo_stack.setClean()
+    window.path = None
+    window.close()
+
+
+@pytest.fixture(autouse=True)
+def never_block_on_questions(monkeypatch):
+    """Closing a window with edits would ask a modal question; answer Discard (a test may
+    patch another answer)."""
+    monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: QMessageBox.StandardButton.Discard)
+
+
+@pytest.fixture
+def window(qtbot, tmp_path):
+    """The main window on the nested demo at a small grid, with its first result shown."""
+    win = make_window(qtbot, tmp_path / "settings.ini")
+    win.panel.set_params(FAST)
+    win.open_demo("nested")
+    wait_result(qtbot, win)
+    yield win
+    close_window(win)

@@ -1,0 +1,51 @@
+"""Start-up: a clear one-line message without a display, and --screenshot under Xvfb."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+from PySide6.QtGui import QImage
+
+from leafstudio.demos import demo
+from leafstudio.gui.app import display_problem, run_app
+from leafstudio.io import save_leaf
+
+from .conftest import FAST
+
+
+def test_without_a_display_the_app_says_how_to_run_it(monkeypatch, capsys):
+    for name in ("DISPLAY", "WAYLAND_DISPLAY", "QT_QPA_PLATFORM"):
+        monkeypatch.delenv(name, raising=False)
+    assert run_app(None, None) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "DISPLAY" in err[0]
+    assert "xvfb-run -a leafstudio" in err[0] and "leafstudio reconstruct" in err[0]
+
+
+def test_a_display_that_does_not_answer_is_reported(monkeypatch):
+    monkeypatch.delenv("QT_QPA_PLATFORM", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.setenv("DISPLAY", ":4321")
+    assert "does not answer" in display_problem()
+    monkeypatch.setenv("QT_QPA_PLATFORM", "offscreen")
+    assert display_problem() is None
+
+
+def test_screenshot_saves_the_whole_window_and_exits(tmp_path):
+    project = tmp_path / "leaf.leaf.json"
+    save_leaf(demo("nested"), project, FAST)
+    png = tmp_path / "window.png"
+    env = {**os.environ, "XDG_CONFIG_HOME": str(tmp_path), "HOME": str(tmp_path)}
+    code = "from leafstudio.cli import main; raise SystemExit(main())"
+    done = subprocess.run(
+        [sys.executable, "-c", code, "gui", str(project), "--screenshot", str(png)],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    image = QImage(str(png))
+    assert image.width() >= 1000 and image.height() >= 600

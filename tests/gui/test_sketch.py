@@ -1,0 +1,102 @@
+"""Sketching a leaf with simulated mouse clicks, dragging with a live 3D view, undo and redo."""
+
+from __future__ import annotations
+
+import numpy as np
+from PySide6.QtCore import QPoint, Qt
+from PySide6.QtGui import QKeySequence
+from PySide6.QtTest import QTest
+
+from leafstudio.gui.sketch_model import BOUNDARY
+
+from .conftest import wait_result
+
+
+def click(qtbot, view, xy, button=Qt.MouseButton.LeftButton) -> None:
+    qtbot.mouseClick(view.viewport(), button, pos=view.view_point(np.asarray(xy)).toPoint())
+
+
+def sketch_leaf(qtbot, window) -> None:
+    """An ellipse of 10 boundary clicks and a midrib of 4 clicks."""
+    window.new_sketch()
+    view = window.editor.view
+    for angle in np.linspace(0, 2 * np.pi, 10, endpoint=False):
+        click(qtbot, view, (0.5 + 0.45 * np.cos(angle), 0.2 * np.sin(angle)))
+    qtbot.mouseClick(window.editor.new_vein, Qt.MouseButton.LeftButton)
+    for x in (0.15, 0.4, 0.65, 0.85):
+        click(qtbot, view, (x, 0.0))
+
+
+def test_sketching_with_clicks_gives_a_mesh(window, qtbot):
+    sketch_leaf(qtbot, window)
+    sketch = window.editor.view.sketch
+    assert sketch.boundary.shape == (10, 2) and len(sketch.veins) == 1
+    assert sketch.veins[0].shape == (4, 3) and np.all(sketch.veins[0][:, 2] > 0)
+    outcome = wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    mesh = outcome.result.mesh
+    assert mesh.n_points > 100
+    assert mesh.point_data["height"].max() > 0.5 * sketch.veins[0][:, 2].max()
+    xy = np.asarray(mesh.points)[:, :2]
+    assert 0.03 < xy[:, 0].min() < 0.1 and 0.9 < xy[:, 0].max() < 0.97  # the clicked ellipse
+    assert window.undo_stack.count() == 15  # 10 + new vein + 4
+
+
+def test_undo_and_redo_every_edit(window, qtbot):
+    sketch_leaf(qtbot, window)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    full = window.doc.leaf
+    assert window.undo_action.shortcut() == QKeySequence(QKeySequence.StandardKey.Undo)
+    assert window.redo_action.shortcut() == QKeySequence(QKeySequence.StandardKey.Redo)
+    window.undo_action.trigger()
+    assert window.editor.view.sketch.veins[0].shape == (3, 3)
+    outcome = wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    assert outcome.result.leaf is not full
+    for _ in range(4):
+        window.undo_stack.undo()
+    assert window.editor.view.sketch.boundary.shape == (10, 2)
+    assert window.editor.view.sketch.veins == ()
+    window.undo_stack.redo()  # the vein, still empty
+    window.redo_action.trigger()
+    assert window.editor.view.sketch.veins[0].shape == (1, 3)
+    while window.undo_stack.canRedo():
+        window.undo_stack.redo()
+    np.testing.assert_allclose(window.doc.leaf.vein_points, full.vein_points)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+
+
+def test_dragging_a_point_of_a_loaded_leaf_updates_live_and_undoes_to_the_original(window, qtbot):
+    original = window.doc.leaf
+    view = window.editor.view
+    tip = int(np.argmax(view.sketch.boundary[:, 0]))
+    start = view.sketch.boundary[tip].copy()
+    shown = []
+    window.result_shown.connect(shown.append)
+    press = view.view_point(start).toPoint()
+    QTest.mousePress(view.viewport(), Qt.MouseButton.LeftButton, pos=press)
+    for step in range(1, 6):
+        QTest.mouseMove(view.viewport(), press + QPoint(12 * step, 0))
+        qtbot.waitUntil(lambda: window.worker.is_idle(), timeout=60_000)
+    QTest.mouseRelease(view.viewport(), Qt.MouseButton.LeftButton, pos=press + QPoint(60, 0))
+    outcome = wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    assert len(shown) >= 3  # the 3D view followed the drag
+    assert window.undo_stack.count() == 1 and window.undo_stack.undoText() == "Move point"
+    moved = view.sketch.boundary[tip]
+    assert moved[0] > start[0] + 1e-3
+    length = np.ptp(np.asarray(outcome.result.mesh.points)[:, 0])  # the tip moved outward
+    assert length > np.ptp(original.boundary[:, 0]) + 1e-3
+    window.undo_stack.undo()
+    assert window.doc.leaf is original
+    wait_result(qtbot, window, lambda o: o.result.leaf is original)
+
+
+def test_right_click_deletes_and_height_spin_box_sets_a_vein_height(window, qtbot):
+    view = window.editor.view
+    n = len(view.sketch.boundary)
+    click(qtbot, view, view.sketch.boundary[3], Qt.MouseButton.RightButton)
+    assert len(view.sketch.boundary) == n - 1
+    click(qtbot, view, view.sketch.veins[0][2, :2])  # select a midrib point
+    assert view.selected == (0, 2) and window.editor.height.isEnabled()
+    window.editor.height.setValue(0.08)
+    assert view.sketch.veins[0][2, 2] == 0.08
+    assert window.undo_stack.count() == 2
+    assert view.selected[0] != BOUNDARY

@@ -1,0 +1,78 @@
+"""The sketch model without Qt: splines through the clicks, insertion, files."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from leafstudio.core.plane import Frame
+from leafstudio.gui.sketch_model import BOUNDARY, Sketch, closed_curve, insert_index, open_curve
+
+SQUARE = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+
+
+def test_the_closed_curve_passes_through_its_control_points_and_closes_smoothly():
+    curve = closed_curve(SQUARE)
+    for point in SQUARE:
+        assert np.linalg.norm(curve - point, axis=1).min() < 1e-9
+    steps = np.diff(np.vstack([curve, curve[:1]]), axis=0)
+    turn = np.arccos(
+        np.clip(
+            (steps[:-1] * steps[1:]).sum(1)
+            / np.linalg.norm(steps[:-1], axis=1)
+            / np.linalg.norm(steps[1:], axis=1),
+            -1,
+            1,
+        )
+    )
+    assert turn.max() < np.deg2rad(15)  # no corner anywhere, the seam included
+
+
+def test_the_open_curve_runs_from_first_to_last_control_point():
+    control = np.array([[0.0, 0.0, 0.1], [0.5, 0.2, 0.2], [1.0, 0.0, 0.1]])
+    curve = open_curve(control)
+    np.testing.assert_allclose(curve[0], control[0], atol=1e-12)
+    np.testing.assert_allclose(curve[-1], control[-1], atol=1e-12)
+    assert np.linalg.norm(curve - control[1], axis=1).min() < 1e-9
+
+
+def test_a_new_point_goes_into_the_nearest_span_or_past_the_nearest_end():
+    assert insert_index(SQUARE, np.array([0.5, -0.1]), closed=True) == 1
+    assert insert_index(SQUARE, np.array([-0.1, 0.5]), closed=True) == 4
+    line = np.array([[0.0, 0.0], [1.0, 0.0]])
+    assert insert_index(line, np.array([-0.5, 0.0]), closed=False) == 0
+    assert insert_index(line, np.array([1.5, 0.1]), closed=False) == 2
+    assert insert_index(line, np.array([0.5, 0.1]), closed=False) == 1
+
+
+def test_the_leaf_lies_on_the_sketch_plane_with_vein_heights_along_its_normal():
+    frame = Frame(
+        origin=np.array([1.0, 2.0, 3.0]),
+        u=np.array([0.0, 1.0, 0.0]),
+        v=np.array([0.0, 0.0, 1.0]),
+        normal=np.array([1.0, 0.0, 0.0]),
+    )
+    sketch = Sketch(
+        boundary=SQUARE, veins=(np.array([[0.2, 0.5, 0.3], [0.8, 0.5, 0.3]]),), frame=frame
+    )
+    leaf = sketch.to_leaf()
+    np.testing.assert_allclose(leaf.boundary[:, 0], 1.0)
+    np.testing.assert_allclose(leaf.veins[0][:, 0], 1.3)
+    assert Sketch(boundary=SQUARE[:2]).to_leaf() is None
+
+
+def test_edits_return_new_sketches_and_leave_the_old_one_alone():
+    sketch = Sketch(boundary=SQUARE)
+    moved = sketch.moved(BOUNDARY, 0, np.array([-1.0, -1.0]))
+    assert sketch.boundary[0, 0] == 0.0 and moved.boundary[0, 0] == -1.0
+    with_vein, index = sketch.with_new_vein().inserted(0, np.array([0.5, 0.5]), 0.2)
+    assert index == 0 and with_vein.veins[0].tolist() == [[0.5, 0.5, 0.2]]
+    assert with_vein.default_height(0, np.array([0.6, 0.5])) == 0.2
+    assert len(with_vein.deleted(BOUNDARY, 1).boundary) == 3
+
+
+def test_a_sketch_survives_its_dict():
+    sketch = Sketch(boundary=SQUARE, veins=(np.array([[0.2, 0.5, 0.3]]),))
+    again = Sketch.from_dict(sketch.to_dict())
+    np.testing.assert_array_equal(again.boundary, sketch.boundary)
+    np.testing.assert_array_equal(again.veins[0], sketch.veins[0])
+    np.testing.assert_array_equal(again.frame.normal, sketch.frame.normal)

@@ -1,0 +1,161 @@
+"""The main window over the worker: results appear, sliders reconstruct off the main thread,
+a slider storm runs the pipeline only a few times, files round-trip, bad files keep the leaf."""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pytest
+from PySide6.QtCore import Qt
+from PySide6.QtWidgets import QMessageBox
+
+from leafstudio.core.pipeline import Pipeline
+from leafstudio.gui.layers import LAYERS
+from leafstudio.gui.main_window import MainWindow
+
+from .conftest import FAST, close_window, make_window, wait_result
+
+
+@pytest.fixture
+def pipeline_calls(monkeypatch):
+    """Records the thread of every Pipeline.run call."""
+    calls: list[int] = []
+    run = Pipeline.run
+
+    def recording(self, *args, **kwargs):
+        calls.append(threading.get_ident())
+        return run(self, *args, **kwargs)
+
+    monkeypatch.setattr(Pipeline, "run", recording)
+    return calls
+
+
+def mesh_actor_points(window: MainWindow) -> np.ndarray:
+    actor = window.viewport.plotter.actors["mesh"]
+    return np.asarray(actor.mapper.dataset.points)
+
+
+def test_the_demo_result_appears(window):
+    result = window.result
+    assert result is not None and result.mesh.n_points > 100
+    assert "mesh" in window.viewport.plotter.actors
+    assert len(mesh_actor_points(window)) == result.mesh.n_points
+    assert window.measurements.topLevelItemCount() >= 3
+    assert "mesh" in window.status_text.text()  # per-stage timings
+    assert window.editor.view.sketch.boundary.shape[0] >= 3  # the leaf as an editable sketch
+
+
+def test_k_slider_gives_a_new_mesh_computed_off_the_main_thread(window, qtbot, pipeline_calls):
+    before = mesh_actor_points(window).copy()
+    window.panel.k.setValue(6)
+    outcome = wait_result(qtbot, window, lambda o: o.result.params.k == 6)
+    after = mesh_actor_points(window)
+    assert len(after) != len(before) or not np.allclose(after, before, atol=1e-6)
+    assert pipeline_calls and threading.main_thread().ident not in pipeline_calls
+    assert outcome.thread != threading.main_thread().ident
+    assert "frame" not in outcome.result.ran and "gmm" in outcome.result.ran  # the cache held
+
+
+def test_a_slider_storm_runs_a_few_times_and_shows_the_last_value(window, qtbot, pipeline_calls):
+    values = [1 + (7 * i) % 12 for i in range(20)]
+    for value in values:  # quicker than the throttle: one run at once, one for the last value
+        window.panel.k.setValue(value)
+    wait_result(qtbot, window, lambda o: o.request.id == window.worker.last_id)
+    assert 1 <= len(pipeline_calls) <= 3
+    assert window.result.params.k == values[-1]
+    assert len(mesh_actor_points(window)) == window.result.mesh.n_points
+
+
+def test_layers_switch_on_and_off_and_actors_are_replaced_not_piled(window, qtbot):
+    items = {
+        window.layer_list.item(i).data(Qt.ItemDataRole.UserRole): window.layer_list.item(i)
+        for i in range(window.layer_list.count())
+    }
+    assert set(items) == {key for key, _, _ in LAYERS}
+    items["probability"].setCheckState(Qt.CheckState.Checked)
+    items["mesh"].setCheckState(Qt.CheckState.Unchecked)
+    actors = window.viewport.plotter.actors
+    assert actors["probability"].GetVisibility() and not actors["mesh"].GetVisibility()
+    assert "p(x)" in window.viewport.plotter.scalar_bars
+    assert "height" not in window.viewport.plotter.scalar_bars
+    count = len(actors)
+    window.panel.seed.setValue(3)
+    wait_result(qtbot, window, lambda o: o.result.params.seed == 3)
+    assert len(window.viewport.plotter.actors) == count
+    assert not window.viewport.plotter.actors["mesh"].GetVisibility()
+    window.edges.setChecked(True)
+    assert window.viewport.plotter.actors["mesh"].prop.show_edges
+
+
+def test_save_reopen_and_compare(window, qtbot, tmp_path):
+    window.panel.k.setValue(4)
+    wait_result(qtbot, window, lambda o: o.result.params.k == 4)
+    leaf, params, mesh = window.doc.leaf, window.panel.params(), window.result.mesh
+    path = tmp_path / "saved.leaf.json"
+    assert window.save_to(str(path))
+    assert not window.isWindowModified()
+
+    other = make_window(qtbot, tmp_path / "other.ini")
+    assert other.open_path(str(path))
+    wait_result(qtbot, other)
+    assert other.panel.params() == params
+    np.testing.assert_allclose(other.doc.leaf.boundary, leaf.boundary)
+    assert len(other.doc.leaf.veins) == len(leaf.veins)
+    np.testing.assert_allclose(other.result.mesh.points, mesh.points, atol=1e-9)
+    assert str(path.resolve()) in other.recent_files()
+    close_window(other)
+
+
+def test_a_bad_file_shows_an_error_and_keeps_the_mesh(window, qtbot, tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("x,y,z\n1,2\n")
+    leaf, points = window.doc.leaf, mesh_actor_points(window).copy()
+    assert not window.open_path(str(bad))
+    box = window.last_error_box
+    assert box is not None and box.isVisible() and "bad.csv" in box.text()
+    assert "line 2" in box.text()
+    box.close()
+    assert window.doc.leaf is leaf
+    np.testing.assert_array_equal(mesh_actor_points(window), points)
+
+
+def test_a_leaf_that_cannot_be_reconstructed_keeps_the_old_one(window, qtbot, tmp_path):
+    line = tmp_path / "line.csv"
+    line.write_text("\n".join(f"{t},{2 * t},0" for t in np.linspace(0, 1, 20)) + "\n")
+    leaf, result = window.doc.leaf, window.result
+    with qtbot.waitSignal(window.failure_shown, timeout=30_000) as failure:
+        assert window.open_path(str(line))
+    assert "line" in failure.args[0]
+    assert window.doc.leaf is leaf and window.result is result
+    assert window.path is None  # still the demo
+    assert "line" in window.last_error_box.text()
+    window.last_error_box.close()
+
+
+def test_unsaved_changes_are_asked_about_before_closing(window, qtbot, monkeypatch):
+    view = window.editor.view
+    view.delete_selected()  # nothing selected: no edit
+    assert not window.isWindowModified()
+    view.selected = (-1, 0)
+    view.delete_selected()
+    assert window.isWindowModified()
+    asked = []
+    monkeypatch.setattr(
+        QMessageBox,
+        "question",
+        lambda *a, **k: asked.append(a) or QMessageBox.StandardButton.Cancel,
+    )
+    assert not window.close()
+    assert asked and window.isVisible()
+
+
+def test_parameters_and_layers_are_remembered(qtbot, tmp_path):
+    first = make_window(qtbot, tmp_path / "s.ini")
+    first.panel.set_params(FAST.with_(k=7, seed=11))
+    first.layer_list.item(2).setCheckState(Qt.CheckState.Checked)
+    close_window(first)
+    second = make_window(qtbot, tmp_path / "s.ini")
+    assert second.panel.params() == FAST.with_(k=7, seed=11)
+    assert second.layer_list.item(2).checkState() == Qt.CheckState.Checked
+    close_window(second)
