@@ -36,6 +36,7 @@ BALL = 0.08  # r, the ball of the blade test, as a fraction of the scan's length
 CORE = 0.4  # core points have at least this share of the busiest balls' count
 EDGE = 0.3  # margin points, grown back near the core, at least this share (a strand has less)
 LIFT_NEIGHBOURS = 16
+RIM_KERNEL = np.array([1.0, 2.0, 3.0, 2.0, 1.0])  # smooths the margin's heights along it
 OPENING = 0.015  # the outline is opened by this share of the length (drops thin stubs)
 PETIOLE_SHARE = 0.02  # fewer points than this share of the blade's do not mark the base
 SIDE_STATIONS = (0.2, 0.35, 0.5, 0.65, 0.8)  # where side veins leave the midrib (arc length)
@@ -316,11 +317,13 @@ def extract_leaf(points: np.ndarray, base_end: str = "auto", count: int = 200) -
 
     veins_xy = [midrib, *_side_veins(polygon, midrib, covered, spacing)]
 
-    def world(q: np.ndarray) -> np.ndarray:
-        z = lift(q, xy, h)
+    def world(q: np.ndarray, z: np.ndarray | None = None) -> np.ndarray:
+        z = lift(q, xy, h) if z is None else z
         return origin + np.column_stack([q, z]) @ axes
 
-    boundary = world(boundary_xy)
+    # the margin's heights are the noisiest (mixed returns at the edge): average along the outline
+    rim = np.convolve(np.tile(lift(boundary_xy, xy, h), 3), RIM_KERNEL / RIM_KERNEL.sum(), "same")
+    boundary = world(boundary_xy, rim[count : 2 * count])
     veins = _inside_outline(boundary, [world(v) for v in veins_xy], spacing)
     return Extraction(
         leaf=Leaf(boundary=boundary, veins=veins),
