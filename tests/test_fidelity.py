@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,8 +11,10 @@ import pyvista as pv
 
 import leafstudio as ls
 from leafstudio.cli import main
+from leafstudio.core.extract import extract_leaf
 from leafstudio.core.fidelity import coverage, scan_distances
 from leafstudio.core.plane import Frame
+from leafstudio.scan import read_scan
 
 
 def _plane() -> pv.PolyData:
@@ -83,3 +86,22 @@ def test_reconstruct_against_a_scan_reports_the_distances(tmp_path, capsys):
     assert main([*args, "--against", str(empty)]) == 2
     err = capsys.readouterr().err.strip()
     assert "holds no points" in err and "\n" not in err
+
+
+REAL = Path(__file__).resolve().parents[2] / "shared" / "realleaves"
+
+
+@pytest.mark.skipif(not REAL.is_dir(), reason="the real leaf scans are not beside the repository")
+def test_a_real_sugar_beet_leaf_from_its_scan_is_close_to_the_scan():
+    raw = read_scan(REAL / "sugarbeet_f00012_20170829T010129_pot1_1.txt")
+    found = extract_leaf(raw)
+    scale = 1.0 / found.length
+    leaf = ls.Leaf(
+        boundary=found.leaf.boundary * scale, veins=[v * scale for v in found.leaf.veins]
+    )
+    result = ls.Pipeline(leaf).run(ls.Params(k=3, grid=128))
+    assert result.surface.base is not None  # a real margin is far from planar
+    d = scan_distances(result.mesh, raw[found.blade] * scale, 1.0)
+    assert d["mean"] < 0.008 and d["beyond_2pct"] < 0.05
+    cover = coverage(result.mesh, result.frame, result.polygon)
+    assert cover["covered"] > 0.98 and cover["outside"] < 1e-6 and cover["pieces"] == 1
