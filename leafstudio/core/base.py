@@ -51,7 +51,7 @@ class BaseSurface:
         """(n,) b at (n, 2) plane points."""
         xy = np.atleast_2d(np.asarray(xy, dtype=float))
         local = (xy - self.origin) / self.scale
-        kernel = _kernel(_scaled_distance(local, (self.centres - self.origin) / self.scale))
+        kernel = _kernel(_squared_distances(local, (self.centres - self.origin) / self.scale))
         return kernel @ self.weights + self.affine[0] + local @ self.affine[1:]
 
     def derivatives(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -64,10 +64,10 @@ class BaseSurface:
         xy = np.atleast_2d(np.asarray(xy, dtype=float))
         x = (xy - self.origin) / self.scale
         c = (self.centres - self.origin) / self.scale
-        r2 = _scaled_distance(x, c)
+        r2 = _squared_distances(x, c)
         away = r2 > 0
         log_r2 = np.log(np.where(away, r2, 1.0))
-        value = (0.5 * r2 * log_r2) @ self.weights + self.affine[0] + x @ self.affine[1:]
+        value = _kernel(r2) @ self.weights + self.affine[0] + x @ self.affine[1:]
         slope = np.where(away, log_r2 + 1.0, 0.0) * self.weights  # (n, m): (2 log r + 1) w
         total = slope.sum(axis=1)
         grad = x * total[:, None] - slope @ c + self.affine[1:]
@@ -83,7 +83,7 @@ class BaseSurface:
         return value, grad / self.scale, hess / self.scale**2
 
 
-def _scaled_distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def _squared_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """(n, m) squared distances between (n, 2) and (m, 2) points."""
     return np.maximum((a**2).sum(axis=1)[:, None] + (b**2).sum(axis=1)[None] - 2 * a @ b.T, 0.0)
 
@@ -127,7 +127,7 @@ def fit_base(polygon: np.ndarray, heights: np.ndarray, length: float) -> BaseSur
     centres = (polygon[pick] - origin) / length
     m = len(centres)
     system = np.zeros((m + 3, m + 3))
-    system[:m, :m] = _kernel(_scaled_distance(centres, centres)) + SMOOTHING * np.eye(m)
+    system[:m, :m] = _kernel(_squared_distances(centres, centres)) + SMOOTHING * np.eye(m)
     poly = np.column_stack([np.ones(m), centres])
     system[:m, m:] = poly
     system[m:, :m] = poly.T
