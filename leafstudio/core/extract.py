@@ -4,10 +4,11 @@
 2. Keep the blade: a petiole is a thin strand, so the points of the blade's interior have many
    more neighbours within a ball of radius r than a strand's; the blade is the largest connected
    group of such "core" points, grown back by r/2 to recover its margin and tip (a morphological
-   opening of the point set). Whatever else remains is the petiole; it marks the base.
-3. Project the blade on its PCA plane; its outline is the closing of the points' disks (a concave
-   hull that bridges scanner stripes), evenly resampled and lifted to the scan's heights by a
-   local plane fit (so the margin's heights come from the scan, not from the nearest point).
+   opening of the point set). The largest strand left is the petiole; it marks the base.
+3. Project the blade on its PCA plane; its outline is a concave hull that bridges scanner stripes
+   (and nothing wider), opened a little to cut off a stub of petiole, evenly resampled and lifted
+   to the scan's heights by a local plane fit (so the margin's heights come from the scan, not
+   from the nearest point), averaged along the outline against the edge's noise.
 4. Midrib: from the base to the tip, through the middle of the blade's cross-sections, lifted to
    the surface. Side veins: straight from the midrib toward the margin at 50° to it, lifted too,
    and cut where the scan has a gap.
@@ -19,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import shapely
+from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import Delaunay, cKDTree
 from shapely.geometry import LineString, MultiPoint, Point, Polygon
@@ -77,8 +79,6 @@ def _neighbour_spacing(points: np.ndarray) -> np.ndarray:
 def _components(points: np.ndarray, radius: float) -> np.ndarray:
     """(n,) label of each point's connected group, linking points within `radius`."""
     pairs = cKDTree(points).query_pairs(radius, output_type="ndarray")
-    from scipy.sparse import coo_matrix
-
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(points),) * 2)
     return connected_components(graph, directed=False)[1]
 
