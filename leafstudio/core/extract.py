@@ -232,6 +232,8 @@ def _midline(outline: np.ndarray, base: np.ndarray, spacing: float) -> np.ndarra
         previous = part.centroid.y
         middle.append((u, previous))
     line = np.asarray(middle)
+    if len(line) < 3:
+        raise LeafError("could not trace a midrib across the blade")
     if len(line) >= 5:  # smooth the middle's wobble, keep the ends
         smooth = np.convolve(line[:, 1], np.ones(5) / 5, mode="same")
         line[2:-2, 1] = smooth[2:-2]
