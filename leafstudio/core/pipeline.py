@@ -224,12 +224,29 @@ class Pipeline:
         self.leaf = leaf
         self._cache: dict[str, tuple[tuple[Any, ...], Any]] = {}
         self._layout: tuple[GuideStage, tuple[np.ndarray, ...]] | None = None
+        self._drawn: tuple[GuideStage, tuple[int, int], np.ndarray] | None = None
+
+    def _samples(self, guide: GuideStage, grid: Grid, params: Params) -> np.ndarray:
+        """The EM samples drawn from the guide (gmm.sample_guide), kept while the guide stage's
+        output, the sample count and the seed are the same: a new K refits the same samples."""
+        key = (params.samples, params.seed)
+        if self._drawn is None or self._drawn[0] is not guide or self._drawn[1] != key:
+            inside = guide.inside
+            drawn = sample_guide(
+                grid.points[inside], guide.p[inside], params.samples, grid.spacing, params.seed
+            )
+            drawn.flags.writeable = False
+            self._drawn = (guide, key, drawn)
+        return self._drawn[2]
 
     def _grid_mesh(self, fs: FrameStage, grid: Grid, guide: GuideStage) -> tuple[np.ndarray, ...]:
         """The conforming mesh in the plane (mesher.conforming_grid_mesh), kept while the guide
         stage's output is the same: it depends on nothing later (K and the fit only lift it)."""
         if self._layout is None or self._layout[0] is not guide:
-            self._layout = (guide, mesher.conforming_grid_mesh(fs.polygon, grid, guide.inside))
+            layout = mesher.conforming_grid_mesh(fs.polygon, grid, guide.inside)
+            for array in layout:  # shared by the runs that follow, and MPUImplicit.derivatives
+                array.flags.writeable = False  # keeps its result for a read-only array
+            self._layout = (guide, layout)
         return self._layout[1]
 
     def run(
@@ -279,7 +296,12 @@ class Pipeline:
         guide: GuideStage = stage("guide", lambda: _guide_stage(fs, implicit, grid))
         flat = not fs.veins or not np.any(np.abs(fs.vein_h) > 1e-9 * fs.length)
         nodes = grid.points[guide.inside]
-        samples, mixture = stage("gmm", lambda: _gmm_stage(fs, guide, grid, nodes, params, flat))
+        samples, mixture = stage(
+            "gmm",
+            lambda: _gmm_stage(
+                fs, guide, grid, params, flat, lambda: self._samples(guide, grid, params)
+            ),
+        )
         surf: SurfaceStage = stage(
             "surface", lambda: _surface_stage(fs, implicit, guide, nodes, mixture, params)
         )
@@ -319,7 +341,12 @@ def _guide_stage(fs: FrameStage, implicit: MPUImplicit, grid: Grid) -> GuideStag
 
 
 def _gmm_stage(
-    fs: FrameStage, guide: GuideStage, grid: Grid, nodes: np.ndarray, params: Params, flat: bool
+    fs: FrameStage,
+    guide: GuideStage,
+    grid: Grid,
+    params: Params,
+    flat: bool,
+    draw: Callable[[], np.ndarray],
 ) -> tuple[np.ndarray, Mixture]:
     if flat:
         return np.zeros((0, 2)), _flat_mixture(fs.polygon.mean(axis=0))
@@ -331,7 +358,7 @@ def _gmm_stage(
             f"{support} grid nodes (at least {MIN_NODES_PER_COMPONENT} per component needed); "
             f"lower K or raise the grid resolution"
         )
-    samples = sample_guide(nodes, p_in, params.samples, grid.spacing, params.seed)
+    samples = draw()
     # the sign of p at each sample's node: veins above and below the plane are fitted apart
     cell = np.rint((samples - grid.origin) / grid.spacing).astype(int)
     ny, nx = grid.shape

@@ -31,7 +31,7 @@ from leafstudio.core.mpu import MPUImplicit
 
 VEIN_WEIGHT = 10.0  # the vein rows together weigh this much relative to all grid rows
 RIDGE = 1e-10
-REFINE_ROWS = 700  # grid nodes drawn for the refinement, and vein points at most
+REFINE_ROWS = 400  # grid nodes drawn for the refinement, and vein points at most
 REFINE_STEPS = 30  # Levenberg-Marquardt iterations at most
 UNDERFLOW = 600.0  # exp(-q) for q beyond this is taken as 0 (exactly, not a subnormal)
 REFINE_GAIN = 1e-5  # stop once a step lowers the cost by less than this fraction
