@@ -27,6 +27,13 @@ LAYERS: tuple[tuple[str, str, bool], ...] = (
 BOUNDARY_COLOR = "#303030"
 VEIN_COLORS = ("#d62728", "#1f77b4", "#ff7f0e", "#9467bd", "#17becf", "#e377c2", "#8c564b")
 SCALAR_BARS = {"mesh": "height", "probability": "p(x)"}
+# what the mesh can be coloured by: point array -> (label, colour map)
+MESH_COLORINGS = {
+    "height": ("height", "viridis"),
+    "mean_curvature": ("mean curvature", "coolwarm"),
+    "gaussian_curvature": ("Gaussian curvature", "coolwarm"),
+}
+CURVATURE_PERCENTILE = 95  # curvature colours span ± this percentile of |value| (margins spike)
 MAP_OFFSET = 0.003  # the probability map sits this fraction of the leaf length below the plane
 
 
@@ -37,6 +44,7 @@ class Piece:
     name: str
     data: pv.DataSet
     style: dict[str, Any] = field(default_factory=dict)
+    ranges: dict[str, tuple[float, float]] = field(default_factory=dict)  # colour range per array
 
 
 def vein_color(index: int) -> str:
@@ -52,19 +60,36 @@ def _polyline(points: np.ndarray, closed: bool) -> pv.PolyData:
     return pv.lines_from_points(np.vstack([points, points[:1]]) if closed else points)
 
 
+def _color_ranges(mesh: pv.PolyData) -> dict[str, tuple[float, float]]:
+    """Colour range of each array in MESH_COLORINGS the mesh has: height from its least to its
+    greatest value, curvature symmetric about 0 (so that 0 is the middle colour)."""
+    ranges = {}
+    for name in MESH_COLORINGS:
+        if name not in mesh.point_data:
+            continue
+        values = np.asarray(mesh.point_data[name], dtype=float)
+        values = values[np.isfinite(values)]
+        if len(values) == 0:
+            continue
+        if name == "height":
+            ranges[name] = (float(values.min()), float(values.max()))
+        else:
+            bound = float(np.percentile(np.abs(values), CURVATURE_PERCENTILE)) or 1.0
+            ranges[name] = (-bound, bound)
+    return ranges
+
+
 def _mesh_piece(result: Result) -> Piece:
     mesh = result.mesh.compute_normals(
         point_normals=True, cell_normals=False, split_vertices=False, auto_orient_normals=False
     )
     style = {
-        "scalars": "height",
-        "cmap": "viridis",
         "smooth_shading": False,  # the normals above already shade smoothly (no main-thread work)
         "show_edges": False,
         "edge_color": "#2a2a2a",
         "specular": 0.3,
     }
-    return Piece("mesh", mesh, style)
+    return Piece("mesh", mesh, style, _color_ranges(mesh))
 
 
 def _input_pieces(result: Result) -> list[Piece]:

@@ -24,6 +24,7 @@ from PySide6.QtGui import (
 )
 from PySide6.QtWidgets import (
     QCheckBox,
+    QComboBox,
     QDockWidget,
     QFileDialog,
     QHBoxLayout,
@@ -42,7 +43,7 @@ from PySide6.QtWidgets import (
 from leafstudio.demos import DEMOS, PAPER_K, demo
 from leafstudio.errors import LeafError
 from leafstudio.gui.controls import ParamPanel
-from leafstudio.gui.layers import LAYERS
+from leafstudio.gui.layers import LAYERS, MESH_COLORINGS
 from leafstudio.gui.measurements import measurement_rows
 from leafstudio.gui.sketch import SketchEditor
 from leafstudio.gui.sketch_model import Sketch
@@ -170,6 +171,16 @@ class MainWindow(QMainWindow):
         self.layer_list.setMaximumHeight(self.layer_list.sizeHintForRow(0) * len(LAYERS) + 8)
         self.edges.setToolTip("Draw the triangles' edges on the mesh.")
         self.edges.toggled.connect(self.viewport.set_edges)
+        self.coloring = QComboBox()
+        for name, (label, _) in MESH_COLORINGS.items():
+            self.coloring.addItem(f"Colour by {label}", name)
+        self.coloring.setToolTip(
+            "What the mesh's colours show: its height above the leaf's plane, or how it bends "
+            "(mean or Gaussian curvature; red bends one way, blue the other)."
+        )
+        self.coloring.currentIndexChanged.connect(
+            lambda row: self.viewport.set_mesh_coloring(self.coloring.itemData(row))
+        )
         cameras = QHBoxLayout()
         for preset in CAMERAS:
             button = QPushButton(preset.capitalize())
@@ -180,6 +191,7 @@ class MainWindow(QMainWindow):
         column = QVBoxLayout(layers)
         column.addWidget(self.layer_list)
         column.addWidget(self.edges)
+        column.addWidget(self.coloring)
         column.addLayout(cameras)
         column.addStretch(1)
         self.layers_dock = self._dock("Layers", layers, left)
@@ -272,6 +284,7 @@ class MainWindow(QMainWindow):
                     Qt.CheckState.Checked if str(on).lower() == "true" else Qt.CheckState.Unchecked
                 )
         self.edges.setChecked(str(s.value("view/edges", "false")).lower() == "true")
+        self.coloring.setCurrentIndex(max(0, self.coloring.findData(s.value("view/coloring"))))
         self.panel.set_params(self.saved_params() or Params())
 
     def saved_params(self) -> Params | None:
@@ -290,6 +303,7 @@ class MainWindow(QMainWindow):
         for key, on in self.viewport.visible.items():
             s.setValue(f"layers/{key}", on)
         s.setValue("view/edges", self.edges.isChecked())
+        s.setValue("view/coloring", self.coloring.currentData())
         s.sync()
 
     def recent_files(self) -> list[str]:

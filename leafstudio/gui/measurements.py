@@ -1,7 +1,7 @@
 """The rows of the measurements panel, from a Result's metrics (no Qt here).
 
-Shows whatever `Result.metrics` holds (the analysis module may add more), flattened into labelled
-rows, plus the outline's length, width and perimeter when the metrics do not already give them.
+Shows whatever `Result.metrics` holds (the leaf's measurements, the paper's Table-1 distances, the
+mesh's facts, curvature ranges, and anything added later), flattened into labelled rows.
 """
 
 from __future__ import annotations
@@ -13,9 +13,11 @@ import numpy as np
 from leafstudio.core.pipeline import Result
 
 SECTION_NAMES = {
-    "boundary": "Boundary points → mesh distance",
-    "veins": "Vein points → mesh distance",
+    "leaf": "Leaf",
+    "boundary": "Boundary points → mesh distance (Table 1)",
+    "veins": "Vein points → mesh distance (Table 1)",
     "mesh": "Mesh",
+    "curvature": "Curvature",
 }
 
 
@@ -26,7 +28,7 @@ def _label(key: str) -> str:
 def _value(value: Any) -> str:
     if value is None:
         return "–"
-    if isinstance(value, bool):
+    if isinstance(value, (bool, np.bool_)):
         return "yes" if value else "no"
     if isinstance(value, (int, np.integer)):
         return str(int(value))
@@ -45,32 +47,19 @@ def _flatten(values: dict[str, Any]) -> list[tuple[str, str]]:
     return rows
 
 
-def outline_size(result: Result) -> dict[str, float]:
-    """Length (along the leaf's main axis), greatest width and perimeter of the leaf outline."""
-    polygon = result.polygon
-    closed = np.vstack([polygon, polygon[:1]])
-    return {
-        "length": float(result.length),
-        "width": float(np.ptp(polygon[:, 1])),
-        "perimeter": float(np.linalg.norm(np.diff(closed, axis=0), axis=1).sum()),
-    }
-
-
 def measurement_rows(result: Result) -> list[tuple[str, list[tuple[str, str]]]]:
-    """(section title, [(label, value text), ...]) for every section of the panel."""
+    """(section title, [(label, value text), ...]) per section, the known sections first."""
     metrics = result.metrics
-    known = {label.split()[-1].lower() for _, rows in _sections(metrics) for label, _ in rows}
-    leaf = [(_label(k), _value(v)) for k, v in outline_size(result).items() if k not in known]
-    return [("Leaf", leaf), *_sections(metrics)] if leaf else _sections(metrics)
-
-
-def _sections(metrics: dict[str, Any]) -> list[tuple[str, list[tuple[str, str]]]]:
+    order = [k for k in SECTION_NAMES if k in metrics] + [
+        k for k in metrics if k not in SECTION_NAMES
+    ]
     sections, loose = [], {}
-    for key, value in metrics.items():
+    for key in order:
+        value = metrics[key]
         if isinstance(value, dict):
             sections.append((SECTION_NAMES.get(key, _label(key)), _flatten(value)))
         else:
             loose[key] = value
     if loose:
-        sections.insert(0, ("Measurements", _flatten(loose)))
+        sections.append(("Other", _flatten(loose)))
     return sections

@@ -11,7 +11,7 @@ from PySide6.QtCore import Signal
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 from pyvistaqt import QtInteractor
 
-from leafstudio.gui.layers import LAYERS, SCALAR_BARS, Piece
+from leafstudio.gui.layers import LAYERS, MESH_COLORINGS, SCALAR_BARS, Piece
 
 CAMERAS = ("iso", "top", "side")
 
@@ -30,6 +30,12 @@ class Viewport(QWidget):
         layout.addWidget(self.plotter.interactor)
         self.visible = {key: on for key, _, on in LAYERS}
         self.show_edges = False
+        self.mesh_coloring = "height"
+        self._bar_titles = {
+            "mesh": {label for label, _ in MESH_COLORINGS.values()},
+            "probability": {SCALAR_BARS["probability"]},
+        }
+        self._mesh_piece: Piece | None = None
         self._names: dict[str, list[str]] = {key: [] for key, _, _ in LAYERS}
         self._normal = np.array([0.0, 0.0, 1.0])
         self._long_axis = np.array([1.0, 0.0, 0.0])
@@ -62,7 +68,14 @@ class Viewport(QWidget):
     def _add(self, key: str, piece: Piece) -> None:
         style = dict(piece.style)
         if key == "mesh":
-            style["show_edges"] = self.show_edges
+            self._mesh_piece = piece
+            coloring = self.mesh_coloring if self.mesh_coloring in piece.ranges else "height"
+            style.update(
+                show_edges=self.show_edges,
+                scalars=coloring,
+                cmap=MESH_COLORINGS[coloring][1],
+                clim=piece.ranges.get(coloring),
+            )
         if piece.data.n_points == 0:
             self.plotter.remove_actor(piece.name, render=False)
             return
@@ -100,6 +113,14 @@ class Viewport(QWidget):
         self._sync_scalar_bars()
         self.plotter.render()
 
+    def set_mesh_coloring(self, name: str) -> None:
+        """Colour the mesh by a point array of MESH_COLORINGS (height when the mesh lacks it)."""
+        self.mesh_coloring = name
+        if self._mesh_piece is not None and "mesh" in self.plotter.actors:
+            self._add("mesh", self._mesh_piece)
+            self._sync_scalar_bars()
+            self.plotter.render()
+
     def set_edges(self, on: bool) -> None:
         """Show or hide the mesh's triangle edges."""
         self.show_edges = on
@@ -109,10 +130,15 @@ class Viewport(QWidget):
 
     def _sync_scalar_bars(self) -> None:
         for key, title in SCALAR_BARS.items():
+            if key == "mesh" and self._mesh_piece is not None:
+                coloring = self.mesh_coloring
+                title = MESH_COLORINGS[
+                    coloring if coloring in self._mesh_piece.ranges else "height"
+                ][0]
             names = self.actor_names(key)
             wanted = self.visible[key] and bool(names)
-            if title in self.plotter.scalar_bars:
-                self.plotter.remove_scalar_bar(title, render=False)
+            for stale in self._bar_titles[key] & set(self.plotter.scalar_bars.keys()):
+                self.plotter.remove_scalar_bar(stale, render=False)
             if wanted:
                 bottom = {"mesh": 0.08, "probability": 0.55}[key]
                 self.plotter.add_scalar_bar(

@@ -86,6 +86,14 @@ def test_layers_switch_on_and_off_and_actors_are_replaced_not_piled(window, qtbo
     assert not window.viewport.plotter.actors["mesh"].GetVisibility()
     window.edges.setChecked(True)
     assert window.viewport.plotter.actors["mesh"].prop.show_edges
+    items["mesh"].setCheckState(Qt.CheckState.Checked)
+    window.coloring.setCurrentIndex(window.coloring.findData("mean_curvature"))
+    mesh = window.viewport.plotter.actors["mesh"]
+    assert mesh.mapper.array_name == "mean_curvature" and mesh.prop.show_edges
+    low, high = mesh.mapper.scalar_range
+    assert low == -high and high > 0  # curvature colours centred on 0
+    assert "mean curvature" in window.viewport.plotter.scalar_bars
+    assert "height" not in window.viewport.plotter.scalar_bars
 
 
 def test_save_reopen_and_compare(window, qtbot, tmp_path):
