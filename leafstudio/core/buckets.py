@@ -3,6 +3,10 @@
 The MPU implicit, the height guide and the mesher ask, for many query points at once, which cells
 or data points lie near each query. Sorting the queries into square buckets once (a counting
 sort, O(n)) lets a compiled loop visit only the buckets a support disc or a search box overlaps.
+
+Core's compiled kernels use ``@njit(cache=True, nogil=True)``: numba keeps the machine code on
+disk (a fresh install compiles once, for some seconds; later processes load it in a fraction of
+a second), and the app's main thread keeps running while a kernel does.
 """
 
 from __future__ import annotations
@@ -44,7 +48,7 @@ def bucket_points(xy: np.ndarray, size: float | None = None) -> Buckets:
     return Buckets(lo=lo, size=float(size), nx=int(nx), ny=int(ny), starts=starts, order=order)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def bounds(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(2,) lower and upper corners of the box around (n >= 1, 2) points (numpy's min(axis=0)
     on an (n, 2) array is many times slower)."""
@@ -56,7 +60,7 @@ def bounds(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _counting_sort(xy, lo, size, nx, ny):
     """Bucket starts and the point indices sorted by bucket, stable, in O(n)."""
     n = len(xy)

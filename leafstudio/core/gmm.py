@@ -72,7 +72,7 @@ class Mixture:
         return _weighted_derivatives(xy, self.means, self.precisions, self.amplitudes)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _gaussian(x, y, mean, prec, k):
     """N(x | μ_k, Σ_k) (eq. 6) from the precision P = Σ⁻¹, and P d with d = x − μ_k."""
     dx, dy = x - mean[k, 0], y - mean[k, 1]
@@ -85,7 +85,7 @@ def _gaussian(x, y, mean, prec, k):
     return np.sqrt(det) / (2 * np.pi) * np.exp(-q), pdx, pdy
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _gaussians(xy, means, prec):
     out = np.empty((len(xy), len(means)))
     for i in range(len(xy)):
@@ -94,7 +94,7 @@ def _gaussians(xy, means, prec):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _weighted_derivatives(xy, means, prec, amplitudes):
     n = len(xy)
     value, grad, hess = np.zeros(n), np.zeros((n, 2)), np.zeros((n, 2, 2))
@@ -226,7 +226,7 @@ def _kmeans_plus_plus(x: np.ndarray, k: int, rng: np.random.RandomState) -> np.n
     return np.array(seeds)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _kmeans(x, centers):
     """Lloyd's k-means from the given (k, 2) centres; returns (n,) labels."""
     n, k = len(x), len(centers)
@@ -256,7 +256,7 @@ def _kmeans(x, centers):
     return labels
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _m_step(x, resp, reg):
     """Weights (k,), means (k, 2) and covariances (k, 2, 2) from (n, k) responsibilities (eq. 7)."""
     n, k = resp.shape
@@ -285,7 +285,7 @@ def _m_step(x, resp, reg):
     return nk / n, means, cov
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _e_step(x, weights, means, cov, resp):
     """Fill (n, k) responsibilities (eq. 9's E-step); return the mean log-likelihood."""
     n, k = resp.shape
@@ -315,7 +315,7 @@ def _e_step(x, weights, means, cov, resp):
     return total / n
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _em(x, labels, k, reg, tol, max_iter):
     """EM from hard k-means labels until the mean log-likelihood settles."""
     resp = np.zeros((len(x), k))

@@ -72,7 +72,7 @@ def nearest_in_groups(
     return dist, position, value, second
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _select(points, group, n_groups, pool, n_pool, x0, y0, x1, y1, bound, near, out):
     """Fill `out` with the points of pool[:n_pool] that can be the nearest point of one of the
     two nearest groups of some query in the box [x0, x1] x [y0, y1]; return their count.
@@ -101,7 +101,7 @@ def _select(points, group, n_groups, pool, n_pool, x0, y0, x1, y1, bound, near, 
     return count
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _nearest_groups(
     xy, points, group, values, n_groups, lo, size, nx, ny, starts, order, dist, pos, value, second
 ):
@@ -141,7 +141,7 @@ def _nearest_groups(
                     )  # fmt: skip
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _scan(
     xy, points, group, values, n_groups, first_q, end_q, order, candidates, count, best, dist,
     pos, value, second,

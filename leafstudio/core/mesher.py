@@ -47,7 +47,7 @@ def inner_nodes(polygon: np.ndarray, nodes: np.ndarray, spacing: float) -> np.nd
     return ~near
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _mark_near_edges(polygon, xy, radius, lo, size, nx, ny, starts, order, near):
     """Set near[i] for the points within `radius` of an edge of the closed polygon."""
     n = len(polygon)
@@ -148,7 +148,7 @@ def conforming_grid_mesh(
     return np.concatenate([polygon, grid.points[kept]]), triangles, kept
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _split_cells(kept, cells, b):
     """From the (ny, nx) kept nodes and the (ny - 1, nx - 1) cells no polygon edge crosses:
 
@@ -216,7 +216,7 @@ def _split_cells(kept, cells, b):
     return vertex, tris, band[:n_band], outline[:n_out]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _grid_inside(polygon, origin, spacing, ny, nx):
     """(ny * nx,) bool: grid nodes inside the closed polygon, by the crossing rule along each
     row (a node on an edge may go either way; the mesher's clearance drops those anyway)."""

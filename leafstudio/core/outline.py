@@ -138,14 +138,14 @@ def _edge_bands(key: bytes, n: int) -> tuple[float, float, int, float, np.ndarra
     return y0, height, n_bands, tolerance, starts, edges
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _band_range(ya: float, yb: float, y0: float, height: float, n_bands: int) -> tuple[int, int]:
     first = min(max(int((min(ya, yb) - y0) / height), 0), n_bands - 1)
     last = min(max(int((max(ya, yb) - y0) / height), 0), n_bands - 1)
     return first, last
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _file_edges(polygon, y0, height, n_bands):
     """(n_bands + 1,) starts and the edge indices of each band, edges of every band they span."""
     n = len(polygon)
@@ -165,7 +165,7 @@ def _file_edges(polygon, y0, height, n_bands):
     return starts, edges
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _inside(polygon, xy, y0, height, n_bands, tolerance, starts, edges):
     n = len(polygon)
     out = np.zeros(len(xy), np.bool_)

@@ -147,7 +147,7 @@ def _refine(mixture: Mixture, xy: np.ndarray, row_scale: np.ndarray, target: np.
     return refined
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _residual_rows(xy, row_scale, target, t, full):
     """Residuals r_i = s_i z(x_i) − y_i (m,) with z = Σ a_k N_k and θ packed as in _pack, and with
     `full` their closed-form Jacobian (m, 6K)."""
@@ -176,7 +176,7 @@ def _residual_rows(xy, row_scale, target, t, full):
     return res, jac
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _levenberg_marquardt(xy, row_scale, target, theta, steps, min_gain):
     """Minimise |r(θ)|² (see _residual_rows) from θ in `steps` iterations at most: Marquardt's
     diagonal scaling, Nielsen's damping update, compiled whole (the loop's numpy calls cost more
