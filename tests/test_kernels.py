@@ -47,7 +47,7 @@ def test_mpu_value_is_eq1_summed_over_every_cell(nested_frame):
     rng = np.random.default_rng(0)
     xy = np.vstack([rng.uniform(-0.6, 0.6, (400, 2)) * [1, 0.3], polygon[:20]])
     dist = np.linalg.norm(xy[:, None] - implicit.centers[None], axis=2)
-    w = bspline_weight(dist * 1.5 / implicit.radii[None])
+    w = bspline_weight(dist / implicit.radii[None])
     f = xy @ implicit.coef[:, :2].T + implicit.coef[:, 2]
     covered = w.sum(axis=1) > 0
     expected = (w * f).sum(axis=1)[covered] / w.sum(axis=1)[covered]

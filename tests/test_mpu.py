@@ -87,3 +87,18 @@ def test_gradient_matches_finite_differences():
     # near the margin g behaves like a distance: |∇g| close to 1
     near = np.abs(g(pts)) < 0.02
     assert np.all(np.abs(np.linalg.norm(grad[near], axis=1) - 1) < 0.1)
+
+
+def test_supports_leave_no_gaps_inside_an_ellipse():
+    """Every point of the region is well inside some cell's support: g is positive and its
+    gradient moderate everywhere inside, not only at the grid nodes the pipeline happens to use."""
+    theta = np.linspace(0, 2 * np.pi, 300, endpoint=False)
+    polygon = np.column_stack([0.5 * np.cos(theta), 0.2 * np.sin(theta)])
+    g = _implicit(polygon)
+    xs = np.linspace(-0.5, 0.5, 401)
+    pts = np.column_stack([a.ravel() for a in np.meshgrid(xs, np.linspace(-0.2, 0.2, 161))])
+    level = (pts[:, 0] / 0.5) ** 2 + (pts[:, 1] / 0.2) ** 2
+    inside = pts[level < 0.9]
+    value, grad = g.evaluate(inside, gradient=True)
+    assert np.all(value > 0)
+    assert np.linalg.norm(grad, axis=1).max() < 3

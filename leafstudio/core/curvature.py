@@ -4,7 +4,7 @@ The paper's point is a differentiable surface (section 4: "using differentials a
 Everything here is exact calculus on the fitted functions, no mesh-based estimates:
 
 - the MPU implicit g = N / D with N = Σ w_i f_i, D = Σ w_i (eq. 1), f_i linear and w_i the
-  quadratic B-spline of t = 1.5 |x − c_i| / r_i (eq. 2), so
+  quadratic B-spline of t = |x − c_i| / r_i (eq. 2; see mpu.py), so
   ∇²g = (∇²N − g ∇²D − ∇g ∇Dᵀ − ∇D ∇gᵀ) / D;
 - the taper T(s) = tanh(s), T' = 1 − T², T'' = −2 T T';
 - the mixture's Hessian (Mixture.derivatives).

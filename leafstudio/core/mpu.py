@@ -4,7 +4,12 @@ g(x) = Σ w_i(x) f_i(x) / Σ w_i(x)                                    (eq. 1)
 
 Each f_i is a linear function fitted to the oriented boundary points inside a ball around the
 centre of one adaptive quadtree cell; the cell is split until the fit is within the tolerance.
-w_i(x) = b(3|x − c_i| / (2 r_i)) is the quadratic B-spline of eq. 2, so g is C1 everywhere.
+w_i(x) = b(|x − c_i| / r_i) with b the quadratic B-spline of eq. 2, so g is C1 everywhere.
+Eq. 2 as printed writes b(3|x − c_i| / (2 r_i)), which applies Ohtake et al.'s factor 3/2 twice:
+their B-spline lives on [0, 3/2) and the paper's b is that spline already rescaled to [0, 1). Taken
+literally, a cell's weight would end at 2 r_i / 3, half its diagonal, leaving the cell's corners
+with almost no weight and g with gaps; with b(|x − c_i| / r_i) each support reaches r_i, as in
+Ohtake et al.
 g > 0 inside the leaf, g = 0 on its margin, g < 0 outside; near the margin g is close to the
 signed distance, because each f_i has a unit gradient.
 """
@@ -114,7 +119,7 @@ class MPUImplicit:
 
 
 # The compiled loops below visit, for each cell, the query buckets its support disc overlaps.
-# b(t) vanishes from t = 1 on, so a cell's weight is nonzero only within radius / 1.5 (eq. 2).
+# b(t) vanishes from t = 1 on, so a cell's weight is nonzero only within its radius (eq. 2).
 
 
 @njit(cache=True)
@@ -160,8 +165,8 @@ def _blend_sums(xy, centers, radii, coef, lo, size, nx, ny, starts, order, degre
     grad_d, grad_n = np.zeros((n, 2)), np.zeros((n, 2))
     hess_d, hess_n = np.zeros((n, 3)), np.zeros((n, 3))
     for c in range(len(centers)):
-        scale = 1.5 / radii[c]
-        reach = 1.0 / scale
+        scale = 1.0 / radii[c]
+        reach = radii[c]
         a, b, e = coef[c, 0], coef[c, 1], coef[c, 2]
         x0, x1 = _bucket_range(centers[c, 0], reach, lo[0], size, nx)
         y0, y1 = _bucket_range(centers[c, 1], reach, lo[1], size, ny)
@@ -263,7 +268,7 @@ def _ball_fits(points, normals, centers, radii, lo, size, nx, ny, starts, order)
                     d2 = dx * dx + dy * dy
                     if d2 > r * r:
                         continue
-                    t = np.sqrt(d2) * 1.5 / r
+                    t = np.sqrt(d2) / r
                     w = 1e-3  # points at the rim of a grown ball still count
                     if t < 1 / 3:
                         w += 0.75 - 2.25 * t * t
