@@ -172,21 +172,17 @@ def split_components(positive_share: float, k: int) -> tuple[int, int]:
 def fit_signed_mixture(
     samples: np.ndarray,
     positive: np.ndarray,
-    fit: Callable[[np.ndarray, int | None], Mixture],
-    k: int | None,
+    fit: Callable[[np.ndarray, int], Mixture],
+    k: int,
 ) -> Mixture:
-    """One mixture for a guide that may be positive in places and negative in others.
+    """One K-component mixture for a guide that may be positive in places and negative in others.
 
     A density cannot be negative, so the samples drawn from |p| where p > 0 and those where p < 0
-    are fitted apart (`fit(part, k_part)`; k_part is None when `k` is None, for an automatic
-    choice) and joined, each part's weights scaled by its share of the samples. The signed
-    amplitudes fitted afterwards (surface.py) then raise one part and lower the other.
+    are fitted apart (`fit(part, k_part)`, the K split by `split_components`) and joined, each
+    part's weights scaled by its share of the samples. The signed amplitudes fitted afterwards
+    (surface.py) then raise one part and lower the other.
     """
-    share = float(positive.mean())
-    if k is None:
-        counts = [None if share > MIN_SIGN_SHARE else 0, None if share < 1 - MIN_SIGN_SHARE else 0]
-    else:
-        counts = list(split_components(share, k))
+    counts = split_components(float(positive.mean()), k)
     parts = [
         (fit(samples[mask], count), mask.mean())
         for mask, count in zip((positive, ~positive), counts, strict=True)
