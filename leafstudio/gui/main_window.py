@@ -12,7 +12,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from PySide6.QtCore import QSettings, Qt, Signal
+from PySide6.QtCore import QSettings, Qt, QTimer, Signal
 from PySide6.QtGui import (
     QAction,
     QCloseEvent,
@@ -62,6 +62,7 @@ from leafstudio.model import Leaf, Params
 APP_NAME = "LeafStudio"
 PROJECT_SUFFIX = ".leaf.json"
 MAX_RECENT = 8
+STAGE_LABEL_MS = 250  # the running stage is shown at most this often (each repaint costs time)
 ABOUT = (
     "<h3>LeafStudio</h3>"
     "<p>Smooth 3D leaf surfaces from a leaf's boundary and vein points.</p>"
@@ -141,6 +142,12 @@ class MainWindow(QMainWindow):
 
         self.worker.stage_started.connect(self._on_stage)
         self.worker.finished.connect(self._on_finished)
+        self.worker.measured.connect(self._on_measured)
+        self._stage_timer = QTimer(self)
+        self._stage_timer.setSingleShot(True)
+        self._stage_timer.setInterval(STAGE_LABEL_MS)
+        self._stage_timer.timeout.connect(self._show_stage)
+        self._stage = ""
         self.worker.failed.connect(self._on_failed)
         self.panel.changed.connect(self._on_params)
         self.editor.preview.connect(self._on_sketch_preview)
@@ -541,8 +548,22 @@ class MainWindow(QMainWindow):
     # --- worker reports ------------------------------------------------------------------------
     def _on_stage(self, request_id: int, stage: str) -> None:
         if request_id == self.worker.last_id:
+            self._stage = stage
+            if not self._stage_timer.isActive():
+                self._stage_timer.start()
+
+    def _show_stage(self) -> None:
+        if not self.worker.is_idle():
             self.status_text.setStyleSheet("")
-            self.status_text.setText(f"Running: {stage}…")
+            self.status_text.setText(f"Running: {self._stage}…")
+
+    def _on_measured(self, request_id: int, seconds: float) -> None:
+        if request_id != self._shown_id or self.result is None:
+            return
+        self._show_measurements(self.result)
+        self.status_text.setText(
+            self.status_text.text() + f" · measurements {1000 * seconds:.0f} ms"
+        )
 
     def _on_finished(self, outcome: Outcome) -> None:
         if outcome.request.id < self._shown_id:
@@ -562,7 +583,7 @@ class MainWindow(QMainWindow):
         elif self._fit_sketch:
             self.editor.view.fit()
         self._fit_sketch = False
-        self._show_measurements(result)
+        self._stage_timer.stop()
         self._show_timings(outcome)
         self.result_shown.emit(outcome)
 

@@ -41,6 +41,9 @@ class Viewport(QWidget):
         self._long_axis = np.array([1.0, 0.0, 0.0])
         self._has_content = False
         self._message = ""
+        self._pieces: dict[str, list[Piece]] = {}
+        self._announce = False
+        self.plotter.render_window.AddObserver("EndEvent", self._on_render_end)
 
     # --- layers --------------------------------------------------------------------------------
     def show_layers(
@@ -51,19 +54,41 @@ class Viewport(QWidget):
         first = not self._has_content
         self._normal, self._long_axis = np.asarray(normal, float), np.asarray(axis, float)
         for key, pieces in layers.items():
-            names = [piece.name for piece in pieces]
-            for stale in set(self._names.get(key, [])) - set(names):
-                self.plotter.remove_actor(stale, render=False)
-            for piece in pieces:
-                self._add(key, piece)
-            self._names[key] = names
+            self._pieces[key] = pieces
+            if self.visible[key]:
+                self._draw_layer(key)
+            else:  # drawn when switched on: hidden layers cost nothing per result
+                self._remove_layer(key)
         self._sync_scalar_bars()
         self._has_content = True
-        self.set_message("")
+        self.set_message("", render=False)
         if first:
-            self.camera("iso")
-        self.plotter.render()
-        self.rendered.emit()
+            self.camera("iso", render=False)
+        self._announce = True
+        self.redraw()
+
+    def redraw(self) -> None:
+        """Schedule one render of the scene (at the next paint; VTK renders in paintGL)."""
+        self.plotter.interactor.update()
+
+    def _on_render_end(self, *_: object) -> None:
+        if self._announce:
+            self._announce = False
+            self.rendered.emit()
+
+    def _draw_layer(self, key: str) -> None:
+        pieces = self._pieces.get(key, [])
+        names = [piece.name for piece in pieces]
+        for stale in set(self._names[key]) - set(names):
+            self.plotter.remove_actor(stale, render=False)
+        for piece in pieces:
+            self._add(key, piece)
+        self._names[key] = names
+
+    def _remove_layer(self, key: str) -> None:
+        for name in self._names[key]:
+            self.plotter.remove_actor(name, render=False)
+        self._names[key] = []
 
     def _add(self, key: str, piece: Piece) -> None:
         style = dict(piece.style)
@@ -94,12 +119,12 @@ class Viewport(QWidget):
     def clear(self) -> None:
         """Remove every layer (a new, still empty sketch)."""
         for key in self._names:
-            for name in self._names[key]:
-                self.plotter.remove_actor(name, render=False)
-            self._names[key] = []
+            self._remove_layer(key)
+        self._pieces.clear()
+        self._mesh_piece = None
         self._sync_scalar_bars()
         self._has_content = False
-        self.plotter.render()
+        self.redraw()
 
     def actor_names(self, key: str) -> list[str]:
         """Names of the actors currently drawn for layer `key`."""
@@ -108,10 +133,12 @@ class Viewport(QWidget):
     def set_visible(self, key: str, on: bool) -> None:
         """Switch a layer on or off."""
         self.visible[key] = on
+        if on and not self.actor_names(key):
+            self._draw_layer(key)
         for name in self.actor_names(key):
             self.plotter.actors[name].SetVisibility(on)
         self._sync_scalar_bars()
-        self.plotter.render()
+        self.redraw()
 
     def set_mesh_coloring(self, name: str) -> None:
         """Colour the mesh by a point array of MESH_COLORINGS (height when the mesh lacks it)."""
@@ -119,14 +146,14 @@ class Viewport(QWidget):
         if self._mesh_piece is not None and "mesh" in self.plotter.actors:
             self._add("mesh", self._mesh_piece)
             self._sync_scalar_bars()
-            self.plotter.render()
+            self.redraw()
 
     def set_edges(self, on: bool) -> None:
         """Show or hide the mesh's triangle edges."""
         self.show_edges = on
         for name in self.actor_names("mesh"):
             self.plotter.actors[name].prop.show_edges = on
-        self.plotter.render()
+        self.redraw()
 
     def _sync_scalar_bars(self) -> None:
         for key, title in SCALAR_BARS.items():
@@ -157,8 +184,10 @@ class Viewport(QWidget):
                     render=False,
                 )
 
-    def set_message(self, text: str) -> None:
+    def set_message(self, text: str, render: bool = True) -> None:
         """A line of text over the view (a failure's message), or none."""
+        if text == self._message:
+            return
         self._message = text
         if text:
             self.plotter.add_text(
@@ -166,10 +195,11 @@ class Viewport(QWidget):
             )
         else:
             self.plotter.remove_actor("message", render=False)
-        self.plotter.render()
+        if render:
+            self.redraw()
 
     # --- camera --------------------------------------------------------------------------------
-    def camera(self, preset: str) -> None:
+    def camera(self, preset: str, render: bool = True) -> None:
         """Look at the leaf from the top (along its normal), the side (along its width) or iso."""
         n, u = self._normal, self._long_axis
         v = np.cross(n, u)
@@ -185,7 +215,8 @@ class Viewport(QWidget):
         ]
         self.plotter.reset_camera(render=False)
         self.plotter.camera.zoom(1.1)
-        self.plotter.render()
+        if render:
+            self.redraw()
 
     def close_plotter(self) -> None:
         """Release VTK resources (before the window goes)."""

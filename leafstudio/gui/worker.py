@@ -52,12 +52,16 @@ class PipelineWorker(QObject):
         Request id and the stage about to run.
     finished(object)
         An Outcome.
+    measured(int, float)
+        Request id and the seconds spent: the finished Result's metrics are now computed (after
+        the mesh is shown, so that they do not delay it).
     failed(int, str)
         Request id and the user-facing message.
     """
 
     stage_started = Signal(int, str)
     finished = Signal(object)
+    measured = Signal(int, float)
     failed = Signal(int, str)
 
     def __init__(self, parent: QObject | None = None) -> None:
@@ -123,9 +127,6 @@ class PipelineWorker(QObject):
         )
         timings = dict(result.timings)
         start = time.perf_counter()
-        _ = result.metrics  # computed here, not on the main thread when the panel reads it
-        timings["metrics"] = time.perf_counter() - start
-        start = time.perf_counter()
         layers = build_layers(result)
         timings["layers"] = time.perf_counter() - start
         return Outcome(request, result, layers, timings, threading.get_ident())
@@ -143,8 +144,18 @@ class PipelineWorker(QObject):
             except Exception as exc:  # shown in the window; the app keeps running
                 self.failed.emit(request.id, f"internal error: {type(exc).__name__}: {exc}")
                 continue
-            if not self._should_stop():  # else a newer interrupting request makes this stale
-                self.finished.emit(outcome)
+            if self._should_stop():  # a newer interrupting request makes this stale
+                continue
+            self.finished.emit(outcome)
+            if self._should_stop():  # measure only what stays on screen
+                continue
+            start = time.perf_counter()
+            try:
+                _ = outcome.result.metrics  # here, not on the main thread when the panel reads it
+            except Exception as exc:  # the mesh is shown; say why its measurements are not
+                self.failed.emit(request.id, f"measurements failed: {type(exc).__name__}: {exc}")
+                continue
+            self.measured.emit(request.id, time.perf_counter() - start)
 
 
 class _Loop(QThread):
