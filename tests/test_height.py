@@ -37,6 +37,24 @@ def test_eq5_between_two_parallel_veins_dips_to_three_quarters_midway():
     np.testing.assert_allclose(p, [0.4, 0.4 * (1 - 0.5 / 4), 0.3], atol=1e-12)
 
 
+def test_ties_are_averaged():
+    """Midway between two veins of different heights at equal distance: both heights count."""
+    left = np.array([[-1.0, 2.0]])
+    right = np.array([[1.0, 2.0]])
+    x = np.array([[0.0, 1.0]])
+    one_vein = height_guide(x, BOUNDARY, [np.vstack([left, right])], [np.array([0.2, 0.6])])
+    # b = (0, 0); v' tied between (-1, 2) and (1, 2): |b - v'| = √5 for both, h_v = 0.4
+    assert one_vein[0] == pytest.approx(0.4 * 1 / np.sqrt(5))
+
+
+def test_tied_boundary_points_average_their_distances_to_the_vein():
+    """x = (0, 1) is √2 from both boundary points (±1, 0); each is √10 from v' = (0, 3), so
+    p = h √2 / √10 (the paper's average of |b − v'|, not the distance from their midpoint, 3)."""
+    boundary = np.array([[-1.0, 0.0], [1.0, 0.0], [-9.0, 9.0], [9.0, 9.0]])
+    p = height_guide(np.array([[0.0, 1.0]]), boundary, [np.array([[0.0, 3.0]])], [np.array([0.5])])
+    assert p[0] == pytest.approx(0.5 * np.sqrt(2) / np.sqrt(10))
+
+
 def test_signed_heights_give_a_negative_guide():
     vein, h = _vein(2.0, -0.3)
     p = height_guide(np.array([[0.0, 1.0]]), BOUNDARY, [vein], [h])

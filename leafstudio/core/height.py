@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
+from scipy.spatial import cKDTree
 
 from leafstudio.core.buckets import bucket_points
 
@@ -214,8 +215,37 @@ def height_guide(
 
     # eq. 4: between the margin and the nearest vein
     reach = np.linalg.norm(b - v_pos, axis=1)
+    _average_tied_reach(reach, xy, boundary, np.vstack(veins), b, d_b, v_pos, d_v)
     p = h_v * np.clip(d_b / np.maximum(reach, 1e-300), 0.0, 1.0)
     # eq. 5: between two veins, when both are nearer than the margin (d_v2 is inf for one vein)
     between = d_v2 < d_b
     ratio = d_v / np.maximum(2 * (d_v + d_v2), 1e-300)
     return np.where(between, h_v * (1 - ratio), p)
+
+
+def _average_tied_reach(
+    reach: np.ndarray,
+    xy: np.ndarray,
+    boundary: np.ndarray,
+    vein_points: np.ndarray,
+    b: np.ndarray,
+    d_b: np.ndarray,
+    v_pos: np.ndarray,
+    d_v: np.ndarray,
+) -> None:
+    """Where several boundary or vein points are nearest at once, set |b − v'| to the mean over
+    all their pairs, as the paper says (in place; rare, so done apart from the compiled search).
+
+    The mean of several points at the same distance lies strictly nearer than that distance, so a
+    tie shows as a mean position closer to the query than its nearest distance.
+    """
+    tied = (np.linalg.norm(xy - b, axis=1) < d_b * (1 - 1e-7)) | (
+        np.linalg.norm(xy - v_pos, axis=1) < d_v * (1 - 1e-7)
+    )
+    if not tied.any():
+        return
+    b_tree, v_tree = cKDTree(boundary), cKDTree(vein_points)
+    for i in np.flatnonzero(tied):
+        b_near = boundary[b_tree.query_ball_point(xy[i], d_b[i] * (1 + TIE) + 1e-15)]
+        v_near = vein_points[v_tree.query_ball_point(xy[i], d_v[i] * (1 + TIE) + 1e-15)]
+        reach[i] = np.linalg.norm(b_near[:, None] - v_near[None], axis=2).mean()
