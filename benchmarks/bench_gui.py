@@ -1,0 +1,151 @@
+"""The app's responsiveness: slider-to-screen latency and main-thread stalls, at grid 128 and 512.
+
+Run under a display (here: `xvfb-run -a .venv/bin/python benchmarks/bench_gui.py`). For each grid
+it opens the nested demo, then moves the K slider several times; for each move it measures the
+time from the slider's new value to the new mesh rendered on screen, and, with a 5 ms QTimer that
+records how late it fires, the longest stall of the main thread's event loop while the
+worker computes the new mesh, and until the worker has also measured it (which includes drawing
+the result, done by VTK on the main thread). Each move starts from an idle app. Prints JSON.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from PySide6.QtCore import QEventLoop, QSettings, Qt, QTimer
+from PySide6.QtWidgets import QApplication
+
+from leafstudio.gui.main_window import MainWindow
+from leafstudio.model import Params
+
+GRIDS = (128, 512)
+MOVES = (4, 5, 3, 6, 2, 5)  # K values, each different from the one before
+TICK_MS = 5
+
+
+class StallMeter:
+    """A QTimer that records how late each of its ticks fires (the main thread's stalls)."""
+
+    def __init__(self) -> None:
+        self.timer = QTimer()
+        self.timer.setTimerType(Qt.TimerType.PreciseTimer)
+        self.timer.setInterval(TICK_MS)
+        self.timer.timeout.connect(self._tick)
+        self.reset()
+
+    def reset(self) -> None:
+        self.last = time.perf_counter()
+        self.samples: list[tuple[float, float]] = []  # (tick time, lateness) in seconds
+
+    def _tick(self) -> None:
+        now = time.perf_counter()
+        self.samples.append((now, max(0.0, now - self.last - TICK_MS / 1000)))
+        self.last = now
+
+    def worst(self, until: float = float("inf")) -> float:
+        """The longest stall among ticks up to `until`."""
+        return max((late for t, late in self.samples if t <= until), default=0.0)
+
+
+def wait_for(signal, timeout_s: float = 600.0) -> list:
+    """Run the event loop until `signal` fires; return its arguments."""
+    loop, got = QEventLoop(), []
+    signal.connect(lambda *args: (got.extend(args), loop.quit()))
+    QTimer.singleShot(int(timeout_s * 1000), loop.quit)
+    loop.exec()
+    return got
+
+
+def measure(window: MainWindow, grid: int) -> dict:
+    """Latency and stalls for K slider moves on the nested demo at `grid`."""
+    meter = StallMeter()
+    window.panel.set_params(Params(k=3, grid=grid))
+    window.open_demo("nested")
+    wait_for(window.result_shown)
+    ready: dict[str, float] = {}
+    window.worker.finished.connect(
+        lambda _outcome: ready.__setitem__("t", time.perf_counter()),
+        Qt.ConnectionType.DirectConnection,  # on the worker thread, the moment the result is ready
+    )
+    meter.timer.start()
+    latencies, computing, total, draws, stages = [], [], [], [], []
+    for k in MOVES:
+        wait_until_idle(window)  # the previous move's measurements are done
+        meter.reset()
+        start = time.perf_counter()
+        window.panel.k.setValue(k)
+        while window.outcome.result.params.k != k:
+            wait_for(window.result_shown)
+        end = time.perf_counter()
+        wait_until_idle(window)
+        wait_for_ticks(meter, time.perf_counter())
+        latencies.append(end - start)
+        computing.append(meter.worst(until=ready["t"]))
+        total.append(meter.worst())
+        draws.append(window.outcome.timings["draw"])
+        stages.append(window.outcome.timings)
+    meter.timer.stop()
+    ms = lambda seconds: round(1000 * seconds, 1)  # noqa: E731
+    return {
+        "slider_to_screen_ms": {
+            "median": ms(statistics.median(latencies)),
+            "max": ms(max(latencies)),
+        },
+        "max_stall_while_computing_ms": ms(max(computing)),
+        "max_stall_until_measured_ms": ms(max(total)),
+        "draw_ms_median": ms(statistics.median(draws)),
+        "stage_ms_median": {
+            name: ms(statistics.median(s.get(name, 0.0) for s in stages)) for name in stages[0]
+        },
+        "mesh_triangles": int(window.result.mesh.n_cells),
+    }
+
+
+def wait_until_idle(window: MainWindow) -> None:
+    """Run the event loop until the worker has nothing running or waiting."""
+    loop = QEventLoop()
+    timer = QTimer()
+    timer.timeout.connect(lambda: window.worker.is_idle() and loop.quit())
+    timer.start(10)
+    loop.exec()
+    timer.stop()
+
+
+def wait_for_ticks(meter: StallMeter, after: float) -> None:
+    """Let the meter tick once more after `after`, so that a stall ending then is counted."""
+    loop = QEventLoop()
+    meter.timer.timeout.connect(loop.quit)
+    while meter.last <= after:
+        loop.exec()
+    meter.timer.timeout.disconnect(loop.quit)
+
+
+def main() -> int:
+    app = QApplication.instance() or QApplication(sys.argv[:1])
+    with tempfile.TemporaryDirectory() as tmp:
+        settings = QSettings(str(Path(tmp) / "bench.ini"), QSettings.Format.IniFormat)
+        window = MainWindow(settings)
+        window.show()
+        app.processEvents()
+        report = {f"grid_{grid}": measure(window, grid) for grid in GRIDS}
+        window.undo_stack.setClean()
+        window.close()
+    report["environment"] = {
+        "platform": QApplication.platformName(),
+        "display": os.environ.get("DISPLAY", ""),
+        "cpus": os.cpu_count(),
+        "load_average_1min": round(os.getloadavg()[0], 2),
+        "window": [window.width(), window.height()],
+    }
+    print(json.dumps(report, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
