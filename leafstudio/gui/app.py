@@ -53,7 +53,8 @@ def run_app(path: str | None = None, screenshot: str | None = None) -> int:
     path : str, optional
         A leaf file or project to open.
     screenshot : str, optional
-        Save the whole window as this PNG once the first result is shown, then exit.
+        Save the whole window as this PNG once the first result and its measurements are
+        shown, then exit.
 
     Returns
     -------
@@ -94,7 +95,7 @@ def run_app(path: str | None = None, screenshot: str | None = None) -> int:
             status["code"] = 2
             window.close()
 
-        window.result_shown.connect(lambda _: QTimer.singleShot(200, grab))
+        window.measurements_shown.connect(lambda: QTimer.singleShot(100, grab))
         window.failure_shown.connect(failed)
         app.exec()
         return status["code"]

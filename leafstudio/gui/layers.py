@@ -16,7 +16,7 @@ from leafstudio.core.pipeline import Result
 
 # (key, label shown in the layer list, on by default)
 LAYERS: tuple[tuple[str, str, bool], ...] = (
-    ("mesh", "Mesh (height)", True),
+    ("mesh", "Mesh", True),
     ("points", "Input points", True),
     ("curves", "Boundary and vein curves", False),
     ("contour", "Zero contour of g", False),

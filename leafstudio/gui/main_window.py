@@ -105,6 +105,7 @@ class MainWindow(QMainWindow):
     """The app's window. `settings` holds layout, last params and recent files."""
 
     result_shown = Signal(object)  # Outcome, after it is on screen
+    measurements_shown = Signal()
     failure_shown = Signal(str)
 
     def __init__(self, settings: QSettings, parent: QWidget | None = None) -> None:
@@ -564,6 +565,7 @@ class MainWindow(QMainWindow):
         self.status_text.setText(
             self.status_text.text() + f" · measurements {1000 * seconds:.0f} ms"
         )
+        self.measurements_shown.emit()
 
     def _on_finished(self, outcome: Outcome) -> None:
         if outcome.request.id < self._shown_id:
