@@ -1,1 +1,1 @@
-"""The reconstruction itself: numpy, scipy, scikit-learn and open3d only, never Qt."""
+"""The reconstruction itself: numpy, scipy, numba, shapely, Triangle and open3d; never Qt."""
