@@ -132,12 +132,11 @@ def _plane_image(result: Result, name: str, values: np.ndarray) -> pv.ImageData:
     return image
 
 
-def _to_world(result: Result, data: pv.DataSet, height: float = 0.0) -> pv.PolyData:
-    """`data` with its plane points (x, y, 0) moved to world coordinates at a fixed height."""
-    data = data if isinstance(data, pv.PolyData) else data.extract_surface()
-    xy = np.asarray(data.points)[:, :2]
-    data.points = result.frame.to_world(xy, np.full(len(xy), height))
-    return data
+def _to_world(result: Result, lines: pv.PolyData) -> pv.PolyData:
+    """`lines` with their plane points (x, y, 0) moved to world coordinates on the plane."""
+    xy = np.asarray(lines.points)[:, :2]
+    lines.points = result.frame.to_world(xy, np.zeros(len(xy)))
+    return lines
 
 
 def _contour_piece(result: Result) -> Piece:
@@ -146,9 +145,14 @@ def _contour_piece(result: Result) -> Piece:
 
 
 def _probability_piece(result: Result) -> Piece:
-    p = np.where(result.inside, result.p_grid, np.nan)
-    image = _plane_image(result, "p(x)", p)
-    surface = _to_world(result, image, -MAP_OFFSET * result.length)
+    """The grid's quads in world coordinates, just below the plane, with p(x) (NaN outside)."""
+    ny, nx = result.grid.shape
+    index = np.arange(ny * nx).reshape(ny, nx)
+    corners = [index[:-1, :-1], index[:-1, 1:], index[1:, 1:], index[1:, :-1]]
+    quads = np.column_stack([np.full(corners[0].size, 4), *(c.ravel() for c in corners)])
+    offset = np.full(ny * nx, -MAP_OFFSET * result.length)
+    surface = pv.PolyData(result.frame.to_world(result.grid.points, offset), faces=quads.ravel())
+    surface.point_data["p(x)"] = np.where(result.inside, result.p_grid, np.nan)
     style = {"scalars": "p(x)", "cmap": "magma", "nan_opacity": 0.0, "opacity": 0.9}
     return Piece("probability", surface, style)
 
