@@ -24,6 +24,7 @@ from __future__ import annotations
 from typing import Protocol
 
 import numpy as np
+from numba import njit
 
 from leafstudio.core.mpu import MPUImplicit
 
@@ -74,17 +75,31 @@ def taper_derivatives(
     `margin` lie on the leaf's edge: they get g = 0 and the limits from inside, which is what a
     mesh of the leaf region sees there.
     """
-    inner = g > 0
-    if margin is not None:
-        g = np.where(margin, 0.0, g)
-        inner |= margin
-    t = np.tanh(np.maximum(g, 0.0) / delta)
-    slope = np.where(inner, 1 - t**2, 0.0)
-    bend = -2 * t * slope
-    grad = (slope / delta)[:, None] * grad_g
-    hess = (bend / delta**2)[:, None, None] * (grad_g[:, :, None] * grad_g[:, None, :]) + (
-        slope / delta
-    )[:, None, None] * hess_g
+    g = np.ascontiguousarray(g, dtype=float)
+    margin = np.zeros(len(g), np.bool_) if margin is None else _c(margin, np.bool_)
+    return _taper(g, _c(grad_g), _c(hess_g), float(delta), margin)
+
+
+def _c(array: np.ndarray, dtype: type = float) -> np.ndarray:
+    """A C-contiguous writeable array of `dtype`: one compiled signature per kernel, so numba's
+    on-disk cache is hit (a read-only array is another type to numba and compiles again)."""
+    out = np.ascontiguousarray(array, dtype=dtype)
+    return out if out.flags.writeable else out.copy()
+
+
+@njit(cache=True, nogil=True)
+def _taper(g, grad_g, hess_g, delta, margin):
+    n = len(g)
+    t, grad, hess = np.empty(n), np.empty((n, 2)), np.empty((n, 2, 2))
+    for i in range(n):
+        gi = 0.0 if margin[i] else g[i]
+        t[i] = np.tanh(max(gi, 0.0) / delta)
+        slope = 1 - t[i] * t[i] if (gi > 0 or margin[i]) else 0.0
+        a, b = slope / delta, -2 * t[i] * slope / (delta * delta)
+        for r in range(2):
+            grad[i, r] = a * grad_g[i, r]
+            for c in range(2):
+                hess[i, r, c] = b * grad_g[i, r] * grad_g[i, c] + a * hess_g[i, r, c]
     return t, grad, hess
 
 
@@ -92,11 +107,21 @@ def product_derivatives(
     a: tuple[np.ndarray, np.ndarray, np.ndarray], b: tuple[np.ndarray, np.ndarray, np.ndarray]
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Value, gradient and Hessian of the product of two functions given theirs."""
-    va, ga, ha = a
-    vb, gb, hb = b
-    cross = ga[:, :, None] * gb[:, None, :]
-    hess = ha * vb[:, None, None] + va[:, None, None] * hb + cross + cross.transpose(0, 2, 1)
-    return va * vb, ga * vb[:, None] + va[:, None] * gb, hess
+    return _product(*(_c(x) for x in a), *(_c(x) for x in b))
+
+
+@njit(cache=True, nogil=True)
+def _product(va, ga, ha, vb, gb, hb):
+    n = len(va)
+    value, grad, hess = np.empty(n), np.empty((n, 2)), np.empty((n, 2, 2))
+    for i in range(n):
+        value[i] = va[i] * vb[i]
+        for r in range(2):
+            grad[i, r] = ga[i, r] * vb[i] + va[i] * gb[i, r]
+            for c in range(2):
+                cross = ga[i, r] * gb[i, c] + ga[i, c] * gb[i, r]
+                hess[i, r, c] = ha[i, r, c] * vb[i] + va[i] * hb[i, r, c] + cross
+    return value, grad, hess
 
 
 def graph_curvatures(gradient: np.ndarray, hessian: np.ndarray) -> dict[str, np.ndarray]:
@@ -104,18 +129,23 @@ def graph_curvatures(gradient: np.ndarray, hessian: np.ndarray) -> dict[str, np.
 
     Returns a dict of (n,) arrays named as in CURVATURE_ARRAYS; k1 >= k2.
     """
-    p, q = gradient[:, 0], gradient[:, 1]
-    zxx, zxy, zyy = hessian[:, 0, 0], hessian[:, 0, 1], hessian[:, 1, 1]
-    w = 1 + p**2 + q**2
-    gauss = (zxx * zyy - zxy**2) / w**2
-    mean = ((1 + q**2) * zxx - 2 * p * q * zxy + (1 + p**2) * zyy) / (2 * w**1.5)
-    spread = np.sqrt(np.maximum(mean**2 - gauss, 0.0))
-    return {
-        "mean_curvature": mean,
-        "gaussian_curvature": gauss,
-        "k1": mean + spread,
-        "k2": mean - spread,
-    }
+    names = CURVATURE_ARRAYS
+    return dict(zip(names, _graph(_c(gradient), _c(hessian)), strict=True))
+
+
+@njit(cache=True, nogil=True)
+def _graph(gradient, hessian):
+    n = len(gradient)
+    mean, gauss, k1, k2 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    for i in range(n):
+        p, q = gradient[i, 0], gradient[i, 1]
+        zxx, zxy, zyy = hessian[i, 0, 0], hessian[i, 0, 1], hessian[i, 1, 1]
+        w = 1 + p * p + q * q
+        gauss[i] = (zxx * zyy - zxy * zxy) / (w * w)
+        mean[i] = ((1 + q * q) * zxx - 2 * p * q * zxy + (1 + p * p) * zyy) / (2 * w**1.5)
+        spread = np.sqrt(max(mean[i] * mean[i] - gauss[i], 0.0))
+        k1[i], k2[i] = mean[i] + spread, mean[i] - spread
+    return mean, gauss, k1, k2
 
 
 def surface_curvatures(
