@@ -40,8 +40,10 @@ def test_a_live_request_lets_the_running_one_finish(worker, qtbot):
     leaf = demo("nested")
     finished = []
     worker.finished.connect(finished.append)
-    with qtbot.waitSignal(worker.stage_started, timeout=WAIT_MS):
-        worker.submit(leaf, FAST.with_(k=2))
+    started = []
+    worker.stage_started.connect(lambda rid, name: started.append(rid))
+    first = worker.submit(leaf, FAST.with_(k=2))
+    qtbot.waitUntil(lambda: first in started, timeout=WAIT_MS)
     worker.submit(leaf, FAST.with_(k=3), interrupt=False)
     qtbot.waitUntil(lambda: worker.is_idle() and len(finished) == 2, timeout=WAIT_MS)
     assert [o.result.params.k for o in finished] == [2, 3]
