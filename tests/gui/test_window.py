@@ -170,3 +170,34 @@ def test_parameters_and_layers_are_remembered(qtbot, tmp_path):
     assert second.panel.params() == FAST.with_(k=7, seed=11)
     assert second.layer_list.item(2).checkState() == Qt.CheckState.Checked
     close_window(second)
+
+
+def test_export_mesh_and_open_by_drag_and_drop(window, qtbot, tmp_path):
+    import pyvista as pv
+    from PySide6.QtCore import QMimeData, QPointF, QUrl
+    from PySide6.QtGui import QDropEvent
+
+    for suffix in (".ply", ".vtp"):
+        out = tmp_path / f"leaf{suffix}"
+        assert window.export_mesh(str(out))
+        assert pv.read(out).n_points == window.result.mesh.n_points
+    assert not window.export_mesh(str(tmp_path / "leaf.xyz"))  # not a mesh type: an error box
+    window.last_error_box.close()
+
+    dropped = tmp_path / "dropped.leaf.json"
+    window.save_to(str(dropped))
+    before = window.doc.leaf
+    mime = QMimeData()
+    mime.setUrls([QUrl.fromLocalFile(str(dropped))])
+    event = QDropEvent(
+        QPointF(10, 10),
+        Qt.DropAction.CopyAction,
+        mime,
+        Qt.MouseButton.NoButton,
+        Qt.KeyboardModifier.NoModifier,
+    )
+    window.dropEvent(event)
+    assert window.path == str(dropped)
+    assert window.doc.leaf is not before
+    np.testing.assert_allclose(window.doc.leaf.boundary, before.boundary)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
