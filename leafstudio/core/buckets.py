@@ -34,10 +34,17 @@ class Buckets:
     order: np.ndarray  # (n,) int64
 
 
+def kernel_array(array: np.ndarray, dtype: type = float) -> np.ndarray:
+    """`array` as a C-contiguous, writeable array of `dtype`, as every compiled kernel here takes
+    it: numba types a read-only array apart and would compile (and cache) each kernel again."""
+    out = np.ascontiguousarray(array, dtype=dtype)
+    return out if out.flags.writeable else out.copy()
+
+
 def bucket_points(xy: np.ndarray, size: float | None = None) -> Buckets:
     """Sort (n, 2) points into square buckets of side `size` (default: about PER_BUCKET points
     per bucket over their bounding box)."""
-    xy = np.asarray(xy, dtype=float)
+    xy = kernel_array(xy)
     lo, hi = bounds(xy) if len(xy) else (np.zeros(2), np.ones(2))
     extent = np.maximum(hi - lo, 1e-300)
     if size is None:

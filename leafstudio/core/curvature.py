@@ -26,6 +26,7 @@ from typing import Protocol
 import numpy as np
 from numba import njit
 
+from leafstudio.core.buckets import kernel_array
 from leafstudio.core.mpu import MPUImplicit
 
 CURVATURE_ARRAYS = ("mean_curvature", "gaussian_curvature", "k1", "k2")
@@ -75,16 +76,9 @@ def taper_derivatives(
     `margin` lie on the leaf's edge: they get g = 0 and the limits from inside, which is what a
     mesh of the leaf region sees there.
     """
-    g = np.ascontiguousarray(g, dtype=float)
-    margin = np.zeros(len(g), np.bool_) if margin is None else _c(margin, np.bool_)
-    return _taper(g, _c(grad_g), _c(hess_g), float(delta), margin)
-
-
-def _c(array: np.ndarray, dtype: type = float) -> np.ndarray:
-    """A C-contiguous writeable array of `dtype`: one compiled signature per kernel, so numba's
-    on-disk cache is hit (a read-only array is another type to numba and compiles again)."""
-    out = np.ascontiguousarray(array, dtype=dtype)
-    return out if out.flags.writeable else out.copy()
+    g = kernel_array(g)
+    margin = np.zeros(len(g), np.bool_) if margin is None else kernel_array(margin, np.bool_)
+    return _taper(g, kernel_array(grad_g), kernel_array(hess_g), float(delta), margin)
 
 
 @njit(cache=True, nogil=True)
@@ -107,7 +101,7 @@ def product_derivatives(
     a: tuple[np.ndarray, np.ndarray, np.ndarray], b: tuple[np.ndarray, np.ndarray, np.ndarray]
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Value, gradient and Hessian of the product of two functions given theirs."""
-    return _product(*(_c(x) for x in a), *(_c(x) for x in b))
+    return _product(*(kernel_array(x) for x in a), *(kernel_array(x) for x in b))
 
 
 @njit(cache=True, nogil=True)
@@ -130,7 +124,7 @@ def graph_curvatures(gradient: np.ndarray, hessian: np.ndarray) -> dict[str, np.
     Returns a dict of (n,) arrays named as in CURVATURE_ARRAYS; k1 >= k2.
     """
     names = CURVATURE_ARRAYS
-    return dict(zip(names, _graph(_c(gradient), _c(hessian)), strict=True))
+    return dict(zip(names, _graph(kernel_array(gradient), kernel_array(hessian)), strict=True))
 
 
 @njit(cache=True, nogil=True)

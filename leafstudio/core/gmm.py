@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from leafstudio.core.buckets import kernel_array
 from leafstudio.errors import LeafError
 
 REG_COVAR = 1e-6  # added to each covariance's diagonal, as scikit-learn does, so Σ stays invertible
@@ -52,7 +53,7 @@ class Mixture:
 
     def components(self, xy: np.ndarray) -> np.ndarray:
         """(n, K) values of each Gaussian N(x | μ_k, Σ_k) (eq. 6), without weights."""
-        xy = np.ascontiguousarray(np.atleast_2d(xy), dtype=float)
+        xy = kernel_array(np.atleast_2d(xy))
         return _gaussians(xy, self.means, self.precisions)
 
     def density(self, xy: np.ndarray) -> np.ndarray:
@@ -68,7 +69,7 @@ class Mixture:
 
         ∇N = −N P d and ∇²N = N (P d dᵀ P − P), with d = x − μ and P = Σ⁻¹.
         """
-        xy = np.ascontiguousarray(np.atleast_2d(xy), dtype=float)
+        xy = kernel_array(np.atleast_2d(xy))
         return _weighted_derivatives(xy, self.means, self.precisions, self.amplitudes)
 
 
@@ -137,7 +138,7 @@ def fit_mixture(samples: np.ndarray, k: int, seed: int) -> Mixture:
     changes by less than EM_TOL. Compiled (numba) loops over the samples: a few milliseconds,
     where scikit-learn took tens and was erratic with several BLAS threads.
     """
-    samples = np.ascontiguousarray(samples, dtype=float)
+    samples = kernel_array(samples)
     distinct = _distinct_count(samples[: 5 * k])  # enough when the first 5 K already differ
     if distinct < 5 * k:
         distinct = _distinct_count(samples)

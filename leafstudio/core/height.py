@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit
 from scipy.spatial import cKDTree
 
-from leafstudio.core.buckets import bucket_points
+from leafstudio.core.buckets import bucket_points, kernel_array
 
 TIE = 1e-9  # relative distance under which nearest points count as tied
 QUERIES_PER_BUCKET = 32  # query points share one candidate list per bucket of about this many
@@ -56,7 +56,7 @@ def nearest_in_groups(
     second : (n,) float array
         Distance to the nearest point of any other group; inf with a single group.
     """
-    xy = np.ascontiguousarray(xy, dtype=float)
+    xy = kernel_array(xy)
     n = len(xy)
     dist, second, value = np.empty(n), np.empty(n), np.empty(n)
     position = np.empty((n, 2))
@@ -66,7 +66,7 @@ def nearest_in_groups(
     size = max(float(np.sqrt(extent[0] * extent[1] * QUERIES_PER_BUCKET / n)), 1e-12)
     b = bucket_points(xy, size=max(size, float(extent.max()) / 1024))
     _nearest_groups(
-        xy, np.ascontiguousarray(points, dtype=float), np.asarray(group, dtype=np.int64),
+        xy, kernel_array(points), np.asarray(group, dtype=np.int64),
         np.asarray(values, dtype=float), int(np.max(group)) + 1, b.lo, b.size, b.nx, b.ny,
         b.starts, b.order, dist, position, value, second,
     )  # fmt: skip

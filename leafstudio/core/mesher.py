@@ -17,7 +17,7 @@ import numpy as np
 import triangle
 from numba import njit
 
-from leafstudio.core.buckets import bucket_points
+from leafstudio.core.buckets import bucket_points, kernel_array
 from leafstudio.core.grid import Grid
 from leafstudio.errors import LeafError
 
@@ -36,12 +36,12 @@ class PlaneMesh:
 
 def inner_nodes(polygon: np.ndarray, nodes: np.ndarray, spacing: float) -> np.ndarray:
     """(n,) bool: grid nodes kept by the conforming mesher, at a clearance from the margin."""
-    nodes = np.ascontiguousarray(nodes, dtype=float)
+    nodes = kernel_array(nodes)
     if len(nodes) == 0:
         return np.zeros(0, dtype=bool)
     b = bucket_points(nodes)
     near = np.zeros(len(nodes), dtype=bool)
-    polygon = np.ascontiguousarray(polygon, dtype=float)
+    polygon = kernel_array(polygon)
     _mark_near_edges(polygon, nodes, INNER_CLEARANCE * spacing, b.lo, b.size, b.nx, b.ny,
                      b.starts, b.order, near)  # fmt: skip
     return ~near
@@ -126,7 +126,7 @@ def conforming_grid_mesh(
     """
     ny, nx = grid.shape
     b = len(polygon)
-    polygon = np.ascontiguousarray(polygon, dtype=float)
+    polygon = kernel_array(polygon)
     candidates = np.flatnonzero(inside & _grid_inside(polygon, grid.origin, grid.spacing, ny, nx))
     kept = np.zeros(ny * nx, dtype=bool)
     kept[candidates[inner_nodes(polygon, grid.points[candidates], grid.spacing)]] = True

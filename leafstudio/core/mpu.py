@@ -23,7 +23,8 @@ import numpy as np
 from numba import njit
 from scipy.spatial import cKDTree
 
-from leafstudio.core.buckets import Buckets, bucket_points
+from leafstudio.core.buckets import Buckets, bucket_points, kernel_array
+from leafstudio.core.grid import Grid
 
 ALPHA = 0.75  # support radius = ALPHA * cell diagonal (Ohtake et al.)
 N_MIN = 6  # a ball grows until it holds this many points
@@ -82,32 +83,71 @@ class MPUImplicit:
         For a read-only `xy` the (read-only) result is kept and returned again when asked for
         the very same array: the pipeline asks for it at the mesh's vertices after every K.
         """
+        return self._kept(xy, lambda: self._blend(xy, 2))
+
+    def _kept(self, xy: np.ndarray, compute: Callable[[], tuple[np.ndarray, ...]]):
+        """compute(), kept (read-only) for a read-only `xy`, returned again for the same array."""
         frozen = isinstance(xy, np.ndarray) and not xy.flags.writeable
         last = self._last.get("derivatives")
         if frozen and last is not None and last[0] is xy:
             return last[1]
-        result = self._blend(xy, 2)
+        result = compute()
         if frozen:
             for array in result:
                 array.flags.writeable = False
             self._last["derivatives"] = (xy, result)
         return result
 
+    def on_grid(self, grid: Grid) -> np.ndarray:
+        """g at every node of a regular grid, (ny * nx,) in grid order: the same values as
+        evaluate(grid.points), summed row by row over each cell's support (no buckets)."""
+        return self._grid_blend(grid, np.ones(grid.shape[0] * grid.shape[1], bool), 0)[0]
+
+    def derivatives_on_grid(
+        self, xy: np.ndarray, grid: Grid, nodes: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """`derivatives(xy)` where xy ends with the grid nodes flagged in the (ny * nx,) bool
+        `nodes`, in grid order (a mesh's vertices: the outline, then grid nodes). Those rows are
+        summed by grid rows; a read-only `xy` keeps the result for `derivatives` to return."""
+        def compute() -> tuple[np.ndarray, ...]:
+            head = len(xy) - int(np.count_nonzero(nodes))
+            parts = zip(self._blend(xy[:head], 2), self._grid_blend(grid, nodes, 2), strict=True)
+            return tuple(np.concatenate(part) for part in parts)
+
+        return self._kept(xy, compute)
+
+    def _grid_blend(self, grid: Grid, nodes: np.ndarray, degree: int):
+        """_blend at the grid nodes flagged in the (ny * nx,) bool `nodes`, in grid order."""
+        slot = np.full(len(nodes), -1, np.int64)
+        flagged = np.flatnonzero(nodes)
+        slot[flagged] = np.arange(len(flagged))
+        sums = _grid_sums(
+            grid.origin[0], grid.origin[1], grid.spacing, grid.shape[1], grid.shape[0], slot,
+            len(flagged), self.centers, self.radii, self.coef, degree,
+        )  # fmt: skip
+        return self._finish(grid.points[flagged], sums, degree)
+
     def _blend(self, xy: np.ndarray, degree: int):
-        """g and, up to `degree` (0, 1 or 2), its gradient and Hessian (zeros when not asked)."""
-        xy = np.ascontiguousarray(np.atleast_2d(np.asarray(xy, dtype=float)))
+        """g and, up to `degree` (0, 1 or 2), its gradient and Hessian (empty when not asked)."""
+        xy = kernel_array(np.atleast_2d(xy))
         b: Buckets = bucket_points(xy)
-        big_d, big_n, grad_d, grad_n, hess_d, hess_n = _blend_sums(
+        sums = _blend_sums(
             xy, self.centers, self.radii, self.coef, b.lo, b.size, b.nx, b.ny, b.starts, b.order,
             degree,
         )  # fmt: skip
-        g, grad, hess = _quotient_rule(big_d, big_n, grad_d, grad_n, hess_d, hess_n, degree)
+        return self._finish(xy, sums, degree)
+
+    def _finish(self, xy: np.ndarray, sums: tuple[np.ndarray, ...], degree: int):
+        """The quotient rule on the sums, and the far-field fallback where no support reaches."""
+        big_d = sums[0]
+        g, grad, hess = _quotient_rule(*sums, degree)
         far = big_d <= 0
         if far.any():
             dist, nearest = cKDTree(self.points).query(xy[far])
             g[far] = -dist
             u = (self.points[nearest] - xy[far]) / np.maximum(dist, 1e-300)[:, None]
-            grad[far] = u  # toward the nearest boundary point
+            if degree >= 1:
+                grad[far] = u  # toward the nearest boundary point
             if degree == 2:  # g = −|x − b|: ∇²g = −(I − u uᵀ) / |x − b|
                 outer = u[:, :, None] * u[:, None, :]
                 hess[far] = -(np.eye(2) - outer) / np.maximum(dist, 1e-300)[:, None, None]
@@ -122,19 +162,21 @@ class MPUImplicit:
 # b(t) vanishes from t = 1 on, so a cell's weight is nonzero only within its radius (eq. 2).
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _bucket_range(c: float, reach: float, lo: float, size: float, count: int) -> tuple[int, int]:
     first = max(int(np.floor((c - reach - lo) / size)), 0)
     last = min(int(np.floor((c + reach - lo) / size)), count - 1)
     return first, last
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _quotient_rule(big_d, big_n, grad_d, grad_n, hess_d, hess_n, degree):
     """g = N / D (eq. 1), ∇g = (∇N − g ∇D) / D and ∇²g = (∇²N − g ∇²D − ∇g ∇Dᵀ − ∇D ∇gᵀ) / D
     where D > 0 (zeros elsewhere), up to `degree`."""
     n = len(big_d)
-    g, grad, hess = np.zeros(n), np.zeros((n, 2)), np.zeros((n, 2, 2))
+    g = np.zeros(n)
+    n1, n2 = (n if degree >= 1 else 0), (n if degree == 2 else 0)
+    grad, hess = np.zeros((n1, 2)), np.zeros((n2, 2, 2))
     for i in range(n):
         d = big_d[i]
         if d <= 0:
@@ -156,14 +198,15 @@ def _quotient_rule(big_d, big_n, grad_d, grad_n, hess_d, hess_n, degree):
     return g, grad, hess
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _blend_sums(xy, centers, radii, coef, lo, size, nx, ny, starts, order, degree):
     """D = Σ w_i and N = Σ w_i f_i (eq. 1) at every query; with degree >= 1 also ∇D and ∇N, with
     degree 2 also ∇²D and ∇²N (as xx, xy, yy)."""
     n = len(xy)
     big_d, big_n = np.zeros(n), np.zeros(n)
-    grad_d, grad_n = np.zeros((n, 2)), np.zeros((n, 2))
-    hess_d, hess_n = np.zeros((n, 3)), np.zeros((n, 3))
+    n1, n2 = (n if degree >= 1 else 0), (n if degree == 2 else 0)  # unused sums: empty
+    grad_d, grad_n = np.zeros((n1, 2)), np.zeros((n1, 2))
+    hess_d, hess_n = np.zeros((n2, 3)), np.zeros((n2, 3))
     for c in range(len(centers)):
         scale = 1.0 / radii[c]
         reach = radii[c]
@@ -209,6 +252,65 @@ def _blend_sums(xy, centers, radii, coef, lo, size, nx, ny, starts, order, degre
     return big_d, big_n, grad_d, grad_n, hess_d, hess_n
 
 
+@njit(cache=True, nogil=True)
+def _grid_sums(ox, oy, spacing, nx, ny, slot, n, centers, radii, coef, degree):
+    """_blend_sums at grid nodes: node (ix, iy) at (ox + spacing ix, oy + spacing iy), its row
+    slot[iy * nx + ix] (-1: skipped). Each cell visits, row by row, the nodes within its radius."""
+    big_d, big_n = np.zeros(n), np.zeros(n)
+    n1, n2 = (n if degree >= 1 else 0), (n if degree == 2 else 0)  # unused sums: empty
+    grad_d, grad_n = np.zeros((n1, 2)), np.zeros((n1, 2))
+    hess_d, hess_n = np.zeros((n2, 3)), np.zeros((n2, 3))
+    for c in range(len(centers)):
+        reach = radii[c]
+        scale = 1.0 / reach
+        cx, cy = centers[c, 0], centers[c, 1]
+        a, b, e = coef[c, 0], coef[c, 1], coef[c, 2]
+        y0 = max(int(np.ceil((cy - reach - oy) / spacing)), 0)
+        y1 = min(int(np.floor((cy + reach - oy) / spacing)), ny - 1)
+        for iy in range(y0, y1 + 1):
+            y = oy + spacing * iy
+            dy = y - cy
+            half = np.sqrt(max(reach * reach - dy * dy, 0.0))
+            x0 = max(int(np.floor((cx - half - ox) / spacing)), 0)
+            x1 = min(int(np.ceil((cx + half - ox) / spacing)), nx - 1)
+            for ix in range(x0, x1 + 1):
+                i = slot[iy * nx + ix]
+                if i < 0:
+                    continue
+                x = ox + spacing * ix
+                dx = x - cx
+                d2 = dx * dx + dy * dy
+                if d2 >= reach * reach:
+                    continue
+                t = np.sqrt(d2) * scale
+                if t < 1 / 3:
+                    w, slope, curl = 0.75 - 2.25 * t * t, -4.5, 0.0
+                else:
+                    w, slope, curl = 1.125 * (t - 1) ** 2, 2.25 * (t - 1) / t, 2.25 / t**3
+                f = a * x + b * y + e
+                big_d[i] += w
+                big_n[i] += w * f
+                if degree == 0:
+                    continue
+                slope *= scale * scale
+                wx, wy = slope * dx, slope * dy
+                grad_d[i, 0] += wx
+                grad_d[i, 1] += wy
+                grad_n[i, 0] += wx * f + w * a
+                grad_n[i, 1] += wy * f + w * b
+                if degree == 1:
+                    continue
+                curl *= scale**4
+                hxx, hxy, hyy = slope + curl * dx * dx, curl * dx * dy, slope + curl * dy * dy
+                hess_d[i, 0] += hxx
+                hess_d[i, 1] += hxy
+                hess_d[i, 2] += hyy
+                hess_n[i, 0] += hxx * f + 2 * wx * a
+                hess_n[i, 1] += hxy * f + wx * b + wy * a
+                hess_n[i, 2] += hyy * f + 2 * wy * b
+    return big_d, big_n, grad_d, grad_n, hess_d, hess_n
+
+
 def _fit_cells(
     centers: np.ndarray,
     radii: np.ndarray,
@@ -228,7 +330,7 @@ def _fit_cells(
     return coef, error, agreement, radii
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _ball_counts(points, centers, radii, lo, size, nx, ny, starts, order):
     """(m,) number of points within radii[c] of centers[c] (closed balls)."""
     counts = np.zeros(len(centers), np.int64)
@@ -247,7 +349,7 @@ def _ball_counts(points, centers, radii, lo, size, nx, ny, starts, order):
     return counts
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _ball_fits(points, normals, centers, radii, lo, size, nx, ny, starts, order):
     """Per cell, the line through the B-spline-weighted mean of the points in its ball, normal to
     their weighted mean normal; its largest residual and the smallest normal agreement."""

@@ -15,6 +15,7 @@ from numba import njit
 from scipy.spatial import cKDTree
 from shapely.geometry import MultiPoint, Polygon
 
+from leafstudio.core.buckets import kernel_array
 from leafstudio.errors import LeafError
 
 _HULL_RATIOS = (0.0, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0)
@@ -120,8 +121,8 @@ def contains(polygon: np.ndarray, xy: np.ndarray) -> np.ndarray:
     The crossing-number test, compiled: the polygon's edges are filed into horizontal bands, so
     each point only tests the few edges of its band.
     """
-    polygon = np.ascontiguousarray(polygon, dtype=float)
-    xy = np.ascontiguousarray(np.atleast_2d(xy), dtype=float).reshape(-1, 2)
+    polygon = kernel_array(polygon)
+    xy = kernel_array(np.atleast_2d(xy)).reshape(-1, 2)
     bands = _edge_bands(polygon.tobytes(), len(polygon))
     return _inside(polygon, xy, *bands)
 

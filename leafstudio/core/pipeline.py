@@ -333,7 +333,7 @@ class Pipeline:
 
 def _guide_stage(fs: FrameStage, implicit: MPUImplicit, grid: Grid) -> GuideStage:
     nodes = grid.points
-    g = implicit(nodes)
+    g = implicit.on_grid(grid)
     inside = g >= 0
     p = np.zeros(len(nodes))
     p[inside] = height_guide(nodes[inside], fs.polygon, fs.veins, fs.heights)
@@ -412,6 +412,7 @@ def _mesh_stage(
     n_outline = len(fs.polygon)
     if params.mesher == "conforming":
         xy, triangles, kept = grid_mesh()
+        implicit.derivatives_on_grid(xy, grid, kept)  # kept for the curvatures below
         # the margin at the boundary points' own heights (0 in the plane for a planar one, eq. 3);
         # the kept nodes' heights are already known
         rim = np.zeros(n_outline) if fs.polygon_h is None else fs.polygon_h

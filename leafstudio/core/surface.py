@@ -25,6 +25,7 @@ import numpy as np
 from numba import njit
 
 from leafstudio.core.base import BaseSurface
+from leafstudio.core.buckets import kernel_array
 from leafstudio.core.curvature import implicit_derivatives, product_derivatives, taper_derivatives
 from leafstudio.core.gmm import Mixture
 from leafstudio.core.mpu import MPUImplicit
@@ -136,9 +137,9 @@ def _unpack(theta: np.ndarray, weights: np.ndarray) -> Mixture:
 def _refine(mixture: Mixture, xy: np.ndarray, row_scale: np.ndarray, target: np.ndarray) -> Mixture:
     """Gauss-Newton (Levenberg-Marquardt) on all of a_k, μ_k, Σ_k so that z follows the targets,
     started from EM's mixture; closed-form Jacobian."""
-    xy = np.ascontiguousarray(xy, dtype=float)
+    xy = kernel_array(xy)
     theta = _levenberg_marquardt(
-        xy, np.ascontiguousarray(row_scale, dtype=float), np.ascontiguousarray(target, dtype=float),
+        xy, kernel_array(row_scale), kernel_array(target),
         _pack(mixture), REFINE_STEPS, REFINE_GAIN,
     )  # fmt: skip
     refined = _unpack(theta, mixture.weights)
