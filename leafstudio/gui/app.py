@@ -77,7 +77,9 @@ def run_app(path: str | None = None, screenshot: str | None = None) -> int:
     if path is None:
         window.open_demo("nested")
     elif not window.open_path(path):
+        window.worker.shutdown()
         raise LeafError(window.last_error_box.text() if window.last_error_box else "cannot open")
+    app.aboutToQuit.connect(window.worker.shutdown)
     window.show()
     if screenshot is not None:
         status: dict[str, int] = {"code": 0}

@@ -14,7 +14,7 @@ import threading
 import time
 from dataclasses import dataclass, field
 
-from PySide6.QtCore import QObject, QThread, Signal
+from PySide6.QtCore import QObject, Signal
 
 from leafstudio.core.pipeline import Cancelled, Pipeline, Result
 from leafstudio.errors import LeafError
@@ -72,7 +72,9 @@ class PipelineWorker(QObject):
         self._busy = False
         self._last_id = 0
         self._pipeline: Pipeline | None = None
-        self._thread = _Loop(self)
+        # a daemon thread: quitting during a long stage must not wait for it (nor abort, as a
+        # running QThread would when destroyed)
+        self._thread = threading.Thread(target=self.loop, name="leafstudio-pipeline", daemon=True)
         self._thread.start()
 
     def submit(self, leaf: Leaf, params: Params, interrupt: bool = True) -> int:
@@ -99,7 +101,7 @@ class PipelineWorker(QObject):
             self._quit = True
             self._pending = None
             self._wake.notify()
-        self._thread.wait(wait_ms)
+        self._thread.join(wait_ms / 1000)
 
     # --- on the worker thread ------------------------------------------------------------------
     def _should_stop(self) -> bool:
@@ -156,12 +158,3 @@ class PipelineWorker(QObject):
                 self.failed.emit(request.id, f"measurements failed: {type(exc).__name__}: {exc}")
                 continue
             self.measured.emit(request.id, time.perf_counter() - start)
-
-
-class _Loop(QThread):
-    def __init__(self, worker: PipelineWorker) -> None:
-        super().__init__()
-        self._worker = worker
-
-    def run(self) -> None:
-        self._worker.loop()
