@@ -15,7 +15,7 @@ from leafstudio.core.grid import make_grid
 from leafstudio.core.height import nearest_in_groups
 from leafstudio.core.mesher import conforming_grid_mesh, inner_nodes
 from leafstudio.core.mpu import bspline_weight, build_mpu
-from leafstudio.core.outline import contains, outward_normals
+from leafstudio.core.outline import contains, outward_normals, thin_outline
 from leafstudio.core.pipeline import _frame_stage
 from leafstudio.core.surface import _levenberg_marquardt, _pack, _residual_rows
 
@@ -150,3 +150,25 @@ def test_levenberg_marquardt_recovers_a_mixture_and_never_worsens_the_start():
     np.testing.assert_allclose(fitted, _pack(truth), atol=1e-5)
     exact = _levenberg_marquardt(xy, ones, target, _pack(truth), 5, 0.0)  # stays put
     assert cost(exact) <= cost(_pack(truth))
+
+
+def test_mpu_on_grid_nodes_is_evaluate_at_them():
+    result = ls.reconstruct(ls.demo("parallel"), ls.Params(k=3, grid=96))
+    implicit, grid = result.surface.implicit, result.grid
+    np.testing.assert_array_equal(implicit.on_grid(grid), implicit.evaluate(grid.points))
+    nodes = result.inside.copy()
+    nodes[::3] = False
+    xy = np.vstack([result.polygon, grid.points[nodes]])
+    on_grid = implicit.derivatives_on_grid(xy, grid, nodes)
+    for a, b in zip(on_grid, implicit._blend(xy, 2), strict=True):
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)
+
+
+def test_thin_outline_keeps_a_dense_outline_within_a_tiny_distance():
+    angle = np.linspace(0, 2 * np.pi, 40000, endpoint=False)
+    circle = np.column_stack([np.cos(angle), 0.5 * np.sin(angle)])
+    keep = thin_outline(circle, most=2000)
+    assert 1500 <= len(keep) <= 2000 and keep[0] == 0 and np.all(np.diff(keep) > 0)
+    thinned = LinearRing(circle[keep])
+    assert shapely.distance(thinned, shapely.points(circle)).max() < 1e-5
+    np.testing.assert_array_equal(thin_outline(circle[:1000], most=2000), np.arange(1000))

@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit
 from scipy.spatial import cKDTree
 
-from leafstudio.core.buckets import bucket_points, kernel_array
+from leafstudio.core.buckets import bounds, bucket_points, kernel_array
 
 TIE = 1e-9  # relative distance under which nearest points count as tied
 QUERIES_PER_BUCKET = 32  # query points share one candidate list per bucket of about this many
@@ -62,7 +62,8 @@ def nearest_in_groups(
     position = np.empty((n, 2))
     if n == 0:
         return dist, position, value, second
-    extent = np.ptp(xy, axis=0)
+    lo, hi = bounds(xy)  # np.ptp(axis=0) on (n, 2) is many times slower
+    extent = hi - lo
     size = max(float(np.sqrt(extent[0] * extent[1] * QUERIES_PER_BUCKET / n)), 1e-12)
     b = bucket_points(xy, size=max(size, float(extent.max()) / 1024))
     _nearest_groups(

@@ -15,10 +15,11 @@ from numba import njit
 from scipy.spatial import cKDTree
 from shapely.geometry import MultiPoint, Polygon
 
-from leafstudio.core.buckets import kernel_array
+from leafstudio.core.buckets import bounds, kernel_array
 from leafstudio.errors import LeafError
 
 _HULL_RATIOS = (0.0, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0)
+MAX_OUTLINE_VERTICES = 3000  # a denser outline is thinned to about this many (thin_outline)
 
 
 def distinct_indices(points: np.ndarray, scale: float) -> np.ndarray:
@@ -89,7 +90,9 @@ def leaf_polygon(points: np.ndarray) -> np.ndarray:
     (m, 2) float array
         Polygon vertices (m <= n, each an input point), counter-clockwise, not closed.
     """
-    scale = float(np.ptp(points, axis=0).max())
+    points = kernel_array(points)
+    lo, hi = bounds(points)
+    scale = float((hi - lo).max())
     pts = points[distinct_indices(points, scale)]
     if len(pts) < 3:
         raise LeafError(f"the boundary needs at least 3 distinct points, got {len(pts)}")
@@ -99,6 +102,35 @@ def leaf_polygon(points: np.ndarray) -> np.ndarray:
         raise LeafError("the boundary points do not enclose any area")
     poly = shapely.geometry.polygon.orient(poly, sign=1.0)
     return np.asarray(poly.exterior.coords)[:-1]
+
+
+def thin_outline(polygon: np.ndarray, most: int = MAX_OUTLINE_VERTICES) -> np.ndarray:
+    """Indices of the vertices of a polygon with more than `most` of them that are kept, in order.
+
+    Walking round the outline from vertex 0, a vertex is kept once it is at least perimeter / most
+    from the last one kept. A dense scan's outline (tens of thousands of points) then costs the
+    implicit, the guide and the mesher as much as a few thousand, at a spacing far below any grid
+    the app uses, so the dropped points stay within a tiny distance of the kept edges.
+    """
+    if len(polygon) <= most:
+        return np.arange(len(polygon))
+    polygon = kernel_array(polygon)
+    closed = np.vstack([polygon, polygon[:1]])
+    perimeter = float(np.sqrt((np.diff(closed, axis=0) ** 2).sum(axis=1)).sum())
+    return _thin(polygon, perimeter / most)
+
+
+@njit(cache=True, nogil=True)
+def _thin(polygon, step):
+    keep = np.zeros(len(polygon), np.bool_)
+    keep[0] = True
+    lx, ly = polygon[0, 0], polygon[0, 1]
+    for i in range(1, len(polygon)):
+        dx, dy = polygon[i, 0] - lx, polygon[i, 1] - ly
+        if dx * dx + dy * dy >= step * step:
+            keep[i] = True
+            lx, ly = polygon[i, 0], polygon[i, 1]
+    return np.flatnonzero(keep)
 
 
 def outward_normals(polygon: np.ndarray, smoothing: int = 2) -> np.ndarray:

@@ -36,7 +36,13 @@ from leafstudio.core.grid import Grid, make_grid
 from leafstudio.core.height import height_guide
 from leafstudio.core.measure import curvature_summary, shape_measurements
 from leafstudio.core.mpu import MPUImplicit, build_mpu
-from leafstudio.core.outline import contains, distinct_indices, leaf_polygon, outward_normals
+from leafstudio.core.outline import (
+    contains,
+    distinct_indices,
+    leaf_polygon,
+    outward_normals,
+    thin_outline,
+)
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.surface import HeightSurface, fit_surface
 from leafstudio.errors import LeafError
@@ -158,6 +164,7 @@ def _frame_stage(leaf: Leaf) -> tuple[FrameStage, list[str]]:
     frame = fit_frame(leaf.boundary, leaf.vein_points)
     xy, boundary_h = frame.to_plane(leaf.boundary)
     polygon = leaf_polygon(xy)
+    polygon = polygon[thin_outline(polygon)]  # a dense scan's outline: a few thousand vertices
     length = float(np.ptp(polygon[:, 0]))
     polygon_h = boundary_h[cKDTree(xy).query(polygon)[1]]  # each vertex is a boundary point
     base = fit_base(polygon, polygon_h, length)
