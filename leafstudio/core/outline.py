@@ -108,28 +108,46 @@ def thin_outline(polygon: np.ndarray, most: int = MAX_OUTLINE_VERTICES) -> np.nd
     """Indices of the vertices of a polygon with more than `most` of them that are kept, in order.
 
     Walking round the outline from vertex 0, a vertex is kept once it is at least perimeter / most
-    from the last one kept. A dense scan's outline (tens of thousands of points) then costs the
-    implicit, the guide and the mesher as much as a few thousand, at a spacing far below any grid
-    the app uses, so the dropped points stay within a tiny distance of the kept edges.
+    from the last one kept (thin_curve). A dense scan's outline (tens of thousands of points) then
+    costs the implicit, the guide and the mesher as much as a few thousand, at a spacing far below
+    any grid the app uses, so the dropped points stay within a tiny distance of the kept edges.
     """
     if len(polygon) <= most:
         return np.arange(len(polygon))
     polygon = kernel_array(polygon)
     closed = np.vstack([polygon, polygon[:1]])
     perimeter = float(np.sqrt((np.diff(closed, axis=0) ** 2).sum(axis=1)).sum())
-    return _thin(polygon, perimeter / most)
+    return thin_curve(polygon, perimeter / most)
+
+
+def thin_veins(veins: list[np.ndarray], most: int = MAX_OUTLINE_VERTICES) -> list[np.ndarray]:
+    """Indices kept of each vein's (m_i, 2) points, when the veins have more than `most` points
+    in all: thinned (thin_curve) at their total length / most, as thin_outline does the outline
+    (the guide's nearest-vein search costs in proportion to the points)."""
+    if sum(len(v) for v in veins) <= most:
+        return [np.arange(len(v)) for v in veins]
+    total = sum(float(np.sqrt((np.diff(v, axis=0) ** 2).sum(axis=1)).sum()) for v in veins)
+    return [thin_curve(v, total / most) for v in veins]
+
+
+def thin_curve(points: np.ndarray, step: float) -> np.ndarray:
+    """Indices of the (n, 2) points kept, in order, when each is dropped that lies nearer than
+    `step` to the last one kept (the first is always kept; unordered points mostly stay)."""
+    return _thin(kernel_array(points), float(step))
 
 
 @njit(cache=True, nogil=True)
-def _thin(polygon, step):
-    keep = np.zeros(len(polygon), np.bool_)
+def _thin(points, step):
+    keep = np.zeros(len(points), np.bool_)
+    if len(points) == 0:
+        return np.flatnonzero(keep)
     keep[0] = True
-    lx, ly = polygon[0, 0], polygon[0, 1]
-    for i in range(1, len(polygon)):
-        dx, dy = polygon[i, 0] - lx, polygon[i, 1] - ly
+    lx, ly = points[0, 0], points[0, 1]
+    for i in range(1, len(points)):
+        dx, dy = points[i, 0] - lx, points[i, 1] - ly
         if dx * dx + dy * dy >= step * step:
             keep[i] = True
-            lx, ly = polygon[i, 0], polygon[i, 1]
+            lx, ly = points[i, 0], points[i, 1]
     return np.flatnonzero(keep)
 
 

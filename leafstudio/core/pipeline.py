@@ -42,6 +42,7 @@ from leafstudio.core.outline import (
     leaf_polygon,
     outward_normals,
     thin_outline,
+    thin_veins,
 )
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.surface import HeightSurface, fit_surface
@@ -169,9 +170,11 @@ def _frame_stage(leaf: Leaf) -> tuple[FrameStage, list[str]]:
     polygon_h = boundary_h[cKDTree(xy).query(polygon)[1]]  # each vertex is a boundary point
     base = fit_base(polygon, polygon_h, length)
     veins, heights = [], []
-    for i, vein in enumerate(leaf.veins):
-        v_xy, v_h = frame.to_plane(vein)
-        keep = distinct_indices(v_xy, length)
+    projected = [frame.to_plane(vein) for vein in leaf.veins]
+    distinct = [distinct_indices(v_xy, length) for v_xy, _ in projected]
+    kept = thin_veins([v_xy[keep] for (v_xy, _), keep in zip(projected, distinct, strict=True)])
+    for i, (v_xy, v_h) in enumerate(projected):
+        keep = distinct[i][kept[i]]  # dense veins: a few thousand points in all (thin_veins)
         v_xy = v_xy[keep]
         outside = ~contains(polygon, v_xy)
         if outside.any():
