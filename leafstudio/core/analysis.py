@@ -42,8 +42,11 @@ def _summary(values: np.ndarray) -> dict[str, float | None]:
 
 def edge_counts(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unique undirected edges (e, 2) and how many triangles share each."""
-    edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    return np.unique(edges, axis=0, return_counts=True)
+    edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1).astype(np.int64)
+    # one integer key per edge: np.unique on a flat array is many times faster than with axis=0
+    base = int(edges.max(initial=0)) + 1
+    keys, counts = np.unique(edges[:, 0] * base + edges[:, 1], return_counts=True)
+    return np.column_stack([keys // base, keys % base]), counts
 
 
 def boundary_loops(triangles: np.ndarray) -> int:
