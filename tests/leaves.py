@@ -6,6 +6,8 @@ import numpy as np
 import shapely
 from scipy.spatial.transform import Rotation
 
+from leafstudio.core import fidelity
+from leafstudio.core.plane import Frame
 from leafstudio.demos import HALFWIDTH, demo
 from leafstudio.model import Leaf
 
@@ -84,19 +86,16 @@ def narrow(n_side: int = 150) -> tuple[Leaf, shapely.Polygon]:
 def coverage(
     result, region: shapely.Polygon, rot: Rotation | None = None, shift=None
 ) -> tuple[float, float]:
-    """(covered share of the region, spilled share) of the mesh projected onto the region's plane.
+    """(covered share of the region, spilled share) of the mesh seen along the region's normal.
 
-    The mesh is taken back to the region's own frame (undoing `rot` and `shift` when the leaf was
-    moved), dropped to 2D, and intersected triangle by triangle with the region.
+    The region lies in its own x-y plane; `rot` and `shift` say how the leaf was moved from it.
     """
-    pts = np.asarray(result.mesh.points)
-    if rot is not None:
-        pts = rot.inv().apply(pts - shift)
-    tri = result.mesh.faces.reshape(-1, 4)[:, 1:]
-    polys = shapely.polygons(pts[tri][:, :, :2])
-    shapely.prepare(region)
-    within = shapely.contains_properly(region, polys)  # most triangles: no clipping needed
-    areas = shapely.area(polys)
-    inside = areas[within].sum() + shapely.area(shapely.intersection(polys[~within], region)).sum()
-    total = areas.sum()
-    return inside / region.area, (total - inside) / region.area
+    rot = rot or Rotation.identity()
+    frame = Frame(
+        origin=np.zeros(3) if shift is None else np.asarray(shift, dtype=float),
+        u=rot.apply([1.0, 0.0, 0.0]),
+        v=rot.apply([0.0, 1.0, 0.0]),
+        normal=rot.apply([0.0, 0.0, 1.0]),
+    )
+    share = fidelity.coverage(result.mesh, frame, np.asarray(region.exterior.coords)[:-1])
+    return share["covered"], share["outside"]
