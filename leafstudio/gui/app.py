@@ -80,6 +80,7 @@ def run_app(path: str | None = None, screenshot: str | None = None) -> int:
         window.worker.shutdown()
         raise LeafError(window.last_error_box.text() if window.last_error_box else "cannot open")
     app.aboutToQuit.connect(window.worker.shutdown)
+    app.aboutToQuit.connect(window.tasks.shutdown)
     window.show()
     if screenshot is not None:
         status: dict[str, int] = {"code": 0}

@@ -23,7 +23,10 @@ LAYERS: tuple[tuple[str, str, bool], ...] = (
     ("probability", "Probability map p(x)", False),
     ("samples", "GMM samples", False),
     ("em", "EM samples", False),
+    ("scan", "Scan points", True),
+    ("poisson", "Screened Poisson surface (beside ours)", False),
 )
+SIDE_LAYERS = frozenset({"scan", "poisson"})  # not built from a Result (see scans.py)
 BOUNDARY_COLOR = "#303030"
 VEIN_COLORS = ("#d62728", "#1f77b4", "#ff7f0e", "#9467bd", "#17becf", "#e377c2", "#8c564b")
 SCALAR_BARS = {"mesh": "height", "probability": "p(x)"}

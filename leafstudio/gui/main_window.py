@@ -45,8 +45,17 @@ from leafstudio.errors import LeafError
 from leafstudio.gui.controls import ParamPanel
 from leafstudio.gui.layers import LAYERS, MESH_COLORINGS
 from leafstudio.gui.measurements import measurement_rows
+from leafstudio.gui.scans import (
+    ScanData,
+    fidelity_sections,
+    is_scan_file,
+    load_scan,
+    looks_like_scan,
+    poisson_piece,
+)
 from leafstudio.gui.sketch import SketchEditor
 from leafstudio.gui.sketch_model import Sketch
+from leafstudio.gui.tasks import TaskWorker
 from leafstudio.gui.viewport import CAMERAS, Viewport
 from leafstudio.gui.worker import Outcome, PipelineWorker
 from leafstudio.io import (
@@ -58,6 +67,7 @@ from leafstudio.io import (
     save_mesh,
 )
 from leafstudio.model import Leaf, Params
+from leafstudio.scan import SCAN_SUFFIXES
 
 APP_NAME = "LeafStudio"
 PROJECT_SUFFIX = ".leaf.json"
@@ -98,14 +108,19 @@ class DocCommand(QUndoCommand):
 
 def _file_filter() -> str:
     patterns = " ".join(f"*{s}" for s in LEAF_SUFFIXES)
-    return f"Leaves ({patterns});;All files (*)"
+    return f"Leaves ({patterns});;{_scan_filter()}"
+
+
+def _scan_filter() -> str:
+    patterns = " ".join(f"*{s}" for s in SCAN_SUFFIXES)
+    return f"Leaf scans ({patterns});;All files (*)"
 
 
 class MainWindow(QMainWindow):
     """The app's window. `settings` holds layout, last params and recent files."""
 
     result_shown = Signal(object)  # Outcome, after it is on screen
-    measurements_shown = Signal()
+    measurements_shown = Signal()  # the panel is complete (with the scan's distances, if any)
     failure_shown = Signal(str)
 
     def __init__(self, settings: QSettings, parent: QWidget | None = None) -> None:
@@ -127,9 +142,15 @@ class MainWindow(QMainWindow):
         self._fallback: tuple[Doc, str | None, Params, int] | None = None
         self._fit_sketch = False
         self._title = APP_NAME
+        self.scan: ScanData | None = None  # the open scan, whose leaf is being edited
+        self._fallback_scan: ScanData | None = None
+        self.fidelity: tuple[int, list] | None = None  # request id, the panel's scan sections
+        self._measured_id = 0
+        self._poisson_leaf: Leaf | None = None  # the leaf of the Poisson surface drawn or due
 
         self.undo_stack = QUndoStack(self)
         self.worker = PipelineWorker(self)
+        self.tasks = TaskWorker(self)
         self.viewport = Viewport(self)
         self.setCentralWidget(self.viewport)
         self.panel = ParamPanel()
@@ -150,6 +171,8 @@ class MainWindow(QMainWindow):
         self._stage_timer.timeout.connect(self._show_stage)
         self._stage = ""
         self.worker.failed.connect(self._on_failed)
+        self.tasks.done.connect(self._on_task_done)
+        self.tasks.failed.connect(self._on_task_failed)
         self.panel.changed.connect(self._on_params)
         self.editor.preview.connect(self._on_sketch_preview)
         self.editor.committed.connect(self._on_sketch_committed)
@@ -228,7 +251,14 @@ class MainWindow(QMainWindow):
         files = bar.addMenu("&File")
         keys = QKeySequence.StandardKey
         self._action(files, "&New sketch", self.new_sketch, keys.New, "Draw a new leaf")
-        self._action(files, "&Open…", self.open_dialog, keys.Open, "Open a leaf or project")
+        self._action(files, "&Open…", self.open_dialog, keys.Open, "Open a leaf, project or scan")
+        self._action(
+            files,
+            "Open s&can…",
+            self.open_scan_dialog,
+            "Ctrl+Shift+O",
+            "Open a 3D scan of a leaf: its boundary and veins are extracted and can be edited",
+        )
         self.recent_menu = files.addMenu("Open &recent")
         self.recent_menu.aboutToShow.connect(self._fill_recent)
         files.addSeparator()
@@ -361,11 +391,21 @@ class MainWindow(QMainWindow):
             return self.save()
         return answer == QMessageBox.StandardButton.Discard
 
-    def _switch(self, doc: Doc, path: str | None, title: str, params: Params | None) -> None:
-        """Make `doc` the document, keeping the current one to fall back to if it fails."""
+    def _switch(
+        self,
+        doc: Doc,
+        path: str | None,
+        title: str,
+        params: Params | None,
+        scan: ScanData | None = None,
+    ) -> None:
+        """Make `doc` (extracted from `scan`, if given) the document, keeping the current one to
+        fall back to if it fails."""
         self._fallback = None
         if doc.leaf is not None and self.doc.leaf is not None and self.result is not None:
             self._fallback = (self.doc, self.path, self.panel.params(), 0)
+            self._fallback_scan = self.scan
+        self._set_scan(scan)
         self.doc, self.path, self._title = doc, path, title
         self._derived, self._edit_base = None, None
         if params is not None:
@@ -396,7 +436,14 @@ class MainWindow(QMainWindow):
                 except (TypeError, ValueError, KeyError) as exc:
                     raise LeafError(f"bad sketch ({exc})", path) from None
             else:
-                leaf = load_leaf(path)
+                try:
+                    leaf = load_leaf(path)
+                except LeafError:
+                    if is_scan_file(path):
+                        return self.open_scan(path)
+                    raise
+                if looks_like_scan(leaf):
+                    return self.open_scan(path)
         except LeafError as exc:
             self.show_error("Cannot open the file", str(exc))
             return False
@@ -415,6 +462,28 @@ class MainWindow(QMainWindow):
         path, _ = QFileDialog.getOpenFileName(self, "Open a leaf", start, _file_filter())
         if path:
             self.open_path(path)
+
+    def open_scan(self, path: str) -> bool:
+        """Read a scan and extract its leaf off the main thread; the leaf then opens like any
+        loaded leaf (editable as a sketch), with the scan's points as a layer. Failures show a
+        message and keep the current leaf. True: the scan is being read."""
+        self.status_text.setStyleSheet("")
+        self.status_text.setText(f"Reading the scan {Path(path).name} and extracting its leaf…")
+        self.tasks.submit("scan", path, load_scan, path)
+        return True
+
+    def open_scan_dialog(self) -> None:
+        """File > Open scan."""
+        if not self._confirm_discard():
+            return
+        start = str(Path(self.path).parent) if self.path else str(Path.home())
+        path, _ = QFileDialog.getOpenFileName(self, "Open a leaf scan", start, _scan_filter())
+        if path:
+            self.open_scan(path)
+
+    def _set_scan(self, scan: ScanData | None) -> None:
+        self.scan, self.fidelity = scan, None
+        self.viewport.set_layer("scan", scan.pieces if scan is not None else [])
 
     def new_sketch(self) -> None:
         """File > New sketch: an empty sketch to draw a leaf in."""
@@ -536,10 +605,27 @@ class MainWindow(QMainWindow):
     def _on_layer_item(self, item: QListWidgetItem) -> None:
         key = item.data(Qt.ItemDataRole.UserRole)
         self.viewport.set_visible(key, item.checkState() == Qt.CheckState.Checked)
+        if key == "poisson":
+            self._update_poisson()
+
+    def _update_poisson(self) -> None:
+        """Compute the Poisson surface of the shown leaf when its layer is on and it is not
+        there yet; when the layer is off, forget a surface that no longer fits the leaf."""
+        leaf = self.result.leaf if self.result is not None else None
+        if leaf is self._poisson_leaf:
+            return
+        if self.viewport.visible["poisson"] and self.result is not None:
+            self._poisson_leaf = leaf
+            self.tasks.submit("poisson", leaf, poisson_piece, self.result)
+        else:
+            self._poisson_leaf = None
+            self.viewport.set_layer("poisson", [])
 
     def _request(self, interrupt: bool = True) -> int:
         if self.doc.leaf is None:
             self.viewport.clear()
+            if self.scan is not None:
+                self.viewport.set_layer("scan", self.scan.pieces)
             self.measurements.clear()
             self.result = None
             self.status_text.setText("Add at least 3 boundary points to see the leaf.")
@@ -561,11 +647,11 @@ class MainWindow(QMainWindow):
     def _on_measured(self, request_id: int, seconds: float) -> None:
         if request_id != self._shown_id or self.result is None:
             return
-        self._show_measurements(self.result)
+        self._measured_id = request_id
         self.status_text.setText(
             self.status_text.text() + f" · measurements {1000 * seconds:.0f} ms"
         )
-        self.measurements_shown.emit()
+        self._show_measurements()
 
     def _on_finished(self, outcome: Outcome) -> None:
         if outcome.request.id < self._shown_id:
@@ -587,6 +673,16 @@ class MainWindow(QMainWindow):
         self._fit_sketch = False
         self._stage_timer.stop()
         self._show_timings(outcome)
+        if self.scan is not None:
+            self.tasks.submit(
+                "fidelity",
+                outcome.request.id,
+                fidelity_sections,
+                result.mesh,
+                self.scan,
+                result.length,
+            )
+        self._update_poisson()
         self.result_shown.emit(outcome)
 
     def _on_failed(self, request_id: int, message: str) -> None:
@@ -606,6 +702,7 @@ class MainWindow(QMainWindow):
             self.panel.set_params(params)
             self._saved_params = params
             self._derived = None
+            self._set_scan(self._fallback_scan)
             self.editor.set_sketch(doc.sketch or Sketch.from_result(self.result), fit=True)
             self._title = Path(path).name if path else self._title
             self._update_title()
@@ -624,14 +721,52 @@ class MainWindow(QMainWindow):
         for note in outcome.result.warnings:
             self.status_text.setText(self.status_text.text() + f" — note: {note}")
 
-    def _show_measurements(self, result) -> None:
+    def _on_task_done(self, kind: str, token: object, value: object) -> None:
+        if kind == "scan":
+            self._switch(Doc(value.extraction.leaf), token, Path(token).name, None, scan=value)
+            self._add_recent(token)
+        elif kind == "fidelity" and token == self._shown_id and self.scan is not None:
+            self.fidelity = (token, value)
+            self._show_measurements()
+        elif kind == "poisson" and token is self._poisson_leaf:
+            self.viewport.set_layer("poisson", [value])
+
+    def _on_task_failed(self, kind: str, token: object, message: str) -> None:
+        if kind == "scan":
+            self.status_text.setStyleSheet("color: #b00020")
+            self.status_text.setText(f"Failed: {message}")
+            self.show_error("Cannot open the scan", message)
+            self.failure_shown.emit(message)
+        elif kind == "fidelity" and token == self._shown_id and self.scan is not None:
+            self.fidelity = (token, [("Scan → mesh distance", [("Failed", message)])])
+            self._show_measurements()
+        elif kind == "poisson" and token is self._poisson_leaf:
+            self._poisson_leaf = None
+            self.status_text.setText(self.status_text.text() + f" — Poisson failed: {message}")
+
+    def _show_measurements(self) -> None:
+        """Fill the panel once the shown result is measured; with a scan open, its distances
+        follow (measurements_shown fires when they are in)."""
+        result = self.result
+        if result is None or self._measured_id != self._shown_id:
+            return
+        sections = measurement_rows(result)
+        waiting = self.scan is not None and (
+            self.fidelity is None or self.fidelity[0] != self._shown_id
+        )
+        if waiting:  # the scan's sections first: with a scan open, they are what matters
+            sections.insert(0, ("Scan → mesh distance", [("Computing…", "")]))
+        elif self.fidelity is not None:
+            sections[:0] = self.fidelity[1]
         self.measurements.clear()
-        for title, rows in measurement_rows(result):
+        for title, rows in sections:
             section = QTreeWidgetItem([title, ""])
             for label, value in rows:
                 QTreeWidgetItem(section, [label, value])
             self.measurements.addTopLevelItem(section)
             section.setExpanded(True)
+        if not waiting:
+            self.measurements_shown.emit()
 
     # --- window events -------------------------------------------------------------------------
     def dragEnterEvent(self, event: QDragEnterEvent) -> None:
@@ -650,5 +785,6 @@ class MainWindow(QMainWindow):
             return
         self._store_settings()
         self.worker.shutdown()
+        self.tasks.shutdown()
         self.viewport.close_plotter()
         event.accept()

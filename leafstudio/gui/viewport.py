@@ -67,6 +67,16 @@ class Viewport(QWidget):
         self._announce = True
         self.redraw()
 
+    def set_layer(self, key: str, pieces: list[Piece]) -> None:
+        """Replace one layer's pieces (the scan and Poisson layers, which come apart from
+        results); drawn now if the layer is on, else when it is switched on."""
+        self._pieces[key] = pieces
+        if self.visible[key]:
+            self._draw_layer(key)
+        else:
+            self._remove_layer(key)
+        self.redraw()
+
     def redraw(self) -> None:
         """Schedule one render of the scene (at the next paint; VTK renders in paintGL)."""
         self.plotter.interactor.update()

@@ -7,7 +7,7 @@ import pytest
 
 from leafstudio.core.pipeline import Pipeline
 from leafstudio.demos import demo
-from leafstudio.gui.layers import LAYERS, build_layers
+from leafstudio.gui.layers import LAYERS, SIDE_LAYERS, build_layers
 from leafstudio.gui.measurements import measurement_rows
 
 from .conftest import FAST
@@ -20,7 +20,7 @@ def result():
 
 def test_every_layer_is_built_with_unique_names(result):
     layers = build_layers(result)
-    assert set(layers) == {key for key, _, _ in LAYERS}
+    assert set(layers) == {key for key, _, _ in LAYERS} - SIDE_LAYERS
     names = [piece.name for pieces in layers.values() for piece in pieces]
     assert len(names) == len(set(names))
     assert len(layers["points"]) == 1 + len(result.leaf.veins)  # boundary + each vein

@@ -1,0 +1,147 @@
+"""Scans and the Poisson comparison in the app, without Qt: what the task worker computes.
+
+A scan (a point cloud of a leaf's whole surface) opens as its extracted leaf (core/extract.py),
+with its points as a layer and its distances to each new mesh in the measurements panel. The
+Poisson layer is open3d's screened Poisson surface of the same input (core/compare.py), drawn
+beside our mesh. Everything here runs on the task thread; the main thread only draws.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyvista as pv
+from scipy.spatial import cKDTree
+
+from leafstudio.core.compare import poisson_surface
+from leafstudio.core.extract import Extraction, extract_leaf
+from leafstudio.core.fidelity import FAR, NEAR, scan_distances
+from leafstudio.core.pipeline import Result
+from leafstudio.errors import LeafError
+from leafstudio.gui.layers import Piece
+from leafstudio.model import Leaf
+from leafstudio.scan import MIN_SCAN_POINTS, SCAN_SUFFIXES, read_scan
+
+LEAF_COLUMNS = 4  # x y z [label]: a point list with more columns is a scan
+SPREAD_NEIGHBOURS = 12
+SURFACE_SPREAD = 0.1  # median ratio of the two largest local spreads: ~0 on a curve, ~1 on a scan
+BLADE_COLOR, DROPPED_COLOR, POISSON_COLOR = "#2e7d32", "#c62828", "#e08a1e"
+POISSON_GAP = 0.15  # the Poisson surface sits this share of the leaf length beside our mesh
+POISSON_OPACITY = 0.6
+
+
+@dataclass(frozen=True, eq=False)
+class ScanData:
+    """An opened scan: its points, what extraction found, and the scan layer's pieces."""
+
+    path: str
+    points: np.ndarray  # (n, 3)
+    extraction: Extraction
+    pieces: list[Piece]
+
+
+def load_scan(path: str) -> ScanData:
+    """Read a scan and extract its leaf (boundary and veins).
+
+    Raises
+    ------
+    LeafError
+        With the file's name: unreadable, too few points, or no blade found.
+    """
+    points = read_scan(path)
+    try:
+        extraction = extract_leaf(points)
+    except LeafError as exc:
+        raise LeafError(exc.problem, path) from None
+    blade = extraction.blade
+    pieces = [
+        Piece("scan:blade", pv.PolyData(points[blade]), _dots(BLADE_COLOR, 3.0)),
+        Piece("scan:dropped", pv.PolyData(points[~blade]), _dots(DROPPED_COLOR, 4.0)),
+    ]
+    return ScanData(str(path), points, extraction, pieces)
+
+
+def _dots(color: str, size: float) -> dict[str, Any]:
+    return {"color": color, "point_size": size, "render_points_as_spheres": True}
+
+
+def is_scan_file(path: str) -> bool:
+    """True for a file only a scan reader takes: a .pcd, or a point list whose first row of
+    numbers has more than x, y, z and a label (normals, colours)."""
+    path_ = Path(path)
+    suffix = path_.suffix.lower()
+    if suffix == ".pcd":
+        return True
+    if suffix not in SCAN_SUFFIXES or suffix == ".ply":
+        return False
+    try:
+        with path_.open(encoding="utf-8") as handle:
+            for line in handle:
+                fields = line.split("#", 1)[0].replace(",", " ").replace(";", " ").split()
+                if fields:
+                    try:
+                        return len([float(f) for f in fields]) > LEAF_COLUMNS
+                    except ValueError:
+                        continue  # a header
+    except (OSError, UnicodeDecodeError):
+        return False
+    return False
+
+
+def looks_like_scan(leaf: Leaf) -> bool:
+    """True when an unlabelled point list covers a surface (a scan) rather than tracing an
+    outline: around most points, the neighbours spread in two directions, not along one."""
+    points = leaf.boundary
+    if leaf.veins or len(points) < MIN_SCAN_POINTS:
+        return False
+    _, near = cKDTree(points).query(points, k=SPREAD_NEIGHBOURS + 1)
+    local = points[near] - points[near].mean(axis=1, keepdims=True)
+    spread = np.linalg.eigvalsh(np.einsum("nki,nkj->nij", local, local))  # ascending
+    ratio = spread[:, 1] / np.maximum(spread[:, 2], 1e-300)
+    return float(np.median(ratio)) >= SURFACE_SPREAD
+
+
+def fidelity_sections(
+    mesh: pv.PolyData, scan: ScanData, length: float
+) -> list[tuple[str, list[tuple[str, str]]]]:
+    """Measurements-panel sections: distances from the scan's blade points (and from all its
+    points) to the mesh, as `leafstudio reconstruct --against` reports them."""
+    parts = (
+        ("Scan → mesh distance (blade points)", scan.points[scan.extraction.blade]),
+        ("Scan → mesh distance (all points)", scan.points),
+    )
+    return [(title, _fidelity_rows(scan_distances(mesh, pts, length))) for title, pts in parts]
+
+
+def _fidelity_rows(f: dict[str, Any]) -> list[tuple[str, str]]:
+    if not f.get("points"):
+        return [("Points", "0")]
+    return [
+        ("Points", str(f["points"])),
+        ("Mean", f"{f['mean']:.4g}"),
+        ("Median", f"{f['median']:.4g}"),
+        ("95th percentile", f"{f['p95']:.4g}"),
+        ("Max", f"{f['max']:.4g}"),
+        (f"Beyond {NEAR:.0%} of length", f"{f['beyond_1pct']:.1%}"),
+        (f"Beyond {FAR:.0%} of length", f"{f['beyond_2pct']:.1%}"),
+        ("Leaf length", f"{f['length']:.4g}"),
+    ]
+
+
+def poisson_piece(result: Result) -> Piece:
+    """The screened Poisson surface of the result's input, moved beside our mesh along the leaf's
+    width (its spill would hide our mesh in place), semi-transparent."""
+    surface = poisson_surface(result.leaf, result.frame.normal)
+    side = result.frame.v
+    ours = np.asarray(result.mesh.points) @ side
+    theirs = np.asarray(surface.points) @ side
+    shift = ours.max() - theirs.min() + POISSON_GAP * result.length
+    surface.points = np.asarray(surface.points) + shift * side
+    surface = surface.compute_normals(
+        point_normals=True, cell_normals=False, split_vertices=False, auto_orient_normals=False
+    )
+    style = {"color": POISSON_COLOR, "opacity": POISSON_OPACITY, "smooth_shading": False}
+    return Piece("poisson", surface, style)
