@@ -206,7 +206,7 @@ def height_guide(
     (n,) float array
         p(x); all zeros when there are no veins (a flat leaf).
     """
-    xy = np.asarray(xy, dtype=float)
+    xy = kernel_array(xy)
     if not veins:
         return np.zeros(len(xy))
     zeros = np.zeros(len(boundary))
@@ -215,13 +215,23 @@ def height_guide(
     d_v, v_pos, h_v, d_v2 = nearest_in_groups(xy, np.vstack(veins), ids, np.concatenate(heights))
 
     # eq. 4: between the margin and the nearest vein
-    reach = np.linalg.norm(b - v_pos, axis=1)
+    reach = np.hypot(b[:, 0] - v_pos[:, 0], b[:, 1] - v_pos[:, 1])
     _average_tied_reach(reach, xy, boundary, np.vstack(veins), b, d_b, v_pos, d_v)
     p = h_v * np.clip(d_b / np.maximum(reach, 1e-300), 0.0, 1.0)
     # eq. 5: between two veins, when both are nearer than the margin (d_v2 is inf for one vein)
     between = d_v2 < d_b
     ratio = d_v / np.maximum(2 * (d_v + d_v2), 1e-300)
     return np.where(between, h_v * (1 - ratio), p)
+
+
+@njit(cache=True, nogil=True)
+def _nearer_than(xy, position, dist):
+    """(n,) bool: |x − position| < dist (1 − 1e-7), i.e. a tie-averaged position."""
+    out = np.empty(len(xy), np.bool_)
+    for i in range(len(xy)):
+        dx, dy = xy[i, 0] - position[i, 0], xy[i, 1] - position[i, 1]
+        out[i] = np.sqrt(dx * dx + dy * dy) < dist[i] * (1 - 1e-7)
+    return out
 
 
 def _average_tied_reach(
@@ -240,9 +250,7 @@ def _average_tied_reach(
     The mean of several points at the same distance lies strictly nearer than that distance, so a
     tie shows as a mean position closer to the query than its nearest distance.
     """
-    tied = (np.linalg.norm(xy - b, axis=1) < d_b * (1 - 1e-7)) | (
-        np.linalg.norm(xy - v_pos, axis=1) < d_v * (1 - 1e-7)
-    )
+    tied = _nearer_than(xy, b, d_b) | _nearer_than(xy, v_pos, d_v)
     if not tied.any():
         return
     b_tree, v_tree = cKDTree(boundary), cKDTree(vein_points)
