@@ -1,0 +1,178 @@
+"""Scans in the app: a scan opens as its extracted leaf (an editable sketch), its points are a
+layer, the measurements panel reports its distances to each new mesh; a bad scan keeps the leaf;
+the Poisson layer is computed when switched on and drawn beside our mesh."""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pytest
+from PySide6.QtCore import Qt
+from PySide6.QtWidgets import QListWidgetItem
+
+from leafstudio.gui import scans
+from leafstudio.gui.main_window import MainWindow
+from leafstudio.model import Leaf
+
+from .conftest import FAST, WAIT_MS, close_window, make_window, wait_result
+
+FIDELITY = "Scan → mesh distance (blade points)"
+
+
+def synthetic_scan(n: int = 900, seed: int = 0) -> np.ndarray:
+    """(m, 6) points of a curved elliptic blade (length 2) with made-up normals: a scan."""
+    rng = np.random.default_rng(seed)
+    xy = rng.uniform([-1.0, -0.4], [1.0, 0.4], size=(n, 2))
+    xy = xy[xy[:, 0] ** 2 + (xy[:, 1] / 0.4) ** 2 < 1]
+    z = 0.15 * xy[:, 0] ** 2 - 0.3 * xy[:, 1] ** 2
+    return np.column_stack([xy, z, np.tile([0.0, 0.0, 1.0], (len(xy), 1))])
+
+
+def write_points(path, rows: np.ndarray) -> str:
+    path.write_text("\n".join(",".join(f"{v:.6f}" for v in row) for row in rows) + "\n")
+    return str(path)
+
+
+def layer_item(window: MainWindow, key: str) -> QListWidgetItem:
+    for row in range(window.layer_list.count()):
+        item = window.layer_list.item(row)
+        if item.data(Qt.ItemDataRole.UserRole) == key:
+            return item
+    raise KeyError(key)
+
+
+def panel_section(window: MainWindow, title: str) -> dict[str, str]:
+    for i in range(window.measurements.topLevelItemCount()):
+        section = window.measurements.topLevelItem(i)
+        if section.text(0) == title:
+            return {
+                section.child(j).text(0): section.child(j).text(1)
+                for j in range(section.childCount())
+            }
+    return {}
+
+
+def wait_fidelity(qtbot, window: MainWindow) -> dict[str, str]:
+    """Wait until the shown result's scan distances are in the panel; return their rows."""
+    qtbot.waitUntil(
+        lambda: (
+            window.fidelity is not None
+            and window.fidelity[0] == window.worker.last_id
+            and window.result is not None
+            and window.result.leaf is window.doc.leaf
+            and bool(panel_section(window, FIDELITY))
+        ),
+        timeout=WAIT_MS,
+    )
+    return panel_section(window, FIDELITY)
+
+
+def record_threads(monkeypatch, name: str) -> list[int]:
+    """Record the thread of every call to scans.`name` (a core geometry function)."""
+    threads: list[int] = []
+    real = getattr(scans, name)
+
+    def recording(*args, **kwargs):
+        threads.append(threading.get_ident())
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(scans, name, recording)
+    return threads
+
+
+@pytest.fixture
+def scan_window(qtbot, tmp_path, monkeypatch):
+    """A window that opened a synthetic 6-column scan (as `leafstudio gui SCAN` would)."""
+    win = make_window(qtbot, tmp_path / "settings.ini")
+    win.extract_threads = record_threads(monkeypatch, "extract_leaf")
+    win.panel.set_params(FAST)
+    path = write_points(tmp_path / "scan.txt", synthetic_scan())
+    assert win.open_path(path)  # a scan, not a leaf: read and extracted off the main thread
+    wait_fidelity(qtbot, win)
+    yield win
+    close_window(win)
+
+
+def test_a_scan_opens_as_an_editable_leaf_with_its_points_and_distances(scan_window, qtbot):
+    window = scan_window
+    extracted = window.scan.extraction.leaf
+    assert window.doc.leaf is extracted and window.path.endswith("scan.txt")
+    assert window.extract_threads and threading.main_thread().ident not in window.extract_threads
+    assert window.result.mesh.n_points > 100 and "mesh" in window.viewport.plotter.actors
+    sketch = window.editor.view.sketch
+    assert len(sketch.boundary) >= 3 and len(sketch.veins) == len(extracted.veins) >= 1
+
+    rows = wait_fidelity(qtbot, window)
+    assert int(rows["Points"]) == window.scan.extraction.blade.sum() > 500
+    mean, top = float(rows["Mean"]), float(rows["Max"])
+    assert 0 < mean < 0.01 * window.result.length and mean <= top
+    assert rows["Beyond 2% of length"].endswith("%")
+    assert window.measurements.topLevelItem(0).text(0) == FIDELITY  # shown first
+    assert panel_section(window, "Scan → mesh distance (all points)")
+
+    actors = window.viewport.plotter.actors
+    assert actors["scan:blade"].GetVisibility()
+    assert actors["scan:blade"].mapper.dataset.n_points == window.scan.extraction.blade.sum()
+    layer_item(window, "scan").setCheckState(Qt.CheckState.Unchecked)
+    assert not actors["scan:blade"].GetVisibility()
+    layer_item(window, "scan").setCheckState(Qt.CheckState.Checked)
+    assert actors["scan:blade"].GetVisibility()
+
+    view = window.editor.view  # an edit: a new leaf, a new mesh, its distances recomputed
+    view.selected = (-1, 0)
+    view.delete_selected()
+    assert window.isWindowModified() and window.doc.leaf is not extracted
+    wait_fidelity(qtbot, window)
+    assert window.scan is not None and window.undo_stack.canUndo()
+    window.undo_stack.undo()
+    assert window.doc.leaf is extracted
+    wait_fidelity(qtbot, window)
+
+
+def test_a_bad_scan_shows_a_dialog_and_keeps_the_mesh(window, qtbot, tmp_path):
+    leaf, mesh = window.doc.leaf, window.result.mesh
+    line = np.column_stack([np.linspace(0, 1, 80), np.zeros((80, 2)), np.ones((80, 3))])
+    for name, path in (
+        ("line.txt", write_points(tmp_path / "line.txt", line)),  # read, but no blade in it
+        ("broken.pcd", str(tmp_path / "broken.pcd")),  # no such file
+    ):
+        with qtbot.waitSignal(window.failure_shown, timeout=WAIT_MS) as failure:
+            assert window.open_path(path)
+        assert name in failure.args[0] and "\n" not in failure.args[0]
+        box = window.last_error_box
+        assert box.isVisible() and name in box.text()
+        box.close()
+        assert window.doc.leaf is leaf and window.result.mesh is mesh and window.scan is None
+        assert "mesh" in window.viewport.plotter.actors
+
+
+def test_the_poisson_layer_appears_beside_our_mesh_when_switched_on(window, qtbot, monkeypatch):
+    threads = record_threads(monkeypatch, "poisson_surface")
+    assert "poisson" not in window.viewport.plotter.actors  # off: not computed
+    layer_item(window, "poisson").setCheckState(Qt.CheckState.Checked)
+    qtbot.waitUntil(lambda: "poisson" in window.viewport.plotter.actors, timeout=WAIT_MS)
+    actor = window.viewport.plotter.actors["poisson"]
+    assert actor.GetVisibility() and actor.prop.opacity < 1
+    assert len(threads) == 1 and threads[0] != threading.main_thread().ident
+    side = window.result.frame.v
+    ours = np.asarray(window.result.mesh.points) @ side
+    theirs = np.asarray(actor.mapper.dataset.points) @ side
+    assert theirs.min() > ours.max()  # beside ours, not over it
+    window.panel.k.setValue(4)  # same leaf: the surface stays
+    wait_result(qtbot, window, lambda o: o.result.params.k == 4)
+    assert window.viewport.plotter.actors["poisson"] is actor and len(threads) == 1
+    layer_item(window, "poisson").setCheckState(Qt.CheckState.Unchecked)
+    assert not actor.GetVisibility()
+
+
+def test_scans_are_told_from_leaves(tmp_path):
+    scan = synthetic_scan()
+    assert scans.looks_like_scan(Leaf(boundary=scan[:, :3], veins=[]))
+    t = np.linspace(0, 2 * np.pi, 300, endpoint=False)
+    outline = np.column_stack([np.cos(t), 0.4 * np.sin(t), 0.05 * np.sin(3 * t)])
+    assert not scans.looks_like_scan(Leaf(boundary=outline, veins=[]))
+    assert not scans.looks_like_scan(Leaf(boundary=scan[:, :3], veins=[scan[:5, :3]]))
+    assert scans.is_scan_file(write_points(tmp_path / "wide.csv", scan))
+    assert not scans.is_scan_file(write_points(tmp_path / "leaf.csv", scan[:, :4]))
+    assert scans.is_scan_file(str(tmp_path / "any.pcd"))
