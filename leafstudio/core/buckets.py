@@ -41,6 +41,14 @@ def kernel_array(array: np.ndarray, dtype: type = float) -> np.ndarray:
     return out if out.flags.writeable else out.copy()
 
 
+def frozen_array(array: np.ndarray, dtype: type = float) -> np.ndarray:
+    """`array` as a C-contiguous, read-only view of `dtype`: for a kernel whose inputs are
+    usually kept (read-only) results, one compiled signature without copying them."""
+    out = np.ascontiguousarray(array, dtype=dtype).view()
+    out.flags.writeable = False
+    return out
+
+
 def bucket_points(xy: np.ndarray, size: float | None = None) -> Buckets:
     """Sort (n, 2) points into square buckets of side `size` (default: about PER_BUCKET points
     per bucket over their bounding box)."""

@@ -26,7 +26,7 @@ from typing import Protocol
 import numpy as np
 from numba import njit
 
-from leafstudio.core.buckets import kernel_array
+from leafstudio.core.buckets import frozen_array, kernel_array
 from leafstudio.core.mpu import MPUImplicit
 
 CURVATURE_ARRAYS = ("mean_curvature", "gaussian_curvature", "k1", "k2")
@@ -76,9 +76,9 @@ def taper_derivatives(
     `margin` lie on the leaf's edge: they get g = 0 and the limits from inside, which is what a
     mesh of the leaf region sees there.
     """
-    g = kernel_array(g)
+    g = frozen_array(g)  # the MPU's kept derivatives are read-only: no copies
     margin = np.zeros(len(g), np.bool_) if margin is None else kernel_array(margin, np.bool_)
-    return _taper(g, kernel_array(grad_g), kernel_array(hess_g), float(delta), margin)
+    return _taper(g, frozen_array(grad_g), frozen_array(hess_g), float(delta), margin)
 
 
 @njit(cache=True, nogil=True)
@@ -136,7 +136,7 @@ def _graph(gradient, hessian):
         zxx, zxy, zyy = hessian[i, 0, 0], hessian[i, 0, 1], hessian[i, 1, 1]
         w = 1 + p * p + q * q
         gauss[i] = (zxx * zyy - zxy * zxy) / (w * w)
-        mean[i] = ((1 + q * q) * zxx - 2 * p * q * zxy + (1 + p * p) * zyy) / (2 * w**1.5)
+        mean[i] = ((1 + q * q) * zxx - 2 * p * q * zxy + (1 + p * p) * zyy) / (2 * w * np.sqrt(w))
         spread = np.sqrt(max(mean[i] * mean[i] - gauss[i], 0.0))
         k1[i], k2[i] = mean[i] + spread, mean[i] - spread
     return mean, gauss, k1, k2

@@ -97,12 +97,21 @@ def _gaussians(xy, means, prec):
 
 @njit(cache=True, nogil=True)
 def _weighted_derivatives(xy, means, prec, amplitudes):
-    n = len(xy)
+    n, m = len(xy), len(means)
     value, grad, hess = np.zeros(n), np.zeros((n, 2)), np.zeros((n, 2, 2))
+    scale = np.empty(m)  # a_k / (2π √det Σ_k), once per component
+    for k in range(m):
+        det = prec[k, 0, 0] * prec[k, 1, 1] - prec[k, 0, 1] * prec[k, 0, 1]
+        scale[k] = amplitudes[k] * np.sqrt(det) / (2 * np.pi)
     for i in range(n):
-        for k in range(len(means)):
-            g, pdx, pdy = _gaussian(xy[i, 0], xy[i, 1], means, prec, k)
-            g *= amplitudes[k]
+        for k in range(m):
+            dx, dy = xy[i, 0] - means[k, 0], xy[i, 1] - means[k, 1]
+            pdx = prec[k, 0, 0] * dx + prec[k, 0, 1] * dy
+            pdy = prec[k, 0, 1] * dx + prec[k, 1, 1] * dy
+            q = 0.5 * (dx * pdx + dy * pdy)
+            if q > UNDERFLOW:
+                continue
+            g = scale[k] * np.exp(-q)
             value[i] += g
             grad[i, 0] -= g * pdx
             grad[i, 1] -= g * pdy
