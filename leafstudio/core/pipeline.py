@@ -437,8 +437,8 @@ def _mesh_stage(
         world = fs.frame.to_world(xy, z)
         triangles = mesher.ball_pivoting(world, normals, grid.spacing, params.radius_factor)
     world = fs.frame.to_world(xy, z)
-    faces = np.column_stack([np.full(len(triangles), 3), triangles]).ravel()
-    mesh = pv.PolyData(world, faces=faces)
+    # regular faces: VTK's legacy (3, a, b, c) import took 7-30 ms at grid 512, this well under 1
+    mesh = pv.PolyData.from_regular_faces(world, triangles)
     mesh.point_data["height"] = z
     on_margin = np.arange(len(xy)) < n_outline  # both meshers put the outline first
     mesh.point_data.update(surface_curvatures(surf.surface, xy, on_margin))
