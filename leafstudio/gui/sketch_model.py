@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 from scipy.interpolate import CubicSpline
+from scipy.spatial import cKDTree
 
 from leafstudio.core.plane import Frame
 from leafstudio.model import Leaf
@@ -22,6 +23,7 @@ SAMPLES_PER_SPAN = 16  # curve points per span between two control points
 MIN_BOUNDARY_SAMPLES = 120
 DERIVED_BOUNDARY_POINTS = 24  # control points when a loaded leaf becomes a sketch
 DERIVED_VEIN_POINTS = 8
+RELIEF_NEIGHBOURS = 4  # a boundary point's height: inverse-distance mean of this many relief points
 
 
 def _identity_frame() -> Frame:
@@ -127,17 +129,23 @@ class Sketch:
         Per vein, its control points in order: x, y and the height above the plane.
     frame : Frame
         The plane the sketch lies on, mapping it to world coordinates.
+    relief : (p, 3) float array
+        x, y and height of a loaded leaf's boundary points (a scan's margin curls off the plane):
+        the boundary curve takes its heights from the nearest of them, wherever its control points
+        are moved. Empty for a drawn leaf, whose boundary lies on the plane.
     """
 
     boundary: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     veins: tuple[np.ndarray, ...] = ()
     frame: Frame = field(default_factory=_identity_frame)
+    relief: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     def __post_init__(self) -> None:
         boundary = np.asarray(self.boundary, dtype=float).reshape(-1, 2)
         veins = tuple(np.asarray(v, dtype=float).reshape(-1, 3) for v in self.veins)
         object.__setattr__(self, "boundary", boundary)
         object.__setattr__(self, "veins", veins)
+        object.__setattr__(self, "relief", np.asarray(self.relief, dtype=float).reshape(-1, 3))
 
     # --- reading -------------------------------------------------------------------------------
     def control(self, curve: int) -> np.ndarray:
@@ -157,13 +165,23 @@ class Sketch:
         outline = self.boundary_curve()
         if len(outline) < 3:
             return None
-        boundary = self.frame.to_world(outline, np.zeros(len(outline)))
+        boundary = self.frame.to_world(outline, self.boundary_heights(outline))
         veins = []
         for i, vein in enumerate(self.veins):
             if len(vein):
                 curve = self.vein_curve(i)
                 veins.append(self.frame.to_world(curve[:, :2], curve[:, 2]))
         return Leaf(boundary=boundary, veins=veins)
+
+    def boundary_heights(self, xy: np.ndarray) -> np.ndarray:
+        """(s,) heights of (s, 2) plane points on the boundary, from the relief (0 without)."""
+        if len(self.relief) == 0:
+            return np.zeros(len(xy))
+        k = min(RELIEF_NEIGHBOURS, len(self.relief))
+        dist, index = cKDTree(self.relief[:, :2]).query(xy, k=k)
+        dist, index = dist.reshape(len(xy), k), index.reshape(len(xy), k)
+        weight = 1.0 / np.maximum(dist, 1e-12 * self.extent()) ** 2
+        return np.sum(weight * self.relief[index, 2], axis=1) / weight.sum(axis=1)
 
     def extent(self) -> float:
         """Largest side of the control points' box (1 for an empty sketch)."""
@@ -226,6 +244,7 @@ class Sketch:
             },
             "boundary": self.boundary.tolist(),
             "veins": [v.tolist() for v in self.veins],
+            "relief": self.relief.tolist(),
         }
 
     @classmethod
@@ -249,16 +268,19 @@ class Sketch:
             boundary=np.asarray(data.get("boundary", []), dtype=float).reshape(-1, 2),
             veins=tuple(np.asarray(v, dtype=float).reshape(-1, 3) for v in data.get("veins", [])),
             frame=frame,
+            relief=np.asarray(data.get("relief", []), dtype=float).reshape(-1, 3),
         )
 
     @classmethod
     def from_result(cls, result: Any) -> Sketch:
         """A sketch approximating a reconstructed leaf: control points spread along its outline
-        and along each vein, on the leaf's own plane (the pipeline's frame)."""
+        and along each vein, on the leaf's own plane (the pipeline's frame), the boundary's
+        heights kept as its relief."""
         boundary = _even_by_length(result.polygon, DERIVED_BOUNDARY_POINTS, closed=True)
+        relief = np.column_stack(result.frame.to_plane(result.leaf.boundary))
         veins = []
         for vein in result.leaf.veins:
             xy, h = result.frame.to_plane(vein)
             points = np.column_stack([xy, h])
             veins.append(_even_by_length(points, min(DERIVED_VEIN_POINTS, len(points)), False))
-        return cls(boundary=boundary, veins=tuple(veins), frame=result.frame)
+        return cls(boundary=boundary, veins=tuple(veins), frame=result.frame, relief=relief)

@@ -76,3 +76,22 @@ def test_a_sketch_survives_its_dict():
     np.testing.assert_array_equal(again.boundary, sketch.boundary)
     np.testing.assert_array_equal(again.veins[0], sketch.veins[0])
     np.testing.assert_array_equal(again.frame.normal, sketch.frame.normal)
+
+
+def test_a_curled_boundary_keeps_its_heights_through_edits_and_files():
+    """A loaded (scanned) leaf's margin lies off the plane: the sketch's boundary curve takes its
+    heights from the loaded boundary (the relief), also after a point moves, and in a file."""
+    t = np.linspace(0, 2 * np.pi, 200, endpoint=False)
+    xy = np.column_stack([np.cos(t), 0.5 * np.sin(t)])
+    height = 0.2 * xy[:, 1] ** 2 - 0.1 * xy[:, 0]  # a margin curled up at the sides
+    sketch = Sketch(boundary=xy[::10], relief=np.column_stack([xy, height]))
+    leaf = sketch.to_leaf()
+    expected = 0.2 * leaf.boundary[:, 1] ** 2 - 0.1 * leaf.boundary[:, 0]
+    assert np.abs(leaf.boundary[:, 2] - expected).max() < 0.01
+    assert np.ptp(leaf.boundary[:, 2]) > 0.2
+    moved = sketch.moved(BOUNDARY, 0, np.array([0.9, 0.0]))
+    near = np.argmin(np.linalg.norm(moved.to_leaf().boundary[:, :2] - [0.9, 0.0], axis=1))
+    assert abs(moved.to_leaf().boundary[near, 2] - (-0.1)) < 0.02  # the margin's height there
+    again = Sketch.from_dict(moved.to_dict())
+    np.testing.assert_allclose(again.to_leaf().boundary, moved.to_leaf().boundary)
+    assert np.all(Sketch(boundary=xy[::10]).to_leaf().boundary[:, 2] == 0)  # drawn: on the plane
