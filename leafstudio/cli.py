@@ -61,7 +61,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", parser_class=_Parser)
 
     gui = sub.add_parser("gui", help="open the app (on FILE, or on the nested demo)")
-    gui.add_argument("file", nargs="?", help="a leaf file to open")
+    gui.add_argument("file", nargs="?", help="a leaf file, project or leaf scan to open")
     gui.add_argument(
         "--screenshot", metavar="PNG", help="save the window once reconstructed, then exit"
     )
