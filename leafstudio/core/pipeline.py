@@ -29,7 +29,7 @@ from scipy.spatial import cKDTree
 
 from leafstudio.core import analysis, mesher
 from leafstudio.core.autok import choose_mixture
-from leafstudio.core.base import BaseSurface, fit_base
+from leafstudio.core.base import PLANAR, BaseSurface, fit_base
 from leafstudio.core.curvature import surface_curvatures
 from leafstudio.core.gmm import Mixture, fit_mixture, fit_signed_mixture, sample_guide
 from leafstudio.core.grid import Grid, make_grid
@@ -167,7 +167,10 @@ def _frame_stage(leaf: Leaf) -> tuple[FrameStage, list[str]]:
     polygon = leaf_polygon(xy)
     polygon = polygon[thin_outline(polygon)]  # a dense scan's outline: a few thousand vertices
     length = float(np.ptp(polygon[:, 0]))
-    polygon_h = boundary_h[cKDTree(xy).query(polygon)[1]]  # each vertex is a boundary point
+    if np.max(np.abs(boundary_h)) <= PLANAR * length:  # no base: skip the vertices' lookup
+        polygon_h = np.zeros(len(polygon))
+    else:
+        polygon_h = boundary_h[cKDTree(xy).query(polygon)[1]]  # each vertex is a boundary point
     base = fit_base(polygon, polygon_h, length)
     veins, heights = [], []
     projected = [frame.to_plane(vein) for vein in leaf.veins]
