@@ -18,6 +18,7 @@ from leafstudio.core.mpu import bspline_weight, build_mpu
 from leafstudio.core.outline import contains, outward_normals, thin_outline
 from leafstudio.core.pipeline import _frame_stage
 from leafstudio.core.surface import _levenberg_marquardt, _pack, _residual_rows
+from leafstudio.demos import PAPER_K
 
 
 def _star(n: int = 240, seed: int = 1) -> np.ndarray:
@@ -172,3 +173,27 @@ def test_thin_outline_keeps_a_dense_outline_within_a_tiny_distance():
     thinned = LinearRing(circle[keep])
     assert shapely.distance(thinned, shapely.points(circle)).max() < 1e-5
     np.testing.assert_array_equal(thin_outline(circle[:1000], most=2000), np.arange(1000))
+
+
+def _densified(curve: np.ndarray, per_edge: int, closed: bool) -> np.ndarray:
+    """`per_edge` points along each edge of a polyline (the input points kept among them)."""
+    ends = np.vstack([curve, curve[:1]]) if closed else curve
+    t = np.arange(per_edge)[None, :, None] / per_edge
+    inner = ends[:-1, None] + t * (ends[1:, None] - ends[:-1, None])
+    dense = inner.reshape(-1, 3)
+    return dense if closed else np.vstack([dense, curve[-1:]])
+
+
+def test_a_dense_scan_is_thinned_and_still_within_the_issue_figures():
+    nested = ls.demo("nested")
+    leaf = ls.Leaf(
+        boundary=_densified(nested.boundary, 40, closed=True),
+        veins=[_densified(v, 60, closed=False) for v in nested.veins],
+    )
+    assert len(leaf.boundary) > 3 * 3000 and len(leaf.vein_points) > 3000
+    result = ls.reconstruct(leaf, ls.Params(k=PAPER_K["nested"], grid=128))
+    assert len(result.polygon) <= 3000
+    m = result.metrics  # from every input point to the mesh
+    assert m["boundary"]["mean"] <= 1e-3 and m["boundary"]["max"] <= 5e-3
+    assert m["veins"]["mean"] <= 5e-3
+    assert m["mesh"]["components"] == 1 and m["mesh"]["boundary_loops"] == 1
