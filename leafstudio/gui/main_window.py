@@ -144,6 +144,7 @@ class MainWindow(QMainWindow):
         self._title = APP_NAME
         self.scan: ScanData | None = None  # the open scan, whose leaf is being edited
         self._fallback_scan: ScanData | None = None
+        self._scan_due: str | None = None  # the scan being read; another open supersedes it
         self.fidelity: tuple[int, list] | None = None  # request id, the panel's scan sections
         self._measured_id = 0
         self._poisson_leaf: Leaf | None = None  # the leaf of the Poisson surface drawn or due
@@ -401,7 +402,7 @@ class MainWindow(QMainWindow):
     ) -> None:
         """Make `doc` (extracted from `scan`, if given) the document, keeping the current one to
         fall back to if it fails."""
-        self._fallback = None
+        self._fallback, self._scan_due = None, None
         if doc.leaf is not None and self.doc.leaf is not None and self.result is not None:
             self._fallback = (self.doc, self.path, self.panel.params(), 0)
             self._fallback_scan = self.scan
@@ -469,6 +470,7 @@ class MainWindow(QMainWindow):
         message and keep the current leaf. True: the scan is being read."""
         self.status_text.setStyleSheet("")
         self.status_text.setText(f"Reading the scan {Path(path).name} and extracting its leaf…")
+        self._scan_due = path
         self.tasks.submit("scan", path, load_scan, path)
         return True
 
@@ -722,7 +724,7 @@ class MainWindow(QMainWindow):
             self.status_text.setText(self.status_text.text() + f" — note: {note}")
 
     def _on_task_done(self, kind: str, token: object, value: object) -> None:
-        if kind == "scan":
+        if kind == "scan" and token == self._scan_due:
             self._switch(Doc(value.extraction.leaf), token, Path(token).name, None, scan=value)
             self._add_recent(token)
         elif kind == "fidelity" and token == self._shown_id and self.scan is not None:
@@ -732,7 +734,8 @@ class MainWindow(QMainWindow):
             self.viewport.set_layer("poisson", [value])
 
     def _on_task_failed(self, kind: str, token: object, message: str) -> None:
-        if kind == "scan":
+        if kind == "scan" and token == self._scan_due:
+            self._scan_due = None
             self.status_text.setStyleSheet("color: #b00020")
             self.status_text.setText(f"Failed: {message}")
             self.show_error("Cannot open the scan", message)

@@ -176,3 +176,13 @@ def test_scans_are_told_from_leaves(tmp_path):
     assert scans.is_scan_file(write_points(tmp_path / "wide.csv", scan))
     assert not scans.is_scan_file(write_points(tmp_path / "leaf.csv", scan[:, :4]))
     assert scans.is_scan_file(str(tmp_path / "any.pcd"))
+
+
+def test_a_scan_still_being_read_is_superseded_by_a_later_open(window, qtbot, tmp_path):
+    path = write_points(tmp_path / "scan.txt", synthetic_scan())
+    assert window.open_path(path)
+    window.open_demo("parallel")  # opened before the scan is read: the demo stays
+    demo_leaf = window.doc.leaf
+    qtbot.waitUntil(window.tasks.is_idle, timeout=WAIT_MS)
+    wait_result(qtbot, window, lambda o: o.result.leaf is demo_leaf)
+    assert window.doc.leaf is demo_leaf and window.scan is None and window.path is None
