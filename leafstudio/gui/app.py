@@ -94,7 +94,9 @@ def run_app(path: str | None = None, screenshot: str | None = None) -> int:
             window.close()
 
         def failed(message: str) -> None:
-            print(f"leafstudio: error: {path or 'demo'}: {message}", file=sys.stderr)
+            where = path or "demo"
+            text = message if message.startswith(f"{where}: ") else f"{where}: {message}"
+            print(f"leafstudio: error: {text}", file=sys.stderr)
             status["code"] = 2
             window.close()
 
