@@ -288,10 +288,13 @@ class SketchEditor(QWidget):
         )
         fit = QPushButton("Fit")
         fit.setToolTip("Zoom to the whole sketch.")
-        tools = QHBoxLayout()
-        for widget in (self.curve, self.new_vein, self.delete, QLabel("Height"), self.height, fit):
-            tools.addWidget(widget)
-        tools.addStretch(1)
+        curves, point = QHBoxLayout(), QHBoxLayout()  # two rows, so a narrow dock shows them
+        for widget in (self.curve, self.new_vein, self.delete):
+            curves.addWidget(widget)
+        for widget in (QLabel("Height"), self.height, fit):
+            point.addWidget(widget)
+        for row in (curves, point):
+            row.addStretch(1)
         hint = QLabel(
             "Click: add a point to the chosen curve · drag: move · right-click or Del: delete · "
             "wheel: zoom"
@@ -300,7 +303,8 @@ class SketchEditor(QWidget):
         hint.setStyleSheet("color: #606060")
         layout = QVBoxLayout(self)
         layout.setContentsMargins(4, 4, 4, 4)
-        layout.addLayout(tools)
+        layout.addLayout(curves)
+        layout.addLayout(point)
         layout.addWidget(self.view, 1)
         layout.addWidget(hint)
 

@@ -177,18 +177,18 @@ class Viewport(QWidget):
             for stale in self._bar_titles[key] & set(self.plotter.scalar_bars.keys()):
                 self.plotter.remove_scalar_bar(stale, render=False)
             if wanted:
-                bottom = {"mesh": 0.08, "probability": 0.55}[key]
+                left = {"mesh": 0.06, "probability": 0.54}[key]  # side by side along the bottom
                 self.plotter.add_scalar_bar(
                     title=title,
                     mapper=self.plotter.actors[names[0]].mapper,
-                    vertical=True,
-                    position_x=0.88,
-                    position_y=bottom,
-                    width=0.07,
-                    height=0.36,
+                    vertical=False,
+                    position_x=left,
+                    position_y=0.02,
+                    width=0.4,
+                    height=0.08,
                     color="#202020",
                     fmt="%.3g",
-                    n_labels=3,
+                    n_labels=2,  # the ends only: a middle label would sit under the title
                     title_font_size=14,
                     label_font_size=12,
                     render=False,
