@@ -199,6 +199,41 @@ def _quotient_rule(big_d, big_n, grad_d, grad_n, hess_d, hess_n, degree):
 
 
 @njit(cache=True, nogil=True)
+def _add_cell(
+    i, dx, dy, x, y, scale, a, b, e, degree, big_d, big_n, grad_d, grad_n, hess_d, hess_n
+):
+    """Add one cell's w, w f and (by degree) their derivatives at query i, offset (dx, dy) from
+    the cell's centre, to D, N, ∇D, ∇N, ∇²D and ∇²N."""
+    t = np.sqrt(dx * dx + dy * dy) * scale
+    if t < 1 / 3:
+        w, slope, curl = 0.75 - 2.25 * t * t, -4.5, 0.0
+    else:
+        w, slope, curl = 1.125 * (t - 1) ** 2, 2.25 * (t - 1) / t, 2.25 / t**3
+    f = a * x + b * y + e
+    big_d[i] += w
+    big_n[i] += w * f
+    if degree == 0:
+        return
+    slope *= scale * scale  # ∇w = b'(t)/t · scale² · d
+    wx, wy = slope * dx, slope * dy
+    grad_d[i, 0] += wx
+    grad_d[i, 1] += wy
+    grad_n[i, 0] += wx * f + w * a
+    grad_n[i, 1] += wy * f + w * b
+    if degree == 1:
+        return
+    # ∇²w = b'(t)/t · scale² I + (d/dt (b'(t)/t)) / t · scale⁴ d dᵀ
+    curl *= scale**4
+    hxx, hxy, hyy = slope + curl * dx * dx, curl * dx * dy, slope + curl * dy * dy
+    hess_d[i, 0] += hxx
+    hess_d[i, 1] += hxy
+    hess_d[i, 2] += hyy
+    hess_n[i, 0] += hxx * f + 2 * wx * a  # ∇²(w f) = ∇²w f + ∇w ∇fᵀ + ∇f ∇wᵀ
+    hess_n[i, 1] += hxy * f + wx * b + wy * a
+    hess_n[i, 2] += hyy * f + 2 * wy * b
+
+
+@njit(cache=True, nogil=True)
 def _blend_sums(xy, centers, radii, coef, lo, size, nx, ny, starts, order, degree):
     """D = Σ w_i and N = Σ w_i f_i (eq. 1) at every query; with degree >= 1 also ∇D and ∇N, with
     degree 2 also ∇²D and ∇²N (as xx, xy, yy)."""
@@ -222,33 +257,10 @@ def _blend_sums(xy, centers, radii, coef, lo, size, nx, ny, starts, order, degre
                     d2 = dx * dx + dy * dy
                     if d2 >= reach * reach:
                         continue
-                    t = np.sqrt(d2) * scale
-                    if t < 1 / 3:
-                        w, slope, curl = 0.75 - 2.25 * t * t, -4.5, 0.0
-                    else:
-                        w, slope, curl = 1.125 * (t - 1) ** 2, 2.25 * (t - 1) / t, 2.25 / t**3
-                    f = a * xy[i, 0] + b * xy[i, 1] + e
-                    big_d[i] += w
-                    big_n[i] += w * f
-                    if degree == 0:
-                        continue
-                    slope *= scale * scale  # ∇w = b'(t)/t · scale² · d
-                    wx, wy = slope * dx, slope * dy
-                    grad_d[i, 0] += wx
-                    grad_d[i, 1] += wy
-                    grad_n[i, 0] += wx * f + w * a
-                    grad_n[i, 1] += wy * f + w * b
-                    if degree == 1:
-                        continue
-                    # ∇²w = b'(t)/t · scale² I + (d/dt (b'(t)/t)) / t · scale⁴ d dᵀ
-                    curl *= scale**4
-                    hxx, hxy, hyy = slope + curl * dx * dx, curl * dx * dy, slope + curl * dy * dy
-                    hess_d[i, 0] += hxx
-                    hess_d[i, 1] += hxy
-                    hess_d[i, 2] += hyy
-                    hess_n[i, 0] += hxx * f + 2 * wx * a  # ∇²(w f) = ∇²w f + ∇w ∇fᵀ + ∇f ∇wᵀ
-                    hess_n[i, 1] += hxy * f + wx * b + wy * a
-                    hess_n[i, 2] += hyy * f + 2 * wy * b
+                    _add_cell(
+                        i, dx, dy, xy[i, 0], xy[i, 1], scale, a, b, e, degree,
+                        big_d, big_n, grad_d, grad_n, hess_d, hess_n,
+                    )  # fmt: skip
     return big_d, big_n, grad_d, grad_n, hess_d, hess_n
 
 
@@ -282,32 +294,10 @@ def _grid_sums(ox, oy, spacing, nx, ny, slot, n, centers, radii, coef, degree):
                 d2 = dx * dx + dy * dy
                 if d2 >= reach * reach:
                     continue
-                t = np.sqrt(d2) * scale
-                if t < 1 / 3:
-                    w, slope, curl = 0.75 - 2.25 * t * t, -4.5, 0.0
-                else:
-                    w, slope, curl = 1.125 * (t - 1) ** 2, 2.25 * (t - 1) / t, 2.25 / t**3
-                f = a * x + b * y + e
-                big_d[i] += w
-                big_n[i] += w * f
-                if degree == 0:
-                    continue
-                slope *= scale * scale
-                wx, wy = slope * dx, slope * dy
-                grad_d[i, 0] += wx
-                grad_d[i, 1] += wy
-                grad_n[i, 0] += wx * f + w * a
-                grad_n[i, 1] += wy * f + w * b
-                if degree == 1:
-                    continue
-                curl *= scale**4
-                hxx, hxy, hyy = slope + curl * dx * dx, curl * dx * dy, slope + curl * dy * dy
-                hess_d[i, 0] += hxx
-                hess_d[i, 1] += hxy
-                hess_d[i, 2] += hyy
-                hess_n[i, 0] += hxx * f + 2 * wx * a
-                hess_n[i, 1] += hxy * f + wx * b + wy * a
-                hess_n[i, 2] += hyy * f + 2 * wy * b
+                _add_cell(
+                    i, dx, dy, x, y, scale, a, b, e, degree,
+                    big_d, big_n, grad_d, grad_n, hess_d, hess_n,
+                )  # fmt: skip
     return big_d, big_n, grad_d, grad_n, hess_d, hess_n
 
 
