@@ -24,17 +24,23 @@ PAPER_TABLE1 = {
 }
 
 
+def table1_figures(metrics: dict) -> dict:
+    """The issue's figures from Result.metrics: Table-1 distances and mesh facts, flat."""
+    return {
+        "boundary_mean": metrics["boundary"]["mean"],
+        "boundary_max": metrics["boundary"]["max"],
+        "vein_mean": metrics["veins"]["mean"],
+        "vein_max": metrics["veins"]["max"],
+        "components": metrics["mesh"]["components"],
+        "boundary_loops": metrics["mesh"]["boundary_loops"],
+        "non_manifold_edges": metrics["mesh"]["non_manifold_edges"],
+    }
+
+
 def _figures(result: ls.Result, region, rot=None, shift=None) -> dict:
-    m = result.metrics
     covered, spilled = leaves.coverage(result, region, rot, shift)
     return {
-        "boundary_mean": m["boundary"]["mean"],
-        "boundary_max": m["boundary"]["max"],
-        "vein_mean": m["veins"]["mean"],
-        "vein_max": m["veins"]["max"],
-        "components": m["mesh"]["components"],
-        "boundary_loops": m["mesh"]["boundary_loops"],
-        "non_manifold_edges": m["mesh"]["non_manifold_edges"],
+        **table1_figures(result.metrics),
         "covered": covered,
         "spilled": spilled,
         "seconds": sum(result.timings.values()),

@@ -35,6 +35,7 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+from bench_accuracy import table1_figures  # a sibling script: benchmarks/ is on sys.path
 from threadpoolctl import threadpool_info, threadpool_limits
 
 import leafstudio as ls
@@ -179,6 +180,8 @@ import json
 from threadpoolctl import threadpool_limits
 import leafstudio as ls
 from leafstudio.demos import PAPER_K
+
+from bench_accuracy import table1_figures  # a sibling script: benchmarks/ is on sys.path
 imported = high_water_kb()
 with threadpool_limits(limits=1):
     for name in ("nested", "parallel"):
@@ -208,15 +211,7 @@ def accuracy() -> dict[str, Any]:
     out = {}
     for name in ("nested", "parallel"):
         m = ls.reconstruct(ls.demo(name), ls.Params(k=PAPER_K[name], grid=128)).metrics
-        out[name] = {
-            "boundary_mean": m["boundary"]["mean"],
-            "boundary_max": m["boundary"]["max"],
-            "vein_mean": m["veins"]["mean"],
-            "vein_max": m["veins"]["max"],
-            "components": m["mesh"]["components"],
-            "boundary_loops": m["mesh"]["boundary_loops"],
-            "non_manifold_edges": m["mesh"]["non_manifold_edges"],
-        }
+        out[name] = table1_figures(m)
     return out
 
 
