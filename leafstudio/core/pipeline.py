@@ -8,7 +8,7 @@
 | grid     | frame, grid                         | the regular grid                         |
 | guide    | implicit, grid                      | g and p(x) on the grid                   |
 | gmm      | guide, k, samples, seed             | the EM mixture                           |
-| surface  | gmm, taper, refine                         | amplitudes, z on the kept grid nodes     |
+| surface  | gmm, taper, refine                  | amplitudes, z on the kept grid nodes     |
 | mesh     | surface, mesher, radius_factor      | the triangle mesh in world coordinates   |
 
 A stage reruns only when a value it depends on changed, so moving K reruns gmm, surface and mesh.
