@@ -10,12 +10,14 @@ import json
 import math
 import os
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from io import BytesIO
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from leafstudio.core.analysis import triangles_of
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf, Params
 
@@ -193,18 +195,25 @@ def _usual_permissions(path: str) -> None:
     os.chmod(path, 0o666 & ~umask)
 
 
-def _write_atomically(path: Path, text: str | bytes) -> None:
-    """Write to a temporary file beside `path`, then rename it over `path`."""
+def _replace_atomically(path: Path, write: Callable[[str], None]) -> None:
+    """Run `write` on a temporary file beside `path` (same suffix, so writers that go by it
+    still work), then rename it over `path`; on failure nothing is left behind."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    handle, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    handle, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
+    os.close(handle)
     try:
-        with os.fdopen(handle, "wb") as out:
-            out.write(text.encode("utf-8") if isinstance(text, str) else text)
+        write(tmp)
         _usual_permissions(tmp)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def _write_atomically(path: Path, text: str | bytes) -> None:
+    """Write text or bytes to `path` atomically."""
+    data = text.encode("utf-8") if isinstance(text, str) else text
+    _replace_atomically(path, lambda tmp: Path(tmp).write_bytes(data))
 
 
 def project_dict(
@@ -249,9 +258,7 @@ def save_leaf(
 
         data = np.empty(len(xyz), dtype=[("x", "f8"), ("y", "f8"), ("z", "f8"), ("label", "i4")])
         data["x"], data["y"], data["z"], data["label"] = xyz[:, 0], xyz[:, 1], xyz[:, 2], labels
-        import io as _io
-
-        buffer = _io.BytesIO()
+        buffer = BytesIO()
         PlyData([PlyElement.describe(data, "vertex")], text=False).write(buffer)
         _write_atomically(path, buffer.getvalue())
     else:
@@ -268,19 +275,9 @@ def save_mesh(result_or_mesh: Any, path: str | os.PathLike) -> None:
             str(path),
         )
     mesh = getattr(result_or_mesh, "mesh", result_or_mesh)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=suffix)
-    os.close(handle)
-    try:
-        if suffix == ".ply":
-            _write_mesh_ply(mesh, tmp)
-        else:
-            mesh.save(tmp)
-        _usual_permissions(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    _replace_atomically(
+        path, lambda tmp: _write_mesh_ply(mesh, tmp) if suffix == ".ply" else mesh.save(tmp)
+    )
 
 
 def _write_mesh_ply(mesh: Any, path: str) -> None:
@@ -298,7 +295,7 @@ def _write_mesh_ply(mesh: Any, path: str) -> None:
         vertex[c] = mesh.points[:, i]
     for name, values in arrays.items():
         vertex[name] = values
-    triangles = mesh.faces.reshape(-1, 4)[:, 1:]
+    triangles = triangles_of(mesh)
     face = np.empty(len(triangles), dtype=[("vertex_indices", "i4", (3,))])
     face["vertex_indices"] = triangles
     elements = [PlyElement.describe(vertex, "vertex"), PlyElement.describe(face, "face")]

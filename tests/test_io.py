@@ -31,7 +31,7 @@ def test_project_keeps_params_and_sketch(tmp_path: Path):
     _, loaded, sketch = load_project(path)
     assert loaded == params
     assert sketch == {"boundary": [[0, 0], [1, 0]]}
-    assert not list(tmp_path.glob(".*tmp"))  # the atomic write left nothing behind
+    assert [p.name for p in tmp_path.iterdir()] == ["p.leaf.json"]  # no temporary file left
 
 
 def test_whitespace_and_header_and_unlabelled_boundary_with_vein_files(tmp_path: Path):
