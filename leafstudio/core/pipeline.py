@@ -423,23 +423,22 @@ def _mesh_stage(
 ) -> pv.PolyData:
     nodes = grid.points[guide.inside]
     n_outline = len(fs.polygon)
+    # the margin at the boundary points' own heights (0 in the plane for a planar one, eq. 3);
+    # the kept grid nodes' heights are already known
+    rim = np.zeros(n_outline) if fs.polygon_h is None else fs.polygon_h
     if params.mesher == "conforming":
         xy, triangles, kept = grid_mesh()
         implicit.derivatives_on_grid(xy, grid, kept)  # kept for the curvatures below
-        # the margin at the boundary points' own heights (0 in the plane for a planar one, eq. 3);
-        # the kept nodes' heights are already known
-        rim = np.zeros(n_outline) if fs.polygon_h is None else fs.polygon_h
         z = np.concatenate([rim, surf.z[kept[guide.inside]]])
+        world = fs.frame.to_world(xy, z)
     else:
         xy = np.vstack([fs.polygon, nodes])
-        rim = np.zeros(n_outline) if fs.polygon_h is None else fs.polygon_h
         z = np.concatenate([rim, surf.z])
+        world = fs.frame.to_world(xy, z)
         grad = surf.surface.gradient(xy)
         normals = fs.frame.to_world(-grad, np.ones(len(xy))) - fs.frame.origin
         normals /= np.linalg.norm(normals, axis=1, keepdims=True)
-        world = fs.frame.to_world(xy, z)
         triangles = mesher.ball_pivoting(world, normals, grid.spacing, params.radius_factor)
-    world = fs.frame.to_world(xy, z)
     # regular faces: VTK's legacy (3, a, b, c) import took 7-30 ms at grid 512, this well under 1
     mesh = pv.PolyData.from_regular_faces(world, triangles)
     mesh.point_data["height"] = z
