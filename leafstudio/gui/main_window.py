@@ -457,10 +457,7 @@ class MainWindow(QMainWindow):
 
     def open_dialog(self) -> None:
         """File > Open."""
-        if not self._confirm_discard():
-            return
-        start = str(Path(self.path).parent) if self.path else str(Path.home())
-        path, _ = QFileDialog.getOpenFileName(self, "Open a leaf", start, _file_filter())
+        path = self._ask_to_open("Open a leaf", _file_filter())
         if path:
             self.open_path(path)
 
@@ -476,12 +473,17 @@ class MainWindow(QMainWindow):
 
     def open_scan_dialog(self) -> None:
         """File > Open scan."""
-        if not self._confirm_discard():
-            return
-        start = str(Path(self.path).parent) if self.path else str(Path.home())
-        path, _ = QFileDialog.getOpenFileName(self, "Open a leaf scan", start, _scan_filter())
+        path = self._ask_to_open("Open a leaf scan", _scan_filter())
         if path:
             self.open_scan(path)
+
+    def _ask_to_open(self, title: str, filters: str) -> str:
+        """A file chosen in an open dialog beside the current file, once unsaved changes are
+        dealt with; "" when cancelled."""
+        if not self._confirm_discard():
+            return ""
+        start = str(Path(self.path).parent) if self.path else str(Path.home())
+        return QFileDialog.getOpenFileName(self, title, start, filters)[0]
 
     def _set_scan(self, scan: ScanData | None) -> None:
         self.scan, self.fidelity = scan, None
