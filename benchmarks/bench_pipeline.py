@@ -180,8 +180,6 @@ import json
 from threadpoolctl import threadpool_limits
 import leafstudio as ls
 from leafstudio.demos import PAPER_K
-
-from bench_accuracy import table1_figures  # a sibling script: benchmarks/ is on sys.path
 imported = high_water_kb()
 with threadpool_limits(limits=1):
     for name in ("nested", "parallel"):

@@ -63,3 +63,20 @@ def test_signed_heights_give_a_negative_guide():
 
 def test_no_veins_gives_a_flat_guide():
     np.testing.assert_array_equal(height_guide(np.zeros((4, 2)), BOUNDARY, [], []), 0.0)
+
+
+def test_thinning_to_half_a_grid_step_moves_the_guide_by_a_small_fraction_of_the_height():
+    """The pipeline thins the curves to half its grid step; on a dense ellipse with a curved
+    midrib the guide stays within 1% of the vein height of the unthinned one."""
+    t = np.linspace(0, 2 * np.pi, 20000, endpoint=False)
+    boundary = np.column_stack([np.cos(t), 0.4 * np.sin(t)])
+    x = np.linspace(-0.9, 0.9, 8000)
+    midrib = np.column_stack([x, 0.05 * np.sin(3 * x)])
+    heights = 0.1 * (1 - x**2)
+    gx, gy = np.meshgrid(np.linspace(-0.95, 0.95, 60), np.linspace(-0.35, 0.35, 30))
+    xy = np.column_stack([gx.ravel(), gy.ravel()])
+    xy = xy[(xy[:, 0] / 0.98) ** 2 + (xy[:, 1] / 0.38) ** 2 < 1]
+    exact = height_guide(xy, boundary, [midrib], [heights])
+    thinned = height_guide(xy, boundary, [midrib], [heights], step=0.5 * 2 / 128)
+    assert np.abs(thinned - exact).max() <= 0.01 * heights.max()
+    assert np.abs(thinned - exact).max() > 0  # the thinning did drop points

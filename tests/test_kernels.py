@@ -10,6 +10,7 @@ from shapely.geometry import LinearRing, Polygon
 from sklearn.mixture import GaussianMixture
 
 import leafstudio as ls
+from leafstudio.core.buckets import neighbour_distances
 from leafstudio.core.gmm import Mixture, fit_mixture
 from leafstudio.core.grid import make_grid
 from leafstudio.core.height import nearest_in_groups
@@ -80,6 +81,18 @@ def test_nearest_in_groups_is_the_brute_force_answer():
     np.testing.assert_allclose(position, (tied @ points) / count[:, None], rtol=1e-12)
     np.testing.assert_allclose(value, (tied @ values) / count, rtol=1e-12, atol=1e-15)
     assert np.all(np.isinf(nearest_in_groups(queries, points, np.zeros(300, int), values)[3]))
+
+
+def test_neighbour_distances_are_the_brute_force_answer():
+    rng = np.random.default_rng(4)
+    clustered = np.vstack([rng.normal(0, 0.01, (500, 2)), rng.uniform(-3, 3, (300, 2))])
+    on_a_line = np.column_stack([np.sort(rng.uniform(0, 1, 400)), np.zeros(400)])
+    for points in (clustered, on_a_line):
+        which = rng.choice(len(points), 150, replace=False)
+        d = np.linalg.norm(points[which, None] - points[None], axis=2)
+        d[np.arange(len(which)), which] = np.inf
+        np.testing.assert_allclose(neighbour_distances(points, which), d.min(axis=1))
+    assert np.isinf(neighbour_distances(np.zeros((1, 2)), np.array([0]))).all()
 
 
 @pytest.mark.parametrize("polygon", [_star(), _slotted_square()], ids=["star", "slot"])

@@ -23,6 +23,7 @@ from numba import njit
 from scipy.spatial import cKDTree
 
 from leafstudio.core.buckets import bounds, bucket_points, kernel_array
+from leafstudio.core.outline import thin_curve
 
 TIE = 1e-9  # relative distance under which nearest points count as tied
 QUERIES_PER_BUCKET = 32  # query points share one candidate list per bucket of about this many
@@ -187,6 +188,7 @@ def height_guide(
     boundary: np.ndarray,
     veins: list[np.ndarray],
     heights: list[np.ndarray],
+    step: float = 0.0,
 ) -> np.ndarray:
     """The guide p at points inside the leaf.
 
@@ -200,6 +202,11 @@ def height_guide(
         Vein points projected onto the plane (v'), one array per vein.
     heights : list of (m_i,) float arrays
         Signed heights h_v of the vein points (eq. 3).
+    step : float, optional
+        Points nearer than `step` to the last one kept along the boundary or a vein are left
+        out (thin_curve). The pipeline passes half its grid step: p is sampled on the grid, a
+        polyline that much denser moves the nearest point by a fraction of its spacing, and the
+        search costs in proportion to the points (a 50,000-point scan's, several times more).
 
     Returns
     -------
@@ -209,6 +216,11 @@ def height_guide(
     xy = kernel_array(xy)
     if not veins:
         return np.zeros(len(xy))
+    if step > 0:
+        boundary = boundary[thin_curve(boundary, step)]
+        kept = [thin_curve(vein, step) for vein in veins]
+        veins = [vein[keep] for vein, keep in zip(veins, kept, strict=True)]
+        heights = [h[keep] for h, keep in zip(heights, kept, strict=True)]
     zeros = np.zeros(len(boundary))
     d_b, b, _, _ = nearest_in_groups(xy, boundary, zeros.astype(np.int64), zeros)
     ids = np.repeat(np.arange(len(veins)), [len(v) for v in veins])

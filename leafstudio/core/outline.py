@@ -12,10 +12,9 @@ from functools import lru_cache
 import numpy as np
 import shapely
 from numba import njit
-from scipy.spatial import cKDTree
 from shapely.geometry import MultiPoint, Polygon
 
-from leafstudio.core.buckets import bounds, kernel_array
+from leafstudio.core.buckets import bounds, kernel_array, neighbour_distances
 from leafstudio.errors import LeafError
 
 _HULL_RATIOS = (0.0, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0)
@@ -27,10 +26,15 @@ def distinct_indices(points: np.ndarray, scale: float) -> np.ndarray:
     keys = np.round(points / (scale * 1e-9)).astype(np.int64)
     keys -= keys.min(axis=0)
     span = keys.max(axis=0) + 1
-    if np.prod(span.astype(float)) < 2.0**62:  # one integer per point: a 1D unique, much faster
-        keys = np.ravel_multi_index(tuple(keys.T), tuple(span.tolist()))
-    _, first = np.unique(keys, axis=0, return_index=True)
-    return np.sort(first)
+    if np.prod(span.astype(float)) >= 2.0**62:  # rare: no one integer per point
+        return np.sort(np.unique(keys, axis=0, return_index=True)[1])
+    keys = np.ravel_multi_index(tuple(keys.T), tuple(span.tolist()))
+    ordered = np.sort(keys)  # a plain sort: many times faster than a unique with indices
+    if np.all(ordered[1:] != ordered[:-1]):
+        return np.arange(len(keys))
+    order = np.argsort(keys)
+    starts = np.flatnonzero(np.r_[True, keys[order[1:]] != keys[order[:-1]]])
+    return np.sort(np.minimum.reduceat(order, starts))  # each repeat's first index
 
 
 SPACING_QUERIES = 2000  # points whose nearest neighbour sets the median spacing, at most
@@ -40,8 +44,7 @@ def _spacing(points: np.ndarray) -> float:
     """Median distance from each point to its nearest neighbour (over SPACING_QUERIES points
     evenly through the array, at most: a scale for the tests below, not an exact figure)."""
     every = max(1, len(points) // SPACING_QUERIES)
-    dist, _ = cKDTree(points).query(points[::every], k=2)
-    return float(np.median(dist[:, 1]))
+    return float(np.median(neighbour_distances(points, np.arange(0, len(points), every))))
 
 
 def _largest_polygon(geom: shapely.Geometry) -> Polygon | None:

@@ -70,6 +70,7 @@ STAGE_KEYS: dict[str, tuple[str, ...]] = {
     ),
 }
 MIN_NODES_PER_COMPONENT = 5
+GUIDE_STEP = 0.5  # the guide's curves are thinned to this fraction of the grid step (height.py)
 VEIN_OUTSIDE_TOLERANCE = 0.01  # vein points may stray this fraction of the leaf length outside
 
 
@@ -349,7 +350,9 @@ def _guide_stage(fs: FrameStage, implicit: MPUImplicit, grid: Grid) -> GuideStag
     g = implicit.on_grid(grid)
     inside = g >= 0
     p = np.zeros(len(nodes))
-    p[inside] = height_guide(nodes[inside], fs.polygon, fs.veins, fs.heights)
+    p[inside] = height_guide(
+        nodes[inside], fs.polygon, fs.veins, fs.heights, step=GUIDE_STEP * grid.spacing
+    )
     return GuideStage(g=g, p=p, inside=inside)
 
 

@@ -70,14 +70,17 @@ def fit_frame(boundary: np.ndarray, vein_points: np.ndarray) -> Frame:
     LeafError
         If there are fewer than 3 distinct boundary points, or they lie on one line.
     """
-    distinct = _distinct_count_up_to_3(np.round(boundary, 12))
-    if distinct < 3:
-        raise LeafError(f"the boundary needs at least 3 distinct points, got {distinct}")
     origin = boundary.mean(axis=0)
-    _, sing, vt = np.linalg.svd(boundary - origin, full_matrices=False)
-    if sing[0] <= 0 or sing[1] <= 1e-6 * sing[0]:
+    centred = boundary - origin
+    # the 3 x 3 scatter's eigenvectors are the principal axes: several times faster than an SVD
+    # of the (n, 3) points, and its float64 error (1e-16 of the largest) is far below the test
+    variances, axes = np.linalg.eigh(centred.T @ centred)  # ascending
+    if variances[2] <= 0 or variances[1] <= 1e-12 * variances[2]:
+        distinct = _distinct_count_up_to_3(np.round(boundary, 12))
+        if distinct < 3:
+            raise LeafError(f"the boundary needs at least 3 distinct points, got {distinct}")
         raise LeafError("the boundary points lie on one line (or one point): no leaf plane")
-    u, normal = vt[0], vt[2]
+    u, normal = axes[:, 2].copy(), axes[:, 0].copy()
     if len(vein_points):
         side = float(np.mean((vein_points - origin) @ normal))
     else:
