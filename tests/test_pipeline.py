@@ -3,6 +3,9 @@ on harder leaves, the stage cache, and the meshers."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -171,3 +174,21 @@ def test_veins_outside_the_boundary_are_an_error():
     far = leaf.veins[0] + [0, 0.5, 0]
     with pytest.raises(ls.LeafError, match=r"vein 1: .* outside the boundary"):
         ls.reconstruct(ls.Leaf(boundary=leaf.boundary, veins=[far]))
+
+
+def test_a_run_and_its_metrics_need_no_vtk_and_the_polydata_holds_the_same_mesh():
+    code = (
+        "import sys, leafstudio as ls\n"
+        "r = ls.reconstruct(ls.demo('nested'), ls.Params(k=3, grid=48))\n"
+        "r.metrics\n"
+        "print(sorted(m for m in ('pyvista', 'vtkmodules') if m in sys.modules))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+    result = ls.reconstruct(ls.demo("nested"), ls.Params(k=3, grid=48))
+    arrays, poly = result.triangle_mesh, result.mesh
+    np.testing.assert_array_equal(poly.points, arrays.points)
+    np.testing.assert_array_equal(poly.regular_faces, arrays.regular_faces)
+    for name, values in arrays.point_data.items():
+        np.testing.assert_array_equal(poly.point_data[name], values)
+    assert result.mesh is poly  # built once

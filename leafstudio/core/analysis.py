@@ -5,17 +5,17 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import pyvista as pv
 
+from leafstudio.core.trianglemesh import MeshLike
 from leafstudio.model import Leaf
 
 
-def triangles_of(mesh: pv.PolyData) -> np.ndarray:
-    """(m, 3) vertex indices of an all-triangle PolyData."""
-    return mesh.faces.reshape(-1, 4)[:, 1:]
+def triangles_of(mesh: MeshLike) -> np.ndarray:
+    """(m, 3) vertex indices of an all-triangle mesh (a TriangleMesh or a pyvista.PolyData)."""
+    return np.asarray(mesh.regular_faces)
 
 
-def point_to_mesh_distance(mesh: pv.PolyData, points: np.ndarray) -> np.ndarray:
+def point_to_mesh_distance(mesh: MeshLike, points: np.ndarray) -> np.ndarray:
     """(n,) exact distance from each point to the nearest point on the mesh's triangles."""
     if len(points) == 0:
         return np.zeros(0)
@@ -88,7 +88,7 @@ def surface_area(points: np.ndarray, triangles: np.ndarray) -> float:
     return float(0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1).sum())
 
 
-def mesh_facts(mesh: pv.PolyData) -> dict[str, Any]:
+def mesh_facts(mesh: MeshLike) -> dict[str, Any]:
     """Triangles, connected components, boundary loops, non-manifold edges and area."""
     triangles = triangles_of(mesh)
     _, counts = edge_counts(triangles)
@@ -102,7 +102,7 @@ def mesh_facts(mesh: pv.PolyData) -> dict[str, Any]:
     }
 
 
-def table_metrics(mesh: pv.PolyData, leaf: Leaf) -> dict[str, Any]:
+def table_metrics(mesh: MeshLike, leaf: Leaf) -> dict[str, Any]:
     """The paper's Table 1 (distances from the boundary and the vein points to the mesh) and the
     mesh's facts."""
     return {

@@ -6,16 +6,16 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import pyvista as pv
 import shapely
 
 from leafstudio.core import analysis
 from leafstudio.core.plane import Frame
+from leafstudio.core.trianglemesh import MeshLike
 
 NEAR, FAR = 0.01, 0.02  # shares of the leaf length for the "beyond" figures
 
 
-def scan_distances(mesh: pv.PolyData, points: np.ndarray, length: float) -> dict[str, Any]:
+def scan_distances(mesh: MeshLike, points: np.ndarray, length: float) -> dict[str, Any]:
     """Distances from (n, 3) scan points to the mesh: mean, median, 95th percentile, maximum, and
     the share of points beyond 1% and 2% of the leaf length (all in the scan's units).
 
@@ -41,7 +41,7 @@ def scan_distances(mesh: pv.PolyData, points: np.ndarray, length: float) -> dict
     }
 
 
-def coverage(mesh: pv.PolyData, frame: Frame, outline: np.ndarray) -> dict[str, Any]:
+def coverage(mesh: MeshLike, frame: Frame, outline: np.ndarray) -> dict[str, Any]:
     """How the mesh, seen from along the plane normal, covers the (b, 2) outline in the frame's
     plane: the share of the outline's area covered, the mesh area outside it (as a share of the
     outline's area), and the number of connected pieces."""

@@ -11,11 +11,11 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import pyvista as pv
 
 from leafstudio.core.analysis import surface_area, triangles_of
 from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.plane import Frame
+from leafstudio.core.trianglemesh import MeshLike
 
 #: (key, label) of the scalar measurements, in the order a table shows them
 FIELDS = (
@@ -36,7 +36,7 @@ def vertex_areas(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     return np.bincount(triangles.ravel(), np.repeat(third, 3), minlength=len(points))
 
 
-def curvature_summary(mesh: pv.PolyData) -> dict[str, dict[str, float]]:
+def curvature_summary(mesh: MeshLike) -> dict[str, dict[str, float]]:
     """min, max and area-weighted mean of each curvature array the mesh carries."""
     weights = vertex_areas(np.asarray(mesh.points), triangles_of(mesh))
     summary = {}
@@ -51,12 +51,12 @@ def curvature_summary(mesh: pv.PolyData) -> dict[str, dict[str, float]]:
     return summary
 
 
-def shape_measurements(mesh: pv.PolyData, frame: Frame, polygon: np.ndarray) -> dict[str, float]:
+def shape_measurements(mesh: MeshLike, frame: Frame, polygon: np.ndarray) -> dict[str, float]:
     """The FIELDS measurements of a leaf mesh.
 
     Parameters
     ----------
-    mesh : pyvista.PolyData
+    mesh : TriangleMesh or pyvista.PolyData
         The leaf's triangle mesh in world coordinates, its first len(polygon) vertices the
         outline in order (as both meshers make it), with the point array "height".
     frame : Frame

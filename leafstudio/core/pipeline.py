@@ -21,10 +21,9 @@ import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pyvista as pv
 from scipy.spatial import cKDTree
 
 from leafstudio.core import analysis, mesher
@@ -46,8 +45,12 @@ from leafstudio.core.outline import (
 )
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.surface import HeightSurface, fit_surface
+from leafstudio.core.trianglemesh import TriangleMesh
 from leafstudio.errors import LeafError
 from leafstudio.model import K_AUTO, Leaf, Params
+
+if TYPE_CHECKING:
+    import pyvista as pv
 
 STAGES = ("frame", "implicit", "grid", "guide", "gmm", "surface", "mesh")
 STAGE_KEYS: dict[str, tuple[str, ...]] = {
@@ -131,7 +134,7 @@ class Result:
     em_samples: np.ndarray  # (s, 2) points drawn from p for EM
     surface: HeightSurface
     surface_points: np.ndarray  # (n, 3) the GMM samples: kept grid nodes lifted, world coords
-    mesh: pv.PolyData
+    triangle_mesh: TriangleMesh  # the mesh's arrays: points, triangles, height and curvatures
     length: float
     timings: dict[str, float] = field(default_factory=dict)
     ran: tuple[str, ...] = ()
@@ -147,17 +150,23 @@ class Result:
         return len(self.surface.mixture.weights)
 
     @cached_property
+    def mesh(self) -> pv.PolyData:
+        """The mesh as a pyvista.PolyData with its point arrays, built on first use (the app asks
+        for it on its main thread: the core itself never creates a VTK object)."""
+        return self.triangle_mesh.to_pyvista()
+
+    @cached_property
     def metrics(self) -> dict[str, Any]:
         """The paper's Table 1 distances and the mesh's facts (see analysis.table_metrics), the
         leaf's measurements with the K used ("leaf") and its curvature ranges ("curvature"; see
         measure.py)."""
         return {
-            **analysis.table_metrics(self.mesh, self.leaf),
+            **analysis.table_metrics(self.triangle_mesh, self.leaf),
             "leaf": {
-                **shape_measurements(self.mesh, self.frame, self.polygon),
+                **shape_measurements(self.triangle_mesh, self.frame, self.polygon),
                 "k": self.chosen_k,
             },
-            "curvature": curvature_summary(self.mesh),
+            "curvature": curvature_summary(self.triangle_mesh),
         }
 
 
@@ -319,7 +328,7 @@ class Pipeline:
         surf: SurfaceStage = stage(
             "surface", lambda: _surface_stage(fs, implicit, guide, nodes, mixture, params)
         )
-        mesh: pv.PolyData = stage(
+        mesh: TriangleMesh = stage(
             "mesh",
             lambda: _mesh_stage(
                 fs, implicit, grid, guide, surf, params, lambda: self._grid_mesh(fs, grid, guide)
@@ -337,7 +346,7 @@ class Pipeline:
             em_samples=samples,
             surface=surf.surface,
             surface_points=fs.frame.to_world(nodes, surf.z),
-            mesh=mesh,
+            triangle_mesh=mesh,
             length=fs.length,
             timings=timings,
             ran=tuple(ran),
@@ -423,7 +432,7 @@ def _mesh_stage(
     surf: SurfaceStage,
     params: Params,
     grid_mesh: Callable[[], tuple[np.ndarray, ...]],
-) -> pv.PolyData:
+) -> TriangleMesh:
     nodes = grid.points[guide.inside]
     n_outline = len(fs.polygon)
     # the margin at the boundary points' own heights (0 in the plane for a planar one, eq. 3);
@@ -442,12 +451,12 @@ def _mesh_stage(
         normals = fs.frame.to_world(-grad, np.ones(len(xy))) - fs.frame.origin
         normals /= np.linalg.norm(normals, axis=1, keepdims=True)
         triangles = mesher.ball_pivoting(world, normals, grid.spacing, params.radius_factor)
-    # regular faces: VTK's legacy (3, a, b, c) import took 7-30 ms at grid 512, this well under 1
-    mesh = pv.PolyData.from_regular_faces(world, triangles)
-    mesh.point_data["height"] = z
     on_margin = np.arange(len(xy)) < n_outline  # both meshers put the outline first
-    mesh.point_data.update(surface_curvatures(surf.surface, xy, on_margin))
-    return mesh
+    return TriangleMesh(
+        points=world,
+        regular_faces=triangles,
+        point_data={"height": z, **surface_curvatures(surf.surface, xy, on_margin)},
+    )
 
 
 def reconstruct(leaf: Leaf, params: Params | None = None) -> Result:
