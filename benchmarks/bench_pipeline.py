@@ -11,7 +11,9 @@ Prints one JSON document:
   kernels from the on-disk cache then; the ``cold`` figures are steady runs in a warm process);
 - ``memory``: peak RSS of a grid-512 run in a fresh interpreter, above a bare interpreter and
   above the same interpreter once leafstudio is imported;
-- ``accuracy``: the core issue's figures for both demos at grid 128 (they must hold at speed).
+- ``accuracy``: the core issue's figures for both demos at grid 128 (they must hold at speed);
+- ``machine``: cores, BLAS, load, and ``reference_ms``: a fixed workload's time before and after,
+  to tell a slower host from slower code between runs.
 
 Every time is the median (and the minimum) of ``--repeats`` runs, in milliseconds, once with BLAS
 pinned to one thread (threadpoolctl) and once with the library default: ``blas_1`` and
@@ -141,6 +143,19 @@ def poisson(leaf: ls.Leaf, repeats: int) -> dict[str, Any]:
         poisson_surface(leaf, normal)
         times.append(time.perf_counter() - start)
     return {"total_ms": _summary(times), "points": len(leaf.boundary) + len(leaf.vein_points)}
+
+
+def reference_ms(repeats: int = 5) -> float:
+    """Median time of a fixed workload (sorting 2 million floats): the host's speed at the moment,
+    to tell a slower machine from slower code when comparing runs (this 2-core VM has been seen
+    to vary by half as much again between runs minutes apart)."""
+    values = np.random.default_rng(0).random(2_000_000)
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        np.sort(values)
+        times.append(time.perf_counter() - start)
+    return round(1e3 * statistics.median(times), 2)
 
 
 def _subprocess_json(code: str) -> dict[str, Any]:
@@ -296,6 +311,7 @@ def main() -> None:
             "cpus": os.cpu_count(),
             "python": platform.python_version(),
             "load_average": list(os.getloadavg()),
+            "reference_ms": reference_ms(),
             "blas": [
                 {k: i.get(k) for k in ("internal_api", "num_threads")} for i in threadpool_info()
             ],
@@ -316,6 +332,7 @@ def main() -> None:
         report["memory"] = mem
     report["accuracy"] = accuracy()
     report["machine"]["load_average_after"] = list(os.getloadavg())
+    report["machine"]["reference_ms_after"] = reference_ms()
     print(json.dumps(report, indent=1))
 
 

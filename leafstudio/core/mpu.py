@@ -23,7 +23,7 @@ import numpy as np
 from numba import njit
 from scipy.spatial import cKDTree
 
-from leafstudio.core.buckets import Buckets, bucket_points, kernel_array
+from leafstudio.core.buckets import Buckets, bucket_points, kernel_array, neighbour_distances
 from leafstudio.core.grid import Grid
 
 ALPHA = 0.75  # support radius = ALPHA * cell diagonal (Ohtake et al.)
@@ -420,7 +420,7 @@ def build_mpu(
     buckets = bucket_points(points)
     lo, hi = points.min(axis=0), points.max(axis=0)
     half = 0.6 * float((hi - lo).max())
-    spacing = float(np.median(tree.query(points, k=2)[0][:, 1]))
+    spacing = float(np.median(neighbour_distances(points, np.arange(len(points)))))
     centers = ((lo + hi) / 2)[None, :]
     kept: list[tuple[np.ndarray, ...]] = []
     depth = 0
