@@ -49,14 +49,16 @@ def frozen_array(array: np.ndarray, dtype: type = float) -> np.ndarray:
     return out
 
 
-def bucket_points(xy: np.ndarray, size: float | None = None) -> Buckets:
-    """Sort (n, 2) points into square buckets of side `size` (default: about PER_BUCKET points
+def bucket_points(
+    xy: np.ndarray, size: float | None = None, per_bucket: float = PER_BUCKET
+) -> Buckets:
+    """Sort (n, 2) points into square buckets of side `size` (default: about `per_bucket` points
     per bucket over their bounding box)."""
     xy = kernel_array(xy)
     lo, hi = bounds(xy) if len(xy) else (np.zeros(2), np.ones(2))
     extent = np.maximum(hi - lo, 1e-300)
     if size is None:
-        size = float(np.sqrt(extent[0] * extent[1] * PER_BUCKET / max(len(xy), 1)))
+        size = float(np.sqrt(extent[0] * extent[1] * per_bucket / max(len(xy), 1)))
         size = max(size, float(extent.max()) / 4096)
     nx, ny = (np.floor(extent / size).astype(np.int64) + 1).tolist()
     starts, order = _counting_sort(xy, lo, float(size), nx, ny)
@@ -103,7 +105,9 @@ def neighbour_distances(points: np.ndarray, which: np.ndarray) -> np.ndarray:
     points = kernel_array(points)
     if len(points) < 2:
         return np.full(len(which), np.inf)
-    b = bucket_points(points)
+    # points along a curve (an outline) crowd a few of the box's buckets: finer ones keep each
+    # query's scan short, and cost only empty buckets where the points fill the box
+    b = bucket_points(points, per_bucket=0.25)
     return _neighbour_distances(
         points, np.asarray(which, dtype=np.int64), b.lo, b.size, b.nx, b.ny, b.starts, b.order
     )

@@ -54,8 +54,7 @@ def poisson_surface(leaf: Leaf, normal: np.ndarray, depth: int = POISSON_DEPTH) 
     triangles = np.asarray(mesh.triangles)
     if len(triangles) == 0:
         raise LeafError("screened Poisson made no surface from these points")
-    faces = np.column_stack([np.full(len(triangles), 3), triangles]).ravel()
-    return pv.PolyData(vertices, faces=faces)
+    return pv.PolyData.from_regular_faces(vertices, triangles)
 
 
 def spill_area(mesh: pv.PolyData, frame: Frame, polygon: np.ndarray) -> float:
