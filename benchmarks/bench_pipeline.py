@@ -95,7 +95,7 @@ def _timed_runs(run: Callable[[], ls.Result], repeats: int) -> dict[str, Any]:
         "total_ms": _summary(totals),
         "stages_ms": {name: _summary(v)["median"] for name, v in stages.items()},
         "ran": list(result.ran),
-        "vertices": int(result.mesh.n_points),
+        "vertices": int(result.triangle_mesh.n_points),
     }
 
 

@@ -185,8 +185,8 @@ def _reconstruct(args: argparse.Namespace) -> int:
 
         blade = split_scan(scan)[0]
         fidelity = {
-            "all": scan_distances(result.mesh, scan, result.length),
-            "blade": scan_distances(result.mesh, scan[blade], result.length),
+            "all": scan_distances(result.triangle_mesh, scan, result.length),
+            "blade": scan_distances(result.triangle_mesh, scan[blade], result.length),
         }
         for part, what in (("all", "all"), ("blade", "blade (no outliers, no petiole)")):
             f = fidelity[part]

@@ -56,7 +56,7 @@ def _colour_range(values: np.ndarray, scalars: str) -> tuple[float, float]:
 
 def _top_scale(result: Any, window_size: tuple[int, int]) -> float:
     """Half the visible height of the top view that shows the whole leaf with a margin."""
-    xy, _ = result.frame.to_plane(np.asarray(result.mesh.points))
+    xy, _ = result.frame.to_plane(result.triangle_mesh.points)
     half_length, half_width = np.ptp(xy, axis=0) / 2
     aspect = (window_size[0] / 2) / window_size[1]  # one panel's width / height
     return float(MARGIN * max(half_length / aspect, half_width * 1.6))

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from leafstudio.core.analysis import triangles_of
+from leafstudio.core.trianglemesh import TriangleMesh
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf, Params
 
@@ -266,7 +267,8 @@ def save_leaf(
 
 
 def save_mesh(result_or_mesh: Any, path: str | os.PathLike) -> None:
-    """Write a Result's mesh (or a pyvista mesh) as .ply, .obj, .stl, .vtp or .vtk by extension."""
+    """Write a Result's mesh (or a TriangleMesh or pyvista mesh) as .ply, .obj, .stl, .vtp or
+    .vtk by extension; PLY straight from the arrays, the others through VTK."""
     path = Path(path)
     suffix = _suffix(path)
     if suffix not in MESH_SUFFIXES:
@@ -274,10 +276,13 @@ def save_mesh(result_or_mesh: Any, path: str | os.PathLike) -> None:
             f"unknown mesh type {suffix or '(none)'!r}; use one of {', '.join(MESH_SUFFIXES)}",
             str(path),
         )
-    mesh = getattr(result_or_mesh, "mesh", result_or_mesh)
-    _replace_atomically(
-        path, lambda tmp: _write_mesh_ply(mesh, tmp) if suffix == ".ply" else mesh.save(tmp)
-    )
+    mesh = getattr(result_or_mesh, "triangle_mesh", result_or_mesh)
+    if suffix == ".ply":
+        _replace_atomically(path, lambda tmp: _write_mesh_ply(mesh, tmp))
+        return
+    if isinstance(mesh, TriangleMesh):
+        mesh = mesh.to_pyvista()
+    _replace_atomically(path, mesh.save)
 
 
 def _write_mesh_ply(mesh: Any, path: str) -> None:

@@ -80,3 +80,14 @@ def test_thinning_to_half_a_grid_step_moves_the_guide_by_a_small_fraction_of_the
     thinned = height_guide(xy, boundary, [midrib], [heights], step=0.5 * 2 / 128)
     assert np.abs(thinned - exact).max() <= 0.01 * heights.max()
     assert np.abs(thinned - exact).max() > 0  # the thinning did drop points
+
+
+def test_thinning_keeps_each_vein_s_end_and_a_short_vein_whole():
+    """A vein shorter than the step keeps both ends: midway between them, their tie averages
+    both heights, as without thinning (the boundary's spacing is above the step: unchanged)."""
+    boundary = np.column_stack([np.linspace(-5, 5, 5), np.zeros(5)])
+    vein, h = np.array([[-1.0, 2.0], [1.0, 2.0]]), np.array([0.1, 0.2])
+    xy = np.array([[0.0, 1.0]])
+    exact = height_guide(xy, boundary, [vein], [h])
+    np.testing.assert_allclose(height_guide(xy, boundary, [vein], [h], step=2.4), exact)
+    assert exact[0] == pytest.approx(0.15 / np.sqrt(5))  # h 0.15, |b - x| 1, mean |b - v'| √5

@@ -4,6 +4,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from plyfile import PlyData
 
 import leafstudio as ls
 from leafstudio.io import load_project, save_leaf
@@ -112,6 +113,20 @@ def test_mesh_export_by_extension(tmp_path: Path, suffix: str):
     np.testing.assert_allclose(back.bounds, result.mesh.bounds, atol=1e-5)
     if suffix != ".stl":  # STL stores each triangle's corners apart
         np.testing.assert_allclose(back.points, result.mesh.points, atol=1e-5)
+
+
+def test_a_triangle_mesh_exports_as_vtp_and_ply_without_a_polydata(tmp_path: Path):
+    import pyvista as pv
+
+    result = ls.reconstruct(ls.demo("nested"), ls.Params(grid=32))
+    for suffix in (".vtp", ".ply"):
+        ls.save_mesh(result.triangle_mesh, tmp_path / f"leaf{suffix}")
+        back = pv.read(tmp_path / f"leaf{suffix}")
+        np.testing.assert_allclose(back.points, result.triangle_mesh.points, atol=1e-6)
+        assert back.n_cells == len(result.triangle_mesh.regular_faces)
+    vertex = PlyData.read(tmp_path / "leaf.ply")["vertex"]  # VTK's reader drops the arrays
+    np.testing.assert_allclose(vertex["height"], result.triangle_mesh.point_data["height"])
+    assert "mesh" not in result.__dict__  # no PolyData of the result was made
 
 
 def test_unknown_mesh_type(tmp_path: Path):

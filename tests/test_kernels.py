@@ -16,7 +16,7 @@ from leafstudio.core.grid import make_grid
 from leafstudio.core.height import nearest_in_groups
 from leafstudio.core.mesher import conforming_grid_mesh, inner_nodes
 from leafstudio.core.mpu import bspline_weight, build_mpu
-from leafstudio.core.outline import contains, outward_normals, thin_outline
+from leafstudio.core.outline import contains, distinct_indices, outward_normals, thin_outline
 from leafstudio.core.pipeline import _frame_stage
 from leafstudio.core.surface import _levenberg_marquardt, _pack, _residual_rows
 from leafstudio.demos import PAPER_K
@@ -93,6 +93,22 @@ def test_neighbour_distances_are_the_brute_force_answer():
         d[np.arange(len(which)), which] = np.inf
         np.testing.assert_allclose(neighbour_distances(points, which), d.min(axis=1))
     assert np.isinf(neighbour_distances(np.zeros((1, 2)), np.array([0]))).all()
+    blob = np.vstack([rng.normal(0, 1e-4, (3000, 2)), [[5.0, 5.0], [-5.0, 3.0]]])  # crowded
+    which = np.arange(0, len(blob), 7)
+    d = np.linalg.norm(blob[which, None] - blob[None], axis=2)
+    d[np.arange(len(which)), which] = np.inf
+    np.testing.assert_allclose(neighbour_distances(blob, which), d.min(axis=1))
+
+
+def test_distinct_indices_drop_repeats_wherever_the_points_lie():
+    rng = np.random.default_rng(5)
+    points = rng.uniform(0, 1, (500, 2))
+    points = np.vstack([points, points[rng.integers(0, 500, 200)]])[rng.permutation(700)]
+    for offset in (0.0, 5.0, -3.0):
+        shifted = points + offset
+        first = np.unique(np.round(shifted / 1e-9), axis=0, return_index=True)[1]
+        np.testing.assert_array_equal(distinct_indices(shifted, 1.0), np.sort(first))
+    assert len(distinct_indices(np.zeros((0, 2)), 1.0)) == 0
 
 
 @pytest.mark.parametrize("polygon", [_star(), _slotted_square()], ids=["star", "slot"])

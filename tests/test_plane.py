@@ -48,8 +48,20 @@ def test_world_and_plane_coordinates_round_trip():
         (np.array([[0, 0, 0], [1, 1, 1], [2, 2, 2], [3, 3, 3.0]]), "one line"),
         (np.array([[1, 2, 3]] * 5, dtype=float), "at least 3 distinct"),
         (np.array([[0, 0, 0], [1, 0, 0.0]]), "at least 3 distinct"),
+        (np.zeros((0, 3)), "at least 3 distinct points, got 0"),
     ],
 )
 def test_degenerate_boundaries_are_refused(points, message):
     with pytest.raises(LeafError, match=message):
         fit_frame(points, np.zeros((0, 3)))
+
+
+def test_a_slender_boundary_keeps_its_plane_normal_to_float_precision():
+    """Aspect 1e5 : 1: the scatter's eigenvectors alone would be off by ~1e-5 rad."""
+    t = np.linspace(0, 2 * np.pi, 400, endpoint=False)
+    flat = np.column_stack([np.cos(t), 1e-5 * np.sin(t), np.zeros_like(t)])
+    c, s = np.cos(0.3), np.sin(0.3)
+    rotation = np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+    frame = fit_frame(flat @ rotation.T + [5.0, -2.0, 7.0], np.zeros((0, 3)))
+    expected = rotation @ [0.0, 0.0, 1.0]
+    assert abs(abs(frame.normal @ expected) - 1) < 1e-12

@@ -12,7 +12,12 @@ from leafstudio.model import Leaf
 
 def triangles_of(mesh: MeshLike) -> np.ndarray:
     """(m, 3) vertex indices of an all-triangle mesh (a TriangleMesh or a pyvista.PolyData)."""
-    return np.asarray(mesh.regular_faces)
+    faces = np.asarray(mesh.regular_faces)
+    if faces.size == 0:
+        return np.empty((0, 3), np.int64)
+    if faces.ndim != 2 or faces.shape[1] != 3:
+        raise ValueError(f"a triangle mesh was expected, got faces of shape {faces.shape}")
+    return faces
 
 
 def point_to_mesh_distance(mesh: MeshLike, points: np.ndarray) -> np.ndarray:

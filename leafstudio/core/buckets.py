@@ -17,6 +17,7 @@ import numpy as np
 from numba import njit
 
 PER_BUCKET = 4  # points per bucket on average over the points' bounding box
+CROWDED_BUCKET = 64  # neighbour_distances hands a set with a bucket this full to a k-d tree
 
 
 @dataclass(frozen=True)
@@ -108,6 +109,10 @@ def neighbour_distances(points: np.ndarray, which: np.ndarray) -> np.ndarray:
     # points along a curve (an outline) crowd a few of the box's buckets: finer ones keep each
     # query's scan short, and cost only empty buckets where the points fill the box
     b = bucket_points(points, per_bucket=0.25)
+    if np.diff(b.starts).max() > CROWDED_BUCKET:  # a tight cluster in a wide box: scans would
+        from scipy.spatial import cKDTree  # grow with its square; a k-d tree does not
+
+        return cKDTree(points).query(points[which], k=2)[0][:, 1]
     return _neighbour_distances(
         points, np.asarray(which, dtype=np.int64), b.lo, b.size, b.nx, b.ny, b.starts, b.order
     )

@@ -14,11 +14,11 @@ from typing import Any
 
 import numpy as np
 import open3d as o3d
-import pyvista as pv
 import shapely
 
 from leafstudio.core.analysis import table_metrics, triangles_of
 from leafstudio.core.plane import Frame
+from leafstudio.core.trianglemesh import MeshLike, TriangleMesh
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf, Params
 
@@ -26,7 +26,7 @@ POISSON_DEPTH = 8
 NORMAL_NEIGHBOURS = 16
 
 
-def poisson_surface(leaf: Leaf, normal: np.ndarray, depth: int = POISSON_DEPTH) -> pv.PolyData:
+def poisson_surface(leaf: Leaf, normal: np.ndarray, depth: int = POISSON_DEPTH) -> TriangleMesh:
     """Screened Poisson surface of the leaf's boundary and vein points.
 
     Parameters
@@ -39,7 +39,7 @@ def poisson_surface(leaf: Leaf, normal: np.ndarray, depth: int = POISSON_DEPTH) 
 
     Returns
     -------
-    pyvista.PolyData
+    TriangleMesh
         The triangle mesh, in the input's coordinates. One thread: open3d's default threading
         has crashed on small machines.
     """
@@ -50,14 +50,13 @@ def poisson_surface(leaf: Leaf, normal: np.ndarray, depth: int = POISSON_DEPTH) 
     mesh, _ = o3d.geometry.TriangleMesh.create_from_point_cloud_poisson(
         cloud, depth=depth, n_threads=1
     )
-    vertices = np.asarray(mesh.vertices)
-    triangles = np.asarray(mesh.triangles)
+    triangles = np.asarray(mesh.triangles, dtype=np.int64)
     if len(triangles) == 0:
         raise LeafError("screened Poisson made no surface from these points")
-    return pv.PolyData.from_regular_faces(vertices, triangles)
+    return TriangleMesh(points=np.asarray(mesh.vertices), regular_faces=triangles)
 
 
-def spill_area(mesh: pv.PolyData, frame: Frame, polygon: np.ndarray) -> float:
+def spill_area(mesh: MeshLike, frame: Frame, polygon: np.ndarray) -> float:
     """Area of the mesh outside the leaf region.
 
     Each triangle counts with the fraction of its projection onto the plane that lies outside
@@ -92,7 +91,7 @@ def compare(leaf: Leaf, params: Params | None = None) -> dict[str, Any]:
     dict
         "ours" and "poisson", each with the Table-1 distances ("boundary", "veins"), the mesh's
         facts ("mesh"), "spill" (spill_area) and "seconds" (the wall time of the
-        reconstruction); "ours" also has "k", the K used; "meshes" holds both pyvista meshes.
+        reconstruction); "ours" also has "k", the K used; "meshes" holds both (TriangleMesh).
     """
     from leafstudio.core.pipeline import Pipeline
 
@@ -103,7 +102,7 @@ def compare(leaf: Leaf, params: Params | None = None) -> dict[str, Any]:
     poisson = poisson_surface(leaf, result.frame.normal)
     poisson_seconds = time.perf_counter() - start
 
-    def report(mesh: pv.PolyData, seconds: float) -> dict[str, Any]:
+    def report(mesh: MeshLike, seconds: float) -> dict[str, Any]:
         return {
             **table_metrics(mesh, leaf),
             "spill": spill_area(mesh, result.frame, result.polygon),
@@ -111,9 +110,9 @@ def compare(leaf: Leaf, params: Params | None = None) -> dict[str, Any]:
         }
 
     return {
-        "ours": {**report(result.mesh, ours_seconds), "k": result.chosen_k},
+        "ours": {**report(result.triangle_mesh, ours_seconds), "k": result.chosen_k},
         "poisson": report(poisson, poisson_seconds),
-        "meshes": {"ours": result.mesh, "poisson": poisson},
+        "meshes": {"ours": result.triangle_mesh, "poisson": poisson},
     }
 
 

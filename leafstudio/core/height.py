@@ -218,7 +218,7 @@ def height_guide(
         return np.zeros(len(xy))
     if step > 0:
         boundary = boundary[thin_curve(boundary, step)]
-        kept = [thin_curve(vein, step) for vein in veins]
+        kept = [thin_curve(vein, step, keep_end=True) for vein in veins]
         veins = [vein[keep] for vein, keep in zip(veins, kept, strict=True)]
         heights = [h[keep] for h, keep in zip(heights, kept, strict=True)]
     zeros = np.zeros(len(boundary))

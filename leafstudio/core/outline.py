@@ -25,9 +25,11 @@ def distinct_indices(points: np.ndarray, scale: float) -> np.ndarray:
     """Indices of the (n, 2) points left once repeats (within 1e-9 of `scale`) are dropped, in
     order. Column by column: numpy's reductions along axis 0 of an (n, 2) array are slow."""
     columns = [np.round(points[:, i] / (scale * 1e-9)).astype(np.int64) for i in range(2)]
-    columns = [c - c.min(initial=0) for c in columns]
-    span_y = int(columns[1].max(initial=0)) + 1
-    if (float(columns[0].max(initial=0)) + 1) * span_y >= 2.0**62:  # rare: no one integer each
+    if len(points) == 0:
+        return np.arange(0)
+    columns = [c - c.min() for c in columns]
+    span_y = int(columns[1].max()) + 1
+    if (float(columns[0].max()) + 1) * span_y >= 2.0**62:  # rare: no one integer each
         return np.sort(np.unique(np.column_stack(columns), axis=0, return_index=True)[1])
     keys = columns[0] * span_y + columns[1]
     ordered = np.sort(keys)  # a plain sort: many times faster than a unique with indices
@@ -137,13 +139,17 @@ def thin_veins(veins: list[np.ndarray], most: int = MAX_OUTLINE_VERTICES) -> lis
     if sum(len(v) for v in veins) <= most:
         return [np.arange(len(v)) for v in veins]
     total = sum(float(np.sqrt((np.diff(v, axis=0) ** 2).sum(axis=1)).sum()) for v in veins)
-    return [thin_curve(v, total / most) for v in veins]
+    return [thin_curve(v, total / most, keep_end=True) for v in veins]
 
 
-def thin_curve(points: np.ndarray, step: float) -> np.ndarray:
+def thin_curve(points: np.ndarray, step: float, keep_end: bool = False) -> np.ndarray:
     """Indices of the (n, 2) points kept, in order, when each is dropped that lies nearer than
-    `step` to the last one kept (the first is always kept; unordered points mostly stay)."""
-    return _thin(kernel_array(points), float(step))
+    `step` to the last one kept (the first is always kept, and with `keep_end` the last: an
+    open curve's end; unordered points mostly stay)."""
+    kept = _thin(kernel_array(points), float(step))
+    if keep_end and len(points) and kept[-1] != len(points) - 1:
+        kept = np.append(kept, len(points) - 1)
+    return kept
 
 
 @njit(cache=True, nogil=True)

@@ -151,8 +151,8 @@ class Result:
 
     @cached_property
     def mesh(self) -> pv.PolyData:
-        """The mesh as a pyvista.PolyData with its point arrays, built on first use (the app asks
-        for it on its main thread: the core itself never creates a VTK object)."""
+        """The mesh as a pyvista.PolyData with its point arrays, built on first use: a run itself
+        never creates a VTK object (the app draws from `triangle_mesh` on its main thread)."""
         return self.triangle_mesh.to_pyvista()
 
     @cached_property

@@ -70,17 +70,25 @@ def fit_frame(boundary: np.ndarray, vein_points: np.ndarray) -> Frame:
     LeafError
         If there are fewer than 3 distinct boundary points, or they lie on one line.
     """
-    origin = boundary.mean(axis=0)
-    centred = boundary - origin
-    # the 3 x 3 scatter's eigenvectors are the principal axes: several times faster than an SVD
-    # of the (n, 3) points, and its float64 error (1e-16 of the largest) is far below the test
-    variances, axes = np.linalg.eigh(centred.T @ centred)  # ascending
-    if variances[2] <= 0 or variances[1] <= 1e-12 * variances[2]:
+    def degenerate() -> LeafError:
         distinct = _distinct_count_up_to_3(np.round(boundary, 12))
         if distinct < 3:
-            raise LeafError(f"the boundary needs at least 3 distinct points, got {distinct}")
-        raise LeafError("the boundary points lie on one line (or one point): no leaf plane")
+            return LeafError(f"the boundary needs at least 3 distinct points, got {distinct}")
+        return LeafError("the boundary points lie on one line (or one point): no leaf plane")
+
+    if len(boundary) < 3:
+        raise degenerate()
+    origin = boundary.mean(axis=0)
+    centred = boundary - origin
+    # the 3 x 3 scatter's eigenvectors are the principal axes, several times faster than an SVD
+    # of the (n, 3) points; the scatter squares the spread's ratios, so a slender boundary (its
+    # axes less precise that way) takes the SVD
+    variances, axes = np.linalg.eigh(centred.T @ centred)  # ascending
+    if variances[2] <= 0 or variances[1] <= 1e-12 * variances[2]:
+        raise degenerate()
     u, normal = axes[:, 2].copy(), axes[:, 0].copy()
+    if variances[1] < 1e-6 * variances[2]:
+        u, normal = np.linalg.svd(centred, full_matrices=False)[2][[0, 2]]
     if len(vein_points):
         side = float(np.mean((vein_points - origin) @ normal))
     else:

@@ -1,8 +1,9 @@
 """The reconstructed mesh as plain arrays, and what the measurements read of any triangle mesh.
 
 The pipeline builds its mesh as numpy arrays and only wraps them in a pyvista.PolyData when one is
-asked for (Result.mesh). The core then never imports VTK (about 60 MB and a third of a second),
-and a worker thread never creates a VTK object: the app asks for the PolyData on its main thread.
+asked for (Result.mesh). A run then never imports VTK (about 60 MB and a third of a second), and
+the app's worker threads never create a VTK object: they hand arrays to the main thread, which
+makes the datasets it draws (gui/layers.py).
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ class MeshLike(Protocol):
     def n_points(self) -> int: ...
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class TriangleMesh:
     """(n, 3) points, (m, 3) triangles and named (n,) point arrays."""
 
@@ -54,3 +55,17 @@ class TriangleMesh:
         mesh = pv.PolyData.from_regular_faces(self.points, self.regular_faces)
         mesh.point_data.update(self.point_data)
         return mesh
+
+
+def vertex_normals(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """(n, 3) unit normals at the vertices: the area-weighted mean of their triangles' normals
+    (each triangle's turning sense sets its side; a vertex without triangles gets 0, 0, 1)."""
+    a, b, c = (points[triangles[:, i]] for i in range(3))
+    face = np.cross(b - a, c - a)  # its length is twice the area: area-weighted as it stands
+    corners = triangles.ravel()
+    normals = np.column_stack(
+        [np.bincount(corners, np.repeat(face[:, k], 3), minlength=len(points)) for k in range(3)]
+    )
+    length = np.linalg.norm(normals, axis=1)
+    normals[length == 0] = (0.0, 0.0, 1.0)
+    return normals / np.where(length == 0, 1.0, length)[:, None]

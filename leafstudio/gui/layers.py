@@ -1,18 +1,23 @@
 """What the viewport draws for a Result: named datasets with their styles, one list per layer.
 
-Built on the worker thread (VTK data objects only, no rendering), so that the main thread only
-hands finished datasets to the renderer. No Qt here.
+Prepared on the worker thread as numpy arrays (normals, contour lines, quads: the costly part),
+and wrapped into VTK datasets on the main thread when the viewport first asks for them
+(Piece.data), so that VTK objects are made and touched there only. No Qt here.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from functools import cached_property, partial
 from typing import Any
 
+import contourpy
 import numpy as np
 import pyvista as pv
 
 from leafstudio.core.pipeline import Result
+from leafstudio.core.trianglemesh import vertex_normals
 
 # (key, label shown in the layer list, on by default)
 LAYERS: tuple[tuple[str, str, bool], ...] = (
@@ -40,14 +45,53 @@ CURVATURE_PERCENTILE = 95  # curvature colours span ± this percentile of |value
 MAP_OFFSET = 0.003  # the probability map sits this fraction of the leaf length below the plane
 
 
-@dataclass
+@dataclass(eq=False)
 class Piece:
-    """One actor: a name unique in the scene, a dataset and its add_mesh keywords."""
+    """One actor: a name unique in the scene, how to make its dataset, and its add_mesh keywords.
+
+    `make` wraps arrays prepared beforehand into a VTK dataset, cheaply; `data` calls it once, on
+    the main thread (the viewport), where VTK objects belong.
+    """
 
     name: str
-    data: pv.DataSet
+    make: Callable[[], pv.DataSet]
     style: dict[str, Any] = field(default_factory=dict)
     ranges: dict[str, tuple[float, float]] = field(default_factory=dict)  # colour range per array
+
+    @cached_property
+    def data(self) -> pv.DataSet:
+        return self.make()
+
+
+def cloud(points: np.ndarray) -> pv.PolyData:
+    """Points as a PolyData of vertices (an empty one for no points)."""
+    return pv.PolyData(points) if len(points) else pv.PolyData()
+
+
+def polylines(lines: list[np.ndarray]) -> pv.PolyData:
+    """(n_i, 3) polylines as one PolyData of line cells."""
+    if not lines:
+        return pv.PolyData()
+    sizes = [len(line) for line in lines]
+    starts = np.cumsum([0, *sizes[:-1]])
+    cells = np.concatenate(
+        [np.r_[size, start + np.arange(size)] for size, start in zip(sizes, starts, strict=True)]
+    )
+    return pv.PolyData(np.vstack(lines), lines=cells)
+
+
+def surface(
+    points: np.ndarray,
+    faces: np.ndarray,
+    point_data: Mapping[str, np.ndarray],
+    normals: np.ndarray | None = None,
+) -> pv.PolyData:
+    """A PolyData of (m, k) regular faces with point arrays and, given, the shading normals."""
+    mesh = pv.PolyData.from_regular_faces(points, faces)
+    mesh.point_data.update(dict(point_data))
+    if normals is not None:
+        mesh.point_data.active_normals = normals
+    return mesh
 
 
 def vein_color(index: int) -> str:
@@ -59,18 +103,14 @@ def _points(color: str, size: float) -> dict[str, Any]:
     return {"color": color, "point_size": size, "render_points_as_spheres": True}
 
 
-def _polyline(points: np.ndarray, closed: bool) -> pv.PolyData:
-    return pv.lines_from_points(np.vstack([points, points[:1]]) if closed else points)
-
-
-def _color_ranges(mesh: pv.PolyData) -> dict[str, tuple[float, float]]:
+def _color_ranges(point_data: Mapping[str, np.ndarray]) -> dict[str, tuple[float, float]]:
     """Colour range of each array in MESH_COLORINGS the mesh has: height from its least to its
     greatest value, curvature symmetric about 0 (so that 0 is the middle colour)."""
     ranges = {}
     for name in MESH_COLORINGS:
-        if name not in mesh.point_data:
+        if name not in point_data:
             continue
-        values = np.asarray(mesh.point_data[name], dtype=float)
+        values = np.asarray(point_data[name], dtype=float)
         values = values[np.isfinite(values)]
         if len(values) == 0:
             continue
@@ -83,68 +123,54 @@ def _color_ranges(mesh: pv.PolyData) -> dict[str, tuple[float, float]]:
 
 
 def _mesh_piece(result: Result) -> Piece:
-    mesh = result.mesh.compute_normals(
-        point_normals=True, cell_normals=False, split_vertices=False, auto_orient_normals=False
-    )
+    mesh = result.triangle_mesh
+    normals = vertex_normals(mesh.points, mesh.regular_faces)
     style = {
         "smooth_shading": False,  # the normals above already shade smoothly (no main-thread work)
         "show_edges": False,
         "edge_color": "#2a2a2a",
         "specular": 0.3,
     }
-    return Piece("mesh", mesh, style, _color_ranges(mesh))
+    make = partial(surface, mesh.points, mesh.regular_faces, mesh.point_data, normals)
+    return Piece("mesh", make, style, _color_ranges(mesh.point_data))
 
 
 def _input_pieces(result: Result) -> list[Piece]:
     size = 7.0
     pieces = [
-        Piece("points:boundary", pv.PolyData(result.leaf.boundary), _points(BOUNDARY_COLOR, 5.0))
+        Piece("points:boundary", partial(cloud, result.leaf.boundary), _points(BOUNDARY_COLOR, 5.0))
     ]
     for i, vein in enumerate(result.leaf.veins):
-        pieces.append(Piece(f"points:vein{i}", pv.PolyData(vein), _points(vein_color(i), size)))
+        pieces.append(Piece(f"points:vein{i}", partial(cloud, vein), _points(vein_color(i), size)))
     return pieces
 
 
 def _curve_pieces(result: Result) -> list[Piece]:
     outline = result.frame.to_world(result.polygon, np.zeros(len(result.polygon)))
-    pieces = [
-        Piece(
-            "curves:boundary", _polyline(outline, True), {"color": BOUNDARY_COLOR, "line_width": 3}
-        )
-    ]
+    closed = np.vstack([outline, outline[:1]])
+    style = {"color": BOUNDARY_COLOR, "line_width": 3}
+    pieces = [Piece("curves:boundary", partial(polylines, [closed]), style)]
     for i, vein in enumerate(result.leaf.veins):
         if len(vein) > 1:
-            pieces.append(
-                Piece(
-                    f"curves:vein{i}",
-                    _polyline(vein, False),
-                    {"color": vein_color(i), "line_width": 3},
-                )
-            )
+            style = {"color": vein_color(i), "line_width": 3}
+            pieces.append(Piece(f"curves:vein{i}", partial(polylines, [vein]), style))
     return pieces
 
 
-def _plane_image(result: Result, name: str, values: np.ndarray) -> pv.ImageData:
-    ny, nx = result.grid.shape
-    image = pv.ImageData(
-        dimensions=(nx, ny, 1),
-        spacing=(result.grid.spacing, result.grid.spacing, 1.0),
-        origin=(*result.grid.origin, 0.0),
-    )
-    image.point_data[name] = values
-    return image
-
-
-def _to_world(result: Result, lines: pv.PolyData) -> pv.PolyData:
-    """`lines` with their plane points (x, y, 0) moved to world coordinates on the plane."""
-    xy = np.asarray(lines.points)[:, :2]
-    lines.points = result.frame.to_world(xy, np.zeros(len(xy)))
-    return lines
-
-
 def _contour_piece(result: Result) -> Piece:
-    lines = _plane_image(result, "g", result.g_grid).contour([0.0], scalars="g")
-    return Piece("contour", _to_world(result, lines), {"color": "#e6550d", "line_width": 3})
+    """g = 0 on the grid (contourpy), lifted onto the plane in world coordinates."""
+    ny, nx = result.grid.shape
+    x = result.grid.origin[0] + result.grid.spacing * np.arange(nx)
+    y = result.grid.origin[1] + result.grid.spacing * np.arange(ny)
+    generator = contourpy.contour_generator(
+        x, y, result.g_grid.reshape(ny, nx), line_type=contourpy.LineType.Separate
+    )
+    lines = [
+        result.frame.to_world(line, np.zeros(len(line)))
+        for line in generator.lines(0.0)
+        if len(line) > 1
+    ]
+    return Piece("contour", partial(polylines, lines), {"color": "#e6550d", "line_width": 3})
 
 
 def _probability_piece(result: Result) -> Piece:
@@ -152,18 +178,18 @@ def _probability_piece(result: Result) -> Piece:
     ny, nx = result.grid.shape
     index = np.arange(ny * nx).reshape(ny, nx)
     corners = [index[:-1, :-1], index[:-1, 1:], index[1:, 1:], index[1:, :-1]]
-    quads = np.column_stack([np.full(corners[0].size, 4), *(c.ravel() for c in corners)])
+    quads = np.column_stack([c.ravel() for c in corners])
     offset = np.full(ny * nx, -MAP_OFFSET * result.length)
-    surface = pv.PolyData(result.frame.to_world(result.grid.points, offset), faces=quads.ravel())
-    surface.point_data["p(x)"] = np.where(result.inside, result.p_grid, np.nan)
+    points = result.frame.to_world(result.grid.points, offset)
+    values = {"p(x)": np.where(result.inside, result.p_grid, np.nan)}
     style = {"scalars": "p(x)", "cmap": "magma", "nan_opacity": 0.0, "opacity": 0.9}
-    return Piece("probability", surface, style)
+    return Piece("probability", partial(surface, points, quads, values), style)
 
 
 def _sample_pieces(result: Result) -> tuple[Piece, Piece]:
-    gmm = Piece("samples", pv.PolyData(result.surface_points), _points("#2ca02c", 3.0))
+    gmm = Piece("samples", partial(cloud, result.surface_points), _points("#2ca02c", 3.0))
     em_xyz = result.frame.to_world(result.em_samples, np.zeros(len(result.em_samples)))
-    em = Piece("em", pv.PolyData(em_xyz) if len(em_xyz) else pv.PolyData(), _points("#7f7f7f", 2.0))
+    em = Piece("em", partial(cloud, em_xyz), _points("#7f7f7f", 2.0))
     return gmm, em
 
 

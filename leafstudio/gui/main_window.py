@@ -682,7 +682,7 @@ class MainWindow(QMainWindow):
                 "fidelity",
                 outcome.request.id,
                 fidelity_sections,
-                result.mesh,
+                result.triangle_mesh,
                 self.scan,
                 result.length,
             )

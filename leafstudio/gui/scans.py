@@ -3,25 +3,27 @@
 A scan (a point cloud of a leaf's whole surface) opens as its extracted leaf (core/extract.py),
 with its points as a layer and its distances to each new mesh in the measurements panel. The
 Poisson layer is open3d's screened Poisson surface of the same input (core/compare.py), drawn
-beside our mesh. Everything here runs on the task thread; the main thread only draws.
+beside our mesh. Everything here runs on the task thread, with numpy only; the main thread
+makes the VTK datasets from it (Piece.data) and draws.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pyvista as pv
 from scipy.spatial import cKDTree
 
 from leafstudio.core.compare import poisson_surface
 from leafstudio.core.extract import Extraction, extract_leaf
 from leafstudio.core.fidelity import FAR, NEAR, scan_distances
 from leafstudio.core.pipeline import Result
+from leafstudio.core.trianglemesh import MeshLike, vertex_normals
 from leafstudio.errors import LeafError
-from leafstudio.gui.layers import Piece
+from leafstudio.gui.layers import Piece, cloud, surface
 from leafstudio.model import Leaf
 from leafstudio.scan import MIN_SCAN_POINTS, SCAN_SUFFIXES, read_scan
 
@@ -58,8 +60,8 @@ def load_scan(path: str) -> ScanData:
         raise LeafError(exc.problem, path) from None
     blade = extraction.blade
     pieces = [
-        Piece("scan:blade", pv.PolyData(points[blade]), _dots(BLADE_COLOR, 3.0)),
-        Piece("scan:dropped", pv.PolyData(points[~blade]), _dots(DROPPED_COLOR, 4.0)),
+        Piece("scan:blade", partial(cloud, points[blade]), _dots(BLADE_COLOR, 3.0)),
+        Piece("scan:dropped", partial(cloud, points[~blade]), _dots(DROPPED_COLOR, 4.0)),
     ]
     return ScanData(str(path), points, extraction, pieces)
 
@@ -105,7 +107,7 @@ def looks_like_scan(leaf: Leaf) -> bool:
 
 
 def fidelity_sections(
-    mesh: pv.PolyData, scan: ScanData, length: float
+    mesh: MeshLike, scan: ScanData, length: float
 ) -> list[tuple[str, list[tuple[str, str]]]]:
     """Measurements-panel sections: distances from the scan's blade points (and from all its
     points) to the mesh, as `leafstudio reconstruct --against` reports them."""
@@ -134,14 +136,11 @@ def _fidelity_rows(f: dict[str, Any]) -> list[tuple[str, str]]:
 def poisson_piece(result: Result) -> Piece:
     """The screened Poisson surface of the result's input, moved beside our mesh along the leaf's
     width (its spill would hide our mesh in place), semi-transparent."""
-    surface = poisson_surface(result.leaf, result.frame.normal)
+    poisson = poisson_surface(result.leaf, result.frame.normal)
     side = result.frame.v
-    ours = np.asarray(result.mesh.points) @ side
-    theirs = np.asarray(surface.points) @ side
-    shift = ours.max() - theirs.min() + POISSON_GAP * result.length
-    surface.points = np.asarray(surface.points) + shift * side
-    surface = surface.compute_normals(
-        point_normals=True, cell_normals=False, split_vertices=False, auto_orient_normals=False
-    )
+    ours = result.triangle_mesh.points @ side
+    theirs = poisson.points @ side
+    points = poisson.points + (ours.max() - theirs.min() + POISSON_GAP * result.length) * side
+    normals = vertex_normals(points, poisson.regular_faces)
     style = {"color": POISSON_COLOR, "opacity": POISSON_OPACITY, "smooth_shading": False}
-    return Piece("poisson", surface, style)
+    return Piece("poisson", partial(surface, points, poisson.regular_faces, {}, normals), style)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 import pytest
 
@@ -24,6 +26,22 @@ def test_every_layer_is_built_with_unique_names(result):
     names = [piece.name for pieces in layers.values() for piece in pieces]
     assert len(names) == len(set(names))
     assert len(layers["points"]) == 1 + len(result.leaf.veins)  # boundary + each vein
+
+
+def test_layers_built_off_the_main_thread_hold_no_vtk_object_until_drawn():
+    result = Pipeline(demo("nested")).run(FAST)
+    built = {}
+    thread = threading.Thread(target=lambda: built.update(build_layers(result)))
+    thread.start()
+    thread.join()
+    pieces = [piece for layer in built.values() for piece in layer]
+    assert not any("data" in piece.__dict__ for piece in pieces)
+    assert "mesh" not in result.__dict__  # nor the result's PolyData
+    mesh = built["mesh"][0].data  # made here, on the main thread
+    assert mesh.n_points == result.triangle_mesh.n_points
+    normals = np.asarray(mesh.point_data["Normals"])
+    np.testing.assert_allclose(np.linalg.norm(normals, axis=1), 1.0)
+    assert (normals @ result.frame.normal > 0.5).all()  # a leaf's shading side faces up
 
 
 def test_the_zero_contour_lies_on_the_plane_along_the_outline(result):
