@@ -2,9 +2,12 @@
 
 import numpy as np
 import pytest
+import shapely
+from shapely.geometry import LinearRing
 
 from leafstudio.core.mpu import bspline_weight, build_mpu
-from leafstudio.core.outline import contains, leaf_polygon, outward_normals
+from leafstudio.core.outline import contains, leaf_polygon, outward_normals, thin_curve
+from leafstudio.core.pipeline import _frame_stage
 from leafstudio.demos import demo
 from tests import leaves
 
@@ -102,3 +105,22 @@ def test_supports_leave_no_gaps_inside_an_ellipse():
     value, grad = g.evaluate(inside, gradient=True)
     assert np.all(value > 0)
     assert np.linalg.norm(grad, axis=1).max() < 3
+
+
+@pytest.mark.parametrize("vertices", [3000, 1500, 1000])
+def test_a_finely_resampled_outline_keeps_a_compact_quadtree(vertices):
+    """The nested demo's outline resampled to 30,000 points and thinned to a few thousand (as a
+    dense scan's is): cells beyond its sharp tip, whose balls all grow to the tip's points, were
+    split to the depth limit for a sign no split could mend (35,000 cells instead of ~700)."""
+    polygon = _frame_stage(demo("nested"))[0].polygon
+    closed = np.vstack([polygon, polygon[:1]])
+    arc = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(closed, axis=0), axis=1))])
+    at = np.linspace(0, arc[-1], 30000, endpoint=False)
+    dense = np.column_stack([np.interp(at, arc, closed[:, k]) for k in range(2)])
+    outline = dense[thin_curve(dense, arc[-1] / vertices)]
+    implicit = _implicit(outline)
+    assert len(implicit.centers) < 1000
+    grid = np.stack(np.meshgrid(np.linspace(-0.6, 0.6, 60), np.linspace(-0.3, 0.3, 30)), -1)
+    xy = grid.reshape(-1, 2)
+    far = shapely.distance(LinearRing(outline), shapely.points(xy)) > 0.01
+    np.testing.assert_array_equal(implicit(xy[far]) > 0, contains(outline, xy[far]))

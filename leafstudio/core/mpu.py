@@ -424,6 +424,7 @@ def build_mpu(
     centers = ((lo + hi) / 2)[None, :]
     kept: list[tuple[np.ndarray, ...]] = []
     depth = 0
+    second_try = np.zeros(1, dtype=bool)  # the cell's parent was split to mend its sign
     while len(centers):
         radii = np.full(len(centers), ALPHA * 2 * np.sqrt(2) * half)
         grown = (
@@ -437,8 +438,11 @@ def build_mpu(
             f_center = np.einsum("ij,ij->i", centers, coef[:, :2]) + coef[:, 2]
             wrong_sign[grown] = (f_center[grown] > 0) != inside(centers[grown])
         # A cell smaller than the local point spacing (its ball had to grow) is as fine as the
-        # data allows: it is split again only to mend a wrong sign.
-        split = (depth < MAX_DEPTH) & (half > 0.5 * spacing) & ((bad & ~grown) | wrong_sign)
+        # data allows: it is split again only to mend a wrong sign, once. Its children's balls
+        # grow to much the same points (beyond a sharp tip, all of them on one side of its
+        # centre), so more splits rarely mend it and multiplied such cells by thousands.
+        mend = wrong_sign & ~second_try
+        split = (depth < MAX_DEPTH) & (half > 0.5 * spacing) & ((bad & ~grown) | mend)
         keep = ~split
         fix = keep & wrong_sign  # could not be split: a constant of the right sign instead
         if fix.any():
@@ -449,6 +453,7 @@ def build_mpu(
         half /= 2
         offsets = np.array([[-1, -1], [1, -1], [-1, 1], [1, 1]]) * half
         centers = (centers[split][:, None, :] + offsets[None]).reshape(-1, 2)
+        second_try = np.repeat(mend[split], 4)
         depth += 1
     c, r, k, d = (np.concatenate(parts) for parts in zip(*kept, strict=True))
     return MPUImplicit(centers=c, radii=r, coef=k, points=points, depth=d.astype(int))
