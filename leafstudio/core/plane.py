@@ -96,7 +96,7 @@ def fit_frame(boundary: np.ndarray, vein_points: np.ndarray) -> Frame:
     if side < 0:
         normal = -normal
     # A deterministic in-plane direction: u points toward the boundary's farther extreme.
-    along = (boundary - origin) @ u
+    along = centred @ u
     if along.max() < -along.min():
         u = -u
     v = np.cross(normal, u)
