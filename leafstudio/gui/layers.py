@@ -17,7 +17,7 @@ import numpy as np
 import pyvista as pv
 
 from leafstudio.core.pipeline import Result
-from leafstudio.core.trianglemesh import vertex_normals
+from leafstudio.core.trianglemesh import polydata, vertex_normals
 
 # (key, label shown in the layer list, on by default)
 LAYERS: tuple[tuple[str, str, bool], ...] = (
@@ -64,8 +64,8 @@ class Piece:
 
 
 def cloud(points: np.ndarray) -> pv.PolyData:
-    """Points as a PolyData of vertices (an empty one for no points)."""
-    return pv.PolyData(points) if len(points) else pv.PolyData()
+    """Points as a PolyData of vertices (an empty one for no points), copied into VTK."""
+    return pv.PolyData(np.asarray(points, dtype=float), deep=True) if len(points) else pv.PolyData()
 
 
 def polylines(lines: list[np.ndarray]) -> pv.PolyData:
@@ -77,21 +77,7 @@ def polylines(lines: list[np.ndarray]) -> pv.PolyData:
     cells = np.concatenate(
         [np.r_[size, start + np.arange(size)] for size, start in zip(sizes, starts, strict=True)]
     )
-    return pv.PolyData(np.vstack(lines), lines=cells)
-
-
-def surface(
-    points: np.ndarray,
-    faces: np.ndarray,
-    point_data: Mapping[str, np.ndarray],
-    normals: np.ndarray | None = None,
-) -> pv.PolyData:
-    """A PolyData of (m, k) regular faces with point arrays and, given, the shading normals."""
-    mesh = pv.PolyData.from_regular_faces(points, faces)
-    mesh.point_data.update(dict(point_data))
-    if normals is not None:
-        mesh.point_data.active_normals = normals
-    return mesh
+    return pv.PolyData(np.vstack(lines), lines=cells, deep=True)
 
 
 def vein_color(index: int) -> str:
@@ -131,7 +117,7 @@ def _mesh_piece(result: Result) -> Piece:
         "edge_color": "#2a2a2a",
         "specular": 0.3,
     }
-    make = partial(surface, mesh.points, mesh.regular_faces, mesh.point_data, normals)
+    make = partial(polydata, mesh.points, mesh.regular_faces, mesh.point_data, normals)
     return Piece("mesh", make, style, _color_ranges(mesh.point_data))
 
 
@@ -183,7 +169,7 @@ def _probability_piece(result: Result) -> Piece:
     points = result.frame.to_world(result.grid.points, offset)
     values = {"p(x)": np.where(result.inside, result.p_grid, np.nan)}
     style = {"scalars": "p(x)", "cmap": "magma", "nan_opacity": 0.0, "opacity": 0.9}
-    return Piece("probability", partial(surface, points, quads, values), style)
+    return Piece("probability", partial(polydata, points, quads, values), style)
 
 
 def _sample_pieces(result: Result) -> tuple[Piece, Piece]:

@@ -21,9 +21,9 @@ from leafstudio.core.compare import poisson_surface
 from leafstudio.core.extract import Extraction, extract_leaf
 from leafstudio.core.fidelity import FAR, NEAR, scan_distances
 from leafstudio.core.pipeline import Result
-from leafstudio.core.trianglemesh import MeshLike, vertex_normals
+from leafstudio.core.trianglemesh import MeshLike, polydata, vertex_normals
 from leafstudio.errors import LeafError
-from leafstudio.gui.layers import Piece, cloud, surface
+from leafstudio.gui.layers import Piece, cloud
 from leafstudio.model import Leaf
 from leafstudio.scan import MIN_SCAN_POINTS, SCAN_SUFFIXES, read_scan
 
@@ -143,4 +143,4 @@ def poisson_piece(result: Result) -> Piece:
     points = poisson.points + (ours.max() - theirs.min() + POISSON_GAP * result.length) * side
     normals = vertex_normals(points, poisson.regular_faces)
     style = {"color": POISSON_COLOR, "opacity": POISSON_OPACITY, "smooth_shading": False}
-    return Piece("poisson", partial(surface, points, poisson.regular_faces, {}, normals), style)
+    return Piece("poisson", partial(polydata, points, poisson.regular_faces, {}, normals), style)
