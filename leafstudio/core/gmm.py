@@ -23,6 +23,7 @@ EM_TOL = 1e-3  # EM stops when the mean log-likelihood per sample changes less t
 EM_MAX_ITER = 200
 UNDERFLOW = 600.0  # exp(-q) for q beyond this is taken as exactly 0 (no subnormals)
 KMEANS_ITER = 300  # Lloyd iterations of the k-means start at most (it stops once labels settle)
+KMEANS_TOL = 1e-4  # ...or once the centres move less than this times the samples' mean variance
 
 
 @dataclass(frozen=True)
@@ -156,7 +157,8 @@ def fit_mixture(samples: np.ndarray, k: int, seed: int) -> Mixture:
             f"K = {k} is more than the data supports: the guide has only {distinct} distinct "
             f"samples (need at least 5 per component); lower K or raise the grid resolution"
         )
-    labels = _kmeans(samples, _kmeans_plus_plus(samples, k, np.random.RandomState(seed)))
+    seeds = _kmeans_plus_plus(samples, k, np.random.RandomState(seed))
+    labels = _kmeans(samples, seeds, KMEANS_TOL * float(np.var(samples, axis=0).mean()))
     weights, means, covariances = _em(samples, labels, k, REG_COVAR, EM_TOL, EM_MAX_ITER)
     return Mixture(weights=weights, means=means, covariances=covariances, amplitudes=weights.copy())
 
@@ -233,33 +235,49 @@ def _kmeans_plus_plus(x: np.ndarray, k: int, rng: np.random.RandomState) -> np.n
 
 
 @njit(cache=True, nogil=True)
-def _kmeans(x, centers):
-    """Lloyd's k-means from the given (k, 2) centres; returns (n,) labels."""
+def _kmeans(x, centers, tol):
+    """Lloyd's k-means from the given (k, 2) centres; returns (n,) labels.
+
+    Stops as scikit-learn's does: when the labels settle, or when the centres' summed squared
+    shift is at most `tol`, and then labels the samples by the last centres.
+    """
     n, k = len(x), len(centers)
     labels = np.full(n, -1, np.int64)
     centers = centers.copy()
     for _ in range(KMEANS_ITER):
-        changed = False
-        for i in range(n):
-            best, arg = np.inf, 0
-            for c in range(k):
-                d = (x[i, 0] - centers[c, 0]) ** 2 + (x[i, 1] - centers[c, 1]) ** 2
-                if d < best:
-                    best, arg = d, c
-            if labels[i] != arg:
-                labels[i], changed = arg, True
-        if not changed:
-            break
+        if not _assign(x, centers, labels):
+            return labels
         sums, counts = np.zeros((k, 2)), np.zeros(k)
         for i in range(n):
             c = labels[i]
             sums[c, 0] += x[i, 0]
             sums[c, 1] += x[i, 1]
             counts[c] += 1
+        shift = 0.0
         for c in range(k):
             if counts[c] > 0:
-                centers[c, 0], centers[c, 1] = sums[c, 0] / counts[c], sums[c, 1] / counts[c]
+                cx, cy = sums[c, 0] / counts[c], sums[c, 1] / counts[c]
+                shift += (cx - centers[c, 0]) ** 2 + (cy - centers[c, 1]) ** 2
+                centers[c, 0], centers[c, 1] = cx, cy
+        if shift <= tol:
+            break
+    _assign(x, centers, labels)
     return labels
+
+
+@njit(cache=True, nogil=True)
+def _assign(x, centers, labels):
+    """Label each sample by its nearest centre, in place; True if any label changed."""
+    changed = False
+    for i in range(len(x)):
+        best, arg = np.inf, 0
+        for c in range(len(centers)):
+            d = (x[i, 0] - centers[c, 0]) ** 2 + (x[i, 1] - centers[c, 1]) ** 2
+            if d < best:
+                best, arg = d, c
+        if labels[i] != arg:
+            labels[i], changed = arg, True
+    return changed
 
 
 @njit(cache=True, nogil=True)
