@@ -16,7 +16,13 @@ from leafstudio.core.grid import make_grid
 from leafstudio.core.height import nearest_in_groups
 from leafstudio.core.mesher import conforming_grid_mesh, inner_nodes
 from leafstudio.core.mpu import bspline_weight, build_mpu
-from leafstudio.core.outline import contains, distinct_indices, outward_normals, thin_outline
+from leafstudio.core.outline import (
+    contains,
+    distinct_indices,
+    leaf_polygon,
+    outward_normals,
+    thin_outline,
+)
 from leafstudio.core.pipeline import _frame_stage
 from leafstudio.core.surface import _levenberg_marquardt, _pack, _residual_rows
 from leafstudio.demos import PAPER_K
@@ -202,6 +208,27 @@ def test_thin_outline_keeps_a_dense_outline_within_a_tiny_distance():
     thinned = LinearRing(circle[keep])
     assert shapely.distance(thinned, shapely.points(circle)).max() < 1e-5
     np.testing.assert_array_equal(thin_outline(circle[:1000], most=2000), np.arange(1000))
+
+
+def test_a_dense_outline_with_a_slit_narrower_than_the_thinning_stays_a_valid_subset():
+    """A unit square traced by 24,000 points with a wavy slit 4e-4 wide down to y = 0.3: chords
+    of the thinned walls (step about 2e-3) cut across it, so the outline must be thinned less,
+    not repaired (a repair fills the slit with vertices that are no input points)."""
+    y = np.linspace(1, 0.3, 4000)
+    wave = 0.005 * np.sin(600 * y)
+    down = np.column_stack([0.5002 + wave, y])
+    up = np.column_stack([0.4998 + wave[::-1], y[::-1]])
+    edge = np.linspace(0, 1, 4000, endpoint=False)
+    bottom_right = np.column_stack([np.r_[edge, np.ones(4000)], np.r_[np.zeros(4000), edge]])
+    top_right = np.column_stack([np.linspace(1, down[0, 0], 2000, endpoint=False), np.ones(2000)])
+    top_left = np.column_stack([np.linspace(up[-1, 0], 0, 2000, endpoint=False), np.ones(2000)])
+    left = np.column_stack([np.zeros(4000), 1 - edge])
+    dense = np.vstack([bottom_right, top_right, down, up, top_left, left])
+    polygon = leaf_polygon(dense)
+    assert Polygon(polygon).is_valid and len(polygon) < len(dense)
+    inputs = {tuple(p) for p in np.round(dense, 12)}
+    assert all(tuple(p) in inputs for p in np.round(polygon, 12))  # each an input point
+    assert Polygon(polygon).area == pytest.approx(Polygon(dense).area, rel=1e-5)
 
 
 def _densified(curve: np.ndarray, per_edge: int, closed: bool) -> np.ndarray:

@@ -1,8 +1,9 @@
 """The leaf outline: unordered boundary points turned into one simple polygon in the plane.
 
 The MPU implicit needs outward normals, and the conforming mesher and the coverage figures need
-the leaf region; both come from this polygon. Ordered input (sketches, sampled curves) is kept as
-given; unordered or shuffled input is ordered by a concave hull of the points.
+the leaf region; both come from this polygon. Ordered input (sketches, sampled curves) is kept in
+its order (a dense one thinned to about MAX_OUTLINE_VERTICES); unordered or shuffled input is
+ordered by a concave hull of the points.
 """
 
 from __future__ import annotations
@@ -59,20 +60,28 @@ def _largest_polygon(geom: shapely.Geometry) -> Polygon | None:
 
 
 def _as_ordered(points: np.ndarray, spacing: float) -> Polygon | None:
-    """The polygon through the points in their given order, if that order traces the outline;
-    more than MAX_OUTLINE_VERTICES of them thinned first (thin_curve, as thin_outline does), so
-    that the validity test checks the outline the pipeline uses, at a fraction of the cost."""
+    """The polygon through the points in their given order, if that order traces the outline.
+
+    More than MAX_OUTLINE_VERTICES of them are thinned first (thin_curve, as thin_outline does),
+    so that the validity test checks the outline the pipeline uses, at a fraction of the cost; a
+    thinned ring that cuts across a narrow slit is thinned less, down to every point, before
+    a self-crossing outline is repaired.
+    """
     x, y = points[:, 0], points[:, 1]
     edges = np.hypot(np.diff(x, append=x[0]), np.diff(y, append=y[0]))  # columns: much faster
     if edges.max() > 8 * spacing:
         return None
-    if len(points) > MAX_OUTLINE_VERTICES:
-        points = points[thin_curve(points, float(edges.sum()) / MAX_OUTLINE_VERTICES)]
+    step = float(edges.sum()) / MAX_OUTLINE_VERTICES if len(points) > MAX_OUTLINE_VERTICES else 0.0
+    while step > 0:
+        poly = Polygon(points[thin_curve(points, step)])
+        if poly.is_valid:
+            return poly
+        step = step / 2 if step / 2 > float(np.median(edges)) else 0.0
     poly = Polygon(points)
     if poly.is_valid:
         return poly
     repaired = _largest_polygon(shapely.make_valid(poly))
-    if repaired is not None and repaired.area > 0.9 * abs(shapely.area(Polygon(points))):
+    if repaired is not None and repaired.area > 0.9 * abs(shapely.area(poly)):
         return repaired
     return None
 
@@ -104,8 +113,9 @@ def leaf_polygon(points: np.ndarray) -> np.ndarray:
     Returns
     -------
     (m, 2) float array
-        Polygon vertices (m <= n, each an input point), counter-clockwise, not closed. Points
-        given in order come back thinned to about MAX_OUTLINE_VERTICES (see thin_outline).
+        Polygon vertices (m <= n, each an input point), counter-clockwise, not closed. More
+        than MAX_OUTLINE_VERTICES points given in order come back thinned to about that many
+        (see thin_outline).
     """
     points = kernel_array(points)
     lo, hi = bounds(points)

@@ -175,7 +175,7 @@ def _frame_stage(leaf: Leaf) -> tuple[FrameStage, list[str]]:
     frame = fit_frame(leaf.boundary, leaf.vein_points)
     xy, boundary_h = frame.to_plane(leaf.boundary)
     polygon = leaf_polygon(xy)
-    polygon = polygon[thin_outline(polygon)]  # a dense scan's outline: a few thousand vertices
+    polygon = polygon[thin_outline(polygon)]  # a dense concave hull: a few thousand vertices
     length = float(np.ptp(polygon[:, 0]))
     if np.max(np.abs(boundary_h)) <= PLANAR * length:  # no base: skip the vertices' lookup
         polygon_h = np.zeros(len(polygon))

@@ -58,8 +58,9 @@ def polydata(
     point_data: Mapping[str, np.ndarray] | None = None,
     normals: np.ndarray | None = None,
 ) -> pv.PolyData:
-    """A pyvista.PolyData of (m, k) faces of the same size over (n, 3) points, with point arrays
-    and, given, the (n, 3) shading normals (VTK imported here, on first use).
+    """A pyvista.PolyData of (m, k) faces of the same size (an (m, k) array: VTK's padded flat
+    format is refused) over (n, 3) points, with point arrays and, given, the (n, 3) shading
+    normals (VTK imported here, on first use).
 
     Every array is copied into VTK's own memory, cells as offsets and connectivity (VTK's usual
     storage): the dataset then owes nothing to numpy arrays that may be freed before it, and the
@@ -69,13 +70,14 @@ def polydata(
     import pyvista as pv
 
     faces = np.asarray(faces)
-    size = faces.shape[1] if faces.ndim == 2 else 3
-    offsets = np.arange(0, faces.size + 1, size)
+    if faces.ndim != 2:
+        raise ValueError(f"faces must be an (m, k) array, got shape {faces.shape}")
+    offsets = np.arange(0, faces.size + 1, max(faces.shape[1], 1))
     cells = pv.CellArray.from_arrays(offsets, faces.ravel(), deep=True)
     mesh = pv.PolyData(np.asarray(points, dtype=float), faces=cells, deep=True)
     for name, values in (point_data or {}).items():
         mesh.point_data.set_array(values, name, deep_copy=True)
-    if normals is not None:
+    if normals is not None and len(normals):
         mesh.point_data.set_array(normals, "Normals", deep_copy=True)
         mesh.point_data.active_normals_name = "Normals"
     return mesh
