@@ -6,6 +6,7 @@ from typing import Any
 
 import numpy as np
 
+from leafstudio.core.distance import mesh_distances
 from leafstudio.core.trianglemesh import MeshLike
 from leafstudio.model import Leaf
 
@@ -21,22 +22,9 @@ def triangles_of(mesh: MeshLike) -> np.ndarray:
 
 
 def point_to_mesh_distance(mesh: MeshLike, points: np.ndarray) -> np.ndarray:
-    """(n,) exact distance from each point to the nearest point on the mesh's triangles."""
-    if len(points) == 0:
-        return np.zeros(0)
-    import open3d as o3d  # here, not at the top: it takes seconds and 250 MB to import
-
-    # open3d's scene is float32: work relative to the mesh's centre to keep leaves far from the
-    # origin precise
-    vertices = np.asarray(mesh.points, dtype=float)
-    center = vertices.mean(axis=0)
-    scene = o3d.t.geometry.RaycastingScene()
-    tmesh = o3d.t.geometry.TriangleMesh()
-    tmesh.vertex.positions = o3d.core.Tensor((vertices - center).astype(np.float32))
-    tmesh.triangle.indices = o3d.core.Tensor(triangles_of(mesh).astype(np.int32))
-    scene.add_triangles(tmesh)
-    query = o3d.core.Tensor((np.asarray(points, dtype=float) - center).astype(np.float32))
-    return scene.compute_distance(query).numpy().astype(float)
+    """(n,) exact distance from each point to the nearest point on the mesh's triangles (see
+    distance.py: compiled, and without holding the GIL for long)."""
+    return mesh_distances(np.asarray(mesh.points, dtype=float), triangles_of(mesh), points)
 
 
 def _summary(values: np.ndarray) -> dict[str, float | None]:
