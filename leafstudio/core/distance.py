@@ -98,11 +98,11 @@ def _triangle_sq(px, py, pz, a, b, c):
     d1 = abx * apx + aby * apy + abz * apz
     d2 = acx * apx + acy * apy + acz * apz
     if d1 <= 0 and d2 <= 0:
-        return apx * apx + apy * apy + apz * apz
+        return _sq(apx, apy, apz)
     d3 = abx * bpx + aby * bpy + abz * bpz
     d4 = acx * bpx + acy * bpy + acz * bpz
     if d3 >= 0 and d4 <= d3:
-        return bpx * bpx + bpy * bpy + bpz * bpz
+        return _sq(bpx, bpy, bpz)
     vc = d1 * d4 - d3 * d2
     if vc <= 0 and d1 >= 0 and d3 <= 0:
         v = d1 / (d1 - d3)
@@ -111,7 +111,7 @@ def _triangle_sq(px, py, pz, a, b, c):
     d5 = abx * cpx + aby * cpy + abz * cpz
     d6 = acx * cpx + acy * cpy + acz * cpz
     if d6 >= 0 and d5 <= d6:
-        return cpx * cpx + cpy * cpy + cpz * cpz
+        return _sq(cpx, cpy, cpz)
     vb = d5 * d2 - d1 * d6
     if vb <= 0 and d2 >= 0 and d6 <= 0:
         w = d2 / (d2 - d6)

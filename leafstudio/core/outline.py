@@ -25,9 +25,9 @@ MAX_OUTLINE_VERTICES = 3000  # a denser outline is thinned to about this many (t
 def distinct_indices(points: np.ndarray, scale: float) -> np.ndarray:
     """Indices of the (n, 2) points left once repeats (within 1e-9 of `scale`) are dropped, in
     order. Column by column: numpy's reductions along axis 0 of an (n, 2) array are slow."""
-    columns = [np.round(points[:, i] / (scale * 1e-9)).astype(np.int64) for i in range(2)]
     if len(points) == 0:
         return np.arange(0)
+    columns = [np.round(points[:, i] / (scale * 1e-9)).astype(np.int64) for i in range(2)]
     columns = [c - c.min() for c in columns]
     span_y = int(columns[1].max()) + 1
     if (float(columns[0].max()) + 1) * span_y >= 2.0**62:  # rare: no one integer each
@@ -72,11 +72,12 @@ def _as_ordered(points: np.ndarray, spacing: float) -> Polygon | None:
     if edges.max() > 8 * spacing:
         return None
     step = float(edges.sum()) / MAX_OUTLINE_VERTICES if len(points) > MAX_OUTLINE_VERTICES else 0.0
+    finest = float(np.median(edges)) if step > 0 else 0.0  # below this, thinning keeps them all
     while step > 0:
         poly = Polygon(points[thin_curve(points, step)])
         if poly.is_valid:
             return poly
-        step = step / 2 if step / 2 > float(np.median(edges)) else 0.0
+        step = step / 2 if step / 2 > finest else 0.0
     poly = Polygon(points)
     if poly.is_valid:
         return poly
