@@ -4,11 +4,16 @@ An implementation of Nagai & Tanaya, "Leaf Reconstruction Based on Gaussian Mixt
 Point Clouds of Leaf Boundaries and Veins".
 """
 
-from leafstudio.core.pipeline import Pipeline, Result, reconstruct
-from leafstudio.demos import demo
-from leafstudio.errors import LeafError
-from leafstudio.io import load_leaf, save_leaf, save_mesh
-from leafstudio.model import Leaf, Params
+from leafstudio import kernelcache
+
+kernelcache.configure()  # before numba is imported: its cache must go to a writable folder
+
+from leafstudio.batch import batch  # noqa: E402
+from leafstudio.core.pipeline import Pipeline, Result, reconstruct  # noqa: E402
+from leafstudio.demos import demo  # noqa: E402
+from leafstudio.errors import LeafError  # noqa: E402
+from leafstudio.io import load_leaf, save_leaf, save_mesh  # noqa: E402
+from leafstudio.model import Leaf, Params  # noqa: E402
 
 __all__ = [
     "Leaf",
@@ -16,6 +21,7 @@ __all__ = [
     "Params",
     "Pipeline",
     "Result",
+    "batch",
     "demo",
     "load_leaf",
     "reconstruct",

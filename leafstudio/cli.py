@@ -7,32 +7,77 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
+import os
 import sys
+import traceback
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
-from leafstudio.errors import LeafError
+from leafstudio.errors import LeafError, shorten
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT = 0, 1, 2
+SEED_MAX = 2**32 - 1
+log = logging.getLogger("leafstudio")
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse that reports usage errors as one line with exit code 2."""
+    """argparse that reports usage errors as one line with exit code 2; every parser (the main
+    one and each command's) takes -v, -q and --debug."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        quiet = argparse.SUPPRESS  # unset unless given, so a command's parser keeps the main one's
+        self.add_argument(
+            "-v", "--verbose", action="count", default=quiet, help="say more (-v -v: debug)"
+        )
+        self.add_argument(
+            "-q", "--quiet", action="count", default=quiet, help="say less (-q -q: errors only)"
+        )
+        self.add_argument(
+            "--debug", action="store_true", default=quiet, help="show a traceback on a bug"
+        )
 
     def error(self, message: str) -> None:  # type: ignore[override]
         raise LeafError(f"{message} (see leafstudio {self.prog.split()[-1]} --help)")
+
+
+def _whole(text: str, what: str, low: int, high: int) -> int:
+    """A whole number in [low, high] from the command line; plain digits only (no "1_0")."""
+    digits = text.strip()
+    body = digits[1:] if digits[:1] in "+-" else digits
+    if not body.isascii() or not body.isdigit():
+        raise argparse.ArgumentTypeError(f"{what} must be a whole number, got {shorten(text)!r}")
+    value = int(digits) if len(body) <= 30 else None  # int() of 5,000 digits is slow, and fails
+    if value is None or not low <= value <= high:
+        raise argparse.ArgumentTypeError(
+            f"{what} must be between {low} and {high}, got {shorten(text)}"
+        )
+    return value
 
 
 def _k_value(text: str) -> int | str:
     if text == "auto":
         return text
     try:
-        return int(text)
-    except ValueError:
+        return _whole(text, "K", -(10**9), 10**9)  # Params says which range
+    except argparse.ArgumentTypeError:
         raise argparse.ArgumentTypeError(
-            f"K must be a whole number or 'auto', got {text!r}"
+            f"K must be a whole number or 'auto', got {shorten(text)!r}"
         ) from None
+
+
+def _grid_value(text: str) -> int:
+    return _whole(text, "--grid", -(10**9), 10**9)  # Params says which range
+
+
+def _seed_value(text: str) -> int:
+    return _whole(text, "--seed", 0, SEED_MAX)
+
+
+def _points_value(text: str) -> int:
+    return _whole(text, "--points", 8, 100_000)
 
 
 def _add_run_options(parser: argparse.ArgumentParser) -> None:
@@ -42,13 +87,24 @@ def _add_run_options(parser: argparse.ArgumentParser) -> None:
         "--k", type=_k_value, default=None, help="number of Gaussians, or auto (default 3)"
     )
     parser.add_argument(
-        "--grid", type=int, default=None, help="grid nodes along the leaf (default 128)"
+        "--grid", type=_grid_value, default=None, help="grid nodes along the leaf (default 128)"
     )
     parser.add_argument("--mesher", choices=("conforming", "bpa"), default=None)
-    parser.add_argument("--seed", type=int, default=None, help="random seed (default 0)")
+    parser.add_argument(
+        "--seed", type=_seed_value, default=None, help=f"random seed, 0 to {SEED_MAX} (default 0)"
+    )
     parser.add_argument(
         "--vein", action="append", default=[], metavar="FILE", help="a vein file (repeatable)"
     )
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("leafstudio")
+    except PackageNotFoundError:
+        return "(not installed)"
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -58,6 +114,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="leafstudio", description="Smooth 3D leaf surfaces from boundaries and veins."
     )
+    parser.add_argument("--version", action="version", version=f"leafstudio {_version()}")
     sub = parser.add_subparsers(dest="command", parser_class=_Parser)
 
     gui = sub.add_parser("gui", help="open the app (on FILE, or on the nested demo)")
@@ -117,9 +174,43 @@ def build_parser() -> argparse.ArgumentParser:
         "world direction it lies in: +x, -x, +y, -y, +z, -z",
     )
     ext.add_argument(
-        "--points", type=int, default=200, metavar="N", help="boundary points (default 200)"
+        "--points",
+        type=_points_value,
+        default=200,
+        metavar="N",
+        help="boundary points (default 200)",
     )
+    ext.add_argument(
+        "--force",
+        action="store_true",
+        help="go on with a cloud that does not look like one leaf (its problems become warnings)",
+    )
+    _add_batch_parser(sub)
     return parser
+
+
+def _add_batch_parser(sub: argparse._SubParsersAction) -> None:
+    """`leafstudio batch`: many inputs, a worker pool or a Dask cluster (leafstudio/batch.py)."""
+    bat = sub.add_parser(
+        "batch", help="reconstruct many leaves or scans: meshes and a trait table"
+    )
+    bat.add_argument("inputs", nargs="+", metavar="INPUT", help="files, folders or glob patterns")
+    bat.add_argument("-o", "--output", required=True, metavar="OUTDIR", help="folder for meshes")
+    bat.add_argument("--scans", action="store_true", help="inputs are 3D scans: extract first")
+    bat.add_argument(
+        "--traits", metavar="FILE", help=".csv, .json or .parquet (default OUTDIR/traits.csv)"
+    )
+    bat.add_argument("--format", choices=("ply", "glb", "obj", "vtp", "none"), default="ply")
+    bat.add_argument(
+        "--k", type=_k_value, default=None, help="number of Gaussians, or auto (default 3)"
+    )
+    bat.add_argument("--grid", type=int, default=None, help="grid nodes along the leaf")
+    bat.add_argument("--jobs", type=int, default=None, help="worker processes (default: cores)")
+    bat.add_argument(
+        "--scheduler", metavar="ADDRESS", help="a Dask scheduler (tcp://HOST:PORT), or local"
+    )
+    bat.add_argument("--resume", action="store_true", help="skip inputs already done")
+    bat.add_argument("--fail-fast", action="store_true", help="stop at the first failure")
 
 
 def _params_for(args: argparse.Namespace, base: object | None):
@@ -145,27 +236,48 @@ def _run(args: argparse.Namespace, leaf: object):
     """The Params (see _settings) and the pipeline's Result; the run's notes are printed as
     warnings, and the chosen K when K is auto."""
     from leafstudio.core.pipeline import Pipeline
+    from leafstudio.core.plausibility import leaf_warnings
+    from leafstudio.kernelcache import mark_cached
 
     params = _settings(args)
+    _compiling_notice()
     try:
         result = Pipeline(leaf).run(params)
     except LeafError as exc:
         raise LeafError(exc.problem, args.input) from None
-    for note in result.warnings:
-        print(f"leafstudio: warning: {args.input}: {note}", file=sys.stderr)
+    mark_cached()
+    args.warnings = [*leaf_warnings(leaf), *result.warnings]  # for --metrics
+    for note in args.warnings:
+        log.warning(f"{args.input}: {note}")
     if params.k == "auto":
-        print(f"{args.input}: K = {result.chosen_k} (chosen by BIC)", file=sys.stderr)
+        log.info(f"{args.input}: K = {result.chosen_k} (chosen by BIC)")
     return params, result
 
 
+def _compiling_notice() -> None:
+    """Say so when this run compiles the numerical kernels (the first run, about 20 s)."""
+    from leafstudio.kernelcache import kernels_cached
+
+    if not kernels_cached():
+        log.info("compiling the numerical kernels (the first run only; about 20 s)")
+
+
 def _reconstruct(args: argparse.Namespace) -> int:
+    """Read, check, compute everything, then write every output together (safewrite.staged):
+    a run that fails anywhere leaves all old outputs as they were."""
     from leafstudio.figure import check_figure_path
     from leafstudio.io import MESH_SUFFIXES, load_leaf, save_mesh
+    from leafstudio.safewrite import check_target, refuse_overlap, staged, write_bytes
 
     out = Path(args.output)
     if not out.name.lower().endswith(MESH_SUFFIXES):
         raise LeafError(f"unknown mesh type; use one of {', '.join(MESH_SUFFIXES)}", str(out))
     figure = check_figure_path(args.figure) if args.figure else None
+    outputs = [out, args.metrics, figure]  # every file this command writes
+    refuse_overlap([args.input, *args.vein, args.against], outputs)
+    for path in outputs:
+        if path:
+            check_target(path)
     leaf = load_leaf(args.input, veins=args.vein)
     scan = None
     if args.against:
@@ -173,11 +285,6 @@ def _reconstruct(args: argparse.Namespace) -> int:
 
         scan = read_scan(args.against)
     params, result = _run(args, leaf)
-    save_mesh(result, out)
-    if figure is not None:
-        from leafstudio.figure import render_figure
-
-        render_figure(result, figure, args.colour_by)
     fidelity = None
     if scan is not None:
         from leafstudio.core.extract import split_scan
@@ -188,6 +295,27 @@ def _reconstruct(args: argparse.Namespace) -> int:
             "all": scan_distances(result.triangle_mesh, scan, result.length),
             "blade": scan_distances(result.triangle_mesh, scan[blade], result.length),
         }
+    metrics = None
+    if args.metrics:
+        metrics = {
+            "input": args.input,
+            "params": params.to_dict(),
+            "k": result.chosen_k,
+            **result.metrics,
+            "warnings": args.warnings,
+        }
+        if fidelity is not None:
+            metrics["fidelity"] = {"scan": args.against, **fidelity}
+    with staged():  # every output is written in this block; renamed over the old ones at its end
+        save_mesh(result, out)
+        if figure is not None:
+            from leafstudio.figure import render_figure
+            from leafstudio.safewrite import replace_atomically
+
+            replace_atomically(figure, lambda tmp: render_figure(result, tmp, args.colour_by))
+        if metrics is not None:
+            write_bytes(args.metrics, json.dumps(metrics, indent=2) + "\n")
+    if fidelity is not None:
         for part, what in (("all", "all"), ("blade", "blade (no outliers, no petiole)")):
             f = fidelity[part]
             print(
@@ -196,16 +324,6 @@ def _reconstruct(args: argparse.Namespace) -> int:
                 f"{f['max']:.4g}; beyond 1% of the leaf length {f['beyond_1pct']:.1%}, beyond 2% "
                 f"{f['beyond_2pct']:.1%} (leaf length {result.length:.4g})"
             )
-    if args.metrics:
-        metrics = {
-            "input": args.input,
-            "params": params.to_dict(),
-            "k": result.chosen_k,
-            **result.metrics,
-        }
-        if fidelity is not None:
-            metrics["fidelity"] = {"scan": args.against, **fidelity}
-        Path(args.metrics).write_text(json.dumps(metrics, indent=2) + "\n", encoding="utf-8")
     return EXIT_OK
 
 
@@ -256,15 +374,19 @@ def _gui(args: argparse.Namespace) -> int:
 
 def _extract(args: argparse.Namespace) -> int:
     from leafstudio.core.extract import extract_leaf
+    from leafstudio.core.plausibility import check_leaf_like
     from leafstudio.io import LEAF_SUFFIXES, save_leaf
+    from leafstudio.safewrite import check_target, refuse_overlap
     from leafstudio.scan import read_scan
 
     if not args.output.lower().endswith(LEAF_SUFFIXES):
         raise LeafError(f"unknown leaf type; use one of {', '.join(LEAF_SUFFIXES)}", args.output)
-    if not 8 <= args.points <= 100_000:
-        raise LeafError(f"--points must be between 8 and 100000, got {args.points}")
+    refuse_overlap([args.scan], [args.output])
+    check_target(args.output)
     scan = read_scan(args.scan)
     try:
+        for note in check_leaf_like(scan, force=args.force):
+            log.warning(f"{args.scan}: {note}")
         found = extract_leaf(scan, args.base_end, args.points)
     except LeafError as exc:
         raise LeafError(exc.problem, args.scan) from None
@@ -279,6 +401,12 @@ def _extract(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _batch(args: argparse.Namespace) -> int:
+    from leafstudio.batch import command
+
+    return command(args)
+
+
 COMMANDS = {
     "gui": _gui,
     "reconstruct": _reconstruct,
@@ -286,28 +414,87 @@ COMMANDS = {
     "extract": _extract,
     "measure": _measure,
     "compare": _compare,
+    "batch": _batch,
 }
 
 
+class _Format(logging.Formatter):
+    """`leafstudio: message`, with `warning: ` or `error: ` for those levels; one line each."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        text = " ".join(record.getMessage().split("\n"))
+        if record.levelno >= logging.ERROR:
+            return f"leafstudio: error: {text}"
+        if record.levelno >= logging.WARNING:
+            return f"leafstudio: warning: {text}"
+        return f"leafstudio: {text}"
+
+
+def _configure_logging(verbose: int, quiet: int) -> None:
+    """INFO by default; each -v one level more, each -q one less (to errors only)."""
+    level = min(max(logging.INFO + 10 * (quiet - verbose), logging.DEBUG), logging.ERROR)
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(_Format())
+    log.handlers[:] = [handler]
+    log.setLevel(level)
+    log.propagate = False
+
+
+def _debugging(argv: Sequence[str]) -> bool:
+    """--debug or -v -v anywhere on the line (checked before parsing, which may itself fail)."""
+    verbose = sum(a.count("v") for a in argv if a.startswith("-v") and set(a[1:]) == {"v"})
+    return "--debug" in argv or verbose + argv.count("--verbose") >= 2
+
+
+def _pipe_closed() -> int:
+    """The reader of our output went away (`| head`): end quietly, as Unix tools do."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
+    return EXIT_OK
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the `leafstudio` console script; returns the exit code."""
+    """Entry point of the `leafstudio` console script; returns the exit code.
+
+    Exit 0: done. Exit 2: bad input or an output that cannot be written, one line on stderr and no
+    output changed. Exit 1: a bug (one line; --debug shows the traceback for a report).
+    """
+    from leafstudio.safewrite import install_signal_cleanup
+
     argv = list(sys.argv[1:] if argv is None else argv)
+    debug = _debugging(argv)
+    _configure_logging(0, 0)
+    install_signal_cleanup()
     try:
         args = build_parser().parse_args(argv)
+        _configure_logging(getattr(args, "verbose", 0) or 0, getattr(args, "quiet", 0) or 0)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # library chatter; our own notes are printed
-            return COMMANDS[args.command or "gui"](args)
+            code = COMMANDS[args.command or "gui"](args)
+        sys.stdout.flush()
+        return code
+    except BrokenPipeError:
+        return _pipe_closed()
     except LeafError as exc:
-        print(f"leafstudio: error: {exc}", file=sys.stderr)
+        log.error(shorten(str(exc), 400))
+        return EXIT_BAD_INPUT
+    except MemoryError:
+        log.error("out of memory: the input is too large for this machine")
         return EXIT_BAD_INPUT
     except OSError as exc:
         where = f"{exc.filename}: " if exc.filename else ""
-        print(f"leafstudio: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        log.error(shorten(f"{where}{exc.strerror or exc}", 400))
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         return 130
-    except Exception as exc:  # never a traceback: one line, and a distinct code
-        print(f"leafstudio: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
+    except Exception as exc:  # a bug: one line (a traceback with --debug), and a distinct code
+        if debug:
+            traceback.print_exc(file=sys.stderr)
+        detail = shorten(f"{type(exc).__name__}: {exc}", 300)
+        log.error(f"internal error: {detail} (run with --debug for the traceback, and report it)")
         return EXIT_INTERNAL
 
 

@@ -9,7 +9,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 from collections.abc import Callable, Sequence
 from io import BytesIO
 from pathlib import Path
@@ -21,6 +20,8 @@ from leafstudio.core.analysis import triangles_of
 from leafstudio.core.trianglemesh import TriangleMesh
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf, Params
+from leafstudio.safewrite import replace_atomically, write_bytes
+from leafstudio.safewrite import staged as staged  # re-exported: outputs replaced together
 
 POINT_SUFFIXES = (".csv", ".txt", ".xyz")
 LEAF_SUFFIXES = (*POINT_SUFFIXES, ".ply", ".leaf.json", ".json")
@@ -189,32 +190,15 @@ def _read_vein(path: Path) -> np.ndarray:
     return read_point_table(path, columns=(3,))
 
 
-def _usual_permissions(path: str) -> None:
-    """Give a temporary file (created 0600) the permissions a plain new file would get."""
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(path, 0o666 & ~umask)
-
-
-def _replace_atomically(path: Path, write: Callable[[str], None]) -> None:
-    """Run `write` on a temporary file beside `path` (same suffix, so writers that go by it
-    still work), then rename it over `path`; on failure nothing is left behind."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
-    os.close(handle)
-    try:
-        write(tmp)
-        _usual_permissions(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+def _replace_atomically(path: Path, write: Callable[[str], object]) -> None:
+    """Run `write` on a temporary file beside `path`, check and flush it, then rename it over
+    `path` (inside `safewrite.staged()`, at the end of the run); see leafstudio.safewrite."""
+    replace_atomically(path, write)
 
 
 def _write_atomically(path: Path, text: str | bytes) -> None:
     """Write text or bytes to `path` atomically."""
-    data = text.encode("utf-8") if isinstance(text, str) else text
-    _replace_atomically(path, lambda tmp: Path(tmp).write_bytes(data))
+    write_bytes(path, text)
 
 
 def project_dict(
@@ -282,7 +266,33 @@ def save_mesh(result_or_mesh: Any, path: str | os.PathLike) -> None:
         return
     if isinstance(mesh, TriangleMesh):
         mesh = mesh.to_pyvista()
+    if suffix in (".vtp", ".vtk"):
+        _write_atomically(path, _vtk_bytes(mesh, suffix))
+        return
     _replace_atomically(path, mesh.save)
+
+
+def _vtk_bytes(mesh: Any, suffix: str) -> bytes:
+    """A mesh as .vtp (XML, zlib-compressed base64) or legacy binary .vtk, made in memory: VTK's
+    file writers report a failed write only through their observers (and an XML writer aborts
+    the process when a disk fills), so the bytes are written by Python, which raises."""
+    from vtkmodules.vtkIOLegacy import vtkPolyDataWriter
+    from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
+
+    if suffix == ".vtp":
+        writer = vtkXMLPolyDataWriter()
+        writer.SetDataModeToBinary()  # base64 inline: the output string is plain ASCII
+        writer.SetCompressorTypeToZLib()
+    else:
+        writer = vtkPolyDataWriter()
+        writer.SetFileTypeToBinary()
+    writer.SetInputData(mesh)
+    writer.SetWriteToOutputString(True)
+    if writer.Write() != 1:
+        raise LeafError(f"VTK could not encode the mesh as {suffix}")
+    if suffix == ".vtp":
+        return writer.GetOutputString().encode("ascii")
+    return bytes(writer.GetOutputStdString())
 
 
 def _write_mesh_ply(mesh: Any, path: str) -> None:

@@ -13,14 +13,54 @@ MESHERS = ("conforming", "bpa")
 K_MAX = 64
 K_AUTO = "auto"  # Params.k: choose K by BIC (core/autok.py)
 GRID_MIN, GRID_MAX = 8, 2048
+SEED_MAX = 2**32 - 1  # numpy's legacy seeds and most tools take 32 bits
+COORDINATE_LIMIT = 1e100  # larger coordinates overflow the squared distances the pipeline takes
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else f"{text[:30]}… ({len(text)} characters)"
+
+
+def _whole_number(value: Any, what: str, low: int, high: int) -> int:
+    """`value` as an int in [low, high]; a bool, a float (even 100.0) or a string is refused."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise LeafError(f"{what} must be a whole number, got {_short(value)}")
+    if not low <= value <= high:
+        raise LeafError(f"{what} must be between {low} and {high}, got {_short(value)}")
+    return int(value)
+
+
+def _real_number(value: Any, what: str, low: float, high: float) -> float:
+    """`value` as a finite float in [low, high]; a bool or a string is refused."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)):
+        raise LeafError(f"{what} must be a number, got {_short(value)}")
+    if isinstance(value, (complex, np.complexfloating)):
+        raise LeafError(f"{what} must be a real number, got {_short(value)}")
+    number = float(value)
+    if not low <= number <= high:  # NaN fails this too
+        raise LeafError(f"{what} must be between {low:g} and {high:g}, got {_short(value)}")
+    return number
 
 
 def _as_points(values: Any, what: str) -> np.ndarray:
     """Return `values` as a finite (n, 3) float array, or raise LeafError naming `what`."""
+    if values is None or isinstance(values, (str, bytes)):
+        raise LeafError(f"{what} must be a list of x, y, z points, got {_short(values)}")
+    raw = np.asarray(values) if not isinstance(values, np.ndarray) else values
+    if raw.dtype.kind == "c":
+        raise LeafError(f"{what} must be real numbers, not complex ones")
+    if raw.dtype.kind not in "biuf" and raw.size:
+        try:
+            raw = np.asarray(values, dtype=float)
+        except (TypeError, ValueError, OverflowError) as exc:
+            raise LeafError(f"{what} must be a list of x, y, z points (numbers)") from exc
+        if raw.dtype.kind != "f":
+            raise LeafError(f"{what} must be a list of x, y, z points (numbers)")
     try:
-        points = np.asarray(values, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise LeafError(f"{what} must be a list of x, y, z points") from exc
+        points = np.asarray(raw, dtype=float)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise LeafError(f"{what} must be a list of x, y, z points (numbers)") from exc
     if points.size == 0:
         return np.zeros((0, 3))
     if points.ndim != 2 or points.shape[1] != 3:
@@ -29,6 +69,11 @@ def _as_points(values: Any, what: str) -> np.ndarray:
         )
     if not np.all(np.isfinite(points)):
         raise LeafError(f"{what} contains NaN or infinite coordinates")
+    if np.abs(points).max() > COORDINATE_LIMIT:
+        raise LeafError(
+            f"{what} has coordinates as large as {np.abs(points).max():.3g}; rescale the input "
+            f"(coordinates up to {COORDINATE_LIMIT:g} are taken)"
+        )
     return points
 
 
@@ -49,6 +94,13 @@ class Leaf:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "boundary", _as_points(self.boundary, "boundary"))
+        if self.veins is None:
+            object.__setattr__(self, "veins", [])
+        if isinstance(self.veins, (str, bytes, np.ndarray)) or not hasattr(self.veins, "__iter__"):
+            raise TypeError(
+                f"veins must be a list of (m, 3) point arrays, one per vein, got "
+                f"{type(self.veins).__name__}"
+            )
         veins = [_as_points(v, f"vein {i + 1}") for i, v in enumerate(self.veins)]
         object.__setattr__(self, "veins", [v for v in veins if len(v)])
 
@@ -101,26 +153,28 @@ class Params:
     refine: bool = True
 
     def __post_init__(self) -> None:
+        checked: dict[str, Any] = {}
         if self.k == K_AUTO:
-            pass
-        elif isinstance(self.k, bool) or not isinstance(self.k, (int, np.integer)):
-            raise LeafError(f"K must be a whole number or {K_AUTO!r}, got {self.k!r}")
-        elif not 1 <= self.k <= K_MAX:
-            raise LeafError(f"K must be between 1 and {K_MAX}, got {self.k}")
-        if not GRID_MIN <= self.grid <= GRID_MAX:
-            raise LeafError(f"grid must be between {GRID_MIN} and {GRID_MAX}, got {self.grid}")
-        if not 1e-6 <= self.mpu_tolerance <= 0.1:
-            raise LeafError(f"MPU tolerance must be between 1e-6 and 0.1, got {self.mpu_tolerance}")
-        if not 100 <= self.samples <= 1_000_000:
-            raise LeafError(f"EM sample count must be between 100 and 1000000, got {self.samples}")
-        if self.seed < 0:
-            raise LeafError(f"seed must be zero or positive, got {self.seed}")
-        if self.mesher not in MESHERS:
-            raise LeafError(f"mesher must be one of {', '.join(MESHERS)}, got {self.mesher!r}")
-        if not 0.25 <= self.radius_factor <= 8:
-            raise LeafError(f"radius factor must be between 0.25 and 8, got {self.radius_factor}")
-        if not 0.01 <= self.taper <= 5:
-            raise LeafError(f"taper must be between 0.01 and 5, got {self.taper}")
+            checked["k"] = K_AUTO
+        elif isinstance(self.k, (bool, np.bool_)) or not isinstance(self.k, (int, np.integer)):
+            raise LeafError(f"K must be a whole number or {K_AUTO!r}, got {_short(self.k)}")
+        else:
+            checked["k"] = _whole_number(self.k, "K", 1, K_MAX)
+        checked["grid"] = _whole_number(self.grid, "grid", GRID_MIN, GRID_MAX)
+        checked["mpu_tolerance"] = _real_number(self.mpu_tolerance, "MPU tolerance", 1e-6, 0.1)
+        checked["samples"] = _whole_number(self.samples, "EM sample count", 100, 1_000_000)
+        checked["seed"] = _whole_number(self.seed, "seed", 0, SEED_MAX)
+        if not isinstance(self.mesher, str) or self.mesher not in MESHERS:
+            raise LeafError(
+                f"mesher must be one of {', '.join(MESHERS)}, got {_short(self.mesher)}"
+            )
+        checked["radius_factor"] = _real_number(self.radius_factor, "radius factor", 0.25, 8)
+        checked["taper"] = _real_number(self.taper, "taper", 0.01, 5)
+        if not isinstance(self.refine, (bool, np.bool_)):
+            raise LeafError(f"refine must be true or false, got {_short(self.refine)}")
+        checked["refine"] = bool(self.refine)
+        for name, value in checked.items():  # plain Python values: JSON-ready, equal as expected
+            object.__setattr__(self, name, value)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-ready dict."""
@@ -129,6 +183,10 @@ class Params:
     @classmethod
     def from_dict(cls, values: dict[str, Any]) -> Params:
         """Params from a dict, ignoring unknown keys (files from newer versions still open)."""
+        if not isinstance(values, dict):
+            raise LeafError(
+                f"parameters must be a mapping of names to values, got {_short(values)}"
+            )
         known = {f.name for f in fields(cls)}
         return cls(**{k: v for k, v in values.items() if k in known})
 

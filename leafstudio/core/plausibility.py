@@ -1,0 +1,126 @@
+"""Is the input plausibly one leaf? Tests that turn a silent wrong answer into a message.
+
+`check_leaf_like` looks at a scan before `extract`: a leaf is one connected sheet, thin against
+its length (a sphere or a 3D blob is not) and locally planar (a surface, not a volume of scattered
+points). `leaf_warnings` looks at a Leaf before the reconstruction: veins far from the boundary's
+plane or outside its extent make a surface of whatever height they say, so that is said.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from leafstudio.errors import LeafError
+
+THIN = 0.6  # thickness (smallest spread) over length (largest), at most (real scans: <= 0.41)
+SURFACE_VARIATION = 0.15  # median local λ3 / (λ1 + λ2 + λ3), 16 neighbours (real: <= 0.10)
+LOCAL_NEIGHBOURS = 16
+LINK = 4.0  # points closer than this many median neighbour spacings belong to one cluster
+LARGE_CLUSTER = 0.3  # a cluster with this share of the largest one's points is "large"
+VEIN_REACH = 1.0  # veins farther than this many leaf lengths from the boundary's plane or extent
+
+
+def _spreads(points: np.ndarray) -> np.ndarray:
+    """Standard deviations along the principal axes, largest first."""
+    centred = points - points.mean(axis=0)
+    return np.sqrt(np.maximum(np.linalg.eigvalsh(centred.T @ centred / len(points))[::-1], 0.0))
+
+
+def _clusters(points: np.ndarray) -> np.ndarray:
+    """Sizes of the connected groups (largest first), linking points within LINK spacings."""
+    tree = cKDTree(points)
+    dist, _ = tree.query(points, k=2)
+    spacing = float(np.median(dist[:, 1]))
+    pairs = tree.query_pairs(LINK * max(spacing, 1e-300), output_type="ndarray")
+    n = len(points)
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    labels = connected_components(graph, directed=False)[1]
+    return np.sort(np.bincount(labels))[::-1]
+
+
+def _surface_variation(points: np.ndarray) -> float:
+    """The median share of the smallest local spread: near 0 on a surface, 1/3 in a volume."""
+    k = min(LOCAL_NEIGHBOURS, len(points))
+    sample = points[:: max(1, len(points) // 2000)]
+    _, index = cKDTree(points).query(sample, k=k)
+    local = points[index] - points[index].mean(axis=1, keepdims=True)
+    eig = np.linalg.eigvalsh(np.einsum("nki,nkj->nij", local, local))
+    total = eig.sum(axis=1)
+    ok = total > 0
+    return float(np.median(eig[ok, 0] / total[ok])) if ok.any() else 0.0
+
+
+def leaf_like_problems(points: np.ndarray) -> list[str]:
+    """What makes an (n, 3) scan unlike one leaf, one sentence per failed test ([] if none)."""
+    points = np.asarray(points, dtype=float)
+    centred = points - points.mean(axis=0)
+    scale = float(np.abs(centred).max())
+    if not np.isfinite(scale) or scale == 0.0:
+        return ["all points are the same point"]
+    unit = centred / scale  # the tests are scale-free; this keeps them finite at 1e200
+    problems = []
+    sizes = _clusters(unit)
+    large = int(np.sum(sizes >= LARGE_CLUSTER * sizes[0]))
+    if large > 1:
+        problems.append(
+            f"not one leaf: {large} large separate clusters of points "
+            f"({', '.join(str(s) for s in sizes[:large])} points)"
+        )
+    spreads = _spreads(unit)
+    if spreads[2] > THIN * spreads[0]:
+        problems.append(
+            f"not thin: its thickness is {spreads[2] / spreads[0]:.2f} of its length "
+            f"(a leaf's is under {THIN})"
+        )
+    variation = _surface_variation(unit)
+    if variation > SURFACE_VARIATION:
+        problems.append(
+            f"not a surface: the points scatter through a volume (local flatness {variation:.2f}, "
+            f"a leaf's is under {SURFACE_VARIATION})"
+        )
+    return problems
+
+
+def check_leaf_like(points: np.ndarray, force: bool = False) -> list[str]:
+    """Raise LeafError naming the failed tests unless `force`; with `force`, return them (for
+    warnings)."""
+    problems = leaf_like_problems(points)
+    if problems and not force:
+        raise LeafError(
+            f"does not look like one leaf: {'; '.join(problems)} (--force to go on anyway)"
+        )
+    return problems
+
+
+def leaf_warnings(leaf) -> list[str]:
+    """Warnings about a Leaf whose veins lie far outside the scale of its boundary."""
+    boundary = leaf.boundary
+    if len(boundary) < 3 or not leaf.veins:
+        return []
+    centre = boundary.mean(axis=0)
+    centred = boundary - centre
+    _, _, axes = np.linalg.svd(centred, full_matrices=False)
+    normal = axes[2]
+    length = float(np.ptp(centred @ axes[0]))
+    if not np.isfinite(length) or length <= 0:
+        return []
+    notes = []
+    for i, vein in enumerate(leaf.veins, start=1):
+        offset = vein - centre
+        height = float(np.max(np.abs(offset @ normal)))
+        if height > VEIN_REACH * length:
+            notes.append(
+                f"vein {i} lies {height:.4g} from the boundary's plane, more than the leaf's "
+                f"length ({length:.4g}); the surface will be that high"
+            )
+            continue
+        reach = float(np.max(np.linalg.norm(offset - np.outer(offset @ normal, normal), axis=1)))
+        if reach > (0.5 + VEIN_REACH) * length:
+            notes.append(
+                f"vein {i} reaches {reach:.4g} from the leaf's centre, far outside its boundary "
+                f"(length {length:.4g})"
+            )
+    return notes
