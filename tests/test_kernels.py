@@ -189,7 +189,7 @@ def test_levenberg_marquardt_recovers_a_mixture_and_never_worsens_the_start():
 
 
 def test_mpu_on_grid_nodes_is_evaluate_at_them():
-    result = ls.reconstruct(ls.demo("parallel"), ls.Params(k=3, grid=96))
+    result = ls.reconstruct(ls.demo("parallel"), ls.Params(k=3, grid=96)).unit  # the MPU's size
     implicit, grid = result.surface.implicit, result.grid
     np.testing.assert_array_equal(implicit.on_grid(grid), implicit.evaluate(grid.points))
     nodes = result.inside.copy()

@@ -46,6 +46,7 @@ from leafstudio.core.outline import (
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.surface import HeightSurface, fit_surface
 from leafstudio.core.trianglemesh import TriangleMesh
+from leafstudio.core.units import ScaledSurface, Units
 from leafstudio.errors import LeafError
 from leafstudio.model import K_AUTO, Leaf, Params
 
@@ -139,6 +140,8 @@ class Result:
     timings: dict[str, float] = field(default_factory=dict)
     ran: tuple[str, ...] = ()
     warnings: list[str] = field(default_factory=list)
+    unit: Result | None = None  # the same run at unit size (units.py); None: this is it
+    units: Units | None = None  # how `unit` maps to this one
 
     def height(self, xy: np.ndarray) -> np.ndarray:
         """z of the surface at (n, 2) plane points (differentiable; see surface.py)."""
@@ -159,7 +162,10 @@ class Result:
     def metrics(self) -> dict[str, Any]:
         """The paper's Table 1 distances and the mesh's facts (see analysis.table_metrics), the
         leaf's measurements with the K used ("leaf") and its curvature ranges ("curvature"; see
-        measure.py)."""
+        measure.py). Measured at unit size and mapped back (units.py): they do not depend on
+        the input's units or its distance from the origin."""
+        if self.unit is not None and self.units is not None:
+            return self.units.metrics(self.unit.metrics)
         return {
             **analysis.table_metrics(self.triangle_mesh, self.leaf),
             "leaf": {
@@ -245,6 +251,8 @@ class Pipeline:
 
     def __init__(self, leaf: Leaf) -> None:
         self.leaf = leaf
+        self.units = Units.of(leaf)  # the stages run on the leaf at unit size (units.py)
+        self._unit_leaf = self.units.leaf(leaf)
         self._cache: dict[str, tuple[tuple[Any, ...], Any]] = {}
         self._layout: tuple[GuideStage, tuple[np.ndarray, ...]] | None = None
         self._drawn: tuple[GuideStage, tuple[int, int], np.ndarray] | None = None
@@ -307,7 +315,7 @@ class Pipeline:
             self._cache[name] = (key, value)
             return value
 
-        fs, notes = stage("frame", lambda: _frame_stage(self.leaf))
+        fs, notes = stage("frame", lambda: _frame_stage(self._unit_leaf))
         tol = params.mpu_tolerance * fs.length
         implicit: MPUImplicit = stage(
             "implicit",
@@ -334,8 +342,8 @@ class Pipeline:
                 fs, implicit, grid, guide, surf, params, lambda: self._grid_mesh(fs, grid, guide)
             ),
         )
-        return Result(
-            leaf=self.leaf,
+        unit = Result(
+            leaf=self._unit_leaf,
             params=params,
             frame=fs.frame,
             polygon=fs.polygon,
@@ -352,6 +360,32 @@ class Pipeline:
             ran=tuple(ran),
             warnings=list(notes),
         )
+        return _in_world(unit, self.leaf, self.units)
+
+
+def _in_world(unit: Result, leaf: Leaf, units: Units) -> Result:
+    """The unit-size run `unit` in the input's coordinates (units.py)."""
+    s = units.scale
+    return Result(
+        leaf=leaf,
+        params=unit.params,
+        frame=units.frame(unit.frame),
+        polygon=s * unit.polygon,
+        grid=units.grid(unit.grid),
+        g_grid=s * unit.g_grid,
+        p_grid=s * unit.p_grid,
+        inside=unit.inside,
+        em_samples=s * unit.em_samples,
+        surface=ScaledSurface(unit.surface, s),  # type: ignore[arg-type]
+        surface_points=units.to_world(unit.surface_points),
+        triangle_mesh=units.mesh(unit.triangle_mesh),
+        length=s * unit.length,
+        timings=unit.timings,
+        ran=unit.ran,
+        warnings=unit.warnings,
+        unit=unit,
+        units=units,
+    )
 
 
 def _guide_stage(fs: FrameStage, implicit: MPUImplicit, grid: Grid) -> GuideStage:
