@@ -1,0 +1,179 @@
+"""A leaf from botanical terms: the outline (outline.py), grown veins (veins.py) and relief.
+
+The convention (DESIGN.md): the blade's base, where the midrib meets it, is at the origin; the
+apex lies on +x and the outline's farthest point along +x is at x = 1; the blade lies in z = 0
+apart from its relief. Relief is heights on the boundary and the veins, so it goes through the
+pipeline like any leaf's: the fold and the wave on the boundary become the base surface b(x), the
+veins' heights above it the Gaussian mixture.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from leafstudio.errors import LeafError
+from leafstudio.forms.outline import Outline, form_outline
+from leafstudio.forms.terms import (
+    APEXES,
+    DEFAULT_LOBES,
+    DEFAULT_TEETH,
+    MARGINS,
+    SHAPES,
+    TOOTHED,
+    USER_BASES,
+    check_term,
+)
+from leafstudio.forms.veins import VENATION_KINDS, grow_veins
+from leafstudio.model import Leaf
+
+WAVES_PER_SIDE = 3
+LIMITS = {  # name: (lowest, highest)
+    "teeth": (2, 300),
+    "lobes": (2, 15),
+    "secondaries": (0, 40),
+    "aspect": (0.5, 30.0),
+    "fold": (-75.0, 75.0),
+    "curl": (-1.0, 1.0),
+    "wave": (0.0, 0.2),
+}
+
+
+class _Still:
+    """Stands in for a random generator when seed is 0: every draw is its range's middle, so the
+    canonical form is the one the definitions describe."""
+
+    def uniform(self, low: float = 0.0, high: float = 1.0, size: Any = None) -> Any:
+        mid = 0.5 * (low + high)
+        return mid if size is None else np.full(size, mid)
+
+
+@dataclass(frozen=True)
+class Form:
+    """A leaf form by its terms (terms.py lists and defines them); None means the shape's usual.
+
+    Examples
+    --------
+    >>> from leafstudio.forms import Form
+    >>> leaf = Form("ovate", margin="serrate", teeth=30).leaf()
+    >>> float(leaf.boundary[:, 0].max())
+    1.0
+    """
+
+    shape: str = "elliptic"
+    apex: str | None = None
+    base: str | None = None
+    margin: str = "entire"
+    teeth: int | None = None
+    lobes: int | None = None
+    venation: str = "pinnate"
+    secondaries: int | None = None
+    aspect: float | None = None
+    fold: float = 0.0
+    curl: float = 0.0
+    wave: float = 0.0
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        check_term("shape", self.shape, SHAPES)
+        spec = SHAPES[self.shape]
+        if self.apex is not None:
+            check_term("apex", self.apex, APEXES)
+        if self.base is not None:
+            check_term("base", self.base, USER_BASES)
+            if spec.fixed_base and self.base != spec.base:
+                raise LeafError(
+                    f"a {self.shape} leaf has a {spec.base} base by definition; leave out --base"
+                )
+        check_term("margin", self.margin, MARGINS)
+        check_term("venation", self.venation, VENATION_KINDS)
+        if self.teeth is not None and self.margin not in TOOTHED:
+            raise LeafError(f"--teeth needs a toothed margin ({', '.join(TOOTHED)})")
+        if self.lobes is not None and self.margin != "lobed":
+            raise LeafError("--lobes needs --margin lobed")
+        for name, (low, high) in LIMITS.items():
+            value = getattr(self, name)
+            if value is not None and not low <= value <= high:
+                raise LeafError(f"--{name} must be between {low:g} and {high:g}, got {value:g}")
+        if self.seed < 0:
+            raise LeafError(f"--seed must be zero or positive, got {self.seed}")
+
+    # the terms in effect
+    @property
+    def apex_term(self) -> str:
+        return self.apex or SHAPES[self.shape].apex
+
+    @property
+    def base_term(self) -> str:
+        return self.base or SHAPES[self.shape].base
+
+    @property
+    def teeth_count(self) -> int:
+        return self.teeth or DEFAULT_TEETH.get(self.margin, 0)
+
+    @property
+    def lobe_count(self) -> int:
+        return self.lobes or (DEFAULT_LOBES if self.margin == "lobed" else 1)
+
+    def with_(self, **changes: Any) -> Form:
+        """A copy with some terms changed (checked again)."""
+        return replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    def outline(self) -> Outline:
+        """The blade's outline in the plane (see outline.py)."""
+        rng = np.random.default_rng(self.seed) if self.seed else _Still()
+        spec = SHAPES[self.shape]
+        aspect = (self.aspect or spec.aspect) * (1 + rng.uniform(-0.05, 0.05))
+        return form_outline(
+            self.shape,
+            self.apex_term,
+            self.base_term,
+            self.margin,
+            self.teeth_count,
+            self.lobe_count,
+            aspect,
+            self.venation == "palmate",
+            rng,  # type: ignore[arg-type]
+        )
+
+    def leaf(self) -> Leaf:
+        """The leaf: boundary and grown veins, with heights for the fold, curl and wave."""
+        outline = self.outline()
+        xy = outline.xy
+        veins = grow_veins(
+            xy,
+            self.venation,
+            self.secondaries,
+            base=np.zeros(2),
+            seed=self.seed,
+            apex=xy[outline.apex_index],
+        )
+        z = self._pose(xy) + self._wave(outline)
+        boundary = np.column_stack([xy, z])
+        veins = [np.column_stack([v[:, :2], v[:, 2] + self._pose(v[:, :2])]) for v in veins]
+        return Leaf(boundary=boundary, veins=veins)
+
+    def _pose(self, xy: np.ndarray) -> np.ndarray:
+        """Fold (the halves rise from the midrib) and curl (the midrib bends), as heights."""
+        return np.abs(xy[:, 1]) * np.tan(np.deg2rad(self.fold)) + self.curl * xy[:, 0] ** 2
+
+    def _wave(self, outline: Outline) -> np.ndarray:
+        """The margin's waves: WAVES_PER_SIDE along each half, none at the base and apex."""
+        z = np.zeros(len(outline.xy))
+        if self.wave == 0:
+            return z
+        for half in (outline.lower, outline.upper):
+            pts = outline.xy[half]
+            s = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+            z[half] = self.wave * np.sin(2 * np.pi * WAVES_PER_SIDE * s / s[-1])
+        return z
+
+
+def make_form(shape: str = "elliptic", **terms: Any) -> Leaf:
+    """The leaf of a form: `make_form("ovate", margin="serrate", teeth=30)` (see Form)."""
+    return Form(shape, **terms).leaf()
