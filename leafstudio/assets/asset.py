@@ -1,0 +1,195 @@
+"""A mesh with what renderers need: closed-form normals, UVs, per-vertex scalars and textures.
+
+Normals. The surface is the graph z(x) over the leaf plane (core/surface.py), so its upward unit
+normal at a plane point is (−z_x, −z_y, 1) / √(1 + z_x² + z_y²), from the closed-form gradient
+(on the margin, the limit from inside the leaf). The mesh lies in the input's coordinates, so the
+plane normal is turned to the world by the frame: n = −z_x u − z_y v + N (u, v, N the frame's
+axes). These are the surface's own normals, not averages of the triangles'.
+
+UVs. A vertex at plane point (x, y) gets
+
+    s = (x − c_x) / S + 1/2,     t = (y − c_y) / S + 1/2,     S = (1 + 2·UV_PAD) · max(w, h)
+
+with c the centre and w × h the size of the outline's bounding box in the plane: one factor for
+both axes (no stretch), the leaf centred in [0, 1]² with a margin of UV_PAD · S on the longer
+side. s runs along the leaf's length (the frame's u), t across it (v); t = 0 is the bottom row of
+the texture image (the OBJ and trimesh convention; glTF's writer flips it). Seen from the normal's
+side, the texture is the leaf as it lies: a photo of it maps back onto itself.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from leafstudio.core.analysis import triangles_of
+from leafstudio.core.curvature import CURVATURE_ARRAYS
+from leafstudio.core.plane import Frame, fit_frame
+from leafstudio.core.trianglemesh import vertex_normals
+
+if TYPE_CHECKING:
+    from PIL import Image
+
+    from leafstudio.core.pipeline import Result
+
+UV_PAD = 1 / 64  # the margin around the leaf in UV space, as a fraction of the square
+SCALARS = ("height", *CURVATURE_ARRAYS)  # the per-vertex scalars written where formats hold them
+
+
+@dataclass(frozen=True)
+class UVMap:
+    """Leaf-plane points to UVs by one scale factor (see the module docstring)."""
+
+    centre: np.ndarray  # (2,) plane point mapped to (1/2, 1/2)
+    size: float  # plane length of the UV square's side, S
+
+    @classmethod
+    def around(cls, xy: np.ndarray) -> UVMap:
+        """The map that centres the (n, 2) plane points' bounding box in [0, 1]²."""
+        lo, hi = xy.min(axis=0), xy.max(axis=0)
+        size = (1 + 2 * UV_PAD) * max(float(np.max(hi - lo)), 1e-12)
+        return cls(centre=(lo + hi) / 2, size=size)
+
+    def __call__(self, xy: np.ndarray) -> np.ndarray:
+        """(n, 2) UVs of (n, 2) plane points."""
+        return (np.asarray(xy, dtype=float) - self.centre) / self.size + 0.5
+
+    def to_plane(self, uv: np.ndarray) -> np.ndarray:
+        """(n, 2) plane points of (n, 2) UVs (the inverse map)."""
+        return (np.asarray(uv, dtype=float) - 0.5) * self.size + self.centre
+
+    def texel_plane_points(self, pixels: int) -> np.ndarray:
+        """(pixels, pixels, 2) plane points at the centres of a square image's texels, row 0 at
+        the top (t = 1)."""
+        centres = (np.arange(pixels) + 0.5) / pixels
+        s, t = np.meshgrid(centres, 1 - centres)
+        return self.to_plane(np.stack([s, t], axis=-1).reshape(-1, 2)).reshape(pixels, pixels, 2)
+
+
+@dataclass(frozen=True, eq=False)
+class MeshAsset:
+    """A triangle mesh ready to export.
+
+    Attributes
+    ----------
+    points, faces : (n, 3) float and (m, 3) int arrays
+        Faces wind counter-clockwise seen from the side the normals point to.
+    normals : (n, 3) float array
+        Unit vertex normals.
+    uv : (n, 2) float array
+        Texture coordinates in [0, 1]² (see the module docstring).
+    point_data : dict of (n,) float arrays
+        Height and curvatures, by the names in SCALARS.
+    texture, normal_map : PIL images or None
+        The base colour (RGBA, alpha 0 outside the leaf) and a tangent-space normal map.
+    name : str
+        The mesh's name in formats that keep one (glTF).
+    """
+
+    points: np.ndarray
+    faces: np.ndarray
+    normals: np.ndarray
+    uv: np.ndarray
+    point_data: dict[str, np.ndarray] = field(default_factory=dict)
+    texture: Image.Image | None = None
+    normal_map: Image.Image | None = None
+    name: str = "leaf"
+    solid: bool = False  # a closed solid (see solid.py) rather than an open sheet
+    plane_normal: np.ndarray | None = None  # (3,) the leaf plane's normal, on the normals' side
+    margin_distance: np.ndarray | None = None  # (n,) each vertex's distance to the outline
+
+    @property
+    def n_points(self) -> int:
+        return len(self.points)
+
+    def with_(self, **changes: Any) -> MeshAsset:
+        return replace(self, **changes)
+
+
+@dataclass(frozen=True)
+class LeafPlane:
+    """What the textures need of the leaf: its frame, UV map, outline and veins in the plane."""
+
+    frame: Frame
+    uvmap: UVMap
+    polygon: np.ndarray  # (b, 2) counter-clockwise outline
+    veins: list[np.ndarray]  # (m_i, 2) per vein
+    length: float
+
+
+def surface_normals(result: Result, xy: np.ndarray, margin: np.ndarray) -> np.ndarray:
+    """(n, 3) world unit normals of the result's height surface at (n, 2) plane points, in closed
+    form (see the module docstring); (n,) bool `margin` flags points on the leaf's edge."""
+    grad = result.surface.derivatives(xy, margin)[1]
+    frame = result.frame
+    normals = np.outer(np.ones(len(xy)), frame.normal)
+    normals -= grad[:, :1] * frame.u + grad[:, 1:] * frame.v
+    return normals / np.linalg.norm(normals, axis=1, keepdims=True)
+
+
+def oriented(faces: np.ndarray, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """The faces with each one's winding turned, if need be, to agree with its vertex normals."""
+    a, b, c = (points[faces[:, i]] for i in range(3))
+    facing = np.einsum("ij,ij->i", np.cross(b - a, c - a), normals[faces].sum(axis=1))
+    return np.where((facing < 0)[:, None], faces[:, ::-1], faces)
+
+
+def leaf_plane(result: Result) -> LeafPlane:
+    """The result's frame, UV map, outline and veins in the plane."""
+    veins = [result.frame.to_plane(v)[0] for v in result.leaf.veins]
+    return LeafPlane(
+        frame=result.frame,
+        uvmap=UVMap.around(result.polygon),
+        polygon=result.polygon,
+        veins=veins,
+        length=result.length,
+    )
+
+
+def leaf_asset(result: Result) -> MeshAsset:
+    """The result's mesh with closed-form normals, UVs and its scalars (no texture yet)."""
+    mesh = result.triangle_mesh
+    points = np.asarray(mesh.points, dtype=float)
+    xy = result.frame.to_plane(points)[0]
+    margin = np.arange(len(points)) < len(result.polygon)  # both meshers put the outline first
+    normals = surface_normals(result, xy, margin)
+    faces = oriented(triangles_of(mesh).astype(np.int64), points, normals)
+    data = {k: np.asarray(mesh.point_data[k], float) for k in SCALARS if k in mesh.point_data}
+    uv = UVMap.around(result.polygon)(xy)
+    distance = _outline_distance(result.polygon, xy)
+    return MeshAsset(points, faces, normals, uv, data, plane_normal=result.frame.normal,
+                     margin_distance=np.where(margin, 0.0, distance))  # fmt: skip
+
+
+def _outline_distance(polygon: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """(n,) distance in the plane from each point to the closed outline."""
+    import shapely
+
+    return shapely.distance(shapely.LinearRing(polygon), shapely.points(xy))
+
+
+def mesh_asset(mesh: Any) -> MeshAsset:
+    """Any triangle mesh (a TriangleMesh or pyvista.PolyData) without its surface: area-weighted
+    vertex normals (toward the side its faces wind counter-clockwise) and UVs in its own PCA
+    plane, by the same rule as a leaf's."""
+    points = np.asarray(mesh.points, dtype=float)
+    faces = triangles_of(mesh).astype(np.int64)
+    normals = vertex_normals(points, faces)
+    frame = fit_frame(points, np.zeros((0, 3)))
+    xy = frame.to_plane(points)[0]
+    data = {
+        k: np.asarray(mesh.point_data[k], float)
+        for k in SCALARS
+        if k in mesh.point_data and np.asarray(mesh.point_data[k]).ndim == 1
+    }
+    up = frame.normal if normals.sum(axis=0) @ frame.normal >= 0 else -frame.normal
+    from scipy.spatial import cKDTree
+
+    from leafstudio.assets.solid import boundary_edges
+
+    rim = np.unique(boundary_edges(faces))
+    distance = cKDTree(xy[rim]).query(xy)[0] if len(rim) else np.full(len(xy), np.inf)
+    return MeshAsset(points, faces, normals, UVMap.around(xy)(xy), data, plane_normal=up,
+                     margin_distance=distance)  # fmt: skip

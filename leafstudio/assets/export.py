@@ -1,0 +1,156 @@
+"""From a Result (or any triangle mesh) to the files 3D tools read: texture, solid and levels of
+detail chosen here, the bytes written by writers.py.
+
+`texture`:
+- "auto": the generated leaf texture (blade and veins, texture.py) and, in glTF, a normal map;
+- "none": no image (the material has the blade's colour; UVs are still written);
+- an image path: mapped through the UVs. If the leaf came from that photo (`leafstudio photo`
+  stores the map from the leaf's coordinates to the photo's pixels in the project), each pixel
+  lands where it was in the photo; otherwise the image covers the UV square as it is.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from leafstudio.assets.asset import MeshAsset, leaf_asset, leaf_plane, mesh_asset
+from leafstudio.assets.writers import ASSET_SUFFIXES, write_assets
+from leafstudio.errors import LeafError
+
+TEXTURES = ("auto", "none")
+MAX_LOD = 8
+
+
+@dataclass(frozen=True)
+class PhotoTexture:
+    """A photo and the affine map (2, 3) from world (x, y) to its (column, row)."""
+
+    image: str | os.PathLike
+    pixel_from_world: np.ndarray | None = None
+
+
+def photo_transform(leaf_path: str | os.PathLike) -> np.ndarray | None:
+    """The (2, 3) world-to-pixel map a `leafstudio photo` project stores, or None."""
+    if not str(leaf_path).lower().endswith(".json"):
+        return None
+    try:
+        data = json.loads(Path(leaf_path).read_text(encoding="utf-8"))
+        photo = data.get("photo") if isinstance(data, dict) else None
+        return None if not photo else np.asarray(photo["pixel_from_world"], float).reshape(2, 3)
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+
+
+def _textured(asset: MeshAsset, result: Any, texture: Any, gltf: bool) -> MeshAsset:
+    from leafstudio.assets import texture as tex
+
+    if isinstance(texture, str) and texture in TEXTURES:
+        if texture == "none":
+            return asset
+        if result is None:  # a bare mesh: no outline or veins to draw
+            return asset
+        plane = leaf_plane(result)
+        return asset.with_(
+            texture=tex.leaf_texture(plane), normal_map=tex.normal_map(plane) if gltf else None
+        )
+    photo = texture if isinstance(texture, PhotoTexture) else PhotoTexture(texture)
+    image = tex.read_image(photo.image)
+    if photo.pixel_from_world is not None and result is not None:
+        return asset.with_(
+            texture=tex.photo_texture(leaf_plane(result), image, photo.pixel_from_world)
+        )
+    return asset.with_(texture=tex.stretched_texture(image))
+
+
+def mesh_assets(
+    result_or_mesh: Any,
+    texture: Any = "auto",
+    thickness: float | None = None,
+    lod: int = 0,
+    gltf: bool = False,
+) -> list[MeshAsset]:
+    """The asset (and `lod` coarser ones) of a Result or a bare mesh.
+
+    Parameters
+    ----------
+    texture : "auto", "none", an image path or a PhotoTexture, default: "auto"
+    thickness : float, optional
+        Turn the sheet into a closed solid this thick (in the mesh's units; solid.py).
+    lod : int, default: 0
+        Coarser levels of detail to add, each with half the triangles of the one before (lod.py).
+    gltf : bool, default: False
+        Whether the target holds a normal map (glTF does; the other formats do not).
+    """
+    result = result_or_mesh if hasattr(result_or_mesh, "surface") else None
+    if result is not None:
+        base = leaf_asset(result)
+    else:
+        base = mesh_asset(getattr(result_or_mesh, "triangle_mesh", result_or_mesh))
+    levels = [base]
+    if lod:
+        from leafstudio.assets.lod import coarser_levels
+
+        levels += coarser_levels(base, result, lod)
+    out = []
+    for level, asset in enumerate(levels):
+        if thickness is not None:
+            from leafstudio.assets.solid import thicken
+
+            asset = thicken(asset, thickness)
+        asset = asset.with_(name=f"leaf_LOD{level}" if lod else "leaf")
+        out.append(_textured(asset, result, texture, gltf))
+    return out
+
+
+def export_mesh(
+    result_or_mesh: Any,
+    path: str | os.PathLike,
+    texture: Any = "auto",
+    thickness: float | None = None,
+    lod: int = 0,
+) -> None:
+    """Write the mesh by the path's suffix (ASSET_SUFFIXES) with normals, UVs, scalars, texture;
+    see mesh_assets for the options."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in ASSET_SUFFIXES:
+        raise LeafError(
+            f"unknown mesh type {suffix or '(none)'!r}; use one of {', '.join(ASSET_SUFFIXES)}",
+            str(path),
+        )
+    if not isinstance(lod, int) or not 0 <= lod <= MAX_LOD:
+        raise LeafError(f"lod must be a whole number from 0 to {MAX_LOD}, got {lod}")
+    assets = mesh_assets(result_or_mesh, texture, thickness, lod, gltf=suffix in (".glb", ".gltf"))
+    write_assets(assets, path)
+
+
+def check_asset_options(texture: str, thickness: str | None, lod: int) -> None:
+    """Refuse bad --texture, --thickness and --lod values before any work (LeafError)."""
+    from leafstudio.assets.solid import parse_thickness
+    from leafstudio.assets.texture import read_image
+
+    if texture not in TEXTURES:
+        read_image(texture)
+    if thickness is not None:
+        parse_thickness(thickness)
+    if not 0 <= lod <= MAX_LOD:
+        raise LeafError(f"--lod must be a whole number from 0 to {MAX_LOD}, got {lod}")
+
+
+def asset_options(
+    texture: str, thickness: str | None, lod: int, leaf_path: str | os.PathLike, length: float
+) -> dict[str, Any]:
+    """save_mesh's keyword arguments from the command line's: an image texture is a photo the
+    leaf came from when the leaf's project says so; the thickness in the mesh's units."""
+    from leafstudio.assets.solid import thickness_in_mesh_units
+
+    if texture not in TEXTURES:
+        texture = PhotoTexture(texture, photo_transform(leaf_path))
+    solid = None if thickness is None else thickness_in_mesh_units(thickness, length)
+    return {"texture": texture, "thickness": solid, "lod": lod}

@@ -1,0 +1,120 @@
+"""A leaf sheet made a closed solid of a given thickness, for printing and thick-leaf renders.
+
+Each vertex p with unit normal n gives a top vertex p + t/2 n and a bottom one p − t/2 n; the top
+sheet keeps the faces, the bottom sheet has them reversed, and every boundary edge of the sheet
+(the margin) becomes a quad of two triangles joining the two. The result is closed and
+consistently oriented with outward normals, and its volume is area × thickness to first order
+(offsets along the surface's own normals keep the thickness perpendicular to it).
+
+Offsets along normals can cross in two ways, and both are prevented:
+- where the surface bends tighter than t/2 (a radius of curvature under half the thickness), the
+  local thickness is narrowed to t_i = min(T, FOLD / max(|k1|, |k2|)) with the vertex's principal
+  curvatures (on a mesh without curvatures it is T everywhere);
+- where the leaf is narrower than the thickness (a thin tip, a deep sinus), a tilted normal would
+  carry the margin's offsets across the outline and past each other. The part of each offset
+  along the leaf plane is cut to MARGIN_SHIFT of the vertex's distance from the outline, so the
+  margin's offsets are perpendicular to the plane, the walls stand on the outline itself and the
+  sheets meet there rather than cross. The thickness there is t_i times the normal's tilt cosine.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from leafstudio.assets.asset import MeshAsset
+from leafstudio.errors import LeafError
+
+MARGIN_SHIFT = 0.5  # an offset moves along the plane at most this fraction of its distance
+FOLD = 1.0  # t <= FOLD · radius of curvature: t/2 stays under half the radius
+UNITS = {"um": 1e-3, "mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4}  # in millimetres
+
+
+def parse_thickness(text: str) -> tuple[float, str | None]:
+    """'0.01' -> (0.01, None): a fraction of the leaf length; '0.4mm' -> (0.4, 'mm')."""
+    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([a-zA-Z]*)\s*", text)
+    if not match:
+        raise LeafError(
+            f"--thickness must be a number (a fraction of the leaf length) or a length with its "
+            f"unit ({', '.join(UNITS)}), got {text!r}"
+        )
+    value, unit = float(match.group(1)), match.group(2).lower() or None
+    if unit is not None and unit not in UNITS:
+        raise LeafError(f"--thickness: unknown unit {unit!r}; use one of {', '.join(UNITS)}")
+    if not value > 0:
+        raise LeafError(f"--thickness must be above 0, got {text!r}")
+    if unit is None and value >= 1:
+        raise LeafError(f"--thickness without a unit is a fraction of the leaf length (< 1), got "
+                        f"{text!r}")  # fmt: skip
+    return value, unit
+
+
+def thickness_in_mesh_units(text: str, length: float) -> float:
+    """The thickness `text` means (parse_thickness) in the mesh's units: a fraction times the
+    leaf length, or a length converted from its unit to millimetres, the unit a leaf's
+    coordinates are taken to be in (as scans and 3MF files are)."""
+    value, unit = parse_thickness(text)
+    return value * length if unit is None else value * UNITS[unit]
+
+
+def boundary_edges(faces: np.ndarray) -> np.ndarray:
+    """(e, 2) directed edges that belong to one face only, in that face's winding."""
+    directed = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    key = np.sort(directed, axis=1)
+    base = int(faces.max(initial=0)) + 1
+    _, inverse, counts = np.unique(
+        key[:, 0] * base + key[:, 1], return_inverse=True, return_counts=True
+    )
+    return directed[counts[inverse] == 1]
+
+
+def local_thickness(asset: MeshAsset, thickness: float) -> np.ndarray:
+    """(n,) thickness at each vertex: T, narrowed where the surface bends tighter (module doc)."""
+    t = np.full(asset.n_points, float(thickness))
+    data = asset.point_data
+    if "k1" in data and "k2" in data:
+        bend = np.maximum(np.abs(data["k1"]), np.abs(data["k2"]))
+        with np.errstate(divide="ignore"):
+            t = np.minimum(t, np.where(bend > 0, FOLD / np.where(bend > 0, bend, 1), np.inf))
+    return t
+
+
+def offsets(asset: MeshAsset, thickness: float) -> np.ndarray:
+    """(n, 3) half-thickness offsets: t_i/2 along the normal, its part along the leaf plane cut
+    to half the vertex's distance from the outline (module docstring)."""
+    half = local_thickness(asset, thickness) / 2
+    normals = asset.normals
+    if asset.plane_normal is None or asset.margin_distance is None:
+        return half[:, None] * normals
+    up = normals @ asset.plane_normal
+    across = normals - up[:, None] * asset.plane_normal
+    shift = half * np.linalg.norm(across, axis=1)  # how far the offset moves along the plane
+    allowed = MARGIN_SHIFT * asset.margin_distance
+    keep = np.where(shift > allowed, allowed / np.where(shift > 0, shift, 1), 1.0)
+    return half[:, None] * (keep[:, None] * across + up[:, None] * asset.plane_normal)
+
+
+def thicken(asset: MeshAsset, thickness: float) -> MeshAsset:
+    """The closed solid of an open sheet (see the module docstring); `thickness` in the mesh's
+    units."""
+    if not thickness > 0:
+        raise LeafError(f"the thickness must be above 0, got {thickness}")
+    if asset.solid:
+        return asset
+    n = asset.n_points
+    offset = offsets(asset, thickness)
+    points = np.vstack([asset.points + offset, asset.points - offset])
+    a, b = boundary_edges(asset.faces).T
+    walls = np.vstack(
+        [np.column_stack([b, a, a + n]), np.column_stack([b, a + n, b + n])]
+    )  # the sheet's edge a -> b is walked b -> a here, so the wall agrees with the top
+    faces = np.vstack([asset.faces, asset.faces[:, ::-1] + n, walls])
+    return asset.with_(
+        points=points,
+        faces=faces,
+        normals=np.vstack([asset.normals, -asset.normals]),
+        uv=np.vstack([asset.uv, asset.uv]),
+        point_data={k: np.concatenate([v, v]) for k, v in asset.point_data.items()},
+        solid=True,
+    )

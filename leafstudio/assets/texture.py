@@ -1,0 +1,163 @@
+"""Textures in the leaf's UV space (asset.py): the generated leaf, a normal map, a mapped photo.
+
+The generated base colour is the blade's colour inside the outline with the veins drawn over it in
+their own colour. The midrib (the longest vein) is drawn widest; the other veins are narrower in
+proportion to the square root of their length relative to the midrib's (never under a third of
+it), and each narrows further toward its far end from the midrib. Outside the outline alpha is 0
+(the colour is the blade's there too, so texture filtering does not bleed a dark fringe).
+
+The normal map is the veins' relief: a height image (the vein strokes, blurred) turned into
+tangent-space normals, with the tangent along s (the leaf's length) and the bitangent along t.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from leafstudio.assets.asset import LeafPlane
+from leafstudio.errors import LeafError
+
+BLADE = (78, 128, 50)  # sRGB
+VEIN = (168, 196, 112)
+TEXTURE_PIXELS = 1024
+SUPERSAMPLE = 2  # drawn at this multiple, then reduced (anti-aliased edges)
+MIDRIB_WIDTH = 0.012  # of the leaf length
+THINNEST = 1 / 3  # of the midrib's width
+TIP_NARROWING = 0.5  # a secondary's width at its far end, as a fraction of its start's
+RELIEF = 2.0  # normal map: slope of the vein relief, in height per vein width
+
+
+def _pixel(plane: LeafPlane, xy: np.ndarray, pixels: int) -> np.ndarray:
+    """(n, 2) image column, row of plane points (row 0 at t = 1)."""
+    uv = plane.uvmap(xy)
+    return np.column_stack([uv[:, 0] * pixels, (1 - uv[:, 1]) * pixels])
+
+
+def outline_mask(plane: LeafPlane, pixels: int) -> np.ndarray:
+    """(pixels, pixels) uint8: 255 inside the outline, anti-aliased at its edge."""
+    from PIL import Image, ImageDraw
+
+    big = pixels * SUPERSAMPLE
+    mask = Image.new("L", (big, big), 0)
+    ImageDraw.Draw(mask).polygon([tuple(p) for p in _pixel(plane, plane.polygon, big)], fill=255)
+    return np.asarray(mask.resize((pixels, pixels), Image.Resampling.BOX))
+
+
+def _polyline_length(line: np.ndarray) -> float:
+    return float(np.linalg.norm(np.diff(line, axis=0), axis=1).sum()) if len(line) > 1 else 0.0
+
+
+def vein_strokes(plane: LeafPlane, pixels: int) -> np.ndarray:
+    """(pixels, pixels) uint8 coverage of the veins drawn with their widths (module docstring)."""
+    from PIL import Image, ImageDraw
+
+    big = pixels * SUPERSAMPLE
+    image = Image.new("L", (big, big), 0)
+    draw = ImageDraw.Draw(image)
+    veins = [v for v in plane.veins if len(v) > 1]
+    if veins:
+        lengths = np.array([_polyline_length(v) for v in veins])
+        midrib = int(np.argmax(lengths))
+        per_unit = big / (plane.uvmap.size)
+        full = MIDRIB_WIDTH * plane.length * per_unit
+        for i, vein in enumerate(veins):
+            if i != midrib:  # a secondary starts at its end nearer the midrib
+                near = np.min(np.linalg.norm(veins[midrib][:, None] - vein[[0, -1]], axis=2), 0)
+                vein = vein if near[0] <= near[1] else vein[::-1]
+            start = full * max(np.sqrt(lengths[i] / lengths[midrib]), THINNEST)
+            along = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(vein, axis=0), axis=1))])
+            fraction = along / max(along[-1], 1e-300)
+            end = 1.0 if i == midrib else TIP_NARROWING
+            widths = start * (1 - (1 - end) * fraction)
+            px = _pixel(plane, vein, big)
+            for k in range(len(px) - 1):
+                w = max(widths[k], 1.0)
+                draw.line([tuple(px[k]), tuple(px[k + 1])], fill=255, width=round(w))
+                r = w / 2
+                x, y = px[k]
+                draw.ellipse([x - r, y - r, x + r, y + r], fill=255)
+            r = max(widths[-1], 1.0) / 2
+            x, y = px[-1]
+            draw.ellipse([x - r, y - r, x + r, y + r], fill=255)
+    return np.asarray(image.resize((pixels, pixels), Image.Resampling.BOX))
+
+
+def leaf_texture(plane: LeafPlane, pixels: int = TEXTURE_PIXELS):
+    """The generated base-colour texture: an RGBA PIL image (see the module docstring)."""
+    from PIL import Image
+
+    alpha = outline_mask(plane, pixels)
+    veins = vein_strokes(plane, pixels).astype(float)[..., None] / 255
+    rgb = np.asarray(BLADE, float) * (1 - veins) + np.asarray(VEIN, float) * veins
+    rgba = np.dstack([np.rint(rgb).astype(np.uint8), alpha])
+    return Image.fromarray(rgba, "RGBA")
+
+
+def normal_map(plane: LeafPlane, pixels: int = TEXTURE_PIXELS):
+    """The veins' relief as a tangent-space normal map: an RGB PIL image (+x along s, +y along t,
+    the OpenGL convention glTF uses)."""
+    from PIL import Image
+    from scipy.ndimage import gaussian_filter
+
+    width = MIDRIB_WIDTH * plane.length * pixels / plane.uvmap.size  # the midrib's, in pixels
+    height = gaussian_filter(vein_strokes(plane, pixels).astype(float) / 255, max(width / 3, 0.5))
+    height *= RELIEF * width
+    d_row, d_col = np.gradient(height)
+    normal = np.dstack([-d_col, d_row, np.ones_like(height)])  # rows run down, t runs up
+    normal /= np.linalg.norm(normal, axis=2, keepdims=True)
+    return Image.fromarray(np.rint((normal + 1) * 127.5).astype(np.uint8), "RGB")
+
+
+def read_image(path: str | Path) -> np.ndarray:
+    """An image file as an (h, w, 3 or 4) uint8 array; LeafError if it cannot be read."""
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        with Image.open(path) as image:
+            image = image.convert("RGBA" if "A" in image.getbands() else "RGB")
+            return np.asarray(image)
+    except FileNotFoundError:
+        raise LeafError("no such file", str(path)) from None
+    except IsADirectoryError:
+        raise LeafError("is a folder, not an image", str(path)) from None
+    except (UnidentifiedImageError, OSError, ValueError) as exc:
+        raise LeafError(f"not a readable image ({type(exc).__name__})", str(path)) from None
+
+
+def photo_texture(
+    plane: LeafPlane, photo: np.ndarray, pixel_from_world: np.ndarray, pixels: int = TEXTURE_PIXELS
+):
+    """The photo resampled into UV space: each texel takes the colour of the photo pixel its leaf
+    point came from, so the leaf in the texture is where the mesh's UVs put it. Alpha is the
+    outline's mask.
+
+    Parameters
+    ----------
+    photo : (h, w, 3 or 4) uint8 array
+    pixel_from_world : (2, 3) float array
+        The affine map from world (x, y) to the photo's (column, row), as `leafstudio photo`
+        stores it (photo.py).
+    """
+    from PIL import Image
+    from scipy.ndimage import map_coordinates
+
+    xy = plane.uvmap.texel_plane_points(pixels).reshape(-1, 2)
+    world = plane.frame.to_world(xy, np.zeros(len(xy)))[:, :2]
+    col_row = world @ pixel_from_world[:, :2].T + pixel_from_world[:, 2]
+    where = [col_row[:, 1] - 0.5, col_row[:, 0] - 0.5]  # pixel centres at integer + 0.5
+    rgb = np.column_stack(
+        [map_coordinates(photo[..., c].astype(float), where, order=1, mode="nearest")
+         for c in range(3)]
+    )  # fmt: skip
+    rgb = np.rint(rgb).clip(0, 255).astype(np.uint8).reshape(pixels, pixels, 3)
+    return Image.fromarray(np.dstack([rgb, outline_mask(plane, pixels)]), "RGBA")
+
+
+def stretched_texture(image: np.ndarray, pixels: int = TEXTURE_PIXELS):
+    """Any image as the texture over the whole UV square (a leaf without a photo transform)."""
+    from PIL import Image
+
+    mode = "RGBA" if image.shape[2] == 4 else "RGB"
+    return Image.fromarray(image, mode).resize((pixels, pixels), Image.Resampling.LANCZOS)

@@ -1,0 +1,186 @@
+"""Mesh assets out, by format: each writer takes MeshAssets (asset.py) and a path.
+
+- ``.ply``: binary, vertices x y z nx ny nz s t and the scalars (height, curvatures).
+- ``.obj``: v, vt, vn and faces f a/a/a, with `<stem>.mtl` and the texture `<stem>.png` beside it.
+- ``.glb``, ``.gltf``: glTF 2.0 through trimesh (one file; .gltf with its buffers embedded):
+  NORMAL, TEXCOORD_0, a double-sided PBR material with the base colour (and normal) texture, and
+  the scalars as custom attributes _HEIGHT, _MEAN_CURVATURE, _GAUSSIAN_CURVATURE, _K1, _K2.
+  Levels of detail are separate meshes leaf_LOD0, leaf_LOD1, ...
+- ``.stl``, ``.3mf``: through trimesh (geometry only; 3MF in millimetres, its unit by spec).
+- ``.vtp``, ``.vtk``: through pyvista, with Normals, the texture coordinates and the scalars.
+
+Every file is written through io._replace_atomically; the OBJ's texture and material go first, so
+an .obj on disk never names a file that is not there.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from io import BytesIO
+from pathlib import Path
+
+import numpy as np
+
+from leafstudio.assets.asset import MeshAsset
+from leafstudio.io import MESH_SUFFIXES
+
+GLTF_SUFFIXES = (".glb", ".gltf")
+ASSET_SUFFIXES = MESH_SUFFIXES  # io's list: the writers below cover each
+METALLIC, ROUGHNESS, ALPHA_CUTOFF = 0.0, 0.8, 0.5
+SHORT = ("nx", "ny", "nz", "s", "t")  # PLY properties kept as float32
+
+
+def _replace(path: Path, write: Callable[[str], None]) -> None:
+    from leafstudio.io import _replace_atomically
+
+    _replace_atomically(path, write)
+
+
+def _bytes(path: Path, data: bytes) -> None:
+    _replace(path, lambda tmp: Path(tmp).write_bytes(data))
+
+
+def write_ply(asset: MeshAsset, path: Path) -> None:
+    """Binary PLY: x y z nx ny nz s t and every scalar as a vertex property, faces as lists."""
+    from plyfile import PlyData, PlyElement
+
+    names = ["x", "y", "z", "nx", "ny", "nz", "s", "t", *asset.point_data]
+    vertex = np.empty(asset.n_points, dtype=[(c, "f4" if c in SHORT else "f8") for c in names])
+    columns = [*asset.points.T, *asset.normals.T, *asset.uv.T, *asset.point_data.values()]
+    for name, column in zip(names, columns, strict=True):
+        vertex[name] = column
+    face = np.empty(len(asset.faces), dtype=[("vertex_indices", "i4", (3,))])
+    face["vertex_indices"] = asset.faces
+    buffer = BytesIO()
+    elements = [PlyElement.describe(vertex, "vertex"), PlyElement.describe(face, "face")]
+    PlyData(elements, text=False).write(buffer)
+    _bytes(path, buffer.getvalue())
+
+
+def _png(image) -> bytes:
+    buffer = BytesIO()
+    image.save(buffer, format="PNG")
+    return buffer.getvalue()
+
+
+def obj_companions(path: Path) -> tuple[Path, Path]:
+    """The material file and texture an .obj at `path` refers to."""
+    return path.with_suffix(".mtl"), path.with_suffix(".png")
+
+
+def write_obj(asset: MeshAsset, path: Path) -> None:
+    """OBJ with vt and vn (one index for all three: no seams), its .mtl and, if the asset has a
+    texture, the PNG beside it."""
+    from leafstudio.assets.texture import BLADE
+
+    mtl, png = obj_companions(path)
+    kd = " ".join(f"{c / 255:.4f}" for c in BLADE)
+    lines = ["newmtl leaf", "Ka 0 0 0", "Ks 0 0 0", "illum 1"]
+    if asset.texture is not None:
+        _bytes(png, _png(asset.texture))
+        lines += ["Kd 1 1 1", f"map_Kd {png.name}", f"map_d {png.name}"]
+    else:
+        lines.append(f"Kd {kd}")
+    _bytes(mtl, ("\n".join(lines) + "\n").encode())
+    rows = [f"# LeafStudio leaf: {asset.n_points} vertices, {len(asset.faces)} triangles",
+            f"mtllib {mtl.name}", f"o {asset.name}"]  # fmt: skip
+    body = BytesIO()
+    body.write(("\n".join(rows) + "\n").encode())
+    np.savetxt(body, asset.points, fmt="v %.9g %.9g %.9g")
+    np.savetxt(body, asset.uv, fmt="vt %.7g %.7g")
+    np.savetxt(body, asset.normals, fmt="vn %.6g %.6g %.6g")
+    body.write(b"usemtl leaf\n")
+    corners = np.repeat(asset.faces + 1, 3, axis=1)  # a/a/a
+    np.savetxt(body, corners, fmt="f %d/%d/%d %d/%d/%d %d/%d/%d")
+    _bytes(path, body.getvalue())
+
+
+def to_trimesh(asset: MeshAsset, textured: bool = True):
+    """A trimesh.Trimesh of the asset: its normals, UVs, PBR material and scalars."""
+    import trimesh
+    from trimesh.visual import TextureVisuals
+    from trimesh.visual.material import PBRMaterial
+
+    from leafstudio.assets.texture import BLADE
+
+    texture = asset.texture if textured else None
+    material = PBRMaterial(
+        name=asset.name,
+        baseColorFactor=[255, 255, 255, 255] if texture is not None else [*BLADE, 255],
+        baseColorTexture=texture,
+        normalTexture=asset.normal_map if textured else None,
+        metallicFactor=METALLIC,
+        roughnessFactor=ROUGHNESS,
+        doubleSided=not asset.solid,
+        alphaMode="MASK" if texture is not None else "OPAQUE",
+        alphaCutoff=ALPHA_CUTOFF if texture is not None else None,
+    )
+    mesh = trimesh.Trimesh(
+        vertices=asset.points,
+        faces=asset.faces,
+        vertex_normals=asset.normals,
+        visual=TextureVisuals(uv=asset.uv, material=material),
+        process=False,
+        validate=False,
+    )
+    for name, values in asset.point_data.items():
+        mesh.vertex_attributes[f"_{name.upper()}"] = np.asarray(values, np.float32)
+    return mesh
+
+
+def write_gltf(assets: Sequence[MeshAsset], path: Path) -> None:
+    """glTF 2.0 (.glb binary, or .gltf with embedded buffers): one mesh per asset."""
+    import trimesh
+    from trimesh.exchange.gltf import export_glb, export_gltf
+
+    scene = trimesh.Scene()
+    for asset in assets:
+        scene.add_geometry(to_trimesh(asset), geom_name=asset.name, node_name=asset.name)
+    if path.suffix.lower() == ".glb":
+        data = export_glb(scene, include_normals=True)
+    else:
+        files = export_gltf(scene, include_normals=True, embed_buffers=True)
+        data = files["model.gltf"]
+    _bytes(path, data)
+
+
+def write_trimesh_format(asset: MeshAsset, path: Path) -> None:
+    """STL or 3MF through trimesh (geometry only)."""
+    mesh = to_trimesh(asset, textured=False)
+    kind = path.suffix.lower().lstrip(".")
+    _bytes(path, mesh.export(file_type=kind))
+
+
+def write_vtk(asset: MeshAsset, path: Path) -> None:
+    """.vtp or .vtk through pyvista, with Normals, texture coordinates and the scalars."""
+    from leafstudio.core.trianglemesh import polydata
+
+    mesh = polydata(asset.points, asset.faces, asset.point_data, normals=asset.normals)
+    mesh.active_texture_coordinates = asset.uv.copy()
+    from leafstudio.io import _vtk_bytes
+
+    _bytes(path, _vtk_bytes(mesh, path.suffix.lower()))
+
+
+def write_assets(assets: Sequence[MeshAsset], path: Path) -> None:
+    """Write the assets (the mesh, then its coarser levels) by the path's suffix: glTF holds them
+    all; other formats write level k > 0 beside it as `<stem>_lod<k><suffix>`."""
+    suffix = path.suffix.lower()
+    if suffix in GLTF_SUFFIXES:
+        write_gltf(assets, path)
+        return
+    writer = {
+        ".ply": write_ply,
+        ".obj": write_obj,
+        ".stl": write_trimesh_format,
+        ".3mf": write_trimesh_format,
+        ".vtp": write_vtk,
+        ".vtk": write_vtk,
+    }[suffix]
+    for level, asset in enumerate(assets):
+        writer(asset, path if level == 0 else lod_path(path, level))
+
+
+def lod_path(path: Path, level: int) -> Path:
+    """Where a format without levels of detail gets level `level`."""
+    return path.with_name(f"{path.stem}_lod{level}{path.suffix}")
