@@ -258,16 +258,17 @@ def test_cli_texture_option(tmp_path: Path):
     leaf = tmp_path / "nested.leaf.json"
     ls.save_leaf(ls.demo("nested"), leaf)
     out = tmp_path / "leaf.obj"
-    assert main(["reconstruct", str(leaf), "-o", str(out), "--grid", "32", "--texture", "none"]) == 0
+    run = ["reconstruct", str(leaf), "--grid", "32", "-o"]
+    assert main([*run, str(out), "--texture", "none"]) == 0
     assert not (tmp_path / "leaf.png").exists() and (tmp_path / "leaf.mtl").exists()
-    assert main(["reconstruct", str(leaf), "-o", str(out), "--grid", "32"]) == 0
+    assert main([*run, str(out)]) == 0
     assert (tmp_path / "leaf.png").exists()
     image = tmp_path / "any.png"
     from PIL import Image
 
     Image.new("RGB", (64, 32), (200, 10, 10)).save(image)
     glb = tmp_path / "leaf.glb"
-    assert main(["reconstruct", str(leaf), "-o", str(glb), "--grid", "32", "--texture", str(image)]) == 0
+    assert main([*run, str(glb), "--texture", str(image)]) == 0
     texture = np.asarray(scene_mesh(glb).visual.material.baseColorTexture)
     assert tuple(texture[0, 0, :3]) == (200, 10, 10)
 

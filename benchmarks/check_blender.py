@@ -1,0 +1,67 @@
+"""Import a LeafStudio .glb into Blender (the `bpy` package) and print what arrived, as JSON:
+meshes, UV layers, the material and its image texture, and the vertex count beside the file's.
+
+bpy pins numpy < 2, so it lives in a venv of its own, not the project's:
+    python3 -m venv /tmp/bpyenv && /tmp/bpyenv/bin/pip install bpy
+    .venv/bin/leafstudio reconstruct leaf.leaf.json -o leaf.glb
+    /tmp/bpyenv/bin/python benchmarks/check_blender.py leaf.glb
+"""
+
+from __future__ import annotations
+
+import json
+import struct
+import sys
+
+
+def file_vertex_count(path: str) -> int:
+    """POSITION accessors' counts summed over the file's meshes (from the GLB's JSON chunk)."""
+    with open(path, "rb") as handle:
+        data = handle.read()
+    length = struct.unpack_from("<I", data, 12)[0]
+    gltf = json.loads(data[20 : 20 + length])
+    return sum(
+        gltf["accessors"][p["attributes"]["POSITION"]]["count"]
+        for mesh in gltf["meshes"]
+        for p in mesh["primitives"]
+    )
+
+
+def main(path: str) -> dict:
+    import bpy
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.import_scene.gltf(filepath=path)
+    meshes = [o for o in bpy.context.scene.objects if o.type == "MESH"]
+    report = {"blender": bpy.app.version_string, "file": path, "meshes": len(meshes)}
+    report["file_vertices"] = file_vertex_count(path)
+    report["objects"] = []
+    for obj in meshes:
+        mesh = obj.data
+        materials = []
+        for material in mesh.materials:
+            images = [
+                node.image.name
+                for node in (material.node_tree.nodes if material.use_nodes else [])
+                if node.type == "TEX_IMAGE" and node.image is not None
+            ]
+            sizes = [list(bpy.data.images[name].size) for name in images]
+            materials.append(
+                {"name": material.name, "image_textures": images, "image_sizes": sizes,
+                 "backface_culling": material.use_backface_culling}
+            )  # fmt: skip
+        report["objects"].append(
+            {
+                "name": obj.name,
+                "vertices": len(mesh.vertices),
+                "polygons": len(mesh.polygons),
+                "uv_layers": [layer.name for layer in mesh.uv_layers],
+                "materials": materials,
+                "attributes": sorted(a.name for a in mesh.attributes if a.name.startswith("_")),
+            }
+        )
+    return report
+
+
+if __name__ == "__main__":
+    print(json.dumps(main(sys.argv[1]), indent=1))
