@@ -43,17 +43,16 @@ class _Parser(argparse.ArgumentParser):
         raise LeafError(f"{message} (see leafstudio {self.prog.split()[-1]} --help)")
 
 
-def _whole(text: str, what: str, low: int, high: int) -> int:
+def _whole(text: str, low: int, high: int, what: str = "") -> int:
     """A whole number in [low, high] from the command line; plain digits only (no "1_0")."""
+    lead = f"{what} must" if what else "must"
     digits = text.strip()
     body = digits[1:] if digits[:1] in "+-" else digits
     if not body.isascii() or not body.isdigit():
-        raise argparse.ArgumentTypeError(f"{what} must be a whole number, got {shorten(text)!r}")
+        raise argparse.ArgumentTypeError(f"{lead} be a whole number, got {shorten(text)!r}")
     value = int(digits) if len(body) <= 30 else None  # int() of 5,000 digits is slow, and fails
     if value is None or not low <= value <= high:
-        raise argparse.ArgumentTypeError(
-            f"{what} must be between {low} and {high}, got {shorten(text)}"
-        )
+        raise argparse.ArgumentTypeError(f"{lead} be between {low} and {high}, got {shorten(text)}")
     return value
 
 
@@ -61,7 +60,7 @@ def _k_value(text: str) -> int | str:
     if text == "auto":
         return text
     try:
-        return _whole(text, "K", -(10**9), 10**9)  # Params says which range
+        return _whole(text, -(10**9), 10**9, "K")  # Params says which range
     except argparse.ArgumentTypeError:
         raise argparse.ArgumentTypeError(
             f"K must be a whole number or 'auto', got {shorten(text)!r}"
@@ -69,15 +68,15 @@ def _k_value(text: str) -> int | str:
 
 
 def _grid_value(text: str) -> int:
-    return _whole(text, "--grid", -(10**9), 10**9)  # Params says which range
+    return _whole(text, -(10**9), 10**9)  # Params says which range
 
 
 def _seed_value(text: str) -> int:
-    return _whole(text, "--seed", 0, SEED_MAX)
+    return _whole(text, 0, SEED_MAX)
 
 
 def _points_value(text: str) -> int:
-    return _whole(text, "--points", 8, 100_000)
+    return _whole(text, 8, 100_000)
 
 
 def _add_run_options(parser: argparse.ArgumentParser) -> None:
@@ -491,11 +490,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         return 130
     except Exception as exc:  # a bug: one line (a traceback with --debug), and a distinct code
-        if debug:
-            traceback.print_exc(file=sys.stderr)
-        detail = shorten(f"{type(exc).__name__}: {exc}", 300)
-        log.error(f"internal error: {detail} (run with --debug for the traceback, and report it)")
-        return EXIT_INTERNAL
+        return _internal_error(exc, debug)
+
+
+def _internal_error(exc: Exception, debug: bool) -> int:
+    """Report a bug (not bad input) in one line, or with its traceback under --debug; the test
+    suite replaces this to make any internal error a failing test (tests/conftest.py)."""
+    if debug:
+        traceback.print_exception(exc, file=sys.stderr)
+    detail = shorten(f"{type(exc).__name__}: {exc}", 300)
+    log.error(f"internal error: {detail} (run with --debug for the traceback, and report it)")
+    return EXIT_INTERNAL
 
 
 if __name__ == "__main__":

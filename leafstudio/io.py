@@ -18,7 +18,8 @@ import numpy as np
 
 from leafstudio.core.analysis import triangles_of
 from leafstudio.core.trianglemesh import TriangleMesh
-from leafstudio.errors import LeafError
+from leafstudio.errors import LeafError, shorten
+from leafstudio.inputs import load_json, parse_number, ply_xyz, read_ply, read_text
 from leafstudio.model import Leaf, Params
 from leafstudio.safewrite import replace_atomically, write_bytes
 from leafstudio.safewrite import staged as staged  # re-exported: outputs replaced together
@@ -27,6 +28,7 @@ POINT_SUFFIXES = (".csv", ".txt", ".xyz")
 LEAF_SUFFIXES = (*POINT_SUFFIXES, ".ply", ".leaf.json", ".json")
 MESH_SUFFIXES = (".ply", ".obj", ".stl", ".vtp", ".vtk")
 FORMAT_NAME, FORMAT_VERSION = "leafstudio", 1
+MAX_LABEL = 100_000  # vein labels 1..MAX_LABEL
 
 
 def _suffix(path: Path) -> str:
@@ -35,16 +37,7 @@ def _suffix(path: Path) -> str:
 
 
 def _read_text(path: Path) -> str:
-    try:
-        return path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise LeafError("no such file", str(path)) from None
-    except IsADirectoryError:
-        raise LeafError("is a folder, not a file", str(path)) from None
-    except UnicodeDecodeError:
-        raise LeafError("is not a text file", str(path)) from None
-    except OSError as exc:
-        raise LeafError(f"cannot be read ({exc.strerror})", str(path)) from None
+    return read_text(path)  # regular files only, size bounded (inputs.py)
 
 
 def read_point_table(path: Path, columns: Sequence[int] = (3, 4)) -> np.ndarray:
@@ -57,12 +50,14 @@ def read_point_table(path: Path, columns: Sequence[int] = (3, 4)) -> np.ndarray:
             continue
         fields = [f for f in text.replace(",", " ").replace(";", " ").split()]
         try:
-            values = [float(f) for f in fields]
+            values = [parse_number(f) for f in fields]
         except ValueError:
             if not rows and width is None:  # a header line
                 width = -1
                 continue
-            raise LeafError(f"line {number}: not a number in {text!r}", str(path)) from None
+            raise LeafError(
+                f"line {number}: not a number in {shorten(text)!r}", str(path)
+            ) from None
         if len(values) not in columns:
             expected = " or ".join(str(c) for c in columns)
             raise LeafError(
@@ -89,8 +84,11 @@ def _split_labels(xyz: np.ndarray, labels: np.ndarray | None, source: str) -> Le
         not np.all(np.isfinite(labels))
         or not np.all(labels == np.round(labels))
         or labels.min() < 0
+        or labels.max() > MAX_LABEL
     ):
-        raise LeafError("labels must be whole numbers >= 0 (0 boundary, 1..n veins)", source)
+        raise LeafError(
+            f"labels must be whole numbers from 0 to {MAX_LABEL} (0 boundary, 1..n veins)", source
+        )
     labels = labels.astype(int)
     veins = [xyz[labels == lab] for lab in np.unique(labels[labels > 0])]
     return _checked_leaf(xyz[labels == 0], veins, source)
@@ -106,55 +104,77 @@ def _checked_leaf(boundary: np.ndarray, veins: list[np.ndarray], source: str) ->
 
 
 def _read_ply(path: Path) -> Leaf:
-    from plyfile import PlyData, PlyParseError
-
-    try:
-        ply = PlyData.read(str(path))
-    except FileNotFoundError:
-        raise LeafError("no such file", str(path)) from None
-    except (PlyParseError, ValueError, EOFError, OSError) as exc:
-        raise LeafError(f"not a readable PLY file ({exc})", str(path)) from None
-    if "vertex" not in ply:
-        raise LeafError("PLY file has no vertex element", str(path))
-    vertex = ply["vertex"]
-    names = vertex.data.dtype.names or ()
-    if not {"x", "y", "z"} <= set(names):
-        raise LeafError("PLY vertices need x, y and z properties", str(path))
-    if len(vertex.data) == 0:
-        raise LeafError("holds no points", str(path))
-    xyz = np.column_stack([vertex[c] for c in "xyz"]).astype(float)
+    ply = read_ply(path)  # header checked against the file's size; one LeafError on failure
+    xyz, names = ply_xyz(ply, path)
     if not np.all(np.isfinite(xyz)):
         raise LeafError("NaN or infinite coordinates", str(path))
-    labels = np.asarray(vertex["label"], dtype=float) if "label" in names else None
+    labels = None
+    if "label" in names:
+        kind = ply["vertex"].data.dtype["label"]
+        if kind.kind not in "biuf" or kind.shape:
+            raise LeafError("the vertex property label must be a number, not a list", str(path))
+        labels = np.asarray(ply["vertex"]["label"], dtype=float)
     return _split_labels(xyz, labels, str(path))
 
 
 def _read_project(path: Path) -> dict[str, Any]:
-    try:
-        data = json.loads(_read_text(path))
-    except json.JSONDecodeError as exc:
-        raise LeafError(f"not valid JSON (line {exc.lineno}: {exc.msg})", str(path)) from None
+    data = load_json(path)  # size and nesting bounded (inputs.py)
     if not isinstance(data, dict) or data.get("format") != FORMAT_NAME:
         raise LeafError(f'not a LeafStudio project (no "format": "{FORMAT_NAME}")', str(path))
-    if data.get("version", 0) > FORMAT_VERSION:
-        raise LeafError(f"written by a newer LeafStudio (version {data['version']})", str(path))
+    version = data.get("version", FORMAT_VERSION)
+    if isinstance(version, bool) or not isinstance(version, int) or version < 1:
+        raise LeafError(
+            f'"version" must be a whole number from 1, got {shorten(json.dumps(version))}',
+            str(path),
+        )
+    if version > FORMAT_VERSION:
+        raise LeafError(f"written by a newer LeafStudio (version {shorten(version)})", str(path))
+    for key, kind, what in (
+        ("boundary", list, "a list of [x, y, z] points"),
+        ("veins", list, "a list of veins, each a list of [x, y, z] points"),
+        ("params", dict, "an object of parameter names and values"),
+        ("sketch", dict, "an object"),
+    ):
+        if data.get(key) is not None and not isinstance(data[key], kind):
+            raise LeafError(
+                f'"{key}" must be {what}, got {shorten(json.dumps(data[key]))}', str(path)
+            )
     return data
+
+
+def _project_points(values: list, what: str, source: str) -> np.ndarray:
+    """An (n, 3) float array from a project's list of [x, y, z] points."""
+    if any(not isinstance(p, list) or len(p) != 3 for p in values) or any(
+        isinstance(c, bool) or not isinstance(c, (int, float)) for p in values for c in p
+    ):
+        raise LeafError(f"{what} must be a list of [x, y, z] points (numbers)", source)
+    try:
+        return np.asarray(values, dtype=float).reshape(-1, 3)
+    except OverflowError:
+        raise LeafError(f"{what} holds a number too large for a coordinate", source) from None
 
 
 def load_project(path: str | os.PathLike) -> tuple[Leaf, Params | None, dict[str, Any]]:
     """A .leaf.json project: its leaf, its parameters (None if absent) and its sketch."""
     path = Path(path)
     data = _read_project(path)
-    try:
-        boundary = np.asarray(data.get("boundary", []), dtype=float).reshape(-1, 3)
-        veins = [np.asarray(v, dtype=float).reshape(-1, 3) for v in data.get("veins", [])]
-    except (TypeError, ValueError):
-        raise LeafError("boundary and veins must be lists of [x, y, z]", str(path)) from None
-    leaf = _checked_leaf(boundary, veins, str(path))
+    source = str(path)
+    boundary = _project_points(data.get("boundary") or [], "boundary", source)
+    veins_data = data.get("veins") or []
+    if any(not isinstance(v, list) for v in veins_data) or any(
+        v and not isinstance(v[0], list) for v in veins_data
+    ):
+        raise LeafError(
+            '"veins" must be a list of veins, each a list of [x, y, z] points (one vein is '
+            "[[[x, y, z], ...]])",
+            source,
+        )
+    veins = [_project_points(v, f"vein {i + 1}", source) for i, v in enumerate(veins_data)]
+    leaf = _checked_leaf(boundary, veins, source)
     try:
         params = Params.from_dict(data["params"]) if data.get("params") else None
     except (TypeError, LeafError) as exc:
-        raise LeafError(f"bad params: {exc}", str(path)) from None
+        raise LeafError(f"bad params: {exc}", source) from None
     return leaf, params, dict(data.get("sketch") or {})
 
 
@@ -167,6 +187,8 @@ def load_leaf(path: str | os.PathLike, veins: Sequence[str | os.PathLike] = ()) 
         With the file's name and the problem, for anything unreadable or malformed.
     """
     path = Path(path)
+    if isinstance(veins, (str, os.PathLike)):
+        veins = [veins]  # one vein file given alone, not a sequence of one-letter names
     suffix = _suffix(path)
     if suffix in POINT_SUFFIXES:
         table = read_point_table(path)

@@ -193,3 +193,32 @@ class Params:
     def with_(self, **changes: Any) -> Params:
         """A copy with some values changed (validated again)."""
         return replace(self, **changes)
+
+
+def as_leaf(value: Any) -> Leaf:
+    """`value` if it is a Leaf; a TypeError that says what is expected otherwise (the API's
+    entry points call this, so `reconstruct(None)` says what went wrong)."""
+    if isinstance(value, Leaf):
+        return value
+    raise TypeError(
+        f"expected a leafstudio.Leaf (from ls.load_leaf, ls.demo or ls.Leaf(boundary, veins)), "
+        f"got {type(value).__name__}"
+    )
+
+
+def as_params(value: Any) -> Params:
+    """`value` as Params: Params, None (the defaults) or a dict of parameter names and values
+    (an unknown name is an error here, where from_dict ignores it for newer files)."""
+    if value is None:
+        return Params()
+    if isinstance(value, Params):
+        return value
+    if isinstance(value, dict):
+        known = {f.name for f in fields(Params)}
+        unknown = sorted(str(k) for k in value if k not in known)
+        if unknown:
+            raise LeafError(
+                f"unknown parameter {_short(unknown[0])}; known: {', '.join(sorted(known))}"
+            )
+        return Params(**value)
+    raise TypeError(f"expected leafstudio.Params, a dict or None, got {type(value).__name__}")

@@ -48,7 +48,7 @@ from leafstudio.core.surface import HeightSurface, fit_surface
 from leafstudio.core.trianglemesh import TriangleMesh
 from leafstudio.core.units import ScaledSurface, Units
 from leafstudio.errors import LeafError
-from leafstudio.model import K_AUTO, Leaf, Params
+from leafstudio.model import K_AUTO, Leaf, Params, as_leaf, as_params
 
 if TYPE_CHECKING:
     import pyvista as pv
@@ -250,7 +250,7 @@ class Pipeline:
     """
 
     def __init__(self, leaf: Leaf) -> None:
-        self.leaf = leaf
+        self.leaf = leaf = as_leaf(leaf)  # a clear TypeError for anything else
         self.units = Units.of(leaf)  # the stages run on the leaf at unit size (units.py)
         self._unit_leaf = self.units.leaf(leaf)
         self._cache: dict[str, tuple[tuple[Any, ...], Any]] = {}
@@ -296,6 +296,7 @@ class Pipeline:
         should_stop : callable, optional
             Polled between stages; when it returns True the run raises Cancelled.
         """
+        params = as_params(params)  # Params, None or a dict; a clear error for anything else
         timings: dict[str, float] = {}
         ran: list[str] = []
 
@@ -499,7 +500,7 @@ def reconstruct(leaf: Leaf, params: Params | None = None) -> Result:
     Warnings (such as a leaf without veins being flat) are issued with `warnings.warn` and kept in
     `Result.warnings`.
     """
-    result = Pipeline(leaf).run(params or Params())
+    result = Pipeline(leaf).run(as_params(params))
     for note in result.warnings:
         warnings.warn(note, stacklevel=2)
     return result
