@@ -16,8 +16,6 @@ from typing import Any
 
 import numpy as np
 
-from leafstudio.core.analysis import triangles_of
-from leafstudio.core.trianglemesh import TriangleMesh
 from leafstudio.errors import LeafError, shorten
 from leafstudio.inputs import load_json, parse_number, ply_xyz, read_ply, read_text
 from leafstudio.model import Leaf, Params
@@ -26,7 +24,7 @@ from leafstudio.safewrite import staged as staged  # re-exported: outputs replac
 
 POINT_SUFFIXES = (".csv", ".txt", ".xyz")
 LEAF_SUFFIXES = (*POINT_SUFFIXES, ".ply", ".leaf.json", ".json")
-MESH_SUFFIXES = (".ply", ".obj", ".stl", ".vtp", ".vtk")
+MESH_SUFFIXES = (".ply", ".obj", ".stl", ".vtp", ".vtk", ".glb", ".gltf", ".3mf")
 FORMAT_NAME, FORMAT_VERSION = "leafstudio", 1
 MAX_LABEL = 100_000  # vein labels 1..MAX_LABEL
 
@@ -272,9 +270,18 @@ def save_leaf(
         raise LeafError(f"cannot write a leaf as {suffix or '(none)'!r}", str(path))
 
 
-def save_mesh(result_or_mesh: Any, path: str | os.PathLike) -> None:
-    """Write a Result's mesh (or a TriangleMesh or pyvista mesh) as .ply, .obj, .stl, .vtp or
-    .vtk by extension; PLY straight from the arrays, the others through VTK."""
+def save_mesh(
+    result_or_mesh: Any,
+    path: str | os.PathLike,
+    *,
+    texture: Any = "auto",
+    thickness: float | None = None,
+    lod: int = 0,
+) -> None:
+    """Write a Result's mesh (or a TriangleMesh or pyvista mesh) by extension (MESH_SUFFIXES),
+    with normals, UVs, height and curvatures where the format holds them, and a texture (see
+    leafstudio.assets: `texture` "auto", "none" or an image; `thickness` makes a closed solid;
+    `lod` adds coarser levels of detail)."""
     path = Path(path)
     suffix = _suffix(path)
     if suffix not in MESH_SUFFIXES:
@@ -282,16 +289,9 @@ def save_mesh(result_or_mesh: Any, path: str | os.PathLike) -> None:
             f"unknown mesh type {suffix or '(none)'!r}; use one of {', '.join(MESH_SUFFIXES)}",
             str(path),
         )
-    mesh = getattr(result_or_mesh, "triangle_mesh", result_or_mesh)
-    if suffix == ".ply":
-        _replace_atomically(path, lambda tmp: _write_mesh_ply(mesh, tmp))
-        return
-    if isinstance(mesh, TriangleMesh):
-        mesh = mesh.to_pyvista()
-    if suffix in (".vtp", ".vtk"):
-        _write_atomically(path, _vtk_bytes(mesh, suffix))
-        return
-    _replace_atomically(path, mesh.save)
+    from leafstudio.assets.export import export_mesh
+
+    export_mesh(result_or_mesh, path, texture=texture, thickness=thickness, lod=lod)
 
 
 def _vtk_bytes(mesh: Any, suffix: str) -> bytes:
@@ -315,25 +315,3 @@ def _vtk_bytes(mesh: Any, suffix: str) -> bytes:
     if suffix == ".vtp":
         return writer.GetOutputString().encode("ascii")
     return bytes(writer.GetOutputStdString())
-
-
-def _write_mesh_ply(mesh: Any, path: str) -> None:
-    """A triangle mesh as binary PLY with every scalar point array (height, curvatures) as a
-    vertex property; VTK's PLY writer drops them."""
-    from plyfile import PlyData, PlyElement
-
-    arrays = {
-        name: np.asarray(mesh.point_data[name])
-        for name in mesh.point_data
-        if np.asarray(mesh.point_data[name]).ndim == 1 and name not in ("x", "y", "z")
-    }
-    vertex = np.empty(mesh.n_points, dtype=[(c, "f8") for c in ("x", "y", "z", *arrays)])
-    for i, c in enumerate("xyz"):
-        vertex[c] = mesh.points[:, i]
-    for name, values in arrays.items():
-        vertex[name] = values
-    triangles = triangles_of(mesh)
-    face = np.empty(len(triangles), dtype=[("vertex_indices", "i4", (3,))])
-    face["vertex_indices"] = triangles
-    elements = [PlyElement.describe(vertex, "vertex"), PlyElement.describe(face, "face")]
-    PlyData(elements, text=False).write(path)

@@ -132,4 +132,4 @@ def test_a_triangle_mesh_exports_as_vtp_and_ply_without_a_polydata(tmp_path: Pat
 def test_unknown_mesh_type(tmp_path: Path):
     result = ls.reconstruct(ls.demo("nested"), ls.Params(grid=32))
     with pytest.raises(ls.LeafError, match="unknown mesh type"):
-        ls.save_mesh(result, tmp_path / "leaf.gltf")
+        ls.save_mesh(result, tmp_path / "leaf.dae")
