@@ -146,3 +146,41 @@ def _neighbour_distances(points, which, lo, size, nx, ny, starts, order):
             ring += 1
         out[q] = np.sqrt(best)
     return out
+
+
+def near_edges(polygon: np.ndarray, xy: np.ndarray, radius: float) -> np.ndarray:
+    """(n,) bool: which of the (n, 2) points lie within `radius` of an edge of the closed
+    (b, 2) polygon; each edge visits only the buckets its box (grown by `radius`) covers."""
+    xy = kernel_array(xy)
+    near = np.zeros(len(xy), dtype=bool)
+    if len(xy) == 0:
+        return near
+    b = bucket_points(xy)
+    _mark_near_edges(kernel_array(polygon), xy, float(radius), b.lo, b.size, b.nx, b.ny,
+                     b.starts, b.order, near)  # fmt: skip
+    return near
+
+
+@njit(cache=True, nogil=True)
+def _mark_near_edges(polygon, xy, radius, lo, size, nx, ny, starts, order, near):
+    """Set near[i] for the points within `radius` of an edge of the closed polygon."""
+    n = len(polygon)
+    for e in range(n):
+        ax, ay = polygon[e, 0], polygon[e, 1]
+        bx, by = polygon[(e + 1) % n, 0], polygon[(e + 1) % n, 1]
+        ex, ey = bx - ax, by - ay
+        length2 = ex * ex + ey * ey
+        x0 = max(int(np.floor((min(ax, bx) - radius - lo[0]) / size)), 0)
+        x1 = min(int(np.floor((max(ax, bx) + radius - lo[0]) / size)), nx - 1)
+        y0 = max(int(np.floor((min(ay, by) - radius - lo[1]) / size)), 0)
+        y1 = min(int(np.floor((max(ay, by) + radius - lo[1]) / size)), ny - 1)
+        for cy in range(y0, y1 + 1):
+            for cx in range(x0, x1 + 1):
+                k = cy * nx + cx
+                for j in range(starts[k], starts[k + 1]):
+                    i = order[j]
+                    px, py = xy[i, 0] - ax, xy[i, 1] - ay
+                    t = (px * ex + py * ey) / length2 if length2 > 0 else 0.0
+                    t = min(max(t, 0.0), 1.0)
+                    if (px - t * ex) ** 2 + (py - t * ey) ** 2 <= radius * radius:
+                        near[i] = True

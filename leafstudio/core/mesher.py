@@ -17,7 +17,7 @@ import numpy as np
 import triangle
 from numba import njit
 
-from leafstudio.core.buckets import bucket_points, kernel_array
+from leafstudio.core.buckets import kernel_array, near_edges
 from leafstudio.core.grid import Grid
 from leafstudio.errors import LeafError
 
@@ -36,40 +36,7 @@ class PlaneMesh:
 
 def inner_nodes(polygon: np.ndarray, nodes: np.ndarray, spacing: float) -> np.ndarray:
     """(n,) bool: grid nodes kept by the conforming mesher, at a clearance from the margin."""
-    nodes = kernel_array(nodes)
-    if len(nodes) == 0:
-        return np.zeros(0, dtype=bool)
-    b = bucket_points(nodes)
-    near = np.zeros(len(nodes), dtype=bool)
-    polygon = kernel_array(polygon)
-    _mark_near_edges(polygon, nodes, INNER_CLEARANCE * spacing, b.lo, b.size, b.nx, b.ny,
-                     b.starts, b.order, near)  # fmt: skip
-    return ~near
-
-
-@njit(cache=True, nogil=True)
-def _mark_near_edges(polygon, xy, radius, lo, size, nx, ny, starts, order, near):
-    """Set near[i] for the points within `radius` of an edge of the closed polygon."""
-    n = len(polygon)
-    for e in range(n):
-        ax, ay = polygon[e, 0], polygon[e, 1]
-        bx, by = polygon[(e + 1) % n, 0], polygon[(e + 1) % n, 1]
-        ex, ey = bx - ax, by - ay
-        length2 = ex * ex + ey * ey
-        x0 = max(int(np.floor((min(ax, bx) - radius - lo[0]) / size)), 0)
-        x1 = min(int(np.floor((max(ax, bx) + radius - lo[0]) / size)), nx - 1)
-        y0 = max(int(np.floor((min(ay, by) - radius - lo[1]) / size)), 0)
-        y1 = min(int(np.floor((max(ay, by) + radius - lo[1]) / size)), ny - 1)
-        for cy in range(y0, y1 + 1):
-            for cx in range(x0, x1 + 1):
-                k = cy * nx + cx
-                for j in range(starts[k], starts[k + 1]):
-                    i = order[j]
-                    px, py = xy[i, 0] - ax, xy[i, 1] - ay
-                    t = (px * ex + py * ey) / length2 if length2 > 0 else 0.0
-                    t = min(max(t, 0.0), 1.0)
-                    if (px - t * ex) ** 2 + (py - t * ey) ** 2 <= radius * radius:
-                        near[i] = True
+    return ~near_edges(polygon, nodes, INNER_CLEARANCE * spacing)
 
 
 def _triangulate(vertices: np.ndarray, segments: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -8,18 +8,33 @@ ordered by a concave hull of the points.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 import shapely
 from numba import njit
+from scipy.spatial import cKDTree
 from shapely.geometry import MultiPoint, Polygon
 
-from leafstudio.core.buckets import bounds, kernel_array, neighbour_distances
+from leafstudio.core.buckets import bounds, kernel_array, near_edges, neighbour_distances
+from leafstudio.core.cloud import (
+    Cells,
+    Noise,
+    estimate_noise,
+    filled_outline,
+    mean_outline,
+    order_cells,
+    point_order,
+)
 from leafstudio.errors import LeafError
 
-_HULL_RATIOS = (0.0, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0)
 MAX_OUTLINE_VERTICES = 3000  # a denser outline is thinned to about this many (thin_outline)
+ORDERED_MEAN_EDGE = 4.0  # given order: mean edge at most this many nearest-neighbour spacings
+CLEAN_NOISE = 2e-5  # estimated noise (σ) under this fraction of the size: a clean boundary
+RASTER = 512  # the cloud's cells: at least 1/RASTER of its size
+HULL_MOST = 5000  # a clean cloud the cells cannot trace is tried by concave hulls up to this
+_HULL_RATIOS = (0.0, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0)
 
 
 def distinct_indices(points: np.ndarray, scale: float) -> np.ndarray:
@@ -59,52 +74,209 @@ def _largest_polygon(geom: shapely.Geometry) -> Polygon | None:
     return Polygon(max(polys, key=lambda g: g.area).exterior)
 
 
-def _as_ordered(points: np.ndarray, spacing: float) -> Polygon | None:
-    """The polygon through the points in their given order, if that order traces the outline.
+@dataclass(frozen=True)
+class Outline:
+    """The leaf outline traced from boundary points (trace_outline).
 
-    More than MAX_OUTLINE_VERTICES of them are thinned first (thin_curve, as thin_outline does),
-    so that the validity test checks the outline the pipeline uses, at a fraction of the cost; a
-    thinned ring that cuts across a narrow slit is thinned less, down to every point, before
-    a self-crossing outline is repaired.
+    Attributes
+    ----------
+    polygon : (m, 2) float array
+        Counter-clockwise vertices, not closed.
+    heights : (m, 2) float array
+        The vertices' heights (the input points' own, or their smoothed mean).
+    noise : Noise
+        The boundary's estimated scatter (cloud.estimate_noise).
+    smoothed : bool
+        True: the vertices are the points' smoothed mean (a noisy cloud); False: input points.
     """
-    x, y = points[:, 0], points[:, 1]
+
+    polygon: np.ndarray
+    heights: np.ndarray
+    noise: Noise
+    smoothed: bool
+
+
+def _canonical(points: np.ndarray, sequence: np.ndarray) -> np.ndarray:
+    """`sequence` (indices of a closed ring of `points`) counter-clockwise and starting at its
+    lowest point by (x, y): the same ring whatever its given start and direction."""
+    x, y = points[sequence, 0], points[sequence, 1]
+    if float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y)) < 0:
+        sequence, x, y = sequence[::-1], x[::-1], y[::-1]
+    at_min = np.flatnonzero(x == x.min())
+    start = int(at_min[np.argmin(y[at_min])])
+    return np.roll(sequence, -start)
+
+
+def _ring(points: np.ndarray, sequence: np.ndarray) -> np.ndarray | Polygon | None:
+    """The outline through points[sequence] (canonical), thinned to about MAX_OUTLINE_VERTICES
+    (thin_curve): kept indices into `points` if that is a simple polygon, a repaired polygon if
+    it crosses itself a little, None if it does not trace an outline.
+
+    The validity test checks the thinned ring (the one the pipeline uses, at a fraction of the
+    cost); a thinned ring that cuts across a narrow slit is thinned less, down to every point,
+    before a self-crossing outline is repaired.
+    """
+    ring = points[sequence]
+    x, y = ring[:, 0], ring[:, 1]
     edges = np.hypot(np.diff(x, append=x[0]), np.diff(y, append=y[0]))  # columns: much faster
-    if edges.max() > 8 * spacing:
-        return None
-    step = float(edges.sum()) / MAX_OUTLINE_VERTICES if len(points) > MAX_OUTLINE_VERTICES else 0.0
+    many = len(ring) > MAX_OUTLINE_VERTICES
+    step = float(edges.sum()) / MAX_OUTLINE_VERTICES if many else 0.0
     finest = float(np.median(edges)) if step > 0 else 0.0  # below this, thinning keeps them all
     while step > 0:
-        poly = Polygon(points[thin_curve(points, step)])
-        if poly.is_valid:
-            return poly
+        kept = thin_curve(ring, step)
+        if Polygon(ring[kept]).is_valid:
+            return sequence[kept]
         step = step / 2 if step / 2 > finest else 0.0
-    poly = Polygon(points)
+    poly = Polygon(ring)
     if poly.is_valid:
-        return poly
+        return sequence
     repaired = _largest_polygon(shapely.make_valid(poly))
     if repaired is not None and repaired.area > 0.9 * abs(shapely.area(poly)):
         return repaired
     return None
 
 
-def _by_concave_hull(points: np.ndarray, spacing: float) -> Polygon:
-    """The tightest concave hull whose outline passes near every point."""
+def _given_order(points: np.ndarray, spacing: float) -> np.ndarray | None:
+    """The points' indices in their given order, canonical (_canonical), if that order may trace
+    the outline: its edges are on average a few spacings long (shuffled points jump across the
+    leaf; points at random spacing along the outline pass)."""
+    x, y = points[:, 0], points[:, 1]
+    edges = np.hypot(np.diff(x, append=x[0]), np.diff(y, append=y[0]))  # columns: much faster
+    if edges.mean() > ORDERED_MEAN_EDGE * spacing:
+        return None
+    return _canonical(points, np.arange(len(points)))
+
+
+def _cloud_cells(points: np.ndarray, z: np.ndarray, spacing: float) -> Cells | None:
+    """cloud.order_cells at a cell of about a spacing (at least 1/RASTER of the cloud's size),
+    coarser if the outline does not close at that size; None if it never does."""
+    lo, hi = bounds(points)
+    size = float((hi - lo).max())
+    cell = max(size / RASTER, spacing)
+    while cell < size / 4:
+        cells = order_cells(points, z, cell)
+        if cells is not None:
+            return cells
+        cell *= 2
+    return None
+
+
+def _exact(points: np.ndarray, z: np.ndarray, sequence: np.ndarray, noise: Noise) -> Outline | None:
+    """The outline through the points in `sequence` (input points as vertices, _ring), or None."""
+    ring = _ring(points, sequence)
+    if ring is None:
+        return None
+    if isinstance(ring, np.ndarray):
+        return Outline(points[ring], z[ring], noise, smoothed=False)
+    vertices = np.asarray(ring.exterior.coords)[:-1]  # repaired: some are no input points
+    return Outline(vertices, z[cKDTree(points).query(vertices)[1]], noise, smoothed=False)
+
+
+def trace_outline(points: np.ndarray, z: np.ndarray | None = None) -> Outline:
+    """The leaf outline from 2D boundary points, ordered or not, clean or noisy, in any number.
+
+    Duplicates are dropped. Points given in an order that traces the outline have their noise
+    estimated along it (cloud.estimate_noise); if it is under CLEAN_NOISE of their size they are
+    the outline's vertices, in that order (today's fast path). Otherwise the points are placed
+    along the outline by a contour round their cells (cloud.order_cells, whatever their order)
+    and the noise estimated in that order: a clean boundary keeps its points as the vertices, a
+    noisy one becomes the smooth outline through their mean position (cloud.mean_outline), never
+    a zig-zag through them. Both orders give the same outline for the same clean points.
+
+    Parameters
+    ----------
+    points : (n, 2) float array
+    z : (n,) float array, optional
+        The points' heights above the plane, carried to the outline's vertices (0 if omitted).
+    """
+    points = kernel_array(points)
+    z = np.zeros(len(points)) if z is None else kernel_array(z)
+    if len(points) == 0:
+        raise LeafError("the boundary needs at least 3 distinct points, got 0")
+    lo, hi = bounds(points)
+    scale = float((hi - lo).max())
+    keep = distinct_indices(points, scale)
+    pts, zs = points[keep], z[keep]
+    if len(pts) < 3:
+        raise LeafError(f"the boundary needs at least 3 distinct points, got {len(pts)}")
+    spacing = max(_spacing(pts), 1e-12 * scale)
+    given = _given_order(pts, spacing)
+    if given is not None:
+        noise = estimate_noise(pts, zs, given)
+        if _clean(noise, scale):
+            outline = _exact(pts, zs, given, noise)
+            if outline is not None:
+                return _checked(outline, scale)
+    cells = _cloud_cells(pts, zs, spacing)
+    if cells is None and len(pts) <= HULL_MOST:
+        hull = _by_concave_hull(pts, spacing)
+        if hull is not None:
+            return _checked(_hull_outline(pts, zs, hull), scale)
+    if cells is None:  # the points fill the leaf rather than trace its margin
+        cell = max(scale / RASTER, spacing)
+        polygon, heights = filled_outline(pts, zs, cell)
+        return _checked(Outline(polygon, heights, Noise(cell, 0.0), smoothed=True), scale)
+    sequence = _canonical(pts, point_order(cells, pts))
+    noise = estimate_noise(pts, zs, sequence)
+    if _clean(noise, scale):
+        ring = _ring(pts, sequence)
+        if isinstance(ring, np.ndarray):
+            return _checked(Outline(pts[ring], zs[ring], noise, smoothed=False), scale)
+        # a clean cloud the cells could not trace (walls nearer than its spacing): a small one
+        # by the tightest concave hull that passes by every point, else as a noisy one
+        hull = _by_concave_hull(pts, spacing) if len(pts) <= HULL_MOST else None
+        if hull is not None:
+            return _checked(_hull_outline(pts, zs, hull, noise), scale)
+    polygon, heights = mean_outline(cells, noise.across, len(pts), scale)
+    if not Polygon(polygon).is_valid:
+        poly = _largest_polygon(shapely.make_valid(Polygon(polygon)))
+        if poly is None:
+            raise LeafError("the boundary points do not enclose any area")
+        vertices = np.asarray(poly.exterior.coords)[:-1]
+        heights = heights[cKDTree(polygon).query(vertices)[1]]
+        polygon = vertices
+    return _checked(Outline(polygon, heights, noise, smoothed=True), scale)
+
+
+def _by_concave_hull(points: np.ndarray, spacing: float) -> Polygon | None:
+    """The tightest valid concave hull (shapely) of the points whose outline passes within 3
+    spacings of every one (buckets.near_edges, linear); None if none does."""
     cloud = MultiPoint(points)
-    fallback = None
     for ratio in _HULL_RATIOS:
         poly = _largest_polygon(shapely.concave_hull(cloud, ratio=ratio))
         if poly is None or not poly.is_valid:
             continue
-        fallback = fallback or poly
-        if shapely.distance(poly.exterior, shapely.points(points)).max() <= 3 * spacing:
+        if near_edges(np.asarray(poly.exterior.coords)[:-1], points, 3 * spacing).all():
             return poly
-    if fallback is None:
+    return None
+
+
+def _hull_outline(
+    points: np.ndarray, z: np.ndarray, hull: Polygon, noise: Noise | None = None
+) -> Outline:
+    """The Outline of a concave hull of the points (its vertices are input points)."""
+    vertices = np.asarray(hull.exterior.coords)[:-1]
+    heights = z[cKDTree(points).query(vertices)[1]]
+    return Outline(vertices, heights, noise or Noise(0.0, 0.0), smoothed=False)
+
+
+def _clean(noise: Noise, scale: float) -> bool:
+    """A boundary whose estimated noise is under CLEAN_NOISE of its size, across and in height."""
+    return max(noise.across, noise.height) <= CLEAN_NOISE * scale
+
+
+def _checked(outline: Outline, scale: float) -> Outline:
+    """The outline, if it encloses some area; canonical (counter-clockwise, lowest point first)."""
+    polygon = outline.polygon
+    x, y = polygon[:, 0], polygon[:, 1]
+    if abs(float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))) / 2 <= 1e-8 * scale**2:
         raise LeafError("the boundary points do not enclose any area")
-    return fallback
+    ring = _canonical(polygon, np.arange(len(polygon)))
+    return Outline(polygon[ring], outline.heights[ring], outline.noise, outline.smoothed)
 
 
 def leaf_polygon(points: np.ndarray) -> np.ndarray:
-    """Order 2D boundary points into a simple counter-clockwise polygon.
+    """Order 2D boundary points into a simple counter-clockwise polygon (trace_outline).
 
     Parameters
     ----------
@@ -114,22 +286,11 @@ def leaf_polygon(points: np.ndarray) -> np.ndarray:
     Returns
     -------
     (m, 2) float array
-        Polygon vertices (m <= n, each an input point), counter-clockwise, not closed. More
-        than MAX_OUTLINE_VERTICES points given in order come back thinned to about that many
-        (see thin_outline).
+        Polygon vertices, counter-clockwise, not closed: input points for a clean boundary (more
+        than MAX_OUTLINE_VERTICES of them come back thinned to about that many, see
+        thin_outline), the smoothed mean outline for a noisy one.
     """
-    points = kernel_array(points)
-    lo, hi = bounds(points)
-    scale = float((hi - lo).max())
-    pts = points[distinct_indices(points, scale)]
-    if len(pts) < 3:
-        raise LeafError(f"the boundary needs at least 3 distinct points, got {len(pts)}")
-    spacing = max(_spacing(pts), 1e-12 * scale)
-    poly = _as_ordered(pts, spacing) or _by_concave_hull(pts, spacing)
-    if poly.area <= 1e-8 * scale**2:
-        raise LeafError("the boundary points do not enclose any area")
-    poly = shapely.geometry.polygon.orient(poly, sign=1.0)
-    return np.asarray(poly.exterior.coords)[:-1]
+    return trace_outline(points).polygon
 
 
 def thin_outline(polygon: np.ndarray, most: int = MAX_OUTLINE_VERTICES) -> np.ndarray:

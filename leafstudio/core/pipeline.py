@@ -24,7 +24,6 @@ from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from leafstudio.core import analysis, mesher
 from leafstudio.core.autok import choose_mixture
@@ -38,10 +37,10 @@ from leafstudio.core.mpu import MPUImplicit, build_mpu
 from leafstudio.core.outline import (
     contains,
     distinct_indices,
-    leaf_polygon,
     outward_normals,
     thin_outline,
     thin_veins,
+    trace_outline,
 )
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.surface import HeightSurface, fit_surface
@@ -180,13 +179,14 @@ def _frame_stage(leaf: Leaf) -> tuple[FrameStage, list[str]]:
     notes: list[str] = []
     frame = fit_frame(leaf.boundary, leaf.vein_points)
     xy, boundary_h = frame.to_plane(leaf.boundary)
-    polygon = leaf_polygon(xy)
-    polygon = polygon[thin_outline(polygon)]  # a dense concave hull: a few thousand vertices
+    outline = trace_outline(xy, boundary_h)  # input points, or a noisy cloud's smooth mean
+    kept_vertices = thin_outline(outline.polygon)  # a few thousand vertices at most
+    polygon = outline.polygon[kept_vertices]
     length = float(np.ptp(polygon[:, 0]))
-    if np.max(np.abs(boundary_h)) <= PLANAR * length:  # no base: skip the vertices' lookup
+    if np.max(np.abs(boundary_h)) <= PLANAR * length:  # planar: no base
         polygon_h = np.zeros(len(polygon))
     else:
-        polygon_h = boundary_h[cKDTree(xy).query(polygon)[1]]  # each vertex is a boundary point
+        polygon_h = outline.heights[kept_vertices]
     base = fit_base(polygon, polygon_h, length)
     veins, heights = [], []
     projected = [frame.to_plane(vein) for vein in leaf.veins]

@@ -1,0 +1,294 @@
+"""Boundary clouds as scanners give them: noisy, unordered, dense; in linear time.
+
+Three steps, none of which depends on the order the points were given in:
+
+- `estimate_noise`: the points' scatter across the outline (and in height), from how far each
+  point lies from the cubic through its neighbours along the outline;
+- `order_cells`: the points summed into square cells (one bucket pass, O(n)), the occupied cells
+  closed into a band on a raster, and the band's outer contour round the hole it encloses
+  (contourpy) as a guide that gives every cell a position along the outline;
+- `mean_outline`: the cells' points binned along that position and smoothed (a Savitzky-Golay
+  filter, which keeps curvature): the outline follows the points' mean position, heights too.
+
+outline.py decides from the estimated noise whether a cloud is clean (its points become the
+outline's vertices, in the order this module finds) or noisy (the smooth mean outline).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import contourpy
+import numpy as np
+from numba import njit
+from scipy import ndimage
+from scipy.signal import savgol_filter
+from scipy.spatial import cKDTree
+
+from leafstudio.core.buckets import bounds, kernel_array
+
+NOISE_SAMPLE = 20000  # points whose prediction misses estimate the noise, at most
+GUIDE_SMOOTHING = 3  # the guide contour is averaged over this many vertices either side
+MAX_BINS = 3000  # the mean outline's vertices, at most
+OUTLINE_STEP = 1 / 1000  # the mean outline's vertex spacing, as a fraction of the cloud's size
+SMOOTH_NOISE = 4.0  # the smoothing window's half width: this many noise σ ...
+SMOOTH_POINTS = 4  # ... and at least the arc this many input points take
+
+
+@dataclass(frozen=True)
+class Noise:
+    """Estimated scatter of a boundary cloud: σ across the outline in the plane, σ in height."""
+
+    across: float
+    height: float
+
+
+PREDICT = np.array([-1 / 6, 2 / 3, 2 / 3, -1 / 6])  # point i from i-2, i-1, i+1, i+2 (exact on
+# cubics in the index); the residual's variance is then (1 + |PREDICT|^2) sigma^2 of the noise
+CHI2_MEDIAN = 0.454936  # the median of chi-squared with one degree of freedom
+
+
+def estimate_noise(xy: np.ndarray, z: np.ndarray, sequence: np.ndarray) -> Noise:
+    """The scatter of (n, 2) boundary points across their outline, and of their heights `z`,
+    with the points taken in `sequence` (indices round the outline, closed).
+
+    Each point is predicted from its two neighbours either side by the cubic through them (in
+    the index) and the miss is measured across the outline (perpendicular to the chord from the
+    second neighbour behind to the second ahead): on a clean curve it is tiny whatever the
+    spacing, and for isotropic noise of σ its variance is (1 + |PREDICT|²) σ² even when the
+    points are so dense that the chord's direction is itself noise. The median over points
+    ignores the few at a tip or a corner.
+    """
+    if len(sequence) < 8:
+        return Noise(0.0, 0.0)
+    step = max(1, len(sequence) // NOISE_SAMPLE)
+    ring = kernel_array(xy[sequence])
+    heights = kernel_array(z[sequence])
+    across, height = _prediction_misses(ring, heights, step)
+    scale = (1 + float(PREDICT @ PREDICT)) * CHI2_MEDIAN
+    return Noise(
+        float(np.sqrt(np.median(across) / scale)), float(np.sqrt(np.median(height) / scale))
+    )
+
+
+@njit(cache=True, nogil=True)
+def _prediction_misses(ring, z, step):
+    """Squared misses (across, in height) of the cubic prediction at every `step`-th point."""
+    n = len(ring)
+    m = (n + step - 1) // step
+    across, height = np.empty(m), np.empty(m)
+    c0, c1 = -1 / 6, 2 / 3
+    for q in range(m):
+        i = q * step
+        a, b, c, d = (i - 2) % n, (i - 1) % n, (i + 1) % n, (i + 2) % n
+        px = c0 * (ring[a, 0] + ring[d, 0]) + c1 * (ring[b, 0] + ring[c, 0])
+        py = c0 * (ring[a, 1] + ring[d, 1]) + c1 * (ring[b, 1] + ring[c, 1])
+        pz = c0 * (z[a] + z[d]) + c1 * (z[b] + z[c])
+        tx, ty = ring[d, 0] - ring[a, 0], ring[d, 1] - ring[a, 1]
+        norm = np.sqrt(tx * tx + ty * ty)
+        miss = (-(ring[i, 0] - px) * ty + (ring[i, 1] - py) * tx) / norm if norm > 0 else 0.0
+        across[q] = miss * miss
+        height[q] = (z[i] - pz) ** 2
+    return across, height
+
+
+@dataclass(frozen=True)
+class Cells:
+    """The cloud summed into square cells, each placed along the outline.
+
+    Attributes
+    ----------
+    of_point : (n,) int array
+        Each point's cell (an index into the arrays below).
+    count : (m,) float array
+        Points per occupied cell.
+    mean : (m, 2) float array
+        Mean position of each cell's points.
+    mean_z : (m,) float array
+        Mean height of each cell's points.
+    t : (m,) float array
+        Each cell's position along the guide contour (arc length from its start).
+    perimeter : float
+        The guide's length.
+    guide : (k, 2) float array
+        The guide contour, closed (not repeating its first vertex).
+    edge : (m,) int array
+        The guide's edge each cell's mean lies nearest (edge i joins vertices i and i + 1).
+    """
+
+    of_point: np.ndarray
+    count: np.ndarray
+    mean: np.ndarray
+    mean_z: np.ndarray
+    t: np.ndarray
+    perimeter: float
+    guide: np.ndarray
+    edge: np.ndarray
+
+
+def order_cells(xy: np.ndarray, z: np.ndarray, cell: float) -> Cells | None:
+    """The (n, 2) points summed into cells of side `cell` and placed along a guide contour.
+
+    The occupied cells are grown (one cell at a time, up to a tenth of the raster) until they
+    close round a hole holding at least a fifth of the region they enclose: the leaf's inside.
+    That hole's outline, traced by contourpy, is the guide. None if no growth closes one.
+    """
+    xy = kernel_array(xy)
+    lo, hi = bounds(xy)
+    nx, ny = (np.floor((hi - lo) / cell).astype(np.int64) + 1).tolist()
+    ix = np.minimum(((xy[:, 0] - lo[0]) / cell).astype(np.int64), nx - 1)
+    iy = np.minimum(((xy[:, 1] - lo[1]) / cell).astype(np.int64), ny - 1)
+    key = iy * nx + ix
+    counts = np.bincount(key, minlength=nx * ny)
+    occupied = counts > 0
+    cell_index = np.cumsum(occupied) - 1
+    of_point = cell_index[key]
+    count = counts[occupied].astype(float)
+    m = len(count)
+    sx = np.bincount(of_point, weights=xy[:, 0], minlength=m)
+    sy = np.bincount(of_point, weights=xy[:, 1], minlength=m)
+    sz = np.bincount(of_point, weights=z, minlength=m)
+    mean = np.column_stack([sx / count, sy / count])
+    mean_z = sz / count
+
+    guide = _guide(occupied.reshape(ny, nx), max(nx, ny) // 10 + 1)
+    if guide is None:
+        return None
+    guide = lo + (guide + 0.5) * cell  # raster cell centres to the plane
+    if len(guide) > 4 * GUIDE_SMOOTHING:  # the raster's staircase, smoothed: its direction
+        kernel = np.ones(2 * GUIDE_SMOOTHING + 1) / (2 * GUIDE_SMOOTHING + 1)  # orders points
+        wrapped = np.vstack([guide[-GUIDE_SMOOTHING:], guide, guide[:GUIDE_SMOOTHING]])
+        guide = np.column_stack([np.convolve(wrapped[:, k], kernel, "valid") for k in range(2)])
+    edges = np.roll(guide, -1, axis=0) - guide
+    lengths = np.hypot(edges[:, 0], edges[:, 1])
+    arc = np.concatenate([[0.0], np.cumsum(lengths)])
+    nearest = cKDTree(guide).query(mean)[1]
+    t, edge = _project(mean, nearest, guide, edges, lengths, arc, reach=1)
+    return Cells(of_point, count, mean, mean_z, t, float(arc[-1]), guide, edge)
+
+
+def _guide(occupied: np.ndarray, most: int) -> np.ndarray | None:
+    """(k, 2) the outer outline of the band of occupied raster cells grown by up to `most`
+    cells round the hole it encloses (the leaf's inside), in cell units (x = column, y = row),
+    not closed; None if it never encloses enough. The outer edge, not the hole's: a narrow tip
+    or base, where the band closes over, stays on it."""
+    pad = most + 1
+    mask = np.pad(occupied, pad)
+    band = mask
+    for _ in range(most):
+        band = ndimage.binary_dilation(band)
+        filled = ndimage.binary_fill_holes(band)
+        hole = filled & ~band
+        labels, n = ndimage.label(hole)
+        if n == 0:
+            continue
+        sizes = np.bincount(labels.ravel())[1:]
+        biggest = int(np.argmax(sizes)) + 1
+        if sizes[biggest - 1] < 0.2 * np.count_nonzero(filled):
+            continue
+        parts = ndimage.label(filled)[0]  # the band's outer edge round that hole
+        inside = (parts == parts[labels == biggest][0]).astype(float)
+        lines = contourpy.contour_generator(z=inside).lines(0.5)
+        line = max(lines, key=len)
+        if len(line) < 4:
+            return None
+        line = line[:-1] if np.allclose(line[0], line[-1]) else line
+        return line - pad
+    return None
+
+
+def filled_outline(xy: np.ndarray, z: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
+    """(k, 2) outline and (k,) heights of the region a cloud fills: for points that cover the
+    leaf rather than trace its margin (order_cells finds no inside). The occupied cells of side
+    `cell`, closed by two cells, their largest filled part's contour; heights of the nearest
+    points."""
+    xy = kernel_array(xy)
+    lo, hi = bounds(xy)
+    nx, ny = (np.floor((hi - lo) / cell).astype(np.int64) + 1).tolist()
+    ix = np.minimum(((xy[:, 0] - lo[0]) / cell).astype(np.int64), nx - 1)
+    iy = np.minimum(((xy[:, 1] - lo[1]) / cell).astype(np.int64), ny - 1)
+    occupied = np.zeros((ny + 6, nx + 6), dtype=bool)
+    occupied[iy + 3, ix + 3] = True
+    region = ndimage.binary_fill_holes(ndimage.binary_closing(occupied, iterations=2))
+    labels = ndimage.label(region)[0]
+    biggest = int(np.argmax(np.bincount(labels.ravel())[1:])) + 1
+    line = max(contourpy.contour_generator(z=(labels == biggest).astype(float)).lines(0.5), key=len)
+    line = line[:-1] if np.allclose(line[0], line[-1]) else line
+    outline = lo + (line - 3 + 0.5) * cell
+    return outline, z[cKDTree(xy).query(outline)[1]]
+
+
+def _project(
+    points: np.ndarray,
+    near: np.ndarray,
+    ring: np.ndarray,
+    edges: np.ndarray,
+    lengths: np.ndarray,
+    arc: np.ndarray,
+    reach: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Arc position along the closed `ring` of each point's nearest place on the edges within
+    `reach` of its vertex `near`, and that edge."""
+    k = len(ring)
+    best_t = np.empty(len(points))
+    best_d = np.full(len(points), np.inf)
+    best_e = np.empty(len(points), np.int64)
+    safe = np.maximum(lengths, 1e-300)
+    for shift in range(-reach, reach + 1):
+        e = (near + shift) % k
+        rel = points - ring[e]
+        s = np.clip((rel * edges[e]).sum(axis=1) / safe[e] ** 2, 0.0, 1.0)
+        d = np.hypot(*(rel - s[:, None] * edges[e]).T)
+        better = d < best_d
+        best_d[better] = d[better]
+        best_t[better] = (arc[e] + s * lengths[e])[better]
+        best_e[better] = e[better]
+    return best_t, best_e
+
+
+def point_order(cells: Cells, xy: np.ndarray) -> np.ndarray:
+    """Indices of the (n, 2) points in order along the outline (for a clean curve, its own
+    order): by their place along the chain of the cells' means in the guide's order, found on
+    the chain's few edges about their own cell's mean. The chain runs through the points
+    themselves, so, unlike the guide a cell or two inside them, it does not bunch the places of
+    points at its corners."""
+    by_t = np.argsort(cells.t, kind="stable")
+    chain = cells.mean[by_t]
+    rank = np.empty(len(by_t), np.int64)
+    rank[by_t] = np.arange(len(by_t))
+    edges = np.roll(chain, -1, axis=0) - chain
+    lengths = np.hypot(edges[:, 0], edges[:, 1])
+    arc = np.concatenate([[0.0], np.cumsum(lengths)])
+    t = _project(xy, rank[cells.of_point], chain, edges, lengths, arc, reach=2)[0]
+    return np.argsort(t, kind="stable")
+
+
+def mean_outline(
+    cells: Cells, noise: float, n_points: int, size: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """(k, 2) vertices and (k,) heights of the smooth outline through the cells' mean position.
+
+    The cells are binned along the guide at about OUTLINE_STEP of `size` (the cloud's size);
+    each bin's mean (by point count) is smoothed round the closed outline by a Savitzky-Golay
+    filter of order 3 whose window spans SMOOTH_NOISE noise σ either side, and at least the arc
+    SMOOTH_POINTS of the `n_points` take, so the noise averages out but the shape does not.
+    """
+    perimeter = cells.perimeter
+    bins = int(np.clip(perimeter / (OUTLINE_STEP * size), 16, MAX_BINS))
+    width = perimeter / bins
+    which = np.minimum((cells.t / width).astype(np.int64), bins - 1)
+    w = np.bincount(which, weights=cells.count, minlength=bins)
+    sums = [
+        np.bincount(which, weights=cells.count * v, minlength=bins)
+        for v in (cells.mean[:, 0], cells.mean[:, 1], cells.mean_z)
+    ]
+    full = np.flatnonzero(w > 0)
+    at = np.arange(bins)
+    curve = np.column_stack(
+        [np.interp(at, full, s[full] / w[full], period=bins) for s in sums]
+    )  # empty bins: between their neighbours
+    half = max(SMOOTH_NOISE * noise, 0.5 * SMOOTH_POINTS * perimeter / max(n_points, 1))
+    window = 2 * int(np.ceil(half / width)) + 1
+    window = min(max(window, 5), bins - (1 - bins % 2))
+    smooth = savgol_filter(curve, window, 3, axis=0, mode="wrap") if window > 3 else curve
+    return smooth[:, :2], smooth[:, 2]
