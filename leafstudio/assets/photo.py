@@ -1,0 +1,302 @@
+"""A leaf from a photo or a scan on a plain background: its outline, base and apex, and veins.
+
+1. Segment (scikit-image): each pixel's colour distance from the background (the median colour
+   of the image's border), smoothed, split by Otsu's threshold; an image with an alpha channel
+   that varies uses its alpha instead. Keep the largest component, fill its holes.
+2. Refuse bad photos with one clear message: no leaf (nothing stands out, or the background is
+   not plain), several leaves (a second object at least SECOND_OBJECT of the largest's size), a
+   leaf cut by the image border.
+3. The petiole: a morphological opening by a disk of PETIOLE_RADIUS of the blade's inscribed
+   radius removes thin parts; a removed part longer than PETIOLE_LENGTH disk radii is the
+   petiole (teeth and most tips are shorter). A second opening, by a disk just wider than the
+   petiole, cuts it off where the blade widens. Where it met the blade is the base.
+4. The outline: the zero contour of the (slightly smoothed) blade mask, at sub-pixel precision,
+   resampled evenly.
+5. Base and apex: the petiole's end when there is one; otherwise, along the blade's long axis,
+   the end `base_end` names (left, right, top, bottom) or, by default, the wider end. The apex is
+   the outline point farthest from the base.
+6. The leaf follows the forms' convention (DESIGN.md): the base at the origin, the apex on +x at
+   `length` (base to apex), z = 0. The affine map from those coordinates back to the photo's
+   pixels is kept (in the project, "photo": {"pixel_from_world": ...}) so that `reconstruct
+   --texture PHOTO` maps each pixel back where it was.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from leafstudio.errors import LeafError
+from leafstudio.model import Leaf
+
+BASE_ENDS = ("auto", "left", "right", "top", "bottom")
+SECOND_OBJECT = 0.25  # a second object this large (of the largest) means several leaves
+SMALLEST_LEAF = 0.002  # of the image's pixels: less is no leaf
+LARGEST_LEAF = 0.9  # of the image's pixels: more means no plain background
+SMOOTHING = 1.0  # pixels: the colour distance is smoothed this much before the threshold
+PETIOLE_RADIUS = 0.3  # the opening disk's radius, as a fraction of the inscribed radius
+PETIOLE_LENGTH = 3.0  # a removed part longer than this many disk radii is the petiole
+PETIOLE_FIT = 1.6  # the second opening's disk, in petiole half-widths
+END_BAND = 0.15  # the width of each end is measured this fraction of the length from it
+
+
+@dataclass(frozen=True)
+class PhotoLeaf:
+    """What `leaf_from_photo` found.
+
+    Attributes
+    ----------
+    leaf : Leaf
+        Boundary (and veins) in the forms' convention, z = 0 on the boundary.
+    pixel_from_world : (2, 3) float array
+        (column, row) = A @ (x, y, 1): from the leaf's coordinates to the photo's pixels.
+    outline_px : (n, 2) float array
+        The outline in the photo, (column, row), pixel centres at integer + 0.5.
+    blade : (h, w) bool array
+        The blade's pixels (petiole cut off).
+    petiole : bool
+        Whether a petiole was found and cut off.
+    """
+
+    leaf: Leaf
+    pixel_from_world: np.ndarray
+    outline_px: np.ndarray
+    blade: np.ndarray
+    petiole: bool
+
+
+def _foreground(image: np.ndarray) -> np.ndarray:
+    """(h, w) bool: pixels that stand out from the background (see the module docstring)."""
+    from scipy.ndimage import gaussian_filter
+    from skimage.filters import threshold_otsu
+
+    if image.shape[2] == 4:
+        alpha = image[..., 3]
+        if alpha.min() < 128 <= alpha.max():
+            return alpha >= 128
+    rgb = image[..., :3].astype(float)
+    border = np.concatenate([rgb[0], rgb[-1], rgb[:, 0], rgb[:, -1]])
+    background = np.median(border, axis=0)
+    distance = gaussian_filter(np.linalg.norm(rgb - background, axis=2), SMOOTHING)
+    if np.ptp(distance) < 10:  # under 4% of the colour range: nothing stands out
+        raise LeafError("no leaf found: nothing stands out from the background")
+    return distance > threshold_otsu(distance)
+
+
+def _leaf_component(mask: np.ndarray) -> np.ndarray:
+    """The largest component, holes filled; LeafError for no leaf, several, or one cut off."""
+    from scipy.ndimage import binary_fill_holes
+    from skimage.measure import label
+
+    labels, count = label(mask, return_num=True, connectivity=2)
+    if count == 0:
+        raise LeafError("no leaf found: nothing stands out from the background")
+    sizes = np.bincount(labels.ravel())[1:]
+    order = np.argsort(sizes)[::-1]
+    largest = sizes[order[0]]
+    if largest < SMALLEST_LEAF * mask.size:
+        raise LeafError("no leaf found: the largest object is a speck")
+    if largest > LARGEST_LEAF * mask.size:
+        raise LeafError("no leaf found: the background is not plain (it covers too little)")
+    others = int(np.count_nonzero(sizes[order[1:]] >= SECOND_OBJECT * largest))
+    if others:
+        raise LeafError(
+            f"several leaves: {others + 1} objects of similar size; photograph one leaf at a time"
+        )
+    leaf = binary_fill_holes(labels == order[0] + 1)
+    if leaf[0].any() or leaf[-1].any() or leaf[:, 0].any() or leaf[:, -1].any():
+        raise LeafError("the leaf is cut by the image border: leave a margin around it")
+    return leaf
+
+
+def _opened(leaf: np.ndarray, inside: np.ndarray, radius: float) -> np.ndarray:
+    """The mask opened by a disk of `radius`, by distance transforms (a large disk's structuring
+    element is slow): the points deeper than r, grown back by r."""
+    from scipy.ndimage import distance_transform_edt
+
+    return leaf & (distance_transform_edt(~(inside > radius)) <= radius)
+
+
+def _longest_part(leaf: np.ndarray, opened: np.ndarray, radius: float) -> np.ndarray | None:
+    """The longest part the opening removed, if longer than PETIOLE_LENGTH radii, else None."""
+    from skimage.measure import label, regionprops
+
+    residue = label(leaf & ~opened, connectivity=2)
+    parts = [p for p in regionprops(residue) if p.axis_major_length > PETIOLE_LENGTH * radius]
+    if not parts:
+        return None
+    return residue == max(parts, key=lambda p: p.axis_major_length).label
+
+
+def _cut_petiole(leaf: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """The blade without the petiole, and where the petiole met it (column, row) or None.
+
+    Two openings: a coarse one (PETIOLE_RADIUS of the inscribed radius) finds the petiole, whose
+    half-width w is then read on its skeleton; a second one by a disk of PETIOLE_FIT w cuts it
+    where the blade widens, not where the coarse disk first fits."""
+    from scipy.ndimage import binary_dilation, distance_transform_edt
+    from skimage.measure import label
+    from skimage.morphology import skeletonize
+
+    inside = distance_transform_edt(leaf)
+    radius = max(PETIOLE_RADIUS * float(inside.max()), 1.0)
+    petiole = _longest_part(leaf, _opened(leaf, inside, radius), radius)
+    if petiole is None:
+        return leaf, None
+    halfwidth = float(np.median(inside[skeletonize(petiole)])) if petiole.sum() > 4 else 1.0
+    fine = max(PETIOLE_FIT * halfwidth, 1.5)
+    if fine < radius:
+        tight = _longest_part(leaf, _opened(leaf, inside, fine), fine)
+        if tight is not None and (tight & petiole).any():
+            petiole = tight
+    blade = leaf & ~petiole
+    pieces = label(blade, connectivity=2)  # the cut may leave crumbs: keep the blade
+    if pieces.max() > 1:
+        blade = pieces == np.argmax(np.bincount(pieces.ravel())[1:]) + 1
+    joint = binary_dilation(petiole, iterations=2) & blade
+    if not joint.any():
+        return leaf, None
+    rows, cols = np.nonzero(joint)
+    return blade, np.array([cols.mean() + 0.5, rows.mean() + 0.5])
+
+
+def _outline(blade: np.ndarray, points: int | None) -> np.ndarray:
+    """(n, 2) evenly spaced (column, row) points on the blade's contour, counter-clockwise as
+    seen with y up (rows run down)."""
+    from scipy.ndimage import gaussian_filter
+    from skimage.measure import find_contours
+
+    field = gaussian_filter(np.pad(blade, 2).astype(float), 0.7)
+    contours = find_contours(field, 0.5)
+    ring = max(contours, key=len)[:, ::-1] - 2 + 0.5  # (column, row), pixel centres at k + 0.5
+    if np.allclose(ring[0], ring[-1]):
+        ring = ring[:-1]
+    step = np.linalg.norm(np.diff(np.vstack([ring, ring[:1]]), axis=0), axis=1)
+    along = np.concatenate([[0], np.cumsum(step)])
+    n = points or int(np.clip(along[-1] / 2, 200, 2000))
+    at = np.linspace(0, along[-1], n, endpoint=False)
+    closed = np.vstack([ring, ring[:1]])
+    out = np.column_stack([np.interp(at, along, closed[:, k]) for k in range(2)])
+    x, y = out[:, 0], -out[:, 1]
+    if 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y) < 0:  # clockwise with y up
+        out = out[::-1]
+    return out
+
+
+def _ends(outline: np.ndarray, blade: np.ndarray, base_end: str, joint: np.ndarray | None):
+    """Indices of the base and apex on the outline (see the module docstring)."""
+    if joint is not None:
+        base = int(np.argmin(np.linalg.norm(outline - joint, axis=1)))
+    else:
+        rows, cols = np.nonzero(blade)
+        pts = np.column_stack([cols, rows]).astype(float) + 0.5
+        centre = pts.mean(axis=0)
+        axis = np.linalg.eigh(np.cov((pts - centre).T))[1][:, -1]  # the long axis
+        along = (outline - centre) @ axis
+        ends = [int(np.argmin(along)), int(np.argmax(along))]
+        if base_end == "auto":
+            span = along.max() - along.min()
+            across = (outline - centre) @ np.array([-axis[1], axis[0]])
+            widths = []
+            for sign, end in ((-1, along.min()), (1, along.max())):
+                band = np.abs(along - (end - sign * END_BAND * span)) < 0.02 * span
+                widths.append(np.ptp(across[band]) if band.sum() > 1 else 0.0)
+            base = ends[int(np.argmax(widths))]
+        else:
+            direction = {
+                "left": (-1, 0),
+                "right": (1, 0),
+                "top": (0, -1),
+                "bottom": (0, 1),
+            }[base_end]
+            base = max(ends, key=lambda i: float(outline[i] @ direction))
+    apex = int(np.argmax(np.linalg.norm(outline - outline[base], axis=1)))
+    return base, apex
+
+
+def leaf_from_photo(
+    image: np.ndarray,
+    length: float | None = None,
+    base_end: str = "auto",
+    veins: str = "grow",
+    venation: str = "pinnate",
+    points: int | None = None,
+    seed: int = 0,
+) -> PhotoLeaf:
+    """The leaf in an (h, w, 3 or 4) uint8 photo (see the module docstring).
+
+    Parameters
+    ----------
+    length : float, optional
+        Base to apex in the output's units; default 1.
+    base_end : {"auto", "left", "right", "top", "bottom"}, default: "auto"
+        Where the base is when no petiole shows it.
+    veins : {"grow", "none"}, default: "grow"
+        Grow veins inside the outline (leafstudio.forms.grow_veins) or leave none.
+    points : int, optional
+        Boundary points; default one per 2 pixels of outline, 200 to 2000.
+    """
+    if base_end not in BASE_ENDS:
+        raise LeafError(f"unknown base end {base_end!r}; use one of {', '.join(BASE_ENDS)}")
+    if veins not in ("grow", "none"):
+        raise LeafError(f"--veins must be grow or none, got {veins!r}")
+    if length is not None and not (np.isfinite(length) and length > 0):
+        raise LeafError(f"--length must be a number above 0, got {length}")
+    if image.ndim != 3 or min(image.shape[:2]) < 16:
+        raise LeafError("the image is too small (under 16 pixels a side)")
+    leaf_mask = _leaf_component(_foreground(image))
+    blade, joint = _cut_petiole(leaf_mask)
+    outline = _outline(blade, points)
+    base, apex = _ends(outline, blade, base_end, joint)
+    start = np.array([outline[base, 0], -outline[base, 1]])  # y up
+    axis = np.array([outline[apex, 0], -outline[apex, 1]]) - start
+    pixels_long = float(np.linalg.norm(axis))
+    if pixels_long < 8:
+        raise LeafError("no leaf found: the object is too small")
+    scale = (1.0 if length is None else float(length)) / pixels_long
+    c, s = axis / pixels_long
+    rotate = np.array([[c, s], [-s, c]])  # turns the base-to-apex axis onto +x
+    q = np.column_stack([outline[:, 0], -outline[:, 1]]) - start
+    xy = scale * q @ rotate.T
+    # back: q = rotate.T @ xy / scale; (column, row) = (q_x + start_x, -(q_y + start_y))
+    back = rotate.T / scale
+    pixel_from_world = np.array(
+        [[back[0, 0], back[0, 1], start[0]], [-back[1, 0], -back[1, 1], -start[1]]]
+    )
+    boundary = np.column_stack([xy, np.zeros(len(xy))])
+    grown: list[np.ndarray] = []
+    if veins == "grow":
+        from leafstudio.forms import grow_veins
+
+        grown = grow_veins(
+            boundary, venation, base=np.zeros(2), seed=seed, apex=xy[apex]
+        )
+    return PhotoLeaf(
+        leaf=Leaf(boundary=boundary, veins=grown),
+        pixel_from_world=pixel_from_world,
+        outline_px=outline,
+        blade=blade,
+        petiole=joint is not None,
+    )
+
+
+def save_photo_leaf(found: PhotoLeaf, image_path: str | Path, path: str | Path) -> None:
+    """Write the leaf; a .leaf.json also keeps the photo's name and its pixel map (the texture
+    of `reconstruct --texture PHOTO` needs it)."""
+    import json
+
+    from leafstudio.io import project_dict, save_leaf
+    from leafstudio.safewrite import write_bytes
+
+    if not str(path).lower().endswith(".json"):
+        save_leaf(found.leaf, path)
+        return
+    data = project_dict(found.leaf)
+    data["photo"] = {
+        "image": Path(image_path).name,
+        "pixel_from_world": found.pixel_from_world.tolist(),
+        "petiole_cut": found.petiole,
+    }
+    write_bytes(path, json.dumps(data, indent=1))

@@ -1,0 +1,115 @@
+"""Photos with known outlines: generated forms drawn on a plain background, and real scans rendered
+from above (pyvista, shaded), both with noise and blur."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import shapely
+
+REALLEAVES = Path(__file__).resolve().parents[2] / "shared" / "realleaves"
+BACKGROUND = (236, 234, 228)
+
+
+def _finish(rgb: np.ndarray, noise: float, blur: float, seed: int) -> np.ndarray:
+    """Blur and sensor noise on an (h, w, 3) float image; uint8 out."""
+    from scipy.ndimage import gaussian_filter
+
+    rgb = gaussian_filter(rgb, (blur, blur, 0)) if blur else rgb
+    rgb = rgb + np.random.default_rng(seed).normal(0, noise, rgb.shape)
+    return np.clip(np.rint(rgb), 0, 255).astype(np.uint8)
+
+
+def form_photo(
+    outline: np.ndarray,
+    veins: list[np.ndarray] = (),
+    angle: float = 25.0,
+    pixels_per_unit: float = 360.0,
+    size: tuple[int, int] = (760, 620),
+    petiole: float = 0.0,
+    noise: float = 6.0,
+    blur: float = 1.0,
+    seed: int = 0,
+) -> tuple[np.ndarray, shapely.Polygon, np.ndarray]:
+    """A photo of a leaf in the forms' convention (base at the origin, apex on +x): the image,
+    the outline's polygon in (column, row) pixel coordinates (continuous, pixel centres at
+    k + 0.5) and the base's pixel. `petiole` draws a stalk that long behind the base."""
+    from PIL import Image, ImageDraw
+
+    width, height = size
+    a = np.deg2rad(angle)
+    rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    centre_world = (outline[:, :2].min(axis=0) + outline[:, :2].max(axis=0)) / 2
+
+    def to_pixels(xy: np.ndarray) -> np.ndarray:
+        turned = (np.asarray(xy)[:, :2] - centre_world) @ rot.T * pixels_per_unit
+        return np.column_stack([width / 2 + turned[:, 0], height / 2 - turned[:, 1]])
+
+    ss = 4
+    canvas = Image.new("RGB", (width * ss, height * ss), BACKGROUND)
+    draw = ImageDraw.Draw(canvas)
+    leaf_px = to_pixels(outline)
+    draw.polygon([tuple(p * ss) for p in leaf_px], fill=(62, 118, 44))
+    for vein in veins:
+        draw.line([tuple(p * ss) for p in to_pixels(vein)], fill=(120, 160, 80), width=2 * ss)
+    if petiole:
+        stalk = to_pixels(np.array([[0.0, 0.0], [-petiole, -0.02]]))
+        draw.line([tuple(p * ss) for p in stalk], fill=(80, 110, 50), width=int(0.02 * ss *
+                  pixels_per_unit))  # fmt: skip
+    rgb = np.asarray(canvas.resize((width, height), Image.Resampling.BOX), float)
+    base = to_pixels(np.zeros((1, 2)))[0]
+    return _finish(rgb, noise, blur, seed), shapely.Polygon(leaf_px), base
+
+
+def scan_photo(
+    path: Path, pixels: int = 640, noise: float = 5.0, blur: float = 1.0, seed: int = 0
+) -> tuple[np.ndarray, shapely.Polygon]:
+    """A top view of a real scan's blade (outliers and petiole dropped), shaded by pyvista on a
+    plain background, and the blade's footprint in (column, row) pixel coordinates."""
+    import pyvista as pv
+    from scipy.spatial import Delaunay
+
+    from leafstudio.core.extract import split_scan
+    from leafstudio.core.plane import fit_frame
+    from leafstudio.scan import read_scan
+
+    points = read_scan(path)
+    points = points[split_scan(points)[0]]
+    frame = fit_frame(points, np.zeros((0, 3)))
+    xy, z = frame.to_plane(points)
+    tri = Delaunay(xy).simplices
+    edges = np.linalg.norm(xy[tri] - xy[np.roll(tri, 1, axis=1)], axis=2).max(axis=1)
+    spacing = np.median(np.linalg.norm(xy[tri[:, 0]] - xy[tri[:, 1]], axis=1))
+    tri = tri[edges < 4 * spacing]  # bridges scanner stripes, not the margin's bays
+    footprint = shapely.union_all(shapely.polygons(xy[tri]))
+    if footprint.geom_type == "MultiPolygon":  # the blade is the largest piece
+        footprint = max(footprint.geoms, key=lambda g: g.area)
+    footprint = shapely.Polygon(footprint.exterior)
+    lo, hi = xy.min(axis=0), xy.max(axis=0)
+    centre = (lo + hi) / 2
+    ppu = 0.8 * pixels / float(np.max(hi - lo))
+    mesh = pv.PolyData(
+        np.column_stack([xy, z]), np.hstack([np.full((len(tri), 1), 3), tri]).ravel()
+    )
+    plotter = pv.Plotter(off_screen=True, window_size=(pixels, pixels))
+    plotter.set_background([c / 255 for c in BACKGROUND])
+    plotter.add_mesh(mesh, color=(0.27, 0.5, 0.2), smooth_shading=True)
+    plotter.enable_parallel_projection()
+    plotter.camera.focal_point = (*centre, 0.0)
+    plotter.camera.position = (*centre, 10.0 * float(np.max(hi - lo)))
+    plotter.camera.up = (0.0, 1.0, 0.0)
+    plotter.camera.parallel_scale = pixels / 2 / ppu
+    plotter.reset_camera_clipping_range()
+    rgb = np.asarray(plotter.screenshot(return_img=True), float)[..., :3]
+    plotter.close()
+    ring = np.asarray(footprint.exterior.coords)
+    px = np.column_stack(
+        [pixels / 2 + (ring[:, 0] - centre[0]) * ppu, pixels / 2 - (ring[:, 1] - centre[1]) * ppu]
+    )
+    return _finish(rgb, noise, blur, seed), shapely.Polygon(px)
+
+
+def iou(a: shapely.Polygon, b: shapely.Polygon) -> float:
+    """Intersection over union of two polygons."""
+    return a.intersection(b).area / a.union(b).area

@@ -1,0 +1,158 @@
+"""Leaves from photos: the outline matches the known one (IoU >= 0.97) on generated forms and on
+real scans rendered from above; the petiole is cut; bad photos get one clear message; the photo
+maps back onto the mesh through the UVs."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import shapely
+from PIL import Image
+
+import leafstudio as ls
+from leafstudio.assets.photo import leaf_from_photo
+from leafstudio.forms import make_form
+from tests.photos import REALLEAVES, form_photo, iou, scan_photo
+
+FORMS = [
+    ("ovate", {}, 0.25, 25.0),
+    ("lanceolate", {}, 0.0, -60.0),
+    ("elliptic", {"margin": "serrate", "teeth": 30}, 0.25, 100.0),
+    ("ovate", {"margin": "lobed", "lobes": 5}, 0.25, 0.0),
+    ("obovate", {}, 0.2, 170.0),
+    ("elliptic", {"apex": "acuminate"}, 0.25, -20.0),
+]
+
+
+@pytest.mark.parametrize(("shape", "terms", "petiole", "angle"), FORMS)
+def test_outline_of_a_generated_form_matches(shape, terms, petiole, angle):
+    leaf = make_form(shape, **terms)
+    image, known, base = form_photo(leaf.boundary, leaf.veins, angle=angle, petiole=petiole)
+    found = leaf_from_photo(image, veins="none")
+    assert iou(shapely.Polygon(found.outline_px), known) >= 0.97
+    assert found.petiole == (petiole > 0)
+    if petiole:  # the petiole marks the base: where the stalk met the blade
+        assert np.linalg.norm(found.pixel_from_world @ [0, 0, 1] - base) < 12
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "soybean_11_20190508T043118_pot1_1.txt",
+        "soybean_11_20190508T043118_pot1_36.txt",
+        "sugarbeet_f00012_20170829T010129_pot1_1.txt",
+        "sugarbeet_f00012_20170904T115033_pot1_7.txt",
+    ],
+)
+def test_outline_of_a_rendered_real_scan_matches(name):
+    path = REALLEAVES / name
+    if not path.exists():
+        pytest.skip(f"{path} is missing")
+    image, known = scan_photo(path)
+    found = leaf_from_photo(image, veins="none")
+    assert iou(shapely.Polygon(found.outline_px), known) >= 0.97
+
+
+def test_leaf_follows_the_forms_convention_and_maps_back_to_the_photo():
+    leaf = make_form("ovate")
+    image, _, _ = form_photo(leaf.boundary, angle=-35, petiole=0.2)
+    found = leaf_from_photo(image, length=4.0)
+    boundary = found.leaf.boundary
+    assert np.allclose(boundary[:, 2], 0)
+    apex = boundary[np.argmax(np.linalg.norm(boundary[:, :2], axis=1))]
+    np.testing.assert_allclose(apex[:2], [4.0, 0.0], atol=1e-9)  # base at 0, apex on +x
+    assert np.min(np.linalg.norm(boundary[:, :2], axis=1)) < 1e-9  # the base is on the outline
+    ones = np.column_stack([boundary[:, :2], np.ones(len(boundary))])
+    np.testing.assert_allclose(ones @ found.pixel_from_world.T, found.outline_px, atol=1e-9)
+    assert len(found.leaf.veins) >= 3  # grown: a midrib and secondaries
+    assert shapely.Polygon(boundary[:, :2]).buffer(1e-6).contains(
+        shapely.MultiPoint(np.vstack(found.leaf.veins)[:, :2])
+    )
+
+
+def _two_leaves() -> np.ndarray:
+    leaf = make_form("elliptic")
+    a = form_photo(leaf.boundary, size=(900, 500), pixels_per_unit=300, angle=0)[0]
+    image = a.copy()
+    image[:, 450:] = a[:, 225:675][:, :450]  # the same leaf again, beside it
+    image[:, :450] = a[:, 225:675][:, :450]
+    return image
+
+
+@pytest.mark.parametrize(
+    ("make", "message"),
+    [
+        (lambda: np.full((300, 400, 3), 200, np.uint8), "no leaf found"),
+        (_two_leaves, "several leaves"),
+        (
+            lambda: form_photo(make_form("ovate").boundary, pixels_per_unit=900)[0],
+            "cut by the image border",
+        ),
+    ],
+    ids=["blank", "two leaves", "cut off"],
+)
+def test_bad_photos_get_one_clear_message(tmp_path: Path, capsys, make, message):
+    from leafstudio.cli import main
+
+    path = tmp_path / "photo.png"
+    Image.fromarray(make()).save(path)
+    code = main(["photo", str(path), "-o", str(tmp_path / "leaf.leaf.json")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and message in err and len(err.splitlines()) == 1, err
+    assert not (tmp_path / "leaf.leaf.json").exists()
+
+
+def test_unreadable_image_is_one_line_exit_2(tmp_path: Path, capsys):
+    from leafstudio.cli import main
+
+    path = tmp_path / "photo.jpg"
+    path.write_bytes(b"\x00not a jpeg")
+    assert main(["photo", str(path), "-o", str(tmp_path / "leaf.leaf.json")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "not a readable image" in err and len(err.splitlines()) == 1
+
+
+def test_photo_texture_lands_on_the_mesh_margin_within_2_pixels(tmp_path: Path):
+    """photo -> leaf -> reconstruct --texture photo: the leaf's edge in the texture (segmented
+    as in the photo) and the mesh's margin in UV space coincide within 2 photo pixels."""
+    from skimage.measure import find_contours
+
+    from leafstudio.assets.photo import _foreground
+    from leafstudio.cli import main
+    from tests.test_assets import assert_valid_gltf, scene_mesh
+
+    leaf = make_form("ovate", margin="serrate", teeth=24)
+    image, _, _ = form_photo(leaf.boundary, leaf.veins, petiole=0.2, angle=-40)
+    photo = tmp_path / "photo.png"
+    Image.fromarray(image).save(photo)
+    project = tmp_path / "leaf.leaf.json"
+    assert main(["photo", str(photo), "-o", str(project), "--length", "3"]) == 0
+    glb = tmp_path / "leaf.glb"
+    assert main(["reconstruct", str(project), "-o", str(glb), "--grid", "48", "--texture",
+                 str(photo)]) == 0  # fmt: skip
+    assert_valid_gltf(glb)
+    mesh = scene_mesh(glb)
+    texture = np.asarray(mesh.visual.material.baseColorTexture)
+    pixels = texture.shape[0]
+    edge = max(find_contours(_foreground(texture[..., :3]).astype(float), 0.5), key=len)
+    edge = edge[:, ::-1] + 0.5  # (column, row)
+    # the margin: the mesh's boundary vertices, by their UVs (glTF's v runs down); the distance
+    # to the nearest of them bounds the distance to the margin from above
+    from scipy.spatial import cKDTree
+
+    from leafstudio.assets.solid import boundary_edges
+
+    rim = np.unique(boundary_edges(np.asarray(mesh.faces)))
+    uv = np.asarray(mesh.visual.uv)[rim] * [1, -1] + [0, 1]
+    texture_px = cKDTree(uv * pixels).query(edge)[0]
+    # texture pixels per photo pixel: the UVs' scale over the photo's, along the leaf
+    far = np.argmax(np.linalg.norm(uv - uv[0], axis=1))
+    points = np.asarray(mesh.vertices)[rim]
+    texture_per_unit = pixels * np.linalg.norm(uv[far] - uv[0]) / np.linalg.norm(
+        points[far] - points[0]
+    )
+    photo_per_unit = np.linalg.norm(ls.assets.photo_transform(project)[:, 0])
+    distance = texture_px * photo_per_unit / texture_per_unit
+    assert np.max(distance) <= 2.0
