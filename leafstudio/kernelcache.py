@@ -43,8 +43,32 @@ def user_cache_folder() -> Path:
 
 
 def configure() -> Path | None:
-    """Point numba's cache at a writable folder when the package's own cannot be written; returns
-    the folder chosen (None: numba's default beside the sources, or the user's NUMBA_CACHE_DIR)."""
+    """Point numba's cache at a writable folder when the package's own cannot be written, and
+    make a failed cache write (a full disk) harmless; returns the folder chosen (None: numba's
+    default beside the sources, or the user's NUMBA_CACHE_DIR)."""
+    folder = _choose_folder()
+    _guard_cache_writes()
+    return folder
+
+
+def _guard_cache_writes() -> None:
+    """A kernel whose cache file cannot be written (disk full, quota) still runs: it is compiled
+    in memory; numba would raise the OSError out of the user's run instead."""
+    from numba.core import caching
+
+    save = caching.Cache.save_overload
+    if getattr(save, "_leafstudio_guard", False):
+        return
+
+    def save_overload(self, sig, data):
+        with contextlib.suppress(OSError):  # the kernel is compiled; its on-disk copy is lost
+            save(self, sig, data)
+
+    save_overload._leafstudio_guard = True  # type: ignore[attr-defined]
+    caching.Cache.save_overload = save_overload
+
+
+def _choose_folder() -> Path | None:
     if os.environ.get("NUMBA_CACHE_DIR") or _writable(CORE / "__pycache__"):
         return None
     uid = os.getuid() if hasattr(os, "getuid") else 0
