@@ -113,3 +113,9 @@ def scan_photo(
 def iou(a: shapely.Polygon, b: shapely.Polygon) -> float:
     """Intersection over union of two polygons."""
     return a.intersection(b).area / a.union(b).area
+
+
+def error_lines(stderr: str) -> int:
+    """Lines of a command's stderr that report an error (notes such as the first run's kernel
+    compilation may come before them)."""
+    return sum("error:" in line for line in stderr.strip().splitlines())

@@ -17,6 +17,7 @@ import leafstudio as ls
 from leafstudio.assets import UVMap, leaf_asset, mesh_assets
 from leafstudio.assets.texture import BLADE, VEIN, outline_mask
 from tests.leaves import moved
+from tests.photos import error_lines
 
 ROOT = Path(__file__).resolve().parents[1]
 VALIDATOR = ROOT / "tests" / "tools" / "validate_gltf.cjs"
@@ -282,7 +283,7 @@ def test_cli_texture_that_is_not_an_image_is_one_line_exit_2(tmp_path: Path, cap
     bad.write_text("not an image")
     code = main(["reconstruct", str(leaf), "-o", str(tmp_path / "x.glb"), "--texture", str(bad)])
     err = capsys.readouterr().err
-    assert code == 2 and "not a readable image" in err and len(err.strip().splitlines()) == 1
+    assert code == 2 and "not a readable image" in err and error_lines(err) == 1
     assert not (tmp_path / "x.glb").exists()
 
 

@@ -14,7 +14,7 @@ from PIL import Image
 import leafstudio as ls
 from leafstudio.assets.photo import leaf_from_photo
 from leafstudio.forms import make_form
-from tests.photos import REALLEAVES, form_photo, iou, scan_photo
+from tests.photos import REALLEAVES, error_lines, form_photo, iou, scan_photo
 
 FORMS = [
     ("ovate", {}, 0.25, 25.0),
@@ -100,7 +100,7 @@ def test_bad_photos_get_one_clear_message(tmp_path: Path, capsys, make, message)
     Image.fromarray(make()).save(path)
     code = main(["photo", str(path), "-o", str(tmp_path / "leaf.leaf.json")])
     err = capsys.readouterr().err.strip()
-    assert code == 2 and message in err and len(err.splitlines()) == 1, err
+    assert code == 2 and message in err and error_lines(err) == 1, err
     assert not (tmp_path / "leaf.leaf.json").exists()
 
 
@@ -111,7 +111,7 @@ def test_unreadable_image_is_one_line_exit_2(tmp_path: Path, capsys):
     path.write_bytes(b"\x00not a jpeg")
     assert main(["photo", str(path), "-o", str(tmp_path / "leaf.leaf.json")]) == 2
     err = capsys.readouterr().err.strip()
-    assert "not a readable image" in err and len(err.splitlines()) == 1
+    assert "not a readable image" in err and error_lines(err) == 1
 
 
 def test_photo_texture_lands_on_the_mesh_margin_within_2_pixels(tmp_path: Path):

@@ -14,7 +14,8 @@ Offsets along normals can cross in two ways, and both are prevented:
   carry the margin's offsets across the outline and past each other. The part of each offset
   along the leaf plane is cut to MARGIN_SHIFT of the vertex's distance from the outline, so the
   margin's offsets are perpendicular to the plane, the walls stand on the outline itself and the
-  sheets meet there rather than cross. The thickness there is t_i times the normal's tilt cosine.
+  sheets meet there rather than cross. The part along the plane's normal then grows, so that the
+  thickness across the surface is still t_i.
 """
 
 from __future__ import annotations
@@ -24,9 +25,11 @@ import re
 import numpy as np
 
 from leafstudio.assets.asset import MeshAsset
+from leafstudio.core.trianglemesh import vertex_normals
 from leafstudio.errors import LeafError
 
 MARGIN_SHIFT = 0.5  # an offset moves along the plane at most this fraction of its distance
+MIN_COSINE = 0.2  # the margin's offsets grow by 1/cos(tilt), at most by 1/MIN_COSINE
 FOLD = 1.0  # t <= FOLD · radius of curvature: t/2 stays under half the radius
 UNITS = {"um": 1e-3, "mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4}  # in millimetres
 
@@ -92,7 +95,21 @@ def offsets(asset: MeshAsset, thickness: float) -> np.ndarray:
     shift = half * np.linalg.norm(across, axis=1)  # how far the offset moves along the plane
     allowed = MARGIN_SHIFT * asset.margin_distance
     keep = np.where(shift > allowed, allowed / np.where(shift > 0, shift, 1), 1.0)
-    return half[:, None] * (keep[:, None] * across + up[:, None] * asset.plane_normal)
+    # the part along the plane's normal grows so that the offset still reaches t/2 along the
+    # surface's normal: o·n = keep sin²θ t/2 + β cos θ = t/2
+    sin2 = 1 - up**2
+    beta = (1 - keep * sin2) / np.maximum(up, MIN_COSINE)
+    offset = half[:, None] * (keep[:, None] * across + beta[:, None] * asset.plane_normal)
+    return offset * _facet_gain(asset, offset, half)[:, None]
+
+
+def _facet_gain(asset: MeshAsset, offset: np.ndarray, half: np.ndarray) -> np.ndarray:
+    """(n,) factors >= 1 that make each offset reach t/2 along the triangles' own mean normal
+    at its vertex too: where the mesh is coarse across a strongly curved leaf, the surface's
+    normals lean away from its facets', and the solid between the facets would be thinner."""
+    facets = vertex_normals(asset.points, asset.faces)
+    reach = np.einsum("ij,ij->i", offset, facets)
+    return np.clip(half / np.maximum(reach, 1e-300), 1.0, 1 / MIN_COSINE)
 
 
 def thicken(asset: MeshAsset, thickness: float) -> MeshAsset:

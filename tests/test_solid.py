@@ -1,0 +1,100 @@
+"""Solid leaves (--thickness): closed, consistently oriented with outward normals, volume = area ×
+thickness within 2%, no self-intersection, also at thin tips and deep sinuses; every solid format
+reads back watertight."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+import leafstudio as ls
+from leafstudio.assets import leaf_asset
+from leafstudio.assets.solid import parse_thickness, thicken, thickness_in_mesh_units
+from leafstudio.errors import LeafError
+from leafstudio.forms import make_form
+from tests.leaves import lobed, narrow
+from tests.photos import error_lines
+
+LEAVES = {
+    "nested": lambda: ls.demo("nested"),  # a thin, pointed base (narrower than T there)
+    "parallel": lambda: ls.demo("parallel"),
+    "lobed": lambda: lobed()[0],  # deep sinuses
+    "narrow": lambda: narrow()[0],  # grass-like, sharp tip
+    "acuminate": lambda: make_form("elliptic", apex="acuminate"),  # a long thin tip
+}
+
+
+@pytest.fixture(scope="module", params=sorted(LEAVES))
+def sheet(request):
+    result = ls.reconstruct(LEAVES[request.param](), ls.Params(grid=48))
+    return result, leaf_asset(result)
+
+
+def self_intersecting(points: np.ndarray, faces: np.ndarray) -> bool:
+    import open3d as o3d
+
+    mesh = o3d.geometry.TriangleMesh(
+        o3d.utility.Vector3dVector(points), o3d.utility.Vector3iVector(faces)
+    )
+    return bool(mesh.is_self_intersecting())
+
+
+@pytest.mark.parametrize("fraction", [0.005, 0.02])
+def test_solid_is_closed_oriented_and_of_the_right_volume(sheet, fraction):
+    result, asset = sheet
+    thickness = fraction * result.length
+    solid = thicken(asset, thickness)
+    mesh = trimesh.Trimesh(solid.points, solid.faces, process=False)
+    assert mesh.is_watertight and mesh.is_winding_consistent and mesh.is_volume
+    area = trimesh.Trimesh(asset.points, asset.faces, process=False).area
+    assert mesh.volume > 0  # outward normals
+    assert mesh.volume == pytest.approx(area * thickness, rel=0.02)
+    assert not self_intersecting(solid.points, solid.faces)
+    # the top sheet's normals point out: away from the bottom sheet
+    top = solid.points[: asset.n_points]
+    bottom = solid.points[asset.n_points :]
+    assert np.all(np.einsum("ij,ij->i", top - bottom, solid.normals[: asset.n_points]) >= 0)
+
+
+@pytest.mark.parametrize("suffix", [".stl", ".obj", ".ply", ".glb", ".3mf"])
+def test_every_solid_format_reads_back_watertight(tmp_path: Path, suffix: str):
+    result = ls.reconstruct(ls.demo("nested"), ls.Params(grid=40))
+    thickness = 0.01 * result.length
+    path = tmp_path / f"leaf{suffix}"
+    ls.save_mesh(result, path, thickness=thickness)
+    loaded = trimesh.load(path, force="mesh")  # merges STL's corners
+    if suffix == ".stl":
+        loaded.merge_vertices()
+    assert loaded.is_watertight and loaded.is_volume
+    expected = thicken(leaf_asset(result), thickness)
+    reference = trimesh.Trimesh(expected.points, expected.faces, process=False)
+    assert loaded.volume == pytest.approx(reference.volume, rel=1e-4)
+
+
+def test_thickness_with_units_and_as_a_fraction():
+    assert parse_thickness("0.01") == (0.01, None)
+    assert parse_thickness("0.4mm") == (0.4, "mm")
+    assert thickness_in_mesh_units("0.4mm", 80.0) == pytest.approx(0.4)
+    assert thickness_in_mesh_units("0.04cm", 80.0) == pytest.approx(0.4)
+    assert thickness_in_mesh_units("0.005", 80.0) == pytest.approx(0.4)
+    for bad in ("", "-1", "0", "thick", "2", "0.4parsec"):
+        with pytest.raises(LeafError):
+            parse_thickness(bad)
+
+
+def test_cli_thickness(tmp_path: Path, capsys):
+    from leafstudio.cli import main
+
+    leaf = tmp_path / "nested.leaf.json"
+    ls.save_leaf(ls.demo("nested"), leaf)
+    out = tmp_path / "leaf.3mf"
+    assert main(["reconstruct", str(leaf), "-o", str(out), "--grid", "32", "--thickness",
+                 "0.01"]) == 0  # fmt: skip
+    assert trimesh.load(out, force="mesh").is_watertight
+    code = main(["reconstruct", str(leaf), "-o", str(tmp_path / "x.stl"), "--thickness", "big"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "--thickness" in err and error_lines(err) == 1
+    assert not (tmp_path / "x.stl").exists()
