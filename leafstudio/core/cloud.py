@@ -7,8 +7,8 @@ Three steps, none of which depends on the order the points were given in:
 - `order_cells`: the points summed into square cells (one bucket pass, O(n)), the occupied cells
   closed into a band on a raster, and the band's outer contour round the hole it encloses
   (contourpy) as a guide that gives every cell a position along the outline;
-- `mean_outline`: the cells' points binned along that position and smoothed (a Savitzky-Golay
-  filter, which keeps curvature): the outline follows the points' mean position, heights too.
+- `mean_outline`: the cells' points binned along that position and smoothed (a local quadratic
+  fit, which keeps curvature): the outline follows the points' mean position, heights too.
 
 outline.py decides from the estimated noise whether a cloud is clean (its points become the
 outline's vertices, in the order this module finds) or noisy (the smooth mean outline).
@@ -22,7 +22,6 @@ import contourpy
 import numpy as np
 from numba import njit
 from scipy import ndimage
-from scipy.signal import savgol_filter
 from scipy.spatial import cKDTree
 
 from leafstudio.core.buckets import bounds, kernel_array
@@ -46,6 +45,7 @@ class Noise:
 PREDICT = np.array([-1 / 6, 2 / 3, 2 / 3, -1 / 6])  # point i from i-2, i-1, i+1, i+2 (exact on
 # cubics in the index); the residual's variance is then (1 + |PREDICT|^2) sigma^2 of the noise
 CHI2_MEDIAN = 0.454936  # the median of chi-squared with one degree of freedom
+CHI2_MEDIAN_MEAN = 0.6  # about the median of a cell's mean square (a few points averaged)
 
 
 def estimate_noise(xy: np.ndarray, z: np.ndarray, sequence: np.ndarray) -> Noise:
@@ -106,6 +106,8 @@ class Cells:
         Mean position of each cell's points.
     mean_z : (m,) float array
         Mean height of each cell's points.
+    spread : (m, 4) float array
+        Each cell's points' (co)variances about their mean: xx, xy, yy and zz.
     t : (m,) float array
         Each cell's position along the guide contour (arc length from its start).
     perimeter : float
@@ -120,6 +122,7 @@ class Cells:
     count: np.ndarray
     mean: np.ndarray
     mean_z: np.ndarray
+    spread: np.ndarray
     t: np.ndarray
     perimeter: float
     guide: np.ndarray
@@ -150,6 +153,11 @@ def order_cells(xy: np.ndarray, z: np.ndarray, cell: float) -> Cells | None:
     sz = np.bincount(of_point, weights=z, minlength=m)
     mean = np.column_stack([sx / count, sy / count])
     mean_z = sz / count
+    dx, dy, dz = xy[:, 0] - mean[of_point, 0], xy[:, 1] - mean[of_point, 1], z - mean_z[of_point]
+    spread = np.column_stack(
+        [np.bincount(of_point, weights=a * b, minlength=m) / count
+         for a, b in ((dx, dx), (dx, dy), (dy, dy), (dz, dz))]
+    )  # fmt: skip
 
     guide = _guide(occupied.reshape(ny, nx), max(nx, ny) // 10 + 1)
     if guide is None:
@@ -164,7 +172,7 @@ def order_cells(xy: np.ndarray, z: np.ndarray, cell: float) -> Cells | None:
     arc = np.concatenate([[0.0], np.cumsum(lengths)])
     nearest = cKDTree(guide).query(mean)[1]
     t, edge = _project(mean, nearest, guide, edges, lengths, arc, reach=1)
-    return Cells(of_point, count, mean, mean_z, t, float(arc[-1]), guide, edge)
+    return Cells(of_point, count, mean, mean_z, spread, t, float(arc[-1]), guide, edge)
 
 
 def _guide(occupied: np.ndarray, most: int) -> np.ndarray | None:
@@ -263,32 +271,90 @@ def point_order(cells: Cells, xy: np.ndarray) -> np.ndarray:
     return np.argsort(t, kind="stable")
 
 
-def mean_outline(
-    cells: Cells, noise: float, n_points: int, size: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """(k, 2) vertices and (k,) heights of the smooth outline through the cells' mean position.
+def mean_outline(cells: Cells, n_points: int, size: float) -> tuple[np.ndarray, np.ndarray, Noise]:
+    """(k, 2) vertices and (k,) heights of the smooth outline through the cells' mean position,
+    and the points' scatter about it.
 
-    The cells are binned along the guide at about OUTLINE_STEP of `size` (the cloud's size);
-    each bin's mean (by point count) is smoothed round the closed outline by a Savitzky-Golay
-    filter of order 3 whose window spans SMOOTH_NOISE noise σ either side, and at least the arc
-    SMOOTH_POINTS of the `n_points` take, so the noise averages out but the shape does not.
+    The cells are binned along the guide at about OUTLINE_STEP of `size` (the cloud's size) and
+    the outline at each bin is a local quadratic fit, with Gaussian weights of SMOOTH_NOISE noise
+    σ either side (at least the arc SMOOTH_POINTS of the `n_points` take) times each bin's point
+    count, to the bins' means (_local_fit): the noise averages out, the shape's curvature does
+    not, and a bin holding only a few stray points weighs only as much as they do. σ is measured
+    about the outline itself (_scatter), twice over, so that it and the outline depend on the
+    points, not on the order they came in.
     """
     perimeter = cells.perimeter
     bins = int(np.clip(perimeter / (OUTLINE_STEP * size), 16, MAX_BINS))
     width = perimeter / bins
     which = np.minimum((cells.t / width).astype(np.int64), bins - 1)
-    w = np.bincount(which, weights=cells.count, minlength=bins)
-    sums = [
-        np.bincount(which, weights=cells.count * v, minlength=bins)
-        for v in (cells.mean[:, 0], cells.mean[:, 1], cells.mean_z)
+    weight = np.bincount(which, weights=cells.count, minlength=bins)
+    sums = np.column_stack(
+        [
+            np.bincount(which, weights=cells.count * v, minlength=bins)
+            for v in (cells.mean[:, 0], cells.mean[:, 1], cells.mean_z)
+        ]
+    )
+    least = 0.5 * SMOOTH_POINTS * perimeter / max(n_points, 1)
+    noise = Noise(0.0, 0.0)
+    for rounds in range(3):
+        half = max(SMOOTH_NOISE * max(noise.across, noise.height), least, 2 * width)
+        curve = _local_fit(weight, sums, min(0.5 * half / width, bins / 8))
+        if rounds < 2:
+            noise = _scatter(cells, curve, cells.t / width)
+    return curve[:, :2], curve[:, 2], noise
+
+
+def _local_fit(weight: np.ndarray, sums: np.ndarray, sigma: float) -> np.ndarray:
+    """(k, 3) the closed curve whose bins hold `weight` points summing to `sums`, each bin the
+    value at it of the quadratic fitted to the bins about it with weights exp(-j²/2σ²) times
+    their point counts (j bins away); where too few bins hold points for a quadratic, their
+    weighted mean."""
+    reach = int(np.ceil(4 * sigma))
+    j = np.arange(-reach, reach + 1, dtype=float)
+    g = np.exp(-0.5 * (j / sigma) ** 2)
+    moment = [ndimage.correlate1d(weight, g * j**p, mode="wrap") for p in range(5)]
+    fit = [
+        np.column_stack([ndimage.correlate1d(sums[:, c], g * j**p, mode="wrap") for c in range(3)])
+        for p in range(3)
     ]
-    full = np.flatnonzero(w > 0)
-    at = np.arange(bins)
-    curve = np.column_stack(
-        [np.interp(at, full, s[full] / w[full], period=bins) for s in sums]
-    )  # empty bins: between their neighbours
-    half = max(SMOOTH_NOISE * noise, 0.5 * SMOOTH_POINTS * perimeter / max(n_points, 1))
-    window = 2 * int(np.ceil(half / width)) + 1
-    window = min(max(window, 5), bins - (1 - bins % 2))
-    smooth = savgol_filter(curve, window, 3, axis=0, mode="wrap") if window > 3 else curve
-    return smooth[:, :2], smooth[:, 2]
+    matrix = np.stack(
+        [np.stack([moment[r + c] for c in range(3)], axis=-1) for r in range(3)], axis=-2
+    )  # (k, 3, 3)
+    rhs = np.stack(fit, axis=1)  # (k, 3 powers, 3 coordinates)
+    mean = fit[0] / np.maximum(moment[0], 1e-300)[:, None]
+    det = np.linalg.det(matrix)
+    ok = det > 1e-9 * np.maximum(moment[0], 1e-300) ** 3 * sigma**6
+    out = mean.copy()
+    if ok.any():
+        out[ok] = np.linalg.solve(matrix[ok], rhs[ok])[:, 0, :]
+    return out
+
+
+def _scatter(cells: Cells, curve: np.ndarray, at: np.ndarray) -> Noise:
+    """The points' scatter about the closed (k, 3) curve, sampled at bins 0..k-1, the cells
+    lying at bin positions `at`: each cell's variance across the curve and in height (its own
+    spread and its mean's offset), the median over points (weighted by count)."""
+    k = len(curve)
+    index = np.arange(k + 1)
+    closed = np.vstack([curve, curve[:1]])
+    place = np.column_stack([np.interp(at, index, closed[:, j]) for j in range(3)])
+    ahead = np.column_stack([np.interp((at + 1) % k, index, closed[:, j]) for j in range(2)])
+    behind = np.column_stack([np.interp((at - 1) % k, index, closed[:, j]) for j in range(2)])
+    tangent = ahead - behind
+    tangent /= np.maximum(np.hypot(tangent[:, 0], tangent[:, 1]), 1e-300)[:, None]
+    nx, ny = -tangent[:, 1], tangent[:, 0]
+    xx, xy, yy, zz = cells.spread.T
+    off = (cells.mean[:, 0] - place[:, 0]) * nx + (cells.mean[:, 1] - place[:, 1]) * ny
+    across = nx * nx * xx + 2 * nx * ny * xy + ny * ny * yy + off * off
+    height = zz + (cells.mean_z - place[:, 2]) ** 2
+    return Noise(
+        float(np.sqrt(_weighted_median(across, cells.count) / CHI2_MEDIAN_MEAN)),
+        float(np.sqrt(_weighted_median(height, cells.count) / CHI2_MEDIAN_MEAN)),
+    )
+
+
+def _weighted_median(values: np.ndarray, weights: np.ndarray) -> float:
+    """The median of `values` each counted `weights` times (order-free)."""
+    order = np.argsort(values, kind="stable")
+    total = np.cumsum(weights[order])
+    return float(values[order][np.searchsorted(total, 0.5 * total[-1])])

@@ -227,7 +227,7 @@ def trace_outline(points: np.ndarray, z: np.ndarray | None = None) -> Outline:
         hull = _by_concave_hull(pts, spacing) if len(pts) <= HULL_MOST else None
         if hull is not None:
             return _checked(_hull_outline(pts, zs, hull, noise), scale)
-    polygon, heights = mean_outline(cells, noise.across, len(pts), scale)
+    polygon, heights, noise = mean_outline(cells, len(pts), scale)
     if not Polygon(polygon).is_valid:
         poly = _largest_polygon(shapely.make_valid(Polygon(polygon)))
         if poly is None:

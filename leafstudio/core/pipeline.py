@@ -188,6 +188,8 @@ def _frame_stage(leaf: Leaf) -> tuple[FrameStage, list[str]]:
     else:
         polygon_h = outline.heights[kept_vertices]
     base = fit_base(polygon, polygon_h, length)
+    if outline.smoothed and base is not None:  # a noisy margin: on the smooth base itself
+        polygon_h = base(polygon)
     veins, heights = [], []
     projected = [frame.to_plane(vein) for vein in leaf.veins]
     distinct = [distinct_indices(v_xy, length) for v_xy, _ in projected]

@@ -1,0 +1,185 @@
+"""Boundary clouds as scanners give them (issue 10, part A): noisy, unordered, dense, unevenly
+spaced. Each finding of the issue first, then the properties any valid leaf must have."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import leafstudio as ls
+from leafstudio.cli import main
+from leafstudio.core.outline import trace_outline
+
+ELLIPSE_AREA = 2 * np.pi  # semi-axes 2 and 1
+
+
+def _ellipse(n: int, sigma: float, seed: int = 0, shuffle: bool = True, even: bool = True):
+    """(n, 3) points on the ellipse x²/4 + y² = 1 with Gaussian noise σ in x and y."""
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    if not even:
+        t = np.sort(rng.uniform(0, 2 * np.pi, n))
+    points = np.column_stack([2 * np.cos(t), np.sin(t), np.zeros(n)])
+    points[:, :2] += rng.normal(0, sigma, (n, 2))
+    return rng.permutation(points) if shuffle else points
+
+
+def _midrib(n: int = 50) -> np.ndarray:
+    x = np.linspace(-1.6, 1.6, n)
+    return np.column_stack([x, np.zeros(n), 0.1 * (1 - (x / 2) ** 2)])
+
+
+def test_finding1_noisy_shuffled_ellipse_measures_its_area(tmp_path, capsys):
+    """3,000 shuffled points with noise of 0.05% of the length: the area was 2.44, not 6.28."""
+    boundary = _ellipse(3000, 0.0005 * 4)
+    path = tmp_path / "ellipse.csv"
+    np.savetxt(path, boundary, delimiter=",")
+    assert main(["measure", str(path), "--json"]) == 0
+    area = json.loads(capsys.readouterr().out)["area"]
+    assert area == pytest.approx(ELLIPSE_AREA, rel=0.01)
+
+
+@pytest.mark.parametrize("n, sigma", [(10_000, 0.00013 * 4), (10_000, 0.002)])
+def test_finding1_noise_gives_no_false_errors(n, sigma):
+    """Veins inside a noisy shuffled boundary were said to lie outside it (or the outline to
+    cross itself)."""
+    leaf = ls.Leaf(boundary=_ellipse(n, sigma, seed=1), veins=[_midrib()])
+    result = ls.reconstruct(leaf, ls.Params(k=2, grid=64))
+    m = result.metrics
+    assert m["mesh"]["components"] == 1 and m["mesh"]["boundary_loops"] == 1
+    assert m["leaf"]["projected_area"] == pytest.approx(ELLIPSE_AREA, rel=0.01)
+
+
+def test_finding2_ordered_points_at_random_spacing_are_recognised_as_ordered():
+    """They went to the concave hull (153 s at 1e5 points): they keep their points and order."""
+    boundary = _ellipse(20_000, 0.0, shuffle=False, even=False)[:, :2]
+    outline = trace_outline(boundary)
+    assert not outline.smoothed
+    inputs = {tuple(p) for p in boundary}
+    assert all(tuple(p) in inputs for p in outline.polygon)
+    assert shapely.Polygon(outline.polygon).area == pytest.approx(ELLIPSE_AREA, rel=1e-4)
+
+
+def test_order_does_not_matter_for_a_clean_dense_boundary():
+    """Shuffled, the same points give the same outline as in order (so the same mesh)."""
+    ordered = _ellipse(50_000, 0.0, shuffle=False, even=False)[:, :2]
+    shuffled = np.random.default_rng(5).permutation(ordered)
+    a, b = trace_outline(ordered), trace_outline(shuffled)
+    np.testing.assert_allclose(a.polygon, b.polygon, atol=1e-9)  # points 1e-10 apart may swap
+
+
+def test_order_does_not_matter_for_a_noisy_boundary():
+    noisy = _ellipse(20_000, 0.004, shuffle=False)
+    a = ls.reconstruct(ls.Leaf(noisy, []), ls.Params(grid=64))
+    b = ls.reconstruct(ls.Leaf(np.random.default_rng(2).permutation(noisy), []), ls.Params(grid=64))
+    np.testing.assert_allclose(a.polygon, b.polygon, atol=1e-9)
+    np.testing.assert_allclose(a.triangle_mesh.points, b.triangle_mesh.points, atol=1e-9)
+
+
+def _ovate(n: int, sigma: float, seed: int = 3) -> ls.Leaf:
+    """An ovate leaf (length 1) with a midrib and two veins, boundary noise σ in x, y and z."""
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    x = 0.5 - 0.5 * np.cos(t)
+    y = 0.3 * np.sin(t) * (1 - 0.4 * x)
+    boundary = np.column_stack([x, y, np.zeros(n)]) + rng.normal(0, sigma, (n, 3))
+    s = np.linspace(0.05, 0.95, 40)
+    midrib = np.column_stack([s, np.zeros_like(s), 0.04 * np.sin(np.pi * s)])
+    return ls.Leaf(boundary=rng.permutation(boundary), veins=[midrib])
+
+
+def _dihedral_degrees(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The angle between the normals of the two triangles at each interior edge, and the edge's
+    two ends."""
+    a, b, c = (points[triangles[:, k]] for k in range(3))
+    normal = np.cross(b - a, c - a)
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    edges = np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]],
+                                    triangles[:, [2, 0]]]), axis=1)  # fmt: skip
+    face = np.tile(np.arange(len(triangles)), 3)
+    order = np.lexsort((edges[:, 1], edges[:, 0]))
+    edges, face = edges[order], face[order]
+    pair = np.flatnonzero(np.all(edges[1:] == edges[:-1], axis=1))
+    cos = np.clip((normal[face[pair]] * normal[face[pair + 1]]).sum(axis=1), -1, 1)
+    return np.degrees(np.arccos(cos)), edges[pair]
+
+
+@pytest.mark.parametrize("grid", [128, 256])
+def test_finding4_a_noisy_margin_is_smooth_and_on_the_data(grid):
+    """Noise of 0.2% of the length: the margin band's 99th-percentile dihedral angle was 63-68°
+    against 3-7° inside. Now at most twice the interior's and under 10°, the boundary points
+    within 1.5 σ of the mesh on average, the area within 1%."""
+    sigma = 0.002
+    leaf = _ovate(4000, sigma)
+    result = ls.reconstruct(leaf, ls.Params(k=2, grid=grid))
+    mesh = result.triangle_mesh
+    angles, edges = _dihedral_degrees(np.asarray(mesh.points), mesh.regular_faces)
+    xy = result.frame.to_plane(np.asarray(mesh.points))[0]
+    depth = shapely.distance(shapely.LinearRing(result.polygon), shapely.points(xy))
+    cell = result.grid.spacing
+    band = (depth[edges] <= 3 * cell).any(axis=1)
+    margin, interior = np.percentile(angles[band], 99), np.percentile(angles[~band], 99)
+    assert margin <= max(2 * interior, 1.0) and margin < 10
+    m = result.metrics
+    assert m["boundary"]["mean"] <= 1.5 * sigma
+    t = np.linspace(0, 2 * np.pi, 20000)
+    x = 0.5 - 0.5 * np.cos(t)
+    exact = shapely.Polygon(np.column_stack([x, 0.3 * np.sin(t) * (1 - 0.4 * x)])).area
+    assert m["leaf"]["projected_area"] == pytest.approx(exact, rel=0.01)
+
+
+def test_clean_boundaries_keep_their_points_on_the_mesh():
+    """Demos, sketches and extract's outlines: clean, so their points are the margin's."""
+    for name in ("nested", "parallel"):
+        leaf = ls.demo(name)
+        outline = trace_outline(leaf.boundary[:, :2])
+        assert not outline.smoothed
+        np.testing.assert_array_equal(np.sort(outline.polygon, axis=0),
+                                      np.sort(leaf.boundary[:, :2], axis=0))  # fmt: skip
+
+
+def _random_leaf(seed: int, n: int, noise: float, size: float) -> tuple[ls.Leaf, float]:
+    """A random star-shaped leaf (a few Fourier modes of the radius), length about `size`,
+    rotated in 3D, shuffled, with duplicates and noise of `noise` of its length; its exact area."""
+    rng = np.random.default_rng(seed)
+    modes = rng.normal(0, 0.08, (3, 2)) / np.arange(2, 5)[:, None]
+    t = np.linspace(0, 2 * np.pi, 20000, endpoint=False)
+    stretch = rng.uniform(1.2, 2.0)
+
+    def outline(t: np.ndarray) -> np.ndarray:
+        r = 1 + sum(a * np.cos(k * t) + b * np.sin(k * t) for k, (a, b) in enumerate(modes, 2))
+        return np.column_stack([stretch * r * np.cos(t), r * np.sin(t)])
+
+    exact = shapely.Polygon(outline(t))
+    length = float(np.ptp(outline(t)[:, 0]))
+    scale = size / length
+    xy = outline(rng.uniform(0, 2 * np.pi, n)) + rng.normal(0, noise * length, (n, 2))
+    points = np.column_stack([xy, np.zeros(n)])
+    points = np.vstack([points, points[rng.choice(n, n // 5)]])  # duplicates
+    rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    points = rng.permutation(points) @ rotation.T * scale + rng.uniform(-5, 5, 3) * size
+    return ls.Leaf(boundary=points, veins=[]), exact.area * scale**2
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    seed=st.integers(0, 10_000),
+    n=st.integers(2000, 20_000),
+    noise=st.sampled_from([0.0, 1e-4, 1e-3, 5e-3]),
+    size=st.sampled_from([1.0]),  # part B's normalisation: widen to 1e-6 .. 1e6 once it lands
+)
+def test_any_valid_leaf_gives_one_clean_piece_of_the_right_area(seed, n, noise, size):
+    leaf, area = _random_leaf(seed, n, noise, size)
+    params = ls.Params(grid=64)
+    result = ls.reconstruct(leaf, params)
+    m = result.metrics
+    assert m["mesh"]["components"] == 1 and m["mesh"]["boundary_loops"] == 1
+    assert m["leaf"]["projected_area"] == pytest.approx(area, rel=0.01)
+    shuffled = ls.Leaf(np.random.default_rng(seed + 1).permutation(leaf.boundary), [])
+    again = ls.reconstruct(shuffled, params)
+    np.testing.assert_allclose(again.polygon, result.polygon, atol=1e-9 * size)
