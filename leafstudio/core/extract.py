@@ -12,6 +12,12 @@
 4. Midrib: from the base to the tip, through the middle of the blade's cross-sections, lifted to
    the surface. Side veins: straight from the midrib toward the margin at 50° to it, lifted too,
    and cut where the scan has a gap.
+
+Units and size: the scan is moved and scaled to unit size first (nothing overflows at 1e200, and
+the constants meet the same leaf in any units), and a scan of more than BUDGET points is thinned
+to one point per occupied voxel (the voxel's centroid, the voxel as large as needed to keep at
+most BUDGET): the steps above then cost the same for 1e5 or 1e7 points, and the blade and petiole
+masks go back to every scan point through its voxel. Smaller scans are used as they are.
 """
 
 from __future__ import annotations
@@ -46,6 +52,10 @@ SIDE_ANGLE = np.deg2rad(50.0)
 SIDE_REACH = 0.85  # side veins stop at this share of the way to the margin
 MIDRIB_REACH = (0.02, 0.98)  # the midrib's span along base -> tip
 AXES = {"+x": 0, "-x": 0, "+y": 1, "-y": 1, "+z": 2, "-z": 2}
+BUDGET = 40_000  # larger scans are thinned to at most this many voxel centroids
+THINNING_PASSES = 8
+PROBES = 10_000  # blade_points counts a ball's points among this many at most
+SAMPLE = 50_000  # the voxel size is first sought on this many of the points
 
 
 @dataclass(frozen=True)
@@ -87,6 +97,8 @@ def clean_scan(points: np.ndarray) -> np.ndarray:
     """(n,) bool: the points kept once outliers and small detached clusters are dropped."""
     spacing = _neighbour_spacing(points)
     typical = float(np.median(spacing))
+    if not typical > 0:
+        raise LeafError("most of the scan's points coincide: no surface to find a leaf on")
     keep = spacing <= OUTLIER_FACTOR * typical
     labels = _components(points[keep], LINK * typical)
     sizes = np.bincount(labels)
@@ -101,10 +113,16 @@ def blade_points(points: np.ndarray) -> np.ndarray:
     centred = points - points.mean(axis=0)
     extent = float(np.ptp(centred @ np.linalg.svd(centred, full_matrices=False)[2][0]))
     radius = BALL * extent
-    tree = cKDTree(points)
-    counts = tree.query_ball_point(points, radius, return_length=True)
+    if len(points) > PROBES:  # each ball's count from a random share of the points, scaled up
+        probes = points[np.random.default_rng(0).choice(len(points), PROBES, replace=False)]
+        found = cKDTree(probes).query_ball_point(points, radius, return_length=True)
+        counts = found * (len(points) / PROBES)
+    else:
+        counts = cKDTree(points).query_ball_point(points, radius, return_length=True)
     busy = np.percentile(counts, 90)
     core = counts >= CORE * busy
+    if not core.any():
+        raise LeafError("no leaf blade in the scan: no point has the neighbours a surface gives")
     typical = float(np.median(_neighbour_spacing(points)))
     labels = _components(points[core], LINK * typical)
     main = np.flatnonzero(core)[labels == np.argmax(np.bincount(labels))]
@@ -294,6 +312,76 @@ def extract_leaf(points: np.ndarray, base_end: str = "auto", count: int = 200) -
         raise LeafError(f"too few points for a leaf scan: {len(points)} (need {MIN_POINTS})")
     if count < 8:
         raise LeafError(f"the boundary needs at least 8 points, got {count}")
+    if not np.all(np.isfinite(points)):
+        raise LeafError("the scan holds NaN or infinite coordinates")
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    centre, scale = lo / 2 + hi / 2, float(np.max(hi / 2 - lo / 2)) * 2
+    if not scale > 0 or not np.isfinite(scale):
+        raise LeafError("the scan's points all coincide")
+    unit = (points - centre) / scale
+    thinned, cell = voxel_thinning(unit, BUDGET)
+    leaf, blade, petiole, origin, axes, region = _extract(thinned, base_end, count)
+    if cell is not None:  # each point as its cube's centroid; a petiole stub cut as there
+        blade, petiole = blade[cell], petiole[cell]
+        local = (unit[blade] - origin) @ axes[:2].T
+        cut = np.flatnonzero(blade)[~shapely.contains_xy(region, local[:, 0], local[:, 1])]
+        blade[cut], petiole[cut] = False, True
+    length = float(np.ptp((unit[blade] - origin) @ axes[0]))
+
+    def world(q: np.ndarray) -> np.ndarray:
+        return centre + scale * q
+
+    return Extraction(
+        leaf=Leaf(boundary=world(leaf.boundary), veins=[world(v) for v in leaf.veins]),
+        blade=blade,
+        petiole=petiole,
+        length=scale * length,
+    )
+
+
+def voxel_thinning(points: np.ndarray, budget: int) -> tuple[np.ndarray, np.ndarray | None]:
+    """Between budget / 2 and `budget` points standing for (n, 3) `points`: the centroids of the
+    occupied cubes of a size tried until their count falls in that range, and each point's cube
+    (n,); the points themselves and None when there are no more than `budget`. A few O(n log n)
+    passes: the first size assumes a surface, each next one scales by the miss."""
+    if len(points) <= budget:
+        return points, None
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    size = float(np.max(hi - lo)) / np.sqrt(budget)
+
+    def cells_of(at: np.ndarray, size: float) -> tuple[np.ndarray, np.ndarray]:
+        cells = np.floor((at - lo) / size).astype(np.int64)
+        dims = np.floor((hi - lo) / size).astype(np.int64) + 1
+        keys = (cells[:, 0] * dims[1] + cells[:, 1]) * dims[2] + cells[:, 2]
+        _, cell, counts = np.unique(keys, return_inverse=True, return_counts=True)
+        return cell, counts
+
+    def adjust(size: float, count: int) -> float:
+        return size * float(np.clip(np.sqrt(count / (0.75 * budget)), 0.5, 4.0))
+
+    if len(points) > 2 * SAMPLE:  # a cheap first guess from a sample (it finds fewer cubes)
+        sample = points[np.random.default_rng(0).choice(len(points), SAMPLE, replace=False)]
+        for _ in range(THINNING_PASSES):
+            count = len(cells_of(sample, size)[1])
+            if budget // 2 <= count <= budget:
+                break
+            size = adjust(size, count)
+    for _ in range(THINNING_PASSES):
+        cell, counts = cells_of(points, size)
+        if budget // 2 <= len(counts) <= budget:
+            break
+        size = adjust(size, len(counts))
+    if len(counts) > budget:  # not settled: a coarser size surely keeps fewer
+        return voxel_thinning(points, budget // 2) if budget > 1 else (points[:1], None)
+    sums = [np.bincount(cell, weights=points[:, k], minlength=len(counts)) for k in range(3)]
+    return np.column_stack(sums) / counts[:, None], cell.ravel()
+
+
+def _extract(
+    points: np.ndarray, base_end: str, count: int
+) -> tuple[Leaf, np.ndarray, np.ndarray, np.ndarray, np.ndarray, Polygon]:
+    """extract_leaf on the scan at unit size (and thinned): the leaf, the blade and petiole masks,
+    the blade's plane (origin (3,), axes (3, 3)) and the region the blade's points keep to."""
     blade, petiole = split_scan(points)
     if blade.sum() < MIN_POINTS:
         raise LeafError(f"found only {blade.sum()} blade points in the scan (need {MIN_POINTS})")
@@ -305,9 +393,15 @@ def extract_leaf(points: np.ndarray, base_end: str = "auto", count: int = 200) -
     polygon = _outline(xy, float(np.ptp(xy[:, 0])))
     boundary_xy = _resample(polygon, count)
     spacing = polygon.length / count
-    cut = ~shapely.contains_xy(polygon.buffer(spacing), local[:, 0], local[:, 1])
+    region = polygon.buffer(spacing)
+    cut = ~shapely.contains_xy(region, local[:, 0], local[:, 1])
     petiole |= blade & cut  # a stub of petiole trimmed by the opening
     blade &= ~cut
+    if blade.sum() < MIN_POINTS:
+        raise LeafError(
+            f"found only {blade.sum()} blade points within the blade's outline (need "
+            f"{MIN_POINTS}): the scan does not look like a leaf surface"
+        )
     xy, h = local[blade, :2], local[blade, 2]
     base = _base_point(base_end, axes, boundary_xy, xy, local[petiole, :2])
     midrib = _midline(boundary_xy, base, spacing)
@@ -327,12 +421,7 @@ def extract_leaf(points: np.ndarray, base_end: str = "auto", count: int = 200) -
     rim = np.convolve(np.tile(lift(boundary_xy, xy, h), 3), RIM_KERNEL / RIM_KERNEL.sum(), "same")
     boundary = world(boundary_xy, rim[count : 2 * count])
     veins = _inside_outline(boundary, [world(v) for v in veins_xy], spacing)
-    return Extraction(
-        leaf=Leaf(boundary=boundary, veins=veins),
-        blade=blade,
-        petiole=petiole,
-        length=float(np.ptp(xy[:, 0])),
-    )
+    return Leaf(boundary=boundary, veins=veins), blade, petiole, origin, axes, region
 
 
 def _inside_outline(boundary: np.ndarray, veins: list[np.ndarray], gap: float) -> list[np.ndarray]:
