@@ -299,3 +299,33 @@ def test_outline_mask_matches_the_mesh_margin(nested: ls.Result):
 
     edge = binary_dilation(mask, iterations=1) & ~binary_erosion(mask, iterations=1)
     assert np.mean(binary_dilation(edge, iterations=1)[row.clip(0, 511), col.clip(0, 511)]) > 0.99
+
+
+def test_levels_of_detail_halve_the_triangles_and_keep_the_margin(nested: ls.Result, tmp_path):
+    import shapely
+
+    from leafstudio.assets.solid import boundary_edges
+
+    path = tmp_path / "leaf.glb"
+    ls.save_mesh(nested, path, lod=3)
+    assert_valid_gltf(path)
+    scene = trimesh.load(path, process=False)
+    names = [f"leaf_LOD{k}" for k in range(4)]
+    assert sorted(scene.geometry) == names
+    counts = [len(scene.geometry[name].faces) for name in names]
+    for coarse, fine in zip(counts[1:], counts[:-1], strict=True):
+        assert coarse == pytest.approx(fine / 2, rel=0.1)
+    ring = shapely.LinearRing(nested.polygon)
+    full = shapely.Polygon(nested.polygon).area
+    for name in names[1:]:
+        mesh = scene.geometry[name]
+        xy = nested.frame.to_plane(np.asarray(mesh.vertices))[0]
+        rim = np.unique(boundary_edges(np.asarray(mesh.faces)))
+        assert shapely.distance(ring, shapely.points(xy[rim])).max() < 5e-4 * nested.length
+        area = shapely.union_all(shapely.polygons(xy[np.asarray(mesh.faces)])).area
+        assert area == pytest.approx(full, rel=0.01)  # the outline keeps its shape
+        assert mesh.visual.uv.shape == (len(mesh.vertices), 2)
+        normals = np.asarray(mesh.vertex_normals)
+        assert np.all(normals @ nested.frame.normal > 0)  # closed-form, the upper side
+    ls.save_mesh(nested, tmp_path / "leaf.obj", lod=1)
+    assert (tmp_path / "leaf_lod1.obj").is_file() and (tmp_path / "leaf_lod1.mtl").is_file()

@@ -158,12 +158,12 @@ def leaf_asset(result: Result) -> MeshAsset:
     faces = oriented(triangles_of(mesh).astype(np.int64), points, normals)
     data = {k: np.asarray(mesh.point_data[k], float) for k in SCALARS if k in mesh.point_data}
     uv = UVMap.around(result.polygon)(xy)
-    distance = _outline_distance(result.polygon, xy)
+    distance = outline_distance(result.polygon, xy)
     return MeshAsset(points, faces, normals, uv, data, plane_normal=result.frame.normal,
                      margin_distance=np.where(margin, 0.0, distance))  # fmt: skip
 
 
-def _outline_distance(polygon: np.ndarray, xy: np.ndarray) -> np.ndarray:
+def outline_distance(polygon: np.ndarray, xy: np.ndarray) -> np.ndarray:
     """(n,) distance in the plane from each point to the closed outline."""
     import shapely
 

@@ -47,25 +47,22 @@ def photo_transform(leaf_path: str | os.PathLike) -> np.ndarray | None:
         return None
 
 
-def _textured(asset: MeshAsset, result: Any, texture: Any, gltf: bool) -> MeshAsset:
+def _images(result: Any, texture: Any, gltf: bool) -> dict[str, Any]:
+    """The texture (and, for glTF, normal map) images the option asks for, made once for all the
+    levels of detail (they share the UV map)."""
     from leafstudio.assets import texture as tex
 
     if isinstance(texture, str) and texture in TEXTURES:
-        if texture == "none":
-            return asset
-        if result is None:  # a bare mesh: no outline or veins to draw
-            return asset
+        if texture == "none" or result is None:  # a bare mesh: no outline or veins to draw
+            return {}
         plane = leaf_plane(result)
-        return asset.with_(
-            texture=tex.leaf_texture(plane), normal_map=tex.normal_map(plane) if gltf else None
-        )
+        maps = tex.normal_map(plane) if gltf else None
+        return {"texture": tex.leaf_texture(plane), "normal_map": maps}
     photo = texture if isinstance(texture, PhotoTexture) else PhotoTexture(texture)
     image = tex.read_image(photo.image)
     if photo.pixel_from_world is not None and result is not None:
-        return asset.with_(
-            texture=tex.photo_texture(leaf_plane(result), image, photo.pixel_from_world)
-        )
-    return asset.with_(texture=tex.stretched_texture(image))
+        return {"texture": tex.photo_texture(leaf_plane(result), image, photo.pixel_from_world)}
+    return {"texture": tex.stretched_texture(image)}
 
 
 def mesh_assets(
@@ -97,14 +94,14 @@ def mesh_assets(
         from leafstudio.assets.lod import coarser_levels
 
         levels += coarser_levels(base, result, lod)
+    images = _images(result, texture, gltf)
     out = []
     for level, asset in enumerate(levels):
         if thickness is not None:
             from leafstudio.assets.solid import thicken
 
             asset = thicken(asset, thickness)
-        asset = asset.with_(name=f"leaf_LOD{level}" if lod else "leaf")
-        out.append(_textured(asset, result, texture, gltf))
+        out.append(asset.with_(name=f"leaf_LOD{level}" if lod else "leaf", **images))
     return out
 
 

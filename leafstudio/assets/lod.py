@@ -1,0 +1,81 @@
+"""Levels of detail: coarser meshes of the same leaf, each with half the triangles of the one
+before, for engines that switch meshes with distance.
+
+Each level is a quadric decimation of the full mesh (open3d, Garland and Heckbert's error
+quadrics) to half, a quarter, ... of its triangles, with the margin's edges weighted heavily
+(BOUNDARY_WEIGHT) so that its vertices stay on the outline and the outline keeps its shape. The
+levels' vertices are then given what the full mesh's have: for a Result, the surface's closed-form
+normals and curvatures at their plane points and the same UV map (one texture serves all levels).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from leafstudio.assets.asset import (
+    SCALARS,
+    MeshAsset,
+    UVMap,
+    mesh_asset,
+    oriented,
+    outline_distance,
+    surface_normals,
+)
+from leafstudio.assets.solid import boundary_edges
+from leafstudio.core.trianglemesh import TriangleMesh
+
+if TYPE_CHECKING:
+    from leafstudio.core.pipeline import Result
+
+BOUNDARY_WEIGHT = 100.0
+FEWEST_TRIANGLES = 8
+
+
+def decimate(points: np.ndarray, faces: np.ndarray, triangles: int) -> tuple[np.ndarray, ...]:
+    """(points, faces) decimated to about `triangles` triangles, the boundary kept."""
+    from leafstudio.extras import require
+
+    o3d = require("open3d", "levels of detail (--lod)")
+
+    mesh = o3d.geometry.TriangleMesh(
+        o3d.utility.Vector3dVector(points), o3d.utility.Vector3iVector(faces)
+    )
+    out = mesh.simplify_quadric_decimation(triangles, boundary_weight=BOUNDARY_WEIGHT)
+    out.remove_unreferenced_vertices()
+    return np.asarray(out.vertices, float), np.asarray(out.triangles, np.int64)
+
+
+def _level(asset: MeshAsset, result: Result | None, points: np.ndarray, faces: np.ndarray):
+    if result is None:
+        level = mesh_asset(TriangleMesh(points, faces))
+        return level.with_(faces=oriented(level.faces, level.points, level.normals))
+    from leafstudio.core.curvature import surface_curvatures
+
+    xy, z = result.frame.to_plane(points)
+    margin = np.zeros(len(points), bool)
+    margin[np.unique(boundary_edges(faces))] = True
+    normals = surface_normals(result, xy, margin)
+    data = {"height": z, **surface_curvatures(result.surface, xy, margin)}
+    return asset.with_(
+        points=points,
+        faces=oriented(faces, points, normals),
+        normals=normals,
+        uv=UVMap.around(result.polygon)(xy),
+        point_data={k: v for k, v in data.items() if k in SCALARS and k in asset.point_data},
+        margin_distance=np.where(margin, 0.0, outline_distance(result.polygon, xy)),
+    )
+
+
+def coarser_levels(asset: MeshAsset, result: Result | None, levels: int) -> list[MeshAsset]:
+    """`levels` coarser versions of the asset (see the module docstring); fewer if the mesh runs
+    out of triangles first."""
+    out = []
+    for level in range(1, levels + 1):
+        target = len(asset.faces) // 2**level
+        if target < FEWEST_TRIANGLES:
+            break
+        points, faces = decimate(asset.points, asset.faces, target)
+        out.append(_level(asset, result, points, faces))
+    return out
