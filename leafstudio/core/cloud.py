@@ -31,7 +31,7 @@ GUIDE_SMOOTHING = 3  # the guide contour is averaged over this many vertices eit
 MAX_BINS = 3000  # the mean outline's vertices, at most
 OUTLINE_STEP = 1 / 1000  # the mean outline's vertex spacing, as a fraction of the cloud's size
 SMOOTH_NOISE = 4.0  # the smoothing window's half width: this many noise σ ...
-SMOOTH_POINTS = 4  # ... and at least the arc this many input points take
+SMOOTH_POINTS = 8  # ... and at least the arc this many input points take
 
 
 @dataclass(frozen=True)
@@ -271,7 +271,9 @@ def point_order(cells: Cells, xy: np.ndarray) -> np.ndarray:
     return np.argsort(t, kind="stable")
 
 
-def mean_outline(cells: Cells, n_points: int, size: float) -> tuple[np.ndarray, np.ndarray, Noise]:
+def mean_outline(
+    cells: Cells, n_points: int, size: float, wider: float = 1.0
+) -> tuple[np.ndarray, np.ndarray, Noise]:
     """(k, 2) vertices and (k,) heights of the smooth outline through the cells' mean position,
     and the points' scatter about it.
 
@@ -281,7 +283,8 @@ def mean_outline(cells: Cells, n_points: int, size: float) -> tuple[np.ndarray, 
     count, to the bins' means (_local_fit): the noise averages out, the shape's curvature does
     not, and a bin holding only a few stray points weighs only as much as they do. σ is measured
     about the outline itself (_scatter), twice over, so that it and the outline depend on the
-    points, not on the order they came in.
+    points, not on the order they came in. `wider` widens the weights (sparse points whose
+    outline folds).
     """
     perimeter = cells.perimeter
     bins = int(np.clip(perimeter / (OUTLINE_STEP * size), 16, MAX_BINS))
@@ -297,7 +300,7 @@ def mean_outline(cells: Cells, n_points: int, size: float) -> tuple[np.ndarray, 
     least = 0.5 * SMOOTH_POINTS * perimeter / max(n_points, 1)
     noise = Noise(0.0, 0.0)
     for rounds in range(3):
-        half = max(SMOOTH_NOISE * max(noise.across, noise.height), least, 2 * width)
+        half = wider * max(SMOOTH_NOISE * max(noise.across, noise.height), least, 2 * width)
         curve = _local_fit(weight, sums, min(0.5 * half / width, bins / 8))
         if rounds < 2:
             noise = _scatter(cells, curve, cells.t / width)

@@ -68,7 +68,8 @@ def _spacing(points: np.ndarray) -> float:
 
 def _largest_polygon(geom: shapely.Geometry) -> Polygon | None:
     """The largest polygon in `geom`, without holes; None if there is none."""
-    polys = [g for g in getattr(geom, "geoms", [geom]) if isinstance(g, Polygon) and g.area > 0]
+    parts = shapely.get_parts(shapely.get_parts(geom))  # a collection may hold multipolygons
+    polys = [g for g in parts if isinstance(g, Polygon) and g.area > 0]
     if not polys:
         return None
     return Polygon(max(polys, key=lambda g: g.area).exterior)
@@ -227,7 +228,10 @@ def trace_outline(points: np.ndarray, z: np.ndarray | None = None) -> Outline:
         hull = _by_concave_hull(pts, spacing) if len(pts) <= HULL_MOST else None
         if hull is not None:
             return _checked(_hull_outline(pts, zs, hull, noise), scale)
-    polygon, heights, noise = mean_outline(cells, len(pts), scale)
+    for wider in (1, 2, 4):  # a fold where the points are sparse: smoothed more
+        polygon, heights, noise = mean_outline(cells, len(pts), scale, wider)
+        if Polygon(polygon).is_valid:
+            break
     if not Polygon(polygon).is_valid:
         poly = _largest_polygon(shapely.make_valid(Polygon(polygon)))
         if poly is None:
