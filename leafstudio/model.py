@@ -14,7 +14,8 @@ K_MAX = 64
 K_AUTO = "auto"  # Params.k: choose K by BIC (core/autok.py)
 GRID_MIN, GRID_MAX = 8, 2048
 SEED_MAX = 2**32 - 1  # numpy's legacy seeds and most tools take 32 bits
-COORDINATE_LIMIT = 1e100  # larger coordinates overflow the squared distances the pipeline takes
+COORDINATE_LIMIT = 1e300  # larger coordinates overflow a leaf's extent (the pipeline runs at unit
+SMALLEST_EXTENT = 1e-100  # size, core/units.py); a smaller leaf's curvatures (1/size²) overflow
 
 
 def _short(value: Any) -> str:
@@ -94,6 +95,12 @@ class Leaf:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "boundary", _as_points(self.boundary, "boundary"))
+        extent = float(np.ptp(self.boundary, axis=0).max()) if len(self.boundary) else 0.0
+        if 0.0 < extent < SMALLEST_EXTENT:
+            raise LeafError(
+                f"the boundary spans only {extent:.3g}; rescale the input (a leaf of at least "
+                f"{SMALLEST_EXTENT:g} is taken)"
+            )
         if self.veins is None:
             object.__setattr__(self, "veins", [])
         if isinstance(self.veins, (str, bytes, np.ndarray)) or not hasattr(self.veins, "__iter__"):

@@ -11,7 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
-from leafstudio.errors import LeafError
+from leafstudio.errors import LeafError, shorten
+from leafstudio.extras import require
+from leafstudio.inputs import check_input_file, parse_number, ply_xyz, read_ply, read_text
 
 SCAN_SUFFIXES = (".ply", ".pcd", ".xyz", ".csv", ".txt")
 MIN_SCAN_POINTS = 50
@@ -56,11 +58,13 @@ def _text_rows(path: Path, text: str) -> np.ndarray:
         if not fields:
             continue
         try:
-            values = [float(f) for f in fields[:3]]
+            values = [parse_number(f) for f in fields[:3]]
         except ValueError:
             if not rows:  # a header line
                 continue
-            raise LeafError(f"line {number}: not a number in {line.strip()!r}", str(path)) from None
+            raise LeafError(
+                f"line {number}: not a number in {shorten(line.strip())!r}", str(path)
+            ) from None
         if len(values) < 3:
             raise LeafError(f"line {number}: needs x, y and z, got {len(values)} values", str(path))
         rows.append(values)
@@ -69,7 +73,10 @@ def _text_rows(path: Path, text: str) -> np.ndarray:
 
 def _pcd_rows(path: Path) -> np.ndarray:
     """x, y, z of a PCD file (ASCII or binary) through open3d, which reports nothing on failure."""
-    import open3d as o3d
+    try:
+        o3d = require("open3d", "reading .pcd scans")
+    except LeafError as exc:
+        raise LeafError(exc.problem, str(path)) from None
 
     with o3d.utility.VerbosityContextManager(o3d.utility.VerbosityLevel.Error):
         cloud = o3d.io.read_point_cloud(str(path), format="pcd")
@@ -80,18 +87,7 @@ def _pcd_rows(path: Path) -> np.ndarray:
 
 
 def _ply_rows(path: Path) -> np.ndarray:
-    from plyfile import PlyData, PlyParseError
-
-    try:
-        ply = PlyData.read(str(path))
-    except (PlyParseError, ValueError, EOFError, OSError) as exc:
-        raise LeafError(f"not a readable PLY file ({exc})", str(path)) from None
-    if "vertex" not in ply:
-        raise LeafError("PLY file has no vertex element", str(path))
-    names = ply["vertex"].data.dtype.names or ()
-    if not {"x", "y", "z"} <= set(names):
-        raise LeafError("PLY vertices need x, y and z properties", str(path))
-    return np.column_stack([ply["vertex"][c] for c in "xyz"]).astype(float)
+    return ply_xyz(read_ply(path), path)[0]  # header checked against the file's size first
 
 
 def read_scan(path: str | os.PathLike) -> np.ndarray:
@@ -110,20 +106,13 @@ def read_scan(path: str | os.PathLike) -> np.ndarray:
             f"unknown scan type {suffix or '(none)'!r}; use one of {', '.join(SCAN_SUFFIXES)}",
             str(path),
         )
-    if not path.exists():
-        raise LeafError("no such file", str(path))
-    if path.is_dir():
-        raise LeafError("is a folder, not a file", str(path))
+    check_input_file(path)  # a regular file (not a FIFO or a device) of a bounded size
     if suffix == ".ply":
         points = _ply_rows(path)
     elif suffix == ".pcd":
         points = _pcd_rows(path)
     else:
-        try:
-            text = path.read_text(encoding="utf-8")
-        except UnicodeDecodeError:
-            raise LeafError("is not a text file", str(path)) from None
-        points = _text_rows(path, text)
+        points = _text_rows(path, read_text(path))
     if len(points) == 0:
         raise LeafError("holds no points", str(path))
     if not np.all(np.isfinite(points)):

@@ -214,8 +214,11 @@ def test_leaf_checks_its_inputs():
         Leaf(None)
     with pytest.raises(LeafError, match="points"):
         Leaf([["a", "b", "c"]] * 3)
+    assert Leaf(np.eye(3) * 1e200).boundary.max() == 1e200  # the pipeline runs at unit size
     with pytest.raises(LeafError, match="rescale"):
-        Leaf(np.eye(3) * 1e200)
+        Leaf(np.eye(3) * 1e305)  # its extent would overflow
+    with pytest.raises(LeafError, match="spans only 1e-300; rescale"):
+        Leaf(np.eye(3) * 1e-300)  # its curvatures would overflow
 
 
 # --- the command line: one line, exit 2 ----------------------------------------------------------

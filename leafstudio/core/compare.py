@@ -13,14 +13,16 @@ import time
 from typing import Any
 
 import numpy as np
-import open3d as o3d
 import shapely
 
 from leafstudio.core.analysis import table_metrics, triangles_of
 from leafstudio.core.plane import Frame
 from leafstudio.core.trianglemesh import MeshLike, TriangleMesh
 from leafstudio.errors import LeafError
+from leafstudio.extras import LazyModule
 from leafstudio.model import Leaf, Params
+
+o3d = LazyModule("open3d", "the screened Poisson comparison")  # an extra: leafstudio[open3d]
 
 POISSON_DEPTH = 8
 NORMAL_NEIGHBOURS = 16

@@ -248,7 +248,9 @@ def ball_pivoting(
     points: np.ndarray, normals: np.ndarray, spacing: float, factor: float
 ) -> np.ndarray:
     """open3d ball pivoting over (n, 3) points with (n, 3) normals; returns (m, 3) triangles."""
-    import open3d as o3d  # here, not at the top: it takes seconds and 250 MB to import
+    from leafstudio.extras import require
+
+    o3d = require("open3d", "the ball-pivoting mesher (mesher bpa)")  # seconds and 250 MB
 
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     cloud.normals = o3d.utility.Vector3dVector(normals)
