@@ -1,7 +1,8 @@
 """The parameter panel: one labelled control per Params field, each with a plain-words tooltip.
 
 Every change emits `changed(Params)`, throttled so that a slider drag does not flood the worker:
-the first value goes out at once and the last value always follows.
+the first value goes out at once and the last value always follows. `released` marks the end of
+a slider drag (one undo step per drag: `is_dragging()` is True until then).
 """
 
 from __future__ import annotations
@@ -59,6 +60,7 @@ class ParamPanel(QWidget):
     """Labelled sliders, spin boxes and choices for Params; `params()` reads them all."""
 
     changed = Signal(object)  # Params
+    released = Signal()  # a slider was let go
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -121,11 +123,17 @@ class ParamPanel(QWidget):
             self.taper,
         ):
             slider.valueChanged.connect(self._on_edit)
+            slider.sliderReleased.connect(self.released)
         self.seed.valueChanged.connect(self._on_edit)
         self.mesher.currentTextChanged.connect(self._on_edit)
         self.auto_k.toggled.connect(self._on_edit)
         self.refine.toggled.connect(self._on_edit)
         self.set_params(Params())
+
+    def is_dragging(self) -> bool:
+        """True while a slider is held down."""
+        sliders = (self.k, self.grid, self.mpu_tolerance, self.samples, self.radius_factor)
+        return any(s.isSliderDown() for s in (*sliders, self.taper))
 
     def params(self) -> Params:
         """The Params the controls show."""

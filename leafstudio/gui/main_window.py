@@ -1,15 +1,16 @@
-"""The main window: menus, docks (parameters, layers, sketch, measurements), status bar, undo.
+"""The main window: menus, docks (parameters, layers, sketch, measurements), status bar.
 
-The document is a Leaf, possibly drawn by a Sketch, plus Params. Every edit asks the worker for a
-new Result; results and failures come back by signal. A failure leaves the last good result on
-screen and says why; a file that cannot be opened or reconstructed leaves the current document.
+The window is a view of a Session (session.py, no Qt): the document, its parameters, results and
+undo history live there. The window forwards edits to it, hands it the worker's reports, and
+draws what it says. A failure leaves the last good result on screen and says why; a file that
+cannot be opened or reconstructed leaves the current document.
 """
 
 from __future__ import annotations
 
 import json
 import time
-from dataclasses import dataclass
+from dataclasses import replace
 from pathlib import Path
 
 from PySide6.QtCore import QSettings, Qt, QTimer, Signal
@@ -19,8 +20,6 @@ from PySide6.QtGui import (
     QDragEnterEvent,
     QDropEvent,
     QKeySequence,
-    QUndoCommand,
-    QUndoStack,
 )
 from PySide6.QtWidgets import (
     QCheckBox,
@@ -53,11 +52,11 @@ from leafstudio.gui.scans import (
     looks_like_scan,
     poisson_piece,
 )
+from leafstudio.gui.session import Framing, History, Session, State, describe, loaded_crossing
 from leafstudio.gui.sketch import SketchEditor
 from leafstudio.gui.sketch_model import Sketch
-from leafstudio.gui.tasks import TaskWorker
 from leafstudio.gui.viewport import CAMERAS, Viewport
-from leafstudio.gui.worker import Outcome, PipelineWorker
+from leafstudio.gui.worker import PIPELINE, Outcome, Worker
 from leafstudio.io import (
     LEAF_SUFFIXES,
     MESH_SUFFIXES,
@@ -83,27 +82,14 @@ ABOUT = (
 )
 
 
-@dataclass(frozen=True, eq=False)
-class Doc:
-    """What is being edited: a leaf (None while a sketch has too few points) and its sketch
-    (None for a leaf read from points, until it is first edited)."""
+def _task(job, token: object = None):
+    """A side job for the worker: `job(*args)`, returning (token, value) so that the answer
+    names what it belongs to (`token` None: the first argument)."""
 
-    leaf: Leaf | None
-    sketch: Sketch | None = None
+    def run(context: object, *args: object) -> tuple[object, object]:
+        return (args[0] if token is None else token), job(*args)
 
-
-class DocCommand(QUndoCommand):
-    """One undoable edit: swaps the window's document between two snapshots."""
-
-    def __init__(self, window: MainWindow, before: Doc, after: Doc, text: str) -> None:
-        super().__init__(text)
-        self._window, self._before, self._after = window, before, after
-
-    def redo(self) -> None:
-        self._window.apply_doc(self._after)
-
-    def undo(self) -> None:
-        self._window.apply_doc(self._before)
+    return run
 
 
 def _file_filter() -> str:
@@ -130,28 +116,14 @@ class MainWindow(QMainWindow):
         self.setAcceptDrops(True)
         self.resize(1500, 920)
 
-        self.doc = Doc(None)
-        self.path: str | None = None
-        self.result = None  # the last good Result
-        self.outcome: Outcome | None = None
         self.last_error_box: QMessageBox | None = None
-        self._shown_id = 0
-        self._saved_params: Params | None = None
-        self._edit_base: Doc | None = None
-        self._derived: tuple[Leaf, Sketch] | None = None
-        self._fallback: tuple[Doc, str | None, Params, int] | None = None
-        self._fit_sketch = False
-        self._title = APP_NAME
-        self.scan: ScanData | None = None  # the open scan, whose leaf is being edited
-        self._fallback_scan: ScanData | None = None
-        self._scan_due: str | None = None  # the scan being read; another open supersedes it
-        self.fidelity: tuple[int, list] | None = None  # request id, the panel's scan sections
-        self._measured_id = 0
+        self._scan_due = 0  # the job reading the scan to open; another open supersedes it
+        self._scan_shown: ScanData | None = None
         self._poisson_leaf: Leaf | None = None  # the leaf of the Poisson surface drawn or due
 
-        self.undo_stack = QUndoStack(self)
-        self.worker = PipelineWorker(self)
-        self.tasks = TaskWorker(self)
+        self.worker = Worker(self)
+        self.tasks = self.worker  # side tasks run on the same worker (their own lane)
+        self.session = Session(self.worker.submit_pipeline)
         self.viewport = Viewport(self)
         self.setCentralWidget(self.viewport)
         self.panel = ParamPanel()
@@ -164,20 +136,26 @@ class MainWindow(QMainWindow):
         self.statusBar().addWidget(self.status_text, 1)
 
         self.worker.stage_started.connect(self._on_stage)
-        self.worker.finished.connect(self._on_finished)
-        self.worker.measured.connect(self._on_measured)
+        self.worker.yielded.connect(self._on_yielded)
+        self.worker.done.connect(self._on_done)
+        self.worker.failed.connect(self._on_failed)
         self._stage_timer = QTimer(self)
         self._stage_timer.setSingleShot(True)
         self._stage_timer.setInterval(STAGE_LABEL_MS)
         self._stage_timer.timeout.connect(self._show_stage)
         self._stage = ""
-        self.worker.failed.connect(self._on_failed)
-        self.tasks.done.connect(self._on_task_done)
-        self.tasks.failed.connect(self._on_task_failed)
+        session = self.session
+        session.state_changed.connect(self._on_state)
+        session.result_shown.connect(self._on_result)
+        session.failed.connect(self._on_session_failed)
+        session.cleared.connect(self._on_cleared)
+        session.sketch_shown.connect(self.editor.set_sketch)
+        session.crossing.connect(self.editor.view.set_crossings)
+        session.history.changed.connect(self._on_history)
         self.panel.changed.connect(self._on_params)
-        self.editor.preview.connect(self._on_sketch_preview)
-        self.editor.committed.connect(self._on_sketch_committed)
-        self.undo_stack.cleanChanged.connect(lambda _: self._update_title())
+        self.panel.released.connect(self._on_params_released)
+        self.editor.preview.connect(session.preview_sketch)
+        self.editor.committed.connect(lambda _b, after, text: session.commit_sketch(after, text))
         self._restore_settings()
 
     # --- layout --------------------------------------------------------------------------------
@@ -277,11 +255,11 @@ class MainWindow(QMainWindow):
         self._action(files, "&Quit", self.close, keys.Quit)
 
         edit = bar.addMenu("&Edit")
-        self.undo_action = self.undo_stack.createUndoAction(self, "&Undo")
-        self.undo_action.setShortcut(QKeySequence(keys.Undo))
-        self.redo_action = self.undo_stack.createRedoAction(self, "&Redo")
-        self.redo_action.setShortcut(QKeySequence(keys.Redo))
-        edit.addActions([self.undo_action, self.redo_action])
+        self.undo_action = self._action(edit, "&Undo", self.session.undo, keys.Undo)
+        self.redo_action = self._action(edit, "&Redo", self.session.redo)
+        redo_keys = [QKeySequence(keys.Redo), QKeySequence("Ctrl+Shift+Z"), QKeySequence("Ctrl+Y")]
+        self.redo_action.setShortcuts(list(dict.fromkeys(k for k in redo_keys if not k.isEmpty())))
+        self._on_history()
 
         view = bar.addMenu("&View")
         for i, preset in enumerate(CAMERAS, start=1):
@@ -325,6 +303,16 @@ class MainWindow(QMainWindow):
         self.edges.setChecked(str(s.value("view/edges", "false")).lower() == "true")
         self.coloring.setCurrentIndex(max(0, self.coloring.findData(s.value("view/coloring"))))
         self.panel.set_params(self.saved_params() or Params())
+        self.session.state = replace(self.session.state, params=self.panel.params())
+
+    def _on_history(self) -> None:
+        """Undo and redo name what they would do, and are off when there is nothing to do."""
+        history = self.session.history
+        self.undo_action.setEnabled(history.can_undo())
+        self.undo_action.setText(f"&Undo {history.undo_text()}".rstrip())
+        self.redo_action.setEnabled(history.can_redo())
+        self.redo_action.setText(f"&Redo {history.redo_text()}".rstrip())
+        self._update_title()
 
     def saved_params(self) -> Params | None:
         """The parameters remembered from the last run, if any and valid."""
@@ -365,14 +353,45 @@ class MainWindow(QMainWindow):
         self.recent_menu.setEnabled(bool(self.recent_files()))
 
     # --- documents -----------------------------------------------------------------------------
+    # The document, parameters, results and history live in self.session (session.py, no Qt);
+    # these properties read it for the window's older callers.
+    @property
+    def doc(self) -> State:
+        """The current document (leaf, sketch, params, path, title, scan)."""
+        return self.session.state
+
+    @property
+    def path(self) -> str | None:
+        return self.session.state.path
+
+    @property
+    def result(self):
+        """The last good Result on screen, or None."""
+        return self.session.result
+
+    @property
+    def outcome(self) -> Outcome | None:
+        return self.session.shown.outcome
+
+    @property
+    def scan(self) -> ScanData | None:
+        return self.session.state.scan
+
+    @property
+    def fidelity(self) -> tuple[int, list] | None:
+        return self.session.shown.fidelity
+
+    @property
+    def undo_stack(self) -> History:
+        return self.session.history
+
     def is_modified(self) -> bool:
-        """True when there are edits not saved: sketch edits, or params of a saved project."""
-        if not self.undo_stack.isClean():
-            return True
-        return self.path is not None and self.panel.params() != self._saved_params
+        """True when there are edits (sketch or parameters) not saved."""
+        return self.session.is_modified()
 
     def _update_title(self) -> None:
-        name = Path(self.path).name if self.path else self._title
+        state = self.session.state
+        name = Path(state.path).name if state.path else state.title
         self.setWindowTitle(f"{name}[*] — {APP_NAME}")
         self.setWindowModified(self.is_modified())
 
@@ -392,39 +411,13 @@ class MainWindow(QMainWindow):
             return self.save()
         return answer == QMessageBox.StandardButton.Discard
 
-    def _switch(
-        self,
-        doc: Doc,
-        path: str | None,
-        title: str,
-        params: Params | None,
-        scan: ScanData | None = None,
-    ) -> None:
-        """Make `doc` (extracted from `scan`, if given) the document, keeping the current one to
-        fall back to if it fails."""
-        self._fallback, self._scan_due = None, None
-        if doc.leaf is not None and self.doc.leaf is not None and self.result is not None:
-            self._fallback = (self.doc, self.path, self.panel.params(), 0)
-            self._fallback_scan = self.scan
-        self._set_scan(scan)
-        self.doc, self.path, self._title = doc, path, title
-        self._derived, self._edit_base = None, None
-        if params is not None:
-            self.panel.set_params(params)
-        self._saved_params = self.panel.params()
-        self._fit_sketch = True
-        self.editor.set_sketch(doc.sketch or Sketch(), fit=doc.sketch is not None)
-        request = self._request()
-        if self._fallback is not None:
-            self._fallback = (*self._fallback[:3], request)
-        self.undo_stack.clear()
-        self._update_title()
-
     def open_demo(self, name: str) -> None:
         """Open a built-in leaf with the paper's K."""
         if self._confirm_discard():
-            params = self.panel.params().with_(k=PAPER_K.get(name, self.panel.params().k))
-            self._switch(Doc(demo(name)), None, f"{name} demo", params)
+            self._scan_due = None
+            params = self.panel.params()
+            params = params.with_(k=PAPER_K.get(name, params.k))
+            self.session.open_document(demo(name), None, f"{name} demo", params=params)
 
     def open_path(self, path: str) -> bool:
         """Open a leaf file or project; on failure show why and keep the current leaf."""
@@ -445,13 +438,23 @@ class MainWindow(QMainWindow):
                     raise
                 if looks_like_scan(leaf):
                     return self.open_scan(path)
+            crossing = loaded_crossing(leaf) if sketch is None else None
+            if crossing is not None:
+                x, y, z = crossing
+                raise LeafError(
+                    f"the boundary crosses itself near ({x:.4g}, {y:.4g}, {z:.4g}); its points "
+                    "must go once around the leaf",
+                    path,
+                )
         except LeafError as exc:
             self.show_error("Cannot open the file", str(exc))
             return False
         except OSError as exc:
             self.show_error("Cannot open the file", f"{path}: {exc.strerror or exc}")
             return False
-        self._switch(Doc(leaf, sketch), path, Path(path).name, params)
+        self._scan_due = None
+        params = params or self.panel.params()
+        self.session.open_document(leaf, sketch, Path(path).name, params=params, path=path)
         self._add_recent(path)
         return True
 
@@ -467,8 +470,7 @@ class MainWindow(QMainWindow):
         message and keep the current leaf. True: the scan is being read."""
         self.status_text.setStyleSheet("")
         self.status_text.setText(f"Reading the scan {Path(path).name} and extracting its leaf…")
-        self._scan_due = path
-        self.tasks.submit("scan", path, load_scan, path)
+        self._scan_due = self.worker.submit("scan", _task(load_scan), path)
         return True
 
     def open_scan_dialog(self) -> None:
@@ -485,16 +487,12 @@ class MainWindow(QMainWindow):
         start = str(Path(self.path).parent) if self.path else str(Path.home())
         return QFileDialog.getOpenFileName(self, title, start, filters)[0]
 
-    def _set_scan(self, scan: ScanData | None) -> None:
-        self.scan, self.fidelity = scan, None
-        self.viewport.set_layer("scan", scan.pieces if scan is not None else [])
-
     def new_sketch(self) -> None:
         """File > New sketch: an empty sketch to draw a leaf in."""
         if not self._confirm_discard():
             return
-        self._switch(Doc(None, Sketch()), None, "new sketch", None)
-        self.editor.set_sketch(Sketch(), fit=True)
+        self._scan_due = None
+        self.session.open_document(None, Sketch(), "new sketch", params=self.panel.params())
         self.sketch_dock.show()
         self.sketch_dock.raise_()
 
@@ -520,20 +518,18 @@ class MainWindow(QMainWindow):
 
     def save_to(self, path: str) -> bool:
         """Write the project (leaf, params, sketch) to `path` atomically."""
-        if self.doc.leaf is None:
+        state = self.session.state
+        if state.leaf is None:
             self.show_error("Nothing to save", "The sketch needs at least 3 boundary points.")
             return False
-        params = self.panel.params()
-        sketch = self.doc.sketch.to_dict() if self.doc.sketch is not None else None
+        sketch = state.sketch.to_dict() if state.sketch is not None else None
         try:
-            save_leaf(self.doc.leaf, path, params, sketch)
+            save_leaf(state.leaf, path, state.params, sketch)
         except (LeafError, OSError) as exc:
             self.show_error("Cannot save", str(exc))
             return False
-        self.path, self._saved_params = path, params
-        self.undo_stack.setClean()
+        self.session.saved(path)
         self._add_recent(path)
-        self._update_title()
         return True
 
     def export_mesh(self, path: str) -> bool:
@@ -577,34 +573,11 @@ class MainWindow(QMainWindow):
         self.last_error_box = box
 
     # --- edits ---------------------------------------------------------------------------------
-    def apply_doc(self, doc: Doc) -> None:
-        """Show `doc` (from an undo command) and reconstruct it unless it is already current."""
-        current = doc is self.doc
-        self.doc = doc
-        shown = doc.sketch
-        if shown is None and self._derived is not None and self._derived[0] is doc.leaf:
-            shown = self._derived[1]
-        if shown is not None and shown is not self.editor.view.sketch:
-            self.editor.set_sketch(shown)
-        if not current:
-            self._request()
-        self._update_title()
-
-    def _on_sketch_preview(self, sketch: Sketch) -> None:
-        if self._edit_base is None:
-            self._edit_base = self.doc
-        self.doc = Doc(sketch.to_leaf(), sketch)
-        self._request(interrupt=False)
-
-    def _on_sketch_committed(self, before: Sketch, after: Sketch, text: str) -> None:
-        base = self._edit_base or self.doc
-        self._edit_base = None
-        doc = self.doc if self.doc.sketch is after else Doc(after.to_leaf(), after)
-        self.undo_stack.push(DocCommand(self, base, doc, text))
-
     def _on_params(self, params: Params) -> None:
-        self._request()
-        self._update_title()
+        self.session.set_params(params, final=not self.panel.is_dragging())
+
+    def _on_params_released(self) -> None:
+        self.session.set_params(self.panel.params(), final=True)
 
     def _on_layer_item(self, item: QListWidgetItem) -> None:
         key = item.data(Qt.ItemDataRole.UserRole)
@@ -620,98 +593,109 @@ class MainWindow(QMainWindow):
             return
         if self.viewport.visible["poisson"] and self.result is not None:
             self._poisson_leaf = leaf
-            self.tasks.submit("poisson", leaf, poisson_piece, self.result)
+            self.worker.submit("poisson", _task(poisson_piece, token=leaf), self.result)
         else:
             self._poisson_leaf = None
             self.viewport.set_layer("poisson", [])
 
-    def _request(self, interrupt: bool = True) -> int:
-        if self.doc.leaf is None:
-            self.viewport.clear()
-            if self.scan is not None:
-                self.viewport.set_layer("scan", self.scan.pieces)
-            self.measurements.clear()
-            self.result = None
-            self.status_text.setText("Add at least 3 boundary points to see the leaf.")
-            return 0
-        return self.worker.submit(self.doc.leaf, self.panel.params(), interrupt)
+    # --- session reports -----------------------------------------------------------------------
+    def _on_state(self, state: State, reason: str) -> None:
+        if reason in ("document", "undo", "fallback"):
+            self.panel.set_params(state.params)
+        if state.scan is not self._scan_shown:
+            self._scan_shown = state.scan
+            self.viewport.set_layer("scan", state.scan.pieces if state.scan is not None else [])
+        self._update_title()
+
+    def _on_cleared(self) -> None:
+        self.viewport.clear()
+        if self.scan is not None:
+            self.viewport.set_layer("scan", self.scan.pieces)
+        self.measurements.clear()
+        self.status_text.setStyleSheet("")
+        self.status_text.setText(self.session.message)
+
+    def _on_result(self, outcome: Outcome, framing: Framing | None) -> None:
+        result = outcome.result
+        start = time.perf_counter()
+        frame = self.session.view_frame() or result.frame
+        how = None if framing is None else ("reset" if framing.reset else "refit")
+        bounds = framing.bounds if framing is not None else None
+        self.viewport.show_layers(outcome.layers, frame, bounds, how)
+        outcome.timings["draw"] = time.perf_counter() - start
+        self._stage_timer.stop()
+        self._show_timings(outcome)
+        self.editor.view.set_crossings(self.session.crossings)
+        if self.scan is not None:
+            rid = outcome.request.id
+            job = _task(fidelity_sections, token=rid)
+            self.worker.submit("fidelity", job, result.triangle_mesh, self.scan, result.length)
+        self._update_poisson()
+        self.result_shown.emit(outcome)
+
+    def _on_session_failed(self, message: str, fell_back: bool) -> None:
+        self.status_text.setStyleSheet("color: #b00020")
+        self.status_text.setText(f"Failed: {message}")
+        self.viewport.set_message(message)
+        self.editor.view.set_crossings(self.session.crossings)
+        if fell_back:
+            self.show_error("Cannot reconstruct this leaf", message)
+        self.failure_shown.emit(message)
 
     # --- worker reports ------------------------------------------------------------------------
-    def _on_stage(self, request_id: int, stage: str) -> None:
-        if request_id == self.worker.last_id:
+    def _on_stage(self, kind: str, request_id: int, stage: str) -> None:
+        if kind == PIPELINE and request_id == self.session.last_id:
             self._stage = stage
             if not self._stage_timer.isActive():
                 self._stage_timer.start()
 
     def _show_stage(self) -> None:
-        if not self.worker.is_idle():
+        if not self.worker.is_idle(PIPELINE):
             self.status_text.setStyleSheet("")
             self.status_text.setText(f"Running: {self._stage}…")
 
-    def _on_measured(self, request_id: int, seconds: float) -> None:
-        if request_id != self._shown_id or self.result is None:
-            return
-        self._measured_id = request_id
-        self.status_text.setText(
-            self.status_text.text() + f" · measurements {1000 * seconds:.0f} ms"
-        )
-        self._show_measurements()
+    def _on_yielded(self, kind: str, job_id: int, value: object) -> None:
+        if kind == PIPELINE:
+            self.session.accept_result(value)
 
-    def _on_finished(self, outcome: Outcome) -> None:
-        if outcome.request.id < self._shown_id:
+    def _on_done(self, kind: str, job_id: int, value: object) -> None:
+        if kind == PIPELINE:
+            if self.session.accept_measured(job_id) and self.result is not None:
+                self.status_text.setText(
+                    self.status_text.text() + f" · measurements {1000 * value:.0f} ms"
+                )
+                self._show_measurements()
             return
-        self._shown_id = outcome.request.id
-        result = outcome.result
-        start = time.perf_counter()
-        self.viewport.show_layers(outcome.layers, result.frame.normal, result.frame.u)
-        outcome.timings["draw"] = time.perf_counter() - start
-        self.result, self.outcome = result, outcome
-        if self._fallback is not None and outcome.request.id >= self._fallback[3]:
-            self._fallback = None
-        if self.doc.sketch is None and result.leaf is self.doc.leaf:
-            if self._derived is None or self._derived[0] is not result.leaf:
-                self._derived = (result.leaf, Sketch.from_result(result))
-                self.editor.set_sketch(self._derived[1], fit=True)
-        elif self._fit_sketch:
-            self.editor.view.fit()
-        self._fit_sketch = False
-        self._stage_timer.stop()
-        self._show_timings(outcome)
-        if self.scan is not None:
-            self.tasks.submit(
-                "fidelity",
-                outcome.request.id,
-                fidelity_sections,
-                result.triangle_mesh,
-                self.scan,
-                result.length,
+        token, value = value
+        if kind == "scan" and job_id == self._scan_due:
+            self._scan_due = None
+            leaf = value.extraction.leaf
+            name, params = Path(token).name, self.panel.params()
+            self.session.open_document(leaf, None, name, params=params, path=token, scan=value)
+            self._add_recent(token)
+        elif kind == "fidelity" and self.session.accept_fidelity(token, value):
+            self._show_measurements()
+        elif kind == "poisson" and token is self._poisson_leaf:
+            self.viewport.set_layer("poisson", [value])
+
+    def _on_failed(self, kind: str, job_id: int, exc: BaseException) -> None:
+        message = describe(exc)
+        if kind == PIPELINE:
+            self.session.accept_failure(job_id, exc)
+        elif kind == "scan" and job_id == self._scan_due:
+            self._scan_due = None
+            self.status_text.setStyleSheet("color: #b00020")
+            self.status_text.setText(f"Failed: {message}")
+            self.show_error("Cannot open the scan", message)
+            self.failure_shown.emit(message)
+        elif kind == "fidelity" and self.scan is not None:
+            self.session.accept_fidelity(
+                self.session.shown_id, [("Scan → mesh distance", [("Failed", message)])]
             )
-        self._update_poisson()
-        self.result_shown.emit(outcome)
-
-    def _on_failed(self, request_id: int, message: str) -> None:
-        if request_id < self._shown_id:
-            return
-        self.status_text.setStyleSheet("color: #b00020")
-        self.status_text.setText(f"Failed: {message}")
-        self.viewport.set_message(message)
-        if (
-            self._fallback is not None
-            and request_id >= self._fallback[3]
-            and self.result is not None
-        ):
-            doc, path, params, _ = self._fallback
-            self._fallback = None
-            self.doc, self.path = doc, path
-            self.panel.set_params(params)
-            self._saved_params = params
-            self._derived = None
-            self._set_scan(self._fallback_scan)
-            self.editor.set_sketch(doc.sketch or Sketch.from_result(self.result), fit=True)
-            self._title = Path(path).name if path else self._title
-            self._update_title()
-            self.show_error("Cannot reconstruct this leaf", message)
-        self.failure_shown.emit(message)
+            self._show_measurements()
+        elif kind == "poisson":
+            self._poisson_leaf = None
+            self.status_text.setText(self.status_text.text() + f" — Poisson failed: {message}")
 
     def _show_timings(self, outcome: Outcome) -> None:
         ms = [f"{name} {1000 * t:.0f} ms" for name, t in outcome.timings.items()]
@@ -725,51 +709,27 @@ class MainWindow(QMainWindow):
         for note in outcome.result.warnings:
             self.status_text.setText(self.status_text.text() + f" — note: {note}")
 
-    def _on_task_done(self, kind: str, token: object, value: object) -> None:
-        if kind == "scan" and token == self._scan_due:
-            self._switch(Doc(value.extraction.leaf), token, Path(token).name, None, scan=value)
-            self._add_recent(token)
-        elif kind == "fidelity" and token == self._shown_id and self.scan is not None:
-            self.fidelity = (token, value)
-            self._show_measurements()
-        elif kind == "poisson" and token is self._poisson_leaf:
-            self.viewport.set_layer("poisson", [value])
-
-    def _on_task_failed(self, kind: str, token: object, message: str) -> None:
-        if kind == "scan" and token == self._scan_due:
-            self._scan_due = None
-            self.status_text.setStyleSheet("color: #b00020")
-            self.status_text.setText(f"Failed: {message}")
-            self.show_error("Cannot open the scan", message)
-            self.failure_shown.emit(message)
-        elif kind == "fidelity" and token == self._shown_id and self.scan is not None:
-            self.fidelity = (token, [("Scan → mesh distance", [("Failed", message)])])
-            self._show_measurements()
-        elif kind == "poisson" and token is self._poisson_leaf:
-            self._poisson_leaf = None
-            self.status_text.setText(self.status_text.text() + f" — Poisson failed: {message}")
-
     def _show_measurements(self) -> None:
         """Fill the panel once the shown result is measured; with a scan open, its distances
         follow (measurements_shown fires when they are in)."""
-        result = self.result
-        if result is None or self._measured_id != self._shown_id:
+        result, shown = self.result, self.session.shown
+        if result is None or shown.measured_id != self.session.shown_id:
             return
         sections = measurement_rows(result)
-        waiting = self.scan is not None and (
-            self.fidelity is None or self.fidelity[0] != self._shown_id
-        )
+        fidelity = shown.fidelity
+        waiting = self.scan is not None and (fidelity is None or fidelity[0] != shown.measured_id)
         if waiting:  # the scan's sections first: with a scan open, they are what matters
             sections.insert(0, ("Scan → mesh distance", [("Computing…", "")]))
-        elif self.fidelity is not None:
-            sections[:0] = self.fidelity[1]
+        elif fidelity is not None:
+            sections[:0] = fidelity[1]
+        self.measurements.setUpdatesEnabled(False)
         self.measurements.clear()
         for title, rows in sections:
             section = QTreeWidgetItem([title, ""])
-            for label, value in rows:
-                QTreeWidgetItem(section, [label, value])
+            section.addChildren([QTreeWidgetItem([label, value]) for label, value in rows])
             self.measurements.addTopLevelItem(section)
             section.setExpanded(True)
+        self.measurements.setUpdatesEnabled(True)
         if not waiting:
             self.measurements_shown.emit()
 
@@ -790,6 +750,5 @@ class MainWindow(QMainWindow):
             return
         self._store_settings()
         self.worker.shutdown()
-        self.tasks.shutdown()
         self.viewport.close_plotter()
         event.accept()

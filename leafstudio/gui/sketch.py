@@ -1,9 +1,15 @@
 """The 2D sketch editor on the leaf plane: click, drag and delete control points of the boundary
 (a closed spline) and of each vein (open splines), and set each vein point's height.
 
+Drawing follows the hand: a click adds a point to the chosen curve (a point of that curve is
+dragged); selecting a point of another curve takes the Select tool, or Ctrl or Shift. A new vein
+exists from its first click, which snaps onto a vein nearby (a branch). The view moves only when
+asked (Fit, the wheel) or when a document opens. With Mirror on, each edit is reflected about
+the midrib. Where the boundary crosses itself it is marked in red.
+
 The editor never changes the document itself: it emits `preview(sketch)` while a point is dragged
-(so the 3D view follows) and `committed(before, after, text)` when an edit is done; the main window
-turns the latter into an undoable command and hands the sketch back with `set_sketch`.
+(so the 3D view follows) and `committed(before, after, text)` when an edit is done; the session
+turns the latter into an undo step and hands the sketch back with `set_sketch` on undo.
 """
 
 from __future__ import annotations
@@ -17,11 +23,13 @@ from PySide6.QtGui import (
     QMouseEvent,
     QPainter,
     QPainterPath,
+    QPalette,
     QPen,
     QResizeEvent,
     QWheelEvent,
 )
 from PySide6.QtWidgets import (
+    QCheckBox,
     QComboBox,
     QDoubleSpinBox,
     QGraphicsEllipseItem,
@@ -39,8 +47,12 @@ from leafstudio.gui.layers import BOUNDARY_COLOR, vein_color
 from leafstudio.gui.sketch_model import BOUNDARY, Sketch
 
 HIT_PIXELS = 9.0
+SNAP_PIXELS = 14.0  # a new vein's first click this close to a vein branches from it
 POINT_PIXELS = 9.0
+FIT_MARGIN = 0.1  # Fit leaves this share of the sketch's size around it
 EMPTY_VIEW = (-0.1, -0.5, 1.2, 1.0)  # x, y, width, height of the plane shown for a new sketch
+CROSSING_COLOR = "#e00000"
+SELECT_MODIFIERS = Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier
 
 
 def _pen(color: str, width: float) -> QPen:
@@ -62,21 +74,35 @@ class SketchView(QGraphicsView):
         self.setRenderHint(QPainter.RenderHint.Antialiasing)
         self.setTransformationAnchor(QGraphicsView.ViewportAnchor.AnchorUnderMouse)
         self.setFocusPolicy(Qt.FocusPolicy.StrongFocus)
-        self.setBackgroundBrush(QColor("#fbfbf7"))
         self.sketch = Sketch()
-        self.active = BOUNDARY
+        self.active = BOUNDARY  # a vein index; len(sketch.veins): a new vein, made by a click
+        self.select_tool = False  # True: a click selects any point instead of adding one
+        self.mirror = False
+        self.crossings = np.zeros((0, 2))
         self.selected: tuple[int, int] | None = None
         self._drag: tuple[int, int] | None = None
         self._before: Sketch | None = None
         self._moved = False
-        self._auto_fit = True  # refit on resize until the user zooms
+        self._auto_fit = True  # keep the fitted area in view on resize until the user zooms
+        self._fitted = EMPTY_VIEW
         self.setSceneRect(-1e3, -1e3, 2e3, 2e3)
+        self.apply_palette()
+
+    def apply_palette(self) -> None:
+        """The canvas follows the palette (light or dark)."""
+        self.setBackgroundBrush(self.palette().color(QPalette.ColorRole.Base))
+
+    def changeEvent(self, event) -> None:
+        super().changeEvent(event)
+        if event.type() == event.Type.PaletteChange:
+            self.apply_palette()
+            self._redraw()
 
     # --- model ---------------------------------------------------------------------------------
     def set_sketch(self, sketch: Sketch, fit: bool = False) -> None:
         """Show `sketch`; `fit` zooms to it (a new document)."""
         self.sketch = sketch
-        if self.active >= len(sketch.veins):
+        if self.active > len(sketch.veins):
             self.active = BOUNDARY
         if self.selected is not None and not self._valid(self.selected):
             self.selected = None
@@ -92,21 +118,34 @@ class SketchView(QGraphicsView):
         return 0 <= index < len(self.sketch.control(curve))
 
     def fit(self) -> None:
-        """Zoom so that the whole sketch (or a default area when empty) fills the view."""
-        points = np.vstack([self.sketch.boundary, *(v[:, :2] for v in self.sketch.veins)])
+        """Zoom so that the whole leaf (its curves, not only the points) fills the view with a
+        margin; a default area when the sketch is empty."""
+        sketch = self.sketch
+        curves = [sketch.boundary, sketch.boundary_curve()]
+        curves += [sketch.vein_curve(i)[:, :2] for i in range(len(sketch.veins))]
+        points = np.vstack([c.reshape(-1, 2) for c in curves])
         if len(points) >= 2 and np.ptp(points, axis=0).max() > 0:
             lo, hi = points.min(axis=0), points.max(axis=0)
-            pad = 0.08 * float((hi - lo).max())
+            pad = FIT_MARGIN * float((hi - lo).max())
             x, y, w, h = lo[0] - pad, -hi[1] - pad, hi[0] - lo[0] + 2 * pad, hi[1] - lo[1] + 2 * pad
         else:
             x, y, w, h = EMPTY_VIEW
+        self._fitted = (x, y, w, h)
         self.fitInView(x, y, w, h, Qt.AspectRatioMode.KeepAspectRatio)
         self._auto_fit = True
 
     def resizeEvent(self, event: QResizeEvent) -> None:
         super().resizeEvent(event)
-        if self._auto_fit:
-            self.fit()
+        if self._auto_fit:  # the area fitted last stays in view; points added since do not move it
+            self.fitInView(*self._fitted, Qt.AspectRatioMode.KeepAspectRatio)
+
+    def set_crossings(self, points: np.ndarray) -> None:
+        """Mark where the boundary crosses itself ((c, 2) plane points; none: empty)."""
+        points = np.asarray(points, dtype=float).reshape(-1, 2)
+        if len(points) == 0 and len(self.crossings) == 0:
+            return
+        self.crossings = points
+        self._redraw()
 
     def plane_point(self, pos: QPointF) -> np.ndarray:
         """Plane coordinates of a viewport position."""
@@ -122,11 +161,18 @@ class SketchView(QGraphicsView):
         scene = self.scene()
         scene.clear()
         outline = self.sketch.boundary_curve()
+        crossing = len(self.crossings) > 0
+        ink = self.palette().color(QPalette.ColorRole.Text).name()
+        boundary_color = (
+            BOUNDARY_COLOR
+            if self.palette().color(QPalette.ColorRole.Base).lightnessF() >= 0.5
+            else ink
+        )
         if len(outline):
             scene.addPath(
                 self._path(outline, closed=True),
-                _pen(BOUNDARY_COLOR, 2),
-                QBrush(QColor(120, 180, 90, 60)),
+                _pen(CROSSING_COLOR if crossing else boundary_color, 2),
+                QBrush(QColor(220, 60, 60, 40) if crossing else QColor(120, 180, 90, 60)),
             )
         elif len(self.sketch.boundary) > 1:
             scene.addPath(self._path(self.sketch.boundary, closed=False), _pen("#909090", 1))
@@ -134,8 +180,15 @@ class SketchView(QGraphicsView):
             curve = self.sketch.vein_curve(i)
             if len(curve) > 1:
                 scene.addPath(self._path(curve[:, :2], closed=False), _pen(vein_color(i), 2))
+        for xy in self.crossings:
+            r = 1.6 * POINT_PIXELS
+            ring = QGraphicsEllipseItem(-r, -r, 2 * r, 2 * r)
+            ring.setFlag(QGraphicsItem.GraphicsItemFlag.ItemIgnoresTransformations)
+            ring.setPos(float(xy[0]), float(-xy[1]))
+            ring.setPen(_pen(CROSSING_COLOR, 3))
+            scene.addItem(ring)
         for curve in (BOUNDARY, *range(len(self.sketch.veins))):
-            color = BOUNDARY_COLOR if curve == BOUNDARY else vein_color(curve)
+            color = boundary_color if curve == BOUNDARY else vein_color(curve)
             for index, point in enumerate(self.sketch.control(curve)):
                 self._dot(
                     point[:2],
@@ -163,13 +216,14 @@ class SketchView(QGraphicsView):
         self.scene().addItem(item)
 
     # --- editing -------------------------------------------------------------------------------
-    def hit(self, pos: QPointF) -> tuple[int, int] | None:
-        """The control point under a viewport position (active curve first), if any."""
+    def hit(self, pos: QPointF, only_active: bool = False) -> tuple[int, int] | None:
+        """The control point under a viewport position (active curve first), if any;
+        `only_active`: of the active curve only."""
         best, best_d = None, HIT_PIXELS
-        curves = (
-            self.active,
-            *(c for c in (BOUNDARY, *range(len(self.sketch.veins))) if c != self.active),
-        )
+        every = (BOUNDARY, *range(len(self.sketch.veins)))
+        curves = [c for c in (self.active,) if c in every]
+        if not only_active:
+            curves += [c for c in every if c != self.active]
         for curve in curves:
             for index, point in enumerate(self.sketch.control(curve)):
                 p = self.view_point(point)
@@ -178,30 +232,61 @@ class SketchView(QGraphicsView):
                     best, best_d = (curve, index), d
         return best
 
-    def _commit(self, before: Sketch, after: Sketch, text: str) -> None:
+    def _commit(self, before: Sketch, after: Sketch, text: str, xy=None) -> None:
+        if self.mirror and xy is not None:
+            after = after.mirrored(1.0 if self._side(after, xy) >= 0 else -1.0)
         self.sketch = after
         self._redraw()
         self.selection_changed.emit()
         self.committed.emit(before, after, text)
 
+    @staticmethod
+    def _side(sketch: Sketch, xy: np.ndarray) -> float:
+        """Which side of the midrib a plane point is on (+ left, - right; 0 without one)."""
+        if not sketch.veins or len(sketch.veins[0]) < 2:
+            return 0.0
+        a, b = sketch.veins[0][0, :2], sketch.veins[0][-1, :2]
+        d = b - a
+        return float(d[0] * (xy[1] - a[1]) - d[1] * (xy[0] - a[0]))
+
+    def _plane_tolerance(self, pixels: float) -> float:
+        """`pixels` of the view as a plane distance at the current zoom."""
+        return pixels / max(abs(self.transform().m11()), 1e-12)
+
     def add_point(self, xy: np.ndarray) -> None:
-        """Add a control point at plane point `xy` to the active curve (a new vein if none)."""
+        """Add a control point at plane point `xy` to the active curve. A new vein's first point
+        snaps onto a vein nearby (the new vein branches from it) and takes its height there."""
         before = sketch = self.sketch
+        xy = np.asarray(xy, dtype=float)
         if self.active == BOUNDARY:
             after, index = sketch.inserted(BOUNDARY, xy)
+        elif self.active >= len(sketch.veins):
+            snapped = sketch.snap_to_vein(xy, self._plane_tolerance(SNAP_PIXELS))
+            first = (
+                snapped if snapped is not None else np.array([*xy, sketch.default_height(-1, xy)])
+            )
+            after, index = sketch.with_vein(first[None, :]), 0
+            self.active = len(after.veins) - 1
+            self.selected = (self.active, index)
+            self._commit(before, after, "New vein", xy)
+            return
         else:
             after, index = sketch.inserted(self.active, xy, sketch.default_height(self.active, xy))
         self.selected = (self.active, index)
-        self._commit(before, after, "Add point")
+        self._commit(before, after, "Add point", xy)
 
     def delete_selected(self) -> None:
         """Delete the selected control point."""
         if self.selected is None:
             return
         before = self.sketch
+        curve = self.selected[0]
         after = before.deleted(*self.selected)
+        if len(after.veins) < len(before.veins) and self.active >= curve != BOUNDARY:
+            self.active = BOUNDARY if self.active == curve else self.active - 1
+        xy = before.control(curve)[self.selected[1], :2]
         self.selected = None
-        self._commit(before, after, "Delete point")
+        self._commit(before, after, "Delete point", xy)
 
     def set_height(self, height: float) -> None:
         """Set the height of the selected vein point."""
@@ -213,12 +298,20 @@ class SketchView(QGraphicsView):
         self._commit(self.sketch, self.sketch.with_height(curve, index, height), "Set height")
 
     def new_vein(self) -> None:
-        """Start a new, empty vein and make it the active curve."""
-        before = self.sketch
-        after = before.with_new_vein()
-        self.active = len(after.veins) - 1
+        """Make the next click start a new vein (no vein exists until then)."""
+        self.active = len(self.sketch.veins)
         self.selected = None
-        self._commit(before, after, "New vein")
+        self.select_tool = False
+        self._redraw()
+        self.selection_changed.emit()
+
+    def set_profile(self, start: float, end: float) -> None:
+        """Set the heights of the active vein from `start` at its first point to `end` at its
+        last (linear along the vein): one undo step."""
+        if not 0 <= self.active < len(self.sketch.veins):
+            return
+        before = self.sketch
+        self._commit(before, before.with_profile(self.active, start, end), "Vein profile")
 
     def mousePressEvent(self, event: QMouseEvent) -> None:
         pos = event.position()
@@ -231,8 +324,16 @@ class SketchView(QGraphicsView):
         if event.button() != Qt.MouseButton.LeftButton:
             super().mousePressEvent(event)
             return
-        if ref is None:
-            self.add_point(self.plane_point(pos))
+        selecting = self.select_tool or bool(event.modifiers() & SELECT_MODIFIERS)
+        if not selecting:  # drawing: a click adds, and only the active curve's points are grabbed
+            ref = self.hit(pos, only_active=True)
+            if ref is None:
+                self.add_point(self.plane_point(pos))
+                return
+        elif ref is None:
+            self.selected = None
+            self._redraw()
+            self.selection_changed.emit()
             return
         self.selected, self.active = ref, ref[0]
         self._drag, self._before, self._moved = ref, self.sketch, False
@@ -243,7 +344,10 @@ class SketchView(QGraphicsView):
         if self._drag is None:
             super().mouseMoveEvent(event)
             return
-        self.sketch = self.sketch.moved(*self._drag, self.plane_point(event.position()))
+        xy = self.plane_point(event.position())
+        self.sketch = self.sketch.moved(*self._drag, xy)
+        if self.mirror:
+            self.sketch = self.sketch.mirrored(1.0 if self._side(self.sketch, xy) >= 0 else -1.0)
         self._moved = True
         self._redraw()
         self.preview.emit(self.sketch)
@@ -287,24 +391,49 @@ class SketchEditor(QWidget):
             "Height of the selected vein point above the leaf's plane (negative: below it)."
         )
         fit = QPushButton("Fit")
-        fit.setToolTip("Zoom to the whole sketch.")
-        curves, point = QHBoxLayout(), QHBoxLayout()  # two rows, so a narrow dock shows them
-        for widget in (self.curve, self.new_vein, self.delete):
+        fit.setToolTip("Zoom to the whole leaf.")
+        self.select = QPushButton("Select")
+        self.select.setCheckable(True)
+        self.select.setToolTip(
+            "Click a point of any curve to select and drag it (also Ctrl- or Shift-click), "
+            "instead of adding points."
+        )
+        self.mirror = QCheckBox("Mirror")
+        self.mirror.setToolTip(
+            "Keep the boundary and the side veins symmetric about the midrib (vein 1): each "
+            "edit is reflected onto the other side."
+        )
+        self.profile_start, self.profile_end = QDoubleSpinBox(), QDoubleSpinBox()
+        for box in (self.profile_start, self.profile_end):
+            box.setRange(-1e3, 1e3)
+            box.setDecimals(4)
+            box.setKeyboardTracking(False)
+        self.profile = QPushButton("Set vein profile")
+        self.profile.setToolTip(
+            "Set the heights of the whole chosen vein at once: from the first value at its start "
+            "to the second at its end, in a straight line along it."
+        )
+        curves, point, whole = QHBoxLayout(), QHBoxLayout(), QHBoxLayout()  # a narrow dock fits
+        for widget in (self.curve, self.new_vein, self.select, self.delete):
             curves.addWidget(widget)
-        for widget in (QLabel("Height"), self.height, fit):
+        for widget in (QLabel("Height"), self.height, self.mirror, fit):
             point.addWidget(widget)
-        for row in (curves, point):
+        for widget in (QLabel("Start"), self.profile_start, QLabel("end"), self.profile_end):
+            whole.addWidget(widget)
+        whole.addWidget(self.profile)
+        for row in (curves, point, whole):
             row.addStretch(1)
         hint = QLabel(
-            "Click: add a point to the chosen curve · drag: move · right-click or Del: delete · "
-            "wheel: zoom"
+            "Click: add a point to the chosen curve · drag its points: move · Ctrl/Shift-click: "
+            "select any point · right-click or Del: delete · wheel: zoom"
         )
         hint.setWordWrap(True)
-        hint.setStyleSheet("color: #606060")
+        hint.setForegroundRole(QPalette.ColorRole.PlaceholderText)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(4, 4, 4, 4)
         layout.addLayout(curves)
         layout.addLayout(point)
+        layout.addLayout(whole)
         layout.addWidget(self.view, 1)
         layout.addWidget(hint)
 
@@ -313,6 +442,11 @@ class SketchEditor(QWidget):
         self.new_vein.clicked.connect(self.view.new_vein)
         self.delete.clicked.connect(self.view.delete_selected)
         fit.clicked.connect(self.view.fit)
+        self.select.toggled.connect(self._set_select_tool)
+        self.mirror.toggled.connect(self._set_mirror)
+        self.profile.clicked.connect(
+            lambda: self.view.set_profile(self.profile_start.value(), self.profile_end.value())
+        )
         self.height.valueChanged.connect(self.view.set_height)
         self.curve.activated.connect(self._choose_curve)
         self.view.selection_changed.connect(self._sync_tools)
@@ -322,6 +456,12 @@ class SketchEditor(QWidget):
         """Show `sketch` (see SketchView.set_sketch)."""
         self.view.set_sketch(sketch, fit)
 
+    def _set_select_tool(self, on: bool) -> None:
+        self.view.select_tool = on
+
+    def _set_mirror(self, on: bool) -> None:
+        self.view.mirror = on
+
     def _choose_curve(self, row: int) -> None:
         self.view.active = BOUNDARY if row == 0 else row - 1
         self.view.selected = None
@@ -329,7 +469,10 @@ class SketchEditor(QWidget):
 
     def _sync_tools(self) -> None:
         view = self.view
-        names = ["Boundary"] + [f"Vein {i + 1}" for i in range(len(view.sketch.veins))]
+        count = len(view.sketch.veins)
+        names = ["Boundary"] + [f"Vein {i + 1}" for i in range(count)]
+        if view.active == count:
+            names.append(f"Vein {count + 1} (new: click to start it)")
         self.curve.blockSignals(True)
         if [self.curve.itemText(i) for i in range(self.curve.count())] != names:
             self.curve.clear()
@@ -346,3 +489,16 @@ class SketchEditor(QWidget):
             float(view.sketch.veins[selected[0]][selected[1], 2]) if on_vein else 0.0
         )
         self.height.blockSignals(False)
+        self.select.blockSignals(True)
+        self.select.setChecked(view.select_tool)
+        self.select.blockSignals(False)
+        on_vein = 0 <= view.active < count
+        for widget in (self.profile_start, self.profile_end, self.profile):
+            widget.setEnabled(on_vein)
+        if on_vein:
+            vein = view.sketch.veins[view.active]
+            for box, value in ((self.profile_start, vein[0, 2]), (self.profile_end, vein[-1, 2])):
+                box.blockSignals(True)
+                box.setSingleStep(0.01 * view.sketch.extent())
+                box.setValue(float(value))
+                box.blockSignals(False)

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
+import shapely
 from scipy.interpolate import CubicSpline
 from scipy.spatial import cKDTree
 
@@ -211,8 +212,12 @@ class Sketch:
         return self._with_curve(curve, np.insert(control, index, row, axis=0)), index
 
     def deleted(self, curve: int, index: int) -> Sketch:
-        """The sketch without one control point."""
-        return self._with_curve(curve, np.delete(self.control(curve), index, axis=0))
+        """The sketch without one control point; a vein left without points goes (veins keep
+        their numbers and colours only if no empty one is kept)."""
+        control = np.delete(self.control(curve), index, axis=0)
+        if curve != BOUNDARY and len(control) == 0:
+            return replace(self, veins=self.veins[:curve] + self.veins[curve + 1 :])
+        return self._with_curve(curve, control)
 
     def with_height(self, vein: int, index: int, height: float) -> Sketch:
         """The sketch with a vein control point's height set."""
@@ -220,14 +225,104 @@ class Sketch:
         control[index, 2] = height
         return self._with_curve(vein, control)
 
-    def with_new_vein(self) -> Sketch:
-        """The sketch with an empty vein appended (its index is len(veins) - 1)."""
-        return replace(self, veins=(*self.veins, np.zeros((0, 3))))
+    def with_vein(self, points: np.ndarray) -> Sketch:
+        """The sketch with a vein of (m, 3) control points appended (index len(veins) - 1)."""
+        return replace(self, veins=(*self.veins, np.asarray(points, dtype=float).reshape(-1, 3)))
+
+    def with_profile(self, vein: int, start: float, end: float) -> Sketch:
+        """The sketch with a whole vein's heights set at once: linear from `start` at its first
+        point to `end` at its last, by length along the vein."""
+        control = self.veins[vein].copy()
+        arc = np.concatenate(
+            [[0.0], np.cumsum(np.linalg.norm(np.diff(control[:, :2], axis=0), axis=1))]
+        )
+        t = arc / arc[-1] if len(arc) > 1 and arc[-1] > 0 else np.zeros(len(control))
+        control[:, 2] = start + t * (end - start)
+        return self._with_curve(vein, control)
+
+    def snap_to_vein(self, xy: np.ndarray, tolerance: float) -> np.ndarray | None:
+        """The point (x, y, height) on the nearest vein curve within `tolerance` of plane point
+        `xy`, or None: a new vein started there branches from that vein."""
+        best, best_d = None, tolerance
+        for i in range(len(self.veins)):
+            curve = self.vein_curve(i)
+            if len(curve) == 0:
+                continue
+            if len(curve) == 1:
+                candidates = curve
+            else:  # the nearest point on each segment of the sampled curve
+                a, b = curve[:-1], curve[1:]
+                ab = b[:, :2] - a[:, :2]
+                t = np.clip(
+                    np.einsum("ij,ij->i", xy - a[:, :2], ab) / np.maximum((ab**2).sum(1), 1e-300),
+                    0,
+                    1,
+                )
+                candidates = a + t[:, None] * (b - a)
+            d = np.linalg.norm(candidates[:, :2] - xy, axis=1)
+            j = int(np.argmin(d))
+            if d[j] <= best_d:
+                best, best_d = candidates[j], float(d[j])
+        return None if best is None else np.asarray(best, dtype=float)
+
+    def mirrored(self, source_side: float) -> Sketch:
+        """The sketch made symmetric about the midrib (vein 1, its first and last points): the
+        half of the boundary on `source_side` (+1: left of the midrib, -1: right) is kept and
+        reflected onto the other, and each side vein there replaces its nearest counterpart on
+        the other side (or gains one). Unchanged without a midrib of two points or more."""
+        if not self.veins or len(self.veins[0]) < 2:
+            return self
+        origin, tip = self.veins[0][0, :2], self.veins[0][-1, :2]
+        axis = (tip - origin) / max(float(np.linalg.norm(tip - origin)), 1e-300)
+        normal = np.array([-axis[1], axis[0]])
+        side = lambda p: (np.asarray(p)[..., :2] - origin) @ normal * source_side  # noqa: E731
+
+        def reflect(points: np.ndarray) -> np.ndarray:
+            out = np.array(points, dtype=float)
+            offset = (out[:, :2] - origin) @ normal
+            out[:, :2] -= 2 * offset[:, None] * normal
+            return out
+
+        boundary = self.boundary
+        eps = 1e-9 * self.extent()
+        keep = side(boundary) > eps
+        if 0 < keep.sum() < len(boundary):
+            start = int(np.flatnonzero(keep & ~np.roll(keep, 1))[0])  # where the kept arc begins
+            order = np.roll(np.arange(len(boundary)), -start)
+            loop, kept = boundary[order], keep[order]
+            arc = loop[kept]
+            axis_at = np.flatnonzero(np.abs(side(loop)) <= eps)
+            last_kept = int(np.flatnonzero(kept)[-1])
+            after = loop[[i for i in axis_at if i > last_kept][:1]]  # where the arc meets the axis
+            before = loop[[i for i in axis_at if i > last_kept][-1:]] if len(axis_at) > 1 else []
+            before = np.asarray(before).reshape(-1, 2)
+            if len(before) and len(after) and np.allclose(before, after):
+                before = before[:0]
+            boundary = np.vstack([arc, after, reflect(arc)[::-1], before])
+            boundary = boundary.reshape(-1, 2)
+        veins = list(self.veins)
+        sides = [float(np.mean(side(v))) for v in veins]
+        targets = [i for i in range(1, len(veins)) if sides[i] < -eps]
+        for i in range(1, len(self.veins)):
+            if sides[i] <= eps:
+                continue
+            mirror = reflect(self.veins[i])
+            if targets:
+                j = min(
+                    targets, key=lambda t: float(np.linalg.norm(veins[t][0, :2] - mirror[0, :2]))
+                )
+                targets.remove(j)
+                veins[j] = mirror
+            else:
+                veins.append(mirror)
+        for j in sorted(targets, reverse=True):
+            del veins[j]
+        return replace(self, boundary=boundary, veins=tuple(veins))
 
     def default_height(self, vein: int, xy: np.ndarray) -> float:
-        """Height for a new point of a vein: that of its nearest control point, else 5% of the
-        sketch's size."""
-        control = self.veins[vein]
+        """Height for a new point of a vein: that of its nearest control point, else (a new
+        vein: any index past the last) 5% of the sketch's size."""
+        control = self.veins[vein] if 0 <= vein < len(self.veins) else np.zeros((0, 3))
         if len(control) == 0:
             return 0.05 * self.extent()
         return float(control[np.argmin(np.linalg.norm(control[:, :2] - xy, axis=1)), 2])
@@ -266,7 +361,9 @@ class Sketch:
         )
         return cls(
             boundary=np.asarray(data.get("boundary", []), dtype=float).reshape(-1, 2),
-            veins=tuple(np.asarray(v, dtype=float).reshape(-1, 3) for v in data.get("veins", [])),
+            veins=tuple(
+                np.asarray(v, dtype=float).reshape(-1, 3) for v in data.get("veins", []) if len(v)
+            ),
             frame=frame,
             relief=np.asarray(data.get("relief", []), dtype=float).reshape(-1, 3),
         )
@@ -284,3 +381,24 @@ class Sketch:
             points = np.column_stack([xy, h])
             veins.append(_even_by_length(points, min(DERIVED_VEIN_POINTS, len(points)), False))
         return cls(boundary=boundary, veins=tuple(veins), frame=result.frame, relief=relief)
+
+
+def ring_crossings(ring: np.ndarray) -> np.ndarray:
+    """Where a closed polyline of (n, 2) points crosses itself: (c, 2) points, empty if never.
+
+    Segments that are not neighbours along the ring and meet are crossings (an STRtree finds
+    the candidate pairs, so a long ring costs little more than a short one).
+    """
+    ring = np.asarray(ring, dtype=float)
+    n = len(ring)
+    if n < 4:
+        return np.zeros((0, 2))
+    ends = np.roll(ring, -1, axis=0)
+    segments = shapely.linestrings(np.stack([ring, ends], axis=1))
+    left, right = shapely.STRtree(segments).query(segments, predicate="intersects")
+    apart = (right > left) & ((right - left) % n > 1) & ((left - right) % n > 1)
+    if not np.any(apart):
+        return np.zeros((0, 2))
+    meet = shapely.intersection(segments[left[apart]], segments[right[apart]])
+    points = shapely.get_coordinates(shapely.centroid(meet))
+    return points.reshape(-1, 2)

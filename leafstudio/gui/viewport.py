@@ -1,17 +1,25 @@
 """The 3D view: a pyvistaqt QtInteractor showing a Result's layers, with camera presets.
 
-Every actor has a fixed name, so a new result replaces the old actors instead of piling up.
-Main thread only (VTK rendering).
+Every actor has a fixed name; a new result's dataset is copied into the actor already drawn
+(a shallow copy, no new actor, mapper or lookup table), so that what follows a result on the main
+thread stays short. The camera frames the blade's robust bounds (framing.py) when the session
+says so, and otherwise stays where the user put it. Point and line sizes follow the device pixel
+ratio; the background and text follow the palette. Main thread only (VTK rendering).
 """
 
 from __future__ import annotations
 
 import numpy as np
-from PySide6.QtCore import Signal
+from PySide6.QtCore import QEvent, Signal
+from PySide6.QtGui import QPalette
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 from pyvistaqt import QtInteractor
 
+from leafstudio.core.plane import Frame
+from leafstudio.gui.framing import BladeBounds, fit_camera, view_direction
 from leafstudio.gui.layers import LAYERS, MESH_COLORINGS, SCALAR_BARS, Piece
+
+SIZED = ("point_size", "line_width")  # style keys in device pixels: scaled by the pixel ratio
 
 CAMERAS = ("iso", "top", "side")
 
@@ -23,8 +31,8 @@ class Viewport(QWidget):
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
-        self.plotter = QtInteractor(self, auto_update=False)
-        self.plotter.set_background("white", top="#dfe8f0")
+        # no multisampling: with software OpenGL it multiplies the cost of every frame
+        self.plotter = QtInteractor(self, auto_update=False, multi_samples=1)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.plotter.interactor)
@@ -37,22 +45,54 @@ class Viewport(QWidget):
         }
         self._mesh_piece: Piece | None = None
         self._names: dict[str, list[str]] = {key: [] for key, _, _ in LAYERS}
-        self._normal = np.array([0.0, 0.0, 1.0])
-        self._long_axis = np.array([1.0, 0.0, 0.0])
+        self._frame = Frame(np.zeros(3), np.eye(3)[0], np.eye(3)[1], np.eye(3)[2])
+        self._bounds: BladeBounds | None = None
         self._has_content = False
         self._message = ""
         self._pieces: dict[str, list[Piece]] = {}
         self._announce = False
+        self._bars: dict[str, tuple] = {}
         self.plotter.render_window.AddObserver("EndEvent", self._on_render_end)
+        self.apply_palette()
+
+    # --- look ----------------------------------------------------------------------------------
+    def pixel_ratio(self) -> float:
+        """Device pixels per logical pixel (2 on a high-DPI screen): VTK sizes are in device
+        pixels, Qt's in logical ones."""
+        return float(self.devicePixelRatioF())
+
+    def text_color(self) -> str:
+        return self.palette().color(QPalette.ColorRole.WindowText).name()
+
+    def apply_palette(self) -> None:
+        """Background and text colours from the palette (light or dark)."""
+        base = self.palette().color(QPalette.ColorRole.Base)
+        dark = base.lightnessF() < 0.5
+        top = base.lighter(135) if dark else base.darker(112)
+        self.plotter.set_background(base.name(), top=top.name())
+        self._bars.clear()
+        self._sync_scalar_bars()
+        self.redraw()
+
+    def changeEvent(self, event: QEvent) -> None:
+        super().changeEvent(event)
+        if event.type() == QEvent.Type.PaletteChange:
+            self.apply_palette()
 
     # --- layers --------------------------------------------------------------------------------
     def show_layers(
-        self, layers: dict[str, list[Piece]], normal: np.ndarray, axis: np.ndarray
+        self,
+        layers: dict[str, list[Piece]],
+        frame: Frame,
+        bounds: BladeBounds | None = None,
+        framing: str | None = None,
     ) -> None:
-        """Replace every layer by the given pieces; `normal` and `axis` orient the camera presets
-        (the leaf plane's normal and long axis, world coordinates)."""
-        first = not self._has_content
-        self._normal, self._long_axis = np.asarray(normal, float), np.asarray(axis, float)
+        """Replace every layer by the given pieces. `frame` orients the camera presets (the
+        plane the sketch shows); `bounds` is the blade's box, framed when `framing` is "reset"
+        (the iso preset) or "refit" (the current direction); otherwise the camera stays."""
+        self._frame = frame
+        if bounds is not None:
+            self._bounds = bounds
         for key, pieces in layers.items():
             self._pieces[key] = pieces
             if self.visible[key]:
@@ -62,8 +102,10 @@ class Viewport(QWidget):
         self._sync_scalar_bars()
         self._has_content = True
         self.set_message("", render=False)
-        if first:
+        if framing == "reset":
             self.camera("iso", render=False)
+        elif framing == "refit":
+            self.refit(render=False)
         self._announce = True
         self.redraw()
 
@@ -114,6 +156,21 @@ class Viewport(QWidget):
         if piece.data.n_points == 0:
             self.plotter.remove_actor(piece.name, render=False)
             return
+        ratio = self.pixel_ratio()
+        style.update({k: style[k] * ratio for k in SIZED if k in style})
+        actor = self.plotter.actors.get(piece.name)
+        if actor is not None and self._same_kind(actor, piece, style):
+            held = actor.mapper.GetInputDataObject(0, 0)  # the dataset the mapper draws
+            held.ShallowCopy(piece.data)
+            if "scalars" in style:
+                held.GetPointData().SetActiveScalars(style["scalars"])
+                actor.mapper.array_name = style["scalars"]
+                clim = style.get("clim")
+                if clim is not None:
+                    actor.mapper.scalar_range = clim
+            actor.prop.show_edges = bool(style.get("show_edges", actor.prop.show_edges))
+            actor.SetVisibility(self.visible[key])
+            return
         actor = self.plotter.add_mesh(
             piece.data,
             name=piece.name,
@@ -124,7 +181,19 @@ class Viewport(QWidget):
         )
         if key == "mesh":
             actor.prop.interpolation = "phong"
+        actor._leafstudio_style = _style_key(style)  # what an in-place update must not change
         actor.SetVisibility(self.visible[key])
+
+    @staticmethod
+    def _same_kind(actor, piece: Piece, style: dict) -> bool:
+        """True when the drawn actor can take the new dataset in place: same style, and the same
+        kind of dataset (its cells' kind decides the mapper's work)."""
+        old = actor.mapper.dataset
+        return (
+            getattr(actor, "_leafstudio_style", None) == _style_key(style)
+            and type(old) is type(piece.data)
+            and bool(old.n_cells) == bool(piece.data.n_cells)
+        )
 
     def clear(self) -> None:
         """Remove every layer (a new, still empty sketch)."""
@@ -166,6 +235,8 @@ class Viewport(QWidget):
         self.redraw()
 
     def _sync_scalar_bars(self) -> None:
+        """Scalar bars for the visible coloured layers; a bar already there for the same title
+        and mapper is kept (making one costs several milliseconds)."""
         for key, title in SCALAR_BARS.items():
             if key == "mesh" and self._mesh_piece is not None:
                 coloring = self.mesh_coloring
@@ -174,19 +245,28 @@ class Viewport(QWidget):
                 ][0]
             names = self.actor_names(key)
             wanted = self.visible[key] and bool(names)
+            mapper = self.plotter.actors[names[0]].mapper if wanted else None
+            if (
+                wanted
+                and self._bars.get(key) == (title, id(mapper))
+                and title in self.plotter.scalar_bars
+            ):
+                continue
             for stale in self._bar_titles[key] & set(self.plotter.scalar_bars.keys()):
                 self.plotter.remove_scalar_bar(stale, render=False)
+            self._bars.pop(key, None)
             if wanted:
+                self._bars[key] = (title, id(mapper))
                 left = {"mesh": 0.06, "probability": 0.54}[key]  # side by side along the bottom
                 self.plotter.add_scalar_bar(
                     title=title,
-                    mapper=self.plotter.actors[names[0]].mapper,
+                    mapper=mapper,
                     vertical=False,
                     position_x=left,
                     position_y=0.02,
                     width=0.4,
                     height=0.08,
-                    color="#202020",
+                    color=self.text_color(),
                     fmt="%.3g",
                     n_labels=2,  # the ends only: a middle label would sit under the title
                     title_font_size=14,
@@ -210,24 +290,37 @@ class Viewport(QWidget):
 
     # --- camera --------------------------------------------------------------------------------
     def camera(self, preset: str, render: bool = True) -> None:
-        """Look at the leaf from the top (along its normal), the side (along its width) or iso."""
-        n, u = self._normal, self._long_axis
-        v = np.cross(n, u)
-        direction = {"top": n, "side": -v, "iso": 0.45 * n - 0.75 * v - 0.45 * u}[preset]
-        up = u if preset == "top" else n
-        self.plotter.reset_camera(render=False)
-        focus = np.asarray(self.plotter.camera.focal_point)
-        distance = self.plotter.camera.distance
-        self.plotter.camera_position = [
-            tuple(focus + distance * direction / np.linalg.norm(direction)),
-            tuple(focus),
-            tuple(up),
-        ]
-        self.plotter.reset_camera(render=False)
-        self.plotter.camera.zoom(1.1)
+        """Look at the blade from the top (along its normal, u to the right and v up, as in the
+        sketch), the side (along its width) or iso, filling most of the view."""
+        direction, up = view_direction(preset, self._frame)
+        self._place(direction, up)
         if render:
             self.redraw()
+
+    def refit(self, render: bool = True) -> None:
+        """Frame the blade again from the current direction (the sketch grew past the view)."""
+        camera = self.plotter.camera
+        direction = np.asarray(camera.position) - np.asarray(camera.focal_point)
+        self._place(direction, np.asarray(camera.up))
+        if render:
+            self.redraw()
+
+    def _place(self, direction: np.ndarray, up: np.ndarray) -> None:
+        if self._bounds is None:
+            self.plotter.reset_camera(render=False)
+            return
+        size = self.plotter.interactor.size()
+        aspect = size.width() / max(size.height(), 1)
+        camera = self.plotter.camera
+        position, focus, up = fit_camera(self._bounds, direction, up, camera.view_angle, aspect)
+        self.plotter.camera_position = [tuple(position), tuple(focus), tuple(up)]
+        self.plotter.renderer.ResetCameraClippingRange()
 
     def close_plotter(self) -> None:
         """Release VTK resources (before the window goes)."""
         self.plotter.close()
+
+
+def _style_key(style: dict) -> tuple:
+    """A hashable summary of an actor's style, without the per-result colour range."""
+    return tuple(sorted((k, repr(v)) for k, v in style.items() if k not in ("clim", "show_edges")))

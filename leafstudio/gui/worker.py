@@ -1,18 +1,27 @@
-"""Runs the pipeline on one background thread; the newest request wins.
+"""Background work, newest request wins: the pipeline and the side tasks, one implementation.
 
-The worker thread owns the Pipeline of the current leaf, so that a parameter change reuses the
-stages it does not affect (moving K reruns only gmm, surface and mesh). A request that arrives
-while another is waiting replaces it; an *interrupting* request also stops the running one at its
-next stage boundary (a slider storm), while a *live* request lets it finish so that the view keeps
-moving during a drag. Results, stage names and failures reach the main thread by queued signals;
-the datasets to draw are built here too (see layers.py), leaving only rendering to the main thread.
+`Worker` runs jobs on a few threads ("lanes": the pipeline's, and one for side tasks such as
+reading a scan, its distances to a mesh, the Poisson surface, so that these never hold up a
+reconstruction). Each job has a kind; a new job replaces a waiting one of its kind, and an
+*interrupting* job also stops the running one of its kind at its next check (a slider storm),
+while a *live* one lets it finish (the view keeps moving during a drag).
+
+A job is a callable taking a `Context` (should_stop, stage) and its arguments. A generator job
+reports each value it yields (`yielded`) before it goes on: the pipeline yields the Outcome to
+draw, then measures it. Failures are reported as exception objects and logged with their
+traceback. The pipeline's Pipeline object lives on its lane, so a parameter change reuses the
+stages it does not affect. Qt signals carry the reports to the main thread.
 """
 
 from __future__ import annotations
 
+import inspect
+import logging
 import threading
 import time
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from typing import Any
 
 from PySide6.QtCore import QObject, Signal
 
@@ -20,6 +29,11 @@ from leafstudio.core.pipeline import Cancelled, Pipeline, Result
 from leafstudio.errors import LeafError
 from leafstudio.gui.layers import Piece, build_layers
 from leafstudio.model import Leaf, Params
+
+log = logging.getLogger("leafstudio.gui")
+
+PIPELINE = "pipeline"
+LANES = {PIPELINE: "pipeline", "scan": "side", "fidelity": "side", "poisson": "side"}
 
 
 @dataclass(frozen=True)
@@ -43,118 +57,170 @@ class Outcome:
     thread: int = 0
 
 
-class PipelineWorker(QObject):
-    """Accepts requests from the main thread and reports on them by signal.
+@dataclass
+class _Job:
+    id: int
+    kind: str
+    job: Callable[..., Any]
+    args: tuple
+    interrupt: bool
+
+
+class Context:
+    """What a running job may ask: whether to stop, and to report the stage it starts."""
+
+    def __init__(self, worker: Worker, job: _Job) -> None:
+        self._worker, self._job = worker, job
+
+    def should_stop(self) -> bool:
+        return self._worker._superseded(self._job)
+
+    def stage(self, name: str) -> None:
+        self._worker.stage_started.emit(self._job.kind, self._job.id, name)
+
+
+class Worker(QObject):
+    """Runs submitted jobs, one lane per thread, and reports by queued signal.
 
     Signals
     -------
-    stage_started(int, str)
-        Request id and the stage about to run.
-    finished(object)
-        An Outcome.
-    measured(int, float)
-        Request id and the seconds spent: the finished Result's metrics are now computed (after
-        the mesh is shown, so that they do not delay it).
-    failed(int, str)
-        Request id and the user-facing message.
+    stage_started(str, int, str)
+        Kind, job id and the stage about to run.
+    yielded(str, int, object)
+        Kind, job id and a value a generator job yielded.
+    done(str, int, object)
+        Kind, job id and the job's return value.
+    failed(str, int, object)
+        Kind, job id and the exception (already logged with its traceback).
     """
 
-    stage_started = Signal(int, str)
-    finished = Signal(object)
-    measured = Signal(int, float)
-    failed = Signal(int, str)
+    stage_started = Signal(str, int, str)
+    yielded = Signal(str, int, object)
+    done = Signal(str, int, object)
+    failed = Signal(str, int, object)
 
-    def __init__(self, parent: QObject | None = None) -> None:
+    def __init__(self, parent: QObject | None = None, lanes: dict[str, str] | None = None) -> None:
         super().__init__(parent)
+        self.lanes = dict(lanes or LANES)
         self._wake = threading.Condition()
-        self._pending: Request | None = None
-        self._quit = False
-        self._busy = False
+        self._pending: dict[str, _Job] = {}
+        self._running: dict[str, _Job | None] = {lane: None for lane in set(self.lanes.values())}
         self._last_id = 0
-        self._pipeline: Pipeline | None = None
-        # a daemon thread: quitting during a long stage must not wait for it (nor abort, as a
-        # running QThread would when destroyed)
-        self._thread = threading.Thread(target=self.loop, name="leafstudio-pipeline", daemon=True)
-        self._thread.start()
+        self._quit = False
+        self._pipeline: Pipeline | None = None  # touched on the pipeline lane only
+        # daemon threads: quitting during a long stage must not wait for it
+        self._threads = [
+            threading.Thread(
+                target=self._loop, args=(lane,), name=f"leafstudio-{lane}", daemon=True
+            )
+            for lane in self._running
+        ]
+        for thread in self._threads:
+            thread.start()
 
-    def submit(self, leaf: Leaf, params: Params, interrupt: bool = True) -> int:
-        """Queue a run (replacing any waiting one) and return its request id."""
+    # --- on the main thread --------------------------------------------------------------------
+    def submit(
+        self, kind: str, job: Callable[..., Any], *args: Any, interrupt: bool = False
+    ) -> int:
+        """Queue `job(context, *args)`, replacing a waiting job of its kind; returns its id."""
         with self._wake:
             self._last_id += 1
-            self._pending = Request(self._last_id, leaf, params, interrupt)
-            self._wake.notify()
+            self._pending[kind] = _Job(self._last_id, kind, job, args, interrupt)
+            self._wake.notify_all()
             return self._last_id
+
+    def submit_pipeline(self, leaf: Leaf, params: Params, interrupt: bool = True) -> int:
+        """Queue a reconstruction (the Session's `submit`)."""
+        with self._wake:
+            request = Request(self._last_id + 1, leaf, params, interrupt)
+            return self.submit(PIPELINE, self._reconstruct, request, interrupt=interrupt)
 
     @property
     def last_id(self) -> int:
-        """Id of the newest request."""
+        """Id of the newest job."""
         return self._last_id
 
-    def is_idle(self) -> bool:
-        """True when nothing is running or waiting."""
+    def is_idle(self, lane: str | None = None) -> bool:
+        """True when nothing is running or waiting (on `lane`, or anywhere)."""
         with self._wake:
-            return self._pending is None and not self._busy
+            jobs = [*self._pending.values(), *(j for j in self._running.values() if j)]
+            return not any(lane is None or self.lanes[j.kind] == lane for j in jobs)
 
     def shutdown(self, wait_ms: int = 10_000) -> None:
-        """Stop the thread at the next stage boundary and wait for it."""
+        """Drop waiting jobs, stop running ones at their next check, and wait for the threads."""
         with self._wake:
             self._quit = True
-            self._pending = None
-            self._wake.notify()
-        self._thread.join(wait_ms / 1000)
+            self._pending.clear()
+            self._wake.notify_all()
+        deadline = time.monotonic() + wait_ms / 1000
+        for thread in self._threads:
+            thread.join(max(0.0, deadline - time.monotonic()))
 
-    # --- on the worker thread ------------------------------------------------------------------
-    def _should_stop(self) -> bool:
-        pending = self._pending
-        return self._quit or (pending is not None and pending.interrupt)
+    # --- on the worker threads -----------------------------------------------------------------
+    def _superseded(self, job: _Job) -> bool:
+        newer = self._pending.get(job.kind)
+        return self._quit or (newer is not None and newer.interrupt)
 
-    def _next(self) -> Request | None:
+    def _next(self, lane: str) -> _Job | None:
         with self._wake:
-            self._busy = False
-            while self._pending is None and not self._quit:
+            self._running[lane] = None
+            while not self._quit:
+                kind = next((k for k in self._pending if self.lanes[k] == lane), None)
+                if kind is not None:
+                    job = self._running[lane] = self._pending.pop(kind)
+                    return job
                 self._wake.wait()
-            if self._quit:
-                return None
-            request, self._pending = self._pending, None
-            self._busy = True
-            return request
+            return None
 
-    def _run(self, request: Request) -> Outcome:
+    def _loop(self, lane: str) -> None:
+        while (job := self._next(lane)) is not None:
+            context = Context(self, job)
+            try:
+                value = job.job(context, *job.args)
+                if inspect.isgenerator(value):
+                    value = self._drain(job, context, value)
+                    if value is _STOPPED:
+                        continue
+            except Cancelled:
+                continue
+            except LeafError as exc:
+                log.info("%s %d: %s", job.kind, job.id, exc)
+                self.failed.emit(job.kind, job.id, exc)
+                continue
+            except Exception as exc:  # the window says so; the app keeps running
+                log.error("%s %d failed", job.kind, job.id, exc_info=exc)
+                self.failed.emit(job.kind, job.id, exc)
+                continue
+            if not context.should_stop():
+                self.done.emit(job.kind, job.id, value)
+
+    def _drain(self, job: _Job, context: Context, values: Iterator[Any]) -> Any:
+        try:
+            while True:
+                value = next(values)
+                if context.should_stop():  # a newer interrupting job makes this stale
+                    values.close()
+                    return _STOPPED
+                self.yielded.emit(job.kind, job.id, value)
+        except StopIteration as stop:
+            return stop.value
+
+    def _reconstruct(self, context: Context, request: Request) -> Iterator[Outcome]:
+        """The pipeline job: run, prepare the layers, yield the Outcome; then measure it (after
+        it is shown, so that the metrics do not delay it) and return the seconds spent."""
         if self._pipeline is None or self._pipeline.leaf is not request.leaf:
             self._pipeline = Pipeline(request.leaf)
         result = self._pipeline.run(
-            request.params,
-            on_stage=lambda name: self.stage_started.emit(request.id, name),
-            should_stop=self._should_stop,
+            request.params, on_stage=context.stage, should_stop=context.should_stop
         )
         timings = dict(result.timings)
         start = time.perf_counter()
         layers = build_layers(result)
         timings["layers"] = time.perf_counter() - start
-        return Outcome(request, result, layers, timings, threading.get_ident())
+        yield Outcome(request, result, layers, timings, threading.get_ident())
+        start = time.perf_counter()
+        _ = result.metrics  # here, not on the main thread when the panel reads them
+        return time.perf_counter() - start
 
-    def loop(self) -> None:
-        """The worker thread's body: take the newest request, run it, report, repeat."""
-        while (request := self._next()) is not None:
-            try:
-                outcome = self._run(request)
-            except Cancelled:
-                continue
-            except LeafError as exc:
-                self.failed.emit(request.id, str(exc))
-                continue
-            except Exception as exc:  # shown in the window; the app keeps running
-                self.failed.emit(request.id, f"internal error: {type(exc).__name__}: {exc}")
-                continue
-            if self._should_stop():  # a newer interrupting request makes this stale
-                continue
-            self.finished.emit(outcome)
-            if self._should_stop():  # measure only what stays on screen
-                continue
-            start = time.perf_counter()
-            try:
-                _ = outcome.result.metrics  # here, not on the main thread when the panel reads it
-            except Exception as exc:  # the mesh is shown; say why its measurements are not
-                self.failed.emit(request.id, f"measurements failed: {type(exc).__name__}: {exc}")
-                continue
-            self.measured.emit(request.id, time.perf_counter() - start)
+
+_STOPPED = object()

@@ -32,8 +32,7 @@ def wait_result(qtbot, window: MainWindow, check=lambda outcome: True) -> object
 
 
 def close_window(window: MainWindow) -> None:
-    window.undo_stack.setClean()
-    window.path = None
+    window.session.history.set_clean()
     window.close()
 
 

@@ -58,7 +58,7 @@ def wait_fidelity(qtbot, window: MainWindow) -> dict[str, str]:
     qtbot.waitUntil(
         lambda: (
             window.fidelity is not None
-            and window.fidelity[0] == window.worker.last_id
+            and window.fidelity[0] == window.session.last_id
             and window.result is not None
             and window.result.leaf is window.doc.leaf
             and bool(panel_section(window, FIDELITY))

@@ -12,8 +12,10 @@ from leafstudio.gui.sketch_model import BOUNDARY
 from .conftest import wait_result
 
 
-def click(qtbot, view, xy, button=Qt.MouseButton.LeftButton) -> None:
-    qtbot.mouseClick(view.viewport(), button, pos=view.view_point(np.asarray(xy)).toPoint())
+def click(qtbot, view, xy, button=Qt.MouseButton.LeftButton, modifier=None) -> None:
+    pos = view.view_point(np.asarray(xy)).toPoint()
+    modifier = modifier or Qt.KeyboardModifier.NoModifier
+    qtbot.mouseClick(view.viewport(), button, modifier, pos=pos)
 
 
 def sketch_leaf(qtbot, window) -> None:
@@ -38,7 +40,7 @@ def test_sketching_with_clicks_gives_a_mesh(window, qtbot):
     assert mesh.point_data["height"].max() > 0.5 * sketch.veins[0][:, 2].max()
     xy = np.asarray(mesh.points)[:, :2]
     assert 0.03 < xy[:, 0].min() < 0.1 and 0.9 < xy[:, 0].max() < 0.97  # the clicked ellipse
-    assert window.undo_stack.count() == 15  # 10 + new vein + 4
+    assert window.undo_stack.count() == 14  # 10 + 4: a vein exists from its first point
 
 
 def test_undo_and_redo_every_edit(window, qtbot):
@@ -51,13 +53,13 @@ def test_undo_and_redo_every_edit(window, qtbot):
     assert window.editor.view.sketch.veins[0].shape == (3, 3)
     outcome = wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
     assert outcome.result.leaf is not full
-    for _ in range(4):
+    for _ in range(3):
         window.undo_stack.undo()
     assert window.editor.view.sketch.boundary.shape == (10, 2)
-    assert window.editor.view.sketch.veins == ()
-    window.undo_stack.redo()  # the vein, still empty
+    assert window.editor.view.sketch.veins == ()  # no empty vein is kept
+    window.undo_stack.redo()  # the vein with its first point
     window.redo_action.trigger()
-    assert window.editor.view.sketch.veins[0].shape == (1, 3)
+    assert window.editor.view.sketch.veins[0].shape == (2, 3)
     while window.undo_stack.canRedo():
         window.undo_stack.redo()
     np.testing.assert_allclose(window.doc.leaf.vein_points, full.vein_points)
@@ -94,7 +96,7 @@ def test_right_click_deletes_and_height_spin_box_sets_a_vein_height(window, qtbo
     n = len(view.sketch.boundary)
     click(qtbot, view, view.sketch.boundary[3], Qt.MouseButton.RightButton)
     assert len(view.sketch.boundary) == n - 1
-    click(qtbot, view, view.sketch.veins[0][2, :2])  # select a midrib point
+    click(qtbot, view, view.sketch.veins[0][2, :2], modifier=Qt.KeyboardModifier.ControlModifier)
     assert view.selected == (0, 2) and window.editor.height.isEnabled()
     window.editor.height.setValue(0.08)
     assert view.sketch.veins[0][2, 2] == 0.08

@@ -64,10 +64,11 @@ def test_edits_return_new_sketches_and_leave_the_old_one_alone():
     sketch = Sketch(boundary=SQUARE)
     moved = sketch.moved(BOUNDARY, 0, np.array([-1.0, -1.0]))
     assert sketch.boundary[0, 0] == 0.0 and moved.boundary[0, 0] == -1.0
-    with_vein, index = sketch.with_new_vein().inserted(0, np.array([0.5, 0.5]), 0.2)
-    assert index == 0 and with_vein.veins[0].tolist() == [[0.5, 0.5, 0.2]]
+    with_vein = sketch.with_vein(np.array([[0.5, 0.5, 0.2]]))
+    assert sketch.veins == () and with_vein.veins[0].tolist() == [[0.5, 0.5, 0.2]]
     assert with_vein.default_height(0, np.array([0.6, 0.5])) == 0.2
     assert len(with_vein.deleted(BOUNDARY, 1).boundary) == 3
+    assert with_vein.deleted(0, 0).veins == ()  # a vein without points goes
 
 
 def test_a_sketch_survives_its_dict():

@@ -1,14 +1,16 @@
-"""The worker on its own: latest request wins, failures are reported, nothing runs on the
-main thread."""
+"""The worker on its own: newest request wins, failures come back as exception objects logged
+with their traceback, side tasks run beside the pipeline, nothing runs on the main thread."""
 
 from __future__ import annotations
 
+import logging
 import threading
 
 import pytest
 
 from leafstudio.demos import demo
-from leafstudio.gui.worker import PipelineWorker
+from leafstudio.errors import LeafError
+from leafstudio.gui.worker import PIPELINE, Worker
 from leafstudio.model import Leaf, Params
 
 from .conftest import FAST, WAIT_MS
@@ -16,56 +18,93 @@ from .conftest import FAST, WAIT_MS
 
 @pytest.fixture
 def worker():
-    w = PipelineWorker()
+    w = Worker()
     yield w
     w.shutdown()
 
 
+def collect(worker: Worker) -> dict[str, list]:
+    got: dict[str, list] = {"yielded": [], "done": [], "failed": [], "stages": []}
+    worker.yielded.connect(lambda kind, jid, value: got["yielded"].append((kind, jid, value)))
+    worker.done.connect(lambda kind, jid, value: got["done"].append((kind, jid, value)))
+    worker.failed.connect(lambda kind, jid, exc: got["failed"].append((kind, jid, exc)))
+    worker.stage_started.connect(lambda kind, jid, name: got["stages"].append(jid))
+    return got
+
+
 def test_newer_requests_replace_older_ones(worker, qtbot):
     leaf = demo("nested")
-    finished, stages = [], []
-    worker.finished.connect(finished.append)
-    worker.stage_started.connect(lambda rid, name: stages.append(rid))
+    got = collect(worker)
     for k in range(1, 13):  # twelve requests while the first is still running
-        worker.submit(leaf, FAST.with_(k=k))
-    qtbot.waitUntil(lambda: worker.is_idle() and bool(finished), timeout=WAIT_MS)
-    assert finished[-1].result.params.k == 12
-    assert finished[-1].request.id == worker.last_id
-    assert len(finished) <= 2  # at most the first (if it beat the others) and the last
-    assert len(set(stages)) <= 3  # only a few requests ever started a stage
-    assert all(o.thread != threading.main_thread().ident for o in finished)
+        worker.submit_pipeline(leaf, FAST.with_(k=k))
+    qtbot.waitUntil(lambda: worker.is_idle() and bool(got["yielded"]), timeout=WAIT_MS)
+    outcomes = [value for _, _, value in got["yielded"]]
+    assert outcomes[-1].result.params.k == 12
+    assert outcomes[-1].request.id == worker.last_id
+    assert len(outcomes) <= 2  # at most the first (if it beat the others) and the last
+    assert len(set(got["stages"])) <= 3  # only a few requests ever started a stage
+    assert all(o.thread != threading.main_thread().ident for o in outcomes)
 
 
 def test_a_live_request_lets_the_running_one_finish(worker, qtbot):
     leaf = demo("nested")
-    finished = []
-    worker.finished.connect(finished.append)
-    started = []
-    worker.stage_started.connect(lambda rid, name: started.append(rid))
-    first = worker.submit(leaf, FAST.with_(k=2))
-    qtbot.waitUntil(lambda: first in started, timeout=WAIT_MS)
-    worker.submit(leaf, FAST.with_(k=3), interrupt=False)
-    qtbot.waitUntil(lambda: worker.is_idle() and len(finished) == 2, timeout=WAIT_MS)
-    assert [o.result.params.k for o in finished] == [2, 3]
+    got = collect(worker)
+    first = worker.submit_pipeline(leaf, FAST.with_(k=2))
+    qtbot.waitUntil(lambda: first in got["stages"], timeout=WAIT_MS)
+    worker.submit_pipeline(leaf, FAST.with_(k=3), interrupt=False)
+    qtbot.waitUntil(lambda: worker.is_idle() and len(got["yielded"]) == 2, timeout=WAIT_MS)
+    assert [o.result.params.k for _, _, o in got["yielded"]] == [2, 3]
 
 
-def test_a_failure_is_reported_with_its_message(worker, qtbot):
+def test_a_failure_comes_back_as_the_exception_itself(worker, qtbot):
     line = Leaf(boundary=[[t, 2 * t, 0] for t in range(10)])
     with qtbot.waitSignal(worker.failed, timeout=WAIT_MS) as failure:
-        request = worker.submit(line, Params(grid=32))
-    assert failure.args[0] == request
-    assert "one line" in failure.args[1]
+        request = worker.submit_pipeline(line, Params(grid=32))
+    kind, job_id, exc = failure.args
+    assert (kind, job_id) == (PIPELINE, request)
+    assert isinstance(exc, LeafError) and "one line" in str(exc)
+
+
+def test_an_unexpected_error_is_logged_with_its_traceback(worker, qtbot, caplog):
+    def broken(context, value):
+        return {}[value]
+
+    with (
+        caplog.at_level(logging.ERROR, logger="leafstudio.gui"),
+        qtbot.waitSignal(worker.failed, timeout=WAIT_MS) as failure,
+    ):
+        worker.submit("fidelity", broken, "missing")
+    assert isinstance(failure.args[2], KeyError)
+    record = caplog.records[-1]
+    assert record.exc_info is not None and record.exc_info[0] is KeyError
+    assert "broken" in caplog.text  # the traceback names the failing function
+
+
+def test_side_tasks_run_while_the_pipeline_is_busy(worker, qtbot):
+    leaf = demo("nested")
+    release = threading.Event()
+    got = collect(worker)
+
+    def slow_stage(context, value):
+        release.wait(10)
+        return value
+
+    worker.submit("poisson", slow_stage, "side")  # holds the side lane until released
+    request = worker.submit_pipeline(leaf, FAST)
+    qtbot.waitUntil(lambda: any(j == request for _, j, _ in got["yielded"]), timeout=WAIT_MS)
+    assert not got["done"] or got["done"][-1][0] == PIPELINE  # the side task still waits
+    release.set()
+    qtbot.waitUntil(lambda: any(k == "poisson" for k, _, _ in got["done"]), timeout=WAIT_MS)
+    qtbot.waitUntil(worker.is_idle, timeout=WAIT_MS)
 
 
 def test_the_pipeline_cache_is_kept_between_runs_of_one_leaf(worker, qtbot):
     leaf = demo("nested")
-    with qtbot.waitSignal(worker.finished, timeout=WAIT_MS):
-        worker.submit(leaf, FAST)
-    outcomes, measured = [], []
-    worker.finished.connect(outcomes.append)
-    worker.measured.connect(lambda rid, seconds: measured.append(rid))
-    request = worker.submit(leaf, FAST.with_(k=5))
-    qtbot.waitUntil(lambda: request in measured, timeout=WAIT_MS)
-    outcome = outcomes[-1]
+    got = collect(worker)
+    first = worker.submit_pipeline(leaf, FAST)
+    qtbot.waitUntil(lambda: any(j == first for _, j, _ in got["done"]), timeout=WAIT_MS)
+    request = worker.submit_pipeline(leaf, FAST.with_(k=5))
+    qtbot.waitUntil(lambda: any(j == request for _, j, _ in got["done"]), timeout=WAIT_MS)
+    outcome = got["yielded"][-1][2]
     assert "frame" not in outcome.result.ran and "layers" in outcome.timings
     assert "veins" in outcome.result.metrics  # computed on the worker thread

@@ -1,0 +1,125 @@
+"""Framing a leaf in the 3D view, without Qt or VTK: the blade's robust bounds on its plane, and
+a camera that shows them filling most of the view in both directions.
+
+Bounds are taken in the view frame (the sketch's plane, else the result's), between low and high
+percentiles of the mesh's points, so that a few stray points or a thin petiole do not shrink the
+blade. The camera's distance follows from the box's projection on the screen's two axes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from leafstudio.core.plane import Frame
+
+LOW, HIGH = 1.0, 99.0  # percentiles of the blade's points along each frame axis
+PAD = 0.04  # each side, as a share of the larger extent
+FILL = 0.86  # share of the viewport the framed box fills along its tighter axis
+CONTAIN_SLACK = 0.1  # a result still fits the framed box within this share of its size
+SAMPLE = 20_000  # points used for the percentiles, at most
+
+
+@dataclass(frozen=True)
+class BladeBounds:
+    """A box on a frame: lo and hi along (u, v, normal), and the frame."""
+
+    frame: Frame
+    lo: np.ndarray
+    hi: np.ndarray
+
+    @property
+    def size(self) -> float:
+        return float(np.max(self.hi - self.lo))
+
+    def contains(self, other: BladeBounds) -> bool:
+        """True when `other` lies inside this box (with some slack) along the plane."""
+        slack = CONTAIN_SLACK * self.size
+        return bool(
+            np.all(other.lo[:2] >= self.lo[:2] - slack)
+            and np.all(other.hi[:2] <= self.hi[:2] + slack)
+        )
+
+    def union(self, other: BladeBounds) -> BladeBounds:
+        return BladeBounds(self.frame, np.minimum(self.lo, other.lo), np.maximum(self.hi, other.hi))
+
+    def corners(self) -> np.ndarray:
+        """(8, 3) world points of the box."""
+        grid = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], float)
+        local = self.lo + grid * (self.hi - self.lo)
+        return self.frame.to_world(local[:, :2], local[:, 2])
+
+
+def blade_bounds(points: np.ndarray, frame: Frame) -> BladeBounds:
+    """Robust bounds of (n, 3) world points (a mesh's) on `frame`: between the LOW and HIGH
+    percentiles along u, v and the normal, padded by PAD of the larger extent."""
+    points = np.asarray(points, dtype=float)
+    if len(points) > SAMPLE:
+        points = points[:: len(points) // SAMPLE + 1]
+    xy, h = frame.to_plane(points)
+    local = np.column_stack([xy, h])
+    lo, hi = np.percentile(local, [LOW, HIGH], axis=0) if len(local) else (np.zeros(3),) * 2
+    pad = PAD * max(float(np.max(hi - lo)), 1e-9)
+    return BladeBounds(frame, lo - pad, hi + pad)
+
+
+def view_direction(preset: str, frame: Frame) -> tuple[np.ndarray, np.ndarray]:
+    """From the focus towards the camera, and the view-up, for a preset: "top" looks down the
+    normal with u to the right and v up (as the sketch shows the plane); "side" along the width;
+    "iso" from above one side and the base, so that the long axis runs across the view."""
+    n, u, v = frame.normal, frame.u, frame.v
+    if preset == "top":
+        return n, v
+    if preset == "side":
+        return -v, n
+    return 0.62 * n - 0.62 * v - 0.48 * u, n
+
+
+def fit_camera(
+    bounds: BladeBounds,
+    direction: np.ndarray,
+    up: np.ndarray,
+    view_angle: float = 30.0,
+    aspect: float = 1.0,
+    fill: float = FILL,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Position, focal point and view-up of a perspective camera (vertical `view_angle` degrees,
+    viewport width / height `aspect`) looking along -`direction` at the box, so that the box's
+    projection fills `fill` of the view along its tighter axis."""
+    direction = np.asarray(direction, float) / np.linalg.norm(direction)
+    up = np.asarray(up, float)
+    up = up - (up @ direction) * direction
+    up /= np.linalg.norm(up)
+    right = np.cross(up, direction)
+    corners = bounds.corners()
+    focus = 0.5 * (corners.min(axis=0) + corners.max(axis=0))
+    rel = corners - focus
+    x, y, z = rel @ right, rel @ up, rel @ direction
+    focus = focus + 0.5 * (x.max() + x.min()) * right + 0.5 * (y.max() + y.min()) * up
+    half_w, half_h = 0.5 * np.ptp(x), 0.5 * np.ptp(y)
+    tan = np.tan(np.radians(view_angle) / 2)
+    distance = max(half_h / (tan * fill), half_w / (tan * aspect * fill)) + float(z.max())
+    distance = max(distance, 1e-6)
+    return focus + distance * direction, focus, up
+
+
+def projected_fill(
+    bounds: BladeBounds,
+    position: np.ndarray,
+    focus: np.ndarray,
+    up: np.ndarray,
+    view_angle: float,
+    aspect: float,
+) -> tuple[float, float]:
+    """The share of the viewport's width and height the box's corners span (perspective)."""
+    direction = (position - focus) / np.linalg.norm(position - focus)
+    up = up - (up @ direction) * direction
+    up /= np.linalg.norm(up)
+    right = np.cross(up, direction)
+    rel = bounds.corners() - position
+    depth = -(rel @ direction)
+    tan = np.tan(np.radians(view_angle) / 2)
+    sx = (rel @ right) / (depth * tan * aspect)
+    sy = (rel @ up) / (depth * tan)
+    return float(np.ptp(sx) / 2), float(np.ptp(sy) / 2)
