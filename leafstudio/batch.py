@@ -244,18 +244,16 @@ _PINNED = False
 
 
 def pin_threads() -> None:
-    """One BLAS thread in this process (the workers run side by side), and one numba thread if
-    numba is not loaded yet (leafstudio's kernels are serial: numba's pool is never started)."""
+    """One BLAS thread and one numba thread in this process (the workers run side by side);
+    done once per process."""
     global _PINNED
     if _PINNED:
         return
-    import sys
-
+    import numba
     from threadpoolctl import threadpool_limits
 
-    threadpool_limits(1)
-    if "numba" not in sys.modules:
-        os.environ["NUMBA_NUM_THREADS"] = "1"
+    numba.set_num_threads(1)  # for any parallel kernel (leafstudio's are serial today)
+    threadpool_limits(1)  # after numba: its OpenMP layer too
     _PINNED = True
 
 
@@ -322,7 +320,9 @@ def _reconstruct(job: Job) -> dict[str, Any]:
     if job.mesh:
         from leafstudio.io import save_mesh
 
-        save_mesh(result, Path(job.out_dir) / job.mesh)
+        # the bare mesh: normals, UVs and the point arrays, without the texture image and the
+        # closed-form normals a Result gets (a second per leaf; `reconstruct` writes those)
+        save_mesh(result.triangle_mesh, Path(job.out_dir) / job.mesh)
         row["mesh"] = job.mesh
     row["warnings"] = "; ".join(result.warnings) or None
     return row
@@ -518,17 +518,19 @@ def _alive(pid: int) -> bool:
     return True
 
 
-def remove_temporaries(folder: Path, suffix: str, recursive: bool = True, stem: str = "") -> int:
+def remove_temporaries(
+    folder: Path, suffixes: Sequence[str], recursive: bool = True, stem: str = ""
+) -> int:
     """Delete the temporary files that atomic writes killed midway left in `folder` (and below,
-    if `recursive`): those for targets ending with `suffix` (and named `stem`..., if given), of
-    no live process. Returns how many."""
+    if `recursive`): those of no live process, for targets ending with one of `suffixes` (and
+    named `stem`..., if given). Returns how many."""
     removed = 0
     if not folder.is_dir():
         return 0
     walk = os.walk(folder) if recursive else [(str(folder), [], os.listdir(folder))]
     for where, _, names in walk:
         for name in names:
-            if not name.startswith(f".{stem}") or not name.lower().endswith(suffix):
+            if not name.startswith(f".{stem}") or not name.lower().endswith(tuple(suffixes)):
                 continue
             part = _PART.match(name)
             if (part and not _alive(int(part.group(1)))) or (not part and _MKSTEMP.match(name)):
@@ -722,9 +724,10 @@ class Batch:
     def __iter__(self) -> Iterator[dict[str, Any]]:
         # what a killed run's atomic writes left: meshes under out_dir, the table beside it
         if self.settings.format != "none":
-            remove_temporaries(self.out_dir, f".{self.settings.format}")
+            companions = (".mtl", ".png") if self.settings.format == "obj" else ()
+            remove_temporaries(self.out_dir, (f".{self.settings.format}", *companions))
         for path in {self.table.path, self.table.journal}:
-            remove_temporaries(path.parent, path.suffix.lower(), False, path.stem)
+            remove_temporaries(path.parent, (path.suffix.lower(),), False, path.stem)
         kept = self._kept()
         self.resumed = len(kept)
         executor = None

@@ -257,7 +257,7 @@ def test_inputs_from_folders_and_patterns_leave_out_the_output_folder(tmp_path, 
     (out / "a" / "leaf0.ply").write_text("ply")
     (out / "a" / ".leaf0.ply.12ab34cd.ply").write_text("x")  # tempfile's kind
     assert len(find_inputs([leaves], exclude=[out])) == 6
-    assert remove_temporaries(out, ".ply") == 1 and (out / "a" / "leaf0.ply").exists()
+    assert remove_temporaries(out, (".ply",)) == 1 and (out / "a" / "leaf0.ply").exists()
     run = Batch([leaves], None, out, jobs=1)
     assert [j.mesh for j in run.jobs][:1] == ["a/leaf0.ply"]
 
