@@ -125,7 +125,11 @@ def build_parser() -> argparse.ArgumentParser:
     rec = sub.add_parser("reconstruct", help="reconstruct a leaf and write its mesh")
     _add_run_options(rec)
     rec.add_argument(
-        "-o", "--output", required=True, metavar="MESH", help=".ply, .obj, .stl, .vtp or .vtk"
+        "-o",
+        "--output",
+        required=True,
+        metavar="MESH",
+        help=".ply, .obj (+ .mtl, .png), .glb, .gltf, .stl, .3mf, .vtp or .vtk",
     )
     rec.add_argument(
         "--figure", metavar="PNG", help="also render iso and top views with the input points"
@@ -143,6 +147,27 @@ def build_parser() -> argparse.ArgumentParser:
         "--against",
         metavar="SCAN",
         help="a scan of the real leaf: report the distances from its points to the surface",
+    )
+
+    rec.add_argument(
+        "--texture",
+        default="auto",
+        metavar="auto|none|IMAGE",
+        help="the mesh's texture: auto (generated: blade and veins), none, or an image (a photo "
+        "the leaf came from by `leafstudio photo` maps back onto itself; default auto)",
+    )
+    rec.add_argument(
+        "--thickness",
+        metavar="T",
+        help="write a closed solid T thick: a fraction of the leaf length (0.01) or a length "
+        "with its unit for a leaf in millimetres (0.4mm)",
+    )
+    rec.add_argument(
+        "--lod",
+        type=int,
+        default=0,
+        metavar="N",
+        help="also write N coarser levels of detail, each with half the triangles",
     )
 
     mea = sub.add_parser("measure", help="reconstruct a leaf and print its measurements")
@@ -185,6 +210,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="go on with a cloud that does not look like one leaf (its problems become warnings)",
     )
     _add_batch_parser(sub)
+    from leafstudio.assets.cli import add_photo_parser
+
+    add_photo_parser(sub)
     return parser
 
 
@@ -272,6 +300,9 @@ def _reconstruct(args: argparse.Namespace) -> int:
     if not out.name.lower().endswith(MESH_SUFFIXES):
         raise LeafError(f"unknown mesh type; use one of {', '.join(MESH_SUFFIXES)}", str(out))
     figure = check_figure_path(args.figure) if args.figure else None
+    from leafstudio.assets.export import asset_options, check_asset_options
+
+    check_asset_options(args.texture, args.thickness, args.lod)
     outputs = [out, args.metrics, figure]  # every file this command writes
     refuse_overlap([args.input, *args.vein, args.against], outputs)
     for path in outputs:
@@ -306,7 +337,8 @@ def _reconstruct(args: argparse.Namespace) -> int:
         if fidelity is not None:
             metrics["fidelity"] = {"scan": args.against, **fidelity}
     with staged():  # every output is written in this block; renamed over the old ones at its end
-        save_mesh(result, out)
+        options = asset_options(args.texture, args.thickness, args.lod, args.input, result.length)
+        save_mesh(result, out, **options)
         if figure is not None:
             from leafstudio.figure import render_figure
             from leafstudio.safewrite import replace_atomically
@@ -414,7 +446,14 @@ COMMANDS = {
     "measure": _measure,
     "compare": _compare,
     "batch": _batch,
+    "photo": lambda args: _photo(args),
 }
+
+
+def _photo(args: argparse.Namespace) -> int:
+    from leafstudio.assets.cli import run_photo
+
+    return run_photo(args)
 
 
 class _Format(logging.Formatter):

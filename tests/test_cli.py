@@ -126,7 +126,7 @@ def test_veins_outside_the_boundary(tmp_path: Path, capsys):
 
 
 def test_unknown_output_type_and_demo(tmp_path: Path, nested_csv: Path, capsys):
-    assert main(["reconstruct", str(nested_csv), "-o", str(tmp_path / "m.gltf")]) == 2
+    assert main(["reconstruct", str(nested_csv), "-o", str(tmp_path / "m.dae")]) == 2
     assert "unknown mesh type" in _error_line(capsys)
     assert main(["demo", "maple", "-o", str(tmp_path / "x.csv")]) == 2
     assert "unknown demo 'maple'" in _error_line(capsys)
