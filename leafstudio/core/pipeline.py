@@ -46,6 +46,7 @@ from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.surface import HeightSurface, fit_surface
 from leafstudio.core.trianglemesh import TriangleMesh
 from leafstudio.core.units import ScaledSurface, Units
+from leafstudio.core.veins import vein_order
 from leafstudio.errors import LeafError
 from leafstudio.model import K_AUTO, Leaf, Params, as_leaf, as_params
 
@@ -192,6 +193,8 @@ def _frame_stage(leaf: Leaf) -> tuple[FrameStage, list[str]]:
         polygon_h = base(polygon)
     veins, heights = [], []
     projected = [frame.to_plane(vein) for vein in leaf.veins]
+    orders = [vein_order(v_xy) for v_xy, _ in projected]  # shuffled veins sorted (veins.py)
+    projected = [(v_xy[o], v_h[o]) for (v_xy, v_h), o in zip(projected, orders, strict=True)]
     distinct = [distinct_indices(v_xy, length) for v_xy, _ in projected]
     kept = thin_veins([v_xy[keep] for (v_xy, _), keep in zip(projected, distinct, strict=True)])
     for i, (v_xy, v_h) in enumerate(projected):
@@ -478,7 +481,8 @@ def _mesh_stage(
     if params.mesher == "conforming":
         xy, triangles, kept = grid_mesh()
         implicit.derivatives_on_grid(xy, grid, kept)  # kept for the curvatures below
-        z = np.concatenate([rim, surf.z[kept[guide.inside]]])
+        added = xy[n_outline : len(xy) - int(np.count_nonzero(kept))]  # against slivers
+        z = np.concatenate([rim, surf.surface(added), surf.z[kept[guide.inside]]])
         world = fs.frame.to_world(xy, z)
     else:
         xy = np.vstack([fs.polygon, nodes])
