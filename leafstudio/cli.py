@@ -263,12 +263,13 @@ def _run(args: argparse.Namespace, leaf: object):
     """The Params (see _settings) and the pipeline's Result; the run's notes are printed as
     warnings, and the chosen K when K is auto."""
     from leafstudio.core.pipeline import Pipeline
-    from leafstudio.core.plausibility import leaf_warnings
+    from leafstudio.core.plausibility import check_boundary, leaf_warnings
     from leafstudio.kernelcache import mark_cached
 
     params = _settings(args)
     _compiling_notice()
     try:
+        check_boundary(leaf.boundary)  # a figure eight would lose a lobe silently
         result = Pipeline(leaf).run(params)
     except LeafError as exc:
         raise LeafError(exc.problem, args.input) from None

@@ -445,3 +445,20 @@ def test_a_fifo_is_refused_at_once_not_read_for_ever(tmp_path):
     run = _cli(["reconstruct", str(fifo), "-o", str(tmp_path / "o.ply")], timeout=60)
     assert run.returncode == 2 and "pipe" in _one_line(run.stderr)
     assert time.monotonic() - start < 60
+
+
+def test_a_boundary_that_crosses_itself_is_an_error_naming_where(tmp_path, capsys):
+    import re
+
+    t = np.linspace(0, 2 * np.pi, 200, endpoint=False)
+    path = tmp_path / "eight.csv"
+    eight = np.column_stack([np.sin(t), 0.6 * np.sin(t) * np.cos(t), 0 * t])
+    np.savetxt(path, eight, delimiter=",")
+    assert main(["reconstruct", str(path), "-o", str(tmp_path / "o.ply"), *GRID]) == 2
+    line = _one_line(capsys.readouterr().err)
+    where = re.search(r"crosses itself near \(([^)]*)\)", line)
+    assert where and np.allclose([float(v) for v in where.group(1).split(",")], 0, atol=1e-6)
+    # a plain ellipse in the same order is fine
+    ellipse = tmp_path / "ellipse.csv"
+    np.savetxt(ellipse, np.column_stack([np.cos(t), 0.6 * np.sin(t), 0 * t]), delimiter=",")
+    assert main(["reconstruct", str(ellipse), "-o", str(tmp_path / "o.ply"), *GRID]) == 0

@@ -124,3 +124,64 @@ def leaf_warnings(leaf) -> list[str]:
                 f"(length {length:.4g})"
             )
     return notes
+
+
+CROSSING_SHARE = 0.05  # each side of a crossing encloses at least this share of the area
+JUMP = 8.0  # a step this many median steps long ends one loop of an ordered boundary
+
+
+def _plane_coordinates(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(n, 2) coordinates in the points' best-fit plane, its centre and its two axes."""
+    centre = points.mean(axis=0)
+    _, _, axes = np.linalg.svd(points - centre, full_matrices=False)
+    return (points - centre) @ axes[:2].T, centre, axes[:2]
+
+
+def boundary_crossing(boundary: np.ndarray) -> np.ndarray | None:
+    """Where an ordered boundary crosses itself into two or more lobes (a figure eight), as a 3D
+    point; None for a simple outline, an unordered cloud, or the small loops of a noisy edge.
+
+    Only a boundary given in order (consecutive points close together, one closed loop) can
+    cross itself; an unordered cloud has no crossing to speak of.
+    """
+    import shapely
+
+    points = np.asarray(boundary, dtype=float)
+    if len(points) < 8:
+        return None
+    xy, centre, axes = _plane_coordinates(points)
+    steps = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1)
+    typical = float(np.median(steps))
+    hull = shapely.MultiPoint(xy).convex_hull
+    if typical <= 0 or hull.area <= 0 or np.any(steps > JUMP * typical):
+        return None  # unordered, or several loops, or an open arc: not one closed ordered loop
+    if steps.sum() > 4 * hull.length:
+        return None  # a zigzag through a cloud, not an outline
+    ring = shapely.LineString(np.vstack([xy, xy[:1]]))
+    if ring.is_simple:
+        return None
+    lobes = list(
+        shapely.get_parts(shapely.polygonize(shapely.get_parts(shapely.unary_union(ring))))
+    )
+    total = sum(lobe.area for lobe in lobes)
+    big = sorted(
+        (lobe for lobe in lobes if lobe.area >= CROSSING_SHARE * total), key=lambda p: -p.area
+    )
+    if len(big) < 2:
+        return None  # only small loops: a noisy edge, which the outline smooths
+    where = big[0].boundary.intersection(big[1].boundary)
+    if where.is_empty:
+        where = big[0].boundary.intersection(ring)
+    x, y = np.asarray(where.representative_point().coords[0])
+    return centre + x * axes[0] + y * axes[1]
+
+
+def check_boundary(boundary: np.ndarray) -> None:
+    """Raise LeafError naming where an ordered boundary crosses itself (see boundary_crossing)."""
+    where = boundary_crossing(boundary)
+    if where is not None:
+        nearest = int(np.argmin(np.linalg.norm(np.asarray(boundary) - where, axis=1)))
+        raise LeafError(
+            "the boundary crosses itself near ({:.4g}, {:.4g}, {:.4g}), by boundary point {}; "
+            "a leaf's outline must not (it would drop a lobe)".format(*where, nearest + 1)
+        )
