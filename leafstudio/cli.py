@@ -210,6 +210,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="go on with a cloud that does not look like one leaf (its problems become warnings)",
     )
     _add_batch_parser(sub)
+    from leafstudio.forms.cli import add_form_parser, add_veins_parser
+
+    add_form_parser(sub)
+    add_veins_parser(sub)
     from leafstudio.assets.cli import add_photo_parser
 
     add_photo_parser(sub)
@@ -447,6 +451,8 @@ COMMANDS = {
     "measure": _measure,
     "compare": _compare,
     "batch": _batch,
+    "form": lambda args: _forms_cli().run_form(args),
+    "veins": lambda args: _forms_cli().run_veins(args),
     "photo": lambda args: _photo(args),
 }
 
@@ -455,6 +461,12 @@ def _photo(args: argparse.Namespace) -> int:
     from leafstudio.assets.cli import run_photo
 
     return run_photo(args)
+
+
+def _forms_cli():
+    import leafstudio.forms.cli as forms_cli
+
+    return forms_cli
 
 
 class _Format(logging.Formatter):

@@ -23,6 +23,7 @@ farthest point along +x is at x = 1.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,7 +47,8 @@ SINUS_REGION = 0.45  # lobe sinuses where the half-width is at least this share 
 SINUS_DEPTH = 0.6  # a sinus pulls the margin this share of the way to its anchor
 PALMATE_ANCHOR = 0.15  # palmate sinuses point at this point of the midrib (x)
 PALMATE_ASPECT = 1.7  # leaves at most this long for their width lobe palmately (with palmate veins)
-POINTS_PER_TOOTH = 10
+POINTS_PER_TOOTH = 10  # at least
+SPACING = 0.005  # the outline's point spacing, in leaf lengths (at most)
 
 
 @dataclass(frozen=True)
@@ -110,8 +112,10 @@ def half_profile(
     margin and before the final scaling."""
     t = 0.5 - 0.5 * np.cos(np.linspace(0, np.pi, DENSE))  # denser at both ends
     knots = np.array(spec.body, dtype=float)
-    body = PchipInterpolator(knots[:, 0], knots[:, 1])(t) if len(knots) > 2 else np.interp(
-        t, knots[:, 0], knots[:, 1]
+    body = (
+        PchipInterpolator(knots[:, 0], knots[:, 1])(t)
+        if len(knots) > 2
+        else np.interp(t, knots[:, 0], knots[:, 1])
     )
     scale = 0.5 / aspect / body.max()
     apex_factor = _end_factor(apex, 1 - t, spec.apex_zone, scale * body[-1])
@@ -152,7 +156,7 @@ def _normals(x: np.ndarray, y: np.ndarray) -> np.ndarray:
 def _tooth_profile(margin: str, phase: np.ndarray) -> np.ndarray:
     """0 at the sinuses (phase 0 and 1), 1 at the tip."""
     if margin == "crenate":
-        return np.sin(np.pi * phase) ** 0.5
+        return 1 - (2 * phase - 1) ** 2
     if margin == "sinuate":
         return 0.5 - 0.5 * np.cos(2 * np.pi * phase)
     tip = TOOTH[margin][1]
@@ -175,9 +179,10 @@ def _toothed_half(
     width = (hi - lo) / max(teeth, 1)
     breaks[1:-1] += rng.uniform(-0.15, 0.15, teeth - 1) * width
     tip = TOOTH[margin][1]
-    phases = np.unique(np.r_[np.linspace(0, 1, POINTS_PER_TOOTH, endpoint=False), tip])
+    per_tooth = 4 * max(POINTS_PER_TOOTH, int(np.ceil(width / SPACING)))
+    phases = np.unique(np.r_[np.linspace(0, 1, per_tooth, endpoint=False), tip])
     inner = (breaks[:-1, None] + np.diff(breaks)[:, None] * phases).ravel()
-    step = width / POINTS_PER_TOOTH
+    step = min(width / POINTS_PER_TOOTH, SPACING)
     before = np.arange(0, lo, step)
     after = np.arange(hi, s[-1], step)
     samples = np.unique(np.r_[before, inner, after, s[-1]])
@@ -189,7 +194,25 @@ def _toothed_half(
     within = (samples >= lo) & (samples <= hi)
     height = np.minimum(TOOTH[margin][0] * np.diff(breaks)[index], 0.5 * py)
     offset = np.where(within, height * _tooth_profile(margin, phase), 0.0)
-    return np.column_stack([px + offset * nx, py + offset * ny])
+    dense = np.column_stack([px + offset * nx, py + offset * ny])
+    corner = np.isin(samples, breaks) | (within & np.isclose(phase, tip))
+    return _even_between(dense, np.flatnonzero(corner), step)
+
+
+def _even_between(points: np.ndarray, corners: np.ndarray, step: float) -> np.ndarray:
+    """The polyline resampled evenly along its length, piece by piece between the corners (kept
+    as vertices): an outline the pipeline takes as clean, its points where the teeth turn."""
+    cuts = np.unique(np.r_[0, corners, len(points) - 1])
+    out = []
+    for a, b in itertools.pairwise(cuts):
+        piece = points[a : b + 1]
+        s = _arc_length(piece[:, 0], piece[:, 1])
+        grid = np.linspace(0, s[-1], max(int(np.ceil(s[-1] / step)), 1) + 1)[:-1]
+        out.append(
+            np.column_stack([np.interp(grid, s, piece[:, 0]), np.interp(grid, s, piece[:, 1])])
+        )
+    out.append(points[-1:])
+    return np.vstack(out)
 
 
 def _resampled(x: np.ndarray, y: np.ndarray, count: int) -> np.ndarray:
@@ -200,9 +223,7 @@ def _resampled(x: np.ndarray, y: np.ndarray, count: int) -> np.ndarray:
 
 def _pull(points: np.ndarray, s: np.ndarray, at: float, reach: float, anchor, depth: float):
     """Pull the points within arc distance `reach` of `at` toward `anchor` (a sinus)."""
-    weight = np.where(
-        np.abs(s - at) < reach, np.cos(0.5 * np.pi * (s - at) / reach) ** 2, 0.0
-    )
+    weight = np.where(np.abs(s - at) < reach, np.cos(0.5 * np.pi * (s - at) / reach) ** 2, 0.0)
     return points + depth * weight[:, None] * (np.asarray(anchor) - points)
 
 
@@ -252,7 +273,7 @@ def form_outline(
     apex_depth = SINUS_DEPTH * 0.7 * rng.uniform(0.9, 1.1)  # the same on both halves
     for side in range(2):
         if margin in ("entire", "lobed") or per_side[side] == 0:
-            points = _resampled(x, y, 400)
+            points = _resampled(x, y, max(200, int(_arc_length(x, y)[-1] / SPACING)))
             if margin == "lobed":
                 radial = palmate and aspect <= PALMATE_ASPECT  # palmately lobed (wide) leaves
                 points = _lobed_half(points, lobes, radial, apex_depth, rng)

@@ -143,29 +143,61 @@ def _chords(poly: Polygon, xs: np.ndarray, mid: np.ndarray) -> np.ndarray:
     """(n, 2) the y-range of the blade's cross-section at each x (the part holding mid[i])."""
     span = 4 * (poly.bounds[3] - poly.bounds[1]) + 1
     lines = shapely.linestrings(
-        np.stack([np.column_stack([xs, np.full_like(xs, -span)]),
-                  np.column_stack([xs, np.full_like(xs, span)])], axis=1)
+        np.stack(
+            [
+                np.column_stack([xs, np.full_like(xs, -span)]),
+                np.column_stack([xs, np.full_like(xs, span)]),
+            ],
+            axis=1,
+        )
     )
     out = np.zeros((len(xs), 2))
-    for i, cut in enumerate(shapely.intersection(poly, lines)):
-        parts = [g for g in getattr(cut, "geoms", [cut]) if isinstance(g, LineString) and
-                 not g.is_empty]
+    for i, cut in enumerate(shapely.intersection(getattr(poly, "poly", poly), lines)):
+        parts = [
+            g for g in getattr(cut, "geoms", [cut]) if isinstance(g, LineString) and not g.is_empty
+        ]
         if not parts:
             out[i] = mid[i], mid[i]
             continue
         ranges = [(min(c[1] for c in g.coords), max(c[1] for c in g.coords)) for g in parts]
-        gaps = [0 if lo <= mid[i] <= hi else min(abs(lo - mid[i]), abs(hi - mid[i]))
-                for lo, hi in ranges]
+        gaps = [
+            0 if lo <= mid[i] <= hi else min(abs(lo - mid[i]), abs(hi - mid[i]))
+            for lo, hi in ranges
+        ]
         out[i] = ranges[int(np.argmin(gaps))]
     return out
 
 
-def _inside(poly: Polygon, pts: np.ndarray, margin: float = 0.0) -> np.ndarray:
-    pts = np.asarray(pts, dtype=float)
-    inside = shapely.contains_xy(poly, pts[:, 0], pts[:, 1])
-    if margin > 0:
-        inside &= shapely.distance(poly.exterior, shapely.points(pts)) > margin
-    return inside
+class _Blade:
+    """The blade's polygon with a fast inside test and distance to the margin (a k-d tree over
+    the margin resampled at a fine step: shapely's exact distance is many times slower)."""
+
+    def __init__(self, poly: Polygon) -> None:
+        self.poly = poly
+        shapely.prepare(poly)
+        ring = poly.exterior
+        step = ring.length / max(int(ring.length / 0.002), 64)
+        dense = shapely.get_coordinates(ring.segmentize(step))
+        self.tree = cKDTree(dense)
+        self.area = poly.area
+
+    def __getattr__(self, name: str):
+        return getattr(self.poly, name)
+
+    def gap(self, pts: np.ndarray) -> np.ndarray:
+        """(n,) distance from each point to the margin."""
+        return self.tree.query(np.asarray(pts, dtype=float))[0]
+
+    def inside(self, pts: np.ndarray, margin: float = 0.0) -> np.ndarray:
+        pts = np.asarray(pts, dtype=float)
+        inside = shapely.contains_xy(self.poly, pts[:, 0], pts[:, 1])
+        if margin > 0:
+            inside &= self.gap(pts) > margin
+        return inside
+
+
+def _inside(blade: _Blade, pts: np.ndarray, margin: float = 0.0) -> np.ndarray:
+    return blade.inside(pts, margin)
 
 
 def _midrib(poly: Polygon) -> np.ndarray:
@@ -275,7 +307,7 @@ def _colonize(
         direction = total / np.maximum(np.linalg.norm(total, axis=1), 1e-12)[:, None]
         pull = TROPISM * bias[tree_of[growing]]
         if arcuate:
-            gap = shapely.distance(poly.exterior, shapely.points(nodes[growing]))
+            gap = poly.gap(nodes[growing])
             pull = pull * (1 + 3 * np.clip(1 - gap / (4 * h), 0, 1))[:, None]
         direction = direction + pull
         direction /= np.maximum(np.linalg.norm(direction, axis=1), 1e-12)[:, None]
@@ -323,7 +355,14 @@ def _to_margin(poly: Polygon, path: np.ndarray) -> np.ndarray:
     steps = path[-1] + np.outer(np.arange(1, 80) * STEP / 2, d)
     ok = _inside(poly, steps, INSET)
     n = np.argmin(ok) if not ok.all() else len(steps)
-    return np.vstack([path, steps[:n]])
+    path = np.vstack([path, steps[:n]])
+    gap, nearest = poly.tree.query(path[-1])
+    if gap > 2 * STEP:  # stopped short (its way ahead leaves the blade): turn to the margin
+        target = poly.tree.data[nearest]
+        share = 1 - INSET / gap
+        t = np.linspace(0, share, int(gap / (STEP / 2)) + 2)[1:]
+        path = np.vstack([path, path[-1] + np.outer(t, target - path[-1])])
+    return path
 
 
 def _arch(poly: Polygon, path: np.ndarray, others: list[np.ndarray], h: float) -> np.ndarray:
@@ -335,8 +374,9 @@ def _arch(poly: Polygon, path: np.ndarray, others: list[np.ndarray], h: float) -
     start = ring.project(shapely.Point(path[-1]))
     pos = np.array([ring.interpolate(start + s).coords[0] for s in (-STEP, STEP)])
     sign = -1 if pos[0][0] > pos[1][0] else 1
-    walk = np.array([ring.interpolate(start + sign * STEP * (i + 1)).coords[0]
-                     for i in range(int(0.35 / STEP))])
+    walk = np.array(
+        [ring.interpolate(start + sign * STEP * (i + 1)).coords[0] for i in range(int(0.35 / STEP))]
+    )
     ahead = walk[:, 0] > path[-1][0] - STEP
     walk = walk[: np.argmin(ahead) if not ahead.all() else len(walk)]
     if len(walk) == 0 or not others:
@@ -420,9 +460,8 @@ def grow_veins(
     v = np.array([-u[1], u[0]])
     local = lambda p: np.column_stack([(p - b) @ u, (p - b) @ v]) / length  # noqa: E731
     world = lambda q: b + length * (q[:, :1] * u + q[:, 1:2] * v)  # noqa: E731
-    blade = Polygon(local(np.asarray(poly.exterior.coords)))
-    if not blade.is_valid:
-        blade = blade.buffer(0)
+    shape = Polygon(local(np.asarray(poly.exterior.coords)))
+    blade = _Blade(shape if shape.is_valid else shape.buffer(0))
 
     midrib = _midrib(blade)
     veins: list[np.ndarray] = []
@@ -459,14 +498,11 @@ def grow_veins(
             else:
                 path = _to_margin(blade, path)
             path = _cut_crossings(path, veins)
-            if len(path) >= 3:
+            reaches = venation == "arcuate" or blade.gap(path[-1:])[0] < 2 * STEP
+            if len(path) >= 3 and reaches:  # an open secondary cut short of the margin is dropped
                 veins.append(path)
-    ring = blade.exterior
     lift = _lifter(xy, heights, frame, poly)
-    return [
-        lift(world(vein), HEIGHT_RATIO * length * shapely.distance(ring, shapely.points(vein)))
-        for vein in veins
-    ]
+    return [lift(world(vein), HEIGHT_RATIO * length * blade.gap(vein)) for vein in veins]
 
 
 def _lifter(xy, heights, frame, poly):
