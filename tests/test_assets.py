@@ -329,3 +329,14 @@ def test_levels_of_detail_halve_the_triangles_and_keep_the_margin(nested: ls.Res
         assert np.all(normals @ nested.frame.normal > 0)  # closed-form, the upper side
     ls.save_mesh(nested, tmp_path / "leaf.obj", lod=1)
     assert (tmp_path / "leaf_lod1.obj").is_file() and (tmp_path / "leaf_lod1.mtl").is_file()
+
+
+def test_an_obj_never_writes_its_texture_over_the_image_it_maps(nested: ls.Result, tmp_path):
+    from PIL import Image
+
+    photo = tmp_path / "leaf.png"
+    Image.new("RGB", (32, 32), (1, 2, 3)).save(photo)
+    before = photo.read_bytes()
+    with pytest.raises(ls.LeafError, match="is also an input"):
+        ls.save_mesh(nested, tmp_path / "leaf.obj", texture=str(photo))
+    assert photo.read_bytes() == before and not (tmp_path / "leaf.obj").exists()

@@ -123,6 +123,12 @@ def export_mesh(
         )
     if not isinstance(lod, int) or not 0 <= lod <= MAX_LOD:
         raise LeafError(f"lod must be a whole number from 0 to {MAX_LOD}, got {lod}")
+    if not (isinstance(texture, str) and texture in TEXTURES):  # never write over the image
+        from leafstudio.assets.writers import written_paths
+        from leafstudio.safewrite import refuse_overlap
+
+        image = texture.image if isinstance(texture, PhotoTexture) else texture
+        refuse_overlap([image], written_paths(path, lod + 1, textured=True))
     assets = mesh_assets(result_or_mesh, texture, thickness, lod, gltf=suffix in (".glb", ".gltf"))
     write_assets(assets, path)
 

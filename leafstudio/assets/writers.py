@@ -195,6 +195,21 @@ def write_assets(assets: Sequence[MeshAsset], path: Path) -> None:
         writer(asset, path if level == 0 else lod_path(path, level))
 
 
+def written_paths(path: Path, levels: int, textured: bool) -> list[Path]:
+    """Every file `write_assets` writes for `levels` levels at `path`."""
+    suffix = path.suffix.lower()
+    if suffix in GLTF_SUFFIXES:
+        return [path]
+    out = []
+    for level in range(levels):
+        target = path if level == 0 else lod_path(path, level)
+        out.append(target)
+        if suffix == ".obj":
+            mtl, png = obj_companions(target)
+            out += [mtl, png] if textured else [mtl]
+    return out
+
+
 def lod_path(path: Path, level: int) -> Path:
     """Where a format without levels of detail gets level `level`."""
     return path.with_name(f"{path.stem}_lod{level}{path.suffix}")
