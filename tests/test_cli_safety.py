@@ -462,3 +462,23 @@ def test_a_boundary_that_crosses_itself_is_an_error_naming_where(tmp_path, capsy
     ellipse = tmp_path / "ellipse.csv"
     np.savetxt(ellipse, np.column_stack([np.cos(t), 0.6 * np.sin(t), 0 * t]), delimiter=",")
     assert main(["reconstruct", str(ellipse), "-o", str(tmp_path / "o.ply"), *GRID]) == 0
+
+
+def test_a_boundary_with_a_hole_or_two_loops_keeps_the_largest_and_says_so(tmp_path, capsys):
+    t = np.linspace(0, 2 * np.pi, 200, endpoint=False)
+    outer = np.column_stack([np.cos(t), 0.6 * np.sin(t), 0 * t])
+    for name, second, what in (
+        ("hole", outer * 0.2, "1 hole inside it"),
+        ("two", outer * 0.5 + [3, 0, 0], "1 separate loop"),
+    ):
+        path = tmp_path / f"{name}.csv"
+        np.savetxt(path, np.vstack([outer, second]), delimiter=",")
+        metrics = tmp_path / f"{name}.json"
+        code = main(["reconstruct", str(path), "-o", str(tmp_path / "o.ply"), *GRID,
+                     "--metrics", str(metrics)])  # fmt: skip
+        assert code == 0
+        err = capsys.readouterr().err
+        assert f"kept the largest (points 1-200) and dropped {what}" in err
+        data = json.loads(metrics.read_text())
+        assert any("kept the largest" in w for w in data["warnings"])
+        assert abs(data["mesh"]["area"] - np.pi * 0.6) < 0.05  # the outer ellipse's area

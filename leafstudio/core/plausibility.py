@@ -185,3 +185,62 @@ def check_boundary(boundary: np.ndarray) -> None:
             "the boundary crosses itself near ({:.4g}, {:.4g}, {:.4g}), by boundary point {}; "
             "a leaf's outline must not (it would drop a lobe)".format(*where, nearest + 1)
         )
+
+
+def boundary_loops(boundary: np.ndarray) -> list[np.ndarray] | None:
+    """The point indices of each closed loop of a boundary given in order as several loops (an
+    outline and its holes, or separate outlines), the largest first; None for one loop or an
+    unordered cloud. A loop ends where the next point is far (JUMP median steps) from it."""
+    import shapely
+
+    points = np.asarray(boundary, dtype=float)
+    if len(points) < 16:
+        return None
+    xy = _plane_coordinates(points)[0]
+    steps = np.linalg.norm(np.diff(xy, axis=0), axis=1)
+    typical = float(np.median(steps))
+    if typical <= 0:
+        return None
+    cuts = np.flatnonzero(steps > JUMP * typical) + 1
+    if len(cuts) == 0 or len(cuts) > 50:
+        return None
+    loops = np.split(np.arange(len(points)), cuts)
+    for loop in loops:
+        closing = np.linalg.norm(xy[loop[-1]] - xy[loop[0]])
+        if len(loop) < 8 or closing > JUMP * typical:
+            return None  # an open piece: not loops
+    rings = [shapely.Polygon(xy[loop]) for loop in loops]
+    if sum(steps[np.setdiff1d(np.arange(len(steps)), cuts - 1)]) > 4 * sum(
+        r.convex_hull.length for r in rings
+    ):
+        return None
+    order = np.argsort([-abs(r.area) for r in rings])
+    return [loops[i] for i in order]
+
+
+def keep_outer_loop(boundary: np.ndarray) -> tuple[np.ndarray, list[str]]:
+    """The boundary's largest loop when it is given as several loops (see boundary_loops), with
+    a warning naming what was kept and what was dropped; otherwise the boundary as it is."""
+    import shapely
+
+    loops = boundary_loops(boundary)
+    if loops is None:
+        return boundary, []
+    xy = _plane_coordinates(np.asarray(boundary, dtype=float))[0]
+    outer = shapely.Polygon(xy[loops[0]]).buffer(0)
+    holes = [i for i in loops[1:] if outer.contains(shapely.Point(xy[i].mean(axis=0)))]
+    others = len(loops) - 1 - len(holes)
+
+    def span(loop: np.ndarray) -> str:
+        return f"points {loop[0] + 1}-{loop[-1] + 1}"
+
+    dropped = []
+    if holes:
+        dropped.append(f"{len(holes)} hole{'s' if len(holes) > 1 else ''} inside it (filled)")
+    if others:
+        dropped.append(f"{others} separate loop{'s' if others > 1 else ''}")
+    note = (
+        f"the boundary is {len(loops)} loops; kept the largest ({span(loops[0])}) and dropped "
+        f"{' and '.join(dropped)}: {', '.join(span(loop) for loop in loops[1:])}"
+    )
+    return np.asarray(boundary)[loops[0]], [note]
