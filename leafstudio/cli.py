@@ -522,10 +522,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = _debugging(argv)
     _configure_logging(0, 0)
-    install_signal_cleanup()
     try:
         args = build_parser().parse_args(argv)
         _configure_logging(getattr(args, "verbose", 0) or 0, getattr(args, "quiet", 0) or 0)
+        if (args.command or "gui") != "gui":  # the app's event loop keeps SIGTERM's default
+            install_signal_cleanup()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # library chatter; our own notes are printed
             code = COMMANDS[args.command or "gui"](args)

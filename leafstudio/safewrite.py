@@ -26,6 +26,7 @@ _NAME_LIMIT = 120  # characters of the target's name kept in its temporary file'
 
 _live: set[str] = set()  # temporary files of this process not yet renamed or removed
 _live_lock = threading.Lock()
+_signals_installed = False
 
 
 def _extension(name: str) -> str:
@@ -301,8 +302,10 @@ def write_bytes(path: str | os.PathLike, data: bytes | str) -> None:
 def install_signal_cleanup() -> None:
     """On SIGTERM or SIGHUP, unwind as Ctrl-C does, so temporary files are removed; call from the
     main thread (the command line does)."""
-    if threading.current_thread() is not threading.main_thread():
+    global _signals_installed
+    if _signals_installed or threading.current_thread() is not threading.main_thread():
         return
+    _signals_installed = True
 
     def stop(signum: int, _frame: object) -> None:
         remove_all_temporaries()
