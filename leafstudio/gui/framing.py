@@ -19,15 +19,19 @@ PAD = 0.04  # each side, as a share of the larger extent
 FILL = 0.86  # share of the viewport the framed box fills along its tighter axis
 CONTAIN_SLACK = 0.1  # a result still fits the framed box within this share of its size
 SAMPLE = 20_000  # points used for the percentiles, at most
+OUTLINE = 2_000  # points kept to fit the camera to the leaf's shape, not its box
 
 
 @dataclass(frozen=True)
 class BladeBounds:
-    """A box on a frame: lo and hi along (u, v, normal), and the frame."""
+    """A box on a frame: lo and hi along (u, v, normal), and the frame; `points` are world
+    points of the blade inside the box (the camera fits their projection, tighter than the
+    box's when the leaf is not a rectangle)."""
 
     frame: Frame
     lo: np.ndarray
     hi: np.ndarray
+    points: np.ndarray | None = None
 
     @property
     def size(self) -> float:
@@ -42,7 +46,17 @@ class BladeBounds:
         )
 
     def union(self, other: BladeBounds) -> BladeBounds:
-        return BladeBounds(self.frame, np.minimum(self.lo, other.lo), np.maximum(self.hi, other.hi))
+        points = [b.points for b in (self, other) if b.points is not None]
+        return BladeBounds(
+            self.frame,
+            np.minimum(self.lo, other.lo),
+            np.maximum(self.hi, other.hi),
+            np.vstack(points) if points else None,
+        )
+
+    def extent_points(self) -> np.ndarray:
+        """World points whose projection the camera frames: the blade's, else the corners."""
+        return self.points if self.points is not None and len(self.points) else self.corners()
 
     def corners(self) -> np.ndarray:
         """(8, 3) world points of the box."""
@@ -59,9 +73,14 @@ def blade_bounds(points: np.ndarray, frame: Frame) -> BladeBounds:
         points = points[:: len(points) // SAMPLE + 1]
     xy, h = frame.to_plane(points)
     local = np.column_stack([xy, h])
-    lo, hi = np.percentile(local, [LOW, HIGH], axis=0) if len(local) else (np.zeros(3),) * 2
+    if not len(local):
+        return BladeBounds(frame, np.zeros(3), np.zeros(3))
+    lo, hi = np.percentile(local, [LOW, HIGH], axis=0)
     pad = PAD * max(float(np.max(hi - lo)), 1e-9)
-    return BladeBounds(frame, lo - pad, hi + pad)
+    lo, hi = lo - pad, hi + pad
+    inside = np.all((local >= lo) & (local <= hi), axis=1)
+    kept = points[inside][:: max(1, int(inside.sum()) // OUTLINE)]
+    return BladeBounds(frame, lo, hi, kept)
 
 
 def view_direction(preset: str, frame: Frame) -> tuple[np.ndarray, np.ndarray]:
@@ -74,6 +93,37 @@ def view_direction(preset: str, frame: Frame) -> tuple[np.ndarray, np.ndarray]:
     if preset == "side":
         return -v, n
     return 0.62 * n - 0.62 * v - 0.48 * u, n
+
+
+ISO_ELEVATIONS = (35.0, 50.0, 65.0)  # degrees above the plane
+ISO_AZIMUTHS = (15.0, 30.0, 45.0, 60.0)  # degrees from the width towards the base
+
+
+def iso_direction(elevation: float, azimuth: float, frame: Frame) -> np.ndarray:
+    """From the focus towards an iso camera: `elevation` above the plane, `azimuth` turned from
+    the leaf's -v side towards its base (-u)."""
+    el, az = np.radians(elevation), np.radians(azimuth)
+    flat = np.cos(az) * -frame.v + np.sin(az) * -frame.u
+    return np.cos(el) * flat + np.sin(el) * frame.normal
+
+
+def best_iso(
+    bounds: BladeBounds, view_angle: float, aspect: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The iso direction and view-up (the normal) among a few elevations and azimuths whose
+    view of the blade fills the viewport best along its less filled axis: a long leaf in a tall
+    view is turned to run across it diagonally."""
+    best, best_fill = None, -1.0
+    for elevation in ISO_ELEVATIONS:
+        for azimuth in ISO_AZIMUTHS:
+            direction = iso_direction(elevation, azimuth, bounds.frame)
+            position, focus, up = fit_camera(
+                bounds, direction, bounds.frame.normal, view_angle, aspect
+            )
+            fill = min(projected_fill(bounds, position, focus, up, view_angle, aspect))
+            if fill > best_fill + 0.02:  # the first (lower, more frontal) of near ties
+                best, best_fill = direction, fill
+    return best, bounds.frame.normal
 
 
 def fit_camera(
@@ -92,7 +142,7 @@ def fit_camera(
     up = up - (up @ direction) * direction
     up /= np.linalg.norm(up)
     right = np.cross(up, direction)
-    corners = bounds.corners()
+    corners = bounds.extent_points()
     focus = 0.5 * (corners.min(axis=0) + corners.max(axis=0))
     rel = corners - focus
     x, y, z = rel @ right, rel @ up, rel @ direction
@@ -112,12 +162,12 @@ def projected_fill(
     view_angle: float,
     aspect: float,
 ) -> tuple[float, float]:
-    """The share of the viewport's width and height the box's corners span (perspective)."""
+    """The share of the viewport's width and height the blade spans (perspective)."""
     direction = (position - focus) / np.linalg.norm(position - focus)
     up = up - (up @ direction) * direction
     up /= np.linalg.norm(up)
     right = np.cross(up, direction)
-    rel = bounds.corners() - position
+    rel = bounds.extent_points() - position
     depth = -(rel @ direction)
     tan = np.tan(np.radians(view_angle) / 2)
     sx = (rel @ right) / (depth * tan * aspect)

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.errors import LeafError
@@ -27,8 +28,9 @@ from leafstudio.model import Leaf, Params
 
 log = logging.getLogger("leafstudio.gui")
 
-# a loaded boundary whose consecutive points are at most this many median steps apart is read
-# in its order (as core/outline.py does), so a crossing in that order is a crossing of the leaf
+# a loaded boundary whose consecutive points are at most this many times the median spacing of
+# nearest neighbours apart is read
+# in its order (as core/outline.py does): a crossing in that order is a crossing of the leaf
 ORDERED_STEP_RATIO = 8.0
 
 
@@ -182,8 +184,8 @@ def loaded_crossing(leaf: Leaf) -> np.ndarray | None:
         return None
     xy, _ = frame.to_plane(points)
     steps = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1)
-    median = float(np.median(steps))
-    if median <= 0 or steps.max() > ORDERED_STEP_RATIO * median:
+    spacing = float(np.median(cKDTree(xy).query(xy, k=2)[0][:, 1]))  # as core/outline.py
+    if spacing <= 0 or steps.max() > ORDERED_STEP_RATIO * spacing:
         return None
     found = ring_crossings(xy)
     if not len(found):
@@ -260,7 +262,7 @@ class Session:
         self.state_changed, self.result_shown, self.failed = Event(), Event(), Event()
         self.cleared, self.sketch_shown, self.crossing = Event(), Event(), Event()
         self._serials = 0
-        self._request_serial: dict[int, int] = {}
+        self._requested: dict[int, tuple[int, str]] = {}  # request id -> serial, reason
         self._framed: tuple[int, BladeBounds] | None = None
         self._edit_base: State | None = None
         self._param_base: State | None = None
@@ -410,9 +412,9 @@ class Session:
                 self.sketch_shown.emit(shown, reason == "document")
         if state.leaf is old.leaf and state.params == old.params and reason != "document":
             return
-        self._request(interrupt=not live)
+        self._request(interrupt=not live, reason=reason)
 
-    def _request(self, interrupt: bool = True) -> int:
+    def _request(self, interrupt: bool = True, reason: str = "document") -> int:
         crossing = self._crossing_of(self.state.sketch)
         self.crossings = crossing if crossing is not None else np.zeros((0, 2))
         self.crossing.emit(self.crossings)
@@ -429,9 +431,9 @@ class Session:
             self.cleared.emit()
             return 0
         self.last_id = self.submit(self.leaf, self.params, interrupt)
-        self._request_serial[self.last_id] = self.state.serial
-        for old in [i for i in self._request_serial if i < self.last_id - 64]:
-            del self._request_serial[old]
+        self._requested[self.last_id] = (self.state.serial, reason)
+        for old in [i for i in self._requested if i < self.last_id - 64]:
+            del self._requested[old]
         return self.last_id
 
     # --- worker reports ------------------------------------------------------------------------
@@ -444,7 +446,7 @@ class Session:
         if self._fallback is not None and request_id >= self._fallback.request:
             self._fallback = None
         result = outcome.result
-        serial = self._request_serial.get(request_id, self.state.serial)
+        serial, reason = self._requested.get(request_id, (self.state.serial, "document"))
         derive = self.derived is None or self._derived_leaf is not result.leaf
         if self.state.sketch is None and result.leaf is self.leaf and derive:
             self.derived = Sketch.from_result(result)
@@ -455,7 +457,7 @@ class Session:
         framing = None
         if self._framed is None or self._framed[0] != serial:
             framing = Framing(bounds, reset=True)
-        elif not self._framed[1].contains(bounds):
+        elif reason in ("edit", "undo") and not self._framed[1].contains(bounds):
             framing = Framing(bounds.union(self._framed[1]), reset=False)
         if framing is not None:
             self._framed = (serial, framing.bounds)

@@ -16,7 +16,7 @@ from PySide6.QtWidgets import QVBoxLayout, QWidget
 from pyvistaqt import QtInteractor
 
 from leafstudio.core.plane import Frame
-from leafstudio.gui.framing import BladeBounds, fit_camera, view_direction
+from leafstudio.gui.framing import BladeBounds, best_iso, fit_camera, view_direction
 from leafstudio.gui.layers import LAYERS, MESH_COLORINGS, SCALAR_BARS, Piece
 
 SIZED = ("point_size", "line_width")  # style keys in device pixels: scaled by the pixel ratio
@@ -293,6 +293,8 @@ class Viewport(QWidget):
         """Look at the blade from the top (along its normal, u to the right and v up, as in the
         sketch), the side (along its width) or iso, filling most of the view."""
         direction, up = view_direction(preset, self._frame)
+        if preset == "iso" and self._bounds is not None:
+            direction, up = best_iso(self._bounds, self.plotter.camera.view_angle, self._aspect())
         self._place(direction, up)
         if render:
             self.redraw()
@@ -305,14 +307,18 @@ class Viewport(QWidget):
         if render:
             self.redraw()
 
+    def _aspect(self) -> float:
+        size = self.plotter.interactor.size()
+        return size.width() / max(size.height(), 1)
+
     def _place(self, direction: np.ndarray, up: np.ndarray) -> None:
         if self._bounds is None:
             self.plotter.reset_camera(render=False)
             return
-        size = self.plotter.interactor.size()
-        aspect = size.width() / max(size.height(), 1)
         camera = self.plotter.camera
-        position, focus, up = fit_camera(self._bounds, direction, up, camera.view_angle, aspect)
+        position, focus, up = fit_camera(
+            self._bounds, direction, up, camera.view_angle, self._aspect()
+        )
         self.plotter.camera_position = [tuple(position), tuple(focus), tuple(up)]
         self.plotter.renderer.ResetCameraClippingRange()
 

@@ -1,0 +1,256 @@
+"""The user stories on the session model alone, without Qt: drawing, framing, vein branches,
+crossings, orientation and colours, undo of parameters (issue 12's findings 1-6)."""
+
+from __future__ import annotations
+
+import sys
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+import shapely
+
+from leafstudio.core.pipeline import Pipeline
+from leafstudio.demos import demo
+from leafstudio.errors import LeafError
+from leafstudio.gui.framing import (
+    best_iso,
+    blade_bounds,
+    fit_camera,
+    projected_fill,
+    view_direction,
+)
+from leafstudio.gui.session import Session, loaded_crossing
+from leafstudio.gui.sketch_model import Sketch, ring_crossings
+from leafstudio.model import Leaf, Params
+
+FAST = Params(k=3, grid=40, samples=1200)
+
+
+class Runner:
+    """Stands in for the worker: records requests, runs them when asked."""
+
+    def __init__(self) -> None:
+        self.requests: list[tuple[Leaf, Params]] = []
+
+    def __call__(self, leaf: Leaf, params: Params, interrupt: bool) -> int:
+        self.requests.append((leaf, params))
+        return len(self.requests)
+
+    def finish(self, session: Session, index: int = -1) -> object:
+        """Run request `index` and report it to the session as the worker would."""
+        request_id = len(self.requests) + 1 + index if index < 0 else index + 1
+        leaf, params = self.requests[request_id - 1]
+        try:
+            result = Pipeline(leaf).run(params)
+        except LeafError as exc:
+            session.accept_failure(request_id, exc)
+            return None
+        outcome = SimpleNamespace(request=SimpleNamespace(id=request_id), result=result, layers={})
+        session.accept_result(outcome)
+        return outcome
+
+
+@pytest.fixture
+def runner() -> Runner:
+    return Runner()
+
+
+@pytest.fixture
+def session(runner) -> Session:
+    return Session(runner, FAST)
+
+
+def events(session: Session) -> dict[str, list]:
+    got: dict[str, list] = {"result": [], "failed": [], "sketch": [], "crossing": []}
+    session.result_shown.connect(lambda outcome, framing: got["result"].append(framing))
+    session.failed.connect(lambda message, fell_back: got["failed"].append(message))
+    session.sketch_shown.connect(lambda sketch, fit: got["sketch"].append(fit))
+    session.crossing.connect(lambda points: got["crossing"].append(len(points)))
+    return got
+
+
+def ellipse(n: int = 12, a: float = 0.5, b: float = 0.2) -> np.ndarray:
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    return np.column_stack([0.5 + a * np.cos(t), b * np.sin(t)])
+
+
+def draw(session: Session, sketch: Sketch, points: np.ndarray) -> Sketch:
+    """Add boundary points one click at a time, as the editor commits them."""
+    for xy in points:
+        sketch, _ = sketch.inserted(-1, xy)
+        session.commit_sketch(sketch, "Add point")
+    return sketch
+
+
+def test_no_qt_is_imported_by_the_session_model():
+    import subprocess
+
+    code = (
+        "import sys, leafstudio.gui.session, leafstudio.gui.framing; "
+        "print(any(m.startswith(('PySide6', 'vtk', 'pyvista')) for m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
+# --- finding 1: the sketch view jumps -----------------------------------------------------------
+def test_drawing_never_asks_the_sketch_view_to_fit(session, runner):
+    got = events(session)
+    session.new_sketch()
+    assert got["sketch"] == [True]  # a new document is fitted once
+    draw(session, Sketch(), ellipse(5))
+    runner.finish(session)
+    assert got["sketch"] == [True]  # results and edits do not move the view
+    assert session.leaf is not None and len(got["result"]) == 1
+
+
+# --- finding 2: the 3D camera frames every document, keeps the user's camera otherwise ----------
+def test_each_document_is_framed_and_parameter_changes_keep_the_camera(session, runner):
+    got = events(session)
+    session.open_document(demo("nested"), None, "nested")
+    runner.finish(session)
+    assert got["result"][-1] is not None and got["result"][-1].reset
+    session.set_params(FAST.with_(k=5))
+    runner.finish(session)
+    assert got["result"][-1] is None  # K changed: the camera stays
+    session.open_document(demo("parallel"), None, "parallel")
+    runner.finish(session)
+    framing = got["result"][-1]
+    assert framing is not None and framing.reset  # the parallel leaf framed, not the nested one
+    size = framing.bounds.hi - framing.bounds.lo
+    assert size[1] > 0.6 * size[0]  # the parallel demo is broad: its own bounds
+
+
+def test_a_growing_sketch_is_reframed_and_the_first_triangle_does_not_stick(session, runner):
+    got = events(session)
+    session.new_sketch()
+    small = draw(session, Sketch(), ellipse(8, 0.1, 0.05)[:3])
+    runner.finish(session)
+    assert got["result"][-1].reset
+    draw(session, small, ellipse(12)[[0, 3, 6, 9]])
+    runner.finish(session)
+    framing = got["result"][-1]
+    assert framing is not None and not framing.reset  # same direction, refitted
+    assert framing.bounds.hi[0] - framing.bounds.lo[0] > 0.9  # the whole leaf
+
+
+def test_robust_bounds_ignore_far_outliers_and_a_thin_stalk():
+    rng = np.random.default_rng(1)
+    frame = Sketch().frame
+    blade = np.column_stack([rng.uniform(0, 1, 5000), rng.uniform(-0.2, 0.2, 5000), np.zeros(5000)])
+    stalk = np.column_stack([np.linspace(-0.6, 0, 40), np.zeros(40), np.zeros(40)])
+    outliers = np.array([[9.0, 9.0, 9.0], [-7.0, 3.0, -5.0]])
+    bounds = blade_bounds(np.vstack([blade, stalk, outliers]), frame)
+    assert bounds.lo[0] > -0.15 and bounds.hi[0] < 1.1 and bounds.hi[2] < 0.1
+
+
+@pytest.mark.parametrize("name", ["nested", "parallel"])
+def test_the_iso_camera_fills_the_view_both_ways(name):
+    leaf = demo(name)
+    result = Pipeline(leaf).run(FAST)
+    bounds = blade_bounds(result.triangle_mesh.points, result.frame)
+    for aspect in (0.8, 1.3, 1.8):
+        direction, up = best_iso(bounds, 30.0, aspect)
+        position, focus, up = fit_camera(bounds, direction, up, 30.0, aspect)
+        wide, high = projected_fill(bounds, position, focus, up, 30.0, aspect)
+        assert max(wide, high) >= 0.6 and min(wide, high) >= 0.35, (aspect, wide, high)
+
+
+# --- finding 3: a new vein started on a vein branches from it ----------------------------------
+def test_a_new_vein_snaps_onto_the_vein_it_starts_on():
+    midrib = np.array([[0.0, 0.0, 0.05], [0.5, 0.02, 0.06], [1.0, 0.0, 0.05]])
+    sketch = Sketch(boundary=ellipse(), veins=(midrib,))
+    snapped = sketch.snap_to_vein(np.array([0.3, 0.012]), tolerance=0.02)
+    assert snapped is not None
+    near = shapely.LineString(sketch.vein_curve(0)[:, :2]).distance(shapely.Point(snapped[:2]))
+    assert near < 1e-9 and 0.05 <= snapped[2] <= 0.06
+    assert sketch.snap_to_vein(np.array([0.3, 0.15]), tolerance=0.02) is None
+    branch = sketch.with_vein(snapped[None, :])
+    again = branch.with_vein(snapped[None, :])  # two veins from one spot stay two veins
+    assert len(again.veins) == 3 and np.array_equal(again.veins[0], midrib)
+
+
+def test_no_empty_vein_is_kept_and_colours_follow_the_vein_index():
+    sketch = Sketch(boundary=ellipse(), veins=(np.array([[0.1, 0, 0.05], [0.9, 0, 0.05]]),))
+    sketch = sketch.with_vein(np.array([[0.4, 0.0, 0.05]])).deleted(1, 0)
+    assert len(sketch.veins) == 1
+    stored = sketch.to_dict()
+    stored["veins"].insert(0, [])  # an old project with an empty vein first
+    loaded = Sketch.from_dict(stored)
+    assert len(loaded.veins) == 1 and len(loaded.to_leaf().veins) == len(loaded.veins)
+
+
+# --- finding 4: a self-crossing boundary ---------------------------------------------------------
+def test_a_crossing_sketch_is_not_reconstructed_and_says_where(session, runner):
+    got = events(session)
+    session.open_document(None, Sketch(boundary=ellipse()), "drawn")
+    runner.finish(session)
+    shown, requested = session.result, len(runner.requests)
+    bow = ellipse()
+    bow[[2, 8]] = bow[[8, 2]]  # two points swapped: the outline crosses itself
+    session.preview_sketch(Sketch(boundary=bow))
+    assert len(runner.requests) == requested  # nothing sent: the 3D view keeps its leaf
+    assert session.result is shown and got["crossing"][-1] >= 1
+    assert "crosses itself near" in got["failed"][-1]
+    session.commit_sketch(Sketch(boundary=ellipse()), "Move point")
+    assert len(runner.requests) == requested + 1 and got["crossing"][-1] == 0
+
+
+def test_a_loaded_boundary_that_crosses_itself_is_found():
+    points = np.column_stack([ellipse(40), np.zeros(40)])
+    assert loaded_crossing(Leaf(points)) is None
+    t = np.linspace(0, 2 * np.pi, 60, endpoint=False)  # a figure of eight, crossing at (0, 0)
+    eight = np.column_stack([np.cos(t), 0.3 * np.sin(2 * t), np.zeros(60)])
+    where = loaded_crossing(Leaf(eight))
+    assert where is not None and np.linalg.norm(where) < 0.05
+    shuffled = np.random.default_rng(0).permutation(np.column_stack([ellipse(40), np.zeros(40)]))
+    assert loaded_crossing(Leaf(shuffled)) is None  # an unordered cloud is not read in order
+    assert len(ring_crossings(ellipse(40))) == 0
+
+
+# --- finding 5: the same way round, the same colours --------------------------------------------
+def test_the_top_view_shows_the_plane_as_the_sketch_does(session, runner):
+    session.open_document(None, Sketch(boundary=ellipse()), "drawn")
+    runner.finish(session)
+    frame = session.view_frame()
+    assert frame is session.state.sketch.frame
+    direction, up = view_direction("top", frame)
+    right = np.cross(up, direction)  # the screen's x axis for a camera looking along -direction
+    np.testing.assert_allclose(right, frame.u, atol=1e-12)  # sketch x to the right
+    np.testing.assert_allclose(up, frame.v, atol=1e-12)  # sketch y up
+
+
+# --- finding 6: parameter changes are undone one release at a time ------------------------------
+def test_each_parameter_change_is_one_undo_step(session, runner):
+    session.open_document(demo("nested"), None, "nested")
+    assert not session.is_modified()
+    session.set_params(FAST.with_(k=7))
+    assert session.history.count() == 1 and session.history.undo_text() == "Change K"
+    assert session.is_modified()
+    for k in (4, 5, 6):  # a slider drag: shown live, one step on release
+        session.set_params(FAST.with_(k=k), final=False)
+    session.set_params(FAST.with_(k=6), final=True)
+    assert session.history.count() == 2 and runner.requests[-1][1].k == 6
+    session.undo()
+    assert session.params.k == 7 and runner.requests[-1][1].k == 7
+    session.undo()
+    assert session.params.k == 3 and not session.is_modified()
+    session.redo()
+    assert session.params.k == 7
+
+
+def test_a_new_document_is_one_undo_step_and_a_failed_open_falls_back(session, runner):
+    session.open_document(demo("nested"), None, "nested")
+    runner.finish(session)
+    nested = session.leaf
+    session.new_document(demo("parallel"), title="parallel")  # e.g. from the forms gallery
+    assert session.history.undo_text() == "New leaf: parallel"
+    session.undo()
+    assert session.leaf is nested
+    line = Leaf(boundary=[[t, 2 * t, 0] for t in np.linspace(0, 1, 20)])
+    got = events(session)
+    session.open_document(line, None, "line.csv", path="line.csv")
+    runner.finish(session)
+    assert session.leaf is nested and session.state.path is None  # back to the demo
+    assert got["failed"] and "line" in got["failed"][-1]
