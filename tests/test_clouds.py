@@ -13,7 +13,9 @@ from hypothesis import strategies as st
 
 import leafstudio as ls
 from leafstudio.cli import main
-from leafstudio.core.outline import trace_outline
+from leafstudio.core.grid import make_grid
+from leafstudio.core.mesher import MAX_EDGE, conforming_grid_mesh
+from leafstudio.core.outline import contains, trace_outline
 
 ELLIPSE_AREA = 2 * np.pi  # semi-axes 2 and 1
 
@@ -183,3 +185,25 @@ def test_any_valid_leaf_gives_one_clean_piece_of_the_right_area(seed, n, noise, 
     shuffled = ls.Leaf(np.random.default_rng(seed + 1).permutation(leaf.boundary), [])
     again = ls.reconstruct(shuffled, params)
     np.testing.assert_allclose(again.polygon, result.polygon, atol=1e-9 * size)
+
+
+def test_finding8_no_slivers_where_the_grid_keeps_no_node():
+    """Where the implicit drops the grid nodes of a region inside the outline (as it did by a
+    cordate leaf's basal sinus), Delaunay joined far margin points by slivers: now no edge but
+    the outline's own is longer than MAX_EDGE grid steps, and the triangles still tile it."""
+    angle = np.linspace(0, 2 * np.pi, 400, endpoint=False)
+    polygon = np.column_stack([np.cos(angle), 0.6 * np.sin(angle)])
+    grid = make_grid(polygon, 128)
+    x, y = grid.points.T
+    inside = contains(polygon, grid.points) & ~((x < -0.3) & (np.abs(y) < 0.35))  # a hole
+    xy, triangles, _ = conforming_grid_mesh(polygon, grid, inside)
+    b = len(polygon)
+    edges = np.unique(np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+    ring = (edges[:, 1] < b) & np.isin(edges[:, 1] - edges[:, 0], [1, b - 1])
+    length = np.linalg.norm(xy[edges[:, 0]] - xy[edges[:, 1]], axis=1)
+    assert length[~ring].max() <= MAX_EDGE * grid.spacing
+    corners = xy[triangles]
+    u, v = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    signed = (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]) / 2
+    assert np.all(signed > 0)
+    assert signed.sum() == pytest.approx(shapely.Polygon(polygon).area, rel=1e-9)

@@ -23,6 +23,8 @@ from leafstudio.errors import LeafError
 
 INNER_CLEARANCE = 0.4  # grid nodes nearer the margin than this many spacings are left out
 BPA_RADII = (0.8, 1.2, 1.8, 2.7)  # ball radii, in grid spacings
+MAX_EDGE = 3.0  # band triangles' edges (other than the outline's) longer than this many spacings
+MAX_REFINEMENTS = 8  # ... are split at most this many times over
 
 
 @dataclass(frozen=True)
@@ -82,10 +84,15 @@ def conforming_grid_mesh(
     inside : (ny * nx,) bool array
         Grid nodes with g >= 0.
 
+    Where the band would hold triangles with an edge over MAX_EDGE spacings (a sinus or a lobe
+    narrower than the grid, where no node is kept), the midpoints of those edges are added and
+    the band triangulated again (at most MAX_REFINEMENTS times): no slivers across the blade.
+
     Returns
     -------
-    xy : (b + n, 2) float array
-        The polygon's vertices, then the kept grid nodes in grid order.
+    xy : (b + e + n, 2) float array
+        The polygon's vertices, the e points added in the band, then the kept grid nodes in grid
+        order.
     triangles : (m, 3) int array
         Counter-clockwise.
     kept : (ny * nx,) bool array
@@ -100,19 +107,50 @@ def conforming_grid_mesh(
     cells = ~_crossed_cells(polygon, grid)
     vertex, grid_tris, band, outline = _split_cells(kept.reshape(ny, nx), cells, b)
 
-    # the band: the polygon, the kept nodes not surrounded by full cells, the full cells' outline
-    segments = np.vstack([_ring(b), outline])
-    xy_band, tris = _triangulate(np.vstack([polygon, grid.points[band]]), segments)
-    if len(xy_band) != b + len(band):
-        raise LeafError("the leaf outline crosses itself: it could not be triangulated")
-    # drop the band triangulation's triangles inside the full cells (they are meshed above)
-    centroid = xy_band[tris].mean(axis=1)
-    cx, cy = ((centroid - grid.origin) / grid.spacing).T.astype(np.int64)
-    in_cells = (cx >= 0) & (cy >= 0) & (cx < nx - 1) & (cy < ny - 1)
-    in_cells[in_cells] = cells[cy[in_cells], cx[in_cells]]
-    to_mesh = np.concatenate([np.arange(b), vertex[band]])
-    triangles = np.concatenate([to_mesh[tris[~in_cells]], grid_tris])
-    return np.concatenate([polygon, grid.points[kept]]), triangles, kept
+    # the band: the polygon, the kept nodes not surrounded by full cells, the full cells' outline,
+    # and points added where the band would have long triangles (_long_edge_midpoints)
+    extra = np.zeros((0, 2))
+    for refinement in range(MAX_REFINEMENTS + 1):
+        e = len(extra)
+        segments = np.vstack([_ring(b), np.where(outline >= b, outline + e, outline)])
+        xy_band, tris = _triangulate(np.vstack([polygon, extra, grid.points[band]]), segments)
+        if len(xy_band) != b + e + len(band):
+            raise LeafError("the leaf outline crosses itself: it could not be triangulated")
+        # drop the band triangulation's triangles inside the full cells (they are meshed above)
+        centroid = xy_band[tris].mean(axis=1)
+        cx, cy = ((centroid - grid.origin) / grid.spacing).T.astype(np.int64)
+        in_cells = (cx >= 0) & (cy >= 0) & (cx < nx - 1) & (cy < ny - 1)
+        in_cells[in_cells] = cells[cy[in_cells], cx[in_cells]]
+        tris = tris[~in_cells]
+        if refinement == MAX_REFINEMENTS:
+            break
+        more = _long_edge_midpoints(xy_band, tris, b, MAX_EDGE * grid.spacing)
+        if len(more) == 0:
+            break
+        extra = np.vstack([extra, more])
+    to_mesh = np.concatenate([np.arange(b + len(extra)), vertex[band] + len(extra)])
+    triangles = np.concatenate([to_mesh[tris], grid_tris + len(extra)])
+    return np.concatenate([polygon, extra, grid.points[kept]]), triangles, kept
+
+
+def _long_edge_midpoints(
+    xy: np.ndarray, triangles: np.ndarray, b: int, longest: float
+) -> np.ndarray:
+    """Midpoints of the triangles' edges longer than `longest`, and than 1.5 times the outline's
+    edges at their ends, other than the outline's own (vertices 0..b-1 in a ring): where a sinus
+    or a lobe leaves no grid node, Delaunay would join far points of a dense margin by slivers
+    across the blade (a sparse margin's long edges are the input's and stay)."""
+    edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    edges = np.unique(edges, axis=0)
+    step = edges[:, 1] - edges[:, 0]
+    ring = (edges[:, 1] < b) & ((step == 1) | (step == b - 1))
+    length = np.linalg.norm(xy[edges[:, 0]] - xy[edges[:, 1]], axis=1)
+    side = np.linalg.norm(xy[:b] - np.roll(xy[:b], -1, axis=0), axis=1)
+    reach = np.zeros(len(xy))
+    reach[:b] = 1.5 * np.maximum(side, np.roll(side, 1))  # each outline vertex's longer side
+    limit = np.maximum(longest, np.maximum(reach[edges[:, 0]], reach[edges[:, 1]]))
+    long = edges[(length > limit) & ~ring]
+    return 0.5 * (xy[long[:, 0]] + xy[long[:, 1]])
 
 
 @njit(cache=True, nogil=True)
