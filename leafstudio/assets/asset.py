@@ -98,7 +98,8 @@ class MeshAsset:
     name: str = "leaf"
     solid: bool = False  # a closed solid (see solid.py) rather than an open sheet
     plane_normal: np.ndarray | None = None  # (3,) the leaf plane's normal, on the normals' side
-    margin_distance: np.ndarray | None = None  # (n,) each vertex's distance to the outline
+    plane_xy: np.ndarray | None = None  # (n, 2) the vertices in the leaf plane
+    outline: np.ndarray | None = None  # (b, 2) the leaf's outline in that plane, if known
 
     @property
     def n_points(self) -> int:
@@ -158,9 +159,8 @@ def leaf_asset(result: Result) -> MeshAsset:
     faces = oriented(triangles_of(mesh).astype(np.int64), points, normals)
     data = {k: np.asarray(mesh.point_data[k], float) for k in SCALARS if k in mesh.point_data}
     uv = UVMap.around(result.polygon)(xy)
-    distance = outline_distance(result.polygon, xy)
     return MeshAsset(points, faces, normals, uv, data, plane_normal=result.frame.normal,
-                     margin_distance=np.where(margin, 0.0, distance))  # fmt: skip
+                     plane_xy=xy, outline=result.polygon)  # fmt: skip
 
 
 def outline_distance(polygon: np.ndarray, xy: np.ndarray) -> np.ndarray:
@@ -185,11 +185,5 @@ def mesh_asset(mesh: Any) -> MeshAsset:
         if k in mesh.point_data and np.asarray(mesh.point_data[k]).ndim == 1
     }
     up = frame.normal if normals.sum(axis=0) @ frame.normal >= 0 else -frame.normal
-    from scipy.spatial import cKDTree
-
-    from leafstudio.assets.solid import boundary_edges
-
-    rim = np.unique(boundary_edges(faces))
-    distance = cKDTree(xy[rim]).query(xy)[0] if len(rim) else np.full(len(xy), np.inf)
     return MeshAsset(points, faces, normals, UVMap.around(xy)(xy), data, plane_normal=up,
-                     margin_distance=distance)  # fmt: skip
+                     plane_xy=xy)  # fmt: skip

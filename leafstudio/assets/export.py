@@ -25,6 +25,7 @@ from leafstudio.errors import LeafError
 
 TEXTURES = ("auto", "none")
 MAX_LOD = 8
+TEXTURED_SUFFIXES = (".obj", ".glb", ".gltf")  # the formats that carry a texture image
 
 
 @dataclass(frozen=True)
@@ -56,8 +57,9 @@ def _images(result: Any, texture: Any, gltf: bool) -> dict[str, Any]:
         if texture == "none" or result is None:  # a bare mesh: no outline or veins to draw
             return {}
         plane = leaf_plane(result)
-        maps = tex.normal_map(plane) if gltf else None
-        return {"texture": tex.leaf_texture(plane), "normal_map": maps}
+        strokes = tex.vein_strokes(plane, tex.TEXTURE_PIXELS)
+        maps = tex.normal_map(plane, strokes=strokes) if gltf else None
+        return {"texture": tex.leaf_texture(plane, strokes=strokes), "normal_map": maps}
     photo = texture if isinstance(texture, PhotoTexture) else PhotoTexture(texture)
     image = tex.read_image(photo.image)
     if photo.pixel_from_world is not None and result is not None:
@@ -129,6 +131,8 @@ def export_mesh(
 
         image = texture.image if isinstance(texture, PhotoTexture) else texture
         refuse_overlap([image], written_paths(path, lod + 1, textured=True))
+    if suffix not in TEXTURED_SUFFIXES:  # the format holds UVs but no image: make none
+        texture = "none"
     assets = mesh_assets(result_or_mesh, texture, thickness, lod, gltf=suffix in (".glb", ".gltf"))
     write_assets(assets, path)
 

@@ -83,17 +83,35 @@ def local_thickness(asset: MeshAsset, thickness: float) -> np.ndarray:
     return t
 
 
+def margin_distance(asset: MeshAsset) -> np.ndarray:
+    """(n,) each vertex's distance in the leaf plane from the outline (the asset's, else its
+    boundary vertices); 0 on the boundary."""
+    from scipy.spatial import cKDTree
+
+    from leafstudio.assets.asset import outline_distance
+
+    rim = np.unique(boundary_edges(asset.faces))
+    if asset.outline is not None:
+        distance = outline_distance(asset.outline, asset.plane_xy)
+    elif len(rim):
+        distance = cKDTree(asset.plane_xy[rim]).query(asset.plane_xy)[0]
+    else:
+        return np.full(asset.n_points, np.inf)
+    distance[rim] = 0.0
+    return distance
+
+
 def offsets(asset: MeshAsset, thickness: float) -> np.ndarray:
     """(n, 3) half-thickness offsets: t_i/2 along the normal, its part along the leaf plane cut
     to half the vertex's distance from the outline (module docstring)."""
     half = local_thickness(asset, thickness) / 2
     normals = asset.normals
-    if asset.plane_normal is None or asset.margin_distance is None:
+    if asset.plane_normal is None or asset.plane_xy is None:
         return half[:, None] * normals
     up = normals @ asset.plane_normal
     across = normals - up[:, None] * asset.plane_normal
     shift = half * np.linalg.norm(across, axis=1)  # how far the offset moves along the plane
-    allowed = MARGIN_SHIFT * asset.margin_distance
+    allowed = MARGIN_SHIFT * margin_distance(asset)
     keep = np.where(shift > allowed, allowed / np.where(shift > 0, shift, 1), 1.0)
     # the part along the plane's normal grows so that the offset still reaches t/2 along the
     # surface's normal: o·n = keep sin²θ t/2 + β cos θ = t/2

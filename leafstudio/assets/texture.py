@@ -84,25 +84,28 @@ def vein_strokes(plane: LeafPlane, pixels: int) -> np.ndarray:
     return np.asarray(image.resize((pixels, pixels), Image.Resampling.BOX))
 
 
-def leaf_texture(plane: LeafPlane, pixels: int = TEXTURE_PIXELS):
-    """The generated base-colour texture: an RGBA PIL image (see the module docstring)."""
+def leaf_texture(plane: LeafPlane, pixels: int = TEXTURE_PIXELS, strokes: np.ndarray | None = None):
+    """The generated base-colour texture: an RGBA PIL image (see the module docstring); pass the
+    vein strokes if they are already drawn."""
     from PIL import Image
 
     alpha = outline_mask(plane, pixels)
-    veins = vein_strokes(plane, pixels).astype(float)[..., None] / 255
+    strokes = vein_strokes(plane, pixels) if strokes is None else strokes
+    veins = strokes.astype(float)[..., None] / 255
     rgb = np.asarray(BLADE, float) * (1 - veins) + np.asarray(VEIN, float) * veins
     rgba = np.dstack([np.rint(rgb).astype(np.uint8), alpha])
     return Image.fromarray(rgba, "RGBA")
 
 
-def normal_map(plane: LeafPlane, pixels: int = TEXTURE_PIXELS):
+def normal_map(plane: LeafPlane, pixels: int = TEXTURE_PIXELS, strokes: np.ndarray | None = None):
     """The veins' relief as a tangent-space normal map: an RGB PIL image (+x along s, +y along t,
     the OpenGL convention glTF uses)."""
     from PIL import Image
     from scipy.ndimage import gaussian_filter
 
+    strokes = vein_strokes(plane, pixels) if strokes is None else strokes
     width = MIDRIB_WIDTH * plane.length * pixels / plane.uvmap.size  # the midrib's, in pixels
-    height = gaussian_filter(vein_strokes(plane, pixels).astype(float) / 255, max(width / 3, 0.5))
+    height = gaussian_filter(strokes.astype(float) / 255, max(width / 3, 0.5))
     height *= RELIEF * width
     d_row, d_col = np.gradient(height)
     normal = np.dstack([-d_col, d_row, np.ones_like(height)])  # rows run down, t runs up

@@ -88,15 +88,23 @@ def write_obj(asset: MeshAsset, path: Path) -> None:
     _bytes(mtl, ("\n".join(lines) + "\n").encode())
     rows = [f"# LeafStudio leaf: {asset.n_points} vertices, {len(asset.faces)} triangles",
             f"mtllib {mtl.name}", f"o {asset.name}"]  # fmt: skip
-    body = BytesIO()
-    body.write(("\n".join(rows) + "\n").encode())
-    np.savetxt(body, asset.points, fmt="v %.9g %.9g %.9g")
-    np.savetxt(body, asset.uv, fmt="vt %.7g %.7g")
-    np.savetxt(body, asset.normals, fmt="vn %.6g %.6g %.6g")
-    body.write(b"usemtl leaf\n")
     corners = np.repeat(asset.faces + 1, 3, axis=1)  # a/a/a
-    np.savetxt(body, corners, fmt="f %d/%d/%d %d/%d/%d %d/%d/%d")
-    _bytes(path, body.getvalue())
+    blocks = [
+        "\n".join(rows),
+        _rows("v {:.9g} {:.9g} {:.9g}", asset.points),
+        _rows("vt {:.7g} {:.7g}", asset.uv),
+        _rows("vn {:.6g} {:.6g} {:.6g}", asset.normals),
+        "usemtl leaf",
+        _rows("f {}/{}/{} {}/{}/{} {}/{}/{}", corners),
+    ]
+    _bytes(path, ("\n".join(b for b in blocks if b) + "\n").encode())
+
+
+def _rows(line: str, values: np.ndarray) -> str:
+    """One formatted line per row, in one str.format call (np.savetxt formats row by row)."""
+    if len(values) == 0:
+        return ""
+    return "\n".join([line] * len(values)).format(*values.ravel().tolist())
 
 
 def material_of(asset: MeshAsset, textured: bool = True):
