@@ -53,3 +53,36 @@ def test_a_reconstructed_leaf_agrees_with_open3d():
     ours = mesh_distances(mesh.points, mesh.regular_faces, points)
     np.testing.assert_allclose(ours, expected.numpy(), atol=2e-6)
 
+
+def _brute_force(vertices: np.ndarray, triangles: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The nearest triangle found by measuring every one (each alone: no search at all)."""
+    each = [mesh_distances(vertices, tri[None], points) for tri in triangles]
+    return np.min(each, axis=0)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_hierarchy_finds_the_nearest_triangle_among_slivers_and_far_points(seed):
+    """A bumpy grid with long slivers across it (finding 7: one long edge used to widen every
+    point's search), flat triangles, duplicated vertices; points near it, far from it, on it."""
+    rng = np.random.default_rng(seed)
+    n = 12
+    x, y = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
+    z = 0.05 * rng.normal(size=x.shape)
+    vertices = np.column_stack([x.ravel(), y.ravel(), z.ravel()])
+    quads = np.array([[i * n + j, i * n + j + 1, (i + 1) * n + j + 1, (i + 1) * n + j]
+                      for i in range(n - 1) for j in range(n - 1)])  # fmt: skip
+    triangles = np.vstack([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    slivers = rng.integers(0, n * n, size=(6, 3))
+    slivers[:2, 2] = slivers[:2, 1]  # flat: two corners the same
+    triangles = np.vstack([triangles, slivers])
+    points = np.vstack([
+        vertices[rng.integers(0, n * n, 100)] + rng.normal(0, 0.03, (100, 3)),
+        rng.uniform(-3, 4, (60, 3)),  # far away
+        vertices[:20],  # on the mesh
+    ])  # fmt: skip
+    np.testing.assert_allclose(
+        mesh_distances(vertices, triangles, points),
+        _brute_force(vertices, triangles, points),
+        rtol=0,
+        atol=1e-12,
+    )

@@ -2,10 +2,14 @@
 
 open3d's raycasting scene did this before, but it held the GIL while building its BVH (about
 100 ms for a grid-512 mesh), so the app's window froze while the worker measured a result; and
-importing open3d takes seconds and 250 MB. Here scipy's k-d tree (which releases the GIL) finds
-each point's nearest vertex, whose distance bounds the answer: the nearest triangle then has a
-vertex within that bound plus the longest edge, and a compiled loop (nogil) measures exactly the
-triangles around those vertices.
+importing open3d takes seconds and 250 MB. Here a bounding-volume hierarchy of our own, compiled
+(nogil) like the rest: the triangles sorted by the Morton code of their centroids, each node's
+box over a contiguous run of them, cut where the codes' highest differing bit turns (Karras's
+LBVH), down to LEAF triangles. A point descends nearer child first and skips every box no
+nearer than its best distance so far; the points go in Morton order too, so that neighbours in
+turn walk the same boxes. The k-d tree search it replaces widened every point's candidates by
+the mesh's longest edge: 0.9-4 s for 20,000 scan points against a grid-512 mesh, against
+47-118 ms for open3d.
 """
 
 from __future__ import annotations
@@ -15,6 +19,9 @@ from numba import njit
 from scipy.spatial import cKDTree
 
 from leafstudio.core.buckets import kernel_array
+
+LEAF = 4  # triangles per leaf box at most
+MORTON_BITS = 10  # per axis
 
 
 def mesh_distances(vertices: np.ndarray, triangles: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -29,53 +36,146 @@ def mesh_distances(vertices: np.ndarray, triangles: np.ndarray, points: np.ndarr
         if len(vertices) == 0:
             return np.full(len(points), np.inf)
         return cKDTree(vertices).query(points)[0]
-    first, triangle_of, longest = _incidence(vertices, triangles)
-    used = np.flatnonzero(np.diff(first))  # a vertex of no triangle bounds nothing
-    # an unbalanced tree builds in half the time and answers these few queries as fast
-    tree = cKDTree(vertices[used], balanced_tree=False, compact_nodes=False)
-    bound, _ = tree.query(points)
-    near = tree.query_ball_point(points, bound + longest * (1 + 1e-9) + 1e-12)
-    sizes = np.fromiter((len(n) for n in near), np.int64, len(near))
-    starts = np.concatenate([[0], np.cumsum(sizes)])
-    candidates = used[np.concatenate([np.asarray(n, np.int64) for n in near])]
-    return _nearest(points, vertices, triangles, starts, candidates, first, triangle_of, bound)
-
-
-@njit(cache=True, nogil=True)
-def _incidence(vertices, triangles):
-    """Each vertex's triangles as a CSR list (first (v + 1,), triangle_of (3 m,)), by a counting
-    sort, and the length of the longest edge."""
-    first = np.zeros(len(vertices) + 1, np.int64)
-    longest = 0.0
-    for t in range(len(triangles)):
-        for k in range(3):
-            first[triangles[t, k] + 1] += 1
-            a, b = vertices[triangles[t, k]], vertices[triangles[t, (k + 1) % 3]]
-            longest = max(longest, _sq(a[0] - b[0], a[1] - b[1], a[2] - b[2]))
-    for v in range(len(vertices)):
-        first[v + 1] += first[v]
-    fill = first[:-1].copy()
-    triangle_of = np.empty(3 * len(triangles), np.int64)
-    for t in range(len(triangles)):
-        for k in range(3):
-            v = triangles[t, k]
-            triangle_of[fill[v]] = t
-            fill[v] += 1
-    return first, triangle_of, np.sqrt(longest)
-
-
-@njit(cache=True, nogil=True)
-def _nearest(points, vertices, triangles, starts, candidates, first, triangle_of, bound):
+    codes = _morton(_centroids(vertices, triangles))
+    order = np.argsort(codes, kind="stable")
+    tree = _build(vertices, triangles[order], codes[order])
+    # queries in Morton order too: neighbours in turn walk the same boxes (3 times faster)
+    visit = np.argsort(_morton(points), kind="stable")
     out = np.empty(len(points))
+    out[visit] = _distances(points[visit], vertices, triangles[order], *tree)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _centroids(vertices, triangles):
+    """(m, 3) the triangles' centroids."""
+    centroids = np.empty((len(triangles), 3))
+    for t in range(len(triangles)):
+        for k in range(3):
+            centroids[t, k] = (
+                vertices[triangles[t, 0], k] + vertices[triangles[t, 1], k]
+                + vertices[triangles[t, 2], k]
+            ) / 3  # fmt: skip
+    return centroids
+
+
+@njit(cache=True, nogil=True)
+def _morton(xyz):
+    """(n,) the Morton code of each of the (n, 3) points over their box."""
+    lo = np.array([xyz[:, k].min() for k in range(3)])
+    span = np.array([xyz[:, k].max() for k in range(3)]) - lo
+    cells = (1 << MORTON_BITS) - 1
+    codes = np.zeros(len(xyz), np.int64)
+    for t in range(len(xyz)):
+        for k in range(3):
+            q = int((xyz[t, k] - lo[k]) / span[k] * cells) if span[k] > 0 else 0
+            for bit in range(MORTON_BITS):  # interleave: bit b of axis k -> 3 b + k
+                codes[t] |= ((q >> bit) & 1) << (3 * bit + k)
+    return codes
+
+
+@njit(cache=True, nogil=True)
+def _build(vertices, triangles, codes):
+    """The hierarchy over the triangles sorted by their Morton `codes`: per node its first and
+    past-last triangle, its two children (-1 for a leaf) and its box (lo (3,), hi (3,)). A run
+    splits where its highest differing code bit turns (an octree-like cut, compact boxes), or
+    in the middle when its codes are all the same."""
+    m = len(triangles)
+    size = 2 * m + 1  # leaves hold at least one triangle each
+    first, last = np.empty(size, np.int64), np.empty(size, np.int64)
+    left, right = np.full(size, -1, np.int64), np.full(size, -1, np.int64)
+    lo, hi = np.empty((size, 3)), np.empty((size, 3))
+    first[0], last[0] = 0, m
+    count = 1
+    stack = np.empty(size, np.int64)
+    stack[0] = 0
+    top = 1
+    while top:  # top-down: split runs in halves
+        top -= 1
+        node = stack[top]
+        if last[node] - first[node] > LEAF:
+            mid = _split(codes, first[node], last[node])
+            for child, a, b in ((count, first[node], mid), (count + 1, mid, last[node])):
+                first[child], last[child] = a, b
+                stack[top] = child
+                top += 1
+            left[node], right[node] = count, count + 1
+            count += 2
+    for node in range(count - 1, -1, -1):  # bottom-up: children come after their parent
+        if left[node] < 0:
+            for k in range(3):
+                lo[node, k], hi[node, k] = np.inf, -np.inf
+            for t in range(first[node], last[node]):
+                for c in range(3):
+                    for k in range(3):
+                        x = vertices[triangles[t, c], k]
+                        lo[node, k] = min(lo[node, k], x)
+                        hi[node, k] = max(hi[node, k], x)
+        else:
+            for k in range(3):
+                lo[node, k] = min(lo[left[node], k], lo[right[node], k])
+                hi[node, k] = max(hi[left[node], k], hi[right[node], k])
+    return first[:count], last[:count], left[:count], right[:count], lo[:count], hi[:count]
+
+
+@njit(cache=True, nogil=True)
+def _split(codes, a, b):
+    """Where the sorted codes[a:b] first have their highest differing bit set."""
+    differ = codes[a] ^ codes[b - 1]
+    if differ == 0:
+        return (a + b) // 2
+    bit = 1
+    while differ > 1:
+        differ >>= 1
+        bit <<= 1
+    lo, hi = a, b - 1  # codes[lo] lacks the bit, codes[hi] has it
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if codes[mid] & bit:
+            hi = mid
+        else:
+            lo = mid
+    return hi
+
+
+@njit(cache=True, nogil=True)
+def _box_sq(px, py, pz, lo, hi):
+    """Squared distance from p to the box [lo, hi]."""
+    dx = max(lo[0] - px, 0.0, px - hi[0])
+    dy = max(lo[1] - py, 0.0, py - hi[1])
+    dz = max(lo[2] - pz, 0.0, pz - hi[2])
+    return dx * dx + dy * dy + dz * dz
+
+
+@njit(cache=True, nogil=True)
+def _distances(points, vertices, triangles, first, last, left, right, lo, hi):
+    out = np.empty(len(points))
+    stack = np.empty(256, np.int64)
     for i in range(len(points)):
         px, py, pz = points[i, 0], points[i, 1], points[i, 2]
-        best = bound[i] * bound[i]
-        for s in range(starts[i], starts[i + 1]):
-            v = candidates[s]
-            for k in range(first[v], first[v + 1]):
-                corner = triangles[triangle_of[k]]
-                a, b, c = vertices[corner[0]], vertices[corner[1]], vertices[corner[2]]
-                best = min(best, _triangle_sq(px, py, pz, a, b, c))
+        best = np.inf
+        stack[0] = 0
+        top = 1
+        while top:
+            top -= 1
+            node = stack[top]
+            if _box_sq(px, py, pz, lo[node], hi[node]) >= best:
+                continue
+            if left[node] < 0:
+                for t in range(first[node], last[node]):
+                    a, b, c = (
+                        vertices[triangles[t, 0]],
+                        vertices[triangles[t, 1]],
+                        vertices[triangles[t, 2]],
+                    )
+                    best = min(best, _triangle_sq(px, py, pz, a, b, c))
+                continue
+            near, far = left[node], right[node]
+            if _box_sq(px, py, pz, lo[far], hi[far]) < _box_sq(px, py, pz, lo[near], hi[near]):
+                near, far = far, near
+            stack[top] = far  # the nearer child on top: visited first
+            stack[top + 1] = near
+            top += 2
         out[i] = np.sqrt(best)
     return out
 
