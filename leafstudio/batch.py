@@ -24,6 +24,8 @@ import io
 import json
 import os
 import re
+import signal
+import threading
 import time
 import warnings
 from collections.abc import Iterable, Iterator, Sequence
@@ -258,7 +260,9 @@ def pin_threads() -> None:
 
 
 def _worker_start() -> None:
-    """Pool initializer: pin threads, then import the pipeline once per worker."""
+    """Pool initializer: pin threads, then import the pipeline once per worker. Ctrl-C reaches
+    the whole process group: the parent stops the batch (and lets running jobs finish)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     pin_threads()
     import leafstudio.core.pipeline  # noqa: F401
 
@@ -553,7 +557,15 @@ class _Local:
         return ProcessPoolExecutor(self.workers, self._context, initializer=_worker_start)
 
     def submit(self, job: Job) -> Future:
-        future = self._pool.submit(run_job, job)
+        # workers start on a submit; started with SIGINT ignored, they keep ignoring it (even
+        # while importing), so Ctrl-C stops the batch in this process alone
+        main = threading.current_thread() is threading.main_thread()
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+        try:
+            future = self._pool.submit(run_job, job)
+        finally:
+            if main:
+                signal.signal(signal.SIGINT, previous)
         future.pool = self._pool  # type: ignore[attr-defined]
         return future
 
@@ -868,12 +880,19 @@ def command(args: Any) -> int:
         dynamic_ncols=True,
         desc="leafstudio batch",
     )
-    with bar:
-        for row in run:
-            if row["status"] != "ok":
-                internal = str(row["error"]).startswith("internal error:")
-                bar.write(f"leafstudio: {'' if internal else 'error: '}{row['error']}", sys.stderr)
-            bar.set_postfix(failed=run.failed, refresh=False)
-            bar.update(1)
+    try:
+        with bar:
+            for row in run:
+                if row["status"] != "ok":
+                    internal = str(row["error"]).startswith("internal error:")
+                    bar.write(
+                        f"leafstudio: {'' if internal else 'error: '}{row['error']}", sys.stderr
+                    )
+                bar.set_postfix(failed=run.failed, refresh=False)
+                bar.update(1)
+    except KeyboardInterrupt:
+        print(f"{summary(run, time.perf_counter() - start)}; interrupted (--resume goes on)",
+              file=sys.stderr)  # fmt: skip
+        raise
     print(summary(run, time.perf_counter() - start), file=sys.stderr)
     return 1 if run.failed else 0

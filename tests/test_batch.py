@@ -166,8 +166,9 @@ def test_fail_fast_stops_at_the_first_failure(tmp_path, leaves):
 
 def test_json_lines_and_parquet_tables_and_no_meshes(tmp_path, leaves):
     table = tmp_path / "t.json"
-    rows = list(ls.batch([str(leaves / "a")], ls.Params(grid=32), tmp_path / "out",
-                         traits=table, format="none", jobs=1))  # fmt: skip
+    run = ls.batch([str(leaves / "a")], ls.Params(grid=32), tmp_path / "out", traits=table,
+                   format="none", jobs=1)  # fmt: skip
+    rows = list(run)
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").rglob("*.ply"))
     lines = [json.loads(line) for line in table.read_text().splitlines()]
     assert [r["input"] for r in lines] == sorted(r["input"] for r in rows)
@@ -175,14 +176,14 @@ def test_json_lines_and_parquet_tables_and_no_meshes(tmp_path, leaves):
     pytest.importorskip("pyarrow")
     import pyarrow.parquet as pq
 
-    parquet = tmp_path / "t.parquet"
-    list(ls.batch([str(leaves / "a")], ls.Params(grid=32), tmp_path / "out",
-                  traits=parquet, format="none", jobs=1))  # fmt: skip
-    got = pq.read_table(parquet).to_pylist()
-    assert [{k: v for k, v in r.items() if k != "seconds"} for r in got] == [
-        {k: v for k, v in r.items() if k != "seconds"} for r in lines
-    ]
-    assert not list(tmp_path.glob(".t.parquet*"))  # the journal is gone
+    parquet = TraitTable(tmp_path / "t.parquet", scans=False)
+    parquet.start()
+    for row in reversed(lines):
+        parquet.add(row)
+    assert parquet.journal.exists() and not parquet.path.exists()  # rows journalled till close
+    parquet.close()
+    assert pq.read_table(parquet.path).to_pylist() == lines
+    assert not parquet.journal.exists()
 
 
 @pytest.fixture(scope="module")
@@ -231,21 +232,19 @@ def test_killed_batch_resumed_is_the_same_as_a_clean_run(tmp_path, scans, clean)
     assert not [p for p in killed.rglob(".*")]  # no temporary file left
 
 
-def test_resume_reruns_what_changed(tmp_path, leaves):
-    inputs = tmp_path / "in"
-    inputs.mkdir()
-    for i in range(3):
-        (inputs / f"l{i}.csv").write_bytes((leaves / "a" / f"leaf{i}.csv").read_bytes())
+def test_resume_keeps_only_rows_of_unchanged_inputs_and_settings(tmp_path, leaves):
+    inputs = _copy(leaves / "a", tmp_path / "in")
     out = tmp_path / "out"
     list(ls.batch([inputs], ls.Params(grid=32), out, jobs=1))
-    (inputs / "l1.csv").write_bytes((leaves / "b" / "c" / "leaf4.csv").read_bytes())
-    run = ls.batch([inputs], ls.Params(grid=32), out, jobs=1, resume=True)
-    list(run)
-    assert run.resumed == 2
-    run = ls.batch([inputs], ls.Params(grid=36), out, jobs=1, resume=True)
-    rows = list(run)
-    assert run.resumed == 0 and {r["grid"] for r in rows} == {36}
-    assert {r["grid"] for r in _rows(out / "traits.csv")} == {"36"}
+    (inputs / "leaf1.csv").write_bytes((leaves / "b" / "c" / "leaf4.csv").read_bytes())
+    kept = Batch([inputs], ls.Params(grid=32), out, resume=True)._kept()
+    assert sorted(Path(k).name for k in kept) == ["leaf0.csv", "leaf2.csv"]
+    assert Batch([inputs], ls.Params(grid=36), out, resume=True)._kept() == {}
+    assert Batch([inputs], ls.Params(grid=32), out, format="obj", resume=True)._kept() == {}
+    (out / "leaf0.ply").unlink()  # a row without its mesh is not kept
+    assert sorted(Batch([inputs], ls.Params(grid=32), out, resume=True)._kept()) == [
+        str(inputs / "leaf2.csv")
+    ]
 
 
 def test_inputs_from_folders_and_patterns_leave_out_the_output_folder(tmp_path, leaves):
