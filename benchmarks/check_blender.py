@@ -63,5 +63,20 @@ def main(path: str) -> dict:
     return report
 
 
+def quietly(path: str) -> dict:
+    """main(path) with Blender's own log lines sent to stderr (stdout is the JSON alone)."""
+    import os
+
+    sys.stdout.flush()
+    saved = os.dup(1)
+    os.dup2(2, 1)
+    try:
+        return main(path)
+    finally:
+        sys.stdout.flush()
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
 if __name__ == "__main__":
-    print(json.dumps(main(sys.argv[1]), indent=1))
+    print(json.dumps(quietly(sys.argv[1]), indent=1))

@@ -115,7 +115,7 @@ def material_of(asset: MeshAsset, textured: bool = True):
 
     texture = asset.texture if textured else None
     return PBRMaterial(
-        name=asset.name,
+        name="leaf",  # one material for every level of detail
         baseColorFactor=[255, 255, 255, 255] if texture is not None else [*BLADE, 255],
         baseColorTexture=texture,
         normalTexture=asset.normal_map if textured else None,
