@@ -386,6 +386,7 @@ COMBINATIONS = [
     for i, shape in enumerate(SHAPES)
     for j, margin in enumerate(MARGINS)
 ] + [(shape, "entire", venation) for shape in SHAPES for venation in VENATION_KINDS]
+COMBINATIONS += [(shape, "lobed", "palmate") for shape in SHAPES]  # lobes cut toward the base
 
 
 @pytest.mark.parametrize("shape,margin,venation", sorted(set(COMBINATIONS)))

@@ -223,21 +223,29 @@ def _ray_end(poly: Polygon, start: np.ndarray, target: np.ndarray, share: float)
     return pts[:stop]
 
 
-def _palmate_primaries(poly: Polygon, rng: np.random.Generator) -> list[np.ndarray]:
-    """Two or four primaries from the base to the farthest margin points either side."""
+def _palmate_primaries(poly: _Blade, rng: np.random.Generator) -> list[np.ndarray]:
+    """Two or four primaries from the base to the farthest margin points either side that the
+    base sees: the straight vein stays inside the blade, clear of the sinuses."""
     ring = np.asarray(poly.exterior.coords)[:-1]
     angle = np.degrees(np.arctan2(ring[:, 1], ring[:, 0]))
     dist = np.linalg.norm(ring, axis=1)
+    inner = poly.poly.buffer(-0.5 * STEP)
+    shapely.prepare(inner)
     out = []
     for lo, hi, least in ((22, 70, 0.0), (75, 130, 0.3)):
         for sign in (1, -1):
-            pick = (sign * angle >= lo) & (sign * angle <= hi)
-            if not pick.any() or dist[pick].max() < least:
+            pick = np.flatnonzero((sign * angle >= lo) & (sign * angle <= hi))
+            if len(pick) == 0 or dist[pick].max() < least:
                 continue
-            target = ring[pick][np.argmax(dist[pick])]
-            vein = _ray_end(poly, np.array([0.012 * np.sign(target[0] + 1e-9), 0.0]), target, 0.92)
-            if len(vein) >= 4:
-                out.append(vein)
+            for index in pick[np.argsort(-dist[pick])][:60:3]:
+                target = ring[index]
+                start = np.array([0.012 * np.sign(target[0] + 1e-9), 0.0])
+                end = start + 0.92 * (target - start)
+                if inner.contains(LineString([start, end])):
+                    vein = _ray_end(poly, start, target, 0.92)
+                    if len(vein) >= 4:
+                        out.append(vein)
+                    break
     return out
 
 
