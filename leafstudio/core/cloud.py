@@ -27,6 +27,7 @@ from scipy.spatial import cKDTree
 from leafstudio.core.buckets import bounds, kernel_array
 
 NOISE_SAMPLE = 20000  # points whose prediction misses estimate the noise, at most
+MAX_GROWTH = 8  # the occupied cells are grown by at most this many to close round the inside
 GUIDE_SMOOTHING = 3  # the guide contour is averaged over this many vertices either side
 MAX_BINS = 3000  # the mean outline's vertices, at most
 OUTLINE_STEP = 1 / 1000  # the mean outline's vertex spacing, as a fraction of the cloud's size
@@ -132,9 +133,9 @@ class Cells:
 def order_cells(xy: np.ndarray, z: np.ndarray, cell: float) -> Cells | None:
     """The (n, 2) points summed into cells of side `cell` and placed along a guide contour.
 
-    The occupied cells are grown (one cell at a time, up to a tenth of the raster) until they
-    close round a hole holding at least a fifth of the region they enclose: the leaf's inside.
-    That hole's outline, traced by contourpy, is the guide. None if no growth closes one.
+    The occupied cells are grown (one cell at a time, up to MAX_GROWTH) until they close round
+    a hole holding at least a fifth of the region they enclose: the leaf's inside. The grown
+    band's outline round it, traced by contourpy, is the guide. None if no growth closes one.
     """
     xy = kernel_array(xy)
     lo, hi = bounds(xy)
@@ -159,7 +160,7 @@ def order_cells(xy: np.ndarray, z: np.ndarray, cell: float) -> Cells | None:
          for a, b in ((dx, dx), (dx, dy), (dy, dy), (dz, dz))]
     )  # fmt: skip
 
-    guide = _guide(occupied.reshape(ny, nx), max(nx, ny) // 10 + 1)
+    guide = _guide(occupied.reshape(ny, nx), MAX_GROWTH)
     if guide is None:
         return None
     guide = lo + (guide + 0.5) * cell  # raster cell centres to the plane
@@ -178,25 +179,23 @@ def order_cells(xy: np.ndarray, z: np.ndarray, cell: float) -> Cells | None:
 def _guide(occupied: np.ndarray, most: int) -> np.ndarray | None:
     """(k, 2) the outer outline of the band of occupied raster cells grown by up to `most`
     cells round the hole it encloses (the leaf's inside), in cell units (x = column, y = row),
-    not closed; None if it never encloses enough. The outer edge, not the hole's: a narrow tip
-    or base, where the band closes over, stays on it."""
+    not closed; None if it never encloses a hole of at least a fifth of the region. The outer
+    edge, not the hole's: a narrow tip or base, where the band closes over, stays on it."""
     pad = most + 1
-    mask = np.pad(occupied, pad)
-    band = mask
+    band = np.pad(occupied, pad)
     for _ in range(most):
         band = ndimage.binary_dilation(band)
-        filled = ndimage.binary_fill_holes(band)
-        hole = filled & ~band
-        labels, n = ndimage.label(hole)
-        if n == 0:
+        labels, n = ndimage.label(~band)  # the outside, and the holes the band encloses
+        if n < 2:
             continue
-        sizes = np.bincount(labels.ravel())[1:]
-        biggest = int(np.argmax(sizes)) + 1
-        if sizes[biggest - 1] < 0.2 * np.count_nonzero(filled):
+        outside = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+        sizes = np.bincount(labels.ravel(), minlength=n + 1)
+        sizes[outside] = 0
+        sizes[0] = 0  # the band itself
+        filled = ~np.isin(labels, outside)
+        if sizes.max() < 0.2 * np.count_nonzero(filled):
             continue
-        parts = ndimage.label(filled)[0]  # the band's outer edge round that hole
-        inside = (parts == parts[labels == biggest][0]).astype(float)
-        lines = contourpy.contour_generator(z=inside).lines(0.5)
+        lines = contourpy.contour_generator(z=filled.astype(float)).lines(0.5)
         line = max(lines, key=len)
         if len(line) < 4:
             return None
@@ -237,21 +236,31 @@ def _project(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Arc position along the closed `ring` of each point's nearest place on the edges within
     `reach` of its vertex `near`, and that edge."""
+    t = np.empty(len(points))
+    edge = np.empty(len(points), np.int64)
+    _project_kernel(
+        kernel_array(points), np.asarray(near, dtype=np.int64), kernel_array(ring),
+        kernel_array(edges), kernel_array(lengths), kernel_array(arc), reach, t, edge,
+    )  # fmt: skip
+    return t, edge
+
+
+@njit(cache=True, nogil=True)
+def _project_kernel(points, near, ring, edges, lengths, arc, reach, t, edge):
     k = len(ring)
-    best_t = np.empty(len(points))
-    best_d = np.full(len(points), np.inf)
-    best_e = np.empty(len(points), np.int64)
-    safe = np.maximum(lengths, 1e-300)
-    for shift in range(-reach, reach + 1):
-        e = (near + shift) % k
-        rel = points - ring[e]
-        s = np.clip((rel * edges[e]).sum(axis=1) / safe[e] ** 2, 0.0, 1.0)
-        d = np.hypot(*(rel - s[:, None] * edges[e]).T)
-        better = d < best_d
-        best_d[better] = d[better]
-        best_t[better] = (arc[e] + s * lengths[e])[better]
-        best_e[better] = e[better]
-    return best_t, best_e
+    for i in range(len(points)):
+        best = np.inf
+        for shift in range(-reach, reach + 1):
+            e = (near[i] + shift) % k
+            rx, ry = points[i, 0] - ring[e, 0], points[i, 1] - ring[e, 1]
+            ex, ey = edges[e, 0], edges[e, 1]
+            length = max(lengths[e], 1e-300)
+            s = min(max((rx * ex + ry * ey) / (length * length), 0.0), 1.0)
+            d = (rx - s * ex) ** 2 + (ry - s * ey) ** 2
+            if d < best:
+                best = d
+                t[i] = arc[e] + s * lengths[e]
+                edge[i] = e
 
 
 def point_order(cells: Cells, xy: np.ndarray) -> np.ndarray:

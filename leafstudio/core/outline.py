@@ -100,12 +100,30 @@ class Outline:
 def _canonical(points: np.ndarray, sequence: np.ndarray) -> np.ndarray:
     """`sequence` (indices of a closed ring of `points`) counter-clockwise and starting at its
     lowest point by (x, y): the same ring whatever its given start and direction."""
-    x, y = points[sequence, 0], points[sequence, 1]
-    if float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y)) < 0:
-        sequence, x, y = sequence[::-1], x[::-1], y[::-1]
-    at_min = np.flatnonzero(x == x.min())
-    start = int(at_min[np.argmin(y[at_min])])
+    sequence = np.asarray(sequence, dtype=np.int64)
+    twice_area, start = _orientation(kernel_array(points), sequence)
+    if twice_area < 0:
+        sequence = sequence[::-1]
+        start = len(sequence) - 1 - start
     return np.roll(sequence, -start)
+
+
+@njit(cache=True, nogil=True)
+def _orientation(points, sequence):
+    """Twice the signed area of the ring points[sequence], and the position in `sequence` of
+    its lowest point by (x, y)."""
+    n = len(sequence)
+    area = 0.0
+    start = 0
+    for i in range(n):
+        a, b = sequence[i], sequence[(i + 1) % n]
+        area += points[a, 0] * points[b, 1] - points[b, 0] * points[a, 1]
+        s = sequence[start]
+        if points[a, 0] < points[s, 0] or (
+            points[a, 0] == points[s, 0] and points[a, 1] < points[s, 1]
+        ):
+            start = i
+    return area, start
 
 
 def _ring(points: np.ndarray, sequence: np.ndarray) -> np.ndarray | Polygon | None:
