@@ -37,6 +37,7 @@ from typing import Any
 
 from leafstudio.errors import LeafError, error_line
 from leafstudio.model import Params
+from leafstudio.safewrite import PART_MARK, _pid_alive
 
 FORMATS = ("ply", "glb", "obj", "vtp", "none")
 TABLE_SUFFIXES = (".csv", ".json", ".jsonl", ".parquet")
@@ -506,20 +507,8 @@ class TraitTable:
 
 # ----------------------------------------------------------------------------- executors
 
-# temporary files of an atomic write (io / safewrite): ".NAME.PID-HEX.leafstudio-part.EXT", or
-# tempfile's ".STEM.XXXXXXXX.EXT"
-_PART = re.compile(r"^\..*\.(\d+)-[0-9a-f]+\.leafstudio-part(\.[^.]+)+$")
-_MKSTEMP = re.compile(r"^\..+\.[a-z0-9_]{8}\.[A-Za-z0-9]+$")
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except (PermissionError, OverflowError):
-        return True
-    return True
+# a temporary file of safewrite's: ".NAME.PID-HEX.leafstudio-part.EXT"
+_PART = re.compile(rf"^\..*\.(\d+)-[0-9a-f]+\.{PART_MARK}(\.[^.]+)+$")
 
 
 def remove_temporaries(
@@ -527,7 +516,8 @@ def remove_temporaries(
 ) -> int:
     """Delete the temporary files that atomic writes killed midway left in `folder` (and below,
     if `recursive`): those of no live process, for targets ending with one of `suffixes` (and
-    named `stem`..., if given). Returns how many."""
+    named `stem`..., if given). Returns how many. (safewrite.remove_stale does this for one
+    target; a batch sweeps its whole output folder once.)"""
     removed = 0
     if not folder.is_dir():
         return 0
@@ -537,7 +527,7 @@ def remove_temporaries(
             if not name.startswith(f".{stem}") or not name.lower().endswith(tuple(suffixes)):
                 continue
             part = _PART.match(name)
-            if (part and not _alive(int(part.group(1)))) or (not part and _MKSTEMP.match(name)):
+            if part and not _pid_alive(int(part.group(1))):
                 Path(where, name).unlink(missing_ok=True)
                 removed += 1
     return removed

@@ -15,7 +15,7 @@ import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
-from leafstudio.errors import LeafError, shorten
+from leafstudio.errors import LeafError, error_line, shorten
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT = 0, 1, 2
 SEED_MAX = 2**32 - 1
@@ -534,15 +534,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return code
     except BrokenPipeError:
         return _pipe_closed()
-    except LeafError as exc:
-        log.error(shorten(str(exc), 400))
-        return EXIT_BAD_INPUT
-    except MemoryError:
-        log.error("out of memory: the input is too large for this machine")
-        return EXIT_BAD_INPUT
-    except OSError as exc:
-        where = f"{exc.filename}: " if exc.filename else ""
-        log.error(shorten(f"{where}{exc.strerror or exc}", 400))
+    except (LeafError, MemoryError, OSError) as exc:
+        log.error(error_line(exc))
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         return 130

@@ -29,11 +29,14 @@ def shorten(text: object, limit: int = 60) -> str:
 
 
 def error_line(exc: BaseException) -> str:
-    """What the command line says of a failure, after "leafstudio: error: ": "FILE: problem".
-    An unexpected exception (a bug, not bad input) reads "internal error: Type: text"."""
+    """The one line the command line prints for a failure, after "leafstudio: error: " (bad
+    input: "FILE: problem") or "leafstudio: " (a bug: "internal error: Type: text"); a batch's
+    failed rows carry the same text."""
     if isinstance(exc, LeafError):
-        return str(exc)
+        return shorten(str(exc), 400)
+    if isinstance(exc, MemoryError):
+        return "out of memory: the input is too large for this machine"
     if isinstance(exc, OSError):
         where = f"{exc.filename}: " if exc.filename else ""
-        return f"{where}{exc.strerror or exc}"
-    return f"internal error: {type(exc).__name__}: {exc}"
+        return shorten(f"{where}{exc.strerror or exc}", 400)
+    return f"internal error: {shorten(f'{type(exc).__name__}: {exc}', 300)}"

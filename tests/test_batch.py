@@ -254,9 +254,12 @@ def test_inputs_from_folders_and_patterns_leave_out_the_output_folder(tmp_path, 
     assert len(found) == 6
     (out / "a").mkdir(parents=True)
     (out / "a" / "leaf0.ply").write_text("ply")
-    (out / "a" / ".leaf0.ply.12ab34cd.ply").write_text("x")  # tempfile's kind
+    (out / "a" / ".leaf0.ply.99999999-12ab34cd.leafstudio-part.ply").write_text("x")  # dead
     assert len(find_inputs([leaves], exclude=[out])) == 6
+    live = out / "a" / f".leaf1.ply.{os.getpid()}-12ab34cd.leafstudio-part.ply"
+    live.write_text("x")  # a live process's: left alone
     assert remove_temporaries(out, (".ply",)) == 1 and (out / "a" / "leaf0.ply").exists()
+    assert live.exists()
     run = Batch([leaves], None, out, jobs=1)
     assert [j.mesh for j in run.jobs][:1] == ["a/leaf0.ply"]
 
