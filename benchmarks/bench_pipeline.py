@@ -12,6 +12,8 @@ Prints one JSON document:
 - ``memory``: peak RSS of a grid-512 run in a fresh interpreter, above a bare interpreter and
   above the same interpreter once leafstudio is imported;
 - ``accuracy``: the core issue's figures for both demos at grid 128 (they must hold at speed);
+- ``scans``: ``extract`` on 1e5- and 1e6-point scans (time, memory) and the distances from
+  20,000 scan points to a grid-512 mesh beside open3d's raycasting (bench_scans.py);
 - ``machine``: cores, BLAS, load, and ``reference_ms``: a fixed workload's time before and after,
   to tell a slower host from slower code between runs.
 
@@ -38,6 +40,7 @@ from typing import Any
 
 import numpy as np
 from bench_accuracy import table1_figures  # a sibling script: benchmarks/ is on sys.path
+from bench_scans import scan_figures  # extract at 1e5 and 1e6 points, scan distances
 from threadpoolctl import threadpool_info, threadpool_limits
 
 import leafstudio as ls
@@ -333,6 +336,8 @@ def main() -> None:
         mem["ok"] = mem["above_bare_mb"] <= TARGET_RSS_MB
         report["memory"] = mem
     report["accuracy"] = accuracy()
+    if not args.quick:  # issue 10: extract at 1e5 and 1e6 points, scan distances (bench_scans.py)
+        report["scans"] = scan_figures(repeats)
     report["machine"]["load_average_after"] = list(os.getloadavg())
     report["machine"]["reference_ms_after"] = reference_ms()
     print(json.dumps(report, indent=1))

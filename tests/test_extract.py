@@ -22,18 +22,25 @@ def _surface(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return 0.3 * x**2 + 0.6 * y**2 - 0.1 * x
 
 
-def _scan(seed: int = 0) -> dict[str, np.ndarray]:
-    """A synthetic scan: the blade's surface, a petiole sticking out at -x, and outliers."""
+def _scan(
+    seed: int = 0,
+    candidates: int = 9000,
+    blade_points: int | None = None,
+    petiole_points: int = 150,
+    outlier_points: int = 25,
+) -> dict[str, np.ndarray]:
+    """A synthetic scan: the blade's surface (the `candidates` uniform points inside its outline,
+    at most `blade_points` of them), a petiole sticking out at -x, and outliers."""
     rng = np.random.default_rng(seed)
     region = shapely.Polygon(_outline_at(np.linspace(0, 2 * np.pi, 400, endpoint=False)))
-    xy = rng.uniform([-0.5, -0.27], [0.5, 0.27], size=(9000, 2))
-    xy = xy[shapely.contains_xy(region, xy[:, 0], xy[:, 1])]
+    xy = rng.uniform([-0.5, -0.27], [0.5, 0.27], size=(candidates, 2))
+    xy = xy[shapely.contains_xy(region, xy[:, 0], xy[:, 1])][:blade_points]
     blade = np.column_stack([xy, _surface(xy[:, 0], xy[:, 1])])
-    along = rng.uniform(-0.8, -0.49, 150)
+    along = rng.uniform(-0.8, -0.49, petiole_points)
     petiole = np.column_stack(
-        [along, rng.normal(0, 0.004, 150), _surface(-0.5, 0) - 0.2 * (along + 0.5)]
+        [along, rng.normal(0, 0.004, petiole_points), _surface(-0.5, 0) - 0.2 * (along + 0.5)]
     )
-    outliers = rng.uniform([-1, -1, -0.5], [1, 1, 0.5], size=(25, 3))
+    outliers = rng.uniform([-1, -1, -0.5], [1, 1, 0.5], size=(outlier_points, 3))
     return {"blade": blade, "petiole": petiole, "outliers": outliers}
 
 

@@ -10,23 +10,13 @@ import shapely
 
 from leafstudio.core.extract import BUDGET, extract_leaf, voxel_thinning
 from leafstudio.errors import LeafError
-from tests.test_extract import _outline_at, _surface
+from tests.test_extract import _outline_at, _scan, _surface
 
 
 def _big_scan(n: int, seed: int = 3) -> tuple[np.ndarray, int]:
     """n blade points on the known surface, a petiole at -x and a few outliers; and n."""
-    rng = np.random.default_rng(seed)
-    region = shapely.Polygon(_outline_at(np.linspace(0, 2 * np.pi, 400, endpoint=False)))
-    xy = rng.uniform([-0.5, -0.27], [0.5, 0.27], size=(int(2.2 * n), 2))
-    xy = xy[shapely.contains_xy(region, xy[:, 0], xy[:, 1])][:n]
-    blade = np.column_stack([xy, _surface(xy[:, 0], xy[:, 1])])
-    m = n // 60
-    along = rng.uniform(-0.8, -0.49, m)
-    petiole = np.column_stack(
-        [along, rng.normal(0, 0.004, m), _surface(-0.5, 0) - 0.2 * (along + 0.5)]
-    )
-    outliers = rng.uniform([-1, -1, -0.5], [1, 1, 0.5], size=(n // 400, 3))
-    return np.vstack([blade, petiole, outliers]), n
+    parts = _scan(seed, int(2.2 * n), n, n // 60, n // 400)
+    return np.vstack([parts["blade"], parts["petiole"], parts["outliers"]]), n
 
 
 @pytest.fixture(scope="module")
