@@ -340,3 +340,14 @@ def test_an_obj_never_writes_its_texture_over_the_image_it_maps(nested: ls.Resul
     with pytest.raises(ls.LeafError, match="is also an input"):
         ls.save_mesh(nested, tmp_path / "leaf.obj", texture=str(photo))
     assert photo.read_bytes() == before and not (tmp_path / "leaf.obj").exists()
+
+
+def test_a_failed_obj_export_leaves_the_old_files_as_they_were(nested: ls.Result, tmp_path):
+    from unittest import mock
+
+    ls.save_mesh(nested, tmp_path / "leaf.obj")
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    full = mock.patch("leafstudio.assets.writers._rows", side_effect=OSError(28, "No space"))
+    with full, pytest.raises((OSError, ls.LeafError)):
+        ls.save_mesh(nested, tmp_path / "leaf.obj", texture="none")
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before  # no .png lost

@@ -134,7 +134,13 @@ def export_mesh(
     if suffix not in TEXTURED_SUFFIXES:  # the format holds UVs but no image: make none
         texture = "none"
     assets = mesh_assets(result_or_mesh, texture, thickness, lod, gltf=suffix in (".glb", ".gltf"))
-    write_assets(assets, path)
+    from leafstudio import safewrite
+
+    if safewrite._staging.get() is not None:  # the caller replaces its outputs together
+        write_assets(assets, path)
+        return
+    with safewrite.staged():  # an .obj, its .mtl and .png (and the levels) replaced together
+        write_assets(assets, path)
 
 
 def check_asset_options(texture: str, thickness: str | None, lod: int) -> None:
