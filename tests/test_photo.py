@@ -156,3 +156,22 @@ def test_photo_texture_lands_on_the_mesh_margin_within_2_pixels(tmp_path: Path):
     photo_per_unit = np.linalg.norm(ls.assets.photo_transform(project)[:, 0])
     distance = texture_px * photo_per_unit / texture_per_unit
     assert np.max(distance) <= 2.0
+
+
+def test_a_malformed_photo_entry_is_one_line_exit_2(tmp_path: Path, capsys):
+    import json
+
+    from leafstudio.cli import main
+
+    project = tmp_path / "leaf.leaf.json"
+    ls.save_leaf(ls.demo("nested"), project)
+    data = json.loads(project.read_text())
+    data["photo"] = {"pixel_from_world": [[1, 2], [3]]}
+    project.write_text(json.dumps(data))
+    image = tmp_path / "photo.png"
+    Image.new("RGB", (40, 40)).save(image)
+    out = tmp_path / "leaf.glb"
+    assert main(["reconstruct", str(project), "-o", str(out), "--grid", "32", "--texture",
+                 str(image)]) == 2  # fmt: skip
+    err = capsys.readouterr().err
+    assert 'bad "photo" entry' in err and error_lines(err) == 1

@@ -11,7 +11,6 @@ detail chosen here, the bytes written by writers.py.
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -37,15 +36,25 @@ class PhotoTexture:
 
 
 def photo_transform(leaf_path: str | os.PathLike) -> np.ndarray | None:
-    """The (2, 3) world-to-pixel map a `leafstudio photo` project stores, or None."""
+    """The (2, 3) world-to-pixel map a `leafstudio photo` project stores, or None (not a project,
+    or a project without a photo); LeafError for a malformed entry."""
     if not str(leaf_path).lower().endswith(".json"):
         return None
-    try:
-        data = json.loads(Path(leaf_path).read_text(encoding="utf-8"))
-        photo = data.get("photo") if isinstance(data, dict) else None
-        return None if not photo else np.asarray(photo["pixel_from_world"], float).reshape(2, 3)
-    except (OSError, ValueError, KeyError, TypeError):
+    from leafstudio.inputs import load_json
+
+    data = load_json(leaf_path)
+    photo = data.get("photo") if isinstance(data, dict) else None
+    if photo is None:
         return None
+    try:
+        affine = np.asarray(photo["pixel_from_world"], dtype=float).reshape(2, 3)
+    except (TypeError, KeyError, ValueError):
+        raise LeafError('bad "photo" entry: "pixel_from_world" must be 2 rows of 3 numbers',
+                        str(leaf_path)) from None  # fmt: skip
+    if not np.all(np.isfinite(affine)) or abs(np.linalg.det(affine[:, :2])) == 0:
+        raise LeafError('bad "photo" entry: "pixel_from_world" is not an invertible map',
+                        str(leaf_path))  # fmt: skip
+    return affine
 
 
 def _images(result: Any, texture: Any, gltf: bool) -> dict[str, Any]:

@@ -116,6 +116,7 @@ def normal_map(plane: LeafPlane, pixels: int = TEXTURE_PIXELS, strokes: np.ndarr
 def read_image(path: str | Path) -> np.ndarray:
     """An image file as an (h, w, 3 or 4) uint8 array; LeafError if it cannot be read."""
     from PIL import Image, UnidentifiedImageError
+    from PIL.Image import DecompressionBombError
 
     try:
         with Image.open(path) as image:
@@ -125,6 +126,8 @@ def read_image(path: str | Path) -> np.ndarray:
         raise LeafError("no such file", str(path)) from None
     except IsADirectoryError:
         raise LeafError("is a folder, not an image", str(path)) from None
+    except DecompressionBombError:
+        raise LeafError("not a readable image (too many pixels)", str(path)) from None
     except (UnidentifiedImageError, OSError, ValueError) as exc:
         raise LeafError(f"not a readable image ({type(exc).__name__})", str(path)) from None
 
