@@ -355,7 +355,7 @@ def test_same_seed_same_leaf_other_seeds_vary_a_little():
     ratios = [aspect(o.boundary[:, :2]) for o in others]
     assert len({round(r, 6) for r in ratios}) == 3  # not copies
     assert max(ratios) < 1.15 * min(ratios)  # but one plant
-    assert all(len(o.veins) == len(a.veins) for o in others)
+    assert all(abs(len(o.veins) - len(a.veins)) <= 2 for o in others)
 
 
 def test_bad_terms_are_one_line_errors():

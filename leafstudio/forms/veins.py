@@ -38,7 +38,7 @@ HEIGHT_RATIO = 0.25  # vein height over its distance to the margin (demos.py: h 
 STEP = 0.02  # growth step D, in leaf lengths
 SOURCES = 350  # auxin sources scattered over the blade
 KILL = 1.2  # kill distance, in growth steps
-MAX_ITERATIONS = 120
+MAX_ITERATIONS = 80
 TROPISM = 0.6  # pull toward the apex added to each growth direction
 INSET = 0.006  # open secondaries end this far (leaf lengths) inside the margin
 MIDRIB_SPAN = (0.01, 0.99)  # the midrib's share of base -> apex
@@ -323,6 +323,8 @@ def _colonize(
         ok = _inside(poly, new, 0.3 * STEP)
         if not ok.any():
             break
+        blocked = np.isin(near, growing[~ok])  # their node cannot step toward them: drop them
+        dist[blocked] = 0.0
         growing, new = growing[ok], new[ok]
         first = len(nodes)
         nodes = np.vstack([nodes, new])
@@ -365,7 +367,7 @@ def _to_margin(poly: Polygon, path: np.ndarray) -> np.ndarray:
     n = np.argmin(ok) if not ok.all() else len(steps)
     path = np.vstack([path, steps[:n]])
     gap, nearest = poly.tree.query(path[-1])
-    if gap > 2 * STEP:  # stopped short (its way ahead leaves the blade): turn to the margin
+    if gap > 3 * INSET:  # stopped short (its way ahead leaves the blade): turn to the margin
         target = poly.tree.data[nearest]
         share = 1 - INSET / gap
         t = np.linspace(0, share, int(gap / (STEP / 2)) + 2)[1:]
@@ -373,24 +375,33 @@ def _to_margin(poly: Polygon, path: np.ndarray) -> np.ndarray:
     return path
 
 
-def _arch(poly: Polygon, path: np.ndarray, others: list[np.ndarray], h: float) -> np.ndarray:
-    """An arcuate secondary continued along the margin toward the apex until it nears a vein."""
-    inner = poly.buffer(-max(2.5 * STEP, 0.02 * np.sqrt(poly.area)))
-    if inner.is_empty or not isinstance(inner, Polygon):
+def _arch_ring(poly: _Blade) -> np.ndarray | None:
+    """(r, 2) points along the margin moved inward, in order, at half a step (the arches' way)."""
+    inner = poly.poly.buffer(-max(2.5 * STEP, 0.02 * np.sqrt(poly.area)))
+    if inner.is_empty:
+        return None
+    if not isinstance(inner, Polygon):
+        inner = max(inner.geoms, key=lambda g: g.area)
+    return shapely.get_coordinates(inner.exterior.segmentize(STEP / 2))[:-1]
+
+
+def _arch(
+    ring: np.ndarray | None, path: np.ndarray, owner: int, veins: cKDTree, owners: np.ndarray, h
+) -> np.ndarray:
+    """An arcuate secondary continued along the margin toward the apex until it nears another
+    vein (`veins` holds all veins' points, `owners` which vein each belongs to)."""
+    if ring is None or len(path) < 2:
         return path
-    ring = inner.exterior
-    start = ring.project(shapely.Point(path[-1]))
-    pos = np.array([ring.interpolate(start + s).coords[0] for s in (-STEP, STEP)])
-    sign = -1 if pos[0][0] > pos[1][0] else 1
-    walk = np.array(
-        [ring.interpolate(start + sign * STEP * (i + 1)).coords[0] for i in range(int(0.35 / STEP))]
-    )
+    n = len(ring)
+    i = int(np.argmin(np.linalg.norm(ring - path[-1], axis=1)))
+    sign = 1 if ring[(i + 2) % n, 0] > ring[(i - 2) % n, 0] else -1
+    walk = ring[(i + sign * np.arange(1, int(0.35 / (STEP / 2)))) % n]
     ahead = walk[:, 0] > path[-1][0] - STEP
     walk = walk[: np.argmin(ahead) if not ahead.all() else len(walk)]
-    if len(walk) == 0 or not others:
+    if len(walk) == 0:
         return path
-    gap = cKDTree(np.vstack(others)).query(walk)[0]
-    near = gap < 1.5 * h
+    dist, index = veins.query(walk, k=min(8, len(owners)))
+    near = np.any((dist < 1.5 * h) & (owners[index] != owner), axis=1)
     walk = walk[: np.argmax(near) if near.any() else len(walk)]
     return np.vstack([path, walk]) if len(walk) else path
 
@@ -500,9 +511,14 @@ def grow_veins(
         paths = _colonize(blade, primaries, seeds, venation == "arcuate", rng) if seeds else []
         h = float(np.sqrt(blade.area / SOURCES))
         veins = list(primaries)
-        for path in paths:
+        if venation == "arcuate":
+            ring = _arch_ring(blade)
+            every = [*primaries, *paths]
+            owners = np.concatenate([np.full(len(v), k) for k, v in enumerate(every)])
+            tree = cKDTree(np.vstack(every))
+        for k, path in enumerate(paths):
             if venation == "arcuate":
-                path = _arch(blade, path, [p for p in paths if p is not path] + primaries, h)
+                path = _arch(ring, path, len(primaries) + k, tree, owners, h)
             else:
                 path = _to_margin(blade, path)
             path = _cut_crossings(path, veins)
