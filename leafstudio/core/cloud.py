@@ -63,9 +63,9 @@ def estimate_noise(xy: np.ndarray, z: np.ndarray, sequence: np.ndarray) -> Noise
     if len(sequence) < 8:
         return Noise(0.0, 0.0)
     step = max(1, len(sequence) // NOISE_SAMPLE)
-    ring = kernel_array(xy[sequence])
-    heights = kernel_array(z[sequence])
-    across, height = _prediction_misses(ring, heights, step)
+    across, height = _prediction_misses(
+        kernel_array(xy), kernel_array(z), np.asarray(sequence, dtype=np.int64), step
+    )
     scale = (1 + float(PREDICT @ PREDICT)) * CHI2_MEDIAN
     return Noise(
         float(np.sqrt(np.median(across) / scale)), float(np.sqrt(np.median(height) / scale))
@@ -73,23 +73,26 @@ def estimate_noise(xy: np.ndarray, z: np.ndarray, sequence: np.ndarray) -> Noise
 
 
 @njit(cache=True, nogil=True)
-def _prediction_misses(ring, z, step):
-    """Squared misses (across, in height) of the cubic prediction at every `step`-th point."""
-    n = len(ring)
+def _prediction_misses(xy, z, sequence, step):
+    """Squared misses (across, in height) of the cubic prediction at every `step`-th point of
+    the closed ring xy[sequence]."""
+    n = len(sequence)
     m = (n + step - 1) // step
     across, height = np.empty(m), np.empty(m)
     c0, c1 = -1 / 6, 2 / 3
     for q in range(m):
         i = q * step
-        a, b, c, d = (i - 2) % n, (i - 1) % n, (i + 1) % n, (i + 2) % n
-        px = c0 * (ring[a, 0] + ring[d, 0]) + c1 * (ring[b, 0] + ring[c, 0])
-        py = c0 * (ring[a, 1] + ring[d, 1]) + c1 * (ring[b, 1] + ring[c, 1])
+        p = sequence[i]
+        a, b = sequence[(i - 2) % n], sequence[(i - 1) % n]
+        c, d = sequence[(i + 1) % n], sequence[(i + 2) % n]
+        px = c0 * (xy[a, 0] + xy[d, 0]) + c1 * (xy[b, 0] + xy[c, 0])
+        py = c0 * (xy[a, 1] + xy[d, 1]) + c1 * (xy[b, 1] + xy[c, 1])
         pz = c0 * (z[a] + z[d]) + c1 * (z[b] + z[c])
-        tx, ty = ring[d, 0] - ring[a, 0], ring[d, 1] - ring[a, 1]
+        tx, ty = xy[d, 0] - xy[a, 0], xy[d, 1] - xy[a, 1]
         norm = np.sqrt(tx * tx + ty * ty)
-        miss = (-(ring[i, 0] - px) * ty + (ring[i, 1] - py) * tx) / norm if norm > 0 else 0.0
+        miss = (-(xy[p, 0] - px) * ty + (xy[p, 1] - py) * tx) / norm if norm > 0 else 0.0
         across[q] = miss * miss
-        height[q] = (z[i] - pz) ** 2
+        height[q] = (z[p] - pz) ** 2
     return across, height
 
 

@@ -57,13 +57,17 @@ def distinct_indices(points: np.ndarray, scale: float) -> np.ndarray:
 
 
 SPACING_QUERIES = 2000  # points whose nearest neighbour sets the median spacing, at most
+SPACING_POINTS = 50_000  # ... among this many, at most
 
 
 def _spacing(points: np.ndarray) -> float:
     """Median distance from each point to its nearest neighbour (over SPACING_QUERIES points
     evenly through the array, at most: a scale for the tests below, not an exact figure)."""
+    thin = max(1, len(points) // SPACING_POINTS)  # a dense cloud: every thin-th point, whose
+    points = points[::thin]  # spacing along a curve is thin times as wide
     every = max(1, len(points) // SPACING_QUERIES)
-    return float(np.median(neighbour_distances(points, np.arange(0, len(points), every))))
+    queries = np.arange(0, len(points), every)
+    return float(np.median(neighbour_distances(points, queries))) / thin
 
 
 def _largest_polygon(geom: shapely.Geometry) -> Polygon | None:
@@ -135,24 +139,53 @@ def _ring(points: np.ndarray, sequence: np.ndarray) -> np.ndarray | Polygon | No
     cost); a thinned ring that cuts across a narrow slit is thinned less, down to every point,
     before a self-crossing outline is repaired.
     """
-    ring = points[sequence]
-    x, y = ring[:, 0], ring[:, 1]
-    edges = np.hypot(np.diff(x, append=x[0]), np.diff(y, append=y[0]))  # columns: much faster
-    many = len(ring) > MAX_OUTLINE_VERTICES
-    step = float(edges.sum()) / MAX_OUTLINE_VERTICES if many else 0.0
-    finest = float(np.median(edges)) if step > 0 else 0.0  # below this, thinning keeps them all
+    points = kernel_array(points)
+    sequence = np.asarray(sequence, dtype=np.int64)
+    perimeter = _ring_length(points, sequence)
+    many = len(sequence) > MAX_OUTLINE_VERTICES
+    step = perimeter / MAX_OUTLINE_VERTICES if many else 0.0
+    finest = perimeter / len(sequence)  # below this mean edge, thinning keeps about all
     while step > 0:
-        kept = thin_curve(ring, step)
-        if Polygon(ring[kept]).is_valid:
-            return sequence[kept]
+        kept = sequence[_thin_ring(points, sequence, step)]
+        if Polygon(points[kept]).is_valid:
+            return kept
         step = step / 2 if step / 2 > finest else 0.0
-    poly = Polygon(ring)
+    poly = Polygon(points[sequence])
     if poly.is_valid:
         return sequence
     repaired = _largest_polygon(shapely.make_valid(poly))
     if repaired is not None and repaired.area > 0.9 * abs(shapely.area(poly)):
         return repaired
     return None
+
+
+@njit(cache=True, nogil=True)
+def _ring_length(points, sequence):
+    """The length of the closed ring points[sequence]."""
+    n = len(sequence)
+    total = 0.0
+    for i in range(n):
+        a, b = sequence[i], sequence[(i + 1) % n]
+        total += np.sqrt((points[b, 0] - points[a, 0]) ** 2 + (points[b, 1] - points[a, 1]) ** 2)
+    return total
+
+
+@njit(cache=True, nogil=True)
+def _thin_ring(points, sequence, step):
+    """Positions in `sequence` kept by thin_curve of points[sequence] (without copying them)."""
+    keep = np.zeros(len(sequence), np.bool_)
+    if len(sequence) == 0:
+        return np.flatnonzero(keep)
+    keep[0] = True
+    last = sequence[0]
+    for i in range(1, len(sequence)):
+        p = sequence[i]
+        if (points[p, 0] - points[last, 0]) ** 2 + (points[p, 1] - points[last, 1]) ** 2 >= (
+            step * step
+        ):
+            keep[i] = True
+            last = p
+    return np.flatnonzero(keep)
 
 
 def _given_order(points: np.ndarray, spacing: float) -> np.ndarray | None:
