@@ -281,14 +281,7 @@ def save_mesh(
     """Write a Result's mesh (or a TriangleMesh or pyvista mesh) by extension (MESH_SUFFIXES),
     with normals, UVs, height and curvatures where the format holds them, and a texture (see
     leafstudio.assets: `texture` "auto", "none" or an image; `thickness` makes a closed solid;
-    `lod` adds coarser levels of detail)."""
-    path = Path(path)
-    suffix = _suffix(path)
-    if suffix not in MESH_SUFFIXES:
-        raise LeafError(
-            f"unknown mesh type {suffix or '(none)'!r}; use one of {', '.join(MESH_SUFFIXES)}",
-            str(path),
-        )
+    `lod` adds coarser levels of detail). LeafError for an unknown suffix."""
     from leafstudio.assets.export import export_mesh
 
     export_mesh(result_or_mesh, path, texture=texture, thickness=thickness, lod=lod)
