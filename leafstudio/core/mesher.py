@@ -141,7 +141,6 @@ def _long_edge_midpoints(
     or a lobe leaves no grid node, Delaunay would join far points of a dense margin by slivers
     across the blade (a sparse margin's long edges are the input's and stay)."""
     edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    edges = np.unique(edges, axis=0)
     step = edges[:, 1] - edges[:, 0]
     ring = (edges[:, 1] < b) & ((step == 1) | (step == b - 1))
     length = np.linalg.norm(xy[edges[:, 0]] - xy[edges[:, 1]], axis=1)
@@ -150,6 +149,9 @@ def _long_edge_midpoints(
     reach[:b] = 1.5 * np.maximum(side, np.roll(side, 1))  # each outline vertex's longer side
     limit = np.maximum(longest, np.maximum(reach[edges[:, 0]], reach[edges[:, 1]]))
     long = edges[(length > limit) & ~ring]
+    if len(long) == 0:
+        return np.zeros((0, 2))
+    long = np.unique(long, axis=0)  # each shared by two triangles
     return 0.5 * (xy[long[:, 0]] + xy[long[:, 1]])
 
 
