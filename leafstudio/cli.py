@@ -413,7 +413,7 @@ def _gui(args: argparse.Namespace) -> int:
 
 
 def _extract(args: argparse.Namespace) -> int:
-    from leafstudio.core.extract import extract_leaf
+    from leafstudio.core.extract import BUDGET, extract_leaf, voxel_thinning
     from leafstudio.core.plausibility import check_leaf_like
     from leafstudio.io import LEAF_SUFFIXES, save_leaf
     from leafstudio.safewrite import check_target, refuse_overlap
@@ -425,7 +425,8 @@ def _extract(args: argparse.Namespace) -> int:
     check_target(args.output)
     scan = read_scan(args.scan)
     try:
-        for note in check_leaf_like(scan, force=args.force):
+        # a large scan is judged by its voxel centroids, as extract sees it (linear time)
+        for note in check_leaf_like(voxel_thinning(scan, BUDGET)[0], force=args.force):
             log.warning(f"{args.scan}: {note}")
         found = extract_leaf(scan, args.base_end, args.points)
     except LeafError as exc:
