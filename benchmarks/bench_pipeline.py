@@ -12,6 +12,8 @@ Prints one JSON document:
 - ``memory``: peak RSS of a grid-512 run in a fresh interpreter, above a bare interpreter and
   above the same interpreter once leafstudio is imported;
 - ``accuracy``: the core issue's figures for both demos at grid 128 (they must hold at speed);
+- ``clouds``: boundaries of 10^4 to 10^6 points, ordered and shuffled, their memory, and noisy
+  margins' creases (bench_clouds.py, which runs on its own too);
 - ``scans``: ``extract`` on 1e5- and 1e6-point scans (time, memory) and the distances from
   20,000 scan points to a grid-512 mesh beside open3d's raycasting (bench_scans.py);
 - ``machine``: cores, BLAS, load, and ``reference_ms``: a fixed workload's time before and after,
@@ -40,6 +42,7 @@ from typing import Any
 
 import numpy as np
 from bench_accuracy import table1_figures  # a sibling script: benchmarks/ is on sys.path
+from bench_clouds import clouds
 from bench_scans import scan_figures  # extract at 1e5 and 1e6 points, scan distances
 from threadpoolctl import threadpool_info, threadpool_limits
 
@@ -336,6 +339,7 @@ def main() -> None:
         mem["ok"] = mem["above_bare_mb"] <= TARGET_RSS_MB
         report["memory"] = mem
     report["accuracy"] = accuracy()
+    report["clouds"] = clouds(repeats, quick=args.quick)  # boundary clouds (bench_clouds.py)
     if not args.quick:  # issue 10: extract at 1e5 and 1e6 points, scan distances (bench_scans.py)
         report["scans"] = scan_figures(repeats)
     report["machine"]["load_average_after"] = list(os.getloadavg())

@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 
 import leafstudio as ls
 from leafstudio.cli import main
+from leafstudio.core.analysis import margin_creases
 from leafstudio.core.grid import make_grid
 from leafstudio.core.mesher import MAX_EDGE, conforming_grid_mesh
 from leafstudio.core.outline import contains, trace_outline
@@ -95,22 +96,6 @@ def _ovate(n: int, sigma: float, seed: int = 3) -> ls.Leaf:
     return ls.Leaf(boundary=rng.permutation(boundary), veins=[midrib])
 
 
-def _dihedral_degrees(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The angle between the normals of the two triangles at each interior edge, and the edge's
-    two ends."""
-    a, b, c = (points[triangles[:, k]] for k in range(3))
-    normal = np.cross(b - a, c - a)
-    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-    edges = np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]],
-                                    triangles[:, [2, 0]]]), axis=1)  # fmt: skip
-    face = np.tile(np.arange(len(triangles)), 3)
-    order = np.lexsort((edges[:, 1], edges[:, 0]))
-    edges, face = edges[order], face[order]
-    pair = np.flatnonzero(np.all(edges[1:] == edges[:-1], axis=1))
-    cos = np.clip((normal[face[pair]] * normal[face[pair + 1]]).sum(axis=1), -1, 1)
-    return np.degrees(np.arccos(cos)), edges[pair]
-
-
 @pytest.mark.parametrize("grid", [128, 256])
 def test_finding4_a_noisy_margin_is_smooth_and_on_the_data(grid):
     """Noise of 0.2% of the length: the margin band's 99th-percentile dihedral angle was 63-68°
@@ -119,13 +104,8 @@ def test_finding4_a_noisy_margin_is_smooth_and_on_the_data(grid):
     sigma = 0.002
     leaf = _ovate(4000, sigma)
     result = ls.reconstruct(leaf, ls.Params(k=2, grid=grid))
-    mesh = result.triangle_mesh
-    angles, edges = _dihedral_degrees(np.asarray(mesh.points), mesh.regular_faces)
-    xy = result.frame.to_plane(np.asarray(mesh.points))[0]
-    depth = shapely.distance(shapely.LinearRing(result.polygon), shapely.points(xy))
-    cell = result.grid.spacing
-    band = (depth[edges] <= 3 * cell).any(axis=1)
-    margin, interior = np.percentile(angles[band], 99), np.percentile(angles[~band], 99)
+    creases = margin_creases(result)
+    margin, interior = creases["margin_p99"], creases["interior_p99"]
     assert margin <= max(2 * interior, 1.0) and margin < 10
     m = result.metrics
     assert m["boundary"]["mean"] <= 1.5 * sigma

@@ -103,3 +103,35 @@ def table_metrics(mesh: MeshLike, leaf: Leaf) -> dict[str, Any]:
         "veins": _summary(point_to_mesh_distance(mesh, leaf.vein_points)),
         "mesh": mesh_facts(mesh),
     }
+
+
+def dihedral_angles(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The angle in degrees between the normals of the two triangles at each edge two share,
+    and those (e, 2) edges: how sharply a mesh creases."""
+    a, b, c = (points[triangles[:, k]] for k in range(3))
+    normal = np.cross(b - a, c - a)
+    normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+    edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1).astype(np.int64)
+    face = np.repeat(np.arange(len(triangles)), 3)
+    base = int(edges.max(initial=0)) + 1
+    order = np.argsort(edges[:, 0] * base + edges[:, 1], kind="stable")
+    edges, face = edges[order], face[order]
+    pair = np.flatnonzero(np.all(edges[1:] == edges[:-1], axis=1))
+    cos = np.clip((normal[face[pair]] * normal[face[pair + 1]]).sum(axis=1), -1.0, 1.0)
+    return np.degrees(np.arccos(cos)), edges[pair]
+
+
+def margin_creases(result: Any, band_cells: float = 3.0) -> dict[str, float]:
+    """The 99th percentile of the dihedral angles (degrees) within `band_cells` grid steps of
+    the margin and farther in, for a pipeline Result: a noisy margin shows as creases."""
+    import shapely
+
+    points = np.asarray(result.triangle_mesh.points)
+    angles, edges = dihedral_angles(points, triangles_of(result.triangle_mesh))
+    xy = result.frame.to_plane(points)[0]
+    depth = shapely.distance(shapely.LinearRing(result.polygon), shapely.points(xy))
+    band = (depth[edges] <= band_cells * result.grid.spacing).any(axis=1)
+    return {
+        "margin_p99": float(np.percentile(angles[band], 99)),
+        "interior_p99": float(np.percentile(angles[~band], 99)),
+    }
