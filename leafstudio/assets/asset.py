@@ -100,6 +100,19 @@ class MeshAsset:
     plane_normal: np.ndarray | None = None  # (3,) the leaf plane's normal, on the normals' side
     plane_xy: np.ndarray | None = None  # (n, 2) the vertices in the leaf plane
     outline: np.ndarray | None = None  # (b, 2) the leaf's outline in that plane, if known
+    plane_u: np.ndarray | None = None  # (3,) the leaf plane's axis along s (the tangents' way)
+
+    def tangents(self) -> np.ndarray | None:
+        """(n, 4) glTF tangents: the plane's s axis in each vertex's tangent plane, and w such
+        that the bitangent cross(n, t)·w runs along t (+y of the normal map), or None."""
+        if self.plane_u is None or self.plane_normal is None:
+            return None
+        u, n = self.plane_u, self.normals
+        tangent = u - (n @ u)[:, None] * n
+        tangent /= np.maximum(np.linalg.norm(tangent, axis=1, keepdims=True), 1e-300)
+        along_t = np.cross(self.plane_normal, u)
+        w = np.where(np.cross(n, tangent) @ along_t >= 0, 1.0, -1.0)
+        return np.column_stack([tangent, w])
 
     @property
     def n_points(self) -> int:
@@ -160,7 +173,7 @@ def leaf_asset(result: Result) -> MeshAsset:
     data = {k: np.asarray(mesh.point_data[k], float) for k in SCALARS if k in mesh.point_data}
     uv = UVMap.around(result.polygon)(xy)
     return MeshAsset(points, faces, normals, uv, data, plane_normal=result.frame.normal,
-                     plane_xy=xy, outline=result.polygon)  # fmt: skip
+                     plane_xy=xy, outline=result.polygon, plane_u=result.frame.u)  # fmt: skip
 
 
 def outline_distance(polygon: np.ndarray, xy: np.ndarray) -> np.ndarray:

@@ -4,7 +4,8 @@
 - ``.obj``: v, vt, vn and faces f a/a/a, with `<stem>.mtl` and the texture `<stem>.png` beside it.
 - ``.glb``, ``.gltf``: glTF 2.0 through trimesh (one file; .gltf with its buffers embedded):
   NORMAL, TEXCOORD_0, a double-sided PBR material with the base colour (and normal) texture, and
-  the scalars as custom attributes _HEIGHT, _MEAN_CURVATURE, _GAUSSIAN_CURVATURE, _K1, _K2.
+  the scalars as custom attributes _HEIGHT, _MEAN_CURVATURE, _GAUSSIAN_CURVATURE, _K1, _K2;
+  with a normal map, TANGENT too (the s axis in each tangent plane: no tangents left to guess).
   Levels of detail are separate meshes leaf_LOD0, leaf_LOD1, ...
 - ``.stl``, ``.3mf``: through trimesh (geometry only; 3MF in millimetres, its unit by spec).
 - ``.vtp``, ``.vtk``: through pyvista, with Normals, the texture coordinates and the scalars.
@@ -143,7 +144,22 @@ def to_trimesh(asset: MeshAsset, textured: bool = True, material=None):
     )
     for name, values in asset.point_data.items():
         mesh.vertex_attributes[f"_{name.upper()}"] = np.asarray(values, np.float32)
+    tangents = asset.tangents() if textured and asset.normal_map is not None else None
+    if tangents is not None:  # renamed TANGENT in the written file (_standard_names)
+        mesh.vertex_attributes[_TANGENT] = tangents.astype(np.float32)
     return mesh
+
+
+_TANGENT = "_TANGENT"  # trimesh writes custom attributes only, with a leading underscore
+
+
+def _standard_names(tree: dict) -> None:
+    """glTF tree post-processor: the tangents written as a custom attribute become TANGENT."""
+    for mesh in tree.get("meshes", []):
+        for primitive in mesh.get("primitives", []):
+            attributes = primitive.get("attributes", {})
+            if _TANGENT in attributes:
+                attributes["TANGENT"] = attributes.pop(_TANGENT)
 
 
 def write_gltf(assets: Sequence[MeshAsset], path: Path) -> None:
@@ -159,9 +175,11 @@ def write_gltf(assets: Sequence[MeshAsset], path: Path) -> None:
         mesh = to_trimesh(asset, material=material)
         scene.add_geometry(mesh, geom_name=asset.name, node_name=asset.name)
     if path.suffix.lower() == ".glb":
-        data = export_glb(scene, include_normals=True)
+        data = export_glb(scene, include_normals=True, tree_postprocessor=_standard_names)
     else:
-        files = export_gltf(scene, include_normals=True, embed_buffers=True)
+        files = export_gltf(
+            scene, include_normals=True, embed_buffers=True, tree_postprocessor=_standard_names
+        )
         data = files["model.gltf"]
     _bytes(path, data)
 
