@@ -150,6 +150,46 @@ def check_ply_header(path: str | os.PathLike) -> None:
         )
 
 
+def check_pcd_header(path: str | os.PathLike) -> None:
+    """Refuse a PCD file whose header declares more points than the file holds (open3d would
+    allocate them first), or that has no PCD header at all."""
+    path = Path(path)
+    size = check_input_file(path, limit=None)
+    try:
+        with open(path, "rb") as handle:
+            head = handle.read(MAX_PLY_HEADER)
+    except OSError as exc:
+        raise LeafError(f"cannot be read ({exc.strerror or exc})", str(path)) from None
+    fields: dict[str, list[str]] = {}
+    body = None
+    offset = 0
+    for raw in head.split(b"\n"):
+        offset += len(raw) + 1
+        words = raw.decode("ascii", "replace").split()
+        if not words or words[0].startswith("#"):
+            continue
+        fields[words[0].upper()] = words[1:]
+        if words[0].upper() == "DATA":
+            body = size - offset
+            break
+    points = fields.get("POINTS", [""])[0]
+    if body is None or not points.isdigit():
+        raise LeafError("not a readable PCD file (no POINTS ... DATA header)", str(path))
+    mode = (fields.get("DATA") or ["ascii"])[0].lower()
+    if mode == "binary_compressed":
+        return  # its size says nothing about the point count; open3d checks it
+    sizes = [int(v) for v in fields.get("SIZE", []) if v.isdigit()]
+    counts = [int(v) for v in fields.get("COUNT", []) if v.isdigit()] or [1] * len(sizes)
+    width = sum(a * b for a, b in zip(sizes, counts, strict=False)) if mode == "binary" else 2
+    needed = int(points) * max(width, 1)
+    if needed > body:
+        raise LeafError(
+            f"not a readable PCD file: its header declares {points} points, which need at least "
+            f"{needed} bytes, but the file holds {max(body, 0)}",
+            str(path),
+        )
+
+
 def read_ply(path: str | os.PathLike) -> Any:
     """A PlyData, header checked first; any failure of the parser is one LeafError."""
     from plyfile import PlyData

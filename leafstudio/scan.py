@@ -13,7 +13,14 @@ import numpy as np
 
 from leafstudio.errors import LeafError, shorten
 from leafstudio.extras import require
-from leafstudio.inputs import check_input_file, parse_number, ply_xyz, read_ply, read_text
+from leafstudio.inputs import (
+    check_input_file,
+    check_pcd_header,
+    parse_number,
+    ply_xyz,
+    read_ply,
+    read_text,
+)
 
 SCAN_SUFFIXES = (".ply", ".pcd", ".xyz", ".csv", ".txt")
 MIN_SCAN_POINTS = 50
@@ -73,6 +80,7 @@ def _text_rows(path: Path, text: str) -> np.ndarray:
 
 def _pcd_rows(path: Path) -> np.ndarray:
     """x, y, z of a PCD file (ASCII or binary) through open3d, which reports nothing on failure."""
+    check_pcd_header(path)  # point counts against the file's size, before open3d allocates
     try:
         o3d = require("open3d", "reading .pcd scans")
     except LeafError as exc:

@@ -237,3 +237,16 @@ def test_every_bad_file_at_the_command_line_is_one_line_and_exit_2(tmp_path, cap
         assert main(["reconstruct", str(path), "-o", str(tmp_path / "o.ply")]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and str(path) in err[0], (name, err)
+
+
+def test_a_pcd_header_declaring_more_than_the_file_holds_is_refused(tmp_path):
+    path = tmp_path / "big.pcd"
+    path.write_text(
+        "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2000000000\n"
+        "HEIGHT 1\nPOINTS 2000000000\nDATA binary\n" + "x" * 100
+    )
+    with pytest.raises(LeafError, match="declares 2000000000 points"):
+        read_scan(path)
+    path.write_bytes(b"\x00\x01 not a pcd")
+    with pytest.raises(LeafError, match="no POINTS"):
+        read_scan(path)
