@@ -169,6 +169,12 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="N",
         help="also write N coarser levels of detail, each with half the triangles",
     )
+    rec.add_argument(
+        "--turntable", metavar="GIF|MP4", help="also render the leaf turning once (for slides)"
+    )
+    rec.add_argument(
+        "--steps-figure", metavar="PNG", help="also render the pipeline's steps side by side"
+    )
 
     mea = sub.add_parser("measure", help="reconstruct a leaf and print its measurements")
     _add_run_options(mea)
@@ -312,7 +318,11 @@ def _reconstruct(args: argparse.Namespace) -> int:
     from leafstudio.assets.export import asset_options, check_asset_options
 
     check_asset_options(args.texture, args.thickness, args.lod)
-    outputs = [out, args.metrics, figure]  # every file this command writes
+    from leafstudio.slides import check_turntable_path
+
+    turntable = check_turntable_path(args.turntable) if args.turntable else None
+    steps = check_figure_path(args.steps_figure) if args.steps_figure else None
+    outputs = [out, args.metrics, figure, turntable, steps]  # every file this command writes
     refuse_overlap([args.input, *args.vein, args.against], outputs)
     for path in outputs:
         if path:
@@ -355,6 +365,14 @@ def _reconstruct(args: argparse.Namespace) -> int:
             replace_atomically(figure, lambda tmp: render_figure(result, tmp, args.colour_by))
         if metrics is not None:
             write_bytes(args.metrics, json.dumps(metrics, indent=2) + "\n")
+        if turntable is not None or steps is not None:
+            from leafstudio.safewrite import replace_atomically
+            from leafstudio.slides import render_steps, render_turntable
+
+            if turntable is not None:
+                replace_atomically(turntable, lambda tmp: render_turntable(result, tmp))
+            if steps is not None:
+                replace_atomically(steps, lambda tmp: render_steps(result, tmp))
     if fidelity is not None:
         for part, what in (("all", "all"), ("blade", "blade (no outliers, no petiole)")):
             f = fidelity[part]
