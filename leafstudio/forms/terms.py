@@ -166,12 +166,21 @@ CATEGORIES: dict[str, dict[str, str]] = {
 }
 
 
-def definition(term: str) -> str:
-    """The plain-words definition of any term (shape, apex, base, margin or venation)."""
-    for group in (CATEGORIES["shape"], APEXES, BASES, MARGINS, VENATIONS, RELIEF):
-        if term in group:
+def definition(term: str, kind: str | None = None) -> str:
+    """The plain-words definition of a term; `kind` ("shape", "apex", "base", "margin",
+    "venation") picks the group when a word is in two (a rounded apex, a rounded base)."""
+    groups = {
+        "shape": CATEGORIES["shape"],
+        "apex": APEXES,
+        "base": BASES,
+        "margin": MARGINS,
+        "venation": VENATIONS,
+        "relief": RELIEF,
+    }
+    for name, group in groups.items():
+        if (kind is None or kind == name) and term in group:
             return group[term]
-    raise LeafError(f"unknown term {term!r}")
+    raise LeafError(f"unknown {kind or 'term'} {term!r}")
 
 
 def check_term(kind: str, value: str, allowed: dict[str, str] | tuple[str, ...]) -> str:

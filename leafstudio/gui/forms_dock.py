@@ -24,6 +24,7 @@ from PySide6.QtWidgets import (
     QListWidget,
     QListWidgetItem,
     QPushButton,
+    QScrollArea,
     QSpinBox,
     QVBoxLayout,
     QWidget,
@@ -138,7 +139,7 @@ class FormsPanel(QWidget):
         self.gallery.setResizeMode(QListView.ResizeMode.Adjust)
         self.gallery.setMovement(QListView.Movement.Static)
         self.gallery.setSpacing(4)
-        self.gallery.setMinimumHeight(2 * (THUMBNAIL + 30))
+        self.gallery.setFixedHeight(2 * (THUMBNAIL + 34))
         for name in SHAPES:
             item = QListWidgetItem(QIcon(QPixmap.fromImage(thumbnail(name))), name)
             item.setData(Qt.ItemDataRole.UserRole, name)
@@ -147,10 +148,10 @@ class FormsPanel(QWidget):
         self.shape_text = QLabel()
         self.shape_text.setWordWrap(True)
 
-        self.apex = self._combo(("(usual)", *APEXES))
-        self.base = self._combo(("(usual)", *USER_BASES))
-        self.margin = self._combo(tuple(MARGINS))
-        self.venation = self._combo(VENATION_KINDS)
+        self.apex = self._combo(("(usual)", *APEXES), "apex")
+        self.base = self._combo(("(usual)", *USER_BASES), "base")
+        self.margin = self._combo(tuple(MARGINS), "margin")
+        self.venation = self._combo(VENATION_KINDS, "venation")
         self.teeth = self._spin(QSpinBox(), 2, 300, 30, RELIEF["teeth"])
         self.lobes = self._spin(QSpinBox(), 2, 15, DEFAULT_LOBES, RELIEF["lobes"])
         self.fold = self._spin(QDoubleSpinBox(), -75, 75, 0, RELIEF["fold"], " °", 5)
@@ -182,7 +183,8 @@ class FormsPanel(QWidget):
         ):
             text = QLabel()
             text.setWordWrap(True)
-            text.setStyleSheet("color: palette(mid); font-size: small;")
+            text.setStyleSheet("color: #555555;")
+            text.setMinimumWidth(200)
             self.texts[label] = text
             form.addRow(label, widget)
             form.addRow("", text)
@@ -190,12 +192,19 @@ class FormsPanel(QWidget):
         seed_row.addWidget(self.seed)
         seed_row.addWidget(self.variant)
         form.addRow("Seed", seed_row)
-        column = QVBoxLayout(self)
+        body = QWidget()
+        column = QVBoxLayout(body)
         column.addWidget(self.gallery)
         column.addWidget(self.shape_text)
         column.addLayout(form)
         column.addWidget(self.grow_button)
         column.addStretch(1)
+        scroll = QScrollArea()  # the definitions take room: scroll rather than squeeze them
+        scroll.setWidgetResizable(True)
+        scroll.setWidget(body)
+        outer = QVBoxLayout(self)
+        outer.setContentsMargins(0, 0, 0, 0)
+        outer.addWidget(scroll)
 
         self._timer = QTimer(self)
         self._timer.setSingleShot(True)
@@ -210,12 +219,12 @@ class FormsPanel(QWidget):
         self._describe()
 
     # --- widgets -------------------------------------------------------------------------------
-    def _combo(self, items: tuple[str, ...]) -> QComboBox:
+    def _combo(self, items: tuple[str, ...], kind: str) -> QComboBox:
         box = QComboBox()
         box.addItems(list(items))
         for i, name in enumerate(items):
             if not name.startswith("("):
-                box.setItemData(i, definition(name), Qt.ItemDataRole.ToolTipRole)
+                box.setItemData(i, definition(name, kind), Qt.ItemDataRole.ToolTipRole)
         box.currentIndexChanged.connect(lambda _: self._changed())
         return box
 
@@ -259,10 +268,10 @@ class FormsPanel(QWidget):
     def _describe(self) -> None:
         form_ = self.form()
         self.shape_text.setText(f"<b>{form_.shape}</b>: {definition(form_.shape)}")
-        self.texts["Apex"].setText(f"{form_.apex_term}: {definition(form_.apex_term)}")
+        self.texts["Apex"].setText(f"{form_.apex_term}: {definition(form_.apex_term, 'apex')}")
         fixed = SHAPES[form_.shape].fixed_base
         self.base.setEnabled(not fixed)
-        base_text = f"{form_.base_term}: {definition(form_.base_term)}"
+        base_text = f"{form_.base_term}: {definition(form_.base_term, 'base')}"
         self.texts["Base"].setText(base_text + (" (part of this shape)" if fixed else ""))
         self.texts["Margin"].setText(definition(form_.margin))
         self.teeth.setEnabled(form_.margin in TOOTHED)

@@ -41,6 +41,8 @@ def test_each_choice_shows_its_definition(qtbot):
     widget.gallery.setCurrentRow(list(SHAPES).index("cordate"))
     assert not widget.base.isEnabled()  # the shape's own base
     assert "heart" in widget.shape_text.text()
+    widget.gallery.setCurrentRow(list(SHAPES).index("oblong"))
+    assert widget.texts["Base"].text().startswith("rounded: the base is")  # not the apex's words
     seed = widget.seed.value()
     widget.variant.click()
     assert widget.seed.value() == seed + 1 and widget.form().seed == seed + 1
