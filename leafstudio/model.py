@@ -10,6 +10,7 @@ import numpy as np
 from leafstudio.errors import LeafError
 
 MESHERS = ("conforming", "bpa")
+MARGINS = ("auto", "exact", "smooth")  # Params.margin (core/outline.py)
 K_MAX = 64
 K_AUTO = "auto"  # Params.k: choose K by BIC (core/autok.py)
 GRID_MIN, GRID_MAX = 8, 2048
@@ -147,6 +148,9 @@ class Params:
         Width of the boundary taper, as a fraction of the leaf's inscribed radius.
     refine : bool, default: True
         Refine the whole mixture by least squares after EM (the paper stops after EM).
+    margin : {"auto", "exact", "smooth"}, default: "auto"
+        The margin through the boundary points themselves ("exact"), through their smoothed
+        mean position ("smooth", for noisy scans), or chosen by the points' measured noise.
     """
 
     k: int | str = 3
@@ -158,6 +162,7 @@ class Params:
     radius_factor: float = 1.0
     taper: float = 0.35
     refine: bool = True
+    margin: str = "auto"
 
     def __post_init__(self) -> None:
         checked: dict[str, Any] = {}
@@ -180,6 +185,10 @@ class Params:
         if not isinstance(self.refine, (bool, np.bool_)):
             raise LeafError(f"refine must be true or false, got {_short(self.refine)}")
         checked["refine"] = bool(self.refine)
+        if not isinstance(self.margin, str) or self.margin not in MARGINS:
+            raise LeafError(
+                f"margin must be one of {', '.join(MARGINS)}, got {_short(self.margin)}"
+            )
         for name, value in checked.items():  # plain Python values: JSON-ready, equal as expected
             object.__setattr__(self, name, value)
 

@@ -187,3 +187,17 @@ def test_finding8_no_slivers_where_the_grid_keeps_no_node():
     signed = (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]) / 2
     assert np.all(signed > 0)
     assert signed.sum() == pytest.approx(shapely.Polygon(polygon).area, rel=1e-9)
+
+
+def test_the_margin_can_be_chosen_over_the_measured_noise():
+    """Params.margin: "exact" keeps the points as the margin, "smooth" smooths a clean one."""
+    noisy = _ellipse(2000, 0.0005, shuffle=False)  # noisy, but the ring through it is simple
+    exact = ls.reconstruct(ls.Leaf(noisy, []), ls.Params(grid=64, margin="exact"))
+    auto = ls.reconstruct(ls.Leaf(noisy, []), ls.Params(grid=64))
+    inputs = {tuple(np.round(p, 9)) for p in exact.frame.to_plane(noisy)[0]}
+    assert all(tuple(np.round(p, 9)) in inputs for p in exact.polygon)
+    assert not any(tuple(np.round(p, 9)) in inputs for p in auto.polygon[:50])
+    outline = trace_outline(ls.demo("nested").boundary[:, :2], margin="smooth")
+    assert outline.smoothed
+    with pytest.raises(ls.LeafError, match="margin must be one of"):
+        ls.Params(margin="jagged")

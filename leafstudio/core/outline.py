@@ -1,9 +1,11 @@
 """The leaf outline: unordered boundary points turned into one simple polygon in the plane.
 
 The MPU implicit needs outward normals, and the conforming mesher and the coverage figures need
-the leaf region; both come from this polygon. Ordered input (sketches, sampled curves) is kept in
-its order (a dense one thinned to about MAX_OUTLINE_VERTICES); unordered or shuffled input is
-ordered by a concave hull of the points.
+the leaf region; both come from this polygon (trace_outline). A clean boundary keeps its points
+as the outline's vertices: ordered input (sketches, sampled curves) in its order, a dense one
+thinned to about MAX_OUTLINE_VERTICES; unordered input in the order a contour round its cells
+gives (cloud.py). A noisy boundary, ordered or not, becomes the smooth outline through its points'
+mean position. Everything is linear in the number of points but for one sort of them.
 """
 
 from __future__ import annotations
@@ -224,7 +226,7 @@ def _exact(points: np.ndarray, z: np.ndarray, sequence: np.ndarray, noise: Noise
     return Outline(vertices, z[cKDTree(points).query(vertices)[1]], noise, smoothed=False)
 
 
-def trace_outline(points: np.ndarray, z: np.ndarray | None = None) -> Outline:
+def trace_outline(points: np.ndarray, z: np.ndarray | None = None, margin: str = "auto") -> Outline:
     """The leaf outline from 2D boundary points, ordered or not, clean or noisy, in any number.
 
     Duplicates are dropped. Points given in an order that traces the outline have their noise
@@ -240,7 +242,14 @@ def trace_outline(points: np.ndarray, z: np.ndarray | None = None) -> Outline:
     points : (n, 2) float array
     z : (n,) float array, optional
         The points' heights above the plane, carried to the outline's vertices (0 if omitted).
+    margin : {"auto", "exact", "smooth"}
+        Params.margin: "exact" takes every boundary as clean (its points the vertices, where an
+        order through them is found), "smooth" every one as noisy; "auto" measures.
     """
+
+    def clean(noise: Noise) -> bool:
+        return margin == "exact" or (margin == "auto" and _clean(noise, scale))
+
     points = kernel_array(points)
     z = np.zeros(len(points)) if z is None else kernel_array(z)
     if len(points) == 0:
@@ -255,7 +264,7 @@ def trace_outline(points: np.ndarray, z: np.ndarray | None = None) -> Outline:
     given = _given_order(pts, spacing)
     if given is not None:
         noise = estimate_noise(pts, zs, given)
-        if _clean(noise, scale):
+        if clean(noise):
             outline = _exact(pts, zs, given, noise)
             if outline is not None:
                 return _checked(outline, scale)
@@ -270,7 +279,7 @@ def trace_outline(points: np.ndarray, z: np.ndarray | None = None) -> Outline:
         return _checked(Outline(polygon, heights, Noise(cell, 0.0), smoothed=True), scale)
     sequence = _canonical(pts, point_order(cells, pts))
     noise = estimate_noise(pts, zs, sequence)
-    if _clean(noise, scale):
+    if clean(noise):
         ring = _ring(pts, sequence)
         if isinstance(ring, np.ndarray):
             return _checked(Outline(pts[ring], zs[ring], noise, smoothed=False), scale)

@@ -55,13 +55,14 @@ if TYPE_CHECKING:
 
 STAGES = ("frame", "implicit", "grid", "guide", "gmm", "surface", "mesh")
 STAGE_KEYS: dict[str, tuple[str, ...]] = {
-    "frame": (),
-    "implicit": ("mpu_tolerance",),
-    "grid": ("grid",),
-    "guide": ("mpu_tolerance", "grid"),
-    "gmm": ("mpu_tolerance", "grid", "k", "samples", "seed"),
-    "surface": ("mpu_tolerance", "grid", "k", "samples", "seed", "taper", "refine"),
+    "frame": ("margin",),
+    "implicit": ("margin", "mpu_tolerance"),
+    "grid": ("margin", "grid"),
+    "guide": ("margin", "mpu_tolerance", "grid"),
+    "gmm": ("margin", "mpu_tolerance", "grid", "k", "samples", "seed"),
+    "surface": ("margin", "mpu_tolerance", "grid", "k", "samples", "seed", "taper", "refine"),
     "mesh": (
+        "margin",
         "mpu_tolerance",
         "grid",
         "k",
@@ -176,11 +177,11 @@ class Result:
         }
 
 
-def _frame_stage(leaf: Leaf) -> tuple[FrameStage, list[str]]:
+def _frame_stage(leaf: Leaf, margin: str = "auto") -> tuple[FrameStage, list[str]]:
     notes: list[str] = []
     frame = fit_frame(leaf.boundary, leaf.vein_points)
     xy, boundary_h = frame.to_plane(leaf.boundary)
-    outline = trace_outline(xy, boundary_h)  # input points, or a noisy cloud's smooth mean
+    outline = trace_outline(xy, boundary_h, margin)  # input points, or a noisy cloud's mean
     kept_vertices = thin_outline(outline.polygon)  # a few thousand vertices at most
     polygon = outline.polygon[kept_vertices]
     length = float(np.ptp(polygon[:, 0]))
@@ -321,7 +322,7 @@ class Pipeline:
             self._cache[name] = (key, value)
             return value
 
-        fs, notes = stage("frame", lambda: _frame_stage(self._unit_leaf))
+        fs, notes = stage("frame", lambda: _frame_stage(self._unit_leaf, params.margin))
         tol = params.mpu_tolerance * fs.length
         implicit: MPUImplicit = stage(
             "implicit",
