@@ -26,7 +26,14 @@ def scan_distances(mesh: MeshLike, points: np.ndarray, length: float) -> dict[st
     >>> round(scan_distances(plane, np.array([[0, 0, 0.01], [0.1, 0, 0.03]]), 1.0)["mean"], 6)
     0.02
     """
-    d = analysis.point_to_mesh_distance(mesh, np.asarray(points, dtype=float))
+    return distance_summary(
+        analysis.point_to_mesh_distance(mesh, np.asarray(points, dtype=float)), length
+    )
+
+
+def distance_summary(d: np.ndarray, length: float) -> dict[str, Any]:
+    """scan_distances' figures from the (n,) distances themselves (measured once, summarised
+    for several subsets of the points)."""
     if len(d) == 0:
         return {"points": 0}
     return {

@@ -17,9 +17,10 @@ from typing import Any
 import numpy as np
 from scipy.spatial import cKDTree
 
+from leafstudio.core.analysis import point_to_mesh_distance
 from leafstudio.core.compare import poisson_surface
 from leafstudio.core.extract import Extraction, extract_leaf
-from leafstudio.core.fidelity import FAR, NEAR, scan_distances
+from leafstudio.core.fidelity import FAR, NEAR, distance_summary
 from leafstudio.core.pipeline import Result
 from leafstudio.core.trianglemesh import MeshLike, polydata, vertex_normals
 from leafstudio.errors import LeafError
@@ -111,11 +112,12 @@ def fidelity_sections(
 ) -> list[tuple[str, list[tuple[str, str]]]]:
     """Measurements-panel sections: distances from the scan's blade points (and from all its
     points) to the mesh, as `leafstudio reconstruct --against` reports them."""
+    d = point_to_mesh_distance(mesh, scan.points)  # once: the blade's are among them
     parts = (
-        ("Scan → mesh distance (blade points)", scan.points[scan.extraction.blade]),
-        ("Scan → mesh distance (all points)", scan.points),
+        ("Scan → mesh distance (blade points)", d[scan.extraction.blade]),
+        ("Scan → mesh distance (all points)", d),
     )
-    return [(title, _fidelity_rows(scan_distances(mesh, pts, length))) for title, pts in parts]
+    return [(title, _fidelity_rows(distance_summary(part, length))) for title, part in parts]
 
 
 def _fidelity_rows(f: dict[str, Any]) -> list[tuple[str, str]]:
