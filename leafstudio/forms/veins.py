@@ -35,6 +35,7 @@ from leafstudio.errors import LeafError
 
 VENATION_KINDS = ("pinnate", "palmate", "parallel", "arcuate")
 HEIGHT_RATIO = 0.25  # vein height over its distance to the margin (demos.py: h = 0.25 w)
+BROAD_STEP = 0.035  # the growth step of a broad blade, as a share of the square root of its area
 STEP = 0.02  # growth step D, in leaf lengths
 SOURCES = 350  # auxin sources scattered over the blade
 KILL = 1.2  # kill distance, in growth steps
@@ -289,7 +290,9 @@ def _colonize(
     rng: np.random.Generator,
 ) -> list[np.ndarray]:
     """Space colonization from the seeds (station, start, preferred direction): each seed's
-    longest path, beginning at its station on a primary."""
+    longest path, beginning at its station on a primary. The growth step is STEP, or a fixed
+    share of a broad blade's size (as many steps across a round leaf as across a narrow one)."""
+    step = max(STEP, BROAD_STEP * np.sqrt(poly.area))
     sources, h = _sources(poly, rng)
     fixed = np.vstack(primaries)
     pos = [fixed] + [s[1][None] for s in seeds]
@@ -299,7 +302,7 @@ def _colonize(
     parent = np.r_[np.full(n_fixed, -1), np.full(len(seeds), -1)]
     depth = np.zeros(len(nodes), int)
     bias = np.array([s[2] for s in seeds])
-    kill = KILL * STEP
+    kill = KILL * step
     dist, near = cKDTree(nodes).query(sources)  # each source's nearest node, kept up to date
     for _ in range(MAX_ITERATIONS):
         alive = dist > kill
@@ -319,8 +322,8 @@ def _colonize(
             pull = pull * (1 + 3 * np.clip(1 - gap / (4 * h), 0, 1))[:, None]
         direction = direction + pull
         direction /= np.maximum(np.linalg.norm(direction, axis=1), 1e-12)[:, None]
-        new = nodes[growing] + STEP * direction
-        ok = _inside(poly, new, 0.3 * STEP)
+        new = nodes[growing] + step * direction
+        ok = _inside(poly, new, 0.3 * step)
         if not ok.any():
             break
         blocked = np.isin(near, growing[~ok])  # their node cannot step toward them: drop them
@@ -522,7 +525,7 @@ def grow_veins(
             else:
                 path = _to_margin(blade, path)
             path = _cut_crossings(path, veins)
-            reaches = venation == "arcuate" or blade.gap(path[-1:])[0] < 2 * STEP
+            reaches = venation == "arcuate" or blade.gap(path[-1:])[0] < 1.25 * STEP
             if len(path) >= 3 and reaches:  # an open secondary cut short of the margin is dropped
                 veins.append(path)
     lift = _lifter(xy, heights, frame, poly)
