@@ -1,0 +1,179 @@
+"""The app explaining itself: a Steps view that walks through the pipeline one step at a time (by
+showing the layers of each step, with a caption tying it to the paper), and File > Export of a
+turntable (GIF or MP4) and of the steps side by side (PNG) for slides (slides.py).
+"""
+
+from __future__ import annotations
+
+from PySide6.QtCore import Qt
+from PySide6.QtGui import QAction
+from PySide6.QtWidgets import (
+    QApplication,
+    QDialog,
+    QFileDialog,
+    QHBoxLayout,
+    QLabel,
+    QPushButton,
+    QVBoxLayout,
+)
+
+# (title, caption, the layers shown)
+STEPS: tuple[tuple[str, str, frozenset[str]], ...] = (
+    (
+        "1. The input on the leaf's plane",
+        "The boundary (black) and vein points (coloured) as given, on the plane that fits the "
+        "boundary best (its PCA plane, step 1 of the paper). Heights are measured from it.",
+        frozenset({"points", "curves"}),
+    ),
+    (
+        "2. g(x): inside or outside",
+        "A smooth function of the outline (the MPU implicit, eqs. 1-2): positive inside the "
+        "leaf, negative outside. Its zero contour, drawn here, is the leaf's margin.",
+        frozenset({"contour", "points"}),
+    ),
+    (
+        "3. p(x): where the relief is",
+        "The height guide (eqs. 4-5): each point takes the height of the nearest vein, falling "
+        "to zero at the margin. Bright: high above the plane.",
+        frozenset({"probability", "points"}),
+    ),
+    (
+        "4. EM samples",
+        "Points drawn where p(x) is large. The Gaussian mixture is fitted to them by EM: each "
+        "Gaussian gathers one cluster of them.",
+        frozenset({"em", "points"}),
+    ),
+    (
+        "5. The Gaussian mixture's surface",
+        "z(x) = b(x) + tanh(g/δ) Σ a_k N(x | μ_k, Σ_k): the K Gaussians, scaled to the veins' "
+        "heights, tapered to zero at the margin by tanh(g/δ). Shown at the grid nodes.",
+        frozenset({"samples"}),
+    ),
+    (
+        "6. The mesh",
+        "The surface triangulated and trimmed at the margin, coloured by height. Change K in "
+        "the Parameters to see how many bumps the mixture can make.",
+        frozenset({"mesh", "points"}),
+    ),
+)
+
+
+class StepsDialog(QDialog):
+    """Back / Next through STEPS, switching the window's layers to each step's; closing puts the
+    layers back as they were."""
+
+    def __init__(self, window) -> None:
+        super().__init__(window)
+        self.setWindowTitle("Steps of the pipeline")
+        self.setModal(False)
+        self.window_ = window
+        self.saved = self._states()
+        self.index = 0
+        self.title = QLabel()
+        self.title.setStyleSheet("font-weight: bold;")
+        self.caption = QLabel()
+        self.caption.setWordWrap(True)
+        self.caption.setMinimumWidth(380)
+        self.back, self.next = QPushButton("Back"), QPushButton("Next")
+        self.back.clicked.connect(lambda: self.show_step(self.index - 1))
+        self.next.clicked.connect(lambda: self.show_step(self.index + 1))
+        buttons = QHBoxLayout()
+        buttons.addWidget(self.back)
+        buttons.addWidget(self.next)
+        column = QVBoxLayout(self)
+        column.addWidget(self.title)
+        column.addWidget(self.caption)
+        column.addLayout(buttons)
+        self.show_step(0)
+
+    def _items(self):
+        layers = self.window_.layer_list
+        return [layers.item(i) for i in range(layers.count())]
+
+    def _states(self) -> dict[str, bool]:
+        return {
+            item.data(Qt.ItemDataRole.UserRole): item.checkState() == Qt.CheckState.Checked
+            for item in self._items()
+        }
+
+    def _set(self, shown: dict[str, bool]) -> None:
+        for item in self._items():
+            key = item.data(Qt.ItemDataRole.UserRole)
+            if key in shown:
+                state = Qt.CheckState.Checked if shown[key] else Qt.CheckState.Unchecked
+                if item.checkState() != state:
+                    item.setCheckState(state)
+
+    def show_step(self, index: int) -> None:
+        self.index = max(0, min(index, len(STEPS) - 1))
+        title, caption, layers = STEPS[self.index]
+        self.title.setText(title)
+        self.caption.setText(caption)
+        self.back.setEnabled(self.index > 0)
+        self.next.setEnabled(self.index < len(STEPS) - 1)
+        self._set({key: key in layers for key in self.saved if key not in ("scan", "poisson")})
+
+    def done(self, result: int) -> None:
+        self._set(self.saved)
+        super().done(result)
+
+
+def _menu(window, title: str):
+    for action in window.menuBar().actions():
+        if action.text().replace("&", "") == title and action.menu() is not None:
+            return action.menu()
+    return window.menuBar().addMenu(title)
+
+
+def export_slide(window, kind: str, path: str) -> bool:
+    """Write the shown result's turntable or steps figure to `path`; errors in the window."""
+    from leafstudio.errors import LeafError
+    from leafstudio.slides import render_steps, render_turntable
+
+    result = window.session.result
+    if result is None:
+        window.show_error("Nothing to export", "There is no reconstructed leaf yet.")
+        return False
+    QApplication.setOverrideCursor(Qt.CursorShape.WaitCursor)
+    try:
+        (render_turntable if kind == "turntable" else render_steps)(result, path)
+    except (LeafError, OSError) as exc:
+        window.show_error("Cannot export", str(exc))
+        return False
+    finally:
+        QApplication.restoreOverrideCursor()
+    return True
+
+
+def install(window) -> None:
+    """Add View > Steps of the pipeline, and File > Export turntable / steps figure."""
+
+    def steps() -> None:
+        window.steps_dialog = StepsDialog(window)
+        window.steps_dialog.show()
+
+    def ask(kind: str, caption: str, filters: str, suffix: str) -> None:
+        path, _ = QFileDialog.getSaveFileName(window, caption, "", filters)
+        if path:
+            export_slide(window, kind, path if "." in path.rsplit("/", 1)[-1] else path + suffix)
+
+    view = _menu(window, "View")
+    action = QAction("&Steps of the pipeline…", window)
+    action.setToolTip("Walk through the pipeline one step at a time, each step explained.")
+    action.triggered.connect(steps)
+    view.addAction(action)
+    files = _menu(window, "File")
+    quits = [a for a in files.actions() if a.text().replace("&", "").startswith(("Quit", "Exit"))]
+    for kind, text, filters, suffix in (
+        ("turntable", "Export &turntable…", "Animations (*.gif *.mp4)", ".gif"),
+        ("steps", "Export steps &figure…", "PNG (*.png)", ".png"),
+    ):
+        act = QAction(text, window)
+        act.triggered.connect(
+            lambda _=False, k=kind, t=text, f=filters, s=suffix: ask(k, t.replace("&", ""), f, s)
+        )
+        if quits:
+            files.insertAction(quits[0], act)
+        else:
+            files.addAction(act)
+    window.explain_actions = action
