@@ -90,6 +90,13 @@ def _add_run_options(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--mesher", choices=("conforming", "bpa"), default=None)
     parser.add_argument(
+        "--margin",
+        choices=("auto", "exact", "smooth"),
+        default=None,
+        help="margin through the boundary points (exact), through their smoothed mean (smooth), "
+        "or chosen by their measured noise (auto, the default)",
+    )
+    parser.add_argument(
         "--seed", type=_seed_value, default=None, help=f"random seed, 0 to {SEED_MAX} (default 0)"
     )
     parser.add_argument(
@@ -254,7 +261,7 @@ def _params_for(args: argparse.Namespace, base: object | None):
     from leafstudio.model import Params
 
     params = base if isinstance(base, Params) else Params()
-    changes = {name: getattr(args, name) for name in ("k", "grid", "mesher", "seed")}
+    changes = {name: getattr(args, name) for name in ("k", "grid", "mesher", "seed", "margin")}
     return params.with_(**{k: v for k, v in changes.items() if v is not None})
 
 

@@ -201,3 +201,15 @@ def test_the_margin_can_be_chosen_over_the_measured_noise():
     assert outline.smoothed
     with pytest.raises(ls.LeafError, match="margin must be one of"):
         ls.Params(margin="jagged")
+
+
+def test_the_command_line_takes_the_margin(tmp_path, capsys):
+    path = tmp_path / "noisy.csv"
+    np.savetxt(path, _ellipse(2000, 0.0005, shuffle=False), delimiter=",")
+    areas = {}
+    for margin in ("exact", "smooth"):
+        assert main(["measure", str(path), "--json", "--grid", "32", "--margin", margin]) == 0
+        areas[margin] = json.loads(capsys.readouterr().out)["area"]
+    assert areas["exact"] != areas["smooth"]
+    assert areas["exact"] == pytest.approx(areas["smooth"], rel=0.01)
+    assert main(["measure", str(path), "--margin", "jagged"]) == 2
