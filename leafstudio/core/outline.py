@@ -387,25 +387,11 @@ def thin_curve(points: np.ndarray, step: float, keep_end: bool = False) -> np.nd
     """Indices of the (n, 2) points kept, in order, when each is dropped that lies nearer than
     `step` to the last one kept (the first is always kept, and with `keep_end` the last: an
     open curve's end; unordered points mostly stay)."""
-    kept = _thin(kernel_array(points), float(step))
+    points = kernel_array(points)
+    kept = _thin_ring(points, np.arange(len(points)), float(step))
     if keep_end and len(points) and kept[-1] != len(points) - 1:
         kept = np.append(kept, len(points) - 1)
     return kept
-
-
-@njit(cache=True, nogil=True)
-def _thin(points, step):
-    keep = np.zeros(len(points), np.bool_)
-    if len(points) == 0:
-        return np.flatnonzero(keep)
-    keep[0] = True
-    lx, ly = points[0, 0], points[0, 1]
-    for i in range(1, len(points)):
-        dx, dy = points[i, 0] - lx, points[i, 1] - ly
-        if dx * dx + dy * dy >= step * step:
-            keep[i] = True
-            lx, ly = points[i, 0], points[i, 1]
-    return np.flatnonzero(keep)
 
 
 def outward_normals(polygon: np.ndarray, smoothing: int = 2) -> np.ndarray:
