@@ -23,6 +23,9 @@ FORMS = [
     ("ovate", {"margin": "lobed", "lobes": 5}, 0.25, 0.0),
     ("obovate", {}, 0.2, 170.0),
     ("elliptic", {"apex": "acuminate"}, 0.25, -20.0),
+    ("elliptic", {"apex": "acuminate"}, 0.0, 45.0),  # a long thin tip is not a petiole
+    ("cordate", {}, 0.12, 60.0),  # a short petiole in the sinus
+    ("linear", {}, 0.12, -30.0),  # a petiole nearly as wide as the blade
 ]
 
 
@@ -124,7 +127,8 @@ def test_photo_texture_lands_on_the_mesh_margin_within_2_pixels(tmp_path: Path):
     from tests.test_assets import assert_valid_gltf, scene_mesh
 
     leaf = make_form("ovate", margin="serrate", teeth=24)
-    image, _, _ = form_photo(leaf.boundary, leaf.veins, petiole=0.2, angle=-40)
+    # no petiole: a cut petiole leaves the photo's edge on purpose (tested above)
+    image, _, _ = form_photo(leaf.boundary, leaf.veins, angle=-40)
     photo = tmp_path / "photo.png"
     Image.fromarray(image).save(photo)
     project = tmp_path / "leaf.leaf.json"
@@ -156,6 +160,8 @@ def test_photo_texture_lands_on_the_mesh_margin_within_2_pixels(tmp_path: Path):
     photo_per_unit = np.linalg.norm(ls.assets.photo_transform(project)[:, 0])
     distance = texture_px * photo_per_unit / texture_per_unit
     assert np.max(distance) <= 2.0
+    back = cKDTree(edge).query(uv * pixels)[0] * photo_per_unit / texture_per_unit
+    assert np.max(back) <= 2.0  # and every margin vertex is near the photo's edge
 
 
 def test_a_malformed_photo_entry_is_one_line_exit_2(tmp_path: Path, capsys):

@@ -7,9 +7,11 @@
    not plain), several leaves (a second object at least SECOND_OBJECT of the largest's size), a
    leaf cut by the image border.
 3. The petiole: a morphological opening by a disk of PETIOLE_RADIUS of the blade's inscribed
-   radius removes thin parts; a removed part longer than PETIOLE_LENGTH disk radii is the
-   petiole (teeth and most tips are shorter). A second opening, by a disk just wider than the
-   petiole, cuts it off where the blade widens. Where it met the blade is the base.
+   radius removes thin parts; of those, a stalk is long (PETIOLE_LENGTH disk radii), slender
+   (STALK_ELONGATION) and of even width (it fills STALK_FILL of its length times its widest
+   width, where a tapering tip fills about half): teeth are short, tips taper. A second
+   opening, by a disk just wider than the petiole, cuts it off where the blade widens. Where it
+   met the blade is the base.
 4. The outline: the zero contour of the (slightly smoothed) blade mask, at sub-pixel precision,
    resampled evenly.
 5. Base and apex: the petiole's end when there is one; otherwise, along the blade's long axis,
@@ -37,7 +39,9 @@ SMALLEST_LEAF = 0.002  # of the image's pixels: less is no leaf
 LARGEST_LEAF = 0.9  # of the image's pixels: more means no plain background
 SMOOTHING = 1.0  # pixels: the colour distance is smoothed this much before the threshold
 PETIOLE_RADIUS = 0.3  # the opening disk's radius, as a fraction of the inscribed radius
-PETIOLE_LENGTH = 3.0  # a removed part longer than this many disk radii is the petiole
+PETIOLE_LENGTH = 1.0  # a stalk is at least this many disk radii long,
+STALK_ELONGATION = 4.0  # this many times longer than wide,
+STALK_FILL = 0.65  # and fills more than this share of its length times its widest width
 PETIOLE_FIT = 1.6  # the second opening's disk, in petiole half-widths
 END_BAND = 0.15  # the width of each end is measured this fraction of the length from it
 
@@ -119,38 +123,49 @@ def _opened(leaf: np.ndarray, inside: np.ndarray, radius: float) -> np.ndarray:
     return leaf & (distance_transform_edt(~(inside > radius)) <= radius)
 
 
-def _longest_part(leaf: np.ndarray, opened: np.ndarray, radius: float) -> np.ndarray | None:
-    """The longest part the opening removed, if longer than PETIOLE_LENGTH radii, else None."""
-    from skimage.measure import label, regionprops
+def _stalk_shape(part: np.ndarray) -> tuple[float, float, float]:
+    """Length, elongation (length over widest width) and fill (area over length times widest
+    width: about 0.85 for a strip of even width, 0.5 for a tapering tip) of a mask's region."""
+    from scipy.ndimage import distance_transform_edt
+    from skimage.measure import regionprops
 
-    residue = label(leaf & ~opened, connectivity=2)
-    parts = [p for p in regionprops(residue) if p.axis_major_length > PETIOLE_LENGTH * radius]
-    if not parts:
-        return None
-    return residue == max(parts, key=lambda p: p.axis_major_length).label
+    (props,) = regionprops(part.astype(np.uint8))
+    width = max(2 * float(distance_transform_edt(np.pad(part, 1)).max()), 1.0)
+    length = props.axis_major_length
+    return length, length / width, props.area / max(length * width, 1e-12)
 
 
 def _cut_petiole(leaf: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     """The blade without the petiole, and where the petiole met it (column, row) or None.
 
-    Two openings: a coarse one (PETIOLE_RADIUS of the inscribed radius) finds the petiole, whose
-    half-width w is then read on its skeleton; a second one by a disk of PETIOLE_FIT w cuts it
-    where the blade widens, not where the coarse disk first fits."""
+    Two openings: a coarse one (PETIOLE_RADIUS of the inscribed radius) removes the thin parts;
+    each long one's half-width w is read on its skeleton, and a second opening by a disk of
+    PETIOLE_FIT w cuts it where the blade widens. What that cuts is a stalk if it is slender and
+    of even width (_stalk_shape: STALK_ELONGATION, STALK_FILL); the most even one is the
+    petiole."""
     from scipy.ndimage import binary_dilation, distance_transform_edt
-    from skimage.measure import label
+    from skimage.measure import label, regionprops
     from skimage.morphology import skeletonize
 
     inside = distance_transform_edt(leaf)
     radius = max(PETIOLE_RADIUS * float(inside.max()), 1.0)
-    petiole = _longest_part(leaf, _opened(leaf, inside, radius), radius)
+    coarse = label(leaf & ~_opened(leaf, inside, radius), connectivity=2)
+    petiole, best = None, STALK_FILL
+    for part in regionprops(coarse):
+        if part.axis_major_length < PETIOLE_LENGTH * radius:
+            continue
+        region = coarse == part.label
+        halfwidth = float(np.median(inside[skeletonize(region)]))
+        fine = max(PETIOLE_FIT * halfwidth, 1.5)
+        thin = label(leaf & ~_opened(leaf, inside, fine) & region, connectivity=2)
+        if thin.max() == 0:
+            continue
+        tight = thin == np.argmax(np.bincount(thin.ravel())[1:]) + 1
+        length, elongation, fill = _stalk_shape(tight)
+        if length >= PETIOLE_LENGTH * radius / 2 and elongation >= STALK_ELONGATION and fill > best:
+            petiole, best = tight, fill
     if petiole is None:
         return leaf, None
-    halfwidth = float(np.median(inside[skeletonize(petiole)])) if petiole.sum() > 4 else 1.0
-    fine = max(PETIOLE_FIT * halfwidth, 1.5)
-    if fine < radius:
-        tight = _longest_part(leaf, _opened(leaf, inside, fine), fine)
-        if tight is not None and (tight & petiole).any():
-            petiole = tight
     blade = leaf & ~petiole
     pieces = label(blade, connectivity=2)  # the cut may leave crumbs: keep the blade
     if pieces.max() > 1:
