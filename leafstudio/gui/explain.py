@@ -57,6 +57,34 @@ STEPS: tuple[tuple[str, str, frozenset[str]], ...] = (
     ),
 )
 
+# each layer's tooltip: what it shows and which step of the paper it comes from
+LAYER_HELP: dict[str, str] = {
+    "mesh": "The reconstructed surface (step 6), coloured as chosen below: z(x) = b(x) + "
+    "tanh(g/δ) Σ a_k N(x | μ_k, Σ_k), trimmed at the margin.",
+    "points": "The input: boundary points (black) and vein points (a colour per vein), with the "
+    "heights the surface must follow.",
+    "curves": "The boundary and vein curves through the input points, in order.",
+    "contour": "The zero contour of g (eqs. 1-2): the MPU implicit of the outline is positive "
+    "inside, negative outside; this line is where the surface is cut.",
+    "probability": "p(x), the height guide (eqs. 4-5): each point takes the nearest vein's "
+    "height, falling to zero at the margin; the mixture is fitted to it.",
+    "samples": "The GMM samples: the kept grid nodes lifted to the fitted surface z(x).",
+    "em": "The EM samples: points drawn where p(x) is large; EM fits the K Gaussians to them.",
+    "scan": "A scan of the real leaf, if one is open, to compare the surface with.",
+    "poisson": "Screened Poisson's surface from the same points, beside ours: it spills past "
+    "the margin (the paper's Fig. 10).",
+}
+
+
+def add_layer_help(window) -> None:
+    """Give each item of the window's layer list its LAYER_HELP tooltip."""
+    layers = window.layer_list
+    for i in range(layers.count()):
+        item = layers.item(i)
+        text = LAYER_HELP.get(item.data(Qt.ItemDataRole.UserRole))
+        if text:
+            item.setToolTip(text)
+
 
 class StepsDialog(QDialog):
     """Back / Next through STEPS, switching the window's layers to each step's; closing puts the
@@ -146,7 +174,9 @@ def export_slide(window, kind: str, path: str) -> bool:
 
 
 def install(window) -> None:
-    """Add View > Steps of the pipeline, and File > Export turntable / steps figure."""
+    """Add View > Steps of the pipeline, File > Export turntable / steps figure, and a tooltip
+    on every layer."""
+    add_layer_help(window)
 
     def steps() -> None:
         window.steps_dialog = StepsDialog(window)

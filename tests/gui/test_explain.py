@@ -35,6 +35,8 @@ def test_steps_view_walks_through_the_layers_and_puts_them_back(window, qtbot):
 def test_export_turntable_and_steps_figure(window, qtbot, tmp_path):
     wait_result(qtbot, window)
     explain.install(window)
+    layers = window.layer_list
+    assert all(layers.item(i).toolTip() for i in range(layers.count()))  # every layer explained
     texts = [a.text() for a in window.menuBar().actions()[0].menu().actions()]
     assert any("turntable" in t for t in texts) and any("steps" in t for t in texts)
     assert explain.export_slide(window, "turntable", str(tmp_path / "t.gif"))
