@@ -459,6 +459,26 @@ def test_veins_grow_inside_a_real_scans_outline():
     assert len(auto) >= 5
 
 
+@pytest.mark.parametrize(
+    "boundary,message",
+    [
+        (np.column_stack([np.linspace(0, 1, 10), np.zeros(10)]), "encloses no area"),
+        (np.array([[0, 0], [1, np.nan], [0, 1]]), "NaN"),
+        (np.zeros((2, 2)), "n >= 3"),
+    ],
+)
+def test_grow_veins_refuses_outlines_without_a_blade(boundary, message):
+    with pytest.raises(LeafError, match=message):
+        grow_veins(boundary)
+
+
+def test_grow_veins_keeps_the_boundarys_coordinates():
+    boundary = ls.demo("nested").boundary * 1000 + [5e4, -3e4, 7]
+    veins = grow_veins(boundary, base=boundary[0])
+    assert np.linalg.norm(veins[0][0, :2] - boundary[0, :2]) < 20  # 2% of the length
+    assert all(np.all(v[:, 2] >= 7) and np.all(v[:, 2] < 7 + 100) for v in veins)
+
+
 # --- the command line ---------------------------------------------------------------------------
 def test_form_list_prints_every_term(capsys):
     assert main(["form", "--list"]) == 0

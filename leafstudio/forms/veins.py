@@ -464,6 +464,9 @@ def grow_veins(
         raise LeafError(f"secondaries must be between 0 and 40, got {count}")
     rng = np.random.default_rng(seed)
     xy, heights, frame, base_xy = _plane(boundary, base)
+    size = float(np.ptp(xy, axis=0).max())
+    if size == 0 or Polygon(xy).convex_hull.area <= 1e-9 * size**2:
+        raise LeafError("the outline encloses no area (its points lie on one line)")
     poly = _polygon(xy)
     origin = None
     if frame is None or not hasattr(frame, "to_plane"):
