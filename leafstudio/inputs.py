@@ -23,7 +23,7 @@ from leafstudio.errors import LeafError, shorten
 MAX_TEXT_BYTES = 1 << 30  # a point list or scan of more than 1 GiB is refused
 MAX_JSON_BYTES = 256 << 20
 MAX_JSON_DEPTH = 32  # a project nests 4 deep (veins -> vein -> point -> number)
-MAX_PLY_HEADER = 64 << 10
+MAX_HEADER = 64 << 10  # a PLY or PCD header ends within this many bytes
 PLY_SIZES = {
     "char": 1, "int8": 1, "uchar": 1, "uint8": 1, "short": 2, "int16": 2, "ushort": 2,
     "uint16": 2, "int": 4, "int32": 4, "uint": 4, "uint32": 4, "float": 4, "float32": 4,
@@ -108,16 +108,21 @@ def json_depth(text: str) -> int:
     return int(np.cumsum(step).max(initial=0))
 
 
+def _head(path: Path) -> tuple[int, bytes]:
+    """A regular file's size and its first MAX_HEADER bytes (where a header must end)."""
+    size = check_input_file(path, limit=None)
+    try:
+        with open(path, "rb") as handle:
+            return size, handle.read(MAX_HEADER)
+    except OSError as exc:
+        raise LeafError(f"cannot be read ({exc.strerror or exc})", str(path)) from None
+
+
 def check_ply_header(path: str | os.PathLike) -> None:
     """Refuse a PLY file whose header declares more data than the file holds (a header can claim
     2e9 vertices in a 200-byte file; plyfile would allocate them first)."""
     path = Path(path)
-    size = check_input_file(path, limit=None)
-    try:
-        with open(path, "rb") as handle:
-            head = handle.read(MAX_PLY_HEADER)
-    except OSError as exc:
-        raise LeafError(f"cannot be read ({exc.strerror or exc})", str(path)) from None
+    size, head = _head(path)
     end = head.find(b"end_header")
     if not head.startswith(b"ply") or end < 0:
         raise LeafError("not a readable PLY file (no 'ply' ... 'end_header' header)", str(path))
@@ -154,12 +159,7 @@ def check_pcd_header(path: str | os.PathLike) -> None:
     """Refuse a PCD file whose header declares more points than the file holds (open3d would
     allocate them first), or that has no PCD header at all."""
     path = Path(path)
-    size = check_input_file(path, limit=None)
-    try:
-        with open(path, "rb") as handle:
-            head = handle.read(MAX_PLY_HEADER)
-    except OSError as exc:
-        raise LeafError(f"cannot be read ({exc.strerror or exc})", str(path)) from None
+    size, head = _head(path)
     fields: dict[str, list[str]] = {}
     body = None
     offset = 0

@@ -80,19 +80,17 @@ EDITS = st.lists(
 
 
 @FUZZ
-@given(data=st.binary(max_size=2000), suffix=st.sampled_from(LEAF_TYPES))
-def test_random_bytes_are_a_leaf_or_one_leaf_error(tmp_path, data, suffix):
+@given(
+    data=st.binary(max_size=2000),
+    kind=st.sampled_from(
+        [(s, load_leaf) for s in LEAF_TYPES] + [(s, read_scan) for s in SCAN_TYPES]
+    ),
+)
+def test_random_bytes_are_a_leaf_or_a_scan_or_one_leaf_error(tmp_path, data, kind):
+    suffix, loader = kind
     path = tmp_path / f"random{suffix}"
     path.write_bytes(data)
-    _load(path, load_leaf)
-
-
-@FUZZ
-@given(data=st.binary(max_size=2000), suffix=st.sampled_from(SCAN_TYPES))
-def test_random_bytes_are_a_scan_or_one_leaf_error(tmp_path, data, suffix):
-    path = tmp_path / f"random{suffix}"
-    path.write_bytes(data)
-    _load(path, read_scan)
+    _load(path, loader)
 
 
 @FUZZ
