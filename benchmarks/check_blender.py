@@ -4,7 +4,9 @@ meshes, UV layers, the material and its image texture, and the vertex count besi
 bpy pins numpy < 2, so it lives in a venv of its own, not the project's:
     python3 -m venv /tmp/bpyenv && /tmp/bpyenv/bin/pip install bpy
     .venv/bin/leafstudio reconstruct leaf.leaf.json -o leaf.glb
-    /tmp/bpyenv/bin/python benchmarks/check_blender.py leaf.glb
+    /tmp/bpyenv/bin/python benchmarks/check_blender.py leaf.glb [--render PNG]
+
+--render also renders the imported scene with Cycles on the CPU (a sun, a camera above).
 """
 
 from __future__ import annotations
@@ -63,15 +65,50 @@ def main(path: str) -> dict:
     return report
 
 
-def quietly(path: str) -> dict:
-    """main(path) with Blender's own log lines sent to stderr (stdout is the JSON alone)."""
+def render(out: str, pixels: int = 640, samples: int = 24) -> None:
+    """Render the imported leaf from above and aside with Cycles (CPU) to `out`."""
+    import bpy
+    from mathutils import Vector
+
+    scene = bpy.context.scene
+    meshes = [o for o in scene.objects if o.type == "MESH"]
+    corners = [o.matrix_world @ Vector(c) for o in meshes for c in o.bound_box]
+    lo = Vector([min(c[i] for c in corners) for i in range(3)])
+    hi = Vector([max(c[i] for c in corners) for i in range(3)])
+    centre, size = (lo + hi) / 2, max(hi - lo)
+    camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+    scene.collection.objects.link(camera)
+    camera.location = centre + Vector((0.6, -0.9, 1.1)) * size
+    camera.rotation_euler = (centre - camera.location).to_track_quat("-Z", "Y").to_euler()
+    scene.camera = camera
+    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", type="SUN"))
+    sun.data.energy = 4.0
+    sun.rotation_euler = (0.5, 0.3, 0.8)
+    scene.collection.objects.link(sun)
+    world = bpy.data.worlds.new("world")
+    world.color = (0.8, 0.8, 0.8)
+    scene.world = world
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = samples
+    scene.render.resolution_x = scene.render.resolution_y = pixels
+    scene.render.filepath = out
+    bpy.ops.render.render(write_still=True)
+
+
+def quietly(path: str, out: str | None = None) -> dict:
+    """main(path) (and render to `out`) with Blender's own log lines sent to stderr (stdout is
+    the JSON alone)."""
     import os
 
     sys.stdout.flush()
     saved = os.dup(1)
     os.dup2(2, 1)
     try:
-        return main(path)
+        report = main(path)
+        if out:
+            render(out)
+        return report
     finally:
         sys.stdout.flush()
         os.dup2(saved, 1)
@@ -79,4 +116,5 @@ def quietly(path: str) -> dict:
 
 
 if __name__ == "__main__":
-    print(json.dumps(quietly(sys.argv[1]), indent=1))
+    target = sys.argv[sys.argv.index("--render") + 1] if "--render" in sys.argv else None
+    print(json.dumps(quietly(sys.argv[1], target), indent=1))
