@@ -380,9 +380,12 @@ def _parse(name: str, text: str) -> Any:
 
 
 def _cell(value: Any) -> str:
+    """A CSV cell: floats exactly (repr), text on one line (a row is one line of the file)."""
     if value is None:
         return ""
-    return repr(value) if isinstance(value, float) else str(value)
+    if isinstance(value, float):
+        return repr(value)
+    return " ".join(str(value).splitlines())
 
 
 class TraitTable:
@@ -486,13 +489,13 @@ class TraitTable:
             return
         self._handle.close()
         self._handle = None
-        rows = sorted(self.rows(), key=lambda r: str(r.get("input")))
         from leafstudio.io import _replace_atomically, _write_atomically
 
         if self.kind == ".parquet":
             import pyarrow as pa
             import pyarrow.parquet as pq
 
+            rows = sorted(self.rows(), key=lambda r: str(r.get("input")))
             types = {c: pa.int64() if c in INT_COLUMNS else pa.float64() for c in FLOAT_COLUMNS}
             types.update({c: pa.int64() for c in INT_COLUMNS})
             schema = pa.schema([(c, types.get(c, pa.string())) for c in self.columns])
@@ -501,8 +504,24 @@ class TraitTable:
             )
             _replace_atomically(self.path, lambda tmp: pq.write_table(table, tmp))
             self.journal.unlink(missing_ok=True)
-        else:
-            _write_atomically(self.path, self._header() + "".join(self._line(r) for r in rows))
+        else:  # the journal's own lines, sorted: rows are not parsed (nor held) whole
+            _write_atomically(self.path, self._header() + "".join(self._sorted_lines()))
+
+    def _sorted_lines(self) -> list[str]:
+        """The journal's complete row lines (one line a row: see _cell), sorted by input."""
+        keyed = []
+        with open(self.journal, encoding="utf-8", newline="") as handle:
+            if self.kind == ".csv":
+                next(handle, None)  # the header
+            for line in handle:
+                if not line.endswith("\n"):
+                    continue
+                try:
+                    key = next(csv.reader([line])) if self.kind == ".csv" else json.loads(line)
+                    keyed.append((str(key[0] if self.kind == ".csv" else key["input"]), line))
+                except (ValueError, KeyError, IndexError, TypeError, StopIteration):
+                    continue
+        return [line for _, line in sorted(keyed)]
 
 
 # ----------------------------------------------------------------------------- executors
