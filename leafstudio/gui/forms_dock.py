@@ -32,7 +32,7 @@ from PySide6.QtWidgets import (
 
 from leafstudio.forms import SHAPES, VENATION_KINDS, Form, definition, grow_veins
 from leafstudio.forms.terms import APEXES, DEFAULT_LOBES, MARGINS, RELIEF, TOOTHED, USER_BASES
-from leafstudio.gui.sketch_model import Sketch
+from leafstudio.gui.sketch_model import Sketch, closed_curve, ring_crossings
 from leafstudio.model import Leaf
 
 THUMBNAIL = 84  # pixels
@@ -95,10 +95,14 @@ def leaf_sketch(leaf: Leaf, teeth: int = 0) -> Sketch:
     boundary control points spread along it with its corners (tooth tips and notches) kept, each
     vein's control points spread along it with their heights, the boundary's heights as relief."""
     xy = leaf.boundary[:, :2]
-    count = max(BOUNDARY_CONTROL, 3 * teeth)
-    even = np.unique(np.linspace(0, len(xy), count, endpoint=False).astype(int))
     corners = np.flatnonzero(_turns(xy) > CORNER_TURN)
-    boundary = xy[np.union1d(even, corners)]
+    count = max(BOUNDARY_CONTROL, 3 * teeth)
+    while True:  # more control points until the curve through them does not cross itself
+        even = np.unique(np.linspace(0, len(xy), count, endpoint=False).astype(int))
+        boundary = xy[np.union1d(even, corners)]
+        if count >= len(xy) or not len(ring_crossings(closed_curve(boundary))):
+            break
+        count *= 2
     veins = []
     for vein in leaf.veins:
         pick = np.unique(np.linspace(0, len(vein) - 1, min(VEIN_CONTROL, len(vein))).astype(int))

@@ -82,3 +82,16 @@ def test_a_forms_sketch_keeps_tooth_tips():
     sketch = leaf_sketch(leaf, 20)
     curve = sketch.boundary_curve()
     assert np.ptp(curve[:, 1]) == pytest.approx(np.ptp(leaf.boundary[:, 1]), rel=0.05)
+
+
+def test_every_forms_sketch_curve_is_a_simple_outline():
+    import itertools
+
+    from leafstudio.forms import Form
+    from leafstudio.forms.terms import MARGINS
+    from leafstudio.gui.sketch_model import ring_crossings
+
+    for shape, margin in itertools.product(SHAPES, MARGINS):
+        form = Form(shape, margin=margin)
+        sketch = leaf_sketch(form.leaf(), form.teeth_count)
+        assert len(ring_crossings(sketch.boundary_curve())) == 0, (shape, margin)
