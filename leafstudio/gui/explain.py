@@ -9,12 +9,15 @@ from PySide6.QtCore import Qt
 from PySide6.QtGui import QAction
 from PySide6.QtWidgets import (
     QApplication,
+    QCheckBox,
     QDialog,
+    QDoubleSpinBox,
     QFileDialog,
     QHBoxLayout,
     QLabel,
     QPushButton,
     QVBoxLayout,
+    QWidget,
 )
 
 # (title, caption, the layers shown)
@@ -146,6 +149,86 @@ class StepsDialog(QDialog):
         super().done(result)
 
 
+class ViewAids(QWidget):
+    """Height exaggeration (the relief is a few percent of the length), a colour range kept
+    while K changes (so K's effect shows), and K written in the view. They act on the actors the
+    viewport drew, after each result and layer change: the viewport's own code is unchanged."""
+
+    def __init__(self, window) -> None:
+        super().__init__()
+        self.window_ = window
+        self.exaggeration = QDoubleSpinBox()
+        self.exaggeration.setRange(1.0, 20.0)
+        self.exaggeration.setSingleStep(0.5)
+        self.exaggeration.setPrefix("Height × ")
+        self.exaggeration.setToolTip(
+            "Stretch the view along the leaf's normal: relief is a few percent of the length. "
+            "Only the view changes, never the mesh or its files."
+        )
+        self.keep = QCheckBox("Keep the colour range")
+        self.keep.setToolTip(
+            "Keep the mesh's colour range as it is now while K or other settings change, so the "
+            "effect of K shows as a change of colour."
+        )
+        self.kept: tuple[str, tuple[float, float]] | None = None
+        row = QHBoxLayout(self)
+        row.setContentsMargins(0, 0, 0, 0)
+        row.addWidget(self.exaggeration)
+        row.addWidget(self.keep)
+        self.exaggeration.valueChanged.connect(lambda _: self.apply())
+        self.keep.toggled.connect(self._on_keep)
+
+    def _mesh_actor(self):
+        return self.window_.viewport.plotter.actors.get("mesh")
+
+    def _on_keep(self, on: bool) -> None:
+        actor = self._mesh_actor()
+        self.kept = None
+        if on and actor is not None:
+            self.kept = (actor.mapper.array_name, tuple(actor.mapper.scalar_range))
+        self.apply()
+
+    def _matrix(self):
+        import numpy as np
+        import vtk
+
+        result = self.window_.session.result
+        scale = self.exaggeration.value()
+        if result is None or scale == 1.0:
+            return None
+        n, o = np.asarray(result.frame.normal), np.asarray(result.frame.origin)
+        linear = np.eye(3) + (scale - 1.0) * np.outer(n, n)  # stretch along the normal only
+        m = np.eye(4)
+        m[:3, :3] = linear
+        m[:3, 3] = o - linear @ o  # about the leaf's plane
+        matrix = vtk.vtkMatrix4x4()
+        for i in range(4):
+            for j in range(4):
+                matrix.SetElement(i, j, float(m[i, j]))
+        return matrix
+
+    def apply(self) -> None:
+        """Exaggeration, kept colours and K's label on what the viewport shows now."""
+        plotter = self.window_.viewport.plotter
+        matrix = self._matrix()
+        for name, actor in plotter.actors.items():
+            if name != "k_label" and hasattr(actor, "SetUserMatrix"):
+                actor.SetUserMatrix(matrix)
+        actor = self._mesh_actor()
+        if self.kept is not None and actor is not None and actor.mapper.array_name == self.kept[0]:
+            actor.mapper.scalar_range = self.kept[1]
+        result = self.window_.session.result
+        if result is not None:
+            plotter.add_text(
+                f"K = {result.chosen_k}",
+                position="upper_right",
+                font_size=11,
+                color=self.window_.viewport.text_color(),
+                name="k_label",
+            )
+        plotter.render()
+
+
 def _menu(window, title: str):
     for action in window.menuBar().actions():
         if action.text().replace("&", "") == title and action.menu() is not None:
@@ -174,9 +257,15 @@ def export_slide(window, kind: str, path: str) -> bool:
 
 
 def install(window) -> None:
-    """Add View > Steps of the pipeline, File > Export turntable / steps figure, and a tooltip
-    on every layer."""
+    """Add View > Steps of the pipeline, File > Export turntable / steps figure, a tooltip on
+    every layer, and the view aids (height exaggeration, kept colour range, K) under the layers."""
     add_layer_help(window)
+    aids = ViewAids(window)
+    layout = window.layers_dock.widget().layout()
+    layout.insertWidget(max(layout.count() - 1, 0), aids)  # above the stretch
+    window.result_shown.connect(lambda _outcome: aids.apply())
+    window.layer_list.itemChanged.connect(lambda _item: aids.apply())
+    window.view_aids = aids
 
     def steps() -> None:
         window.steps_dialog = StepsDialog(window)

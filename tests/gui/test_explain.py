@@ -43,3 +43,24 @@ def test_export_turntable_and_steps_figure(window, qtbot, tmp_path):
     assert explain.export_slide(window, "steps", str(tmp_path / "s.png"))
     assert (tmp_path / "t.gif").stat().st_size > 1000 and (tmp_path / "s.png").stat().st_size > 1000
     assert not explain.export_slide(window, "turntable", str(tmp_path / "t.avi"))  # a message
+
+
+def test_height_exaggeration_kept_colours_and_k_in_the_view(window, qtbot):
+    wait_result(qtbot, window)
+    explain.install(window)
+    aids = window.view_aids
+    plotter = window.viewport.plotter
+    mesh = plotter.actors["mesh"]
+    z_before = mesh.GetBounds()[5] - mesh.GetBounds()[4]
+    aids.exaggeration.setValue(5.0)
+    z_after = plotter.actors["mesh"].GetBounds()[5] - plotter.actors["mesh"].GetBounds()[4]
+    assert z_after > 3 * z_before  # the demo lies in z = 0: its normal is z
+    assert "k_label" in plotter.actors
+    aids.keep.setChecked(True)
+    kept = tuple(plotter.actors["mesh"].mapper.scalar_range)
+    window.panel.k.setValue(5)
+    wait_result(qtbot, window, lambda o: o.result.params.k == 5)
+    assert tuple(plotter.actors["mesh"].mapper.scalar_range) == kept
+    assert plotter.actors["mesh"].GetUserMatrix() is not None  # still exaggerated
+    aids.exaggeration.setValue(1.0)
+    assert plotter.actors["mesh"].GetUserMatrix() is None
