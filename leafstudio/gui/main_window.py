@@ -248,7 +248,14 @@ class MainWindow(QMainWindow):
             "&Export mesh…",
             self.export_mesh_dialog,
             "Ctrl+E",
-            "Write the mesh as .ply, .obj, .stl, .vtp or .vtk",
+            "Write the mesh: .glb, .gltf, .obj (textured), .ply, .stl, .3mf, .vtp or .vtk",
+        )
+        self._action(
+            files,
+            "Export so&lid for printing…",
+            self.export_solid_dialog,
+            None,
+            "Write the leaf as a closed solid of a chosen thickness (.stl, .3mf, .obj, .ply, .glb)",
         )
         self._action(files, "Export &screenshot…", self.export_screenshot_dialog, "Ctrl+Shift+E")
         files.addSeparator()
@@ -532,13 +539,20 @@ class MainWindow(QMainWindow):
         self._add_recent(path)
         return True
 
-    def export_mesh(self, path: str) -> bool:
-        """Write the shown mesh to `path` (.ply, .obj, .stl, .vtp or .vtk)."""
+    def export_mesh(self, path: str, thickness: str | None = None) -> bool:
+        """Write the shown mesh to `path` (by its suffix, with normals, UVs and the generated
+        texture where the format holds them); `thickness` ("0.01" of the length, or "0.4mm")
+        makes it a closed solid."""
         if self.result is None:
             self.show_error("Nothing to export", "There is no reconstructed mesh yet.")
             return False
         try:
-            save_mesh(self.result, path)
+            solid = None
+            if thickness is not None:
+                from leafstudio.assets.solid import thickness_in_mesh_units
+
+                solid = thickness_in_mesh_units(thickness, self.result.length)
+            save_mesh(self.result, path, thickness=solid)
         except (LeafError, OSError) as exc:
             self.show_error("Cannot export the mesh", str(exc))
             return False
@@ -550,6 +564,25 @@ class MainWindow(QMainWindow):
         path, _ = QFileDialog.getSaveFileName(self, "Export the mesh", "", f"Meshes ({patterns})")
         if path:
             self.export_mesh(path if Path(path).suffix else path + ".ply")
+
+    def export_solid_dialog(self) -> None:
+        """File > Export solid: the thickness (a fraction of the length, or with its unit), then
+        the file."""
+        from PySide6.QtWidgets import QInputDialog
+
+        text, ok = QInputDialog.getText(
+            self,
+            "Export a solid",
+            "Thickness: a fraction of the leaf length (0.01), or a length with its unit for a leaf "
+            "in millimetres (0.4mm)",
+            text="0.01",
+        )
+        if not ok:
+            return
+        patterns = "*.stl *.3mf *.obj *.ply *.glb"
+        path, _ = QFileDialog.getSaveFileName(self, "Export the solid", "", f"Solids ({patterns})")
+        if path:
+            self.export_mesh(path if Path(path).suffix else path + ".stl", thickness=text)
 
     def export_screenshot_dialog(self) -> None:
         """File > Export screenshot: the 3D view as PNG."""

@@ -201,3 +201,18 @@ def test_export_mesh_and_open_by_drag_and_drop(window, qtbot, tmp_path):
     assert window.doc.leaf is not before
     np.testing.assert_allclose(window.doc.leaf.boundary, before.boundary)
     wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+
+
+def test_export_a_textured_gltf_and_a_solid(window, qtbot, tmp_path):
+    import trimesh
+
+    glb = tmp_path / "leaf.glb"
+    assert window.export_mesh(str(glb))
+    (mesh,) = trimesh.load(glb, process=False).geometry.values()
+    assert mesh.visual.material.baseColorTexture is not None and mesh.visual.uv is not None
+    solid = tmp_path / "leaf.stl"
+    assert window.export_mesh(str(solid), thickness="0.01")
+    assert trimesh.load(solid).is_watertight
+    assert not window.export_mesh(str(tmp_path / "bad.stl"), thickness="thick")  # an error box
+    window.last_error_box.close()
+    assert not (tmp_path / "bad.stl").exists()
