@@ -149,6 +149,9 @@ class StepsDialog(QDialog):
         super().done(result)
 
 
+SEE_THROUGH = 0.35  # the mesh's opacity when the layers under it should show
+
+
 class ViewAids(QWidget):
     """Height exaggeration (the relief is a few percent of the length), a colour range kept
     while K changes (so K's effect shows), and K written in the view. They act on the actors the
@@ -170,12 +173,21 @@ class ViewAids(QWidget):
             "Keep the mesh's colour range as it is now while K or other settings change, so the "
             "effect of K shows as a change of colour."
         )
+        self.see_through = QCheckBox("See-through mesh")
+        self.see_through.setToolTip(
+            "Draw the mesh translucent, so the layers under it (p(x), the zero contour of g, the "
+            "EM samples) can be read with the mesh shown."
+        )
         self.kept: tuple[str, tuple[float, float]] | None = None
-        row = QHBoxLayout(self)
-        row.setContentsMargins(0, 0, 0, 0)
+        column = QVBoxLayout(self)
+        column.setContentsMargins(0, 0, 0, 0)
+        row = QHBoxLayout()
         row.addWidget(self.exaggeration)
-        row.addWidget(self.keep)
+        row.addWidget(self.see_through)
+        column.addLayout(row)
+        column.addWidget(self.keep)
         self.exaggeration.valueChanged.connect(lambda _: self.apply())
+        self.see_through.toggled.connect(lambda _: self.apply())
         self.keep.toggled.connect(self._on_keep)
 
     def _mesh_actor(self):
@@ -215,6 +227,8 @@ class ViewAids(QWidget):
             if name != "k_label" and hasattr(actor, "SetUserMatrix"):
                 actor.SetUserMatrix(matrix)
         actor = self._mesh_actor()
+        if actor is not None:
+            actor.prop.opacity = SEE_THROUGH if self.see_through.isChecked() else 1.0
         if self.kept is not None and actor is not None and actor.mapper.array_name == self.kept[0]:
             actor.mapper.scalar_range = self.kept[1]
         result = self.window_.session.result

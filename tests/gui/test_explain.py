@@ -64,3 +64,7 @@ def test_height_exaggeration_kept_colours_and_k_in_the_view(window, qtbot):
     assert plotter.actors["mesh"].GetUserMatrix() is not None  # still exaggerated
     aids.exaggeration.setValue(1.0)
     assert plotter.actors["mesh"].GetUserMatrix() is None
+    aids.see_through.setChecked(True)
+    assert plotter.actors["mesh"].prop.opacity < 0.5  # the layers under it show
+    aids.see_through.setChecked(False)
+    assert plotter.actors["mesh"].prop.opacity == 1.0
