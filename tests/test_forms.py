@@ -153,6 +153,12 @@ def test_shapes_meet_their_definitions():
     assert r["reniform"] < 1
 
 
+@pytest.mark.parametrize("shape", ["elliptic", "ovate", "cordate", "linear"])
+@pytest.mark.parametrize("target", [1.5, 3.0, 6.0])
+def test_aspect_sets_length_over_width(shape, target):
+    assert aspect(outline(shape=shape, aspect=target)) == pytest.approx(target, rel=0.02)
+
+
 @pytest.mark.parametrize("shape", ["cordate", "reniform", "sagittate"])
 def test_basal_lobes_reach_back_past_the_base(shape):
     xy = outline(shape=shape)
