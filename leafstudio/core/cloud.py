@@ -1,9 +1,10 @@
 """Boundary clouds as scanners give them: noisy, unordered, dense; in linear time.
 
-Three steps, none of which depends on the order the points were given in:
+Three steps; the last two do not depend on the order the points were given in:
 
 - `estimate_noise`: the points' scatter across the outline (and in height), from how far each
-  point lies from the cubic through its neighbours along the outline;
+  point lies from the cubic through its neighbours along an order round the outline (the given
+  one, or the one `point_order` finds);
 - `order_cells`: the points summed into square cells (one bucket pass, O(n)), the occupied cells
   closed into a band on a raster, and the band's outer contour round the hole it encloses
   (contourpy) as a guide that gives every cell a position along the outline;
