@@ -213,3 +213,17 @@ def test_the_command_line_takes_the_margin(tmp_path, capsys):
     assert areas["exact"] != areas["smooth"]
     assert areas["exact"] == pytest.approx(areas["smooth"], rel=0.01)
     assert main(["measure", str(path), "--margin", "jagged"]) == 2
+
+
+@pytest.mark.parametrize("count", [5, 12, 40])
+def test_sketched_outlines_are_clean(count):
+    """A sketch's boundary (a periodic spline through a few clicks, even irregular ones) keeps
+    its points as the margin."""
+    from leafstudio.gui.sketch_model import closed_curve  # no Qt in the sketch's model
+
+    rng = np.random.default_rng(count)
+    angle = np.sort(rng.uniform(0, 2 * np.pi, count))
+    radius = rng.uniform(0.8, 1.2, (count, 1))
+    clicks = np.column_stack([np.cos(angle), 0.5 * np.sin(angle)]) * radius
+    outline = trace_outline(closed_curve(clicks))
+    assert not outline.smoothed
