@@ -45,14 +45,15 @@ def test_a_large_scan_is_thinned_and_its_outline_is_the_blade(big):
 def test_voxel_thinning_keeps_at_most_the_budget_and_maps_every_point():
     rng = np.random.default_rng(0)
     blob = rng.normal(size=(200_000, 3))  # a volume, not a surface: the first guess overshoots
-    kept, cell = voxel_thinning(blob, 5000)
+    kept, cell, size = voxel_thinning(blob, 5000)
     assert 2500 <= len(kept) <= 5000
     assert cell is not None and cell.shape == (len(blob),) and cell.max() == len(kept) - 1
     # each centroid is the mean of the points mapped to it
     for c in (0, len(kept) // 2, len(kept) - 1):
         np.testing.assert_allclose(kept[c], blob[cell == c].mean(axis=0), atol=1e-12)
-    same, none = voxel_thinning(blob[:100], 5000)
-    assert none is None and np.array_equal(same, blob[:100])
+        assert np.ptp(blob[cell == c], axis=0).max() <= size  # one cube's points
+    same, none, zero = voxel_thinning(blob[:100], 5000)
+    assert none is None and zero == 0 and np.array_equal(same, blob[:100])
 
 
 def test_a_blob_larger_than_the_budget_is_refused_cleanly_or_read():

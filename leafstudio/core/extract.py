@@ -319,12 +319,16 @@ def extract_leaf(points: np.ndarray, base_end: str = "auto", count: int = 200) -
     if not scale > 0 or not np.isfinite(scale):
         raise LeafError("the scan's points all coincide")
     unit = (points - centre) / scale
-    thinned, cell = voxel_thinning(unit, BUDGET)
+    thinned, cell, size = voxel_thinning(unit, BUDGET)
     leaf, blade, petiole, origin, axes, region = _extract(thinned, base_end, count)
     if cell is not None:  # each point as its cube's centroid; a petiole stub cut as there
+        # a cube whose centroid lies deeper in the region than the cube's diagonal is inside
+        xy = (thinned - origin) @ axes[:2].T
+        deep = shapely.contains_xy(region.buffer(-np.sqrt(3) * size), xy[:, 0], xy[:, 1])
         blade, petiole = blade[cell], petiole[cell]
-        local = (unit[blade] - origin) @ axes[:2].T
-        cut = np.flatnonzero(blade)[~shapely.contains_xy(region, local[:, 0], local[:, 1])]
+        test = np.flatnonzero(blade & ~deep[cell])
+        local = (unit[test] - origin) @ axes[:2].T
+        cut = test[~shapely.contains_xy(region, local[:, 0], local[:, 1])]
         blade[cut], petiole[cut] = False, True
     length = float(np.ptp((unit[blade] - origin) @ axes[0]))
 
@@ -339,13 +343,14 @@ def extract_leaf(points: np.ndarray, base_end: str = "auto", count: int = 200) -
     )
 
 
-def voxel_thinning(points: np.ndarray, budget: int) -> tuple[np.ndarray, np.ndarray | None]:
+def voxel_thinning(points: np.ndarray, budget: int) -> tuple[np.ndarray, np.ndarray | None, float]:
     """Between budget / 2 and `budget` points standing for (n, 3) `points`: the centroids of the
-    occupied cubes of a size tried until their count falls in that range, and each point's cube
-    (n,); the points themselves and None when there are no more than `budget`. A few O(n log n)
-    passes: the first size assumes a surface, each next one scales by the miss."""
+    occupied cubes of a size tried until their count falls in that range, each point's cube
+    (n,), and the cubes' side; the points themselves, None and 0 when there are no more than
+    `budget`. A few O(n log n) passes: the first size assumes a surface (on a sample of the
+    points, then on all of them), each next one scales by the miss."""
     if len(points) <= budget:
-        return points, None
+        return points, None, 0.0
     lo, hi = points.min(axis=0), points.max(axis=0)
     size = float(np.max(hi - lo)) / np.sqrt(budget)
 
@@ -372,9 +377,9 @@ def voxel_thinning(points: np.ndarray, budget: int) -> tuple[np.ndarray, np.ndar
             break
         size = adjust(size, len(counts))
     if len(counts) > budget:  # not settled: a coarser size surely keeps fewer
-        return voxel_thinning(points, budget // 2) if budget > 1 else (points[:1], None)
+        return voxel_thinning(points, budget // 2) if budget > 1 else (points[:1], None, 0.0)
     sums = [np.bincount(cell, weights=points[:, k], minlength=len(counts)) for k in range(3)]
-    return np.column_stack(sums) / counts[:, None], cell.ravel()
+    return np.column_stack(sums) / counts[:, None], cell.ravel(), size
 
 
 def _extract(
