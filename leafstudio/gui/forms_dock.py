@@ -341,9 +341,33 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
 
     panel.chosen.connect(choose)
     panel.grow.connect(grow)
+    _add_grow_row(window.editor, grow)
     window.forms_dock = window._dock("Forms", panel, dock_area)
     window.forms_panel = panel
     return panel
+
+
+def _add_grow_row(editor: QWidget, grow: Callable[[str], None]) -> None:
+    """A "Grow veins" row in the sketch editor, above its drawing (the editor's layout is a
+    column of tool rows, then the view)."""
+    kind = QComboBox()
+    kind.addItems(list(VENATION_KINDS))
+    for i, name in enumerate(VENATION_KINDS):
+        kind.setItemData(i, definition(name, "venation"), Qt.ItemDataRole.ToolTipRole)
+    button = QPushButton("Grow veins")
+    button.setToolTip(
+        "Replace the veins by veins of this kind grown inside the outline (space colonization, "
+        "Runions et al. 2005): an ordinary sketch, editable, one undo step."
+    )
+    button.clicked.connect(lambda: grow(kind.currentText()))
+    row = QHBoxLayout()
+    row.addWidget(button)
+    row.addWidget(kind)
+    row.addStretch(1)
+    layout = editor.layout()
+    views = [i for i in range(layout.count()) if layout.itemAt(i).widget() is editor.view]
+    layout.insertLayout(views[0] if views else layout.count(), row)
+    editor.grow_button, editor.grow_kind = button, kind
 
 
 def _sketch_of(session, leaf: Leaf) -> Sketch | None:

@@ -73,6 +73,11 @@ def test_grow_veins_fills_the_current_outline_as_one_step(window, panel, qtbot):
     assert len(grown.veins) >= 5 and len(grown.veins) != veins_before
     window.session.undo()
     assert len(window.session.leaf.veins) == veins_before
+    window.editor.grow_kind.setCurrentText("parallel")  # the same from the sketch editor
+    window.editor.grow_button.click()
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.leaf)
+    veins = window.session.leaf.veins
+    assert len(veins) == 7 and all(v[-1, 0] - v[0, 0] > 0.8 for v in veins)  # base to apex
 
 
 def test_a_forms_sketch_keeps_tooth_tips():
