@@ -111,10 +111,14 @@ def leaf_sketch(leaf: Leaf, teeth: int = 0) -> Sketch:
     return Sketch(boundary=boundary, veins=tuple(veins), relief=relief)
 
 
-def with_grown_veins(sketch: Sketch, venation: str, seed: int = 0) -> Sketch:
-    """The sketch with its veins replaced by veins grown inside its boundary curve."""
+def with_grown_veins(
+    sketch: Sketch, venation: str, seed: int = 0, base: np.ndarray | None = None
+) -> Sketch:
+    """The sketch with its veins replaced by veins grown inside its boundary curve; the base is
+    `base` (plane point), else the start of the sketch's first vein, else found by grow_veins."""
     outline = sketch.boundary_curve()
-    base = sketch.veins[0][0, :2] if sketch.veins and len(sketch.veins[0]) else None
+    if base is None and sketch.veins and len(sketch.veins[0]):
+        base = sketch.veins[0][0, :2]
     veins = grow_veins(outline, venation, base=base, seed=seed)
     pick = [
         np.unique(np.linspace(0, len(v) - 1, min(VEIN_CONTROL, len(v))).astype(int)) for v in veins
@@ -332,8 +336,12 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
         if sketch is None or len(sketch.boundary) < 3:
             window.show_error("Grow veins", "Draw an outline first (at least 3 points).")
             return
+        base = None
+        leaf = session.leaf
+        if not (sketch.veins and len(sketch.veins[0])) and leaf is not None and leaf.veins:
+            base = sketch.frame.to_plane(leaf.veins[0][:1])[0][0]  # the midrib's start
         try:
-            grown = with_grown_veins(sketch, venation, panel.seed.value())
+            grown = with_grown_veins(sketch, venation, panel.seed.value(), base)
         except Exception as exc:
             window.show_error("Grow veins", str(exc))
             return
@@ -371,7 +379,15 @@ def _add_grow_row(editor: QWidget, grow: Callable[[str], None]) -> None:
 
 
 def _sketch_of(session, leaf: Leaf) -> Sketch | None:
-    result: Callable | None = getattr(session, "result", None)
+    """A loaded leaf's sketch: from its shown result, else from the leaf itself on the plane of
+    its boundary (its heights kept as relief)."""
+    result = getattr(session, "result", None)
     if result is not None and getattr(result, "leaf", None) is leaf:
         return Sketch.from_result(result)
-    return None
+    from leafstudio.core.plane import fit_frame
+
+    frame = fit_frame(leaf.boundary, leaf.vein_points)
+    xy, h = frame.to_plane(leaf.boundary)
+    pick = np.unique(np.linspace(0, len(xy), BOUNDARY_CONTROL, endpoint=False).astype(int))
+    relief = np.column_stack([xy, h]) if np.any(np.abs(h) > 0) else np.zeros((0, 3))
+    return Sketch(boundary=xy[pick], frame=frame, relief=relief)

@@ -73,6 +73,7 @@ def test_grow_veins_fills_the_current_outline_as_one_step(window, panel, qtbot):
     assert len(grown.veins) >= 5 and len(grown.veins) != veins_before
     window.session.undo()
     assert len(window.session.leaf.veins) == veins_before
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.leaf)
     window.editor.grow_kind.setCurrentText("parallel")  # the same from the sketch editor
     window.editor.grow_button.click()
     wait_result(qtbot, window, lambda o: o.result.leaf is window.session.leaf)
