@@ -151,10 +151,6 @@ def _input_suffixes(scans: bool) -> tuple[str, ...]:
     return LEAF_SUFFIXES
 
 
-def _hidden(parts: Iterable[str]) -> bool:
-    return any(p.startswith(".") and p not in (".", "..") for p in parts)
-
-
 def _inside(path: Path, folder: Path) -> bool:
     return path == folder or folder in path.parents
 
@@ -186,13 +182,19 @@ def find_inputs(
             candidates = [(m, root) for m in matches if m.is_file()]
         elif Path(text).is_dir():
             root = Path(text)
-            candidates = [
-                (Path(folder) / name, root)
-                for folder, dirs, names in os.walk(text)
-                for name in names
-                if name.lower().endswith(suffixes)
-                and not _hidden(Path(folder, name).relative_to(root).parts)
-            ]
+            candidates = []
+            for folder, dirs, names in os.walk(text):
+                # hidden folders and the output folder are not searched
+                dirs[:] = sorted(
+                    d for d in dirs
+                    if not d.startswith(".")
+                    and not any(_inside(Path(folder, d).resolve(), e) for e in excluded)
+                )  # fmt: skip
+                candidates += [
+                    (Path(folder) / name, root)
+                    for name in names
+                    if name.lower().endswith(suffixes) and not name.startswith(".")
+                ]
         else:
             candidates = [(Path(text), Path(text).parent)]
         for path, root in candidates:
@@ -227,11 +229,11 @@ def plan(
     found = find_inputs(inputs, settings.scans, [out, *exclude])
     if not found:
         raise LeafError(f"no input files found in {' '.join(map(os.fspath, inputs))}")
-    roots = {str(root.resolve()) for _, root in found}
-    common = Path(os.path.commonpath(sorted(roots)))
+    roots = {os.path.abspath(root) for _, root in found}  # links are not followed: a linked
+    common = Path(os.path.commonpath(sorted(roots)))  # file stays where it was listed
     jobs, owners = [], {}
     for shown, _ in found:
-        absolute = Path(shown).resolve()
+        absolute = Path(os.path.abspath(shown))
         mesh = ""
         if settings.format != "none":
             mesh = _mesh_name(absolute.relative_to(common), settings.format)

@@ -264,6 +264,16 @@ def test_inputs_from_folders_and_patterns_leave_out_the_output_folder(tmp_path, 
     assert live.exists()
     run = Batch([leaves], None, out, jobs=1)
     assert [j.mesh for j in run.jobs][:1] == ["a/leaf0.ply"]
+    # hidden folders are not searched; a link stays where it is listed
+    (leaves / ".git").mkdir()
+    (leaves / ".git" / "x.csv").write_text("1 2 3\n")
+    (tmp_path / "elsewhere.csv").write_bytes((leaves / "a" / "leaf0.csv").read_bytes())
+    (leaves / "b" / "linked.csv").symlink_to(tmp_path / "elsewhere.csv")
+    run = Batch([leaves], None, out, jobs=1)
+    assert [j.mesh for j in run.jobs] == [
+        "a/leaf0.ply", "a/leaf1.ply", "a/leaf2.ply", "b/c/leaf3.ply", "b/c/leaf4.ply",
+        "b/c/leaf5.ply", "b/linked.ply",
+    ]  # fmt: skip
 
 
 def test_dask_scheduler_and_worker_on_localhost_run_the_tasks(tmp_path, leaves):
