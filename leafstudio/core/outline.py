@@ -59,7 +59,7 @@ def distinct_indices(points: np.ndarray, scale: float) -> np.ndarray:
 
 
 SPACING_QUERIES = 2000  # points whose nearest neighbour sets the median spacing, at most
-SPACING_POINTS = 50_000  # ... among this many, at most
+SPACING_POINTS = 20_000  # ... among this many, at most
 
 
 def _spacing(points: np.ndarray) -> float:
