@@ -47,16 +47,24 @@ class StallMeter:
 
     def reset(self) -> None:
         self.last = time.perf_counter()
-        self.samples: list[tuple[float, float]] = []  # (tick time, lateness) in seconds
+        self.last_cpu = time.thread_time()
+        # (tick time, lateness, main-thread CPU time since the last tick) in seconds
+        self.samples: list[tuple[float, float, float]] = []
 
     def _tick(self) -> None:
-        now = time.perf_counter()
-        self.samples.append((now, max(0.0, now - self.last - TICK_MS / 1000)))
-        self.last = now
+        now, cpu = time.perf_counter(), time.thread_time()
+        late = max(0.0, now - self.last - TICK_MS / 1000)
+        self.samples.append((now, late, cpu - self.last_cpu))
+        self.last, self.last_cpu = now, cpu
 
     def worst(self, until: float = float("inf"), since: float = 0.0) -> float:
         """The longest stall among ticks from `since` to `until` (a tick's stall ends at it)."""
-        return max((late for t, late in self.samples if since < t <= until), default=0.0)
+        return max((late for t, late, _ in self.samples if since < t <= until), default=0.0)
+
+    def busiest(self, until: float = float("inf"), since: float = 0.0) -> float:
+        """The most main-thread CPU time between two ticks from `since` to `until`: the work
+        done in one piece, which the host's load does not inflate as it does wall time."""
+        return max((busy for t, _, busy in self.samples if since < t <= until), default=0.0)
 
 
 def wait_for(signal, timeout_s: float = 600.0) -> list:
@@ -72,15 +80,16 @@ def measure(window: MainWindow, grid: int) -> dict:
     """Latency and stalls for K slider moves on the nested demo at `grid`."""
     meter = StallMeter()
     window.panel.set_params(Params(k=3, grid=grid))
+    window.session.history.set_clean()  # no question about unsaved parameter changes
     window.open_demo("nested")
     wait_for(window.result_shown)
     ready: dict[str, float] = {}
-    window.worker.finished.connect(
-        lambda _outcome: ready.__setitem__("t", time.perf_counter()),
+    window.worker.yielded.connect(
+        lambda *_: ready.__setitem__("t", time.perf_counter()),
         Qt.ConnectionType.DirectConnection,  # on the worker thread, the moment the result is ready
     )
     meter.timer.start()
-    latencies, computing, after, total, draws, stages = [], [], [], [], [], []
+    latencies, computing, after, busy, total, draws, stages = [], [], [], [], [], [], []
     for k in MOVES:
         wait_until_idle(window)  # the previous move's measurements are done
         meter.reset()
@@ -95,6 +104,7 @@ def measure(window: MainWindow, grid: int) -> dict:
         latencies.append(end - start)
         computing.append(meter.worst(until=ready["t"]))
         after.append(meter.worst(since=ready["t"]))
+        busy.append(meter.busiest(since=ready["t"]))
         total.append(meter.worst())
         draws.append(window.outcome.timings["draw"])
         stages.append(window.outcome.timings)
@@ -108,6 +118,7 @@ def measure(window: MainWindow, grid: int) -> dict:
         },
         "max_stall_while_computing_ms": ms(max(computing)),
         "max_stall_after_result_ms": ms(max(after)),
+        "max_main_thread_cpu_in_one_piece_after_result_ms": ms(max(busy)),
         "max_stall_until_measured_ms": ms(max(total)),
         "storm": storm,
         "draw_ms_median": ms(statistics.median(draws)),
@@ -154,6 +165,7 @@ def measure_storm(window: MainWindow, meter: StallMeter) -> dict:
         "gap_ms": STORM_GAP_MS,
         "last_move_to_screen_ms": round(1000 * (end - moved["t"]), 1),
         "max_stall_ms": round(1000 * meter.worst(), 1),
+        "max_main_thread_cpu_in_one_piece_ms": round(1000 * meter.busiest(), 1),
     }
 
 
@@ -186,6 +198,9 @@ def wait_for_ticks(meter: StallMeter, after: float) -> None:
     meter.timer.timeout.disconnect(loop.quit)
 
 
+LOAD_AT_START = round(os.getloadavg()[0], 2)
+
+
 def main() -> int:
     app = QApplication.instance() or QApplication(sys.argv[:1])
     with tempfile.TemporaryDirectory() as tmp:
@@ -194,12 +209,13 @@ def main() -> int:
         window.show()
         app.processEvents()
         report = {f"grid_{grid}": measure(window, grid) for grid in GRIDS}
-        window.undo_stack.setClean()
+        window.session.history.set_clean()
         window.close()
     report["environment"] = {
         "platform": QApplication.platformName(),
         "display": os.environ.get("DISPLAY", ""),
         "cpus": os.cpu_count(),
+        "load_average_1min_at_start": LOAD_AT_START,
         "load_average_1min": round(os.getloadavg()[0], 2),
         "window": [window.width(), window.height()],
     }

@@ -211,6 +211,9 @@ class MainWindow(QMainWindow):
         self.measurements.setHeaderLabels(["Measure", "Value"])
         self.measurements.setColumnWidth(0, 190)
         self.measurements_dock = self._dock("Measurements", self.measurements, left)
+        # More docks (e.g. a forms gallery, gui/forms_dock.py) are added here with self._dock;
+        # a dock that makes a leaf calls self.session.new_document(leaf, sketch, title=...),
+        # one undo step, and the window shows it like any other document.
         self.resizeDocks(
             [self.params_dock, self.sketch_dock], [320, 430], Qt.Orientation.Horizontal
         )

@@ -257,6 +257,7 @@ class Session:
         self.shown = Shown()
         self.last_id = 0  # the newest request submitted
         self.derived: Sketch | None = None  # a loaded leaf's sketch, made from its first result
+        self._derived_leaf: Leaf | None = None
         self.crossings = np.zeros((0, 2))
         self.message = ""
         self.state_changed, self.result_shown, self.failed = Event(), Event(), Event()
@@ -464,8 +465,6 @@ class Session:
         self.message = ""
         self.result_shown.emit(outcome, framing)
         return True
-
-    _derived_leaf: Leaf | None = None
 
     def accept_measured(self, request_id: int) -> bool:
         """The shown result's metrics are computed (on the worker)."""

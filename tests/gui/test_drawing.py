@@ -200,3 +200,29 @@ def test_a_dark_palette_darkens_the_canvas_and_the_3d_background(window):
     assert background.lightnessF() < 0.3
     bottom = window.viewport.plotter.renderer.GetBackground()
     assert max(bottom) < 0.3
+
+
+def test_mirror_editing_adds_the_reflected_point_and_a_profile_is_one_step(window, qtbot):
+    window.new_sketch()
+    view = window.editor.view
+    qtbot.mouseClick(window.editor.new_vein, Qt.MouseButton.LeftButton)
+    for x in (0.05, 0.95):
+        click(qtbot, view, (x, 0.0))
+    window.editor.mirror.setChecked(True)
+    window.editor.curve.setCurrentIndex(0)
+    window.editor.curve.activated.emit(0)  # back to the boundary
+    for xy in ((0.0, 0.0), (0.3, 0.15), (0.7, 0.15), (1.0, 0.0)):
+        click(qtbot, view, xy)
+    boundary = view.sketch.boundary
+    assert len(boundary) == 6  # the two off-axis clicks gained mirror images
+    assert np.isclose(boundary[:, 1].min(), -0.15, atol=0.01)
+    steps = window.undo_stack.count()
+    window.editor.curve.setCurrentIndex(1)
+    window.editor.curve.activated.emit(1)
+    window.editor.profile_start.setValue(0.06)
+    window.editor.profile_end.setValue(0.01)
+    qtbot.mouseClick(window.editor.profile, Qt.MouseButton.LeftButton)
+    np.testing.assert_allclose(view.sketch.veins[0][:, 2], [0.06, 0.01])
+    assert window.undo_stack.count() == steps + 1
+    assert window.undo_stack.undo_text() == "Vein profile"
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)

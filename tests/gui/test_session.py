@@ -254,3 +254,29 @@ def test_a_new_document_is_one_undo_step_and_a_failed_open_falls_back(session, r
     runner.finish(session)
     assert session.leaf is nested and session.state.path is None  # back to the demo
     assert got["failed"] and "line" in got["failed"][-1]
+
+
+# --- mirror editing and whole-vein profiles (no Qt) ---------------------------------------------
+def test_mirroring_reflects_the_edited_half_about_the_midrib():
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    lopsided = np.column_stack([0.5 + 0.5 * np.cos(t), 0.2 * np.sin(t) * (1 + 0.5 * np.sin(t))])
+    midrib = np.array([[0.0, 0.0, 0.05], [1.0, 0.0, 0.05]])
+    side = np.array([[0.4, 0.0, 0.05], [0.6, 0.15, 0.04]])
+    sketch = Sketch(boundary=lopsided, veins=(midrib, side))
+    mirrored = sketch.mirrored(+1.0)  # keep the upper half
+    upper = mirrored.boundary[mirrored.boundary[:, 1] > 1e-9]
+    lower = mirrored.boundary[mirrored.boundary[:, 1] < -1e-9]
+    np.testing.assert_allclose(np.sort(upper[:, 0]), np.sort(lower[:, 0]))
+    np.testing.assert_allclose(np.sort(upper[:, 1]), np.sort(-lower[:, 1]))
+    assert len(ring_crossings(mirrored.boundary_curve())) == 0  # still one loop around
+    assert len(mirrored.veins) == 3
+    np.testing.assert_allclose(mirrored.veins[2][:, 1], -side[:, 1])
+    again = mirrored.mirrored(+1.0)  # a second edit replaces the mirror, does not add one
+    assert len(again.veins) == 3
+
+
+def test_a_whole_vein_profile_is_linear_along_the_vein():
+    vein = np.array([[0.0, 0.0, 0.1], [0.25, 0.0, 0.3], [1.0, 0.0, 0.0]])
+    sketch = Sketch(boundary=ellipse(), veins=(vein,)).with_profile(0, 0.08, 0.02)
+    np.testing.assert_allclose(sketch.veins[0][:, 2], [0.08, 0.065, 0.02])
+    np.testing.assert_array_equal(sketch.veins[0][:, :2], vein[:, :2])
