@@ -482,3 +482,10 @@ def test_a_boundary_with_a_hole_or_two_loops_keeps_the_largest_and_says_so(tmp_p
         data = json.loads(metrics.read_text())
         assert any("kept the largest" in w for w in data["warnings"])
         assert abs(data["mesh"]["area"] - np.pi * 0.6) < 0.05  # the outer ellipse's area
+
+
+def test_veins_refuses_to_overwrite_its_leaf(leaf_csv, tmp_path, capsys):
+    before = leaf_csv.read_bytes()
+    assert main(["veins", str(leaf_csv), "-o", str(leaf_csv)]) == 2
+    assert "is also an input" in _one_line(capsys.readouterr().err)
+    assert leaf_csv.read_bytes() == before
