@@ -148,7 +148,9 @@ def _random_leaf(seed: int, n: int, noise: float, size: float) -> tuple[ls.Leaf,
     return ls.Leaf(boundary=points, veins=[]), exact.area * scale**2
 
 
-@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(
+    max_examples=8, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)  # the same examples in every CI run; widen max_examples locally to search further
 @given(
     seed=st.integers(0, 10_000),
     n=st.integers(2000, 20_000),
