@@ -279,6 +279,8 @@ def install(window) -> None:
     layout.insertWidget(max(layout.count() - 1, 0), aids)  # above the stretch
     window.result_shown.connect(lambda _outcome: aids.apply())
     window.layer_list.itemChanged.connect(lambda _item: aids.apply())
+    window.coloring.currentIndexChanged.connect(lambda _row: aids.apply())
+    window.edges.toggled.connect(lambda _on: aids.apply())
     window.view_aids = aids
 
     def steps() -> None:

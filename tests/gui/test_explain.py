@@ -62,6 +62,8 @@ def test_height_exaggeration_kept_colours_and_k_in_the_view(window, qtbot):
     wait_result(qtbot, window, lambda o: o.result.params.k == 5)
     assert tuple(plotter.actors["mesh"].mapper.scalar_range) == kept
     assert plotter.actors["mesh"].GetUserMatrix() is not None  # still exaggerated
+    window.coloring.setCurrentIndex(window.coloring.findData("mean_curvature"))
+    assert plotter.actors["mesh"].GetUserMatrix() is not None  # a new colouring keeps it
     aids.exaggeration.setValue(1.0)
     assert plotter.actors["mesh"].GetUserMatrix() is None
     aids.see_through.setChecked(True)
