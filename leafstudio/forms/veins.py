@@ -41,6 +41,7 @@ SOURCES = 350  # auxin sources scattered over the blade
 KILL = 1.2  # kill distance, in growth steps
 MAX_ITERATIONS = 80
 TROPISM = 0.6  # pull toward the apex added to each growth direction
+PALMATE_TROPISM = 0.3  # palmate secondaries: a gentler pull along their primary
 INSET = 0.006  # open secondaries end this far (leaf lengths) inside the margin
 MIDRIB_SPAN = (0.01, 0.99)  # the midrib's share of base -> apex
 DEFAULT_SECONDARIES = {"pinnate": 6, "arcuate": 6, "palmate": 3, "parallel": 3}
@@ -288,6 +289,7 @@ def _colonize(
     seeds: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
     arcuate: bool,
     rng: np.random.Generator,
+    tropism: float = TROPISM,
 ) -> list[np.ndarray]:
     """Space colonization from the seeds (station, start, preferred direction): each seed's
     longest path, beginning at its station on a primary. The growth step is STEP, or a fixed
@@ -316,7 +318,7 @@ def _colonize(
         total = np.zeros((len(growing), 2))
         np.add.at(total, slot, unit)
         direction = total / np.maximum(np.linalg.norm(total, axis=1), 1e-12)[:, None]
-        pull = TROPISM * bias[tree_of[growing]]
+        pull = tropism * bias[tree_of[growing]]
         if arcuate:
             gap = poly.gap(nodes[growing])
             pull = pull * (1 + 3 * np.clip(1 - gap / (4 * h), 0, 1))[:, None]
@@ -340,7 +342,9 @@ def _colonize(
     paths = []
     for k, (station, _start, _) in enumerate(seeds):
         members = np.flatnonzero(tree_of == k)
-        tip = members[np.argmax(depth[members])]
+        # the secondary ends at the node nearest the margin, of those farthest from its station
+        reach = np.linalg.norm(nodes[members] - station, axis=1) - poly.gap(nodes[members])
+        tip = members[np.argmax(reach)]
         path = []
         while tip >= 0:
             path.append(nodes[tip])
@@ -514,7 +518,10 @@ def grow_veins(
                 c, s = np.cos(turn), np.sin(turn)
                 tip = along[index] @ np.array([[c, s], [-s, c]])
                 seeds.append((prim[index], prim[index] + 0.5 * STEP * normal, tip))
-        paths = _colonize(blade, primaries, seeds, venation == "arcuate", rng) if seeds else []
+        tropism = PALMATE_TROPISM if venation == "palmate" else TROPISM
+        paths = (
+            _colonize(blade, primaries, seeds, venation == "arcuate", rng, tropism) if seeds else []
+        )
         h = float(np.sqrt(blade.area / SOURCES))
         veins = list(primaries)
         if venation == "arcuate":
