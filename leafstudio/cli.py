@@ -280,22 +280,17 @@ def _run(args: argparse.Namespace, leaf: object):
     """The Params (see _settings) and the pipeline's Result; the run's notes are printed as
     warnings, and the chosen K when K is auto."""
     from leafstudio.core.pipeline import Pipeline
-    from leafstudio.core.plausibility import check_boundary, keep_outer_loop, leaf_warnings
+    from leafstudio.core.plausibility import leaf_warnings
     from leafstudio.kernelcache import mark_cached
-    from leafstudio.model import Leaf
 
     params = _settings(args)
     _compiling_notice()
-    try:
-        check_boundary(leaf.boundary)  # a figure eight would lose a lobe silently
-        boundary, loops = keep_outer_loop(leaf.boundary)  # holes, separate loops: said, dropped
-        if loops:
-            leaf = Leaf(boundary, leaf.veins)
+    try:  # the frame stage refuses a crossing boundary and keeps the largest of several loops
         result = Pipeline(leaf).run(params)
     except LeafError as exc:
         raise LeafError(exc.problem, args.input) from None
     mark_cached()
-    args.warnings = [*loops, *leaf_warnings(leaf), *result.warnings]  # for --metrics
+    args.warnings = [*leaf_warnings(leaf), *result.warnings]  # for --metrics
     for note in args.warnings:
         log.warning(f"{args.input}: {note}")
     if params.k == "auto":

@@ -250,3 +250,15 @@ def test_a_pcd_header_declaring_more_than_the_file_holds_is_refused(tmp_path):
     path.write_bytes(b"\x00\x01 not a pcd")
     with pytest.raises(LeafError, match="no POINTS"):
         read_scan(path)
+
+
+def test_the_api_refuses_a_crossing_boundary_and_keeps_the_largest_loop():
+    t = np.linspace(0, 2 * np.pi, 200, endpoint=False)
+    eight = np.column_stack([np.sin(t), 0.6 * np.sin(t) * np.cos(t), 0 * t]) * 1e6 + [5e6, 0, 0]
+    with pytest.raises(LeafError, match=r"crosses itself near \(5e\+06, "):
+        ls.reconstruct(Leaf(eight), Params(grid=32))  # the place in the caller's coordinates
+    outer = np.column_stack([np.cos(t), 0.6 * np.sin(t), 0 * t])
+    with pytest.warns(UserWarning, match=r"kept the largest \(points 1-200\)"):
+        result = ls.reconstruct(Leaf(np.vstack([outer, 0.2 * outer])), Params(grid=32))
+    assert len(result.leaf.boundary) == 400  # the input as given; the outline is the outer loop
+    assert abs(result.metrics["mesh"]["area"] - np.pi * 0.6) < 0.05

@@ -43,6 +43,7 @@ from leafstudio.core.outline import (
     trace_outline,
 )
 from leafstudio.core.plane import Frame, fit_frame
+from leafstudio.core.plausibility import check_boundary, keep_outer_loop
 from leafstudio.core.surface import HeightSurface, fit_surface
 from leafstudio.core.trianglemesh import TriangleMesh
 from leafstudio.core.units import ScaledSurface, Units
@@ -177,8 +178,14 @@ class Result:
         }
 
 
-def _frame_stage(leaf: Leaf, margin: str = "auto") -> tuple[FrameStage, list[str]]:
-    notes: list[str] = []
+def _frame_stage(
+    leaf: Leaf, margin: str = "auto", units: Units | None = None
+) -> tuple[FrameStage, list[str]]:
+    scale, offset = (units.scale, units.offset) if units is not None else (1.0, None)
+    check_boundary(leaf.boundary, scale, offset)  # a figure eight would lose a lobe: an error
+    boundary, notes = keep_outer_loop(leaf.boundary)  # holes, separate loops: dropped, and said
+    if notes:
+        leaf = Leaf(boundary, leaf.veins)
     frame = fit_frame(leaf.boundary, leaf.vein_points)
     xy, boundary_h = frame.to_plane(leaf.boundary)
     outline = trace_outline(xy, boundary_h, margin)  # input points, or a noisy cloud's mean
@@ -322,7 +329,7 @@ class Pipeline:
             self._cache[name] = (key, value)
             return value
 
-        fs, notes = stage("frame", lambda: _frame_stage(self._unit_leaf, params.margin))
+        fs, notes = stage("frame", lambda: _frame_stage(self._unit_leaf, params.margin, self.units))
         tol = params.mpu_tolerance * fs.length
         implicit: MPUImplicit = stage(
             "implicit",

@@ -176,14 +176,18 @@ def boundary_crossing(boundary: np.ndarray) -> np.ndarray | None:
     return centre + x * axes[0] + y * axes[1]
 
 
-def check_boundary(boundary: np.ndarray) -> None:
-    """Raise LeafError naming where an ordered boundary crosses itself (see boundary_crossing)."""
+def check_boundary(
+    boundary: np.ndarray, scale: float = 1.0, shift: np.ndarray | None = None
+) -> None:
+    """Raise LeafError naming where an ordered boundary crosses itself (see boundary_crossing), in
+    the user's coordinates `point * scale + shift` (the pipeline runs at unit size)."""
     where = boundary_crossing(boundary)
     if where is not None:
         nearest = int(np.argmin(np.linalg.norm(np.asarray(boundary) - where, axis=1)))
+        shown = where * scale + (0.0 if shift is None else shift)
         raise LeafError(
             "the boundary crosses itself near ({:.4g}, {:.4g}, {:.4g}), by boundary point {}; "
-            "a leaf's outline must not (it would drop a lobe)".format(*where, nearest + 1)
+            "a leaf's outline must not (it would drop a lobe)".format(*shown, nearest + 1)
         )
 
 
