@@ -4,7 +4,8 @@ Prints one JSON document (bench_pipeline.py adds it under "clouds"):
 
 - ``boundaries``: whole cold runs at grid 128 of an ovate leaf (a midrib of 40 points) whose
   boundary has 10^4, 5·10^4, 10^5 and 10^6 points along it at random spacing, in order and
-  shuffled: median and minimum milliseconds, and the frame stage's (where the outline is traced);
+  shuffled: median and minimum milliseconds, the frame stage's, and the outline's alone
+  (outline.trace_outline, within the frame stage);
 - ``linear``: the time per point at 10^6 over that at 10^4 (at most 1 is linear or better);
 - ``memory_1e6``: peak RSS of a shuffled 10^6-point run in a fresh interpreter, above a bare one;
 - ``noisy_margin``: for boundary noise of 0.2%, 0.5% and 1% of the length (x, y and z, 4,000
@@ -33,6 +34,7 @@ import shapely
 
 import leafstudio as ls
 from leafstudio.core.analysis import margin_creases
+from leafstudio.core.outline import trace_outline
 
 SIZES = (10_000, 50_000, 100_000, 1_000_000)
 NOISES = (0.002, 0.005, 0.01)
@@ -82,9 +84,16 @@ def boundaries(sizes: tuple[int, ...], repeats: int) -> dict[str, Any]:
                 result = ls.Pipeline(leaf).run(params)
                 totals.append(time.perf_counter() - start)
                 frames.append(result.timings["frame"])
+            xy, z = result.frame.to_plane(leaf.boundary)
+            traces = []
+            for _ in range(max(1, repeats // 3)):
+                start = time.perf_counter()
+                trace_outline(xy, z)
+                traces.append(time.perf_counter() - start)
             out[f"{'shuffled' if shuffled else 'ordered'}_{n}"] = {
                 "total_ms": _ms(totals),
                 "frame_ms": _ms(frames)["median"],
+                "outline_ms": _ms(traces)["median"],  # trace_outline alone, in the frame stage
             }
     return out
 
