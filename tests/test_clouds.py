@@ -229,3 +229,14 @@ def test_sketched_outlines_are_clean(count):
     clicks = np.column_stack([np.cos(angle), 0.5 * np.sin(angle)]) * radius
     outline = trace_outline(closed_curve(clicks))
     assert not outline.smoothed
+
+
+def test_a_cloud_that_fills_the_leaf_gives_its_outline():
+    """Points over the whole blade (a scan given as a boundary) trace no margin: the outline of
+    the region they fill, not an error."""
+    rng = np.random.default_rng(4)
+    r, t = np.sqrt(rng.uniform(0, 1, 20_000)), rng.uniform(0, 2 * np.pi, 20_000)
+    filled = np.column_stack([2 * r * np.cos(t), r * np.sin(t)])
+    outline = trace_outline(filled)
+    assert outline.smoothed
+    assert shapely.Polygon(outline.polygon).area == pytest.approx(ELLIPSE_AREA, rel=0.05)
