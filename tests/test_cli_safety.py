@@ -489,3 +489,11 @@ def test_veins_refuses_to_overwrite_its_leaf(leaf_csv, tmp_path, capsys):
     assert main(["veins", str(leaf_csv), "-o", str(leaf_csv)]) == 2
     assert "is also an input" in _one_line(capsys.readouterr().err)
     assert leaf_csv.read_bytes() == before
+
+
+def test_a_dense_leaf_like_scan_passes_the_plausibility_tests():
+    from leafstudio.core.plausibility import leaf_like_problems
+
+    dense = _sheet(1_000_000)  # its noise, at this density, once read as "not a surface"
+    assert leaf_like_problems(dense) == []
+    assert "large separate" in leaf_like_problems(np.vstack([dense, dense + [5, 0, 0]]))[0]
