@@ -51,11 +51,18 @@ def distinct_indices(points: np.ndarray, scale: float) -> np.ndarray:
         return np.sort(np.unique(np.column_stack(columns), axis=0, return_index=True)[1])
     keys = columns[0] * span_y + columns[1]
     ordered = np.sort(keys)  # a plain sort: many times faster than a unique with indices
-    if np.all(ordered[1:] != ordered[:-1]):
+    same = ordered[1:] == ordered[:-1]
+    if not same.any():
         return np.arange(len(keys))
-    order = np.argsort(keys)
-    starts = np.flatnonzero(np.r_[True, keys[order[1:]] != keys[order[:-1]]])
-    return np.sort(np.minimum.reduceat(order, starts))  # each repeat's first index
+    # only the points whose key repeats are sorted again (a dense scan has a few such pairs)
+    involved = np.flatnonzero(np.isin(keys, np.unique(ordered[1:][same])))
+    order = np.argsort(keys[involved], kind="stable")
+    grouped = keys[involved][order]
+    first = involved[order[np.r_[True, grouped[1:] != grouped[:-1]]]]  # each repeat's first
+    keep = np.ones(len(keys), dtype=bool)
+    keep[involved] = False
+    keep[first] = True
+    return np.flatnonzero(keep)
 
 
 SPACING_QUERIES = 2000  # points whose nearest neighbour sets the median spacing, at most
