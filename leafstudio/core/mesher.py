@@ -3,8 +3,10 @@
 Two meshers, both returning plane coordinates, heights and triangles:
 
 - ``conforming`` (ours, the default): a constrained Delaunay triangulation (Shewchuk's Triangle)
-  of the leaf polygon, whose vertices are the boundary points on g ≈ 0, with the kept grid nodes
-  inside. Its outer edge is the margin itself, so thin tips are covered and nothing spills out.
+  of the leaf polygon (the outline's vertices: the boundary points, or a noisy boundary's smooth
+  mean, outline.py), with the kept grid nodes inside, and points added where the band would hold
+  long slivers (MAX_EDGE). Its outer edge is the margin itself, so thin tips are covered and
+  nothing spills out.
 - ``bpa`` (the paper's): open3d ball pivoting on the kept grid points lifted by z, plus the
   boundary points, with radii derived from the grid spacing.
 """
