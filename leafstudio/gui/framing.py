@@ -97,6 +97,7 @@ def view_direction(preset: str, frame: Frame) -> tuple[np.ndarray, np.ndarray]:
 
 ISO_ELEVATIONS = (35.0, 50.0, 65.0)  # degrees above the plane
 ISO_AZIMUTHS = (15.0, 30.0, 45.0, 60.0)  # degrees from the width towards the base
+ISO_FILL = 0.42  # an iso view filling this share along both axes is good enough
 
 
 def iso_direction(elevation: float, azimuth: float, frame: Frame) -> np.ndarray:
@@ -110,9 +111,9 @@ def iso_direction(elevation: float, azimuth: float, frame: Frame) -> np.ndarray:
 def best_iso(
     bounds: BladeBounds, view_angle: float, aspect: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The iso direction and view-up (the normal) among a few elevations and azimuths whose
-    view of the blade fills the viewport best along its less filled axis: a long leaf in a tall
-    view is turned to run across it diagonally."""
+    """The iso direction and view-up (the normal): the lowest elevation (the most relief) at
+    which some azimuth fills the viewport by ISO_FILL along its less filled axis, else the
+    candidate that fills it best; a long leaf in a tall view is turned to run diagonally."""
     best, best_fill = None, -1.0
     for elevation in ISO_ELEVATIONS:
         for azimuth in ISO_AZIMUTHS:
@@ -121,8 +122,10 @@ def best_iso(
                 bounds, direction, bounds.frame.normal, view_angle, aspect
             )
             fill = min(projected_fill(bounds, position, focus, up, view_angle, aspect))
-            if fill > best_fill + 0.02:  # the first (lower, more frontal) of near ties
+            if fill > best_fill + 0.02:  # the first (more frontal) of near ties
                 best, best_fill = direction, fill
+        if best_fill >= ISO_FILL:
+            break
     return best, bounds.frame.normal
 
 

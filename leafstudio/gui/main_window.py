@@ -211,6 +211,10 @@ class MainWindow(QMainWindow):
         self.measurements.setHeaderLabels(["Measure", "Value"])
         self.measurements.setColumnWidth(0, 190)
         self.measurements_dock = self._dock("Measurements", self.measurements, left)
+        self._measurements_due = False
+        self.measurements_dock.visibilityChanged.connect(
+            lambda visible: visible and self._measurements_due and self._show_measurements()
+        )
         # More docks (e.g. a forms gallery, gui/forms_dock.py) are added here with self._dock;
         # a dock that makes a leaf calls self.session.new_document(leaf, sketch, title=...),
         # one undo step, and the window shows it like any other document.
@@ -751,6 +755,11 @@ class MainWindow(QMainWindow):
         result, shown = self.result, self.session.shown
         if result is None or shown.measured_id != self.session.shown_id:
             return
+        if not self.measurements_dock.isVisible():  # filled when shown: no cost while hidden
+            self._measurements_due = True
+            self.measurements_shown.emit()  # nothing on screen waits for it
+            return
+        self._measurements_due = False
         sections = measurement_rows(result)
         fidelity = shown.fidelity
         waiting = self.scan is not None and (fidelity is None or fidelity[0] != shown.measured_id)
