@@ -1,0 +1,31 @@
+"""The Qt binding keeps Python's reference counts straight.
+
+PySide6 6.12.0 drops one reference to True on every signal emit; on Python 3.11, where True and
+None are not immortal, a few hundred emits later the interpreter dies in bool_dealloc or
+none_dealloc (the GUI test run ended in exit 134). pyproject.toml pins a release without it.
+"""
+
+from __future__ import annotations
+
+import sys
+
+from PySide6.QtCore import QObject, Signal
+
+
+class _Emitter(QObject):
+    carried = Signal(str, int, object)
+    bare = Signal()
+
+
+def test_signal_emits_leave_the_singletons_reference_counts_alone(qapp) -> None:
+    emitter = _Emitter()
+    received: list[object] = []
+    emitter.carried.connect(lambda name, number, value: received.append(value))
+    emitter.bare.connect(lambda: received.append(None))
+    before = [sys.getrefcount(v) for v in (True, False, None)]
+    for number in range(50):
+        emitter.carried.emit("result", number, None)
+        emitter.bare.emit()
+    received.clear()
+    after = [sys.getrefcount(v) for v in (True, False, None)]
+    assert after == before
