@@ -98,3 +98,20 @@ def test_cli_thickness(tmp_path: Path, capsys):
     err = capsys.readouterr().err.strip()
     assert code == 2 and "--thickness" in err and error_lines(err) == 1
     assert not (tmp_path / "x.stl").exists()
+
+
+@pytest.mark.parametrize(
+    ("name", "fraction"), [("narrow", 0.01), ("narrow", 0.02), ("nested", 0.05)]
+)
+def test_thick_solids_on_a_fine_mesh_keep_their_volume_and_do_not_cross(name, fraction):
+    """A fine mesh sees the margin's steep, tightly bent band: the thickness is kept there and
+    the sheets still do not cross (the grass-like blade is 0.06 wide: T = 0.02 is a third)."""
+    result = ls.reconstruct(LEAVES[name](), ls.Params(grid=128))
+    asset = leaf_asset(result)
+    thickness = fraction * result.length
+    solid = thicken(asset, thickness)
+    mesh = trimesh.Trimesh(solid.points, solid.faces, process=False)
+    assert mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0
+    area = trimesh.Trimesh(asset.points, asset.faces, process=False).area
+    assert mesh.volume == pytest.approx(area * thickness, rel=0.02)
+    assert not self_intersecting(solid.points, solid.faces)

@@ -6,16 +6,22 @@ sheet keeps the faces, the bottom sheet has them reversed, and every boundary ed
 consistently oriented with outward normals, and its volume is area × thickness to first order
 (offsets along the surface's own normals keep the thickness perpendicular to it).
 
-Offsets along normals can cross in two ways, and both are prevented:
-- where the surface bends tighter than t/2 (a radius of curvature under half the thickness), the
-  local thickness is narrowed to t_i = min(T, FOLD / max(|k1|, |k2|)) with the vertex's principal
-  curvatures (on a mesh without curvatures it is T everywhere);
+Offsets along normals can cross, and are kept from it by one rule: each offset keeps its reach
+t/2 along the surface's normal, but its part along the leaf plane (which is what can carry one
+vertex past another) is cut, and the part along the plane's normal grows to make up for it:
 - where the leaf is narrower than the thickness (a thin tip, a deep sinus), a tilted normal would
-  carry the margin's offsets across the outline and past each other. The part of each offset
-  along the leaf plane is cut to MARGIN_SHIFT of the vertex's distance from the outline, so the
-  margin's offsets are perpendicular to the plane, the walls stand on the outline itself and the
-  sheets meet there rather than cross. The part along the plane's normal then grows, so that the
-  thickness across the surface is still t_i.
+  carry the margin's offsets across the outline and past each other: the in-plane part is at
+  most MARGIN_SHIFT of the vertex's distance from the outline, so the margin's offsets are
+  perpendicular to the plane, the walls stand on the outline itself and the sheets meet there
+  rather than cross;
+- where the surface bends tighter than the thickness, offsets along the normals would fold over
+  (past the centre of curvature): the in-plane part moves by about t/2 · |k| per unit of length
+  (k the larger principal curvature), which is kept under FOLD_GRADIENT, so each sheet stays a
+  graph over the plane, one above the other.
+Offsets straight along the plane's normal never cross (the sheets are graphs of z ± t/(2 cos θ)),
+so the thickness itself is never narrowed. Where the mesh is coarse across a strongly curved
+leaf, the offsets also reach t/2 along the facets' mean normal (the solid between the facets
+would be thinner otherwise).
 """
 
 from __future__ import annotations
@@ -30,7 +36,7 @@ from leafstudio.errors import LeafError
 
 MARGIN_SHIFT = 0.5  # an offset moves along the plane at most this fraction of its distance
 MIN_COSINE = 0.2  # the margin's offsets grow by 1/cos(tilt), at most by 1/MIN_COSINE
-FOLD = 1.0  # t <= FOLD · radius of curvature: t/2 stays under half the radius
+FOLD_GRADIENT = 0.5  # the in-plane offset moves at most this much per unit of length
 UNITS = {"um": 1e-3, "mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4}  # in millimetres
 
 
@@ -72,17 +78,6 @@ def boundary_edges(faces: np.ndarray) -> np.ndarray:
     return directed[counts[inverse] == 1]
 
 
-def local_thickness(asset: MeshAsset, thickness: float) -> np.ndarray:
-    """(n,) thickness at each vertex: T, narrowed where the surface bends tighter (module doc)."""
-    t = np.full(asset.n_points, float(thickness))
-    data = asset.point_data
-    if "k1" in data and "k2" in data:
-        bend = np.maximum(np.abs(data["k1"]), np.abs(data["k2"]))
-        with np.errstate(divide="ignore"):
-            t = np.minimum(t, np.where(bend > 0, FOLD / np.where(bend > 0, bend, 1), np.inf))
-    return t
-
-
 def margin_distance(asset: MeshAsset) -> np.ndarray:
     """(n,) each vertex's distance in the leaf plane from the outline (the asset's, else its
     boundary vertices); 0 on the boundary."""
@@ -102,32 +97,33 @@ def margin_distance(asset: MeshAsset) -> np.ndarray:
 
 
 def offsets(asset: MeshAsset, thickness: float) -> np.ndarray:
-    """(n, 3) half-thickness offsets: t_i/2 along the normal, its part along the leaf plane cut
-    to half the vertex's distance from the outline (module docstring)."""
-    half = local_thickness(asset, thickness) / 2
-    normals = asset.normals
+    """(n, 3) half-thickness offsets: t/2 across the surface, their part along the leaf plane cut
+    near the outline and where the surface bends tightly (module docstring)."""
+    half = np.full(asset.n_points, float(thickness) / 2)
     if asset.plane_normal is None or asset.plane_xy is None:
-        return half[:, None] * normals
-    up = normals @ asset.plane_normal
-    across = normals - up[:, None] * asset.plane_normal
+        return half[:, None] * asset.normals
+    plane = asset.plane_normal
+    up = asset.normals @ plane
+    across = asset.normals - up[:, None] * plane
     shift = half * np.linalg.norm(across, axis=1)  # how far the offset moves along the plane
     allowed = MARGIN_SHIFT * margin_distance(asset)
     keep = np.where(shift > allowed, allowed / np.where(shift > 0, shift, 1), 1.0)
+    data = asset.point_data
+    if "k1" in data and "k2" in data:
+        gradient = half * np.maximum(np.abs(data["k1"]), np.abs(data["k2"]))
+        fold = FOLD_GRADIENT / np.where(gradient > 0, gradient, 1)
+        keep = np.minimum(keep, np.where(gradient > FOLD_GRADIENT, fold, 1.0))
     # the part along the plane's normal grows so that the offset still reaches t/2 along the
-    # surface's normal: o·n = keep sin²θ t/2 + β cos θ = t/2
-    sin2 = 1 - up**2
-    beta = (1 - keep * sin2) / np.maximum(up, MIN_COSINE)
-    offset = half[:, None] * (keep[:, None] * across + beta[:, None] * asset.plane_normal)
-    return offset * _facet_gain(asset, offset, half)[:, None]
-
-
-def _facet_gain(asset: MeshAsset, offset: np.ndarray, half: np.ndarray) -> np.ndarray:
-    """(n,) factors >= 1 that make each offset reach t/2 along the triangles' own mean normal
-    at its vertex too: where the mesh is coarse across a strongly curved leaf, the surface's
-    normals lean away from its facets', and the solid between the facets would be thinner."""
+    # surface's normal: o·n = keep sin²θ t/2 + β cos θ t/2 = t/2
+    beta = (1 - keep * (1 - up**2)) / np.maximum(up, MIN_COSINE)
+    in_plane = (half * keep)[:, None] * across
+    vertical = half * beta
+    # and along the facets' mean normal f too: in_plane·f + g·vertical·(N·f) >= t/2
     facets = vertex_normals(asset.points, asset.faces)
-    reach = np.einsum("ij,ij->i", offset, facets)
-    return np.clip(half / np.maximum(reach, 1e-300), 1.0, 1 / MIN_COSINE)
+    lift = np.maximum(vertical * (facets @ plane), 1e-300)
+    reach = half - np.einsum("ij,ij->i", in_plane, facets)
+    gain = np.clip(reach / lift, 1.0, 1 / MIN_COSINE)
+    return in_plane + (vertical * gain)[:, None] * plane
 
 
 def thicken(asset: MeshAsset, thickness: float) -> MeshAsset:
