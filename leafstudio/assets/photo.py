@@ -315,3 +315,22 @@ def save_photo_leaf(found: PhotoLeaf, image_path: str | Path, path: str | Path) 
         "petiole_cut": found.petiole,
     }
     write_bytes(path, json.dumps(data, indent=1))
+
+
+PHOTO_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp")
+
+
+def is_photo(path: str | Path) -> bool:
+    """Whether a path names an image the photo reader takes (by its suffix)."""
+    return Path(path).suffix.lower() in PHOTO_SUFFIXES
+
+
+def read_photo_leaf(path: str | Path, **options) -> PhotoLeaf:
+    """leaf_from_photo on an image file; LeafError naming the file (the app opens photos so)."""
+    from leafstudio.assets.texture import read_image
+
+    image = read_image(path)
+    try:
+        return leaf_from_photo(image, **options)
+    except LeafError as exc:
+        raise LeafError(exc.problem, str(path)) from None

@@ -94,7 +94,13 @@ def _task(job, token: object = None):
 
 def _file_filter() -> str:
     patterns = " ".join(f"*{s}" for s in LEAF_SUFFIXES)
-    return f"Leaves ({patterns});;{_scan_filter()}"
+    return f"Leaves ({patterns});;{_photo_filter()};;{_scan_filter()}"
+
+
+def _photo_filter() -> str:
+    from leafstudio.assets.photo import PHOTO_SUFFIXES
+
+    return f"Photos of a leaf ({' '.join(f'*{s}' for s in PHOTO_SUFFIXES)})"
 
 
 def _scan_filter() -> str:
@@ -244,6 +250,13 @@ class MainWindow(QMainWindow):
             self.open_scan_dialog,
             "Ctrl+Shift+O",
             "Open a 3D scan of a leaf: its boundary and veins are extracted and can be edited",
+        )
+        self._action(
+            files,
+            "Open &photo…",
+            self.open_photo_dialog,
+            None,
+            "Open a photo or scan of one leaf on a plain background: its outline, grown veins",
         )
         self.recent_menu = files.addMenu("Open &recent")
         self.recent_menu.aboutToShow.connect(self._fill_recent)
@@ -435,6 +448,10 @@ class MainWindow(QMainWindow):
 
     def open_path(self, path: str) -> bool:
         """Open a leaf file or project; on failure show why and keep the current leaf."""
+        from leafstudio.assets.photo import is_photo
+
+        if is_photo(path):
+            return self.open_photo(path)
         try:
             params, sketch = None, None
             if path.lower().endswith(".json"):
@@ -486,6 +503,23 @@ class MainWindow(QMainWindow):
         self.status_text.setText(f"Reading the scan {Path(path).name} and extracting its leaf…")
         self._scan_due = self.worker.submit("scan", _task(load_scan), path)
         return True
+
+    def open_photo(self, path: str) -> bool:
+        """Find the leaf in a photo off the main thread (assets/photo.py: outline, petiole cut,
+        veins grown); it then opens like any loaded leaf and is reconstructed. True: the photo is
+        being read."""
+        from leafstudio.assets.photo import read_photo_leaf
+
+        self.status_text.setStyleSheet("")
+        self.status_text.setText(f"Finding the leaf in the photo {Path(path).name}…")
+        self._scan_due = self.worker.submit("photo", _task(read_photo_leaf), path)
+        return True
+
+    def open_photo_dialog(self) -> None:
+        """File > Open photo."""
+        path = self._ask_to_open("Open a photo of a leaf", _photo_filter())
+        if path:
+            self.open_photo(path)
 
     def open_scan_dialog(self) -> None:
         """File > Open scan."""
@@ -713,6 +747,11 @@ class MainWindow(QMainWindow):
             name, params = Path(token).name, self.panel.params()
             self.session.open_document(leaf, None, name, params=params, path=token, scan=value)
             self._add_recent(token)
+        elif kind == "photo" and job_id == self._scan_due:
+            self._scan_due = None
+            name, params = Path(token).name, self.panel.params()
+            self.session.open_document(value.leaf, None, name, params=params, path=token)
+            self._add_recent(token)
         elif kind == "fidelity" and self.session.accept_fidelity(token, value):
             self._show_measurements()
         elif kind == "poisson" and token is self._poisson_leaf:
@@ -722,11 +761,11 @@ class MainWindow(QMainWindow):
         message = describe(exc)
         if kind == PIPELINE:
             self.session.accept_failure(job_id, exc)
-        elif kind == "scan" and job_id == self._scan_due:
+        elif kind in ("scan", "photo") and job_id == self._scan_due:
             self._scan_due = None
             self.status_text.setStyleSheet("color: #b00020")
             self.status_text.setText(f"Failed: {message}")
-            self.show_error("Cannot open the scan", message)
+            self.show_error(f"Cannot open the {kind}", message)
             self.failure_shown.emit(message)
         elif kind == "fidelity" and self.scan is not None:
             self.session.accept_fidelity(

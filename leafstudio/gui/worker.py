@@ -33,7 +33,13 @@ from leafstudio.model import Leaf, Params
 log = logging.getLogger("leafstudio.gui")
 
 PIPELINE = "pipeline"
-LANES = {PIPELINE: "pipeline", "scan": "side", "fidelity": "side", "poisson": "side"}
+LANES = {
+    PIPELINE: "pipeline",
+    "scan": "side",
+    "photo": "side",
+    "fidelity": "side",
+    "poisson": "side",
+}
 
 
 @dataclass(frozen=True)

@@ -216,3 +216,28 @@ def test_export_a_textured_gltf_and_a_solid(window, qtbot, tmp_path):
     assert not window.export_mesh(str(tmp_path / "bad.stl"), thickness="thick")  # an error box
     window.last_error_box.close()
     assert not (tmp_path / "bad.stl").exists()
+
+
+def test_open_a_photo_finds_the_leaf_and_reconstructs_it(window, qtbot, tmp_path):
+    from PIL import Image
+
+    from leafstudio.forms import make_form
+    from tests.photos import form_photo
+
+    leaf = make_form("ovate")
+    image, _, _ = form_photo(leaf.boundary, leaf.veins, petiole=0.2, angle=30)
+    photo = tmp_path / "leaf.png"
+    Image.fromarray(image).save(photo)
+    assert window.open_path(str(photo))
+    qtbot.waitUntil(lambda: window.path == str(photo), timeout=60_000)
+    wait_result(qtbot, window, lambda outcome: outcome.result.leaf is window.doc.leaf)
+    found = window.doc.leaf
+    assert np.ptp(found.boundary[:, 0]) == pytest.approx(1.0, abs=0.05)  # base 0, apex at 1
+    assert len(found.veins) >= 3  # grown
+    blank = tmp_path / "blank.png"
+    Image.new("RGB", (200, 150), (230, 230, 230)).save(blank)
+    with qtbot.waitSignal(window.failure_shown, timeout=60_000) as failed:
+        window.open_path(str(blank))
+    assert "no leaf found" in failed.args[0]
+    window.last_error_box.close()
+    assert window.doc.leaf is found  # the current leaf is kept
