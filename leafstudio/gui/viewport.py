@@ -17,7 +17,7 @@ from pyvistaqt import QtInteractor
 
 from leafstudio.core.plane import Frame
 from leafstudio.gui.framing import BladeBounds, best_iso, fit_camera, view_direction
-from leafstudio.gui.layers import LAYERS, MESH_COLORINGS, SCALAR_BARS, Piece
+from leafstudio.gui.layers import BOUNDARY_COLOR, LAYERS, MESH_COLORINGS, SCALAR_BARS, Piece
 
 SIZED = ("point_size", "line_width")  # style keys in device pixels: scaled by the pixel ratio
 
@@ -64,12 +64,17 @@ class Viewport(QWidget):
     def text_color(self) -> str:
         return self.palette().color(QPalette.ColorRole.WindowText).name()
 
+    def _dark(self) -> bool:
+        return self.palette().color(QPalette.ColorRole.Base).lightnessF() < 0.5
+
     def apply_palette(self) -> None:
         """Background and text colours from the palette (light or dark)."""
         base = self.palette().color(QPalette.ColorRole.Base)
-        dark = base.lightnessF() < 0.5
-        top = base.lighter(135) if dark else base.darker(112)
+        top = base.lighter(135) if self._dark() else base.darker(112)
         self.plotter.set_background(base.name(), top=top.name())
+        for key in self._pieces:  # colours that follow the palette
+            if self.visible[key]:
+                self._draw_layer(key)
         self._bars.clear()
         self._sync_scalar_bars()
         self.redraw()
@@ -158,6 +163,8 @@ class Viewport(QWidget):
             return
         ratio = self.pixel_ratio()
         style.update({k: style[k] * ratio for k in SIZED if k in style})
+        if style.get("color") == BOUNDARY_COLOR and self._dark():
+            style["color"] = self.text_color()  # the near-black boundary on a dark background
         actor = self.plotter.actors.get(piece.name)
         if actor is not None and self._same_kind(actor, piece, style):
             held = actor.mapper.GetInputDataObject(0, 0)  # the dataset the mapper draws

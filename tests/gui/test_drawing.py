@@ -200,6 +200,8 @@ def test_a_dark_palette_darkens_the_canvas_and_the_3d_background(window):
     assert background.lightnessF() < 0.3
     bottom = window.viewport.plotter.renderer.GetBackground()
     assert max(bottom) < 0.3
+    outline = window.viewport.plotter.actors["points:boundary"].prop.color
+    assert min(outline.float_rgb) > 0.7  # the boundary's dots turn light on a dark background
 
 
 def test_mirror_editing_adds_the_reflected_point_and_a_profile_is_one_step(window, qtbot):
