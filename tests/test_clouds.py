@@ -154,7 +154,7 @@ def _random_leaf(seed: int, n: int, noise: float, size: float) -> tuple[ls.Leaf,
 @given(
     seed=st.integers(0, 10_000),
     n=st.integers(2000, 20_000),
-    noise=st.sampled_from([0.0, 1e-4, 1e-3, 5e-3]),
+    noise=st.sampled_from([0.0, 1e-4, 1e-3, 5e-3, 1e-2]),
     size=st.sampled_from([1e-6, 1e-3, 1.0, 1e3, 1e6]),  # the pipeline runs at unit size
 )
 def test_any_valid_leaf_gives_one_clean_piece_of_the_right_area(seed, n, noise, size):
