@@ -28,7 +28,8 @@ def render(paths: list[str], out: str, size: int = 700) -> None:
         image = getattr(mesh.visual.material, "baseColorTexture", None)
         if image is not None:
             poly.active_texture_coordinates = np.asarray(mesh.visual.uv, float)
-            rgba = np.asarray(image.convert("RGBA"))[::-1].copy()  # VTK's rows run up
+            opaque = getattr(mesh.visual.material, "alphaMode", None) in (None, "OPAQUE")
+            rgba = np.asarray(image.convert("RGB" if opaque else "RGBA"))[::-1].copy()  # rows up
             plotter.add_mesh(poly, texture=pv.Texture(rgba), smooth_shading=True)
         else:
             plotter.add_mesh(poly, color=(0.3, 0.5, 0.2), smooth_shading=True)

@@ -126,6 +126,26 @@ def offsets(asset: MeshAsset, thickness: float) -> np.ndarray:
     return in_plane + (vertical * gain)[:, None] * plane
 
 
+def _outward(
+    points: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    normals: np.ndarray,
+    plane: np.ndarray | None = None,
+) -> np.ndarray:
+    """(n, 3) unit outward directions at the boundary vertices (0 elsewhere): each boundary edge
+    a -> b (counter-clockwise seen from the normals' side) points out along (b − a) × n; along
+    the leaf plane when it is known (the walls stand on the outline)."""
+    edge = np.cross(points[b] - points[a], (normals[a] + normals[b]) / 2)
+    out = np.zeros_like(points)
+    np.add.at(out, a, edge)
+    np.add.at(out, b, edge)
+    if plane is not None:
+        out -= (out @ plane)[:, None] * plane
+    length = np.linalg.norm(out, axis=1, keepdims=True)
+    return np.where(length > 0, out / np.where(length > 0, length, 1), 0.0)
+
+
 def thicken(asset: MeshAsset, thickness: float) -> MeshAsset:
     """The closed solid of an open sheet (see the module docstring); `thickness` in the mesh's
     units."""
@@ -141,10 +161,18 @@ def thicken(asset: MeshAsset, thickness: float) -> MeshAsset:
         [np.column_stack([b, a, a + n]), np.column_stack([b, a + n, b + n])]
     )  # the sheet's edge a -> b is walked b -> a here, so the wall agrees with the top
     faces = np.vstack([asset.faces, asset.faces[:, ::-1] + n, walls])
+    normals = np.vstack([asset.normals, -asset.normals])
+    # the rim's vertices are shared by a sheet and the wall: their normals lean outward halfway
+    # (a rounded edge to a renderer, rather than a wall shaded as if it faced up and down)
+    out = _outward(asset.points, a, b, asset.normals, asset.plane_normal)
+    rim = np.unique(np.concatenate([a, b]))
+    for side in (0, n):
+        bevel = normals[rim + side] + out[rim]
+        normals[rim + side] = bevel / np.linalg.norm(bevel, axis=1, keepdims=True)
     return asset.with_(
         points=points,
         faces=faces,
-        normals=np.vstack([asset.normals, -asset.normals]),
+        normals=normals,
         uv=np.vstack([asset.uv, asset.uv]),
         point_data={k: np.concatenate([v, v]) for k, v in asset.point_data.items()},
         solid=True,

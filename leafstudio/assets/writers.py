@@ -123,8 +123,9 @@ def material_of(asset: MeshAsset, textured: bool = True):
         metallicFactor=METALLIC,
         roughnessFactor=ROUGHNESS,
         doubleSided=not asset.solid,
-        alphaMode="MASK" if texture is not None else "OPAQUE",
-        alphaCutoff=ALPHA_CUTOFF if texture is not None else None,
+        # a sheet's texture cuts the outline out; a solid is opaque (its walls sample the edge)
+        alphaMode="MASK" if texture is not None and not asset.solid else "OPAQUE",
+        alphaCutoff=ALPHA_CUTOFF if texture is not None and not asset.solid else None,
     )
 
 
