@@ -191,6 +191,27 @@ def test_finding8_no_slivers_where_the_grid_keeps_no_node():
     assert signed.sum() == pytest.approx(shapely.Polygon(polygon).area, rel=1e-9)
 
 
+@pytest.mark.parametrize("corners", [40, 60])
+def test_finding8_a_sparse_heart_has_no_slivers_from_its_sinus(corners):
+    """Finding 8 as a user meets it: a heart-shaped (cordate) sketch of a few dozen clean points
+    with a midrib from its notch, grid 128. The old mesher joined the notch to the waist by
+    triangles 0.09-0.13 of the leaf length long; now no edge is longer than a few grid cells."""
+    from leafstudio.core.analysis import triangles_of
+
+    t = np.linspace(0, 2 * np.pi, corners, endpoint=False)
+    x = 16 * np.sin(t) ** 3
+    y = 13 * np.cos(t) - 5 * np.cos(2 * t) - 2 * np.cos(3 * t) - np.cos(4 * t)
+    heart = np.column_stack([x, y, np.zeros(corners)]) / 16
+    along = np.linspace(0, 1, 30)
+    midrib = np.column_stack([np.zeros(30), -1.0 + 1.25 * along, 0.05 * np.sin(np.pi * along)])
+    result = ls.reconstruct(ls.Leaf(heart, [midrib]), ls.Params(grid=128))
+    mesh = result.triangle_mesh
+    triangles = triangles_of(mesh)
+    corners_xyz = mesh.points[triangles]
+    edges = np.linalg.norm(corners_xyz - np.roll(corners_xyz, 1, axis=1), axis=2)
+    assert edges.max() <= 4 * result.length / 128
+
+
 def test_the_margin_can_be_chosen_over_the_measured_noise():
     """Params.margin: "exact" keeps the points as the margin, "smooth" smooths a clean one."""
     noisy = _ellipse(2000, 0.0005, shuffle=False)  # noisy, but the ring through it is simple
