@@ -228,3 +228,22 @@ def test_mirror_editing_adds_the_reflected_point_and_a_profile_is_one_step(windo
     assert window.undo_stack.count() == steps + 1
     assert window.undo_stack.undo_text() == "Vein profile"
     wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+
+
+def test_a_scan_opened_after_another_is_framed_on_its_own_blade(window, qtbot, tmp_path):
+    from .test_scan import synthetic_scan, write_points
+
+    first = synthetic_scan()
+    second = synthetic_scan(seed=1)
+    second[:, :3] = second[:, :3] * 3.0 + [20.0, -5.0, 2.0]  # elsewhere, three times larger
+    rng = np.random.default_rng(2)
+    outliers = rng.uniform(-40, 80, size=(6, 3))  # far stray points in the second scan
+    second = np.vstack([second, np.column_stack([outliers, np.tile([0, 0, 1.0], (6, 1))])])
+    for i, rows in enumerate((first, second)):
+        path = write_points(tmp_path / f"scan{i}.txt", rows)
+        window.session.history.set_clean()
+        assert window.open_path(path)
+        qtbot.waitUntil(lambda p=path: window.path == p, timeout=60_000)
+        wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+        wide, high = leaf_fill(window)
+        assert max(wide, high) >= 0.6 and min(wide, high) >= 0.35, (i, wide, high)
