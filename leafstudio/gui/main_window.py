@@ -41,6 +41,7 @@ from PySide6.QtWidgets import (
 
 from leafstudio.demos import DEMOS, PAPER_K, demo
 from leafstudio.errors import LeafError
+from leafstudio.gui import explain, forms_dock
 from leafstudio.gui.controls import ParamPanel
 from leafstudio.gui.layers import LAYERS, MESH_COLORINGS
 from leafstudio.gui.measurements import measurement_rows
@@ -162,6 +163,8 @@ class MainWindow(QMainWindow):
         self.panel.released.connect(self._on_params_released)
         self.editor.preview.connect(session.preview_sketch)
         self.editor.committed.connect(lambda _b, after, text: session.commit_sketch(after, text))
+        forms_dock.install(self)  # the Forms gallery; Grow veins in the sketch editor
+        explain.install(self)  # the Steps view, exports for slides, layer help, view aids
         self._restore_settings()
 
     # --- layout --------------------------------------------------------------------------------
