@@ -136,7 +136,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--output",
         required=True,
         metavar="MESH",
-        help=".ply, .obj (+ .mtl, .png), .glb, .gltf, .stl, .3mf, .vtp or .vtk",
+        help=".ply, .obj (+ .mtl, _texture.png), .glb, .gltf, .stl, .3mf, .vtp or .vtk",
     )
     rec.add_argument(
         "--figure", metavar="PNG", help="also render iso and top views with the input points"

@@ -196,7 +196,7 @@ def test_trimesh_reads_normals_uvs_and_texture_back(nested: ls.Result, tmp_path:
             back.vertex_attributes
         )
     if suffix == ".obj":
-        assert (tmp_path / "leaf.mtl").is_file() and (tmp_path / "leaf.png").is_file()
+        assert (tmp_path / "leaf.mtl").is_file() and (tmp_path / "leaf_texture.png").is_file()
         assert back.visual.material.image.size == (1024, 1024)
 
 
@@ -274,7 +274,7 @@ def test_texture_none_still_writes_uvs_and_a_coloured_material(nested: ls.Result
     assert back.visual.material.baseColorTexture is None
     assert back.visual.uv.shape == (len(back.vertices), 2)
     ls.save_mesh(nested, tmp_path / "leaf.obj", texture="none")
-    assert not (tmp_path / "leaf.png").exists()
+    assert not (tmp_path / "leaf_texture.png").exists()
     assert "Kd 0.3" in (tmp_path / "leaf.mtl").read_text()
 
 
@@ -286,9 +286,9 @@ def test_cli_texture_option(tmp_path: Path):
     out = tmp_path / "leaf.obj"
     run = ["reconstruct", str(leaf), "--grid", "32", "-o"]
     assert main([*run, str(out), "--texture", "none"]) == 0
-    assert not (tmp_path / "leaf.png").exists() and (tmp_path / "leaf.mtl").exists()
+    assert not (tmp_path / "leaf_texture.png").exists() and (tmp_path / "leaf.mtl").exists()
     assert main([*run, str(out)]) == 0
-    assert (tmp_path / "leaf.png").exists()
+    assert (tmp_path / "leaf_texture.png").exists()
     image = tmp_path / "any.png"
     from PIL import Image
 
@@ -359,7 +359,7 @@ def test_levels_of_detail_halve_the_triangles_and_keep_the_margin(nested: ls.Res
 def test_an_obj_never_writes_its_texture_over_the_image_it_maps(nested: ls.Result, tmp_path):
     from PIL import Image
 
-    photo = tmp_path / "leaf.png"
+    photo = tmp_path / "leaf_texture.png"
     Image.new("RGB", (32, 32), (1, 2, 3)).save(photo)
     before = photo.read_bytes()
     with pytest.raises(ls.LeafError, match="is also an input"):

@@ -127,7 +127,7 @@ def test_a_write_past_the_file_size_limit_keeps_the_old_file(limited, name):
     out, code, err = limited[name]
     assert code == 2, err
     line = _one_line(err)
-    assert str(out.parent / out.name.split(".")[0]) in line  # o.obj's texture o.png may fail first
+    assert str(out.parent / out.name.split(".")[0]) in line  # o_texture.png may fail first
     assert PART_MARK not in line and out.read_bytes() == OLD
     assert _leftovers(out.parent) == []
 

@@ -181,3 +181,22 @@ def test_a_malformed_photo_entry_is_one_line_exit_2(tmp_path: Path, capsys):
                  str(image)]) == 2  # fmt: skip
     err = capsys.readouterr().err
     assert 'bad "photo" entry' in err and error_lines(err) == 1
+
+
+def test_an_obj_export_never_writes_over_the_photo_it_came_from(tmp_path: Path):
+    """The README's steps: `photo oak.png -o oak.leaf.json`, then `reconstruct oak.leaf.json -o
+    oak.obj`. The OBJ's texture used to be oak.png, written over the user's photo; the next step,
+    `--texture oak.png`, then mapped that generated texture instead of the photo."""
+    from leafstudio.cli import main
+
+    leaf = make_form("ovate")
+    image, _, _ = form_photo(leaf.boundary, leaf.veins)
+    photo = tmp_path / "oak.png"
+    Image.fromarray(image).save(photo)
+    before = photo.read_bytes()
+    project = tmp_path / "oak.leaf.json"
+    assert main(["photo", str(photo), "-o", str(project)]) == 0
+    assert main(["reconstruct", str(project), "-o", str(tmp_path / "oak.obj"), "--grid", "32"]) == 0
+    assert photo.read_bytes() == before
+    assert (tmp_path / "oak_texture.png").is_file()
+    assert "map_Kd oak_texture.png" in (tmp_path / "oak.mtl").read_text()

@@ -1,7 +1,8 @@
 """Mesh assets out, by format: each writer takes MeshAssets (asset.py) and a path.
 
 - ``.ply``: binary, vertices x y z nx ny nz s t and the scalars (height, curvatures).
-- ``.obj``: v, vt, vn and faces f a/a/a, with `<stem>.mtl` and the texture `<stem>.png` beside it.
+- ``.obj``: v, vt, vn and faces f a/a/a, with `<stem>.mtl` and the texture
+  `<stem>_texture.png` beside it (not `<stem>.png`: often the photo the leaf came from).
 - ``.glb``, ``.gltf``: glTF 2.0 through trimesh (one file; .gltf with its buffers embedded):
   NORMAL, TEXCOORD_0, a double-sided PBR material with the base colour (and normal) texture, and
   the scalars as custom attributes _HEIGHT, _MEAN_CURVATURE, _GAUSSIAN_CURVATURE, _K1, _K2;
@@ -68,9 +69,12 @@ def _png(image) -> bytes:
     return buffer.getvalue()
 
 
+TEXTURE_SUFFIX = "_texture.png"  # an OBJ's texture: oak.obj -> oak_texture.png
+
+
 def obj_companions(path: Path) -> tuple[Path, Path]:
     """The material file and texture an .obj at `path` refers to."""
-    return path.with_suffix(".mtl"), path.with_suffix(".png")
+    return path.with_suffix(".mtl"), path.with_name(f"{path.stem}{TEXTURE_SUFFIX}")
 
 
 def write_obj(asset: MeshAsset, path: Path) -> None:
