@@ -351,6 +351,10 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
     panel.grow.connect(grow)
     _add_grow_row(window.editor, grow)
     window.forms_dock = window._dock("Forms", panel, dock_area)
+    sketch_dock = getattr(window, "sketch_dock", None)
+    if sketch_dock is not None:  # a tab beside the sketch: both want the height
+        window.tabifyDockWidget(sketch_dock, window.forms_dock)
+        sketch_dock.raise_()
     window.forms_panel = panel
     return panel
 
