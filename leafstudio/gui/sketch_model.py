@@ -86,13 +86,47 @@ def open_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.ndar
     return CubicSpline(t, control, bc_type="natural")(s)
 
 
-def _even_by_length(points: np.ndarray, count: int, closed: bool) -> np.ndarray:
-    """`count` of the (n, d) points spread evenly by arc length along them (indices kept)."""
+def _even_indices(points: np.ndarray, count: int, closed: bool) -> np.ndarray:
+    """Indices of `count` of the (n, d) points spread evenly by arc length (in the plane)."""
     path = np.vstack([points, points[:1]]) if closed else points
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path[:, :2], axis=0), axis=1))])
     targets = np.linspace(0.0, arc[-1], count, endpoint=not closed)
-    index = np.unique(np.clip(np.searchsorted(arc, targets), 0, len(points) - 1))
-    return points[index]
+    return np.unique(np.clip(np.searchsorted(arc, targets), 0, len(points) - 1))
+
+
+def _even_by_length(points: np.ndarray, count: int, closed: bool) -> np.ndarray:
+    """`count` of the (n, d) points spread evenly by arc length along them (indices kept)."""
+    return points[_even_indices(points, count, closed)]
+
+
+OUTLINE_TOLERANCE = 0.002  # a derived boundary's spline stays this close (of the extent) to it
+
+
+def _outline_controls(polygon: np.ndarray) -> np.ndarray:
+    """Control points whose closed spline follows the (n, 2) outline polygon within
+    OUTLINE_TOLERANCE of its extent: the corners the outline's Douglas-Peucker simplification
+    keeps (tooth tips, sinuses), among points spread evenly along it, more of them until the
+    spline is close enough. An even spread alone (24 points) smoothed every tooth away."""
+    polygon = np.asarray(polygon, dtype=float)
+    extent = float(np.ptp(polygon, axis=0).max()) if len(polygon) else 0.0
+    if len(polygon) <= DERIVED_BOUNDARY_POINTS or extent == 0.0:
+        return polygon
+    tolerance = OUTLINE_TOLERANCE * extent
+    ring = shapely.LinearRing(polygon)
+    corners = shapely.get_coordinates(shapely.simplify(ring, tolerance))
+    index_of = {tuple(p): i for i, p in enumerate(polygon)}
+    keep = {index_of[tuple(p)] for p in corners if tuple(p) in index_of}
+    count = DERIVED_BOUNDARY_POINTS
+    while True:
+        spread = _even_indices(polygon, count, closed=True)
+        chosen = np.array(sorted(keep | set(spread.tolist())))
+        control = polygon[chosen]
+        curve = shapely.LinearRing(closed_curve(control))
+        if len(chosen) == len(polygon) or np.all(
+            shapely.distance(shapely.points(polygon), curve) <= 2 * tolerance
+        ):
+            return control
+        count *= 2
 
 
 def insert_index(control: np.ndarray, xy: np.ndarray, closed: bool) -> int:
@@ -373,7 +407,7 @@ class Sketch:
         """A sketch approximating a reconstructed leaf: control points spread along its outline
         and along each vein, on the leaf's own plane (the pipeline's frame), the boundary's
         heights kept as its relief."""
-        boundary = _even_by_length(result.polygon, DERIVED_BOUNDARY_POINTS, closed=True)
+        boundary = _outline_controls(result.polygon)
         relief = np.column_stack(result.frame.to_plane(result.leaf.boundary))
         veins = []
         for vein in result.leaf.veins:

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
+import shapely
 
+import leafstudio as ls
 from leafstudio.core.plane import Frame
 from leafstudio.gui.sketch_model import BOUNDARY, Sketch, closed_curve, insert_index, open_curve
 
@@ -96,3 +99,26 @@ def test_a_curled_boundary_keeps_its_heights_through_edits_and_files():
     again = Sketch.from_dict(moved.to_dict())
     np.testing.assert_allclose(again.to_leaf().boundary, moved.to_leaf().boundary)
     assert np.all(Sketch(boundary=xy[::10]).to_leaf().boundary[:, 2] == 0)  # drawn: on the plane
+
+
+@pytest.mark.parametrize(
+    ("shape", "terms"),
+    [("ovate", {"margin": "serrate", "teeth": 30}), ("hastate", {"margin": "lobed", "lobes": 5})],
+)
+def test_a_loaded_toothed_leaf_keeps_its_teeth_when_one_point_is_moved(shape, terms):
+    """Review finding: a loaded leaf became a sketch of 24 evenly spread points, so moving one
+    boundary point wiped every tooth and the edit failed ("vein 1: 2 of 113 points lie outside
+    the boundary"). The derived boundary now follows the outline within its tolerance."""
+    from leafstudio.forms import make_form
+    from leafstudio.gui.sketch_model import OUTLINE_TOLERANCE
+
+    result = ls.reconstruct(make_form(shape, **terms), ls.Params(grid=64))
+    sketch = Sketch.from_result(result)
+    curve = shapely.LinearRing(closed_curve(sketch.boundary))
+    extent = np.ptp(result.polygon, axis=0).max()
+    gap = shapely.distance(shapely.points(result.polygon), curve)
+    assert gap.max() <= 2 * OUTLINE_TOLERANCE * extent
+    edited = sketch.moved(BOUNDARY, 0, sketch.boundary[0] + 0.001 * extent)
+    again = ls.reconstruct(edited.to_leaf(), ls.Params(grid=64))
+    area = result.metrics["leaf"]["projected_area"]
+    assert again.metrics["leaf"]["projected_area"] == pytest.approx(area, rel=0.01)
