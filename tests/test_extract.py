@@ -165,3 +165,20 @@ def test_extract_writes_a_leaf_that_reconstructs(tmp_path, capsys):
     assert main(["extract", str(tmp_path / "missing.ply"), "-o", str(out)]) == 2
     assert main(["extract", str(scan_file), "-o", str(tmp_path / "leaf.doc")]) == 2
     assert capsys.readouterr().err.count("\n") == 3
+
+
+def test_the_outline_count_changes_only_the_outline(scan):
+    """Review finding: --points set the spacing of the veins and of the region kept as blade, so
+    a finer outline moved the blade/petiole split and the length, and cost quadratically in it
+    (100,000 points ran past a minute). Now the blade, the petiole, the length and the veins'
+    sampling are the same whatever the count."""
+    points = scan[1]
+    coarse = extract_leaf(points, count=200)
+    fine = extract_leaf(points, count=5000)
+    assert len(fine.leaf.boundary) == 5000
+    np.testing.assert_array_equal(fine.blade, coarse.blade)
+    np.testing.assert_array_equal(fine.petiole, coarse.petiole)
+    assert fine.length == pytest.approx(coarse.length, rel=1e-12)
+    assert [len(v) for v in fine.leaf.veins] == [len(v) for v in coarse.leaf.veins]
+    outline = shapely.Polygon(coarse.leaf.boundary[:, :2])
+    assert shapely.Polygon(fine.leaf.boundary[:, :2]).area == pytest.approx(outline.area, rel=0.01)

@@ -45,6 +45,7 @@ CORE = 0.4  # core points have at least this share of the busiest balls' count
 EDGE = 0.3  # margin points, grown back near the core, at least this share (a strand has less)
 LIFT_NEIGHBOURS = 16
 RIM_KERNEL = np.array([1.0, 2.0, 3.0, 2.0, 1.0])  # smooths the margin's heights along it
+OUTLINE_POINTS = 200  # the outline's default count; its spacing sets the veins' and the rim's
 OPENING = 0.015  # the outline is opened by this share of the length (drops thin stubs)
 PETIOLE_SHARE = 0.02  # fewer points than this share of the blade's do not mark the base
 SIDE_STATIONS = (0.2, 0.35, 0.5, 0.65, 0.8)  # where side veins leave the midrib (arc length)
@@ -289,7 +290,9 @@ def _side_veins(polygon: Polygon, midrib: np.ndarray, covered, spacing: float) -
     return veins
 
 
-def extract_leaf(points: np.ndarray, base_end: str = "auto", count: int = 200) -> Extraction:
+def extract_leaf(
+    points: np.ndarray, base_end: str = "auto", count: int = OUTLINE_POINTS
+) -> Extraction:
     """Boundary and veins of the leaf in a scan of its surface.
 
     Parameters
@@ -397,7 +400,9 @@ def _extract(
         raise LeafError("the scan's points lie on a line, not a leaf surface")
     polygon = _outline(xy, float(np.ptp(xy[:, 0])))
     boundary_xy = _resample(polygon, count)
-    spacing = polygon.length / count
+    # the veins, the region and the rim's smoothing at a spacing of their own: --points sets how
+    # finely the outline is written, not what is blade (it did), nor the cost (quadratic in it)
+    spacing = polygon.length / OUTLINE_POINTS
     region = polygon.buffer(spacing)
     cut = ~shapely.contains_xy(region, local[:, 0], local[:, 1])
     petiole |= blade & cut  # a stub of petiole trimmed by the opening
@@ -423,7 +428,10 @@ def _extract(
         return origin + np.column_stack([q, z]) @ axes
 
     # the margin's heights are the noisiest (mixed returns at the edge): average along the outline
-    rim = np.convolve(np.tile(lift(boundary_xy, xy, h), 3), RIM_KERNEL / RIM_KERNEL.sum(), "same")
+    taps = max(len(RIM_KERNEL), round(len(RIM_KERNEL) * count / OUTLINE_POINTS))
+    reach = np.linspace(0, len(RIM_KERNEL) - 1, taps)  # RIM_KERNEL's reach, whatever the count
+    kernel = np.interp(reach, np.arange(len(RIM_KERNEL)), RIM_KERNEL)
+    rim = np.convolve(np.tile(lift(boundary_xy, xy, h), 3), kernel / kernel.sum(), "same")
     boundary = world(boundary_xy, rim[count : 2 * count])
     veins = _inside_outline(boundary, [world(v) for v in veins_xy], spacing)
     return Leaf(boundary=boundary, veins=veins), blade, petiole, origin, axes, region
