@@ -532,6 +532,21 @@ def _pipe_closed() -> int:
     return EXIT_OK
 
 
+DASHED_VALUES = {"--base-end": ("-x", "-y", "-z")}  # values argparse would take for options
+
+
+def _join_dashed_values(argv: list[str]) -> list[str]:
+    """`--base-end -z` as `--base-end=-z`: argparse reads a value that starts with a dash as the
+    next option and reports a missing argument."""
+    out: list[str] = []
+    for word in argv:
+        if out and word in DASHED_VALUES.get(out[-1], ()):
+            out[-1] = f"{out[-1]}={word}"
+        else:
+            out.append(word)
+    return out
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the `leafstudio` console script; returns the exit code.
 
@@ -540,7 +555,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     from leafstudio.safewrite import install_signal_cleanup
 
-    argv = list(sys.argv[1:] if argv is None else argv)
+    argv = _join_dashed_values(list(sys.argv[1:] if argv is None else argv))
     debug = _debugging(argv)
     _configure_logging(0, 0)
     try:

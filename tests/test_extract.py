@@ -182,3 +182,16 @@ def test_the_outline_count_changes_only_the_outline(scan):
     assert [len(v) for v in fine.leaf.veins] == [len(v) for v in coarse.leaf.veins]
     outline = shapely.Polygon(coarse.leaf.boundary[:, :2])
     assert shapely.Polygon(fine.leaf.boundary[:, :2]).area == pytest.approx(outline.area, rel=0.01)
+
+
+def test_a_base_end_with_a_minus_sign_is_taken_as_written(tmp_path, capsys):
+    """Review finding: `--base-end -x`, as --help writes it, was read as an option ("expected
+    one argument"); only `--base-end=-x` worked."""
+    parts = _scan(seed=1)
+    scan = tmp_path / "scan.xyz"
+    np.savetxt(scan, np.vstack([parts["blade"], parts["outliers"]]))
+    out = tmp_path / "leaf.csv"
+    code = main(["extract", str(scan), "-o", str(out), "--base-end", "-x"])
+    assert code == 0, capsys.readouterr().err
+    midrib = load_leaf(out).veins[0]
+    assert midrib[0, 0] < -0.45 and midrib[-1, 0] > 0.45
