@@ -43,7 +43,7 @@ from leafstudio.core.outline import (
     trace_outline,
 )
 from leafstudio.core.plane import Frame, fit_frame
-from leafstudio.core.plausibility import check_boundary, keep_outer_loop
+from leafstudio.core.plausibility import check_boundary, filled_cloud_note, keep_outer_loop
 from leafstudio.core.surface import HeightSurface, fit_surface
 from leafstudio.core.trianglemesh import TriangleMesh
 from leafstudio.core.units import ScaledSurface, Units
@@ -192,6 +192,9 @@ def _frame_stage(
     kept_vertices = thin_outline(outline.polygon)  # a few thousand vertices at most
     polygon = outline.polygon[kept_vertices]
     length = float(np.ptp(polygon[:, 0]))
+    filled = filled_cloud_note(xy, polygon, length)  # a whole scan given as the boundary
+    if filled:
+        notes = [*notes, filled]
     if np.max(np.abs(boundary_h)) <= PLANAR * length:  # planar: no base
         polygon_h = np.zeros(len(polygon))
     else:

@@ -130,6 +130,29 @@ def leaf_warnings(leaf) -> list[str]:
     return notes
 
 
+FILLED_DEPTH = 0.03  # boundary points whose median depth inside the outline is over this share
+FILLED_SAMPLE = 2000  # of the length fill an area (noise of 1% of the length: about 0.007)
+
+
+def filled_cloud_note(xy: np.ndarray, polygon: np.ndarray, length: float) -> str | None:
+    """A warning when the (n, 2) boundary points fill the region inside the (m, 2) outline
+    instead of lying along it: a scan of the whole leaf given as its boundary (its area is then
+    the outline's, and the points' surface is lost). Checks FILLED_SAMPLE points at most."""
+    import shapely
+
+    if len(xy) < 3 or len(polygon) < 3 or not length > 0:
+        return None
+    sample = xy[:: max(1, len(xy) // FILLED_SAMPLE)]
+    depth = float(np.median(shapely.distance(shapely.LinearRing(polygon), shapely.points(sample))))
+    if depth <= FILLED_DEPTH * length:
+        return None
+    return (
+        f"the boundary points fill an area (half lie more than {depth / length:.0%} of the leaf's "
+        "length inside its outline): if this is a scan of the whole leaf, `leafstudio extract` "
+        "takes its boundary and veins"
+    )
+
+
 CHECKED_POINTS = 4000  # a longer ordered boundary is checked on every k-th point
 CROSSING_SHARE = 0.05  # each side of a crossing encloses at least this share of the area
 JUMP = 8.0  # a step this many median steps long ends one loop of an ordered boundary
