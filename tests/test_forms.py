@@ -527,3 +527,22 @@ def test_bad_form_and_veins_arguments_are_one_line_and_exit_2(tmp_path, capsys, 
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize(
+    ("shape", "terms"),
+    [
+        ("oblanceolate", dict(venation="parallel", apex="acuminate", seed=202, fold=46.5,
+                              curl=-0.42, wave=0.089)),
+        ("spatulate", dict(margin="crenate", venation="parallel", apex="acuminate", seed=882,
+                           fold=10.6, curl=0.5, wave=0.09)),
+        ("linear", dict(margin="lobed", venation="palmate", seed=344, curl=0.11, wave=0.079)),
+    ],
+)  # fmt: skip
+def test_relief_within_its_ranges_still_reconstructs(shape, terms):
+    """Review finding: fold, curl and wave together tilt the boundary's plane, so vein ends near
+    the margin fell outside the outline ("vein 1: 14 of 70 points lie outside the boundary"), and
+    a wave taller than a linear blade is wide made its outline cross itself."""
+    result = ls.reconstruct(Form(shape, **terms).leaf(), ls.Params(grid=64))
+    assert result.metrics["mesh"]["components"] == 1
+    assert result.metrics["mesh"]["boundary_loops"] == 1

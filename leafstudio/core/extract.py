@@ -31,7 +31,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import Delaunay, cKDTree
 from shapely.geometry import LineString, MultiPoint, Point, Polygon
 
-from leafstudio.core.plane import fit_frame
+from leafstudio.core.veins import veins_inside_outline
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
 
@@ -433,19 +433,6 @@ def _extract(
     kernel = np.interp(reach, np.arange(len(RIM_KERNEL)), RIM_KERNEL)
     rim = np.convolve(np.tile(lift(boundary_xy, xy, h), 3), kernel / kernel.sum(), "same")
     boundary = world(boundary_xy, rim[count : 2 * count])
-    veins = _inside_outline(boundary, [world(v) for v in veins_xy], spacing)
+    veins = veins_inside_outline(boundary, [world(v) for v in veins_xy], spacing)
     return Leaf(boundary=boundary, veins=veins), blade, petiole, origin, axes, region
 
-
-def _inside_outline(boundary: np.ndarray, veins: list[np.ndarray], gap: float) -> list[np.ndarray]:
-    """The veins' points that lie inside the outline, by at least `gap`, as the pipeline sees
-    them: on the boundary's own PCA plane (not the blade's), where a curled margin moves."""
-    frame = fit_frame(boundary, np.vstack(veins))
-    region = Polygon(frame.to_plane(boundary)[0]).buffer(-gap)
-    kept = []
-    for vein in veins:
-        xy = frame.to_plane(vein)[0]
-        inside = vein[shapely.contains_xy(region, xy[:, 0], xy[:, 1])]
-        if len(inside) >= 2:
-            kept.append(inside)
-    return kept

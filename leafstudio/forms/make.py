@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from leafstudio.core.veins import veins_inside_outline
 from leafstudio.errors import LeafError
 from leafstudio.forms.outline import Outline, form_outline
 from leafstudio.forms.terms import (
@@ -30,6 +31,9 @@ from leafstudio.forms.veins import VENATION_KINDS, grow_veins
 from leafstudio.model import Leaf
 
 WAVES_PER_SIDE = 3
+WAVE_WIDTH_SHARE = 0.5  # the margin's wave at most this share of the blade's half-width
+VEIN_SLACK = 0.004  # vein points may lie this far (of the length) outside the outline as the
+# pipeline sees it (it allows 0.01): the midrib's ends on the base and apex are kept
 LIMITS = {  # name: (lowest, highest)
     "teeth": (2, 300),
     "lobes": (2, 15),
@@ -156,7 +160,9 @@ class Form:
         z = self._pose(xy) + self._wave(outline)
         boundary = np.column_stack([xy, z])
         veins = [np.column_stack([v[:, :2], v[:, 2] + self._pose(v[:, :2])]) for v in veins]
-        return Leaf(boundary=boundary, veins=veins)
+        # a fold, curl or wave tilts the boundary's plane: a vein end near the margin can fall
+        # outside the outline there, and the pipeline refuses such a vein
+        return Leaf(boundary=boundary, veins=veins_inside_outline(boundary, veins, -VEIN_SLACK))
 
     def _pose(self, xy: np.ndarray) -> np.ndarray:
         """Fold (the halves rise from the midrib) and curl (the midrib bends), as heights."""
@@ -167,10 +173,13 @@ class Form:
         z = np.zeros(len(outline.xy))
         if self.wave == 0:
             return z
+        # no higher than half the blade's half-width: a wave taller than a narrow blade is wide
+        # tilts the boundary's plane on its side, and the outline then crosses itself there
+        amplitude = min(self.wave, WAVE_WIDTH_SHARE * float(np.abs(outline.xy[:, 1]).max()))
         for half in (outline.lower, outline.upper):
             pts = outline.xy[half]
             s = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
-            z[half] = self.wave * np.sin(2 * np.pi * WAVES_PER_SIDE * s / s[-1])
+            z[half] = amplitude * np.sin(2 * np.pi * WAVES_PER_SIDE * s / s[-1])
         return z
 
 

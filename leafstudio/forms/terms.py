@@ -146,7 +146,8 @@ VENATIONS: dict[str, str] = {
 RELIEF: dict[str, str] = {
     "fold": "--fold DEG: the two halves rise from the midrib by this angle, like a half-open book",
     "curl": "--curl C: the midrib bends so the apex rises C leaf lengths (droops, if negative)",
-    "wave": "--wave A: the margin rises and falls in waves of this height (in leaf lengths)",
+    "wave": "--wave A: the margin rises and falls in waves of this height (in leaf lengths; "
+    "at most half the blade's half-width)",
     "seed": "--seed S: a variant of the form: tooth spacing, lobe depth, vein angles and width "
     "vary slightly; the same seed gives the same leaf",
     "aspect": "--aspect L/W: the length over the greatest width (each shape has its own usual "
