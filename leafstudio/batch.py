@@ -430,6 +430,33 @@ class TraitTable:
         self._handle: io.TextIOWrapper | None = None
 
     # reading -----------------------------------------------------------------------------
+    def is_foreign(self) -> bool:
+        """Whether the table's path holds a file that is not a trait table (a leaf, a user's
+        CSV): writing the table would replace it."""
+        if not self.path.exists():
+            return False
+        if not self.path.is_file():
+            return True
+        if self.path.stat().st_size == 0:
+            return False
+        if self.kind == ".parquet":
+            import pyarrow.parquet as pq
+
+            try:
+                names = pq.read_schema(self.path).names
+            except Exception:  # not a Parquet file at all
+                return True
+            return names[:2] != ["input", "status"]
+        with open(self.path, encoding="utf-8", errors="replace") as handle:
+            first = handle.readline(4096).strip()
+        if self.kind == ".csv":
+            return not first.startswith("input,status,")
+        try:
+            row = json.loads(first)
+        except json.JSONDecodeError:
+            return True
+        return not (isinstance(row, dict) and {"input", "status"} <= row.keys())
+
     def rows(self) -> Iterator[dict[str, Any]]:
         """The complete rows in the journal (a row cut short by a kill is left out)."""
         source = self.journal if self.journal.exists() else self.path
@@ -719,6 +746,12 @@ class Batch:
             raise LeafError("is a file, not a folder", str(self.out_dir))
         self.settings = Settings(params or Params(), scans, format)
         self.table = TraitTable(traits if traits else self.out_dir / DEFAULT_TABLE, scans)
+        if self.table.is_foreign():  # never write the table over an input or a user's file
+            raise LeafError(
+                "exists and is not a trait table, so it would be replaced; choose another "
+                "--traits path",
+                str(self.table.path),
+            )
         self.jobs = plan(inputs, self.out_dir, self.settings, exclude=[self.table.path])
         self.total = len(self.jobs)
         self.workers = jobs or os.cpu_count() or 1

@@ -350,3 +350,21 @@ def test_progress_bar_only_on_a_terminal(tmp_path, leaves):
     assert tty.returncode == 0
     assert b"leaf/s" in shown or b"s/leaf" in shown, shown
     assert b"3/3" in shown
+
+
+def test_the_trait_table_never_replaces_an_input_or_a_users_file(tmp_path, leaves, capsys):
+    """Review finding: `batch DIR -o out --traits DIR/a.leaf.json` left that leaf out of the
+    inputs, wrote the table over it and exited 0. A --traits path that holds anything but a
+    trait table is refused before any work."""
+    leaf = sorted(leaves.rglob("*.csv"))[0]
+    before = leaf.read_bytes()
+    out = tmp_path / "out"
+    text = _message(["batch", str(leaves), "-o", str(out), "--traits", str(leaf)], capsys)
+    assert str(leaf) in text and "not a trait table" in text
+    assert leaf.read_bytes() == before and not out.exists()
+    own = tmp_path / "mine.csv"
+    own.write_text("x,y,z\n1,2,3\n")
+    assert "not a trait table" in _message(
+        ["batch", str(leaves), "-o", str(out), "--traits", str(own)], capsys
+    )
+    assert own.read_text() == "x,y,z\n1,2,3\n"
