@@ -435,14 +435,10 @@ def _gui(args: argparse.Namespace) -> int:
 def _extract(args: argparse.Namespace) -> int:
     from leafstudio.core.extract import BUDGET, extract_leaf, voxel_thinning
     from leafstudio.core.plausibility import check_leaf_like
-    from leafstudio.io import LEAF_SUFFIXES, save_leaf
-    from leafstudio.safewrite import check_target, refuse_overlap
+    from leafstudio.io import check_leaf_output, save_leaf
     from leafstudio.scan import read_scan
 
-    if not args.output.lower().endswith(LEAF_SUFFIXES):
-        raise LeafError(f"unknown leaf type; use one of {', '.join(LEAF_SUFFIXES)}", args.output)
-    refuse_overlap([args.scan], [args.output])
-    check_target(args.output)
+    check_leaf_output(args.output, [args.scan])
     scan = read_scan(args.scan)
     try:
         # a large scan is judged by its voxel centroids, as extract sees it (linear time)

@@ -210,6 +210,17 @@ def _read_vein(path: Path) -> np.ndarray:
     return read_point_table(path, columns=(3,))
 
 
+def check_leaf_output(output: str, inputs: Sequence[str | os.PathLike]) -> None:
+    """Refuse, before any work, a leaf output of an unknown type, one that is also one of the
+    `inputs`, or one that cannot be written (LeafError naming the output)."""
+    from leafstudio.safewrite import check_target, refuse_overlap
+
+    if not output.lower().endswith(LEAF_SUFFIXES):
+        raise LeafError(f"unknown leaf type; use one of {', '.join(LEAF_SUFFIXES)}", output)
+    refuse_overlap(list(inputs), [output])  # an input is never an output
+    check_target(output)
+
+
 def _replace_atomically(path: Path, write: Callable[[str], object]) -> None:
     """Run `write` on a temporary file beside `path`, check and flush it, then rename it over
     `path` (inside `safewrite.staged()`, at the end of the run); see leafstudio.safewrite."""

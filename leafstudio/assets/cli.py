@@ -31,13 +31,9 @@ def run_photo(args: argparse.Namespace) -> int:
     """Find the leaf in the photo and write it."""
     from leafstudio.assets.photo import leaf_from_photo, save_photo_leaf
     from leafstudio.assets.texture import read_image
-    from leafstudio.io import LEAF_SUFFIXES
-    from leafstudio.safewrite import check_target, refuse_overlap
+    from leafstudio.io import check_leaf_output
 
-    if not args.output.lower().endswith(LEAF_SUFFIXES):
-        raise LeafError(f"unknown leaf type; use one of {', '.join(LEAF_SUFFIXES)}", args.output)
-    refuse_overlap([args.image], [args.output])
-    check_target(args.output)
+    check_leaf_output(args.output, [args.image])
     image = read_image(args.image)
     try:
         found = leaf_from_photo(

@@ -116,13 +116,10 @@ def _point(text: str) -> np.ndarray:
 
 def run_veins(args: argparse.Namespace) -> int:
     from leafstudio.forms.veins import grow_veins
-    from leafstudio.io import LEAF_SUFFIXES, load_leaf, save_leaf
+    from leafstudio.io import check_leaf_output, load_leaf, save_leaf
     from leafstudio.model import Leaf
-    from leafstudio.safewrite import refuse_overlap
 
-    if not _is_leaf_file(args.output):
-        raise LeafError(f"unknown leaf type; use one of {', '.join(LEAF_SUFFIXES)}", args.output)
-    refuse_overlap([args.leaf], [args.output])  # an input is never an output (issue 11)
+    check_leaf_output(args.output, [args.leaf])
     leaf = load_leaf(args.leaf)
     base = _point(args.base) if args.base else (leaf.veins[0][0] if leaf.veins else None)
     try:
