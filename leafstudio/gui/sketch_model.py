@@ -99,7 +99,7 @@ def _even_by_length(points: np.ndarray, count: int, closed: bool) -> np.ndarray:
     return points[_even_indices(points, count, closed)]
 
 
-OUTLINE_TOLERANCE = 0.002  # a derived boundary's spline stays this close (of the extent) to it
+OUTLINE_TOLERANCE = 0.005  # a derived boundary's spline stays this close (of the extent) to it
 
 
 def _outline_controls(polygon: np.ndarray) -> np.ndarray:
