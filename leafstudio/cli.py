@@ -270,6 +270,7 @@ def _settings(args: argparse.Namespace):
     from leafstudio.io import load_project
 
     saved = load_project(args.input)[1] if args.input.lower().endswith(".json") else None
+    _params_for(args, None)  # a bad flag (--grid 3) is the command line's, not the input's
     try:
         return _params_for(args, saved)
     except LeafError as exc:
