@@ -89,6 +89,7 @@ def columns(scans: bool) -> tuple[str, ...]:
         "warnings",
         "seconds",
         "sha256",
+        "mesh_sha256",
         "settings",
     )
 
@@ -338,6 +339,7 @@ def _reconstruct(job: Job) -> dict[str, Any]:
         # closed-form normals a Result gets (a second per leaf; `reconstruct` writes those)
         save_mesh(result.triangle_mesh, Path(job.out_dir) / job.mesh)
         row["mesh"] = job.mesh
+        row["mesh_sha256"] = file_hash(Path(job.out_dir) / job.mesh)  # --resume checks it
     row["warnings"] = "; ".join(result.warnings) or None
     return row
 
@@ -764,7 +766,7 @@ class Batch:
         self.stopped = False  # by fail_fast
 
     def _kept(self) -> dict[str, dict[str, Any]]:
-        """Rows of an earlier run that stand: ok, same settings, same content, mesh present."""
+        """Rows of an earlier run that stand: ok, same settings and content, the mesh as written."""
         if not self.resume:
             return {}
         key = self.settings.key()
@@ -776,11 +778,12 @@ class Batch:
                 job is None
                 or row.get("status") != "ok"
                 or row.get("settings") != key
-                or (job.mesh and not (self.out_dir / job.mesh).is_file())
             ):
                 continue
-            try:
-                same = row.get("sha256") == file_hash(job.path)
+            try:  # the input unchanged, and its mesh as written (not lost, cut short or edited)
+                same = row.get("sha256") == file_hash(job.path) and (
+                    not job.mesh or row.get("mesh_sha256") == file_hash(self.out_dir / job.mesh)
+                )
             except OSError:
                 same = False
             if same:

@@ -247,6 +247,9 @@ def test_resume_keeps_only_rows_of_unchanged_inputs_and_settings(tmp_path, leave
     assert sorted(Batch([inputs], ls.Params(grid=32), out, resume=True)._kept()) == [
         str(inputs / "leaf2.csv")
     ]
+    # review finding: a mesh damaged after the run (cut short, edited) was kept as done
+    (out / "leaf2.ply").write_bytes(b"garbage\n")
+    assert Batch([inputs], ls.Params(grid=32), out, resume=True)._kept() == {}
 
 
 def test_inputs_from_folders_and_patterns_leave_out_the_output_folder(tmp_path, leaves):
