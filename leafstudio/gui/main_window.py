@@ -583,20 +583,22 @@ class MainWindow(QMainWindow):
         self._add_recent(path)
         return True
 
-    def export_mesh(self, path: str, thickness: str | None = None) -> bool:
-        """Write the shown mesh to `path` (by its suffix, with normals, UVs and the generated
-        texture where the format holds them); `thickness` ("0.01" of the length, or "0.4mm")
-        makes it a closed solid."""
+    def export_mesh(self, path: str, thickness: str | None = None, texture: str = "auto") -> bool:
+        """Write the shown mesh to `path` (by its suffix, with normals, UVs and a texture where
+        the format holds them); `thickness` ("0.01" of the length, or "0.4mm") makes it a closed
+        solid; `texture` is "auto" (generated from the leaf), "none" or an image file, mapped as
+        `reconstruct --texture` maps it (a photo the leaf's project came from lands on itself)."""
         if self.result is None:
             self.show_error("Nothing to export", "There is no reconstructed mesh yet.")
             return False
         try:
-            solid = None
-            if thickness is not None:
-                from leafstudio.assets.solid import thickness_in_mesh_units
+            from leafstudio.assets.export import asset_options, check_asset_options
 
-                solid = thickness_in_mesh_units(thickness, self.result.length)
-            save_mesh(self.result, path, thickness=solid)
+            check_asset_options(texture, thickness, 0)
+            options = asset_options(
+                texture, thickness, 0, self.session.state.path or "", self.result.length
+            )
+            save_mesh(self.result, path, **options)
         except (LeafError, OSError) as exc:
             self.show_error("Cannot export the mesh", str(exc))
             return False
@@ -606,8 +608,39 @@ class MainWindow(QMainWindow):
         """File > Export mesh."""
         patterns = " ".join(f"*{s}" for s in MESH_SUFFIXES)
         path, _ = QFileDialog.getSaveFileName(self, "Export the mesh", "", f"Meshes ({patterns})")
-        if path:
-            self.export_mesh(path if Path(path).suffix else path + ".ply")
+        if not path:
+            return
+        path = path if Path(path).suffix else path + ".ply"
+        texture = self._texture_choice(path)
+        if texture is not None:
+            self.export_mesh(path, texture=texture)
+
+    TEXTURE_CHOICES = (
+        "Generated from the leaf (blade and veins)",
+        "None (UVs and a plain material)",
+        "An image file… (mapped through the UVs)",
+    )
+
+    def _texture_choice(self, path: str) -> str | None:
+        """The texture for a format that carries one (.glb, .gltf, .obj): "auto", "none" or an
+        image path, as `reconstruct --texture` takes it; None if the user cancels."""
+        from PySide6.QtWidgets import QInputDialog
+
+        if Path(path).suffix.lower() not in (".glb", ".gltf", ".obj"):
+            return "auto"
+        choice, ok = QInputDialog.getItem(
+            self, "Texture", "The mesh's texture:", list(self.TEXTURE_CHOICES), 0, False
+        )
+        if not ok:
+            return None
+        if choice == self.TEXTURE_CHOICES[0]:
+            return "auto"
+        if choice == self.TEXTURE_CHOICES[1]:
+            return "none"
+        image, _ = QFileDialog.getOpenFileName(
+            self, "The texture image", "", "Images (*.png *.jpg *.jpeg *.tif *.tiff *.bmp *.webp)"
+        )
+        return image or None
 
     def export_solid_dialog(self) -> None:
         """File > Export solid: the thickness (a fraction of the length, or with its unit), then

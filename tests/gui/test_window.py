@@ -243,3 +243,27 @@ def test_open_a_photo_finds_the_leaf_and_reconstructs_it(window, qtbot, tmp_path
     assert "no leaf found" in failed.args[0]
     window.last_error_box.close()
     assert window.doc.leaf is found  # the current leaf is kept
+
+
+def test_the_export_dialog_offers_the_texture(window, qtbot, tmp_path, monkeypatch):
+    """Issue 14: `--texture auto|none|IMAGE`, and the same in the app's export dialog."""
+    import trimesh
+    from PIL import Image
+    from PySide6.QtWidgets import QFileDialog, QInputDialog
+
+    photo = tmp_path / "bark.png"
+    Image.new("RGB", (64, 48), (200, 30, 10)).save(photo)
+    glb = tmp_path / "leaf.glb"
+    choices = iter([(window.TEXTURE_CHOICES[2], True), (window.TEXTURE_CHOICES[1], True)])
+    monkeypatch.setattr(QInputDialog, "getItem", lambda *a, **k: next(choices))
+    monkeypatch.setattr(QFileDialog, "getSaveFileName", lambda *a, **k: (str(glb), ""))
+    monkeypatch.setattr(QFileDialog, "getOpenFileName", lambda *a, **k: (str(photo), ""))
+    window.export_mesh_dialog()  # an image file
+    (mesh,) = trimesh.load(glb, process=False).geometry.values()
+    image = np.asarray(mesh.visual.material.baseColorTexture.convert("RGB")).reshape(-1, 3)
+    assert np.all(np.abs(np.median(image, axis=0) - [200, 30, 10]) <= 12)  # the image's colour
+    window.export_mesh_dialog()  # none
+    (mesh,) = trimesh.load(glb, process=False).geometry.values()
+    assert mesh.visual.material.baseColorTexture is None and mesh.visual.uv is not None
+    assert not window.export_mesh(str(glb), texture=str(tmp_path / "missing.png"))  # an error box
+    window.last_error_box.close()
