@@ -148,6 +148,14 @@ def _neighbour_distances(points, which, lo, size, nx, ny, starts, order):
     return out
 
 
+@njit(cache=True, nogil=True)
+def bucket_span(low: float, high: float, lo: float, size: float, count: int) -> tuple[int, int]:
+    """The first and last bucket, along one axis, that the interval [low, high] overlaps."""
+    first = max(int(np.floor((low - lo) / size)), 0)
+    last = min(int(np.floor((high - lo) / size)), count - 1)
+    return first, last
+
+
 def near_edges(polygon: np.ndarray, xy: np.ndarray, radius: float) -> np.ndarray:
     """(n,) bool: which of the (n, 2) points lie within `radius` of an edge of the closed
     (b, 2) polygon; each edge visits only the buckets its box (grown by `radius`) covers."""
@@ -170,10 +178,8 @@ def _mark_near_edges(polygon, xy, radius, lo, size, nx, ny, starts, order, near)
         bx, by = polygon[(e + 1) % n, 0], polygon[(e + 1) % n, 1]
         ex, ey = bx - ax, by - ay
         length2 = ex * ex + ey * ey
-        x0 = max(int(np.floor((min(ax, bx) - radius - lo[0]) / size)), 0)
-        x1 = min(int(np.floor((max(ax, bx) + radius - lo[0]) / size)), nx - 1)
-        y0 = max(int(np.floor((min(ay, by) - radius - lo[1]) / size)), 0)
-        y1 = min(int(np.floor((max(ay, by) + radius - lo[1]) / size)), ny - 1)
+        x0, x1 = bucket_span(min(ax, bx) - radius, max(ax, bx) + radius, lo[0], size, nx)
+        y0, y1 = bucket_span(min(ay, by) - radius, max(ay, by) + radius, lo[1], size, ny)
         for cy in range(y0, y1 + 1):
             for cx in range(x0, x1 + 1):
                 k = cy * nx + cx

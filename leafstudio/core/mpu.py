@@ -23,7 +23,13 @@ import numpy as np
 from numba import njit
 from scipy.spatial import cKDTree
 
-from leafstudio.core.buckets import Buckets, bucket_points, kernel_array, neighbour_distances
+from leafstudio.core.buckets import (
+    Buckets,
+    bucket_points,
+    bucket_span,
+    kernel_array,
+    neighbour_distances,
+)
 from leafstudio.core.grid import Grid
 
 ALPHA = 0.75  # support radius = ALPHA * cell diagonal (Ohtake et al.)
@@ -163,13 +169,6 @@ class MPUImplicit:
 
 
 @njit(cache=True, nogil=True)
-def _bucket_range(c: float, reach: float, lo: float, size: float, count: int) -> tuple[int, int]:
-    first = max(int(np.floor((c - reach - lo) / size)), 0)
-    last = min(int(np.floor((c + reach - lo) / size)), count - 1)
-    return first, last
-
-
-@njit(cache=True, nogil=True)
 def _quotient_rule(big_d, big_n, grad_d, grad_n, hess_d, hess_n, degree):
     """g = N / D (eq. 1), ∇g = (∇N − g ∇D) / D and ∇²g = (∇²N − g ∇²D − ∇g ∇Dᵀ − ∇D ∇gᵀ) / D
     where D > 0 (zeros elsewhere), up to `degree`."""
@@ -246,8 +245,8 @@ def _blend_sums(xy, centers, radii, coef, lo, size, nx, ny, starts, order, degre
         scale = 1.0 / radii[c]
         reach = radii[c]
         a, b, e = coef[c, 0], coef[c, 1], coef[c, 2]
-        x0, x1 = _bucket_range(centers[c, 0], reach, lo[0], size, nx)
-        y0, y1 = _bucket_range(centers[c, 1], reach, lo[1], size, ny)
+        x0, x1 = bucket_span(centers[c, 0] - reach, centers[c, 0] + reach, lo[0], size, nx)
+        y0, y1 = bucket_span(centers[c, 1] - reach, centers[c, 1] + reach, lo[1], size, ny)
         for by in range(y0, y1 + 1):
             for bx in range(x0, x1 + 1):
                 k = by * nx + bx
@@ -326,8 +325,8 @@ def _ball_counts(points, centers, radii, lo, size, nx, ny, starts, order):
     counts = np.zeros(len(centers), np.int64)
     for c in range(len(centers)):
         r = radii[c]
-        x0, x1 = _bucket_range(centers[c, 0], r, lo[0], size, nx)
-        y0, y1 = _bucket_range(centers[c, 1], r, lo[1], size, ny)
+        x0, x1 = bucket_span(centers[c, 0] - r, centers[c, 0] + r, lo[0], size, nx)
+        y0, y1 = bucket_span(centers[c, 1] - r, centers[c, 1] + r, lo[1], size, ny)
         for by in range(y0, y1 + 1):
             for bx in range(x0, x1 + 1):
                 k = by * nx + bx
@@ -348,8 +347,8 @@ def _ball_fits(points, normals, centers, radii, lo, size, nx, ny, starts, order)
     for c in range(m):
         r = radii[c]
         cx, cy = centers[c, 0], centers[c, 1]
-        x0, x1 = _bucket_range(cx, r, lo[0], size, nx)
-        y0, y1 = _bucket_range(cy, r, lo[1], size, ny)
+        x0, x1 = bucket_span(cx - r, cx + r, lo[0], size, nx)
+        y0, y1 = bucket_span(cy - r, cy + r, lo[1], size, ny)
         wsum, px, py, nx_sum, ny_sum = 0.0, 0.0, 0.0, 0.0, 0.0
         for by in range(y0, y1 + 1):
             for bx in range(x0, x1 + 1):
