@@ -6,11 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import shapely
 
 from leafstudio.core.extract import BUDGET, extract_leaf, voxel_thinning
 from leafstudio.errors import LeafError
-from tests.test_extract import _outline_at, _scan, _surface
+from tests.test_extract import _scan, _surface, assert_outline_is_the_blades
 
 
 def _big_scan(n: int, seed: int = 3) -> tuple[np.ndarray, int]:
@@ -27,11 +26,7 @@ def big():
 
 def test_a_large_scan_is_thinned_and_its_outline_is_the_blade(big):
     points, n, found = big
-    known = shapely.Polygon(_outline_at(np.linspace(0, 2 * np.pi, 400, endpoint=False)))
-    got = shapely.Polygon(found.leaf.boundary[:, :2])
-    assert got.is_valid
-    assert known.symmetric_difference(got).area < 0.04 * known.area
-    assert shapely.hausdorff_distance(known.exterior, got.exterior) < 0.03
+    assert_outline_is_the_blades(found)
     assert len(found.blade) == len(points) and len(found.petiole) == len(points)
     assert found.blade[:n].mean() > 0.99
     assert not found.blade[n + n // 60 :].any()  # no outlier
