@@ -117,10 +117,6 @@ class Cells:
         Each cell's position along the guide contour (arc length from its start).
     perimeter : float
         The guide's length.
-    guide : (k, 2) float array
-        The guide contour, closed (not repeating its first vertex).
-    edge : (m,) int array
-        The guide's edge each cell's mean lies nearest (edge i joins vertices i and i + 1).
     """
 
     of_point: np.ndarray
@@ -130,8 +126,6 @@ class Cells:
     spread: np.ndarray
     t: np.ndarray
     perimeter: float
-    guide: np.ndarray
-    edge: np.ndarray
 
 
 def order_cells(xy: np.ndarray, z: np.ndarray, cell: float) -> Cells | None:
@@ -176,8 +170,8 @@ def order_cells(xy: np.ndarray, z: np.ndarray, cell: float) -> Cells | None:
     lengths = np.hypot(edges[:, 0], edges[:, 1])
     arc = np.concatenate([[0.0], np.cumsum(lengths)])
     nearest = cKDTree(guide).query(mean)[1]
-    t, edge = _project(mean, nearest, guide, edges, lengths, arc, reach=1)
-    return Cells(of_point, count, mean, mean_z, spread, t, float(arc[-1]), guide, edge)
+    t = _project(mean, nearest, guide, edges, lengths, arc, reach=1)
+    return Cells(of_point, count, mean, mean_z, spread, t, float(arc[-1]))
 
 
 def _guide(occupied: np.ndarray, most: int) -> np.ndarray | None:
@@ -237,20 +231,19 @@ def _project(
     lengths: np.ndarray,
     arc: np.ndarray,
     reach: int,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> np.ndarray:
     """Arc position along the closed `ring` of each point's nearest place on the edges within
-    `reach` of its vertex `near`, and that edge."""
+    `reach` of its vertex `near`."""
     t = np.empty(len(points))
-    edge = np.empty(len(points), np.int64)
     _project_kernel(
         kernel_array(points), np.asarray(near, dtype=np.int64), kernel_array(ring),
-        kernel_array(edges), kernel_array(lengths), kernel_array(arc), reach, t, edge,
+        kernel_array(edges), kernel_array(lengths), kernel_array(arc), reach, t,
     )  # fmt: skip
-    return t, edge
+    return t
 
 
 @njit(cache=True, nogil=True)
-def _project_kernel(points, near, ring, edges, lengths, arc, reach, t, edge):
+def _project_kernel(points, near, ring, edges, lengths, arc, reach, t):
     k = len(ring)
     for i in range(len(points)):
         best = np.inf
@@ -264,7 +257,6 @@ def _project_kernel(points, near, ring, edges, lengths, arc, reach, t, edge):
             if d < best:
                 best = d
                 t[i] = arc[e] + s * lengths[e]
-                edge[i] = e
 
 
 def point_order(cells: Cells, xy: np.ndarray) -> np.ndarray:
@@ -280,7 +272,7 @@ def point_order(cells: Cells, xy: np.ndarray) -> np.ndarray:
     edges = np.roll(chain, -1, axis=0) - chain
     lengths = np.hypot(edges[:, 0], edges[:, 1])
     arc = np.concatenate([[0.0], np.cumsum(lengths)])
-    t = _project(xy, rank[cells.of_point], chain, edges, lengths, arc, reach=2)[0]
+    t = _project(xy, rank[cells.of_point], chain, edges, lengths, arc, reach=2)
     return np.argsort(t, kind="stable")
 
 
