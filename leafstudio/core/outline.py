@@ -229,8 +229,7 @@ def _exact(points: np.ndarray, z: np.ndarray, sequence: np.ndarray, noise: Noise
         return None
     if isinstance(ring, np.ndarray):
         return Outline(points[ring], z[ring], noise, smoothed=False)
-    vertices = np.asarray(ring.exterior.coords)[:-1]  # repaired: some are no input points
-    return Outline(vertices, z[cKDTree(points).query(vertices)[1]], noise, smoothed=False)
+    return _polygon_outline(points, z, ring, noise)  # repaired: some are no input points
 
 
 def trace_outline(points: np.ndarray, z: np.ndarray | None = None, margin: str = "auto") -> Outline:
@@ -279,7 +278,7 @@ def trace_outline(points: np.ndarray, z: np.ndarray | None = None, margin: str =
     if cells is None and len(pts) <= HULL_MOST:
         hull = _by_concave_hull(pts, spacing)
         if hull is not None:
-            return _checked(_hull_outline(pts, zs, hull), scale)
+            return _checked(_polygon_outline(pts, zs, hull), scale)
     if cells is None:  # the points fill the leaf rather than trace its margin
         cell = max(scale / RASTER, spacing)
         polygon, heights = filled_outline(pts, zs, cell)
@@ -294,7 +293,7 @@ def trace_outline(points: np.ndarray, z: np.ndarray | None = None, margin: str =
         # by the tightest concave hull that passes by every point, else as a noisy one
         hull = _by_concave_hull(pts, spacing) if len(pts) <= HULL_MOST else None
         if hull is not None:
-            return _checked(_hull_outline(pts, zs, hull, noise), scale)
+            return _checked(_polygon_outline(pts, zs, hull, noise), scale)
     for wider in (1, 2, 4):  # a fold where the points are sparse: smoothed more
         polygon, heights, noise = mean_outline(cells, len(pts), scale, wider)
         if Polygon(polygon).is_valid:
@@ -322,10 +321,11 @@ def _by_concave_hull(points: np.ndarray, spacing: float) -> Polygon | None:
     return None
 
 
-def _hull_outline(
+def _polygon_outline(
     points: np.ndarray, z: np.ndarray, hull: Polygon, noise: Noise | None = None
 ) -> Outline:
-    """The Outline of a concave hull of the points (its vertices are input points)."""
+    """The Outline of a polygon whose vertices are (near) input points, such as their concave
+    hull: each vertex takes the height of the input point nearest it."""
     vertices = np.asarray(hull.exterior.coords)[:-1]
     heights = z[cKDTree(points).query(vertices)[1]]
     return Outline(vertices, heights, noise or Noise(0.0, 0.0), smoothed=False)
