@@ -155,6 +155,7 @@ def filled_cloud_note(xy: np.ndarray, polygon: np.ndarray, length: float) -> str
 
 CHECKED_POINTS = 4000  # a longer ordered boundary is checked on every k-th point
 CROSSING_SHARE = 0.05  # each side of a crossing encloses at least this share of the area
+LOOPS_FROM = 16  # fewer boundary points are taken as one loop
 JUMP = 8.0  # a step this many median steps long ends one loop of an ordered boundary
 
 
@@ -232,16 +233,17 @@ def check_boundary(
         )
 
 
-def boundary_loops(boundary: np.ndarray) -> list[np.ndarray] | None:
+def boundary_loops(boundary: np.ndarray, xy: np.ndarray | None = None) -> list[np.ndarray] | None:
     """The point indices of each closed loop of a boundary given in order as several loops (an
     outline and its holes, or separate outlines), the largest first; None for one loop or an
-    unordered cloud. A loop ends where the next point is far (JUMP median steps) from it."""
+    unordered cloud. A loop ends where the next point is far (JUMP median steps) from it. `xy`:
+    the boundary on its plane (_plane_coordinates), if the caller has it already."""
     import shapely
 
     points = np.asarray(boundary, dtype=float)
-    if len(points) < 16:
+    if len(points) < LOOPS_FROM:
         return None
-    xy = _plane_coordinates(points)[0]
+    xy = _plane_coordinates(points)[0] if xy is None else xy
     steps = np.linalg.norm(np.diff(xy, axis=0), axis=1)
     typical = float(np.median(steps))
     if typical <= 0:
@@ -267,10 +269,13 @@ def keep_outer_loop(boundary: np.ndarray) -> tuple[np.ndarray, list[str]]:
     a warning naming what was kept and what was dropped; otherwise the boundary as it is."""
     import shapely
 
-    loops = boundary_loops(boundary)
+    points = np.asarray(boundary, dtype=float)
+    if len(points) < LOOPS_FROM:
+        return boundary, []
+    xy = _plane_coordinates(points)[0]  # projected once, for the loops and the holes
+    loops = boundary_loops(points, xy)
     if loops is None:
         return boundary, []
-    xy = _plane_coordinates(np.asarray(boundary, dtype=float))[0]
     outer = shapely.Polygon(xy[loops[0][:: max(1, len(loops[0]) // CHECKED_POINTS)]]).buffer(0)
     holes = [i for i in loops[1:] if outer.contains(shapely.Point(xy[i].mean(axis=0)))]
     others = len(loops) - 1 - len(holes)
