@@ -17,6 +17,7 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial import cKDTree
 
 from leafstudio.core.plane import Frame
+from leafstudio.gui.midrib import Midrib
 from leafstudio.model import Leaf
 
 BOUNDARY = -1  # curve index of the boundary; veins are 0, 1, ...
@@ -263,16 +264,31 @@ class Sketch:
         """The sketch with a vein of (m, 3) control points appended (index len(veins) - 1)."""
         return replace(self, veins=(*self.veins, np.asarray(points, dtype=float).reshape(-1, 3)))
 
+    def with_heights(self, vein: int, heights: np.ndarray) -> Sketch:
+        """The sketch with all of a vein's control point heights set ((m,) array)."""
+        control = self.veins[vein].copy()
+        control[:, 2] = np.asarray(heights, dtype=float).reshape(len(control))
+        return self._with_curve(vein, control)
+
+    def vein_fractions(self, vein: int) -> np.ndarray:
+        """(m,) shares of vein `vein`'s length (along its curve, in the plane) at its control
+        points: 0 at the first, 1 at the last (all 0 for a vein of no length)."""
+        control = self.veins[vein]
+        curve = self.vein_curve(vein)[:, :2]
+        arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(curve, axis=0), axis=1))])
+        if len(control) < 2 or arc[-1] <= 0:
+            return np.zeros(len(control))
+        if len(curve) == (len(control) - 1) * SAMPLES_PER_SPAN + 1:  # control i is sample i*span
+            at = arc[::SAMPLES_PER_SPAN]
+        else:  # repeated control points were dropped from the curve: lengths along the polygon
+            steps = np.linalg.norm(np.diff(control[:, :2], axis=0), axis=1)
+            at = np.concatenate([[0.0], np.cumsum(steps)])
+        return at / at[-1]
+
     def with_profile(self, vein: int, start: float, end: float) -> Sketch:
         """The sketch with a whole vein's heights set at once: linear from `start` at its first
         point to `end` at its last, by length along the vein."""
-        control = self.veins[vein].copy()
-        arc = np.concatenate(
-            [[0.0], np.cumsum(np.linalg.norm(np.diff(control[:, :2], axis=0), axis=1))]
-        )
-        t = arc / arc[-1] if len(arc) > 1 and arc[-1] > 0 else np.zeros(len(control))
-        control[:, 2] = start + t * (end - start)
-        return self._with_curve(vein, control)
+        return self.with_heights(vein, start + self.vein_fractions(vein) * (end - start))
 
     def snap_to_vein(self, xy: np.ndarray, tolerance: float) -> np.ndarray | None:
         """The point (x, y, height) on the nearest vein curve within `tolerance` of plane point
@@ -299,23 +315,32 @@ class Sketch:
                 best, best_d = candidates[j], float(d[j])
         return None if best is None else np.asarray(best, dtype=float)
 
-    def mirrored(self, source_side: float) -> Sketch:
-        """The sketch made symmetric about the midrib (vein 1, its first and last points): the
-        half of the boundary on `source_side` (+1: left of the midrib, -1: right) is kept and
-        reflected onto the other, and each side vein there replaces its nearest counterpart on
-        the other side (or gains one). Unchanged without a midrib of two points or more."""
+    def midrib(self) -> Midrib | None:
+        """The midrib (vein 1) as mirror editing follows it, or None below two points."""
         if not self.veins or len(self.veins[0]) < 2:
-            return self
-        origin, tip = self.veins[0][0, :2], self.veins[0][-1, :2]
-        axis = (tip - origin) / max(float(np.linalg.norm(tip - origin)), 1e-300)
-        normal = np.array([-axis[1], axis[0]])
-        side = lambda p: (np.asarray(p)[..., :2] - origin) @ normal * source_side  # noqa: E731
+            return None
+        try:
+            return Midrib(self.vein_curve(0)[:, :2])
+        except ValueError:  # its points all in one place
+            return None
 
-        def reflect(points: np.ndarray) -> np.ndarray:
-            out = np.array(points, dtype=float)
-            offset = (out[:, :2] - origin) @ normal
-            out[:, :2] -= 2 * offset[:, None] * normal
-            return out
+    def midrib_side(self, xy: np.ndarray) -> float:
+        """Signed offset of plane point `xy` from the midrib curve (+ left, - right; 0 without
+        a midrib): the side an edit at `xy` was made on."""
+        midrib = self.midrib()
+        return 0.0 if midrib is None else float(midrib.offset(np.reshape(xy, (1, -1))[:, :2])[0])
+
+    def mirrored(self, source_side: float) -> Sketch:
+        """The sketch made symmetric about the midrib (vein 1, followed along its curve, see
+        gui/midrib.py): the half of the boundary on `source_side` (+1: left of the midrib,
+        -1: right) is kept and reflected onto the other, and each side vein there replaces its
+        nearest counterpart on the other side (or gains one). Unchanged without a midrib of
+        two points or more."""
+        midrib = self.midrib()
+        if midrib is None:
+            return self
+        side = lambda points: midrib.offset(points) * source_side  # noqa: E731
+        reflect = midrib.reflect
 
         boundary = self.boundary
         eps = 1e-9 * self.extent()
