@@ -233,10 +233,14 @@ def _write_atomically(path: Path, text: str | bytes) -> None:
 
 
 def project_dict(
-    leaf: Leaf, params: Params | None = None, sketch: dict[str, Any] | None = None
+    leaf: Leaf,
+    params: Params | None = None,
+    sketch: dict[str, Any] | None = None,
+    photo: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """The .leaf.json content for a leaf."""
-    return {
+    """The .leaf.json content for a leaf; `photo` is the photo it came from (assets/leafphoto.py),
+    kept only when given."""
+    data = {
         "format": FORMAT_NAME,
         "version": FORMAT_VERSION,
         "boundary": leaf.boundary.tolist(),
@@ -244,6 +248,9 @@ def project_dict(
         "params": params.to_dict() if params else {},
         "sketch": sketch or {},
     }
+    if photo is not None:
+        data["photo"] = photo
+    return data
 
 
 def save_leaf(
@@ -251,8 +258,10 @@ def save_leaf(
     path: str | os.PathLike,
     params: Params | None = None,
     sketch: dict[str, Any] | None = None,
+    photo: dict[str, Any] | None = None,
 ) -> None:
-    """Write a leaf as .leaf.json (with params and sketch), a labelled point list or PLY."""
+    """Write a leaf as .leaf.json (with params, sketch and the photo it came from), a labelled
+    point list or PLY."""
     path = Path(path)
     suffix = _suffix(path)
     labels = np.concatenate(
@@ -260,7 +269,7 @@ def save_leaf(
     ).astype(int)
     xyz = np.vstack([leaf.boundary, *leaf.veins])
     if suffix in (".leaf.json", ".json"):
-        _write_atomically(path, json.dumps(project_dict(leaf, params, sketch), indent=1))
+        _write_atomically(path, json.dumps(project_dict(leaf, params, sketch, photo), indent=1))
     elif suffix in POINT_SUFFIXES:
         sep = "," if suffix == ".csv" else " "
         lines = [sep.join(["x", "y", "z", "label"])]

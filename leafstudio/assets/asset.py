@@ -162,6 +162,14 @@ def leaf_plane(result: Result) -> LeafPlane:
     )
 
 
+def leaf_uvs(result: Result, xy: np.ndarray | None = None) -> np.ndarray:
+    """(n, 2) UVs of the result's mesh vertices (or of (n, 2) plane points `xy`): the map every
+    export writes (module docstring), also the app's."""
+    if xy is None:
+        xy = result.frame.to_plane(np.asarray(result.triangle_mesh.points, dtype=float))[0]
+    return UVMap.around(result.polygon)(xy)
+
+
 def leaf_asset(result: Result) -> MeshAsset:
     """The result's mesh with closed-form normals, UVs and its scalars (no texture yet)."""
     mesh = result.triangle_mesh
@@ -171,7 +179,7 @@ def leaf_asset(result: Result) -> MeshAsset:
     normals = surface_normals(result, xy, margin)
     faces = oriented(triangles_of(mesh).astype(np.int64), points, normals)
     data = {k: np.asarray(mesh.point_data[k], float) for k in SCALARS if k in mesh.point_data}
-    uv = UVMap.around(result.polygon)(xy)
+    uv = leaf_uvs(result, xy)
     return MeshAsset(points, faces, normals, uv, data, plane_normal=result.frame.normal,
                      plane_xy=xy, outline=result.polygon, plane_u=result.frame.u)  # fmt: skip
 

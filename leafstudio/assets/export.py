@@ -46,15 +46,9 @@ def photo_transform(leaf_path: str | os.PathLike) -> np.ndarray | None:
     photo = data.get("photo") if isinstance(data, dict) else None
     if photo is None:
         return None
-    try:
-        affine = np.asarray(photo["pixel_from_world"], dtype=float).reshape(2, 3)
-    except (TypeError, KeyError, ValueError):
-        raise LeafError('bad "photo" entry: "pixel_from_world" must be 2 rows of 3 numbers',
-                        str(leaf_path)) from None  # fmt: skip
-    if not np.all(np.isfinite(affine)) or abs(np.linalg.det(affine[:, :2])) == 0:
-        raise LeafError('bad "photo" entry: "pixel_from_world" is not an invertible map',
-                        str(leaf_path))  # fmt: skip
-    return affine
+    from leafstudio.assets.leafphoto import pixel_map
+
+    return pixel_map(photo, str(leaf_path))
 
 
 def _images(result: Any, texture: Any, gltf: bool) -> dict[str, Any]:
@@ -74,6 +68,12 @@ def _images(result: Any, texture: Any, gltf: bool) -> dict[str, Any]:
     if photo.pixel_from_world is not None and result is not None:
         return {"texture": tex.photo_texture(leaf_plane(result), image, photo.pixel_from_world)}
     return {"texture": tex.stretched_texture(image)}
+
+
+def base_color(result: Any, texture: Any = "auto") -> Any:
+    """The base-colour texture an export with this `texture` option writes for `result` (an
+    RGBA or RGB PIL image, row 0 at t = 1), or None for "none"; the app draws it on the mesh."""
+    return _images(result, texture, gltf=False).get("texture")
 
 
 def mesh_assets(

@@ -200,34 +200,29 @@ def _outline(blade: np.ndarray, points: int | None) -> np.ndarray:
     return out
 
 
-def _ends(outline: np.ndarray, blade: np.ndarray, base_end: str, joint: np.ndarray | None):
+def _ends(
+    outline: np.ndarray,
+    image: np.ndarray,
+    blade: np.ndarray,
+    base_end: str,
+    joint: np.ndarray | None,
+) -> tuple[int, int]:
     """Indices of the base and apex on the outline (see the module docstring)."""
+    from leafstudio.assets.leafends import VeinField, base_end_index, midline
+
     if joint is not None:
         base = int(np.argmin(np.linalg.norm(outline - joint, axis=1)))
+        apex = int(np.argmax(np.linalg.norm(outline - outline[base], axis=1)))
+        return base, apex
+    veins = VeinField(image, blade)
+    line = midline(outline, veins)
+    if base_end == "auto":
+        first = base_end_index(outline, line, veins)[0]
     else:
-        rows, cols = np.nonzero(blade)
-        pts = np.column_stack([cols, rows]).astype(float) + 0.5
-        centre = pts.mean(axis=0)
-        axis = np.linalg.eigh(np.cov((pts - centre).T))[1][:, -1]  # the long axis
-        along = (outline - centre) @ axis
-        ends = [int(np.argmin(along)), int(np.argmax(along))]
-        if base_end == "auto":
-            span = along.max() - along.min()
-            across = (outline - centre) @ np.array([-axis[1], axis[0]])
-            widths = []
-            for sign, end in ((-1, along.min()), (1, along.max())):
-                band = np.abs(along - (end - sign * END_BAND * span)) < 0.02 * span
-                widths.append(np.ptp(across[band]) if band.sum() > 1 else 0.0)
-            base = ends[int(np.argmax(widths))]
-        else:
-            direction = {
-                "left": (-1, 0),
-                "right": (1, 0),
-                "top": (0, -1),
-                "bottom": (0, 1),
-            }[base_end]
-            base = max(ends, key=lambda i: float(outline[i] @ direction))
-    apex = int(np.argmax(np.linalg.norm(outline - outline[base], axis=1)))
+        direction = {"left": (-1, 0), "right": (1, 0), "top": (0, -1), "bottom": (0, 1)}[base_end]
+        first = int(np.argmax(line.ends @ np.array(direction, float)))
+    base, apex = (int(np.argmin(np.linalg.norm(outline - end, axis=1)))
+                  for end in (line.ends[first], line.ends[1 - first]))  # fmt: skip
     return base, apex
 
 

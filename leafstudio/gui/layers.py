@@ -16,6 +16,7 @@ import contourpy
 import numpy as np
 import pyvista as pv
 
+from leafstudio.assets.asset import leaf_uvs
 from leafstudio.core.pipeline import Result
 from leafstudio.core.trianglemesh import polydata, vertex_normals
 
@@ -108,9 +109,17 @@ def _color_ranges(point_data: Mapping[str, np.ndarray]) -> dict[str, tuple[float
     return ranges
 
 
+def textured(uv: np.ndarray, make: Callable[[], pv.PolyData]) -> pv.PolyData:
+    """The dataset `make` returns, with (n, 2) texture coordinates (copied into VTK)."""
+    mesh = make()
+    mesh.active_texture_coordinates = np.array(uv, dtype=float)
+    return mesh
+
+
 def _mesh_piece(result: Result) -> Piece:
     mesh = result.triangle_mesh
     normals = vertex_normals(mesh.points, mesh.regular_faces)
+    uv = leaf_uvs(result)  # the exports' UVs: the Texture colouring maps their image
     style = {
         "smooth_shading": False,  # the normals above already shade smoothly (no main-thread work)
         "show_edges": False,
@@ -118,7 +127,7 @@ def _mesh_piece(result: Result) -> Piece:
         "specular": 0.3,
     }
     make = partial(polydata, mesh.points, mesh.regular_faces, mesh.point_data, normals)
-    return Piece("mesh", make, style, _color_ranges(mesh.point_data))
+    return Piece("mesh", partial(textured, uv, make), style, _color_ranges(mesh.point_data))
 
 
 def _input_pieces(result: Result) -> list[Piece]:

@@ -39,6 +39,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from leafstudio.assets.export import TEXTURED_SUFFIXES
 from leafstudio.demos import DEMOS, PAPER_K, demo
 from leafstudio.errors import LeafError
 from leafstudio.gui import explain, forms_dock
@@ -56,6 +57,7 @@ from leafstudio.gui.scans import (
 from leafstudio.gui.session import Framing, History, Session, State, describe, loaded_crossing
 from leafstudio.gui.sketch import SketchEditor
 from leafstudio.gui.sketch_model import Sketch
+from leafstudio.gui.textures import TEXTURE, TEXTURE_LABEL, texture_image, texture_key
 from leafstudio.gui.viewport import CAMERAS, Viewport
 from leafstudio.gui.worker import PIPELINE, Outcome, Worker
 from leafstudio.io import (
@@ -115,6 +117,8 @@ class MainWindow(QMainWindow):
     result_shown = Signal(object)  # Outcome, after it is on screen
     measurements_shown = Signal()  # the panel is complete (with the scan's distances, if any)
     failure_shown = Signal(str)
+    texture_shown = Signal()  # a new texture image is on the mesh (the Texture colouring)
+    notice_shown = Signal(str)  # a message that is not a failure (a project's photo is missing)
 
     def __init__(self, settings: QSettings, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -127,6 +131,7 @@ class MainWindow(QMainWindow):
         self._scan_due = 0  # the job reading the scan to open; another open supersedes it
         self._scan_shown: ScanData | None = None
         self._poisson_leaf: Leaf | None = None  # the leaf of the Poisson surface drawn or due
+        self._texture_due: tuple | None = None  # (job id, key) of the texture being made
 
         self.worker = Worker(self)
         self.tasks = self.worker  # side tasks run on the same worker (their own lane)
@@ -158,6 +163,7 @@ class MainWindow(QMainWindow):
         session.cleared.connect(self._on_cleared)
         session.sketch_shown.connect(self.editor.set_sketch)
         session.crossing.connect(self.editor.view.set_crossings)
+        session.noticed.connect(self._on_notice)
         session.history.changed.connect(self._on_history)
         self.panel.changed.connect(self._on_params)
         self.panel.released.connect(self._on_params_released)
@@ -193,13 +199,14 @@ class MainWindow(QMainWindow):
         self.coloring = QComboBox()
         for name, (label, _) in MESH_COLORINGS.items():
             self.coloring.addItem(f"Colour by {label}", name)
+        self.coloring.addItem(f"Show the {TEXTURE_LABEL}", TEXTURE)
         self.coloring.setToolTip(
-            "What the mesh's colours show: its height above the leaf's plane, or how it bends "
-            "(mean or Gaussian curvature; red bends one way, blue the other)."
+            "What the mesh's colours show: its height above the leaf's plane, how it bends "
+            "(mean or Gaussian curvature; red bends one way, blue the other), or the texture an "
+            "export writes (blade and veins, the photo the leaf came from, or the image chosen "
+            "in Export mesh) mapped through the mesh's UVs, as Blender shows it."
         )
-        self.coloring.currentIndexChanged.connect(
-            lambda row: self.viewport.set_mesh_coloring(self.coloring.itemData(row))
-        )
+        self.coloring.currentIndexChanged.connect(self._on_coloring)
         cameras = QHBoxLayout()
         for preset in CAMERAS:
             button = QPushButton(preset.capitalize())
@@ -456,13 +463,14 @@ class MainWindow(QMainWindow):
         if is_photo(path):
             return self.open_photo(path)
         try:
-            params, sketch = None, None
+            params, sketch, photo, photo_problem = None, None, None, ""
             if path.lower().endswith(".json"):
                 leaf, params, stored = load_project(path)
                 try:
                     sketch = Sketch.from_dict(stored) if stored else None
                 except (TypeError, ValueError, KeyError) as exc:
                     raise LeafError(f"bad sketch ({exc})", path) from None
+                photo, photo_problem = self._project_photo(path)
             else:
                 try:
                     leaf = load_leaf(path)
@@ -488,9 +496,24 @@ class MainWindow(QMainWindow):
             return False
         self._scan_due = None
         params = params or self.panel.params()
-        self.session.open_document(leaf, sketch, Path(path).name, params=params, path=path)
+        self.session.open_document(
+            leaf, sketch, Path(path).name, params=params, path=path, photo=photo
+        )
         self._add_recent(path)
+        if photo_problem:
+            self._on_notice(photo_problem)
         return True
+
+    @staticmethod
+    def _project_photo(path: str) -> tuple[object, str]:
+        """The photo a project remembers (assets/leafphoto.py) or None, and what is wrong with
+        its entry ("" if nothing): a bad entry costs the texture, never the leaf."""
+        from leafstudio.assets.leafphoto import project_photo
+
+        try:
+            return project_photo(path), ""
+        except LeafError as exc:
+            return None, f"{exc}: the leaf shows and exports the texture generated from it."
 
     def open_dialog(self) -> None:
         """File > Open."""
@@ -574,8 +597,9 @@ class MainWindow(QMainWindow):
             self.show_error("Nothing to save", "The sketch needs at least 3 boundary points.")
             return False
         sketch = state.sketch.to_dict() if state.sketch is not None else None
+        photo = state.photo.entry(path) if state.photo is not None else None
         try:
-            save_leaf(state.leaf, path, state.params, sketch)
+            save_leaf(state.leaf, path, state.params, sketch, photo)
         except (LeafError, OSError) as exc:
             self.show_error("Cannot save", str(exc))
             return False
@@ -583,53 +607,105 @@ class MainWindow(QMainWindow):
         self._add_recent(path)
         return True
 
-    def export_mesh(self, path: str, thickness: str | None = None, texture: str = "auto") -> bool:
+    def export_mesh(self, path: str, thickness: str | None = None, texture: object = None) -> bool:
         """Write the shown mesh to `path` (by its suffix, with normals, UVs and a texture where
         the format holds them); `thickness` ("0.01" of the length, or "0.4mm") makes it a closed
-        solid; `texture` is "auto" (generated from the leaf), "none" or an image file, mapped as
-        `reconstruct --texture` maps it (a photo the leaf's project came from lands on itself)."""
+        solid; `texture` is None (the leaf's: what the Texture colouring shows), "auto"
+        (generated from the leaf), "none", "photo" (the photo the leaf was found in) or an image
+        file, mapped as `reconstruct --texture` maps it (see _texture_option)."""
         if self.result is None:
             self.show_error("Nothing to export", "There is no reconstructed mesh yet.")
             return False
         try:
-            from leafstudio.assets.export import asset_options, check_asset_options
+            option = self._texture_option(texture)
+            solid = None
+            if thickness is not None:
+                from leafstudio.assets.solid import thickness_in_mesh_units
 
-            check_asset_options(texture, thickness, 0)
-            options = asset_options(
-                texture, thickness, 0, self.session.state.path or "", self.result.length
-            )
-            save_mesh(self.result, path, **options)
+                solid = thickness_in_mesh_units(thickness, self.result.length)
+            save_mesh(self.result, path, texture=option, thickness=solid)
         except (LeafError, OSError) as exc:
             self.show_error("Cannot export the mesh", str(exc))
             return False
         return True
 
+    def _texture_option(self, texture: object) -> object:
+        """assets.export's `texture` for a choice: None is the session's (Session.texture);
+        "photo" the photo the leaf was found in; an image is mapped through that photo's pixel
+        map when the leaf has one (as `reconstruct PROJECT --texture IMAGE`), else stretched over
+        the UV square. LeafError for a missing photo or an unreadable image."""
+        from leafstudio.assets.export import TEXTURES, PhotoTexture
+        from leafstudio.assets.texture import read_image
+
+        photo = self.session.state.photo
+        if texture is None:
+            return self.session.texture()
+        if isinstance(texture, PhotoTexture) or texture in TEXTURES:
+            return texture
+        if texture == "photo":
+            if photo is None or not photo.exists():
+                where = photo.image if photo is not None else self.session.state.title
+                raise LeafError("the photo this leaf was found in is missing", str(where))
+            return photo.texture()
+        read_image(str(texture))  # refused before any work
+        return PhotoTexture(str(texture), photo.pixel_from_world if photo is not None else None)
+
     def export_mesh_dialog(self) -> None:
-        """File > Export mesh."""
+        """File > Export mesh; the texture chosen is the one the Texture colouring shows next."""
         patterns = " ".join(f"*{s}" for s in MESH_SUFFIXES)
         path, _ = QFileDialog.getSaveFileName(self, "Export the mesh", "", f"Meshes ({patterns})")
         if not path:
             return
         path = path if Path(path).suffix else path + ".ply"
         texture = self._texture_choice(path)
-        if texture is not None:
-            self.export_mesh(path, texture=texture)
+        if texture is None:
+            return
+        try:
+            option = self._texture_option(texture)
+        except LeafError as exc:
+            self.show_error("Cannot export the mesh", str(exc))
+            return
+        textured = Path(path).suffix.lower() in TEXTURED_SUFFIXES
+        if self.export_mesh(path, texture=option) and textured:
+            self.session.chosen_texture = option
+            self._update_texture()
 
     TEXTURE_CHOICES = (
         "Generated from the leaf (blade and veins)",
         "None (UVs and a plain material)",
         "An image file… (mapped through the UVs)",
     )
+    PHOTO_CHOICE = "The photo the leaf was found in ({name})"
 
-    def _texture_choice(self, path: str) -> str | None:
-        """The texture for a format that carries one (.glb, .gltf, .obj): "auto", "none" or an
-        image path, as `reconstruct --texture` takes it; None if the user cancels."""
+    def _texture_choice(self, path: str) -> object:
+        """The texture for a format that carries one (.glb, .gltf, .obj): "auto", "none",
+        "photo" or an image path; None if the user cancels. The leaf's current texture is
+        offered first (a photo-opened leaf's photo)."""
         from PySide6.QtWidgets import QInputDialog
 
-        if Path(path).suffix.lower() not in (".glb", ".gltf", ".obj"):
+        from leafstudio.assets.export import PhotoTexture
+
+        if Path(path).suffix.lower() not in TEXTURED_SUFFIXES:
             return "auto"
+        choices = list(self.TEXTURE_CHOICES)
+        photo = self.session.state.photo
+        if photo is not None and photo.exists():
+            choices.append(self.PHOTO_CHOICE.format(name=photo.image.name))
+        current = self.session.texture()
+        if current == "none":
+            first = 1
+        elif (
+            isinstance(current, PhotoTexture)
+            and len(choices) > 3
+            and (photo is not None and Path(current.image) == photo.image)
+        ):
+            first = 3
+        elif current == "auto":
+            first = 0
+        else:
+            first = 2
         choice, ok = QInputDialog.getItem(
-            self, "Texture", "The mesh's texture:", list(self.TEXTURE_CHOICES), 0, False
+            self, "Texture", "The mesh's texture:", choices, first, False
         )
         if not ok:
             return None
@@ -637,6 +713,8 @@ class MainWindow(QMainWindow):
             return "auto"
         if choice == self.TEXTURE_CHOICES[1]:
             return "none"
+        if choice != self.TEXTURE_CHOICES[2]:
+            return "photo"
         image, _ = QFileDialog.getOpenFileName(
             self, "The texture image", "", "Images (*.png *.jpg *.jpeg *.tif *.tiff *.bmp *.webp)"
         )
@@ -708,10 +786,35 @@ class MainWindow(QMainWindow):
             self._poisson_leaf = None
             self.viewport.set_layer("poisson", [])
 
+    def _on_coloring(self, row: int) -> None:
+        """The Layers dock's colouring: a scalar, or the texture (made on the side lane)."""
+        self.viewport.set_mesh_coloring(self.coloring.itemData(row))
+        self._update_texture()
+
+    def _update_texture(self) -> None:
+        """Have the texture of the shown leaf made off the main thread when the mesh shows the
+        texture and the one on it is not the leaf's (gui/textures.py); it is drawn when done."""
+        if self.viewport.mesh_coloring != TEXTURE or self.result is None:
+            return
+        source = self.session.texture()
+        key = texture_key(self.result, source)
+        if key == self.viewport.texture_key or (self._texture_due and self._texture_due[1] == key):
+            return
+        job = self.worker.submit("texture", _task(texture_image, token=key), self.result, source)
+        self._texture_due = (job, key)
+
+    def _on_notice(self, message: str) -> None:
+        """A message that is not a failure (the leaf is still shown): a box and the status."""
+        self.status_text.setStyleSheet("color: #b00020")
+        self.status_text.setText(message)
+        self.show_error("Note", message)
+        self.notice_shown.emit(message)
+
     # --- session reports -----------------------------------------------------------------------
     def _on_state(self, state: State, reason: str) -> None:
         if reason in ("document", "undo", "fallback"):
             self.panel.set_params(state.params)
+            self._update_texture()
         if state.scan is not self._scan_shown:
             self._scan_shown = state.scan
             self.viewport.set_layer("scan", state.scan.pieces if state.scan is not None else [])
@@ -731,6 +834,8 @@ class MainWindow(QMainWindow):
         frame = self.session.view_frame() or result.frame
         how = None if framing is None else ("reset" if framing.reset else "refit")
         bounds = framing.bounds if framing is not None else None
+        if how == "reset" and self.viewport.texture_key is not None:  # another leaf's image
+            self.viewport.set_texture(None, None, draw=False)
         self.viewport.show_layers(outcome.layers, frame, bounds, how)
         outcome.timings["draw"] = time.perf_counter() - start
         self._stage_timer.stop()
@@ -741,6 +846,7 @@ class MainWindow(QMainWindow):
             job = _task(fidelity_sections, token=rid)
             self.worker.submit("fidelity", job, result.triangle_mesh, self.scan, result.length)
         self._update_poisson()
+        self._update_texture()
         self.result_shown.emit(outcome)
 
     def _on_session_failed(self, message: str, fell_back: bool) -> None:
@@ -784,10 +890,19 @@ class MainWindow(QMainWindow):
             self.session.open_document(leaf, None, name, params=params, path=token, scan=value)
             self._add_recent(token)
         elif kind == "photo" and job_id == self._scan_due:
+            from leafstudio.assets.leafphoto import LeafPhoto
+
             self._scan_due = None
             name, params = Path(token).name, self.panel.params()
-            self.session.open_document(value.leaf, None, name, params=params, path=token)
+            photo = LeafPhoto.of(value, token)  # its texture, kept when the project is saved
+            self.session.open_document(
+                value.leaf, None, name, params=params, path=token, photo=photo
+            )
             self._add_recent(token)
+        elif kind == "texture" and self._texture_due == (job_id, token):
+            self._texture_due = None
+            self.viewport.set_texture(value, token)
+            self.texture_shown.emit()
         elif kind == "fidelity" and self.session.accept_fidelity(token, value):
             self._show_measurements()
         elif kind == "poisson" and token is self._poisson_leaf:
@@ -811,6 +926,14 @@ class MainWindow(QMainWindow):
         elif kind == "poisson":
             self._poisson_leaf = None
             self.status_text.setText(self.status_text.text() + f" — Poisson failed: {message}")
+        elif kind == "texture" and self._texture_due and self._texture_due[0] == job_id:
+            self._texture_due = None
+            if self.session.texture() != "auto":  # an unreadable image: the generated texture
+                self.session.chosen_texture = "auto"
+                self._on_notice(f"Cannot show the texture: {message}. The generated one is shown.")
+                self._update_texture()
+            else:
+                self.status_text.setText(self.status_text.text() + f" — texture: {message}")
 
     def _show_timings(self, outcome: Outcome) -> None:
         ms = [f"{name} {1000 * t:.0f} ms" for name, t in outcome.timings.items()]

@@ -66,6 +66,7 @@ class State:
     title: str = "untitled"
     scan: Any = None  # gui.scans.ScanData
     serial: int = 0
+    photo: Any = None  # assets.leafphoto.LeafPhoto: the photo the leaf was found in
 
 
 @dataclass(frozen=True, eq=False)
@@ -172,6 +173,15 @@ def describe(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc} (details in the log)"
 
 
+def missing_photo_message(photo: Any) -> str:
+    """What the window says when a leaf's photo is not where its project says."""
+    return (
+        f"The photo this leaf was found in is missing ({photo.image}): the leaf shows and exports "
+        "the texture generated from it instead. Put the photo back and open the project again "
+        "to use it; saving keeps the photo's place in the project."
+    )
+
+
 def loaded_crossing(leaf: Leaf) -> np.ndarray | None:
     """Where a loaded leaf's boundary crosses itself, as a world point, when its points trace the
     outline in order (an unordered cloud is ordered by the pipeline, not read as given)."""
@@ -244,6 +254,8 @@ class Session:
         The sketch the editor should show, and whether to fit the view to it.
     crossing(ndarray)
         The sketch's boundary crossings, (c, 2) plane points (empty when it does not cross).
+    noticed(str)
+        A message for the user that is not a failure (a project's photo is missing).
     """
 
     def __init__(
@@ -262,6 +274,8 @@ class Session:
         self.message = ""
         self.state_changed, self.result_shown, self.failed = Event(), Event(), Event()
         self.cleared, self.sketch_shown, self.crossing = Event(), Event(), Event()
+        self.noticed = Event()
+        self.chosen_texture: str | None = None  # an image picked for the export, shown too
         self._serials = 0
         self._requested: dict[int, tuple[int, str]] = {}  # request id -> serial, reason
         self._framed: tuple[int, BladeBounds] | None = None
@@ -317,15 +331,18 @@ class Session:
         params: Params | None = None,
         path: str | None = None,
         scan: Any = None,
+        photo: Any = None,
         undoable: bool = True,
     ) -> int:
         """Make a new document current (framed when shown), as one undo step; returns the
         request id (0 when there is nothing to reconstruct). `undoable=False` starts a fresh
-        history instead and falls back to the current document if the new one fails."""
+        history instead and falls back to the current document if the new one fails. `photo`
+        (a LeafPhoto) is the photo the leaf was found in: its texture."""
         if sketch is not None and leaf is None:
             leaf = sketch.to_leaf()
         self._serials += 1
-        state = State(leaf, sketch, params or self.params, path, title, scan, serial=self._serials)
+        state = State(leaf, sketch, params or self.params, path, title, scan, self._serials, photo)
+        self.chosen_texture = None
         self._fallback = None
         if not undoable and leaf is not None and self.result is not None:
             h = self.history
@@ -341,7 +358,20 @@ class Session:
         request = self.last_id if self.leaf is not None else 0
         if self._fallback is not None:
             self._fallback.request = request
+        if photo is not None and not photo.exists():
+            self.noticed.emit(missing_photo_message(photo))
         return request
+
+    def texture(self) -> Any:
+        """What the leaf's texture is, in the view and in an export: an image picked for the
+        export, else the photo the leaf came from (while it is there), else "auto" (generated
+        from the leaf). Each as assets.export's `texture` option takes it."""
+        if self.chosen_texture is not None:
+            return self.chosen_texture
+        photo = self.state.photo
+        if photo is not None and photo.exists():
+            return photo.texture()
+        return "auto"
 
     def open_document(self, leaf: Leaf | None, sketch: Sketch | None, title: str, **kw: Any) -> int:
         """A file, demo or scan: a new document with a fresh history; if its first result

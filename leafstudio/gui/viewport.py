@@ -18,6 +18,7 @@ from pyvistaqt import QtInteractor
 from leafstudio.core.plane import Frame
 from leafstudio.gui.framing import BladeBounds, best_iso, fit_camera, view_direction
 from leafstudio.gui.layers import BOUNDARY_COLOR, LAYERS, MESH_COLORINGS, SCALAR_BARS, Piece
+from leafstudio.gui.textures import TEXTURE
 
 SIZED = ("point_size", "line_width")  # style keys in device pixels: scaled by the pixel ratio
 
@@ -44,6 +45,8 @@ class Viewport(QWidget):
             "probability": {SCALAR_BARS["probability"]},
         }
         self._mesh_piece: Piece | None = None
+        self._texture = None  # pyvista.Texture for the TEXTURE colouring, made on this thread
+        self.texture_key: tuple | None = None  # what the texture shows (gui/textures.py)
         self._names: dict[str, list[str]] = {key: [] for key, _, _ in LAYERS}
         self._frame = Frame(np.zeros(3), np.eye(3)[0], np.eye(3)[1], np.eye(3)[2])
         self._bounds: BladeBounds | None = None
@@ -149,7 +152,15 @@ class Viewport(QWidget):
 
     def _add(self, key: str, piece: Piece) -> None:
         style = dict(piece.style)
-        if key == "mesh":
+        if key == "mesh" and self.mesh_coloring == TEXTURE:
+            self._mesh_piece = piece
+            # white under the image (its colours as they are); the blade's until it is made.
+            # Opaque: alpha 0 outside the outline is dropped (glTF's MASK), never sorted.
+            plain = "white" if self._texture is not None else "#4e8032"
+            style.update(
+                show_edges=self.show_edges, texture=self._texture, color=plain, force_opaque=True
+            )
+        elif key == "mesh":
             self._mesh_piece = piece
             coloring = self.mesh_coloring if self.mesh_coloring in piece.ranges else "height"
             style.update(
@@ -175,6 +186,8 @@ class Viewport(QWidget):
                 clim = style.get("clim")
                 if clim is not None:
                     actor.mapper.scalar_range = clim
+            if "texture" in style:
+                actor.SetTexture(style["texture"])
             actor.prop.show_edges = bool(style.get("show_edges", actor.prop.show_edges))
             actor.SetVisibility(self.visible[key])
             return
@@ -234,6 +247,25 @@ class Viewport(QWidget):
             self._sync_scalar_bars()
             self.redraw()
 
+    def set_texture(self, image: np.ndarray | None, key: tuple | None, draw: bool = True) -> None:
+        """The image the TEXTURE colouring maps through the mesh's UVs ((h, w, 3 or 4) uint8,
+        row 0 at t = 1, as an export writes it; None: the blade's plain colour), and what it
+        shows (`key`, gui/textures.py); `draw=False` leaves the mesh to the next result."""
+        import pyvista as pv
+
+        self._texture = None if image is None else pv.Texture(np.ascontiguousarray(image))
+        if self._texture is not None:
+            self._texture.interpolate = True  # smooth texels, as renderers filter them
+        self.texture_key = key
+        if draw and self.mesh_coloring == TEXTURE:
+            self.set_mesh_coloring(TEXTURE)
+
+    def texture_actor_image(self) -> np.ndarray | None:
+        """The image on the mesh actor now (row 0 at t = 1), or None (for tests and checks)."""
+        actor = self.plotter.actors.get("mesh")
+        texture = actor.GetTexture() if actor is not None else None
+        return None if texture is None else np.asarray(texture.to_array())
+
     def set_edges(self, on: bool) -> None:
         """Show or hide the mesh's triangle edges."""
         self.show_edges = on
@@ -252,6 +284,8 @@ class Viewport(QWidget):
                 ][0]
             names = self.actor_names(key)
             wanted = self.visible[key] and bool(names)
+            if key == "mesh" and self.mesh_coloring == TEXTURE:
+                wanted = False  # an image, not a colour scale
             mapper = self.plotter.actors[names[0]].mapper if wanted else None
             if (
                 wanted
@@ -336,4 +370,5 @@ class Viewport(QWidget):
 
 def _style_key(style: dict) -> tuple:
     """A hashable summary of an actor's style, without the per-result colour range."""
-    return tuple(sorted((k, repr(v)) for k, v in style.items() if k not in ("clim", "show_edges")))
+    dropped = ("clim", "show_edges", "texture")  # set on the actor in place
+    return tuple(sorted((k, repr(v)) for k, v in style.items() if k not in dropped))

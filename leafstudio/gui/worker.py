@@ -39,6 +39,7 @@ LANES = {
     "photo": "side",
     "fidelity": "side",
     "poisson": "side",
+    "texture": "side",
 }
 
 
