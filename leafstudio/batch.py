@@ -108,11 +108,16 @@ class Settings:
         distances from the scan's blade points to the surface.
     format : str, default: "ply"
         Mesh format (one of FORMATS; "none" writes no meshes).
+    force : bool, default: False
+        With scans: a scan that does not look like one leaf (extract's plausibility check) is
+        reconstructed anyway, its problems the row's warnings, as `extract --force`; without it
+        the row fails with extract's line.
     """
 
     params: Params = field(default_factory=Params)
     scans: bool = False
     format: str = "ply"
+    force: bool = False
 
     def key(self) -> str:
         """A short hash of the settings: rows made with other settings are not resumed."""
@@ -122,6 +127,7 @@ class Settings:
                 "scans": self.scans,
                 "format": self.format,
                 "points": EXTRACT_POINTS,
+                "force": self.force,
             },
             sort_keys=True,
         )
@@ -297,17 +303,21 @@ def _traits(result: Any) -> dict[str, Any]:
 
 
 def _reconstruct(job: Job) -> dict[str, Any]:
-    """Read, (extract,) reconstruct, measure and write one input; raises on bad input."""
+    """Read, (extract,) reconstruct, measure and write one input; raises on bad input. It fails
+    and warns as `leafstudio extract` (for a scan) then `reconstruct` would."""
     from leafstudio.core.pipeline import Pipeline
+    from leafstudio.core.plausibility import leaf_warnings
 
     settings = job.settings
     scan = extraction = None
+    notes: list[str] = []
     if settings.scans:
-        from leafstudio.core.extract import extract_leaf
+        from leafstudio.core.extract import check_scan, extract_leaf
         from leafstudio.scan import read_scan
 
         scan = read_scan(job.path)
         try:
+            notes += check_scan(scan, force=settings.force)
             extraction = extract_leaf(scan, "auto", EXTRACT_POINTS)
         except LeafError as exc:
             raise LeafError(exc.problem, job.input) from None
@@ -320,6 +330,7 @@ def _reconstruct(job: Job) -> dict[str, Any]:
         result = Pipeline(leaf).run(settings.params)
     except LeafError as exc:
         raise LeafError(exc.problem, job.input) from None
+    notes += [*leaf_warnings(leaf), *result.warnings]
     row: dict[str, Any] = {"k": result.chosen_k, "grid": settings.params.grid, **_traits(result)}
     if scan is not None and extraction is not None:
         from leafstudio.core.fidelity import scan_distances
@@ -340,7 +351,7 @@ def _reconstruct(job: Job) -> dict[str, Any]:
         save_mesh(result.triangle_mesh, Path(job.out_dir) / job.mesh)
         row["mesh"] = job.mesh
         row["mesh_sha256"] = file_hash(Path(job.out_dir) / job.mesh)  # --resume checks it
-    row["warnings"] = "; ".join(result.warnings) or None
+    row["warnings"] = "; ".join(notes) or None
     return row
 
 
@@ -731,6 +742,7 @@ class Batch:
         scheduler: str | None = None,
         resume: bool = False,
         fail_fast: bool = False,
+        force: bool = False,
     ) -> None:
         if format not in FORMATS:
             raise LeafError(f"unknown mesh format {format!r}; use one of {', '.join(FORMATS)}")
@@ -746,7 +758,7 @@ class Batch:
         self.out_dir = Path(out_dir)
         if self.out_dir.exists() and not self.out_dir.is_dir():
             raise LeafError("is a file, not a folder", str(self.out_dir))
-        self.settings = Settings(params or Params(), scans, format)
+        self.settings = Settings(params or Params(), scans, format, force)
         self.table = TraitTable(traits if traits else self.out_dir / DEFAULT_TABLE, scans)
         if self.table.is_foreign():  # never write the table over an input or a user's file
             raise LeafError(
@@ -871,7 +883,8 @@ def batch(
     **options
         scans (bool), traits (table path: .csv, .json, .parquet; default OUT_DIR/traits.csv),
         format ("ply", "glb", "obj", "vtp", "none"), jobs (worker processes, default the
-        cores), scheduler (a Dask scheduler address, or "local"), resume, fail_fast.
+        cores), scheduler (a Dask scheduler address, or "local"), resume, fail_fast, force
+        (scans that do not look like one leaf are reconstructed anyway, with warnings).
 
     Returns
     -------
@@ -927,6 +940,7 @@ def command(args: Any) -> int:
         scheduler=args.scheduler,
         resume=args.resume,
         fail_fast=args.fail_fast,
+        force=args.force,
     )
     start = time.perf_counter()
     bar = tqdm(

@@ -255,6 +255,12 @@ def _add_batch_parser(sub: argparse._SubParsersAction) -> None:
     )
     bat.add_argument("--resume", action="store_true", help="skip inputs already done")
     bat.add_argument("--fail-fast", action="store_true", help="stop at the first failure")
+    bat.add_argument(
+        "--force",
+        action="store_true",
+        help="with --scans: go on with a cloud that does not look like one leaf (as extract "
+        "--force: its problems become the row's warnings)",
+    )
 
 
 def _params_for(args: argparse.Namespace, base: object | None):
@@ -434,16 +440,14 @@ def _gui(args: argparse.Namespace) -> int:
 
 
 def _extract(args: argparse.Namespace) -> int:
-    from leafstudio.core.extract import BUDGET, extract_leaf, voxel_thinning
-    from leafstudio.core.plausibility import check_leaf_like
+    from leafstudio.core.extract import check_scan, extract_leaf
     from leafstudio.io import check_leaf_output, save_leaf
     from leafstudio.scan import read_scan
 
     check_leaf_output(args.output, [args.scan])
     scan = read_scan(args.scan)
     try:
-        # a large scan is judged by its voxel centroids, as extract sees it (linear time)
-        for note in check_leaf_like(voxel_thinning(scan, BUDGET)[0], force=args.force):
+        for note in check_scan(scan, force=args.force):
             log.warning(f"{args.scan}: {note}")
         found = extract_leaf(scan, args.base_end, args.points)
     except LeafError as exc:

@@ -20,7 +20,15 @@ import numpy as np
 import pytest
 
 import leafstudio as ls
-from leafstudio.batch import Batch, TraitTable, find_inputs, remove_temporaries
+from leafstudio.batch import (
+    Batch,
+    Settings,
+    TraitTable,
+    find_inputs,
+    plan,
+    remove_temporaries,
+    run_job,
+)
 from leafstudio.cli import main
 from leafstudio.errors import LeafError
 
@@ -371,3 +379,56 @@ def test_the_trait_table_never_replaces_an_input_or_a_users_file(tmp_path, leave
         ["batch", str(leaves), "-o", str(out), "--traits", str(own)], capsys
     )
     assert own.read_text() == "x,y,z\n1,2,3\n"
+
+
+def _warned(err: str, source: str) -> list[str]:
+    """The warnings `leafstudio` printed about `source`, without their prefix."""
+    lead = f"leafstudio: warning: {source}: "
+    return [line[len(lead) :] for line in err.splitlines() if line.startswith(lead)]
+
+
+def test_a_scan_row_fails_and_warns_as_extract_and_reconstruct_do(tmp_path, scans, capsys):
+    """Issue 15: `batch --scans` did not run extract's plausibility check (check_leaf_like), so
+    a cloud of two leaves became an `ok` row. Its row now fails with extract's line, and with
+    --force it is reconstructed, its warnings those of `extract --force` then `reconstruct`."""
+    inputs = tmp_path / "in"
+    inputs.mkdir()
+    good = (scans / "scan0.txt").read_bytes()
+    (inputs / "good.txt").write_bytes(good)
+    xyz = np.loadtxt(scans / "scan1.txt")
+    two = inputs / "two.txt"
+    np.savetxt(two, np.vstack([xyz, xyz + [3 * np.ptp(xyz[:, 0]), 0.0, 0.0]]), fmt="%.6f")
+    leaf = tmp_path / "two.leaf.json"
+    refused = _message(["extract", str(two), "-o", str(leaf)], capsys)
+    assert "does not look like one leaf" in refused
+    argv = ["batch", str(inputs), "--scans", "--grid", GRID, "--jobs", "1", "-o"]
+    assert main([*argv, str(tmp_path / "out")]) == 1
+    assert refused in capsys.readouterr().err
+    rows = {Path(r["input"]).name: r for r in _rows(tmp_path / "out" / "traits.csv")}
+    assert rows["good.txt"]["status"] == "ok" and rows["good.txt"]["warnings"] == ""
+    assert rows["two.txt"]["status"] == "failed"
+    assert f"leafstudio: error: {rows['two.txt']['error']}" == refused
+    # --force: the problems become the row's warnings, followed by reconstruct's
+    assert main(["extract", str(two), "-o", str(leaf), "--force"]) == 0
+    warned = _warned(capsys.readouterr().err, str(two))
+    assert main(["reconstruct", str(leaf), "-o", str(tmp_path / "two.ply"), "--grid", GRID]) == 0
+    warned += _warned(capsys.readouterr().err, str(leaf))
+    assert any("not one leaf" in w for w in warned)
+    assert main([*argv, str(tmp_path / "forced"), "--force"]) == 0
+    rows = {Path(r["input"]).name: r for r in _rows(tmp_path / "forced" / "traits.csv")}
+    assert rows["two.txt"]["status"] == "ok" and rows["two.txt"]["warnings"] == "; ".join(warned)
+
+
+def test_a_leaf_row_warns_as_reconstruct_does(tmp_path, capsys):
+    """A leaf whose vein lies far off the boundary's plane: reconstruct warns about it
+    (plausibility.leaf_warnings), and so does the batch row."""
+    demo = ls.demo("nested")
+    far = demo.veins[0] + [0.0, 0.0, 5 * np.ptp(demo.boundary[:, 0])]
+    path = tmp_path / "far.csv"
+    ls.save_leaf(ls.Leaf(boundary=demo.boundary, veins=[far, *demo.veins[1:]]), path)
+    assert main(["reconstruct", str(path), "-o", str(tmp_path / "far.ply"), "--grid", GRID]) == 0
+    warned = _warned(capsys.readouterr().err, str(path))
+    assert any("from the boundary's plane" in w for w in warned)
+    settings = Settings(ls.Params(grid=int(GRID)))
+    row = run_job(plan([path], tmp_path / "out", settings)[0])
+    assert row["status"] == "ok" and row["warnings"] == "; ".join(warned)

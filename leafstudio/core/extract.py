@@ -346,6 +346,15 @@ def extract_leaf(
     )
 
 
+def check_scan(points: np.ndarray, force: bool = False) -> list[str]:
+    """plausibility.check_leaf_like on a scan as extract_leaf sees it (a large one by its voxel
+    centroids: linear time). `leafstudio extract` and `batch --scans` both run it first, so they
+    refuse the same scans with the same line (or, with `force`, return the same warnings)."""
+    from leafstudio.core.plausibility import check_leaf_like
+
+    return check_leaf_like(voxel_thinning(points, BUDGET)[0], force=force)
+
+
 def voxel_thinning(points: np.ndarray, budget: int) -> tuple[np.ndarray, np.ndarray | None, float]:
     """Between budget / 2 and `budget` points standing for (n, 3) `points`: the centroids of the
     occupied cubes of a size tried until their count falls in that range, each point's cube
