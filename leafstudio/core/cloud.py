@@ -30,6 +30,7 @@ from leafstudio.core.buckets import bounds, kernel_array
 NOISE_SAMPLE = 20000  # points whose prediction misses estimate the noise, at most
 MAX_GROWTH = 8  # the occupied cells are grown by at most this many to close round the inside
 GUIDE_SMOOTHING = 3  # the guide contour is averaged over this many vertices either side
+FILLED_KEEP = 0.9  # the region a filled cloud covers holds at least this share of its points
 MAX_BINS = 3000  # the mean outline's vertices, at most
 OUTLINE_STEP = 1 / 1000  # the mean outline's vertex spacing, as a fraction of the cloud's size
 SMOOTH_NOISE = 4.0  # the smoothing window's half width: this many noise σ ...
@@ -206,17 +207,22 @@ def filled_outline(xy: np.ndarray, z: np.ndarray, cell: float) -> tuple[np.ndarr
     """(k, 2) outline and (k,) heights of the region a cloud fills: for points that cover the
     leaf rather than trace its margin (order_cells finds no inside). The occupied cells of side
     `cell`, closed by two cells, their largest filled part's contour; heights of the nearest
-    points."""
+    points. The cell doubles while that part holds under FILLED_KEEP of the points (a scan's
+    stripes lie farther apart than its points along them)."""
     xy = kernel_array(xy)
     lo, hi = bounds(xy)
-    nx, ny = (np.floor((hi - lo) / cell).astype(np.int64) + 1).tolist()
-    ix = np.minimum(((xy[:, 0] - lo[0]) / cell).astype(np.int64), nx - 1)
-    iy = np.minimum(((xy[:, 1] - lo[1]) / cell).astype(np.int64), ny - 1)
-    occupied = np.zeros((ny + 6, nx + 6), dtype=bool)
-    occupied[iy + 3, ix + 3] = True
-    region = ndimage.binary_fill_holes(ndimage.binary_closing(occupied, iterations=2))
-    labels = ndimage.label(region)[0]
-    biggest = int(np.argmax(np.bincount(labels.ravel())[1:])) + 1
+    while True:
+        nx, ny = (np.floor((hi - lo) / cell).astype(np.int64) + 1).tolist()
+        ix = np.minimum(((xy[:, 0] - lo[0]) / cell).astype(np.int64), nx - 1)
+        iy = np.minimum(((xy[:, 1] - lo[1]) / cell).astype(np.int64), ny - 1)
+        occupied = np.zeros((ny + 6, nx + 6), dtype=bool)
+        occupied[iy + 3, ix + 3] = True
+        region = ndimage.binary_fill_holes(ndimage.binary_closing(occupied, iterations=2))
+        labels = ndimage.label(region)[0]
+        biggest = int(np.argmax(np.bincount(labels.ravel())[1:])) + 1
+        if np.mean(labels[iy + 3, ix + 3] == biggest) >= FILLED_KEEP or max(nx, ny) <= 16:
+            break
+        cell *= 2
     line = max(contourpy.contour_generator(z=(labels == biggest).astype(float)).lines(0.5), key=len)
     line = line[:-1] if np.allclose(line[0], line[-1]) else line
     outline = lo + (line - 3 + 0.5) * cell

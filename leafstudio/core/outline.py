@@ -29,6 +29,7 @@ from leafstudio.core.cloud import (
     order_cells,
     point_order,
 )
+from leafstudio.core.plausibility import ZIGZAG
 from leafstudio.errors import LeafError
 
 MAX_OUTLINE_VERTICES = 3000  # a denser outline is thinned to about this many (thin_outline)
@@ -36,6 +37,7 @@ ORDERED_MEAN_EDGE = 4.0  # given order: mean edge at most this many nearest-neig
 CLEAN_NOISE = 2e-5  # estimated noise (σ) under this fraction of the size: a clean boundary
 RASTER = 512  # the cloud's cells: at least 1/RASTER of its size
 HULL_MOST = 5000  # a clean cloud the cells cannot trace is tried by concave hulls up to this
+SNAKE = (2.0, 0.25)  # a concave hull this much longer round this share of the area: see _snakes
 _HULL_RATIOS = (0.0, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0)
 
 
@@ -310,15 +312,29 @@ def trace_outline(points: np.ndarray, z: np.ndarray | None = None, margin: str =
 
 def _by_concave_hull(points: np.ndarray, spacing: float) -> Polygon | None:
     """The tightest valid concave hull (shapely) of the points whose outline passes within 3
-    spacings of every one (buckets.near_edges, linear); None if none does."""
+    spacings of every one (buckets.near_edges, linear); None if none does. A hull that snakes
+    through points filling an area (a whole scan given as the boundary: twice the convex hull's
+    perimeter round a quarter of its area, SNAKE) traces no margin and is not taken."""
     cloud = MultiPoint(points)
+    convex = shapely.convex_hull(cloud)
     for ratio in _HULL_RATIOS:
         poly = _largest_polygon(shapely.concave_hull(cloud, ratio=ratio))
-        if poly is None or not poly.is_valid:
+        if poly is None or not poly.is_valid or _snakes(poly, convex):
             continue
         if near_edges(np.asarray(poly.exterior.coords)[:-1], points, 3 * spacing).all():
             return poly
     return None
+
+
+def _snakes(poly: Polygon, convex: shapely.Geometry) -> bool:
+    """True for a polygon that winds through a cloud rather than round it: ZIGZAG times the
+    convex hull's perimeter, or SNAKE[0] times it round SNAKE[1] of its area (a leaf's outline,
+    teeth, lobes and sinuses included, is under 1.3 times the perimeter round over half the area;
+    the real scans' tightest hulls 3 to 12 times round 5% to 35%)."""
+    longer, smaller = SNAKE
+    if poly.length > ZIGZAG * convex.length:
+        return True
+    return poly.length > longer * convex.length and poly.area < smaller * convex.area
 
 
 def _polygon_outline(

@@ -43,7 +43,11 @@ from leafstudio.core.outline import (
     trace_outline,
 )
 from leafstudio.core.plane import Frame, fit_frame
-from leafstudio.core.plausibility import check_boundary, filled_cloud_note, keep_outer_loop
+from leafstudio.core.plausibility import (
+    check_boundary,
+    check_not_a_surface,
+    keep_outer_loop,
+)
 from leafstudio.core.surface import HeightSurface, fit_surface
 from leafstudio.core.trianglemesh import TriangleMesh
 from leafstudio.core.units import ScaledSurface, Units
@@ -182,6 +186,7 @@ def _frame_stage(
     leaf: Leaf, margin: str = "auto", units: Units | None = None
 ) -> tuple[FrameStage, list[str]]:
     scale, offset = (units.scale, units.offset) if units is not None else (1.0, None)
+    check_not_a_surface(leaf.boundary)  # a whole scan given as the boundary: an error
     check_boundary(leaf.boundary, scale, offset)  # a figure eight would lose a lobe: an error
     boundary, notes = keep_outer_loop(leaf.boundary)  # holes, separate loops: dropped, and said
     if notes:
@@ -192,9 +197,6 @@ def _frame_stage(
     kept_vertices = thin_outline(outline.polygon)  # a few thousand vertices at most
     polygon = outline.polygon[kept_vertices]
     length = float(np.ptp(polygon[:, 0]))
-    filled = filled_cloud_note(xy, polygon, length)  # a whole scan given as the boundary
-    if filled:
-        notes = [*notes, filled]
     if np.max(np.abs(boundary_h)) <= PLANAR * length:  # planar: no base
         polygon_h = np.zeros(len(polygon))
     else:
