@@ -927,8 +927,7 @@ def command(args: Any) -> int:
 
     from tqdm import tqdm
 
-    changes = {"k": args.k, "grid": args.grid}
-    params = Params().with_(**{k: v for k, v in changes.items() if v is not None})
+    params = args.params  # from the parameter flags (cli._add_param_flags)
     run = batch(
         args.inputs,
         params,

@@ -14,11 +14,14 @@ import traceback
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from leafstudio.errors import LeafError, error_line, shorten
 
+if TYPE_CHECKING:
+    from leafstudio.paramspec import Param
+
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT = 0, 1, 2
-SEED_MAX = 2**32 - 1
 log = logging.getLogger("leafstudio")
 
 
@@ -56,49 +59,45 @@ def _whole(text: str, low: int, high: int, what: str = "") -> int:
     return value
 
 
-def _k_value(text: str) -> int | str:
-    if text == "auto":
-        return text
-    try:
-        return _whole(text, -(10**9), 10**9, "K")  # Params says which range
-    except argparse.ArgumentTypeError:
-        raise argparse.ArgumentTypeError(
-            f"K must be a whole number or 'auto', got {shorten(text)!r}"
-        ) from None
-
-
-def _grid_value(text: str) -> int:
-    return _whole(text, -(10**9), 10**9)  # Params says which range
-
-
-def _seed_value(text: str) -> int:
-    return _whole(text, 0, SEED_MAX)
-
-
 def _points_value(text: str) -> int:
     return _whole(text, 8, 100_000)
+
+
+def _param_value(param: Param):
+    """The argparse `type` of a parameter's flag: its text read and checked as Params does."""
+
+    def value(text: str) -> object:
+        try:
+            return param.parse(text)
+        except LeafError as exc:
+            raise argparse.ArgumentTypeError(exc.problem) from None
+
+    return value
+
+
+def _add_param_flags(parser: argparse.ArgumentParser) -> None:
+    """A flag for each reconstruction parameter, as Params declares it (model.PARAMS): unset
+    (None) unless given, so that a project's saved value stands."""
+    from leafstudio.model import PARAMS
+    from leafstudio.paramspec import Choice, Switch
+
+    group = parser.add_argument_group("reconstruction parameters")
+    for name, param in PARAMS.items():
+        options = {"dest": name, "default": None, "help": param.help_text().replace("%", "%%")}
+        if isinstance(param, Switch):
+            group.add_argument(param.flag, action=argparse.BooleanOptionalAction, **options)
+        elif isinstance(param, Choice):
+            group.add_argument(param.flag, choices=param.choices, **options)
+        else:
+            group.add_argument(
+                param.flag, type=_param_value(param), metavar=param.metavar, **options
+            )
 
 
 def _add_run_options(parser: argparse.ArgumentParser) -> None:
     """The leaf input and reconstruction settings shared by reconstruct, measure and compare."""
     parser.add_argument("input", help="leaf file: .csv, .txt, .xyz, .ply or .leaf.json")
-    parser.add_argument(
-        "--k", type=_k_value, default=None, help="number of Gaussians, or auto (default 3)"
-    )
-    parser.add_argument(
-        "--grid", type=_grid_value, default=None, help="grid nodes along the leaf (default 128)"
-    )
-    parser.add_argument("--mesher", choices=("conforming", "bpa"), default=None)
-    parser.add_argument(
-        "--margin",
-        choices=("auto", "exact", "smooth"),
-        default=None,
-        help="margin through the boundary points (exact), through their smoothed mean (smooth), "
-        "or chosen by their measured noise (auto, the default)",
-    )
-    parser.add_argument(
-        "--seed", type=_seed_value, default=None, help=f"random seed, 0 to {SEED_MAX} (default 0)"
-    )
+    _add_param_flags(parser)
     parser.add_argument(
         "--vein", action="append", default=[], metavar="FILE", help="a vein file (repeatable)"
     )
@@ -245,10 +244,7 @@ def _add_batch_parser(sub: argparse._SubParsersAction) -> None:
         "--traits", metavar="FILE", help=".csv, .json or .parquet (default OUTDIR/traits.csv)"
     )
     bat.add_argument("--format", choices=("ply", "glb", "obj", "vtp", "none"), default="ply")
-    bat.add_argument(
-        "--k", type=_k_value, default=None, help="number of Gaussians, or auto (default 3)"
-    )
-    bat.add_argument("--grid", type=int, default=None, help="grid nodes along the leaf")
+    _add_param_flags(bat)
     bat.add_argument("--jobs", type=int, default=None, help="worker processes (default: cores)")
     bat.add_argument(
         "--scheduler", metavar="ADDRESS", help="a Dask scheduler (tcp://HOST:PORT), or local"
@@ -264,10 +260,11 @@ def _add_batch_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def _params_for(args: argparse.Namespace, base: object | None):
-    from leafstudio.model import Params
+    """`base` (Params, else the defaults) with the parameter flags given (_add_param_flags)."""
+    from leafstudio.model import PARAMS, Params
 
     params = base if isinstance(base, Params) else Params()
-    changes = {name: getattr(args, name) for name in ("k", "grid", "mesher", "seed", "margin")}
+    changes = {name: getattr(args, name) for name in PARAMS}
     return params.with_(**{k: v for k, v in changes.items() if v is not None})
 
 
@@ -276,8 +273,7 @@ def _settings(args: argparse.Namespace):
     from leafstudio.io import load_project
 
     saved = load_project(args.input)[1] if args.input.lower().endswith(".json") else None
-    _params_for(args, None)  # a bad flag (--grid 3) is the command line's, not the input's
-    try:
+    try:  # each flag is checked as it is read (_param_value): a bad one is the command line's
         return _params_for(args, saved)
     except LeafError as exc:
         raise LeafError(exc.problem, args.input) from None
@@ -466,6 +462,7 @@ def _extract(args: argparse.Namespace) -> int:
 def _batch(args: argparse.Namespace) -> int:
     from leafstudio.batch import command
 
+    args.params = _params_for(args, None)
     return command(args)
 
 

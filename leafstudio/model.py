@@ -8,41 +8,18 @@ from typing import Any
 import numpy as np
 
 from leafstudio.errors import LeafError
+from leafstudio.paramspec import Choice, Param, Real, Switch, Whole, declared, numpy_doc
+from leafstudio.paramspec import short as _short
 
 MESHERS = ("conforming", "bpa")
 MARGINS = ("auto", "exact", "smooth")  # Params.margin (core/outline.py)
 K_MAX = 64
 K_AUTO = "auto"  # Params.k: choose K by BIC (core/autok.py)
+K_AUTO_MAX = 12  # auto chooses K from 1 to this; the panel's K slider covers the same
 GRID_MIN, GRID_MAX = 8, 2048
 SEED_MAX = 2**32 - 1  # numpy's legacy seeds and most tools take 32 bits
 COORDINATE_LIMIT = 1e300  # larger coordinates overflow a leaf's extent (the pipeline runs at unit
 SMALLEST_EXTENT = 1e-100  # size, core/units.py); a smaller leaf's curvatures (1/size²) overflow
-
-
-def _short(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 40 else f"{text[:30]}… ({len(text)} characters)"
-
-
-def _whole_number(value: Any, what: str, low: int, high: int) -> int:
-    """`value` as an int in [low, high]; a bool, a float (even 100.0) or a string is refused."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
-        raise LeafError(f"{what} must be a whole number, got {_short(value)}")
-    if not low <= value <= high:
-        raise LeafError(f"{what} must be between {low} and {high}, got {_short(value)}")
-    return int(value)
-
-
-def _real_number(value: Any, what: str, low: float, high: float) -> float:
-    """`value` as a finite float in [low, high]; a bool or a string is refused."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)):
-        raise LeafError(f"{what} must be a number, got {_short(value)}")
-    if isinstance(value, (complex, np.complexfloating)):
-        raise LeafError(f"{what} must be a real number, got {_short(value)}")
-    number = float(value)
-    if not low <= number <= high:  # NaN fails this too
-        raise LeafError(f"{what} must be between {low:g} and {high:g}, got {_short(value)}")
-    return number
 
 
 def _as_points(values: Any, what: str) -> np.ndarray:
@@ -127,68 +104,79 @@ class Leaf:
 class Params:
     """Reconstruction settings, checked on creation.
 
-    Parameters
-    ----------
-    k : int or "auto", default: 3
-        Number of Gaussian components (the paper's K); "auto" chooses 1 to 12 by BIC
-        (Result.chosen_k says which).
-    grid : int, default: 128
-        Grid nodes along the leaf's longer side.
-    mpu_tolerance : float, default: 1e-3
-        MPU fit tolerance, as a fraction of the leaf length.
-    samples : int, default: 4000
-        Points drawn from the height guide p(x) for the EM fit.
-    seed : int, default: 0
-        Random seed of the sampling and EM, so that results repeat.
-    mesher : {"conforming", "bpa"}, default: "conforming"
-        Our boundary-conforming triangulation, or open3d ball pivoting as in the paper.
-    radius_factor : float, default: 1.0
-        Scales the ball-pivoting radii (which derive from the grid spacing).
-    taper : float, default: 0.35
-        Width of the boundary taper, as a fraction of the leaf's inscribed radius.
-    refine : bool, default: True
-        Refine the whole mixture by least squares after EM (the paper stops after EM).
-    margin : {"auto", "exact", "smooth"}, default: "auto"
-        The margin through the boundary points themselves ("exact"), through their smoothed
-        mean position ("smooth", for noisy scans), or chosen by the points' measured noise.
+    Each field is declared once, here: its kind and range, default, help, the pipeline stage it
+    invalidates and its command-line flag (paramspec.py). Validation, the stage cache's keys
+    (core/pipeline.py), the parameter panel (gui/controls.py) and the CLI flags (cli.py) are
+    derived from these declarations (`PARAMS`).
     """
 
-    k: int | str = 3
-    grid: int = 128
-    mpu_tolerance: float = 1e-3
-    samples: int = 4000
-    seed: int = 0
-    mesher: str = "conforming"
-    radius_factor: float = 1.0
-    taper: float = 0.35
-    refine: bool = True
-    margin: str = "auto"
+    k: int | str = Whole(
+        default=3, low=1, high=K_MAX, special=K_AUTO, slider=(1, K_AUTO_MAX),
+        what="K", label="K (Gaussians)", stage="gmm", flag="--k", metavar="K|auto",
+        help="How many Gaussian bumps (the paper's K) make up the leaf's surface. One bump per "
+        "main vein region is a good start; more bumps follow the veins more closely. auto "
+        f"chooses K from 1 to {K_AUTO_MAX} by the Bayesian information criterion",
+    ).field()  # fmt: skip
+    grid: int = Whole(
+        default=128, low=GRID_MIN, high=GRID_MAX, slider=(16, 512), step=16,
+        what="grid", label="Grid", stage="grid", flag="--grid", metavar="N",
+        help="How finely the leaf is sampled: grid nodes along the leaf's longer side. Higher is "
+        "smoother and slower (the time grows with the square of this number)",
+    ).field()  # fmt: skip
+    mpu_tolerance: float = Real(
+        default=1e-3, low=1e-6, high=0.1, slider=(1e-4, 0.02), decimals=4,
+        what="MPU tolerance", label="MPU tolerance", stage="implicit", flag="--mpu-tolerance",
+        metavar="F",
+        help="How closely the leaf's outline function (the MPU implicit) must follow the "
+        "boundary points, as a fraction of the leaf's length. Smaller follows every wiggle; "
+        "larger smooths noise",
+    ).field()  # fmt: skip
+    samples: int = Whole(
+        default=4000, low=100, high=1_000_000, slider=(500, 20_000), step=500,
+        what="EM sample count", label="EM samples", stage="gmm", flag="--samples", metavar="N",
+        help="How many random points, drawn where the height guide p(x) is high, the Gaussian "
+        "mixture is fitted to by EM. More points give a steadier fit",
+    ).field()  # fmt: skip
+    seed: int = Whole(
+        default=0, low=0, high=SEED_MAX,
+        what="seed", label="Seed", stage="gmm", flag="--seed", metavar="S",
+        help="The random seed of the sampling and of EM: the same seed always gives the same leaf",
+    ).field()  # fmt: skip
+    mesher: str = Choice(
+        default="conforming", choices=MESHERS,
+        what="mesher", label="Mesher", stage="mesh", flag="--mesher",
+        help="How the surface becomes triangles: conforming follows the outline exactly (our "
+        "boundary-conforming triangulation); bpa is the paper's ball pivoting (open3d), which "
+        "may leave gaps at thin tips",
+    ).field()  # fmt: skip
+    radius_factor: float = Real(
+        default=1.0, low=0.25, high=8, slider=(0.5, 4.0), decimals=2,
+        what="radius factor", label="Ball radius ×", stage="mesh", flag="--radius-factor",
+        metavar="F",
+        help="Ball pivoting only: scales the ball radii (which follow the grid spacing). Larger "
+        "balls close gaps but can bridge notches in the outline",
+    ).field()  # fmt: skip
+    taper: float = Real(
+        default=0.35, low=0.01, high=5, slider=(0.05, 1.0), decimals=2,
+        what="taper", label="Margin taper", stage="surface", flag="--taper", metavar="F",
+        help="How wide the band along the margin is where the surface bends down to the "
+        "outline, as a fraction of the leaf's inscribed radius",
+    ).field()  # fmt: skip
+    refine: bool = Switch(
+        default=True,
+        what="refine", label="Refine after EM", stage="surface", flag="--refine",
+        help="After the EM fit, adjust all bumps together by least squares so that the surface "
+        "passes closer to the veins (the paper stops after EM)",
+    ).field()  # fmt: skip
+    margin: str = Choice(
+        default="auto", choices=MARGINS,
+        what="margin", label="Margin", stage="frame", flag="--margin",
+        help="The margin through the boundary points themselves (exact), through their smoothed "
+        "mean position (smooth, for noisy scans), or chosen by the points' measured noise (auto)",
+    ).field()  # fmt: skip
 
     def __post_init__(self) -> None:
-        checked: dict[str, Any] = {}
-        if self.k == K_AUTO:
-            checked["k"] = K_AUTO
-        elif isinstance(self.k, (bool, np.bool_)) or not isinstance(self.k, (int, np.integer)):
-            raise LeafError(f"K must be a whole number or {K_AUTO!r}, got {_short(self.k)}")
-        else:
-            checked["k"] = _whole_number(self.k, "K", 1, K_MAX)
-        checked["grid"] = _whole_number(self.grid, "grid", GRID_MIN, GRID_MAX)
-        checked["mpu_tolerance"] = _real_number(self.mpu_tolerance, "MPU tolerance", 1e-6, 0.1)
-        checked["samples"] = _whole_number(self.samples, "EM sample count", 100, 1_000_000)
-        checked["seed"] = _whole_number(self.seed, "seed", 0, SEED_MAX)
-        if not isinstance(self.mesher, str) or self.mesher not in MESHERS:
-            raise LeafError(
-                f"mesher must be one of {', '.join(MESHERS)}, got {_short(self.mesher)}"
-            )
-        checked["radius_factor"] = _real_number(self.radius_factor, "radius factor", 0.25, 8)
-        checked["taper"] = _real_number(self.taper, "taper", 0.01, 5)
-        if not isinstance(self.refine, (bool, np.bool_)):
-            raise LeafError(f"refine must be true or false, got {_short(self.refine)}")
-        checked["refine"] = bool(self.refine)
-        if not isinstance(self.margin, str) or self.margin not in MARGINS:
-            raise LeafError(
-                f"margin must be one of {', '.join(MARGINS)}, got {_short(self.margin)}"
-            )
+        checked = {name: p.check(getattr(self, name)) for name, p in PARAMS.items()}
         for name, value in checked.items():  # plain Python values: JSON-ready, equal as expected
             object.__setattr__(self, name, value)
 
@@ -209,6 +197,10 @@ class Params:
     def with_(self, **changes: Any) -> Params:
         """A copy with some values changed (validated again)."""
         return replace(self, **changes)
+
+
+PARAMS: dict[str, Param] = declared(Params)  # each field's declaration, in field order
+Params.__doc__ = f"{Params.__doc__}{numpy_doc(PARAMS)}"
 
 
 def as_leaf(value: Any) -> Leaf:

@@ -110,7 +110,7 @@ def test_cli_measure_prints_a_table_and_json(tmp_path, capsys):
         (["measure", "LEAF", "--k", "0"], "K must be between 1 and"),
         (["measure", "LEAF", "--grid", "100000"], "grid must be between"),
         (["measure", "LEAF", "--k", "3.5"], "K must be a whole number or 'auto'"),
-        (["measure", "LEAF", "--grid", "many"], "argument --grid: must be a whole number"),
+        (["measure", "LEAF", "--grid", "many"], "argument --grid: grid must be a whole number"),
         (["measure"], "the following arguments are required: input"),
     ],
 )

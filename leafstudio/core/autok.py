@@ -21,8 +21,7 @@ import numpy as np
 
 from leafstudio.core.gmm import Mixture
 from leafstudio.errors import LeafError
-
-K_AUTO_MAX = 12
+from leafstudio.model import K_AUTO_MAX  # declared beside Params.k, whose help names it
 
 
 def bic(mixture: Mixture, samples: np.ndarray) -> float:

@@ -2,7 +2,7 @@
 
 | stage    | depends on                          | output                                   |
 |----------|-------------------------------------|------------------------------------------|
-| frame    | the leaf                            | PCA frame, 2D polygon, 2D veins, heights |
+| frame    | the leaf, margin                    | PCA frame, 2D polygon, 2D veins, heights |
 |          |                                     | above the base b(x) (base.py)            |
 | implicit | frame, mpu_tolerance                | the MPU implicit g                       |
 | grid     | frame, grid                         | the regular grid                         |
@@ -12,6 +12,9 @@
 | mesh     | surface, mesher, radius_factor      | the triangle mesh in world coordinates   |
 
 A stage reruns only when a value it depends on changed, so moving K reruns gmm, surface and mesh.
+Each parameter's stage is declared with it (model.Params); the cache keys (STAGE_KEYS) follow from
+those declarations and this table's stage inputs (STAGE_INPUTS; tests/test_params.py checks that
+this table says the same).
 """
 
 from __future__ import annotations
@@ -53,32 +56,34 @@ from leafstudio.core.trianglemesh import TriangleMesh
 from leafstudio.core.units import ScaledSurface, Units
 from leafstudio.core.veins import vein_order
 from leafstudio.errors import LeafError
-from leafstudio.model import K_AUTO, Leaf, Params, as_leaf, as_params
+from leafstudio.model import K_AUTO, PARAMS, Leaf, Params, as_leaf, as_params
 
 if TYPE_CHECKING:
     import pyvista as pv
 
-STAGES = ("frame", "implicit", "grid", "guide", "gmm", "surface", "mesh")
-STAGE_KEYS: dict[str, tuple[str, ...]] = {
-    "frame": ("margin",),
-    "implicit": ("margin", "mpu_tolerance"),
-    "grid": ("margin", "grid"),
-    "guide": ("margin", "mpu_tolerance", "grid"),
-    "gmm": ("margin", "mpu_tolerance", "grid", "k", "samples", "seed"),
-    "surface": ("margin", "mpu_tolerance", "grid", "k", "samples", "seed", "taper", "refine"),
-    "mesh": (
-        "margin",
-        "mpu_tolerance",
-        "grid",
-        "k",
-        "samples",
-        "seed",
-        "taper",
-        "refine",
-        "mesher",
-        "radius_factor",
-    ),
+STAGE_INPUTS: dict[str, tuple[str, ...]] = {  # the table's "depends on", less the parameters
+    "frame": (),
+    "implicit": ("frame",),
+    "grid": ("frame",),
+    "guide": ("implicit", "grid"),
+    "gmm": ("guide",),
+    "surface": ("gmm",),
+    "mesh": ("surface",),
 }
+STAGES = tuple(STAGE_INPUTS)
+
+
+def _stage_keys() -> dict[str, tuple[str, ...]]:
+    """Each stage's cache key: the parameters declared for it (model.Params, `stage`) and those
+    of every stage it reads, in field order."""
+    keys: dict[str, set[str]] = {}
+    for stage, inputs in STAGE_INPUTS.items():
+        own = {name for name, p in PARAMS.items() if p.stage == stage}
+        keys[stage] = own.union(*(keys[i] for i in inputs))
+    return {stage: tuple(n for n in PARAMS if n in names) for stage, names in keys.items()}
+
+
+STAGE_KEYS = _stage_keys()
 MIN_NODES_PER_COMPONENT = 5
 GUIDE_STEP = 0.5  # the guide's curves are thinned to this fraction of the grid step (height.py)
 VEIN_OUTSIDE_TOLERANCE = 0.01  # vein points may stray this fraction of the leaf length outside

@@ -1,4 +1,10 @@
-"""The parameter panel: one labelled control per Params field, each with a plain-words tooltip.
+"""The parameter panel: one labelled control per Params field, made from its declaration
+(model.PARAMS: widget kind, range, label and tooltip).
+
+A number with a slider range (paramspec.Ranged.slider) gets a slider over that range, which sits
+inside the valid one, so the panel never offers a value Params refuses. A value outside it that a
+project holds widens that slider to show it, and every value the user has not touched is given
+back exactly as it was shown (`params()`), so no valid value is clamped or rounded away.
 
 Every change emits `changed(Params)`, throttled so that a slider drag does not flood the worker:
 the first value goes out at once and the last value always follows. `released` marks the end of
@@ -7,53 +13,45 @@ a slider drag (one undo step per drag: `is_dragging()` is True until then).
 
 from __future__ import annotations
 
+from typing import Any
+
 from PySide6.QtCore import Qt, Signal
-from PySide6.QtWidgets import (
-    QCheckBox,
-    QComboBox,
-    QFormLayout,
-    QSpinBox,
-    QWidget,
-)
-from superqt import QLabeledDoubleSlider, QLabeledSlider
+from PySide6.QtWidgets import QCheckBox, QComboBox, QFormLayout, QWidget
+from superqt import QLabeledDoubleSlider, QLabeledSlider, QLargeIntSpinBox
 from superqt.utils import qthrottled
 
-from leafstudio.errors import LeafError
-from leafstudio.model import MESHERS, Params
+from leafstudio.model import PARAMS, Params
+from leafstudio.paramspec import Choice, Param, Ranged, Real, Switch, Whole
 
 THROTTLE_MS = 80
-K_RANGE = (1, 12)
-GRID_RANGE = (16, 512)
-
-TIPS = {
-    "k": "How many Gaussian bumps (the paper's K) make up the leaf's surface. One bump per main "
-    "vein region is a good start; more bumps follow the veins more closely.",
-    "auto": "Let LeafStudio choose K from 1 to 12 by the Bayesian information criterion.",
-    "grid": "How finely the leaf is sampled: grid points along the leaf's length. Higher is "
-    "smoother and slower (the time grows with the square of this number).",
-    "mpu_tolerance": "How closely the leaf's outline function must follow the boundary points, as "
-    "a fraction of the leaf's length. Smaller follows every wiggle; larger smooths noise.",
-    "samples": "How many random points, drawn where the height guide is high, the Gaussian "
-    "mixture is fitted to. More points give a steadier fit.",
-    "seed": "The random seed for drawing those points. The same seed always gives the same leaf.",
-    "mesher": "How the surface becomes triangles: 'conforming' follows the outline exactly; "
-    "'bpa' is the ball pivoting of the paper, which may leave gaps at thin tips.",
-    "radius_factor": "Ball pivoting only: scales the ball radii. Larger balls close gaps but can "
-    "bridge notches in the outline.",
-    "taper": "How wide the band along the margin is where the surface bends down to the "
-    "outline, as a fraction of the leaf's inner radius.",
-    "refine": "After the EM fit, adjust all bumps together so the surface passes closer to the "
-    "veins (the paper stops after EM).",
-}
 
 
-def auto_k_supported() -> bool:
-    """True once Params accepts k='auto' (automatic K, added by the analysis work)."""
-    try:
-        Params(k="auto")  # type: ignore[arg-type]
-    except (LeafError, TypeError, ValueError):
-        return False
-    return True
+def _widget(param: Param) -> QWidget:
+    """The control for one declared parameter, over its panel range."""
+    if isinstance(param, Switch):
+        return QCheckBox(param.label)
+    if isinstance(param, Choice):
+        combo = QComboBox()
+        combo.addItems(param.choices)
+        return combo
+    if isinstance(param, Whole) and param.slider is None:
+        spin = QLargeIntSpinBox()  # a QSpinBox stops at 2**31 - 1
+        spin.setRange(param.low, param.high)
+        return spin
+    if isinstance(param, Real):
+        slider = QLabeledDoubleSlider(Qt.Orientation.Horizontal)
+        slider.setDecimals(param.decimals)
+    else:
+        assert isinstance(param, Whole)
+        slider = QLabeledSlider(Qt.Orientation.Horizontal)
+        slider.setSingleStep(param.step)
+        slider.setPageStep(4 * param.step)
+    slider.setRange(*param.panel_range)
+    return slider
+
+
+def _is_slider(widget: QWidget) -> bool:
+    return isinstance(widget, QLabeledSlider)  # QLabeledDoubleSlider is one too
 
 
 class ParamPanel(QWidget):
@@ -66,122 +64,98 @@ class ParamPanel(QWidget):
         super().__init__(parent)
         form = QFormLayout(self)
         form.setFieldGrowthPolicy(QFormLayout.FieldGrowthPolicy.AllNonFixedFieldsGrow)
-
-        self.k = QLabeledSlider(Qt.Orientation.Horizontal)
-        self.k.setRange(*K_RANGE)
-        self.auto_k = QCheckBox("Auto")
-        self.grid = QLabeledSlider(Qt.Orientation.Horizontal)
-        self.grid.setRange(*GRID_RANGE)
-        self.grid.setSingleStep(16)
-        self.grid.setPageStep(64)
-        self.mpu_tolerance = QLabeledDoubleSlider(Qt.Orientation.Horizontal)
-        self.mpu_tolerance.setRange(0.0001, 0.02)
-        self.mpu_tolerance.setDecimals(4)
-        self.samples = QLabeledSlider(Qt.Orientation.Horizontal)
-        self.samples.setRange(500, 20000)
-        self.samples.setSingleStep(500)
-        self.samples.setPageStep(2000)
-        self.seed = QSpinBox()
-        self.seed.setRange(0, 99999)
-        self.mesher = QComboBox()
-        self.mesher.addItems(MESHERS)
-        self.radius_factor = QLabeledDoubleSlider(Qt.Orientation.Horizontal)
-        self.radius_factor.setRange(0.5, 4.0)
-        self.radius_factor.setDecimals(2)
-        self.taper = QLabeledDoubleSlider(Qt.Orientation.Horizontal)
-        self.taper.setRange(0.05, 1.0)
-        self.taper.setDecimals(2)
-        self.refine = QCheckBox("Refine after EM")
-
-        rows = [
-            ("K (Gaussians)", self.k, "k"),
-            ("", self.auto_k, "auto"),
-            ("Grid", self.grid, "grid"),
-            ("MPU tolerance", self.mpu_tolerance, "mpu_tolerance"),
-            ("EM samples", self.samples, "samples"),
-            ("Seed", self.seed, "seed"),
-            ("Mesher", self.mesher, "mesher"),
-            ("Ball radius ×", self.radius_factor, "radius_factor"),
-            ("Margin taper", self.taper, "taper"),
-            ("", self.refine, "refine"),
-        ]
-        for label, widget, key in rows:
-            widget.setToolTip(TIPS[key])
-            if key == "auto" and not auto_k_supported():
-                continue
-            form.addRow(label, widget)
-            if label:
-                form.labelForField(widget).setToolTip(TIPS[key])
-
+        self.widgets: dict[str, QWidget] = {}
+        self.specials: dict[str, QCheckBox] = {}  # a word a number also takes (K's "auto")
+        for name, param in PARAMS.items():
+            widget = self.widgets[name] = _widget(param)
+            setattr(self, name, widget)
+            widget.setToolTip(param.help_text())
+            form.addRow("" if isinstance(param, Switch) else param.label, widget)
+            if not isinstance(param, Switch):
+                form.labelForField(widget).setToolTip(param.help_text())
+            if isinstance(param, Whole) and param.special:
+                box = self.specials[name] = QCheckBox(param.special.capitalize())
+                box.setToolTip(param.help_text())
+                form.addRow("", box)
+                box.toggled.connect(self._on_edit)
+            self._connect(widget)
+        self.auto_k = self.specials["k"]
         self._emit_throttled = qthrottled(self._emit, timeout=THROTTLE_MS, leading=True)
-        for slider in (
-            self.k,
-            self.grid,
-            self.mpu_tolerance,
-            self.samples,
-            self.radius_factor,
-            self.taper,
-        ):
-            slider.valueChanged.connect(self._on_edit)
-            slider.sliderReleased.connect(self.released)
-        self.seed.valueChanged.connect(self._on_edit)
-        self.mesher.currentTextChanged.connect(self._on_edit)
-        self.auto_k.toggled.connect(self._on_edit)
-        self.refine.toggled.connect(self._on_edit)
-        self.set_params(Params())
+        self._shown = Params()
+        self._shown_values: dict[str, Any] = {}
+        self.set_params(self._shown)
+
+    def _connect(self, widget: QWidget) -> None:
+        if isinstance(widget, QCheckBox):
+            widget.toggled.connect(self._on_edit)
+        elif isinstance(widget, QComboBox):
+            widget.currentTextChanged.connect(self._on_edit)
+        else:
+            widget.valueChanged.connect(self._on_edit)
+        if _is_slider(widget):
+            widget.sliderReleased.connect(self.released)
 
     def is_dragging(self) -> bool:
         """True while a slider is held down."""
-        sliders = (self.k, self.grid, self.mpu_tolerance, self.samples, self.radius_factor)
-        return any(s.isSliderDown() for s in (*sliders, self.taper))
+        return any(_is_slider(w) and w.isSliderDown() for w in self.widgets.values())
+
+    def _read(self) -> dict[str, Any]:
+        """Each control's value as the panel reads it."""
+        values: dict[str, Any] = {}
+        for name, param in PARAMS.items():
+            widget = self.widgets[name]
+            if name in self.specials and self.specials[name].isChecked():
+                values[name] = param.special  # type: ignore[attr-defined]
+            elif isinstance(widget, QCheckBox):
+                values[name] = widget.isChecked()
+            elif isinstance(widget, QComboBox):
+                values[name] = widget.currentText()
+            elif isinstance(param, Real):
+                values[name] = round(float(widget.value()), param.decimals + 2)
+            else:
+                values[name] = int(widget.value())
+        return values
 
     def params(self) -> Params:
-        """The Params the controls show."""
+        """The Params the controls show: a value the user has not changed since `set_params`
+        is the one given there, exactly."""
+        read = self._read()
         return Params(
-            k="auto" if self.auto_k.isChecked() else int(self.k.value()),  # type: ignore[arg-type]
-            grid=int(self.grid.value()),
-            mpu_tolerance=round(float(self.mpu_tolerance.value()), 6),
-            samples=int(self.samples.value()),
-            seed=int(self.seed.value()),
-            mesher=self.mesher.currentText(),
-            radius_factor=round(float(self.radius_factor.value()), 4),
-            taper=round(float(self.taper.value()), 4),
-            refine=self.refine.isChecked(),
+            **{
+                name: getattr(self._shown, name) if value == self._shown_values[name] else value
+                for name, value in read.items()
+            }
         )
 
     def set_params(self, params: Params) -> None:
-        """Show `params` without emitting `changed` (values outside a slider's range are clamped
-        by it; those params are what `params()` returns afterwards)."""
-        widgets = (
-            self.k,
-            self.auto_k,
-            self.grid,
-            self.mpu_tolerance,
-            self.samples,
-            self.seed,
-            self.mesher,
-            self.radius_factor,
-            self.taper,
-            self.refine,
-        )
+        """Show `params` without emitting `changed`; a slider widens to show a value outside
+        its range (declared or not, it is valid: Params checked it)."""
+        widgets = [*self.widgets.values(), *self.specials.values()]
         blocked = [w.blockSignals(True) for w in widgets]
         try:
-            auto = params.k == "auto"
-            self.auto_k.setChecked(auto)
-            if not auto:
-                self.k.setValue(int(params.k))
-            self.grid.setValue(params.grid)
-            self.mpu_tolerance.setValue(params.mpu_tolerance)
-            self.samples.setValue(params.samples)
-            self.seed.setValue(params.seed)
-            self.mesher.setCurrentText(params.mesher)
-            self.radius_factor.setValue(params.radius_factor)
-            self.taper.setValue(params.taper)
-            self.refine.setChecked(params.refine)
+            for name, param in PARAMS.items():
+                self._show(name, param, getattr(params, name))
         finally:
             for widget, was in zip(widgets, blocked, strict=True):
                 widget.blockSignals(was)
+        self._shown, self._shown_values = params, self._read()
         self._sync_enabled()
+
+    def _show(self, name: str, param: Param, value: Any) -> None:
+        widget = self.widgets[name]
+        if name in self.specials:
+            self.specials[name].setChecked(value == param.special)  # type: ignore[attr-defined]
+            if self.specials[name].isChecked():
+                return
+        if isinstance(widget, QCheckBox):
+            widget.setChecked(value)
+        elif isinstance(widget, QComboBox):
+            widget.setCurrentText(value)
+        else:
+            if _is_slider(widget) and isinstance(param, Ranged):
+                low, high = param.panel_range
+                widget.setRange(min(low, value), max(high, value))
+            widget.setValue(value)
 
     def _sync_enabled(self) -> None:
         self.k.setEnabled(not self.auto_k.isChecked())

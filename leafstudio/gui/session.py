@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -24,7 +24,7 @@ from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.errors import LeafError
 from leafstudio.gui.framing import BladeBounds, blade_bounds
 from leafstudio.gui.sketch_model import Sketch, ring_crossings
-from leafstudio.model import Leaf, Params
+from leafstudio.model import PARAMS, Leaf, Params
 
 log = logging.getLogger("leafstudio.gui")
 
@@ -161,9 +161,9 @@ class History:
 
 
 def _param_text(before: Params, after: Params) -> str:
-    changed = [f.name for f in fields(Params) if getattr(before, f.name) != getattr(after, f.name)]
-    names = {"k": "K", "mpu_tolerance": "MPU tolerance", "radius_factor": "ball radius"}
-    return "Change " + ", ".join(names.get(n, n.replace("_", " ")) for n in changed)
+    """The undo step's name: the parameters changed, as their messages name them."""
+    changed = [p.what for n, p in PARAMS.items() if getattr(before, n) != getattr(after, n)]
+    return "Change " + ", ".join(changed)
 
 
 def describe(exc: BaseException) -> str:
@@ -433,10 +433,8 @@ class Session:
         old = self.state
         self.state = state
         self.state_changed.emit(state, reason)
-        if reason in ("document", "undo") and (
-            state.sketch is not None or old.serial != state.serial
-        ):
-            shown = state.sketch if state.sketch is not None else None
+        if reason in ("document", "undo"):
+            shown = state.sketch
             if state.sketch is None and self.derived is not None and old.serial == state.serial:
                 shown = self.derived  # undo back to the loaded leaf: its derived sketch
             if shown is not None:

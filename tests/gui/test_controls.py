@@ -1,21 +1,93 @@
-"""The parameter panel: a tooltip on every control, Auto K, and the last value always emitted."""
+"""The parameter panel: made from Params' declarations (a control, range, label and tooltip for
+each), Auto K, valid values kept exactly, and the last value always emitted."""
 
 from __future__ import annotations
 
-from PySide6.QtWidgets import QLabel
+import pytest
+from PySide6.QtWidgets import QCheckBox, QComboBox, QLabel
+from superqt import QLabeledSlider, QLargeIntSpinBox
 
-from leafstudio.gui.controls import TIPS, ParamPanel, auto_k_supported
-from leafstudio.model import Params
+from leafstudio.gui.controls import ParamPanel
+from leafstudio.model import PARAMS, SEED_MAX, Params
+from leafstudio.paramspec import Choice, Ranged, Switch, Whole
 
 
 def test_every_control_and_its_label_explain_themselves(qtbot):
     panel = ParamPanel()
     qtbot.addWidget(panel)
-    for key in TIPS:
-        widget = getattr(panel, "auto_k" if key == "auto" else key)
-        assert len(widget.toolTip()) > 30
+    for name, param in PARAMS.items():
+        widget = panel.widgets[name]
+        assert widget.toolTip() == param.help_text() and len(widget.toolTip()) > 30
+    assert len(panel.auto_k.toolTip()) > 30
     labels = [w for w in panel.findChildren(QLabel) if w.text() and w.toolTip()]
-    assert len(labels) >= 8
+    assert {w.text() for w in labels} == {
+        p.label for p in PARAMS.values() if not isinstance(p, Switch)
+    }
+
+
+def test_each_declared_parameter_has_its_control_over_its_declared_range(qtbot):
+    """The panel offers what validation takes: a slider's ends sit inside the valid range and are
+    both taken by Params; a choice offers exactly the declared words."""
+    panel = ParamPanel()
+    qtbot.addWidget(panel)
+    assert list(panel.widgets) == list(PARAMS)  # every field has a control (margin had none)
+    for name, param in PARAMS.items():
+        widget = panel.widgets[name]
+        if isinstance(param, Switch):
+            assert isinstance(widget, QCheckBox) and widget.text() == param.label
+        elif isinstance(param, Choice):
+            assert isinstance(widget, QComboBox)
+            assert [widget.itemText(i) for i in range(widget.count())] == list(param.choices)
+        else:
+            assert isinstance(param, Ranged)
+            shown = (widget.minimum(), widget.maximum())
+            assert shown == pytest.approx(param.panel_range)
+            assert param.low <= shown[0] < shown[1] <= param.high
+            assert isinstance(widget, QLabeledSlider if param.slider else QLargeIntSpinBox)
+            for end in shown:  # both ends of the control are valid Params
+                widget.setValue(end)
+                assert getattr(panel.params(), name) == pytest.approx(end)
+    assert panel.seed.maximum() == SEED_MAX  # the whole seed range (a QSpinBox stops at 2**31)
+
+
+def test_a_loaded_projects_values_are_kept_exactly_even_outside_the_sliders(qtbot):
+    """A slider widens to show a valid value outside its range; an edit of another control keeps
+    every value the user did not touch (nothing clamped or rounded, margin included)."""
+    panel = ParamPanel()
+    qtbot.addWidget(panel)
+    far = Params(
+        k=40,
+        grid=2048,
+        mpu_tolerance=1.234567e-6,
+        samples=100,
+        seed=SEED_MAX,
+        mesher="bpa",
+        radius_factor=7.77777,
+        taper=0.0123456,
+        refine=False,
+        margin="exact",
+    )
+    for name, param in PARAMS.items():
+        if isinstance(param, Ranged) and param.slider is not None:
+            assert not param.slider[0] <= getattr(far, name) <= param.slider[1]  # outside
+    panel.set_params(far)
+    assert panel.params() == far
+    assert panel.grid.maximum() == 2048 and panel.k.maximum() == 40
+    panel.mesher.setCurrentText("conforming")
+    assert panel.params() == far.with_(mesher="conforming")
+    panel.k.setValue(3)
+    assert panel.params().k == 3
+    panel.set_params(Params())  # the next document: the declared ranges again
+    assert (panel.grid.minimum(), panel.grid.maximum()) == PARAMS["grid"].panel_range
+    assert panel.params() == Params()
+
+
+def test_a_moved_slider_gives_a_tidy_value(qtbot):
+    panel = ParamPanel()
+    qtbot.addWidget(panel)
+    panel.taper.setValue(0.123456789)
+    assert panel.params().taper == round(0.123456789, PARAMS["taper"].decimals + 2)
+    assert isinstance(PARAMS["k"], Whole) and PARAMS["k"].special == "auto"
 
 
 def test_params_round_trip_through_the_controls(qtbot):
@@ -48,11 +120,12 @@ def test_a_drag_emits_the_first_and_the_last_value(qtbot):
     assert [p.grid for p in emitted] == [16, 392]  # throttled: at once, then the last
 
 
-def test_auto_k_when_the_pipeline_offers_it(qtbot):
+def test_auto_k(qtbot):
     panel = ParamPanel()
     qtbot.addWidget(panel)
-    if not auto_k_supported():
-        assert panel.auto_k.parent() is None
-        return
     panel.auto_k.setChecked(True)
     assert panel.params().k == "auto" and not panel.k.isEnabled()
+    panel.set_params(Params(k=5))
+    assert not panel.auto_k.isChecked() and panel.params().k == 5
+    panel.set_params(Params(k="auto"))
+    assert panel.auto_k.isChecked() and panel.params() == Params(k="auto")
