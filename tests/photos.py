@@ -110,6 +110,31 @@ def scan_photo(
     return _finish(rgb, noise, blur, seed), shapely.Polygon(px)
 
 
+def leaf_frame_match(terms: dict, angle: float, seed: int = 0, **found_options) -> dict:
+    """A form (make_form's terms) photographed at `angle` without a petiole, found again: the IoU
+    with the known outline in the forms' convention (base at the origin, apex on +x, both at the
+    known base-to-apex length: a wrong base turns the outline round), the IoU in the photo's
+    pixels (the segmentation alone), and the base's distance from the known one (share of the
+    length)."""
+    from leafstudio.assets.photo import leaf_from_photo
+    from leafstudio.forms import Form
+
+    form = Form(**terms)
+    leaf, apex = form.leaf(), form.outline().apex_index
+    known = leaf.boundary[:, :2]
+    length = float(np.linalg.norm(known[apex]))  # base to apex, as `--length` means it
+    image, known_px, base_px = form_photo(leaf.boundary, leaf.veins, angle=angle, seed=seed)
+    found = leaf_from_photo(image, length=length, veins="none", **found_options)
+    xy = found.leaf.boundary[:, :2]
+    pixel_length = np.linalg.norm(found.pixel_from_world[:, 0]) * length
+    base_error = np.linalg.norm(found.pixel_from_world @ [0, 0, 1] - base_px) / pixel_length
+    return {
+        "iou_leaf_frame": round(iou(shapely.Polygon(xy).buffer(0), shapely.Polygon(known)), 4),
+        "iou_pixels": round(iou(shapely.Polygon(found.outline_px).buffer(0), known_px), 4),
+        "base_error": round(float(base_error), 4),
+    }
+
+
 def iou(a: shapely.Polygon, b: shapely.Polygon) -> float:
     """Intersection over union of two polygons."""
     return a.intersection(b).area / a.union(b).area

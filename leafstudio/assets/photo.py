@@ -9,14 +9,18 @@
 3. The petiole: a morphological opening by a disk of PETIOLE_RADIUS of the blade's inscribed
    radius removes thin parts; of those, a stalk is long (PETIOLE_LENGTH disk radii), slender
    (STALK_ELONGATION) and of even width (it fills STALK_FILL of its length times its widest
-   width, where a tapering tip fills about half): teeth are short, tips taper. A second
+   width, where a tapering tip fills about half, and its width a fifth in from either end is
+   the same within STALK_EVEN, where a spatulate blade's narrow base widens): teeth are short,
+   tips taper. A second
    opening, by a disk just wider than the petiole, cuts it off where the blade widens. Where it
    met the blade is the base.
 4. The outline: the zero contour of the (slightly smoothed) blade mask, at sub-pixel precision,
    resampled evenly.
-5. Base and apex: the petiole's end when there is one; otherwise, along the blade's long axis,
-   the end `base_end` names (left, right, top, bottom) or, by default, the wider end. The apex is
-   the outline point farthest from the base.
+5. Base and apex: the petiole's end when there is one (the apex is then the outline point
+   farthest from it); otherwise the two ends of the blade's midline, its best mirror axis
+   (leafends.py), of which the base is the one `base_end` names (left, right, top, bottom) or, by
+   default, the one with a basal notch (cordate, sagittate), else the one the veins lean away
+   from, else the wider one.
 6. The leaf follows the forms' convention (DESIGN.md): the base at the origin, the apex on +x at
    `length` (base to apex), z = 0. The affine map from those coordinates back to the photo's
    pixels is kept (in the project, "photo": {"pixel_from_world": ...}) so that `reconstruct
@@ -41,9 +45,9 @@ SMOOTHING = 1.0  # pixels: the colour distance is smoothed this much before the 
 PETIOLE_RADIUS = 0.3  # the opening disk's radius, as a fraction of the inscribed radius
 PETIOLE_LENGTH = 1.0  # a stalk is at least this many disk radii long,
 STALK_ELONGATION = 4.0  # this many times longer than wide,
-STALK_FILL = 0.65  # and fills more than this share of its length times its widest width
+STALK_FILL = 0.65  # and fills more than this share of its length times its widest width,
+STALK_EVEN = 0.88  # and is as wide near one end as near the other (_evenness), to this share
 PETIOLE_FIT = 1.6  # the second opening's disk, in petiole half-widths
-END_BAND = 0.15  # the width of each end is measured this fraction of the length from it
 
 
 @dataclass(frozen=True)
@@ -135,6 +139,23 @@ def _stalk_shape(part: np.ndarray) -> tuple[float, float, float]:
     return length, length / width, props.area / max(length * width, 1e-12)
 
 
+def _evenness(part: np.ndarray) -> float:
+    """How even a region's width is along its long axis: the narrower over the wider of its
+    widths a fifth of its length in from each end (0.97-1 for a drawn stalk, about 0.79 for
+    the wedge of a spatulate blade's narrow base)."""
+    rows, cols = np.nonzero(part)
+    pts = np.column_stack([cols, rows]).astype(float)
+    if len(pts) < 10:
+        return 0.0
+    centre = pts.mean(axis=0)
+    axis = np.linalg.eigh(np.cov((pts - centre).T))[1][:, -1]
+    along = (pts - centre) @ axis
+    edges = np.linspace(along.min(), along.max() + 1e-9, 6)
+    counts = np.histogram(along, edges)[0]
+    low, high = sorted(counts[[1, 3]])
+    return float(low / high) if high else 0.0
+
+
 def _cut_petiole(leaf: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     """The blade without the petiole, and where the petiole met it (column, row) or None.
 
@@ -162,7 +183,12 @@ def _cut_petiole(leaf: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
             continue
         tight = thin == np.argmax(np.bincount(thin.ravel())[1:]) + 1
         length, elongation, fill = _stalk_shape(tight)
-        if length >= PETIOLE_LENGTH * radius / 2 and elongation >= STALK_ELONGATION and fill > best:
+        if (
+            length >= PETIOLE_LENGTH * radius / 2
+            and elongation >= STALK_ELONGATION
+            and fill > best
+            and _evenness(tight) >= STALK_EVEN
+        ):
             petiole, best = tight, fill
     if petiole is None:
         return leaf, None
@@ -259,7 +285,7 @@ def leaf_from_photo(
     leaf_mask = _leaf_component(_foreground(image))
     blade, joint = _cut_petiole(leaf_mask)
     outline = _outline(blade, points)
-    base, apex = _ends(outline, blade, base_end, joint)
+    base, apex = _ends(outline, image, blade, base_end, joint)
     start = np.array([outline[base, 0], -outline[base, 1]])  # y up
     axis = np.array([outline[apex, 0], -outline[apex, 1]]) - start
     pixels_long = float(np.linalg.norm(axis))
@@ -280,9 +306,7 @@ def leaf_from_photo(
     if veins == "grow":
         from leafstudio.forms import grow_veins
 
-        grown = grow_veins(
-            boundary, venation, base=np.zeros(2), seed=seed, apex=xy[apex]
-        )
+        grown = grow_veins(boundary, venation, base=np.zeros(2), seed=seed, apex=xy[apex])
     return PhotoLeaf(
         leaf=Leaf(boundary=boundary, veins=grown),
         pixel_from_world=pixel_from_world,
@@ -293,23 +317,16 @@ def leaf_from_photo(
 
 
 def save_photo_leaf(found: PhotoLeaf, image_path: str | Path, path: str | Path) -> None:
-    """Write the leaf; a .leaf.json also keeps the photo's name and its pixel map (the texture
-    of `reconstruct --texture PHOTO` needs it)."""
-    import json
-
-    from leafstudio.io import project_dict, save_leaf
-    from leafstudio.safewrite import write_bytes
+    """Write the leaf; a .leaf.json also keeps the photo (its path relative to the project) and
+    its pixel map, which the texture of `reconstruct --texture PHOTO` and the app need
+    (assets/leafphoto.py)."""
+    from leafstudio.assets.leafphoto import LeafPhoto
+    from leafstudio.io import save_leaf
 
     if not str(path).lower().endswith(".json"):
         save_leaf(found.leaf, path)
         return
-    data = project_dict(found.leaf)
-    data["photo"] = {
-        "image": Path(image_path).name,
-        "pixel_from_world": found.pixel_from_world.tolist(),
-        "petiole_cut": found.petiole,
-    }
-    write_bytes(path, json.dumps(data, indent=1))
+    save_leaf(found.leaf, path, photo=LeafPhoto.of(found, image_path).entry(path))
 
 
 PHOTO_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp")

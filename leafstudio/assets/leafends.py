@@ -1,0 +1,208 @@
+"""Which end of a leaf without a petiole is its base: the midline and the cues that orient it.
+
+A photo's outline alone cannot always tell base from apex (an obovate leaf is an ovate one turned
+round, but for the end terms), so the ends are found in three steps:
+
+1. The midline: the blade's best mirror axis (the line whose reflection of the outline overlaps
+   it most, by IoU), searched over directions through the centroid and refined; of the axes
+   within MIRROR_TIE of the best, the one with the longest chord (an elliptic or round leaf is
+   symmetric both ways; its length is the long way). The two ends are where the midline leaves
+   the blade; on a cordate or sagittate leaf one of them is the bottom of the sinus.
+2. The cues, strongest first:
+   - a basal notch: the outline reaches back past one end by NOTCH_DEEP of the length or more
+     (cordate 0.14, reniform 0.2, sagittate 0.32; an emarginate apex's notch is 0.06 at most)
+     and past the other by less than half that: that end is the base;
+   - the veins: secondary veins leave the midrib running outward toward the apex, on both sides,
+     so the structure tensor of the blade's inner pixels, turned to the midline's frame, has an
+     across-along term whose sign (flipped on one side of the midline) points to the apex. Used
+     when it is clear (VEIN_CLEAR of the tensor's trace);
+   - else the wider end (END_BAND of the length from each end) is the base: right for ovate,
+     lanceolate, deltoid leaves, wrong for obovate and spatulate ones, which need their veins.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from shapely import affinity
+
+MIRROR_TIE = 0.015  # axes this close (in IoU) to the best mirror count as equally good
+SEARCH_POINTS = 240  # the outline is thinned to this many points for the search
+NOTCH_DEEP = 0.08  # of the length: a notch this deep at one end marks the base
+VEIN_CLEAR = 0.03  # the veins' cue counts when its share of the tensor's trace is this large
+END_BAND = 0.15  # each end's width is measured this share of the length from it
+MARGIN_SKIP = 5.0  # pixels: the veins' cue ignores this band inside the outline (its edge)
+MIDRIB_SKIP = 3.0  # pixels: and this band either side of the midline (the midrib itself)
+TENSOR_SIGMA = 1.0  # pixels: the structure tensor's window (wider ones reach the outline's edge)
+
+
+@dataclass(frozen=True)
+class Midline:
+    """The blade's mirror axis and its two ends.
+
+    Attributes
+    ----------
+    ends : (2, 2) float array
+        Where the midline leaves the blade, (column, row); ends[1] - ends[0] runs along `along`.
+    along : (2,) float array
+        The midline's unit direction.
+    mirror : float
+        IoU of the outline with its reflection in the midline (1 for a symmetric blade).
+    """
+
+    ends: np.ndarray
+    along: np.ndarray
+    mirror: float
+
+    @property
+    def length(self) -> float:
+        return float(np.linalg.norm(self.ends[1] - self.ends[0]))
+
+
+def _reflect_iou(polygon: shapely.Polygon, centre: np.ndarray, angle: float, shift: float) -> float:
+    """IoU of the polygon with its reflection in the line at `angle` (radians) through `centre`
+    moved `shift` along its normal."""
+    normal = np.array([-np.sin(angle), np.cos(angle)])
+    x0, y0 = centre + shift * normal
+    c, s = np.cos(2 * angle), np.sin(2 * angle)
+    # reflection in a line through (x0, y0) at `angle`: [[c, s], [s, -c]] about that point
+    matrix = [c, s, s, -c, x0 - c * x0 - s * y0, y0 - s * x0 + c * y0]
+    mirrored = affinity.affine_transform(polygon, matrix)
+    union = polygon.union(mirrored).area
+    return polygon.intersection(mirrored).area / union if union > 0 else 0.0
+
+
+def _chord(polygon: shapely.Polygon, centre: np.ndarray, along: np.ndarray) -> np.ndarray:
+    """(2, 2) the ends of the piece of the line through `centre` along `along` that lies in the
+    polygon and passes nearest the centre."""
+    reach = 4 * np.sqrt(polygon.area) + np.ptp(np.asarray(polygon.exterior.coords), axis=0).sum()
+    line = shapely.LineString([centre - reach * along, centre + reach * along])
+    cut = polygon.intersection(line)
+    pieces = [g for g in getattr(cut, "geoms", [cut]) if g.geom_type == "LineString" and g.length]
+    if not pieces:
+        return np.array([centre, centre])
+    piece = min(pieces, key=lambda g: g.distance(shapely.Point(centre)))
+    ends = np.asarray(piece.coords)[[0, -1]]
+    return ends if (ends[1] - ends[0]) @ along >= 0 else ends[::-1]
+
+
+def midline(outline: np.ndarray, veins: VeinField | None = None) -> Midline:
+    """The blade's mirror axis (see the module docstring) from its (n, 2) outline; a round
+    blade's (every axis a mirror) is the line the veins lean off most, when they show."""
+    from scipy.optimize import minimize
+
+    polygon = shapely.Polygon(outline).buffer(0)
+    step = max(1, len(outline) // SEARCH_POINTS)
+    coarse = shapely.Polygon(outline[::step]).buffer(0)
+    centre = np.array(polygon.centroid.coords[0])
+    angles = np.deg2rad(np.arange(0.0, 180.0, 3.0))
+    scores = np.array([_reflect_iou(coarse, centre, a, 0.0) for a in angles])
+    if veins is not None and scores.min() >= scores.max() - MIRROR_TIE:
+        along, lean = veins.direction(centre)
+        if abs(lean) >= VEIN_CLEAR:
+            angle = float(np.arctan2(along[1], along[0]))
+            return Midline(_chord(polygon, centre, along), along,
+                           _reflect_iou(polygon, centre, angle, 0.0))  # fmt: skip
+    # local maxima of the circular scan, best first; a few are refined
+    peaks = [i for i in range(len(angles)) if scores[i] >= scores[i - 1]
+             and scores[i] >= scores[(i + 1) % len(angles)]]  # fmt: skip
+    peaks = sorted(peaks, key=lambda i: -scores[i])[:4]
+    candidates = []
+    size = np.sqrt(polygon.area)
+    for i in peaks:
+        result = minimize(
+            lambda v: -_reflect_iou(polygon, centre, v[0], v[1] * size),
+            [angles[i], 0.0],
+            method="Nelder-Mead",
+            options={"xatol": 1e-4, "fatol": 1e-5, "initial_simplex": [
+                [angles[i], 0.0], [angles[i] + 0.03, 0.0], [angles[i], 0.02]]},
+        )  # fmt: skip
+        angle, shift = result.x[0], result.x[1] * size
+        along = np.array([np.cos(angle), np.sin(angle)])
+        through = centre + shift * np.array([-along[1], along[0]])
+        ends = _chord(polygon, through, along)
+        candidates.append(Midline(ends=ends, along=along, mirror=-float(result.fun)))
+    best = max(c.mirror for c in candidates)
+    return max((c for c in candidates if c.mirror >= best - MIRROR_TIE), key=lambda c: c.length)
+
+
+def notch_depths(outline: np.ndarray, line: Midline) -> np.ndarray:
+    """(2,) how far the outline reaches back past each end (outward along the midline), as a
+    share of the midline's length: the basal lobes of a cordate or sagittate leaf."""
+    along = (outline - line.ends[0]) @ line.along
+    span = max(line.length, 1e-12)
+    return np.array([max(-along.min(), 0.0), max(along.max() - span, 0.0)]) / span
+
+
+def end_widths(outline: np.ndarray, line: Midline) -> np.ndarray:
+    """(2,) the blade's width END_BAND of the length in from each end."""
+    along = (outline - line.ends[0]) @ line.along
+    across = (outline - line.ends[0]) @ np.array([-line.along[1], line.along[0]])
+    span = line.length
+    widths = []
+    for at in (END_BAND * span, (1 - END_BAND) * span):
+        band = np.abs(along - at) < 0.02 * span
+        widths.append(float(np.ptp(across[band])) if band.sum() > 1 else 0.0)
+    return np.array(widths)
+
+
+class VeinField:
+    """The structure tensor of a photo's grey levels on the blade's inner pixels (MARGIN_SKIP in
+    from the outline, whose own edge would swamp the veins'), for `lean`."""
+
+    def __init__(self, image: np.ndarray, blade: np.ndarray) -> None:
+        from scipy.ndimage import distance_transform_edt
+        from skimage.feature import structure_tensor
+
+        grey = image[..., :3].astype(float) @ np.array([0.299, 0.587, 0.114])
+        arr, arc, acc = structure_tensor(grey, sigma=TENSOR_SIGMA, order="rc")
+        rows, cols = np.nonzero(distance_transform_edt(blade) > MARGIN_SKIP)
+        self.xy = np.column_stack([cols, rows]) + 0.5  # (column, row) pixel centres
+        self.j = np.column_stack([acc[rows, cols], arc[rows, cols], arr[rows, cols]])  # xx xy yy
+
+    def lean(self, through: np.ndarray, along: np.ndarray) -> float:
+        """Which way the veins lean off the line through `through` along `along`: > 0 if they
+        run toward +along as they leave it (on both sides), < 0 toward -along; a share of the
+        tensor's trace, in [-1, 1]."""
+        normal = np.array([-along[1], along[0]])
+        across = (self.xy - through) @ normal
+        keep = np.abs(across) > MIDRIB_SKIP
+        j, across = self.j[keep], across[keep]
+        total = float(j[:, 0].sum() + j[:, 2].sum())
+        if total <= 0:
+            return 0.0
+        # u^T J n, the gradient's along-across term: a line running (d_a, d_c) gives -d_a d_c
+        u, n = along, normal
+        cross = (
+            u[0] * n[0] * j[:, 0] + (u[0] * n[1] + u[1] * n[0]) * j[:, 1] + u[1] * n[1] * j[:, 2]
+        )
+        return float(-(np.sign(across) * cross).sum() / total)
+
+    def direction(self, through: np.ndarray) -> tuple[np.ndarray, float]:
+        """The direction through `through` along which the veins lean most (a round blade's
+        midline; they lean little off any other line), and that lean."""
+        best = 0.0
+        for step in (5.0, 1.0):  # a coarse scan, then one finer round the best
+            angles = np.deg2rad(np.arange(0.0, 180.0, 5.0) if step == 5.0
+                                else best + np.arange(-4.0, 5.0))  # fmt: skip
+            leans = [self.lean(through, np.array([np.cos(a), np.sin(a)])) for a in angles]
+            i = int(np.argmax(np.abs(leans)))
+            best, lean = float(np.rad2deg(angles[i])), float(leans[i])
+        a = np.deg2rad(best)
+        return np.array([np.cos(a), np.sin(a)]), lean
+
+
+def base_end_index(outline: np.ndarray, line: Midline, veins: VeinField | None) -> tuple[int, str]:
+    """0 or 1: which of the midline's ends is the base, and the cue that told (see the module
+    docstring)."""
+    depths = notch_depths(outline, line)
+    deep = int(np.argmax(depths))
+    if depths[deep] >= NOTCH_DEEP and depths[1 - deep] < depths[deep] / 2:
+        return deep, "notch"
+    if veins is not None:
+        lean = veins.lean(line.ends[0], line.along)
+        if abs(lean) >= VEIN_CLEAR:
+            return (0 if lean > 0 else 1), "veins"
+    return int(np.argmax(end_widths(outline, line))), "wider end"

@@ -1,0 +1,62 @@
+"""Base and apex of a leaf photographed without a petiole (issue 14, "base without a petiole"):
+the found leaf, placed in the forms' convention, matches the known one (IoU >= 0.97) and its base
+is the known base, whichever way the leaf lies in the photo. The old guess (the wider end of the
+long axis) turned cordate, sagittate, obovate and lobed cordate leaves round (IoU 0.54-0.69)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from leafstudio.assets.leafends import Midline, notch_depths
+from leafstudio.assets.photo import leaf_from_photo
+from leafstudio.forms import make_form
+from tests.photos import form_photo, leaf_frame_match
+
+FORMS = {
+    "cordate": {"shape": "cordate"},  # the base in the sinus, between the lobes
+    "sagittate": {"shape": "sagittate"},  # lobes reaching far back past the base
+    "obovate": {"shape": "obovate"},  # the wider end is the apex
+    "spatulate": {"shape": "spatulate"},  # a long narrow base, not a petiole
+    "ovate": {"shape": "ovate"},
+    "lanceolate": {"shape": "lanceolate"},
+    "palmate lobed": {"shape": "cordate", "margin": "lobed", "lobes": 5, "venation": "palmate"},
+    "orbicular": {"shape": "orbicular"},  # round: only the veins show the midline
+}
+ANGLES = {"base left": 0.0, "base bottom": 90.0, "base right": 180.0, "base top": 270.0}
+
+
+@pytest.mark.parametrize("angle", list(ANGLES.values()), ids=list(ANGLES))
+@pytest.mark.parametrize("name", list(FORMS))
+def test_base_and_apex_of_a_form_without_petiole(name, angle):
+    match = leaf_frame_match(FORMS[name], angle)
+    assert match["base_error"] < 0.03, match
+    assert match["iou_leaf_frame"] >= 0.97, match
+
+
+@pytest.mark.parametrize("name", ["cordate", "obovate"])
+def test_a_turned_leaf_keeps_its_base(name):
+    """Away from the image's axes too, and with other noise."""
+    match = leaf_frame_match(FORMS[name], -125.0, seed=3)
+    assert match["base_error"] < 0.03 and match["iou_leaf_frame"] >= 0.97, match
+
+
+@pytest.mark.parametrize("base_end", ["left", "right", "top", "bottom"])
+def test_base_end_overrides_the_cues(base_end):
+    """--base-end names the end, even against the cues (an obovate leaf, base left)."""
+    leaf = make_form("obovate")
+    angle = {"left": 0.0, "right": 180.0, "top": 270.0, "bottom": 90.0}[base_end]
+    image, _, base = form_photo(leaf.boundary, leaf.veins, angle=angle + 180.0)
+    found = leaf_from_photo(image, veins="none", base_end=base_end)
+    at = found.pixel_from_world @ [0, 0, 1]  # the base it took, in pixels
+    apex = found.pixel_from_world @ [1, 0, 1]
+    direction = {"left": (-1, 0), "right": (1, 0), "top": (0, -1), "bottom": (0, 1)}[base_end]
+    assert (at - apex) @ np.array(direction) > 0.9 * np.linalg.norm(at - apex)
+    assert np.linalg.norm(apex - base) < 0.03 * np.linalg.norm(at - apex)  # the true base
+
+
+def test_notch_depth_is_how_far_the_lobes_reach_back():
+    """A square with a notch cut into its left side: the lobes reach 2 back past the notch."""
+    outline = np.array([[0, 0], [10, 0], [10, 10], [0, 10], [0, 6], [2, 5], [0, 4]], float)
+    line = Midline(ends=np.array([[2.0, 5.0], [10.0, 5.0]]), along=np.array([1.0, 0.0]), mirror=1)
+    np.testing.assert_allclose(notch_depths(outline, line), [2 / 8, 0.0])
