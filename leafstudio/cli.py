@@ -46,16 +46,15 @@ class _Parser(argparse.ArgumentParser):
         raise LeafError(f"{message} (see leafstudio {self.prog.split()[-1]} --help)")
 
 
-def _whole(text: str, low: int, high: int, what: str = "") -> int:
-    """A whole number in [low, high] from the command line; plain digits only (no "1_0")."""
-    lead = f"{what} must" if what else "must"
-    digits = text.strip()
-    body = digits[1:] if digits[:1] in "+-" else digits
-    if not body.isascii() or not body.isdigit():
-        raise argparse.ArgumentTypeError(f"{lead} be a whole number, got {shorten(text)!r}")
-    value = int(digits) if len(body) <= 30 else None  # int() of 5,000 digits is slow, and fails
-    if value is None or not low <= value <= high:
-        raise argparse.ArgumentTypeError(f"{lead} be between {low} and {high}, got {shorten(text)}")
+def _whole(text: str, low: int, high: int) -> int:
+    """A whole number in [low, high] from the command line (paramspec.read_whole)."""
+    from leafstudio.paramspec import read_whole
+
+    value = read_whole(text)
+    if value is None:
+        raise argparse.ArgumentTypeError(f"must be a whole number, got {shorten(text)!r}")
+    if not low <= value <= high:
+        raise argparse.ArgumentTypeError(f"must be between {low} and {high}, got {shorten(text)}")
     return value
 
 

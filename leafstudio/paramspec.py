@@ -36,6 +36,18 @@ def short(value: Any) -> str:
     return text if len(text) <= 40 else f"{text[:30]}… ({len(text)} characters)"
 
 
+def read_whole(text: str) -> int | None:
+    """A command line's whole number: plain digits with an optional sign (no "1_0", no "1.0"),
+    else None. Over LONGEST_DIGITS digits it is ±10**LONGEST_DIGITS: out of any range."""
+    body = text.strip()
+    digits = body[1:] if body[:1] in "+-" else body
+    if not digits.isascii() or not digits.isdigit():
+        return None
+    if len(digits) > LONGEST_DIGITS:
+        return -(10**LONGEST_DIGITS) if body[0] == "-" else 10**LONGEST_DIGITS
+    return int(body)
+
+
 def _number(value: float) -> str:
     return f"{value:g}" if isinstance(value, float) else str(value)
 
@@ -147,14 +159,13 @@ class Whole(Ranged):
         return int(value)
 
     def parse(self, text: str) -> Any:
-        """Plain digits with an optional sign (no "1_0", no "1.0")."""
-        body = text.strip()
-        digits = body[1:] if body[:1] in "+-" else body
-        if not digits.isascii() or not digits.isdigit():
+        """Plain digits with an optional sign (read_whole)."""
+        value = read_whole(text)
+        if value is None:
             return self.check(text)  # the special word, or "must be a whole number"
-        if len(digits) > LONGEST_DIGITS:
+        if not self.low <= value <= self.high:
             raise self.out_of_range(shorten(text))
-        return self.check(int(body))
+        return self.check(value)
 
     def describe(self) -> str:
         also = f", or {self.special}" if self.special else ""

@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import re
 from dataclasses import fields
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -85,6 +86,12 @@ def test_a_slider_range_outside_the_valid_one_is_refused_on_declaration():
     with pytest.raises(ValueError, match="default"):
         Real(default=20.0, low=1, high=50, slider=(1, 10), what="x", label="x", help="", stage="",
              flag="--x")  # fmt: skip
+
+
+def test_the_readme_names_every_flag():
+    readme = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
+    for p in PARAMS.values():
+        assert f"`{p.flag}`" in readme or f"`{p.flag}/" in readme, p.flag
 
 
 # --- validation ---------------------------------------------------------------------------------
