@@ -23,7 +23,6 @@ import hashlib
 import io
 import json
 import os
-import re
 import signal
 import threading
 import time
@@ -37,7 +36,7 @@ from typing import Any
 
 from leafstudio.errors import LeafError, error_line
 from leafstudio.model import Params
-from leafstudio.safewrite import PART_MARK, _pid_alive
+from leafstudio.safewrite import stale_part
 
 FORMATS = ("ply", "glb", "obj", "vtp", "none")
 TABLE_SUFFIXES = (".csv", ".json", ".jsonl", ".parquet")
@@ -575,9 +574,6 @@ class TraitTable:
 
 # ----------------------------------------------------------------------------- executors
 
-# a temporary file of safewrite's: ".NAME.PID-HEX.leafstudio-part.EXT"
-_PART = re.compile(rf"^\..*\.(\d+)-[0-9a-f]+\.{PART_MARK}(\.[^.]+)+$")
-
 
 def remove_temporaries(
     folder: Path, suffixes: Sequence[str], recursive: bool = True, stem: str = ""
@@ -594,8 +590,7 @@ def remove_temporaries(
         for name in names:
             if not name.startswith(f".{stem}") or not name.lower().endswith(tuple(suffixes)):
                 continue
-            part = _PART.match(name)
-            if part and not _pid_alive(int(part.group(1))):
+            if stale_part(name) is not None:
                 Path(where, name).unlink(missing_ok=True)
                 removed += 1
     return removed

@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import os
+import re
 import secrets
 import signal
 import stat
@@ -52,21 +53,29 @@ def _pid_alive(pid: int) -> bool:
     return True
 
 
+# a temporary file's name: ".TARGET.PID-HEX.leafstudio-part[.EXT]" (see _temp_name)
+_PART = re.compile(rf"^\.(.*)\.(\d+)-[0-9a-f]+\.{re.escape(PART_MARK)}(\..+)?$", re.DOTALL)
+
+
+def stale_part(name: str) -> str | None:
+    """The target's name (cut to _NAME_LIMIT characters) if `name` is one of our temporary files
+    left by a process no longer alive (a killed run's, safe to delete); None if it is not a
+    temporary file, or its process still runs."""
+    found = _PART.match(name)
+    if found is None or _pid_alive(int(found.group(2))):
+        return None
+    return found.group(1)
+
+
 def remove_stale(target: Path) -> list[Path]:
     """Remove temporary files beside `target` left by runs that are no longer alive."""
-    prefix = f".{target.name[:_NAME_LIMIT]}."
     removed = []
     try:
         entries = list(os.scandir(target.parent))
     except OSError:
         return removed
     for entry in entries:
-        name = entry.name
-        if not name.startswith(prefix) or f".{PART_MARK}" not in name:
-            continue
-        middle = name[len(prefix) :].split(".", 1)[0]
-        pid_text = middle.split("-", 1)[0]
-        if not pid_text.isdigit() or _pid_alive(int(pid_text)):
+        if stale_part(entry.name) != target.name[:_NAME_LIMIT]:
             continue
         with contextlib.suppress(OSError):
             os.unlink(entry.path)
@@ -331,5 +340,6 @@ __all__ = [
     "remove_stale",
     "replace_atomically",
     "staged",
+    "stale_part",
     "write_bytes",
 ]

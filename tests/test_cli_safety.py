@@ -221,6 +221,21 @@ def test_a_later_write_removes_what_a_killed_run_left(leaf_csv, tmp_path):
     assert not stale.exists() and other.exists()
 
 
+def test_stale_part_names_the_target_of_a_dead_processs_temporary_file():
+    """safewrite.stale_part: the one reading of a temporary file's name (remove_stale and
+    batch.remove_temporaries both use it)."""
+    from leafstudio.safewrite import _temp_name, stale_part
+
+    dead = 2**22 + 12345
+    assert stale_part(f".o.ply.{dead}-0badcafe.{PART_MARK}.ply") == "o.ply"
+    assert stale_part(f".a.leaf.json.{dead}-0badcafe.{PART_MARK}.leaf.json") == "a.leaf.json"
+    assert stale_part(f".plain.{dead}-0badcafe.{PART_MARK}") == "plain"
+    live = _temp_name(Path("a.b.ply"))  # this process's own: not stale
+    assert stale_part(live) is None
+    assert stale_part(live.replace(f".{os.getpid()}-", f".{dead}-")) == "a.b.ply"
+    assert stale_part("o.ply") is None and stale_part(f".o.ply.x-1.{PART_MARK}.ply") is None
+
+
 WRITER = """
 import sys, time
 from pathlib import Path
