@@ -44,6 +44,7 @@ from PySide6.QtWidgets import (
 )
 
 from leafstudio.gui.layers import BOUNDARY_COLOR, vein_color
+from leafstudio.gui.profile_view import ProfileView
 from leafstudio.gui.sketch_model import BOUNDARY, Sketch
 
 HIT_PIXELS = 9.0
@@ -232,22 +233,19 @@ class SketchView(QGraphicsView):
                     best, best_d = (curve, index), d
         return best
 
+    def _mirrored(self, sketch: Sketch, xy: np.ndarray | None) -> Sketch:
+        """With Mirror on, `sketch` made symmetric from the side of plane point `xy` (an edit
+        there); as it is otherwise, or without `xy`."""
+        if not self.mirror or xy is None:
+            return sketch
+        return sketch.mirrored(1.0 if sketch.midrib_side(xy) >= 0 else -1.0)
+
     def _commit(self, before: Sketch, after: Sketch, text: str, xy=None) -> None:
-        if self.mirror and xy is not None:
-            after = after.mirrored(1.0 if self._side(after, xy) >= 0 else -1.0)
+        after = self._mirrored(after, xy)
         self.sketch = after
         self._redraw()
         self.selection_changed.emit()
         self.committed.emit(before, after, text)
-
-    @staticmethod
-    def _side(sketch: Sketch, xy: np.ndarray) -> float:
-        """Which side of the midrib a plane point is on (+ left, - right; 0 without one)."""
-        if not sketch.veins or len(sketch.veins[0]) < 2:
-            return 0.0
-        a, b = sketch.veins[0][0, :2], sketch.veins[0][-1, :2]
-        d = b - a
-        return float(d[0] * (xy[1] - a[1]) - d[1] * (xy[0] - a[0]))
 
     def _plane_tolerance(self, pixels: float) -> float:
         """`pixels` of the view as a plane distance at the current zoom."""
@@ -310,8 +308,25 @@ class SketchView(QGraphicsView):
         last (linear along the vein): one undo step."""
         if not 0 <= self.active < len(self.sketch.veins):
             return
-        before = self.sketch
-        self._commit(before, before.with_profile(self.active, start, end), "Vein profile")
+        self.commit_heights(self.sketch, self.sketch.with_profile(self.active, start, end))
+
+    def _side_vein_at(self, sketch: Sketch) -> np.ndarray | None:
+        """Where the active vein lies when it is a side vein (its points' mean), for mirroring
+        its heights onto its counterpart; None for the midrib or no vein."""
+        if not 0 < self.active < len(sketch.veins):
+            return None
+        return sketch.veins[self.active][:, :2].mean(axis=0)
+
+    def preview_heights(self, sketch: Sketch) -> None:
+        """The active vein's heights during a profile drag: shown and sent on as a preview
+        (with Mirror on, a side vein's counterpart follows)."""
+        self.sketch = self._mirrored(sketch, self._side_vein_at(sketch))
+        self._redraw()
+        self.preview.emit(self.sketch)
+
+    def commit_heights(self, before: Sketch, after: Sketch) -> None:
+        """The active vein's new heights (a profile set or dragged): one undo step."""
+        self._commit(before, after, "Vein profile", self._side_vein_at(after))
 
     def mousePressEvent(self, event: QMouseEvent) -> None:
         pos = event.position()
@@ -345,9 +360,7 @@ class SketchView(QGraphicsView):
             super().mouseMoveEvent(event)
             return
         xy = self.plane_point(event.position())
-        self.sketch = self.sketch.moved(*self._drag, xy)
-        if self.mirror:
-            self.sketch = self.sketch.mirrored(1.0 if self._side(self.sketch, xy) >= 0 else -1.0)
+        self.sketch = self._mirrored(self.sketch.moved(*self._drag, xy), xy)
         self._moved = True
         self._redraw()
         self.preview.emit(self.sketch)
@@ -434,6 +447,8 @@ class SketchEditor(QWidget):
         layout.addLayout(curves)
         layout.addLayout(point)
         layout.addLayout(whole)
+        self.profile_view = ProfileView()
+        layout.addWidget(self.profile_view)
         layout.addWidget(self.view, 1)
         layout.addWidget(hint)
 
@@ -448,6 +463,8 @@ class SketchEditor(QWidget):
             lambda: self.view.set_profile(self.profile_start.value(), self.profile_end.value())
         )
         self.height.valueChanged.connect(self.view.set_height)
+        self.profile_view.dragged.connect(self.view.preview_heights)
+        self.profile_view.released.connect(self.view.commit_heights)
         self.curve.activated.connect(self._choose_curve)
         self.view.selection_changed.connect(self._sync_tools)
         self._sync_tools()
@@ -493,6 +510,7 @@ class SketchEditor(QWidget):
         self.select.setChecked(view.select_tool)
         self.select.blockSignals(False)
         on_vein = 0 <= view.active < count
+        self.profile_view.set_vein(view.sketch, view.active)
         for widget in (self.profile_start, self.profile_end, self.profile):
             widget.setEnabled(on_vein)
         if on_vein:
