@@ -188,3 +188,21 @@ def test_a_missing_photo_is_said_and_the_generated_texture_shown(window, qtbot, 
     assert not window.export_mesh(str(tmp_path / "x.glb"), texture="photo")  # said, not written
     assert "missing" in window.last_error_box.text()
     window.last_error_box.close()
+
+
+def test_an_unreadable_photo_is_said_and_the_generated_one_shown(window, qtbot, tmp_path, photo):
+    from leafstudio.assets.export import base_color
+
+    _open(window, qtbot, photo)
+    _show_texture(window, qtbot)
+    photo.write_bytes(b"not a picture any more")
+    project = tmp_path / "oak.leaf.json"
+    assert window.save_to(str(project))
+    with qtbot.waitSignal(window.notice_shown, timeout=WAIT_MS) as notice:
+        _open(window, qtbot, project)  # the texture job fails on the side lane
+    assert "not a readable image" in notice.args[0] and "generated" in notice.args[0]
+    window.last_error_box.close()
+    qtbot.waitUntil(lambda: window.viewport.texture_key is not None, timeout=WAIT_MS)
+    assert window.viewport.texture_key[0] == ("auto",)
+    generated = np.asarray(base_color(window.result, "auto"))
+    np.testing.assert_array_equal(window.viewport.texture_actor_image(), generated)
