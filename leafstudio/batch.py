@@ -516,12 +516,12 @@ class TraitTable:
 
     def start(self, keep: Iterable[dict[str, Any]] = ()) -> None:
         """Start the journal afresh with the rows in `keep` (rows resumed), then open it."""
-        from leafstudio.io import _write_atomically
+        from leafstudio.safewrite import write_bytes
 
         self.path.parent.mkdir(parents=True, exist_ok=True)
         text = self._header() + "".join(self._line(r) for r in keep)
         if text:
-            _write_atomically(self.journal, text)
+            write_bytes(self.journal, text)
         self._handle = open(self.journal, "a" if text else "w", encoding="utf-8", newline="")  # noqa: SIM115
 
     def add(self, row: dict[str, Any]) -> None:
@@ -537,7 +537,7 @@ class TraitTable:
             return
         self._handle.close()
         self._handle = None
-        from leafstudio.io import _replace_atomically, _write_atomically
+        from leafstudio.safewrite import replace_atomically, write_bytes
 
         if self.kind == ".parquet":
             import pyarrow as pa
@@ -550,10 +550,10 @@ class TraitTable:
             table = pa.Table.from_pylist(
                 [{c: r.get(c) for c in self.columns} for r in rows], schema=schema
             )
-            _replace_atomically(self.path, lambda tmp: pq.write_table(table, tmp))
+            replace_atomically(self.path, lambda tmp: pq.write_table(table, tmp))
             self.journal.unlink(missing_ok=True)
         else:  # the journal's own lines, sorted: rows are not parsed (nor held) whole
-            _write_atomically(self.path, self._header() + "".join(self._sorted_lines()))
+            write_bytes(self.path, self._header() + "".join(self._sorted_lines()))
 
     def _sorted_lines(self) -> list[str]:
         """The journal's complete row lines (one line a row: see _cell), sorted by input."""

@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from io import BytesIO
 from pathlib import Path
 from typing import Any
@@ -19,8 +19,8 @@ import numpy as np
 from leafstudio.errors import LeafError, shorten
 from leafstudio.inputs import load_json, parse_number, ply_xyz, read_ply, read_text
 from leafstudio.model import Leaf, Params
-from leafstudio.safewrite import replace_atomically, write_bytes
 from leafstudio.safewrite import staged as staged  # re-exported: outputs replaced together
+from leafstudio.safewrite import write_bytes
 
 POINT_SUFFIXES = (".csv", ".txt", ".xyz")
 LEAF_SUFFIXES = (*POINT_SUFFIXES, ".ply", ".leaf.json", ".json")
@@ -34,15 +34,11 @@ def _suffix(path: Path) -> str:
     return ".leaf.json" if name.endswith(".leaf.json") else path.suffix.lower()
 
 
-def _read_text(path: Path) -> str:
-    return read_text(path)  # regular files only, size bounded (inputs.py)
-
-
 def read_point_table(path: Path, columns: Sequence[int] = (3, 4)) -> np.ndarray:
     """Numbers from a point list, (n, c) with c one of `columns`; header and blank lines skipped."""
     rows: list[list[float]] = []
     width = None
-    for number, line in enumerate(_read_text(path).splitlines(), start=1):
+    for number, line in enumerate(read_text(path).splitlines(), start=1):
         text = line.split("#", 1)[0].strip()
         if not text:
             continue
@@ -221,17 +217,6 @@ def check_leaf_output(output: str, inputs: Sequence[str | os.PathLike]) -> None:
     check_target(output)
 
 
-def _replace_atomically(path: Path, write: Callable[[str], object]) -> None:
-    """Run `write` on a temporary file beside `path`, check and flush it, then rename it over
-    `path` (inside `safewrite.staged()`, at the end of the run); see leafstudio.safewrite."""
-    replace_atomically(path, write)
-
-
-def _write_atomically(path: Path, text: str | bytes) -> None:
-    """Write text or bytes to `path` atomically."""
-    write_bytes(path, text)
-
-
 def project_dict(
     leaf: Leaf,
     params: Params | None = None,
@@ -269,7 +254,7 @@ def save_leaf(
     ).astype(int)
     xyz = np.vstack([leaf.boundary, *leaf.veins])
     if suffix in (".leaf.json", ".json"):
-        _write_atomically(path, json.dumps(project_dict(leaf, params, sketch, photo), indent=1))
+        write_bytes(path, json.dumps(project_dict(leaf, params, sketch, photo), indent=1))
     elif suffix in POINT_SUFFIXES:
         sep = "," if suffix == ".csv" else " "
         lines = [sep.join(["x", "y", "z", "label"])]
@@ -277,7 +262,7 @@ def save_leaf(
             sep.join([f"{x:.9g}", f"{y:.9g}", f"{z:.9g}", str(lab)])
             for (x, y, z), lab in zip(xyz, labels, strict=True)
         ]
-        _write_atomically(path, "\n".join(lines) + "\n")
+        write_bytes(path, "\n".join(lines) + "\n")
     elif suffix == ".ply":
         from plyfile import PlyData, PlyElement
 
@@ -285,7 +270,7 @@ def save_leaf(
         data["x"], data["y"], data["z"], data["label"] = xyz[:, 0], xyz[:, 1], xyz[:, 2], labels
         buffer = BytesIO()
         PlyData([PlyElement.describe(data, "vertex")], text=False).write(buffer)
-        _write_atomically(path, buffer.getvalue())
+        write_bytes(path, buffer.getvalue())
     else:
         raise LeafError(f"cannot write a leaf as {suffix or '(none)'!r}", str(path))
 

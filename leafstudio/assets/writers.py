@@ -11,13 +11,13 @@
 - ``.stl``, ``.3mf``: through trimesh (geometry only; 3MF in millimetres, its unit by spec).
 - ``.vtp``, ``.vtk``: through pyvista, with Normals, the texture coordinates and the scalars.
 
-Every file is written through io._replace_atomically; the OBJ's texture and material go first, so
-an .obj on disk never names a file that is not there.
+Every file is written atomically (safewrite.write_bytes); the OBJ's texture and material go
+first, so an .obj on disk never names a file that is not there.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from io import BytesIO
 from pathlib import Path
 
@@ -25,21 +25,12 @@ import numpy as np
 
 from leafstudio.assets.asset import MeshAsset
 from leafstudio.io import MESH_SUFFIXES
+from leafstudio.safewrite import write_bytes
 
 GLTF_SUFFIXES = (".glb", ".gltf")
 ASSET_SUFFIXES = MESH_SUFFIXES  # io's list: the writers below cover each
 METALLIC, ROUGHNESS, ALPHA_CUTOFF = 0.0, 0.8, 0.5
 SHORT = ("nx", "ny", "nz", "s", "t")  # PLY properties kept as float32
-
-
-def _replace(path: Path, write: Callable[[str], None]) -> None:
-    from leafstudio.io import _replace_atomically
-
-    _replace_atomically(path, write)
-
-
-def _bytes(path: Path, data: bytes) -> None:
-    _replace(path, lambda tmp: Path(tmp).write_bytes(data))
 
 
 def write_ply(asset: MeshAsset, path: Path) -> None:
@@ -60,7 +51,7 @@ def write_ply(asset: MeshAsset, path: Path) -> None:
     rows = np.empty(len(asset.faces), dtype=[("n", "u1"), ("v", "<i4", (3,))])
     rows["n"], rows["v"] = 3, asset.faces
     little = vertex.astype(vertex.dtype.newbyteorder("<"))
-    _bytes(path, header.encode("ascii") + b"\n" + little.tobytes() + rows.tobytes())
+    write_bytes(path, header.encode("ascii") + b"\n" + little.tobytes() + rows.tobytes())
 
 
 def _png(image) -> bytes:
@@ -86,11 +77,11 @@ def write_obj(asset: MeshAsset, path: Path) -> None:
     kd = " ".join(f"{c / 255:.4f}" for c in BLADE)
     lines = ["newmtl leaf", "Ka 0 0 0", "Ks 0 0 0", "illum 1"]
     if asset.texture is not None:
-        _bytes(png, _png(asset.texture))
+        write_bytes(png, _png(asset.texture))
         lines += ["Kd 1 1 1", f"map_Kd {png.name}", f"map_d {png.name}"]
     else:
         lines.append(f"Kd {kd}")
-    _bytes(mtl, ("\n".join(lines) + "\n").encode())
+    write_bytes(mtl, ("\n".join(lines) + "\n").encode())
     rows = [f"# LeafStudio leaf: {asset.n_points} vertices, {len(asset.faces)} triangles",
             f"mtllib {mtl.name}", f"o {asset.name}"]  # fmt: skip
     corners = np.repeat(asset.faces + 1, 3, axis=1)  # a/a/a
@@ -102,7 +93,7 @@ def write_obj(asset: MeshAsset, path: Path) -> None:
         "usemtl leaf",
         _rows("f {}/{}/{} {}/{}/{} {}/{}/{}", corners),
     ]
-    _bytes(path, ("\n".join(b for b in blocks if b) + "\n").encode())
+    write_bytes(path, ("\n".join(b for b in blocks if b) + "\n").encode())
 
 
 def _rows(line: str, values: np.ndarray) -> str:
@@ -186,14 +177,14 @@ def write_gltf(assets: Sequence[MeshAsset], path: Path) -> None:
             scene, include_normals=True, embed_buffers=True, tree_postprocessor=_standard_names
         )
         data = files["model.gltf"]
-    _bytes(path, data)
+    write_bytes(path, data)
 
 
 def write_trimesh_format(asset: MeshAsset, path: Path) -> None:
     """STL or 3MF through trimesh (geometry only)."""
     mesh = to_trimesh(asset, textured=False)
     kind = path.suffix.lower().lstrip(".")
-    _bytes(path, mesh.export(file_type=kind))
+    write_bytes(path, mesh.export(file_type=kind))
 
 
 def write_vtk(asset: MeshAsset, path: Path) -> None:
@@ -204,7 +195,7 @@ def write_vtk(asset: MeshAsset, path: Path) -> None:
     mesh.active_texture_coordinates = asset.uv.copy()
     from leafstudio.io import _vtk_bytes
 
-    _bytes(path, _vtk_bytes(mesh, path.suffix.lower()))
+    write_bytes(path, _vtk_bytes(mesh, path.suffix.lower()))
 
 
 def write_assets(assets: Sequence[MeshAsset], path: Path) -> None:
