@@ -7,9 +7,12 @@ import pytest
 from PySide6.QtWidgets import QCheckBox, QComboBox, QLabel
 from superqt import QLabeledSlider, QLargeIntSpinBox
 
+import leafstudio as ls
 from leafstudio.gui.controls import ParamPanel
 from leafstudio.model import PARAMS, SEED_MAX, Params
 from leafstudio.paramspec import Choice, Ranged, Switch, Whole
+
+from .conftest import FAST, wait_result
 
 
 def test_every_control_and_its_label_explain_themselves(qtbot):
@@ -129,3 +132,18 @@ def test_auto_k(qtbot):
     assert not panel.auto_k.isChecked() and panel.params().k == 5
     panel.set_params(Params(k="auto"))
     assert panel.auto_k.isChecked() and panel.params() == Params(k="auto")
+
+
+def test_a_project_keeps_its_parameters_through_a_panel_edit_in_the_window(window, qtbot, tmp_path):
+    """Issue 12: the panel allowed K 1-12, grid 16-512, 500+ samples, a taper up to 1 and seeds up
+    to 99999 where validation takes more, and had no margin control: a project's valid values
+    were clamped, and its margin reset, at the first edit in the panel."""
+    saved = FAST.with_(samples=120, taper=1.5, margin="exact", seed=2**31 + 5)
+    path = tmp_path / "p.leaf.json"
+    ls.save_leaf(ls.demo("nested"), path, saved)
+    assert window.open_path(str(path))
+    wait_result(qtbot, window, lambda o: o.result.params == saved)
+    window.panel.k.setValue(4)
+    outcome = wait_result(qtbot, window, lambda o: o.result.params.k == 4)
+    assert outcome.result.params == saved.with_(k=4)
+    assert window.session.params == saved.with_(k=4)
