@@ -38,7 +38,7 @@ from leafstudio.errors import LeafError, error_line
 from leafstudio.model import Params
 from leafstudio.safewrite import stale_part
 
-FORMATS = ("ply", "glb", "obj", "vtp", "none")
+FORMATS = ("ply", "glb", "obj", "vtp", "none")  # mesh types save_mesh writes, or none
 TABLE_SUFFIXES = (".csv", ".json", ".jsonl", ".parquet")
 DEFAULT_TABLE = "traits.csv"
 EXTRACT_POINTS = 200  # boundary points taken from a scan (as `leafstudio extract`)
@@ -544,8 +544,7 @@ class TraitTable:
             import pyarrow.parquet as pq
 
             rows = sorted(self.rows(), key=lambda r: str(r.get("input")))
-            types = {c: pa.int64() if c in INT_COLUMNS else pa.float64() for c in FLOAT_COLUMNS}
-            types.update({c: pa.int64() for c in INT_COLUMNS})
+            types = {c: pa.float64() for c in FLOAT_COLUMNS} | {c: pa.int64() for c in INT_COLUMNS}
             schema = pa.schema([(c, types.get(c, pa.string())) for c in self.columns])
             table = pa.Table.from_pylist(
                 [{c: r.get(c) for c in self.columns} for r in rows], schema=schema
@@ -741,13 +740,6 @@ class Batch:
     ) -> None:
         if format not in FORMATS:
             raise LeafError(f"unknown mesh format {format!r}; use one of {', '.join(FORMATS)}")
-        if format != "none":
-            from leafstudio.io import MESH_SUFFIXES
-
-            if f".{format}" not in MESH_SUFFIXES:
-                raise LeafError(
-                    f"unknown mesh type '.{format}'; use one of {', '.join(MESH_SUFFIXES)}"
-                )
         if jobs is not None and jobs < 1:
             raise LeafError(f"--jobs must be 1 or more, got {jobs}")
         self.out_dir = Path(out_dir)
