@@ -233,6 +233,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _add_batch_parser(sub: argparse._SubParsersAction) -> None:
     """`leafstudio batch`: many inputs, a worker pool or a Dask cluster (leafstudio/batch.py)."""
+    from leafstudio.batch import FORMATS
+
     bat = sub.add_parser(
         "batch", help="reconstruct many leaves or scans: meshes and a trait table"
     )
@@ -242,7 +244,7 @@ def _add_batch_parser(sub: argparse._SubParsersAction) -> None:
     bat.add_argument(
         "--traits", metavar="FILE", help=".csv, .json or .parquet (default OUTDIR/traits.csv)"
     )
-    bat.add_argument("--format", choices=("ply", "glb", "obj", "vtp", "none"), default="ply")
+    bat.add_argument("--format", choices=FORMATS, default="ply")
     _add_param_flags(bat)
     bat.add_argument("--jobs", type=int, default=None, help="worker processes (default: cores)")
     bat.add_argument(
