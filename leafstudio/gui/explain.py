@@ -150,6 +150,8 @@ class StepsDialog(QDialog):
 
 
 SEE_THROUGH = 0.35  # the mesh's opacity when the layers under it should show
+K_FONT_PX = 24  # K's label in the view: its size in logical pixels
+K_POSITION = (0.985, 0.98)  # its upper right corner, in the view's normalized coordinates
 
 
 class ViewAids(QWidget):
@@ -179,6 +181,7 @@ class ViewAids(QWidget):
             "EM samples) can be read with the mesh shown."
         )
         self.kept: tuple[str, tuple[float, float]] | None = None
+        self._label: tuple[str, str, int] | None = None  # K's text, colour and size, as drawn
         column = QVBoxLayout(self)
         column.setContentsMargins(0, 0, 0, 0)
         row = QHBoxLayout()
@@ -233,14 +236,35 @@ class ViewAids(QWidget):
             actor.mapper.scalar_range = self.kept[1]
         result = self.window_.session.result
         if result is not None:
-            plotter.add_text(
-                f"K = {result.chosen_k}",
-                position="upper_right",
-                font_size=11,
-                color=self.window_.viewport.text_color(),
-                name="k_label",
+            self._show_k(f"K = {result.chosen_k}")
+        # one render at the next paint, with the result's own: a render here would be a second
+        # (and a third, from the frame it ends with) full render of the scene per result
+        self.window_.viewport.redraw()
+
+    def _show_k(self, text: str) -> None:
+        """K in the view's upper right corner: one text actor, its string set in place (a
+        corner annotation fits its font anew whenever its text changes, about 15 ms of the
+        main thread's time in every render that follows a result)."""
+        import pyvista as pv
+
+        plotter, viewport = self.window_.viewport.plotter, self.window_.viewport
+        label = (text, viewport.text_color(), round(K_FONT_PX * viewport.pixel_ratio()))
+        actor = plotter.actors.get("k_label")
+        if not isinstance(actor, pv.Text):
+            actor = pv.Text(text)
+            actor.GetPositionCoordinate().SetCoordinateSystemToNormalizedViewport()
+            actor.SetPosition(*K_POSITION)
+            actor.prop.justification_horizontal = "right"
+            actor.prop.justification_vertical = "top"
+            plotter.add_actor(
+                actor, name="k_label", reset_camera=False, pickable=False, render=False
             )
-        plotter.render()
+        elif label == self._label:
+            return
+        actor.input = label[0]
+        actor.prop.color = label[1]
+        actor.prop.font_size = label[2]
+        self._label = label
 
 
 def _menu(window, title: str):
