@@ -167,3 +167,37 @@ def test_the_side_view_follows_a_dark_palette(window):
     image = window.editor.profile_view.grab().toImage()
     corner = image.pixelColor(2, 2)
     assert corner.lightnessF() < 0.3
+
+
+def test_with_mirror_on_a_side_veins_profile_and_a_click_follow_the_bent_midrib(window, qtbot):
+    from .test_midrib import distance_to, lopsided_leaf
+    from .test_sketch import click
+
+    bent = lopsided_leaf(bend=0.6).mirrored(+1.0)  # symmetric about its bent midrib
+    window.session.new_document(None, bent, title="bent")
+    editor, view = window.editor, window.editor.view
+    assert len(view.sketch.veins) == 3
+    editor.mirror.setChecked(True)
+    choose_vein(window, 1)  # the side vein; vein 3 is its mirror image
+    side = editor.profile_view
+    steps = window.undo_stack.count()
+    press = side.to_view(side.profile.t[0], side.profile.h[0]).toPoint()
+    QTest.mousePress(side, Qt.MouseButton.LeftButton, pos=press)
+    QTest.mouseMove(side, press + QPoint(0, -25))
+    QTest.mouseRelease(side, Qt.MouseButton.LeftButton, pos=press + QPoint(0, -25))
+    veins = view.sketch.veins
+    assert veins[1][0, 2] > bent.veins[1][0, 2] + 1e-6
+    np.testing.assert_allclose(veins[2][:, 2], veins[1][:, 2])  # the mirror vein followed
+    assert window.undo_stack.count() == steps + 1
+    choose_vein(window, -1)  # the boundary: a click beside the bent midrib gains its mirror
+    midrib = view.sketch.vein_curve(0)
+    spot = np.array([0.5, 0.27])  # between two boundary points, above the midrib's lowest
+    before = view.sketch.boundary
+    click(qtbot, view, spot)
+    added = np.array([p for p in view.sketch.boundary if not np.any(np.all(before == p, axis=1))])
+    assert len(added) == 2
+    offsets = view.sketch.midrib().offset(added)
+    assert offsets[0] * offsets[1] < 0  # one on each side of the midrib's curve
+    far = distance_to(midrib, added)
+    assert np.isclose(far[0], far[1], rtol=0.02)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
