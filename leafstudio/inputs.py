@@ -212,9 +212,17 @@ def ply_xyz(ply: Any, path: str | os.PathLike) -> tuple[np.ndarray, tuple[str, .
     names = vertex.data.dtype.names or ()
     if not {"x", "y", "z"} <= set(names):
         raise LeafError("PLY vertices need x, y and z properties", str(path))
-    for c in "xyz":
-        if vertex.data.dtype[c].kind not in "biuf" or vertex.data.dtype[c].shape:
-            raise LeafError(f"PLY vertex property {c} must be a number, not a list", str(path))
+    xyz = np.column_stack([ply_numbers(ply, c, path) for c in "xyz"])
     if len(vertex.data) == 0:
         raise LeafError("holds no points", str(path))
-    return np.column_stack([vertex[c] for c in "xyz"]).astype(float), names
+    return xyz, names
+
+
+def ply_numbers(ply: Any, name: str, path: str | os.PathLike) -> np.ndarray:
+    """The vertex property `name` of a PlyData, as floats; refused if it is a list (one per
+    vertex: x y z, a leaf's labels)."""
+    vertex = ply["vertex"]
+    kind = vertex.data.dtype[name]
+    if kind.kind not in "biuf" or kind.shape:
+        raise LeafError(f"PLY vertex property {name} must be a number, not a list", str(path))
+    return np.asarray(vertex[name], dtype=float)

@@ -17,7 +17,14 @@ from typing import Any
 import numpy as np
 
 from leafstudio.errors import LeafError, shorten
-from leafstudio.inputs import load_json, parse_number, ply_xyz, read_ply, read_text
+from leafstudio.inputs import (
+    load_json,
+    parse_number,
+    ply_numbers,
+    ply_xyz,
+    read_ply,
+    read_text,
+)
 from leafstudio.model import Leaf, Params
 from leafstudio.safewrite import staged as staged  # re-exported: outputs replaced together
 from leafstudio.safewrite import write_bytes
@@ -102,12 +109,7 @@ def _read_ply(path: Path) -> Leaf:
     xyz, names = ply_xyz(ply, path)
     if not np.all(np.isfinite(xyz)):
         raise LeafError("NaN or infinite coordinates", str(path))
-    labels = None
-    if "label" in names:
-        kind = ply["vertex"].data.dtype["label"]
-        if kind.kind not in "biuf" or kind.shape:
-            raise LeafError("the vertex property label must be a number, not a list", str(path))
-        labels = np.asarray(ply["vertex"]["label"], dtype=float)
+    labels = ply_numbers(ply, "label", path) if "label" in names else None
     return _split_labels(xyz, labels, str(path))
 
 
