@@ -46,6 +46,7 @@ class Viewport(QWidget):
         }
         self._mesh_piece: Piece | None = None
         self._texture = None  # pyvista.Texture for the TEXTURE colouring, made on this thread
+        self._plain = None  # its stand-in while the image is being made
         self.texture_key: tuple | None = None  # what the texture shows (gui/textures.py)
         self._names: dict[str, list[str]] = {key: [] for key, _, _ in LAYERS}
         self._frame = Frame(np.zeros(3), np.eye(3)[0], np.eye(3)[1], np.eye(3)[2])
@@ -154,11 +155,12 @@ class Viewport(QWidget):
         style = dict(piece.style)
         if key == "mesh" and self.mesh_coloring == TEXTURE:
             self._mesh_piece = piece
-            # white under the image (its colours as they are); the blade's until it is made.
+            # white under the image (its colours as they are); until the leaf's is made, one
+            # texel of the blade's colour (the same actor then takes the image in place).
             # Opaque: alpha 0 outside the outline is dropped (glTF's MASK), never sorted.
-            plain = "white" if self._texture is not None else "#4e8032"
+            texture = self._texture if self._texture is not None else self._plain_texture()
             style.update(
-                show_edges=self.show_edges, texture=self._texture, color=plain, force_opaque=True
+                show_edges=self.show_edges, texture=texture, color="white", force_opaque=True
             )
         elif key == "mesh":
             self._mesh_piece = piece
@@ -259,6 +261,16 @@ class Viewport(QWidget):
         self.texture_key = key
         if draw and self.mesh_coloring == TEXTURE:
             self.set_mesh_coloring(TEXTURE)
+
+    def _plain_texture(self):
+        """A one-texel texture of the generated blade colour (assets/texture.py)."""
+        import pyvista as pv
+
+        from leafstudio.assets.texture import BLADE
+
+        if self._plain is None:
+            self._plain = pv.Texture(np.array([[BLADE]], dtype=np.uint8))
+        return self._plain
 
     def texture_actor_image(self) -> np.ndarray | None:
         """The image on the mesh actor now (row 0 at t = 1), or None (for tests and checks)."""

@@ -206,3 +206,17 @@ def test_an_unreadable_photo_is_said_and_the_generated_one_shown(window, qtbot, 
     assert window.viewport.texture_key[0] == ("auto",)
     generated = np.asarray(base_color(window.result, "auto"))
     np.testing.assert_array_equal(window.viewport.texture_actor_image(), generated)
+
+
+def test_the_image_arrives_on_the_same_actor_and_keeps_the_view_aids(window, qtbot):
+    """Until the image is made the mesh has the blade's colour; the image then goes onto the
+    same actor, so the height exaggeration (explain.py's view aids) stays on it."""
+    window.view_aids.exaggeration.setValue(3.0)
+    window.coloring.setCurrentIndex(window.coloring.findData(TEXTURE))
+    actor = window.viewport.plotter.actors["mesh"]
+    assert actor.GetUserMatrix() is not None
+    if window.viewport.texture_key is None:  # the blade's colour while the image is made
+        assert window.viewport.texture_actor_image().shape[:2] == (1, 1)
+    qtbot.waitUntil(lambda: window.viewport.texture_key is not None, timeout=WAIT_MS)
+    assert window.viewport.plotter.actors["mesh"] is actor and actor.GetUserMatrix() is not None
+    assert window.viewport.texture_actor_image().shape == (1024, 1024, 4)
