@@ -108,6 +108,12 @@ class Params:
     invalidates and its command-line flag (paramspec.py). Validation, the stage cache's keys
     (core/pipeline.py), the parameter panel (gui/controls.py) and the CLI flags (cli.py) are
     derived from these declarations (`PARAMS`).
+
+    A `slider` range is what the panel's slider offers, inside the valid range: what is worth
+    exploring by hand. K goes up to what auto tries; grid to 512, as a run's time grows with its
+    square (2048 takes 16 times as long); samples, tolerance, radius and taper over what changes
+    a leaf visibly. A project, the command line or the API may hold any valid value; the panel
+    widens its slider to show it and gives it back unchanged.
     """
 
     k: int | str = Whole(
