@@ -315,7 +315,7 @@ def _reconstruct(args: argparse.Namespace) -> int:
     a run that fails anywhere leaves all old outputs as they were."""
     from leafstudio.figure import check_figure_path
     from leafstudio.io import MESH_SUFFIXES, load_leaf, save_mesh
-    from leafstudio.safewrite import check_target, refuse_overlap, staged, write_bytes
+    from leafstudio.safewrite import check_outputs, staged, write_bytes
 
     out = Path(args.output)
     if not out.name.lower().endswith(MESH_SUFFIXES):
@@ -329,10 +329,7 @@ def _reconstruct(args: argparse.Namespace) -> int:
     turntable = check_turntable_path(args.turntable) if args.turntable else None
     steps = check_figure_path(args.steps_figure) if args.steps_figure else None
     outputs = [out, args.metrics, figure, turntable, steps]  # every file this command writes
-    refuse_overlap([args.input, *args.vein, args.against], outputs)
-    for path in outputs:
-        if path:
-            check_target(path)
+    check_outputs([args.input, *args.vein, args.against], outputs)
     leaf = load_leaf(args.input, veins=args.vein)
     scan = None
     if args.against:

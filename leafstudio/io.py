@@ -211,12 +211,11 @@ def _read_vein(path: Path) -> np.ndarray:
 def check_leaf_output(output: str, inputs: Sequence[str | os.PathLike]) -> None:
     """Refuse, before any work, a leaf output of an unknown type, one that is also one of the
     `inputs`, or one that cannot be written (LeafError naming the output)."""
-    from leafstudio.safewrite import check_target, refuse_overlap
+    from leafstudio.safewrite import check_outputs
 
     if not output.lower().endswith(LEAF_SUFFIXES):
         raise LeafError(f"unknown leaf type; use one of {', '.join(LEAF_SUFFIXES)}", output)
-    refuse_overlap(list(inputs), [output])  # an input is never an output
-    check_target(output)
+    check_outputs(list(inputs), [output])
 
 
 def project_dict(

@@ -154,6 +154,17 @@ def refuse_overlap(
                 raise LeafError(f"is given as two outputs ({other} and {out})", str(out))
 
 
+def check_outputs(
+    inputs: Sequence[str | os.PathLike | None], outputs: Sequence[str | os.PathLike | None]
+) -> None:
+    """Refuse, before any work, every output of a run that is also an input or another output
+    (refuse_overlap) or that cannot be written (check_target); None entries are left out."""
+    refuse_overlap(inputs, outputs)
+    for path in outputs:
+        if path:
+            check_target(path)
+
+
 def _usual_permissions(path: str, target: Path) -> None:
     """Give the temporary file (created 0600) the target's permissions, or those a plain new file
     would get."""
@@ -333,6 +344,7 @@ def install_signal_cleanup() -> None:
 __all__ = [
     "PART_MARK",
     "Staging",
+    "check_outputs",
     "check_target",
     "install_signal_cleanup",
     "refuse_overlap",
