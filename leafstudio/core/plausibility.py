@@ -141,33 +141,60 @@ def leaf_warnings(leaf) -> list[str]:
     return notes
 
 
-FILLED_DEPTH = 0.03  # boundary points whose median depth inside the outline is over this share
-FILLED_SAMPLE = 2000  # of the length fill an area (noise of 1% of the length: about 0.007)
+COVER_REACH = 0.05  # the neighbourhood of a point: this share of the length round it
+COVER_SPREAD = 0.45  # median ratio of the two largest spreads in it: a curve's is near 0 (noise
+# of 1% of the length: 0.11, of 2%: 0.35; teeth: at most 0.12), a surface's near 1 (the real
+# scans: 0.59 to 0.89)
+COVER_CENTRES = 500  # neighbourhoods measured
+COVER_POINTS = 5000  # points they are taken from, at most
+COVER_LEAST = 8  # a neighbourhood with fewer points is not measured (a sparse outline)
 
 
-def filled_cloud_note(xy: np.ndarray, polygon: np.ndarray, length: float) -> str | None:
-    """A warning when the (n, 2) boundary points fill the region inside the (m, 2) outline
-    instead of lying along it: a scan of the whole leaf given as its boundary (its area is then
-    the outline's, and the points' surface is lost). Checks FILLED_SAMPLE points at most."""
-    import shapely
+def surface_spread(points: np.ndarray) -> float:
+    """How much the (n, 3) points cover a surface rather than trace a curve: the median, over
+    neighbourhoods of COVER_REACH of the length, of their second spread over their largest (0
+    on a curve, 1 on a surface); 0 when most neighbourhoods hold too few points to tell.
+    Scale-free and independent of the points' order and of any outline traced through them."""
+    points = np.asarray(points, dtype=float)
+    if len(points) > COVER_POINTS:
+        points = points[np.random.default_rng(0).choice(len(points), COVER_POINTS, False)]
+    centred = points - points.mean(axis=0)
+    length = float(np.ptp(centred @ np.linalg.svd(centred, full_matrices=False)[2][0]))
+    if not np.isfinite(length) or length <= 0:
+        return 0.0
+    centres = points[:: max(1, len(points) // COVER_CENTRES)]
+    balls = cKDTree(points).query_ball_point(centres, COVER_REACH * length)
+    ratios = []
+    for ball in balls:
+        if len(ball) >= COVER_LEAST:
+            near = points[ball] - points[ball].mean(axis=0)
+            spread = np.linalg.eigvalsh(near.T @ near)  # ascending
+            ratios.append(spread[1] / max(spread[2], 1e-300))
+    if len(ratios) < len(centres) / 2:
+        return 0.0
+    return float(np.median(ratios))
 
-    if len(xy) < 3 or len(polygon) < 3 or not length > 0:
-        return None
-    sample = xy[:: max(1, len(xy) // FILLED_SAMPLE)]
-    depth = float(np.median(shapely.distance(shapely.LinearRing(polygon), shapely.points(sample))))
-    if depth <= FILLED_DEPTH * length:
-        return None
-    return (
-        f"the boundary points fill an area (half lie more than {depth / length:.0%} of the leaf's "
-        "length inside its outline): if this is a scan of the whole leaf, `leafstudio extract` "
-        "takes its boundary and veins"
-    )
+
+def check_not_a_surface(boundary: np.ndarray) -> None:
+    """Raise LeafError when the boundary points cover a surface (surface_spread over
+    COVER_SPREAD): a scan of the whole leaf given where its boundary belongs, whose outline and
+    area would be meaningless and whose surface would be lost."""
+    spread = surface_spread(boundary)
+    if spread > COVER_SPREAD:
+        raise LeafError(
+            f"the boundary points cover a surface, not a line round the leaf (local spread "
+            f"{spread:.2f}; an outline's is under {COVER_SPREAD}): this looks like a scan of the "
+            "whole leaf; `leafstudio extract SCAN -o LEAF` takes its boundary and veins"
+        )
 
 
 CHECKED_POINTS = 4000  # a longer ordered boundary is checked on every k-th point
 CROSSING_SHARE = 0.05  # each side of a crossing encloses at least this share of the area
 LOOPS_FROM = 16  # fewer boundary points are taken as one loop
 JUMP = 8.0  # a step this many median steps long ends one loop of an ordered boundary
+ZIGZAG = 4.0  # a path this many times its points' hull perimeter zigzags through a cloud: a
+# leaf's outline, teeth and lobes included, is under 1.3 of it (gallery forms); a scan's points in
+# the scanner's order are 11 to 47 (the real scans)
 
 
 def _plane_coordinates(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -179,8 +206,8 @@ def _plane_coordinates(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.n
     return (points - centre) @ np.ascontiguousarray(axes[:2].T), centre, axes[:2]
 
 
-def _hull_perimeter(xy: np.ndarray) -> float:
-    """The perimeter of the points' convex hull (0 for collinear points)."""
+def hull_perimeter(xy: np.ndarray) -> float:
+    """The perimeter of the (n, 2) points' convex hull (0 for collinear points)."""
     from scipy.spatial import ConvexHull, QhullError
 
     try:
@@ -205,10 +232,10 @@ def boundary_crossing(boundary: np.ndarray) -> np.ndarray | None:
     xy, centre, axes = _plane_coordinates(points)
     steps = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1)
     typical = float(np.median(steps))
-    perimeter = _hull_perimeter(xy)
+    perimeter = hull_perimeter(xy)
     if typical <= 0 or perimeter <= 0 or np.any(steps > JUMP * typical):
         return None  # unordered, or several loops, or an open arc: not one closed ordered loop
-    if steps.sum() > 4 * perimeter:
+    if steps.sum() > ZIGZAG * perimeter:
         return None  # a zigzag through a cloud, not an outline
     ring = shapely.LineString(np.vstack([xy, xy[:1]]))
     if ring.is_simple:
@@ -269,7 +296,7 @@ def boundary_loops(boundary: np.ndarray, xy: np.ndarray | None = None) -> list[n
             return None  # an open piece: not loops
     thin = [loop[:: max(1, len(loop) // CHECKED_POINTS)] for loop in loops]
     path = steps.sum() - steps[cuts - 1].sum()
-    if path > 4 * sum(_hull_perimeter(xy[loop]) for loop in thin):
+    if path > ZIGZAG * sum(hull_perimeter(xy[loop]) for loop in thin):
         return None  # zigzags through a cloud, not outlines
     order = np.argsort([-abs(shapely.Polygon(xy[loop]).area) for loop in thin])
     return [loops[i] for i in order]
