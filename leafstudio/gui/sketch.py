@@ -4,8 +4,9 @@
 Drawing follows the hand: a click adds a point to the chosen curve (a point of that curve is
 dragged); selecting a point of another curve takes the Select tool, or Ctrl or Shift. A new vein
 exists from its first click, which snaps onto a vein nearby (a branch). The view moves only when
-asked (Fit, the wheel) or when a document opens. With Mirror on, each edit is reflected about
-the midrib. Where the boundary crosses itself it is marked in red.
+asked (Fit, the wheel) or when a document opens. With Mirror on, each edit is reflected across
+the midrib's curve (gui/midrib.py). Where the boundary crosses itself it is marked in red. A side
+view (gui/profile_view.py) shows the chosen vein's heights along it, with handles to drag.
 
 The editor never changes the document itself: it emits `preview(sketch)` while a point is dragged
 (so the 3D view follows) and `committed(before, after, text)` when an edit is done; the session
@@ -383,7 +384,8 @@ class SketchView(QGraphicsView):
 
 
 class SketchEditor(QWidget):
-    """The sketch view with its tools: which curve to draw, a new vein, delete, height, fit."""
+    """The sketch view with its tools: which curve to draw, a new vein, delete, height, fit,
+    and the chosen vein's heights along it (a linear profile, or the side view's handles)."""
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -413,8 +415,9 @@ class SketchEditor(QWidget):
         )
         self.mirror = QCheckBox("Mirror")
         self.mirror.setToolTip(
-            "Keep the boundary and the side veins symmetric about the midrib (vein 1): each "
-            "edit is reflected onto the other side."
+            "Keep the boundary and the side veins symmetric about the midrib (vein 1), following "
+            "its curve: each edit is reflected onto the other side, as far from the midrib at "
+            "the same place along it."
         )
         self.profile_start, self.profile_end = QDoubleSpinBox(), QDoubleSpinBox()
         for box in (self.profile_start, self.profile_end):

@@ -63,8 +63,9 @@ class Profile:
         """The profile with handle `index` dragged to (t, h): an end handle moves up and down
         only, an inner one stays between its neighbours."""
         ts, hs = self.t.copy(), self.h.copy()
-        if 0 < index < len(ts) - 1:
-            ts[index] = float(np.clip(t, ts[index - 1] + MIN_GAP, ts[index + 1] - MIN_GAP))
+        low, high = ts[index - 1] + MIN_GAP, ts[min(index + 1, len(ts) - 1)] - MIN_GAP
+        if 0 < index < len(ts) - 1 and low <= high:  # closer neighbours: it holds its place
+            ts[index] = float(np.clip(t, low, high))
         hs[index] = float(h)
         return Profile(ts, hs)
 

@@ -70,6 +70,9 @@ def test_end_handles_move_up_and_down_only_and_inner_ones_stay_between_neighbour
     assert profile.moved(3, 0.2, 0.1).t[-1] == 1.0
     assert np.isclose(profile.moved(1, 0.9, 0.0).t[1], 0.6 - MIN_GAP)
     assert np.isclose(profile.moved(2, -1.0, 0.0).t[2], 0.3 + MIN_GAP)
+    crowded = Profile(np.array([0.0, 0.5, 0.51, 0.52, 1.0]), np.zeros(5))  # closer than the gap
+    moved = crowded.moved(2, 0.9, 0.1)
+    assert moved.t[2] == 0.51 and moved.h[2] == 0.1 and np.all(np.isfinite(moved.heights([0.5])))
 
 
 def test_a_linear_profile_uses_the_same_shares_as_the_side_view():
