@@ -35,6 +35,9 @@ VEIN_CLEAR = 0.03  # the veins' cue counts when its share of the tensor's trace 
 END_BAND = 0.15  # each end's width is measured this share of the length from it
 MARGIN_SKIP = 5.0  # pixels: the veins' cue ignores this band inside the outline (its edge)
 MIDRIB_SKIP = 3.0  # pixels: and this band either side of the midline (the midrib itself)
+TIP_SIDES = (4.0, 16.0)  # pixels along the outline from a pointed end: its sides' straight part
+TIP_ANGLE = 100.0  # degrees: ends blunter than this are left as they are
+TIP_REACH = 6.0  # pixels: a pointed end moves out at most this far
 TENSOR_SIGMA = 1.0  # pixels: the structure tensor's window (wider ones reach the outline's edge)
 
 
@@ -206,3 +209,51 @@ def base_end_index(outline: np.ndarray, line: Midline, veins: VeinField | None) 
         if abs(lean) >= VEIN_CLEAR:
             return (0 if lean > 0 else 1), "veins"
     return int(np.argmax(end_widths(outline, line))), "wider end"
+
+
+def sharpen_end(outline: np.ndarray, index: int, inward: np.ndarray) -> tuple[np.ndarray, int]:
+    """The outline with a pointed end (an acute apex, a cuneate base, the bottom of a cordate
+    sinus) put back where blur and the threshold rounded it off: the lines through each side's
+    points TIP_SIDES pixels along the outline from the end meet at the true point when the
+    sides are straight there (outward of a pointed end, inward of a sinus). Only ends sharper
+    than TIP_ANGLE (between the sides, both taken toward `inward`, the midline's direction into
+    the blade), moved by at most TIP_REACH pixels; the end's points within TIP_SIDES[0] become
+    that point and straight sides to it. Returns the outline and the end's index in it (the
+    outline then starts there)."""
+    n = len(outline)
+    step = np.linalg.norm(np.diff(outline, axis=0, append=outline[:1]), axis=1)
+    gaps = np.concatenate([[0.0], np.cumsum(step)])
+    total = gaps[-1]
+    arc = (gaps[:n] - gaps[index]) % total  # forward distance from the end
+    arc = np.where(arc > total / 2, arc - total, arc)  # signed: < 0 before, > 0 after
+    near, far = TIP_SIDES
+    sides = []
+    for sign in (1, -1):
+        pts = outline[(sign * arc >= near) & (sign * arc <= far)]
+        if len(pts) < 3:
+            return outline, index
+        centre = pts.mean(axis=0)
+        direction = np.linalg.eigh(np.cov((pts - centre).T))[1][:, -1]
+        if direction @ inward < 0:
+            direction = -direction
+        sides.append((centre, direction))
+    (p, u), (q, v) = sides
+    if np.degrees(np.arccos(np.clip(u @ v, -1, 1))) > TIP_ANGLE:
+        return outline, index
+    try:
+        t = np.linalg.solve(np.column_stack([u, -v]), q - p)
+    except np.linalg.LinAlgError:
+        return outline, index
+    tip = p + t[0] * u
+    moved = outline[index] - tip
+    if np.linalg.norm(moved) > TIP_REACH:
+        return outline, index
+    # the tip first, then the kept points in order, joined to it by straight sides at the
+    # outline's spacing (the texture's edge near the tip stays within a pixel of them)
+    kept = np.roll(outline, -index, axis=0)[np.abs(np.roll(arc, -index)) >= near]
+    spacing = float(np.median(step))
+    sides = []
+    for end in (kept[0], kept[-1]):
+        count = max(int(np.linalg.norm(end - tip) / spacing), 1)
+        sides.append(tip + (end - tip) * (np.arange(1, count) / count)[:, None])
+    return np.vstack([tip, sides[0], kept, sides[1][::-1]]), 0

@@ -232,14 +232,15 @@ def _ends(
     blade: np.ndarray,
     base_end: str,
     joint: np.ndarray | None,
-) -> tuple[int, int]:
-    """Indices of the base and apex on the outline (see the module docstring)."""
-    from leafstudio.assets.leafends import VeinField, base_end_index, midline
+) -> tuple[np.ndarray, int, int]:
+    """The outline (its pointed ends sharpened when no petiole shows the base) and the indices
+    of the base and apex on it (see the module docstring)."""
+    from leafstudio.assets.leafends import VeinField, base_end_index, midline, sharpen_end
 
     if joint is not None:
         base = int(np.argmin(np.linalg.norm(outline - joint, axis=1)))
         apex = int(np.argmax(np.linalg.norm(outline - outline[base], axis=1)))
-        return base, apex
+        return outline, base, apex
     veins = VeinField(image, blade)
     line = midline(outline, veins)
     if base_end == "auto":
@@ -247,9 +248,14 @@ def _ends(
     else:
         direction = {"left": (-1, 0), "right": (1, 0), "top": (0, -1), "bottom": (0, 1)}[base_end]
         first = int(np.argmax(line.ends @ np.array(direction, float)))
-    base, apex = (int(np.argmin(np.linalg.norm(outline - end, axis=1)))
-                  for end in (line.ends[first], line.ends[1 - first]))  # fmt: skip
-    return base, apex
+    ends = line.ends[[first, 1 - first]]  # base, apex
+    inward = (ends[1] - ends[0]) / max(np.linalg.norm(ends[1] - ends[0]), 1e-12)
+    for k, direction in ((0, inward), (1, -inward)):  # pointed ends put back where blur cut them
+        at = int(np.argmin(np.linalg.norm(outline - ends[k], axis=1)))
+        outline, at = sharpen_end(outline, at, direction)
+        ends[k] = outline[at]
+    base, apex = (int(np.argmin(np.linalg.norm(outline - end, axis=1))) for end in ends)
+    return outline, base, apex
 
 
 def leaf_from_photo(
@@ -285,7 +291,7 @@ def leaf_from_photo(
     leaf_mask = _leaf_component(_foreground(image))
     blade, joint = _cut_petiole(leaf_mask)
     outline = _outline(blade, points)
-    base, apex = _ends(outline, image, blade, base_end, joint)
+    outline, base, apex = _ends(outline, image, blade, base_end, joint)
     start = np.array([outline[base, 0], -outline[base, 1]])  # y up
     axis = np.array([outline[apex, 0], -outline[apex, 1]]) - start
     pixels_long = float(np.linalg.norm(axis))
