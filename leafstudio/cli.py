@@ -43,7 +43,7 @@ class _Parser(argparse.ArgumentParser):
         )
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        raise LeafError(f"{message} (see leafstudio {self.prog.split()[-1]} --help)")
+        raise LeafError(f"{message} (see {self.prog} --help)")  # "leafstudio form", "leafstudio"
 
 
 def _whole(text: str, low: int, high: int) -> int:

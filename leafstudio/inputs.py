@@ -34,6 +34,16 @@ _NUMBER = re.compile(
 )
 
 
+FOLDER = "is a folder, not a file (`leafstudio batch` takes folders)"
+
+
+def check_not_a_folder(path: str | os.PathLike) -> None:
+    """Refuse a folder given where an input file belongs, before its name's suffix is judged (a
+    folder has none, and "unknown file type '(none)'" did not say what was wrong)."""
+    if Path(path).is_dir():
+        raise LeafError(FOLDER, str(path))
+
+
 def check_input_file(path: str | os.PathLike, limit: int | None = MAX_TEXT_BYTES) -> int:
     """The size of `path`, a regular file that exists; refused (LeafError) if it is missing, a
     folder, a device or a pipe, or larger than `limit` bytes."""
@@ -45,7 +55,7 @@ def check_input_file(path: str | os.PathLike, limit: int | None = MAX_TEXT_BYTES
     except OSError as exc:
         raise LeafError(f"cannot be read ({exc.strerror or exc})", str(path)) from None
     if stat.S_ISDIR(info.st_mode):
-        raise LeafError("is a folder, not a file", str(path))
+        raise LeafError(FOLDER, str(path))
     if not stat.S_ISREG(info.st_mode):
         raise LeafError("is a device or a pipe, not a regular file", str(path))
     if limit is not None and info.st_size > limit:

@@ -18,6 +18,7 @@ import numpy as np
 
 from leafstudio.errors import LeafError, shorten
 from leafstudio.inputs import (
+    check_not_a_folder,
     load_json,
     parse_number,
     ply_numbers,
@@ -61,8 +62,10 @@ def read_point_table(path: Path, columns: Sequence[int] = (3, 4)) -> np.ndarray:
             ) from None
         if len(values) not in columns:
             expected = " or ".join(str(c) for c in columns)
+            scan = "; a scan (x y z with normals or colours)? `leafstudio extract` takes a leaf's"
             raise LeafError(
-                f"line {number}: expected {expected} columns (x y z [label]), got {len(values)}",
+                f"line {number}: expected {expected} columns (x y z [label]), got {len(values)}"
+                + (f"{scan} boundary and veins from it" if len(values) > 4 else ""),
                 str(path),
             )
         if rows and len(values) != len(rows[0]):
@@ -185,6 +188,7 @@ def load_leaf(path: str | os.PathLike, veins: Sequence[str | os.PathLike] = ()) 
     path = Path(path)
     if isinstance(veins, (str, os.PathLike)):
         veins = [veins]  # one vein file given alone, not a sequence of one-letter names
+    check_not_a_folder(path)
     suffix = _suffix(path)
     if suffix in POINT_SUFFIXES:
         table = read_point_table(path)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import logging
 import os
 import re
 import secrets
@@ -108,7 +109,9 @@ def remove_all_temporaries() -> None:
 
 def check_target(path: str | os.PathLike) -> Path:
     """`path` as an output: refused (LeafError) if it is a folder or a special file (a device, a
-    FIFO), or if its folder does not exist or is not a folder. Checked before any work."""
+    FIFO), or if a file stands where its folder belongs. Checked before any work. A folder that
+    does not exist yet is created when the output is written (make_folder), as `batch -o OUTDIR`
+    creates OUTDIR."""
     path = Path(path)
     try:
         info = path.stat()
@@ -265,6 +268,19 @@ def staged() -> Iterator[Staging]:
         raise
 
 
+def make_folder(target: Path) -> None:
+    """Create the missing folders of an output's path, saying so in one line on the leafstudio
+    log (a mistyped folder is not made without a word); nothing when the folder exists."""
+    folder = target.parent
+    if folder.is_dir():
+        return
+    top = folder
+    while not top.parent.exists() and top.parent != top:
+        top = top.parent  # the first folder that did not exist
+    folder.mkdir(parents=True, exist_ok=True)
+    logging.getLogger("leafstudio").info(f"created the folder {top} for {target}")
+
+
 def replace_atomically(path: str | os.PathLike, write: Callable[[str], object]) -> None:
     """Run `write` on a temporary file beside `path`, check it, flush it to disk and rename it
     over `path` (or, inside `staged()`, keep it for the block's end).
@@ -275,7 +291,7 @@ def replace_atomically(path: str | os.PathLike, write: Callable[[str], object]) 
     """
     target = check_target(path)
     try:
-        target.parent.mkdir(parents=True, exist_ok=True)
+        make_folder(target)
     except OSError as exc:
         raise _failed(exc, target) from None
     remove_stale(target)

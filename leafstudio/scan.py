@@ -15,6 +15,7 @@ from leafstudio.errors import LeafError, shorten
 from leafstudio.extras import require
 from leafstudio.inputs import (
     check_input_file,
+    check_not_a_folder,
     check_pcd_header,
     parse_number,
     ply_xyz,
@@ -108,6 +109,7 @@ def read_scan(path: str | os.PathLike) -> np.ndarray:
         infinite coordinates, or has fewer than MIN_SCAN_POINTS points.
     """
     path = Path(path)
+    check_not_a_folder(path)
     suffix = path.suffix.lower()
     if suffix not in SCAN_SUFFIXES:
         raise LeafError(

@@ -1,0 +1,69 @@
+"""Small command-line messages (review findings, session 2): a usage error of the main parser said
+"see leafstudio leafstudio --help"; a folder given as the input said "unknown file type '(none)'";
+a scan with normals and colours given as a leaf said only how many columns it has; an output's
+missing folder was created without a word."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from leafstudio.cli import main
+
+
+def _error(capsys) -> str:
+    err = capsys.readouterr().err.strip().splitlines()
+    errors = [line for line in err if line.startswith("leafstudio: error:")]
+    assert len(errors) == 1, err
+    return errors[0]
+
+
+@pytest.mark.parametrize(
+    ("argv", "hint"),
+    [
+        (["forms"], "(see leafstudio --help)"),
+        (["form", "--margin", "wavy"], "(see leafstudio form --help)"),
+        (["reconstruct", "leaf.csv"], "(see leafstudio reconstruct --help)"),
+    ],
+)
+def test_a_usage_error_names_the_command_once(capsys, argv, hint):
+    assert main(argv) == 2
+    line = _error(capsys)
+    assert line.endswith(hint) and "leafstudio leafstudio" not in line
+
+
+@pytest.mark.parametrize("command", ["reconstruct", "measure", "compare", "extract", "veins"])
+def test_a_folder_given_as_the_input_is_said_to_be_a_folder(tmp_path, capsys, command):
+    out = ["-o", str(tmp_path / "out.ply" if command == "reconstruct" else tmp_path / "o.csv")]
+    argv = [command, str(tmp_path), *(out if command not in ("measure", "compare") else [])]
+    assert main(argv) == 2
+    line = _error(capsys)
+    assert f"{tmp_path}: is a folder, not a file" in line and "leafstudio batch" in line
+    assert "unknown" not in line
+
+
+def test_a_scan_with_normals_given_as_a_leaf_points_to_extract(tmp_path, capsys):
+    path = tmp_path / "scan.txt"
+    np.savetxt(path, np.random.default_rng(0).normal(size=(100, 10)), delimiter=",")
+    assert main(["measure", str(path)]) == 2
+    line = _error(capsys)
+    assert "got 10" in line and "leafstudio extract" in line
+
+
+def test_a_vein_file_with_a_label_gets_no_scan_hint(tmp_path, capsys):
+    leaf, vein = tmp_path / "leaf.leaf.json", tmp_path / "vein.csv"
+    assert main(["demo", "nested", "-o", str(leaf)]) == 0
+    np.savetxt(vein, np.zeros((5, 4)), delimiter=",")
+    assert main(["measure", str(leaf), "--vein", str(vein)]) == 2
+    line = _error(capsys)
+    assert "expected 3 columns" in line and "extract" not in line
+
+
+def test_an_outputs_missing_folder_is_created_and_said(tmp_path, capsys):
+    target = tmp_path / "new" / "deeper" / "leaf.leaf.json"
+    assert main(["demo", "nested", "-o", str(target)]) == 0
+    assert target.is_file()
+    err = capsys.readouterr().err
+    assert f"created the folder {tmp_path / 'new'} for {target}" in err
+    assert main(["demo", "nested", "-o", str(target)]) == 0  # it exists now: nothing said
+    assert "created" not in capsys.readouterr().err
