@@ -20,7 +20,8 @@ def add_photo_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--length", type=float, metavar="L", help="base to apex (default 1)")
     p.add_argument(
         "--base-end", choices=BASE_ENDS, default="auto",
-        help="where the base is when no petiole shows it (default: the wider end)",
+        help="where the base is when no petiole shows it (default auto: the end of the blade's "
+        "mirror axis with a basal notch, else the one the veins lean away from, else the wider)",
     )  # fmt: skip
     p.add_argument("--veins", choices=("grow", "none"), default="grow")
     p.add_argument("--venation", default="pinnate", help="for --veins grow (default pinnate)")
