@@ -5,6 +5,11 @@ per form and angle the IoU in that frame (a wrong base turns the outline round, 
 IoU in the photo's pixels (segmentation alone) and the base's error as a share of the length.
 
     .venv/bin/python benchmarks/bench_photo_base.py [--angles 0 90 ...] [--forms cordate ...]
+        [--variants N] [--plain] [--scans]
+
+--variants N adds each form's seeds 1..N (other proportions); --plain draws the blades without
+veins (then only the outline tells the base); --scans adds the real scans' renders, where the
+base is known where the scan shows the petiole (left out of the render).
 
 Angles: the form's base-to-apex direction in the photo, counter-clockwise from +x (0: base left,
 90: base at the bottom, 180: base right, 270: base at the top).
@@ -21,6 +26,10 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+import numpy as np
+import shapely
+
+from leafstudio.assets.photo import leaf_from_photo
 from tests.photos import leaf_frame_match
 
 FORMS: dict[str, dict] = {  # name: make_form's arguments
@@ -41,21 +50,52 @@ FORMS["obovate serrate"] = {"shape": "obovate", "margin": "serrate", "teeth": 30
 ANGLES = (0.0, 90.0, 180.0, 270.0, 35.0, -125.0)
 
 
+def scan_rows() -> dict:
+    """The real scans rendered from above (tests/photos.scan_photo): the pixel IoU and, where
+    the scan shows its petiole (it is left out of the render), the found base's distance from
+    where it met the blade, as a share of the found length."""
+    from tests.photos import REALLEAVES, iou, scan_photo
+
+    rows = {}
+    for path in sorted(REALLEAVES.glob("*.txt")):
+        image, known, base = scan_photo(path)
+        found = leaf_from_photo(image, veins="none")
+        at, apex = found.pixel_from_world @ [0, 0, 1], found.pixel_from_world @ [1, 0, 1]
+        length = float(np.linalg.norm(apex - at))
+        rows[path.name] = {
+            "iou_pixels": round(iou(shapely.Polygon(found.outline_px).buffer(0), known), 4),
+            "base_error": None
+            if base is None
+            else round(float(np.linalg.norm(at - base)) / length, 3),
+            "base_cue": found.base_cue,
+        }
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--angles", type=float, nargs="+", default=list(ANGLES))
     parser.add_argument("--forms", nargs="+", default=list(FORMS), choices=list(FORMS))
+    parser.add_argument("--variants", type=int, default=0, help="also forms' seeds 1..N")
+    parser.add_argument("--plain", action="store_true", help="draw the blades without veins")
+    parser.add_argument("--scans", action="store_true", help="also the real scans' renders")
     args = parser.parse_args()
     rows, start, cpu = {}, time.perf_counter(), time.process_time()
     for name in args.forms:
-        rows[name] = {f"{a:g}": leaf_frame_match(FORMS[name], a) for a in args.angles}
+        for variant in range(args.variants + 1):
+            terms = dict(FORMS[name], seed=variant)
+            rows[name if not variant else f"{name} seed {variant}"] = {
+                f"{a:g}": leaf_frame_match(terms, a, draw_veins=not args.plain) for a in args.angles
+            }
     cases = [r for per in rows.values() for r in per.values()]
     print(
         json.dumps(
             {
                 "forms": rows,
+                "scans": scan_rows() if args.scans else None,
                 "cases": len(cases),
                 "passed": sum(r["iou_leaf_frame"] >= 0.97 for r in cases),
+                "base_within_2pct": sum(r["base_error"] < 0.02 for r in cases),
                 "min_iou_leaf_frame": min(r["iou_leaf_frame"] for r in cases),
                 "wall_s": round(time.perf_counter() - start, 1),
                 "cpu_s": round(time.process_time() - cpu, 1),

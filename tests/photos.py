@@ -64,18 +64,21 @@ def form_photo(
 
 def scan_photo(
     path: Path, pixels: int = 640, noise: float = 5.0, blur: float = 1.0, seed: int = 0
-) -> tuple[np.ndarray, shapely.Polygon]:
+) -> tuple[np.ndarray, shapely.Polygon, np.ndarray | None]:
     """A top view of a real scan's blade (outliers and petiole dropped), shaded by pyvista on a
-    plain background, and the blade's footprint in (column, row) pixel coordinates."""
+    plain background, the blade's footprint in (column, row) pixel coordinates, and where the
+    scan's petiole met the blade (its points within 3 spacings of the blade's), the base, in
+    pixels (None when the scan shows no petiole)."""
     import pyvista as pv
-    from scipy.spatial import Delaunay
+    from scipy.spatial import Delaunay, cKDTree
 
     from leafstudio.core.extract import split_scan
     from leafstudio.core.plane import fit_frame
     from leafstudio.scan import read_scan
 
     points = read_scan(path)
-    points = points[split_scan(points)[0]]
+    blade, stalk = split_scan(points)
+    stalk_points, points = points[stalk], points[blade]
     frame = fit_frame(points, np.zeros((0, 3)))
     xy, z = frame.to_plane(points)
     tri = Delaunay(xy).simplices
@@ -103,19 +106,33 @@ def scan_photo(
     plotter.reset_camera_clipping_range()
     rgb = np.asarray(plotter.screenshot(return_img=True), float)[..., :3]
     plotter.close()
-    ring = np.asarray(footprint.exterior.coords)
-    px = np.column_stack(
-        [pixels / 2 + (ring[:, 0] - centre[0]) * ppu, pixels / 2 - (ring[:, 1] - centre[1]) * ppu]
-    )
-    return _finish(rgb, noise, blur, seed), shapely.Polygon(px)
+
+    def to_pixels(plane: np.ndarray) -> np.ndarray:
+        return np.column_stack(
+            [
+                pixels / 2 + (plane[:, 0] - centre[0]) * ppu,
+                pixels / 2 - (plane[:, 1] - centre[1]) * ppu,
+            ]
+        )
+
+    base = None
+    if len(stalk_points):
+        near = frame.to_plane(stalk_points)[0]
+        near = near[cKDTree(xy).query(near)[0] < 3 * spacing]
+        base = to_pixels(near).mean(axis=0) if len(near) else None
+    px = to_pixels(np.asarray(footprint.exterior.coords))
+    return _finish(rgb, noise, blur, seed), shapely.Polygon(px), base
 
 
-def leaf_frame_match(terms: dict, angle: float, seed: int = 0, **found_options) -> dict:
+def leaf_frame_match(
+    terms: dict, angle: float, seed: int = 0, draw_veins: bool = True, **found_options
+) -> dict:
     """A form (make_form's terms) photographed at `angle` without a petiole, found again: the IoU
     with the known outline in the forms' convention (base at the origin, apex on +x, both at the
     known base-to-apex length: a wrong base turns the outline round), the IoU in the photo's
-    pixels (the segmentation alone), and the base's distance from the known one (share of the
-    length)."""
+    pixels (the segmentation alone), the base's distance from the known one (share of the
+    length) and the cue that told the base (PhotoLeaf.base_cue). `draw_veins` False draws the
+    blade plain."""
     from leafstudio.assets.photo import leaf_from_photo
     from leafstudio.forms import Form
 
@@ -123,7 +140,8 @@ def leaf_frame_match(terms: dict, angle: float, seed: int = 0, **found_options) 
     leaf, apex = form.leaf(), form.outline().apex_index
     known = leaf.boundary[:, :2]
     length = float(np.linalg.norm(known[apex]))  # base to apex, as `--length` means it
-    image, known_px, base_px = form_photo(leaf.boundary, leaf.veins, angle=angle, seed=seed)
+    veins = leaf.veins if draw_veins else []
+    image, known_px, base_px = form_photo(leaf.boundary, veins, angle=angle, seed=seed)
     found = leaf_from_photo(image, length=length, veins="none", **found_options)
     xy = found.leaf.boundary[:, :2]
     pixel_length = np.linalg.norm(found.pixel_from_world[:, 0]) * length
@@ -132,6 +150,7 @@ def leaf_frame_match(terms: dict, angle: float, seed: int = 0, **found_options) 
         "iou_leaf_frame": round(iou(shapely.Polygon(xy).buffer(0), shapely.Polygon(known)), 4),
         "iou_pixels": round(iou(shapely.Polygon(found.outline_px).buffer(0), known_px), 4),
         "base_error": round(float(base_error), 4),
+        "base_cue": found.base_cue,
     }
 
 

@@ -53,7 +53,7 @@ def test_outline_of_a_rendered_real_scan_matches(name):
     path = REALLEAVES / name
     if not path.exists():
         pytest.skip(f"{path} is missing")
-    image, known = scan_photo(path)
+    image, known, _ = scan_photo(path)
     found = leaf_from_photo(image, veins="none")
     assert iou(shapely.Polygon(found.outline_px), known) >= 0.97
 

@@ -60,3 +60,28 @@ def test_notch_depth_is_how_far_the_lobes_reach_back():
     outline = np.array([[0, 0], [10, 0], [10, 10], [0, 10], [0, 6], [2, 5], [0, 4]], float)
     line = Midline(ends=np.array([[2.0, 5.0], [10.0, 5.0]]), along=np.array([1.0, 0.0]), mirror=1)
     np.testing.assert_allclose(notch_depths(outline, line), [2 / 8, 0.0])
+
+
+@pytest.mark.parametrize(
+    ("shape", "cue"), [("cordate", "notch"), ("obovate", "veins"), ("ovate", "veins")]
+)
+def test_the_cue_that_told_the_base(shape, cue):
+    leaf = make_form(shape)
+    image, _, _ = form_photo(leaf.boundary, leaf.veins, angle=50.0)
+    assert leaf_from_photo(image, veins="none").base_cue == cue
+
+
+def test_without_visible_veins_the_base_is_a_guess_and_the_command_says_so(tmp_path, capsys):
+    """An obovate leaf drawn without veins: nothing but the ends' widths is left, and they point
+    the wrong way (the wider end is its apex). The command says the base is a guess."""
+    from PIL import Image
+
+    from leafstudio.cli import main
+
+    leaf = make_form("obovate")
+    image, _, _ = form_photo(leaf.boundary, angle=50.0)
+    assert leaf_from_photo(image, veins="none").base_cue == "wider end"
+    path = tmp_path / "photo.png"
+    Image.fromarray(image).save(path)
+    assert main(["photo", str(path), "-o", str(tmp_path / "leaf.leaf.json")]) == 0
+    assert "a guess: --base-end names it" in capsys.readouterr().err

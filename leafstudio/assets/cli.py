@@ -43,9 +43,12 @@ def run_photo(args: argparse.Namespace) -> int:
     except LeafError as exc:
         raise LeafError(exc.problem, args.image) from None
     save_photo_leaf(found, args.image, args.output)
+    guess = "; base at the wider end (a guess: --base-end names it)"
     print(
         f"{args.image}: leaf of {int(found.blade.sum())} pixels"
-        f"{', petiole cut off' if found.petiole else ''}; wrote {len(found.leaf.boundary)} "
+        f"{', petiole cut off' if found.petiole else ''}"
+        f"{guess if found.base_cue == 'wider end' else ''}"
+        f"; wrote {len(found.leaf.boundary)} "
         f"boundary points and {len(found.leaf.veins)} veins to {args.output}",
         file=sys.stderr,
     )

@@ -132,11 +132,17 @@ def midline(outline: np.ndarray, veins: VeinField | None = None) -> Midline:
 
 
 def notch_depths(outline: np.ndarray, line: Midline) -> np.ndarray:
-    """(2,) how far the outline reaches back past each end (outward along the midline), as a
-    share of the midline's length: the basal lobes of a cordate or sagittate leaf."""
+    """(2,) how far the outline reaches back past each end (outward along the midline) on both
+    sides of it (the lesser of the two sides' reach), as a share of the midline's length: the
+    basal lobes of a cordate or sagittate leaf; a bay torn into one side is no notch."""
     along = (outline - line.ends[0]) @ line.along
+    across = (outline - line.ends[0]) @ np.array([-line.along[1], line.along[0]])
     span = max(line.length, 1e-12)
-    return np.array([max(-along.min(), 0.0), max(along.max() - span, 0.0)]) / span
+    depths = []
+    for beyond in (-along, along - span):  # outward past end 0, past end 1
+        reach = [beyond[side].max() if side.any() else 0.0 for side in (across > 0, across < 0)]
+        depths.append(max(min(reach), 0.0))
+    return np.array(depths) / span
 
 
 def end_widths(outline: np.ndarray, line: Midline) -> np.ndarray:

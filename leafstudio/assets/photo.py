@@ -66,6 +66,9 @@ class PhotoLeaf:
         The blade's pixels (petiole cut off).
     petiole : bool
         Whether a petiole was found and cut off.
+    base_cue : str
+        What told the base: "petiole", "given" (base_end), "notch", "veins" or "wider end"
+        (leafends.base_end_index); the last is a guess.
     """
 
     leaf: Leaf
@@ -73,6 +76,7 @@ class PhotoLeaf:
     outline_px: np.ndarray
     blade: np.ndarray
     petiole: bool
+    base_cue: str = "petiole"
 
 
 def _foreground(image: np.ndarray) -> np.ndarray:
@@ -232,22 +236,22 @@ def _ends(
     blade: np.ndarray,
     base_end: str,
     joint: np.ndarray | None,
-) -> tuple[np.ndarray, int, int]:
-    """The outline (its pointed ends sharpened when no petiole shows the base) and the indices
-    of the base and apex on it (see the module docstring)."""
+) -> tuple[np.ndarray, int, int, str]:
+    """The outline (its pointed ends sharpened when no petiole shows the base), the indices of
+    the base and apex on it, and what told the base (see the module docstring)."""
     from leafstudio.assets.leafends import VeinField, base_end_index, midline, sharpen_end
 
     if joint is not None:
         base = int(np.argmin(np.linalg.norm(outline - joint, axis=1)))
         apex = int(np.argmax(np.linalg.norm(outline - outline[base], axis=1)))
-        return outline, base, apex
+        return outline, base, apex, "petiole"
     veins = VeinField(image, blade)
     line = midline(outline, veins)
     if base_end == "auto":
-        first = base_end_index(outline, line, veins)[0]
+        first, cue = base_end_index(outline, line, veins)
     else:
         direction = {"left": (-1, 0), "right": (1, 0), "top": (0, -1), "bottom": (0, 1)}[base_end]
-        first = int(np.argmax(line.ends @ np.array(direction, float)))
+        first, cue = int(np.argmax(line.ends @ np.array(direction, float))), "given"
     ends = line.ends[[first, 1 - first]]  # base, apex
     inward = (ends[1] - ends[0]) / max(np.linalg.norm(ends[1] - ends[0]), 1e-12)
     for k, direction in ((0, inward), (1, -inward)):  # pointed ends put back where blur cut them
@@ -255,7 +259,7 @@ def _ends(
         outline, at = sharpen_end(outline, at, direction)
         ends[k] = outline[at]
     base, apex = (int(np.argmin(np.linalg.norm(outline - end, axis=1))) for end in ends)
-    return outline, base, apex
+    return outline, base, apex, cue
 
 
 def leaf_from_photo(
@@ -291,7 +295,7 @@ def leaf_from_photo(
     leaf_mask = _leaf_component(_foreground(image))
     blade, joint = _cut_petiole(leaf_mask)
     outline = _outline(blade, points)
-    outline, base, apex = _ends(outline, image, blade, base_end, joint)
+    outline, base, apex, cue = _ends(outline, image, blade, base_end, joint)
     start = np.array([outline[base, 0], -outline[base, 1]])  # y up
     axis = np.array([outline[apex, 0], -outline[apex, 1]]) - start
     pixels_long = float(np.linalg.norm(axis))
@@ -319,6 +323,7 @@ def leaf_from_photo(
         outline_px=outline,
         blade=blade,
         petiole=joint is not None,
+        base_cue=cue,
     )
 
 
