@@ -18,7 +18,10 @@ visualization of leaf venation patterns", SIGGRAPH 2005, open venation):
    55°), and for arcuate venation it strengthens near the margin so the secondaries curve up along
    it. Each seed's tree is reduced to its longest path (the secondary vein); an open secondary is
    continued straight to just inside the margin, an arcuate one along the margin toward the apex
-   until it nears the next vein.
+   until it nears the next vein. In a narrow blade (a linear leaf, 20 or 30 times longer than
+   wide) the step shrinks to half its half-width and the seeds leave at the tropism's angle, so
+   its secondaries are short and steep, as in rosemary or willow (growth_step); grass-like leaves
+   are parallel-veined (venation "parallel").
 3. Heights: every vein point stands HEIGHT_RATIO times its distance to the margin above the
    blade's base surface (b(x) through a 3D outline's heights, 0 for a flat one), as the demos'
    midribs do (h = 0.25 w): the blade rises about 14° from the margin to the veins.
@@ -37,6 +40,8 @@ VENATION_KINDS = ("pinnate", "palmate", "parallel", "arcuate")
 HEIGHT_RATIO = 0.25  # vein height over its distance to the margin (demos.py: h = 0.25 w)
 BROAD_STEP = 0.035  # the growth step of a broad blade, as a share of the square root of its area
 STEP = 0.02  # growth step D, in leaf lengths
+NARROW_STEPS = 2  # a blade's half-width holds at least this many growth steps (see growth_step)
+NARROW_TURN = np.deg2rad(35.0)  # a narrow blade's secondaries leave the midrib at 90° - this
 SOURCES = 350  # auxin sources scattered over the blade
 KILL = 1.2  # kill distance, in growth steps
 MAX_ITERATIONS = 80
@@ -283,6 +288,18 @@ def _stations(vein: np.ndarray, count: int, lo: float, hi: float, rng) -> list[t
     return out
 
 
+def growth_step(poly: Polygon) -> float:
+    """The growth step D: STEP, or a fixed share of a broad blade's size (as many steps across a
+    round leaf as across a narrow one), and at most a NARROW_STEPS-th of a narrow blade's
+    half-width (its inscribed circle's radius). With STEP alone a blade over about 20 times
+    longer than wide (a grass-like linear leaf) had no room for a secondary: its pinnate and
+    arcuate secondaries all came out shorter than three steps and were dropped (review finding)."""
+    step = max(STEP, BROAD_STEP * np.sqrt(poly.area))
+    shape = getattr(poly, "poly", poly)  # a _Blade's polygon
+    half = float(shapely.maximum_inscribed_circle(shape, 0.01 * step).length)
+    return min(step, half / NARROW_STEPS)
+
+
 def _colonize(
     poly: Polygon,
     primaries: list[np.ndarray],
@@ -292,9 +309,8 @@ def _colonize(
     tropism: float = TROPISM,
 ) -> list[np.ndarray]:
     """Space colonization from the seeds (station, start, preferred direction): each seed's
-    longest path, beginning at its station on a primary. The growth step is STEP, or a fixed
-    share of a broad blade's size (as many steps across a round leaf as across a narrow one)."""
-    step = max(STEP, BROAD_STEP * np.sqrt(poly.area))
+    longest path, beginning at its station on a primary, in steps of growth_step."""
+    step = growth_step(poly)
     sources, h = _sources(poly, rng)
     fixed = np.vstack(primaries)
     pos = [fixed] + [s[1][None] for s in seeds]
@@ -363,13 +379,13 @@ def _smooth(path: np.ndarray, passes: int = 3) -> np.ndarray:
     return path
 
 
-def _to_margin(poly: Polygon, path: np.ndarray) -> np.ndarray:
-    """An open secondary continued straight on to just inside the margin."""
+def _to_margin(poly: Polygon, path: np.ndarray, step: float = STEP) -> np.ndarray:
+    """An open secondary continued straight on to just inside the margin (in half `step`s)."""
     if len(path) < 2:
         return path
     d = path[-1] - path[max(len(path) - 4, 0)]
     d /= max(np.linalg.norm(d), 1e-12)
-    steps = path[-1] + np.outer(np.arange(1, 80) * STEP / 2, d)
+    steps = path[-1] + np.outer(np.arange(1, 80) * step / 2, d)
     ok = _inside(poly, steps, INSET)
     n = np.argmin(ok) if not ok.all() else len(steps)
     path = np.vstack([path, steps[:n]])
@@ -377,23 +393,33 @@ def _to_margin(poly: Polygon, path: np.ndarray) -> np.ndarray:
     if gap > 3 * INSET:  # stopped short (its way ahead leaves the blade): turn to the margin
         target = poly.tree.data[nearest]
         share = 1 - INSET / gap
-        t = np.linspace(0, share, int(gap / (STEP / 2)) + 2)[1:]
+        t = np.linspace(0, share, int(gap / (step / 2)) + 2)[1:]
         path = np.vstack([path, path[-1] + np.outer(t, target - path[-1])])
     return path
 
 
-def _arch_ring(poly: _Blade) -> np.ndarray | None:
-    """(r, 2) points along the margin moved inward, in order, at half a step (the arches' way)."""
-    inner = poly.poly.buffer(-max(2.5 * STEP, 0.02 * np.sqrt(poly.area)))
+def _arch_ring(poly: _Blade, step: float = STEP) -> np.ndarray | None:
+    """(r, 2) points along the margin moved inward, in order, at half a step (the arches' way);
+    in a narrow blade (growth_step under STEP) halfway between the margin and the midrib."""
+    inset = max(2.5 * STEP, 0.02 * np.sqrt(poly.area))
+    if step < STEP:
+        inset = min(inset, 0.5 * NARROW_STEPS * step)  # half the half-width
+    inner = poly.poly.buffer(-inset)
     if inner.is_empty:
         return None
     if not isinstance(inner, Polygon):
         inner = max(inner.geoms, key=lambda g: g.area)
-    return shapely.get_coordinates(inner.exterior.segmentize(STEP / 2))[:-1]
+    return shapely.get_coordinates(inner.exterior.segmentize(step / 2))[:-1]
 
 
 def _arch(
-    ring: np.ndarray | None, path: np.ndarray, owner: int, veins: cKDTree, owners: np.ndarray, h
+    ring: np.ndarray | None,
+    path: np.ndarray,
+    owner: int,
+    veins: cKDTree,
+    owners: np.ndarray,
+    h: float,
+    step: float = STEP,
 ) -> np.ndarray:
     """An arcuate secondary continued along the margin toward the apex until it nears another
     vein (`veins` holds all veins' points, `owners` which vein each belongs to)."""
@@ -402,8 +428,8 @@ def _arch(
     n = len(ring)
     i = int(np.argmin(np.linalg.norm(ring - path[-1], axis=1)))
     sign = 1 if ring[(i + 2) % n, 0] > ring[(i - 2) % n, 0] else -1
-    walk = ring[(i + sign * np.arange(1, int(0.35 / (STEP / 2)))) % n]
-    ahead = walk[:, 0] > path[-1][0] - STEP
+    walk = ring[(i + sign * np.arange(1, int(0.35 / (step / 2)))) % n]  # the ring's spacing
+    ahead = walk[:, 0] > path[-1][0] - step
     walk = walk[: np.argmin(ahead) if not ahead.all() else len(walk)]
     if len(walk) == 0:
         return path
@@ -413,8 +439,8 @@ def _arch(
     return np.vstack([path, walk]) if len(walk) else path
 
 
-def _cut_crossings(vein: np.ndarray, laid: list[np.ndarray]) -> np.ndarray:
-    """The vein up to just before it first crosses one already laid (its start may touch)."""
+def _cut_crossings(vein: np.ndarray, laid: list[np.ndarray], step: float = STEP) -> np.ndarray:
+    """The vein up to a `step` before it first crosses one already laid (its start may touch)."""
     if len(vein) < 3 or not laid:
         return vein
     rest = LineString(vein[1:])
@@ -424,7 +450,7 @@ def _cut_crossings(vein: np.ndarray, laid: list[np.ndarray]) -> np.ndarray:
     pts = [g.coords[0] for g in getattr(cut, "geoms", [cut]) if not g.is_empty]
     first = min(rest.project(shapely.Point(p)) for p in pts)
     s = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(vein[1:], axis=0), axis=1))])
-    keep = int(np.searchsorted(s, first - STEP))
+    keep = int(np.searchsorted(s, first - step))
     return vein[: keep + 1]
 
 
@@ -502,6 +528,7 @@ def grow_veins(
         if venation == "palmate":
             primaries += _palmate_primaries(blade, rng)
         seeds = []
+        step = growth_step(blade)
         for k, prim in enumerate(primaries):
             along = np.diff(prim, axis=0)
             along = np.vstack([along, along[-1:]])
@@ -514,10 +541,13 @@ def grow_veins(
                 if k > 0 and side * np.sign(prim[-1, 1]) < 0 and venation == "palmate":
                     continue  # a lateral primary's seeds face away from the midrib
                 normal = side * np.array([-along[index, 1], along[index, 0]])
+                if step < STEP:  # a narrow blade: room for a few steps only, so the secondary
+                    # leaves at the angle the tropism gives it in a broad blade, not square
+                    normal = np.cos(NARROW_TURN) * normal + np.sin(NARROW_TURN) * along[index]
                 turn = np.deg2rad(rng.uniform(-4, 4))
                 c, s = np.cos(turn), np.sin(turn)
                 tip = along[index] @ np.array([[c, s], [-s, c]])
-                seeds.append((prim[index], prim[index] + 0.5 * STEP * normal, tip))
+                seeds.append((prim[index], prim[index] + 0.5 * step * normal, tip))
         tropism = PALMATE_TROPISM if venation == "palmate" else TROPISM
         paths = (
             _colonize(blade, primaries, seeds, venation == "arcuate", rng, tropism) if seeds else []
@@ -525,17 +555,17 @@ def grow_veins(
         h = float(np.sqrt(blade.area / SOURCES))
         veins = list(primaries)
         if venation == "arcuate":
-            ring = _arch_ring(blade)
+            ring = _arch_ring(blade, step)
             every = [*primaries, *paths]
             owners = np.concatenate([np.full(len(v), k) for k, v in enumerate(every)])
             tree = cKDTree(np.vstack(every))
         for k, path in enumerate(paths):
             if venation == "arcuate":
-                path = _arch(ring, path, len(primaries) + k, tree, owners, h)
+                path = _arch(ring, path, len(primaries) + k, tree, owners, h, step)
             else:
-                path = _to_margin(blade, path)
-            path = _cut_crossings(path, veins)
-            reaches = venation == "arcuate" or blade.gap(path[-1:])[0] < 1.25 * STEP
+                path = _to_margin(blade, path, step)
+            path = _cut_crossings(path, veins, step)
+            reaches = venation == "arcuate" or blade.gap(path[-1:])[0] < 1.25 * step
             if len(path) >= 3 and reaches:  # an open secondary cut short of the margin is dropped
                 veins.append(path)
     lift = _lifter(xy, heights, frame, poly)
