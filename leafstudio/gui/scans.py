@@ -15,13 +15,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from leafstudio.core.analysis import point_to_mesh_distance
 from leafstudio.core.compare import poisson_surface
 from leafstudio.core.extract import Extraction, extract_leaf
 from leafstudio.core.fidelity import FAR, NEAR, distance_summary
 from leafstudio.core.pipeline import Result
+from leafstudio.core.plausibility import COVER_SPREAD, surface_spread
 from leafstudio.core.trianglemesh import MeshLike, polydata, vertex_normals
 from leafstudio.errors import LeafError
 from leafstudio.gui.layers import Piece, cloud
@@ -29,8 +29,6 @@ from leafstudio.model import Leaf
 from leafstudio.scan import MIN_SCAN_POINTS, SCAN_SUFFIXES, read_scan
 
 LEAF_COLUMNS = 4  # x y z [label]: a point list with more columns is a scan
-SPREAD_NEIGHBOURS = 12
-SURFACE_SPREAD = 0.1  # median ratio of the two largest local spreads: ~0 on a curve, ~1 on a scan
 BLADE_COLOR, DROPPED_COLOR, POISSON_COLOR = "#2e7d32", "#c62828", "#e08a1e"
 POISSON_GAP = 0.15  # the Poisson surface sits this share of the leaf length beside our mesh
 POISSON_OPACITY = 0.6
@@ -96,15 +94,13 @@ def is_scan_file(path: str) -> bool:
 
 def looks_like_scan(leaf: Leaf) -> bool:
     """True when an unlabelled point list covers a surface (a scan) rather than tracing an
-    outline: around most points, the neighbours spread in two directions, not along one."""
-    points = leaf.boundary
-    if leaf.veins or len(points) < MIN_SCAN_POINTS:
+    outline (plausibility.surface_spread, the test the pipeline refuses a scan as a boundary
+    by). Its 12 nearest neighbours spread in two directions within a dense noisy outline's
+    band too: the app opened such a boundary (24,000 points, noise 0.1% of the length) as a
+    scan and extracted a leaf from it."""
+    if leaf.veins or len(leaf.boundary) < MIN_SCAN_POINTS:
         return False
-    _, near = cKDTree(points).query(points, k=SPREAD_NEIGHBOURS + 1)
-    local = points[near] - points[near].mean(axis=1, keepdims=True)
-    spread = np.linalg.eigvalsh(np.einsum("nki,nkj->nij", local, local))  # ascending
-    ratio = spread[:, 1] / np.maximum(spread[:, 2], 1e-300)
-    return float(np.median(ratio)) >= SURFACE_SPREAD
+    return surface_spread(leaf.boundary) > COVER_SPREAD
 
 
 def fidelity_sections(
