@@ -19,6 +19,7 @@ import pyvista as pv
 from leafstudio.assets.asset import leaf_uvs
 from leafstudio.core.pipeline import Result
 from leafstudio.core.trianglemesh import polydata, vertex_normals
+from leafstudio.gui.display_mesh import display_subset
 
 # (key, label shown in the layer list, on by default)
 LAYERS: tuple[tuple[str, str, bool], ...] = (
@@ -58,10 +59,16 @@ class Piece:
     make: Callable[[], pv.DataSet]
     style: dict[str, Any] = field(default_factory=dict)
     ranges: dict[str, tuple[float, float]] = field(default_factory=dict)  # colour range per array
+    make_full: Callable[[], pv.DataSet] | None = None  # the whole dataset, when `make` draws less
 
     @cached_property
     def data(self) -> pv.DataSet:
         return self.make()
+
+    @cached_property
+    def full_data(self) -> pv.DataSet:
+        """The whole dataset (a large mesh's every triangle, for its edges); else `data`."""
+        return self.make_full() if self.make_full is not None else self.data
 
 
 def cloud(points: np.ndarray) -> pv.PolyData:
@@ -117,17 +124,30 @@ def textured(uv: np.ndarray, make: Callable[[], pv.PolyData]) -> pv.PolyData:
 
 
 def _mesh_piece(result: Result) -> Piece:
+    """The mesh, drawn through a subset of its vertices when large (display_mesh.py); with the
+    arrays the view colours by (height, curvatures), its shading normals and UVs."""
     mesh = result.triangle_mesh
     normals = vertex_normals(mesh.points, mesh.regular_faces)
-    uv = leaf_uvs(result)  # the exports' UVs: the Texture colouring maps their image
+    xy = result.frame.to_plane(np.asarray(mesh.points, dtype=float))[0]
+    uv = leaf_uvs(result, xy)  # the exports' UVs: the Texture colouring maps their image
+    colourings = {k: v for k, v in mesh.point_data.items() if k in MESH_COLORINGS}
     style = {
         "smooth_shading": False,  # the normals above already shade smoothly (no main-thread work)
         "show_edges": False,
         "edge_color": "#2a2a2a",
         "specular": 0.3,
     }
-    make = partial(polydata, mesh.points, mesh.regular_faces, mesh.point_data, normals)
-    return Piece("mesh", partial(textured, uv, make), style, _color_ranges(mesh.point_data))
+    ranges = _color_ranges(mesh.point_data)
+    whole = partial(polydata, mesh.points, mesh.regular_faces, colourings, normals)
+    grid = result.grid
+    subset = display_subset(xy, mesh.regular_faces, grid.origin, grid.spacing, len(result.polygon))
+    if subset is None:
+        return Piece("mesh", partial(textured, uv, whole), style, ranges)
+    keep, faces = subset
+    some = {k: v[keep] for k, v in colourings.items()}
+    make = partial(polydata, mesh.points[keep], faces, some, normals[keep])
+    full = partial(textured, uv, whole)
+    return Piece("mesh", partial(textured, uv[keep], make), style, ranges, make_full=full)
 
 
 def _input_pieces(result: Result) -> list[Piece]:

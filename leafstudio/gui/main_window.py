@@ -9,6 +9,7 @@ cannot be opened or reconstructed leaves the current document.
 from __future__ import annotations
 
 import json
+import threading
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -134,9 +135,12 @@ class MainWindow(QMainWindow):
         self._texture_due: tuple | None = None  # (job id, key) of the texture being made
 
         self.worker = Worker(self)
+        self.worker.measure_after_drawn = True  # measuring would slow the render down
+        self._drawn_due: threading.Event | None = None  # the outcome the viewport is drawing
         self.tasks = self.worker  # side tasks run on the same worker (their own lane)
         self.session = Session(self.worker.submit_pipeline)
         self.viewport = Viewport(self)
+        self.viewport.rendered.connect(self._on_rendered)
         self.setCentralWidget(self.viewport)
         self.panel = ParamPanel()
         self.editor = SketchEditor()
@@ -872,7 +876,17 @@ class MainWindow(QMainWindow):
 
     def _on_yielded(self, kind: str, job_id: int, value: object) -> None:
         if kind == PIPELINE:
-            self.session.accept_result(value)
+            if self._drawn_due is not None:
+                self._drawn_due.set()  # a newer result replaces it before its render
+            self._drawn_due = value.drawn
+            if not self.session.accept_result(value):
+                self._on_rendered()  # not shown: no render to wait for
+
+    def _on_rendered(self) -> None:
+        """The shown result is on screen: the worker may measure it (Worker.measure_after_drawn)."""
+        if self._drawn_due is not None:
+            self._drawn_due.set()
+            self._drawn_due = None
 
     def _on_done(self, kind: str, job_id: int, value: object) -> None:
         if kind == PIPELINE:

@@ -171,7 +171,9 @@ class Viewport(QWidget):
                 cmap=MESH_COLORINGS[coloring][1],
                 clim=piece.ranges.get(coloring),
             )
-        if piece.data.n_points == 0:
+        # a large mesh is drawn lighter (display_mesh.py), but its edges are the full mesh's
+        data = piece.full_data if key == "mesh" and self.show_edges else piece.data
+        if data.n_points == 0:
             self.plotter.remove_actor(piece.name, render=False)
             return
         ratio = self.pixel_ratio()
@@ -179,9 +181,9 @@ class Viewport(QWidget):
         if style.get("color") == BOUNDARY_COLOR and self._dark():
             style["color"] = self.text_color()  # the near-black boundary on a dark background
         actor = self.plotter.actors.get(piece.name)
-        if actor is not None and self._same_kind(actor, piece, style):
+        if actor is not None and self._same_kind(actor, data, style):
             held = actor.mapper.GetInputDataObject(0, 0)  # the dataset the mapper draws
-            held.ShallowCopy(piece.data)
+            held.ShallowCopy(data)
             if "scalars" in style:
                 held.GetPointData().SetActiveScalars(style["scalars"])
                 actor.mapper.array_name = style["scalars"]
@@ -194,7 +196,7 @@ class Viewport(QWidget):
             actor.SetVisibility(self.visible[key])
             return
         actor = self.plotter.add_mesh(
-            piece.data,
+            data,
             name=piece.name,
             show_scalar_bar=False,
             reset_camera=False,
@@ -207,14 +209,14 @@ class Viewport(QWidget):
         actor.SetVisibility(self.visible[key])
 
     @staticmethod
-    def _same_kind(actor, piece: Piece, style: dict) -> bool:
+    def _same_kind(actor, data, style: dict) -> bool:
         """True when the drawn actor can take the new dataset in place: same style, and the same
         kind of dataset (its cells' kind decides the mapper's work)."""
         old = actor.mapper.dataset
         return (
             getattr(actor, "_leafstudio_style", None) == _style_key(style)
-            and type(old) is type(piece.data)
-            and bool(old.n_cells) == bool(piece.data.n_cells)
+            and type(old) is type(data)
+            and bool(old.n_cells) == bool(data.n_cells)
         )
 
     def clear(self) -> None:
@@ -279,10 +281,11 @@ class Viewport(QWidget):
         return None if texture is None else np.asarray(texture.to_array())
 
     def set_edges(self, on: bool) -> None:
-        """Show or hide the mesh's triangle edges."""
+        """Show or hide the mesh's triangle edges (over the full mesh: a large one is otherwise
+        drawn through fewer vertices, display_mesh.py)."""
         self.show_edges = on
-        for name in self.actor_names("mesh"):
-            self.plotter.actors[name].prop.show_edges = on
+        if self._mesh_piece is not None and self.actor_names("mesh"):
+            self._add("mesh", self._mesh_piece)
         self.redraw()
 
     def _sync_scalar_bars(self) -> None:

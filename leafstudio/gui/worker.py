@@ -62,6 +62,8 @@ class Outcome:
     layers: dict[str, list[Piece]]
     timings: dict[str, float] = field(default_factory=dict)
     thread: int = 0
+    # set by the window once the outcome is on screen (or will not be): measuring waits for it
+    drawn: threading.Event = field(default_factory=threading.Event, repr=False)
 
 
 @dataclass
@@ -84,6 +86,10 @@ class Context:
 
     def stage(self, name: str) -> None:
         self._worker.stage_started.emit(self._job.kind, self._job.id, name)
+
+    def newer_waiting(self) -> bool:
+        """True when a newer job of this kind waits, interrupting or not."""
+        return self._job.kind in self._worker._pending
 
 
 class Worker(QObject):
@@ -115,6 +121,9 @@ class Worker(QObject):
         self._last_id = 0
         self._quit = False
         self._pipeline: Pipeline | None = None  # touched on the pipeline lane only
+        # measure a result only once the window has drawn it (Outcome.drawn), so that measuring
+        # never competes with the render for the host's cores (software OpenGL renders on them)
+        self.measure_after_drawn = False
         # daemon threads: quitting during a long stage must not wait for it
         self._threads = [
             threading.Thread(
@@ -224,10 +233,25 @@ class Worker(QObject):
         start = time.perf_counter()
         layers = build_layers(result)
         timings["layers"] = time.perf_counter() - start
-        yield Outcome(request, result, layers, timings, threading.get_ident())
+        outcome = Outcome(request, result, layers, timings, threading.get_ident())
+        yield outcome
+        if self.measure_after_drawn and not self._wait_drawn(outcome, context):
+            raise Cancelled  # a newer result follows: its measurements would be replaced at once
         start = time.perf_counter()
         _ = result.metrics  # here, not on the main thread when the panel reads them
         return time.perf_counter() - start
 
+    @staticmethod
+    def _wait_drawn(outcome: Outcome, context: Context) -> bool:
+        """Wait until `outcome` is drawn (at most DRAWN_WAIT_S: a hidden window never draws);
+        False when a newer request waits by then."""
+        deadline = time.monotonic() + DRAWN_WAIT_S
+        while not outcome.drawn.wait(DRAWN_POLL_S):
+            if context.newer_waiting() or time.monotonic() > deadline:
+                break
+        return not context.newer_waiting()
+
 
 _STOPPED = object()
+DRAWN_WAIT_S = 2.0  # the longest a result's measuring waits for the window to draw it
+DRAWN_POLL_S = 0.01  # how often that wait looks for a newer request

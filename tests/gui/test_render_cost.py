@@ -1,9 +1,18 @@
-"""What the 3D view does per result, counted rather than timed: one render of the scene, and
-text that is set in place (software OpenGL makes every extra render or font fit a stall)."""
+"""What the 3D view does per result, counted rather than timed: one render of the scene, text
+set in place, measuring only once the result is drawn, and a large mesh drawn through fewer of
+its own vertices while edges and exports keep it whole (software OpenGL makes every extra render,
+font fit or vertex a main-thread stall)."""
 
 from __future__ import annotations
 
-from tests.gui.conftest import wait_result
+import numpy as np
+
+from leafstudio.core.pipeline import Pipeline
+from leafstudio.demos import demo
+from leafstudio.gui import display_mesh
+from leafstudio.gui.display_mesh import display_subset
+from leafstudio.gui.worker import PIPELINE, Worker
+from tests.gui.conftest import FAST, WAIT_MS, wait_result
 
 
 def _count_renders(window) -> list[int]:
@@ -31,3 +40,103 @@ def test_the_k_label_is_one_text_actor_updated_in_place(window, qtbot):
     wait_result(qtbot, window, lambda o: o.result.params.k == 5)
     assert plotter.actors["k_label"] is label  # not made anew (nor its font fitted anew)
     assert label.input == f"K = {window.outcome.result.chosen_k}"
+
+
+def test_a_result_is_measured_once_drawn_and_not_when_a_newer_one_waits(qtbot):
+    """Measuring (hundreds of ms of CPU at grid 512) waits until the window has drawn the
+    result, so that it never slows the render; a result already replaced is not measured."""
+    worker = Worker()
+    worker.measure_after_drawn = True
+    got: dict[str, list] = {"yielded": [], "done": []}
+    worker.yielded.connect(lambda kind, jid, value: got["yielded"].append(value))
+    worker.done.connect(lambda kind, jid, value: got["done"].append(jid))
+    try:
+        leaf = demo("nested")
+        first = worker.submit_pipeline(leaf, FAST)
+        qtbot.waitUntil(lambda: bool(got["yielded"]), timeout=WAIT_MS)
+        qtbot.wait(100)
+        assert got["done"] == []  # not measured while not drawn
+        assert not worker.is_idle()
+        got["yielded"][0].drawn.set()
+        qtbot.waitUntil(lambda: got["done"] == [first], timeout=WAIT_MS)
+
+        second = worker.submit_pipeline(leaf, FAST.with_(k=4))
+        qtbot.waitUntil(lambda: len(got["yielded"]) == 2, timeout=WAIT_MS)
+        third = worker.submit_pipeline(leaf, FAST.with_(k=5), interrupt=False)
+        qtbot.waitUntil(lambda: len(got["yielded"]) == 3, timeout=WAIT_MS)
+        assert got["yielded"][2].request.id == third
+        got["yielded"][2].drawn.set()
+        qtbot.waitUntil(worker.is_idle, timeout=WAIT_MS)
+        assert got["done"] == [first, third]  # the second was replaced before it was drawn
+        assert second not in got["done"]
+    finally:
+        worker.shutdown()
+
+
+def test_the_window_lets_the_worker_measure_once_the_result_is_on_screen(window, qtbot):
+    rendered: list[bool] = []
+    window.viewport.rendered.connect(lambda: rendered.append(True))
+    measured_after_render: list[bool] = []
+    window.worker.done.connect(
+        lambda kind, *_: kind == PIPELINE and measured_after_render.append(bool(rendered))
+    )
+    window.panel.k.setValue(5)
+    wait_result(qtbot, window, lambda o: o.result.params.k == 5)
+    qtbot.waitUntil(lambda: bool(measured_after_render), timeout=WAIT_MS)
+    assert measured_after_render == [True]
+    assert window.session.shown.measured_id == window.session.shown_id
+
+
+def _plane_areas(xy: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Signed areas of the triangles on the plane."""
+    a, b, c = xy[faces[:, 0]], xy[faces[:, 1]], xy[faces[:, 2]]
+    (u, v), (s, t) = (b - a).T, (c - a).T
+    return 0.5 * (u * t - v * s)
+
+
+def test_a_large_mesh_is_drawn_through_a_subset_of_its_own_vertices():
+    result = Pipeline(demo("nested")).run(FAST.with_(grid=96))
+    mesh = result.triangle_mesh
+    xy = result.frame.to_plane(mesh.points)[0]
+    grid, n_outline = result.grid, len(result.polygon)
+    faces = mesh.regular_faces
+    assert display_subset(xy, faces, grid.origin, grid.spacing, n_outline, len(faces)) is None
+    keep, drawn = display_subset(xy, faces, grid.origin, grid.spacing, n_outline, len(faces) // 4)
+    assert len(faces) // 6 < len(drawn) <= len(faces) // 3  # blocks of 2 x 2 nodes
+    assert set(range(n_outline)) <= set(keep.tolist())  # the margin is drawn exactly
+    assert len(np.unique(keep)) == len(keep) and drawn.max() < len(keep)
+    assert (drawn[:, 0] != drawn[:, 1]).all() and (drawn[:, 1] != drawn[:, 2]).all()
+    assert len(np.unique(np.sort(drawn, axis=1), axis=0)) == len(drawn)  # no repeats
+    full, shown = _plane_areas(xy, faces), _plane_areas(xy[keep], drawn)
+    # the same blade, without holes or folds: signed and unsigned areas match the full mesh's
+    assert np.isclose(shown.sum(), full.sum(), rtol=1e-3)
+    assert np.abs(shown).sum() < 1.01 * np.abs(full).sum()
+
+
+def test_a_mesh_that_is_not_over_the_grid_is_drawn_whole():
+    rng = np.random.default_rng(1)
+    xy = rng.random((400, 2))
+    faces = rng.integers(0, 400, (2000, 3))
+    assert display_subset(xy, faces, np.zeros(2), 0.013, 10, 100) is None
+
+
+def test_the_view_draws_a_lighter_mesh_but_edges_and_exports_are_the_full_one(
+    window, qtbot, tmp_path, monkeypatch
+):
+    import pyvista as pv
+
+    monkeypatch.setattr(display_mesh, "DISPLAY_TRIANGLES", 500)
+    window.panel.k.setValue(5)
+    result = wait_result(qtbot, window, lambda o: o.result.params.k == 5).result
+    full = result.triangle_mesh
+    drawn = window.viewport.plotter.actors["mesh"].mapper.dataset
+    assert 0 < drawn.n_cells < len(full.regular_faces) // 2
+    assert {"height", "Normals"} <= set(drawn.point_data.keys())
+    window.edges.setChecked(True)  # edges show the mesh as it is
+    drawn = window.viewport.plotter.actors["mesh"].mapper.dataset
+    assert drawn.n_cells == len(full.regular_faces) and drawn.n_points == len(full.points)
+    window.edges.setChecked(False)
+    assert window.viewport.plotter.actors["mesh"].mapper.dataset.n_cells < drawn.n_cells
+    out = tmp_path / "leaf.ply"
+    assert window.export_mesh(str(out))
+    assert pv.read(out).n_points == len(full.points)  # the export is the full mesh
