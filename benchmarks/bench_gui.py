@@ -71,15 +71,31 @@ class StallMeter:
 
 
 class ScreenLog:
-    """When each render of the 3D view ended and which request the session showed then."""
+    """When each render of the 3D view ended and which request the session showed then; and
+    what each render cost: wall time, the main thread's CPU time, and the whole process's CPU
+    time (software OpenGL rasterizes on its own threads: on a quiet host of n cores a render
+    takes about the process's CPU time over n, whatever the load was when it was measured)."""
 
     def __init__(self, window: MainWindow) -> None:
         self.window = window
         self.renders: list[tuple[float, int]] = []  # (time, id of the request shown)
+        self.costs: list[tuple[float, float, float]] = []  # (wall, main thread, process) in s
+        self._start = (0.0, 0.0, 0.0)
+        window.viewport.plotter.render_window.AddObserver("StartEvent", self._on_start)
         window.viewport.plotter.render_window.AddObserver("EndEvent", self._on_render)
 
+    def _on_start(self, *_: object) -> None:
+        self._start = (time.perf_counter(), time.thread_time(), time.process_time())
+
     def _on_render(self, *_: object) -> None:
-        self.renders.append((time.perf_counter(), self.window.session.shown_id))
+        now = (time.perf_counter(), time.thread_time(), time.process_time())
+        self.costs.append(tuple(b - a for a, b in zip(self._start, now, strict=True)))
+        self.renders.append((now[0], self.window.session.shown_id))
+
+    def cost_of_first(self, request_id: int) -> tuple[float, float, float] | None:
+        """What the render that first showed request `request_id` cost, if there was one."""
+        i = next((i for i, (_, shown) in enumerate(self.renders) if shown >= request_id), None)
+        return None if i is None else self.costs[i]
 
     def shown(self, request_id: int) -> float | None:
         """When request `request_id` (or a newer one) was first on screen, if it was."""
@@ -125,7 +141,7 @@ def measure(window: MainWindow, grid: int) -> dict:
     screen = ScreenLog(window)
     meter.timer.start()
     latencies, computing, after, busy, total, draws, stages = [], [], [], [], [], [], []
-    renders = []
+    renders, costs = [], []
     for k in MOVES:
         wait_until_idle(window)  # the previous move's measurements are done
         meter.reset()
@@ -136,6 +152,7 @@ def measure(window: MainWindow, grid: int) -> dict:
         wait_until_idle(window)
         wait_for_ticks(meter, time.perf_counter() + 0.2)  # and any render queued behind it
         renders.append(sum(t > ready["t"] for t, _ in screen.renders))
+        costs.append(screen.cost_of_first(request))
         latencies.append(end - start)
         computing.append(meter.worst(until=ready["t"]))
         after.append(meter.worst(since=ready["t"]))
@@ -156,6 +173,10 @@ def measure(window: MainWindow, grid: int) -> dict:
         "max_main_thread_cpu_in_one_piece_after_result_ms": ms(max(busy)),
         "max_stall_until_measured_ms": ms(max(total)),
         "renders_per_result_max": max(renders),
+        "render_of_result_ms_median": {
+            name: ms(statistics.median(c[i] for c in costs if c is not None))
+            for i, name in enumerate(("wall", "main_thread_cpu", "process_cpu"))
+        },
         "storm": storm,
         "draw_ms_median": ms(statistics.median(draws)),
         "stage_ms_median": {

@@ -127,7 +127,6 @@ def _mesh_piece(result: Result) -> Piece:
     """The mesh, drawn through a subset of its vertices when large (display_mesh.py); with the
     arrays the view colours by (height, curvatures), its shading normals and UVs."""
     mesh = result.triangle_mesh
-    normals = vertex_normals(mesh.points, mesh.regular_faces)
     xy = result.frame.to_plane(np.asarray(mesh.points, dtype=float))[0]
     uv = leaf_uvs(result, xy)  # the exports' UVs: the Texture colouring maps their image
     colourings = {k: v for k, v in mesh.point_data.items() if k in MESH_COLORINGS}
@@ -138,16 +137,28 @@ def _mesh_piece(result: Result) -> Piece:
         "specular": 0.3,
     }
     ranges = _color_ranges(mesh.point_data)
-    whole = partial(polydata, mesh.points, mesh.regular_faces, colourings, normals)
     grid = result.grid
     subset = display_subset(xy, mesh.regular_faces, grid.origin, grid.spacing, len(result.polygon))
     if subset is None:
+        normals = vertex_normals(mesh.points, mesh.regular_faces)
+        whole = partial(polydata, mesh.points, mesh.regular_faces, colourings, normals)
         return Piece("mesh", partial(textured, uv, whole), style, ranges)
     keep, faces = subset
+    points = mesh.points[keep]
+    normals = vertex_normals(points, faces)  # of the mesh drawn: a quarter of the work
     some = {k: v[keep] for k, v in colourings.items()}
-    make = partial(polydata, mesh.points[keep], faces, some, normals[keep])
-    full = partial(textured, uv, whole)
+    make = partial(polydata, points, faces, some, normals)
+    # the full mesh, for its edges: made (normals and all) on the main thread if ever shown
+    full = partial(_whole_mesh, mesh.points, mesh.regular_faces, colourings, uv)
     return Piece("mesh", partial(textured, uv[keep], make), style, ranges, make_full=full)
+
+
+def _whole_mesh(
+    points: np.ndarray, faces: np.ndarray, colourings: dict[str, np.ndarray], uv: np.ndarray
+) -> pv.PolyData:
+    """The full mesh as drawn with its edges, with its own shading normals and UVs."""
+    normals = vertex_normals(points, faces)
+    return textured(uv, partial(polydata, points, faces, colourings, normals))
 
 
 def _input_pieces(result: Result) -> list[Piece]:
