@@ -144,3 +144,30 @@ def test_the_photo_texture_lands_the_photo_on_the_leaf(tmp_path):
     inside = texture[..., 3] == 255
     assert inside.mean() > 0.2 and (texture[..., 3] == 0).mean() > 0.2
     assert np.all(np.abs(np.median(texture[inside][:, :3], axis=0) - (62, 118, 44)) <= 6)
+
+
+def test_no_photo_background_inside_the_outline(tmp_path):
+    """Where the smooth margin rounds a sinus of a serrate leaf, or the photo's edge is blurred,
+    the texels inside the outline took the photo's background (a pale band 1-2 photo pixels
+    deep, about a thousand texels here); they now take the nearest leaf colour."""
+    import leafstudio as ls
+    from leafstudio.assets.photo import leaf_from_photo
+    from leafstudio.forms import make_form
+    from tests.photos import BACKGROUND, form_photo
+
+    form = make_form("ovate", margin="serrate", teeth=24)
+    image, _, _ = form_photo(form.boundary, form.veins, angle=-40)
+    found = leaf_from_photo(image, veins="none")
+    result = ls.reconstruct(found.leaf, ls.Params(k=1, grid=64, samples=800))
+    path = tmp_path / "leaf.png"
+    from PIL import Image
+
+    Image.fromarray(image).save(path)
+    texture = np.asarray(base_color(result, PhotoTexture(path, found.pixel_from_world)))
+    inside = texture[..., 3] == 255
+    rgb = texture[..., :3].astype(float)
+    to_background = np.linalg.norm(rgb - BACKGROUND, axis=2)
+    to_leaf = np.linalg.norm(rgb - (62, 118, 44), axis=2)
+    assert np.count_nonzero(inside & (to_background < to_leaf)) == 0
+    outside = texture[..., 3] == 0
+    assert np.median(to_background[outside]) < 30  # outside the outline: the photo as it is

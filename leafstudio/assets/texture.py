@@ -27,6 +27,7 @@ MIDRIB_WIDTH = 0.012  # of the leaf length
 THINNEST = 1 / 3  # of the midrib's width
 TIP_NARROWING = 0.5  # a secondary's width at its far end, as a fraction of its start's
 RELIEF = 2.0  # normal map: slope of the vein relief, in height per vein width
+EDGE_PIXELS = 2  # a photo's leaf edge this deep blends with the background (blur, anti-aliasing)
 
 
 def _pixel(plane: LeafPlane, xy: np.ndarray, pixels: int) -> np.ndarray:
@@ -137,7 +138,9 @@ def photo_texture(
 ):
     """The photo resampled into UV space: each texel takes the colour of the photo pixel its leaf
     point came from, so the leaf in the texture is where the mesh's UVs put it. Alpha is the
-    outline's mask.
+    outline's mask. Inside the outline, a texel whose photo pixel is background (the smooth
+    margin rounding a sinus, the photo's blurred edge: a pale band 1-2 photo pixels deep) takes
+    the colour of the nearest texel on the photo's leaf (see _leaf_inside).
 
     Parameters
     ----------
@@ -158,7 +161,39 @@ def photo_texture(
          for c in range(3)]
     )  # fmt: skip
     rgb = np.rint(rgb).clip(0, 255).astype(np.uint8).reshape(pixels, pixels, 3)
-    return Image.fromarray(np.dstack([rgb, outline_mask(plane, pixels)]), "RGBA")
+    alpha = outline_mask(plane, pixels)
+    leaf = _photo_leaf(photo)
+    if leaf is not None:
+        on_leaf = map_coordinates(leaf.view(np.uint8), where, order=0, mode="constant", cval=0)
+        rgb = _leaf_inside(rgb, on_leaf.reshape(pixels, pixels).astype(bool), alpha > 0)
+    return Image.fromarray(np.dstack([rgb, alpha]), "RGBA")
+
+
+def _photo_leaf(photo: np.ndarray) -> np.ndarray | None:
+    """(h, w) bool: the photo's leaf pixels as `leafstudio photo` segments them (photo.py), less
+    the edge where leaf and background blend (EDGE_PIXELS); None if nothing stands out."""
+    from scipy.ndimage import binary_erosion
+
+    from leafstudio.assets.photo import _foreground
+
+    try:
+        return binary_erosion(_foreground(photo), iterations=EDGE_PIXELS)
+    except LeafError:
+        return None
+
+
+def _leaf_inside(rgb: np.ndarray, on_leaf: np.ndarray, inside: np.ndarray) -> np.ndarray:
+    """`rgb` with each texel `inside` the outline but not `on_leaf` given the colour of the
+    nearest texel that is (edge padding; unchanged when no texel is on the leaf)."""
+    from scipy.ndimage import distance_transform_edt
+
+    fill = inside & ~on_leaf
+    if not fill.any() or not on_leaf.any():
+        return rgb
+    rows, cols = distance_transform_edt(~on_leaf, return_distances=False, return_indices=True)
+    out = rgb.copy()
+    out[fill] = rgb[rows[fill], cols[fill]]
+    return out
 
 
 def stretched_texture(image: np.ndarray, pixels: int = TEXTURE_PIXELS):
