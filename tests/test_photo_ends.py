@@ -85,3 +85,18 @@ def test_without_visible_veins_the_base_is_a_guess_and_the_command_says_so(tmp_p
     Image.fromarray(image).save(path)
     assert main(["photo", str(path), "-o", str(tmp_path / "leaf.leaf.json")]) == 0
     assert "a guess: --base-end names it" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "terms",
+    [
+        # random lobes: the blade is not quite symmetric, its midline leaves it beside the tip
+        {"shape": "cordate", "margin": "lobed", "lobes": 5, "venation": "palmate", "seed": 2},
+        # a little wider than long: the veins, not the longer chord, tell the midline
+        {"shape": "orbicular", "seed": 2},
+    ],
+    ids=["asymmetric lobes", "wider than long"],
+)
+def test_a_variant_form_keeps_its_base_and_apex(terms):
+    match = leaf_frame_match(terms, 90.0)
+    assert match["base_error"] < 0.02 and match["iou_leaf_frame"] >= 0.97, match

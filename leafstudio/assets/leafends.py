@@ -38,6 +38,8 @@ MIDRIB_SKIP = 3.0  # pixels: and this band either side of the midline (the midri
 TIP_SIDES = (4.0, 16.0)  # pixels along the outline from a pointed end: its sides' straight part
 TIP_ANGLE = 100.0  # degrees: ends blunter than this are left as they are
 TIP_REACH = 6.0  # pixels: a pointed end moves out at most this far
+TIP_CLIMB = 0.1  # of the length: an apex off the midline is looked for this far along the outline
+TIP_GAIN = 0.005  # of the length: a climb that gains less is left (a round end)
 TENSOR_SIGMA = 1.0  # pixels: the structure tensor's window (wider ones reach the outline's edge)
 
 
@@ -93,7 +95,8 @@ def _chord(polygon: shapely.Polygon, centre: np.ndarray, along: np.ndarray) -> n
 
 def midline(outline: np.ndarray, veins: VeinField | None = None) -> Midline:
     """The blade's mirror axis (see the module docstring) from its (n, 2) outline; a round
-    blade's (every axis a mirror) is the line the veins lean off most, when they show."""
+    blade's (every axis a mirror) is the line the veins lean off most, when they show, and of
+    axes that mirror it about as well (an elliptic or round blade) the one they lean off most."""
     from scipy.optimize import minimize
 
     polygon = shapely.Polygon(outline).buffer(0)
@@ -128,7 +131,12 @@ def midline(outline: np.ndarray, veins: VeinField | None = None) -> Midline:
         ends = _chord(polygon, through, along)
         candidates.append(Midline(ends=ends, along=along, mirror=-float(result.fun)))
     best = max(c.mirror for c in candidates)
-    return max((c for c in candidates if c.mirror >= best - MIRROR_TIE), key=lambda c: c.length)
+    tied = [c for c in candidates if c.mirror >= best - MIRROR_TIE]
+    if veins is not None and len(tied) > 1:  # the veins lean off the midline, not off the others
+        leans = [abs(veins.lean(c.ends[0], c.along)) for c in tied]
+        if max(leans) >= VEIN_CLEAR:
+            return tied[int(np.argmax(leans))]
+    return max(tied, key=lambda c: c.length)
 
 
 def notch_depths(outline: np.ndarray, line: Midline) -> np.ndarray:
@@ -263,3 +271,28 @@ def sharpen_end(outline: np.ndarray, index: int, inward: np.ndarray) -> tuple[np
         count = max(int(np.linalg.norm(end - tip) / spacing), 1)
         sides.append(tip + (end - tip) * (np.arange(1, count) / count)[:, None])
     return np.vstack([tip, sides[0], kept, sides[1][::-1]]), 0
+
+
+def climb_to_tip(outline: np.ndarray, index: int, base: np.ndarray) -> int:
+    """The apex where the midline leaves an asymmetric blade beside its tip: the outline is
+    followed from there, away from the base, to the tip (the farthest point from the base
+    within TIP_CLIMB of the length along the outline), if that is TIP_GAIN of the length
+    farther (a round end is about as far everywhere: the base's own error would steer the
+    climb). An end at a tip stays, and so does one in a notch (an emarginate apex: the outline
+    runs away from the base on both sides)."""
+    n = len(outline)
+    far = np.linalg.norm(outline - base, axis=1)
+    step = float(np.median(np.linalg.norm(np.diff(outline, axis=0), axis=1)))
+    limit = int(TIP_CLIMB * far[index] / max(step, 1e-12))
+    rising = [s for s in (1, -1) if far[(index + 2 * s) % n] > far[index]]
+    if len(rising) != 1:
+        return index
+    (s,) = rising
+    at = index
+    for _ in range(limit):
+        if far[(at + 2 * s) % n] <= far[at]:
+            break
+        at = (at + s) % n
+    window = (at + np.arange(-2, 3)) % n  # the top of the climb, to the vertex
+    top = int(window[np.argmax(far[window])])
+    return top if far[top] - far[index] >= TIP_GAIN * far[index] else index

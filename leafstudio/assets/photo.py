@@ -239,7 +239,13 @@ def _ends(
 ) -> tuple[np.ndarray, int, int, str]:
     """The outline (its pointed ends sharpened when no petiole shows the base), the indices of
     the base and apex on it, and what told the base (see the module docstring)."""
-    from leafstudio.assets.leafends import VeinField, base_end_index, midline, sharpen_end
+    from leafstudio.assets.leafends import (
+        VeinField,
+        base_end_index,
+        climb_to_tip,
+        midline,
+        sharpen_end,
+    )
 
     if joint is not None:
         base = int(np.argmin(np.linalg.norm(outline - joint, axis=1)))
@@ -253,6 +259,8 @@ def _ends(
         direction = {"left": (-1, 0), "right": (1, 0), "top": (0, -1), "bottom": (0, 1)}[base_end]
         first, cue = int(np.argmax(line.ends @ np.array(direction, float))), "given"
     ends = line.ends[[first, 1 - first]]  # base, apex
+    tip = climb_to_tip(outline, int(np.argmin(np.linalg.norm(outline - ends[1], axis=1))), ends[0])
+    ends[1] = outline[tip]
     inward = (ends[1] - ends[0]) / max(np.linalg.norm(ends[1] - ends[0]), 1e-12)
     for k, direction in ((0, inward), (1, -inward)):  # pointed ends put back where blur cut them
         at = int(np.argmin(np.linalg.norm(outline - ends[k], axis=1)))
