@@ -140,3 +140,17 @@ def test_the_view_draws_a_lighter_mesh_but_edges_and_exports_are_the_full_one(
     out = tmp_path / "leaf.ply"
     assert window.export_mesh(str(out))
     assert pv.read(out).n_points == len(full.points)  # the export is the full mesh
+
+
+def test_the_background_is_one_colour_in_light_and_dark(window):
+    """A gradient background is a full-view pass of its own in every render."""
+    from PySide6.QtGui import QColor, QPalette
+
+    renderer = window.viewport.plotter.renderer
+    assert not renderer.GetGradientBackground()
+    light = renderer.GetBackground()
+    dark = QPalette()
+    dark.setColor(QPalette.ColorRole.Base, QColor("#17181a"))
+    window.setPalette(dark)
+    assert not renderer.GetGradientBackground()
+    assert max(renderer.GetBackground()) < 0.3 < min(light)
