@@ -100,3 +100,20 @@ def test_without_visible_veins_the_base_is_a_guess_and_the_command_says_so(tmp_p
 def test_a_variant_form_keeps_its_base_and_apex(terms):
     match = leaf_frame_match(terms, 90.0)
     assert match["base_error"] < 0.02 and match["iou_leaf_frame"] >= 0.97, match
+
+
+def test_a_real_leaf_is_found_along_its_length():
+    """A real scan's blade (sugar beet, rendered from above: no veins, shading from its relief):
+    the midline runs the blade's long way. Its relief's shading leans a little off the short
+    axis too, which once made that the midline (base 2 lengths from the petiole's joint)."""
+    from tests.photos import REALLEAVES, scan_photo
+
+    path = REALLEAVES / "sugarbeet_f00012_20170829T010129_pot1_1.txt"
+    if not path.exists():
+        pytest.skip(f"{path} is missing")
+    image, known, _ = scan_photo(path)
+    found = leaf_from_photo(image, veins="none")
+    base, apex = found.pixel_from_world @ [0, 0, 1], found.pixel_from_world @ [1, 0, 1]
+    ring = np.asarray(known.exterior.coords)
+    extent = np.max(np.linalg.norm(ring[:, None] - ring[None], axis=2))
+    assert np.linalg.norm(apex - base) > 0.9 * extent

@@ -30,6 +30,7 @@ from shapely import affinity
 
 MIRROR_TIE = 0.015  # axes this close (in IoU) to the best mirror count as equally good
 SEARCH_POINTS = 240  # the outline is thinned to this many points for the search
+ROUNDISH = 0.8  # mirror axes with chords within this ratio are told apart by the veins
 NOTCH_DEEP = 0.08  # of the length: a notch this deep at one end marks the base
 VEIN_CLEAR = 0.03  # the veins' cue counts when its share of the tensor's trace is this large
 END_BAND = 0.15  # each end's width is measured this share of the length from it
@@ -95,8 +96,9 @@ def _chord(polygon: shapely.Polygon, centre: np.ndarray, along: np.ndarray) -> n
 
 def midline(outline: np.ndarray, veins: VeinField | None = None) -> Midline:
     """The blade's mirror axis (see the module docstring) from its (n, 2) outline; a round
-    blade's (every axis a mirror) is the line the veins lean off most, when they show, and of
-    axes that mirror it about as well (an elliptic or round blade) the one they lean off most."""
+    blade's (every axis a mirror) is the line the veins lean off most, when they show; of axes
+    that mirror it about as well (an elliptic blade) the longest, unless they are about as long
+    (ROUNDISH: a round blade a little wider than long), then the one the veins lean off most."""
     from scipy.optimize import minimize
 
     polygon = shapely.Polygon(outline).buffer(0)
@@ -132,6 +134,8 @@ def midline(outline: np.ndarray, veins: VeinField | None = None) -> Midline:
         candidates.append(Midline(ends=ends, along=along, mirror=-float(result.fun)))
     best = max(c.mirror for c in candidates)
     tied = [c for c in candidates if c.mirror >= best - MIRROR_TIE]
+    longest = max(c.length for c in tied)
+    tied = [c for c in tied if c.length >= ROUNDISH * longest]  # a much longer one wins
     if veins is not None and len(tied) > 1:  # the veins lean off the midline, not off the others
         leans = [abs(veins.lean(c.ends[0], c.along)) for c in tied]
         if max(leans) >= VEIN_CLEAR:
