@@ -117,3 +117,26 @@ def test_a_real_leaf_is_found_along_its_length():
     ring = np.asarray(known.exterior.coords)
     extent = np.max(np.linalg.norm(ring[:, None] - ring[None], axis=2))
     assert np.linalg.norm(apex - base) > 0.9 * extent
+
+
+@pytest.mark.parametrize(
+    ("shape", "petiole", "angle"),
+    [
+        ("orbicular", 0.12, 0.0),  # short beside a large blade: the openings are too coarse
+        ("reniform", 0.12, 90.0),  # mostly hidden in the sinus
+        ("spatulate", 0.12, 180.0),  # runs into the narrow base
+        ("linear", 0.25, 270.0),  # a quarter of the blade's width
+    ],
+)
+def test_a_petiole_the_openings_miss_is_found_along_the_midline(shape, petiole, angle):
+    from shapely import Polygon
+
+    from tests.photos import iou
+
+    leaf = make_form(shape)
+    image, known, base = form_photo(leaf.boundary, leaf.veins, angle=angle, petiole=petiole)
+    found = leaf_from_photo(image, veins="none")
+    pixels_long = np.linalg.norm(found.pixel_from_world[:, 0])  # base to apex, in pixels
+    assert found.petiole and found.base_cue == "petiole"
+    assert np.linalg.norm(found.pixel_from_world @ [0, 0, 1] - base) < 0.025 * pixels_long
+    assert iou(Polygon(found.outline_px), known) >= 0.97

@@ -41,6 +41,10 @@ TIP_ANGLE = 100.0  # degrees: ends blunter than this are left as they are
 TIP_REACH = 6.0  # pixels: a pointed end moves out at most this far
 TIP_CLIMB = 0.1  # of the length: an apex off the midline is looked for this far along the outline
 TIP_GAIN = 0.005  # of the length: a climb that gains less is left (a round end)
+STALK_JUMP = 2.5  # the blade is this many times wider than a petiole along the midline,
+STALK_EVEN_RUN = 1.5  # whose width stays within this factor of its width near its end,
+STALK_SLENDER = 1.5  # over at least this many widths; it is looked for within
+STALK_REACH = 0.5  # this share of the length from each end
 TENSOR_SIGMA = 1.0  # pixels: the structure tensor's window (wider ones reach the outline's edge)
 
 
@@ -300,3 +304,59 @@ def climb_to_tip(outline: np.ndarray, index: int, base: np.ndarray) -> int:
     window = (at + np.arange(-2, 3)) % n  # the top of the climb, to the vertex
     top = int(window[np.argmax(far[window])])
     return top if far[top] - far[index] >= TIP_GAIN * far[index] else index
+
+
+@dataclass(frozen=True)
+class Stalk:
+    """A petiole found along the midline: it runs from `tip` to `joint`, `halfwidth` wide."""
+
+    end: int  # which of the midline's ends it is at
+    tip: np.ndarray
+    joint: np.ndarray
+    halfwidth: float
+
+
+def _widths(polygon: shapely.Polygon, start: np.ndarray, inward: np.ndarray, at: np.ndarray):
+    """The blade's width across the midline at distances `at` in from `start`: the piece of
+    each cross-line that holds the midline's point (a petiole in a sinus, not the lobes)."""
+    normal = np.array([-inward[1], inward[0]])
+    reach = 2 * np.sqrt(polygon.area) + polygon.length
+    widths = np.zeros(len(at))
+    for i, t in enumerate(at):
+        centre = start + t * inward
+        cut = polygon.intersection(
+            shapely.LineString([centre - reach * normal, centre + reach * normal])
+        )
+        pieces = [g for g in getattr(cut, "geoms", [cut]) if g.geom_type == "LineString"]
+        point = shapely.Point(centre)
+        holding = [g for g in pieces if g.distance(point) < 1.0]
+        widths[i] = max((g.length for g in holding), default=0.0)
+    return widths
+
+
+def find_stalk(outline: np.ndarray, line: Midline) -> Stalk | None:
+    """A petiole the openings missed (short beside a large blade, hidden in a sinus, or running
+    into a narrow base): at one end of the midline, a run of even width (within STALK_EVEN_RUN
+    of its width near the end) STALK_SLENDER times longer than wide, on a blade STALK_JUMP
+    times wider; the run ends where the width leaves that band (the blade widens, or narrows
+    where the stalk meets a cuneate base). A pointed end widens from nothing at once."""
+    polygon = shapely.Polygon(outline).buffer(0)
+    span = line.length
+    greatest = _widths(polygon, line.ends[0], line.along, np.linspace(0, span, 41)[1:-1]).max()
+    found = None
+    for end, sign in ((0, 1.0), (1, -1.0)):
+        start, inward = line.ends[end], sign * line.along
+        at = np.arange(1.0, STALK_REACH * span)
+        widths = _widths(polygon, start, inward, at)
+        width = float(np.median(widths[1:8]))  # 2 to 8 pixels in: past the blurred tip
+        if width <= 0 or greatest < STALK_JUMP * width:
+            continue
+        inside = (widths <= STALK_EVEN_RUN * width) & (widths >= width / STALK_EVEN_RUN)
+        inside[0] = True  # the very end is rounded by blur
+        run = int(np.argmin(inside)) if not inside.all() else len(at)
+        if run == len(at) or at[run] < STALK_SLENDER * width:
+            continue
+        candidate = Stalk(end, start, start + at[run] * inward, width / 2)
+        if found is None or at[run] > np.linalg.norm(found.joint - found.tip):
+            found = candidate
+    return found

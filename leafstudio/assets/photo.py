@@ -13,7 +13,9 @@
    the same within STALK_EVEN, where a spatulate blade's narrow base widens): teeth are short,
    tips taper. A second
    opening, by a disk just wider than the petiole, cuts it off where the blade widens. Where it
-   met the blade is the base.
+   met the blade is the base. A petiole these miss (short beside a large blade, or running
+   into a narrow base) is looked for along the blade's midline (leafends.find_stalk) and cut
+   off square at its joint.
 4. The outline: the zero contour of the (slightly smoothed) blade mask, at sub-pixel precision,
    resampled evenly.
 5. Base and apex: the petiole's end when there is one (the apex is then the outline point
@@ -31,11 +33,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
+
+if TYPE_CHECKING:
+    from leafstudio.assets.leafends import Midline, VeinField
 
 BASE_ENDS = ("auto", "left", "right", "top", "bottom")
 SECOND_OBJECT = 0.25  # a second object this large (of the largest) means several leaves
@@ -47,6 +53,7 @@ PETIOLE_LENGTH = 1.0  # a stalk is at least this many disk radii long,
 STALK_ELONGATION = 4.0  # this many times longer than wide,
 STALK_FILL = 0.65  # and fills more than this share of its length times its widest width,
 STALK_EVEN = 0.88  # and is as wide near one end as near the other (_evenness), to this share
+STALK_MARGIN = 1.5  # pixels: a petiole found along the midline is cut this much wider
 PETIOLE_FIT = 1.6  # the second opening's disk, in petiole half-widths
 
 
@@ -230,29 +237,53 @@ def _outline(blade: np.ndarray, points: int | None) -> np.ndarray:
     return out
 
 
+def _cut_stalk(
+    outline: np.ndarray, image: np.ndarray, blade: np.ndarray
+) -> tuple[np.ndarray, np.ndarray | None, VeinField, Midline]:
+    """A petiole the openings missed, found along the blade's midline (leafends.find_stalk), cut
+    off square at its joint: (blade, joint or None, veins, midline); the last two serve _ends
+    when there is no petiole."""
+    from skimage.measure import label
+
+    from leafstudio.assets.leafends import VeinField, find_stalk, midline
+
+    veins = VeinField(image, blade)
+    line = midline(outline, veins)
+    stalk = find_stalk(outline, line)
+    if stalk is None:
+        return blade, None, veins, line
+    rows, cols = np.nonzero(blade)
+    xy = np.column_stack([cols, rows]) + 0.5
+    inward = (stalk.joint - stalk.tip) / np.linalg.norm(stalk.joint - stalk.tip)
+    along = (xy - stalk.tip) @ inward
+    across = (xy - stalk.tip) @ np.array([-inward[1], inward[0]])
+    cut = (along <= np.linalg.norm(stalk.joint - stalk.tip)) & (
+        np.abs(across) <= stalk.halfwidth + STALK_MARGIN
+    )
+    rest = blade.copy()
+    rest[rows[cut], cols[cut]] = False
+    pieces = label(rest, connectivity=2)
+    if pieces.max() == 0:
+        return blade, None, veins, line
+    rest = pieces == np.argmax(np.bincount(pieces.ravel())[1:]) + 1
+    return rest, stalk.joint, veins, line
+
+
 def _ends(
     outline: np.ndarray,
-    image: np.ndarray,
-    blade: np.ndarray,
     base_end: str,
     joint: np.ndarray | None,
+    veins: VeinField | None,
+    line: Midline | None,
 ) -> tuple[np.ndarray, int, int, str]:
     """The outline (its pointed ends sharpened when no petiole shows the base), the indices of
     the base and apex on it, and what told the base (see the module docstring)."""
-    from leafstudio.assets.leafends import (
-        VeinField,
-        base_end_index,
-        climb_to_tip,
-        midline,
-        sharpen_end,
-    )
+    from leafstudio.assets.leafends import base_end_index, climb_to_tip, sharpen_end
 
     if joint is not None:
         base = int(np.argmin(np.linalg.norm(outline - joint, axis=1)))
         apex = int(np.argmax(np.linalg.norm(outline - outline[base], axis=1)))
         return outline, base, apex, "petiole"
-    veins = VeinField(image, blade)
-    line = midline(outline, veins)
     if base_end == "auto":
         first, cue = base_end_index(outline, line, veins)
     else:
@@ -303,7 +334,12 @@ def leaf_from_photo(
     leaf_mask = _leaf_component(_foreground(image))
     blade, joint = _cut_petiole(leaf_mask)
     outline = _outline(blade, points)
-    outline, base, apex, cue = _ends(outline, image, blade, base_end, joint)
+    field = line = None
+    if joint is None:
+        blade, joint, field, line = _cut_stalk(outline, image, blade)
+        if joint is not None:
+            outline = _outline(blade, points)
+    outline, base, apex, cue = _ends(outline, base_end, joint, field, line)
     start = np.array([outline[base, 0], -outline[base, 1]])  # y up
     axis = np.array([outline[apex, 0], -outline[apex, 1]]) - start
     pixels_long = float(np.linalg.norm(axis))
