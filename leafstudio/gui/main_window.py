@@ -28,7 +28,6 @@ from PySide6.QtWidgets import (
     QDockWidget,
     QFileDialog,
     QHBoxLayout,
-    QLabel,
     QListWidget,
     QListWidgetItem,
     QMainWindow,
@@ -58,6 +57,7 @@ from leafstudio.gui.scans import (
 from leafstudio.gui.session import Framing, History, Session, State, describe, loaded_crossing
 from leafstudio.gui.sketch import SketchEditor
 from leafstudio.gui.sketch_model import Sketch
+from leafstudio.gui.status import StatusText
 from leafstudio.gui.textures import TEXTURE, TEXTURE_LABEL, texture_image, texture_key
 from leafstudio.gui.viewport import CAMERAS, Viewport
 from leafstudio.gui.worker import PIPELINE, Outcome, Worker
@@ -146,7 +146,7 @@ class MainWindow(QMainWindow):
         self.editor = SketchEditor()
         self.layer_list, self.edges = QListWidget(), QCheckBox("Show mesh edges")
         self.measurements = QTreeWidget()
-        self.status_text = QLabel("")
+        self.status_text = StatusText()  # not a QLabel: see status.py
         self._build_docks()
         self._build_menus()
         self.statusBar().addWidget(self.status_text, 1)

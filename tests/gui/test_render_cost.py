@@ -154,3 +154,30 @@ def test_the_background_is_one_colour_in_light_and_dark(window):
     window.setPalette(dark)
     assert not renderer.GetGradientBackground()
     assert max(renderer.GetBackground()) < 0.3 < min(light)
+
+
+def test_a_status_text_repaints_the_window_once(window, qtbot):
+    """A QLabel's new text laid the status bar out again and repainted the main window a second
+    time a moment later: one more composition of the whole window with the 3D view (status.py)."""
+    from PySide6.QtCore import QEvent, QObject
+    from PySide6.QtGui import QPalette
+
+    repaints: list[int] = []
+
+    class Repaints(QObject):
+        def eventFilter(self, obj, event):
+            if event.type() == QEvent.Type.UpdateRequest and obj is window:
+                repaints.append(1)
+            return False
+
+    qtbot.wait(300)
+    spy = Repaints()
+    window.installEventFilter(spy)
+    window.status_text.setText("K=5, grid 48: gmm 3 ms · surface 4 ms (total 7 ms)")
+    qtbot.wait(300)
+    window.removeEventFilter(spy)
+    assert len(repaints) == 1
+    assert window.status_text.text().startswith("K=5")
+    window.status_text.setStyleSheet("color: #b00020")  # how a failure is shown
+    window.status_text.ensurePolished()
+    assert window.status_text.palette().color(QPalette.ColorRole.WindowText).name() == "#b00020"

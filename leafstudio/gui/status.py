@@ -1,0 +1,47 @@
+"""The status bar's line of text, painted without a layout pass.
+
+A QLabel asks its layout for new geometry at every `setText`: the status bar is laid out again
+and the main window repaints once more a moment later. In a window holding the 3D view (a
+QOpenGLWidget), every repaint composes the whole window with OpenGL, in software here: that
+second repaint cost as much as a render of the 3D view after each result. This widget takes the
+status bar's width and one line's height, and repaints only itself when its text changes.
+"""
+
+from __future__ import annotations
+
+from PySide6.QtCore import QSize, Qt
+from PySide6.QtGui import QPainter, QPaintEvent, QPalette
+from PySide6.QtWidgets import QSizePolicy, QWidget
+
+
+class StatusText(QWidget):
+    """A one-line text, elided at the right when too long; `setText`/`text` as a QLabel's, and
+    its colour from the palette (a style sheet's `color` applies)."""
+
+    def __init__(self, text: str = "", parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self._text = text
+        self.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Fixed)
+
+    def text(self) -> str:
+        return self._text
+
+    def setText(self, text: str) -> None:
+        if text != self._text:
+            self._text = text
+            self.setToolTip(text)  # the whole line, when it is elided
+            self.update()
+
+    def sizeHint(self) -> QSize:
+        return QSize(0, self.fontMetrics().height() + 2)
+
+    def minimumSizeHint(self) -> QSize:
+        return self.sizeHint()
+
+    def paintEvent(self, event: QPaintEvent) -> None:
+        painter = QPainter(self)
+        painter.setPen(self.palette().color(QPalette.ColorRole.WindowText))
+        line = self.fontMetrics().elidedText(self._text, Qt.TextElideMode.ElideRight, self.width())
+        painter.drawText(
+            self.rect(), Qt.AlignmentFlag.AlignVCenter | Qt.AlignmentFlag.AlignLeft, line
+        )
