@@ -171,6 +171,7 @@ class MainWindow(QMainWindow):
         session.history.changed.connect(self._on_history)
         self.panel.changed.connect(self._on_params)
         self.panel.released.connect(self._on_params_released)
+        self.panel.released.connect(self._on_rendered)  # measure what the drag left shown
         self.editor.preview.connect(session.preview_sketch)
         self.editor.committed.connect(lambda _b, after, text: session.commit_sketch(after, text))
         forms_dock.install(self)  # the Forms gallery; Grow veins in the sketch editor
@@ -883,8 +884,10 @@ class MainWindow(QMainWindow):
                 self._on_rendered()  # not shown: no render to wait for
 
     def _on_rendered(self) -> None:
-        """The shown result is on screen: the worker may measure it (Worker.measure_after_drawn)."""
-        if self._drawn_due is not None:
+        """The shown result is on screen: the worker may measure it (Worker.measure_after_drawn);
+        while a slider is held, not before it is let go (measuring takes the pipeline's lane
+        for ~0.1 s at grid 512, which the drag's next value would wait for)."""
+        if self._drawn_due is not None and not self.panel.is_dragging():
             self._drawn_due.set()
             self._drawn_due = None
 

@@ -181,3 +181,19 @@ def test_a_status_text_repaints_the_window_once(window, qtbot):
     window.status_text.setStyleSheet("color: #b00020")  # how a failure is shown
     window.status_text.ensurePolished()
     assert window.status_text.palette().color(QPalette.ColorRole.WindowText).name() == "#b00020"
+
+
+def test_no_measuring_while_a_slider_is_held(window, qtbot, monkeypatch):
+    """Measuring holds the pipeline's lane (~0.1 s at grid 512): during a drag it would delay
+    the drag's next value; the result the drag leaves is measured when the slider is let go."""
+    measured: list[int] = []
+    window.worker.done.connect(lambda kind, *_: kind == PIPELINE and measured.append(1))
+    monkeypatch.setattr(window.panel, "is_dragging", lambda: True)
+    window.panel.k.setValue(5)
+    qtbot.waitUntil(lambda: window.outcome.result.params.k == 5, timeout=WAIT_MS)
+    qtbot.wait(300)  # drawn by now, and not measured
+    assert measured == [] and not window.worker.is_idle()
+    monkeypatch.setattr(window.panel, "is_dragging", lambda: False)
+    window.panel.released.emit()
+    qtbot.waitUntil(lambda: measured == [1], timeout=WAIT_MS)
+    assert window.session.shown.measured_id == window.session.shown_id
