@@ -118,11 +118,17 @@ def test_unreadable_image_is_one_line_exit_2(tmp_path: Path, capsys):
 
 
 def test_photo_texture_lands_on_the_mesh_margin_within_2_pixels(tmp_path: Path):
-    """photo -> leaf -> reconstruct --texture photo: the leaf's edge in the texture (segmented
-    as in the photo) and the mesh's margin in UV space coincide within 2 photo pixels."""
+    """photo -> leaf -> reconstruct --texture photo: the leaf's edge in the photo (segmented as
+    `leafstudio photo` does), the texture's cut-out (its alpha) and the mesh's margin coincide
+    within 2 photo pixels, and the texture's pixels are the photo's where the UVs put them (its
+    drawn veins on the photo's veins). The photo's edge is found in the photo, not in the
+    texture's colours: outside the outline the texture has the leaf's colour (edge padding)."""
+    from scipy.ndimage import distance_transform_edt, map_coordinates
+    from scipy.spatial import cKDTree
     from skimage.measure import find_contours
 
     from leafstudio.assets.photo import _foreground
+    from leafstudio.assets.solid import boundary_edges
     from leafstudio.cli import main
     from tests.test_assets import assert_valid_gltf, scene_mesh
 
@@ -138,30 +144,50 @@ def test_photo_texture_lands_on_the_mesh_margin_within_2_pixels(tmp_path: Path):
                  str(photo)]) == 0  # fmt: skip
     assert_valid_gltf(glb)
     mesh = scene_mesh(glb)
-    texture = np.asarray(mesh.visual.material.baseColorTexture)
+    texture = np.asarray(mesh.visual.material.baseColorTexture.convert("RGBA"))
     pixels = texture.shape[0]
-    edge = max(find_contours(_foreground(texture[..., :3]).astype(float), 0.5), key=len)
-    edge = edge[:, ::-1] + 0.5  # (column, row)
-    # the margin: the mesh's boundary vertices, by their UVs (glTF's v runs down); the distance
-    # to the nearest of them bounds the distance to the margin from above
-    from scipy.spatial import cKDTree
-
-    from leafstudio.assets.solid import boundary_edges
-
+    pixel_from_world = ls.assets.photo_transform(project)
+    uv = np.asarray(mesh.visual.uv) * [1, -1] + [0, 1]  # glTF's v runs down: (column, row) / px
+    photo_px = np.asarray(mesh.vertices)[:, :2] @ pixel_from_world[:, :2].T + pixel_from_world[:, 2]
+    # the margin: the mesh's boundary vertices; the distance to the nearest of them bounds the
+    # distance to the margin from above
     rim = np.unique(boundary_edges(np.asarray(mesh.faces)))
-    uv = np.asarray(mesh.visual.uv)[rim] * [1, -1] + [0, 1]
-    texture_px = cKDTree(uv * pixels).query(edge)[0]
     # texture pixels per photo pixel: the UVs' scale over the photo's, along the leaf
-    far = np.argmax(np.linalg.norm(uv - uv[0], axis=1))
-    points = np.asarray(mesh.vertices)[rim]
-    texture_per_unit = pixels * np.linalg.norm(uv[far] - uv[0]) / np.linalg.norm(
-        points[far] - points[0]
-    )
-    photo_per_unit = np.linalg.norm(ls.assets.photo_transform(project)[:, 0])
-    distance = texture_px * photo_per_unit / texture_per_unit
-    assert np.max(distance) <= 2.0
-    back = cKDTree(edge).query(uv * pixels)[0] * photo_per_unit / texture_per_unit
-    assert np.max(back) <= 2.0  # and every margin vertex is near the photo's edge
+    far = np.argmax(np.linalg.norm(uv[rim] - uv[rim[0]], axis=1))
+    along_uv = np.linalg.norm(uv[rim][far] - uv[rim[0]])
+    texture_per_photo = pixels * along_uv / np.linalg.norm(photo_px[rim][far] - photo_px[rim[0]])
+
+    def assert_within_2(edge: np.ndarray, margin: np.ndarray, per_photo_px: float) -> None:
+        """Every edge point near the margin and every margin point near the edge."""
+        assert np.max(cKDTree(margin).query(edge)[0]) / per_photo_px <= 2.0
+        assert np.max(cKDTree(edge).query(margin)[0]) / per_photo_px <= 2.0
+
+    # the photo's leaf edge and the margin mapped into the photo (pixel centres at k + 0.5)
+    edge = max(find_contours(_foreground(image).astype(float), 0.5), key=len)[:, ::-1] + 0.5
+    assert_within_2(edge, photo_px[rim], 1.0)
+    # the texture's cut-out (what an engine draws with alphaMode MASK) and the margin's UVs
+    cut = max(find_contours(texture[..., 3].astype(float), 127.5), key=len)[:, ::-1] + 0.5
+    assert_within_2(cut, uv[rim] * pixels, texture_per_photo)
+
+    # the texture is the photo where the UVs put it: vertices on a vein in the texture are on (or
+    # within 2 photo pixels of) a vein in the photo, and most vertices on the photo's veins are
+    # on the texture's
+    def on_vein(rgb: np.ndarray) -> np.ndarray:
+        rgb = rgb.astype(float)
+        return np.linalg.norm(rgb - (120, 160, 80), axis=-1) < np.linalg.norm(
+            rgb - (62, 118, 44), axis=-1
+        )
+
+    inner = np.setdiff1d(np.arange(len(uv)), rim)
+    texel = np.clip((uv[inner] * pixels).astype(int), 0, pixels - 1)
+    in_texture = on_vein(texture[texel[:, 1], texel[:, 0], :3])
+    veins = on_vein(image)
+    to_vein = distance_transform_edt(~veins)
+    where = [photo_px[inner, 1] - 0.5, photo_px[inner, 0] - 0.5]
+    assert in_texture.sum() >= 20
+    assert np.max(map_coordinates(to_vein, where, order=1)[in_texture]) <= 2.0
+    in_photo = map_coordinates(veins.astype(float), where, order=1) > 0.5
+    assert np.mean(in_texture[in_photo]) > 0.8
 
 
 def test_a_malformed_photo_entry_is_one_line_exit_2(tmp_path: Path, capsys):

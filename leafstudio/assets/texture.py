@@ -3,8 +3,12 @@
 The generated base colour is the blade's colour inside the outline with the veins drawn over it in
 their own colour. The midrib (the longest vein) is drawn widest; the other veins are narrower in
 proportion to the square root of their length relative to the midrib's (never under a third of
-it), and each narrows further toward its far end from the midrib. Outside the outline alpha is 0
-(the colour is the blade's there too, so texture filtering does not bleed a dark fringe).
+it), and each narrows further toward its far end from the midrib. Outside the outline alpha is 0.
+
+Every RGBA texture made here is padded (`bleed`): a texel with alpha 0 takes the colour of the
+nearest texel with alpha > 0. Engines filter textures (bilinear, mipmaps) on straight, not
+premultiplied, colour, so whatever colour sat under alpha 0 (a photo's background, the blade's
+colour beside a vein reaching the margin) would mix into the leaf's edge as a halo.
 
 The normal map is the veins' relief: a height image (the vein strokes, blurred) turned into
 tangent-space normals, with the tangent along s (the leaf's length) and the bitangent along t.
@@ -95,7 +99,7 @@ def leaf_texture(plane: LeafPlane, pixels: int = TEXTURE_PIXELS, strokes: np.nda
     veins = strokes.astype(float)[..., None] / 255
     rgb = np.asarray(BLADE, float) * (1 - veins) + np.asarray(VEIN, float) * veins
     rgba = np.dstack([np.rint(rgb).astype(np.uint8), alpha])
-    return Image.fromarray(rgba, "RGBA")
+    return bleed(Image.fromarray(rgba, "RGBA"))
 
 
 def normal_map(plane: LeafPlane, pixels: int = TEXTURE_PIXELS, strokes: np.ndarray | None = None):
@@ -140,7 +144,8 @@ def photo_texture(
     point came from, so the leaf in the texture is where the mesh's UVs put it. Alpha is the
     outline's mask. Inside the outline, a texel whose photo pixel is background (the smooth
     margin rounding a sinus, the photo's blurred edge: a pale band 1-2 photo pixels deep) takes
-    the colour of the nearest texel on the photo's leaf (see _leaf_inside).
+    the colour of the nearest texel on the photo's leaf; outside it, the nearest texel inside
+    it (`bleed`).
 
     Parameters
     ----------
@@ -165,8 +170,9 @@ def photo_texture(
     leaf = _photo_leaf(photo)
     if leaf is not None:
         on_leaf = map_coordinates(leaf.view(np.uint8), where, order=0, mode="constant", cval=0)
-        rgb = _leaf_inside(rgb, on_leaf.reshape(pixels, pixels).astype(bool), alpha > 0)
-    return Image.fromarray(np.dstack([rgb, alpha]), "RGBA")
+        on_leaf = on_leaf.reshape(pixels, pixels).astype(bool)
+        rgb = _nearest_fill(rgb, on_leaf, (alpha > 0) & ~on_leaf)
+    return bleed(Image.fromarray(np.dstack([rgb, alpha]), "RGBA"))
 
 
 def _photo_leaf(photo: np.ndarray) -> np.ndarray | None:
@@ -182,23 +188,46 @@ def _photo_leaf(photo: np.ndarray) -> np.ndarray | None:
         return None
 
 
-def _leaf_inside(rgb: np.ndarray, on_leaf: np.ndarray, inside: np.ndarray) -> np.ndarray:
-    """`rgb` with each texel `inside` the outline but not `on_leaf` given the colour of the
-    nearest texel that is (edge padding; unchanged when no texel is on the leaf)."""
+def _nearest_fill(rgb: np.ndarray, source: np.ndarray, fill: np.ndarray) -> np.ndarray:
+    """`rgb` with each `fill` texel given the colour of the nearest `source` texel (edge
+    padding; unchanged when there is nothing to fill or nothing to fill from)."""
     from scipy.ndimage import distance_transform_edt
 
-    fill = inside & ~on_leaf
-    if not fill.any() or not on_leaf.any():
+    if not fill.any() or not source.any():
         return rgb
-    rows, cols = distance_transform_edt(~on_leaf, return_distances=False, return_indices=True)
+    rows, cols = distance_transform_edt(~source, return_distances=False, return_indices=True)
     out = rgb.copy()
     out[fill] = rgb[rows[fill], cols[fill]]
     return out
 
 
-def stretched_texture(image: np.ndarray, pixels: int = TEXTURE_PIXELS):
-    """Any image as the texture over the whole UV square (a leaf without a photo transform)."""
+def bleed(image):
+    """An RGBA PIL image with every alpha-0 texel given the colour of the nearest texel with
+    alpha > 0, alpha unchanged (alpha bleeding: no hidden colour for filtering and mipmaps to
+    mix into the edge); other modes are returned as they are."""
     from PIL import Image
 
-    mode = "RGBA" if image.shape[2] == 4 else "RGB"
-    return Image.fromarray(image, mode).resize((pixels, pixels), Image.Resampling.LANCZOS)
+    if image.mode != "RGBA":
+        return image
+    rgba = np.asarray(image)
+    seen = rgba[..., 3] > 0
+    rgb = _nearest_fill(rgba[..., :3], seen, ~seen)
+    if rgb is rgba[..., :3]:
+        return image
+    return Image.fromarray(np.dstack([rgb, rgba[..., 3]]), "RGBA")
+
+
+def stretched_texture(image: np.ndarray, pixels: int = TEXTURE_PIXELS):
+    """Any image as the texture over the whole UV square (a leaf without a photo transform).
+    An image with alpha is padded (`bleed`) before it is resized, colour and alpha apart (Pillow
+    resizes RGBA premultiplied: a faint texel's colour would come back from a few levels of 8
+    bits), and again after (the filter's reach)."""
+    from PIL import Image
+
+    size, lanczos = (pixels, pixels), Image.Resampling.LANCZOS
+    if image.shape[2] != 4:
+        return Image.fromarray(image, "RGB").resize(size, lanczos)
+    padded = np.asarray(bleed(Image.fromarray(image, "RGBA")))
+    rgb = Image.fromarray(np.ascontiguousarray(padded[..., :3]), "RGB").resize(size, lanczos)
+    alpha = Image.fromarray(np.ascontiguousarray(padded[..., 3]), "L").resize(size, lanczos)
+    return bleed(Image.merge("RGBA", (*rgb.split(), alpha)))
