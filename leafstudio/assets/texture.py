@@ -32,6 +32,7 @@ THINNEST = 1 / 3  # of the midrib's width
 TIP_NARROWING = 0.5  # a secondary's width at its far end, as a fraction of its start's
 RELIEF = 2.0  # normal map: slope of the vein relief, in height per vein width
 EDGE_PIXELS = 2  # a photo's leaf edge this deep blends with the background (blur, anti-aliasing)
+PAD_EXACT = 32  # edge padding: the nearest leaf texel's colour is exact this far out, or farther
 
 
 def _pixel(plane: LeafPlane, xy: np.ndarray, pixels: int) -> np.ndarray:
@@ -188,33 +189,49 @@ def _photo_leaf(photo: np.ndarray) -> np.ndarray | None:
         return None
 
 
+def _nearest(source: np.ndarray) -> np.ndarray:
+    """(h, w) flat index of the `source` texel nearest each texel (some source texel needed).
+    Exact for every texel within PAD_EXACT of the sources' bounding box (the distance transform
+    runs on that box only: a leaf leaves a third of the square or more empty); farther out a
+    texel takes the box's texel nearest it."""
+    from scipy.ndimage import distance_transform_edt
+
+    h, w = source.shape
+    used_rows, used_cols = np.flatnonzero(source.any(axis=1)), np.flatnonzero(source.any(axis=0))
+    r0, r1 = max(used_rows[0] - PAD_EXACT, 0), min(used_rows[-1] + PAD_EXACT + 1, h)
+    c0, c1 = max(used_cols[0] - PAD_EXACT, 0), min(used_cols[-1] + PAD_EXACT + 1, w)
+    rows, cols = distance_transform_edt(
+        ~source[r0:r1, c0:c1], return_distances=False, return_indices=True
+    )
+    nearest = (rows + r0) * w + (cols + c0)
+    return np.pad(nearest, ((r0, h - r1), (c0, w - c1)), mode="edge")
+
+
 def _nearest_fill(rgb: np.ndarray, source: np.ndarray, fill: np.ndarray) -> np.ndarray:
     """`rgb` with each `fill` texel given the colour of the nearest `source` texel (edge
     padding; unchanged when there is nothing to fill or nothing to fill from)."""
-    from scipy.ndimage import distance_transform_edt
-
     if not fill.any() or not source.any():
         return rgb
-    rows, cols = distance_transform_edt(~source, return_distances=False, return_indices=True)
-    out = rgb.copy()
-    out[fill] = rgb[rows[fill], cols[fill]]
-    return out
+    taken = rgb.reshape(-1, rgb.shape[2])[_nearest(source).ravel()].reshape(rgb.shape)
+    return np.where(fill[..., None], taken, rgb)
 
 
 def bleed(image):
     """An RGBA PIL image with every alpha-0 texel given the colour of the nearest texel with
     alpha > 0, alpha unchanged (alpha bleeding: no hidden colour for filtering and mipmaps to
-    mix into the edge); other modes are returned as they are."""
+    mix into the edge); other modes, or an image all or nothing transparent, as they are."""
     from PIL import Image
 
     if image.mode != "RGBA":
         return image
-    rgba = np.asarray(image)
+    rgba = np.ascontiguousarray(np.asarray(image))
     seen = rgba[..., 3] > 0
-    rgb = _nearest_fill(rgba[..., :3], seen, ~seen)
-    if rgb is rgba[..., :3]:
+    if seen.all() or not seen.any():
         return image
-    return Image.fromarray(np.dstack([rgb, rgba[..., 3]]), "RGBA")
+    texels = rgba.view(np.uint32).ravel()  # one RGBA texel per element: a single gather
+    out = texels[_nearest(seen).ravel()].view(np.uint8).reshape(rgba.shape)
+    out[..., 3] = rgba[..., 3]
+    return Image.fromarray(out, "RGBA")
 
 
 def stretched_texture(image: np.ndarray, pixels: int = TEXTURE_PIXELS):
