@@ -12,8 +12,10 @@ import pytest
 from PIL import Image
 
 import leafstudio as ls
+from leafstudio.assets.asset import leaf_plane
 from leafstudio.assets.export import PhotoTexture, base_color
 from leafstudio.assets.photo import leaf_from_photo
+from leafstudio.assets.texture import outline_mask
 from leafstudio.forms import make_form
 from tests.photos import BACKGROUND, form_photo
 from tests.test_assets import gltf_reports, scene_mesh
@@ -105,6 +107,8 @@ def test_the_generated_texture_has_the_leaf_colour_outside_its_outline(tmp_path)
                             ls.Params(k=1, grid=48, samples=800))  # fmt: skip
     texture = _glb_texture(result, "auto", tmp_path / "auto.glb")
     _assert_no_bleeding(texture)
+    alpha = outline_mask(leaf_plane(result), texture.shape[0])
+    assert np.array_equal(texture[..., 3], alpha)  # alpha as it was: the outline's mask
     assert np.array_equal(np.asarray(base_color(result, "auto")), texture)
 
 
