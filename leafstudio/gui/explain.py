@@ -268,10 +268,13 @@ class ViewAids(QWidget):
 
 
 def _menu(window, title: str):
-    for action in window.menuBar().actions():
-        if action.text().replace("&", "") == title and action.menu() is not None:
-            return action.menu()
-    return window.menuBar().addMenu(title)
+    """The window's menu of that title (MainWindow.menus), made if it has none."""
+    menus = getattr(window, "menus", None)
+    if menus is None:
+        menus = window.menus = {}
+    if title not in menus:
+        menus[title] = window.menuBar().addMenu(title)
+    return menus[title]
 
 
 def export_slide(window, kind: str, path: str) -> bool:
@@ -322,7 +325,7 @@ def install(window) -> None:
     action.triggered.connect(steps)
     view.addAction(action)
     files = _menu(window, "File")
-    quits = [a for a in files.actions() if a.text().replace("&", "").startswith(("Quit", "Exit"))]
+    quit_action = getattr(window, "quit_action", None)
     for kind, text, filters, suffix in (
         ("turntable", "Export &turntable…", "Animations (*.gif *.mp4)", ".gif"),
         ("steps", "Export steps &figure…", "PNG (*.png)", ".png"),
@@ -331,8 +334,8 @@ def install(window) -> None:
         act.triggered.connect(
             lambda _=False, k=kind, t=text, f=filters, s=suffix: ask(k, t.replace("&", ""), f, s)
         )
-        if quits:
-            files.insertAction(quits[0], act)
+        if quit_action is not None:
+            files.insertAction(quit_action, act)
         else:
             files.addAction(act)
     window.explain_actions = action

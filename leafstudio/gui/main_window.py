@@ -294,7 +294,7 @@ class MainWindow(QMainWindow):
         )
         self._action(files, "Export &screenshot…", self.export_screenshot_dialog, "Ctrl+Shift+E")
         files.addSeparator()
-        self._action(files, "&Quit", self.close, keys.Quit)
+        self.quit_action = self._action(files, "&Quit", self.close, keys.Quit)
 
         edit = bar.addMenu("&Edit")
         self.undo_action = self._action(edit, "&Undo", self.session.undo, keys.Undo)
@@ -326,6 +326,9 @@ class MainWindow(QMainWindow):
 
         about = bar.addMenu("&Help")
         self._action(about, "&About LeafStudio", self.about)
+        # Kept in Python: walking menuBar().actions() can hand back a stale wrapper of another
+        # type (a QSurface) under PySide6, seen intermittently in the GUI tests.
+        self.menus = {"File": files, "Edit": edit, "View": view, "Demos": demos, "Help": about}
 
     # --- settings ------------------------------------------------------------------------------
     def _restore_settings(self) -> None:
