@@ -109,6 +109,3 @@ def main() -> dict:
 
 if __name__ == "__main__":
     print(json.dumps(main(), indent=2), flush=True)
-    # skip the interpreter's final garbage collection: with Qt and shapely in one process it has
-    # aborted here ("none_dealloc", a C extension's reference count), after the figures
-    os._exit(0)
