@@ -141,7 +141,9 @@ def leaf_warnings(leaf) -> list[str]:
     return notes
 
 
-COVER_REACH = 0.05  # the neighbourhood of a point: this share of the length round it
+COVER_REACH = 0.05  # the neighbourhood of a point: this share of the length round it,
+COVER_WIDTH = 0.25  # or this share of the width if less, so that a narrow blade's two margins
+# (20-30 times longer than wide) never fall in one neighbourhood and look like a surface
 COVER_SPREAD = 0.45  # median ratio of the two largest spreads in it: a curve's is near 0 (noise
 # of 1% of the length: 0.11, of 2%: 0.35; teeth: at most 0.12), a surface's near 1 (the real
 # scans: 0.59 to 0.89)
@@ -152,18 +154,21 @@ COVER_LEAST = 8  # a neighbourhood with fewer points is not measured (a sparse o
 
 def surface_spread(points: np.ndarray) -> float:
     """How much the (n, 3) points cover a surface rather than trace a curve: the median, over
-    neighbourhoods of COVER_REACH of the length, of their second spread over their largest (0
-    on a curve, 1 on a surface); 0 when most neighbourhoods hold too few points to tell.
+    neighbourhoods of COVER_REACH of the length (COVER_WIDTH of the width if less), of their
+    second spread over their largest (0 on a curve, 1 on a surface); 0 when most neighbourhoods
+    hold too few points to tell.
     Scale-free and independent of the points' order and of any outline traced through them."""
     points = np.asarray(points, dtype=float)
     if len(points) > COVER_POINTS:
         points = points[np.random.default_rng(0).choice(len(points), COVER_POINTS, False)]
     centred = points - points.mean(axis=0)
-    length = float(np.ptp(centred @ np.linalg.svd(centred, full_matrices=False)[2][0]))
+    axes = np.linalg.svd(centred, full_matrices=False)[2]
+    length, width = (float(np.ptp(centred @ axis)) for axis in axes[:2])
     if not np.isfinite(length) or length <= 0:
         return 0.0
     centres = points[:: max(1, len(points) // COVER_CENTRES)]
-    balls = cKDTree(points).query_ball_point(centres, COVER_REACH * length)
+    reach = min(COVER_REACH * length, COVER_WIDTH * width)
+    balls = cKDTree(points).query_ball_point(centres, reach)
     ratios = []
     for ball in balls:
         if len(ball) >= COVER_LEAST:
