@@ -104,7 +104,9 @@ class Param:
 
     def help_text(self) -> str:
         """`help` with the values taken and the default: the tooltip and the flag's --help."""
-        default = self.default if not isinstance(self.default, bool) else str(self.default).lower()
+        default = self.default
+        if isinstance(default, bool):
+            default = "on" if default else "off"
         return f"{self.help} ({self.describe()}; default {default})"
 
 
