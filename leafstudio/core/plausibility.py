@@ -150,51 +150,33 @@ COVER_SPREAD = 0.45  # median ratio of the two largest spreads in it: a curve's 
 COVER_CENTRES = 500  # neighbourhoods measured
 COVER_POINTS = 5000  # points they are taken from, at most
 COVER_LEAST = 8  # a neighbourhood with fewer points is not measured (a sparse outline)
-COVER_FINER = 8  # how much closer a cloud that reads as a surface is looked at again
 
 
 def surface_spread(points: np.ndarray) -> float:
     """How much the (n, 3) points cover a surface rather than trace a curve: the median, over
     neighbourhoods of COVER_REACH of the length (COVER_WIDTH of the width if less), of their
     second spread over their largest (0 on a curve, 1 on a surface); 0 when most neighbourhoods
-    hold too few points to tell. Points that read as a surface are looked at again COVER_FINER
-    times closer (from as many times more points), and the lower figure is kept: a curved
-    narrow blade's two margins part there, while a scan stays a surface.
+    hold too few points to tell.
     Scale-free and independent of the points' order and of any outline traced through them."""
     points = np.asarray(points, dtype=float)
-    sample = _some(points, COVER_POINTS)
-    centred = sample - sample.mean(axis=0)
+    if len(points) > COVER_POINTS:
+        points = points[np.random.default_rng(0).choice(len(points), COVER_POINTS, False)]
+    centred = points - points.mean(axis=0)
     axes = np.linalg.svd(centred, full_matrices=False)[2]
     length, width = (float(np.ptp(centred @ axis)) for axis in axes[:2])
     if not np.isfinite(length) or length <= 0:
         return 0.0
-    reach = min(COVER_REACH * length, COVER_WIDTH * width)
-    spread = _spread_within(sample, reach)
-    if spread is not None and spread > COVER_SPREAD:
-        finer = _spread_within(_some(points, COVER_FINER * COVER_POINTS), reach / COVER_FINER)
-        spread = spread if finer is None else min(spread, finer)
-    return 0.0 if spread is None else spread
-
-
-def _some(points: np.ndarray, most: int) -> np.ndarray:
-    """At most `most` of the points, the same ones every time."""
-    if len(points) <= most:
-        return points
-    return points[np.random.default_rng(0).choice(len(points), most, False)]
-
-
-def _spread_within(points: np.ndarray, reach: float) -> float | None:
-    """surface_spread's median over neighbourhoods of `reach`; None when most hold too few
-    points to tell."""
     centres = points[:: max(1, len(points) // COVER_CENTRES)]
+    reach = min(COVER_REACH * length, COVER_WIDTH * width)
+    balls = cKDTree(points).query_ball_point(centres, reach)
     ratios = []
-    for ball in cKDTree(points).query_ball_point(centres, reach):
+    for ball in balls:
         if len(ball) >= COVER_LEAST:
             near = points[ball] - points[ball].mean(axis=0)
             spread = np.linalg.eigvalsh(near.T @ near)  # ascending
             ratios.append(spread[1] / max(spread[2], 1e-300))
     if len(ratios) < len(centres) / 2:
-        return None
+        return 0.0
     return float(np.median(ratios))
 
 
