@@ -31,6 +31,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import Delaunay, cKDTree
 from shapely.geometry import LineString, MultiPoint, Point, Polygon
 
+from leafstudio.core.plane import fixed_sample, principal_extents, principal_spreads
 from leafstudio.core.veins import veins_inside_outline
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
@@ -115,11 +116,9 @@ def clean_scan(points: np.ndarray) -> np.ndarray:
 
 def blade_points(points: np.ndarray) -> np.ndarray:
     """(n,) bool: the blade among cleaned scan points, without a petiole that sticks out."""
-    centred = points - points.mean(axis=0)
-    extent = float(np.ptp(centred @ np.linalg.svd(centred, full_matrices=False)[2][0]))
-    radius = BALL * extent
+    radius = BALL * float(principal_extents(points)[0])
     if len(points) > PROBES:  # each ball's count from a random share of the points, scaled up
-        probes = points[np.random.default_rng(0).choice(len(points), PROBES, replace=False)]
+        probes = fixed_sample(points, PROBES)
         found = cKDTree(probes).query_ball_point(points, radius, return_length=True)
         counts = found * (len(points) / PROBES)
     else:
@@ -172,10 +171,9 @@ def _sticks_out(piece: np.ndarray, gap: np.ndarray) -> bool:
     """True for an (m, 3) piece of a scan that is a strand (its second spread at most STRAND of
     its first) whose far end lies at least STICK_OUT of its length from the blade (`gap`: each
     point's distance to the blade): a petiole, not a strip along the blade's margin."""
-    centred = piece - piece.mean(axis=0)
-    spread = np.sqrt(np.maximum(np.linalg.eigvalsh(centred.T @ centred / len(piece)), 0.0))
-    length = 2 * np.sqrt(3) * spread[2]  # a uniform segment's length from its spread
-    return bool(spread[1] <= STRAND * spread[2] and gap.max() >= STICK_OUT * length)
+    spread = principal_spreads(piece)
+    length = 2 * np.sqrt(3) * spread[0]  # a uniform segment's length from its spread
+    return bool(spread[1] <= STRAND * spread[0] and gap.max() >= STICK_OUT * length)
 
 
 def _plane(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -411,7 +409,7 @@ def voxel_thinning(points: np.ndarray, budget: int) -> tuple[np.ndarray, np.ndar
         return size * float(np.clip(np.sqrt(count / (0.75 * budget)), 0.5, 4.0))
 
     if len(points) > 2 * SAMPLE:  # a cheap first guess from a sample (it finds fewer cubes)
-        sample = points[np.random.default_rng(0).choice(len(points), SAMPLE, replace=False)]
+        sample = fixed_sample(points, SAMPLE)
         for _ in range(THINNING_PASSES):
             count = len(cells_of(sample, size)[1])
             if budget // 2 <= count <= budget:

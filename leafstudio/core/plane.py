@@ -43,6 +43,28 @@ class Frame:
         return out
 
 
+def fixed_sample(points: np.ndarray, most: int) -> np.ndarray:
+    """At most `most` of the points, drawn at random without repeats, the same ones every time
+    (seed 0): the tests and guesses that run on a sample of a large cloud stay reproducible."""
+    if len(points) <= most:
+        return points
+    return points[np.random.default_rng(0).choice(len(points), most, replace=False)]
+
+
+def principal_spreads(points: np.ndarray) -> np.ndarray:
+    """Standard deviations of the (n, 3) points along their principal axes, largest first."""
+    centred = points - points.mean(axis=0)
+    return np.sqrt(np.maximum(np.linalg.eigvalsh(centred.T @ centred / len(points))[::-1], 0.0))
+
+
+def principal_extents(points: np.ndarray) -> np.ndarray:
+    """The (n, 3) points' extent (max - min) along each of their principal axes, the first
+    axis's first: their length, then their width."""
+    centred = points - points.mean(axis=0)
+    axes = np.linalg.svd(centred, full_matrices=False)[2]
+    return np.ptp(centred @ axes.T, axis=0)
+
+
 def _distinct_count_up_to_3(points: np.ndarray) -> int:
     """The number of distinct rows of (n, 3) `points`, counted up to 3 (no sort: O(n))."""
     if len(points) == 0:

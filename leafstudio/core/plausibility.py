@@ -13,6 +13,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from leafstudio.core.plane import fixed_sample, principal_extents, principal_spreads
 from leafstudio.errors import LeafError
 
 THIN = 0.6  # thickness (smallest spread) over length (largest), at most (real scans: <= 0.41)
@@ -22,12 +23,6 @@ SAMPLE = 6000  # points tested at most (the real scans hold 2,300-7,300)
 LINK = 4.0  # points closer than this many median neighbour spacings belong to one cluster
 LARGE_CLUSTER = 0.3  # a cluster with this share of the largest one's points is "large"
 VEIN_REACH = 1.0  # veins farther than this many leaf lengths from the boundary's plane or extent
-
-
-def _spreads(points: np.ndarray) -> np.ndarray:
-    """Standard deviations along the principal axes, largest first."""
-    centred = points - points.mean(axis=0)
-    return np.sqrt(np.maximum(np.linalg.eigvalsh(centred.T @ centred / len(points))[::-1], 0.0))
 
 
 def _clusters(points: np.ndarray, tree: cKDTree, nearest: np.ndarray) -> np.ndarray:
@@ -67,9 +62,9 @@ def _neighbours(points: np.ndarray) -> tuple[cKDTree, np.ndarray, np.ndarray]:
 def leaf_like_problems(points: np.ndarray) -> list[str]:
     """What makes an (n, 3) scan unlike one leaf, one sentence per failed test ([] if none)."""
     points = np.asarray(points, dtype=float)
-    if len(points) > SAMPLE:  # the tests were calibrated on scans of this size; denser clouds
-        # make the local flatness measure the scanner's noise, and cost seconds
-        points = points[np.random.default_rng(0).choice(len(points), SAMPLE, replace=False)]
+    # the tests were calibrated on scans of SAMPLE points; denser clouds make the local flatness
+    # measure the scanner's noise, and cost seconds
+    points = fixed_sample(points, SAMPLE)
     centred = points - points.mean(axis=0)
     scale = float(np.abs(centred).max())
     if not np.isfinite(scale) or scale == 0.0:
@@ -84,7 +79,7 @@ def leaf_like_problems(points: np.ndarray) -> list[str]:
             f"not one leaf: {large} large separate clusters of points "
             f"({', '.join(str(s) for s in sizes[:large])} points)"
         )
-    spreads = _spreads(unit)
+    spreads = principal_spreads(unit)
     if spreads[2] > THIN * spreads[0]:
         problems.append(
             f"not thin: its thickness is {spreads[2] / spreads[0]:.2f} of its length "
@@ -158,12 +153,8 @@ def surface_spread(points: np.ndarray) -> float:
     second spread over their largest (0 on a curve, 1 on a surface); 0 when most neighbourhoods
     hold too few points to tell.
     Scale-free and independent of the points' order and of any outline traced through them."""
-    points = np.asarray(points, dtype=float)
-    if len(points) > COVER_POINTS:
-        points = points[np.random.default_rng(0).choice(len(points), COVER_POINTS, False)]
-    centred = points - points.mean(axis=0)
-    axes = np.linalg.svd(centred, full_matrices=False)[2]
-    length, width = (float(np.ptp(centred @ axis)) for axis in axes[:2])
+    points = fixed_sample(np.asarray(points, dtype=float), COVER_POINTS)
+    length, width = (float(extent) for extent in principal_extents(points)[:2])
     if not np.isfinite(length) or length <= 0:
         return 0.0
     centres = points[:: max(1, len(points) // COVER_CENTRES)]
