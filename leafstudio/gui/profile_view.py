@@ -16,7 +16,7 @@ from PySide6.QtGui import QColor, QMouseEvent, QPainter, QPainterPath, QPaintEve
 from PySide6.QtWidgets import QSizePolicy, QWidget
 
 from leafstudio.gui.layers import vein_color
-from leafstudio.gui.sketch_model import Sketch
+from leafstudio.gui.sketch_model import Sketch, plane_arc_lengths
 from leafstudio.gui.vein_profile import Profile
 
 HANDLE_PIXELS = 9.0
@@ -153,9 +153,7 @@ class ProfileView(QWidget):
         painter.drawLine(self.to_view(0, 0), self.to_view(1, 0))
         color = QColor(vein_color(self.vein))
         curve = self.sketch.vein_curve(self.vein)
-        arc = np.concatenate(
-            [[0.0], np.cumsum(np.linalg.norm(np.diff(curve[:, :2], axis=0), axis=1))]
-        )
+        arc = plane_arc_lengths(curve)
         shares = arc / arc[-1] if arc[-1] > 0 else np.zeros(len(arc))
         painter.setPen(QPen(color, 2))
         painter.drawPath(self._path(shares, curve[:, 2]))

@@ -87,10 +87,16 @@ def open_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.ndar
     return CubicSpline(t, control, bc_type="natural")(s)
 
 
+def plane_arc_lengths(points: np.ndarray) -> np.ndarray:
+    """(n,) length along the (n, d) points' polyline, in the plane (x, y), from the first."""
+    steps = np.linalg.norm(np.diff(points[:, :2], axis=0), axis=1)
+    return np.concatenate([[0.0], np.cumsum(steps)])
+
+
 def _even_indices(points: np.ndarray, count: int, closed: bool) -> np.ndarray:
     """Indices of `count` of the (n, d) points spread evenly by arc length (in the plane)."""
     path = np.vstack([points, points[:1]]) if closed else points
-    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path[:, :2], axis=0), axis=1))])
+    arc = plane_arc_lengths(path)
     targets = np.linspace(0.0, arc[-1], count, endpoint=not closed)
     return np.unique(np.clip(np.searchsorted(arc, targets), 0, len(points) - 1))
 
@@ -274,15 +280,14 @@ class Sketch:
         """(m,) shares of vein `vein`'s length (along its curve, in the plane) at its control
         points: 0 at the first, 1 at the last (all 0 for a vein of no length)."""
         control = self.veins[vein]
-        curve = self.vein_curve(vein)[:, :2]
-        arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(curve, axis=0), axis=1))])
+        curve = self.vein_curve(vein)
+        arc = plane_arc_lengths(curve)
         if len(control) < 2 or arc[-1] <= 0:
             return np.zeros(len(control))
         if len(curve) == (len(control) - 1) * SAMPLES_PER_SPAN + 1:  # control i is sample i*span
             at = arc[::SAMPLES_PER_SPAN]
         else:  # repeated control points were dropped from the curve: lengths along the polygon
-            steps = np.linalg.norm(np.diff(control[:, :2], axis=0), axis=1)
-            at = np.concatenate([[0.0], np.cumsum(steps)])
+            at = plane_arc_lengths(control)
         return at / at[-1]
 
     def with_profile(self, vein: int, start: float, end: float) -> Sketch:
