@@ -1,0 +1,229 @@
+"""The vein side view as a designer uses it (issue 12, Xvfb): a drag starts from the vein's own
+heights, handles are added by a double-click and removed by Delete, a right-click or a
+double-click, the keyboard chooses and nudges them, and each change of heights is one undo step."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PySide6.QtCore import QEvent, QPoint, Qt
+from PySide6.QtGui import QColor, QKeyEvent
+from PySide6.QtTest import QTest
+from PySide6.QtWidgets import QApplication, QLineEdit, QVBoxLayout, QWidget
+
+from leafstudio.gui.profile_view import BIG_NUDGE, HANDLE_PIXELS, NUDGE, SELECTED, ProfileView
+
+from ..test_profile_handles import wiggly_vein
+from .conftest import wait_result
+
+
+@pytest.fixture
+def side(qtbot):
+    """The side view on an 11-point vein between two text fields, wired like the editor: a
+    released edit is shown back to it; `side.steps` lists the (before, after) undo steps."""
+    holder = QWidget()
+    layout = QVBoxLayout(holder)
+    view = ProfileView()
+    layout.addWidget(QLineEdit())
+    layout.addWidget(view)
+    layout.addWidget(QLineEdit())
+    qtbot.addWidget(holder)
+    holder.resize(420, 260)
+    holder.show()
+    qtbot.waitExposed(holder)
+    holder.activateWindow()  # keys and focus need the active window
+    qtbot.waitUntil(holder.isActiveWindow)
+    view.set_vein(wiggly_vein(11), 0)
+    view.steps = []
+    view.released.connect(lambda before, after: view.steps.append((before, after)))
+    view.released.connect(lambda before, after: view.set_vein(after, 0))
+    yield view  # the holder lives as long as the test
+    holder.close()
+
+
+def heights(view: ProfileView) -> np.ndarray:
+    return view.sketch.veins[0][:, 2].copy()
+
+
+def spot(view: ProfileView, index: int) -> QPoint:
+    return view.to_view(view.profile.t[index], view.profile.h[index]).toPoint()
+
+
+def height_per_pixel(view: ProfileView) -> float:
+    lo, hi = view._heights_range()
+    return (hi - lo) / view._plot().height()
+
+
+def test_a_one_pixel_drag_on_a_long_vein_moves_no_height_by_more_than_a_pixel(side):
+    """The finding: the first drag on a vein of more than 5 points smoothed every height between
+    the handles (here up to ~0.03, some 20 pixels, for a 1-pixel drag)."""
+    before, pixel = heights(side), height_per_pixel(side)
+    press = spot(side, 2)
+    QTest.mousePress(side, Qt.MouseButton.LeftButton, pos=press)
+    QTest.mouseRelease(side, Qt.MouseButton.LeftButton, pos=press)
+    assert side.steps == [] and np.array_equal(heights(side), before)  # a click changes nothing
+    QTest.mousePress(side, Qt.MouseButton.LeftButton, pos=press + QPoint(3, 2))  # off-centre
+    QTest.mouseMove(side, press + QPoint(3, 1))
+    QTest.mouseRelease(side, Qt.MouseButton.LeftButton, pos=press + QPoint(3, 1))
+    change = heights(side) - before
+    assert len(side.steps) == 1
+    assert 0 < np.abs(change).max() <= 1.01 * pixel
+    shares, t = side.sketch.vein_fractions(0), side.profile.t
+    outside = (shares <= t[1]) | (shares >= t[3])
+    assert np.all(change[outside] == 0)  # beyond the neighbouring handles: untouched
+
+
+def test_double_clicking_the_line_adds_a_handle_that_changes_no_height(side):
+    before, count = heights(side), len(side.profile.t)
+    t = float(np.mean(side.profile.t[1:3]))
+    on_line = side.to_view(t, float(side.profile.heights(np.array([t]))[0])).toPoint()
+    QTest.mouseDClick(side, Qt.MouseButton.LeftButton, pos=on_line + QPoint(0, 3))
+    assert len(side.profile.t) == count + 1 and side.selected == 2
+    assert abs(side.profile.t[2] - t) < 2 * height_per_pixel(side) + 0.01
+    np.testing.assert_array_equal(heights(side), before)
+    assert side.steps == []
+    QTest.mouseDClick(side, Qt.MouseButton.LeftButton, pos=on_line + QPoint(0, 40))  # off the line
+    assert len(side.profile.t) == count + 1
+    # the new handle bends the vein between its neighbours only
+    QTest.mousePress(side, Qt.MouseButton.LeftButton, pos=spot(side, 2))
+    QTest.mouseMove(side, spot(side, 2) + QPoint(0, -30))
+    QTest.mouseRelease(side, Qt.MouseButton.LeftButton, pos=spot(side, 2))
+    shares, ts = side.sketch.vein_fractions(0), side.profile.t
+    outside = (shares <= ts[1]) | (shares >= ts[3])
+    moved = heights(side) != before
+    assert moved.any() and not moved[outside].any() and len(side.steps) == 1
+
+
+def test_a_handle_is_removed_by_delete_right_click_or_double_click_but_not_the_ends(side, qtbot):
+    QTest.mousePress(side, Qt.MouseButton.LeftButton, pos=spot(side, 2))
+    QTest.mouseMove(side, spot(side, 2) + QPoint(0, -40))
+    QTest.mouseRelease(side, Qt.MouseButton.LeftButton, pos=spot(side, 2) + QPoint(0, -40))
+    assert side.hasFocus() and side.selected == 2 and len(side.steps) == 1
+    raised, t2 = heights(side), side.profile.t[2]
+    QTest.keyClick(side, Qt.Key.Key_Delete)
+    assert len(side.profile.t) == 4 and t2 not in side.profile.t and len(side.steps) == 2
+    before, after = side.steps[-1]
+    np.testing.assert_array_equal(before.veins[0][:, 2], raised)
+    assert after is side.sketch
+    under = int(np.argmin(np.abs(side.sketch.vein_fractions(0) - t2)))
+    assert heights(side)[under] < raised[under] - 10 * height_per_pixel(side)  # the bump is gone
+    QTest.mouseClick(side, Qt.MouseButton.RightButton, pos=spot(side, 1))
+    assert len(side.profile.t) == 3
+    QTest.mouseDClick(side, Qt.MouseButton.LeftButton, pos=spot(side, 1))
+    assert len(side.profile.t) == 2
+    for index in (0, 1):  # the ends stay
+        side.select(index)
+        QTest.keyClick(side, Qt.Key.Key_Backspace)
+        QTest.mouseClick(side, Qt.MouseButton.RightButton, pos=spot(side, index))
+        QTest.mouseDClick(side, Qt.MouseButton.LeftButton, pos=spot(side, index))
+    assert list(side.profile.t) == [0.0, 1.0]
+
+
+def test_keys_choose_handles_and_nudge_with_one_undo_step_per_press_or_held_run(side):
+    QTest.mouseClick(side, Qt.MouseButton.LeftButton, pos=side._plot().center().toPoint())
+    assert side.hasFocus() and side.selected is None
+    QTest.keyClick(side, Qt.Key.Key_Right)
+    assert side.selected == 0
+    QTest.keyClick(side, Qt.Key.Key_Right)
+    QTest.keyClick(side, Qt.Key.Key_Right)
+    QTest.keyClick(side, Qt.Key.Key_Left)
+    assert side.selected == 1
+    step = NUDGE * side.sketch.extent()
+    under = int(np.argmin(np.abs(side.sketch.vein_fractions(0) - side.profile.t[1])))
+    h0 = heights(side)[under]
+    QTest.keyClick(side, Qt.Key.Key_Up)
+    QTest.keyClick(side, Qt.Key.Key_Up)
+    assert len(side.steps) == 2  # a press is a step
+    assert np.isclose(heights(side)[under], h0 + 2 * step)
+    QTest.keyClick(side, Qt.Key.Key_Down, Qt.KeyboardModifier.ShiftModifier)
+    assert np.isclose(heights(side)[under], h0 + 2 * step - BIG_NUDGE * side.sketch.extent())
+    assert len(side.steps) == 3
+    # a held key: presses repeat, one step when it is let go
+    app, h1 = QApplication.instance(), heights(side)[under]
+    app.sendEvent(
+        side, QKeyEvent(QEvent.Type.KeyPress, Qt.Key.Key_Up, Qt.KeyboardModifier.NoModifier)
+    )
+    for _ in range(4):
+        for kind in (QEvent.Type.KeyRelease, QEvent.Type.KeyPress):
+            event = QKeyEvent(kind, Qt.Key.Key_Up, Qt.KeyboardModifier.NoModifier, "", True)
+            app.sendEvent(side, event)
+    assert len(side.steps) == 3 and np.isclose(heights(side)[under], h1 + 5 * step)
+    app.sendEvent(
+        side, QKeyEvent(QEvent.Type.KeyRelease, Qt.Key.Key_Up, Qt.KeyboardModifier.NoModifier)
+    )
+    assert len(side.steps) == 4
+    np.testing.assert_array_equal(side.steps[-1][0].veins[0][:, 2][under], h1)
+
+
+def test_tab_goes_through_the_handles_then_on(side):
+    first = side.parentWidget().findChildren(QLineEdit)[0]
+    first.setFocus()
+    QTest.keyClick(first, Qt.Key.Key_Tab)
+    assert side.hasFocus() and side.selected == 0
+    for expected in range(1, len(side.profile.t)):
+        QTest.keyClick(side, Qt.Key.Key_Tab)
+        assert side.hasFocus() and side.selected == expected
+    QTest.keyClick(side, Qt.Key.Key_Tab)  # past the last handle: the next field
+    assert not side.hasFocus()
+    QTest.keyClick(
+        side.parentWidget().focusWidget(), Qt.Key.Key_Tab, Qt.KeyboardModifier.ShiftModifier
+    )
+    assert side.hasFocus() and side.selected == len(side.profile.t) - 1
+    QTest.keyClick(side, Qt.Key.Key_Backtab)
+    assert side.selected == len(side.profile.t) - 2
+
+
+def test_the_selected_handle_is_drawn_filled_with_a_focus_ring(side):
+    side.setFocus()
+    side.select(3)
+    palette = side.palette()
+    highlight = palette.color(palette.ColorRole.Highlight)
+    ring = HANDLE_PIXELS / 2 + 1.5 + 3.0  # the selected handle's half side, and the ring's gap
+
+    def colours(widget: ProfileView, index: int, above: float) -> list[QColor]:
+        """Colours at distances around `above` logical pixels over handle `index`'s centre,
+        read in device pixels."""
+        image = widget.grab().toImage()
+        ratio = image.devicePixelRatio()
+        centre = side.to_view(side.profile.t[index], side.profile.h[index])
+        return [
+            image.pixelColor(round(centre.x() * ratio), round((centre.y() - d) * ratio))
+            for d in np.arange(above - 1.5, above + 1.51, 0.5)
+        ]
+
+    def near(a: QColor, b: QColor) -> bool:
+        return (
+            max(abs(a.red() - b.red()), abs(a.green() - b.green()), abs(a.blue() - b.blue())) < 40
+        )
+
+    assert colours(side, 3, 0.0)[3] == QColor(SELECTED)
+    assert colours(side, 2, 0.0)[3] == palette.color(palette.ColorRole.Base)
+    assert any(near(c, highlight) for c in colours(side, 3, ring))
+    assert not any(near(c, highlight) for c in colours(side, 2, ring))  # only the selected one
+    side.clearFocus()
+    assert not any(near(c, highlight) for c in colours(side, 3, ring))  # no focus, no ring
+
+
+def test_a_key_nudge_in_the_window_is_one_undo_step_that_undo_restores(window, qtbot):
+    editor = window.editor
+    editor.curve.setCurrentIndex(1)
+    editor.curve.activated.emit(1)
+    side, view = editor.profile_view, editor.view
+    before = view.sketch.veins[0][:, 2].copy()
+    steps = window.undo_stack.count()
+    window.activateWindow()
+    qtbot.waitUntil(window.isActiveWindow)
+    QTest.mouseClick(side, Qt.MouseButton.LeftButton, pos=spot(side, 1))
+    assert side.hasFocus() and side.selected == 1
+    QTest.keyClick(side, Qt.Key.Key_Up)
+    assert window.undo_stack.count() == steps + 1
+    assert window.undo_stack.undo_text() == "Vein profile"
+    assert view.sketch.veins[0][:, 2].max() > before.max() + 1e-9 or not np.array_equal(
+        view.sketch.veins[0][:, 2], before
+    )
+    assert window.doc.sketch is view.sketch
+    assert side.selected == 1  # still chosen: the next press goes on from it
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    window.session.undo()
+    np.testing.assert_array_equal(view.sketch.veins[0][:, 2], before)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
