@@ -19,6 +19,7 @@ this table says the same).
 
 from __future__ import annotations
 
+import threading
 import time
 import warnings
 from collections.abc import Callable
@@ -90,7 +91,11 @@ VEIN_OUTSIDE_TOLERANCE = 0.01  # vein points may stray this fraction of the leaf
 
 
 class Cancelled(Exception):
-    """Raised inside `Pipeline.run` when its `should_stop` callback says so."""
+    """Raised inside `Pipeline.run` (or `Result.measure`) when its `should_stop` callback says
+    so."""
+
+
+_MEASURING = threading.Lock()  # held while a Result takes one step of its measuring
 
 
 @dataclass(frozen=True)
@@ -153,6 +158,9 @@ class Result:
     warnings: list[str] = field(default_factory=list)
     unit: Result | None = None  # the same run at unit size (units.py); None: this is it
     units: Units | None = None  # how `unit` maps to this one
+    # the metrics once measured, and the measuring steps under way (see measure)
+    _metrics: dict[str, Any] | None = field(default=None, init=False, repr=False, compare=False)
+    _steps: analysis.Steps | None = field(default=None, init=False, repr=False, compare=False)
 
     def height(self, xy: np.ndarray) -> np.ndarray:
         """z of the surface at (n, 2) plane points (differentiable; see surface.py)."""
@@ -169,22 +177,55 @@ class Result:
         never creates a VTK object (the app draws from `triangle_mesh` on its main thread)."""
         return self.triangle_mesh.to_pyvista()
 
-    @cached_property
+    @property
     def metrics(self) -> dict[str, Any]:
         """The paper's Table 1 distances and the mesh's facts (see analysis.table_metrics), the
         leaf's measurements with the K used ("leaf") and its curvature ranges ("curvature"; see
         measure.py). Measured at unit size and mapped back (units.py): they do not depend on
-        the input's units or its distance from the origin."""
-        if self.unit is not None and self.units is not None:
-            return self.units.metrics(self.unit.metrics)
-        return {
-            **analysis.table_metrics(self.triangle_mesh, self.leaf),
-            "leaf": {
-                **shape_measurements(self.triangle_mesh, self.frame, self.polygon),
-                "k": self.chosen_k,
-            },
-            "curvature": curvature_summary(self.triangle_mesh),
-        }
+        the input's units or its distance from the origin. Computed once (see measure)."""
+        return self.measure()
+
+    @property
+    def measured(self) -> bool:
+        """True once `metrics` are computed."""
+        return self._metrics is not None
+
+    def measure(self, should_stop: Callable[[], bool] | None = None) -> dict[str, Any]:
+        """`metrics`, computed in steps of at most about 35 ms of CPU at grid 512: when
+        `should_stop()` is true after a step, Cancelled is raised, and the next call goes on
+        from there (the app stops measuring a shown result when a newer request waits; the
+        steps already done are kept)."""
+        if self._metrics is None:
+            if self.unit is not None and self.units is not None:
+                self._metrics = self.units.metrics(self.unit.measure(should_stop))
+            else:
+                self._metrics = self._measure_in_steps(should_stop)
+        return self._metrics
+
+    def _measure_in_steps(self, should_stop: Callable[[], bool] | None) -> dict[str, Any]:
+        while True:
+            with _MEASURING:  # one thread at a time runs the steps (a generator is not shared)
+                if self._metrics is not None:  # another thread finished them meanwhile
+                    return self._metrics
+                if self._steps is None:
+                    self._steps = self._metric_steps()
+                try:
+                    next(self._steps)
+                except StopIteration as stop:
+                    self._metrics, self._steps = stop.value, None
+                    return self._metrics
+                except BaseException:
+                    self._steps = None  # a failed step: the next call starts again
+                    raise
+            if should_stop is not None and should_stop():
+                raise Cancelled
+
+    def _metric_steps(self) -> analysis.Steps[dict[str, Any]]:
+        table = yield from analysis.table_steps(self.triangle_mesh, self.leaf)
+        shape = shape_measurements(self.triangle_mesh, self.frame, self.polygon)
+        yield
+        curvature = curvature_summary(self.triangle_mesh)
+        return {**table, "leaf": {**shape, "k": self.chosen_k}, "curvature": curvature}
 
 
 def _frame_stage(

@@ -8,7 +8,10 @@ while a *live* one lets it finish (the view keeps moving during a drag).
 
 A job is a callable taking a `Context` (should_stop, stage) and its arguments. A generator job
 reports each value it yields (`yielded`) before it goes on: the pipeline yields the Outcome to
-draw, then measures it. Failures are reported as exception objects and logged with their
+draw, then measures it, in steps (Result.measure): a newer request, interrupting or not, stops
+the measuring at its next step (a few tens of ms at most), so that measuring never holds it up;
+the steps done are kept on the Result, and when that newer request fails the lane goes back to
+measure what is shown. Failures are reported as exception objects and logged with their
 traceback. The pipeline's Pipeline object lives on its lane, so a parameter change reuses the
 stages it does not affect. Qt signals carry the reports to the main thread.
 """
@@ -121,6 +124,7 @@ class Worker(QObject):
         self._last_id = 0
         self._quit = False
         self._pipeline: Pipeline | None = None  # touched on the pipeline lane only
+        self._shown: Outcome | None = None  # the last outcome yielded (pipeline lane only)
         # measure a result only once the window has drawn it (Outcome.drawn), so that measuring
         # never competes with the render for the host's cores (software OpenGL renders on them)
         self.measure_after_drawn = False
@@ -202,10 +206,12 @@ class Worker(QObject):
             except LeafError as exc:
                 log.info("%s %d: %s", job.kind, job.id, exc)
                 self.failed.emit(job.kind, job.id, exc)
+                self._failed(job)
                 continue
             except Exception as exc:  # the window says so; the app keeps running
                 log.error("%s %d failed", job.kind, job.id, exc_info=exc)
                 self.failed.emit(job.kind, job.id, exc)
+                self._failed(job)
                 continue
             if not context.should_stop():
                 self.done.emit(job.kind, job.id, value)
@@ -235,21 +241,44 @@ class Worker(QObject):
         timings["layers"] = time.perf_counter() - start
         outcome = Outcome(request, result, layers, timings, threading.get_ident())
         yield outcome
-        if self.measure_after_drawn and not self._wait_drawn(outcome, context):
-            raise Cancelled  # a newer result follows: its measurements would be replaced at once
+        self._shown = outcome  # reported, so shown: a newer request's id is higher
+        return self._measure(context, outcome)
+
+    def _measure(self, context: Context, outcome: Outcome) -> float:
+        """Measure `outcome` once it is drawn (if measure_after_drawn), on the pipeline's lane,
+        here rather than on the main thread when the panel reads them; the seconds spent. Any
+        newer request stops it at its next step (Cancelled: no `done`); the steps done are kept
+        on the Result for the next try."""
+        if self.measure_after_drawn:
+            self._wait_drawn(outcome, context)
         start = time.perf_counter()
-        _ = result.metrics  # here, not on the main thread when the panel reads them
+        outcome.result.measure(context.newer_waiting)
         return time.perf_counter() - start
 
-    @staticmethod
-    def _wait_drawn(outcome: Outcome, context: Context) -> bool:
+    def _wait_drawn(self, outcome: Outcome, context: Context) -> None:
         """Wait until `outcome` is drawn (at most DRAWN_WAIT_S: a hidden window never draws);
-        False when a newer request waits by then."""
+        Cancelled when a newer request waits (a submit wakes this at once)."""
         deadline = time.monotonic() + DRAWN_WAIT_S
-        while not outcome.drawn.wait(DRAWN_POLL_S):
-            if context.newer_waiting() or time.monotonic() > deadline:
-                break
-        return not context.newer_waiting()
+        with self._wake:
+            while not outcome.drawn.is_set() and time.monotonic() < deadline:
+                if context.newer_waiting():
+                    break
+                self._wake.wait(DRAWN_POLL_S)
+        if context.newer_waiting():
+            raise Cancelled  # a newer result follows: its measurements would be replaced at once
+
+    def _failed(self, job: _Job) -> None:
+        """After a pipeline job failed: measure the outcome shown, if it is not measured yet
+        (its measuring gave way to the failed request) and no newer request waits."""
+        outcome = self._shown
+        if job.job != self._reconstruct or outcome is None or outcome.result.measured:
+            return
+        with self._wake:
+            if PIPELINE not in self._pending and not self._quit:
+                # the job id is the outcome's request id, which `done` reports with the seconds
+                self._pending[PIPELINE] = _Job(
+                    outcome.request.id, PIPELINE, self._measure, (outcome,), False
+                )
 
 
 _STOPPED = object()
