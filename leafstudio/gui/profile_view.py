@@ -397,9 +397,13 @@ class ProfileView(QWidget):
         super().keyReleaseEvent(event)
 
     def focusNextPrevChild(self, next: bool) -> bool:
-        """Tab and Shift+Tab go through the handles, then on to the next widget."""
-        if self.hasFocus() and self.profile is not None and self.selected is not None:
-            index = self.selected + (1 if next else -1)
+        """Tab and Shift+Tab go through the handles (from the first or the last when none is
+        chosen), then on to the next widget."""
+        if self.hasFocus() and self.profile is not None:
+            if self.selected is None:
+                index = 0 if next else len(self.profile.t) - 1
+            else:
+                index = self.selected + (1 if next else -1)
             if 0 <= index < len(self.profile.t):
                 self.select(index)
                 return True

@@ -171,6 +171,9 @@ def test_tab_goes_through_the_handles_then_on(side):
     assert side.hasFocus() and side.selected == len(side.profile.t) - 1
     QTest.keyClick(side, Qt.Key.Key_Backtab)
     assert side.selected == len(side.profile.t) - 2
+    side.select(None)  # a click beside the handles chose none: Tab starts from the first
+    QTest.keyClick(side, Qt.Key.Key_Tab)
+    assert side.hasFocus() and side.selected == 0
 
 
 def test_the_selected_handle_is_drawn_filled_with_a_focus_ring(side):
