@@ -174,6 +174,7 @@ class MainWindow(QMainWindow):
         self.panel.released.connect(self._on_rendered)  # measure what the drag left shown
         self.editor.preview.connect(session.preview_sketch)
         self.editor.committed.connect(lambda _b, after, text: session.commit_sketch(after, text))
+        self.editor.mirror_changed.connect(session.set_symmetric)  # saved with the sketch
         forms_dock.install(self)  # the Forms gallery; Grow veins in the sketch editor
         explain.install(self)  # the Steps view, exports for slides, layer help, view aids
         self._restore_settings()

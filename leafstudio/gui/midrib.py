@@ -7,6 +7,10 @@ linearly along each segment from the mean directions at its ends, so it turns sm
 foot is where (p - C(s)) . T(s) = 0 (a quadratic on each segment). The mirror image of p is
 C(s) - d N(s): the same place along the midrib, the same distance on the other side. Mirroring
 twice gives p back, and about a straight midrib it is the reflection about its line.
+
+The map (s, d) -> C(s) + d N(s) folds where d reaches the radius of curvature on the inside of
+a bend (1 - d kappa(s) = 0, kappa the signed curvature, + turning left): a midrib bent more
+tightly than the leaf is wide cannot carry a mirror image there (`mirror_reach`).
 """
 
 from __future__ import annotations
@@ -44,10 +48,15 @@ class Midrib:
             [curve[0] - reach * tangents[0], curve, curve[-1] + reach * tangents[-1]]
         )
         self.tangents = np.vstack([tangents[:1], tangents, tangents[-1:]])
+        ta, tb = self.tangents[:-1], self.tangents[1:]
+        turn = np.arctan2(ta[:, 0] * tb[:, 1] - ta[:, 1] * tb[:, 0], np.einsum("sk,sk->s", ta, tb))
+        length = np.linalg.norm(np.diff(self.points, axis=0), axis=1)
+        self.curvature = turn / np.maximum(length, 1e-300)  # per segment, + turning left
 
-    def _feet(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Per point: its foot on the curve, the unit normal there and the signed offset (the
-        foot with the smallest offset where several segments hold one)."""
+    def _feet(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Per point: its foot on the curve, the unit normal there, the signed offset (the
+        foot with the smallest offset where several segments hold one) and the curvature of
+        the foot's segment."""
         a, b = self.points[:-1], self.points[1:]
         ta, tb = self.tangents[:-1], self.tangents[1:]
         e, dt = b - a, tb - ta
@@ -65,6 +74,7 @@ class Midrib:
         best_d = np.full(len(points), np.inf)
         foot = np.zeros((len(points), 2))
         normal = np.zeros((len(points), 2))
+        kappa = np.zeros(len(points))
         for u in (first, second):
             ok = np.isfinite(u) & (u >= -1e-9) & (u <= 1 + 1e-9)
             u = np.where(ok, u, 0.0)  # not clipped: a foot a hair past a joint stays exact
@@ -79,22 +89,36 @@ class Midrib:
             best_d = np.where(better, d[rows, j], best_d)
             foot = np.where(better[:, None], at[rows, j], foot)
             normal = np.where(better[:, None], n[rows, j], normal)
+            kappa = np.where(better, self.curvature[j], kappa)
         lost = ~np.isfinite(best_d)  # no foot on any segment (not met past the long ends)
         if np.any(lost):
             near = np.argmin(np.linalg.norm(points[lost, None] - self.points[None], axis=2), axis=1)
             foot[lost] = self.points[near]
             normal[lost] = np.stack([-self.tangents[near, 1], self.tangents[near, 0]], axis=-1)
             best_d[lost] = np.einsum("pk,pk->p", points[lost] - foot[lost], normal[lost])
-        return foot, normal, best_d
+            bends = np.concatenate([[0.0], self.curvature, [0.0]])  # the segments at a joint
+            kappa[lost] = np.where(
+                np.abs(bends[near]) > np.abs(bends[near + 1]), bends[near], bends[near + 1]
+            )
+        return foot, normal, best_d, kappa
 
     def offset(self, points: np.ndarray) -> np.ndarray:
         """(n,) signed offsets of (n, 2+) plane points from the midrib (+ left of it)."""
         points = np.asarray(points, dtype=float).reshape(-1, np.shape(points)[-1])[:, :2]
         return self._feet(points)[2]
 
+    def mirror_reach(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """How far each point's mirror image reaches into a bend, as a share of the midrib's
+        radius of curvature there: (n,) -d kappa (positive: the image falls on the inside of
+        the bend; 1 or more: at or past the centre of curvature, where the mirror folds), with
+        the (n, 2) feet and (n,) |kappa| (1 / radius)."""
+        points = np.asarray(points, dtype=float).reshape(-1, np.shape(points)[-1])[:, :2]
+        foot, _, d, kappa = self._feet(points)
+        return -d * kappa, foot, np.abs(kappa)
+
     def reflect(self, points: np.ndarray) -> np.ndarray:
         """(n, k) points, k >= 2, with x, y mirrored across the midrib (other columns kept)."""
         out = np.array(points, dtype=float).reshape(-1, np.shape(points)[-1])
-        foot, normal, d = self._feet(out[:, :2])
+        foot, normal, d, _ = self._feet(out[:, :2])
         out[:, :2] = foot - d[:, None] * normal
         return out

@@ -403,6 +403,27 @@ class Session:
             self._apply(replace(self.state, leaf=sketch.to_leaf(), sketch=sketch), "edit")
         self.history.push(Step(text, base, self.state))
 
+    def set_symmetric(self, on: bool) -> None:
+        """Mirror editing on or off. It is a property of the drawing, saved with its sketch
+        (Sketch.symmetric), so turning it is an undo step and marks the document modified, as
+        any change to what Save writes; the leaf, and so the 3D view, stay as they are.
+
+        A loaded leaf not yet edited has no sketch of its own (the editor shows one derived from
+        its result): making that the document would replace the leaf by its approximation, so
+        the flag rides on the derived sketch and enters the document with the first edit."""
+        sketch = self.editable_sketch()
+        if sketch is None or sketch.symmetric == on:
+            return
+        sketch = replace(sketch, symmetric=on)
+        if self.state.sketch is None:
+            self.derived = sketch
+            self.sketch_shown.emit(sketch, False)
+            return
+        before = self.state
+        self._apply(replace(self.state, sketch=sketch), "mirror")
+        self.sketch_shown.emit(sketch, False)
+        self.history.push(Step("Mirror on" if on else "Mirror off", before, self.state))
+
     def set_params(self, params: Params, final: bool = True) -> None:
         """New parameters: `final=False` while a slider is held (shown, not an undo step);
         `final=True` on release or any other change: one undo step from before the drag."""

@@ -15,6 +15,8 @@ turns the latter into an undo step and hands the sketch back with `set_sketch` o
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from PySide6.QtCore import QPointF, Qt, Signal
 from PySide6.QtGui import (
@@ -68,6 +70,8 @@ class SketchView(QGraphicsView):
 
     preview = Signal(object)  # Sketch while dragging
     committed = Signal(object, object, str)  # before, after, what was done
+    mirror_changed = Signal(bool)  # Mirror turned on or off (a property of the sketch)
+    mirror_problem = Signal(str)  # why the last edit was not mirrored ("" when it was)
     selection_changed = Signal()
 
     def __init__(self, parent: QWidget | None = None) -> None:
@@ -79,7 +83,6 @@ class SketchView(QGraphicsView):
         self.sketch = Sketch()
         self.active = BOUNDARY  # a vein index; len(sketch.veins): a new vein, made by a click
         self.select_tool = False  # True: a click selects any point instead of adding one
-        self.mirror = False
         self.crossings = np.zeros((0, 2))
         self.selected: tuple[int, int] | None = None
         self._drag: tuple[int, int] | None = None
@@ -234,12 +237,19 @@ class SketchView(QGraphicsView):
                     best, best_d = (curve, index), d
         return best
 
+    @property
+    def mirror(self) -> bool:
+        """Mirror editing is on: the sketch's own flag (saved with it, see Sketch.symmetric)."""
+        return self.sketch.symmetric
+
     def _mirrored(self, sketch: Sketch, xy: np.ndarray | None) -> Sketch:
         """With Mirror on, `sketch` made symmetric from the side of plane point `xy` (an edit
         there); as it is otherwise, or without `xy`."""
         if not self.mirror or xy is None:
             return sketch
-        return sketch.mirrored(1.0 if sketch.midrib_side(xy) >= 0 else -1.0)
+        mirrored, fold = sketch.mirror_edit(xy)
+        self.mirror_problem.emit(fold.message() if fold is not None else "")
+        return mirrored
 
     def _commit(self, before: Sketch, after: Sketch, text: str, xy=None) -> None:
         after = self._mirrored(after, xy)
@@ -445,6 +455,15 @@ class SketchEditor(QWidget):
         )
         hint.setWordWrap(True)
         hint.setForegroundRole(QPalette.ColorRole.PlaceholderText)
+        # why an edit was not mirrored, over the view's top (in a layout, its showing would
+        # resize the view, which keeps its fitted area in view: the drawing would jump)
+        self.mirror_note = QLabel(self.view)
+        self.mirror_note.setWordWrap(True)
+        self.mirror_note.setStyleSheet(
+            f"color: {CROSSING_COLOR}; background: palette(base); border: 1px solid "
+            f"{CROSSING_COLOR}; padding: 3px"
+        )
+        self.mirror_note.hide()
         layout = QVBoxLayout(self)
         layout.setContentsMargins(4, 4, 4, 4)
         layout.addLayout(curves)
@@ -457,11 +476,13 @@ class SketchEditor(QWidget):
 
         self.preview = self.view.preview
         self.committed = self.view.committed
+        self.mirror_changed = self.view.mirror_changed
         self.new_vein.clicked.connect(self.view.new_vein)
         self.delete.clicked.connect(self.view.delete_selected)
         fit.clicked.connect(self.view.fit)
         self.select.toggled.connect(self._set_select_tool)
         self.mirror.toggled.connect(self._set_mirror)
+        self.view.mirror_problem.connect(self._show_mirror_note)
         self.profile.clicked.connect(
             lambda: self.view.set_profile(self.profile_start.value(), self.profile_end.value())
         )
@@ -473,14 +494,33 @@ class SketchEditor(QWidget):
         self._sync_tools()
 
     def set_sketch(self, sketch: Sketch, fit: bool = False) -> None:
-        """Show `sketch` (see SketchView.set_sketch)."""
+        """Show `sketch` (see SketchView.set_sketch); a new document (`fit`) clears the note
+        about an edit not mirrored."""
+        if fit:
+            self._show_mirror_note("")
         self.view.set_sketch(sketch, fit)
 
     def _set_select_tool(self, on: bool) -> None:
         self.view.select_tool = on
 
     def _set_mirror(self, on: bool) -> None:
-        self.view.mirror = on
+        """The checkbox: the view's sketch takes the flag at once (so edits mirror even with
+        nothing listening); the session records it as an undo step (`mirror_changed`)."""
+        self.view.sketch = replace(self.view.sketch, symmetric=on)
+        self.view.mirror_changed.emit(on)
+
+    def _show_mirror_note(self, text: str) -> None:
+        """Say why an edit was not mirrored, over the sketch (a drag updates it without any
+        dialog); cleared by the next mirrored edit, a new document or Mirror off."""
+        note = self.mirror_note
+        if text != note.text():
+            note.setText(text)
+        if text:
+            width = max(120, self.view.width() - 16)
+            note.setFixedSize(width, note.heightForWidth(width))
+            note.move(8, 8)
+            note.raise_()
+        note.setVisible(bool(text))
 
     def _choose_curve(self, row: int) -> None:
         self.view.active = BOUNDARY if row == 0 else row - 1
@@ -512,6 +552,11 @@ class SketchEditor(QWidget):
         self.select.blockSignals(True)
         self.select.setChecked(view.select_tool)
         self.select.blockSignals(False)
+        self.mirror.blockSignals(True)
+        self.mirror.setChecked(view.sketch.symmetric)
+        self.mirror.blockSignals(False)
+        if not view.sketch.symmetric:
+            self._show_mirror_note("")
         on_vein = 0 <= view.active < count
         self.profile_view.set_vein(view.sketch, view.active)
         for widget in (self.profile_start, self.profile_end, self.profile):

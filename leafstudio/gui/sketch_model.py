@@ -26,6 +26,7 @@ MIN_BOUNDARY_SAMPLES = 120
 DERIVED_BOUNDARY_POINTS = 24  # control points when a loaded leaf becomes a sketch
 DERIVED_VEIN_POINTS = 8
 RELIEF_NEIGHBOURS = 4  # a boundary point's height: inverse-distance mean of this many relief points
+FOLD_REACH = 1.0  # a mirror image this far into a bend (in radii of curvature) is folded over
 
 
 def _identity_frame() -> Frame:
@@ -159,6 +160,29 @@ def insert_index(control: np.ndarray, xy: np.ndarray, closed: bool) -> int:
     return best + 1
 
 
+@dataclass(frozen=True)
+class MirrorFold:
+    """Where a mirror image would fold: the midrib bends more tightly than the leaf is wide.
+
+    where : (2,) plane point on the midrib; radius : its radius of curvature there; reach : how
+    far from the midrib the half being mirrored reaches there (more than `radius`).
+    """
+
+    where: tuple[float, float]
+    radius: float
+    reach: float
+
+    def message(self) -> str:
+        """What the editor tells the user (the edit itself is kept, not mirrored)."""
+        x, y = self.where
+        return (
+            f"Not mirrored: the midrib bends with a radius of {self.radius:.3g} near "
+            f"({x:.3g}, {y:.3g}), less than the {self.reach:.3g} the leaf reaches from it there, "
+            "so the mirror half would fold over itself. Bend the midrib less or narrow the leaf "
+            "there; Mirror resumes with the next edit that fits."
+        )
+
+
 @dataclass(frozen=True, eq=False)
 class Sketch:
     """Control points of a leaf drawn on a plane.
@@ -175,12 +199,16 @@ class Sketch:
         x, y and height of a loaded leaf's boundary points (a scan's margin curls off the plane):
         the boundary curve takes its heights from the nearest of them, wherever its control points
         are moved. Empty for a drawn leaf, whose boundary lies on the plane.
+    symmetric : bool
+        Mirror editing is on: each edit is reflected across the midrib (`mirrored`). A property
+        of the drawing, saved with it (a project's "sketch" without it: off).
     """
 
     boundary: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     veins: tuple[np.ndarray, ...] = ()
     frame: Frame = field(default_factory=_identity_frame)
     relief: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    symmetric: bool = False
 
     def __post_init__(self) -> None:
         boundary = np.asarray(self.boundary, dtype=float).reshape(-1, 2)
@@ -335,6 +363,43 @@ class Sketch:
         midrib = self.midrib()
         return 0.0 if midrib is None else float(midrib.offset(np.reshape(xy, (1, -1))[:, :2])[0])
 
+    def _mirrored_curves(self, source_side: float) -> np.ndarray:
+        """(n, 2) points along the curves `mirrored` reflects from `source_side`: the
+        boundary curve on that side and the side veins' curves that lie there."""
+        midrib = self.midrib()
+        if midrib is None:
+            return np.zeros((0, 2))
+        eps = 1e-9 * self.extent()
+        outline = self.boundary_curve()
+        parts = [outline[midrib.offset(outline) * source_side > eps]] if len(outline) else []
+        for i in range(1, len(self.veins)):
+            if float(np.mean(midrib.offset(self.veins[i]))) * source_side > eps:
+                parts.append(self.vein_curve(i)[:, :2])
+        return np.vstack(parts) if parts else np.zeros((0, 2))
+
+    def mirror_fold(self, source_side: float) -> MirrorFold | None:
+        """Where mirroring from `source_side` would fold (see MirrorFold), or None. Checked on
+        the curves (spline samples), not only on the control points, so a bend between two of
+        them is seen: a point whose image would reach the centre of the midrib's curvature
+        (1 - d kappa <= 0 on the inside of the bend, gui/midrib.py) folds."""
+        midrib = self.midrib()
+        points = self._mirrored_curves(source_side)
+        if midrib is None or not len(points):
+            return None
+        reach, feet, kappa = midrib.mirror_reach(points)
+        worst = int(np.argmax(reach))
+        if reach[worst] < FOLD_REACH:
+            return None
+        radius = 1.0 / float(kappa[worst])
+        return MirrorFold(tuple(map(float, feet[worst])), radius, float(reach[worst]) * radius)
+
+    def mirror_edit(self, xy: np.ndarray) -> tuple[Sketch, MirrorFold | None]:
+        """An edit at plane point `xy` with Mirror on: the sketch made symmetric from that side
+        of the midrib, or, where the mirror would fold, the sketch as it is and the fold."""
+        side = 1.0 if self.midrib_side(xy) >= 0 else -1.0
+        fold = self.mirror_fold(side)
+        return (self, fold) if fold is not None else (self.mirrored(side), None)
+
     def mirrored(self, source_side: float) -> Sketch:
         """The sketch made symmetric about the midrib (vein 1, followed along its curve, see
         gui/midrib.py): the half of the boundary on `source_side` (+1: left of the midrib,
@@ -404,6 +469,7 @@ class Sketch:
             "boundary": self.boundary.tolist(),
             "veins": [v.tolist() for v in self.veins],
             "relief": self.relief.tolist(),
+            "symmetric": self.symmetric,
         }
 
     @classmethod
@@ -413,8 +479,12 @@ class Sketch:
         Raises
         ------
         ValueError
-            If the stored arrays have the wrong shape.
+            If the stored arrays have the wrong shape, or "symmetric" is not true or false
+            (absent, as in projects written before it: false).
         """
+        symmetric = data.get("symmetric", False)
+        if not isinstance(symmetric, bool):
+            raise ValueError(f'"symmetric" must be true or false, got {symmetric!r:.40}')
         plane = data.get("plane") or {}
         frame = (
             Frame(
@@ -430,6 +500,7 @@ class Sketch:
             ),
             frame=frame,
             relief=np.asarray(data.get("relief", []), dtype=float).reshape(-1, 3),
+            symmetric=symmetric,
         )
 
     @classmethod
