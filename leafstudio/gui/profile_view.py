@@ -18,6 +18,8 @@ device pixel ratio.
 
 from __future__ import annotations
 
+from weakref import WeakKeyDictionary
+
 import numpy as np
 from PySide6.QtCore import QPointF, QRectF, QSize, Qt, Signal
 from PySide6.QtGui import (
@@ -72,6 +74,10 @@ class ProfileView(QWidget):
         self._count = 0  # the shown vein's control points (its handles are kept while the same)
         self._before: Sketch | None = None  # the sketch when the edit under way began
         self._base: tuple[np.ndarray, np.ndarray] | None = None  # its vein's shares and heights
+        self._handles_before: np.ndarray | None = None  # the handles' places when it began
+        # the handles' places (per vein) of the sketches before and after each edit, so that an
+        # undo or redo of a removal or a drag brings them back with the heights
+        self._remembered: WeakKeyDictionary[Sketch, dict[int, np.ndarray]] = WeakKeyDictionary()
         self._offset = QPointF()  # from the cursor to the grabbed handle's centre
         self._range: tuple[float, float] | None = None  # heights shown; held during a drag
         self.setMinimumHeight(96)
@@ -102,7 +108,13 @@ class ProfileView(QWidget):
         if not self.has_vein():
             self.profile, self.selected = None, None
         elif self._before is None:  # no edit under way (its previews come back here)
-            self._rebuild(keep and len(sketch.veins[vein]) == self._count)
+            at = self._remembered.get(sketch, {}).get(vein)
+            if at is not None:  # a sketch this view edited, shown again (an undo, a redo)
+                self.profile = Profile.of_vein(*self._vein_shares(), self._line(), at)
+                self._count = len(sketch.veins[vein])
+                self.selected = None if self.selected is None else min(self.selected, len(at) - 1)
+            else:
+                self._rebuild(keep and len(sketch.veins[vein]) == self._count)
             self._range = None
         self.update()
 
@@ -131,6 +143,12 @@ class ProfileView(QWidget):
     def _begin(self) -> None:
         """Start an edit (a drag, a run of key presses) from the vein's present heights."""
         self._before, self._base = self.sketch, self._vein_shares()
+        self._handles_before = self.profile.t.copy()
+
+    def _remember(self, before: Sketch, handles_before: np.ndarray, after: Sketch) -> None:
+        """Keep where the handles were on `before` and are on `after` (see set_vein)."""
+        self._remembered.setdefault(before, {})[self.vein] = handles_before
+        self._remembered.setdefault(after, {})[self.vein] = self.profile.t.copy()
 
     def _show(self, profile: Profile) -> None:
         """During an edit: the vein's heights as `profile` makes them, shown and sent on."""
@@ -141,13 +159,14 @@ class ProfileView(QWidget):
 
     def _finish(self) -> None:
         """End the edit under way: one undo step if it changed a height."""
-        before, after = self._before, self.sketch
+        before, after, handles = self._before, self.sketch, self._handles_before
         self.grabbed, self._before, self._base, self._range = None, None, None, None
         if before is None or not self.has_vein():
             return
         self._rebuild(keep=True)
         self.update()
         if after is not before:
+            self._remember(before, handles, after)
             self.released.emit(before, after)
 
     def add_handle(self, t: float) -> int | None:
@@ -174,11 +193,12 @@ class ProfileView(QWidget):
         tolerance = 1e-12 * self.sketch.extent()
         if np.any(np.abs(after_heights - heights) > tolerance):
             self.sketch = before.with_heights(self.vein, after_heights)
-        kept = np.delete(self.profile.t, index)
+        handles, kept = self.profile.t.copy(), np.delete(self.profile.t, index)
         self.profile = Profile.of_vein(*self._vein_shares(), self._line(), kept)
         self.selected = min(index, len(kept) - 1) if self.selected is not None else None
         self.update()
         if self.sketch is not before:
+            self._remember(before, handles, self.sketch)
             self.released.emit(before, self.sketch)
         return True
 
