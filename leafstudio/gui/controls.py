@@ -6,6 +6,11 @@ inside the valid one, so the panel never offers a value Params refuses. A value 
 project holds widens that slider to show it, and every value the user has not touched is given
 back exactly as it was shown (`params()`), so no valid value is clamped or rounded away.
 
+A slider's number is a field of our own (`fields`), not superqt's label, which clamps what is
+typed to the slider's range: a typed value that Params takes widens the slider as a project's
+value does, and one it refuses is not applied, with Params' message under the controls (`note`).
+Only superqt's public API is used (`setEdgeLabelMode(NoLabel)` hides its label).
+
 Every change emits `changed(Params)`, throttled so that a slider drag does not flood the worker:
 the first value goes out at once and the last value always follows. `released` marks the end of
 a slider drag (one undo step per drag: `is_dragging()` is True until then).
@@ -16,14 +21,39 @@ from __future__ import annotations
 from typing import Any
 
 from PySide6.QtCore import Qt, Signal
-from PySide6.QtWidgets import QCheckBox, QComboBox, QFormLayout, QWidget
+from PySide6.QtWidgets import QCheckBox, QComboBox, QFormLayout, QLabel, QLineEdit, QWidget
 from superqt import QLabeledDoubleSlider, QLabeledSlider, QLargeIntSpinBox
 from superqt.utils import qthrottled
 
+from leafstudio.errors import LeafError
 from leafstudio.model import PARAMS, Params
 from leafstudio.paramspec import Choice, Param, Ranged, Real, Switch, Whole
 
 THROTTLE_MS = 80
+NOTE_COLOR = "#b00020"  # as the status line's failures
+
+
+def _text(param: Ranged, value: Any) -> str:
+    """A slider's value as its field shows it: `decimals` places, or 3 significant digits for a
+    value too small for them (a project's tolerance of 1e-6)."""
+    if isinstance(param, Real):
+        value = float(value)
+        if value == 0 or abs(value) >= 10.0**-param.decimals:
+            return f"{value:.{param.decimals}f}"
+        return f"{value:.3g}"
+    return str(int(value))
+
+
+def _field(slider: QLabeledSlider, param: Ranged) -> QLineEdit:
+    """The slider's number, typed into: a line edit in place of superqt's label (hidden), wide
+    enough for any valid value."""
+    slider.setEdgeLabelMode(QLabeledSlider.EdgeLabelMode.NoLabel)
+    field = QLineEdit()
+    field.setAlignment(Qt.AlignmentFlag.AlignRight)
+    longest = max(len(_text(param, v)) for v in (param.low, param.high, *param.panel_range))
+    field.setFixedWidth(field.fontMetrics().horizontalAdvance("8" * (longest + 1)) + 12)
+    slider.layout().addWidget(field)
+    return field
 
 
 def _widget(param: Param) -> QWidget:
@@ -66,6 +96,7 @@ class ParamPanel(QWidget):
         form.setFieldGrowthPolicy(QFormLayout.FieldGrowthPolicy.AllNonFixedFieldsGrow)
         self.widgets: dict[str, QWidget] = {}
         self.specials: dict[str, QCheckBox] = {}  # a word a number also takes (K's "auto")
+        self.fields: dict[str, QLineEdit] = {}  # a slider's number, typed into
         for name, param in PARAMS.items():
             widget = self.widgets[name] = _widget(param)
             setattr(self, name, widget)
@@ -79,6 +110,13 @@ class ParamPanel(QWidget):
                 form.addRow("", box)
                 box.toggled.connect(self._on_edit)
             self._connect(widget)
+            if _is_slider(widget):
+                self._add_field(name, widget, param)
+        self.note = QLabel()  # why a typed value was refused; hidden when none was
+        self.note.setWordWrap(True)
+        self.note.setStyleSheet(f"color: {NOTE_COLOR}")
+        self.note.hide()
+        form.addRow(self.note)
         self.auto_k = self.specials["k"]
         self._emit_throttled = qthrottled(self._emit, timeout=THROTTLE_MS, leading=True)
         self._shown = Params()
@@ -94,6 +132,49 @@ class ParamPanel(QWidget):
             widget.valueChanged.connect(self._on_edit)
         if _is_slider(widget):
             widget.sliderReleased.connect(self.released)
+
+    def _add_field(self, name: str, slider: QLabeledSlider, param: Ranged) -> None:
+        field = self.fields[name] = _field(slider, param)
+        field.setToolTip(param.help_text())
+        slider.valueChanged.connect(lambda *_: self._show_field(name))
+        field.editingFinished.connect(lambda: self._typed(name))
+        self._show_field(name)
+
+    def _show_field(self, name: str) -> None:
+        field = self.fields[name]
+        field.setText(_text(PARAMS[name], self.widgets[name].value()))  # type: ignore[arg-type]
+
+    def _typed(self, name: str) -> None:
+        """A value typed into a slider's field: applied when Params takes it (the slider
+        widens to show it), else refused with Params' own message and the field shown again."""
+        param, slider, field = PARAMS[name], self.widgets[name], self.fields[name]
+        assert isinstance(param, Ranged) and isinstance(slider, QLabeledSlider)
+        text = field.text().strip()
+        if text == _text(param, slider.value()):
+            return  # left as shown (a project's exact value stays)
+        try:
+            value = param.parse(text)
+        except LeafError as exc:
+            self._show_field(name)
+            kept = _text(param, slider.value())
+            self._say(f"{exc}; {param.what} stays {kept}. It takes {param.describe()}.")
+            return
+        self._say("")
+        if name in self.specials and value == getattr(param, "special", None):
+            self.specials[name].setChecked(True)
+            self._show_field(name)
+            return
+        if name in self.specials:
+            self.specials[name].setChecked(False)
+        low, high = slider.minimum(), slider.maximum()
+        if not low <= value <= high:
+            slider.setRange(min(low, value), max(high, value))
+        slider.setValue(value)
+        self._show_field(name)
+
+    def _say(self, text: str) -> None:
+        self.note.setText(text)
+        self.note.setVisible(bool(text))
 
     def is_dragging(self) -> bool:
         """True while a slider is held down."""
@@ -156,6 +237,8 @@ class ParamPanel(QWidget):
                 low, high = param.panel_range
                 widget.setRange(min(low, value), max(high, value))
             widget.setValue(value)
+            if name in self.fields:
+                self._show_field(name)
 
     def _sync_enabled(self) -> None:
         self.k.setEnabled(not self.auto_k.isChecked())

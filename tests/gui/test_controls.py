@@ -4,6 +4,7 @@ each), Auto K, valid values kept exactly, and the last value always emitted."""
 from __future__ import annotations
 
 import pytest
+from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QCheckBox, QComboBox, QLabel
 from superqt import QLabeledSlider, QLargeIntSpinBox
 
@@ -147,3 +148,86 @@ def test_a_project_keeps_its_parameters_through_a_panel_edit_in_the_window(windo
     outcome = wait_result(qtbot, window, lambda o: o.result.params.k == 4)
     assert outcome.result.params == saved.with_(k=4)
     assert window.session.params == saved.with_(k=4)
+
+
+def type_into(qtbot, field, text: str) -> None:
+    """Select the field's text, type `text` and press Return, as a user does."""
+    field.setFocus()
+    field.selectAll()
+    qtbot.keyClicks(field, text)
+    qtbot.keyClick(field, Qt.Key.Key_Return)
+
+
+def test_a_typed_valid_value_past_the_slider_is_taken_and_widens_it(qtbot):
+    """Before: superqt's number field clamped a typed K = 20 to the slider's 12 and a grid of
+    1024 to 512, both valid (K up to 64, grid up to 2048)."""
+    panel = ParamPanel()
+    qtbot.addWidget(panel)
+    panel.show()
+    emitted = []
+    panel.changed.connect(emitted.append)
+    typed = (("k", "20", 20, "20"), ("grid", "1024", 1024, "1024"), ("taper", "2.5", 2.5, "2.50"))
+    for name, text, value, shown in typed:
+        param = PARAMS[name]
+        assert param.slider[1] < value <= param.high  # past the slider, inside the valid range
+        type_into(qtbot, panel.fields[name], text)
+        assert getattr(panel.params(), name) == value
+        assert panel.widgets[name].maximum() >= value  # the slider widened to show it
+        assert panel.fields[name].text() == shown
+        qtbot.waitUntil(lambda n=name, v=value: getattr(emitted[-1], n) == v, timeout=2000)
+    assert panel.note.isHidden()
+    type_into(qtbot, panel.fields["grid"], "200")  # inside the slider: simply taken
+    assert panel.params().grid == 200 and panel.grid.value() == 200
+    type_into(qtbot, panel.fields["k"], "auto")  # K's word, too
+    assert panel.auto_k.isChecked() and panel.params().k == "auto"
+
+
+@pytest.mark.parametrize(
+    ("name", "text", "message"),
+    [
+        ("k", "65", "K must be between 1 and 64, got 65"),
+        ("grid", "4096", "grid must be between 8 and 2048, got 4096"),
+        ("grid", "abc", "grid must be a whole number, got 'abc'"),
+        ("grid", "100.5", "grid must be a whole number"),
+        ("taper", "9", "taper must be between 0.01 and 5, got 9"),
+    ],
+)
+def test_a_typed_invalid_value_is_refused_with_params_message(qtbot, name, text, message):
+    panel = ParamPanel()
+    qtbot.addWidget(panel)
+    panel.show()
+    emitted = []
+    panel.changed.connect(emitted.append)
+    before = panel.params()
+    shown = panel.fields[name].text()
+    type_into(qtbot, panel.fields[name], text)
+    assert panel.params() == before and not emitted  # nothing applied, nothing sent
+    assert panel.fields[name].text() == shown  # the value in force is shown again
+    assert panel.note.isVisible() and message in panel.note.text()
+    assert PARAMS[name].describe() in panel.note.text()  # what it takes
+    type_into(qtbot, panel.fields[name], shown)  # unchanged: nothing happens, the note stays
+    type_into(qtbot, panel.fields["k"], "5")  # the next value taken clears the note
+    assert panel.note.isHidden() and panel.params().k == 5
+
+
+def test_a_projects_small_value_is_shown_and_kept_while_its_field_is_left_alone(qtbot):
+    panel = ParamPanel()
+    qtbot.addWidget(panel)
+    panel.show()
+    far = Params(mpu_tolerance=1.234567e-6, taper=0.0123456)
+    panel.set_params(far)
+    assert panel.fields["mpu_tolerance"].text() == "1.23e-06"
+    field = panel.fields["taper"]
+    field.setFocus()
+    qtbot.keyClick(field, Qt.Key.Key_Return)  # finished without a change
+    assert panel.params() == far  # not rounded to what the field shows
+
+
+def test_a_typed_value_in_the_window_is_one_undo_step(window, qtbot):
+    type_into(qtbot, window.panel.fields["k"], "14")
+    outcome = wait_result(qtbot, window, lambda o: o.result.params.k == 14)
+    assert outcome.result.params == FAST.with_(k=14)
+    assert window.undo_stack.undo_text() == "Change K"
+    window.session.undo()
+    assert window.panel.params().k == FAST.k and window.panel.fields["k"].text() == str(FAST.k)
+    assert window.panel.k.maximum() == PARAMS["k"].panel_range[1]  # back to the declared range
