@@ -102,7 +102,7 @@ def finish(steps: Steps[T]) -> T:
 
 
 def mesh_fact_steps(mesh: MeshLike) -> Steps[dict[str, Any]]:
-    """mesh_facts in steps of at most about 35 ms of CPU each at grid 512 (see table_steps)."""
+    """mesh_facts in steps (see table_steps)."""
     triangles = triangles_of(mesh)
     counted = edge_counts(triangles)
     yield

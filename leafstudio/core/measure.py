@@ -51,7 +51,9 @@ def curvature_summary(mesh: MeshLike) -> dict[str, dict[str, float]]:
     return summary
 
 
-def shape_measurements(mesh: MeshLike, frame: Frame, polygon: np.ndarray) -> dict[str, float]:
+def shape_measurements(
+    mesh: MeshLike, frame: Frame, polygon: np.ndarray, area: float | None = None
+) -> dict[str, float]:
     """The FIELDS measurements of a leaf mesh.
 
     Parameters
@@ -63,6 +65,8 @@ def shape_measurements(mesh: MeshLike, frame: Frame, polygon: np.ndarray) -> dic
         The leaf's plane frame (u: the main axis).
     polygon : (b, 2) float array
         The outline in plane coordinates.
+    area : float, optional
+        The mesh's surface area, when it is known already (analysis.mesh_facts has it).
 
     Returns
     -------
@@ -76,7 +80,7 @@ def shape_measurements(mesh: MeshLike, frame: Frame, polygon: np.ndarray) -> dic
     length = float(np.ptp(polygon[:, 0]))
     width = float(np.ptp(polygon[:, 1]))
     return {
-        "area": surface_area(points, triangles),
+        "area": surface_area(points, triangles) if area is None else area,
         "projected_area": surface_area(plane_xy, triangles),
         "perimeter": float(np.linalg.norm(outline - np.roll(outline, 1, axis=0), axis=1).sum()),
         "length": length,
