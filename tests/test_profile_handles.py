@@ -128,3 +128,30 @@ def test_kept_handles_sit_on_the_veins_own_curve():
     np.testing.assert_array_equal(profile.t, [0.0, 0.45, 1.0])
     assert np.isclose(profile.h[1], np.interp(0.45, *line))
     np.testing.assert_allclose(profile.h[[0, -1]], sketch.veins[0][[0, -1], 2])
+
+
+def curled(sketch: Sketch) -> Sketch:
+    """`sketch` with a relief that tilts its boundary: height 0.1 (x - 0.5), as a loaded leaf's
+    margin keeps its heights."""
+    from dataclasses import replace
+
+    outline = sketch.boundary_curve()
+    return replace(sketch, relief=np.column_stack([outline, 0.1 * (outline[:, 0] - 0.5)]))
+
+
+def test_the_boundarys_heights_go_once_round_it_from_its_first_point():
+    from leafstudio.gui.vein_profile import boundary_line
+
+    sketch = curled(wiggly_vein(5))
+    shares, heights, points = boundary_line(sketch)
+    assert shares[0] == 0 and shares[-1] == 1 and np.all(np.diff(shares) > 0)
+    assert heights[0] == heights[-1]  # the loop is closed
+    loop = np.vstack([sketch.boundary_curve(), sketch.boundary_curve()[:1]])
+    np.testing.assert_allclose(heights, 0.1 * (loop[:, 0] - 0.5), atol=2e-3)
+    assert len(points) == len(sketch.boundary) and points[0] == 0 and np.all(np.diff(points) > 0)
+    np.testing.assert_allclose(
+        np.interp(points, shares, heights), 0.1 * (sketch.boundary[:, 0] - 0.5), atol=2e-3
+    )
+    flat = boundary_line(wiggly_vein(5))[1]  # a drawn leaf: on the plane
+    assert len(flat) and not flat.any()
+    assert all(len(a) == 0 for a in boundary_line(Sketch(boundary=sketch.boundary[:2])))

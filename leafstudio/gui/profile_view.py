@@ -35,9 +35,9 @@ from PySide6.QtGui import (
 )
 from PySide6.QtWidgets import QSizePolicy, QWidget
 
-from leafstudio.gui.layers import vein_color
-from leafstudio.gui.sketch_model import Sketch, plane_arc_lengths
-from leafstudio.gui.vein_profile import Profile
+from leafstudio.gui.layers import BOUNDARY_COLOR, vein_color
+from leafstudio.gui.sketch_model import BOUNDARY, Sketch, plane_arc_lengths
+from leafstudio.gui.vein_profile import Profile, boundary_line
 
 HANDLE_PIXELS = 9.0
 HIT_PIXELS = 10.0
@@ -50,7 +50,8 @@ NUDGE_KEYS = (Qt.Key.Key_Up, Qt.Key.Key_Down)
 
 
 class ProfileView(QWidget):
-    """The side view; `set_vein(sketch, vein)` shows a vein (an index past the veins: none).
+    """The side view; `set_vein(sketch, vein)` shows a vein (BOUNDARY: the boundary's heights,
+    read only; an index past the veins: none).
 
     Signals
     -------
@@ -80,6 +81,7 @@ class ProfileView(QWidget):
         self._remembered: WeakKeyDictionary[Sketch, dict[int, np.ndarray]] = WeakKeyDictionary()
         self._offset = QPointF()  # from the cursor to the grabbed handle's centre
         self._range: tuple[float, float] | None = None  # heights shown; held during a drag
+        self._outline = (np.zeros(0), np.zeros(0), np.zeros(0))  # the boundary's (boundary_line)
         self.setMinimumHeight(96)
         self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Fixed)
         self.setFocusPolicy(Qt.FocusPolicy.StrongFocus)  # a click or Tab: keys work on handles
@@ -105,6 +107,8 @@ class ProfileView(QWidget):
             self.grabbed, self._before, self._base, self.selected = None, None, None, None
         keep = vein == self.vein and self.profile is not None
         self.sketch, self.vein = sketch, vein
+        empty = np.zeros(0)
+        self._outline = boundary_line(sketch) if vein == BOUNDARY else (empty, empty, empty)
         if not self.has_vein():
             self.profile, self.selected = None, None
         elif self._before is None:  # no edit under way (its previews come back here)
@@ -120,6 +124,10 @@ class ProfileView(QWidget):
 
     def has_vein(self) -> bool:
         return 0 <= self.vein < len(self.sketch.veins)
+
+    def has_boundary(self) -> bool:
+        """The boundary is shown (chosen, with 3 control points or more)."""
+        return self.vein == BOUNDARY and len(self._outline[0]) > 0
 
     def _vein_shares(self) -> tuple[np.ndarray, np.ndarray]:
         return self.sketch.vein_fractions(self.vein), self.sketch.veins[self.vein][:, 2].copy()
@@ -233,6 +241,7 @@ class ProfileView(QWidget):
         values = [0.0]
         if self.has_vein():
             values += list(self.sketch.vein_curve(self.vein)[:, 2])
+        values += list(self._outline[1])
         if self.profile is not None:
             values += list(self.profile.h)
         lo, hi = min(values), max(values)
@@ -285,21 +294,18 @@ class ProfileView(QWidget):
         painter.setPen(QPen(focus, 1.5) if self.hasFocus() else QPen(faint, 1))
         painter.drawRect(plot)
         painter.setPen(QPen(faint, 1))
-        painter.drawText(
-            QRectF(plot.left(), plot.bottom(), plot.width(), MARGINS[3]),
-            Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter,
-            "base",
-        )
-        painter.drawText(
-            QRectF(plot.left(), plot.bottom(), plot.width(), MARGINS[3]),
-            Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter,
-            "tip",
-        )
+        below = QRectF(plot.left(), plot.bottom(), plot.width(), MARGINS[3])
+        ends = ("point 1", "round to point 1") if self.has_boundary() else ("base", "tip")
+        sides = (Qt.AlignmentFlag.AlignLeft, Qt.AlignmentFlag.AlignRight)
+        for align, text in zip(sides, ends, strict=True):
+            painter.drawText(below, align | Qt.AlignmentFlag.AlignVCenter, text)
+        if self.has_boundary():
+            self._draw_boundary(painter, palette)
+            return
         if not self.has_vein() or self.profile is None:
             painter.drawText(plot, Qt.AlignmentFlag.AlignCenter, "Choose a vein to see its heights")
             return
-        plane = QPen(faint, 1, Qt.PenStyle.DashLine)
-        painter.setPen(plane)
+        painter.setPen(QPen(faint, 1, Qt.PenStyle.DashLine))
         painter.drawLine(self.to_view(0, 0), self.to_view(1, 0))
         color = QColor(vein_color(self.vein))
         shares, heights = self._line()
@@ -308,10 +314,7 @@ class ProfileView(QWidget):
         t = np.linspace(0, 1, 128)
         painter.setPen(QPen(ink, 1))
         painter.drawPath(self._path(t, self.profile.heights(t)))
-        painter.setBrush(color)
-        painter.setPen(Qt.PenStyle.NoPen)
-        for share, h in zip(*self._vein_shares(), strict=True):
-            painter.drawEllipse(self.to_view(share, h), 3.0, 3.0)
+        self._draw_points(painter, color, *self._vein_shares())
         peak = float(heights[np.argmax(np.abs(heights))])  # farthest from the plane
         painter.setPen(QPen(faint, 1))
         painter.drawText(
@@ -320,6 +323,40 @@ class ProfileView(QWidget):
             f"peak {peak:.3g}",
         )
         self._draw_handles(painter, palette)
+
+    def _draw_points(self, painter: QPainter, color: QColor, t: np.ndarray, h: np.ndarray) -> None:
+        """The control points, as dots in the curve's colour."""
+        painter.setBrush(color)
+        painter.setPen(Qt.PenStyle.NoPen)
+        for share, height in zip(t, h, strict=True):
+            painter.drawEllipse(self.to_view(share, height), 3.0, 3.0)
+
+    def _draw_boundary(self, painter: QPainter, palette: QPalette) -> None:
+        """The boundary's heights once round it (read only: they come from a loaded leaf's
+        relief, and a drawn leaf's boundary lies on the plane)."""
+        shares, heights, points = self._outline
+        faint = palette.color(QPalette.ColorRole.PlaceholderText)
+        painter.setPen(QPen(faint, 1, Qt.PenStyle.DashLine))
+        painter.drawLine(self.to_view(0, 0), self.to_view(1, 0))
+        base = palette.color(QPalette.ColorRole.Base)
+        color = QColor(
+            BOUNDARY_COLOR if base.lightnessF() >= 0.5 else palette.color(QPalette.ColorRole.Text)
+        )
+        painter.setPen(QPen(color, 2))
+        painter.drawPath(self._path(shares, heights))
+        self._draw_points(painter, color, points, np.interp(points, shares, heights))
+        peak = float(heights[np.argmax(np.abs(heights))])
+        text = (
+            f"boundary, from the scan: peak {peak:.3g} (not editable)"
+            if len(self.sketch.relief)
+            else "boundary: on the plane (a drawn leaf's boundary has no heights)"
+        )
+        painter.setPen(QPen(faint, 1))
+        painter.drawText(
+            self._plot().adjusted(4, 2, -4, -2),
+            Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignTop,
+            text,
+        )
 
     def _draw_handles(self, painter: QPainter, palette: QPalette) -> None:
         """Square handles; the selected (or grabbed) one larger and filled, with a ring in the

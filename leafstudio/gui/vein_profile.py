@@ -6,7 +6,8 @@ handles alone never change a height. Moving a handle by d moves the vein by a sm
 is d under the handle and fades to nothing at its two neighbouring handles: a monotone cubic
 (PCHIP, no overshoot) through the handles' displacements, zero at every untouched handle. A tiny
 drag is therefore a tiny change, and nothing beyond the neighbouring handles moves. The first and
-last handles stay at the ends.
+last handles stay at the ends. The boundary's heights (a loaded leaf's margin, from its relief)
+are shown the same way, going once round it (`boundary_line`), without handles.
 """
 
 from __future__ import annotations
@@ -15,6 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.interpolate import PchipInterpolator
+from scipy.spatial import cKDTree
+
+from leafstudio.gui.sketch_model import Sketch, plane_arc_lengths
 
 PROFILE_HANDLES = 5  # handles of a profile made from a vein of this many points or more
 MIN_GAP = 0.02  # the least share of the length between two neighbouring handles
@@ -122,3 +126,18 @@ class Profile:
         others = np.delete(np.arange(len(self.t)), index)
         h = float(PchipInterpolator(self.t[others], self.h[others])(self.t[index]))
         return self.moved(index, float(self.t[index]), h)
+
+
+def boundary_line(sketch: Sketch) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The boundary's heights going once round it from its first control point: the shares of
+    its length (0 to 1, the loop closed) and heights along its curve, and the shares at its
+    control points. Empty arrays below 3 control points. The heights are the sketch's own
+    (`Sketch.boundary_heights`: from a loaded leaf's relief; 0 for a drawn leaf)."""
+    curve = sketch.boundary_curve()
+    if len(curve) < 3:
+        return np.zeros(0), np.zeros(0), np.zeros(0)
+    loop = np.vstack([curve, curve[:1]])
+    arc = plane_arc_lengths(loop)
+    shares = arc / arc[-1]
+    _, nearest = cKDTree(curve).query(sketch.boundary)  # each control point's own sample
+    return shares, sketch.boundary_heights(loop), shares[nearest]

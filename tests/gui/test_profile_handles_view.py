@@ -13,7 +13,7 @@ from PySide6.QtWidgets import QApplication, QLineEdit, QVBoxLayout, QWidget
 
 from leafstudio.gui.profile_view import BIG_NUDGE, HANDLE_PIXELS, NUDGE, SELECTED, ProfileView
 
-from ..test_profile_handles import wiggly_vein
+from ..test_profile_handles import curled, wiggly_vein
 from .conftest import wait_result
 
 
@@ -205,6 +205,32 @@ def test_the_selected_handle_is_drawn_filled_with_a_focus_ring(side):
     assert not any(near(c, highlight) for c in colours(side, 2, ring))  # only the selected one
     side.clearFocus()
     assert not any(near(c, highlight) for c in colours(side, 3, ring))  # no focus, no ring
+
+
+def test_the_boundary_shows_its_heights_read_only(side):
+    from leafstudio.gui.sketch_model import BOUNDARY, Sketch
+
+    sketch = curled(wiggly_vein(5))
+    side.set_vein(sketch, BOUNDARY)
+    assert side.has_boundary() and side.profile is None and not side.has_vein()
+    shares, heights, _ = side._outline
+    lo, hi = side._heights_range()
+    assert lo < heights.min() and hi > heights.max()  # the whole margin fits the view
+    image = side.grab().toImage()
+    ratio = image.devicePixelRatio()
+    base = side.palette().color(side.palette().ColorRole.Base)
+    for i in np.linspace(0, len(shares) - 1, 7).astype(int)[1:-1]:  # the curve is drawn
+        where = side.to_view(shares[i], heights[i])
+        assert image.pixelColor(round(where.x() * ratio), round(where.y() * ratio)) != base
+    side.setFocus()
+    QTest.keyClick(side, Qt.Key.Key_Right)
+    QTest.keyClick(side, Qt.Key.Key_Up)
+    middle = side.to_view(shares[len(shares) // 2], heights[len(shares) // 2]).toPoint()
+    QTest.mouseDClick(side, Qt.MouseButton.LeftButton, pos=middle)
+    assert side.steps == [] and side.sketch is sketch and side.profile is None  # read only
+    side.set_vein(Sketch(boundary=sketch.boundary[:2]), BOUNDARY)  # no boundary yet
+    assert not side.has_boundary()
+    side.grab()
 
 
 def test_in_the_window_a_drag_a_nudge_and_a_removal_are_undo_steps_that_bring_back_handles(
