@@ -69,6 +69,7 @@ def run_app(path: str | None = None, screenshot: str | None = None) -> int:
     from PySide6.QtWidgets import QApplication
 
     from leafstudio.gui.main_window import MainWindow
+    from leafstudio.gui.viewport import grab_window
 
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("LeafStudio")
@@ -87,7 +88,7 @@ def run_app(path: str | None = None, screenshot: str | None = None) -> int:
 
         def grab(*_: object) -> None:
             app.processEvents()
-            if not window.grab().save(screenshot):
+            if not grab_window(window, window.viewport).save(screenshot):
                 print(f"leafstudio: error: {screenshot}: cannot write the PNG", file=sys.stderr)
                 status["code"] = 2
             window.undo_stack.setClean()

@@ -753,7 +753,7 @@ class MainWindow(QMainWindow):
         path, _ = QFileDialog.getSaveFileName(self, "Export a screenshot", "", "PNG (*.png)")
         if path:
             path = path if path.lower().endswith(".png") else path + ".png"
-            if not self.viewport.plotter.interactor.grab().save(path):
+            if not self.viewport.image().save(path):
                 self.show_error("Cannot save the screenshot", f"{path}: not written")
 
     def about(self) -> None:

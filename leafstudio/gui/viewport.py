@@ -1,4 +1,5 @@
-"""The 3D view: a pyvistaqt QtInteractor showing a Result's layers, with camera presets.
+"""The 3D view: a pyvista Plotter widget (native_view.py) showing a Result's layers, with camera
+presets.
 
 Every actor has a fixed name; a new result's dataset is copied into the actor already drawn
 (a shallow copy, no new actor, mapper or lookup table), so that what follows a result on the main
@@ -10,14 +11,14 @@ ratio; the background and text follow the palette. Main thread only (VTK renderi
 from __future__ import annotations
 
 import numpy as np
-from PySide6.QtCore import QEvent, Signal
-from PySide6.QtGui import QPalette
+from PySide6.QtCore import QEvent, QPoint, QRect, Signal
+from PySide6.QtGui import QImage, QPainter, QPalette, QPixmap
 from PySide6.QtWidgets import QVBoxLayout, QWidget
-from pyvistaqt import QtInteractor
 
 from leafstudio.core.plane import Frame
 from leafstudio.gui.framing import BladeBounds, best_iso, fit_camera, view_direction
 from leafstudio.gui.layers import BOUNDARY_COLOR, LAYERS, MESH_COLORINGS, SCALAR_BARS, Piece
+from leafstudio.gui.native_view import make_plotter
 from leafstudio.gui.textures import TEXTURE
 
 SIZED = ("point_size", "line_width")  # style keys in device pixels: scaled by the pixel ratio
@@ -32,8 +33,7 @@ class Viewport(QWidget):
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
-        # no multisampling: with software OpenGL it multiplies the cost of every frame
-        self.plotter = QtInteractor(self, auto_update=False, multi_samples=1)
+        self.plotter = make_plotter(self)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.plotter.interactor)
@@ -131,7 +131,7 @@ class Viewport(QWidget):
         self.redraw()
 
     def redraw(self) -> None:
-        """Schedule one render of the scene (at the next paint; VTK renders in paintGL)."""
+        """Schedule one render of the scene (at the widget's next paint, where VTK renders)."""
         self.plotter.interactor.update()
 
     def _on_render_end(self, *_: object) -> None:
@@ -380,9 +380,30 @@ class Viewport(QWidget):
         self.plotter.camera_position = [tuple(position), tuple(focus), tuple(up)]
         self.plotter.renderer.ResetCameraClippingRange()
 
+    def image(self) -> QImage:
+        """The 3D view as drawn now, from VTK's frame buffer: Qt cannot grab a native window
+        (native_view.py), and this is the same on every platform."""
+        pixels = np.ascontiguousarray(self.plotter.screenshot(None, return_img=True)[..., :3])
+        height, width = pixels.shape[:2]
+        image = QImage(pixels.data, width, height, 3 * width, QImage.Format.Format_RGB888).copy()
+        image.setDevicePixelRatio(self.pixel_ratio())
+        return image
+
     def close_plotter(self) -> None:
         """Release VTK resources (before the window goes)."""
         self.plotter.close()
+
+
+def grab_window(window: QWidget, viewport: Viewport) -> QPixmap:
+    """The whole window as on screen, with the 3D view painted from its own frame buffer over
+    the place Qt's grab leaves blank (native_view.py)."""
+    pixmap = window.grab()
+    if viewport.isVisible():
+        painter = QPainter(pixmap)
+        corner = viewport.mapTo(window, QPoint(0, 0))
+        painter.drawImage(QRect(corner, viewport.size()), viewport.image())
+        painter.end()
+    return pixmap
 
 
 def _style_key(style: dict) -> tuple:

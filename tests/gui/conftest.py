@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from PySide6.QtCore import QSettings
+from PySide6.QtGui import QImage
 from PySide6.QtWidgets import QMessageBox
 
 from leafstudio.gui.main_window import MainWindow
@@ -29,6 +31,22 @@ def wait_result(qtbot, window: MainWindow, check=lambda outcome: True) -> object
         timeout=WAIT_MS,
     )
     return window.outcome
+
+
+def image_pixels(image: QImage) -> np.ndarray:
+    """An image's (h, w, 3) RGB pixels, copied out of Qt's buffer."""
+    image = image.convertToFormat(QImage.Format.Format_RGB888)
+    rows = np.frombuffer(image.constBits(), np.uint8, image.sizeInBytes())
+    rows = rows.reshape(image.height(), image.bytesPerLine())
+    return rows[:, : 3 * image.width()].reshape(image.height(), image.width(), 3).copy()
+
+
+def coloured_share(pixels: np.ndarray) -> float:
+    """Share of strongly coloured pixels: the height colour map on the leaf (viridis), never
+    the grey background, the widgets, or a black unread frame."""
+    rgb = pixels.astype(float)
+    spread = rgb.max(axis=2) - rgb.min(axis=2)
+    return float(np.mean(spread > 60))
 
 
 def close_window(window: MainWindow) -> None:

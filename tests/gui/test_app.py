@@ -12,7 +12,7 @@ from leafstudio.demos import demo
 from leafstudio.gui.app import display_problem, run_app
 from leafstudio.io import save_leaf
 
-from .conftest import FAST
+from .conftest import FAST, coloured_share, image_pixels
 
 
 def test_without_a_display_the_app_says_how_to_run_it(monkeypatch, capsys):
@@ -49,3 +49,9 @@ def test_screenshot_saves_the_whole_window_and_exits(tmp_path):
     assert done.returncode == 0, done.stderr
     image = QImage(str(png))
     assert image.width() >= 1000 and image.height() >= 600
+    # the 3D view in the middle shows the leaf in its height colours: not a blank or black view
+    # (Qt cannot grab a native view: its pixels come from VTK, gui/viewport.grab_window)
+    pixels = image_pixels(image)
+    height, width = pixels.shape[:2]
+    middle = pixels[height // 5 : 4 * height // 5, 3 * width // 10 : 6 * width // 10]
+    assert coloured_share(middle) > 0.03
