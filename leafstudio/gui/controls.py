@@ -46,7 +46,7 @@ def _text(param: Ranged, value: Any) -> str:
 
 def _field(slider: QLabeledSlider, param: Ranged) -> QLineEdit:
     """The slider's number, typed into: a line edit in place of superqt's label (hidden), wide
-    enough for any valid value."""
+    enough for any valid value (the panel then gives every field the widest one's width)."""
     slider.setEdgeLabelMode(QLabeledSlider.EdgeLabelMode.NoLabel)
     field = QLineEdit()
     field.setAlignment(Qt.AlignmentFlag.AlignRight)
@@ -112,6 +112,9 @@ class ParamPanel(QWidget):
             self._connect(widget)
             if _is_slider(widget):
                 self._add_field(name, widget, param)
+        widest = max((f.width() for f in self.fields.values()), default=0)
+        for field in self.fields.values():  # the sliders line up
+            field.setFixedWidth(widest)
         self.note = QLabel()  # why a typed value was refused; hidden when none was
         self.note.setWordWrap(True)
         self.note.setStyleSheet(f"color: {NOTE_COLOR}")
@@ -157,7 +160,10 @@ class ParamPanel(QWidget):
         except LeafError as exc:
             self._show_field(name)
             kept = _text(param, slider.value())
-            self._say(f"{exc}; {param.what} stays {kept}. It takes {param.describe()}.")
+            said = str(exc)
+            takes = "between" not in said or getattr(param, "special", None) is not None
+            also = f" It takes {param.describe()}." if takes else ""
+            self._say(f"{said}; {param.what} stays {kept}.{also}")
             return
         self._say("")
         if name in self.specials and value == getattr(param, "special", None):
