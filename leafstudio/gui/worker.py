@@ -252,19 +252,20 @@ class Worker(QObject):
         if self.measure_after_drawn:
             self._wait_drawn(outcome, context)
         start = time.perf_counter()
-        outcome.result.measure(context.newer_waiting)
+        outcome.result.measure(lambda: self._quit or context.newer_waiting())
         return time.perf_counter() - start
 
     def _wait_drawn(self, outcome: Outcome, context: Context) -> None:
         """Wait until `outcome` is drawn (at most DRAWN_WAIT_S: a hidden window never draws);
-        Cancelled when a newer request waits (a submit wakes this at once)."""
+        Cancelled when a newer request waits (a submit wakes this at once) or the worker
+        shuts down."""
         deadline = time.monotonic() + DRAWN_WAIT_S
         with self._wake:
             while not outcome.drawn.is_set() and time.monotonic() < deadline:
-                if context.newer_waiting():
+                if self._quit or context.newer_waiting():
                     break
                 self._wake.wait(DRAWN_POLL_S)
-        if context.newer_waiting():
+        if self._quit or context.newer_waiting():
             raise Cancelled  # a newer result follows: its measurements would be replaced at once
 
     def _failed(self, job: _Job) -> None:
@@ -283,4 +284,4 @@ class Worker(QObject):
 
 _STOPPED = object()
 DRAWN_WAIT_S = 2.0  # the longest a result's measuring waits for the window to draw it
-DRAWN_POLL_S = 0.01  # how often that wait looks for a newer request
+DRAWN_POLL_S = 0.01  # how often that wait looks whether it is drawn (a newer request wakes it)
