@@ -120,11 +120,9 @@ def test_a_narrow_filled_cloud_is_still_a_surface():
     assert surface_spread(np.column_stack([x, y, z])) > COVER_SPREAD
 
 
-@pytest.mark.parametrize("spacing", [0.003, 0.01, 0.02])
-def test_a_dense_striped_scan_is_a_surface(spacing):
-    """A laser-line scanner's cloud: dense along its lines, `spacing` of the length between
-    them. Looked at closer than the spacing it reads as lines (a finer second look tried this
-    session accepted it as a boundary), so the neighbourhood stays wider than the stripes."""
+def striped_scan(spacing: float) -> np.ndarray:
+    """A laser-line scanner's cloud of a leaf 1 long and 0.6 wide: dense along its lines (a
+    point every 0.001), `spacing` of the length between them."""
     rng = np.random.default_rng(1)
     stripes = []
     for y in np.arange(-0.3, 0.3, spacing):
@@ -139,4 +137,101 @@ def test_a_dense_striped_scan_is_a_surface(spacing):
                 ]
             )
         )
-    assert surface_spread(np.vstack(stripes)) > COVER_SPREAD
+    return np.vstack(stripes)
+
+
+@pytest.mark.parametrize("spacing", [0.003, 0.01, 0.02])
+def test_a_dense_striped_scan_is_a_surface(spacing):
+    """Looked at closer than the spacing it reads as lines (a finer second look tried in
+    session 2 accepted it as a boundary), so the neighbourhood stays wider than the stripes."""
+    assert surface_spread(striped_scan(spacing)) > COVER_SPREAD
+
+
+def _bend(along: np.ndarray, across: np.ndarray, bend: float) -> np.ndarray:
+    """(n, 3) points of a blade 1 long whose midline is an arc turning `bend` radians (0:
+    straight), at `along` (0 to 1) on the midline and `across` off it."""
+    turn = bend * (along - 0.5)
+    if bend == 0:
+        centre = np.column_stack([along - 0.5, 0 * along])
+    else:
+        centre = np.column_stack([np.sin(turn), 1 - np.cos(turn)]) / bend
+    normal = np.column_stack([-np.sin(turn), np.cos(turn)])
+    return np.column_stack([centre + across[:, None] * normal, 0 * along])
+
+
+def bent_strap(points: int, aspect: float, bend: float, noise: float = 0.0, seed: int = 0):
+    """A narrow outline 1 long, `aspect` times longer than wide, bent `bend` radians along its
+    midline (a curved grass or iris leaf traced as an outline), `points` points in order, with
+    noise of `noise` of its length."""
+    t = np.linspace(0, 1, points // 2)
+    half = 0.5 / aspect * np.sin(np.pi * t) ** 0.5
+    outline = np.vstack([_bend(t, half, bend), _bend(t, -half, bend)[::-1]])
+    return outline + noise * np.random.default_rng(seed).normal(size=outline.shape)
+
+
+def bent_filled_strip(points: int, aspect: float, bend: float, seed: int = 0) -> np.ndarray:
+    """Points all over a bent strip (a scan of a curved grass-like leaf), the strip of
+    bent_strap, with the scanner's noise of 0.2% of the length off its plane."""
+    rng = np.random.default_rng(seed)
+    t = rng.uniform(0, 1, points)
+    across = 0.5 / aspect * rng.uniform(-1, 1, points) * np.sin(np.pi * t) ** 0.5
+    cloud = _bend(t, across, bend)
+    cloud[:, 2] = 0.05 * t**2 + 0.002 * rng.normal(size=points)
+    return cloud
+
+
+def narrow_striped_scan(spacing: float, along: bool = True, bend: float = 0.0) -> np.ndarray:
+    """A laser-line scan of the strip of bent_filled_strip (25 times longer than wide), its
+    lines `spacing` apart along its length (`along`) or across it, a point every 0.001."""
+    rng = np.random.default_rng(2)
+    half = 0.5 / 25
+    parts = []
+    if along:
+        for y in np.arange(-half, half, spacing) + spacing / 2:
+            t = np.arange(0, 1, 0.001)
+            t = t[np.abs(y) < half * np.sin(np.pi * t) ** 0.5]
+            parts.append(np.column_stack([t, np.full(t.size, y)]))
+    else:
+        for t in np.arange(0, 1, spacing):
+            w = half * np.sin(np.pi * t) ** 0.5
+            y = np.arange(-w, w, 0.001)
+            parts.append(np.column_stack([np.full(y.size, t), y]))
+    t, y = np.vstack(parts).T
+    cloud = _bend(t, y + 0.0003 * rng.normal(size=y.size), bend)
+    cloud[:, 2] = 0.05 * t**2 + 0.0005 * rng.normal(size=t.size)
+    return cloud
+
+
+@pytest.mark.filterwarnings("ignore:no veins given")
+@pytest.mark.parametrize(("aspect", "bend"), [(25, 1.0), (25, 2.0), (30, 1.0), (30, 3.0)])
+@pytest.mark.parametrize(("points", "noise"), [(2000, 0.0), (5000, 0.002), (10000, 0.004)])
+def test_a_bent_narrow_outline_is_a_boundary(aspect, bend, points, noise):
+    """Review finding (session 2, known limit): the neighbourhood's cap at a quarter of the
+    width is the blade's straight extent across, which for a bent blade is far more than its
+    width, so both margins fell in one neighbourhood and read as a surface (0.46 to 0.59)."""
+    boundary = bent_strap(points, aspect, bend, noise)
+    assert surface_spread(boundary) < COVER_SPREAD
+    leaf = ls.Leaf(boundary * 100, [])
+    ls.reconstruct(leaf, ls.Params(grid=48))  # no "cover a surface" error
+
+
+@pytest.mark.parametrize("spacing", [0.003, 0.005])
+@pytest.mark.parametrize("along", [True, False], ids=["lines-along", "lines-across"])
+def test_a_narrow_striped_scan_is_still_a_surface(spacing, along):
+    """A straight grass leaf scanned in lines 0.3-0.5% of its length apart (8 to 13 across its
+    width): a neighbourhood holds several lines, never just two, so it is not read as two
+    margins (0.60-0.74 before and after the two-strand test)."""
+    assert surface_spread(narrow_striped_scan(spacing, along)) > COVER_SPREAD
+
+
+@needs_scans
+def test_a_real_scan_thinned_or_turned_is_still_a_surface():
+    """Half of each scan's points, and each scan turned in space: the two-strand test lowers
+    none of them to a boundary (0.58-0.86)."""
+    rng = np.random.default_rng(0)
+    turn = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    for path in SCANS:
+        scan = read_scan(path)
+        half = scan[rng.choice(len(scan), len(scan) // 2, replace=False)]
+        assert surface_spread(half) > COVER_SPREAD, path.name
+        assert surface_spread(scan @ turn.T * 3 + 7) > COVER_SPREAD, path.name

@@ -145,30 +145,142 @@ COVER_SPREAD = 0.45  # median ratio of the two largest spreads in it: a curve's 
 COVER_CENTRES = 500  # neighbourhoods measured
 COVER_POINTS = 5000  # points they are taken from, at most
 COVER_LEAST = 8  # a neighbourhood with fewer points is not measured (a sparse outline)
+# Two strands: a bent narrow blade's width across is not its straight extent, so its two margins
+# can share a neighbourhood (spread 0.46-0.59 at 25-30 times longer than wide, bent 1-3 rad).
+# A neighbourhood that reads as a surface is measured again as two strands when its points part
+# into two line-like groups with one clear gap between them: a filled patch does not part, and a
+# striped scan's lines part into many groups, not two.
+STRAND_POINTS = 64  # points of a neighbourhood looked at for strands, at most
+STRAND_DIRECTIONS = 8  # directions across it tried first for the gap between two strands
+STRAND_SHARE = 0.1  # each strand holds at least this share of those points
+STRAND_SECOND = 0.5  # any other gap in between is under this share of the widest (not stripes)
+STRAND_APART = 3.0  # the strands' centres lie this many times their summed spreads apart
+STRAND_LINE = 0.25  # each strand's own spread ratio is under this (a line, not half a patch)
+
+
+def _spread_ratios(points: np.ndarray, centres: np.ndarray, reach: float):
+    """The points within `reach` of each centre (its neighbourhood): its second spread over its
+    largest and its principal axes (ascending), and all their points in units of `reach` round
+    their centre, one neighbourhood after the other, where each starts and how many it holds
+    (each holds its centre, so none is empty)."""
+    pairs = cKDTree(centres).sparse_distance_matrix(
+        cKDTree(points), reach, output_type="ndarray"
+    )  # one array, several times faster than query_ball_point's lists
+    order = np.argsort(pairs["i"], kind="stable")
+    owner = pairs["i"][order]
+    sizes = np.bincount(owner, minlength=len(centres))
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    local = (points[pairs["j"][order]] - centres[owner]) / reach
+    moments = np.column_stack([local, local[:, [0, 0, 0, 1, 1, 2]] * local[:, [0, 1, 2, 1, 2, 2]]])
+    sums = np.add.reduceat(moments, starts, axis=0) / sizes[:, None]
+    mean = sums[:, :3]
+    scatter = np.empty((len(centres), 3, 3))
+    for k, (i, j) in enumerate([(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)]):
+        scatter[:, i, j] = scatter[:, j, i] = sums[:, 3 + k] - mean[:, i] * mean[:, j]
+    spread, axes = np.linalg.eigh(scatter)  # ascending
+    ratios = spread[:, 1] / np.maximum(spread[:, 2], 1e-300)
+    return ratios, axes, local, starts, sizes
+
+
+def _padded(local: np.ndarray, starts: np.ndarray, sizes: np.ndarray):
+    """At most STRAND_POINTS points of each neighbourhood (evenly through its list) as a
+    (m, STRAND_POINTS, 3) array, zero past each one's own, and the mask of its own."""
+    step = np.maximum(1, -(-sizes // STRAND_POINTS))  # ceil
+    taken = -(-sizes // step)
+    slot = np.arange(STRAND_POINTS)
+    mask = slot[None, :] < taken[:, None]
+    index = starts[:, None] + np.where(mask, slot[None, :] * step[:, None], 0)
+    return np.where(mask[..., None], local[index], 0.0), mask
+
+
+def _widest_gap(values: np.ndarray, mask: np.ndarray, least: np.ndarray):
+    """The widest gap between the sorted real `values` of each row (..., n) with at least `least`
+    of them each side: its width, its middle, and the second widest such gap's width."""
+    ranked = np.sort(np.where(mask, values, np.inf), axis=-1)
+    with np.errstate(invalid="ignore"):
+        gaps = np.diff(ranked, axis=-1)
+    j = np.arange(1, gaps.shape[-1] + 1)
+    n = mask.sum(axis=-1)[..., None]
+    gaps = np.where((j >= least[..., None]) & (j <= n - least[..., None]), gaps, -1.0)
+    cut = gaps.argmax(axis=-1)[..., None]
+    widest = np.take_along_axis(gaps, cut, -1)[..., 0]
+    middle = np.take_along_axis(ranked, cut, -1)[..., 0] + 0.5 * widest
+    return widest, middle, np.partition(gaps, -2, axis=-1)[..., -2]
+
+
+def _moments(points: np.ndarray, inside: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The mean and scatter matrix of each row's points (m, k, d) where `inside` (m, k)."""
+    weight = inside[..., None]
+    mean = (points * weight).sum(axis=1) / np.maximum(inside.sum(axis=1), 1)[:, None]
+    centred = (points - mean[:, None]) * weight
+    return mean, centred.transpose(0, 2, 1) @ centred
+
+
+def _two_strands(padded: np.ndarray, mask: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    """For each neighbourhood (_padded), the larger spread ratio of its two strands when its
+    points part into two line-like strands with one clear gap between them, else inf."""
+    least = np.maximum(3, np.ceil(STRAND_SHARE * mask.sum(axis=1))).astype(int)
+    plane = padded @ axes[:, :, 1:]  # in the neighbourhood's plane
+    # the widest gap over a few directions parts the two sides roughly ...
+    angles = np.linspace(0, np.pi, STRAND_DIRECTIONS, endpoint=False)
+    across = np.stack([np.cos(angles), np.sin(angles)])
+    proj = (plane @ across).transpose(0, 2, 1)  # (m, directions, points)
+    shape = proj.shape
+    widest, middle, _ = _widest_gap(
+        proj, np.broadcast_to(mask[:, None], shape), np.broadcast_to(least[:, None], shape[:2])
+    )
+    rows, best = np.arange(len(plane)), widest.argmax(axis=1)
+    left = mask & (proj[rows, best] < middle[rows, best][:, None])
+    # ... and the gap is measured again square to the sides' mean direction
+    doubled = np.zeros((len(plane), 2))  # each side's axis as a doubled angle (no sign)
+    for side in (left, mask & ~left):
+        (xx, xy), (_, yy) = _moments(plane, side)[1].transpose(1, 2, 0)
+        doubled += np.column_stack([xx - yy, 2 * xy]) / np.maximum(xx + yy, 1e-300)[:, None]
+    along = 0.5 * np.arctan2(doubled[:, 1], doubled[:, 0])
+    proj = plane[..., 0] * -np.sin(along)[:, None] + plane[..., 1] * np.cos(along)[:, None]
+    widest, middle, second = _widest_gap(proj, mask, least)
+    left = mask & (proj < middle[:, None])
+    parted = (widest > 0) & (second <= STRAND_SECOND * widest)
+    centres, spreads, worst = [], [], np.zeros(len(plane))
+    for side in (left, mask & ~left):
+        mean, scatter = _moments(proj[..., None], side)
+        centres.append(mean[:, 0])
+        spreads.append(np.sqrt(scatter[:, 0, 0] / np.maximum(side.sum(axis=1), 1)))
+        spread = np.linalg.eigvalsh(_moments(padded, side)[1])  # the strand's own, in 3D
+        worst = np.maximum(worst, spread[:, 1] / np.maximum(spread[:, 2], 1e-300))
+    parted &= np.abs(centres[1] - centres[0]) >= STRAND_APART * (spreads[0] + spreads[1])
+    return np.where(parted & (worst <= STRAND_LINE), worst, np.inf)
 
 
 def surface_spread(points: np.ndarray) -> float:
     """How much the (n, 3) points cover a surface rather than trace a curve: the median, over
     neighbourhoods of COVER_REACH of the length (COVER_WIDTH of the width if less), of their
     second spread over their largest (0 on a curve, 1 on a surface); 0 when most neighbourhoods
-    hold too few points to tell.
+    hold too few points to tell. A neighbourhood holding two line-like strands with one clear gap
+    between them (a bent narrow blade's two margins) counts at its strands' spread instead.
     Scale-free and independent of the points' order and of any outline traced through them."""
     points = fixed_sample(np.asarray(points, dtype=float), COVER_POINTS)
+    if len(points) == 0 or not np.isfinite(points).all():
+        return 0.0
+    low, high = points.min(axis=0), points.max(axis=0)
+    points = points - (low / 2 + high / 2)
+    points /= max(float(np.abs(points).max()), 1e-300)  # finite sums at 1e200 or 1e-200
     length, width = (float(extent) for extent in principal_extents(points)[:2])
     if not np.isfinite(length) or length <= 0:
         return 0.0
     centres = points[:: max(1, len(points) // COVER_CENTRES)]
     reach = min(COVER_REACH * length, COVER_WIDTH * width)
-    balls = cKDTree(points).query_ball_point(centres, reach)
-    ratios = []
-    for ball in balls:
-        if len(ball) >= COVER_LEAST:
-            near = points[ball] - points[ball].mean(axis=0)
-            spread = np.linalg.eigvalsh(near.T @ near)  # ascending
-            ratios.append(spread[1] / max(spread[2], 1e-300))
-    if len(ratios) < len(centres) / 2:
+    if reach <= 0:
+        return 0.0  # points on one line
+    ratios, axes, local, starts, sizes = _spread_ratios(points, centres, reach)
+    measured = sizes >= COVER_LEAST
+    if measured.sum() < len(centres) / 2:
         return 0.0
-    return float(np.median(ratios))
+    chosen = np.flatnonzero(measured & (ratios > STRAND_LINE))
+    if len(chosen):
+        padded, mask = _padded(local, starts[chosen], sizes[chosen])
+        ratios[chosen] = np.minimum(ratios[chosen], _two_strands(padded, mask, axes[chosen]))
+    return float(np.median(ratios[measured]))
 
 
 def check_not_a_surface(boundary: np.ndarray) -> None:
