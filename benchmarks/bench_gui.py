@@ -14,8 +14,9 @@ does not use (so that none of its results can stand for it; K = 4, 3 or 6, whose
 what 2 to 7 cost: K = 9 to 11 take several times longer in the surface stage); it reports the
 time from the last move to its result on screen, and the longest stall of the event loop during
 the storm and until the app is idle.
-Prints JSON. Timings here are shared-host figures: other work on the machine moves them; the
-main thread's CPU time in one piece is the figure load inflates least.
+`LEAFSTUDIO_3D=opengl` measures the 3D view as pyvistaqt's QOpenGLWidget instead of the native
+window (gui/native_view.py). Prints JSON. Timings here are shared-host figures: other work on
+the machine moves them; the main thread's CPU time in one piece is the figure load inflates least.
 """
 
 from __future__ import annotations
@@ -265,6 +266,9 @@ def main() -> int:
         "load_average_1min_at_start": LOAD_AT_START,
         "load_average_1min": round(os.getloadavg()[0], 2),
         "window": [window.width(), window.height()],
+        # the 3D view's widget: "native" (an X child window) or "opengl" (pyvistaqt's
+        # QOpenGLWidget, LEAFSTUDIO_3D=opengl), gui/native_view.py
+        "view_widget": type(window.viewport.plotter).__name__,
     }
     print(json.dumps(report, indent=2))
     return 0
