@@ -13,6 +13,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from PySide6.QtGui import QImage
 from PySide6.QtOpenGLWidgets import QOpenGLWidget
@@ -103,3 +104,20 @@ def test_a_gui_test_run_exits_0_although_its_virtual_display_stops_first():
     )
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
     assert "XIO" not in done.stderr
+
+
+def test_dragging_in_the_native_view_turns_the_camera(window, qtbot):
+    from PySide6.QtCore import QPoint, Qt
+    from PySide6.QtTest import QTest
+
+    plotter = window.viewport.plotter
+    before = np.array(plotter.camera.position)
+    centre = QPoint(plotter.width() // 2, plotter.height() // 2)
+    QTest.mousePress(plotter, Qt.MouseButton.LeftButton, Qt.KeyboardModifier.NoModifier, centre)
+    for step in range(1, 11):
+        QTest.mouseMove(plotter, centre + QPoint(15 * step, 0))
+    QTest.mouseRelease(
+        plotter, Qt.MouseButton.LeftButton, Qt.KeyboardModifier.NoModifier, centre + QPoint(150, 0)
+    )
+    after = np.array(plotter.camera.position)
+    assert np.linalg.norm(after - before) > 0.05 * np.linalg.norm(before)
