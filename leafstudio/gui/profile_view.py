@@ -81,6 +81,7 @@ class ProfileView(QWidget):
         self._remembered: WeakKeyDictionary[Sketch, dict[int, np.ndarray]] = WeakKeyDictionary()
         self._offset = QPointF()  # from the cursor to the grabbed handle's centre
         self._range: tuple[float, float] | None = None  # heights shown; held during a drag
+        self._range_of: tuple | None = None  # the last range worked out, and for what
         self._outline = (np.zeros(0), np.zeros(0), np.zeros(0))  # the boundary's (boundary_line)
         self.setMinimumHeight(96)
         self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Fixed)
@@ -112,13 +113,11 @@ class ProfileView(QWidget):
         if not self.has_vein():
             self.profile, self.selected = None, None
         elif self._before is None:  # no edit under way (its previews come back here)
+            # a sketch this view edited, shown again (an undo, a redo): its handles
             at = self._remembered.get(sketch, {}).get(vein)
-            if at is not None:  # a sketch this view edited, shown again (an undo, a redo)
-                self.profile = Profile.of_vein(*self._vein_shares(), self._line(), at)
-                self._count = len(sketch.veins[vein])
-                self.selected = None if self.selected is None else min(self.selected, len(at) - 1)
-            else:
-                self._rebuild(keep and len(sketch.veins[vein]) == self._count)
+            if at is None and keep and len(sketch.veins[vein]) == self._count:
+                at = self.profile.t
+            self._rebuild(at)
             self._range = None
         self.update()
 
@@ -139,9 +138,8 @@ class ProfileView(QWidget):
         shares = arc / arc[-1] if arc[-1] > 0 else np.linspace(0.0, 1.0, len(arc))
         return shares, curve[:, 2]
 
-    def _rebuild(self, keep: bool) -> None:
-        """Handles on the vein's current heights: at the same places when `keep`."""
-        at = self.profile.t if keep and self.profile is not None else None
+    def _rebuild(self, at: np.ndarray | None) -> None:
+        """Handles on the vein's current heights, at shares `at` (None: spread anew)."""
         self.profile = Profile.of_vein(*self._vein_shares(), self._line(), at)
         self._count = len(self.sketch.veins[self.vein])
         if self.selected is not None and self.selected >= len(self.profile.t):
@@ -171,7 +169,7 @@ class ProfileView(QWidget):
         self.grabbed, self._before, self._base, self._range = None, None, None, None
         if before is None or not self.has_vein():
             return
-        self._rebuild(keep=True)
+        self._rebuild(self.profile.t)
         self.update()
         if after is not before:
             self._remember(before, handles, after)
@@ -201,9 +199,9 @@ class ProfileView(QWidget):
         tolerance = 1e-12 * self.sketch.extent()
         if np.any(np.abs(after_heights - heights) > tolerance):
             self.sketch = before.with_heights(self.vein, after_heights)
-        handles, kept = self.profile.t.copy(), np.delete(self.profile.t, index)
-        self.profile = Profile.of_vein(*self._vein_shares(), self._line(), kept)
-        self.selected = min(index, len(kept) - 1) if self.selected is not None else None
+        handles = self.profile.t.copy()
+        self._rebuild(np.delete(handles, index))
+        self.selected = None if self.selected is None else min(index, len(handles) - 2)
         self.update()
         if self.sketch is not before:
             self._remember(before, handles, self.sketch)
@@ -236,8 +234,18 @@ class ProfileView(QWidget):
         )
 
     def _heights_range(self) -> tuple[float, float]:
+        """The heights the plot spans (held during a drag; worked out once per shown sketch,
+        profile and curve, as every drawn point asks for it)."""
         if self._range is not None:
             return self._range
+        cached = self._range_of
+        if (
+            cached
+            and cached[0] is self.sketch
+            and cached[1] is self.profile
+            and cached[2] == self.vein
+        ):
+            return cached[3]
         values = [0.0]
         if self.has_vein():
             values += list(self.sketch.vein_curve(self.vein)[:, 2])
@@ -246,6 +254,7 @@ class ProfileView(QWidget):
             values += list(self.profile.h)
         lo, hi = min(values), max(values)
         pad = max(PAD * (hi - lo), 0.02 * self.sketch.extent())
+        self._range_of = (self.sketch, self.profile, self.vein, (lo - pad, hi + pad))
         return lo - pad, hi + pad
 
     def to_view(self, t: float, h: float) -> QPointF:
@@ -275,9 +284,11 @@ class ProfileView(QWidget):
         position (the nearest of its samples), if it does."""
         if self.profile is None:
             return None
-        t = np.linspace(0.0, 1.0, max(int(self._plot().width()), 2) + 1)  # a sample per pixel
-        spots = np.array([[p.x(), p.y()] for p in map(self.to_view, t, self.profile.heights(t))])
-        d = np.hypot(spots[:, 0] - pos.x(), spots[:, 1] - pos.y())
+        plot, (lo, hi) = self._plot(), self._heights_range()
+        t = np.linspace(0.0, 1.0, max(int(plot.width()), 2) + 1)  # a sample per pixel
+        x = plot.left() + t * plot.width()
+        y = plot.bottom() - (self.profile.heights(t) - lo) / (hi - lo) * plot.height()
+        d = np.hypot(x - pos.x(), y - pos.y())
         best = int(np.argmin(d))
         return float(t[best]) if d[best] <= HIT_PIXELS else None
 
@@ -403,8 +414,12 @@ class ProfileView(QWidget):
 
     def mouseMoveEvent(self, event: QMouseEvent) -> None:
         if self.grabbed is None or self.profile is None:
-            over = self.handle_at(event.position()) is not None
-            self.setCursor(Qt.CursorShape.SizeAllCursor if over else Qt.CursorShape.ArrowCursor)
+            shape = Qt.CursorShape.ArrowCursor  # the cursor tells what a click would do there
+            if self.handle_at(event.position()) is not None:
+                shape = Qt.CursorShape.SizeAllCursor  # drag
+            elif self.on_line(event.position()) is not None:
+                shape = Qt.CursorShape.CrossCursor  # double-click: a new handle
+            self.setCursor(shape)
             super().mouseMoveEvent(event)
             return
         t, h = self.from_view(event.position() + self._offset)

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from PySide6.QtCore import QEvent, QPoint, Qt
-from PySide6.QtGui import QColor, QKeyEvent
+from PySide6.QtCore import QEvent, QPoint, QPointF, Qt
+from PySide6.QtGui import QColor, QKeyEvent, QMouseEvent
 from PySide6.QtTest import QTest
 from PySide6.QtWidgets import QApplication, QLineEdit, QVBoxLayout, QWidget
 
@@ -205,6 +205,44 @@ def test_the_selected_handle_is_drawn_filled_with_a_focus_ring(side):
     assert not any(near(c, highlight) for c in colours(side, 2, ring))  # only the selected one
     side.clearFocus()
     assert not any(near(c, highlight) for c in colours(side, 3, ring))  # no focus, no ring
+
+
+def test_the_cursor_tells_a_handle_from_the_line_from_empty_space(side):
+    t = float(np.mean(side.profile.t[1:3]))
+    on_line = side.to_view(t, float(side.profile.heights(np.array([t]))[0])).toPoint()
+    for pos, shape in (
+        (spot(side, 1), Qt.CursorShape.SizeAllCursor),
+        (on_line, Qt.CursorShape.CrossCursor),
+        (on_line + QPoint(0, 40), Qt.CursorShape.ArrowCursor),
+    ):
+        move = QMouseEvent(
+            QEvent.Type.MouseMove,
+            QPointF(pos),
+            side.mapToGlobal(QPointF(pos)),
+            Qt.MouseButton.NoButton,
+            Qt.MouseButton.NoButton,
+            Qt.KeyboardModifier.NoModifier,
+        )
+        QApplication.sendEvent(side, move)  # QTest.mouseMove may leave a hover move out
+        assert side.cursor().shape() == shape
+
+
+def test_drawing_works_out_the_veins_curve_a_few_times_not_once_per_drawn_point(side, monkeypatch):
+    """Each drawn point asked for the plot's height range, which made the vein's spline anew:
+    ~75 ms of CPU per repaint of an 11-point vein, on every move of a drag."""
+    from leafstudio.gui.sketch_model import Sketch
+
+    calls = []
+    made = Sketch.vein_curve
+    monkeypatch.setattr(Sketch, "vein_curve", lambda self, i: calls.append(i) or made(self, i))
+    side.grab()
+    assert 0 < len(calls) <= 3
+    QTest.mousePress(side, Qt.MouseButton.LeftButton, pos=spot(side, 2))
+    calls.clear()
+    QTest.mouseMove(side, spot(side, 2) + QPoint(0, -5))
+    side.grab()
+    assert 0 < len(calls) <= 3
+    QTest.mouseRelease(side, Qt.MouseButton.LeftButton, pos=spot(side, 2))
 
 
 def test_the_boundary_shows_its_heights_read_only(side):
