@@ -19,6 +19,7 @@ import contextlib
 import os
 from collections.abc import Iterator
 
+from PySide6.QtCore import Qt
 from PySide6.QtGui import QGuiApplication
 from PySide6.QtWidgets import QWidget
 from pyvista import global_theme
@@ -42,6 +43,9 @@ def make_plotter(parent: QWidget) -> BasePlotter:
     it multiplies the cost of every frame) and without pyvistaqt's auto-update timer."""
     # VTK's widget on QOpenGLWidget (vtkmodules.qt.QVTKRWIBase) draws nothing: never that one
     if widget_kind() == NATIVE and vtkmodules.qt.QVTKRWIBase == "QWidget":
+        # a native widget makes its ancestors native, and by default their siblings too (the
+        # docks, the menu and status bars): keep those ordinary widgets
+        QGuiApplication.setAttribute(Qt.ApplicationAttribute.AA_DontCreateNativeWidgetSiblings)
         try:
             return NativePlotter(parent)
         except ImportError:  # a VTK built without X11 (vtkXOpenGLRenderWindow)

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from PySide6.QtGui import QImage
 from PySide6.QtOpenGLWidgets import QOpenGLWidget
-from PySide6.QtWidgets import QFileDialog
+from PySide6.QtWidgets import QFileDialog, QWidget
 
 from leafstudio.gui.native_view import WIDGET_ENV, NativePlotter
 from leafstudio.gui.viewport import grab_window
@@ -44,6 +44,12 @@ def test_the_3d_view_is_a_native_window_and_nothing_in_the_window_is_drawn_with_
     assert isinstance(plotter, NativePlotter)
     assert plotter.internalWinId()  # its own X window, where VTK renders
     assert window.findChildren(QOpenGLWidget) == []
+    # only the view and what holds it are native windows, not the docks or the status bar
+    chain = [plotter]
+    while chain[-1].parentWidget() is not None:
+        chain.append(chain[-1].parentWidget())
+    native = [w for w in window.findChildren(QWidget) if w.internalWinId()]
+    assert native and all(w in chain for w in native)
 
 
 def test_the_window_screenshot_and_the_exported_one_show_the_leaf(window, tmp_path, monkeypatch):
