@@ -108,13 +108,14 @@ class Midrib:
         return self._feet(points)[2]
 
     def mirror_reach(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """How far each point's mirror image reaches into a bend, as a share of the midrib's
-        radius of curvature there: (n,) -d kappa (positive: the image falls on the inside of
+        """How far each point's mirror image reaches into a bend: (n,) -d kappa, a share of the
+        midrib's radius of curvature at its foot (positive: the image falls on the inside of
         the bend; 1 or more: at or past the centre of curvature, where the mirror folds), with
-        the (n, 2) feet and (n,) |kappa| (1 / radius)."""
+        the (n,) signed offsets d and the (n, 2) feet. 1 / |kappa| is the radius there:
+        -d / reach where reach is not 0."""
         points = np.asarray(points, dtype=float).reshape(-1, np.shape(points)[-1])[:, :2]
         foot, _, d, kappa = self._feet(points)
-        return -d * kappa, foot, np.abs(kappa)
+        return -d * kappa, d, foot
 
     def reflect(self, points: np.ndarray) -> np.ndarray:
         """(n, k) points, k >= 2, with x, y mirrored across the midrib (other columns kept)."""

@@ -9,6 +9,7 @@ keep a spline from looping between close points. No Qt here: the editor in sketc
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -27,6 +28,7 @@ DERIVED_BOUNDARY_POINTS = 24  # control points when a loaded leaf becomes a sket
 DERIVED_VEIN_POINTS = 8
 RELIEF_NEIGHBOURS = 4  # a boundary point's height: inverse-distance mean of this many relief points
 FOLD_REACH = 1.0  # a mirror image this far into a bend (in radii of curvature) is folded over
+FOLD_SAMPLES = 4  # curve points per span where a fold is looked for (it runs on every drag move)
 
 
 def _identity_frame() -> Frame:
@@ -349,7 +351,12 @@ class Sketch:
         return None if best is None else np.asarray(best, dtype=float)
 
     def midrib(self) -> Midrib | None:
-        """The midrib (vein 1) as mirror editing follows it, or None below two points."""
+        """The midrib (vein 1) as mirror editing follows it, or None below two points (made
+        once per sketch: a mirrored edit asks for it several times)."""
+        return self._midrib
+
+    @cached_property
+    def _midrib(self) -> Midrib | None:
         if not self.veins or len(self.veins[0]) < 2:
             return None
         try:
@@ -363,35 +370,38 @@ class Sketch:
         midrib = self.midrib()
         return 0.0 if midrib is None else float(midrib.offset(np.reshape(xy, (1, -1))[:, :2])[0])
 
-    def _mirrored_curves(self, source_side: float) -> np.ndarray:
-        """(n, 2) points along the curves `mirrored` reflects from `source_side`: the
-        boundary curve on that side and the side veins' curves that lie there."""
-        midrib = self.midrib()
-        if midrib is None:
-            return np.zeros((0, 2))
-        eps = 1e-9 * self.extent()
-        outline = self.boundary_curve()
-        parts = [outline[midrib.offset(outline) * source_side > eps]] if len(outline) else []
-        for i in range(1, len(self.veins)):
-            if float(np.mean(midrib.offset(self.veins[i]))) * source_side > eps:
-                parts.append(self.vein_curve(i)[:, :2])
-        return np.vstack(parts) if parts else np.zeros((0, 2))
-
     def mirror_fold(self, source_side: float) -> MirrorFold | None:
         """Where mirroring from `source_side` would fold (see MirrorFold), or None. Checked on
-        the curves (spline samples), not only on the control points, so a bend between two of
-        them is seen: a point whose image would reach the centre of the midrib's curvature
-        (1 - d kappa <= 0 on the inside of the bend, gui/midrib.py) folds."""
+        the curves that `mirrored` reflects (the boundary curve on that side and the side
+        veins there, as spline samples, so a bend between two control points is seen): a
+        point whose image would reach the centre of the midrib's curvature (1 - d kappa <= 0
+        on the inside of the bend, gui/midrib.py) folds. One pass over all the points."""
         midrib = self.midrib()
-        points = self._mirrored_curves(source_side)
-        if midrib is None or not len(points):
+        if midrib is None:
             return None
-        reach, feet, kappa = midrib.mirror_reach(points)
+        outline = closed_curve(self.boundary, FOLD_SAMPLES) if len(self.boundary) >= 3 else []
+        outline = np.asarray(outline, dtype=float).reshape(-1, 2)
+        side_veins = range(1, len(self.veins))
+        controls = [self.veins[i][:, :2] for i in side_veins]
+        curves = [open_curve(self.veins[i], FOLD_SAMPLES)[:, :2] for i in side_veins]
+        points = np.vstack([outline.reshape(-1, 2), *controls, *curves])
+        if not len(points):
+            return None
+        reach, offset, feet = midrib.mirror_reach(points)
+        eps = 1e-9 * self.extent()
+        mirrored = np.zeros(len(points), dtype=bool)
+        mirrored[: len(outline)] = offset[: len(outline)] * source_side > eps
+        starts = np.cumsum([len(outline), *map(len, controls), *map(len, curves)])
+        for k in range(len(controls)):  # a side vein goes over whole, by its points' mean side
+            if float(np.mean(offset[starts[k] : starts[k + 1]])) * source_side > eps:
+                at = len(controls) + k
+                mirrored[starts[at] : starts[at + 1]] = True
+        reach = np.where(mirrored, reach, -np.inf)
         worst = int(np.argmax(reach))
         if reach[worst] < FOLD_REACH:
             return None
-        radius = 1.0 / float(kappa[worst])
-        return MirrorFold(tuple(map(float, feet[worst])), radius, float(reach[worst]) * radius)
+        radius = float(-offset[worst] / reach[worst])
+        return MirrorFold(tuple(map(float, feet[worst])), radius, abs(float(offset[worst])))
 
     def mirror_edit(self, xy: np.ndarray) -> tuple[Sketch, MirrorFold | None]:
         """An edit at plane point `xy` with Mirror on: the sketch made symmetric from that side

@@ -160,10 +160,17 @@ def test_a_midribs_bend_is_measured_by_its_radius_of_curvature():
     angle = np.linspace(-0.3, 0.3, 5)
     for offset in (0.3, -0.6):  # + left: inside the bend
         points = (1.0 - offset) * np.column_stack([np.cos(angle), np.sin(angle)])
-        reach, feet, kappa = midrib.mirror_reach(points)
-        np.testing.assert_allclose(1 / kappa, 1.0, rtol=0.05)
+        reach, d, feet = midrib.mirror_reach(points)
+        np.testing.assert_allclose(d, offset, atol=1e-3)
+        np.testing.assert_allclose(-d / reach, 1.0, rtol=0.05)  # the radius of curvature
         np.testing.assert_allclose(reach, -offset, rtol=0.05)  # the image's depth into the bend
         np.testing.assert_allclose(np.linalg.norm(feet, axis=1), 1.0, atol=1e-3)
+
+
+def test_a_sketch_with_only_a_midrib_has_no_fold():
+    midrib = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    assert Sketch(boundary=[[0.5, 0.2]], veins=(midrib,)).mirror_fold(1.0) is None
+    assert Sketch(veins=(midrib,)).mirror_edit(np.array([0.5, 0.1]))[1] is None
 
 
 def test_a_mirror_that_would_fold_is_not_made_and_says_why():
