@@ -227,6 +227,7 @@ class ParamPanel(QWidget):
                 widget.blockSignals(was)
         self._shown, self._shown_values = params, self._read()
         self._sync_enabled()
+        self._say("")  # a refusal concerned the values shown before
 
     def _show(self, name: str, param: Param, value: Any) -> None:
         widget = self.widgets[name]

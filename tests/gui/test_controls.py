@@ -210,6 +210,9 @@ def test_a_typed_invalid_value_is_refused_with_params_message(qtbot, name, text,
     type_into(qtbot, panel.fields[name], shown)  # unchanged: nothing happens, the note stays
     type_into(qtbot, panel.fields["k"], "5")  # the next value taken clears the note
     assert panel.note.isHidden() and panel.params().k == 5
+    type_into(qtbot, panel.fields[name], text)
+    panel.set_params(Params(k=4))  # so does the next document (or an undo)
+    assert panel.note.isHidden()
 
 
 def test_a_projects_small_value_is_shown_and_kept_while_its_field_is_left_alone(qtbot):
