@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import itertools
 import json
 import os
 import subprocess
@@ -46,15 +47,6 @@ from tests.test_scan_as_boundary import (  # noqa: E402
 
 def _turn(seed: int) -> np.ndarray:
     return np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))[0]
-
-
-def _straight_filled_strip() -> np.ndarray:
-    """tests' narrow filled cloud: a strip 25 times longer than wide."""
-    rng = np.random.default_rng(0)
-    x = rng.uniform(0, 1, 20000)
-    y = rng.uniform(-0.02, 0.02, x.size) * np.sin(np.pi * x) ** 0.5
-    z = 0.05 * x**2 + 0.002 * rng.normal(size=x.size)
-    return np.column_stack([x, y, z])
 
 
 def classes():
@@ -95,7 +87,11 @@ def classes():
             for a in (True, False)
         },
     )
-    yield "filled strip 25x", "surface", {"straight": _straight_filled_strip()}
+    yield (
+        "straight filled strip",
+        "surface",
+        {f"aspect {a}": bent_filled_strip(20000, a, 0.0) for a in (25, 30)},
+    )
     yield (
         "bent filled strip",
         "surface",
@@ -123,6 +119,24 @@ def classes():
             f"{shape} aspect {a}": make_form(shape, aspect=a).boundary
             for shape in ("linear", "lanceolate")
             for a in (20, 25, 30)
+        },
+    )
+    posed = itertools.product(
+        ("linear", "lanceolate"),
+        (20, 25, 30),
+        (0.0, 0.5, 1.0, -1.0),
+        (0.0, 30.0, 60.0),
+        (0.0, 0.1),
+        ("entire", "serrate"),
+    )
+    yield (
+        "narrow forms, curl/fold/wave",
+        "boundary",
+        {
+            f"{s} aspect {a} curl {c} fold {f} wave {w} {m}": make_form(
+                s, aspect=a, curl=c, fold=f, wave=w, margin=m
+            ).boundary
+            for s, a, c, f, w, m in posed
         },
     )
     yield (
