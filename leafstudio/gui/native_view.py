@@ -52,7 +52,9 @@ def make_plotter(parent: QWidget) -> BasePlotter:
             pass
     from pyvistaqt import QtInteractor
 
-    return QtInteractor(parent, auto_update=False, multi_samples=1)
+    plotter = QtInteractor(parent, auto_update=False, multi_samples=1)
+    plotter.setAcceptDrops(False)  # a file dropped on the view opens in the window, not the scene
+    return plotter
 
 
 @contextlib.contextmanager

@@ -127,3 +127,17 @@ def test_dragging_in_the_native_view_turns_the_camera(window, qtbot):
     )
     after = np.array(plotter.camera.position)
     assert np.linalg.norm(after - before) > 0.05 * np.linalg.norm(before)
+
+
+@pytest.mark.parametrize("kind", ["native", "opengl"])
+def test_files_dropped_on_the_3d_view_go_to_the_window(kind, qtbot, tmp_path, monkeypatch):
+    """The view takes no drops itself (pyvistaqt's would add the file to the scene), so Qt
+    hands a file dropped on it to the window, which opens it."""
+    monkeypatch.setenv(WIDGET_ENV, kind)
+    win = make_window(qtbot, tmp_path / "settings.ini")
+    widget = win.viewport.plotter
+    while widget is not win:
+        assert not widget.acceptDrops(), type(widget).__name__
+        widget = widget.parentWidget()
+    assert win.acceptDrops()
+    close_window(win)
