@@ -19,12 +19,16 @@ import contextlib
 import os
 from collections.abc import Iterator
 
+import vtkmodules.qt  # VTK's Qt widget; it uses PySide6 (loaded already, and its first choice)
+import vtkmodules.vtkInteractionStyle  # the trackball style
+import vtkmodules.vtkRenderingOpenGL2  # the OpenGL render window classes
 from PySide6.QtCore import Qt
 from PySide6.QtGui import QGuiApplication
 from PySide6.QtWidgets import QWidget
 from pyvista import global_theme
 from pyvista.plotting import BasePlotter
 from pyvista.plotting.render_window_interactor import RenderWindowInteractor
+from vtkmodules.qt.QVTKRenderWindowInteractor import QVTKRenderWindowInteractor
 
 WIDGET_ENV = "LEAFSTUDIO_3D"  # "native" or "opengl": which widget the 3D view uses
 NATIVE, OPENGL = "native", "opengl"
@@ -67,12 +71,6 @@ def _base_plotter_init_skipped() -> Iterator[None]:
         yield
     finally:
         BasePlotter.__init__ = init  # type: ignore[method-assign]
-
-
-import vtkmodules.qt  # noqa: E402  (after PySide6: it takes the binding already loaded)
-import vtkmodules.vtkInteractionStyle  # noqa: E402  (the trackball style)
-import vtkmodules.vtkRenderingOpenGL2  # noqa: E402
-from vtkmodules.qt.QVTKRenderWindowInteractor import QVTKRenderWindowInteractor  # noqa: E402
 
 
 class _FakeInteractor:
