@@ -898,9 +898,10 @@ class MainWindow(QMainWindow):
     def _on_done(self, kind: str, job_id: int, value: object) -> None:
         if kind == PIPELINE:
             if self.session.accept_measured(job_id) and self.result is not None:
-                self.status_text.setText(
-                    self.status_text.text() + f" · measurements {1000 * value:.0f} ms"
-                )
+                if not self.session.message:  # not after a failure's message (Worker._failed)
+                    self.status_text.setText(
+                        self.status_text.text() + f" · measurements {1000 * value:.0f} ms"
+                    )
                 self._show_measurements()
             return
         token, value = value

@@ -132,3 +132,33 @@ def _outcome(request_id: int):
     leaf = demo("nested")
     result = Pipeline(leaf).run(FAST)
     return Outcome(Request(request_id, leaf, FAST, True), result, {})
+
+
+def test_in_the_window_a_failed_request_leaves_the_shown_result_measured(
+    window, qtbot, monkeypatch
+):
+    """A new document that fails arrives while the shown result is measured: the measuring
+    gives way, then finishes; the panel shows that result's figures, and the status line keeps
+    the failure's message as it is."""
+    held = HeldMeasuring(monkeypatch, [])
+    window.panel.k.setValue(5)
+    qtbot.waitUntil(held.started.is_set, timeout=WAIT_MS)  # K = 5 is drawn, and measured
+    shown = window.session.shown_id
+    line = Leaf(boundary=[[t, 2 * t, 0] for t in range(10)])
+    window.session.new_document(line, title="a line")
+    held.submitted.set()
+    qtbot.waitUntil(
+        lambda: window.worker.is_idle() and window.session.shown.measured_id == shown,
+        timeout=WAIT_MS,
+    )
+    assert window.session.shown_id == shown and window.result.params.k == 5
+    assert (
+        window.status_text.text().startswith("Failed:") and "one line" in window.status_text.text()
+    )
+    assert "measurements" not in window.status_text.text()
+    rows = {
+        item.child(j).text(0): item.child(j).text(1)
+        for item in (window.measurements.topLevelItem(i) for i in range(3))
+        for j in range(item.childCount())
+    }
+    assert rows["K"] == "5"  # the panel holds the shown result's figures
