@@ -509,6 +509,11 @@ class SketchEditor(QWidget):
         self.view.sketch = replace(self.view.sketch, symmetric=on)
         self.view.mirror_changed.emit(on)
 
+    def resizeEvent(self, event: QResizeEvent) -> None:
+        super().resizeEvent(event)
+        if self.mirror_note.isVisible():  # the note keeps to the view's width
+            self._show_mirror_note(self.mirror_note.text())
+
     def _show_mirror_note(self, text: str) -> None:
         """Say why an edit was not mirrored, over the sketch (a drag updates it without any
         dialog); cleared by the next mirrored edit, a new document or Mirror off."""
@@ -516,9 +521,10 @@ class SketchEditor(QWidget):
         if text != note.text():
             note.setText(text)
         if text:
-            width = max(120, self.view.width() - 16)
+            area = self.view.viewport().geometry()  # inside the frame and the scroll bars
+            width = max(120, area.width() - 16)
             note.setFixedSize(width, note.heightForWidth(width))
-            note.move(8, 8)
+            note.move(area.left() + 8, area.top() + 8)
             note.raise_()
         note.setVisible(bool(text))
 

@@ -220,6 +220,11 @@ def test_the_sketch_editor_says_why_an_edit_was_not_mirrored(qtbot):
     assert editor.view.transform() == before  # the note shows over the view: no jump
     assert len(edits) == 1 and len(edits[0].boundary) == len(sketch.boundary) + 1  # not mirrored
     assert editor.mirror_note.isVisible() and "Not mirrored" in editor.mirror_note.text()
+    inside = editor.view.viewport().geometry()
+    assert inside.contains(editor.mirror_note.geometry())  # over the drawing, clear of scroll bars
+    editor.resize(360, 600)
+    qtbot.waitUntil(lambda: editor.view.viewport().width() < inside.width())
+    assert editor.view.viewport().geometry().contains(editor.mirror_note.geometry())
     click(qtbot, editor.view, (0.75, 0.41))  # inside the inner half: this one fits
     offsets = edits[1].midrib().offset(edits[1].boundary)
     assert -offsets.min() == pytest.approx(offsets.max(), rel=1e-6)  # mirrored: symmetric
