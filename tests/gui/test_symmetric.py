@@ -231,3 +231,38 @@ def test_the_sketch_editor_says_why_an_edit_was_not_mirrored(qtbot):
     assert editor.mirror_note.isHidden()
     editor.mirror.setChecked(False)
     assert not editor.view.mirror and editor.mirror_note.isHidden()
+
+
+def test_a_drag_past_the_bend_pauses_the_mirror_and_says_so_without_a_dialog(qtbot):
+    from PySide6.QtCore import Qt
+    from PySide6.QtWidgets import QMessageBox
+
+    from leafstudio.gui.sketch import SketchEditor
+
+    editor = SketchEditor()
+    qtbot.addWidget(editor)
+    editor.resize(500, 600)
+    editor.show()
+    editor.set_sketch(bent_leaf(radius=1.0, outside=0.3, inside=0.3), fit=True)
+    view = editor.view
+    index = 8  # the outside's widest control point
+    start = view.sketch.boundary[index]
+    direction = start / np.linalg.norm(start)  # outward from the bend's centre
+    previews = []
+    view.preview.connect(previews.append)
+    qtbot.mousePress(
+        view.viewport(), Qt.MouseButton.LeftButton, pos=view.view_point(start).toPoint()
+    )
+    inner = []
+    for radius in (1.5, 2.2, 1.5):  # 0.5 out (mirrors), 1.2 out (would fold), back again
+        qtbot.mouseMove(view.viewport(), view.view_point(radius * direction).toPoint())
+        offsets = view.sketch.midrib().offset(view.sketch.boundary)
+        inner.append(offsets.max())  # how far the inside reaches
+        assert editor.mirror_note.isVisible() == (radius > 2.0)
+    qtbot.mouseRelease(
+        view.viewport(), Qt.MouseButton.LeftButton, pos=view.view_point(1.5 * direction).toPoint()
+    )
+    assert inner[0] == pytest.approx(0.5, abs=0.02)  # mirrored
+    assert inner[1] == pytest.approx(inner[0])  # not mirrored past the bend's centre
+    assert inner[2] == pytest.approx(0.5, abs=0.02) and len(previews) == 3
+    assert not editor.findChildren(QMessageBox)
