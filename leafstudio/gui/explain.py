@@ -150,7 +150,7 @@ class StepsDialog(QDialog):
 
 
 SEE_THROUGH = 0.35  # the mesh's opacity when the layers under it should show
-K_FONT_PX = 24  # K's label in the view: its size in logical pixels
+K_FONT_PX = 24  # K's label in the view: its size in logical pixels (VTK points at 72 DPI)
 K_POSITION = (0.985, 0.98)  # its upper right corner, in the view's normalized coordinates
 
 
@@ -248,7 +248,9 @@ class ViewAids(QWidget):
         import pyvista as pv
 
         plotter, viewport = self.window_.viewport.plotter, self.window_.viewport
-        label = (text, viewport.text_color(), round(K_FONT_PX * viewport.pixel_ratio()))
+        # in points: the Qt VTK widgets set the render window's DPI to 72 x the pixel ratio,
+        # and VTK scales text by it (scaling by the ratio here too made it twice too large)
+        label = (text, viewport.text_color(), K_FONT_PX)
         actor = plotter.actors.get("k_label")
         if not isinstance(actor, pv.Text):
             actor = pv.Text(text)

@@ -1,0 +1,412 @@
+"""Screenshots of issue 12's user stories, driven through the real main window, with the leaf's
+framing in the 3D view as JSON.
+
+Run under a display:
+`xvfb-run -a -s "-screen 0 1600x1000x24" .venv/bin/python benchmarks/story_screens.py --out DIR`.
+
+Stories (each shot is the whole window, `DIR/s3-story-<name>.png`):
+1. File > New, then 12 boundary clicks, a midrib and four side veins clicked in the sketch view
+   (QTest mouse clicks, as a user), waiting for each result: shots after 3 points, at the end,
+   and in the top view;
+2. Demos > Nested, then Demos > Parallel, then a form picked in the Forms gallery;
+3. two real scans opened one after the other (soybean, then sugar beet) from ../shared/realleaves;
+4. a dark palette; then the same at QT_SCALE_FACTOR=2 in a subprocess (a virtual screen of its
+   own, twice as large, when xvfb-run is there).
+
+For each shot the JSON gives the leaf's framing in the 3D view: the share of the viewport's width
+and height that the result mesh's points span on screen (projected with the renderer's world to
+display transform, as tests/gui/test_drawing.py measures it), the same for the blade's robust
+bounds (gui/framing.py: 1st-99th percentiles, the points the camera frames), the share of mesh
+points that fall outside the view (clipped), and whether the sketch view's transform changed
+while drawing. The issue's framing target: >= 60% along one axis and >= 35% along the other.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from PySide6.QtCore import QSettings, Qt
+from PySide6.QtGui import QColor, QPalette
+from PySide6.QtTest import QTest
+from PySide6.QtWidgets import QApplication, QMessageBox
+
+from leafstudio.gui.framing import blade_bounds
+from leafstudio.gui.layers import vein_color
+from leafstudio.gui.main_window import MainWindow
+from leafstudio.gui.viewport import grab_window
+
+REAL = Path(__file__).resolve().parents[2] / "shared" / "realleaves"
+SCANS = (
+    "soybean_11_20190508T043118_pot1_1.txt",
+    "sugarbeet_f00012_20170829T010129_pot1_1.txt",
+)
+WAIT_S = 300.0
+STORIES = ("draw", "demos", "scans", "dark")
+DARK = {
+    QPalette.ColorRole.Window: "#202124",
+    QPalette.ColorRole.Base: "#17181a",
+    QPalette.ColorRole.AlternateBase: "#232427",
+    QPalette.ColorRole.Button: "#2a2b2e",
+    QPalette.ColorRole.Text: "#e8e8e8",
+    QPalette.ColorRole.WindowText: "#e8e8e8",
+    QPalette.ColorRole.ButtonText: "#e8e8e8",
+    QPalette.ColorRole.PlaceholderText: "#9a9a9a",
+}
+
+
+def boundary_clicks() -> np.ndarray:
+    """12 plane points around an ovate leaf (base at x = 0.05, tip at x = 0.95), in drawing
+    order (counter-clockwise from the tip)."""
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    x = 0.5 + 0.45 * np.cos(t)
+    y = 0.22 * np.sin(t) * (1.0 - 0.25 * np.cos(t))  # wider towards the base
+    return np.column_stack([x, y])
+
+
+MIDRIB = np.array([[0.08, 0.0], [0.35, 0.0], [0.62, 0.0], [0.9, 0.0]])
+# side veins: a start on the midrib (a new vein snaps onto it), then two points outwards
+SIDE_VEINS = (
+    ((0.3, 0.0), (0.42, 0.1), (0.52, 0.17)),
+    ((0.3, 0.0), (0.42, -0.1), (0.52, -0.17)),
+    ((0.55, 0.0), (0.67, 0.09), (0.76, 0.13)),
+    ((0.55, 0.0), (0.67, -0.09), (0.76, -0.13)),
+)
+
+
+def process(ms: int) -> None:
+    """Run the event loop for `ms` milliseconds."""
+    end = time.perf_counter() + ms / 1000
+    while time.perf_counter() < end:
+        QApplication.processEvents()
+        time.sleep(0.005)
+
+
+def wait_until(check, timeout_s: float = WAIT_S, what: str = "") -> None:
+    end = time.perf_counter() + timeout_s
+    while not check():
+        if time.perf_counter() > end:
+            raise TimeoutError(f"timed out waiting for {what or check}")
+        QApplication.processEvents()
+        time.sleep(0.01)
+
+
+def settle(window: MainWindow) -> None:
+    """Wait until the session has nothing pending: the newest request shown (or refused with a
+    message), the worker idle (measurements in), and a few more turns of the event loop."""
+
+    def done() -> bool:
+        session = window.session
+        if not window.worker.is_idle():
+            return False
+        return session.last_id == 0 or session.shown_id >= session.last_id or bool(session.message)
+
+    process(100)
+    wait_until(done, what="the result")
+    process(400)
+
+
+def click(window: MainWindow, xy) -> dict:
+    """A left click at plane point `xy` in the sketch view; whether the view moved."""
+    view = window.editor.view
+    before = view.transform()
+    pos = view.view_point(np.asarray(xy, float)).toPoint()
+    no_key = Qt.KeyboardModifier.NoModifier
+    QTest.mouseClick(view.viewport(), Qt.MouseButton.LeftButton, no_key, pos)
+    QApplication.processEvents()
+    return {"moved": view.transform() != before}
+
+
+def screen_points(window: MainWindow, points: np.ndarray) -> np.ndarray:
+    """(n, 2) display positions (device pixels, y up) of world points in the 3D view."""
+    renderer = window.viewport.plotter.renderer
+    out = np.empty((len(points), 2))
+    for i, p in enumerate(points):
+        renderer.SetWorldPoint(*p, 1.0)
+        renderer.WorldToDisplay()
+        out[i] = renderer.GetDisplayPoint()[:2]
+    return out
+
+
+def framing(window: MainWindow) -> dict:
+    """The shown leaf's framing in the 3D view."""
+    result = window.result
+    if result is None:
+        return {"leaf": None}
+    renderer = window.viewport.plotter.renderer
+    width, height = renderer.GetSize()
+    points = np.asarray(result.triangle_mesh.points)
+    mesh_xy = screen_points(window, points[:: max(1, len(points) // 3000)])
+    frame = window.session.view_frame() or result.frame
+    blade = blade_bounds(points, frame)
+    blade_xy = screen_points(window, blade.extent_points())
+    inside = (
+        (mesh_xy[:, 0] >= 0)
+        & (mesh_xy[:, 0] <= width)
+        & (mesh_xy[:, 1] >= 0)
+        & (mesh_xy[:, 1] <= height)
+    )
+    mesh_fill = (float(np.ptp(mesh_xy[:, 0]) / width), float(np.ptp(mesh_xy[:, 1]) / height))
+    blade_fill = (float(np.ptp(blade_xy[:, 0]) / width), float(np.ptp(blade_xy[:, 1]) / height))
+    return {
+        "viewport_px": [int(width), int(height)],
+        "mesh_fill_wh": [round(v, 3) for v in mesh_fill],
+        "blade_fill_wh": [round(v, 3) for v in blade_fill],
+        "meets_target": bool(max(blade_fill) >= 0.6 and min(blade_fill) >= 0.35),
+        "mesh_points_outside_view": round(float(1.0 - inside.mean()), 4),
+        "veins": len(result.leaf.veins),
+        "vein_colours_match": vein_colours_match(window),
+    }
+
+
+def vein_colours_match(window: MainWindow) -> bool:
+    """True when each vein's points in the 3D view have the sketch's colour for that vein."""
+    plotter = window.viewport.plotter
+    sketch_veins = len(window.editor.view.sketch.veins)
+    count = len(window.result.leaf.veins)
+    if sketch_veins and sketch_veins != count:
+        return False
+    for i in range(count):
+        actor = plotter.actors.get(f"points:vein{i}")
+        if actor is None:
+            continue
+        expected = QColor(vein_color(i))
+        got = [round(c * 255) for c in actor.prop.color.float_rgb]
+        if got != [expected.red(), expected.green(), expected.blue()]:
+            return False
+    return True
+
+
+def top_view_way_round(window: MainWindow) -> dict:
+    """In the top view, does the sketch's right-most point show right of the centre and its
+    top-most point above it (the same way round as the sketch)?"""
+    sketch = window.editor.view.sketch
+    frame = window.session.view_frame()
+    if frame is None or len(sketch.boundary) < 3:
+        return {}
+    b = sketch.boundary
+
+    def at(xy) -> np.ndarray:
+        return screen_points(window, frame.to_world(np.asarray([xy]), np.zeros(1)))[0]
+
+    centre = at(b.mean(axis=0))
+    right = at(b[np.argmax(b[:, 0])])
+    top = at(b[np.argmax(b[:, 1])])
+    return {
+        "sketch_right_is_screen_right": bool(right[0] > centre[0]),
+        "sketch_up_is_screen_up": bool(top[1] > centre[1]),
+    }
+
+
+class Shooter:
+    """Saves whole-window shots and collects their figures."""
+
+    def __init__(self, window: MainWindow, out: Path, suffix: str = "") -> None:
+        self.window, self.out, self.suffix = window, out, suffix
+        self.shots: list[dict] = []
+
+    def __call__(self, story: str, name: str, **extra: object) -> dict:
+        window = self.window
+        process(200)
+        path = self.out / f"s3-story-{name}{self.suffix}.png"
+        if not grab_window(window, window.viewport).save(str(path)):
+            raise OSError(f"{path}: cannot write the PNG")
+        entry = {
+            "story": story,
+            "shot": path.name,
+            "title": window.windowTitle(),
+            "status": window.status_text.text(),
+            "framing": framing(window),
+            **extra,
+        }
+        self.shots.append(entry)
+        return entry
+
+
+def trigger(window: MainWindow, menu: str, text: str) -> None:
+    """Trigger the menu item whose text (without '&') starts with `text`."""
+    for action in window.menus[menu].actions():
+        if action.text().replace("&", "").startswith(text):
+            action.trigger()
+            return
+    raise LookupError(f"{menu} > {text}: no such menu item")
+
+
+def story_draw(window: MainWindow, shot: Shooter) -> None:
+    """File > New, 12 boundary points, a midrib, four side veins, through the sketch view."""
+    trigger(window, "File", "New sketch")
+    process(300)
+    view = window.editor.view
+    start = view.transform()
+    moves: list[bool] = []
+    for i, xy in enumerate(boundary_clicks()):
+        moves.append(click(window, xy)["moved"])
+        if i == 2:
+            settle(window)
+            shot("draw", "1a-new-after-3-points", sketch_view_moved=any(moves))
+    settle(window)
+    shot("draw", "1b-12-boundary-points", sketch_view_moved=any(moves))
+    QTest.mouseClick(window.editor.new_vein, Qt.MouseButton.LeftButton)
+    for xy in MIDRIB:
+        moves.append(click(window, xy)["moved"])
+    for vein in SIDE_VEINS:
+        QTest.mouseClick(window.editor.new_vein, Qt.MouseButton.LeftButton)
+        for xy in vein:
+            moves.append(click(window, xy)["moved"])
+    settle(window)
+    sketch = view.sketch
+    drawn = {
+        "boundary_points": len(sketch.boundary),
+        "vein_points": [len(v) for v in sketch.veins],
+        "sketch_view_moved": any(moves) or view.transform() != start,
+        "undo_steps": window.undo_stack.count(),
+    }
+    shot("draw", "1c-drawn-leaf-iso", **drawn)
+    window.viewport.camera("top")
+    process(300)
+    shot("draw", "1d-drawn-leaf-top", top_view=top_view_way_round(window), **drawn)
+
+
+def story_demos(window: MainWindow, shot: Shooter) -> None:
+    """Demos > Nested, Demos > Parallel, then a gallery form."""
+    trigger(window, "Demos", "Nested")
+    settle(window)
+    shot("demos", "2a-demo-nested")
+    trigger(window, "Demos", "Parallel")
+    settle(window)
+    shot("demos", "2b-demo-parallel-after-nested")
+    panel = getattr(window, "forms_panel", None)
+    if panel is None:
+        return
+    window.forms_dock.show()
+    window.forms_dock.raise_()
+    process(300)
+    gallery = panel.gallery
+    names = [gallery.item(i).data(Qt.ItemDataRole.UserRole) for i in range(gallery.count())]
+    row = names.index("lanceolate") if "lanceolate" in names else 0
+    item = gallery.item(row)
+    gallery.scrollToItem(item)
+    process(100)
+    rect = gallery.visualItemRect(item)
+    QTest.mouseClick(gallery.viewport(), Qt.MouseButton.LeftButton, pos=rect.center())
+    wait_until(lambda: names[row] in window.windowTitle(), what="the chosen form")
+    settle(window)
+    shot("demos", f"2c-form-{names[row]}", form=names[row])
+    window.sketch_dock.raise_()
+    process(300)
+    shot("demos", f"2d-form-{names[row]}-sketch", form=names[row])
+
+
+def story_scans(window: MainWindow, shot: Shooter) -> None:
+    """Two real scans, one after the other, as File > Open would open them."""
+    for i, name in enumerate(SCANS):
+        path = str(REAL / name)
+        window.session.history.set_clean()
+        if not window.open_path(path):
+            raise RuntimeError(f"{path}: not opened")
+        wait_until(lambda p=path: window.path == p, what=f"the scan {name}")
+        settle(window)
+        kind = name.split("_")[0]
+        shot("scans", f"3{'ab'[i]}-scan-{kind}", scan=name)
+
+
+def dark_palette() -> QPalette:
+    palette = QPalette()
+    for role, color in DARK.items():
+        palette.setColor(role, QColor(color))
+    return palette
+
+
+def story_dark(window: MainWindow, shot: Shooter) -> None:
+    """The nested demo under a dark palette (the whole application's)."""
+    QApplication.instance().setPalette(dark_palette())
+    window.session.history.set_clean()
+    trigger(window, "Demos", "Nested")
+    settle(window)
+    window.editor.view.sketch  # noqa: B018  (the sketch is drawn with the palette)
+    canvas = window.editor.view.backgroundBrush().color()
+    background = window.viewport.plotter.renderer.GetBackground()
+    shot(
+        "dark",
+        "4-dark-palette",
+        scale_factor=os.environ.get("QT_SCALE_FACTOR", "1"),
+        device_pixel_ratio=window.devicePixelRatioF(),
+        canvas_lightness=round(canvas.lightnessF(), 3),
+        background_3d=[round(c, 3) for c in background],
+        vein_point_size=window.viewport.plotter.actors["points:vein0"].prop.point_size,
+    )
+
+
+def run(stories: list[str], out: Path, suffix: str) -> list[dict]:
+    app = QApplication.instance() or QApplication(sys.argv[:1])
+    QMessageBox.question = staticmethod(lambda *a, **k: QMessageBox.StandardButton.Discard)
+    with tempfile.TemporaryDirectory() as tmp:
+        settings = QSettings(str(Path(tmp) / "settings.ini"), QSettings.Format.IniFormat)
+        window = MainWindow(settings)
+        available = app.primaryScreen().availableGeometry()
+        window.resize(min(1500, available.width()), min(920, available.height()))
+        window.show()
+        process(500)
+        shot = Shooter(window, out, suffix)
+        try:
+            for name in stories:
+                {
+                    "draw": story_draw,
+                    "demos": story_demos,
+                    "scans": story_scans,
+                    "dark": story_dark,
+                }[name](window, shot)
+        finally:
+            window.session.history.set_clean()
+            window.worker.shutdown()
+            window.close()
+            process(200)
+    return shot.shots
+
+
+def scaled_run(out: Path) -> list[dict]:
+    """The dark story again at QT_SCALE_FACTOR=2, in a subprocess (a screen of its own)."""
+    env = dict(os.environ, QT_SCALE_FACTOR="2")
+    command = [sys.executable, __file__, "--out", str(out), "--stories", "dark"]
+    command.append("--suffix=-scale2")  # with "=": a value that starts with "-"
+    if shutil.which("xvfb-run"):
+        command = ["xvfb-run", "-a", "-s", "-screen 0 3200x2000x24", *command]
+    done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=900)
+    if done.returncode != 0:
+        return [{"story": "dark", "error": done.stderr.strip().splitlines()[-5:]}]
+    return json.loads(done.stdout)["shots"]
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", required=True, help="folder for the PNGs")
+    parser.add_argument("--stories", nargs="*", default=list(STORIES), choices=STORIES)
+    parser.add_argument("--suffix", default="", help="added to each PNG's name")
+    parser.add_argument("--no-scale2", action="store_true", help="skip the QT_SCALE_FACTOR=2 run")
+    args = parser.parse_args()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    start = time.perf_counter()
+    shots = run(args.stories, out, args.suffix)
+    if "dark" in args.stories and not args.suffix and not args.no_scale2:
+        shots += scaled_run(out)
+    report = {
+        "shots": shots,
+        "platform": QApplication.platformName(),
+        "wall_s": round(time.perf_counter() - start, 1),
+        "load_average": [round(v, 2) for v in os.getloadavg()],
+    }
+    print(json.dumps(report, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
