@@ -44,6 +44,51 @@ def _text(param: Ranged, value: Any) -> str:
     return str(int(value))
 
 
+def _refusal(param: Ranged, exc: LeafError, kept: str) -> str:
+    """Why a typed value was not taken: Params' message, the value kept and, unless the
+    message says it, what the parameter takes."""
+    said = str(exc)
+    takes = "between" not in said or getattr(param, "special", None) is not None
+    also = f" It takes {param.describe()}." if takes else ""
+    return f"{said}; {param.what} stays {kept}.{also}"
+
+
+class WholeBox(QLargeIntSpinBox):
+    """A whole number over its parameter's whole range (a QSpinBox stops at 2**31 - 1). What is
+    typed is read on Return or on leaving the box (no keyboard tracking, which clamped each
+    keystroke), and checked by the declaration first: superqt's box would clamp a seed of -5 to
+    0; here it is refused (`verdict` carries why; "" when the typed value is taken)."""
+
+    verdict = Signal(str)
+
+    def __init__(self, param: Whole) -> None:
+        super().__init__()
+        self.param = param
+        self.setRange(param.low, param.high)
+        self.setKeyboardTracking(False)
+
+    def _check_typed(self) -> None:
+        text = self.lineEdit().text().strip()
+        if text == str(self.value()):
+            return
+        try:
+            self.param.parse(text)
+        except LeafError as exc:
+            self.lineEdit().setText(str(self.value()))  # superqt then reads the value kept
+            self.verdict.emit(_refusal(self.param, exc, str(self.value())))
+            return
+        self.verdict.emit("")
+
+    def keyPressEvent(self, event: Any) -> None:
+        if event.key() in (Qt.Key.Key_Return, Qt.Key.Key_Enter):
+            self._check_typed()
+        super().keyPressEvent(event)
+
+    def focusOutEvent(self, event: Any) -> None:
+        self._check_typed()
+        super().focusOutEvent(event)
+
+
 def _field(slider: QLabeledSlider, param: Ranged) -> QLineEdit:
     """The slider's number, typed into: a line edit in place of superqt's label (hidden), wide
     enough for any valid value (the panel then gives every field the widest one's width)."""
@@ -65,9 +110,7 @@ def _widget(param: Param) -> QWidget:
         combo.addItems(param.choices)
         return combo
     if isinstance(param, Whole) and param.slider is None:
-        spin = QLargeIntSpinBox()  # a QSpinBox stops at 2**31 - 1
-        spin.setRange(param.low, param.high)
-        return spin
+        return WholeBox(param)
     if isinstance(param, Real):
         slider = QLabeledDoubleSlider(Qt.Orientation.Horizontal)
         slider.setDecimals(param.decimals)
@@ -112,6 +155,8 @@ class ParamPanel(QWidget):
             self._connect(widget)
             if _is_slider(widget):
                 self._add_field(name, widget, param)
+            elif isinstance(widget, WholeBox):
+                widget.verdict.connect(self._say)
         widest = max((f.width() for f in self.fields.values()), default=0)
         for field in self.fields.values():  # the sliders line up
             field.setFixedWidth(widest)
@@ -160,10 +205,7 @@ class ParamPanel(QWidget):
         except LeafError as exc:
             self._show_field(name)
             kept = _text(param, slider.value())
-            said = str(exc)
-            takes = "between" not in said or getattr(param, "special", None) is not None
-            also = f" It takes {param.describe()}." if takes else ""
-            self._say(f"{said}; {param.what} stays {kept}.{also}")
+            self._say(_refusal(param, exc, kept))
             return
         self._say("")
         if name in self.specials and value == getattr(param, "special", None):

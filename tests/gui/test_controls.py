@@ -236,3 +236,26 @@ def test_a_typed_value_in_the_window_is_one_undo_step(window, qtbot):
     window.session.undo()
     assert window.panel.params().k == FAST.k and window.panel.fields["k"].text() == str(FAST.k)
     assert window.panel.k.maximum() == PARAMS["k"].panel_range[1]  # back to the declared range
+
+
+def test_a_typed_seed_out_of_range_is_refused_not_clamped(qtbot):
+    """Before: superqt's box clamped a typed seed of -5 to 0 and 10**23 to 2**32 - 1, quietly."""
+    panel = ParamPanel()
+    qtbot.addWidget(panel)
+    panel.show()
+    emitted = []
+    panel.changed.connect(emitted.append)
+    box = panel.seed
+    for text in ("-5", "1" + "0" * 23):
+        box.setFocus()
+        box.lineEdit().selectAll()
+        qtbot.keyClicks(box, text)
+        qtbot.keyClick(box, Qt.Key.Key_Return)
+        assert panel.params().seed == 0 and box.lineEdit().text() == "0" and not emitted
+        assert f"seed must be between 0 and {SEED_MAX}" in panel.note.text()
+        assert panel.note.isVisible() and "seed stays 0" in panel.note.text()
+    box.lineEdit().selectAll()
+    qtbot.keyClicks(box, "4294967295")
+    qtbot.keyClick(box, Qt.Key.Key_Return)
+    assert panel.params().seed == SEED_MAX and panel.note.isHidden()
+    qtbot.waitUntil(lambda: bool(emitted) and emitted[-1].seed == SEED_MAX, timeout=2000)
