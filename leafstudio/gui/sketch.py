@@ -105,8 +105,11 @@ class SketchView(QGraphicsView):
 
     # --- model ---------------------------------------------------------------------------------
     def set_sketch(self, sketch: Sketch, fit: bool = False) -> None:
-        """Show `sketch`; `fit` zooms to it (a new document)."""
+        """Show `sketch`; `fit` zooms to it (a new document: drawing starts on its boundary,
+        nothing selected, never on the last document's chosen vein or point)."""
         self.sketch = sketch
+        if fit:
+            self.active, self.selected = BOUNDARY, None
         if self.active > len(sketch.veins):
             self.active = BOUNDARY
         if self.selected is not None and not self._valid(self.selected):

@@ -3,7 +3,13 @@ window for each finding."""
 
 from __future__ import annotations
 
+from PySide6.QtCore import Qt
+
 from leafstudio.gui import explain
+from leafstudio.gui.sketch_model import BOUNDARY
+
+from .conftest import wait_result
+from .test_sketch import click
 
 
 def _label_height(window) -> float:
@@ -31,3 +37,22 @@ def test_the_k_label_is_as_large_in_logical_pixels_at_any_pixel_ratio(window, mo
     aids._label = None
     aids.apply()
     assert 1.7 < _label_height(window) / single < 2.3  # was 4: the ratio applied twice
+
+
+def test_a_new_document_starts_with_no_point_selected_on_the_boundary(window, qtbot):
+    """The nested demo opened after drawing showed the drawing's chosen vein (vein 5) and its
+    selected point on the demo's vein 5: a click then added to a vein the user never chose."""
+    window.new_sketch()
+    view = window.editor.view
+    for xy in ((0.1, 0.0), (0.5, 0.2), (0.9, 0.0), (0.5, -0.2)):
+        click(qtbot, view, xy)
+    for start, end in (((0.1, 0.0), (0.9, 0.0)), ((0.5, 0.0), (0.6, 0.12))):
+        qtbot.mouseClick(window.editor.new_vein, Qt.MouseButton.LeftButton)
+        click(qtbot, view, start)
+        click(qtbot, view, end)
+    assert view.active == 1 and view.selected == (1, 1)
+    window.session.history.set_clean()
+    window.open_demo("nested")
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    assert view.active == BOUNDARY and view.selected is None
+    assert window.editor.curve.currentIndex() == 0
