@@ -89,8 +89,12 @@ def polylines(lines: list[np.ndarray]) -> pv.PolyData:
 
 
 def vein_color(index: int) -> str:
-    """The colour of vein `index` (0-based), in the 3D view and in the sketch editor alike."""
-    return VEIN_COLORS[index % len(VEIN_COLORS)]
+    """The colour of vein `index` (0-based), in the 3D view and in the sketch editor alike. The
+    midrib's red is its own: side veins go round the other colours (a form's eighth vein was
+    red, a second midrib to the eye)."""
+    if index == 0:
+        return VEIN_COLORS[0]
+    return VEIN_COLORS[1 + (index - 1) % (len(VEIN_COLORS) - 1)]
 
 
 def _points(color: str, size: float) -> dict[str, Any]:

@@ -6,6 +6,7 @@ from __future__ import annotations
 from PySide6.QtCore import Qt
 
 from leafstudio.gui import explain
+from leafstudio.gui.layers import vein_color
 from leafstudio.gui.sketch_model import BOUNDARY
 
 from .conftest import wait_result
@@ -56,3 +57,10 @@ def test_a_new_document_starts_with_no_point_selected_on_the_boundary(window, qt
     wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
     assert view.active == BOUNDARY and view.selected is None
     assert window.editor.curve.currentIndex() == 0
+
+
+def test_no_side_vein_takes_the_midribs_colour():
+    """A gallery form has 13 veins: its eighth was drawn in the midrib's red, in both views."""
+    midrib = vein_color(0)
+    assert all(vein_color(i) != midrib for i in range(1, 40))
+    assert len({vein_color(i) for i in range(1, 7)}) == 6  # neighbours still differ
