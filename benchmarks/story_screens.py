@@ -9,7 +9,8 @@ Stories (each shot is the whole window, `DIR/s3-story-<name>.png`):
    (QTest mouse clicks, as a user), waiting for each result: shots after 3 points, at the end,
    and in the top view;
 2. Demos > Nested, then Demos > Parallel, then a form picked in the Forms gallery;
-3. two real scans opened one after the other (soybean, then sugar beet) from ../shared/realleaves;
+3. two real scans opened one after the other (soybean, then sugar beet) from ../shared/realleaves,
+   each in iso (as opened) and in the top view;
 4. a dark palette; then the same at QT_SCALE_FACTOR=2 in a subprocess (a virtual screen of its
    own, twice as large, when xvfb-run is there).
 
@@ -17,8 +18,9 @@ For each shot the JSON gives the leaf's framing in the 3D view: the share of the
 and height that the result mesh's points span on screen (projected with the renderer's world to
 display transform, as tests/gui/test_drawing.py measures it), the same for the blade's robust
 bounds (gui/framing.py: 1st-99th percentiles, the points the camera frames), the share of mesh
-points that fall outside the view (clipped), and whether the sketch view's transform changed
-while drawing. The issue's framing target: >= 60% along one axis and >= 35% along the other.
+points that fall outside the view (clipped) or under the height colour bar, and whether the
+sketch view's transform changed while drawing. The issue's framing target: >= 60% along one
+axis and >= 35% along the other.
 """
 
 from __future__ import annotations
@@ -50,6 +52,9 @@ SCANS = (
     "sugarbeet_f00012_20170829T010129_pot1_1.txt",
 )
 WAIT_S = 300.0
+# the height colour bar's box in the viewport (gui/viewport.py's scalar bar: x 0.06-0.46, its
+# bar, labels and title from y 0.02 to about 0.10 of the height, display y up)
+COLOUR_BAR = ((0.06, 0.46), (0.02, 0.10))
 STORIES = ("draw", "demos", "scans", "dark")
 DARK = {
     QPalette.ColorRole.Window: "#202124",
@@ -154,6 +159,13 @@ def framing(window: MainWindow) -> dict:
         & (mesh_xy[:, 1] >= 0)
         & (mesh_xy[:, 1] <= height)
     )
+    bar_x, bar_y = COLOUR_BAR
+    under_bar = (
+        (mesh_xy[:, 0] >= bar_x[0] * width)
+        & (mesh_xy[:, 0] <= bar_x[1] * width)
+        & (mesh_xy[:, 1] >= bar_y[0] * height)
+        & (mesh_xy[:, 1] <= bar_y[1] * height)
+    )
     mesh_fill = (float(np.ptp(mesh_xy[:, 0]) / width), float(np.ptp(mesh_xy[:, 1]) / height))
     blade_fill = (float(np.ptp(blade_xy[:, 0]) / width), float(np.ptp(blade_xy[:, 1]) / height))
     return {
@@ -162,6 +174,7 @@ def framing(window: MainWindow) -> dict:
         "blade_fill_wh": [round(v, 3) for v in blade_fill],
         "meets_target": bool(max(blade_fill) >= 0.6 and min(blade_fill) >= 0.35),
         "mesh_points_outside_view": round(float(1.0 - inside.mean()), 4),
+        "mesh_points_under_colour_bar": round(float(under_bar.mean()), 4),
         "veins": len(result.leaf.veins),
         "vein_colours_match": vein_colours_match(window),
     }
@@ -316,12 +329,22 @@ def story_scans(window: MainWindow, shot: Shooter) -> None:
         settle(window)
         kind = name.split("_")[0]
         shot("scans", f"3{'ab'[i]}-scan-{kind}", scan=name)
+        window.viewport.camera("top")
+        process(300)
+        way_round = top_view_way_round(window)
+        shot("scans", f"3{'ab'[i]}-scan-{kind}-top", scan=name, top_view=way_round)
 
 
 def dark_palette() -> QPalette:
     palette = QPalette()
     for role, color in DARK.items():
         palette.setColor(role, QColor(color))
+    for role in (
+        QPalette.ColorRole.Text,
+        QPalette.ColorRole.WindowText,
+        QPalette.ColorRole.ButtonText,
+    ):  # greyed out as a dark theme greys them (unset, they keep the active colour)
+        palette.setColor(QPalette.ColorGroup.Disabled, role, QColor("#6e6e6e"))
     return palette
 
 
