@@ -7,7 +7,7 @@ Run under a display:
 Stories (each shot is the whole window, `DIR/s3-story-<name>.png`):
 1. File > New, then 12 boundary clicks, a midrib and four side veins clicked in the sketch view
    (QTest mouse clicks, as a user), waiting for each result: shots after 3 points, at the end,
-   and in the top view;
+   in the top view, and after the Iso button;
 2. Demos > Nested, then Demos > Parallel, then a form picked in the Forms gallery;
 3. two real scans opened one after the other (soybean, then sugar beet) from ../shared/realleaves,
    each in iso (as opened) and in the top view;
@@ -41,7 +41,7 @@ from PySide6.QtGui import QColor, QPalette
 from PySide6.QtTest import QTest
 from PySide6.QtWidgets import QApplication, QMessageBox
 
-from leafstudio.gui.framing import blade_bounds
+from leafstudio.gui.framing import best_iso, blade_bounds
 from leafstudio.gui.layers import vein_color
 from leafstudio.gui.main_window import MainWindow
 from leafstudio.gui.viewport import grab_window
@@ -198,6 +198,20 @@ def vein_colours_match(window: MainWindow) -> bool:
     return True
 
 
+def iso_turn(window: MainWindow) -> float:
+    """Degrees between the camera's direction now and the iso direction a fresh opening of the
+    shown leaf would take (framing.best_iso on its blade bounds)."""
+    plotter = window.viewport.plotter
+    camera = plotter.camera
+    now = np.asarray(camera.position) - np.asarray(camera.focal_point)
+    frame = window.session.view_frame() or window.result.frame
+    bounds = blade_bounds(np.asarray(window.result.triangle_mesh.points), frame)
+    width, height = plotter.renderer.GetSize()
+    fresh, _ = best_iso(bounds, camera.view_angle, width / max(height, 1))
+    cos = now @ fresh / (np.linalg.norm(now) * np.linalg.norm(fresh))
+    return round(float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))), 1)
+
+
 def top_view_way_round(window: MainWindow) -> dict:
     """In the top view, does the sketch's right-most point show right of the centre and its
     top-most point above it (the same way round as the sketch)?"""
@@ -282,10 +296,13 @@ def story_draw(window: MainWindow, shot: Shooter) -> None:
         "sketch_view_moved": any(moves) or view.transform() != start,
         "undo_steps": window.undo_stack.count(),
     }
-    shot("draw", "1c-drawn-leaf-iso", **drawn)
+    shot("draw", "1c-drawn-leaf-iso", iso_turned_from_fresh_deg=iso_turn(window), **drawn)
     window.viewport.camera("top")
     process(300)
     shot("draw", "1d-drawn-leaf-top", top_view=top_view_way_round(window), **drawn)
+    window.viewport.camera("iso")  # the Iso button: the iso view chosen for the whole leaf
+    process(300)
+    shot("draw", "1e-drawn-leaf-iso-button", iso_turned_from_fresh_deg=iso_turn(window), **drawn)
 
 
 def story_demos(window: MainWindow, shot: Shooter) -> None:
