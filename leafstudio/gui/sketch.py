@@ -61,7 +61,7 @@ SELECT_MODIFIERS = Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.Shi
 
 def _pen(color: str, width: float) -> QPen:
     pen = QPen(QColor(color), width)
-    pen.setCosmetic(True)  # width in pixels at any zoom
+    pen.setCosmetic(True)  # width in device pixels at any zoom (SketchView.pen scales it)
     return pen
 
 
@@ -102,6 +102,16 @@ class SketchView(QGraphicsView):
         if event.type() == event.Type.PaletteChange:
             self.apply_palette()
             self._redraw()
+
+    def event(self, event) -> bool:
+        if event.type() == event.Type.DevicePixelRatioChange:  # another screen: pen widths
+            self._redraw()
+        return super().event(event)
+
+    def pen(self, color: str, width: float) -> QPen:
+        """A cosmetic pen `width` logical pixels wide: a cosmetic pen's width is in device
+        pixels, which are half as wide at a pixel ratio of 2."""
+        return _pen(color, width * self.devicePixelRatioF())
 
     # --- model ---------------------------------------------------------------------------------
     def set_sketch(self, sketch: Sketch, fit: bool = False) -> None:
@@ -179,21 +189,21 @@ class SketchView(QGraphicsView):
         if len(outline):
             scene.addPath(
                 self._path(outline, closed=True),
-                _pen(CROSSING_COLOR if crossing else boundary_color, 2),
+                self.pen(CROSSING_COLOR if crossing else boundary_color, 2),
                 QBrush(QColor(220, 60, 60, 40) if crossing else QColor(120, 180, 90, 60)),
             )
         elif len(self.sketch.boundary) > 1:
-            scene.addPath(self._path(self.sketch.boundary, closed=False), _pen("#909090", 1))
+            scene.addPath(self._path(self.sketch.boundary, closed=False), self.pen("#909090", 1))
         for i in range(len(self.sketch.veins)):
             curve = self.sketch.vein_curve(i)
             if len(curve) > 1:
-                scene.addPath(self._path(curve[:, :2], closed=False), _pen(vein_color(i), 2))
+                scene.addPath(self._path(curve[:, :2], closed=False), self.pen(vein_color(i), 2))
         for xy in self.crossings:
             r = 1.6 * POINT_PIXELS
             ring = QGraphicsEllipseItem(-r, -r, 2 * r, 2 * r)
             ring.setFlag(QGraphicsItem.GraphicsItemFlag.ItemIgnoresTransformations)
             ring.setPos(float(xy[0]), float(-xy[1]))
-            ring.setPen(_pen(CROSSING_COLOR, 3))
+            ring.setPen(self.pen(CROSSING_COLOR, 3))
             scene.addItem(ring)
         for curve in (BOUNDARY, *range(len(self.sketch.veins))):
             color = boundary_color if curve == BOUNDARY else vein_color(curve)
@@ -220,7 +230,7 @@ class SketchView(QGraphicsView):
         item.setFlag(QGraphicsItem.GraphicsItemFlag.ItemIgnoresTransformations)
         item.setPos(float(xy[0]), float(-xy[1]))
         item.setBrush(QBrush(QColor("#ffd400" if selected else ("white" if active else color))))
-        item.setPen(_pen(color, 3 if selected else 2))
+        item.setPen(self.pen(color, 3 if selected else 2))
         self.scene().addItem(item)
 
     # --- editing -------------------------------------------------------------------------------

@@ -64,3 +64,18 @@ def test_no_side_vein_takes_the_midribs_colour():
     midrib = vein_color(0)
     assert all(vein_color(i) != midrib for i in range(1, 40))
     assert len({vein_color(i) for i in range(1, 7)}) == 6  # neighbours still differ
+
+
+def test_the_sketch_lines_follow_the_pixel_ratio(window, monkeypatch):
+    """Cosmetic pens are in device pixels: at QT_SCALE_FACTOR=2 the sketch's curves and the
+    dots' rims were half as wide as at 1 (seen in s3-story-4-dark-palette-scale2.png)."""
+    view = window.editor.view
+
+    def widths() -> list[float]:
+        view._redraw()
+        return sorted(item.pen().widthF() for item in view.scene().items() if hasattr(item, "pen"))
+
+    single = widths()
+    assert single and min(single) >= 1
+    monkeypatch.setattr(view, "devicePixelRatioF", lambda: 2.0)
+    assert widths() == [2 * w for w in single]
