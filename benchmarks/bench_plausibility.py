@@ -1,16 +1,18 @@
-"""Whole scans given as a boundary (plausibility.surface_spread, refused over COVER_SPREAD):
-the spread and verdict of each class of cloud, and the CPU cost of one call on a 10,000-point
-outline and a 220,000-point cloud. Prints JSON.
+"""Whole scans given as a boundary (cover.surface_spread, refused over COVER_SPREAD): the
+spread and verdict of each class of cloud, and the CPU cost of one call on a 10,000-point outline
+and a 220,000-point cloud. Prints JSON.
 
-    .venv/bin/python benchmarks/bench_plausibility.py [--before REV] [--repeats N] [--cases]
-        [--table]
+    .venv/bin/python benchmarks/bench_plausibility.py [--before REV ...] [--repeats N]
+        [--cases] [--table]
 
---before REV measures plausibility.py as it was at git revision REV beside today's (e.g. 18be64f,
-before the two-strand test). Each class says what it should be ("surface": refused, "boundary":
-accepted) and how many of its clouds get the other verdict (`wrong`). --cases lists every cloud;
---table prints a Markdown table instead of JSON.
-The cost is the median of N calls' process (CPU) time, and wall time, in ms; the host's load
-average is printed beside it, as the machine may be shared.
+--before REV (repeatable) measures surface_spread as it was at git revision REV beside today's
+(18be64f: before the two-strand and narrow-band looks; 760e578: two strands only). Each class
+says what it should be ("surface": refused, "boundary": accepted; "boundary (most)": outlines
+drawn past the range asked for, aspect up to 35 and noise up to 0.5%, where the two margins'
+noise can merge into one filled band) and how many of its clouds get the other verdict
+(`wrong`). --cases lists every cloud; --table prints a Markdown table instead
+of JSON. The cost is the median of N calls' process (CPU) time, and wall time, in ms; the host's
+load average is printed beside it, as the machine may be shared.
 """
 
 from __future__ import annotations
@@ -31,16 +33,18 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from leafstudio.core import plausibility  # noqa: E402
+from leafstudio.core import cover  # noqa: E402
 from leafstudio.forms import make_form  # noqa: E402
 from leafstudio.scan import read_scan  # noqa: E402
 from tests.test_scan_as_boundary import (  # noqa: E402
     SCANS,
     _boundaries,
+    _dense_noisy,
     _strap,
     bent_filled_strip,
     bent_strap,
     narrow_striped_scan,
+    random_narrow_outline,
     striped_scan,
 )
 
@@ -145,6 +149,30 @@ def classes():
         {f"n {n} noise {s}": _strap(n, s) for n, s in [(2000, 0), (10000, 0.001), (20000, 0.004)]},
     )
     yield (
+        "noisy toothed outline",
+        "boundary",
+        {
+            f"{shape} {margin} noise {noise}": _dense_noisy(
+                make_form(shape, margin=margin).boundary, 5000, noise
+            )
+            for shape in ("elliptic", "ovate")
+            for margin in ("dentate", "serrate", "crenate", "lobed")
+            for noise in (0.001, 0.003, 0.005)
+        },
+    )
+    rng = np.random.default_rng(7)  # as the test draws them
+    yield (
+        "random narrow outline",
+        "boundary",
+        {f"seed 7 #{i}": random_narrow_outline(rng) for i in range(30)},
+    )
+    rng = np.random.default_rng(1)
+    yield (
+        "random narrow outline, wider range",
+        "boundary (most)",
+        {f"seed 1 #{i}": random_narrow_outline(rng, (20, 35), (0, 3.5), 0.005) for i in range(150)},
+    )
+    yield (
         "bent narrow outline",
         "boundary",
         {
@@ -158,16 +186,21 @@ def classes():
 
 
 def _module_at(rev: str):
-    """plausibility.py as it was at git revision `rev`, imported as a module."""
-    source = subprocess.run(
-        ["git", "show", f"{rev}:leafstudio/core/plausibility.py"],
-        cwd=ROOT,
-        check=True,
-        capture_output=True,
-        text=True,
-    ).stdout
-    path = Path(tempfile.mkdtemp()) / f"plausibility_{rev}.py"
-    path.write_text(source)
+    """surface_spread's module as it was at git revision `rev` (core/cover.py, or before that
+    core/plausibility.py), imported from a copy."""
+    for name in ("cover", "plausibility"):
+        shown = subprocess.run(
+            ["git", "show", f"{rev}:leafstudio/core/{name}.py"],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+        )
+        if shown.returncode == 0:
+            break
+    else:
+        raise SystemExit(f"no core/cover.py or core/plausibility.py at {rev}")
+    path = Path(tempfile.mkdtemp()) / f"{name}_{rev}.py"
+    path.write_text(shown.stdout)
     spec = importlib.util.spec_from_file_location(path.stem, path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
@@ -186,15 +219,15 @@ def _cost(spread, cloud: np.ndarray, repeats: int) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--before", metavar="REV", help="also measure plausibility.py at REV")
+    parser.add_argument(
+        "--before", metavar="REV", action="append", default=[], help="also measure it at REV"
+    )
     parser.add_argument("--repeats", type=int, default=15)
     parser.add_argument("--cases", action="store_true", help="list every cloud's spread")
     parser.add_argument("--table", action="store_true", help="a Markdown table, not JSON")
     args = parser.parse_args()
-    versions = {"now": plausibility}
-    if args.before:
-        versions = {f"at {args.before}": _module_at(args.before), **versions}
-    threshold = plausibility.COVER_SPREAD
+    versions = {f"at {rev}": _module_at(rev) for rev in args.before} | {"now": cover}
+    threshold = cover.COVER_SPREAD
     report: dict = {
         "command": " ".join([".venv/bin/python benchmarks/bench_plausibility.py", *sys.argv[1:]]),
         "threshold": threshold,
@@ -211,7 +244,7 @@ def main() -> None:
                 "spread_min": round(float(values.min()), 3),
                 "spread_max": round(float(values.max()), 3),
                 "refused": refused,
-                "wrong": refused if should == "boundary" else len(values) - refused,
+                "wrong": len(values) - refused if should == "surface" else refused,
             }
             if args.cases:
                 entry[label]["cases"] = {k: round(v, 3) for k, v in spreads.items()}
