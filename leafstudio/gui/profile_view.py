@@ -356,18 +356,21 @@ class ProfileView(QWidget):
         painter.setPen(QPen(color, 2))
         painter.drawPath(self._path(shares, heights))
         self._draw_points(painter, color, points, np.interp(points, shares, heights))
-        peak = float(heights[np.argmax(np.abs(heights))])
-        text = (
-            f"boundary, from the scan: peak {peak:.3g} (not editable)"
-            if len(self.sketch.relief)
-            else "boundary: on the plane (a drawn leaf's boundary has no heights)"
-        )
         painter.setPen(QPen(faint, 1))
         painter.drawText(
             self._plot().adjusted(4, 2, -4, -2),
             Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignTop,
-            text,
+            self.boundary_caption(),
         )
+
+    def boundary_caption(self) -> str:
+        """What the boundary's side view says over its line: where its heights come from (a
+        loaded leaf's relief: a file, scan, demo or form; a drawn leaf's lies on the plane)."""
+        if not len(self.sketch.relief):
+            return "boundary: on the plane (a drawn leaf's boundary has no heights)"
+        heights = self._outline[1]
+        peak = float(heights[np.argmax(np.abs(heights))]) if len(heights) else 0.0
+        return f"boundary, as loaded: peak {peak:.3g} (not editable)"
 
     def _draw_handles(self, painter: QPainter, palette: QPalette) -> None:
         """Square handles; the selected (or grabbed) one larger and filled, with a ring in the

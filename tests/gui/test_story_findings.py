@@ -79,3 +79,13 @@ def test_the_sketch_lines_follow_the_pixel_ratio(window, monkeypatch):
     assert single and min(single) >= 1
     monkeypatch.setattr(view, "devicePixelRatioF", lambda: 2.0)
     assert widths() == [2 * w for w in single]
+
+
+def test_a_demos_boundary_side_view_does_not_call_it_a_scan(window):
+    """With the boundary chosen, the side view said "boundary, from the scan" over the nested
+    demo (and every loaded leaf): its heights come from whatever was loaded."""
+    side = window.editor.profile_view
+    window.editor.view.set_sketch(window.editor.view.sketch, fit=True)  # the boundary chosen
+    assert side.vein == BOUNDARY and len(side.sketch.relief)
+    caption = side.boundary_caption()
+    assert "scan" not in caption and caption.startswith("boundary, as loaded: peak")
