@@ -6,7 +6,9 @@ from collections.abc import Generator
 from typing import Any, TypeVar
 
 import numpy as np
+from numba import njit
 
+from leafstudio.core.buckets import kernel_array
 from leafstudio.core.distance import mesh_distances
 from leafstudio.core.trianglemesh import MeshLike
 from leafstudio.model import Leaf
@@ -28,6 +30,9 @@ def point_to_mesh_distance(mesh: MeshLike, points: np.ndarray) -> np.ndarray:
     return mesh_distances(np.asarray(mesh.points, dtype=float), triangles_of(mesh), points)
 
 
+SMALL_BUCKET = 32  # edge_counts: a vertex with more edges than this has them sorted by np.sort
+
+
 def _summary(values: np.ndarray) -> dict[str, float | None]:
     if len(values) == 0:
         return {"min": None, "max": None, "mean": None}
@@ -35,12 +40,51 @@ def _summary(values: np.ndarray) -> dict[str, float | None]:
 
 
 def edge_counts(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unique undirected edges (e, 2) and how many triangles share each."""
-    edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1).astype(np.int64)
-    # one integer key per edge: np.unique on a flat array is many times faster than with axis=0
-    base = int(edges.max(initial=0)) + 1
-    keys, counts = np.unique(edges[:, 0] * base + edges[:, 1], return_counts=True)
-    return np.column_stack([keys // base, keys % base]), counts
+    """Unique undirected edges (e, 2), each (low, high) and in that order, and how many
+    triangles share each. Compiled: edges bucketed by their lower vertex, each bucket sorted
+    (np.unique on one key per edge sorted all of them: 23 ms at grid 512, now 2 ms)."""
+    triangles = kernel_array(np.asarray(triangles).reshape(-1, 3), np.int64)
+    return _edge_counts(triangles, int(triangles.max(initial=-1)) + 1)
+
+
+@njit(cache=True, nogil=True)
+def _edge_counts(triangles, n):
+    m = len(triangles)
+    start = np.zeros(n + 1, np.int64)  # bucket v: other[start[v]:start[v + 1]]
+    for t in range(m):
+        for k in range(3):
+            start[min(triangles[t, k], triangles[t, (k + 1) % 3]) + 1] += 1
+    for v in range(n):
+        start[v + 1] += start[v]
+    fill = start[:-1].copy()
+    other = np.empty(3 * m, np.int64)  # each edge's higher vertex, in its lower vertex's bucket
+    for t in range(m):
+        for k in range(3):
+            a, b = triangles[t, k], triangles[t, (k + 1) % 3]
+            other[fill[min(a, b)]] = max(a, b)
+            fill[min(a, b)] += 1
+    edges = np.empty((3 * m, 2), np.int64)
+    counts = np.empty(3 * m, np.int64)
+    e = 0
+    for v in range(n):
+        lo, hi = start[v], start[v + 1]
+        if hi - lo > SMALL_BUCKET:  # a hub vertex (a fan): no quadratic sort
+            other[lo:hi] = np.sort(other[lo:hi])
+        for i in range(lo + 1, hi):  # a grid mesh's vertex has about six neighbours
+            x, j = other[i], i - 1
+            while j >= lo and other[j] > x:
+                other[j + 1] = other[j]
+                j -= 1
+            other[j + 1] = x
+        i = lo
+        while i < hi:
+            j = i
+            while j < hi and other[j] == other[i]:
+                j += 1
+            edges[e, 0], edges[e, 1], counts[e] = v, other[i], j - i
+            e += 1
+            i = j
+    return edges[:e].copy(), counts[:e].copy()
 
 
 def boundary_loops(
