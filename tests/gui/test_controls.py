@@ -259,3 +259,26 @@ def test_a_typed_seed_out_of_range_is_refused_not_clamped(qtbot):
     qtbot.keyClick(box, Qt.Key.Key_Return)
     assert panel.params().seed == SEED_MAX and panel.note.isHidden()
     qtbot.waitUntil(lambda: bool(emitted) and emitted[-1].seed == SEED_MAX, timeout=2000)
+
+
+def test_leaving_a_field_or_the_seed_box_reads_what_was_typed(qtbot):
+    panel = ParamPanel()
+    qtbot.addWidget(panel)
+    panel.show()
+    panel.activateWindow()
+    qtbot.waitActive(panel)
+
+    def leave_after_typing(widget, text: str) -> None:
+        widget.setFocus()
+        qtbot.waitUntil(widget.hasFocus)
+        (widget.lineEdit() if widget is panel.seed else widget).selectAll()
+        qtbot.keyClicks(widget, text)
+        panel.mesher.setFocus()
+        qtbot.waitUntil(lambda: not widget.hasFocus())
+
+    leave_after_typing(panel.seed, "-7")
+    assert panel.params().seed == 0 and "got -7" in panel.note.text()
+    leave_after_typing(panel.seed, "77")
+    assert panel.params().seed == 77 and panel.note.isHidden()
+    leave_after_typing(panel.fields["grid"], "777")
+    assert panel.params().grid == 777 and panel.grid.maximum() == 777
