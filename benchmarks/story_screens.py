@@ -78,12 +78,14 @@ def boundary_clicks() -> np.ndarray:
 
 
 MIDRIB = np.array([[0.08, 0.0], [0.35, 0.0], [0.62, 0.0], [0.9, 0.0]])
-# side veins: a start on the midrib (a new vein snaps onto it), then two points outwards
+# side veins, two from each of two midrib points: the first click lands on the midrib's own
+# control point (issue 12, finding 3: it selected that point and added to the midrib; and two
+# veins from one spot merged), then two points outwards
 SIDE_VEINS = (
-    ((0.3, 0.0), (0.42, 0.1), (0.52, 0.17)),
-    ((0.3, 0.0), (0.42, -0.1), (0.52, -0.17)),
-    ((0.55, 0.0), (0.67, 0.09), (0.76, 0.13)),
-    ((0.55, 0.0), (0.67, -0.09), (0.76, -0.13)),
+    ((0.35, 0.0), (0.45, 0.1), (0.54, 0.17)),
+    ((0.35, 0.0), (0.45, -0.1), (0.54, -0.17)),
+    ((0.62, 0.0), (0.71, 0.09), (0.79, 0.13)),
+    ((0.62, 0.0), (0.71, -0.09), (0.79, -0.13)),
 )
 
 
