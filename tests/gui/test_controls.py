@@ -91,6 +91,9 @@ def test_a_moved_slider_gives_a_tidy_value(qtbot):
     qtbot.addWidget(panel)
     panel.taper.setValue(0.123456789)
     assert panel.params().taper == round(0.123456789, PARAMS["taper"].decimals + 2)
+    assert panel.fields["taper"].text() == "0.12"  # the field follows the slider
+    panel.grid.setValue(256)
+    assert panel.fields["grid"].text() == "256"
     assert isinstance(PARAMS["k"], Whole) and PARAMS["k"].special == "auto"
 
 
