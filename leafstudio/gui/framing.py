@@ -20,6 +20,7 @@ FILL = 0.86  # share of the viewport the framed box fills along its tighter axis
 CONTAIN_SLACK = 0.1  # a result still fits the framed box within this share of its size
 SAMPLE = 20_000  # points used for the percentiles, at most
 OUTLINE = 2_000  # points kept to fit the camera to the leaf's shape, not its box
+RECENTRE_STEPS = 4  # rounds of centring and sizing the perspective projection
 
 
 @dataclass(frozen=True)
@@ -109,17 +110,18 @@ def iso_direction(elevation: float, azimuth: float, frame: Frame) -> np.ndarray:
 
 
 def best_iso(
-    bounds: BladeBounds, view_angle: float, aspect: float
+    bounds: BladeBounds, view_angle: float, aspect: float, bottom: float = 0.0
 ) -> tuple[np.ndarray, np.ndarray]:
     """The iso direction and view-up (the normal): the lowest elevation (the most relief) at
     which some azimuth fills the viewport by ISO_FILL along its less filled axis, else the
-    candidate that fills it best; a long leaf in a tall view is turned to run diagonally."""
+    candidate that fills it best; a long leaf in a tall view is turned to run diagonally.
+    `bottom` as in fit_camera."""
     best, best_fill = None, -1.0
     for elevation in ISO_ELEVATIONS:
         for azimuth in ISO_AZIMUTHS:
             direction = iso_direction(elevation, azimuth, bounds.frame)
             position, focus, up = fit_camera(
-                bounds, direction, bounds.frame.normal, view_angle, aspect
+                bounds, direction, bounds.frame.normal, view_angle, aspect, bottom=bottom
             )
             fill = min(projected_fill(bounds, position, focus, up, view_angle, aspect))
             if fill > best_fill + 0.02:  # the first (more frontal) of near ties
@@ -136,10 +138,13 @@ def fit_camera(
     view_angle: float = 30.0,
     aspect: float = 1.0,
     fill: float = FILL,
+    bottom: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Position, focal point and view-up of a perspective camera (vertical `view_angle` degrees,
     viewport width / height `aspect`) looking along -`direction` at the box, so that the box's
-    projection fills `fill` of the view along its tighter axis."""
+    projection fills `fill` of the view along its tighter axis. `bottom` is a share of the
+    view's height kept free along its lower edge (where the colour bars are): the box fills
+    and is centred in the rest."""
     direction = np.asarray(direction, float) / np.linalg.norm(direction)
     up = np.asarray(up, float)
     up = up - (up @ direction) * direction
@@ -152,8 +157,20 @@ def fit_camera(
     focus = focus + 0.5 * (x.max() + x.min()) * right + 0.5 * (y.max() + y.min()) * up
     half_w, half_h = 0.5 * np.ptp(x), 0.5 * np.ptp(y)
     tan = np.tan(np.radians(view_angle) / 2)
-    distance = max(half_h / (tan * fill), half_w / (tan * aspect * fill)) + float(z.max())
+    high = 1.0 - bottom  # the free part of the view's height
+    distance = max(half_h / (tan * fill * high), half_w / (tan * aspect * fill)) + float(z.max())
     distance = max(distance, 1e-6)
+    # centre the projection in the free part (whose centre is `bottom` of the half-height
+    # above the view's): near points project larger, so the box's centre is not the middle
+    # and fill exactly (the distance above is the safe side of a perspective's, by the depth)
+    points = bounds.extent_points()
+    nearest = float(z.max())
+    for _ in range(RECENTRE_STEPS):
+        x, y = project(points, focus + distance * direction, focus, up, view_angle, aspect)
+        off_x, off_y = (x.max() + x.min()) / 2, (y.max() + y.min()) / 2 - bottom
+        focus = focus + tan * distance * (off_x * aspect * right + off_y * up)
+        need = max(np.ptp(x) / (2 * fill), np.ptp(y) / (2 * fill * high))
+        distance = max(nearest + (distance - nearest) * need, 1.05 * nearest, 1e-6)
     return focus + distance * direction, focus, up
 
 
@@ -166,13 +183,24 @@ def projected_fill(
     aspect: float,
 ) -> tuple[float, float]:
     """The share of the viewport's width and height the blade spans (perspective)."""
+    sx, sy = project(bounds.extent_points(), position, focus, up, view_angle, aspect)
+    return float(np.ptp(sx) / 2), float(np.ptp(sy) / 2)
+
+
+def project(
+    points: np.ndarray,
+    position: np.ndarray,
+    focus: np.ndarray,
+    up: np.ndarray,
+    view_angle: float,
+    aspect: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Where (n, 3) world points land in the view, x and y from -1 (left, bottom) to 1."""
     direction = (position - focus) / np.linalg.norm(position - focus)
     up = up - (up @ direction) * direction
     up /= np.linalg.norm(up)
     right = np.cross(up, direction)
-    rel = bounds.extent_points() - position
+    rel = np.asarray(points, float) - position
     depth = -(rel @ direction)
     tan = np.tan(np.radians(view_angle) / 2)
-    sx = (rel @ right) / (depth * tan * aspect)
-    sy = (rel @ up) / (depth * tan)
-    return float(np.ptp(sx) / 2), float(np.ptp(sy) / 2)
+    return (rel @ right) / (depth * tan * aspect), (rel @ up) / (depth * tan)

@@ -24,6 +24,7 @@ from leafstudio.gui.textures import TEXTURE
 SIZED = ("point_size", "line_width")  # style keys in device pixels: scaled by the pixel ratio
 
 CAMERAS = ("iso", "top", "side")
+BAR_BAND = 0.13  # the colour bars' share of the view's height, at its bottom, with their titles
 
 
 class Viewport(QWidget):
@@ -56,6 +57,7 @@ class Viewport(QWidget):
         self._pieces: dict[str, list[Piece]] = {}
         self._announce = False
         self._bars: dict[str, tuple] = {}
+        self._placed: tuple | None = None  # the preset and camera the view last framed with
         self.plotter.render_window.AddObserver("EndEvent", self._on_render_end)
         self.apply_palette()
 
@@ -352,18 +354,35 @@ class Viewport(QWidget):
         sketch), the side (along its width) or iso, filling most of the view."""
         direction, up = view_direction(preset, self._frame)
         if preset == "iso" and self._bounds is not None:
-            direction, up = best_iso(self._bounds, self.plotter.camera.view_angle, self._aspect())
+            direction, up = best_iso(
+                self._bounds, self.plotter.camera.view_angle, self._aspect(), self._bottom()
+            )
         self._place(direction, up)
+        self._placed = (preset, self._camera_now())
         if render:
             self.redraw()
 
     def refit(self, render: bool = True) -> None:
-        """Frame the blade again from the current direction (the sketch grew past the view)."""
+        """Frame the blade again (the sketch grew past the view): from the current direction,
+        or, while the camera is still where the iso preset put it, from the iso direction
+        that suits the grown leaf (a few first points are a sliver, turned another way)."""
+        if self._placed is not None and self._placed == ("iso", self._camera_now()):
+            self.camera("iso", render)
+            return
         camera = self.plotter.camera
         direction = np.asarray(camera.position) - np.asarray(camera.focal_point)
         self._place(direction, np.asarray(camera.up))
+        self._placed = None
         if render:
             self.redraw()
+
+    def _camera_now(self) -> tuple:
+        camera = self.plotter.camera
+        return tuple(np.round([*camera.position, *camera.focal_point, *camera.up], 9))
+
+    def _bottom(self) -> float:
+        """The share of the view's height kept free for the colour bars (none: 0)."""
+        return BAR_BAND if self._bars else 0.0
 
     def _aspect(self) -> float:
         size = self.plotter.interactor.size()
@@ -375,7 +394,7 @@ class Viewport(QWidget):
             return
         camera = self.plotter.camera
         position, focus, up = fit_camera(
-            self._bounds, direction, up, camera.view_angle, self._aspect()
+            self._bounds, direction, up, camera.view_angle, self._aspect(), bottom=self._bottom()
         )
         self.plotter.camera_position = [tuple(position), tuple(focus), tuple(up)]
         self.plotter.renderer.ResetCameraClippingRange()
