@@ -31,7 +31,7 @@ COVER_WIDTH = 0.25  # or this share of the width if less, so that a narrow blade
 # (20-30 times longer than wide) never fall in one neighbourhood and look like a surface
 COVER_SPREAD = 0.45  # median ratio of the two largest spreads in it: a curve's is near 0 (noise
 # of 1% of the length: 0.11, of 2%: 0.35; teeth: at most 0.12), a surface's near 1 (the real
-# scans: 0.59 to 0.89)
+# scans: 0.73 to 0.86, a quarter of their points 0.53 to 0.73; benchmarks/bench_plausibility.py)
 COVER_CENTRES = 500  # neighbourhoods measured
 COVER_POINTS = 5000  # points they are taken from, at most
 COVER_LEAST = 8  # a neighbourhood with fewer points is not measured (a sparse outline)
