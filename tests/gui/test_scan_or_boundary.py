@@ -25,3 +25,13 @@ def test_a_dense_noisy_boundary_opens_as_a_boundary(noise):
 @pytest.mark.skipif(not REAL.is_dir(), reason=f"no real scans at {REAL}")
 def test_the_real_scans_open_as_scans():
     assert all(scans.looks_like_scan(Leaf(read_scan(p), [])) for p in sorted(REAL.glob("*.txt")))
+
+
+def test_a_bent_narrow_outline_opens_as_a_boundary_and_a_bent_strip_scan_as_a_scan():
+    """Session 3: the app asks the pipeline's question, so a curved grass leaf's outline (aspect
+    30, bent 1 rad, noise 0.2%) opened as a scan (0.51) and the scan of a bent strip as a
+    boundary (0.17); now the other way round."""
+    from tests.test_scan_as_boundary import bent_filled_strip, bent_strap
+
+    assert not scans.looks_like_scan(Leaf(bent_strap(5000, 30, 1.0, 0.002), []))
+    assert scans.looks_like_scan(Leaf(bent_filled_strip(5000, 25, 2.0), []))
