@@ -11,7 +11,7 @@ ratio; the background and text follow the palette. Main thread only (VTK renderi
 from __future__ import annotations
 
 import numpy as np
-from PySide6.QtCore import QEvent, QPoint, QRect, Signal
+from PySide6.QtCore import QEvent, QPoint, QRect, QTimer, Signal
 from PySide6.QtGui import QImage, QPainter, QPalette, QPixmap
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
@@ -58,6 +58,7 @@ class Viewport(QWidget):
         self._announce = False
         self._bars: dict[str, tuple] = {}
         self._placed: tuple | None = None  # the preset and camera the view last framed with
+        self._redraw_due = False
         self.plotter.render_window.AddObserver("EndEvent", self._on_render_end)
         self.apply_palette()
 
@@ -133,8 +134,17 @@ class Viewport(QWidget):
         self.redraw()
 
     def redraw(self) -> None:
-        """Schedule one render of the scene (at the widget's next paint, where VTK renders)."""
-        self.plotter.interactor.update()
+        """Schedule one render of the scene, in a later turn of the event loop than the work
+        that asked for it: a result's layers and its render are then two short pauses of the
+        main thread, with input handled between them, rather than one long one. Many asks
+        before that turn make one render."""
+        if not self._redraw_due:
+            self._redraw_due = True
+            QTimer.singleShot(0, self, self._redraw_now)
+
+    def _redraw_now(self) -> None:
+        self._redraw_due = False
+        self.plotter.interactor.update()  # VTK renders at the widget's paint
 
     def _on_render_end(self, *_: object) -> None:
         if self._announce:
