@@ -44,7 +44,7 @@ from PySide6.QtWidgets import QApplication, QMessageBox
 from leafstudio.gui.framing import best_iso, blade_bounds
 from leafstudio.gui.layers import vein_color
 from leafstudio.gui.main_window import MainWindow
-from leafstudio.gui.viewport import grab_window
+from leafstudio.gui.viewport import BAR_BAND, grab_window
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "realleaves"
 SCANS = (
@@ -52,9 +52,6 @@ SCANS = (
     "sugarbeet_f00012_20170829T010129_pot1_1.txt",
 )
 WAIT_S = 300.0
-# the height colour bar's box in the viewport (gui/viewport.py's scalar bar: x 0.06-0.46, its
-# bar, labels and title from y 0.02 to about 0.10 of the height, display y up)
-COLOUR_BAR = ((0.06, 0.46), (0.02, 0.10))
 STORIES = ("draw", "demos", "scans", "dark")
 DARK = {
     QPalette.ColorRole.Window: "#202124",
@@ -161,13 +158,17 @@ def framing(window: MainWindow) -> dict:
         & (mesh_xy[:, 1] >= 0)
         & (mesh_xy[:, 1] <= height)
     )
-    bar_x, bar_y = COLOUR_BAR
-    under_bar = (
-        (mesh_xy[:, 0] >= bar_x[0] * width)
-        & (mesh_xy[:, 0] <= bar_x[1] * width)
-        & (mesh_xy[:, 1] >= bar_y[0] * height)
-        & (mesh_xy[:, 1] <= bar_y[1] * height)
-    )
+    under_bar = np.zeros(len(mesh_xy), bool)
+    for bar in window.viewport.plotter.scalar_bars.values():
+        # the bar's box as drawn (viewport shares), up to the band kept for its title
+        x0, y0 = bar.GetPositionCoordinate().GetValue()[:2]
+        wide = bar.GetPosition2Coordinate().GetValue()[0]
+        under_bar |= (
+            (mesh_xy[:, 0] >= x0 * width)
+            & (mesh_xy[:, 0] <= (x0 + wide) * width)
+            & (mesh_xy[:, 1] >= y0 * height)
+            & (mesh_xy[:, 1] <= BAR_BAND * height)
+        )
     mesh_fill = (float(np.ptp(mesh_xy[:, 0]) / width), float(np.ptp(mesh_xy[:, 1]) / height))
     blade_fill = (float(np.ptp(blade_xy[:, 0]) / width), float(np.ptp(blade_xy[:, 1]) / height))
     return {
