@@ -341,7 +341,7 @@ def test_a_bent_narrow_leaf_traced_from_an_image_is_a_boundary(aspect, bend):
     assert surface_spread(np.column_stack([traced, np.zeros(len(traced))])) < COVER_SPREAD
 
 
-@pytest.mark.filterwarnings("ignore")
+@pytest.mark.filterwarnings("error")
 @pytest.mark.parametrize(("aspect", "bend"), [(25, 2.0), (30, 3.0)])
 def test_a_photo_of_a_bent_grass_leaf_makes_a_leaf(aspect, bend):
     """End to end: a curved grass leaf photographed, its outline found (leafstudio photo) and
@@ -351,4 +351,9 @@ def test_a_photo_of_a_bent_grass_leaf_makes_a_leaf(aspect, bend):
 
     outline = bent_strap(2000, aspect, bend)
     image = form_photo(outline - outline[0], angle=10, pixels_per_unit=700, size=(900, 500))[0]
-    ls.reconstruct(leaf_from_photo(image).leaf, ls.Params(grid=48))  # no "cover a surface"
+    leaf = leaf_from_photo(image).leaf
+    result = ls.reconstruct(leaf, ls.Params(grid=48))  # no "cover a surface", no warning
+    flat, _ = result.frame.to_plane(leaf.boundary)
+    outline_area = shapely.Polygon(flat).buffer(0).area
+    assert result.warnings == []
+    assert abs(result.metrics["leaf"]["area"] - outline_area) < 0.05 * outline_area  # whole blade
