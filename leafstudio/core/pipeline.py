@@ -191,10 +191,10 @@ class Result:
         return self._metrics is not None
 
     def measure(self, should_stop: Callable[[], bool] | None = None) -> dict[str, Any]:
-        """`metrics`, computed in steps (at grid 512, at most about 15 ms of CPU each on the
-        nested demo, 50 ms on the parallel demo's 280k triangles): when `should_stop()` is true
-        after a step, Cancelled is raised, and the next call goes on from there (the app stops
-        measuring a shown result when a newer request waits; the steps done are kept)."""
+        """`metrics`, computed in steps (distances, mesh facts, shape, curvature, in pieces):
+        when `should_stop()` is true after a step, Cancelled is raised, and the next call goes
+        on from there (the app stops measuring a shown result when a newer request waits; the
+        steps done are kept)."""
         if self._metrics is None:
             if self.unit is not None and self.units is not None:
                 self._metrics = self.units.metrics(self.unit.measure(should_stop))
