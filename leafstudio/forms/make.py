@@ -13,6 +13,7 @@ from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 import numpy as np
+import shapely
 
 from leafstudio.core.veins import veins_inside_outline
 from leafstudio.errors import LeafError
@@ -160,9 +161,7 @@ class Form:
         z = self._pose(xy) + self._wave(outline)
         boundary = np.column_stack([xy, z])
         veins = [np.column_stack([v[:, :2], v[:, 2] + self._pose(v[:, :2])]) for v in veins]
-        # a fold, curl or wave tilts the boundary's plane: a vein end near the margin can fall
-        # outside the outline there, and the pipeline refuses such a vein
-        return Leaf(boundary=boundary, veins=veins_inside_outline(boundary, veins, -VEIN_SLACK))
+        return Leaf(boundary=boundary, veins=_veins_on_blade(boundary, veins))
 
     def _pose(self, xy: np.ndarray) -> np.ndarray:
         """Fold (the halves rise from the midrib) and curl (the midrib bends), as heights."""
@@ -181,6 +180,23 @@ class Form:
             s = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
             z[half] = amplitude * np.sin(2 * np.pi * WAVES_PER_SIDE * s / s[-1])
         return z
+
+
+def _veins_on_blade(boundary: np.ndarray, veins: list[np.ndarray]) -> list[np.ndarray]:
+    """The posed veins' points inside the posed outline as the pipeline sees it, on the
+    boundary's PCA plane, when that outline holds every vein; else inside the outline before
+    posing (the blade's own plane, z = 0, where the pose only added heights)."""
+    seen = veins_inside_outline(boundary, veins, -VEIN_SLACK)
+    if len(seen) == len(veins):
+        # a fold, curl or wave tilts the boundary's plane: a vein end near the margin can fall
+        # outside the outline there, and the pipeline refuses such a vein
+        return seen
+    # a fold or curl that raises the margin higher than the blade is wide stands that plane on
+    # edge to the blade: the outline there is the blade's side view (a fold's halves fall on
+    # each other), and whole veins, often all, the midrib too, fell outside it
+    region = shapely.Polygon(boundary[:, :2]).buffer(VEIN_SLACK)
+    kept = [v[shapely.contains_xy(region, v[:, 0], v[:, 1])] for v in veins]
+    return [v for v in kept if len(v) >= 2]
 
 
 def make_form(shape: str = "elliptic", **terms: Any) -> Leaf:
