@@ -21,13 +21,14 @@ from __future__ import annotations
 from typing import Any
 
 from PySide6.QtCore import Qt, Signal
+from PySide6.QtGui import QValidator
 from PySide6.QtWidgets import QCheckBox, QComboBox, QFormLayout, QLabel, QLineEdit, QWidget
 from superqt import QLabeledDoubleSlider, QLabeledSlider, QLargeIntSpinBox
 from superqt.utils import qthrottled
 
 from leafstudio.errors import LeafError
 from leafstudio.model import PARAMS, Params
-from leafstudio.paramspec import Choice, Param, Ranged, Real, Switch, Whole
+from leafstudio.paramspec import Choice, Param, Ranged, Real, Switch, Whole, read_whole
 
 THROTTLE_MS = 80
 NOTE_COLOR = "#b00020"  # as the status line's failures
@@ -53,11 +54,27 @@ def _refusal(param: Ranged, exc: LeafError, kept: str) -> str:
     return f"{said}; {param.what} stays {kept}.{also}"
 
 
+class _WholeText(QValidator):
+    """Lets into the Seed box only what `read_whole` reads (digits with an optional sign) and a
+    bare sign on the way to one. superqt's own validator also lets in `--5`, `½` and `²`, which
+    its bare int() cannot read: with keyboard tracking off that int() ran inside Qt's stepBy,
+    and the ValueError killed the app (segfault)."""
+
+    def validate(self, text: str, pos: int) -> tuple[QValidator.State, str, int]:
+        if read_whole(text) is not None:
+            return QValidator.State.Acceptable, text, pos
+        if text.strip() in ("", "+", "-"):
+            return QValidator.State.Intermediate, text, pos
+        return QValidator.State.Invalid, text, pos
+
+
 class WholeBox(QLargeIntSpinBox):
     """A whole number over its parameter's whole range (a QSpinBox stops at 2**31 - 1). What is
-    typed is read on Return or on leaving the box (no keyboard tracking, which clamped each
-    keystroke), and checked by the declaration first: superqt's box would clamp a seed of -5 to
-    0; here it is refused (`verdict` carries why; "" when the typed value is taken)."""
+    typed is read on Return, on leaving the box, and before a step (Up/Down, Page Up/Down, the
+    wheel, the arrows), never per keystroke (keyboard tracking clamped each one), and is checked
+    by the declaration first: superqt's box would clamp a seed of -5 to 0; here it is refused,
+    and a step is not taken from it (`verdict` carries why; "" when the typed value is taken).
+    So superqt's int() only ever reads text Params took, or the value kept."""
 
     verdict = Signal(str)
 
@@ -66,18 +83,27 @@ class WholeBox(QLargeIntSpinBox):
         self.param = param
         self.setRange(param.low, param.high)
         self.setKeyboardTracking(False)
+        self.lineEdit().setValidator(_WholeText(self))
 
-    def _check_typed(self) -> None:
+    def _check_typed(self) -> bool:
+        """Take or refuse the typed text; False when it was refused (the kept value shown)."""
         text = self.lineEdit().text().strip()
         if text == str(self.value()):
-            return
+            return True
         try:
             self.param.parse(text)
         except LeafError as exc:
             self.lineEdit().setText(str(self.value()))  # superqt then reads the value kept
             self.verdict.emit(_refusal(self.param, exc, str(self.value())))
-            return
+            return False
         self.verdict.emit("")
+        return True
+
+    def stepBy(self, steps: int) -> None:
+        """Every step (keys, wheel, arrows) comes here: from a typed value Params takes, or not
+        at all when the typed value is refused."""
+        if self._check_typed():
+            super().stepBy(steps)
 
     def keyPressEvent(self, event: Any) -> None:
         if event.key() in (Qt.Key.Key_Return, Qt.Key.Key_Enter):
@@ -87,6 +113,10 @@ class WholeBox(QLargeIntSpinBox):
     def focusOutEvent(self, event: Any) -> None:
         self._check_typed()
         super().focusOutEvent(event)
+
+    def closeEvent(self, event: Any) -> None:
+        self._check_typed()  # superqt reads pending text here too
+        super().closeEvent(event)
 
 
 def _field(slider: QLabeledSlider, param: Ranged) -> QLineEdit:
@@ -212,8 +242,7 @@ class ParamPanel(QWidget):
             self.specials[name].setChecked(True)
             self._show_field(name)
             return
-        if name in self.specials:
-            self.specials[name].setChecked(False)
+        # a number with its word on is never typed here: the field is disabled with its slider
         low, high = slider.minimum(), slider.maximum()
         if not low <= value <= high:
             slider.setRange(min(low, value), max(high, value))
@@ -276,6 +305,8 @@ class ParamPanel(QWidget):
         if name in self.specials:
             self.specials[name].setChecked(value == param.special)  # type: ignore[attr-defined]
             if self.specials[name].isChecked():
+                if name in self.fields:  # text typed, not applied, is dropped before it is read
+                    self._show_field(name)
                 return
         if isinstance(widget, QCheckBox):
             widget.setChecked(value)

@@ -3,13 +3,27 @@ each), Auto K, valid values kept exactly, and the last value always emitted."""
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import pytest
-from PySide6.QtCore import Qt
-from PySide6.QtWidgets import QCheckBox, QComboBox, QLabel
+from PySide6.QtCore import QPoint, QPointF, Qt
+from PySide6.QtGui import QWheelEvent
+from PySide6.QtWidgets import (
+    QApplication,
+    QCheckBox,
+    QComboBox,
+    QLabel,
+    QStyle,
+    QStyleOptionSpinBox,
+)
 from superqt import QLabeledSlider, QLargeIntSpinBox
 
 import leafstudio as ls
-from leafstudio.gui.controls import ParamPanel
+from leafstudio.gui.controls import THROTTLE_MS, ParamPanel
 from leafstudio.model import PARAMS, SEED_MAX, Params
 from leafstudio.paramspec import Choice, Ranged, Switch, Whole
 
@@ -285,3 +299,133 @@ def test_leaving_a_field_or_the_seed_box_reads_what_was_typed(qtbot):
     assert panel.params().seed == 77 and panel.note.isHidden()
     leave_after_typing(panel.fields["grid"], "777")
     assert panel.params().grid == 777 and panel.grid.maximum() == 777
+
+
+def step(qtbot, box, how: str) -> None:
+    """Step the box as a user does: a key, the mouse wheel, or a click on its up arrow."""
+    if how in ("up", "page up"):
+        qtbot.keyClick(box, Qt.Key.Key_Up if how == "up" else Qt.Key.Key_PageUp)
+    elif how == "wheel":
+        centre = QPointF(box.rect().center())
+        wheel = QWheelEvent(
+            centre,
+            QPointF(box.mapToGlobal(box.rect().center())),
+            QPoint(),
+            QPoint(0, 120),
+            Qt.MouseButton.NoButton,
+            Qt.KeyboardModifier.NoModifier,
+            Qt.ScrollPhase.NoScrollPhase,
+            False,
+        )
+        QApplication.sendEvent(box, wheel)
+    else:
+        option = QStyleOptionSpinBox()
+        box.initStyleOption(option)
+        control = QStyle.ComplexControl.CC_SpinBox
+        up = box.style().subControlRect(control, option, QStyle.SubControl.SC_SpinBoxUp, box)
+        qtbot.mouseClick(box, Qt.MouseButton.LeftButton, pos=up.center())
+
+
+STEPS = ("up", "page up", "wheel", "arrow")  # Page Up: 10 steps
+
+SEED_STEPS_SCRIPT = """
+import json, sys
+from PySide6.QtTest import QTest
+from PySide6.QtWidgets import QApplication
+app = QApplication([])
+from tests.gui.test_controls import ParamPanel, STEPS, step
+panel = ParamPanel()
+panel.show()
+box, seen = panel.seed, []
+for text in sys.argv[1:]:
+    for how in STEPS:
+        box.setFocus()
+        box.lineEdit().selectAll()
+        QTest.keyClicks(box.lineEdit(), text)
+        typed = box.lineEdit().text()
+        step(QTest, box, how)  # QTest has qtbot's keyClick and mouseClick
+        seen.append([text, how, typed, box.value(), panel.note.text()])
+        panel.set_params(panel.params().with_(seed=0))
+print(json.dumps(seen))
+"""
+
+
+def test_text_int_cannot_read_then_a_step_does_not_crash_the_seed_box(tmp_path):
+    """Review s3 #1: superqt read the typed text with a bare int() in stepBy; `--5`, `½` or a lone
+    `-` typed and then Up, Page Up, the wheel or an arrow raised inside Qt and killed the app
+    (exit 139). Run in a child process, so that a crash fails this test, not the test run."""
+    root = Path(__file__).resolve().parents[2]
+    env = {**os.environ, "PYTHONPATH": str(root)}
+    done = subprocess.run(
+        [sys.executable, "-c", SEED_STEPS_SCRIPT, "--5", "½", "-"],
+        cwd=root,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    seen = {(text, how): rest for text, how, *rest in json.loads(done.stdout)}
+    assert len(seen) == 3 * len(STEPS)
+    for how in STEPS:
+        # the box takes no text int() cannot read: `--5` types as -5, `½` not at all
+        typed, value, note = seen["--5", how]
+        assert typed == "-5" and value == 0 and "got -5; seed stays 0" in note
+        typed, value, note = seen["½", how]
+        assert typed == "0" and value == (10 if how == "page up" else 1) and note == ""
+        typed, value, note = seen["-", how]
+        assert value == 0 and "seed must be a whole number, got '-'; seed stays 0" in note
+
+
+@pytest.mark.parametrize("how", STEPS)
+def test_a_typed_seed_out_of_range_is_refused_by_a_step_too(qtbot, how):
+    """Review s3 #1: `-5` then Up stepped to 1 with no word (superqt clamps it to 0 first), and
+    10**23 then Up became 2**32 - 1; refused here as on Return, and no step taken from it."""
+    panel = ParamPanel()
+    qtbot.addWidget(panel)
+    panel.show()
+    emitted = []
+    panel.changed.connect(emitted.append)
+    box = panel.seed
+    for text in ("-5", "1" + "0" * 23):
+        box.setFocus()
+        box.lineEdit().selectAll()
+        qtbot.keyClicks(box.lineEdit(), text)
+        step(qtbot, box, how)
+        assert box.value() == 0 and box.lineEdit().text() == "0"
+        assert panel.note.isVisible() and "seed stays 0" in panel.note.text()
+        assert f"seed must be between 0 and {SEED_MAX}, got {text[:5]}" in panel.note.text()
+    assert panel.params().seed == 0 and not emitted
+    box.lineEdit().selectAll()
+    qtbot.keyClicks(box.lineEdit(), "41")  # a value taken is stepped from, exactly
+    step(qtbot, box, how)
+    expected = 51 if how == "page up" else 42
+    assert panel.params().seed == expected and panel.note.isHidden()
+    qtbot.waitUntil(lambda: bool(emitted) and emitted[-1].seed == expected, timeout=2000)
+    box.lineEdit().selectAll()
+    qtbot.keyClicks(box.lineEdit(), str(SEED_MAX))  # the top seed is kept, not stepped past
+    step(qtbot, box, "up")
+    assert panel.params().seed == SEED_MAX
+
+
+def test_text_typed_into_k_is_dropped_when_auto_k_comes_in_from_outside(qtbot):
+    """Review s3 #5: K typed but not applied, then Auto K shown from outside (an undo, a project):
+    the disabled field lost focus, read its stale text, unchecked Auto K and set K, two changes
+    (two undo steps) that overrode the undo. The field now shows the slider's value again."""
+    panel = ParamPanel()
+    qtbot.addWidget(panel)
+    panel.show()
+    panel.activateWindow()
+    qtbot.waitActive(panel)
+    emitted = []
+    panel.changed.connect(emitted.append)
+    field = panel.fields["k"]
+    field.setFocus()
+    qtbot.waitUntil(field.hasFocus)
+    field.selectAll()
+    qtbot.keyClicks(field, "7")
+    panel.set_params(Params(k="auto"))
+    qtbot.waitUntil(lambda: not field.hasFocus())
+    qtbot.wait(THROTTLE_MS * 3)  # a change would have been sent by now
+    assert panel.auto_k.isChecked() and panel.params() == Params(k="auto") and not emitted
+    assert field.text() == str(panel.k.value())
