@@ -10,6 +10,7 @@ cached for the process.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 from PySide6.QtCore import QPointF, QSize, Qt, QTimer, Signal
@@ -123,12 +124,8 @@ def with_grown_veins(
     pick = [
         np.unique(np.linspace(0, len(v) - 1, min(VEIN_CONTROL, len(v))).astype(int)) for v in veins
     ]
-    return Sketch(
-        boundary=sketch.boundary,
-        veins=tuple(v[p] for v, p in zip(veins, pick, strict=True)),
-        frame=sketch.frame,
-        relief=sketch.relief,
-    )
+    # replace, not a new Sketch: the boundary, frame, relief and the saved Mirror flag are kept
+    return replace(sketch, veins=tuple(v[p] for v, p in zip(veins, pick, strict=True)))
 
 
 class FormsPanel(QWidget):

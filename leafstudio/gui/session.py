@@ -251,7 +251,9 @@ class Session:
     cleared()
         No leaf to show (a sketch with fewer than 3 boundary points).
     sketch_shown(Sketch, bool)
-        The sketch the editor should show, and whether to fit the view to it.
+        The sketch the editor should show, and whether to fit the view to it: sent whenever the
+        document's sketch changes, whatever changed it (an edit that came from the editor comes
+        back as the very sketch it shows, which the editor ignores).
     crossing(ndarray)
         The sketch's boundary crossings, (c, 2) plane points (empty when it does not cross).
     noticed(str)
@@ -421,7 +423,6 @@ class Session:
             return
         before = self.state
         self._apply(replace(self.state, sketch=sketch), "mirror")
-        self.sketch_shown.emit(sketch, False)
         self.history.push(Step("Mirror on" if on else "Mirror off", before, self.state))
 
     def set_params(self, params: Params, final: bool = True) -> None:
@@ -460,6 +461,11 @@ class Session:
                 shown = self.derived  # undo back to the loaded leaf: its derived sketch
             if shown is not None:
                 self.sketch_shown.emit(shown, reason == "document")
+        elif state.sketch is not None and state.sketch is not old.sketch:
+            # any other change of the document's sketch (Grow veins, Mirror, the editor's own
+            # edit, which it ignores): the editor must show it, or its next edit would start
+            # from the sketch it still shows and throw this one away
+            self.sketch_shown.emit(state.sketch, False)
         if state.leaf is old.leaf and state.params == old.params and reason != "document":
             return
         self._request(interrupt=not live, reason=reason)

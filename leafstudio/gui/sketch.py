@@ -10,7 +10,9 @@ view (gui/profile_view.py) shows the chosen vein's heights along it, with handle
 
 The editor never changes the document itself: it emits `preview(sketch)` while a point is dragged
 (so the 3D view follows) and `committed(before, after, text)` when an edit is done; the session
-turns the latter into an undo step and hands the sketch back with `set_sketch` on undo.
+turns the latter into an undo step. Whatever changes the document's sketch (undo, Grow veins,
+Mirror) hands it to `set_sketch`, so the editor always edits the document's sketch; its own edits
+come back as the sketch it already shows and are ignored.
 """
 
 from __future__ import annotations
@@ -509,6 +511,8 @@ class SketchEditor(QWidget):
     def set_sketch(self, sketch: Sketch, fit: bool = False) -> None:
         """Show `sketch` (see SketchView.set_sketch); a new document (`fit`) clears the note
         about an edit not mirrored."""
+        if sketch is self.view.sketch and not fit:
+            return  # the editor's own edit, back from the session: shown already
         if fit:
             self._show_mirror_note("")
         self.view.set_sketch(sketch, fit)

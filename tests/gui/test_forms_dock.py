@@ -101,3 +101,70 @@ def test_every_forms_sketch_curve_is_a_simple_outline():
         form = Form(shape, margin=margin)
         sketch = leaf_sketch(form.leaf(), form.teeth_count)
         assert len(ring_crossings(sketch.boundary_curve())) == 0, (shape, margin)
+
+
+def _click_outside_the_boundary(qtbot, view) -> None:
+    """One drawing click just outside the boundary, between two of its control points (never on
+    one): the editor adds one boundary point to the sketch it shows."""
+    from tests.gui.test_sketch import click
+
+    boundary = view.sketch.boundary
+    gaps = np.linalg.norm(np.roll(boundary, -1, axis=0) - boundary, axis=1)
+    widest = int(np.argmax(gaps))
+    middle = 0.5 * (boundary[widest] + boundary[(widest + 1) % len(boundary)])
+    xy = middle + 0.02 * (middle - boundary.mean(axis=0))
+    assert view.hit(view.view_point(xy)) is None  # a click there adds a point
+    click(qtbot, view, xy)
+
+
+def test_grown_veins_are_what_the_sketch_editor_shows_and_the_next_click_edits(
+    window, panel, qtbot
+):
+    """Review s3 finding 2: after Grow veins the editor kept the old sketch, so the next click
+    committed the old veins (7) and threw the grown ones (10) away."""
+    session, view = window.session, window.editor.view
+    before = session.editable_sketch()
+    panel.grow.emit("pinnate")
+    wait_result(qtbot, window, lambda o: o.result.leaf is session.leaf)
+    grown = session.state.sketch
+    assert len(grown.veins) != len(before.veins)
+    assert view.sketch is grown  # the editor shows the grown veins
+    assert window.editor.curve.count() >= len(grown.veins) + 1  # and lists them
+    _click_outside_the_boundary(qtbot, view)
+    after = session.state.sketch
+    assert after is not grown and len(after.boundary) == len(grown.boundary) + 1
+    assert len(after.veins) == len(grown.veins)  # the grown veins are kept
+    assert all(np.array_equal(a, b) for a, b in zip(after.veins, grown.veins, strict=True))
+    session.undo()  # the click
+    session.undo()  # Grow veins is one step
+    assert view.sketch is before  # the loaded leaf's derived sketch again
+
+
+def test_growing_veins_keeps_mirror_on(window, panel, qtbot):
+    """Review s3 finding 2: Grow veins built a new sketch without the saved Mirror flag."""
+    session, editor = window.session, window.editor
+    editor.mirror.setChecked(True)
+    panel.grow.emit("pinnate")
+    wait_result(qtbot, window, lambda o: o.result.leaf is session.leaf)
+    assert session.state.sketch.symmetric
+    assert editor.view.sketch is session.state.sketch and editor.mirror.isChecked()
+    grown = session.state.sketch
+    _click_outside_the_boundary(qtbot, editor.view)
+    after = session.state.sketch
+    assert after is not grown and after.symmetric
+    # a mirrored edit keeps the clicked side's veins and reflects them: grown veins, never the
+    # demo's old ones (the midrib and at least one side vein are the grown ones, unchanged)
+    kept = [g for g in grown.veins if any(np.array_equal(a, g) for a in after.veins)]
+    assert len(kept) >= 2 and np.array_equal(after.veins[0], grown.veins[0])
+
+
+def test_with_grown_veins_keeps_the_sketchs_other_fields():
+    from dataclasses import replace
+
+    from leafstudio.forms import Form
+
+    leaf = Form("elliptic").leaf()
+    sketch = replace(leaf_sketch(leaf, 0), symmetric=True)
+    grown = forms_dock.with_grown_veins(sketch, "pinnate")
+    assert grown.symmetric and grown.frame is sketch.frame
+    assert np.array_equal(grown.boundary, sketch.boundary) and len(grown.veins) >= 3

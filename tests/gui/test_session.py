@@ -101,8 +101,24 @@ def test_drawing_never_asks_the_sketch_view_to_fit(session, runner):
     assert got["sketch"] == [True]  # a new document is fitted once
     draw(session, Sketch(), ellipse(5))
     runner.finish(session)
-    assert got["sketch"] == [True]  # results and edits do not move the view
+    assert got["sketch"][0] and not any(got["sketch"][1:])  # results and edits do not fit it
     assert session.leaf is not None and len(got["result"]) == 1
+
+
+def test_every_change_of_the_documents_sketch_is_sent_to_the_editor(session, runner):
+    """Review s3 finding 2: a sketch committed from outside the editor (Grow veins) was never
+    sent to it, so the editor's next edit started from the old sketch and undid it."""
+    shown: list = []
+    session.sketch_shown.connect(lambda sketch, fit: shown.append((sketch, fit)))
+    session.new_sketch()
+    drawn = draw(session, Sketch(), ellipse(6))
+    grown = drawn.with_vein(np.array([[0.1, 0.0, 0.0], [0.9, 0.0, 0.0]]))
+    session.commit_sketch(grown, "Grow veins")
+    assert shown[-1] == (grown, False)
+    session.set_symmetric(True)
+    assert shown[-1] == (session.state.sketch, False) and shown[-1][0].symmetric
+    session.undo()
+    assert shown[-1][0] is grown
 
 
 # --- finding 2: the 3D camera frames every document, keeps the user's camera otherwise ----------
