@@ -103,9 +103,13 @@ class ProfileView(QWidget):
     def set_vein(self, sketch: Sketch, vein: int) -> None:
         """Show vein `vein` of `sketch`. The handles stay where they are along the same vein
         with as many points (after an edit, an undo, a height typed in), lying on its new
-        heights; another vein gets handles anew."""
+        heights; another vein gets handles anew. An edit under way (a drag, held keys) ends
+        without a step when another sketch arrives (an undo, a redo, a new document): its
+        before-sketch is no longer the document's, so its step would bring that back."""
         if vein != self.vein:
             self.grabbed, self._before, self._base, self.selected = None, None, None, None
+        elif self._before is not None and sketch is not self.sketch:
+            self.grabbed, self._before, self._base, self._range = None, None, None, None
         keep = vein == self.vein and self.profile is not None
         self.sketch, self.vein = sketch, vein
         empty = np.zeros(0)

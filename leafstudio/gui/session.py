@@ -267,7 +267,7 @@ class Session:
     ) -> None:
         self.submit = submit or (lambda leaf, params, interrupt: 0)
         self.state = State(None, None, params or Params())
-        self.history = History(moved=lambda state: self._apply(state, "undo"))
+        self.history = History(moved=self._history_moved)
         self.shown = Shown()
         self.last_id = 0  # the newest request submitted
         self.derived: Sketch | None = None  # a loaded leaf's sketch, made from its first result
@@ -343,14 +343,14 @@ class Session:
         if sketch is not None and leaf is None:
             leaf = sketch.to_leaf()
         self._serials += 1
-        state = State(leaf, sketch, params or self.params, path, title, scan, self._serials, photo)
+        before = self._drop_edit()  # the step (or the fallback) starts from before it
+        params = params or before.params  # a held slider's value is dropped with its drag
+        state = State(leaf, sketch, params, path, title, scan, self._serials, photo)
         self.chosen_texture = None
         self._fallback = None
         if not undoable and leaf is not None and self.result is not None:
             h = self.history
-            self._fallback = _Fallback(self.state, list(h.steps), h.index, h.clean_index)
-        before = self.state
-        self._edit_base = self._param_base = None
+            self._fallback = _Fallback(before, list(h.steps), h.index, h.clean_index)
         self.derived = None
         self._apply(state, "document")
         if undoable:
@@ -443,6 +443,24 @@ class Session:
 
     def redo(self) -> None:
         self.history.redo()
+
+    def _drop_edit(self) -> State:
+        """Drop the edit under way (a drag, a held slider, a run of key presses), if any, and
+        return the state from before it began: the one the history's last step led to.
+
+        Undo, redo and a new document drop it rather than commit it: committing would push a
+        step and so throw away the redo steps (Redo would then redo nothing), and the session
+        cannot name the unfinished gesture. Its base must not outlive them either, or the next
+        edit's step would go from a state from before the undo and bring back what was undone.
+        The widgets drop their part when the new state's sketch reaches them."""
+        base = self._edit_base or self._param_base or self.state
+        self._edit_base = self._param_base = None
+        return base
+
+    def _history_moved(self, state: State) -> None:
+        """Undo or redo made `state` current: an edit under way is dropped (see _drop_edit)."""
+        self._drop_edit()
+        self._apply(state, "undo")
 
     # --- requests ------------------------------------------------------------------------------
     def _crossing_of(self, sketch: Sketch | None) -> np.ndarray | None:
@@ -544,6 +562,7 @@ class Session:
         fallback = self._fallback
         if fallback is not None and request_id >= fallback.request and self.result is not None:
             self._fallback = None
+            self._drop_edit()  # an edit begun on the failed document
             self.state = fallback.state
             h = self.history
             h.steps, h.index, h.clean_index = fallback.steps, fallback.index, fallback.clean

@@ -118,7 +118,11 @@ class SketchView(QGraphicsView):
     # --- model ---------------------------------------------------------------------------------
     def set_sketch(self, sketch: Sketch, fit: bool = False) -> None:
         """Show `sketch`; `fit` zooms to it (a new document: drawing starts on its boundary,
-        nothing selected, never on the last document's chosen vein or point)."""
+        nothing selected, never on the last document's chosen vein or point). A point drag
+        under way ends without a step when another sketch arrives (an undo, a redo, a new
+        document): its point may be gone, and its step would start from the old sketch."""
+        if sketch is not self.sketch:
+            self._drag, self._before, self._moved = None, None, False
         self.sketch = sketch
         if fit:
             self.active, self.selected = BOUNDARY, None

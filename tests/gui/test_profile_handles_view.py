@@ -311,3 +311,75 @@ def test_in_the_window_a_drag_a_nudge_and_a_removal_are_undo_steps_that_bring_ba
         window.session.undo()
     np.testing.assert_array_equal(view.sketch.veins[0][:, 2], original)
     wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+
+
+# --- review s3 finding 3: an undo or redo during an edit of the side view -------------------------
+def press_key(widget: QWidget, kind: QEvent.Type, key: Qt.Key, repeat: bool = False) -> None:
+    event = QKeyEvent(kind, key, Qt.KeyboardModifier.NoModifier, "", repeat)
+    QApplication.instance().sendEvent(widget, event)
+
+
+def on_the_midrib(window, qtbot) -> ProfileView:
+    """K made 5 (one "Change K" step), the midrib chosen, handle 2 selected, keys to the view."""
+    window.session.set_params(window.session.params.with_(k=5))
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    window.editor.curve.setCurrentIndex(1)
+    window.editor.curve.activated.emit(1)
+    window.activateWindow()
+    qtbot.waitUntil(window.isActiveWindow)
+    side = window.editor.profile_view
+    side.setFocus()
+    side.select(2)
+    return side
+
+
+def test_an_undo_while_up_is_held_ends_the_run_and_the_next_step_starts_after_it(window, qtbot):
+    """Ctrl+Z while Up was held: the run went on from before the undo, so the next nudge's
+    step went from K=5 to K=3 and undoing it brought back the change the user had undone."""
+    session, history = window.session, window.session.history
+    side = on_the_midrib(window, qtbot)
+    press_key(side, QEvent.Type.KeyPress, Qt.Key.Key_Up)  # held: the run's first preview
+    assert history.count() == 1 and window.editor.view.sketch is session.state.sketch
+    window.undo_action.trigger()
+    undone = session.state
+    assert undone.params.k == 3 and undone.sketch is None  # the loaded leaf, as opened
+    press_key(side, QEvent.Type.KeyPress, Qt.Key.Key_Up, repeat=True)  # the key repeats
+    press_key(side, QEvent.Type.KeyRelease, Qt.Key.Key_Up)
+    # the presses after the undo are a run of their own, from the state the undo made
+    assert history.index == 1 and history.steps[0].before is undone
+    assert history.steps[0].after is session.state and session.params.k == 3
+    press_key(side, QEvent.Type.KeyPress, Qt.Key.Key_Down)  # an ordinary nudge later
+    press_key(side, QEvent.Type.KeyRelease, Qt.Key.Key_Down)
+    assert history.index == 2 and history.steps[1].before is history.steps[0].after
+    window.undo_action.trigger()
+    window.undo_action.trigger()
+    assert session.state is undone and session.params.k == 3  # was K 5: the undone change
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+
+
+@pytest.mark.parametrize("move", ["undo", "redo"])
+def test_an_undo_or_redo_during_a_handle_drag_drops_the_drag(window, qtbot, move):
+    """A handle dragged when Ctrl+Z (or Ctrl+Y) comes: the drag ends there with no step, and
+    letting go after it changes nothing; the next drag's step starts from the undone state."""
+    session, history = window.session, window.session.history
+    side = on_the_midrib(window, qtbot)
+    if move == "redo":
+        window.undo_action.trigger()  # K 3, "Change K" to redo
+    count, start = history.count(), spot(side, 2)
+    QTest.mousePress(side, Qt.MouseButton.LeftButton, pos=start)
+    QTest.mouseMove(side, start + QPoint(0, -6))
+    assert session.state.sketch is not None  # the drag's preview
+    (window.undo_action if move == "undo" else window.redo_action).trigger()
+    moved_to = session.state
+    assert side.grabbed is None and moved_to.params.k == (3 if move == "undo" else 5)
+    QTest.mouseMove(side, start + QPoint(0, -12))
+    QTest.mouseRelease(side, Qt.MouseButton.LeftButton, pos=start + QPoint(0, -12))
+    assert history.count() == count and session.state is moved_to  # no step, nothing moved
+    start = spot(side, 2)
+    QTest.mousePress(side, Qt.MouseButton.LeftButton, pos=start)
+    QTest.mouseMove(side, start + QPoint(0, -6))
+    QTest.mouseRelease(side, Qt.MouseButton.LeftButton, pos=start + QPoint(0, -6))
+    assert history.steps[history.index - 1].before is moved_to
+    window.undo_action.trigger()
+    assert session.state is moved_to
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)

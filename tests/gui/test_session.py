@@ -4,6 +4,7 @@ crossings, orientation and colours, undo of parameters (issue 12's findings 1-6)
 from __future__ import annotations
 
 import sys
+from itertools import pairwise
 from types import SimpleNamespace
 
 import numpy as np
@@ -296,3 +297,77 @@ def test_a_whole_vein_profile_is_linear_along_the_vein():
     sketch = Sketch(boundary=ellipse(), veins=(vein,)).with_profile(0, 0.08, 0.02)
     np.testing.assert_allclose(sketch.veins[0][:, 2], [0.08, 0.065, 0.02])
     np.testing.assert_array_equal(sketch.veins[0][:, :2], vein[:, :2])
+
+
+# --- review s3 finding 3: undo, redo or a new document during an edit (no Qt) --------------------
+def assert_chained(session: Session) -> None:
+    """Each undo step starts from exactly the state the one before it led to."""
+    steps = session.history.steps
+    for earlier, later in pairwise(steps):
+        assert later.before is earlier.after, (earlier.text, later.text)
+
+
+def nudged(sketch: Sketch, dy: float) -> Sketch:
+    """`sketch` with its first boundary point moved by `dy` (a drag's preview)."""
+    return sketch.moved(-1, 0, sketch.boundary[0] + [0.0, dy])
+
+
+@pytest.mark.parametrize("move", ["undo", "redo"])
+def test_an_undo_or_redo_during_a_drag_leaves_it_no_base_from_before(session, move):
+    """A drag under way (its first preview set the session's edit base) when Ctrl+Z or Ctrl+Y
+    comes: the base was kept, so the next edit's step went from the state before the undo (or
+    redo) and undoing it brought back what the user had undone."""
+    drawn = draw(session, Sketch(), ellipse(6))
+    session.set_params(FAST.with_(k=5))  # "Change K": 3 -> 5
+    if move == "redo":
+        session.undo()
+    session.preview_sketch(nudged(drawn, 0.05))  # a drag begins
+    getattr(session, move)()
+    assert session.params.k == (3 if move == "undo" else 5)
+    moved_to = session.state
+    later = nudged(drawn, -0.05)  # the next drag
+    session.preview_sketch(later)
+    session.commit_sketch(later, "Move point")
+    assert session.history.steps[-1].before is moved_to
+    assert_chained(session)
+    session.undo()
+    assert session.state is moved_to  # K 5 after undo was 3: the undone change came back
+
+
+def test_an_undo_during_a_slider_drag_leaves_it_no_base_from_before(session):
+    session.open_document(demo("nested"), None, "nested")
+    session.set_params(FAST.with_(k=5))  # "Change K": 3 -> 5
+    session.set_params(FAST.with_(k=6), final=False)  # a slider held
+    session.undo()
+    assert session.params.k == 3
+    session.set_params(FAST.with_(k=4), final=True)  # let go further on
+    assert session.history.steps[-1].before.params.k == 3
+    session.undo()
+    assert session.params.k == 3  # was 5: the undone change came back
+    session.set_params(FAST.with_(k=6), final=False)
+    session.redo()  # a redo while held: the step it makes current is not dropped or amended
+    assert session.params.k == 4 and session.history.count() == 1
+    session.set_params(FAST.with_(k=7), final=True)
+    assert_chained(session)
+    assert session.history.steps[-1].before.params.k == 4
+
+
+@pytest.mark.parametrize("undoable", [True, False])
+def test_a_new_document_during_an_edit_starts_from_before_it(session, runner, undoable):
+    """A new document opened while a drag or a slider is held: its undo step (or the document
+    a failed open falls back to) is the state before the unfinished edit, never its preview."""
+    drawn = draw(session, Sketch(), ellipse(6))
+    runner.finish(session)
+    committed = session.state
+    session.preview_sketch(nudged(drawn, 0.05))
+    session.set_params(FAST.with_(k=6), final=False)
+    line = Leaf(boundary=[[t, 2 * t, 0] for t in np.linspace(0, 1, 20)])  # fails to open
+    session.new_document(line if not undoable else demo("parallel"), undoable=undoable)
+    assert session.params.k == 3  # the held slider's value went with its drag
+    if undoable:
+        assert session.history.steps[-1].before is committed
+        assert_chained(session)
+        session.undo()
+    else:
+        runner.finish(session)  # the line fails: the previous document comes back
+    assert session.state is committed

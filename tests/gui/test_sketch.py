@@ -102,3 +102,30 @@ def test_right_click_deletes_and_height_spin_box_sets_a_vein_height(window, qtbo
     assert view.sketch.veins[0][2, 2] == 0.08
     assert window.undo_stack.count() == 2
     assert view.selected[0] != BOUNDARY
+
+
+def test_an_undo_during_a_point_drag_drops_the_drag(window, qtbot):
+    """Review s3 finding 3, for a point of the sketch: Ctrl+Z while a point is dragged ends the
+    drag with no step (it went on from the sketch before the undo, and its step from the state
+    before it); the next drag's step starts from the state the undo made."""
+    session, history, view = window.session, window.session.history, window.editor.view
+    session.set_params(session.params.with_(k=5))  # "Change K": 3 -> 5
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    tip = int(np.argmax(view.sketch.boundary[:, 0]))
+    press = view.view_point(view.sketch.boundary[tip]).toPoint()
+    QTest.mousePress(view.viewport(), Qt.MouseButton.LeftButton, pos=press)
+    QTest.mouseMove(view.viewport(), press + QPoint(12, 0))
+    assert session.state.sketch is view.sketch  # the drag's preview
+    window.undo_action.trigger()
+    undone = session.state
+    assert undone.params.k == 3 and view._drag is None
+    QTest.mouseMove(view.viewport(), press + QPoint(24, 0))
+    QTest.mouseRelease(view.viewport(), Qt.MouseButton.LeftButton, pos=press + QPoint(24, 0))
+    assert history.index == 0 and session.state is undone  # no step, nothing moved
+    QTest.mousePress(view.viewport(), Qt.MouseButton.LeftButton, pos=press)
+    QTest.mouseMove(view.viewport(), press + QPoint(12, 0))
+    QTest.mouseRelease(view.viewport(), Qt.MouseButton.LeftButton, pos=press + QPoint(12, 0))
+    assert history.index == 1 and history.undo_text() == "Move point"
+    window.undo_action.trigger()
+    assert session.state is undone  # was K 5: the undone change came back
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
