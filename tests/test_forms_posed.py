@@ -17,7 +17,7 @@ from shapely.geometry import Polygon
 from leafstudio.core.plane import fit_frame
 from leafstudio.core.veins import veins_inside_outline
 from leafstudio.forms import Form
-from leafstudio.forms.make import LIMITS, VEIN_SLACK, make_form
+from leafstudio.forms.make import LIMITS, VEIN_SLACK, make_form, seen_on_edge
 from leafstudio.forms.terms import SHAPES
 
 FOLDS = (LIMITS["fold"][0], -60.0, 45.0, 60.0, LIMITS["fold"][1])
@@ -77,3 +77,19 @@ def test_the_form_command_writes_a_posed_leaf_with_its_veins(tmp_path, capsys):
     assert main([*argv, "-o", str(out)]) == 0
     assert "13 veins" in capsys.readouterr().err
     assert len(load_leaf(str(out)).veins) == 13
+
+
+def test_a_form_seen_on_edge_is_refused_as_a_mesh_in_one_line(tmp_path, capsys):
+    """The pipeline takes the boundary's PCA plane for the leaf's (paper, step 1): seen on edge,
+    a posed form came out as a side view (its veins dropped), or now, with its veins, "vein 1:
+    49 of 49 points lie outside the boundary"; `form -o MESH` says why instead."""
+    from leafstudio.cli import main
+
+    argv = ["form", "elliptic", "--aspect", "20", "--curl", "-1", "--fold", "60", "-o"]
+    assert main([*argv, str(tmp_path / "x.obj")]) == 2
+    err = capsys.readouterr().err
+    assert "on edge" in err and "--fold" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "x.obj").exists()
+    assert seen_on_edge(make_form("elliptic", aspect=20.0, curl=-1.0, fold=60.0))
+    assert not seen_on_edge(make_form("reniform", fold=75.0))  # on edge too, but seen whole
+    assert not seen_on_edge(make_form("ovate", fold=25.0, curl=0.15, wave=0.02))

@@ -182,6 +182,13 @@ class Form:
         return z
 
 
+def seen_on_edge(leaf: Leaf) -> bool:
+    """Whether the pipeline would see this posed form on edge: a whole vein lies outside the
+    outline on the boundary's PCA plane, which it takes for the leaf's, so that plane is not the
+    blade's and a reconstruction would be a side view of the blade (see _veins_on_blade)."""
+    return len(veins_inside_outline(leaf.boundary, leaf.veins, -VEIN_SLACK)) < len(leaf.veins)
+
+
 def _veins_on_blade(boundary: np.ndarray, veins: list[np.ndarray]) -> list[np.ndarray]:
     """The posed veins' points inside the posed outline as the pipeline sees it, on the
     boundary's PCA plane, when that outline holds every vein; else inside the outline before
