@@ -822,6 +822,7 @@ class MainWindow(QMainWindow):
     # --- session reports -----------------------------------------------------------------------
     def _on_state(self, state: State, reason: str) -> None:
         if reason in ("document", "undo", "fallback"):
+            self.editor.drop_edit()  # a drag or key run under way: its step would mix documents
             self.panel.set_params(state.params)
             self._update_texture()
         if state.scan is not self._scan_shown:

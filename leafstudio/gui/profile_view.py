@@ -76,6 +76,7 @@ class ProfileView(QWidget):
         self._before: Sketch | None = None  # the sketch when the edit under way began
         self._base: tuple[np.ndarray, np.ndarray] | None = None  # its vein's shares and heights
         self._handles_before: np.ndarray | None = None  # the handles' places when it began
+        self._dropped = False  # an edit was dropped: a held key's repeats do not resume it
         # the handles' places (per vein) of the sketches before and after each edit, so that an
         # undo or redo of a removal or a drag brings them back with the heights
         self._remembered: WeakKeyDictionary[Sketch, dict[int, np.ndarray]] = WeakKeyDictionary()
@@ -109,7 +110,7 @@ class ProfileView(QWidget):
         if vein != self.vein:
             self.grabbed, self._before, self._base, self.selected = None, None, None, None
         elif self._before is not None and sketch is not self.sketch:
-            self.grabbed, self._before, self._base, self._range = None, None, None, None
+            self.drop_edit()
         keep = vein == self.vein and self.profile is not None
         self.sketch, self.vein = sketch, vein
         empty = np.zeros(0)
@@ -150,6 +151,14 @@ class ProfileView(QWidget):
             self.selected = len(self.profile.t) - 1
 
     # --- editing -------------------------------------------------------------------------------
+    def drop_edit(self) -> None:
+        """End the edit under way, if any, with no step: the document changed under it (an
+        undo, a redo, a new document), so its step would start from a sketch that is no longer
+        the document's. A held Up/Down does nothing more until pressed again."""
+        if self._before is not None or self.grabbed is not None:
+            self._dropped = True
+        self.grabbed, self._before, self._base, self._range = None, None, None, None
+
     def _begin(self) -> None:
         """Start an edit (a drag, a run of key presses) from the vein's present heights."""
         self._before, self._base = self.sketch, self._vein_shares()
@@ -453,6 +462,9 @@ class ProfileView(QWidget):
     # --- the keyboard --------------------------------------------------------------------------
     def keyPressEvent(self, event: QKeyEvent) -> None:
         key, count = event.key(), 0 if self.profile is None else len(self.profile.t)
+        if key in NUDGE_KEYS and event.isAutoRepeat() and self._dropped:
+            return  # the run this key began was dropped: its repeats do not start another
+        self._dropped = False
         if key in NUDGE_KEYS and self.selected is not None and self.grabbed is None:
             shift = event.modifiers() & Qt.KeyboardModifier.ShiftModifier
             steps = BIG_NUDGE / NUDGE if shift else 1.0

@@ -122,7 +122,7 @@ class SketchView(QGraphicsView):
         under way ends without a step when another sketch arrives (an undo, a redo, a new
         document): its point may be gone, and its step would start from the old sketch."""
         if sketch is not self.sketch:
-            self._drag, self._before, self._moved = None, None, False
+            self.drop_drag()
         self.sketch = sketch
         if fit:
             self.active, self.selected = BOUNDARY, None
@@ -134,6 +134,10 @@ class SketchView(QGraphicsView):
         if fit:
             self.fit()
         self.selection_changed.emit()
+
+    def drop_drag(self) -> None:
+        """End a point drag under way, if any, with no step (see SketchEditor.drop_edit)."""
+        self._drag, self._before, self._moved = None, None, False
 
     def _valid(self, ref: tuple[int, int]) -> bool:
         curve, index = ref
@@ -520,6 +524,14 @@ class SketchEditor(QWidget):
         if fit:
             self._show_mirror_note("")
         self.view.set_sketch(sketch, fit)
+
+    def drop_edit(self) -> None:
+        """End a drag (of a point or a side view handle) or a run of key presses under way, with
+        no step: the document changed under it (a new document, an undo, a redo), and its step
+        would start from a sketch that is no longer the document's. The window calls it before
+        the new document's sketch arrives, which may be only with its first result."""
+        self.view.drop_drag()
+        self.profile_view.drop_edit()
 
     def _set_select_tool(self, on: bool) -> None:
         self.view.select_tool = on

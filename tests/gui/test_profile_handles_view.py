@@ -345,13 +345,11 @@ def test_an_undo_while_up_is_held_ends_the_run_and_the_next_step_starts_after_it
     assert undone.params.k == 3 and undone.sketch is None  # the loaded leaf, as opened
     press_key(side, QEvent.Type.KeyPress, Qt.Key.Key_Up, repeat=True)  # the key repeats
     press_key(side, QEvent.Type.KeyRelease, Qt.Key.Key_Up)
-    # the presses after the undo are a run of their own, from the state the undo made
-    assert history.index == 1 and history.steps[0].before is undone
-    assert history.steps[0].after is session.state and session.params.k == 3
+    # the run ended at the undo: its repeats and its release change nothing
+    assert history.index == 0 and session.state is undone
     press_key(side, QEvent.Type.KeyPress, Qt.Key.Key_Down)  # an ordinary nudge later
     press_key(side, QEvent.Type.KeyRelease, Qt.Key.Key_Down)
-    assert history.index == 2 and history.steps[1].before is history.steps[0].after
-    window.undo_action.trigger()
+    assert history.index == 1 and history.steps[0].before is undone
     window.undo_action.trigger()
     assert session.state is undone and session.params.k == 3  # was K 5: the undone change
     wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
@@ -383,3 +381,27 @@ def test_an_undo_or_redo_during_a_handle_drag_drops_the_drag(window, qtbot, move
     window.undo_action.trigger()
     assert session.state is moved_to
     wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+
+
+@pytest.mark.parametrize("how", ["keys", "drag"])
+def test_a_new_document_during_an_edit_of_the_side_view_ends_it(window, qtbot, how):
+    """A demo opened while Up was held (or a handle dragged): letting go committed the old
+    document's edited sketch as a "Vein profile" step of the new one, replacing its leaf."""
+    session, history = window.session, window.session.history
+    side = on_the_midrib(window, qtbot)
+    start = spot(side, 2)
+    if how == "keys":
+        press_key(side, QEvent.Type.KeyPress, Qt.Key.Key_Up)
+    else:
+        QTest.mousePress(side, Qt.MouseButton.LeftButton, pos=start)
+        QTest.mouseMove(side, start + QPoint(0, -6))
+    window.open_demo("parallel")
+    opened = session.state
+    if how == "keys":
+        press_key(side, QEvent.Type.KeyPress, Qt.Key.Key_Up, repeat=True)
+        press_key(side, QEvent.Type.KeyRelease, Qt.Key.Key_Up)
+    else:
+        QTest.mouseMove(side, start + QPoint(0, -12))
+        QTest.mouseRelease(side, Qt.MouseButton.LeftButton, pos=start + QPoint(0, -12))
+    assert session.state is opened and history.count() == 0
+    wait_result(qtbot, window, lambda o: o.result.leaf is opened.leaf)
