@@ -411,3 +411,23 @@ def test_text_typed_into_k_is_dropped_when_auto_k_comes_in_from_outside(qtbot):
     qtbot.wait(THROTTLE_MS * 3)  # a change would have been sent by now
     assert panel.auto_k.isChecked() and panel.params() == Params(k="auto") and not emitted
     assert field.text() == str(panel.k.value())
+
+
+def test_an_undo_while_a_slider_is_held_leaves_its_drag_no_base_from_before(window, qtbot):
+    """Review s3 finding 3, for a slider: Ctrl+Z while K's slider was held kept the drag's base
+    (K 5), so letting go made a step from K 5 and undoing it brought back the undone change."""
+    session, history, slider = window.session, window.session.history, window.panel.k
+    session.set_params(session.params.with_(k=5))  # "Change K": 3 -> 5
+    slider.setSliderDown(True)
+    slider.setValue(6)
+    qtbot.waitUntil(lambda: session.params.k == 6)
+    window.undo_action.trigger()
+    undone = session.state
+    assert undone.params.k == 3 and slider.value() == 3
+    slider.setValue(4)
+    qtbot.waitUntil(lambda: session.params.k == 4)
+    slider.setSliderDown(False)  # let go: one step, from the state the undo made
+    assert history.index == 1 and history.steps[0].before is undone
+    window.undo_action.trigger()
+    assert session.state is undone
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
