@@ -129,3 +129,20 @@ def test_an_undo_during_a_point_drag_drops_the_drag(window, qtbot):
     window.undo_action.trigger()
     assert session.state is undone  # was K 5: the undone change came back
     wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+
+
+def test_an_undo_that_removes_the_dragged_point_ends_the_drag_without_an_error(window, qtbot):
+    """The last midrib point dragged, Ctrl+Z removes it: the drag went on moving a point the
+    sketch no longer has (an IndexError in the view's mouse move)."""
+    sketch_leaf(qtbot, window)
+    view, history = window.editor.view, window.session.history
+    press = view.view_point(view.sketch.veins[0][-1, :2]).toPoint()
+    QTest.mousePress(view.viewport(), Qt.MouseButton.LeftButton, pos=press)
+    QTest.mouseMove(view.viewport(), press + QPoint(0, 10))
+    window.undo_action.trigger()  # the point's "Add point" undone
+    undone, steps = window.session.state, history.index
+    assert view.sketch.veins[0].shape == (3, 3) and view.sketch is undone.sketch
+    QTest.mouseMove(view.viewport(), press + QPoint(0, 20))
+    QTest.mouseRelease(view.viewport(), Qt.MouseButton.LeftButton, pos=press + QPoint(0, 20))
+    assert window.session.state is undone and history.index == steps
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
