@@ -431,3 +431,24 @@ def test_an_undo_while_a_slider_is_held_leaves_its_drag_no_base_from_before(wind
     window.undo_action.trigger()
     assert session.state is undone
     wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+
+
+def test_undo_to_auto_k_is_not_overridden_by_k_typed_and_not_applied(window, qtbot):
+    """Review s3 #5 in the window: K typed, then Undo (menu or toolbar) back to Auto K gave K = 7
+    (the typed text, read when the disabled field lost focus) instead of Auto K."""
+    window.panel.auto_k.setChecked(True)
+    wait_result(qtbot, window, lambda o: o.result.params.k == "auto")
+    window.panel.auto_k.setChecked(False)
+    wait_result(qtbot, window, lambda o: o.result.params.k == FAST.k)
+    window.activateWindow()
+    qtbot.waitActive(window)
+    field = window.panel.fields["k"]
+    field.setFocus()
+    qtbot.waitUntil(field.hasFocus)
+    field.selectAll()
+    qtbot.keyClicks(field, "7")
+    window.undo_action.trigger()
+    wait_result(qtbot, window, lambda o: o.result.params.k == "auto")
+    qtbot.wait(THROTTLE_MS * 3)  # a change would have been sent by now
+    assert window.session.params == FAST.with_(k="auto") and window.panel.auto_k.isChecked()
+    assert window.worker.is_idle() and window.outcome.result.params.k == "auto"
