@@ -166,6 +166,7 @@ class MainWindow(QMainWindow):
         session.failed.connect(self._on_session_failed)
         session.cleared.connect(self._on_cleared)
         session.sketch_shown.connect(self.editor.set_sketch)
+        session.sketch_waiting.connect(self.editor.wait_for_sketch)  # a loaded leaf: none yet
         session.crossing.connect(self.editor.view.set_crossings)
         session.noticed.connect(self._on_notice)
         session.history.changed.connect(self._on_history)

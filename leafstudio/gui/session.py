@@ -228,6 +228,8 @@ class _Fallback:
     index: int = 0
     clean: int | None = 0
     request: int = 0
+    derived: Sketch | None = None  # the state's sketch derived from its result, if any
+    derived_leaf: Leaf | None = None
 
 
 class Session:
@@ -254,6 +256,10 @@ class Session:
         The sketch the editor should show, and whether to fit the view to it: sent whenever the
         document's sketch changes, whatever changed it (an edit that came from the editor comes
         back as the very sketch it shows, which the editor ignores).
+    sketch_waiting()
+        A new document (or an undo to another one) whose sketch is not known yet: a loaded
+        leaf's is derived from its first result. The editor must drop the sketch it shows and
+        take no edit until sketch_shown: an edit of the old sketch would replace the new leaf.
     crossing(ndarray)
         The sketch's boundary crossings, (c, 2) plane points (empty when it does not cross).
     noticed(str)
@@ -276,7 +282,7 @@ class Session:
         self.message = ""
         self.state_changed, self.result_shown, self.failed = Event(), Event(), Event()
         self.cleared, self.sketch_shown, self.crossing = Event(), Event(), Event()
-        self.noticed = Event()
+        self.noticed, self.sketch_waiting = Event(), Event()
         self.chosen_texture: str | None = None  # an image picked for the export, shown too
         self._serials = 0
         self._requested: dict[int, tuple[int, str]] = {}  # request id -> serial, reason
@@ -349,8 +355,8 @@ class Session:
         self.chosen_texture = None
         self._fallback = None
         if not undoable and leaf is not None and self.result is not None:
-            h = self.history
-            self._fallback = _Fallback(before, list(h.steps), h.index, h.clean_index)
+            h, derived = self.history, (self.derived, self._derived_leaf)
+            self._fallback = _Fallback(before, list(h.steps), h.index, h.clean_index, 0, *derived)
         self.derived = None
         self._apply(state, "document")
         if undoable:
@@ -479,6 +485,8 @@ class Session:
                 shown = self.derived  # undo back to the loaded leaf: its derived sketch
             if shown is not None:
                 self.sketch_shown.emit(shown, reason == "document")
+            else:  # a loaded leaf: its sketch comes with its first result
+                self.sketch_waiting.emit()
         elif state.sketch is not None and state.sketch is not old.sketch:
             # any other change of the document's sketch (Grow veins, Mirror, the editor's own
             # edit, which it ignores): the editor must show it, or its next edit would start
@@ -564,6 +572,7 @@ class Session:
             self._fallback = None
             self._drop_edit()  # an edit begun on the failed document
             self.state = fallback.state
+            self.derived, self._derived_leaf = fallback.derived, fallback.derived_leaf
             h = self.history
             h.steps, h.index, h.clean_index = fallback.steps, fallback.index, fallback.clean
             h.changed.emit()

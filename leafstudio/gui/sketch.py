@@ -487,6 +487,12 @@ class SketchEditor(QWidget):
             f"{CROSSING_COLOR}; padding: 3px"
         )
         self.mirror_note.hide()
+        # a new document whose sketch is not known yet (a loaded leaf's comes with its result)
+        self.waiting = QLabel("Waiting for the leaf: its sketch shows once it is reconstructed.")
+        self.waiting.setParent(self.view)
+        self.waiting.setWordWrap(True)
+        self.waiting.hide()
+        self._waiting = False
         layout = QVBoxLayout(self)
         layout.setContentsMargins(4, 4, 4, 4)
         layout.addLayout(curves)
@@ -519,6 +525,10 @@ class SketchEditor(QWidget):
     def set_sketch(self, sketch: Sketch, fit: bool = False) -> None:
         """Show `sketch` (see SketchView.set_sketch); a new document (`fit`) clears the note
         about an edit not mirrored."""
+        if self._waiting:
+            self._waiting = False
+            self.waiting.hide()
+            self.setEnabled(True)
         if sketch is self.view.sketch and not fit:
             return  # the editor's own edit, back from the session: shown already
         if fit:
@@ -533,6 +543,26 @@ class SketchEditor(QWidget):
         self.view.drop_drag()
         self.profile_view.drop_edit()
 
+    def wait_for_sketch(self) -> None:
+        """A new document whose sketch is not known yet (Session.sketch_waiting): drop the
+        sketch shown and take no edit until set_sketch. An edit of the previous document's
+        sketch would be committed onto the new one, replacing its leaf."""
+        self.drop_edit()
+        self.view.set_sketch(Sketch(), fit=True)
+        self._show_mirror_note("")
+        self._waiting = True
+        self.setEnabled(False)
+        self._over_view(self.waiting)
+        self.waiting.show()
+
+    def _over_view(self, label: QLabel) -> None:
+        """Lay a note over the view's top, inside the frame and the scroll bars."""
+        area = self.view.viewport().geometry()
+        width = max(120, area.width() - 16)
+        label.setFixedSize(width, label.heightForWidth(width))
+        label.move(area.left() + 8, area.top() + 8)
+        label.raise_()
+
     def _set_select_tool(self, on: bool) -> None:
         self.view.select_tool = on
 
@@ -546,6 +576,8 @@ class SketchEditor(QWidget):
         super().resizeEvent(event)
         if self.mirror_note.isVisible():  # the note keeps to the view's width
             self._show_mirror_note(self.mirror_note.text())
+        if self._waiting:
+            self._over_view(self.waiting)
 
     def _show_mirror_note(self, text: str) -> None:
         """Say why an edit was not mirrored, over the sketch (a drag updates it without any
@@ -554,11 +586,7 @@ class SketchEditor(QWidget):
         if text != note.text():
             note.setText(text)
         if text:
-            area = self.view.viewport().geometry()  # inside the frame and the scroll bars
-            width = max(120, area.width() - 16)
-            note.setFixedSize(width, note.heightForWidth(width))
-            note.move(area.left() + 8, area.top() + 8)
-            note.raise_()
+            self._over_view(note)
         note.setVisible(bool(text))
 
     def _choose_curve(self, row: int) -> None:
