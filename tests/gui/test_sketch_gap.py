@@ -6,14 +6,16 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from PySide6.QtCore import Qt
 
 from leafstudio.demos import demo
 from leafstudio.gui.session import Session
-from leafstudio.gui.sketch_model import Sketch
+from leafstudio.gui.sketch_model import BOUNDARY, Sketch
 from leafstudio.io import save_leaf
 from leafstudio.model import Leaf
 
 from .conftest import wait_result
+from .test_scan import synthetic_scan, write_points
 from .test_session import FAST, Runner
 from .test_sketch import click
 
@@ -118,3 +120,21 @@ def test_the_session_says_when_a_documents_sketch_is_not_known_yet():
     assert isinstance(got[-1], Sketch) and len(got[-1].boundary) == 0
     session.undo()  # back to the loaded leaf, of another document: its sketch is derived anew
     assert got[-1] == "waiting"
+
+
+def test_a_click_or_key_while_a_scans_first_reconstruction_runs_leaves_it_alone(
+    window, qtbot, tmp_path
+):
+    """A scan's first reconstruction takes seconds: the whole while, the editor showed the
+    previous leaf's sketch and took edits of it."""
+    session, view = window.session, window.editor.view
+    old = view.sketch
+    never_done(window)  # the scan is read and extracted; its reconstruction never finishes
+    assert window.open_path(write_points(tmp_path / "scan.txt", synthetic_scan()))
+    qtbot.waitUntil(lambda: session.state.scan is not None, timeout=30_000)
+    opened = session.state
+    click(qtbot, view, old.boundary[0])
+    view.selected = (BOUNDARY, 0)  # as if a point of the old sketch were still selected
+    qtbot.keyClick(view, Qt.Key.Key_Delete)
+    assert session.state is opened and session.history.count() == 0
+    assert not window.editor.isEnabled() and len(view.sketch.boundary) == 0
