@@ -93,3 +93,10 @@ def test_a_form_seen_on_edge_is_refused_as_a_mesh_in_one_line(tmp_path, capsys):
     assert seen_on_edge(make_form("elliptic", aspect=20.0, curl=-1.0, fold=60.0))
     assert not seen_on_edge(make_form("reniform", fold=75.0))  # on edge too, but seen whole
     assert not seen_on_edge(make_form("ovate", fold=25.0, curl=0.15, wave=0.02))
+
+
+def test_a_side_on_form_warns_through_the_api():
+    from leafstudio.forms.make import SIDE_ON
+
+    with pytest.warns(UserWarning, match=SIDE_ON.split(",")[0]):
+        make_form("elliptic", fold=75.0)

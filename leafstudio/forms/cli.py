@@ -62,7 +62,7 @@ def _is_leaf_file(name: str) -> bool:
 
 
 def run_form(args: argparse.Namespace) -> int:
-    from leafstudio.forms.make import Form, seen_on_edge
+    from leafstudio.forms.make import SIDE_ON, Form, seen_on_edge
     from leafstudio.forms.terms import format_terms
     from leafstudio.io import LEAF_SUFFIXES, MESH_SUFFIXES, save_leaf, save_mesh
 
@@ -89,11 +89,7 @@ def run_form(args: argparse.Namespace) -> int:
     )
     leaf = form.leaf()
     if mesh and seen_on_edge(leaf):
-        raise LeafError(
-            "this fold or curl stands the leaf on edge to the plane reconstruction fits to its "
-            "boundary, so the mesh would be a side view; write the leaf (.leaf.json), or lower "
-            "--fold or --curl"
-        )
+        raise LeafError(f"{SIDE_ON}; write the leaf (.leaf.json), or lower --fold or --curl")
     if mesh:
         from leafstudio.core.pipeline import reconstruct
         from leafstudio.model import Params

@@ -9,6 +9,7 @@ veins' heights above it the Gaussian mixture.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import asdict, dataclass, replace
 from typing import Any
 
@@ -182,6 +183,12 @@ class Form:
         return z
 
 
+SIDE_ON = (
+    "this fold or curl stands the leaf on edge to the plane reconstruction fits to its "
+    "boundary, so a mesh of it would be a side view"
+)
+
+
 def seen_on_edge(leaf: Leaf) -> bool:
     """Whether the pipeline would see this posed form on edge: a whole vein lies outside the
     outline on the boundary's PCA plane, which it takes for the leaf's, so that plane is not the
@@ -201,6 +208,7 @@ def _veins_on_blade(boundary: np.ndarray, veins: list[np.ndarray]) -> list[np.nd
     # a fold or curl that raises the margin higher than the blade is wide stands that plane on
     # edge to the blade: the outline there is the blade's side view (a fold's halves fall on
     # each other), and whole veins, often all, the midrib too, fell outside it
+    warnings.warn(f"{SIDE_ON}; lower the fold or curl", stacklevel=3)
     region = shapely.Polygon(boundary[:, :2]).buffer(VEIN_SLACK)
     kept = [v[shapely.contains_xy(region, v[:, 0], v[:, 1])] for v in veins]
     return [v for v in kept if len(v) >= 2]

@@ -9,6 +9,7 @@ cached for the process.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from dataclasses import replace
 
@@ -32,6 +33,7 @@ from PySide6.QtWidgets import (
 )
 
 from leafstudio.forms import SHAPES, VENATION_KINDS, Form, definition, grow_veins
+from leafstudio.forms.make import SIDE_ON
 from leafstudio.forms.terms import APEXES, DEFAULT_LOBES, MARGINS, RELIEF, TOOTHED, USER_BASES
 from leafstudio.gui.sketch_model import Sketch, closed_curve, ring_crossings
 from leafstudio.model import Leaf
@@ -193,6 +195,12 @@ class FormsPanel(QWidget):
             self.texts[label] = text
             form.addRow(label, widget)
             form.addRow("", text)
+        # a pose the reconstruction would see side-on (forms.make.SIDE_ON): said where it is set
+        self.pose_note = QLabel()
+        self.pose_note.setWordWrap(True)
+        self.pose_note.setStyleSheet("color: #b00020;")
+        self.pose_note.hide()
+        form.addRow("", self.pose_note)
         seed_row = QHBoxLayout()
         seed_row.addWidget(self.seed)
         seed_row.addWidget(self.variant)
@@ -222,6 +230,11 @@ class FormsPanel(QWidget):
         self._timer.stop()  # the first shape is selected, not chosen
         self._picked = False
         self._describe()
+
+    def show_pose_note(self, text: str) -> None:
+        """A note under Fold, Curl and Wave on the chosen pose (none: hidden)."""
+        self.pose_note.setText(text[:1].upper() + text[1:])
+        self.pose_note.setVisible(bool(text))
 
     # --- widgets -------------------------------------------------------------------------------
     def _combo(self, items: tuple[str, ...], kind: str) -> QComboBox:
@@ -314,10 +327,14 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
         if not picked and session.state.serial != made["serial"]:
             return  # a term changed while another document is open: only its definition shows
         try:
-            leaf = form.leaf()
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                leaf = form.leaf()
         except Exception as exc:  # shown in the window, never a traceback
             window.show_error("Forms", str(exc))
             return
+        side_on = [str(w.message) for w in caught if str(w.message).startswith(SIDE_ON)]
+        panel.show_pose_note(side_on[0] if side_on else "")
         title = f"{form.shape} form"
         session.new_document(leaf, leaf_sketch(leaf, form.teeth_count), title)
         made["serial"] = session.state.serial

@@ -168,3 +168,19 @@ def test_with_grown_veins_keeps_the_sketchs_other_fields():
     grown = forms_dock.with_grown_veins(sketch, "pinnate")
     assert grown.symmetric and grown.frame is sketch.frame
     assert np.array_equal(grown.boundary, sketch.boundary) and len(grown.veins) >= 3
+
+
+def test_a_pose_seen_side_on_is_said_under_the_pose_and_goes_with_a_milder_one(
+    window, panel, qtbot
+):
+    """elliptic folded 75 degrees stands on edge to the plane the reconstruction fits
+    (forms.make.seen_on_edge): its mesh is a side view. Before, nothing said so in the window."""
+    panel.gallery.setCurrentRow(list(SHAPES).index("elliptic"))
+    panel.fold.setValue(75.0)
+    panel.choose_now()
+    assert panel.pose_note.isVisibleTo(panel)
+    assert "side view" in panel.pose_note.text() and "fold or curl" in panel.pose_note.text()
+    panel.fold.setValue(20.0)
+    panel.choose_now()
+    assert not panel.pose_note.isVisibleTo(panel)
+
