@@ -129,17 +129,6 @@ def click(window: MainWindow, xy) -> dict:
     return {"moved": view.transform() != before}
 
 
-def screen_points(window: MainWindow, points: np.ndarray) -> np.ndarray:
-    """(n, 2) display positions (device pixels, y up) of world points in the 3D view."""
-    renderer = window.viewport.plotter.renderer
-    out = np.empty((len(points), 2))
-    for i, p in enumerate(points):
-        renderer.SetWorldPoint(*p, 1.0)
-        renderer.WorldToDisplay()
-        out[i] = renderer.GetDisplayPoint()[:2]
-    return out
-
-
 def framing(window: MainWindow) -> dict:
     """The shown leaf's framing in the 3D view."""
     result = window.result
@@ -148,10 +137,10 @@ def framing(window: MainWindow) -> dict:
     renderer = window.viewport.plotter.renderer
     width, height = renderer.GetSize()
     points = np.asarray(result.triangle_mesh.points)
-    mesh_xy = screen_points(window, points[:: max(1, len(points) // 3000)])
+    mesh_xy = window.viewport.display_points(points[:: max(1, len(points) // 3000)])
     frame = window.session.view_frame() or result.frame
     blade = blade_bounds(points, frame)
-    blade_xy = screen_points(window, blade.extent_points())
+    blade_xy = window.viewport.display_points(blade.extent_points())
     inside = (
         (mesh_xy[:, 0] >= 0)
         & (mesh_xy[:, 0] <= width)
@@ -225,7 +214,7 @@ def top_view_way_round(window: MainWindow) -> dict:
     b = sketch.boundary
 
     def at(xy) -> np.ndarray:
-        return screen_points(window, frame.to_world(np.asarray([xy]), np.zeros(1)))[0]
+        return window.viewport.display_points(frame.to_world(np.asarray([xy]), np.zeros(1)))[0]
 
     centre = at(b.mean(axis=0))
     right = at(b[np.argmax(b[:, 0])])

@@ -409,6 +409,17 @@ class Viewport(QWidget):
         self.plotter.camera_position = [tuple(position), tuple(focus), tuple(up)]
         self.plotter.renderer.ResetCameraClippingRange()
 
+    def display_points(self, points: np.ndarray) -> np.ndarray:
+        """(n, 2) display positions (device pixels, y up) of (n, 3) world points in the view,
+        with the camera as it is (for checks of the framing)."""
+        renderer = self.plotter.renderer
+        out = np.empty((len(points), 2))
+        for i, point in enumerate(np.asarray(points, float)):
+            renderer.SetWorldPoint(*point, 1.0)
+            renderer.WorldToDisplay()
+            out[i] = renderer.GetDisplayPoint()[:2]
+        return out
+
     def image(self) -> QImage:
         """The 3D view as drawn now, from VTK's frame buffer: Qt cannot grab a native window
         (native_view.py), and this is the same on every platform."""

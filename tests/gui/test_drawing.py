@@ -18,17 +18,9 @@ from .test_sketch import click
 
 def leaf_fill(window: MainWindow) -> tuple[float, float]:
     """Share of the 3D view's width and height the mesh's points span on screen."""
-    renderer = window.viewport.plotter.renderer
-    points = np.asarray(window.result.triangle_mesh.points)[::7]
-    xs, ys = [], []
-    for p in points:
-        renderer.SetWorldPoint(*p, 1.0)
-        renderer.WorldToDisplay()
-        x, y, _ = renderer.GetDisplayPoint()
-        xs.append(x)
-        ys.append(y)
-    w, h = renderer.GetSize()
-    return np.ptp(xs) / w, np.ptp(ys) / h
+    xy = window.viewport.display_points(np.asarray(window.result.triangle_mesh.points)[::7])
+    w, h = window.viewport.plotter.renderer.GetSize()
+    return np.ptp(xy[:, 0]) / w, np.ptp(xy[:, 1]) / h
 
 
 def camera(window: MainWindow) -> np.ndarray:
@@ -76,16 +68,13 @@ def test_each_demo_is_framed_and_a_parameter_change_keeps_the_camera(window, qtb
 
 def test_the_top_view_shows_the_leaf_the_way_round_the_sketch_does(window, qtbot):
     window.viewport.camera("top")
-    renderer = window.viewport.plotter.renderer
     frame = window.session.view_frame()
     sketch = window.editor.view.sketch
     tip = sketch.boundary[np.argmax(sketch.boundary[:, 0])]  # right-most in the sketch
     side = sketch.boundary[np.argmax(sketch.boundary[:, 1])]  # top-most in the sketch
 
     def screen(xy):
-        renderer.SetWorldPoint(*frame.to_world(np.asarray([xy]), np.zeros(1))[0], 1.0)
-        renderer.WorldToDisplay()
-        return np.asarray(renderer.GetDisplayPoint()[:2])
+        return window.viewport.display_points(frame.to_world(np.asarray([xy]), np.zeros(1)))[0]
 
     centre = screen(sketch.boundary.mean(axis=0))
     assert screen(tip)[0] > centre[0] + 10  # right in the sketch: right on screen

@@ -12,7 +12,7 @@ from leafstudio.gui.framing import best_iso, blade_bounds, fit_camera, project, 
 from leafstudio.gui.viewport import BAR_BAND
 
 from .conftest import FAST, wait_result
-from .test_drawing import click, ellipse_clicks, leaf_fill
+from .test_drawing import camera, click, ellipse_clicks, leaf_fill
 
 
 @pytest.mark.parametrize("name", ["nested", "parallel"])
@@ -29,20 +29,11 @@ def test_a_camera_keeping_the_bottom_free_frames_the_blade_above_it(name):
         assert max(wide, high) >= 0.6 and min(wide, high) >= 0.35, (aspect, wide, high)
 
 
-def _camera(plotter) -> np.ndarray:
-    camera = plotter.camera
-    return np.array([*camera.position, *camera.focal_point, *camera.up])
-
-
 def _display_heights(window) -> np.ndarray:
     """Display y of the mesh's points as a share of the view's height (0 at its bottom)."""
-    renderer = window.viewport.plotter.renderer
-    heights = []
-    for point in np.asarray(window.result.triangle_mesh.points)[::5]:
-        renderer.SetWorldPoint(*point, 1.0)
-        renderer.WorldToDisplay()
-        heights.append(renderer.GetDisplayPoint()[1])
-    return np.asarray(heights) / renderer.GetSize()[1]
+    points = np.asarray(window.result.triangle_mesh.points)[::5]
+    height = window.viewport.plotter.renderer.GetSize()[1]
+    return window.viewport.display_points(points)[:, 1] / height
 
 
 def test_the_leaf_is_framed_clear_of_the_height_colour_bar(window, qtbot):
@@ -65,9 +56,9 @@ def test_a_drawn_leaf_gets_the_iso_view_of_the_whole_leaf_unless_the_user_turned
         click(qtbot, view, xy)
     wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
     plotter = window.viewport.plotter
-    grown = _camera(plotter)
+    grown = camera(window)
     window.viewport.camera("iso")  # what the Iso button shows for the whole leaf
-    np.testing.assert_allclose(grown, _camera(plotter), atol=1e-9)
+    np.testing.assert_allclose(grown, camera(window), atol=1e-9)
     wide, high = leaf_fill(window)
     assert max(wide, high) >= 0.6 and min(wide, high) >= 0.35, (wide, high)
 

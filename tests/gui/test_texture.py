@@ -92,11 +92,8 @@ def test_the_texture_colouring_shows_what_an_export_writes(window, qtbot, tmp_pa
 
 def _on_screen(window, world: np.ndarray, shape) -> tuple[int, int]:
     """The screenshot pixel (column, row) of a world point."""
-    renderer = window.viewport.plotter.renderer
-    renderer.SetWorldPoint(*world, 1.0)
-    renderer.WorldToDisplay()
-    x, y, _ = renderer.GetDisplayPoint()
-    width, height = renderer.GetRenderWindow().GetSize()
+    x, y = window.viewport.display_points(np.asarray([world]))[0]
+    width, height = window.viewport.plotter.render_window.GetSize()
     column = round(x * shape[1] / width)
     row = round(shape[0] - 1 - y * shape[0] / height)
     return column, row
