@@ -15,7 +15,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # for tests.leaves
 
 import leafstudio as ls
-from leafstudio.demos import PAPER_K
+from leafstudio.sources.demos import PAPER_K
 from tests import leaves
 
 PAPER_TABLE1 = {

@@ -17,10 +17,10 @@ import warnings
 from functools import partial
 
 import leafstudio as ls
-from leafstudio.core.compare import compare
+from leafstudio.analysis.compare import compare
 from leafstudio.core.curvature import surface_curvatures
 from leafstudio.core.measure import leaf_measurements
-from leafstudio.demos import PAPER_K
+from leafstudio.sources.demos import PAPER_K
 
 
 def _best_time(function, repeat: int) -> float:

@@ -44,8 +44,8 @@ def _timed(times: list, step, *args):
 
 
 def measure(app: QApplication, grid: int, folder: Path) -> dict:
-    from leafstudio.gui.main_window import MainWindow
-    from leafstudio.gui.textures import TEXTURE, texture_image
+    from leafstudio.gui.model.textures import TEXTURE, texture_image
+    from leafstudio.gui.qt.main_window import MainWindow
     from leafstudio.model import Params
 
     window = MainWindow(QSettings(str(folder / f"s{grid}.ini"), QSettings.Format.IniFormat))

@@ -35,7 +35,7 @@ import shapely
 
 import leafstudio as ls
 from leafstudio.core.analysis import margin_creases
-from leafstudio.core.outline import trace_outline
+from leafstudio.core.prepare.outline import trace_outline
 
 SIZES = (10_000, 50_000, 100_000, 1_000_000)
 NOISES = (0.002, 0.005, 0.01)

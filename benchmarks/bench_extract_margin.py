@@ -15,10 +15,10 @@ import warnings
 from pathlib import Path
 
 import leafstudio as ls
+from leafstudio.analysis.fidelity import scan_distances
 from leafstudio.core.analysis import margin_creases
-from leafstudio.core.extract import extract_leaf
-from leafstudio.core.fidelity import scan_distances
-from leafstudio.scan import read_scan
+from leafstudio.sources.extract import extract_leaf
+from leafstudio.sources.scan import read_scan
 
 REALLEAVES = Path(__file__).resolve().parents[2] / "shared" / "realleaves"
 

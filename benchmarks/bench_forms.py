@@ -57,7 +57,7 @@ def main() -> dict:
 
     global _APP
     _APP = QGuiApplication.instance() or QGuiApplication([])  # QPainter needs one; kept to exit
-    from leafstudio.gui.forms_dock import draw_leaf
+    from leafstudio.gui.qt.forms_dock import draw_leaf
 
     Form("ovate").leaf()  # imports and first calls out of the way
     forms = {name: _ms(lambda n=name: Form(n).leaf()) for name in SHAPES}

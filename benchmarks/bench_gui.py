@@ -15,7 +15,7 @@ what 2 to 7 cost: K = 9 to 11 take several times longer in the surface stage); i
 time from the last move to its result on screen, and the longest stall of the event loop during
 the storm and until the app is idle.
 `LEAFSTUDIO_3D=opengl` measures the 3D view as pyvistaqt's QOpenGLWidget instead of the native
-window (gui/native_view.py). Prints JSON. Timings here are shared-host figures: other work on
+window (gui/qt/native_view.py). Prints JSON. Timings here are shared-host figures: other work on
 the machine moves them; the main thread's CPU time in one piece is the figure load inflates least.
 """
 
@@ -32,7 +32,7 @@ from pathlib import Path
 from PySide6.QtCore import QEventLoop, QSettings, Qt, QTimer
 from PySide6.QtWidgets import QApplication
 
-from leafstudio.gui.main_window import MainWindow
+from leafstudio.gui.qt.main_window import MainWindow
 from leafstudio.model import Params
 
 GRIDS = (128, 512)
@@ -267,7 +267,7 @@ def main() -> int:
         "load_average_1min": round(os.getloadavg()[0], 2),
         "window": [window.width(), window.height()],
         # the 3D view's widget: "native" (an X child window) or "opengl" (pyvistaqt's
-        # QOpenGLWidget, LEAFSTUDIO_3D=opengl), gui/native_view.py
+        # QOpenGLWidget, LEAFSTUDIO_3D=opengl), gui/qt/native_view.py
         "view_widget": type(window.viewport.plotter).__name__,
     }
     print(json.dumps(report, indent=2))

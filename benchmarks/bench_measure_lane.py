@@ -33,8 +33,8 @@ from PySide6.QtWidgets import QApplication
 
 from leafstudio.core import analysis
 from leafstudio.core.pipeline import Cancelled
-from leafstudio.gui.main_window import MainWindow
-from leafstudio.gui.worker import PIPELINE, Worker
+from leafstudio.gui.qt.main_window import MainWindow
+from leafstudio.gui.qt.worker import PIPELINE, Worker
 from leafstudio.model import Params
 
 OFFSETS_MS = (15, 30, 45, 60)  # after the result is on screen, when the next request comes

@@ -30,7 +30,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import numpy as np
 import shapely
 
-from leafstudio.assets.photo import leaf_from_photo
+from leafstudio.sources.photo import leaf_from_photo
 from tests.photos import leaf_frame_match
 
 FORMS: dict[str, dict] = {  # name: make_form's arguments

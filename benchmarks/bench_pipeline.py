@@ -47,8 +47,8 @@ from bench_scans import scan_figures  # extract at 1e5 and 1e6 points, scan dist
 from threadpoolctl import threadpool_info, threadpool_limits
 
 import leafstudio as ls
-from leafstudio.core.compare import poisson_surface
-from leafstudio.demos import PAPER_K
+from leafstudio.analysis.compare import poisson_surface
+from leafstudio.sources.demos import PAPER_K
 
 GRIDS = (64, 128, 256, 512)
 DENSE_POINTS = 50_000
@@ -202,7 +202,7 @@ PEAK_RSS = (
 import json
 from threadpoolctl import threadpool_limits
 import leafstudio as ls
-from leafstudio.demos import PAPER_K
+from leafstudio.sources.demos import PAPER_K
 imported = high_water_kb()
 with threadpool_limits(limits=1):
     for name in ("nested", "parallel"):

@@ -35,8 +35,8 @@ sys.path.insert(0, str(ROOT))
 
 from leafstudio.core import cover  # noqa: E402
 from leafstudio.forms import make_form  # noqa: E402
-from leafstudio.scan import read_scan  # noqa: E402
-from tests.test_scan_as_boundary import (  # noqa: E402
+from leafstudio.sources.scan import read_scan  # noqa: E402
+from tests.core.prepare.test_scan_as_boundary import (  # noqa: E402
     SCANS,
     _boundaries,
     _dense_noisy,
@@ -186,8 +186,9 @@ def classes():
 
 
 def _module_at(rev: str):
-    """surface_spread's module as it was at git revision `rev` (core/cover.py, or before that
-    core/plausibility.py), imported from a copy."""
+    """surface_spread's module as it was at git revision `rev` (core/prepare/cover.py, or
+    before that
+    core/prepare/plausibility.py), imported from a copy."""
     for name in ("cover", "plausibility"):
         shown = subprocess.run(
             ["git", "show", f"{rev}:leafstudio/core/{name}.py"],
@@ -198,7 +199,7 @@ def _module_at(rev: str):
         if shown.returncode == 0:
             break
     else:
-        raise SystemExit(f"no core/cover.py or core/plausibility.py at {rev}")
+        raise SystemExit(f"no core/prepare/cover.py or core/prepare/plausibility.py at {rev}")
     path = Path(tempfile.mkdtemp()) / f"{name}_{rev}.py"
     path.write_text(shown.stdout)
     spec = importlib.util.spec_from_file_location(path.stem, path)

@@ -23,10 +23,10 @@ from pathlib import Path
 import numpy as np
 
 import leafstudio as ls
-from leafstudio.core.extract import extract_leaf
-from leafstudio.core.fidelity import coverage, scan_distances
+from leafstudio.analysis.fidelity import coverage, scan_distances
 from leafstudio.errors import LeafError
-from leafstudio.scan import read_scan
+from leafstudio.sources.extract import extract_leaf
+from leafstudio.sources.scan import read_scan
 
 SCANS = Path(__file__).resolve().parents[2] / "shared" / "realleaves"
 

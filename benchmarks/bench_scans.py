@@ -43,9 +43,9 @@ from bench_realleaves import SCANS  # noqa: E402
 
 import leafstudio as ls  # noqa: E402
 from leafstudio.core.distance import mesh_distances  # noqa: E402
-from leafstudio.core.extract import extract_leaf  # noqa: E402
-from leafstudio.scan import read_scan  # noqa: E402
-from tests.test_extract_scale import _big_scan  # noqa: E402
+from leafstudio.sources.extract import extract_leaf  # noqa: E402
+from leafstudio.sources.scan import read_scan  # noqa: E402
+from tests.sources.test_extract_scale import _big_scan  # noqa: E402
 
 SIZES = (100_000, 1_000_000)
 SCAN_POINTS = 20_000
@@ -59,8 +59,8 @@ def high_water_kb():
         if line.startswith("VmHWM:"):
             return int(line.split()[1])
 import leafstudio
-from leafstudio.core.extract import extract_leaf
-from leafstudio.scan import read_scan
+from leafstudio.sources.extract import extract_leaf
+from leafstudio.sources.scan import read_scan
 extract_leaf(read_scan(sys.argv[2]))  # compiled kernels loaded, as in a long-running app
 imported = high_water_kb()
 start = time.perf_counter()

@@ -19,8 +19,8 @@ from PySide6.QtCore import QPoint, Qt
 from PySide6.QtTest import QTest
 from PySide6.QtWidgets import QApplication
 
-from leafstudio.gui.profile_view import ProfileView
-from leafstudio.gui.sketch_model import Sketch
+from leafstudio.gui.model.sketch_model import Sketch
+from leafstudio.gui.qt.profile_view import ProfileView
 
 REPEATS = 40
 POINTS = (8, 40)

@@ -33,9 +33,10 @@ def main(repeats: int = 5) -> dict:
 
     import leafstudio as ls
     from leafstudio.assets import texture
-    from leafstudio.assets.export import PhotoTexture, base_color
-    from leafstudio.assets.photo import leaf_from_photo
+    from leafstudio.assets.export import base_color
     from leafstudio.forms import make_form
+    from leafstudio.sources.leafphoto import PhotoTexture
+    from leafstudio.sources.photo import leaf_from_photo
     from tests.photos import form_photo
 
     form = make_form("ovate", margin="serrate", teeth=24)

@@ -17,7 +17,7 @@ Stories (each shot is the whole window, `DIR/s3-story-<name>.png`):
 For each shot the JSON gives the leaf's framing in the 3D view: the share of the viewport's width
 and height that the result mesh's points span on screen (projected with the renderer's world to
 display transform, as tests/gui/test_drawing.py measures it), the same for the blade's robust
-bounds (gui/framing.py: 1st-99th percentiles, the points the camera frames), the share of mesh
+bounds (gui/model/framing.py: 1st-99th percentiles, the points the camera frames), the share of mesh
 points that fall outside the view (clipped) or under the height colour bar, and whether the
 sketch view's transform changed while drawing. The issue's framing target: >= 60% along one
 axis and >= 35% along the other.
@@ -41,10 +41,10 @@ from PySide6.QtGui import QColor, QPalette
 from PySide6.QtTest import QTest
 from PySide6.QtWidgets import QApplication, QMessageBox
 
-from leafstudio.gui.framing import best_iso, blade_bounds
-from leafstudio.gui.layers import vein_color
-from leafstudio.gui.main_window import MainWindow
-from leafstudio.gui.viewport import BAR_BAND, grab_window
+from leafstudio.gui.model.framing import best_iso, blade_bounds
+from leafstudio.gui.model.layers import vein_color
+from leafstudio.gui.qt.main_window import MainWindow
+from leafstudio.gui.qt.viewport import BAR_BAND, grab_window
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "realleaves"
 SCANS = (

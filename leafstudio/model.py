@@ -12,14 +12,16 @@ from leafstudio.paramspec import Choice, Param, Real, Switch, Whole, declared, n
 from leafstudio.paramspec import short as _short
 
 MESHERS = ("conforming", "bpa")
-MARGINS = ("auto", "exact", "smooth")  # Params.margin (core/outline.py)
+MARGINS = ("auto", "exact", "smooth")  # Params.margin (core/prepare/outline.py)
 K_MAX = 64
 K_AUTO = "auto"  # Params.k: choose K by BIC (core/autok.py)
 K_AUTO_MAX = 12  # auto chooses K from 1 to this; the panel's K slider covers the same
 GRID_MIN, GRID_MAX = 8, 2048
 SEED_MAX = 2**32 - 1  # numpy's legacy seeds and most tools take 32 bits
-COORDINATE_LIMIT = 1e300  # larger coordinates overflow a leaf's extent (the pipeline runs at unit
-SMALLEST_EXTENT = 1e-100  # size, core/units.py); a smaller leaf's curvatures (1/size²) overflow
+# larger coordinates overflow a leaf's extent (the pipeline runs at unit size,
+# core/prepare/units.py); a smaller leaf's curvatures (1/size²) overflow
+COORDINATE_LIMIT = 1e300
+SMALLEST_EXTENT = 1e-100
 
 
 def _as_points(values: Any, what: str) -> np.ndarray:
@@ -106,7 +108,7 @@ class Params:
 
     Each field is declared once, here: its kind and range, default, help, the pipeline stage it
     invalidates and its command-line flag (paramspec.py). Validation, the stage cache's keys
-    (core/pipeline.py), the parameter panel (gui/controls.py) and the CLI flags (cli.py) are
+    (core/pipeline.py), the parameter panel (gui/qt/controls.py) and the CLI flags (cli/) are
     derived from these declarations (`PARAMS`).
 
     A `slider` range is what the panel's slider offers, inside the valid range: what is worth

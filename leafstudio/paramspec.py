@@ -6,8 +6,8 @@ invalidates, its command-line flag and the panel's slider range.
 
 - validation: `Params.__post_init__` calls each declaration's `check`;
 - the stage cache's keys: `core/pipeline.STAGE_KEYS` from each declaration's `stage`;
-- the parameter panel (gui/controls.py): widget, range, label and tooltip;
-- the command line (cli.py): the flag, its metavar and help, and `parse` for its text.
+- the parameter panel (gui/qt/controls.py): widget, range, label and tooltip;
+- the command line (cli/): the flag, its metavar and help, and `parse` for its text.
 
 The panel's range is `panel_range`: a slider needs a range a hand can use, so a wide validation
 range may name a smaller `slider` range inside it (checked here, on declaration). The panel

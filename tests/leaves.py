@@ -6,10 +6,10 @@ import numpy as np
 import shapely
 from scipy.spatial.transform import Rotation
 
-from leafstudio.core import fidelity
+from leafstudio.analysis import fidelity
 from leafstudio.core.plane import Frame
-from leafstudio.demos import HALFWIDTH, demo
 from leafstudio.model import Leaf
+from leafstudio.sources.demos import HALFWIDTH, demo
 
 
 def halfwidth_region(name: str, n: int = 4000) -> shapely.Polygon:

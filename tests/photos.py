@@ -72,9 +72,9 @@ def scan_photo(
     import pyvista as pv
     from scipy.spatial import Delaunay, cKDTree
 
-    from leafstudio.core.extract import split_scan
     from leafstudio.core.plane import fit_frame
-    from leafstudio.scan import read_scan
+    from leafstudio.sources.extract import split_scan
+    from leafstudio.sources.scan import read_scan
 
     points = read_scan(path)
     blade, stalk = split_scan(points)
@@ -133,8 +133,8 @@ def leaf_frame_match(
     pixels (the segmentation alone), the base's distance from the known one (share of the
     length) and the cue that told the base (PhotoLeaf.base_cue). `draw_veins` False draws the
     blade plain."""
-    from leafstudio.assets.photo import leaf_from_photo
     from leafstudio.forms import Form
+    from leafstudio.sources.photo import leaf_from_photo
 
     form = Form(**terms)
     leaf, apex = form.leaf(), form.outline().apex_index

@@ -2,17 +2,18 @@
 for printing, levels of detail, and leaves from photos (DESIGN.md: assets)."""
 
 from leafstudio.assets.asset import MeshAsset, UVMap, leaf_asset, mesh_asset
-from leafstudio.assets.export import PhotoTexture, export_mesh, mesh_assets, photo_transform
-from leafstudio.assets.writers import ASSET_SUFFIXES
+from leafstudio.assets.export import mesh_assets, photo_transform, save_mesh
+from leafstudio.assets.writers import MESH_SUFFIXES
+from leafstudio.sources.leafphoto import PhotoTexture
 
 __all__ = [
-    "ASSET_SUFFIXES",
+    "MESH_SUFFIXES",
     "MeshAsset",
     "PhotoTexture",
     "UVMap",
-    "export_mesh",
     "leaf_asset",
     "mesh_asset",
     "mesh_assets",
     "photo_transform",
+    "save_mesh",
 ]

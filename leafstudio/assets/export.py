@@ -12,27 +12,21 @@ detail chosen here, the bytes written by writers.py.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from leafstudio._shared.inputs import load_json, read_image
+from leafstudio.assets import texture as tex
 from leafstudio.assets.asset import MeshAsset, leaf_asset, leaf_plane, mesh_asset
-from leafstudio.assets.writers import ASSET_SUFFIXES, write_assets
+from leafstudio.assets.writers import MESH_SUFFIXES, write_assets
 from leafstudio.errors import LeafError
+from leafstudio.sources.leafphoto import PhotoTexture, pixel_map
 
 TEXTURES = ("auto", "none")
 MAX_LOD = 8
 TEXTURED_SUFFIXES = (".obj", ".glb", ".gltf")  # the formats that carry a texture image
-
-
-@dataclass(frozen=True)
-class PhotoTexture:
-    """A photo and the affine map (2, 3) from world (x, y) to its (column, row)."""
-
-    image: str | os.PathLike
-    pixel_from_world: np.ndarray | None = None
 
 
 def photo_transform(leaf_path: str | os.PathLike) -> np.ndarray | None:
@@ -40,22 +34,16 @@ def photo_transform(leaf_path: str | os.PathLike) -> np.ndarray | None:
     or a project without a photo); LeafError for a malformed entry."""
     if not str(leaf_path).lower().endswith(".json"):
         return None
-    from leafstudio.inputs import load_json
-
     data = load_json(leaf_path)
     photo = data.get("photo") if isinstance(data, dict) else None
     if photo is None:
         return None
-    from leafstudio.assets.leafphoto import pixel_map
-
     return pixel_map(photo, str(leaf_path))
 
 
 def _images(result: Any, texture: Any, gltf: bool) -> dict[str, Any]:
     """The texture (and, for glTF, normal map) images the option asks for, made once for all the
     levels of detail (they share the UV map)."""
-    from leafstudio.assets import texture as tex
-
     if isinstance(texture, str) and texture in TEXTURES:
         if texture == "none" or result is None:  # a bare mesh: no outline or veins to draw
             return {}
@@ -64,7 +52,7 @@ def _images(result: Any, texture: Any, gltf: bool) -> dict[str, Any]:
         maps = tex.normal_map(plane, strokes=strokes) if gltf else None
         return {"texture": tex.leaf_texture(plane, strokes=strokes), "normal_map": maps}
     photo = texture if isinstance(texture, PhotoTexture) else PhotoTexture(texture)
-    image = tex.read_image(photo.image)
+    image = read_image(photo.image)
     if photo.pixel_from_world is not None and result is not None:
         return {"texture": tex.photo_texture(leaf_plane(result), image, photo.pixel_from_world)}
     return {"texture": tex.stretched_texture(image)}
@@ -116,34 +104,34 @@ def mesh_assets(
     return out
 
 
-def export_mesh(
+def save_mesh(
     result_or_mesh: Any,
     path: str | os.PathLike,
     texture: Any = "auto",
     thickness: float | None = None,
     lod: int = 0,
 ) -> None:
-    """Write the mesh by the path's suffix (ASSET_SUFFIXES) with normals, UVs, scalars, texture;
+    """Write the mesh by the path's suffix (MESH_SUFFIXES) with normals, UVs, scalars, texture;
     see mesh_assets for the options."""
     path = Path(path)
     suffix = path.suffix.lower()
-    if suffix not in ASSET_SUFFIXES:
+    if suffix not in MESH_SUFFIXES:
         raise LeafError(
-            f"unknown mesh type {suffix or '(none)'!r}; use one of {', '.join(ASSET_SUFFIXES)}",
+            f"unknown mesh type {suffix or '(none)'!r}; use one of {', '.join(MESH_SUFFIXES)}",
             str(path),
         )
     if not isinstance(lod, int) or not 0 <= lod <= MAX_LOD:
         raise LeafError(f"lod must be a whole number from 0 to {MAX_LOD}, got {lod}")
     if not (isinstance(texture, str) and texture in TEXTURES):  # never write over the image
+        from leafstudio._shared.safewrite import refuse_overlap
         from leafstudio.assets.writers import written_paths
-        from leafstudio.safewrite import refuse_overlap
 
         image = texture.image if isinstance(texture, PhotoTexture) else texture
         refuse_overlap([image], written_paths(path, lod + 1, textured=True))
     if suffix not in TEXTURED_SUFFIXES:  # the format holds UVs but no image: make none
         texture = "none"
     assets = mesh_assets(result_or_mesh, texture, thickness, lod, gltf=suffix in (".glb", ".gltf"))
-    from leafstudio import safewrite
+    from leafstudio._shared import safewrite
 
     if safewrite._staging.get() is not None:  # the caller replaces its outputs together
         write_assets(assets, path)
@@ -154,8 +142,8 @@ def export_mesh(
 
 def check_asset_options(texture: str, thickness: str | None, lod: int) -> None:
     """Refuse bad --texture, --thickness and --lod values before any work (LeafError)."""
+    from leafstudio._shared.inputs import read_image
     from leafstudio.assets.solid import parse_thickness
-    from leafstudio.assets.texture import read_image
 
     if texture not in TEXTURES:
         read_image(texture)

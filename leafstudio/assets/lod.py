@@ -35,7 +35,7 @@ FEWEST_TRIANGLES = 8
 
 def decimate(points: np.ndarray, faces: np.ndarray, triangles: int) -> tuple[np.ndarray, ...]:
     """(points, faces) decimated to about `triangles` triangles, the boundary kept."""
-    from leafstudio.extras import require
+    from leafstudio._shared.extras import require
 
     o3d = require("open3d", "levels of detail (--lod)")
 

@@ -16,8 +16,6 @@ tangent-space normals, with the tangent along s (the leaf's length) and the bita
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
 from leafstudio.assets.asset import LeafPlane
@@ -119,25 +117,6 @@ def normal_map(plane: LeafPlane, pixels: int = TEXTURE_PIXELS, strokes: np.ndarr
     return Image.fromarray(np.rint((normal + 1) * 127.5).astype(np.uint8), "RGB")
 
 
-def read_image(path: str | Path) -> np.ndarray:
-    """An image file as an (h, w, 3 or 4) uint8 array; LeafError if it cannot be read."""
-    from PIL import Image, UnidentifiedImageError
-    from PIL.Image import DecompressionBombError
-
-    try:
-        with Image.open(path) as image:
-            image = image.convert("RGBA" if "A" in image.getbands() else "RGB")
-            return np.asarray(image)
-    except FileNotFoundError:
-        raise LeafError("no such file", str(path)) from None
-    except IsADirectoryError:
-        raise LeafError("is a folder, not an image", str(path)) from None
-    except DecompressionBombError:
-        raise LeafError("not a readable image (too many pixels)", str(path)) from None
-    except (UnidentifiedImageError, OSError, ValueError) as exc:
-        raise LeafError(f"not a readable image ({type(exc).__name__})", str(path)) from None
-
-
 def photo_texture(
     plane: LeafPlane, photo: np.ndarray, pixel_from_world: np.ndarray, pixels: int = TEXTURE_PIXELS
 ):
@@ -181,10 +160,10 @@ def _photo_leaf(photo: np.ndarray) -> np.ndarray | None:
     the edge where leaf and background blend (EDGE_PIXELS); None if nothing stands out."""
     from scipy.ndimage import binary_erosion
 
-    from leafstudio.assets.photo import _foreground
+    from leafstudio.sources.photo import foreground
 
     try:
-        return binary_erosion(_foreground(photo), iterations=EDGE_PIXELS)
+        return binary_erosion(foreground(photo), iterations=EDGE_PIXELS)
     except LeafError:
         return None
 

@@ -20,15 +20,15 @@ from __future__ import annotations
 from collections.abc import Sequence
 from io import BytesIO
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from leafstudio._shared.safewrite import write_bytes
 from leafstudio.assets.asset import MeshAsset
-from leafstudio.io import MESH_SUFFIXES
-from leafstudio.safewrite import write_bytes
+from leafstudio.errors import LeafError
 
 GLTF_SUFFIXES = (".glb", ".gltf")
-ASSET_SUFFIXES = MESH_SUFFIXES  # io's list: the writers below cover each
 METALLIC, ROUGHNESS, ALPHA_CUTOFF = 0.0, 0.8, 0.5
 SHORT = ("nx", "ny", "nz", "s", "t")  # PLY properties kept as float32
 
@@ -193,9 +193,7 @@ def write_vtk(asset: MeshAsset, path: Path) -> None:
 
     mesh = polydata(asset.points, asset.faces, asset.point_data, normals=asset.normals)
     mesh.active_texture_coordinates = asset.uv.copy()
-    from leafstudio.io import _vtk_bytes
-
-    write_bytes(path, _vtk_bytes(mesh, path.suffix.lower()))
+    write_bytes(path, vtk_bytes(mesh, path.suffix.lower()))
 
 
 def write_assets(assets: Sequence[MeshAsset], path: Path) -> None:
@@ -205,14 +203,7 @@ def write_assets(assets: Sequence[MeshAsset], path: Path) -> None:
     if suffix in GLTF_SUFFIXES:
         write_gltf(assets, path)
         return
-    writer = {
-        ".ply": write_ply,
-        ".obj": write_obj,
-        ".stl": write_trimesh_format,
-        ".3mf": write_trimesh_format,
-        ".vtp": write_vtk,
-        ".vtk": write_vtk,
-    }[suffix]
+    writer = WRITERS[suffix]
     for level, asset in enumerate(assets):
         writer(asset, path if level == 0 else lod_path(path, level))
 
@@ -235,3 +226,41 @@ def written_paths(path: Path, levels: int, textured: bool) -> list[Path]:
 def lod_path(path: Path, level: int) -> Path:
     """Where a format without levels of detail gets level `level`."""
     return path.with_name(f"{path.stem}_lod{level}{path.suffix}")
+
+
+def vtk_bytes(mesh: Any, suffix: str) -> bytes:
+    """A mesh as .vtp (XML, zlib-compressed base64) or legacy binary .vtk, made in memory: VTK's
+    file writers report a failed write only through their observers (and an XML writer aborts
+    the process when a disk fills), so the bytes are written by Python, which raises."""
+    from vtkmodules.vtkIOLegacy import vtkPolyDataWriter
+    from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
+
+    if suffix == ".vtp":
+        writer = vtkXMLPolyDataWriter()
+        writer.SetDataModeToBinary()  # base64 inline: the output string is plain ASCII
+        writer.SetCompressorTypeToZLib()
+    else:
+        writer = vtkPolyDataWriter()
+        writer.SetFileTypeToBinary()
+    writer.SetInputData(mesh)
+    writer.SetWriteToOutputString(True)
+    if writer.Write() != 1:
+        raise LeafError(f"VTK could not encode the mesh as {suffix}")
+    if suffix == ".vtp":
+        return writer.GetOutputString().encode("ascii")
+    return bytes(writer.GetOutputStdString())
+
+
+# The one table of mesh types: every suffix a mesh can be written as, and its writer (glTF's
+# writer takes every level of detail at once; `write_assets` calls it apart).
+WRITERS = {
+    ".ply": write_ply,
+    ".obj": write_obj,
+    ".stl": write_trimesh_format,
+    ".vtp": write_vtk,
+    ".vtk": write_vtk,
+    ".glb": write_gltf,
+    ".gltf": write_gltf,
+    ".3mf": write_trimesh_format,
+}
+MESH_SUFFIXES = tuple(WRITERS)

@@ -290,7 +290,7 @@ def ball_pivoting(
     points: np.ndarray, normals: np.ndarray, spacing: float, factor: float
 ) -> np.ndarray:
     """open3d ball pivoting over (n, 3) points with (n, 3) normals; returns (m, 3) triangles."""
-    from leafstudio.extras import require
+    from leafstudio._shared.extras import require
 
     o3d = require("open3d", "the ball-pivoting mesher (mesher bpa)")  # seconds and 250 MB
 

@@ -38,7 +38,8 @@ from leafstudio.core.grid import Grid, make_grid
 from leafstudio.core.height import height_guide
 from leafstudio.core.measure import curvature_summary, shape_measurements
 from leafstudio.core.mpu import MPUImplicit, build_mpu
-from leafstudio.core.outline import (
+from leafstudio.core.plane import Frame, fit_frame
+from leafstudio.core.prepare.outline import (
     contains,
     distinct_indices,
     outward_normals,
@@ -46,16 +47,15 @@ from leafstudio.core.outline import (
     thin_veins,
     trace_outline,
 )
-from leafstudio.core.plane import Frame, fit_frame
-from leafstudio.core.plausibility import (
+from leafstudio.core.prepare.plausibility import (
     check_boundary,
     check_not_a_surface,
     keep_outer_loop,
 )
+from leafstudio.core.prepare.units import ScaledSurface, Units
+from leafstudio.core.prepare.vein_order import vein_order
 from leafstudio.core.surface import HeightSurface, fit_surface
 from leafstudio.core.trianglemesh import TriangleMesh
-from leafstudio.core.units import ScaledSurface, Units
-from leafstudio.core.veins import vein_order
 from leafstudio.errors import LeafError
 from leafstudio.model import K_AUTO, PARAMS, Leaf, Params, as_leaf, as_params
 

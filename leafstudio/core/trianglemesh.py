@@ -3,7 +3,7 @@
 The pipeline builds its mesh as numpy arrays and only wraps them in a pyvista.PolyData when one is
 asked for (Result.mesh). A run then never imports VTK (about 60 MB and a third of a second), and
 the app's worker threads never create a VTK object: they hand arrays to the main thread, which
-makes the datasets it draws (gui/layers.py).
+makes the datasets it draws (gui/model/layers.py).
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import shapely
 
-from leafstudio.core.veins import veins_inside_outline
+from leafstudio.core.prepare.vein_order import veins_inside_outline
 from leafstudio.errors import LeafError
 from leafstudio.forms.outline import Outline, form_outline
 from leafstudio.forms.terms import (

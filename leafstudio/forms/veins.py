@@ -37,7 +37,7 @@ from shapely.geometry import LineString, MultiLineString, Polygon
 from leafstudio.errors import LeafError
 
 VENATION_KINDS = ("pinnate", "palmate", "parallel", "arcuate")
-HEIGHT_RATIO = 0.25  # vein height over its distance to the margin (demos.py: h = 0.25 w)
+HEIGHT_RATIO = 0.25  # vein height over its distance to the margin (sources/demos.py: h = 0.25 w)
 BROAD_STEP = 0.035  # the growth step of a broad blade, as a share of the square root of its area
 STEP = 0.02  # growth step D, in leaf lengths
 NARROW_STEPS = 2  # a blade's half-width holds at least this many growth steps (see growth_step)
@@ -82,7 +82,7 @@ def _polygon(xy: np.ndarray) -> Polygon:
     poly = Polygon(xy)
     if poly.is_valid and poly.area > 0:
         return poly
-    from leafstudio.core.outline import leaf_polygon
+    from leafstudio.core.prepare.outline import leaf_polygon
 
     ring = leaf_polygon(xy)
     poly = Polygon(ring[0] if isinstance(ring, tuple) else ring)

@@ -8,7 +8,7 @@ from PySide6.QtCore import QSettings
 from PySide6.QtGui import QImage
 from PySide6.QtWidgets import QMessageBox
 
-from leafstudio.gui.main_window import MainWindow
+from leafstudio.gui.qt.main_window import MainWindow
 from leafstudio.model import Params
 
 FAST = Params(k=3, grid=48, samples=1500)  # small enough for quick runs, same code paths

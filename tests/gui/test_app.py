@@ -8,9 +8,9 @@ import sys
 
 from PySide6.QtGui import QImage
 
-from leafstudio.demos import demo
-from leafstudio.gui.app import display_problem, run_app
-from leafstudio.io import save_leaf
+from leafstudio.gui.qt.app import display_problem, run_app
+from leafstudio.sources.demos import demo
+from leafstudio.sources.files import save_leaf
 
 from .conftest import FAST, coloured_share, image_pixels
 

@@ -23,7 +23,7 @@ from PySide6.QtWidgets import (
 from superqt import QLabeledSlider, QLargeIntSpinBox
 
 import leafstudio as ls
-from leafstudio.gui.controls import THROTTLE_MS, ParamPanel
+from leafstudio.gui.qt.controls import THROTTLE_MS, ParamPanel
 from leafstudio.model import PARAMS, SEED_MAX, Params
 from leafstudio.paramspec import Choice, Ranged, Switch, Whole
 

@@ -9,8 +9,8 @@ from PySide6.QtCore import QPoint, Qt
 from PySide6.QtGui import QColor, QKeySequence, QPalette
 from PySide6.QtTest import QTest
 
-from leafstudio.gui.layers import vein_color
-from leafstudio.gui.main_window import MainWindow
+from leafstudio.gui.model.layers import vein_color
+from leafstudio.gui.qt.main_window import MainWindow
 
 from .conftest import wait_result
 from .test_sketch import click

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from PySide6.QtCore import Qt
 
-from leafstudio.gui import explain
+from leafstudio.gui.qt import explain
 from tests.gui.conftest import wait_result
 
 

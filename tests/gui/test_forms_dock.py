@@ -8,8 +8,8 @@ import pytest
 from PySide6.QtWidgets import QDockWidget
 
 from leafstudio.forms import SHAPES
-from leafstudio.gui import forms_dock
-from leafstudio.gui.forms_dock import FormsPanel, leaf_sketch, thumbnail
+from leafstudio.gui.qt import forms_dock
+from leafstudio.gui.qt.forms_dock import FormsPanel, leaf_sketch, thumbnail
 from tests.gui.conftest import wait_result
 
 
@@ -93,9 +93,9 @@ def test_a_forms_sketch_keeps_tooth_tips():
 def test_every_forms_sketch_curve_is_a_simple_outline():
     import itertools
 
+    from leafstudio.core.prepare.outline import ring_crossings
     from leafstudio.forms import Form
     from leafstudio.forms.terms import MARGINS
-    from leafstudio.gui.sketch_model import ring_crossings
 
     for shape, margin in itertools.product(SHAPES, MARGINS):
         form = Form(shape, margin=margin)

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from leafstudio.core.pipeline import Pipeline
-from leafstudio.demos import demo
-from leafstudio.gui.framing import best_iso, blade_bounds, fit_camera, project, projected_fill
-from leafstudio.gui.viewport import BAR_BAND
+from leafstudio.gui.model.framing import best_iso, blade_bounds, fit_camera, project, projected_fill
+from leafstudio.gui.qt.viewport import BAR_BAND
+from leafstudio.sources.demos import demo
 
 from .conftest import FAST, wait_result
 from .test_drawing import camera, click, ellipse_clicks, leaf_fill

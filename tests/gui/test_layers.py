@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from leafstudio.core.pipeline import Pipeline
-from leafstudio.demos import demo
-from leafstudio.gui.layers import LAYERS, SIDE_LAYERS, build_layers
-from leafstudio.gui.measurements import measurement_rows
+from leafstudio.gui.model.layers import LAYERS, SIDE_LAYERS, build_layers
+from leafstudio.gui.model.measurements import measurement_rows
+from leafstudio.sources.demos import demo
 
 from .conftest import FAST
 

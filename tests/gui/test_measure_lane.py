@@ -12,10 +12,10 @@ from PySide6.QtCore import Qt
 
 from leafstudio.core import analysis, pipeline
 from leafstudio.core.pipeline import Cancelled, Pipeline
-from leafstudio.demos import demo
-from leafstudio.gui.session import Session
-from leafstudio.gui.worker import PIPELINE, Worker
+from leafstudio.gui.model.session import Session
+from leafstudio.gui.qt.worker import PIPELINE, Worker
 from leafstudio.model import Leaf, Params
+from leafstudio.sources.demos import demo
 
 from .conftest import FAST, WAIT_MS
 
@@ -127,7 +127,7 @@ def test_metrics_of_a_result_no_longer_shown_never_reach_the_panel():
 
 def _outcome(request_id: int):
     """An outcome as the worker makes it, for the nested demo at a small grid."""
-    from leafstudio.gui.worker import Outcome, Request
+    from leafstudio.gui.qt.worker import Outcome, Request
 
     leaf = demo("nested")
     result = Pipeline(leaf).run(FAST)

@@ -9,8 +9,9 @@ import sys
 import numpy as np
 import shapely
 
-from leafstudio.gui.midrib import Midrib
-from leafstudio.gui.sketch_model import Sketch, ring_crossings
+from leafstudio.core.prepare.outline import ring_crossings
+from leafstudio.gui.model.midrib import Midrib
+from leafstudio.gui.model.sketch_model import Sketch
 
 
 def arc_midrib(points: int = 5) -> np.ndarray:
@@ -125,8 +126,8 @@ def test_a_straight_leaf_is_mirrored_as_before():
 
 def test_the_midrib_and_profile_models_import_no_qt():
     code = (
-        "import sys, leafstudio.gui.midrib, leafstudio.gui.vein_profile, "
-        "leafstudio.gui.sketch_model; "
+        "import sys, leafstudio.gui.model.midrib, leafstudio.gui.model.vein_profile, "
+        "leafstudio.gui.model.sketch_model; "
         "print(any(m.startswith(('PySide6', 'PyQt', 'vtk')) for m in sys.modules))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -1,4 +1,4 @@
-"""The 3D view as a native child window on X11 (gui/native_view.py).
+"""The 3D view as a native child window on X11 (gui/qt/native_view.py).
 
 A QOpenGLWidget makes Qt compose the whole window with OpenGL on every repaint of any widget;
 the native view does not. Its pixels come from VTK's frame buffer, so the screenshots must too;
@@ -19,8 +19,8 @@ from PySide6.QtGui import QImage
 from PySide6.QtOpenGLWidgets import QOpenGLWidget
 from PySide6.QtWidgets import QFileDialog, QWidget
 
-from leafstudio.gui.native_view import WIDGET_ENV, NativePlotter
-from leafstudio.gui.viewport import grab_window
+from leafstudio.gui.qt.native_view import WIDGET_ENV, NativePlotter
+from leafstudio.gui.qt.viewport import grab_window
 
 from .conftest import FAST, close_window, coloured_share, image_pixels, make_window, wait_result
 

@@ -11,9 +11,9 @@ from PySide6.QtGui import QColor, QKeyEvent, QMouseEvent
 from PySide6.QtTest import QTest
 from PySide6.QtWidgets import QApplication, QLineEdit, QVBoxLayout, QWidget
 
-from leafstudio.gui.profile_view import BIG_NUDGE, HANDLE_PIXELS, NUDGE, SELECTED, ProfileView
+from leafstudio.gui.qt.profile_view import BIG_NUDGE, HANDLE_PIXELS, NUDGE, SELECTED, ProfileView
+from tests.gui.test_profile_handles import curled, wiggly_vein
 
-from ..test_profile_handles import curled, wiggly_vein
 from .conftest import wait_result
 
 
@@ -230,7 +230,7 @@ def test_the_cursor_tells_a_handle_from_the_line_from_empty_space(side):
 def test_drawing_works_out_the_veins_curve_a_few_times_not_once_per_drawn_point(side, monkeypatch):
     """Each drawn point asked for the plot's height range, which made the vein's spline anew:
     ~75 ms of CPU per repaint of an 11-point vein, on every move of a drag."""
-    from leafstudio.gui.sketch_model import Sketch
+    from leafstudio.gui.model.sketch_model import Sketch
 
     calls = []
     made = Sketch.vein_curve
@@ -246,7 +246,7 @@ def test_drawing_works_out_the_veins_curve_a_few_times_not_once_per_drawn_point(
 
 
 def test_the_boundary_shows_its_heights_read_only(side):
-    from leafstudio.gui.sketch_model import BOUNDARY, Sketch
+    from leafstudio.gui.model.sketch_model import BOUNDARY, Sketch
 
     sketch = curled(wiggly_vein(5))
     side.set_vein(sketch, BOUNDARY)

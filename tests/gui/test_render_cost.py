@@ -8,10 +8,10 @@ from __future__ import annotations
 import numpy as np
 
 from leafstudio.core.pipeline import Pipeline
-from leafstudio.demos import demo
-from leafstudio.gui import display_mesh
-from leafstudio.gui.display_mesh import display_subset
-from leafstudio.gui.worker import PIPELINE, Worker
+from leafstudio.gui.model import display_mesh
+from leafstudio.gui.model.display_mesh import display_subset
+from leafstudio.gui.qt.worker import PIPELINE, Worker
+from leafstudio.sources.demos import demo
 from tests.gui.conftest import FAST, WAIT_MS, wait_result
 
 
@@ -138,7 +138,7 @@ def test_the_view_draws_a_lighter_mesh_but_edges_and_exports_are_the_full_one(
     window.edges.setChecked(False)
     assert window.viewport.plotter.actors["mesh"].mapper.dataset.n_cells < drawn.n_cells
     out = tmp_path / "leaf.ply"
-    assert window.export_mesh(str(out))
+    assert window.save_mesh(str(out))
     assert pv.read(out).n_points == len(full.points)  # the export is the full mesh
 
 

@@ -11,9 +11,11 @@ import pytest
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QListWidgetItem
 
-from leafstudio.gui import scans
-from leafstudio.gui.main_window import MainWindow
+from leafstudio import workflows
+from leafstudio.gui.model import scans
+from leafstudio.gui.qt.main_window import MainWindow
 from leafstudio.model import Leaf
+from leafstudio.sources.scan import is_scan_file, looks_like_scan
 
 from .conftest import FAST, WAIT_MS, close_window, make_window, wait_result
 
@@ -68,16 +70,16 @@ def wait_fidelity(qtbot, window: MainWindow) -> dict[str, str]:
     return panel_section(window, FIDELITY)
 
 
-def record_threads(monkeypatch, name: str) -> list[int]:
-    """Record the thread of every call to scans.`name` (a core geometry function)."""
+def record_threads(monkeypatch, name: str, module=scans) -> list[int]:
+    """Record the thread of every call to module.`name` (a core geometry function)."""
     threads: list[int] = []
-    real = getattr(scans, name)
+    real = getattr(module, name)
 
     def recording(*args, **kwargs):
         threads.append(threading.get_ident())
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(scans, name, recording)
+    monkeypatch.setattr(module, name, recording)
     return threads
 
 
@@ -85,7 +87,7 @@ def record_threads(monkeypatch, name: str) -> list[int]:
 def scan_window(qtbot, tmp_path, monkeypatch):
     """A window that opened a synthetic 6-column scan (as `leafstudio gui SCAN` would)."""
     win = make_window(qtbot, tmp_path / "settings.ini")
-    win.extract_threads = record_threads(monkeypatch, "extract_leaf")
+    win.extract_threads = record_threads(monkeypatch, "extract_leaf", workflows)
     win.panel.set_params(FAST)
     path = write_points(tmp_path / "scan.txt", synthetic_scan())
     assert win.open_path(path)  # a scan, not a leaf: read and extracted off the main thread
@@ -168,14 +170,14 @@ def test_the_poisson_layer_appears_beside_our_mesh_when_switched_on(window, qtbo
 
 def test_scans_are_told_from_leaves(tmp_path):
     scan = synthetic_scan()
-    assert scans.looks_like_scan(Leaf(boundary=scan[:, :3], veins=[]))
+    assert looks_like_scan(Leaf(boundary=scan[:, :3], veins=[]))
     t = np.linspace(0, 2 * np.pi, 300, endpoint=False)
     outline = np.column_stack([np.cos(t), 0.4 * np.sin(t), 0.05 * np.sin(3 * t)])
-    assert not scans.looks_like_scan(Leaf(boundary=outline, veins=[]))
-    assert not scans.looks_like_scan(Leaf(boundary=scan[:, :3], veins=[scan[:5, :3]]))
-    assert scans.is_scan_file(write_points(tmp_path / "wide.csv", scan))
-    assert not scans.is_scan_file(write_points(tmp_path / "leaf.csv", scan[:, :4]))
-    assert scans.is_scan_file(str(tmp_path / "any.pcd"))
+    assert not looks_like_scan(Leaf(boundary=outline, veins=[]))
+    assert not looks_like_scan(Leaf(boundary=scan[:, :3], veins=[scan[:5, :3]]))
+    assert is_scan_file(write_points(tmp_path / "wide.csv", scan))
+    assert not is_scan_file(write_points(tmp_path / "leaf.csv", scan[:, :4]))
+    assert is_scan_file(str(tmp_path / "any.pcd"))
 
 
 def test_a_scan_still_being_read_is_superseded_by_a_later_open(window, qtbot, tmp_path):

@@ -8,30 +8,29 @@ from pathlib import Path
 
 import pytest
 
-from leafstudio.gui import scans
 from leafstudio.model import Leaf
-from leafstudio.scan import read_scan
-from tests.test_clouds import _ellipse, _random_leaf
+from leafstudio.sources.scan import looks_like_scan, read_scan
+from tests.core.prepare.test_clouds import _ellipse, _random_leaf
 
 REAL = Path(__file__).resolve().parents[3] / "shared" / "realleaves"
 
 
 @pytest.mark.parametrize("noise", [1e-3, 1e-2])
 def test_a_dense_noisy_boundary_opens_as_a_boundary(noise):
-    assert not scans.looks_like_scan(_random_leaf(0, 20000, noise, 1.0)[0])
-    assert not scans.looks_like_scan(Leaf(_ellipse(20000, 0.04), []))
+    assert not looks_like_scan(_random_leaf(0, 20000, noise, 1.0)[0])
+    assert not looks_like_scan(Leaf(_ellipse(20000, 0.04), []))
 
 
 @pytest.mark.skipif(not REAL.is_dir(), reason=f"no real scans at {REAL}")
 def test_the_real_scans_open_as_scans():
-    assert all(scans.looks_like_scan(Leaf(read_scan(p), [])) for p in sorted(REAL.glob("*.txt")))
+    assert all(looks_like_scan(Leaf(read_scan(p), [])) for p in sorted(REAL.glob("*.txt")))
 
 
 def test_a_bent_narrow_outline_opens_as_a_boundary_and_a_bent_strip_scan_as_a_scan():
     """Session 3: the app asks the pipeline's question, so a curved grass leaf's outline (aspect
     30, bent 1 rad, noise 0.2%) opened as a scan (0.51) and the scan of a bent strip as a
     boundary (0.17); now the other way round."""
-    from tests.test_scan_as_boundary import bent_filled_strip, bent_strap
+    from tests.core.prepare.test_scan_as_boundary import bent_filled_strip, bent_strap
 
-    assert not scans.looks_like_scan(Leaf(bent_strap(5000, 30, 1.0, 0.002), []))
-    assert scans.looks_like_scan(Leaf(bent_filled_strip(5000, 25, 2.0), []))
+    assert not looks_like_scan(Leaf(bent_strap(5000, 30, 1.0, 0.002), []))
+    assert looks_like_scan(Leaf(bent_filled_strip(5000, 25, 2.0), []))

@@ -12,18 +12,20 @@ import pytest
 import shapely
 
 from leafstudio.core.pipeline import Pipeline
-from leafstudio.demos import demo
+from leafstudio.core.prepare.outline import ring_crossings
 from leafstudio.errors import LeafError
-from leafstudio.gui.framing import (
+from leafstudio.gui.model.framing import (
     best_iso,
     blade_bounds,
     fit_camera,
     projected_fill,
     view_direction,
 )
-from leafstudio.gui.session import Session, loaded_crossing
-from leafstudio.gui.sketch_model import Sketch, ring_crossings
+from leafstudio.gui.model.session import Session
+from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.model import Leaf, Params
+from leafstudio.sources.demos import demo
+from leafstudio.workflows import boundary_crossing
 
 FAST = Params(k=3, grid=40, samples=1200)
 
@@ -88,7 +90,7 @@ def test_no_qt_is_imported_by_the_session_model():
     import subprocess
 
     code = (
-        "import sys, leafstudio.gui.session, leafstudio.gui.framing; "
+        "import sys, leafstudio.gui.model.session, leafstudio.gui.model.framing; "
         "print(any(m.startswith(('PySide6', 'vtk', 'pyvista')) for m in sys.modules))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
@@ -216,13 +218,13 @@ def test_a_crossing_sketch_is_not_reconstructed_and_says_where(session, runner):
 
 def test_a_loaded_boundary_that_crosses_itself_is_found():
     points = np.column_stack([ellipse(40), np.zeros(40)])
-    assert loaded_crossing(Leaf(points)) is None
+    assert boundary_crossing(Leaf(points)) is None
     t = np.linspace(0, 2 * np.pi, 60, endpoint=False)  # a figure of eight, crossing at (0, 0)
     eight = np.column_stack([np.cos(t), 0.3 * np.sin(2 * t), np.zeros(60)])
-    where = loaded_crossing(Leaf(eight))
+    where = boundary_crossing(Leaf(eight))
     assert where is not None and np.linalg.norm(where) < 0.05
     shuffled = np.random.default_rng(0).permutation(np.column_stack([ellipse(40), np.zeros(40)]))
-    assert loaded_crossing(Leaf(shuffled)) is None  # an unordered cloud is not read in order
+    assert boundary_crossing(Leaf(shuffled)) is None  # an unordered cloud is not read in order
     assert len(ring_crossings(ellipse(40))) == 0
 
 

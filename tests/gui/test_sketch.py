@@ -7,7 +7,7 @@ from PySide6.QtCore import QPoint, Qt
 from PySide6.QtGui import QKeySequence
 from PySide6.QtTest import QTest
 
-from leafstudio.gui.sketch_model import BOUNDARY
+from leafstudio.gui.model.sketch_model import BOUNDARY
 
 from .conftest import wait_result
 

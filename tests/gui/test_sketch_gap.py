@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from PySide6.QtCore import Qt
 
-from leafstudio.demos import demo
-from leafstudio.gui.session import Session
-from leafstudio.gui.sketch_model import BOUNDARY, Sketch
-from leafstudio.io import save_leaf
+from leafstudio.gui.model.session import Session
+from leafstudio.gui.model.sketch_model import BOUNDARY, Sketch
 from leafstudio.model import Leaf
+from leafstudio.sources.demos import demo
+from leafstudio.sources.files import save_leaf
 
 from .conftest import wait_result
 from .test_scan import synthetic_scan, write_points

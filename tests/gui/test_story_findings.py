@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from PySide6.QtCore import Qt
 
-from leafstudio.gui import explain
-from leafstudio.gui.layers import vein_color
-from leafstudio.gui.sketch_model import BOUNDARY
+from leafstudio.gui.model.layers import vein_color
+from leafstudio.gui.model.sketch_model import BOUNDARY
+from leafstudio.gui.qt import explain
 
 from .conftest import wait_result
 from .test_sketch import click

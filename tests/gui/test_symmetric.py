@@ -12,9 +12,10 @@ import pytest
 
 import leafstudio as ls
 from leafstudio.cli import main
-from leafstudio.gui.session import Session
-from leafstudio.gui.sketch_model import Sketch, ring_crossings
-from leafstudio.io import load_project, save_leaf
+from leafstudio.core.prepare.outline import ring_crossings
+from leafstudio.gui.model.session import Session
+from leafstudio.gui.model.sketch_model import Sketch
+from leafstudio.sources.files import load_project, save_leaf
 
 from .conftest import wait_result
 from .test_session import FAST, Runner, ellipse
@@ -202,7 +203,7 @@ def test_the_fold_is_found_where_the_leaf_reaches_past_the_bends_centre(outside,
 
 def test_the_sketch_editor_says_why_an_edit_was_not_mirrored(qtbot):
     """In the dock, not in a dialog: a drag passes through many such edits."""
-    from leafstudio.gui.sketch import SketchEditor
+    from leafstudio.gui.qt.sketch import SketchEditor
 
     from .test_sketch import click
 
@@ -237,7 +238,7 @@ def test_a_drag_past_the_bend_pauses_the_mirror_and_says_so_without_a_dialog(qtb
     from PySide6.QtCore import Qt
     from PySide6.QtWidgets import QMessageBox
 
-    from leafstudio.gui.sketch import SketchEditor
+    from leafstudio.gui.qt.sketch import SketchEditor
 
     editor = SketchEditor()
     qtbot.addWidget(editor)

@@ -11,7 +11,7 @@ from PIL import Image
 from PySide6.QtCore import Qt
 
 from leafstudio.assets.asset import leaf_uvs
-from leafstudio.gui.textures import TEXTURE
+from leafstudio.gui.model.textures import TEXTURE
 from tests.gui.conftest import WAIT_MS, wait_result
 
 
@@ -46,7 +46,7 @@ def test_the_texture_colouring_shows_what_an_export_writes(window, qtbot, tmp_pa
     result = window.result
     assert image.shape == (1024, 1024, 4)
     glb = tmp_path / "leaf.glb"
-    assert window.export_mesh(str(glb))  # the leaf's texture: the generated one
+    assert window.save_mesh(str(glb))  # the leaf's texture: the generated one
     np.testing.assert_array_equal(image, _glb_texture(glb))  # pixel for pixel
     np.testing.assert_allclose(_mesh_uvs(window), leaf_uvs(result), atol=1e-6)
     assert window.viewport.plotter.actors["mesh"].mapper.scalar_visibility is False
@@ -157,7 +157,7 @@ def test_a_photo_leaf_keeps_its_photo_through_save_reopen_and_export(
     glb = tmp_path / "oak.glb"
     assert window._texture_choice(str(glb)) == "photo"
     assert offered["items"][offered["current"]] == window.PHOTO_CHOICE.format(name="oak.png")
-    assert window.export_mesh(str(glb))  # no choice given: the photo, as shown
+    assert window.save_mesh(str(glb))  # no choice given: the photo, as shown
     np.testing.assert_array_equal(_glb_texture(glb), expected)
 
 
@@ -182,7 +182,7 @@ def test_a_missing_photo_is_said_and_the_generated_texture_shown(window, qtbot, 
     np.testing.assert_array_equal(image, np.asarray(base_color(window.result, "auto")))
     assert window.save_to(str(project))  # the photo's place is kept for when it comes back
     assert '"oak.png"' in project.read_text() or "photos/oak.png" in project.read_text()
-    assert not window.export_mesh(str(tmp_path / "x.glb"), texture="photo")  # said, not written
+    assert not window.save_mesh(str(tmp_path / "x.glb"), texture="photo")  # said, not written
     assert "missing" in window.last_error_box.text()
     window.last_error_box.close()
 

@@ -8,10 +8,10 @@ from PySide6.QtCore import QPoint, Qt
 from PySide6.QtGui import QColor, QPalette
 from PySide6.QtTest import QTest
 
-from leafstudio.demos import demo
-from leafstudio.gui.session import Session
-from leafstudio.gui.sketch_model import Sketch
-from leafstudio.gui.vein_profile import MIN_GAP, PROFILE_HANDLES, Profile
+from leafstudio.gui.model.session import Session
+from leafstudio.gui.model.sketch_model import Sketch
+from leafstudio.gui.model.vein_profile import MIN_GAP, PROFILE_HANDLES, Profile
+from leafstudio.sources.demos import demo
 
 from .conftest import wait_result
 

@@ -11,8 +11,8 @@ from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QMessageBox
 
 from leafstudio.core.pipeline import Pipeline
-from leafstudio.gui.layers import LAYERS
-from leafstudio.gui.main_window import MainWindow
+from leafstudio.gui.model.layers import LAYERS
+from leafstudio.gui.qt.main_window import MainWindow
 
 from .conftest import FAST, close_window, make_window, wait_result
 
@@ -181,9 +181,9 @@ def test_export_mesh_and_open_by_drag_and_drop(window, qtbot, tmp_path):
 
     for suffix in (".ply", ".vtp"):
         out = tmp_path / f"leaf{suffix}"
-        assert window.export_mesh(str(out))
+        assert window.save_mesh(str(out))
         assert pv.read(out).n_points == window.result.mesh.n_points
-    assert not window.export_mesh(str(tmp_path / "leaf.xyz"))  # not a mesh type: an error box
+    assert not window.save_mesh(str(tmp_path / "leaf.xyz"))  # not a mesh type: an error box
     window.last_error_box.close()
 
     dropped = tmp_path / "dropped.leaf.json"
@@ -209,13 +209,13 @@ def test_export_a_textured_gltf_and_a_solid(window, qtbot, tmp_path):
     import trimesh
 
     glb = tmp_path / "leaf.glb"
-    assert window.export_mesh(str(glb))
+    assert window.save_mesh(str(glb))
     (mesh,) = trimesh.load(glb, process=False).geometry.values()
     assert mesh.visual.material.baseColorTexture is not None and mesh.visual.uv is not None
     solid = tmp_path / "leaf.stl"
-    assert window.export_mesh(str(solid), thickness="0.01")
+    assert window.save_mesh(str(solid), thickness="0.01")
     assert trimesh.load(solid).is_watertight
-    assert not window.export_mesh(str(tmp_path / "bad.stl"), thickness="thick")  # an error box
+    assert not window.save_mesh(str(tmp_path / "bad.stl"), thickness="thick")  # an error box
     window.last_error_box.close()
     assert not (tmp_path / "bad.stl").exists()
 
@@ -265,5 +265,5 @@ def test_the_export_dialog_offers_the_texture(window, qtbot, tmp_path, monkeypat
     window.export_mesh_dialog()  # none
     (mesh,) = trimesh.load(glb, process=False).geometry.values()
     assert mesh.visual.material.baseColorTexture is None and mesh.visual.uv is not None
-    assert not window.export_mesh(str(glb), texture=str(tmp_path / "missing.png"))  # an error box
+    assert not window.save_mesh(str(glb), texture=str(tmp_path / "missing.png"))  # an error box
     window.last_error_box.close()

@@ -8,10 +8,10 @@ import threading
 
 import pytest
 
-from leafstudio.demos import demo
 from leafstudio.errors import LeafError
-from leafstudio.gui.worker import PIPELINE, Worker
+from leafstudio.gui.qt.worker import PIPELINE, Worker
 from leafstudio.model import Leaf, Params
+from leafstudio.sources.demos import demo
 
 from .conftest import FAST, WAIT_MS
 

@@ -1,0 +1,257 @@
+"""Reading input files defensively: every bad file is one LeafError naming it, never a hang, a
+huge allocation or a library's traceback.
+
+- Only regular files are opened (a FIFO would block for ever, /dev/zero never ends).
+- Sizes are bounded: text files by MAX_TEXT_BYTES, JSON by MAX_JSON_BYTES and MAX_JSON_DEPTH.
+- A PLY header's element counts are checked against the file's size before plyfile allocates.
+- Numbers are read strictly: Python's float() also takes "1_0" (as 10), which no scanner writes.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import stat
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from leafstudio.errors import LeafError, shorten
+
+MAX_TEXT_BYTES = 1 << 30  # a point list or scan of more than 1 GiB is refused
+MAX_JSON_BYTES = 256 << 20
+MAX_JSON_DEPTH = 32  # a project nests 4 deep (veins -> vein -> point -> number)
+MAX_HEADER = 64 << 10  # a PLY or PCD header ends within this many bytes
+PLY_SIZES = {
+    "char": 1, "int8": 1, "uchar": 1, "uint8": 1, "short": 2, "int16": 2, "ushort": 2,
+    "uint16": 2, "int": 4, "int32": 4, "uint": 4, "uint32": 4, "float": 4, "float32": 4,
+    "double": 8, "float64": 8,
+}  # fmt: skip
+_NUMBER = re.compile(
+    r"[+-]?(?:\d+\.?\d*(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?|nan|inf)", re.I | re.ASCII
+)
+
+
+FOLDER = "is a folder, not a file (`leafstudio batch` takes folders)"
+
+
+def check_not_a_folder(path: str | os.PathLike) -> None:
+    """Refuse a folder given where an input file belongs, before its name's suffix is judged (a
+    folder has none, and "unknown file type '(none)'" did not say what was wrong)."""
+    if Path(path).is_dir():
+        raise LeafError(FOLDER, str(path))
+
+
+def check_input_file(path: str | os.PathLike, limit: int | None = MAX_TEXT_BYTES) -> int:
+    """The size of `path`, a regular file that exists; refused (LeafError) if it is missing, a
+    folder, a device or a pipe, or larger than `limit` bytes."""
+    path = Path(path)
+    try:
+        info = path.stat()
+    except FileNotFoundError:
+        raise LeafError("no such file", str(path)) from None
+    except OSError as exc:
+        raise LeafError(f"cannot be read ({exc.strerror or exc})", str(path)) from None
+    if stat.S_ISDIR(info.st_mode):
+        raise LeafError(FOLDER, str(path))
+    if not stat.S_ISREG(info.st_mode):
+        raise LeafError("is a device or a pipe, not a regular file", str(path))
+    if limit is not None and info.st_size > limit:
+        raise LeafError(
+            f"is too large ({info.st_size / 2**20:.0f} MiB; at most {limit / 2**20:.0f} MiB)",
+            str(path),
+        )
+    return info.st_size
+
+
+def read_text(path: str | os.PathLike, limit: int = MAX_TEXT_BYTES) -> str:
+    """A text file's contents (UTF-8), after `check_input_file`."""
+    path = Path(path)
+    check_input_file(path, limit)
+    try:
+        with open(path, "rb") as handle:
+            data = handle.read(limit + 1)
+    except OSError as exc:
+        raise LeafError(f"cannot be read ({exc.strerror or exc})", str(path)) from None
+    if len(data) > limit:
+        raise LeafError(f"is too large (more than {limit / 2**20:.0f} MiB)", str(path))
+    if b"\0" in data:
+        raise LeafError("is not a text file (it holds binary data)", str(path))
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise LeafError("is not a text file (not UTF-8)", str(path)) from None
+
+
+def parse_number(field: str) -> float:
+    """A float from a plain decimal field ("1.5", "-2e3", "nan"); ValueError otherwise (Python's
+    float() also reads "1_0" as 10 and "١" as 1)."""
+    if not _NUMBER.fullmatch(field):
+        raise ValueError(field)
+    return float(field)
+
+
+def load_json(path: str | os.PathLike) -> Any:
+    """Parsed JSON, with its size and nesting bounded and each failure one LeafError."""
+    text = read_text(path, MAX_JSON_BYTES)
+    depth = json_depth(text)
+    if depth > MAX_JSON_DEPTH:
+        raise LeafError(f"nested {depth} levels deep (at most {MAX_JSON_DEPTH})", str(path))
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise LeafError(f"not valid JSON (line {exc.lineno}: {exc.msg})", str(path)) from None
+    except (ValueError, RecursionError) as exc:  # e.g. an integer of more than 4300 digits
+        raise LeafError(f"not valid JSON ({shorten(exc, 80)})", str(path)) from None
+
+
+def json_depth(text: str) -> int:
+    """The deepest nesting of [ and { in JSON text, strings aside (no recursion: 1e6 levels are
+    counted as quickly as 1)."""
+    bare = re.sub(r'"(?:[^"\\]|\\.)*"', '""', text)
+    codes = np.frombuffer(bare.encode("utf-8", "replace"), dtype=np.uint8)
+    step = np.zeros(len(codes), dtype=np.int64)
+    step[(codes == ord("[")) | (codes == ord("{"))] = 1
+    step[(codes == ord("]")) | (codes == ord("}"))] = -1
+    return int(np.cumsum(step).max(initial=0))
+
+
+def _head(path: Path) -> tuple[int, bytes]:
+    """A regular file's size and its first MAX_HEADER bytes (where a header must end)."""
+    size = check_input_file(path, limit=None)
+    try:
+        with open(path, "rb") as handle:
+            return size, handle.read(MAX_HEADER)
+    except OSError as exc:
+        raise LeafError(f"cannot be read ({exc.strerror or exc})", str(path)) from None
+
+
+def check_ply_header(path: str | os.PathLike) -> None:
+    """Refuse a PLY file whose header declares more data than the file holds (a header can claim
+    2e9 vertices in a 200-byte file; plyfile would allocate them first)."""
+    path = Path(path)
+    size, head = _head(path)
+    end = head.find(b"end_header")
+    if not head.startswith(b"ply") or end < 0:
+        raise LeafError("not a readable PLY file (no 'ply' ... 'end_header' header)", str(path))
+    body = size - (end + len(b"end_header") + 1)
+    lines = head[:end].decode("ascii", "replace").splitlines()
+    ascii_format = any(line.split()[:2] == ["format", "ascii"] for line in lines if line.split())
+    elements: list[list[int]] = []  # [count, bytes per element at least]
+    for line in lines:
+        words = line.split()
+        if not words:
+            continue
+        if words[0] == "element":
+            if len(words) != 3 or not words[2].isdigit():
+                raise LeafError(f"not a readable PLY file (bad line {shorten(line)!r})", str(path))
+            elements.append([int(words[2]), 0])
+        elif words[0] == "property" and elements:
+            if ascii_format:
+                elements[-1][1] += 2  # a digit and a separator at least
+            elif words[1:2] == ["list"] and len(words) >= 3:
+                elements[-1][1] += PLY_SIZES.get(words[2], 1)  # the list's length, at least
+            elif len(words) >= 2:
+                elements[-1][1] += PLY_SIZES.get(words[1], 1)
+    needed = sum(count * max(width, 1) for count, width in elements)
+    if needed > body:
+        counts = ", ".join(f"{count}" for count, _ in elements)
+        raise LeafError(
+            f"not a readable PLY file: its header declares {counts} elements, which need at least "
+            f"{needed} bytes, but the file holds {max(body, 0)}",
+            str(path),
+        )
+
+
+def check_pcd_header(path: str | os.PathLike) -> None:
+    """Refuse a PCD file whose header declares more points than the file holds (open3d would
+    allocate them first), or that has no PCD header at all."""
+    path = Path(path)
+    size, head = _head(path)
+    fields: dict[str, list[str]] = {}
+    body = None
+    offset = 0
+    for raw in head.split(b"\n"):
+        offset += len(raw) + 1
+        words = raw.decode("ascii", "replace").split()
+        if not words or words[0].startswith("#"):
+            continue
+        fields[words[0].upper()] = words[1:]
+        if words[0].upper() == "DATA":
+            body = size - offset
+            break
+    points = fields.get("POINTS", [""])[0]
+    if body is None or not points.isdigit():
+        raise LeafError("not a readable PCD file (no POINTS ... DATA header)", str(path))
+    mode = (fields.get("DATA") or ["ascii"])[0].lower()
+    if mode == "binary_compressed":
+        return  # its size says nothing about the point count; open3d checks it
+    sizes = [int(v) for v in fields.get("SIZE", []) if v.isdigit()]
+    counts = [int(v) for v in fields.get("COUNT", []) if v.isdigit()] or [1] * len(sizes)
+    width = sum(a * b for a, b in zip(sizes, counts, strict=False)) if mode == "binary" else 2
+    needed = int(points) * max(width, 1)
+    if needed > body:
+        raise LeafError(
+            f"not a readable PCD file: its header declares {points} points, which need at least "
+            f"{needed} bytes, but the file holds {max(body, 0)}",
+            str(path),
+        )
+
+
+def read_ply(path: str | os.PathLike) -> Any:
+    """A PlyData, header checked first; any failure of the parser is one LeafError."""
+    from plyfile import PlyData
+
+    path = Path(path)
+    check_ply_header(path)
+    try:
+        return PlyData.read(str(path))
+    except MemoryError:
+        raise LeafError("not a readable PLY file (too large to read)", str(path)) from None
+    except Exception as exc:  # plyfile raises many types on a damaged file; all mean the same
+        raise LeafError(f"not a readable PLY file ({shorten(exc, 80)})", str(path)) from None
+
+
+def ply_xyz(ply: Any, path: str | os.PathLike) -> tuple[np.ndarray, tuple[str, ...]]:
+    """The (n, 3) vertex coordinates of a PlyData and its vertex property names."""
+    if "vertex" not in ply:
+        raise LeafError("PLY file has no vertex element", str(path))
+    vertex = ply["vertex"]
+    names = vertex.data.dtype.names or ()
+    if not {"x", "y", "z"} <= set(names):
+        raise LeafError("PLY vertices need x, y and z properties", str(path))
+    xyz = np.column_stack([ply_numbers(ply, c, path) for c in "xyz"])
+    if len(vertex.data) == 0:
+        raise LeafError("holds no points", str(path))
+    return xyz, names
+
+
+def ply_numbers(ply: Any, name: str, path: str | os.PathLike) -> np.ndarray:
+    """The vertex property `name` of a PlyData, as floats; refused if it is a list (one per
+    vertex: x y z, a leaf's labels)."""
+    vertex = ply["vertex"]
+    kind = vertex.data.dtype[name]
+    if kind.kind not in "biuf" or kind.shape:
+        raise LeafError(f"PLY vertex property {name} must be a number, not a list", str(path))
+    return np.asarray(vertex[name], dtype=float)
+
+
+def read_image(path: str | Path) -> np.ndarray:
+    """An image file as an (h, w, 3 or 4) uint8 array; LeafError if it cannot be read."""
+    from PIL import Image, UnidentifiedImageError
+    from PIL.Image import DecompressionBombError
+
+    try:
+        with Image.open(path) as image:
+            image = image.convert("RGBA" if "A" in image.getbands() else "RGB")
+            return np.asarray(image)
+    except FileNotFoundError:
+        raise LeafError("no such file", str(path)) from None
+    except IsADirectoryError:
+        raise LeafError("is a folder, not an image", str(path)) from None
+    except DecompressionBombError:
+        raise LeafError("not a readable image (too many pixels)", str(path)) from None
+    except (UnidentifiedImageError, OSError, ValueError) as exc:
+        raise LeafError(f"not a readable image ({type(exc).__name__})", str(path)) from None

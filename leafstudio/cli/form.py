@@ -1,0 +1,139 @@
+"""`leafstudio form` and `leafstudio veins`: the command-line side of leafstudio.forms."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from leafstudio.errors import LeafError
+from leafstudio.forms.terms import APEXES, MARGINS, SHAPES, USER_BASES
+from leafstudio.forms.veins import VENATION_KINDS
+
+
+def add_form_parser(sub: argparse._SubParsersAction) -> None:
+    """The `form` subcommand."""
+    p = sub.add_parser("form", help="write a leaf made from botanical terms (--list: every term)")
+    p.add_argument("shape", nargs="?", help=f"one of: {', '.join(SHAPES)}")
+    p.add_argument("--list", action="store_true", help="print every term with its definition")
+    p.add_argument("--apex", choices=tuple(APEXES), help="default: the shape's usual apex")
+    p.add_argument("--base", choices=USER_BASES, help="default: the shape's usual base")
+    p.add_argument("--margin", choices=tuple(MARGINS), default="entire")
+    p.add_argument("--teeth", type=int, metavar="N", help="N teeth in all (toothed margins)")
+    p.add_argument("--lobes", type=int, metavar="N", help="N lobes in all (--margin lobed)")
+    p.add_argument("--venation", choices=VENATION_KINDS, default="pinnate")
+    p.add_argument("--secondaries", type=int, metavar="N", help="secondary veins per side")
+    p.add_argument("--aspect", type=float, metavar="L/W", help="length over greatest width")
+    p.add_argument("--fold", type=float, default=0.0, metavar="DEG", help="halves raised by DEG")
+    p.add_argument("--curl", type=float, default=0.0, metavar="C", help="apex raised C lengths")
+    p.add_argument("--wave", type=float, default=0.0, metavar="A", help="margin wave height")
+    p.add_argument("--seed", type=int, default=0, metavar="S", help="a variant (default 0)")
+    p.add_argument(
+        "-o",
+        "--output",
+        metavar="FILE",
+        help=".leaf.json, .csv, .txt, .xyz, .ply (the leaf) or "
+        "a mesh type (reconstructed with default settings)",
+    )
+
+
+def add_veins_parser(sub: argparse._SubParsersAction) -> None:
+    """The `veins` subcommand."""
+    p = sub.add_parser("veins", help="grow veins inside a leaf's outline")
+    p.add_argument("leaf", help="a leaf file: its boundary is kept, its veins replaced")
+    p.add_argument("-o", "--output", required=True, metavar="OUT", help="the leaf with new veins")
+    p.add_argument("--venation", choices=VENATION_KINDS, default="pinnate")
+    p.add_argument("--secondaries", type=int, metavar="N", help="secondary veins per side")
+    p.add_argument("--seed", type=int, default=0, metavar="S")
+    p.add_argument(
+        "--base",
+        metavar="X,Y[,Z]",
+        help="where the midrib meets the blade (default: the start of the leaf's first vein, "
+        "else an end of the outline's longest axis)",
+    )
+
+
+def _is_leaf_file(name: str) -> bool:
+    from leafstudio.sources.files import LEAF_SUFFIXES
+
+    return name.lower().endswith(LEAF_SUFFIXES)
+
+
+def run_form(args: argparse.Namespace) -> int:
+    from leafstudio.assets.export import save_mesh
+    from leafstudio.assets.writers import MESH_SUFFIXES
+    from leafstudio.forms.make import SIDE_ON, Form, seen_on_edge
+    from leafstudio.forms.terms import format_terms
+    from leafstudio.sources.files import LEAF_SUFFIXES, save_leaf
+
+    if args.list:
+        print(format_terms())
+        return 0
+    if not args.shape:
+        raise LeafError("a shape is needed (leafstudio form --list shows them)")
+    if not args.output:
+        raise LeafError("the output file is needed: -o FILE")
+    out = args.output
+    mesh = not _is_leaf_file(out)
+    if mesh and not out.lower().endswith(MESH_SUFFIXES):
+        kinds = ", ".join(dict.fromkeys((*LEAF_SUFFIXES, *MESH_SUFFIXES)))
+        raise LeafError(f"unknown file type; use one of {kinds}", out)
+    names = ("apex", "base", "margin", "teeth", "lobes", "venation", "secondaries", "aspect")
+    form = Form(
+        args.shape,
+        **{n: getattr(args, n) for n in names},
+        fold=args.fold,
+        curl=args.curl,
+        wave=args.wave,
+        seed=args.seed,
+    )
+    leaf = form.leaf()
+    if mesh and seen_on_edge(leaf):
+        raise LeafError(f"{SIDE_ON}; write the leaf (.leaf.json), or lower --fold or --curl")
+    if mesh:
+        from leafstudio.core.pipeline import reconstruct
+        from leafstudio.model import Params
+
+        save_mesh(reconstruct(leaf, Params()), out)
+    else:
+        save_leaf(leaf, out)
+    print(
+        f"{out}: {form.shape} leaf ({form.apex_term} apex, {form.base_term} base, {form.margin} "
+        f"margin, {form.venation} venation): {len(leaf.boundary)} boundary points, "
+        f"{len(leaf.veins)} veins",
+        file=sys.stderr,
+    )
+    return 0
+
+
+def _point(text: str) -> np.ndarray:
+    try:
+        values = [float(v) for v in text.replace(" ", "").split(",")]
+    except ValueError:
+        values = []
+    if len(values) not in (2, 3) or not np.all(np.isfinite(values)):
+        raise LeafError(f"--base must be X,Y or X,Y,Z, got {text!r}")
+    return np.array(values)
+
+
+def run_veins(args: argparse.Namespace) -> int:
+    from leafstudio.forms.veins import grow_veins
+    from leafstudio.model import Leaf
+    from leafstudio.sources.files import check_leaf_output, load_leaf, save_leaf
+
+    check_leaf_output(args.output, [args.leaf])
+    leaf = load_leaf(args.leaf)
+    base = _point(args.base) if args.base else (leaf.veins[0][0] if leaf.veins else None)
+    try:
+        veins = grow_veins(leaf.boundary, args.venation, args.secondaries, base, args.seed)
+    except LeafError as exc:
+        raise LeafError(exc.problem, args.leaf) from None
+    save_leaf(Leaf(boundary=leaf.boundary, veins=veins), args.output)
+    print(
+        f"{args.output}: {len(veins)} {args.venation} veins grown inside the outline of "
+        f"{Path(args.leaf).name}",
+        file=sys.stderr,
+    )
+    return 0

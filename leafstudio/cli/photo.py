@@ -1,0 +1,55 @@
+"""`leafstudio photo`: the command-line side of sources/photo.py."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from leafstudio.errors import LeafError
+from leafstudio.sources.photo import BASE_ENDS
+
+
+def add_photo_parser(sub: argparse._SubParsersAction) -> None:
+    """The `photo` subcommand."""
+    p = sub.add_parser("photo", help="a leaf's boundary (and grown veins) from a photo or scan")
+    p.add_argument("image", help="a photo of one leaf on a plain background (.png, .jpg, ...)")
+    p.add_argument(
+        "-o", "--output", required=True, metavar="LEAF",
+        help=".leaf.json (keeps the photo's pixel map for --texture), .csv, .txt, .xyz or .ply",
+    )  # fmt: skip
+    p.add_argument("--length", type=float, metavar="L", help="base to apex (default 1)")
+    p.add_argument(
+        "--base-end", choices=BASE_ENDS, default="auto",
+        help="where the base is when no petiole shows it (default auto: the end of the blade's "
+        "mirror axis with a basal notch, else the one the veins lean away from, else the wider)",
+    )  # fmt: skip
+    p.add_argument("--veins", choices=("grow", "none"), default="grow")
+    p.add_argument("--venation", default="pinnate", help="for --veins grow (default pinnate)")
+    p.add_argument("--seed", type=int, default=0, metavar="S", help="vein growth's variant")
+
+
+def run_photo(args: argparse.Namespace) -> int:
+    """Find the leaf in the photo and write it."""
+    from leafstudio._shared.inputs import read_image
+    from leafstudio.sources.files import check_leaf_output
+    from leafstudio.sources.photo import leaf_from_photo, save_photo_leaf
+
+    check_leaf_output(args.output, [args.image])
+    image = read_image(args.image)
+    try:
+        found = leaf_from_photo(
+            image, args.length, args.base_end, args.veins, args.venation, seed=args.seed
+        )
+    except LeafError as exc:
+        raise LeafError(exc.problem, args.image) from None
+    save_photo_leaf(found, args.image, args.output)
+    guess = "; base at the wider end (a guess: --base-end names it)"
+    print(
+        f"{args.image}: leaf of {int(found.blade.sum())} pixels"
+        f"{', petiole cut off' if found.petiole else ''}"
+        f"{guess if found.base_cue == 'wider end' else ''}"
+        f"; wrote {len(found.leaf.boundary)} "
+        f"boundary points and {len(found.leaf.veins)} veins to {args.output}",
+        file=sys.stderr,
+    )
+    return 0

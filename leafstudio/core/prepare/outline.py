@@ -1,0 +1,534 @@
+"""The leaf outline: unordered boundary points turned into one simple polygon in the plane.
+
+The MPU implicit needs outward normals, and the conforming mesher and the coverage figures need
+the leaf region; both come from this polygon (trace_outline). A clean boundary keeps its points
+as the outline's vertices: ordered input (sketches, sampled curves) in its order, a dense one
+thinned to about MAX_OUTLINE_VERTICES; unordered input in the order a contour round its cells
+gives (cloud.py). A noisy boundary, ordered or not, becomes the smooth outline through its points'
+mean position. Everything is linear in the number of points but for one sort of them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+import shapely
+from numba import njit
+from scipy.spatial import cKDTree
+from shapely.geometry import MultiPoint, Polygon
+
+from leafstudio.core.buckets import bounds, kernel_array, near_edges, neighbour_distances
+from leafstudio.core.prepare.cloud import (
+    Cells,
+    Noise,
+    estimate_noise,
+    filled_outline,
+    mean_outline,
+    order_cells,
+    point_order,
+)
+from leafstudio.core.prepare.plausibility import ZIGZAG
+from leafstudio.errors import LeafError
+
+# points given in order step at most this many median spacings (a longer step: unordered)
+ORDERED_STEP_RATIO = 8.0
+
+MAX_OUTLINE_VERTICES = 3000  # a denser outline is thinned to about this many (thin_outline)
+ORDERED_MEAN_EDGE = 4.0  # given order: mean edge at most this many nearest-neighbour spacings
+CLEAN_NOISE = 2e-5  # estimated noise (σ) under this fraction of the size: a clean boundary
+RASTER = 512  # the cloud's cells: at least 1/RASTER of its size
+HULL_MOST = 5000  # a clean cloud the cells cannot trace is tried by concave hulls up to this
+SNAKE = (2.0, 0.25)  # a concave hull this much longer round this share of the area: see _snakes
+_HULL_RATIOS = (0.0, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0)
+
+
+def distinct_indices(points: np.ndarray, scale: float) -> np.ndarray:
+    """Indices of the (n, 2) points left once repeats (within 1e-9 of `scale`) are dropped, in
+    order. Column by column: numpy's reductions along axis 0 of an (n, 2) array are slow."""
+    if len(points) == 0:
+        return np.arange(0)
+    columns = [np.round(points[:, i] / (scale * 1e-9)).astype(np.int64) for i in range(2)]
+    columns = [c - c.min() for c in columns]
+    span_y = int(columns[1].max()) + 1
+    if (float(columns[0].max()) + 1) * span_y >= 2.0**62:  # rare: no one integer each
+        return np.sort(np.unique(np.column_stack(columns), axis=0, return_index=True)[1])
+    keys = columns[0] * span_y + columns[1]
+    ordered = np.sort(keys)  # a plain sort: many times faster than a unique with indices
+    same = ordered[1:] == ordered[:-1]
+    if not same.any():
+        return np.arange(len(keys))
+    # only the points whose key repeats are sorted again (a dense scan has a few such pairs)
+    involved = np.flatnonzero(np.isin(keys, np.unique(ordered[1:][same])))
+    order = np.argsort(keys[involved], kind="stable")
+    grouped = keys[involved][order]
+    first = involved[order[np.r_[True, grouped[1:] != grouped[:-1]]]]  # each repeat's first
+    keep = np.ones(len(keys), dtype=bool)
+    keep[involved] = False
+    keep[first] = True
+    return np.flatnonzero(keep)
+
+
+SPACING_QUERIES = 2000  # points whose nearest neighbour sets the median spacing, at most
+SPACING_POINTS = 20_000  # ... among this many, at most
+
+
+def _spacing(points: np.ndarray) -> float:
+    """Median distance from each point to its nearest neighbour (over SPACING_QUERIES points
+    evenly through the array, at most: a scale for the tests below, not an exact figure)."""
+    thin = max(1, len(points) // SPACING_POINTS)  # a dense cloud: every thin-th point, whose
+    points = points[::thin]  # spacing along a curve is thin times as wide
+    every = max(1, len(points) // SPACING_QUERIES)
+    queries = np.arange(0, len(points), every)
+    return float(np.median(neighbour_distances(points, queries))) / thin
+
+
+def _largest_polygon(geom: shapely.Geometry) -> Polygon | None:
+    """The largest polygon in `geom`, without holes; None if there is none."""
+    parts = shapely.get_parts(shapely.get_parts(geom))  # a collection may hold multipolygons
+    polys = [g for g in parts if isinstance(g, Polygon) and g.area > 0]
+    if not polys:
+        return None
+    return Polygon(max(polys, key=lambda g: g.area).exterior)
+
+
+@dataclass(frozen=True)
+class Outline:
+    """The leaf outline traced from boundary points (trace_outline).
+
+    Attributes
+    ----------
+    polygon : (m, 2) float array
+        Counter-clockwise vertices, not closed.
+    heights : (m, 2) float array
+        The vertices' heights (the input points' own, or their smoothed mean).
+    noise : Noise
+        The boundary's estimated scatter (cloud.estimate_noise).
+    smoothed : bool
+        True: the vertices are the points' smoothed mean (a noisy cloud); False: input points.
+    """
+
+    polygon: np.ndarray
+    heights: np.ndarray
+    noise: Noise
+    smoothed: bool
+
+
+def _canonical(points: np.ndarray, sequence: np.ndarray) -> np.ndarray:
+    """`sequence` (indices of a closed ring of `points`) counter-clockwise and starting at its
+    lowest point by (x, y): the same ring whatever its given start and direction."""
+    sequence = np.asarray(sequence, dtype=np.int64)
+    twice_area, start = _orientation(kernel_array(points), sequence)
+    if twice_area < 0:
+        sequence = sequence[::-1]
+        start = len(sequence) - 1 - start
+    return np.roll(sequence, -start)
+
+
+@njit(cache=True, nogil=True)
+def _orientation(points, sequence):
+    """Twice the signed area of the ring points[sequence], and the position in `sequence` of
+    its lowest point by (x, y)."""
+    n = len(sequence)
+    area = 0.0
+    start = 0
+    for i in range(n):
+        a, b = sequence[i], sequence[(i + 1) % n]
+        area += points[a, 0] * points[b, 1] - points[b, 0] * points[a, 1]
+        s = sequence[start]
+        if points[a, 0] < points[s, 0] or (
+            points[a, 0] == points[s, 0] and points[a, 1] < points[s, 1]
+        ):
+            start = i
+    return area, start
+
+
+def _ring(points: np.ndarray, sequence: np.ndarray) -> np.ndarray | Polygon | None:
+    """The outline through points[sequence] (canonical), thinned to about MAX_OUTLINE_VERTICES
+    (thin_curve): kept indices into `points` if that is a simple polygon, a repaired polygon if
+    it crosses itself a little, None if it does not trace an outline.
+
+    The validity test checks the thinned ring (the one the pipeline uses, at a fraction of the
+    cost); a thinned ring that cuts across a narrow slit is thinned less, down to every point,
+    before a self-crossing outline is repaired.
+    """
+    points = kernel_array(points)
+    sequence = np.asarray(sequence, dtype=np.int64)
+    perimeter = _ring_length(points, sequence)
+    many = len(sequence) > MAX_OUTLINE_VERTICES
+    step = perimeter / MAX_OUTLINE_VERTICES if many else 0.0
+    finest = perimeter / len(sequence)  # below this mean edge, thinning keeps about all
+    while step > 0:
+        kept = sequence[_thin_ring(points, sequence, step)]
+        if Polygon(points[kept]).is_valid:
+            return kept
+        step = step / 2 if step / 2 > finest else 0.0
+    poly = Polygon(points[sequence])
+    if poly.is_valid:
+        return sequence
+    repaired = _largest_polygon(shapely.make_valid(poly))
+    if repaired is not None and repaired.area > 0.9 * abs(shapely.area(poly)):
+        return repaired
+    return None
+
+
+@njit(cache=True, nogil=True)
+def _ring_length(points, sequence):
+    """The length of the closed ring points[sequence]."""
+    n = len(sequence)
+    total = 0.0
+    for i in range(n):
+        a, b = sequence[i], sequence[(i + 1) % n]
+        total += np.sqrt((points[b, 0] - points[a, 0]) ** 2 + (points[b, 1] - points[a, 1]) ** 2)
+    return total
+
+
+@njit(cache=True, nogil=True)
+def _thin_ring(points, sequence, step):
+    """Positions in `sequence` kept by thin_curve of points[sequence] (without copying them)."""
+    keep = np.zeros(len(sequence), np.bool_)
+    if len(sequence) == 0:
+        return np.flatnonzero(keep)
+    keep[0] = True
+    last = sequence[0]
+    for i in range(1, len(sequence)):
+        p = sequence[i]
+        if (points[p, 0] - points[last, 0]) ** 2 + (points[p, 1] - points[last, 1]) ** 2 >= (
+            step * step
+        ):
+            keep[i] = True
+            last = p
+    return np.flatnonzero(keep)
+
+
+def _given_order(points: np.ndarray, spacing: float) -> np.ndarray | None:
+    """The points' indices in their given order, canonical (_canonical), if that order may trace
+    the outline: its edges are on average a few spacings long (shuffled points jump across the
+    leaf; points at random spacing along the outline pass)."""
+    x, y = points[:, 0], points[:, 1]
+    edges = np.hypot(np.diff(x, append=x[0]), np.diff(y, append=y[0]))  # columns: much faster
+    if edges.mean() > ORDERED_MEAN_EDGE * spacing:
+        return None
+    return _canonical(points, np.arange(len(points)))
+
+
+def _cloud_cells(points: np.ndarray, z: np.ndarray, spacing: float) -> Cells | None:
+    """cloud.order_cells at a cell of about a spacing (at least 1/RASTER of the cloud's size),
+    coarser if the outline does not close at that size; None if it never does."""
+    lo, hi = bounds(points)
+    size = float((hi - lo).max())
+    cell = max(size / RASTER, spacing)
+    while cell < size / 4:
+        cells = order_cells(points, z, cell)
+        if cells is not None:
+            return cells
+        cell *= 2
+    return None
+
+
+def _exact(points: np.ndarray, z: np.ndarray, sequence: np.ndarray, noise: Noise) -> Outline | None:
+    """The outline through the points in `sequence` (input points as vertices, _ring), or None."""
+    ring = _ring(points, sequence)
+    if ring is None:
+        return None
+    if isinstance(ring, np.ndarray):
+        return Outline(points[ring], z[ring], noise, smoothed=False)
+    return _polygon_outline(points, z, ring, noise)  # repaired: some are no input points
+
+
+def trace_outline(points: np.ndarray, z: np.ndarray | None = None, margin: str = "auto") -> Outline:
+    """The leaf outline from 2D boundary points, ordered or not, clean or noisy, in any number.
+
+    Duplicates are dropped. Points given in an order that traces the outline have their noise
+    estimated along it (cloud.estimate_noise); if it is under CLEAN_NOISE of their size they are
+    the outline's vertices, in that order (today's fast path). Otherwise the points are placed
+    along the outline by a contour round their cells (cloud.order_cells, whatever their order)
+    and the noise estimated in that order: a clean boundary keeps its points as the vertices, a
+    noisy one becomes the smooth outline through their mean position (cloud.mean_outline), never
+    a zig-zag through them. Both orders give the same outline for the same clean points.
+
+    Parameters
+    ----------
+    points : (n, 2) float array
+    z : (n,) float array, optional
+        The points' heights above the plane, carried to the outline's vertices (0 if omitted).
+    margin : {"auto", "exact", "smooth"}
+        Params.margin: "exact" takes every boundary as clean (its points the vertices, where an
+        order through them is found), "smooth" every one as noisy; "auto" measures.
+    """
+
+    def clean(noise: Noise) -> bool:
+        return margin == "exact" or (margin == "auto" and _clean(noise, scale))
+
+    points = kernel_array(points)
+    z = np.zeros(len(points)) if z is None else kernel_array(z)
+    if len(points) == 0:
+        raise LeafError("the boundary needs at least 3 distinct points, got 0")
+    lo, hi = bounds(points)
+    scale = float((hi - lo).max())
+    keep = distinct_indices(points, scale)
+    pts, zs = points[keep], z[keep]
+    if len(pts) < 3:
+        raise LeafError(f"the boundary needs at least 3 distinct points, got {len(pts)}")
+    spacing = max(_spacing(pts), 1e-12 * scale)
+    given = _given_order(pts, spacing)
+    if given is not None:
+        noise = estimate_noise(pts, zs, given)
+        if clean(noise):
+            outline = _exact(pts, zs, given, noise)
+            if outline is not None:
+                return _checked(outline, scale)
+    cells = _cloud_cells(pts, zs, spacing)
+    if cells is None and len(pts) <= HULL_MOST:
+        hull = _by_concave_hull(pts, spacing)
+        if hull is not None:
+            return _checked(_polygon_outline(pts, zs, hull), scale)
+    if cells is None:  # the points fill the leaf rather than trace its margin
+        cell = max(scale / RASTER, spacing)
+        polygon, heights = filled_outline(pts, zs, cell)
+        return _checked(Outline(polygon, heights, Noise(cell, 0.0), smoothed=True), scale)
+    sequence = _canonical(pts, point_order(cells, pts))
+    noise = estimate_noise(pts, zs, sequence)
+    if clean(noise):
+        ring = _ring(pts, sequence)
+        if isinstance(ring, np.ndarray):
+            return _checked(Outline(pts[ring], zs[ring], noise, smoothed=False), scale)
+        # a clean cloud the cells could not trace (walls nearer than its spacing): a small one
+        # by the tightest concave hull that passes by every point, else as a noisy one
+        hull = _by_concave_hull(pts, spacing) if len(pts) <= HULL_MOST else None
+        if hull is not None:
+            return _checked(_polygon_outline(pts, zs, hull, noise), scale)
+    for wider in (1, 2, 4):  # a fold where the points are sparse: smoothed more
+        polygon, heights, noise = mean_outline(cells, len(pts), scale, wider)
+        if Polygon(polygon).is_valid:
+            break
+    if not Polygon(polygon).is_valid:
+        poly = _largest_polygon(shapely.make_valid(Polygon(polygon)))
+        if poly is None:
+            raise LeafError("the boundary points do not enclose any area")
+        vertices = np.asarray(poly.exterior.coords)[:-1]
+        heights = heights[cKDTree(polygon).query(vertices)[1]]
+        polygon = vertices
+    return _checked(Outline(polygon, heights, noise, smoothed=True), scale)
+
+
+def _by_concave_hull(points: np.ndarray, spacing: float) -> Polygon | None:
+    """The tightest valid concave hull (shapely) of the points whose outline passes within 3
+    spacings of every one (buckets.near_edges, linear); None if none does. A hull that snakes
+    through points filling an area (a whole scan given as the boundary: twice the convex hull's
+    perimeter round a quarter of its area, SNAKE) traces no margin and is not taken."""
+    cloud = MultiPoint(points)
+    convex = shapely.convex_hull(cloud)
+    for ratio in _HULL_RATIOS:
+        poly = _largest_polygon(shapely.concave_hull(cloud, ratio=ratio))
+        if poly is None or not poly.is_valid or _snakes(poly, convex):
+            continue
+        if near_edges(np.asarray(poly.exterior.coords)[:-1], points, 3 * spacing).all():
+            return poly
+    return None
+
+
+def _snakes(poly: Polygon, convex: shapely.Geometry) -> bool:
+    """True for a polygon that winds through a cloud rather than round it: ZIGZAG times the
+    convex hull's perimeter, or SNAKE[0] times it round SNAKE[1] of its area (a leaf's outline,
+    teeth, lobes and sinuses included, is under 1.3 times the perimeter round over half the area;
+    the real scans' tightest hulls 3 to 12 times round 5% to 35%)."""
+    longer, smaller = SNAKE
+    if poly.length > ZIGZAG * convex.length:
+        return True
+    return poly.length > longer * convex.length and poly.area < smaller * convex.area
+
+
+def _polygon_outline(
+    points: np.ndarray, z: np.ndarray, hull: Polygon, noise: Noise | None = None
+) -> Outline:
+    """The Outline of a polygon whose vertices are (near) input points, such as their concave
+    hull: each vertex takes the height of the input point nearest it."""
+    vertices = np.asarray(hull.exterior.coords)[:-1]
+    heights = z[cKDTree(points).query(vertices)[1]]
+    return Outline(vertices, heights, noise or Noise(0.0, 0.0), smoothed=False)
+
+
+def _clean(noise: Noise, scale: float) -> bool:
+    """A boundary whose estimated noise is under CLEAN_NOISE of its size, across and in height."""
+    return max(noise.across, noise.height) <= CLEAN_NOISE * scale
+
+
+def _checked(outline: Outline, scale: float) -> Outline:
+    """The outline, if it encloses some area; canonical (counter-clockwise, lowest point first)."""
+    polygon = outline.polygon
+    x, y = polygon[:, 0], polygon[:, 1]
+    if abs(float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))) / 2 <= 1e-8 * scale**2:
+        raise LeafError("the boundary points do not enclose any area")
+    ring = _canonical(polygon, np.arange(len(polygon)))
+    return Outline(polygon[ring], outline.heights[ring], outline.noise, outline.smoothed)
+
+
+def leaf_polygon(points: np.ndarray) -> np.ndarray:
+    """Order 2D boundary points into a simple counter-clockwise polygon (trace_outline).
+
+    Parameters
+    ----------
+    points : (n, 2) float array
+        Boundary points in the plane, ordered or not, possibly with duplicates and noise.
+
+    Returns
+    -------
+    (m, 2) float array
+        Polygon vertices, counter-clockwise, not closed: input points for a clean boundary (more
+        than MAX_OUTLINE_VERTICES of them come back thinned to about that many, see
+        thin_outline), the smoothed mean outline for a noisy one.
+    """
+    return trace_outline(points).polygon
+
+
+def thin_outline(polygon: np.ndarray, most: int = MAX_OUTLINE_VERTICES) -> np.ndarray:
+    """Indices of the vertices of a polygon with more than `most` of them that are kept, in order.
+
+    Walking round the outline from vertex 0, a vertex is kept once it is at least perimeter / most
+    from the last one kept (thin_curve). A dense scan's outline (tens of thousands of points) then
+    costs the implicit, the guide and the mesher as much as a few thousand, at a spacing far below
+    any grid the app uses, so the dropped points stay within a tiny distance of the kept edges.
+    """
+    if len(polygon) <= most:
+        return np.arange(len(polygon))
+    polygon = kernel_array(polygon)
+    closed = np.vstack([polygon, polygon[:1]])
+    perimeter = float(np.sqrt((np.diff(closed, axis=0) ** 2).sum(axis=1)).sum())
+    return thin_curve(polygon, perimeter / most)
+
+
+def thin_veins(veins: list[np.ndarray], most: int = MAX_OUTLINE_VERTICES) -> list[np.ndarray]:
+    """Indices kept of each vein's (m_i, 2) points, when the veins have more than `most` points
+    in all: thinned (thin_curve) at their total length / most, as thin_outline does the outline
+    (the guide's nearest-vein search costs in proportion to the points)."""
+    if sum(len(v) for v in veins) <= most:
+        return [np.arange(len(v)) for v in veins]
+    total = sum(float(np.sqrt((np.diff(v, axis=0) ** 2).sum(axis=1)).sum()) for v in veins)
+    return [thin_curve(v, total / most, keep_end=True) for v in veins]
+
+
+def thin_curve(points: np.ndarray, step: float, keep_end: bool = False) -> np.ndarray:
+    """Indices of the (n, 2) points kept, in order, when each is dropped that lies nearer than
+    `step` to the last one kept (the first is always kept, and with `keep_end` the last: an
+    open curve's end; unordered points mostly stay)."""
+    points = kernel_array(points)
+    kept = _thin_ring(points, np.arange(len(points)), float(step))
+    if keep_end and len(points) and kept[-1] != len(points) - 1:
+        kept = np.append(kept, len(points) - 1)
+    return kept
+
+
+def outward_normals(polygon: np.ndarray, smoothing: int = 2) -> np.ndarray:
+    """Unit outward normals at the vertices of a counter-clockwise polygon.
+
+    Each normal is perpendicular to the chord between the neighbours `smoothing` steps away, which
+    averages out mild noise.
+    """
+    ahead = np.roll(polygon, -smoothing, axis=0)
+    behind = np.roll(polygon, smoothing, axis=0)
+    tangent = ahead - behind
+    normal = np.column_stack([tangent[:, 1], -tangent[:, 0]])
+    length = np.linalg.norm(normal, axis=1, keepdims=True)
+    return normal / np.where(length > 0, length, 1.0)
+
+
+def contains(polygon: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """(n,) bool: which points lie inside the polygon (or on its edge).
+
+    The crossing-number test, compiled: the polygon's edges are filed into horizontal bands, so
+    each point only tests the few edges of its band.
+    """
+    polygon = kernel_array(polygon)
+    xy = kernel_array(np.atleast_2d(xy)).reshape(-1, 2)
+    bands = _edge_bands(polygon.tobytes(), len(polygon))
+    return _inside(polygon, xy, *bands)
+
+
+@lru_cache(maxsize=8)
+def _edge_bands(key: bytes, n: int) -> tuple[float, float, int, float, np.ndarray, np.ndarray]:
+    """The polygon's edges filed by horizontal band (cached: one polygon is tested many times)."""
+    polygon = np.frombuffer(key).reshape(n, 2)
+    n_bands = max(1, n // 2)
+    y0, y1 = float(polygon[:, 1].min()), float(polygon[:, 1].max())
+    height = max(y1 - y0, 1e-300) / n_bands
+    tolerance = 1e-12 * float(np.ptp(polygon, axis=0).max())
+    starts, edges = _file_edges(polygon, y0, height, n_bands)
+    return y0, height, n_bands, tolerance, starts, edges
+
+
+@njit(cache=True, nogil=True)
+def _band_range(ya: float, yb: float, y0: float, height: float, n_bands: int) -> tuple[int, int]:
+    first = min(max(int((min(ya, yb) - y0) / height), 0), n_bands - 1)
+    last = min(max(int((max(ya, yb) - y0) / height), 0), n_bands - 1)
+    return first, last
+
+
+@njit(cache=True, nogil=True)
+def _file_edges(polygon, y0, height, n_bands):
+    """(n_bands + 1,) starts and the edge indices of each band, edges of every band they span."""
+    n = len(polygon)
+    starts = np.zeros(n_bands + 1, np.int64)
+    for e in range(n):
+        first, last = _band_range(polygon[e, 1], polygon[(e + 1) % n, 1], y0, height, n_bands)
+        starts[first + 1 : last + 2] += 1
+    for b in range(n_bands):
+        starts[b + 1] += starts[b]
+    edges = np.empty(starts[-1], np.int64)
+    fill = starts[:-1].copy()
+    for e in range(n):
+        first, last = _band_range(polygon[e, 1], polygon[(e + 1) % n, 1], y0, height, n_bands)
+        for b in range(first, last + 1):
+            edges[fill[b]] = e
+            fill[b] += 1
+    return starts, edges
+
+
+@njit(cache=True, nogil=True)
+def _inside(polygon, xy, y0, height, n_bands, tolerance, starts, edges):
+    n = len(polygon)
+    out = np.zeros(len(xy), np.bool_)
+    for i in range(len(xy)):
+        px, py = xy[i, 0], xy[i, 1]
+        if py < y0 - tolerance or py > y0 + height * n_bands + tolerance:
+            continue
+        band = min(max(int((py - y0) / height), 0), n_bands - 1)
+        inside = False
+        for s in range(starts[band], starts[band + 1]):
+            e = edges[s]
+            ax, ay = polygon[e, 0], polygon[e, 1]
+            bx, by = polygon[(e + 1) % n, 0], polygon[(e + 1) % n, 1]
+            # on the edge itself: covered
+            ex, ey = bx - ax, by - ay
+            length2 = ex * ex + ey * ey
+            t = ((px - ax) * ex + (py - ay) * ey) / length2 if length2 > 0 else 0.0
+            t = min(max(t, 0.0), 1.0)
+            if (ax + t * ex - px) ** 2 + (ay + t * ey - py) ** 2 <= tolerance * tolerance:
+                inside = True
+                break
+            if (ay > py) != (by > py) and px < ax + (py - ay) * ex / ey:
+                inside = not inside
+        out[i] = inside
+    return out
+
+
+def ring_crossings(ring: np.ndarray) -> np.ndarray:
+    """Where a closed polyline of (n, 2) points crosses itself: (c, 2) points, empty if never.
+
+    Segments that are not neighbours along the ring and meet are crossings (an STRtree finds
+    the candidate pairs, so a long ring costs little more than a short one).
+    """
+    ring = np.asarray(ring, dtype=float)
+    n = len(ring)
+    if n < 4:
+        return np.zeros((0, 2))
+    ends = np.roll(ring, -1, axis=0)
+    segments = shapely.linestrings(np.stack([ring, ends], axis=1))
+    left, right = shapely.STRtree(segments).query(segments, predicate="intersects")
+    apart = (right > left) & ((right - left) % n > 1) & ((left - right) % n > 1)
+    if not np.any(apart):
+        return np.zeros((0, 2))
+    meet = shapely.intersection(segments[left[apart]], segments[right[apart]])
+    points = shapely.get_coordinates(shapely.centroid(meet))
+    return points.reshape(-1, 2)

@@ -1,0 +1,103 @@
+"""Scans and the Poisson comparison in the app, without Qt: what the task worker computes.
+
+A scan (a point cloud of a leaf's whole surface) opens as its extracted leaf (sources/extract.py),
+with its points as a layer and its distances to each new mesh in the measurements panel. The
+Poisson layer is open3d's screened Poisson surface of the same input (analysis/compare.py), drawn
+beside our mesh. Everything here runs on the task thread, with numpy only; the main thread
+makes the VTK datasets from it (Piece.data) and draws.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+from typing import Any
+
+import numpy as np
+
+from leafstudio.analysis.compare import poisson_surface
+from leafstudio.analysis.fidelity import FAR, NEAR, distance_summary
+from leafstudio.core.analysis import point_to_mesh_distance
+from leafstudio.core.pipeline import Result
+from leafstudio.core.trianglemesh import MeshLike, polydata, vertex_normals
+from leafstudio.gui.model.layers import Piece, cloud
+from leafstudio.sources.extract import Extraction
+from leafstudio.workflows import open_scan
+
+BLADE_COLOR, DROPPED_COLOR, POISSON_COLOR = "#2e7d32", "#c62828", "#e08a1e"
+POISSON_GAP = 0.15  # the Poisson surface sits this share of the leaf length beside our mesh
+POISSON_OPACITY = 0.6
+
+
+@dataclass(frozen=True, eq=False)
+class ScanData:
+    """An opened scan: its points, what extraction found, and the scan layer's pieces."""
+
+    path: str
+    points: np.ndarray  # (n, 3)
+    extraction: Extraction
+    pieces: list[Piece]
+
+
+def load_scan(path: str) -> ScanData:
+    """Open a scan as every command does (workflows.open_scan: read, checked, extracted), with
+    its blade and dropped points as layers.
+
+    Raises
+    ------
+    LeafError
+        With the file's name: unreadable, not plausibly one leaf, or no blade found.
+    """
+    opened = open_scan(path)
+    points, extraction = opened.scan, opened.extraction
+    blade = extraction.blade
+    pieces = [
+        Piece("scan:blade", partial(cloud, points[blade]), _dots(BLADE_COLOR, 3.0)),
+        Piece("scan:dropped", partial(cloud, points[~blade]), _dots(DROPPED_COLOR, 4.0)),
+    ]
+    return ScanData(str(path), points, extraction, pieces)
+
+
+def _dots(color: str, size: float) -> dict[str, Any]:
+    return {"color": color, "point_size": size, "render_points_as_spheres": True}
+
+
+def fidelity_sections(
+    mesh: MeshLike, scan: ScanData, length: float
+) -> list[tuple[str, list[tuple[str, str]]]]:
+    """Measurements-panel sections: distances from the scan's blade points (and from all its
+    points) to the mesh, as `leafstudio reconstruct --against` reports them."""
+    d = point_to_mesh_distance(mesh, scan.points)  # once: the blade's are among them
+    parts = (
+        ("Scan → mesh distance (blade points)", d[scan.extraction.blade]),
+        ("Scan → mesh distance (all points)", d),
+    )
+    return [(title, _fidelity_rows(distance_summary(part, length))) for title, part in parts]
+
+
+def _fidelity_rows(f: dict[str, Any]) -> list[tuple[str, str]]:
+    if not f.get("points"):
+        return [("Points", "0")]
+    return [
+        ("Points", str(f["points"])),
+        ("Mean", f"{f['mean']:.4g}"),
+        ("Median", f"{f['median']:.4g}"),
+        ("95th percentile", f"{f['p95']:.4g}"),
+        ("Max", f"{f['max']:.4g}"),
+        (f"Beyond {NEAR:.0%} of length", f"{f['beyond_1pct']:.1%}"),
+        (f"Beyond {FAR:.0%} of length", f"{f['beyond_2pct']:.1%}"),
+        ("Leaf length", f"{f['length']:.4g}"),
+    ]
+
+
+def poisson_piece(result: Result) -> Piece:
+    """The screened Poisson surface of the result's input, moved beside our mesh along the leaf's
+    width (its spill would hide our mesh in place), semi-transparent."""
+    poisson = poisson_surface(result.leaf, result.frame.normal)
+    side = result.frame.v
+    ours = result.triangle_mesh.points @ side
+    theirs = poisson.points @ side
+    points = poisson.points + (ours.max() - theirs.min() + POISSON_GAP * result.length) * side
+    normals = vertex_normals(points, poisson.regular_faces)
+    style = {"color": POISSON_COLOR, "opacity": POISSON_OPACITY, "smooth_shading": False}
+    return Piece("poisson", partial(polydata, points, poisson.regular_faces, {}, normals), style)

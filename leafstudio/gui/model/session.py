@@ -1,0 +1,558 @@
+"""The app's state without Qt: the document, its parameters, results, the pending request and
+the undo history. The window displays a Session and forwards the user's edits to it; the
+worker's reports come back to it (as napari's ViewerModel and its `_qt` views).
+
+For other features (the forms gallery, imports): `Session.new_document(leaf, sketch=None,
+title=...)` replaces the document as ONE undo step (Ctrl+Z brings the previous one back);
+`Session.open_document(...)` does the same for a file, clearing the history instead.
+
+Every user story can be played on a Session in plain pytest: give it a `submit` callable that
+records or runs requests, then hand it `accept_result` / `accept_failure` as the worker would.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from leafstudio.core.plane import Frame
+from leafstudio.core.prepare.outline import ring_crossings
+from leafstudio.errors import LeafError
+from leafstudio.gui.model.framing import BladeBounds, blade_bounds
+from leafstudio.gui.model.sketch_model import Sketch
+from leafstudio.model import PARAMS, Leaf, Params
+
+log = logging.getLogger("leafstudio.gui")
+
+
+class Event:
+    """A list of callbacks: `connect(f)`, `disconnect(f)`, `emit(*args)` (no Qt)."""
+
+    def __init__(self) -> None:
+        self._callbacks: list[Callable[..., Any]] = []
+
+    def connect(self, callback: Callable[..., Any]) -> None:
+        self._callbacks.append(callback)
+
+    def disconnect(self, callback: Callable[..., Any]) -> None:
+        self._callbacks.remove(callback)
+
+    def emit(self, *args: Any) -> None:
+        for callback in list(self._callbacks):
+            callback(*args)
+
+
+@dataclass(frozen=True, eq=False)
+class State:
+    """One snapshot of what is edited; undo and redo swap snapshots.
+
+    leaf is None while a sketch has fewer than 3 boundary points; sketch is None for a leaf read
+    from points (until it is first edited). `serial` numbers documents: a new one is framed.
+    """
+
+    leaf: Leaf | None
+    sketch: Sketch | None
+    params: Params
+    path: str | None = None
+    title: str = "untitled"
+    scan: Any = None  # gui.scans.ScanData
+    serial: int = 0
+    photo: Any = None  # assets.leafphoto.LeafPhoto: the photo the leaf was found in
+
+
+@dataclass(frozen=True, eq=False)
+class Step:
+    """One undoable edit."""
+
+    text: str
+    before: State
+    after: State
+
+
+class History:
+    """Undo and redo over State snapshots, with a clean mark (the saved state)."""
+
+    def __init__(self, moved: Callable[[State], None] | None = None) -> None:
+        self.moved = moved  # called with the state that undo or redo makes current
+        self.steps: list[Step] = []
+        self.index = 0  # steps[:index] are done
+        self.clean_index: int | None = 0
+        self.changed = Event()
+
+    def push(self, step: Step) -> None:
+        if self.clean_index is not None and self.clean_index > self.index:
+            self.clean_index = None  # the saved state was undone and is now out of reach
+        del self.steps[self.index :]
+        self.steps.append(step)
+        self.index += 1
+        self.changed.emit()
+
+    def undo(self) -> State | None:
+        if not self.can_undo():
+            return None
+        self.index -= 1
+        state = self.steps[self.index].before
+        if self.moved is not None:
+            self.moved(state)
+        self.changed.emit()
+        return state
+
+    def redo(self) -> State | None:
+        if not self.can_redo():
+            return None
+        self.index += 1
+        state = self.steps[self.index - 1].after
+        if self.moved is not None:
+            self.moved(state)
+        self.changed.emit()
+        return state
+
+    def can_undo(self) -> bool:
+        return self.index > 0
+
+    def can_redo(self) -> bool:
+        return self.index < len(self.steps)
+
+    def undo_text(self) -> str:
+        return self.steps[self.index - 1].text if self.can_undo() else ""
+
+    def redo_text(self) -> str:
+        return self.steps[self.index].text if self.can_redo() else ""
+
+    def count(self) -> int:
+        return len(self.steps)
+
+    def is_clean(self) -> bool:
+        return self.index == self.clean_index
+
+    def set_clean(self) -> None:
+        self.clean_index = self.index
+        self.changed.emit()
+
+    def clear(self) -> None:
+        self.steps.clear()
+        self.index, self.clean_index = 0, 0
+        self.changed.emit()
+
+    # the QUndoStack names the window's older callers use
+    def canUndo(self) -> bool:
+        return self.can_undo()
+
+    def canRedo(self) -> bool:
+        return self.can_redo()
+
+    def undoText(self) -> str:
+        return self.undo_text()
+
+    def setClean(self) -> None:
+        self.set_clean()
+
+    def isClean(self) -> bool:
+        return self.is_clean()
+
+
+def _param_text(before: Params, after: Params) -> str:
+    """The undo step's name: the parameters changed, as their messages name them."""
+    changed = [p.what for n, p in PARAMS.items() if getattr(before, n) != getattr(after, n)]
+    return "Change " + ", ".join(changed)
+
+
+def describe(exc: BaseException) -> str:
+    """The one line the window shows for a failure (the traceback goes to the log)."""
+    if isinstance(exc, LeafError):
+        return str(exc)
+    return f"{type(exc).__name__}: {exc} (details in the log)"
+
+
+def missing_photo_message(photo: Any) -> str:
+    """What the window says when a leaf's photo is not where its project says."""
+    return (
+        f"The photo this leaf was found in is missing ({photo.image}): the leaf shows and exports "
+        "the texture generated from it instead. Put the photo back and open the project again "
+        "to use it; saving keeps the photo's place in the project."
+    )
+
+
+@dataclass
+class Framing:
+    """How the 3D view should frame a result: `reset` (a new document: the iso preset) or
+    `refit` (the sketch grew past the view: same direction, the whole leaf in view)."""
+
+    bounds: BladeBounds
+    reset: bool
+
+
+@dataclass
+class Shown:
+    """What the session last accepted from the worker."""
+
+    outcome: Any = None  # worker.Outcome
+    measured_id: int = 0
+    fidelity: tuple[int, list] | None = None  # request id, the panel's scan sections
+
+
+@dataclass
+class _Fallback:
+    state: State
+    steps: list[Step] = field(default_factory=list)
+    index: int = 0
+    clean: int | None = 0
+    request: int = 0
+    derived: Sketch | None = None  # the state's sketch derived from its result, if any
+    derived_leaf: Leaf | None = None
+
+
+class Session:
+    """The document, parameters, results, pending request and history.
+
+    Parameters
+    ----------
+    submit : callable(leaf, params, interrupt) -> int
+        Queues a reconstruction and returns its request id (the window passes the worker's).
+    params : Params
+        The parameters of the first document.
+
+    Events
+    ------
+    state_changed(State, str)
+        The document or parameters changed; the reason: "document", "edit", "params", "undo".
+    result_shown(outcome, Framing | None)
+        A result to display, with how to frame it (None: keep the camera).
+    failed(str, bool)
+        A message for the user; True when the document fell back to the previous one.
+    cleared()
+        No leaf to show (a sketch with fewer than 3 boundary points).
+    sketch_shown(Sketch, bool)
+        The sketch the editor should show, and whether to fit the view to it: sent whenever the
+        document's sketch changes, whatever changed it (an edit that came from the editor comes
+        back as the very sketch it shows, which the editor ignores).
+    sketch_waiting()
+        A new document (or an undo to another one) whose sketch is not known yet: a loaded
+        leaf's is derived from its first result. The editor must drop the sketch it shows and
+        take no edit until sketch_shown: an edit of the old sketch would replace the new leaf.
+    crossing(ndarray)
+        The sketch's boundary crossings, (c, 2) plane points (empty when it does not cross).
+    noticed(str)
+        A message for the user that is not a failure (a project's photo is missing).
+    """
+
+    def __init__(
+        self,
+        submit: Callable[[Leaf, Params, bool], int] | None = None,
+        params: Params | None = None,
+    ) -> None:
+        self.submit = submit or (lambda leaf, params, interrupt: 0)
+        self.state = State(None, None, params or Params())
+        self.history = History(moved=self._history_moved)
+        self.shown = Shown()
+        self.last_id = 0  # the newest request submitted
+        self.derived: Sketch | None = None  # a loaded leaf's sketch, made from its first result
+        self._derived_leaf: Leaf | None = None
+        self.crossings = np.zeros((0, 2))
+        self.message = ""
+        self.state_changed, self.result_shown, self.failed = Event(), Event(), Event()
+        self.cleared, self.sketch_shown, self.crossing = Event(), Event(), Event()
+        self.noticed, self.sketch_waiting = Event(), Event()
+        self.chosen_texture: str | None = None  # an image picked for the export, shown too
+        self._serials = 0
+        self._requested: dict[int, tuple[int, str]] = {}  # request id -> serial, reason
+        self._framed: tuple[int, BladeBounds] | None = None
+        self._edit_base: State | None = None
+        self._param_base: State | None = None
+        self._fallback: _Fallback | None = None
+
+    # --- reading -------------------------------------------------------------------------------
+    @property
+    def leaf(self) -> Leaf | None:
+        return self.state.leaf
+
+    @property
+    def params(self) -> Params:
+        return self.state.params
+
+    @property
+    def result(self) -> Any:
+        """The last good Result shown, or None."""
+        return self.shown.outcome.result if self.shown.outcome is not None else None
+
+    @property
+    def shown_id(self) -> int:
+        return self.shown.outcome.request.id if self.shown.outcome is not None else 0
+
+    def editable_sketch(self) -> Sketch | None:
+        """The sketch edits start from: the document's, else the one derived from its result."""
+        if self.state.sketch is not None:
+            return self.state.sketch
+        if self.derived is not None and self.result is not None and self.result.leaf is self.leaf:
+            return self.derived
+        return None
+
+    def view_frame(self) -> Frame | None:
+        """The plane both views show the leaf on: the sketch's (so the 3D top view and the
+        sketch are the same way round), else the shown result's."""
+        sketch = self.editable_sketch()
+        if sketch is not None and len(sketch.boundary):
+            return sketch.frame
+        return self.result.frame if self.result is not None else None
+
+    def is_modified(self) -> bool:
+        """True when there are edits (sketch or parameters) not saved."""
+        return not self.history.is_clean()
+
+    # --- documents -----------------------------------------------------------------------------
+    def new_document(
+        self,
+        leaf: Leaf | None,
+        sketch: Sketch | None = None,
+        title: str = "untitled",
+        *,
+        params: Params | None = None,
+        path: str | None = None,
+        scan: Any = None,
+        photo: Any = None,
+        undoable: bool = True,
+    ) -> int:
+        """Make a new document current (framed when shown), as one undo step; returns the
+        request id (0 when there is nothing to reconstruct). `undoable=False` starts a fresh
+        history instead and falls back to the current document if the new one fails. `photo`
+        (a LeafPhoto) is the photo the leaf was found in: its texture."""
+        if sketch is not None and leaf is None:
+            leaf = sketch.to_leaf()
+        self._serials += 1
+        before = self._drop_edit()  # the step (or the fallback) starts from before it
+        params = params or before.params  # a held slider's value is dropped with its drag
+        state = State(leaf, sketch, params, path, title, scan, self._serials, photo)
+        self.chosen_texture = None
+        self._fallback = None
+        if not undoable and leaf is not None and self.result is not None:
+            h, derived = self.history, (self.derived, self._derived_leaf)
+            self._fallback = _Fallback(before, list(h.steps), h.index, h.clean_index, 0, *derived)
+        self.derived = None
+        self._apply(state, "document")
+        if undoable:
+            self.history.push(Step(f"New leaf: {title}", before, state))
+        else:
+            self.history.clear()
+        request = self.last_id if self.leaf is not None else 0
+        if self._fallback is not None:
+            self._fallback.request = request
+        if photo is not None and not photo.exists():
+            self.noticed.emit(missing_photo_message(photo))
+        return request
+
+    def texture(self) -> Any:
+        """What the leaf's texture is, in the view and in an export: an image picked for the
+        export, else the photo the leaf came from (while it is there), else "auto" (generated
+        from the leaf). Each as assets.export's `texture` option takes it."""
+        if self.chosen_texture is not None:
+            return self.chosen_texture
+        photo = self.state.photo
+        if photo is not None and photo.exists():
+            return photo.texture()
+        return "auto"
+
+    def open_document(self, leaf: Leaf | None, sketch: Sketch | None, title: str, **kw: Any) -> int:
+        """A file, demo or scan: a new document with a fresh history; if its first result
+        fails, the previous document comes back."""
+        return self.new_document(leaf, sketch, title, undoable=False, **kw)
+
+    def new_sketch(self) -> int:
+        """An empty sketch to draw in."""
+        return self.open_document(None, Sketch(), "new sketch")
+
+    def saved(self, path: str) -> None:
+        """The document was written to `path`: it is now its file and unmodified."""
+        self.state = replace(self.state, path=path)
+        self.history.set_clean()
+        self.state_changed.emit(self.state, "saved")
+
+    # --- edits ---------------------------------------------------------------------------------
+    def preview_sketch(self, sketch: Sketch) -> None:
+        """A sketch during a drag: shown live, not yet an undo step."""
+        if self._edit_base is None:
+            self._edit_base = self.state
+        self._apply(replace(self.state, leaf=sketch.to_leaf(), sketch=sketch), "edit", live=True)
+
+    def commit_sketch(self, sketch: Sketch, text: str) -> None:
+        """A finished sketch edit: one undo step from before the edit (or drag) began."""
+        base = self._edit_base or self.state
+        self._edit_base = None
+        if self.state.sketch is not sketch:  # a drag's last preview is requested already
+            self._apply(replace(self.state, leaf=sketch.to_leaf(), sketch=sketch), "edit")
+        self.history.push(Step(text, base, self.state))
+
+    def set_symmetric(self, on: bool) -> None:
+        """Mirror editing on or off. It is a property of the drawing, saved with its sketch
+        (Sketch.symmetric), so turning it is an undo step and marks the document modified, as
+        any change to what Save writes; the leaf, and so the 3D view, stay as they are.
+
+        A loaded leaf not yet edited has no sketch of its own (the editor shows one derived from
+        its result): making that the document would replace the leaf by its approximation, so
+        the flag rides on the derived sketch and enters the document with the first edit."""
+        sketch = self.editable_sketch()
+        if sketch is None or sketch.symmetric == on:
+            return
+        sketch = replace(sketch, symmetric=on)
+        if self.state.sketch is None:
+            self.derived = sketch
+            self.sketch_shown.emit(sketch, False)
+            return
+        before = self.state
+        self._apply(replace(self.state, sketch=sketch), "mirror")
+        self.history.push(Step("Mirror on" if on else "Mirror off", before, self.state))
+
+    def set_params(self, params: Params, final: bool = True) -> None:
+        """New parameters: `final=False` while a slider is held (shown, not an undo step);
+        `final=True` on release or any other change: one undo step from before the drag."""
+        if self._param_base is None:
+            self._param_base = self.state
+        base = self._param_base
+        if params != self.params:
+            self._apply(replace(self.state, params=params), "params")
+        if final:
+            self._param_base = None
+            if base.params != self.params:
+                self.history.push(Step(_param_text(base.params, self.params), base, self.state))
+
+    def undo(self) -> None:
+        self.history.undo()
+
+    def redo(self) -> None:
+        self.history.redo()
+
+    def _drop_edit(self) -> State:
+        """Drop the edit under way (a drag, a held slider, a run of key presses), if any, and
+        return the state from before it began: the one the history's last step led to.
+
+        Undo, redo and a new document drop it rather than commit it: committing would push a
+        step and so throw away the redo steps (Redo would then redo nothing), and the session
+        cannot name the unfinished gesture. Its base must not outlive them either, or the next
+        edit's step would go from a state from before the undo and bring back what was undone.
+        The widgets drop their part when the new state's sketch reaches them."""
+        base = self._edit_base or self._param_base or self.state
+        self._edit_base = self._param_base = None
+        return base
+
+    def _history_moved(self, state: State) -> None:
+        """Undo or redo made `state` current: an edit under way is dropped (see _drop_edit)."""
+        self._drop_edit()
+        self._apply(state, "undo")
+
+    # --- requests ------------------------------------------------------------------------------
+    def _crossing_of(self, sketch: Sketch | None) -> np.ndarray | None:
+        if sketch is None:
+            return None
+        found = ring_crossings(sketch.boundary_curve())
+        return found if len(found) else None
+
+    def _apply(self, state: State, reason: str, live: bool = False) -> None:
+        old = self.state
+        self.state = state
+        self.state_changed.emit(state, reason)
+        if reason in ("document", "undo"):
+            shown = state.sketch
+            if state.sketch is None and self.derived is not None and old.serial == state.serial:
+                shown = self.derived  # undo back to the loaded leaf: its derived sketch
+            if shown is not None:
+                self.sketch_shown.emit(shown, reason == "document")
+            else:  # a loaded leaf: its sketch comes with its first result
+                self.sketch_waiting.emit()
+        elif state.sketch is not None and state.sketch is not old.sketch:
+            # any other change of the document's sketch (Grow veins, Mirror, the editor's own
+            # edit, which it ignores): the editor must show it, or its next edit would start
+            # from the sketch it still shows and throw this one away
+            self.sketch_shown.emit(state.sketch, False)
+        if state.leaf is old.leaf and state.params == old.params and reason != "document":
+            return
+        self._request(interrupt=not live, reason=reason)
+
+    def _request(self, interrupt: bool = True, reason: str = "document") -> int:
+        crossing = self._crossing_of(self.state.sketch)
+        self.crossings = crossing if crossing is not None else np.zeros((0, 2))
+        self.crossing.emit(self.crossings)
+        if crossing is not None:
+            x, y = crossing[0]
+            self.message = (
+                f"The boundary crosses itself near ({x:.3g}, {y:.3g}); the 3D view keeps the "
+                "last leaf without a crossing."
+            )
+            self.failed.emit(self.message, False)
+            return 0
+        if self.leaf is None:
+            self.message = "Add at least 3 boundary points to see the leaf."
+            self.cleared.emit()
+            return 0
+        self.last_id = self.submit(self.leaf, self.params, interrupt)
+        self._requested[self.last_id] = (self.state.serial, reason)
+        for old in [i for i in self._requested if i < self.last_id - 64]:
+            del self._requested[old]
+        return self.last_id
+
+    # --- worker reports ------------------------------------------------------------------------
+    def accept_result(self, outcome: Any) -> bool:
+        """A finished reconstruction: shown unless a newer one was shown already."""
+        request_id = outcome.request.id
+        if request_id < self.shown_id:
+            return False
+        self.shown = Shown(outcome, 0, None)
+        if self._fallback is not None and request_id >= self._fallback.request:
+            self._fallback = None
+        result = outcome.result
+        serial, reason = self._requested.get(request_id, (self.state.serial, "document"))
+        derive = self.derived is None or self._derived_leaf is not result.leaf
+        if self.state.sketch is None and result.leaf is self.leaf and derive:
+            self.derived = Sketch.from_result(result)
+            self._derived_leaf = result.leaf
+            self.sketch_shown.emit(self.derived, True)
+        frame = self.view_frame() or result.frame
+        bounds = blade_bounds(result.triangle_mesh.points, frame)
+        framing = None
+        if self._framed is None or self._framed[0] != serial:
+            framing = Framing(bounds, reset=True)
+        elif reason in ("edit", "undo") and not self._framed[1].contains(bounds):
+            framing = Framing(bounds.union(self._framed[1]), reset=False)
+        if framing is not None:
+            self._framed = (serial, framing.bounds)
+        self.message = ""
+        self.result_shown.emit(outcome, framing)
+        return True
+
+    def accept_measured(self, request_id: int) -> bool:
+        """The shown result's metrics are computed (on the worker)."""
+        if request_id != self.shown_id:
+            return False
+        self.shown.measured_id = request_id
+        return True
+
+    def accept_fidelity(self, request_id: int, sections: list) -> bool:
+        """The scan's distances to result `request_id`."""
+        if request_id != self.shown_id or self.state.scan is None:
+            return False
+        self.shown.fidelity = (request_id, sections)
+        return True
+
+    def accept_failure(self, request_id: int, exc: BaseException) -> bool:
+        """A failed reconstruction: the last good result stays; a newly opened document that
+        fails brings the previous one back. True when the failure concerns what is shown."""
+        if request_id < self.shown_id or request_id < self.last_id:
+            return False
+        self.message = describe(exc)
+        fallback = self._fallback
+        if fallback is not None and request_id >= fallback.request and self.result is not None:
+            self._fallback = None
+            self._drop_edit()  # an edit begun on the failed document
+            self.state = fallback.state
+            self.derived, self._derived_leaf = fallback.derived, fallback.derived_leaf
+            h = self.history
+            h.steps, h.index, h.clean_index = fallback.steps, fallback.index, fallback.clean
+            h.changed.emit()
+            self.state_changed.emit(self.state, "fallback")
+            self.sketch_shown.emit(self.editable_sketch() or Sketch(), True)
+            self.failed.emit(self.message, True)
+            return True
+        self.failed.emit(self.message, False)
+        return True

@@ -1,0 +1,528 @@
+"""The sketch behind a drawn leaf: control points on the leaf plane, and the curves through them.
+
+A sketch is an immutable snapshot, so undo and redo simply swap snapshots. The boundary is a closed
+curve (a periodic cubic spline through its control points); each vein is an open curve through its
+control points, each carrying a height above the plane. Curves use centripetal parameters, which
+keep a spline from looping between close points. No Qt here: the editor in sketch.py draws it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+import shapely
+from scipy.interpolate import CubicSpline
+from scipy.spatial import cKDTree
+
+from leafstudio.core.plane import Frame
+from leafstudio.gui.model.midrib import Midrib
+from leafstudio.model import Leaf
+
+BOUNDARY = -1  # curve index of the boundary; veins are 0, 1, ...
+SAMPLES_PER_SPAN = 16  # curve points per span between two control points
+MIN_BOUNDARY_SAMPLES = 120
+DERIVED_BOUNDARY_POINTS = 24  # control points when a loaded leaf becomes a sketch
+DERIVED_VEIN_POINTS = 8
+RELIEF_NEIGHBOURS = 4  # a boundary point's height: inverse-distance mean of this many relief points
+FOLD_REACH = 1.0  # a mirror image this far into a bend (in radii of curvature) is folded over
+FOLD_SAMPLES = 4  # curve points per span where a fold is looked for (it runs on every drag move)
+
+
+def _identity_frame() -> Frame:
+    return Frame(
+        origin=np.zeros(3), u=np.array([1.0, 0, 0]), v=np.array([0, 1.0, 0]), normal=np.eye(3)[2]
+    )
+
+
+def _centripetal(points: np.ndarray) -> np.ndarray:
+    """Cumulative centripetal parameter of (n, d) points (square root of chord lengths)."""
+    steps = np.sqrt(np.linalg.norm(np.diff(points, axis=0), axis=1))
+    return np.concatenate([[0.0], np.cumsum(steps)])
+
+
+def _drop_repeats(points: np.ndarray, closed: bool) -> np.ndarray:
+    """Control points without consecutive duplicates (a spline cannot pass twice in no time)."""
+    if len(points) < 2:
+        return points
+    ahead = np.roll(points, -1, axis=0) if closed else points[1:]
+    same = np.all(np.isclose(points[: len(ahead)], ahead, rtol=0, atol=1e-12), axis=1)
+    keep = np.ones(len(points), dtype=bool)
+    keep[: len(ahead)] &= ~same
+    return points[keep]
+
+
+def _span_samples(t: np.ndarray, per_span: int) -> np.ndarray:
+    """Parameters spaced evenly within each span [t_i, t_i+1], every t_i included."""
+    inner = np.linspace(0.0, 1.0, per_span, endpoint=False)
+    return np.append((t[:-1, None] + np.diff(t)[:, None] * inner).ravel(), t[-1])
+
+
+def closed_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.ndarray:
+    """Points along the periodic cubic spline through (n, 2) control points, n >= 3.
+
+    Returns
+    -------
+    (s, 2) float array
+        Counter-ordered like the control points, without repeating the first point.
+    """
+    control = _drop_repeats(np.asarray(control, dtype=float), closed=True)
+    if len(control) < 3:
+        return control
+    loop = np.vstack([control, control[:1]])
+    t = _centripetal(loop)
+    spline = CubicSpline(t, loop, bc_type="periodic")
+    per_span = max(per_span, -(-MIN_BOUNDARY_SAMPLES // len(control)))
+    return spline(_span_samples(t, per_span)[:-1])
+
+
+def open_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.ndarray:
+    """Points along the natural cubic spline through (m, d) control points (a line for m = 2)."""
+    control = _drop_repeats(np.asarray(control, dtype=float), closed=False)
+    if len(control) < 2:
+        return control
+    t = _centripetal(control)
+    s = _span_samples(t, per_span)
+    if len(control) == 2:
+        return control[0] + np.outer(s / t[-1], control[1] - control[0])
+    return CubicSpline(t, control, bc_type="natural")(s)
+
+
+def plane_arc_lengths(points: np.ndarray) -> np.ndarray:
+    """(n,) length along the (n, d) points' polyline, in the plane (x, y), from the first."""
+    steps = np.linalg.norm(np.diff(points[:, :2], axis=0), axis=1)
+    return np.concatenate([[0.0], np.cumsum(steps)])
+
+
+def _even_indices(points: np.ndarray, count: int, closed: bool) -> np.ndarray:
+    """Indices of `count` of the (n, d) points spread evenly by arc length (in the plane)."""
+    path = np.vstack([points, points[:1]]) if closed else points
+    arc = plane_arc_lengths(path)
+    targets = np.linspace(0.0, arc[-1], count, endpoint=not closed)
+    return np.unique(np.clip(np.searchsorted(arc, targets), 0, len(points) - 1))
+
+
+def _even_by_length(points: np.ndarray, count: int, closed: bool) -> np.ndarray:
+    """`count` of the (n, d) points spread evenly by arc length along them (indices kept)."""
+    return points[_even_indices(points, count, closed)]
+
+
+OUTLINE_TOLERANCE = 0.005  # a derived boundary's spline stays this close (of the extent) to it
+
+
+def _outline_controls(polygon: np.ndarray) -> np.ndarray:
+    """Control points whose closed spline follows the (n, 2) outline polygon within
+    OUTLINE_TOLERANCE of its extent: the corners the outline's Douglas-Peucker simplification
+    keeps (tooth tips, sinuses), among points spread evenly along it, more of them until the
+    spline is close enough. An even spread alone (24 points) smoothed every tooth away."""
+    polygon = np.asarray(polygon, dtype=float)
+    extent = float(np.ptp(polygon, axis=0).max()) if len(polygon) else 0.0
+    if len(polygon) <= DERIVED_BOUNDARY_POINTS or extent == 0.0:
+        return polygon
+    tolerance = OUTLINE_TOLERANCE * extent
+    ring = shapely.LinearRing(polygon)
+    corners = shapely.get_coordinates(shapely.simplify(ring, tolerance))
+    index_of = {tuple(p): i for i, p in enumerate(polygon)}
+    keep = {index_of[tuple(p)] for p in corners if tuple(p) in index_of}
+    count = DERIVED_BOUNDARY_POINTS
+    while True:
+        spread = _even_indices(polygon, count, closed=True)
+        chosen = np.array(sorted(keep | set(spread.tolist())))
+        control = polygon[chosen]
+        curve = shapely.LinearRing(closed_curve(control))
+        if len(chosen) == len(polygon) or np.all(
+            shapely.distance(shapely.points(polygon), curve) <= 2 * tolerance
+        ):
+            return control
+        count *= 2
+
+
+def insert_index(control: np.ndarray, xy: np.ndarray, closed: bool) -> int:
+    """Where a new point `xy` belongs in the control polygon: the place that lengthens it least.
+
+    Between two neighbours a and b that costs |a - p| + |p - b| - |a - b|; an open curve may also
+    grow at either end, costing the distance to that end. Clicking around an outline in order
+    thus appends, and clicking beside a span inserts into it.
+    """
+    control = np.asarray(control, dtype=float)[:, :2]
+    n = len(control)
+    if n < 2:
+        return n
+    a = control if closed else control[:-1]
+    b = np.roll(control, -1, axis=0) if closed else control[1:]
+    dist = lambda p, q: np.linalg.norm(p - q, axis=-1)  # noqa: E731
+    costs = dist(a, xy) + dist(xy, b) - dist(a, b)
+    best = int(np.argmin(costs))
+    if not closed:
+        ends = (dist(control[0], xy), dist(control[-1], xy))
+        if min(ends) < costs[best]:
+            return 0 if ends[0] < ends[1] else n
+    return best + 1
+
+
+@dataclass(frozen=True)
+class MirrorFold:
+    """Where a mirror image would fold: the midrib bends more tightly than the leaf is wide.
+
+    where : (2,) plane point on the midrib; radius : its radius of curvature there; reach : how
+    far from the midrib the half being mirrored reaches there (more than `radius`).
+    """
+
+    where: tuple[float, float]
+    radius: float
+    reach: float
+
+    def message(self) -> str:
+        """What the editor tells the user (the edit itself is kept, not mirrored)."""
+        x, y = self.where
+        return (
+            f"Not mirrored: the midrib bends with a radius of {self.radius:.3g} near "
+            f"({x:.3g}, {y:.3g}), less than the {self.reach:.3g} the leaf reaches from it there, "
+            "so the mirror half would fold over itself. Bend the midrib less or narrow the leaf "
+            "there; Mirror resumes with the next edit that fits."
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Sketch:
+    """Control points of a leaf drawn on a plane.
+
+    Parameters
+    ----------
+    boundary : (n, 2) float array
+        Boundary control points, in order around the leaf.
+    veins : tuple of (m_i, 3) float arrays
+        Per vein, its control points in order: x, y and the height above the plane.
+    frame : Frame
+        The plane the sketch lies on, mapping it to world coordinates.
+    relief : (p, 3) float array
+        x, y and height of a loaded leaf's boundary points (a scan's margin curls off the plane):
+        the boundary curve takes its heights from the nearest of them, wherever its control points
+        are moved. Empty for a drawn leaf, whose boundary lies on the plane.
+    symmetric : bool
+        Mirror editing is on: each edit is reflected across the midrib (`mirrored`). A property
+        of the drawing, saved with it (a project's "sketch" without it: off).
+    """
+
+    boundary: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    veins: tuple[np.ndarray, ...] = ()
+    frame: Frame = field(default_factory=_identity_frame)
+    relief: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    symmetric: bool = False
+
+    def __post_init__(self) -> None:
+        boundary = np.asarray(self.boundary, dtype=float).reshape(-1, 2)
+        veins = tuple(np.asarray(v, dtype=float).reshape(-1, 3) for v in self.veins)
+        object.__setattr__(self, "boundary", boundary)
+        object.__setattr__(self, "veins", veins)
+        object.__setattr__(self, "relief", np.asarray(self.relief, dtype=float).reshape(-1, 3))
+
+    # --- reading -------------------------------------------------------------------------------
+    def control(self, curve: int) -> np.ndarray:
+        """Control points of a curve: (n, 2) for the boundary, (m, 3) for vein `curve`."""
+        return self.boundary if curve == BOUNDARY else self.veins[curve]
+
+    def boundary_curve(self) -> np.ndarray:
+        """(s, 2) points along the closed boundary curve (empty below 3 control points)."""
+        return closed_curve(self.boundary) if len(self.boundary) >= 3 else np.zeros((0, 2))
+
+    def vein_curve(self, index: int) -> np.ndarray:
+        """(s, 3) points along vein `index`: x, y, height."""
+        return open_curve(self.veins[index])
+
+    def to_leaf(self) -> Leaf | None:
+        """The leaf this sketch draws, in world coordinates; None below 3 boundary points."""
+        outline = self.boundary_curve()
+        if len(outline) < 3:
+            return None
+        boundary = self.frame.to_world(outline, self.boundary_heights(outline))
+        veins = []
+        for i, vein in enumerate(self.veins):
+            if len(vein):
+                curve = self.vein_curve(i)
+                veins.append(self.frame.to_world(curve[:, :2], curve[:, 2]))
+        return Leaf(boundary=boundary, veins=veins)
+
+    def boundary_heights(self, xy: np.ndarray) -> np.ndarray:
+        """(s,) heights of (s, 2) plane points on the boundary, from the relief (0 without)."""
+        if len(self.relief) == 0:
+            return np.zeros(len(xy))
+        k = min(RELIEF_NEIGHBOURS, len(self.relief))
+        dist, index = cKDTree(self.relief[:, :2]).query(xy, k=k)
+        dist, index = dist.reshape(len(xy), k), index.reshape(len(xy), k)
+        weight = 1.0 / np.maximum(dist, 1e-12 * self.extent()) ** 2
+        return np.sum(weight * self.relief[index, 2], axis=1) / weight.sum(axis=1)
+
+    def extent(self) -> float:
+        """Largest side of the control points' box (1 for an empty sketch)."""
+        points = np.vstack([self.boundary, *(v[:, :2] for v in self.veins)])
+        size = float(np.ptp(points, axis=0).max()) if len(points) > 1 else 0.0
+        return size if size > 0 else 1.0
+
+    # --- editing: each returns a new sketch ---------------------------------------------------
+    def _with_curve(self, curve: int, control: np.ndarray) -> Sketch:
+        if curve == BOUNDARY:
+            return replace(self, boundary=control)
+        veins = list(self.veins)
+        veins[curve] = control
+        return replace(self, veins=tuple(veins))
+
+    def moved(self, curve: int, index: int, xy: np.ndarray) -> Sketch:
+        """The sketch with one control point moved to plane point `xy`."""
+        control = self.control(curve).copy()
+        control[index, :2] = xy
+        return self._with_curve(curve, control)
+
+    def inserted(self, curve: int, xy: np.ndarray, height: float = 0.0) -> tuple[Sketch, int]:
+        """The sketch with a control point added where it fits best, and the point's index."""
+        control = self.control(curve)
+        index = insert_index(control, np.asarray(xy, dtype=float), closed=curve == BOUNDARY)
+        row = np.asarray(xy, dtype=float) if curve == BOUNDARY else np.array([*xy, height])
+        return self._with_curve(curve, np.insert(control, index, row, axis=0)), index
+
+    def deleted(self, curve: int, index: int) -> Sketch:
+        """The sketch without one control point; a vein left without points goes (veins keep
+        their numbers and colours only if no empty one is kept)."""
+        control = np.delete(self.control(curve), index, axis=0)
+        if curve != BOUNDARY and len(control) == 0:
+            return replace(self, veins=self.veins[:curve] + self.veins[curve + 1 :])
+        return self._with_curve(curve, control)
+
+    def with_height(self, vein: int, index: int, height: float) -> Sketch:
+        """The sketch with a vein control point's height set."""
+        control = self.veins[vein].copy()
+        control[index, 2] = height
+        return self._with_curve(vein, control)
+
+    def with_vein(self, points: np.ndarray) -> Sketch:
+        """The sketch with a vein of (m, 3) control points appended (index len(veins) - 1)."""
+        return replace(self, veins=(*self.veins, np.asarray(points, dtype=float).reshape(-1, 3)))
+
+    def with_heights(self, vein: int, heights: np.ndarray) -> Sketch:
+        """The sketch with all of a vein's control point heights set ((m,) array)."""
+        control = self.veins[vein].copy()
+        control[:, 2] = np.asarray(heights, dtype=float).reshape(len(control))
+        return self._with_curve(vein, control)
+
+    def vein_fractions(self, vein: int) -> np.ndarray:
+        """(m,) shares of vein `vein`'s length (along its curve, in the plane) at its control
+        points: 0 at the first, 1 at the last (all 0 for a vein of no length)."""
+        control = self.veins[vein]
+        curve = self.vein_curve(vein)
+        arc = plane_arc_lengths(curve)
+        if len(control) < 2 or arc[-1] <= 0:
+            return np.zeros(len(control))
+        if len(curve) == (len(control) - 1) * SAMPLES_PER_SPAN + 1:  # control i is sample i*span
+            at = arc[::SAMPLES_PER_SPAN]
+        else:  # repeated control points were dropped from the curve: lengths along the polygon
+            at = plane_arc_lengths(control)
+        return at / at[-1]
+
+    def with_profile(self, vein: int, start: float, end: float) -> Sketch:
+        """The sketch with a whole vein's heights set at once: linear from `start` at its first
+        point to `end` at its last, by length along the vein."""
+        return self.with_heights(vein, start + self.vein_fractions(vein) * (end - start))
+
+    def snap_to_vein(self, xy: np.ndarray, tolerance: float) -> np.ndarray | None:
+        """The point (x, y, height) on the nearest vein curve within `tolerance` of plane point
+        `xy`, or None: a new vein started there branches from that vein."""
+        best, best_d = None, tolerance
+        for i in range(len(self.veins)):
+            curve = self.vein_curve(i)
+            if len(curve) == 0:
+                continue
+            if len(curve) == 1:
+                candidates = curve
+            else:  # the nearest point on each segment of the sampled curve
+                a, b = curve[:-1], curve[1:]
+                ab = b[:, :2] - a[:, :2]
+                t = np.clip(
+                    np.einsum("ij,ij->i", xy - a[:, :2], ab) / np.maximum((ab**2).sum(1), 1e-300),
+                    0,
+                    1,
+                )
+                candidates = a + t[:, None] * (b - a)
+            d = np.linalg.norm(candidates[:, :2] - xy, axis=1)
+            j = int(np.argmin(d))
+            if d[j] <= best_d:
+                best, best_d = candidates[j], float(d[j])
+        return None if best is None else np.asarray(best, dtype=float)
+
+    def midrib(self) -> Midrib | None:
+        """The midrib (vein 1) as mirror editing follows it, or None below two points (made
+        once per sketch: a mirrored edit asks for it several times)."""
+        return self._midrib
+
+    @cached_property
+    def _midrib(self) -> Midrib | None:
+        if not self.veins or len(self.veins[0]) < 2:
+            return None
+        try:
+            return Midrib(self.vein_curve(0)[:, :2])
+        except ValueError:  # its points all in one place
+            return None
+
+    def midrib_side(self, xy: np.ndarray) -> float:
+        """Signed offset of plane point `xy` from the midrib curve (+ left, - right; 0 without
+        a midrib): the side an edit at `xy` was made on."""
+        midrib = self.midrib()
+        return 0.0 if midrib is None else float(midrib.offset(np.reshape(xy, (1, -1))[:, :2])[0])
+
+    def mirror_fold(self, source_side: float) -> MirrorFold | None:
+        """Where mirroring from `source_side` would fold (see MirrorFold), or None. Checked on
+        the curves that `mirrored` reflects (the boundary curve on that side and the side
+        veins there, as spline samples, so a bend between two control points is seen): a
+        point whose image would reach the centre of the midrib's curvature (1 - d kappa <= 0
+        on the inside of the bend, gui/model/midrib.py) folds. One pass over all the points."""
+        midrib = self.midrib()
+        if midrib is None:
+            return None
+        outline = closed_curve(self.boundary, FOLD_SAMPLES) if len(self.boundary) >= 3 else []
+        outline = np.asarray(outline, dtype=float).reshape(-1, 2)
+        side_veins = range(1, len(self.veins))
+        controls = [self.veins[i][:, :2] for i in side_veins]
+        curves = [open_curve(self.veins[i], FOLD_SAMPLES)[:, :2] for i in side_veins]
+        points = np.vstack([outline.reshape(-1, 2), *controls, *curves])
+        if not len(points):
+            return None
+        reach, offset, feet = midrib.mirror_reach(points)
+        eps = 1e-9 * self.extent()
+        mirrored = np.zeros(len(points), dtype=bool)
+        mirrored[: len(outline)] = offset[: len(outline)] * source_side > eps
+        starts = np.cumsum([len(outline), *map(len, controls), *map(len, curves)])
+        for k in range(len(controls)):  # a side vein goes over whole, by its points' mean side
+            if float(np.mean(offset[starts[k] : starts[k + 1]])) * source_side > eps:
+                at = len(controls) + k
+                mirrored[starts[at] : starts[at + 1]] = True
+        reach = np.where(mirrored, reach, -np.inf)
+        worst = int(np.argmax(reach))
+        if reach[worst] < FOLD_REACH:
+            return None
+        radius = float(-offset[worst] / reach[worst])
+        return MirrorFold(tuple(map(float, feet[worst])), radius, abs(float(offset[worst])))
+
+    def mirror_edit(self, xy: np.ndarray) -> tuple[Sketch, MirrorFold | None]:
+        """An edit at plane point `xy` with Mirror on: the sketch made symmetric from that side
+        of the midrib, or, where the mirror would fold, the sketch as it is and the fold."""
+        side = 1.0 if self.midrib_side(xy) >= 0 else -1.0
+        fold = self.mirror_fold(side)
+        return (self, fold) if fold is not None else (self.mirrored(side), None)
+
+    def mirrored(self, source_side: float) -> Sketch:
+        """The sketch made symmetric about the midrib (vein 1, followed along its curve, see
+        gui/model/midrib.py): the half of the boundary on `source_side` (+1: left of the midrib,
+        -1: right) is kept and reflected onto the other, and each side vein there replaces its
+        nearest counterpart on the other side (or gains one). Unchanged without a midrib of
+        two points or more."""
+        midrib = self.midrib()
+        if midrib is None:
+            return self
+        side = lambda points: midrib.offset(points) * source_side  # noqa: E731
+        reflect = midrib.reflect
+
+        boundary = self.boundary
+        eps = 1e-9 * self.extent()
+        keep = side(boundary) > eps
+        if 0 < keep.sum() < len(boundary):
+            start = int(np.flatnonzero(keep & ~np.roll(keep, 1))[0])  # where the kept arc begins
+            order = np.roll(np.arange(len(boundary)), -start)
+            loop, kept = boundary[order], keep[order]
+            arc = loop[kept]
+            axis_at = np.flatnonzero(np.abs(side(loop)) <= eps)
+            last_kept = int(np.flatnonzero(kept)[-1])
+            after = loop[[i for i in axis_at if i > last_kept][:1]]  # where the arc meets the axis
+            before = loop[[i for i in axis_at if i > last_kept][-1:]] if len(axis_at) > 1 else []
+            before = np.asarray(before).reshape(-1, 2)
+            if len(before) and len(after) and np.allclose(before, after):
+                before = before[:0]
+            boundary = np.vstack([arc, after, reflect(arc)[::-1], before])
+            boundary = boundary.reshape(-1, 2)
+        veins = list(self.veins)
+        sides = [float(np.mean(side(v))) for v in veins]
+        targets = [i for i in range(1, len(veins)) if sides[i] < -eps]
+        for i in range(1, len(self.veins)):
+            if sides[i] <= eps:
+                continue
+            mirror = reflect(self.veins[i])
+            if targets:
+                j = min(
+                    targets, key=lambda t: float(np.linalg.norm(veins[t][0, :2] - mirror[0, :2]))
+                )
+                targets.remove(j)
+                veins[j] = mirror
+            else:
+                veins.append(mirror)
+        for j in sorted(targets, reverse=True):
+            del veins[j]
+        return replace(self, boundary=boundary, veins=tuple(veins))
+
+    def default_height(self, vein: int, xy: np.ndarray) -> float:
+        """Height for a new point of a vein: that of its nearest control point, else (a new
+        vein: any index past the last) 5% of the sketch's size."""
+        control = self.veins[vein] if 0 <= vein < len(self.veins) else np.zeros((0, 3))
+        if len(control) == 0:
+            return 0.05 * self.extent()
+        return float(control[np.argmin(np.linalg.norm(control[:, :2] - xy, axis=1)), 2])
+
+    # --- files ---------------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form, stored as a project's "sketch"."""
+        return {
+            "plane": {
+                "origin": self.frame.origin.tolist(),
+                "u": self.frame.u.tolist(),
+                "v": self.frame.v.tolist(),
+                "normal": self.frame.normal.tolist(),
+            },
+            "boundary": self.boundary.tolist(),
+            "veins": [v.tolist() for v in self.veins],
+            "relief": self.relief.tolist(),
+            "symmetric": self.symmetric,
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> Sketch:
+        """The sketch stored by `to_dict`.
+
+        Raises
+        ------
+        ValueError
+            If the stored arrays have the wrong shape, or "symmetric" is not true or false
+            (absent, as in projects written before it: false).
+        """
+        symmetric = data.get("symmetric", False)
+        if not isinstance(symmetric, bool):
+            raise ValueError(f'"symmetric" must be true or false, got {symmetric!r:.40}')
+        plane = data.get("plane") or {}
+        frame = (
+            Frame(
+                **{k: np.asarray(plane[k], dtype=float).reshape(3) for k in Frame.__annotations__}
+            )
+            if plane
+            else _identity_frame()
+        )
+        return cls(
+            boundary=np.asarray(data.get("boundary", []), dtype=float).reshape(-1, 2),
+            veins=tuple(
+                np.asarray(v, dtype=float).reshape(-1, 3) for v in data.get("veins", []) if len(v)
+            ),
+            frame=frame,
+            relief=np.asarray(data.get("relief", []), dtype=float).reshape(-1, 3),
+            symmetric=symmetric,
+        )
+
+    @classmethod
+    def from_result(cls, result: Any) -> Sketch:
+        """A sketch approximating a reconstructed leaf: control points spread along its outline
+        and along each vein, on the leaf's own plane (the pipeline's frame), the boundary's
+        heights kept as its relief."""
+        boundary = _outline_controls(result.polygon)
+        relief = np.column_stack(result.frame.to_plane(result.leaf.boundary))
+        veins = []
+        for vein in result.leaf.veins:
+            xy, h = result.frame.to_plane(vein)
+            points = np.column_stack([xy, h])
+            veins.append(_even_by_length(points, min(DERIVED_VEIN_POINTS, len(points)), False))
+        return cls(boundary=boundary, veins=tuple(veins), frame=result.frame, relief=relief)

@@ -1,0 +1,56 @@
+"""The leaf as it exports, in the 3D view: the base-colour texture an export writes (generated
+blade and veins, the photo the leaf came from, or an image picked for the export), mapped through
+the mesh's UVs (assets/asset.py).
+
+The image is made on the worker's side lane (texture_image, a numpy array); the viewport wraps it
+into a pyvista Texture on the main thread. texture_key names what the image depends on (the
+texture option and the leaf plane: outline, veins, frame), so that a parameter change that keeps
+the plane keeps the image. No Qt here.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from leafstudio.assets.export import base_color
+from leafstudio.sources.leafphoto import PhotoTexture
+
+TEXTURE = "texture"  # the mesh colouring that shows the texture
+TEXTURE_LABEL = "texture (as exported)"
+
+
+def _file_stamp(path: Any) -> tuple:
+    """A file's name, size and modification time (a replaced image is made again)."""
+    try:
+        stat = Path(path).stat()
+        return (str(path), stat.st_size, stat.st_mtime_ns)
+    except OSError:
+        return (str(path), None, None)
+
+
+def texture_key(result: Any, texture: Any) -> tuple:
+    """What the texture image of `result` under the export option `texture` depends on."""
+    digest = hashlib.sha1()
+    frame = result.frame
+    for array in (result.polygon, frame.origin, frame.u, frame.v, *result.leaf.veins):
+        digest.update(np.ascontiguousarray(array, dtype=float).tobytes())
+        digest.update(b"|")
+    if isinstance(texture, PhotoTexture):
+        mapping = None if texture.pixel_from_world is None else texture.pixel_from_world.tobytes()
+        option: tuple = ("photo", _file_stamp(texture.image), mapping)
+    elif texture in ("auto", "none"):
+        option = (texture,)
+    else:
+        option = ("image", _file_stamp(texture))
+    return (option, digest.hexdigest())
+
+
+def texture_image(result: Any, texture: Any) -> np.ndarray | None:
+    """The (h, w, 3 or 4) uint8 base-colour image an export writes (row 0 at t = 1), or None
+    for no texture; LeafError for an image that cannot be read. Runs off the main thread."""
+    image = base_color(result, texture)
+    return None if image is None else np.asarray(image)

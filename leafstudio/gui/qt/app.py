@@ -1,0 +1,108 @@
+"""Start-up: check that a display can be opened, create the QApplication and the main window.
+
+`run_app(path, screenshot)` is what `leafstudio` and `leafstudio gui` call (see cli/).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+import os
+import sys
+
+from leafstudio.errors import LeafError
+
+NO_DISPLAY = (
+    "leafstudio: cannot open a display ({why}); run the app under a virtual display with "
+    "`xvfb-run -a leafstudio`, or use `leafstudio reconstruct` without a window"
+)
+HEADLESS_PLATFORMS = ("offscreen", "minimal", "vnc", "eglfs", "linuxfb")
+SETTINGS = ("LeafStudio", "LeafStudio")  # organisation, application
+
+
+def display_problem() -> str | None:
+    """Why no window can be shown here, or None when one can (checked before Qt, which would
+    abort the process instead)."""
+    platform = os.environ.get("QT_QPA_PLATFORM", "").split(":")[0]
+    if platform in HEADLESS_PLATFORMS or not sys.platform.startswith("linux"):
+        return None
+    if platform == "wayland" or (not platform and os.environ.get("WAYLAND_DISPLAY")):
+        return None if os.environ.get("WAYLAND_DISPLAY") else "WAYLAND_DISPLAY is not set"
+    display = os.environ.get("DISPLAY")
+    if not display:
+        return "DISPLAY is not set"
+    name = ctypes.util.find_library("X11")
+    if name is None:
+        return None  # cannot check without libX11; let Qt try
+    xlib = ctypes.CDLL(name)
+    xlib.XOpenDisplay.restype = ctypes.c_void_p
+    xlib.XOpenDisplay.argtypes = [ctypes.c_char_p]
+    handle = xlib.XOpenDisplay(display.encode())
+    if not handle:
+        return f"the X display {display!r} does not answer"
+    xlib.XCloseDisplay.argtypes = [ctypes.c_void_p]
+    xlib.XCloseDisplay(handle)
+    return None
+
+
+def run_app(path: str | None = None, screenshot: str | None = None) -> int:
+    """Open the main window on `path` (or the nested demo) and run until it closes.
+
+    Parameters
+    ----------
+    path : str, optional
+        A leaf file or project to open.
+    screenshot : str, optional
+        Save the whole window as this PNG once the first result and its measurements are
+        shown, then exit.
+
+    Returns
+    -------
+    int
+        The exit code: 0, or 2 when no display can be opened or the file cannot be read.
+    """
+    problem = display_problem()
+    if problem is not None:
+        print(NO_DISPLAY.format(why=problem), file=sys.stderr)
+        return 2
+    from PySide6.QtCore import QSettings, QTimer
+    from PySide6.QtWidgets import QApplication
+
+    from leafstudio.gui.qt.main_window import MainWindow
+    from leafstudio.gui.qt.viewport import grab_window
+
+    app = QApplication.instance() or QApplication(sys.argv[:1])
+    app.setApplicationName("LeafStudio")
+    app.setOrganizationName(SETTINGS[0])
+    window = MainWindow(QSettings(*SETTINGS))
+    if path is None:
+        window.open_demo("nested")
+    elif not window.open_path(path):
+        window.worker.shutdown()
+        raise LeafError(window.last_error_box.text() if window.last_error_box else "cannot open")
+    app.aboutToQuit.connect(window.worker.shutdown)
+    app.aboutToQuit.connect(window.tasks.shutdown)
+    window.show()
+    if screenshot is not None:
+        status: dict[str, int] = {"code": 0}
+
+        def grab(*_: object) -> None:
+            app.processEvents()
+            if not grab_window(window, window.viewport).save(screenshot):
+                print(f"leafstudio: error: {screenshot}: cannot write the PNG", file=sys.stderr)
+                status["code"] = 2
+            window.undo_stack.setClean()
+            window.close()
+
+        def failed(message: str) -> None:
+            where = path or "demo"
+            text = message if message.startswith(f"{where}: ") else f"{where}: {message}"
+            print(f"leafstudio: error: {text}", file=sys.stderr)
+            status["code"] = 2
+            window.close()
+
+        window.measurements_shown.connect(lambda: QTimer.singleShot(100, grab))
+        window.failure_shown.connect(failed)
+        app.exec()
+        return status["code"]
+    return app.exec()

@@ -1,0 +1,343 @@
+"""The app explaining itself: a Steps view that walks through the pipeline one step at a time (by
+showing the layers of each step, with a caption tying it to the paper), and File > Export of a
+turntable (GIF or MP4) and of the steps side by side (PNG) for slides (render/slides.py).
+"""
+
+from __future__ import annotations
+
+from PySide6.QtCore import Qt
+from PySide6.QtGui import QAction
+from PySide6.QtWidgets import (
+    QApplication,
+    QCheckBox,
+    QDialog,
+    QDoubleSpinBox,
+    QFileDialog,
+    QHBoxLayout,
+    QLabel,
+    QPushButton,
+    QVBoxLayout,
+    QWidget,
+)
+
+# (title, caption, the layers shown)
+STEPS: tuple[tuple[str, str, frozenset[str]], ...] = (
+    (
+        "1. The input on the leaf's plane",
+        "The boundary (black) and vein points (coloured) as given, on the plane that fits the "
+        "boundary best (its PCA plane, step 1 of the paper). Heights are measured from it.",
+        frozenset({"points", "curves"}),
+    ),
+    (
+        "2. g(x): inside or outside",
+        "A smooth function of the outline (the MPU implicit, eqs. 1-2): positive inside the "
+        "leaf, negative outside. Its zero contour, drawn here, is the leaf's margin.",
+        frozenset({"contour", "points"}),
+    ),
+    (
+        "3. p(x): where the relief is",
+        "The height guide (eqs. 4-5): each point takes the height of the nearest vein, falling "
+        "to zero at the margin. Bright: high above the plane.",
+        frozenset({"probability", "points"}),
+    ),
+    (
+        "4. EM samples",
+        "Points drawn where p(x) is large. The Gaussian mixture is fitted to them by EM: each "
+        "Gaussian gathers one cluster of them.",
+        frozenset({"em", "points"}),
+    ),
+    (
+        "5. The Gaussian mixture's surface",
+        "z(x) = b(x) + tanh(g/δ) Σ a_k N(x | μ_k, Σ_k): the K Gaussians, scaled to the veins' "
+        "heights, tapered to zero at the margin by tanh(g/δ). Shown at the grid nodes.",
+        frozenset({"samples"}),
+    ),
+    (
+        "6. The mesh",
+        "The surface triangulated and trimmed at the margin, coloured by height. Change K in "
+        "the Parameters to see how many bumps the mixture can make.",
+        frozenset({"mesh", "points"}),
+    ),
+)
+
+# each layer's tooltip: what it shows and which step of the paper it comes from
+LAYER_HELP: dict[str, str] = {
+    "mesh": "The reconstructed surface (step 6), coloured as chosen below: z(x) = b(x) + "
+    "tanh(g/δ) Σ a_k N(x | μ_k, Σ_k), trimmed at the margin.",
+    "points": "The input: boundary points (black) and vein points (a colour per vein), with the "
+    "heights the surface must follow.",
+    "curves": "The boundary and vein curves through the input points, in order.",
+    "contour": "The zero contour of g (eqs. 1-2): the MPU implicit of the outline is positive "
+    "inside, negative outside; this line is where the surface is cut.",
+    "probability": "p(x), the height guide (eqs. 4-5): each point takes the nearest vein's "
+    "height, falling to zero at the margin; the mixture is fitted to it.",
+    "samples": "The GMM samples: the kept grid nodes lifted to the fitted surface z(x).",
+    "em": "The EM samples: points drawn where p(x) is large; EM fits the K Gaussians to them.",
+    "scan": "A scan of the real leaf, if one is open, to compare the surface with.",
+    "poisson": "Screened Poisson's surface from the same points, beside ours: it spills past "
+    "the margin (the paper's Fig. 10).",
+}
+
+
+def add_layer_help(window) -> None:
+    """Give each item of the window's layer list its LAYER_HELP tooltip."""
+    layers = window.layer_list
+    for i in range(layers.count()):
+        item = layers.item(i)
+        text = LAYER_HELP.get(item.data(Qt.ItemDataRole.UserRole))
+        if text:
+            item.setToolTip(text)
+
+
+class StepsDialog(QDialog):
+    """Back / Next through STEPS, switching the window's layers to each step's; closing puts the
+    layers back as they were."""
+
+    def __init__(self, window) -> None:
+        super().__init__(window)
+        self.setWindowTitle("Steps of the pipeline")
+        self.setModal(False)
+        self.window_ = window
+        self.saved = self._states()
+        self.index = 0
+        self.title = QLabel()
+        self.title.setStyleSheet("font-weight: bold;")
+        self.caption = QLabel()
+        self.caption.setWordWrap(True)
+        self.caption.setMinimumWidth(380)
+        self.back, self.next = QPushButton("Back"), QPushButton("Next")
+        self.back.clicked.connect(lambda: self.show_step(self.index - 1))
+        self.next.clicked.connect(lambda: self.show_step(self.index + 1))
+        buttons = QHBoxLayout()
+        buttons.addWidget(self.back)
+        buttons.addWidget(self.next)
+        column = QVBoxLayout(self)
+        column.addWidget(self.title)
+        column.addWidget(self.caption)
+        column.addLayout(buttons)
+        self.show_step(0)
+
+    def _items(self):
+        layers = self.window_.layer_list
+        return [layers.item(i) for i in range(layers.count())]
+
+    def _states(self) -> dict[str, bool]:
+        return {
+            item.data(Qt.ItemDataRole.UserRole): item.checkState() == Qt.CheckState.Checked
+            for item in self._items()
+        }
+
+    def _set(self, shown: dict[str, bool]) -> None:
+        for item in self._items():
+            key = item.data(Qt.ItemDataRole.UserRole)
+            if key in shown:
+                state = Qt.CheckState.Checked if shown[key] else Qt.CheckState.Unchecked
+                if item.checkState() != state:
+                    item.setCheckState(state)
+
+    def show_step(self, index: int) -> None:
+        self.index = max(0, min(index, len(STEPS) - 1))
+        title, caption, layers = STEPS[self.index]
+        self.title.setText(title)
+        self.caption.setText(caption)
+        self.back.setEnabled(self.index > 0)
+        self.next.setEnabled(self.index < len(STEPS) - 1)
+        self._set({key: key in layers for key in self.saved if key not in ("scan", "poisson")})
+
+    def done(self, result: int) -> None:
+        self._set(self.saved)
+        super().done(result)
+
+
+SEE_THROUGH = 0.35  # the mesh's opacity when the layers under it should show
+K_FONT_PX = 24  # K's label in the view: its size in logical pixels (VTK points at 72 DPI)
+K_POSITION = (0.985, 0.98)  # its upper right corner, in the view's normalized coordinates
+
+
+class ViewAids(QWidget):
+    """Height exaggeration (the relief is a few percent of the length), a colour range kept
+    while K changes (so K's effect shows), and K written in the view. They act on the actors the
+    viewport drew, after each result and layer change: the viewport's own code is unchanged."""
+
+    def __init__(self, window) -> None:
+        super().__init__()
+        self.window_ = window
+        self.exaggeration = QDoubleSpinBox()
+        self.exaggeration.setRange(1.0, 20.0)
+        self.exaggeration.setSingleStep(0.5)
+        self.exaggeration.setPrefix("Height × ")
+        self.exaggeration.setToolTip(
+            "Stretch the view along the leaf's normal: relief is a few percent of the length. "
+            "Only the view changes, never the mesh or its files."
+        )
+        self.keep = QCheckBox("Keep the colour range")
+        self.keep.setToolTip(
+            "Keep the mesh's colour range as it is now while K or other settings change, so the "
+            "effect of K shows as a change of colour."
+        )
+        self.see_through = QCheckBox("See-through mesh")
+        self.see_through.setToolTip(
+            "Draw the mesh translucent, so the layers under it (p(x), the zero contour of g, the "
+            "EM samples) can be read with the mesh shown."
+        )
+        self.kept: tuple[str, tuple[float, float]] | None = None
+        self._label: tuple[str, str, int] | None = None  # K's text, colour and size, as drawn
+        column = QVBoxLayout(self)
+        column.setContentsMargins(0, 0, 0, 0)
+        row = QHBoxLayout()
+        row.addWidget(self.exaggeration)
+        row.addWidget(self.see_through)
+        column.addLayout(row)
+        column.addWidget(self.keep)
+        self.exaggeration.valueChanged.connect(lambda _: self.apply())
+        self.see_through.toggled.connect(lambda _: self.apply())
+        self.keep.toggled.connect(self._on_keep)
+
+    def _mesh_actor(self):
+        return self.window_.viewport.plotter.actors.get("mesh")
+
+    def _on_keep(self, on: bool) -> None:
+        actor = self._mesh_actor()
+        self.kept = None
+        if on and actor is not None:
+            self.kept = (actor.mapper.array_name, tuple(actor.mapper.scalar_range))
+        self.apply()
+
+    def _matrix(self):
+        import numpy as np
+        import vtk
+
+        result = self.window_.session.result
+        scale = self.exaggeration.value()
+        if result is None or scale == 1.0:
+            return None
+        n, o = np.asarray(result.frame.normal), np.asarray(result.frame.origin)
+        linear = np.eye(3) + (scale - 1.0) * np.outer(n, n)  # stretch along the normal only
+        m = np.eye(4)
+        m[:3, :3] = linear
+        m[:3, 3] = o - linear @ o  # about the leaf's plane
+        matrix = vtk.vtkMatrix4x4()
+        for i in range(4):
+            for j in range(4):
+                matrix.SetElement(i, j, float(m[i, j]))
+        return matrix
+
+    def apply(self) -> None:
+        """Exaggeration, kept colours and K's label on what the viewport shows now."""
+        plotter = self.window_.viewport.plotter
+        matrix = self._matrix()
+        for name, actor in plotter.actors.items():
+            if name != "k_label" and hasattr(actor, "SetUserMatrix"):
+                actor.SetUserMatrix(matrix)
+        actor = self._mesh_actor()
+        if actor is not None:
+            actor.prop.opacity = SEE_THROUGH if self.see_through.isChecked() else 1.0
+        if self.kept is not None and actor is not None and actor.mapper.array_name == self.kept[0]:
+            actor.mapper.scalar_range = self.kept[1]
+        result = self.window_.session.result
+        if result is not None:
+            self._show_k(f"K = {result.chosen_k}")
+        # one render at the next paint, with the result's own: a render here would be a second
+        # (and a third, from the frame it ends with) full render of the scene per result
+        self.window_.viewport.redraw()
+
+    def _show_k(self, text: str) -> None:
+        """K in the view's upper right corner: one text actor, its string set in place (a
+        corner annotation fits its font anew whenever its text changes, about 15 ms of the
+        main thread's time in every render that follows a result)."""
+        import pyvista as pv
+
+        plotter, viewport = self.window_.viewport.plotter, self.window_.viewport
+        # in points: the Qt VTK widgets set the render window's DPI to 72 x the pixel ratio,
+        # and VTK scales text by it (scaling by the ratio here too made it twice too large)
+        label = (text, viewport.text_color(), K_FONT_PX)
+        actor = plotter.actors.get("k_label")
+        if not isinstance(actor, pv.Text):
+            actor = pv.Text(text)
+            actor.GetPositionCoordinate().SetCoordinateSystemToNormalizedViewport()
+            actor.SetPosition(*K_POSITION)
+            actor.prop.justification_horizontal = "right"
+            actor.prop.justification_vertical = "top"
+            plotter.add_actor(
+                actor, name="k_label", reset_camera=False, pickable=False, render=False
+            )
+        elif label == self._label:
+            return
+        actor.input = label[0]
+        actor.prop.color = label[1]
+        actor.prop.font_size = label[2]
+        self._label = label
+
+
+def _menu(window, title: str):
+    """The window's menu of that title (MainWindow.menus), made if it has none."""
+    menus = getattr(window, "menus", None)
+    if menus is None:
+        menus = window.menus = {}
+    if title not in menus:
+        menus[title] = window.menuBar().addMenu(title)
+    return menus[title]
+
+
+def export_slide(window, kind: str, path: str) -> bool:
+    """Write the shown result's turntable or steps figure to `path`; errors in the window."""
+    from leafstudio.errors import LeafError
+    from leafstudio.render.slides import render_steps, render_turntable
+
+    result = window.session.result
+    if result is None:
+        window.show_error("Nothing to export", "There is no reconstructed leaf yet.")
+        return False
+    QApplication.setOverrideCursor(Qt.CursorShape.WaitCursor)
+    try:
+        (render_turntable if kind == "turntable" else render_steps)(result, path)
+    except (LeafError, OSError) as exc:
+        window.show_error("Cannot export", str(exc))
+        return False
+    finally:
+        QApplication.restoreOverrideCursor()
+    return True
+
+
+def install(window) -> None:
+    """Add View > Steps of the pipeline, File > Export turntable / steps figure, a tooltip on
+    every layer, and the view aids (height exaggeration, kept colour range, K) under the layers."""
+    add_layer_help(window)
+    aids = ViewAids(window)
+    layout = window.layers_dock.widget().layout()
+    layout.insertWidget(max(layout.count() - 1, 0), aids)  # above the stretch
+    window.result_shown.connect(lambda _outcome: aids.apply())
+    window.layer_list.itemChanged.connect(lambda _item: aids.apply())
+    window.coloring.currentIndexChanged.connect(lambda _row: aids.apply())
+    window.edges.toggled.connect(lambda _on: aids.apply())
+    window.view_aids = aids
+
+    def steps() -> None:
+        window.steps_dialog = StepsDialog(window)
+        window.steps_dialog.show()
+
+    def ask(kind: str, caption: str, filters: str, suffix: str) -> None:
+        path, _ = QFileDialog.getSaveFileName(window, caption, "", filters)
+        if path:
+            export_slide(window, kind, path if "." in path.rsplit("/", 1)[-1] else path + suffix)
+
+    view = _menu(window, "View")
+    action = QAction("&Steps of the pipeline…", window)
+    action.setToolTip("Walk through the pipeline one step at a time, each step explained.")
+    action.triggered.connect(steps)
+    view.addAction(action)
+    files = _menu(window, "File")
+    quit_action = getattr(window, "quit_action", None)
+    for kind, text, filters, suffix in (
+        ("turntable", "Export &turntable…", "Animations (*.gif *.mp4)", ".gif"),
+        ("steps", "Export steps &figure…", "PNG (*.png)", ".png"),
+    ):
+        act = QAction(text, window)
+        act.triggered.connect(
+            lambda _=False, k=kind, t=text, f=filters, s=suffix: ask(k, t.replace("&", ""), f, s)
+        )
+        if quit_action is not None:
+            files.insertAction(quit_action, act)
+        else:
+            files.addAction(act)
+    window.explain_actions = action

@@ -1,0 +1,412 @@
+"""The Forms gallery: a thumbnail per shape term, choosers for the other terms, each with its
+definition in plain words beside it. Choosing makes the form the document, as an editable sketch
+(one undo step, through Session.new_document); "Grow veins" fills the current outline with veins
+of the chosen venation (leafstudio.forms.grow_veins), one undo step too.
+
+Thumbnails are drawn once per shape and size with QPainter (outline and veins in the plane) and
+cached for the process.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable
+from dataclasses import replace
+
+import numpy as np
+from PySide6.QtCore import QPointF, QSize, Qt, QTimer, Signal
+from PySide6.QtGui import QColor, QIcon, QImage, QPainter, QPainterPath, QPen, QPixmap
+from PySide6.QtWidgets import (
+    QComboBox,
+    QDoubleSpinBox,
+    QFormLayout,
+    QHBoxLayout,
+    QLabel,
+    QListView,
+    QListWidget,
+    QListWidgetItem,
+    QPushButton,
+    QScrollArea,
+    QSpinBox,
+    QVBoxLayout,
+    QWidget,
+)
+
+from leafstudio.core.prepare.outline import ring_crossings
+from leafstudio.forms import SHAPES, VENATION_KINDS, Form, definition, grow_veins
+from leafstudio.forms.make import SIDE_ON
+from leafstudio.forms.terms import APEXES, DEFAULT_LOBES, MARGINS, RELIEF, TOOTHED, USER_BASES
+from leafstudio.gui.model.sketch_model import Sketch, closed_curve
+from leafstudio.model import Leaf
+
+THUMBNAIL = 84  # pixels
+BOUNDARY_CONTROL = 48  # a form's sketch: about this many boundary control points, plus corners
+CORNER_TURN = 0.35  # radians: outline points turning this sharply (tooth tips, notches) are kept
+VEIN_CONTROL = 8
+DEBOUNCE_MS = 250
+_thumbnails: dict[tuple[str, int], QImage] = {}
+
+
+def thumbnail(shape: str, size: int = THUMBNAIL) -> QImage:
+    """The shape's canonical form drawn in a `size` square (outline filled, veins on it); drawn
+    once per shape and size, then cached."""
+    key = (shape, size)
+    if key not in _thumbnails:
+        _thumbnails[key] = draw_leaf(Form(shape).leaf(), size)
+    return _thumbnails[key]
+
+
+def draw_leaf(leaf: Leaf, size: int) -> QImage:
+    """A leaf's outline and veins seen from above, fitted in a `size` square."""
+    image = QImage(size, size, QImage.Format.Format_ARGB32_Premultiplied)
+    image.fill(Qt.GlobalColor.transparent)
+    xy = leaf.boundary[:, :2]
+    lo, hi = xy.min(axis=0), xy.max(axis=0)
+    scale = 0.9 * size / max(float((hi - lo).max()), 1e-12)
+    centre = (lo + hi) / 2
+
+    def point(p: np.ndarray) -> QPointF:
+        q = (p[:2] - centre) * scale
+        return QPointF(size / 2 + q[0], size / 2 - q[1])
+
+    painter = QPainter(image)
+    painter.setRenderHint(QPainter.RenderHint.Antialiasing)
+    path = QPainterPath(point(xy[0]))
+    for p in xy[1:]:
+        path.lineTo(point(p))
+    path.closeSubpath()
+    painter.setPen(QPen(QColor("#2f5d1e"), 1.2))
+    painter.setBrush(QColor("#8cc46a"))
+    painter.drawPath(path)
+    painter.setPen(QPen(QColor("#e9f5dc"), 0.9))
+    for vein in leaf.veins:
+        line = QPainterPath(point(vein[0]))
+        for p in vein[1:]:
+            line.lineTo(point(p))
+        painter.setBrush(Qt.BrushStyle.NoBrush)
+        painter.drawPath(line)
+    painter.end()
+    return image
+
+
+def _turns(xy: np.ndarray) -> np.ndarray:
+    a, b = xy - np.roll(xy, 1, axis=0), np.roll(xy, -1, axis=0) - xy
+    return np.abs(np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], (a * b).sum(axis=1)))
+
+
+def leaf_sketch(leaf: Leaf, teeth: int = 0) -> Sketch:
+    """An editable sketch of a leaf that lies in the z = 0 plane apart from its relief (a form):
+    boundary control points spread along it with its corners (tooth tips and notches) kept, each
+    vein's control points spread along it with their heights, the boundary's heights as relief."""
+    xy = leaf.boundary[:, :2]
+    corners = np.flatnonzero(_turns(xy) > CORNER_TURN)
+    count = max(BOUNDARY_CONTROL, 3 * teeth)
+    while True:  # more control points until the curve through them does not cross itself
+        even = np.unique(np.linspace(0, len(xy), count, endpoint=False).astype(int))
+        boundary = xy[np.union1d(even, corners)]
+        if count >= len(xy) or not len(ring_crossings(closed_curve(boundary))):
+            break
+        count *= 2
+    veins = []
+    for vein in leaf.veins:
+        pick = np.unique(np.linspace(0, len(vein) - 1, min(VEIN_CONTROL, len(vein))).astype(int))
+        veins.append(vein[pick])
+    relief = leaf.boundary if np.any(leaf.boundary[:, 2] != 0) else np.zeros((0, 3))
+    return Sketch(boundary=boundary, veins=tuple(veins), relief=relief)
+
+
+def with_grown_veins(
+    sketch: Sketch, venation: str, seed: int = 0, base: np.ndarray | None = None
+) -> Sketch:
+    """The sketch with its veins replaced by veins grown inside its boundary curve; the base is
+    `base` (plane point), else the start of the sketch's first vein, else found by grow_veins."""
+    outline = sketch.boundary_curve()
+    if base is None and sketch.veins and len(sketch.veins[0]):
+        base = sketch.veins[0][0, :2]
+    veins = grow_veins(outline, venation, base=base, seed=seed)
+    pick = [
+        np.unique(np.linspace(0, len(v) - 1, min(VEIN_CONTROL, len(v))).astype(int)) for v in veins
+    ]
+    # replace, not a new Sketch: the boundary, frame, relief and the saved Mirror flag are kept
+    return replace(sketch, veins=tuple(v[p] for v, p in zip(veins, pick, strict=True)))
+
+
+class FormsPanel(QWidget):
+    """The gallery and its choosers. `chosen(Form, picked)` fires when the user picks a shape
+    (picked True) or changes a term (False; debounced); `grow(str)` when "Grow veins" is pressed,
+    with the venation."""
+
+    chosen = Signal(object, bool)
+    grow = Signal(str)
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.gallery = QListWidget()
+        self.gallery.setViewMode(QListView.ViewMode.IconMode)
+        self.gallery.setIconSize(QSize(THUMBNAIL, THUMBNAIL))
+        self.gallery.setResizeMode(QListView.ResizeMode.Adjust)
+        self.gallery.setMovement(QListView.Movement.Static)
+        self.gallery.setSpacing(4)
+        self.gallery.setFixedHeight(2 * (THUMBNAIL + 34))
+        for name in SHAPES:
+            item = QListWidgetItem(QIcon(QPixmap.fromImage(thumbnail(name))), name)
+            item.setData(Qt.ItemDataRole.UserRole, name)
+            item.setToolTip(f"{name}: {definition(name)}")
+            self.gallery.addItem(item)
+        self.shape_text = QLabel()
+        self.shape_text.setWordWrap(True)
+
+        self.apex = self._combo(("(usual)", *APEXES), "apex")
+        self.base = self._combo(("(usual)", *USER_BASES), "base")
+        self.margin = self._combo(tuple(MARGINS), "margin")
+        self.venation = self._combo(VENATION_KINDS, "venation")
+        self.teeth = self._spin(QSpinBox(), 2, 300, 30, RELIEF["teeth"])
+        self.lobes = self._spin(QSpinBox(), 2, 15, DEFAULT_LOBES, RELIEF["lobes"])
+        self.fold = self._spin(QDoubleSpinBox(), -75, 75, 0, RELIEF["fold"], " °", 5)
+        self.curl = self._spin(QDoubleSpinBox(), -1, 1, 0, RELIEF["curl"], "", 0.05)
+        self.wave = self._spin(QDoubleSpinBox(), 0, 0.2, 0, RELIEF["wave"], "", 0.005)
+        self.seed = self._spin(QSpinBox(), 0, 1_000_000, 0, RELIEF["seed"])
+        self.variant = QPushButton("New variant")
+        self.variant.setToolTip("Another leaf of the same kind: the next seed.")
+        self.variant.clicked.connect(lambda: self.seed.setValue(self.seed.value() + 1))
+        self.grow_button = QPushButton("Grow veins in the current outline")
+        self.grow_button.setToolTip(
+            "Replace the current leaf's veins by veins of the chosen venation grown inside its "
+            "outline (space colonization, Runions et al. 2005). One undo step."
+        )
+        self.grow_button.clicked.connect(lambda: self.grow.emit(self.venation.currentText()))
+
+        self.texts: dict[str, QLabel] = {}
+        form = QFormLayout()
+        for label, widget in (
+            ("Apex", self.apex),
+            ("Base", self.base),
+            ("Margin", self.margin),
+            ("Teeth", self.teeth),
+            ("Lobes", self.lobes),
+            ("Venation", self.venation),
+            ("Fold", self.fold),
+            ("Curl", self.curl),
+            ("Wave", self.wave),
+        ):
+            text = QLabel()
+            text.setWordWrap(True)
+            text.setStyleSheet("color: #555555;")
+            text.setMinimumWidth(200)
+            self.texts[label] = text
+            form.addRow(label, widget)
+            form.addRow("", text)
+        # a pose the reconstruction would see side-on (forms.make.SIDE_ON): said where it is set
+        self.pose_note = QLabel()
+        self.pose_note.setWordWrap(True)
+        self.pose_note.setStyleSheet("color: #b00020;")
+        self.pose_note.hide()
+        form.addRow("", self.pose_note)
+        seed_row = QHBoxLayout()
+        seed_row.addWidget(self.seed)
+        seed_row.addWidget(self.variant)
+        form.addRow("Seed", seed_row)
+        body = QWidget()
+        column = QVBoxLayout(body)
+        column.addWidget(self.gallery)
+        column.addWidget(self.shape_text)
+        column.addLayout(form)
+        column.addWidget(self.grow_button)
+        column.addStretch(1)
+        scroll = QScrollArea()  # the definitions take room: scroll rather than squeeze them
+        scroll.setWidgetResizable(True)
+        scroll.setWidget(body)
+        outer = QVBoxLayout(self)
+        outer.setContentsMargins(0, 0, 0, 0)
+        outer.addWidget(scroll)
+
+        self._timer = QTimer(self)
+        self._timer.setSingleShot(True)
+        self._timer.setInterval(DEBOUNCE_MS)
+        self._timer.timeout.connect(self._emit)
+        self._picked = False
+        self.gallery.currentItemChanged.connect(lambda *_: self._changed(picked=True))
+        self.gallery.itemClicked.connect(lambda *_: self._changed(picked=True))
+        self.gallery.setCurrentRow(list(SHAPES).index("ovate"))
+        self._timer.stop()  # the first shape is selected, not chosen
+        self._picked = False
+        self._describe()
+
+    def show_pose_note(self, text: str) -> None:
+        """A note under Fold, Curl and Wave on the chosen pose (none: hidden)."""
+        self.pose_note.setText(text[:1].upper() + text[1:])
+        self.pose_note.setVisible(bool(text))
+
+    # --- widgets -------------------------------------------------------------------------------
+    def _combo(self, items: tuple[str, ...], kind: str) -> QComboBox:
+        box = QComboBox()
+        box.addItems(list(items))
+        for i, name in enumerate(items):
+            if not name.startswith("("):
+                box.setItemData(i, definition(name, kind), Qt.ItemDataRole.ToolTipRole)
+        box.currentIndexChanged.connect(lambda _: self._changed())
+        return box
+
+    def _spin(self, box, low, high, value, tip: str, suffix: str = "", step: float = 1):
+        box.setRange(low, high)
+        box.setValue(value)
+        box.setToolTip(tip)
+        if suffix:
+            box.setSuffix(suffix)
+        box.setSingleStep(step)
+        if isinstance(box, QDoubleSpinBox):
+            box.setDecimals(3)
+        box.valueChanged.connect(lambda _: self._changed())
+        return box
+
+    # --- state ---------------------------------------------------------------------------------
+    def shape(self) -> str:
+        item = self.gallery.currentItem()
+        return item.data(Qt.ItemDataRole.UserRole) if item is not None else "ovate"
+
+    def form(self) -> Form:
+        """The form the choosers describe (terms that do not apply are left out)."""
+        shape = self.shape()
+        margin = self.margin.currentText()
+        fixed = SHAPES[shape].fixed_base
+        base = None if fixed or self.base.currentIndex() == 0 else self.base.currentText()
+        return Form(
+            shape,
+            apex=None if self.apex.currentIndex() == 0 else self.apex.currentText(),
+            base=base,
+            margin=margin,
+            teeth=self.teeth.value() if margin in TOOTHED else None,
+            lobes=self.lobes.value() if margin == "lobed" else None,
+            venation=self.venation.currentText(),
+            fold=self.fold.value(),
+            curl=self.curl.value(),
+            wave=self.wave.value(),
+            seed=self.seed.value(),
+        )
+
+    def _describe(self) -> None:
+        form_ = self.form()
+        self.shape_text.setText(f"<b>{form_.shape}</b>: {definition(form_.shape)}")
+        self.texts["Apex"].setText(f"{form_.apex_term}: {definition(form_.apex_term, 'apex')}")
+        fixed = SHAPES[form_.shape].fixed_base
+        self.base.setEnabled(not fixed)
+        base_text = f"{form_.base_term}: {definition(form_.base_term, 'base')}"
+        self.texts["Base"].setText(base_text + (" (part of this shape)" if fixed else ""))
+        self.texts["Margin"].setText(definition(form_.margin))
+        self.teeth.setEnabled(form_.margin in TOOTHED)
+        self.lobes.setEnabled(form_.margin == "lobed")
+        self.texts["Teeth"].setText(RELIEF["teeth"])
+        self.texts["Lobes"].setText(RELIEF["lobes"])
+        self.texts["Venation"].setText(definition(form_.venation))
+        for name in ("Fold", "Curl", "Wave"):
+            self.texts[name].setText(RELIEF[name.lower()].split(": ", 1)[1])
+
+    def _changed(self, picked: bool = False) -> None:
+        self._picked = self._picked or picked
+        self._describe()
+        self._timer.start()
+
+    def _emit(self) -> None:
+        picked, self._picked = self._picked, False
+        self.chosen.emit(self.form(), picked)
+
+    def choose_now(self) -> None:
+        """Emit the current form at once, as picked (tests, and the gallery's double click)."""
+        self._timer.stop()
+        self._picked = True
+        self._emit()
+
+
+def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPanel:
+    """Add the Forms dock to the main window: a chosen form becomes the document through the
+    window's session (one undo step); Grow veins edits the current sketch (one undo step)."""
+    panel = FormsPanel()
+    session = window.session
+    made = {"serial": None}  # the document the gallery made last
+
+    def choose(form: Form, picked: bool) -> None:
+        if not picked and session.state.serial != made["serial"]:
+            return  # a term changed while another document is open: only its definition shows
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                leaf = form.leaf()
+        except Exception as exc:  # shown in the window, never a traceback
+            window.show_error("Forms", str(exc))
+            return
+        side_on = [str(w.message) for w in caught if str(w.message).startswith(SIDE_ON)]
+        panel.show_pose_note(side_on[0] if side_on else "")
+        title = f"{form.shape} form"
+        session.new_document(leaf, leaf_sketch(leaf, form.teeth_count), title)
+        made["serial"] = session.state.serial
+
+    def grow(venation: str) -> None:
+        sketch = session.editable_sketch()
+        if sketch is None:
+            leaf = session.leaf
+            if leaf is None:
+                window.show_error("Grow veins", "There is no outline to grow veins in.")
+                return
+            sketch = _sketch_of(session, leaf)
+        if sketch is None or len(sketch.boundary) < 3:
+            window.show_error("Grow veins", "Draw an outline first (at least 3 points).")
+            return
+        base = None
+        leaf = session.leaf
+        if not (sketch.veins and len(sketch.veins[0])) and leaf is not None and leaf.veins:
+            base = sketch.frame.to_plane(leaf.veins[0][:1])[0][0]  # the midrib's start
+        try:
+            grown = with_grown_veins(sketch, venation, panel.seed.value(), base)
+        except Exception as exc:
+            window.show_error("Grow veins", str(exc))
+            return
+        session.commit_sketch(grown, f"Grow {venation} veins")
+
+    panel.chosen.connect(choose)
+    panel.grow.connect(grow)
+    _add_grow_row(window.editor, grow)
+    window.forms_dock = window._dock("Forms", panel, dock_area)
+    sketch_dock = getattr(window, "sketch_dock", None)
+    if sketch_dock is not None:  # a tab beside the sketch: both want the height
+        window.tabifyDockWidget(sketch_dock, window.forms_dock)
+        sketch_dock.raise_()
+    window.forms_panel = panel
+    return panel
+
+
+def _add_grow_row(editor: QWidget, grow: Callable[[str], None]) -> None:
+    """A "Grow veins" row in the sketch editor, above its drawing (the editor's layout is a
+    column of tool rows, then the view)."""
+    kind = QComboBox()
+    kind.addItems(list(VENATION_KINDS))
+    for i, name in enumerate(VENATION_KINDS):
+        kind.setItemData(i, definition(name, "venation"), Qt.ItemDataRole.ToolTipRole)
+    button = QPushButton("Grow veins")
+    button.setToolTip(
+        "Replace the veins by veins of this kind grown inside the outline (space colonization, "
+        "Runions et al. 2005): an ordinary sketch, editable, one undo step."
+    )
+    button.clicked.connect(lambda: grow(kind.currentText()))
+    row = QHBoxLayout()
+    row.addWidget(button)
+    row.addWidget(kind)
+    row.addStretch(1)
+    layout = editor.layout()
+    views = [i for i in range(layout.count()) if layout.itemAt(i).widget() is editor.view]
+    layout.insertLayout(views[0] if views else layout.count(), row)
+    editor.grow_button, editor.grow_kind = button, kind
+
+
+def _sketch_of(session, leaf: Leaf) -> Sketch | None:
+    """A loaded leaf's sketch: from its shown result, else from the leaf itself on the plane of
+    its boundary (its heights kept as relief)."""
+    result = getattr(session, "result", None)
+    if result is not None and getattr(result, "leaf", None) is leaf:
+        return Sketch.from_result(result)
+    from leafstudio.core.plane import fit_frame
+
+    frame = fit_frame(leaf.boundary, leaf.vein_points)
+    xy, h = frame.to_plane(leaf.boundary)
+    pick = np.unique(np.linspace(0, len(xy), BOUNDARY_CONTROL, endpoint=False).astype(int))
+    relief = np.column_stack([xy, h]) if np.any(np.abs(h) > 0) else np.zeros((0, 3))
+    return Sketch(boundary=xy[pick], frame=frame, relief=relief)

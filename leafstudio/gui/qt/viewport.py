@@ -1,0 +1,452 @@
+"""The 3D view: a pyvista Plotter widget (native_view.py) showing a Result's layers, with camera
+presets.
+
+Every actor has a fixed name; a new result's dataset is copied into the actor already drawn
+(a shallow copy, no new actor, mapper or lookup table), so that what follows a result on the main
+thread stays short. The camera frames the blade's robust bounds (framing.py) when the session
+says so, and otherwise stays where the user put it. Point and line sizes follow the device pixel
+ratio; the background and text follow the palette. Main thread only (VTK rendering).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from PySide6.QtCore import QEvent, QPoint, QRect, QTimer, Signal
+from PySide6.QtGui import QImage, QPainter, QPalette, QPixmap
+from PySide6.QtWidgets import QVBoxLayout, QWidget
+
+from leafstudio.core.plane import Frame
+from leafstudio.gui.model.framing import BladeBounds, best_iso, fit_camera, view_direction
+from leafstudio.gui.model.layers import BOUNDARY_COLOR, LAYERS, MESH_COLORINGS, SCALAR_BARS, Piece
+from leafstudio.gui.model.textures import TEXTURE
+from leafstudio.gui.qt.native_view import make_plotter
+
+SIZED = ("point_size", "line_width")  # style keys in device pixels: scaled by the pixel ratio
+
+CAMERAS = ("iso", "top", "side")
+BAR_BAND = 0.13  # the colour bars' share of the view's height, at its bottom, with their titles
+
+
+class Viewport(QWidget):
+    """Draws layers of pieces; `rendered` fires after each new result is on screen."""
+
+    rendered = Signal()
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.plotter = make_plotter(self)
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        layout.addWidget(self.plotter.interactor)
+        self.visible = {key: on for key, _, on in LAYERS}
+        self.show_edges = False
+        self.mesh_coloring = "height"
+        self._bar_titles = {
+            "mesh": {label for label, _ in MESH_COLORINGS.values()},
+            "probability": {SCALAR_BARS["probability"]},
+        }
+        self._mesh_piece: Piece | None = None
+        self._texture = None  # pyvista.Texture for the TEXTURE colouring, made on this thread
+        self._plain = None  # its stand-in while the image is being made
+        self.texture_key: tuple | None = None  # what the texture shows (gui/model/textures.py)
+        self._names: dict[str, list[str]] = {key: [] for key, _, _ in LAYERS}
+        self._frame = Frame(np.zeros(3), np.eye(3)[0], np.eye(3)[1], np.eye(3)[2])
+        self._bounds: BladeBounds | None = None
+        self._has_content = False
+        self._message = ""
+        self._pieces: dict[str, list[Piece]] = {}
+        self._announce = False
+        self._bars: dict[str, tuple] = {}
+        self._placed: tuple | None = None  # the preset and camera the view last framed with
+        self._redraw_due = False
+        self.plotter.render_window.AddObserver("EndEvent", self._on_render_end)
+        self.apply_palette()
+
+    # --- look ----------------------------------------------------------------------------------
+    def pixel_ratio(self) -> float:
+        """Device pixels per logical pixel (2 on a high-DPI screen): VTK sizes are in device
+        pixels, Qt's in logical ones."""
+        return float(self.devicePixelRatioF())
+
+    def text_color(self) -> str:
+        return self.palette().color(QPalette.ColorRole.WindowText).name()
+
+    def _dark(self) -> bool:
+        return self.palette().color(QPalette.ColorRole.Base).lightnessF() < 0.5
+
+    def apply_palette(self) -> None:
+        """Background and text colours from the palette (light or dark). The background is
+        one colour, a shade off the palette's base: a gradient is a full-view pass of its own
+        in every render, a third of a render's cost under software OpenGL."""
+        base = self.palette().color(QPalette.ColorRole.Base)
+        shade = base.lighter(118) if self._dark() else base.darker(106)
+        self.plotter.set_background(shade.name())
+        for key in self._pieces:  # colours that follow the palette
+            if self.visible[key]:
+                self._draw_layer(key)
+        self._bars.clear()
+        self._sync_scalar_bars()
+        self.redraw()
+
+    def changeEvent(self, event: QEvent) -> None:
+        super().changeEvent(event)
+        if event.type() == QEvent.Type.PaletteChange:
+            self.apply_palette()
+
+    # --- layers --------------------------------------------------------------------------------
+    def show_layers(
+        self,
+        layers: dict[str, list[Piece]],
+        frame: Frame,
+        bounds: BladeBounds | None = None,
+        framing: str | None = None,
+    ) -> None:
+        """Replace every layer by the given pieces. `frame` orients the camera presets (the
+        plane the sketch shows); `bounds` is the blade's box, framed when `framing` is "reset"
+        (the iso preset) or "refit" (the current direction); otherwise the camera stays."""
+        self._frame = frame
+        if bounds is not None:
+            self._bounds = bounds
+        for key, pieces in layers.items():
+            self._pieces[key] = pieces
+            if self.visible[key]:
+                self._draw_layer(key)
+            else:  # drawn when switched on: hidden layers cost nothing per result
+                self._remove_layer(key)
+        self._sync_scalar_bars()
+        self._has_content = True
+        self.set_message("", render=False)
+        if framing == "reset":
+            self.camera("iso", render=False)
+        elif framing == "refit":
+            self.refit(render=False)
+        self._announce = True
+        self.redraw()
+
+    def set_layer(self, key: str, pieces: list[Piece]) -> None:
+        """Replace one layer's pieces (the scan and Poisson layers, which come apart from
+        results); drawn now if the layer is on, else when it is switched on."""
+        self._pieces[key] = pieces
+        if self.visible[key]:
+            self._draw_layer(key)
+        else:
+            self._remove_layer(key)
+        self.redraw()
+
+    def redraw(self) -> None:
+        """Schedule one render of the scene, in a later turn of the event loop than the work
+        that asked for it: a result's layers and its render are then two short pauses of the
+        main thread, with input handled between them, rather than one long one. Many asks
+        before that turn make one render."""
+        if not self._redraw_due:
+            self._redraw_due = True
+            QTimer.singleShot(0, self, self._redraw_now)
+
+    def _redraw_now(self) -> None:
+        self._redraw_due = False
+        self.plotter.interactor.update()  # VTK renders at the widget's paint
+
+    def _on_render_end(self, *_: object) -> None:
+        if self._announce:
+            self._announce = False
+            self.rendered.emit()
+
+    def _draw_layer(self, key: str) -> None:
+        pieces = self._pieces.get(key, [])
+        names = [piece.name for piece in pieces]
+        for stale in set(self._names[key]) - set(names):
+            self.plotter.remove_actor(stale, render=False)
+        for piece in pieces:
+            self._add(key, piece)
+        self._names[key] = names
+
+    def _remove_layer(self, key: str) -> None:
+        for name in self._names[key]:
+            self.plotter.remove_actor(name, render=False)
+        self._names[key] = []
+
+    def _add(self, key: str, piece: Piece) -> None:
+        style = dict(piece.style)
+        if key == "mesh" and self.mesh_coloring == TEXTURE:
+            self._mesh_piece = piece
+            # white under the image (its colours as they are); until the leaf's is made, one
+            # texel of the blade's colour (the same actor then takes the image in place).
+            # Opaque: alpha 0 outside the outline is dropped (glTF's MASK), never sorted.
+            texture = self._texture if self._texture is not None else self._plain_texture()
+            style.update(
+                show_edges=self.show_edges, texture=texture, color="white", force_opaque=True
+            )
+        elif key == "mesh":
+            self._mesh_piece = piece
+            coloring = self.mesh_coloring if self.mesh_coloring in piece.ranges else "height"
+            style.update(
+                show_edges=self.show_edges,
+                scalars=coloring,
+                cmap=MESH_COLORINGS[coloring][1],
+                clim=piece.ranges.get(coloring),
+            )
+        # a large mesh is drawn lighter (display_mesh.py), but its edges are the full mesh's
+        data = piece.full_data if key == "mesh" and self.show_edges else piece.data
+        if data.n_points == 0:
+            self.plotter.remove_actor(piece.name, render=False)
+            return
+        ratio = self.pixel_ratio()
+        style.update({k: style[k] * ratio for k in SIZED if k in style})
+        if style.get("color") == BOUNDARY_COLOR and self._dark():
+            style["color"] = self.text_color()  # the near-black boundary on a dark background
+        actor = self.plotter.actors.get(piece.name)
+        if actor is not None and self._same_kind(actor, data, style):
+            held = actor.mapper.GetInputDataObject(0, 0)  # the dataset the mapper draws
+            held.ShallowCopy(data)
+            if "scalars" in style:
+                held.GetPointData().SetActiveScalars(style["scalars"])
+                actor.mapper.array_name = style["scalars"]
+                clim = style.get("clim")
+                if clim is not None:
+                    actor.mapper.scalar_range = clim
+            if "texture" in style:
+                actor.SetTexture(style["texture"])
+            actor.prop.show_edges = bool(style.get("show_edges", actor.prop.show_edges))
+            actor.SetVisibility(self.visible[key])
+            return
+        actor = self.plotter.add_mesh(
+            data,
+            name=piece.name,
+            show_scalar_bar=False,
+            reset_camera=False,
+            render=False,
+            **style,
+        )
+        if key == "mesh":
+            actor.prop.interpolation = "phong"
+        actor._leafstudio_style = _style_key(style)  # what an in-place update must not change
+        actor.SetVisibility(self.visible[key])
+
+    @staticmethod
+    def _same_kind(actor, data, style: dict) -> bool:
+        """True when the drawn actor can take the new dataset in place: same style, and the same
+        kind of dataset (its cells' kind decides the mapper's work)."""
+        old = actor.mapper.dataset
+        return (
+            getattr(actor, "_leafstudio_style", None) == _style_key(style)
+            and type(old) is type(data)
+            and bool(old.n_cells) == bool(data.n_cells)
+        )
+
+    def clear(self) -> None:
+        """Remove every layer (a new, still empty sketch)."""
+        for key in self._names:
+            self._remove_layer(key)
+        self._pieces.clear()
+        self._mesh_piece = None
+        self._sync_scalar_bars()
+        self._has_content = False
+        self.redraw()
+
+    def actor_names(self, key: str) -> list[str]:
+        """Names of the actors currently drawn for layer `key`."""
+        return [n for n in self._names[key] if n in self.plotter.actors]
+
+    def set_visible(self, key: str, on: bool) -> None:
+        """Switch a layer on or off."""
+        self.visible[key] = on
+        if on and not self.actor_names(key):
+            self._draw_layer(key)
+        for name in self.actor_names(key):
+            self.plotter.actors[name].SetVisibility(on)
+        self._sync_scalar_bars()
+        self.redraw()
+
+    def set_mesh_coloring(self, name: str) -> None:
+        """Colour the mesh by a point array of MESH_COLORINGS (height when the mesh lacks it)."""
+        self.mesh_coloring = name
+        if self._mesh_piece is not None and "mesh" in self.plotter.actors:
+            self._add("mesh", self._mesh_piece)
+            self._sync_scalar_bars()
+            self.redraw()
+
+    def set_texture(self, image: np.ndarray | None, key: tuple | None, draw: bool = True) -> None:
+        """The image the TEXTURE colouring maps through the mesh's UVs ((h, w, 3 or 4) uint8,
+        row 0 at t = 1, as an export writes it; None: the blade's plain colour), and what it
+        shows (`key`, gui/model/textures.py); `draw=False` leaves the mesh to the next result."""
+        import pyvista as pv
+
+        self._texture = None if image is None else pv.Texture(np.ascontiguousarray(image))
+        if self._texture is not None:
+            self._texture.interpolate = True  # smooth texels, as renderers filter them
+        self.texture_key = key
+        if draw and self.mesh_coloring == TEXTURE:
+            self.set_mesh_coloring(TEXTURE)
+
+    def _plain_texture(self):
+        """A one-texel texture of the generated blade colour (assets/texture.py)."""
+        import pyvista as pv
+
+        from leafstudio.assets.texture import BLADE
+
+        if self._plain is None:
+            self._plain = pv.Texture(np.array([[BLADE]], dtype=np.uint8))
+        return self._plain
+
+    def texture_actor_image(self) -> np.ndarray | None:
+        """The image on the mesh actor now (row 0 at t = 1), or None (for tests and checks)."""
+        actor = self.plotter.actors.get("mesh")
+        texture = actor.GetTexture() if actor is not None else None
+        return None if texture is None else np.asarray(texture.to_array())
+
+    def set_edges(self, on: bool) -> None:
+        """Show or hide the mesh's triangle edges (over the full mesh: a large one is otherwise
+        drawn through fewer vertices, display_mesh.py)."""
+        self.show_edges = on
+        if self._mesh_piece is not None and self.actor_names("mesh"):
+            self._add("mesh", self._mesh_piece)
+        self.redraw()
+
+    def _sync_scalar_bars(self) -> None:
+        """Scalar bars for the visible coloured layers; a bar already there for the same title
+        and mapper is kept (making one costs several milliseconds)."""
+        for key, title in SCALAR_BARS.items():
+            if key == "mesh" and self._mesh_piece is not None:
+                coloring = self.mesh_coloring
+                title = MESH_COLORINGS[
+                    coloring if coloring in self._mesh_piece.ranges else "height"
+                ][0]
+            names = self.actor_names(key)
+            wanted = self.visible[key] and bool(names)
+            if key == "mesh" and self.mesh_coloring == TEXTURE:
+                wanted = False  # an image, not a colour scale
+            mapper = self.plotter.actors[names[0]].mapper if wanted else None
+            if (
+                wanted
+                and self._bars.get(key) == (title, id(mapper))
+                and title in self.plotter.scalar_bars
+            ):
+                continue
+            for stale in self._bar_titles[key] & set(self.plotter.scalar_bars.keys()):
+                self.plotter.remove_scalar_bar(stale, render=False)
+            self._bars.pop(key, None)
+            if wanted:
+                self._bars[key] = (title, id(mapper))
+                left = {"mesh": 0.06, "probability": 0.54}[key]  # side by side along the bottom
+                self.plotter.add_scalar_bar(
+                    title=title,
+                    mapper=mapper,
+                    vertical=False,
+                    position_x=left,
+                    position_y=0.02,
+                    width=0.4,
+                    height=0.08,
+                    color=self.text_color(),
+                    fmt="%.3g",
+                    n_labels=2,  # the ends only: a middle label would sit under the title
+                    title_font_size=14,
+                    label_font_size=12,
+                    render=False,
+                )
+
+    def set_message(self, text: str, render: bool = True) -> None:
+        """A line of text over the view (a failure's message), or none."""
+        if text == self._message:
+            return
+        self._message = text
+        if text:
+            self.plotter.add_text(
+                text, position="upper_left", font_size=10, color="#b00020", name="message"
+            )
+        else:
+            self.plotter.remove_actor("message", render=False)
+        if render:
+            self.redraw()
+
+    # --- camera --------------------------------------------------------------------------------
+    def camera(self, preset: str, render: bool = True) -> None:
+        """Look at the blade from the top (along its normal, u to the right and v up, as in the
+        sketch), the side (along its width) or iso, filling most of the view."""
+        direction, up = view_direction(preset, self._frame)
+        if preset == "iso" and self._bounds is not None:
+            direction, up = best_iso(
+                self._bounds, self.plotter.camera.view_angle, self._aspect(), self._bottom()
+            )
+        self._place(direction, up)
+        self._placed = (preset, self._camera_now())
+        if render:
+            self.redraw()
+
+    def refit(self, render: bool = True) -> None:
+        """Frame the blade again (the sketch grew past the view): from the current direction,
+        or, while the camera is still where the iso preset put it, from the iso direction
+        that suits the grown leaf (a few first points are a sliver, turned another way)."""
+        if self._placed is not None and self._placed == ("iso", self._camera_now()):
+            self.camera("iso", render)
+            return
+        camera = self.plotter.camera
+        direction = np.asarray(camera.position) - np.asarray(camera.focal_point)
+        self._place(direction, np.asarray(camera.up))
+        self._placed = None
+        if render:
+            self.redraw()
+
+    def _camera_now(self) -> tuple:
+        camera = self.plotter.camera
+        return tuple(np.round([*camera.position, *camera.focal_point, *camera.up], 9))
+
+    def _bottom(self) -> float:
+        """The share of the view's height kept free for the colour bars (none: 0)."""
+        return BAR_BAND if self._bars else 0.0
+
+    def _aspect(self) -> float:
+        size = self.plotter.interactor.size()
+        return size.width() / max(size.height(), 1)
+
+    def _place(self, direction: np.ndarray, up: np.ndarray) -> None:
+        if self._bounds is None:
+            self.plotter.reset_camera(render=False)
+            return
+        camera = self.plotter.camera
+        position, focus, up = fit_camera(
+            self._bounds, direction, up, camera.view_angle, self._aspect(), bottom=self._bottom()
+        )
+        self.plotter.camera_position = [tuple(position), tuple(focus), tuple(up)]
+        self.plotter.renderer.ResetCameraClippingRange()
+
+    def display_points(self, points: np.ndarray) -> np.ndarray:
+        """(n, 2) display positions (device pixels, y up) of (n, 3) world points in the view,
+        with the camera as it is (for checks of the framing)."""
+        renderer = self.plotter.renderer
+        out = np.empty((len(points), 2))
+        for i, point in enumerate(np.asarray(points, float)):
+            renderer.SetWorldPoint(*point, 1.0)
+            renderer.WorldToDisplay()
+            out[i] = renderer.GetDisplayPoint()[:2]
+        return out
+
+    def image(self) -> QImage:
+        """The 3D view as drawn now, from VTK's frame buffer: Qt cannot grab a native window
+        (native_view.py), and this is the same on every platform."""
+        pixels = np.ascontiguousarray(self.plotter.screenshot(None, return_img=True)[..., :3])
+        height, width = pixels.shape[:2]
+        image = QImage(pixels.data, width, height, 3 * width, QImage.Format.Format_RGB888).copy()
+        image.setDevicePixelRatio(self.pixel_ratio())
+        return image
+
+    def close_plotter(self) -> None:
+        """Release VTK resources (before the window goes)."""
+        self.plotter.close()
+
+
+def grab_window(window: QWidget, viewport: Viewport) -> QPixmap:
+    """The whole window as on screen, with the 3D view painted from its own frame buffer over
+    the place Qt's grab leaves blank (native_view.py)."""
+    pixmap = window.grab()
+    if viewport.isVisible():
+        painter = QPainter(pixmap)
+        corner = viewport.mapTo(window, QPoint(0, 0))
+        painter.drawImage(QRect(corner, viewport.size()), viewport.image())
+        painter.end()
+    return pixmap
+
+
+def _style_key(style: dict) -> tuple:
+    """A hashable summary of an actor's style, without the per-result colour range."""
+    dropped = ("clim", "show_edges", "texture")  # set on the actor in place
+    return tuple(sorted((k, repr(v)) for k, v in style.items() if k not in dropped))

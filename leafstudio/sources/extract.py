@@ -1,0 +1,479 @@
+"""From a leaf scan (a point cloud of its whole surface) to what the paper takes: boundary, veins.
+
+1. Clean: drop points far from their neighbours (outliers) and small detached clusters.
+2. Keep the blade: a petiole is a thin strand, so the points of the blade's interior have many
+   more neighbours within a ball of radius r than a strand's; the blade is the largest connected
+   group of such "core" points, grown back by r/2 to recover its margin and tip (a morphological
+   opening of the point set). The largest strand left is the petiole; it marks the base.
+3. Project the blade on its PCA plane; its outline is a concave hull that bridges scanner stripes
+   (and nothing wider), opened a little to cut off a stub of petiole, evenly resampled and lifted
+   to the scan's heights by a local plane fit (so the margin's heights come from the scan, not
+   from the nearest point), averaged along the outline against the edge's noise.
+4. Midrib: from the base to the tip, through the middle of the blade's cross-sections, lifted to
+   the surface. Side veins: straight from the midrib toward the margin at 50° to it, lifted too,
+   and cut where the scan has a gap.
+
+Units and size: the scan is moved and scaled to unit size first (nothing overflows at 1e200, and
+the constants meet the same leaf in any units), and a scan of more than BUDGET points is thinned
+to one point per occupied voxel (the voxel's centroid, the voxel as large as needed to keep at
+most BUDGET): the steps above then cost the same for 1e5 or 1e7 points, and the blade and petiole
+masks go back to every scan point through its voxel. Smaller scans are used as they are.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import Delaunay, cKDTree
+from shapely.geometry import LineString, MultiPoint, Point, Polygon
+
+from leafstudio.core.plane import fixed_sample, principal_extents, principal_spreads
+from leafstudio.core.prepare.vein_order import veins_inside_outline
+from leafstudio.errors import LeafError
+from leafstudio.model import Leaf
+
+MIN_POINTS = 50
+OUTLIER_FACTOR = 3.0  # a point whose mean neighbour distance exceeds this many medians is noise
+NEIGHBOURS = 8
+LINK = 4.0  # points closer than this many median neighbour distances are connected
+CLUSTER_SHARE = 0.1  # detached clusters smaller than this share of the largest are dropped
+BALL = 0.08  # r, the ball of the blade test, as a fraction of the scan's length
+CORE = 0.4  # core points have at least this share of the busiest balls' count
+EDGE = 0.3  # margin points, grown back near the core, at least this share (a strand has less)
+LIFT_NEIGHBOURS = 16
+RIM_KERNEL = np.array([1.0, 2.0, 3.0, 2.0, 1.0])  # smooths the margin's heights along it
+OUTLINE_POINTS = 200  # the outline's default count; its spacing sets the veins' and the rim's
+OPENING = 0.015  # the outline is opened by this share of the length (drops thin stubs)
+PETIOLE_SHARE = 0.02  # fewer points than this share of the blade's do not mark the base
+STRAND = 0.35  # a petiole's second spread is at most this share of its first (the real scans'
+# petioles: 0.06-0.23; the pieces of blade the ball test leaves: sheets 0.60-0.64, strips 0.12-0.34)
+STICK_OUT = 0.5  # ... and its far end this share of its length from the blade (petioles: 0.92-1.05;
+# strips along the margin: 0.09-0.18)
+SIDE_STATIONS = (0.2, 0.35, 0.5, 0.65, 0.8)  # where side veins leave the midrib (arc length)
+SIDE_ANGLE = np.deg2rad(50.0)
+SIDE_REACH = 0.85  # side veins stop at this share of the way to the margin
+MIDRIB_REACH = (0.02, 0.98)  # the midrib's span along base -> tip
+AXES = {"+x": 0, "-x": 0, "+y": 1, "-y": 1, "+z": 2, "-z": 2}
+BUDGET = 40_000  # larger scans are thinned to at most this many voxel centroids
+THINNING_PASSES = 8
+PROBES = 10_000  # blade_points counts a ball's points among this many at most
+SAMPLE = 50_000  # the voxel size is first sought on this many of the points
+
+
+@dataclass(frozen=True)
+class Extraction:
+    """What `extract_leaf` found.
+
+    Attributes
+    ----------
+    leaf : Leaf
+        Boundary (evenly resampled, in order) and veins (midrib first), in scan coordinates.
+    blade : (n,) bool array
+        Which scan points belong to the blade (not outliers, clutter or petiole).
+    petiole : (n,) bool array
+        Which scan points were taken as the petiole.
+    length : float
+        The blade's length along its main axis, in scan units.
+    """
+
+    leaf: Leaf
+    blade: np.ndarray
+    petiole: np.ndarray
+    length: float
+
+
+def _neighbour_spacing(points: np.ndarray) -> np.ndarray:
+    """(n,) mean distance from each point to its NEIGHBOURS nearest others."""
+    dist, _ = cKDTree(points).query(points, k=min(NEIGHBOURS + 1, len(points)))
+    return dist[:, 1:].mean(axis=1)
+
+
+def _components(points: np.ndarray, radius: float) -> np.ndarray:
+    """(n,) label of each point's connected group, linking points within `radius`."""
+    pairs = cKDTree(points).query_pairs(radius, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(points),) * 2)
+    return connected_components(graph, directed=False)[1]
+
+
+def clean_scan(points: np.ndarray) -> np.ndarray:
+    """(n,) bool: the points kept once outliers and small detached clusters are dropped."""
+    spacing = _neighbour_spacing(points)
+    typical = float(np.median(spacing))
+    if not typical > 0:
+        raise LeafError("most of the scan's points coincide: no surface to find a leaf on")
+    keep = spacing <= OUTLIER_FACTOR * typical
+    labels = _components(points[keep], LINK * typical)
+    sizes = np.bincount(labels)
+    big = sizes >= CLUSTER_SHARE * sizes.max()
+    kept = np.flatnonzero(keep)
+    keep[kept[~big[labels]]] = False
+    return keep
+
+
+def blade_points(points: np.ndarray) -> np.ndarray:
+    """(n,) bool: the blade among cleaned scan points, without a petiole that sticks out."""
+    radius = BALL * float(principal_extents(points)[0])
+    if len(points) > PROBES:  # each ball's count from a random share of the points, scaled up
+        probes = fixed_sample(points, PROBES)
+        found = cKDTree(probes).query_ball_point(points, radius, return_length=True)
+        counts = found * (len(points) / PROBES)
+    else:
+        counts = cKDTree(points).query_ball_point(points, radius, return_length=True)
+    busy = np.percentile(counts, 90)
+    core = counts >= CORE * busy
+    if not core.any():
+        raise LeafError("no leaf blade in the scan: no point has the neighbours a surface gives")
+    typical = float(np.median(_neighbour_spacing(points)))
+    labels = _components(points[core], LINK * typical)
+    main = np.flatnonzero(core)[labels == np.argmax(np.bincount(labels))]
+    near, _ = cKDTree(points[main]).query(points, distance_upper_bound=0.5 * radius)
+    return np.isfinite(near) & (counts >= EDGE * busy)
+
+
+def split_scan(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(n,) bool masks of a scan's blade and its petiole (the rest: outliers and clutter).
+
+    The points blade_points leaves out fall into connected pieces. The petiole is the largest
+    piece that is a strand sticking out of the blade (_sticks_out); every other piece that
+    touches the blade is blade: a margin whose balls hold fewer points (a strip along the edge,
+    or a part of the blade the scanner saw obliquely, its stripes farther apart). Taking the
+    largest piece left as the petiole, whatever its shape, dropped 16% of the soybean pot1_1
+    blade, and on sugar beet pot1_7 took a piece of the blade for the petiole and the real
+    petiole for clutter (review finding)."""
+    clean = clean_scan(points)
+    blade = np.zeros(len(points), dtype=bool)
+    blade[np.flatnonzero(clean)[blade_points(points[clean])]] = True
+    rest = np.flatnonzero(clean & ~blade)
+    petiole = np.zeros(len(points), dtype=bool)
+    if len(rest) == 0:
+        return blade, petiole
+    link = LINK * float(np.median(_neighbour_spacing(points)))
+    labels = _components(points[rest], link)
+    gap = cKDTree(points[blade]).query(points[rest])[0]
+    sizes = np.bincount(labels)
+    for label in np.argsort(sizes)[::-1]:
+        if sizes[label] < PETIOLE_SHARE * blade.sum():
+            break
+        piece = labels == label
+        if _sticks_out(points[rest[piece]], gap[piece]):
+            petiole[rest[piece]] = True
+            break
+    touching = np.bincount(labels, weights=gap <= link, minlength=len(sizes)) > 0
+    blade[rest[touching[labels] & ~petiole[rest]]] = True
+    return blade, petiole
+
+
+def _sticks_out(piece: np.ndarray, gap: np.ndarray) -> bool:
+    """True for an (m, 3) piece of a scan that is a strand (its second spread at most STRAND of
+    its first) whose far end lies at least STICK_OUT of its length from the blade (`gap`: each
+    point's distance to the blade): a petiole, not a strip along the blade's margin."""
+    spread = principal_spreads(piece)
+    length = 2 * np.sqrt(3) * spread[0]  # a uniform segment's length from its spread
+    return bool(spread[1] <= STRAND * spread[0] and gap.max() >= STICK_OUT * length)
+
+
+def _plane(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The PCA frame of points: origin (3,) and axes (3, 3), rows u (length), v, normal."""
+    origin = points.mean(axis=0)
+    axes = np.linalg.svd(points - origin, full_matrices=False)[2]
+    if np.linalg.det(axes) < 0:
+        axes[2] = -axes[2]
+    return origin, axes
+
+
+def lift(query: np.ndarray, xy: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """(q,) heights at (q, 2) plane points from a weighted local plane fit to the scan's (n, 2)
+    points and (n,) heights (extrapolates sensibly at the margin, smooths scanner noise)."""
+    k = min(LIFT_NEIGHBOURS, len(xy))
+    dist, idx = cKDTree(xy).query(query, k=k)
+    d = xy[idx] - query[:, None, :]
+    design = np.concatenate([np.ones((len(query), k, 1)), d], axis=2)
+    weight = 1.0 / (dist + dist[:, :1] + 1e-12)
+    normal = np.einsum("nk,nki,nkj->nij", weight, design, design)
+    scale = np.trace(normal, axis1=1, axis2=2)[:, None, None]
+    normal += 1e-6 * scale * np.eye(3)
+    rhs = np.einsum("nk,nki,nk->ni", weight, design, h[idx])
+    return np.linalg.solve(normal, rhs[..., None])[:, 0, 0]
+
+
+def _outline(xy: np.ndarray, length: float) -> Polygon:
+    """A concave hull of the points whose edges bridge gaps of up to four times the scan's typical
+    largest point spacing (scanner stripes) and nothing longer, opened by OPENING of the length
+    (so that a stub of petiole narrower than twice that is cut off)."""
+    gaps, _ = cKDTree(xy).query(xy, k=2)
+    bridge = 4.0 * float(np.percentile(gaps[:, 1], 95))
+    simplices = Delaunay(xy).simplices
+    edges = np.linalg.norm(xy[simplices] - xy[np.roll(simplices, 1, axis=1)], axis=2)
+    lo, hi = float(edges.min()), float(edges.max())
+    ratio = float(np.clip((bridge - lo) / max(hi - lo, 1e-300), 0.0, 1.0))
+    hull = shapely.concave_hull(MultiPoint(xy), ratio=ratio)
+    polys = [g for g in getattr(hull, "geoms", [hull]) if isinstance(g, Polygon) and g.area > 0]
+    if not polys:
+        raise LeafError("the scan's points do not cover an area")
+    hull = max(polys, key=lambda g: g.area)
+    radius = OPENING * length
+    opened = hull.buffer(-radius, quad_segs=8).buffer(radius, quad_segs=8)
+    polys = [g for g in getattr(opened, "geoms", [opened]) if isinstance(g, Polygon)]
+    hull = max(polys, key=lambda g: g.area) if polys else hull
+    return shapely.geometry.polygon.orient(Polygon(hull.exterior))
+
+
+def _resample(polygon: Polygon, count: int) -> np.ndarray:
+    """(count, 2) points evenly spaced around the polygon's outline, counter-clockwise."""
+    ring = polygon.exterior
+    steps = np.linspace(0.0, ring.length, count, endpoint=False)
+    return shapely.get_coordinates(shapely.line_interpolate_point(ring, steps))
+
+
+def _base_point(
+    base_end: str, axes: np.ndarray, outline: np.ndarray, xy: np.ndarray, petiole: np.ndarray
+) -> np.ndarray:
+    """(2,) the blade's base in the plane: where the petiole joins (auto, if there is one), else
+    the outline's extreme along the main axis at the base end (auto: the wider end)."""
+    u = outline[:, 0]
+    if base_end == "auto":
+        if len(petiole) >= PETIOLE_SHARE * len(xy):
+            joint = cKDTree(xy).query(petiole)[0]
+            attach = petiole[np.argsort(joint)[: max(3, len(petiole) // 10)]].mean(axis=0)
+            return outline[np.argmin(np.linalg.norm(outline - attach, axis=1))]
+        lo, hi = u.min(), u.max()
+        polygon = Polygon(outline)
+        width = [_chord(polygon, lo + f * (hi - lo)).length for f in (0.25, 0.75)]
+        side = 1.0 if width[1] > width[0] else -1.0
+    elif base_end in AXES:
+        sign = 1.0 if base_end[0] == "+" else -1.0
+        along = sign * axes[0, AXES[base_end]]
+        if abs(along) < 1e-6:
+            raise LeafError(f"base end {base_end}: the leaf's length lies across that axis")
+        side = float(np.sign(along))
+    else:
+        raise LeafError(f"base end must be auto or one of {', '.join(AXES)}, got {base_end!r}")
+    return outline[np.argmax(side * u)]
+
+
+def _chord(polygon: Polygon, u: float):
+    """The polygon's cross-section at plane coordinate x = u (a line or several)."""
+    lo, hi = polygon.bounds[1] - 1, polygon.bounds[3] + 1
+    return polygon.intersection(LineString([(u, lo), (u, hi)]))
+
+
+def _midline(outline: np.ndarray, base: np.ndarray, spacing: float) -> np.ndarray:
+    """(m, 2) the midrib in the plane, from the base to the tip (the outline point farthest from
+    the base) through the middles of the cross-sections square to the base-tip line."""
+    tip = outline[np.argmax(np.linalg.norm(outline - base, axis=1))]
+    along = (tip - base) / np.linalg.norm(tip - base)
+    across = np.array([-along[1], along[0]])
+    rotation = np.column_stack([along, across])  # plane -> (along, across)
+    polygon = Polygon((outline - base) @ rotation)
+    span = float(np.linalg.norm(tip - base))
+    stations = span * np.linspace(*MIDRIB_REACH, max(int(span / spacing), 8))
+    middle = []
+    previous = 0.0
+    for u in stations:
+        chord = _chord(polygon, u)
+        parts = [g for g in getattr(chord, "geoms", [chord]) if isinstance(g, LineString)]
+        parts = [p for p in parts if p.length > 0]
+        if not parts:
+            continue
+        part = min(parts, key=lambda p: p.distance(Point(u, previous)))
+        previous = part.centroid.y
+        middle.append((u, previous))
+    line = np.asarray(middle)
+    if len(line) < 3:
+        raise LeafError("could not trace a midrib across the blade")
+    if len(line) >= 5:  # smooth the middle's wobble, keep the ends
+        smooth = np.convolve(line[:, 1], np.ones(5) / 5, mode="same")
+        line[2:-2, 1] = smooth[2:-2]
+    return base + line @ rotation.T
+
+
+def _side_veins(polygon: Polygon, midrib: np.ndarray, covered, spacing: float) -> list[np.ndarray]:
+    """(k_i, 2) side veins: from midrib stations toward the margin at SIDE_ANGLE, toward the tip,
+    up to SIDE_REACH of the way, cut at the first gap in the scan."""
+    steps = np.linalg.norm(np.diff(midrib, axis=0), axis=1)
+    arc = np.concatenate([[0.0], np.cumsum(steps)])
+    reach = 4 * float(np.hypot(*np.ptp(midrib, axis=0)))
+    veins = []
+    for station in SIDE_STATIONS:
+        i = int(np.clip(np.searchsorted(arc, station * arc[-1]), 1, len(midrib) - 2))
+        tangent = midrib[i + 1] - midrib[i - 1]
+        tangent /= np.linalg.norm(tangent)
+        for turn in (SIDE_ANGLE, -SIDE_ANGLE):
+            c, s = np.cos(turn), np.sin(turn)
+            direction = np.array([c * tangent[0] - s * tangent[1], s * tangent[0] + c * tangent[1]])
+            ray = LineString([midrib[i], midrib[i] + reach * direction])
+            hit = polygon.exterior.intersection(ray)
+            if hit.is_empty:
+                continue
+            distance = min(Point(midrib[i]).distance(p) for p in getattr(hit, "geoms", [hit]))
+            count = int(SIDE_REACH * distance / spacing)
+            if count < 4:
+                continue
+            t = np.linspace(0, SIDE_REACH * distance, count + 1)[1:]
+            path = midrib[i] + t[:, None] * direction
+            ok = covered(path)
+            stop = int(np.argmin(ok)) if not ok.all() else len(path)
+            if stop >= 4:
+                veins.append(path[:stop])
+    return veins
+
+
+def extract_leaf(
+    points: np.ndarray, base_end: str = "auto", count: int = OUTLINE_POINTS
+) -> Extraction:
+    """Boundary and veins of the leaf in a scan of its surface.
+
+    Parameters
+    ----------
+    points : (n, 3) float array
+        The scan's points.
+    base_end : str, default: "auto"
+        Which end of the blade is its base: "auto" (where the petiole was, else the wider end),
+        or a world direction "+x", "-x", "+y", "-y", "+z", "-z" (the base is the end that way).
+    count : int, default: 200
+        Boundary points; the veins are sampled at the same spacing.
+
+    Raises
+    ------
+    LeafError
+        If the scan has too few points or no blade can be found.
+    """
+    points = np.asarray(points, dtype=float)
+    if len(points) < MIN_POINTS:
+        raise LeafError(f"too few points for a leaf scan: {len(points)} (need {MIN_POINTS})")
+    if count < 8:
+        raise LeafError(f"the boundary needs at least 8 points, got {count}")
+    if not np.all(np.isfinite(points)):
+        raise LeafError("the scan holds NaN or infinite coordinates")
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    centre, scale = lo / 2 + hi / 2, float(np.max(hi / 2 - lo / 2)) * 2
+    if not scale > 0 or not np.isfinite(scale):
+        raise LeafError("the scan's points all coincide")
+    unit = (points - centre) / scale
+    thinned, cell, size = voxel_thinning(unit, BUDGET)
+    leaf, blade, petiole, origin, axes, region = _extract(thinned, base_end, count)
+    if cell is not None:  # each point as its cube's centroid; a petiole stub cut as there
+        # a cube whose centroid lies deeper in the region than the cube's diagonal is inside
+        xy = (thinned - origin) @ axes[:2].T
+        deep = shapely.contains_xy(region.buffer(-np.sqrt(3) * size), xy[:, 0], xy[:, 1])
+        blade, petiole = blade[cell], petiole[cell]
+        test = np.flatnonzero(blade & ~deep[cell])
+        local = (unit[test] - origin) @ axes[:2].T
+        cut = test[~shapely.contains_xy(region, local[:, 0], local[:, 1])]
+        blade[cut], petiole[cut] = False, True
+    length = float(np.ptp((unit[blade] - origin) @ axes[0]))
+
+    def world(q: np.ndarray) -> np.ndarray:
+        return centre + scale * q
+
+    return Extraction(
+        leaf=Leaf(boundary=world(leaf.boundary), veins=[world(v) for v in leaf.veins]),
+        blade=blade,
+        petiole=petiole,
+        length=scale * length,
+    )
+
+
+def check_scan(points: np.ndarray, force: bool = False) -> list[str]:
+    """plausibility.check_leaf_like on a scan as extract_leaf sees it (a large one by its voxel
+    centroids: linear time). `leafstudio extract` and `batch --scans` both run it first, so they
+    refuse the same scans with the same line (or, with `force`, return the same warnings)."""
+    from leafstudio.core.prepare.plausibility import check_leaf_like
+
+    return check_leaf_like(voxel_thinning(points, BUDGET)[0], force=force)
+
+
+def voxel_thinning(points: np.ndarray, budget: int) -> tuple[np.ndarray, np.ndarray | None, float]:
+    """Between budget / 2 and `budget` points standing for (n, 3) `points`: the centroids of the
+    occupied cubes of a size tried until their count falls in that range, each point's cube
+    (n,), and the cubes' side; the points themselves, None and 0 when there are no more than
+    `budget`. A few O(n log n) passes: the first size assumes a surface (on a sample of the
+    points, then on all of them), each next one scales by the miss."""
+    if len(points) <= budget:
+        return points, None, 0.0
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    size = float(np.max(hi - lo)) / np.sqrt(budget)
+
+    def cells_of(at: np.ndarray, size: float) -> tuple[np.ndarray, np.ndarray]:
+        cells = np.floor((at - lo) / size).astype(np.int64)
+        dims = np.floor((hi - lo) / size).astype(np.int64) + 1
+        keys = (cells[:, 0] * dims[1] + cells[:, 1]) * dims[2] + cells[:, 2]
+        _, cell, counts = np.unique(keys, return_inverse=True, return_counts=True)
+        return cell, counts
+
+    def adjust(size: float, count: int) -> float:
+        return size * float(np.clip(np.sqrt(count / (0.75 * budget)), 0.5, 4.0))
+
+    if len(points) > 2 * SAMPLE:  # a cheap first guess from a sample (it finds fewer cubes)
+        sample = fixed_sample(points, SAMPLE)
+        for _ in range(THINNING_PASSES):
+            count = len(cells_of(sample, size)[1])
+            if budget // 2 <= count <= budget:
+                break
+            size = adjust(size, count)
+    for _ in range(THINNING_PASSES):
+        cell, counts = cells_of(points, size)
+        if budget // 2 <= len(counts) <= budget:
+            break
+        size = adjust(size, len(counts))
+    if len(counts) > budget:  # not settled: a coarser size surely keeps fewer
+        return voxel_thinning(points, budget // 2) if budget > 1 else (points[:1], None, 0.0)
+    sums = [np.bincount(cell, weights=points[:, k], minlength=len(counts)) for k in range(3)]
+    return np.column_stack(sums) / counts[:, None], cell.ravel(), size
+
+
+def _extract(
+    points: np.ndarray, base_end: str, count: int
+) -> tuple[Leaf, np.ndarray, np.ndarray, np.ndarray, np.ndarray, Polygon]:
+    """extract_leaf on the scan at unit size (and thinned): the leaf, the blade and petiole masks,
+    the blade's plane (origin (3,), axes (3, 3)) and the region the blade's points keep to."""
+    blade, petiole = split_scan(points)
+    if blade.sum() < MIN_POINTS:
+        raise LeafError(f"found only {blade.sum()} blade points in the scan (need {MIN_POINTS})")
+    origin, axes = _plane(points[blade])
+    local = (points - origin) @ axes.T
+    xy, h = local[blade, :2], local[blade, 2]
+    if np.ptp(xy[:, 1]) < 1e-3 * np.ptp(xy[:, 0]):
+        raise LeafError("the scan's points lie on a line, not a leaf surface")
+    polygon = _outline(xy, float(np.ptp(xy[:, 0])))
+    boundary_xy = _resample(polygon, count)
+    # the veins, the region and the rim's smoothing at a spacing of their own: --points sets how
+    # finely the outline is written, not what is blade (it did), nor the cost (quadratic in it)
+    spacing = polygon.length / OUTLINE_POINTS
+    region = polygon.buffer(spacing)
+    cut = ~shapely.contains_xy(region, local[:, 0], local[:, 1])
+    petiole |= blade & cut  # a stub of petiole trimmed by the opening
+    blade &= ~cut
+    if blade.sum() < MIN_POINTS:
+        raise LeafError(
+            f"found only {blade.sum()} blade points within the blade's outline (need "
+            f"{MIN_POINTS}): the scan does not look like a leaf surface"
+        )
+    xy, h = local[blade, :2], local[blade, 2]
+    base = _base_point(base_end, axes, boundary_xy, xy, local[petiole, :2])
+    midrib = _midline(boundary_xy, base, spacing)
+    gaps = cKDTree(xy)
+    reach = 2.0 * float(np.percentile(gaps.query(xy, k=2)[0][:, 1], 95))
+
+    def covered(q: np.ndarray) -> np.ndarray:
+        return np.isfinite(gaps.query(q, distance_upper_bound=reach)[0])
+
+    veins_xy = [midrib, *_side_veins(polygon, midrib, covered, spacing)]
+
+    def world(q: np.ndarray, z: np.ndarray | None = None) -> np.ndarray:
+        z = lift(q, xy, h) if z is None else z
+        return origin + np.column_stack([q, z]) @ axes
+
+    # the margin's heights are the noisiest (mixed returns at the edge): average along the outline
+    taps = max(len(RIM_KERNEL), round(len(RIM_KERNEL) * count / OUTLINE_POINTS))
+    reach = np.linspace(0, len(RIM_KERNEL) - 1, taps)  # RIM_KERNEL's reach, whatever the count
+    kernel = np.interp(reach, np.arange(len(RIM_KERNEL)), RIM_KERNEL)
+    rim = np.convolve(np.tile(lift(boundary_xy, xy, h), 3), kernel / kernel.sum(), "same")
+    boundary = world(boundary_xy, rim[count : 2 * count])
+    veins = veins_inside_outline(boundary, [world(v) for v in veins_xy], spacing)
+    return Leaf(boundary=boundary, veins=veins), blade, petiole, origin, axes, region
+

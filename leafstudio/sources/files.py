@@ -1,0 +1,279 @@
+"""Leaf files in and out (.csv/.txt/.xyz, .ply with labels, .leaf.json) and mesh export.
+
+Point lists: one point per line, `x y z [label]`, comma or whitespace separated, an optional header
+line; label 0 is the boundary and 1..n are veins. A file without labels is a boundary.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Sequence
+from io import BytesIO
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from leafstudio._shared.inputs import (
+    check_not_a_folder,
+    load_json,
+    parse_number,
+    ply_numbers,
+    ply_xyz,
+    read_ply,
+    read_text,
+)
+from leafstudio._shared.safewrite import staged as staged  # re-exported: outputs replaced together
+from leafstudio._shared.safewrite import write_bytes
+from leafstudio.errors import LeafError, shorten
+from leafstudio.model import Leaf, Params
+
+POINT_SUFFIXES = (".csv", ".txt", ".xyz")
+LEAF_SUFFIXES = (*POINT_SUFFIXES, ".ply", ".leaf.json", ".json")
+FORMAT_NAME, FORMAT_VERSION = "leafstudio", 1
+MAX_LABEL = 100_000  # vein labels 1..MAX_LABEL
+
+
+def _suffix(path: Path) -> str:
+    name = path.name.lower()
+    return ".leaf.json" if name.endswith(".leaf.json") else path.suffix.lower()
+
+
+def read_point_table(path: Path, columns: Sequence[int] = (3, 4)) -> np.ndarray:
+    """Numbers from a point list, (n, c) with c one of `columns`; header and blank lines skipped."""
+    rows: list[list[float]] = []
+    width = None
+    for number, line in enumerate(read_text(path).splitlines(), start=1):
+        text = line.split("#", 1)[0].strip()
+        if not text:
+            continue
+        fields = [f for f in text.replace(",", " ").replace(";", " ").split()]
+        try:
+            values = [parse_number(f) for f in fields]
+        except ValueError:
+            if not rows and width is None:  # a header line
+                width = -1
+                continue
+            raise LeafError(
+                f"line {number}: not a number in {shorten(text)!r}", str(path)
+            ) from None
+        if len(values) not in columns:
+            expected = " or ".join(str(c) for c in columns)
+            scan = "; a scan (x y z with normals or colours)? `leafstudio extract` takes a leaf's"
+            raise LeafError(
+                f"line {number}: expected {expected} columns (x y z [label]), got {len(values)}"
+                + (f"{scan} boundary and veins from it" if len(values) > 4 else ""),
+                str(path),
+            )
+        if rows and len(values) != len(rows[0]):
+            raise LeafError(
+                f"line {number}: {len(values)} columns where earlier lines have {len(rows[0])}",
+                str(path),
+            )
+        if not all(math.isfinite(v) for v in values):
+            raise LeafError(f"line {number}: NaN or infinite value", str(path))
+        rows.append(values)
+    if not rows:
+        raise LeafError("holds no points", str(path))
+    return np.asarray(rows, dtype=float)
+
+
+def _split_labels(xyz: np.ndarray, labels: np.ndarray | None, source: str) -> Leaf:
+    if labels is None:
+        return _checked_leaf(xyz, [], source)
+    if (
+        not np.all(np.isfinite(labels))
+        or not np.all(labels == np.round(labels))
+        or labels.min() < 0
+        or labels.max() > MAX_LABEL
+    ):
+        raise LeafError(
+            f"labels must be whole numbers from 0 to {MAX_LABEL} (0 boundary, 1..n veins)", source
+        )
+    labels = labels.astype(int)
+    veins = [xyz[labels == lab] for lab in np.unique(labels[labels > 0])]
+    return _checked_leaf(xyz[labels == 0], veins, source)
+
+
+def _checked_leaf(boundary: np.ndarray, veins: list[np.ndarray], source: str) -> Leaf:
+    if len(boundary) < 3:
+        raise LeafError(f"needs at least 3 boundary points (label 0), got {len(boundary)}", source)
+    try:
+        return Leaf(boundary=boundary, veins=veins)
+    except LeafError as exc:
+        raise LeafError(exc.problem, source) from None
+
+
+def _read_ply(path: Path) -> Leaf:
+    ply = read_ply(path)  # header checked against the file's size; one LeafError on failure
+    xyz, names = ply_xyz(ply, path)
+    if not np.all(np.isfinite(xyz)):
+        raise LeafError("NaN or infinite coordinates", str(path))
+    labels = ply_numbers(ply, "label", path) if "label" in names else None
+    return _split_labels(xyz, labels, str(path))
+
+
+def _read_project(path: Path) -> dict[str, Any]:
+    data = load_json(path)  # size and nesting bounded (_shared/inputs.py)
+    if not isinstance(data, dict) or data.get("format") != FORMAT_NAME:
+        raise LeafError(f'not a LeafStudio project (no "format": "{FORMAT_NAME}")', str(path))
+    version = data.get("version", FORMAT_VERSION)
+    if isinstance(version, bool) or not isinstance(version, int) or version < 1:
+        raise LeafError(
+            f'"version" must be a whole number from 1, got {shorten(json.dumps(version))}',
+            str(path),
+        )
+    if version > FORMAT_VERSION:
+        raise LeafError(f"written by a newer LeafStudio (version {shorten(version)})", str(path))
+    for key, kind, what in (
+        ("boundary", list, "a list of [x, y, z] points"),
+        ("veins", list, "a list of veins, each a list of [x, y, z] points"),
+        ("params", dict, "an object of parameter names and values"),
+        ("sketch", dict, "an object"),
+    ):
+        if data.get(key) is not None and not isinstance(data[key], kind):
+            raise LeafError(
+                f'"{key}" must be {what}, got {shorten(json.dumps(data[key]))}', str(path)
+            )
+    return data
+
+
+def _project_points(values: list, what: str, source: str) -> np.ndarray:
+    """An (n, 3) float array from a project's list of [x, y, z] points."""
+    if any(not isinstance(p, list) or len(p) != 3 for p in values) or any(
+        isinstance(c, bool) or not isinstance(c, (int, float)) for p in values for c in p
+    ):
+        raise LeafError(f"{what} must be a list of [x, y, z] points (numbers)", source)
+    try:
+        return np.asarray(values, dtype=float).reshape(-1, 3)
+    except OverflowError:
+        raise LeafError(f"{what} holds a number too large for a coordinate", source) from None
+
+
+def load_project(path: str | os.PathLike) -> tuple[Leaf, Params | None, dict[str, Any]]:
+    """A .leaf.json project: its leaf, its parameters (None if absent) and its sketch."""
+    path = Path(path)
+    data = _read_project(path)
+    source = str(path)
+    boundary = _project_points(data.get("boundary") or [], "boundary", source)
+    veins_data = data.get("veins") or []
+    if any(not isinstance(v, list) for v in veins_data) or any(
+        v and not isinstance(v[0], list) for v in veins_data
+    ):
+        raise LeafError(
+            '"veins" must be a list of veins, each a list of [x, y, z] points (one vein is '
+            "[[[x, y, z], ...]])",
+            source,
+        )
+    veins = [_project_points(v, f"vein {i + 1}", source) for i, v in enumerate(veins_data)]
+    leaf = _checked_leaf(boundary, veins, source)
+    try:
+        params = Params.from_dict(data["params"]) if data.get("params") else None
+    except (TypeError, LeafError) as exc:
+        raise LeafError(f"bad params: {exc}", source) from None
+    return leaf, params, dict(data.get("sketch") or {})
+
+
+def load_leaf(path: str | os.PathLike, veins: Sequence[str | os.PathLike] = ()) -> Leaf:
+    """Read a leaf from a point list, a labelled PLY or a project; `veins` adds one vein per file.
+
+    Raises
+    ------
+    LeafError
+        With the file's name and the problem, for anything unreadable or malformed.
+    """
+    path = Path(path)
+    if isinstance(veins, (str, os.PathLike)):
+        veins = [veins]  # one vein file given alone, not a sequence of one-letter names
+    check_not_a_folder(path)
+    suffix = _suffix(path)
+    if suffix in POINT_SUFFIXES:
+        table = read_point_table(path)
+        leaf = _split_labels(table[:, :3], table[:, 3] if table.shape[1] == 4 else None, str(path))
+    elif suffix == ".ply":
+        leaf = _read_ply(path)
+    elif suffix in (".leaf.json", ".json"):
+        leaf = load_project(path)[0]
+    else:
+        raise LeafError(
+            f"unknown file type {suffix or '(none)'!r}; use one of {', '.join(LEAF_SUFFIXES)}",
+            str(path),
+        )
+    extra = [_read_vein(Path(v)) for v in veins]
+    return Leaf(boundary=leaf.boundary, veins=[*leaf.veins, *extra]) if extra else leaf
+
+
+def _read_vein(path: Path) -> np.ndarray:
+    if _suffix(path) == ".ply":
+        return _read_ply(path).boundary
+    return read_point_table(path, columns=(3,))
+
+
+def check_leaf_output(output: str, inputs: Sequence[str | os.PathLike]) -> None:
+    """Refuse, before any work, a leaf output of an unknown type, one that is also one of the
+    `inputs`, or one that cannot be written (LeafError naming the output)."""
+    from leafstudio._shared.safewrite import check_outputs
+
+    if not output.lower().endswith(LEAF_SUFFIXES):
+        raise LeafError(f"unknown leaf type; use one of {', '.join(LEAF_SUFFIXES)}", output)
+    check_outputs(list(inputs), [output])
+
+
+def project_dict(
+    leaf: Leaf,
+    params: Params | None = None,
+    sketch: dict[str, Any] | None = None,
+    photo: dict[str, Any] | None = None,
+) -> dict[str, Any]:
+    """The .leaf.json content for a leaf; `photo` is the photo it came from (sources/leafphoto.py),
+    kept only when given."""
+    data = {
+        "format": FORMAT_NAME,
+        "version": FORMAT_VERSION,
+        "boundary": leaf.boundary.tolist(),
+        "veins": [v.tolist() for v in leaf.veins],
+        "params": params.to_dict() if params else {},
+        "sketch": sketch or {},
+    }
+    if photo is not None:
+        data["photo"] = photo
+    return data
+
+
+def save_leaf(
+    leaf: Leaf,
+    path: str | os.PathLike,
+    params: Params | None = None,
+    sketch: dict[str, Any] | None = None,
+    photo: dict[str, Any] | None = None,
+) -> None:
+    """Write a leaf as .leaf.json (with params, sketch and the photo it came from), a labelled
+    point list or PLY."""
+    path = Path(path)
+    suffix = _suffix(path)
+    labels = np.concatenate(
+        [np.zeros(len(leaf.boundary))] + [np.full(len(v), i + 1) for i, v in enumerate(leaf.veins)]
+    ).astype(int)
+    xyz = np.vstack([leaf.boundary, *leaf.veins])
+    if suffix in (".leaf.json", ".json"):
+        write_bytes(path, json.dumps(project_dict(leaf, params, sketch, photo), indent=1))
+    elif suffix in POINT_SUFFIXES:
+        sep = "," if suffix == ".csv" else " "
+        lines = [sep.join(["x", "y", "z", "label"])]
+        lines += [
+            sep.join([f"{x:.9g}", f"{y:.9g}", f"{z:.9g}", str(lab)])
+            for (x, y, z), lab in zip(xyz, labels, strict=True)
+        ]
+        write_bytes(path, "\n".join(lines) + "\n")
+    elif suffix == ".ply":
+        from plyfile import PlyData, PlyElement
+
+        data = np.empty(len(xyz), dtype=[("x", "f8"), ("y", "f8"), ("z", "f8"), ("label", "i4")])
+        data["x"], data["y"], data["z"], data["label"] = xyz[:, 0], xyz[:, 1], xyz[:, 2], labels
+        buffer = BytesIO()
+        PlyData([PlyElement.describe(data, "vertex")], text=False).write(buffer)
+        write_bytes(path, buffer.getvalue())
+    else:
+        raise LeafError(f"cannot write a leaf as {suffix or '(none)'!r}", str(path))

@@ -1,0 +1,103 @@
+"""The photo a leaf was found in, as a project remembers it.
+
+A `.leaf.json` made from a photo (`leafstudio photo`, or the app's File > Open photo then Save)
+holds
+
+    "photo": {"image": "leaf.png", "pixel_from_world": [[a, b, c], [d, e, f]], "petiole_cut": b}
+
+`image` is the photo's path relative to the project's folder (so a folder moved or copied as a
+whole keeps working; an absolute path is read as it is), `pixel_from_world` the affine map from
+the leaf's coordinates to the photo's (column, row), pixel centres at integer + 0.5. Projects
+without the entry load as before; the entry is what lets `reconstruct --texture PHOTO` and the
+app's texture put each pixel back where it was in the photo.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from leafstudio.errors import LeafError
+
+
+@dataclass(frozen=True)
+class PhotoTexture:
+    """A photo and the affine map (2, 3) from world (x, y) to its (column, row)."""
+
+    image: str | os.PathLike
+    pixel_from_world: np.ndarray | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class LeafPhoto:
+    """A photo (its absolute path) and the map from the leaf's (x, y, 1) to its pixels."""
+
+    image: Path
+    pixel_from_world: np.ndarray  # (2, 3)
+    petiole_cut: bool | None = None
+
+    @classmethod
+    def of(cls, found: Any, image: str | os.PathLike) -> LeafPhoto:
+        """The photo a leaf was just found in (a photo.PhotoLeaf, read from `image`)."""
+        return cls(Path(image).resolve(), np.asarray(found.pixel_from_world, float), found.petiole)
+
+    def exists(self) -> bool:
+        """Whether the photo is still where the project says (moved or deleted files are not)."""
+        return self.image.is_file()
+
+    def texture(self) -> PhotoTexture:
+        """The export option that maps this photo onto the leaf (assets/export.py)."""
+        return PhotoTexture(self.image, self.pixel_from_world)
+
+    def entry(self, project: str | os.PathLike) -> dict[str, Any]:
+        """The project's "photo" entry, the image relative to the project's folder."""
+        folder = Path(project).resolve().parent
+        try:
+            image = Path(os.path.relpath(self.image, folder)).as_posix()
+        except ValueError:  # another drive (Windows): no relative path
+            image = str(self.image)
+        entry: dict[str, Any] = {"image": image, "pixel_from_world": self.pixel_from_world.tolist()}
+        if self.petiole_cut is not None:
+            entry["petiole_cut"] = bool(self.petiole_cut)
+        return entry
+
+
+def pixel_map(entry: Any, source: str) -> np.ndarray:
+    """The (2, 3) world-to-pixel map of a "photo" entry; LeafError if malformed."""
+    try:
+        affine = np.asarray(entry["pixel_from_world"], dtype=float).reshape(2, 3)
+    except (TypeError, KeyError, ValueError):
+        raise LeafError('bad "photo" entry: "pixel_from_world" must be 2 rows of 3 numbers',
+                        source) from None  # fmt: skip
+    if not np.all(np.isfinite(affine)) or abs(np.linalg.det(affine[:, :2])) == 0:
+        raise LeafError('bad "photo" entry: "pixel_from_world" is not an invertible map', source)
+    return affine
+
+
+def from_entry(entry: Any, project: str | os.PathLike) -> LeafPhoto:
+    """The LeafPhoto of a project's "photo" entry (the image resolved against the project's
+    folder); LeafError if the entry is malformed. The image need not exist (see exists)."""
+    source = str(project)
+    affine = pixel_map(entry, source)
+    image = entry.get("image")
+    if not isinstance(image, str) or not image.strip():
+        raise LeafError('bad "photo" entry: "image" must name the photo file', source)
+    petiole = entry.get("petiole_cut")
+    path = (Path(project).resolve().parent / image).resolve()  # an absolute one stays
+    return LeafPhoto(path, affine, petiole if isinstance(petiole, bool) else None)
+
+
+def project_photo(project: str | os.PathLike) -> LeafPhoto | None:
+    """The photo a .leaf.json project remembers, or None (another file type, or no entry);
+    LeafError for an unreadable project or a malformed entry."""
+    if not str(project).lower().endswith(".json"):
+        return None
+    from leafstudio._shared.inputs import load_json
+
+    data = load_json(project)
+    entry = data.get("photo") if isinstance(data, dict) else None
+    return None if entry is None else from_entry(entry, project)

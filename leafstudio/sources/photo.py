@@ -1,0 +1,403 @@
+"""A leaf from a photo or a scan on a plain background: its outline, base and apex, and veins.
+
+1. Segment (scikit-image): each pixel's colour distance from the background (the median colour
+   of the image's border), smoothed, split by Otsu's threshold; an image with an alpha channel
+   that varies uses its alpha instead. Keep the largest component, fill its holes.
+2. Refuse bad photos with one clear message: no leaf (nothing stands out, or the background is
+   not plain), several leaves (a second object at least SECOND_OBJECT of the largest's size), a
+   leaf cut by the image border.
+3. The petiole: a morphological opening by a disk of PETIOLE_RADIUS of the blade's inscribed
+   radius removes thin parts; of those, a stalk is long (PETIOLE_LENGTH disk radii), slender
+   (STALK_ELONGATION) and of even width (it fills STALK_FILL of its length times its widest
+   width, where a tapering tip fills about half, and its width a fifth in from either end is
+   the same within STALK_EVEN, where a spatulate blade's narrow base widens): teeth are short,
+   tips taper. A second
+   opening, by a disk just wider than the petiole, cuts it off where the blade widens. Where it
+   met the blade is the base. A petiole these miss (short beside a large blade, or running
+   into a narrow base) is looked for along the blade's midline (leafends.find_stalk) and cut
+   off square at its joint.
+4. The outline: the zero contour of the (slightly smoothed) blade mask, at sub-pixel precision,
+   resampled evenly.
+5. Base and apex: the petiole's end when there is one (the apex is then the outline point
+   farthest from it); otherwise the two ends of the blade's midline, its best mirror axis
+   (leafends.py), of which the base is the one `base_end` names (left, right, top, bottom) or, by
+   default, the one with a basal notch (cordate, sagittate), else the one the veins lean away
+   from, else the wider one.
+6. The leaf follows the forms' convention (DESIGN.md): the base at the origin, the apex on +x at
+   `length` (base to apex), z = 0. The affine map from those coordinates back to the photo's
+   pixels is kept (in the project, "photo": {"pixel_from_world": ...}) so that `reconstruct
+   --texture PHOTO` maps each pixel back where it was.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from leafstudio.errors import LeafError
+from leafstudio.model import Leaf
+
+if TYPE_CHECKING:
+    from leafstudio.sources.leafends import Midline, VeinField
+
+BASE_ENDS = ("auto", "left", "right", "top", "bottom")
+SECOND_OBJECT = 0.25  # a second object this large (of the largest) means several leaves
+SMALLEST_LEAF = 0.002  # of the image's pixels: less is no leaf
+LARGEST_LEAF = 0.9  # of the image's pixels: more means no plain background
+SMOOTHING = 1.0  # pixels: the colour distance is smoothed this much before the threshold
+PETIOLE_RADIUS = 0.3  # the opening disk's radius, as a fraction of the inscribed radius
+PETIOLE_LENGTH = 1.0  # a stalk is at least this many disk radii long,
+STALK_ELONGATION = 4.0  # this many times longer than wide,
+STALK_FILL = 0.65  # and fills more than this share of its length times its widest width,
+STALK_EVEN = 0.88  # and is as wide near one end as near the other (_evenness), to this share
+STALK_MARGIN = 1.5  # pixels: a petiole found along the midline is cut this much wider
+PETIOLE_FIT = 1.6  # the second opening's disk, in petiole half-widths
+
+
+@dataclass(frozen=True)
+class PhotoLeaf:
+    """What `leaf_from_photo` found.
+
+    Attributes
+    ----------
+    leaf : Leaf
+        Boundary (and veins) in the forms' convention, z = 0 on the boundary.
+    pixel_from_world : (2, 3) float array
+        (column, row) = A @ (x, y, 1): from the leaf's coordinates to the photo's pixels.
+    outline_px : (n, 2) float array
+        The outline in the photo, (column, row), pixel centres at integer + 0.5.
+    blade : (h, w) bool array
+        The blade's pixels (petiole cut off).
+    petiole : bool
+        Whether a petiole was found and cut off.
+    base_cue : str
+        What told the base: "petiole", "given" (base_end), "notch", "veins" or "wider end"
+        (leafends.base_end_index); the last is a guess.
+    """
+
+    leaf: Leaf
+    pixel_from_world: np.ndarray
+    outline_px: np.ndarray
+    blade: np.ndarray
+    petiole: bool
+    base_cue: str = "petiole"
+
+
+def foreground(image: np.ndarray) -> np.ndarray:
+    """(h, w) bool: pixels that stand out from the background (see the module docstring)."""
+    from scipy.ndimage import gaussian_filter
+    from skimage.filters import threshold_otsu
+
+    if image.shape[2] == 4:
+        alpha = image[..., 3]
+        if alpha.min() < 128 <= alpha.max():
+            return alpha >= 128
+    rgb = image[..., :3].astype(float)
+    border = np.concatenate([rgb[0], rgb[-1], rgb[:, 0], rgb[:, -1]])
+    background = np.median(border, axis=0)
+    distance = gaussian_filter(np.linalg.norm(rgb - background, axis=2), SMOOTHING)
+    if np.ptp(distance) < 10:  # under 4% of the colour range: nothing stands out
+        raise LeafError("no leaf found: nothing stands out from the background")
+    return distance > threshold_otsu(distance)
+
+
+def _leaf_component(mask: np.ndarray) -> np.ndarray:
+    """The largest component, holes filled; LeafError for no leaf, several, or one cut off."""
+    from scipy.ndimage import binary_fill_holes
+    from skimage.measure import label
+
+    labels, count = label(mask, return_num=True, connectivity=2)
+    if count == 0:
+        raise LeafError("no leaf found: nothing stands out from the background")
+    sizes = np.bincount(labels.ravel())[1:]
+    order = np.argsort(sizes)[::-1]
+    largest = sizes[order[0]]
+    if largest < SMALLEST_LEAF * mask.size:
+        raise LeafError("no leaf found: the largest object is a speck")
+    if largest > LARGEST_LEAF * mask.size:
+        raise LeafError("no leaf found: the background is not plain (it covers too little)")
+    others = int(np.count_nonzero(sizes[order[1:]] >= SECOND_OBJECT * largest))
+    if others:
+        raise LeafError(
+            f"several leaves: {others + 1} objects of similar size; photograph one leaf at a time"
+        )
+    leaf = binary_fill_holes(labels == order[0] + 1)
+    if leaf[0].any() or leaf[-1].any() or leaf[:, 0].any() or leaf[:, -1].any():
+        raise LeafError("the leaf is cut by the image border: leave a margin around it")
+    return leaf
+
+
+def _opened(leaf: np.ndarray, inside: np.ndarray, radius: float) -> np.ndarray:
+    """The mask opened by a disk of `radius`, by distance transforms (a large disk's structuring
+    element is slow): the points deeper than r, grown back by r."""
+    from scipy.ndimage import distance_transform_edt
+
+    return leaf & (distance_transform_edt(~(inside > radius)) <= radius)
+
+
+def _stalk_shape(part: np.ndarray) -> tuple[float, float, float]:
+    """Length, elongation (length over widest width) and fill (area over length times widest
+    width: about 0.85 for a strip of even width, 0.5 for a tapering tip) of a mask's region."""
+    from scipy.ndimage import distance_transform_edt
+    from skimage.measure import regionprops
+
+    (props,) = regionprops(part.astype(np.uint8))
+    width = max(2 * float(distance_transform_edt(np.pad(part, 1)).max()), 1.0)
+    length = props.axis_major_length
+    return length, length / width, props.area / max(length * width, 1e-12)
+
+
+def _evenness(part: np.ndarray) -> float:
+    """How even a region's width is along its long axis: the narrower over the wider of its
+    widths a fifth of its length in from each end (0.97-1 for a drawn stalk, about 0.79 for
+    the wedge of a spatulate blade's narrow base)."""
+    rows, cols = np.nonzero(part)
+    pts = np.column_stack([cols, rows]).astype(float)
+    if len(pts) < 10:
+        return 0.0
+    centre = pts.mean(axis=0)
+    axis = np.linalg.eigh(np.cov((pts - centre).T))[1][:, -1]
+    along = (pts - centre) @ axis
+    edges = np.linspace(along.min(), along.max() + 1e-9, 6)
+    counts = np.histogram(along, edges)[0]
+    low, high = sorted(counts[[1, 3]])
+    return float(low / high) if high else 0.0
+
+
+def _cut_petiole(leaf: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """The blade without the petiole, and where the petiole met it (column, row) or None.
+
+    Two openings: a coarse one (PETIOLE_RADIUS of the inscribed radius) removes the thin parts;
+    each long one's half-width w is read on its skeleton, and a second opening by a disk of
+    PETIOLE_FIT w cuts it where the blade widens. What that cuts is a stalk if it is slender and
+    of even width (_stalk_shape: STALK_ELONGATION, STALK_FILL); the most even one is the
+    petiole."""
+    from scipy.ndimage import binary_dilation, distance_transform_edt
+    from skimage.measure import label, regionprops
+    from skimage.morphology import skeletonize
+
+    inside = distance_transform_edt(leaf)
+    radius = max(PETIOLE_RADIUS * float(inside.max()), 1.0)
+    coarse = label(leaf & ~_opened(leaf, inside, radius), connectivity=2)
+    petiole, best = None, STALK_FILL
+    for part in regionprops(coarse):
+        if part.axis_major_length < PETIOLE_LENGTH * radius:
+            continue
+        region = coarse == part.label
+        halfwidth = float(np.median(inside[skeletonize(region)]))
+        fine = max(PETIOLE_FIT * halfwidth, 1.5)
+        thin = label(leaf & ~_opened(leaf, inside, fine) & region, connectivity=2)
+        if thin.max() == 0:
+            continue
+        tight = thin == np.argmax(np.bincount(thin.ravel())[1:]) + 1
+        length, elongation, fill = _stalk_shape(tight)
+        if (
+            length >= PETIOLE_LENGTH * radius / 2
+            and elongation >= STALK_ELONGATION
+            and fill > best
+            and _evenness(tight) >= STALK_EVEN
+        ):
+            petiole, best = tight, fill
+    if petiole is None:
+        return leaf, None
+    blade = leaf & ~petiole
+    pieces = label(blade, connectivity=2)  # the cut may leave crumbs: keep the blade
+    if pieces.max() > 1:
+        blade = pieces == np.argmax(np.bincount(pieces.ravel())[1:]) + 1
+    joint = binary_dilation(petiole, iterations=2) & blade
+    if not joint.any():
+        return leaf, None
+    rows, cols = np.nonzero(joint)
+    return blade, np.array([cols.mean() + 0.5, rows.mean() + 0.5])
+
+
+def _outline(blade: np.ndarray, points: int | None) -> np.ndarray:
+    """(n, 2) evenly spaced (column, row) points on the blade's contour, counter-clockwise as
+    seen with y up (rows run down)."""
+    from scipy.ndimage import gaussian_filter
+    from skimage.measure import find_contours
+
+    field = gaussian_filter(np.pad(blade, 2).astype(float), 0.7)
+    contours = find_contours(field, 0.5)
+    ring = max(contours, key=len)[:, ::-1] - 2 + 0.5  # (column, row), pixel centres at k + 0.5
+    if np.allclose(ring[0], ring[-1]):
+        ring = ring[:-1]
+    step = np.linalg.norm(np.diff(np.vstack([ring, ring[:1]]), axis=0), axis=1)
+    along = np.concatenate([[0], np.cumsum(step)])
+    n = points or int(np.clip(along[-1] / 2, 200, 2000))
+    at = np.linspace(0, along[-1], n, endpoint=False)
+    closed = np.vstack([ring, ring[:1]])
+    out = np.column_stack([np.interp(at, along, closed[:, k]) for k in range(2)])
+    x, y = out[:, 0], -out[:, 1]
+    if 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y) < 0:  # clockwise with y up
+        out = out[::-1]
+    return out
+
+
+def _cut_stalk(
+    outline: np.ndarray, image: np.ndarray, blade: np.ndarray
+) -> tuple[np.ndarray, np.ndarray | None, VeinField, Midline]:
+    """A petiole the openings missed, found along the blade's midline (leafends.find_stalk), cut
+    off square at its joint: (blade, joint or None, veins, midline); the last two serve _ends
+    when there is no petiole."""
+    from skimage.measure import label
+
+    from leafstudio.sources.leafends import VeinField, find_stalk, midline
+
+    veins = VeinField(image, blade)
+    line = midline(outline, veins)
+    stalk = find_stalk(outline, line)
+    if stalk is None:
+        return blade, None, veins, line
+    rows, cols = np.nonzero(blade)
+    xy = np.column_stack([cols, rows]) + 0.5
+    inward = (stalk.joint - stalk.tip) / np.linalg.norm(stalk.joint - stalk.tip)
+    along = (xy - stalk.tip) @ inward
+    across = (xy - stalk.tip) @ np.array([-inward[1], inward[0]])
+    cut = (along <= np.linalg.norm(stalk.joint - stalk.tip)) & (
+        np.abs(across) <= stalk.halfwidth + STALK_MARGIN
+    )
+    rest = blade.copy()
+    rest[rows[cut], cols[cut]] = False
+    pieces = label(rest, connectivity=2)
+    if pieces.max() == 0:
+        return blade, None, veins, line
+    rest = pieces == np.argmax(np.bincount(pieces.ravel())[1:]) + 1
+    return rest, stalk.joint, veins, line
+
+
+def _ends(
+    outline: np.ndarray,
+    base_end: str,
+    joint: np.ndarray | None,
+    veins: VeinField | None,
+    line: Midline | None,
+) -> tuple[np.ndarray, int, int, str]:
+    """The outline (its pointed ends sharpened when no petiole shows the base), the indices of
+    the base and apex on it, and what told the base (see the module docstring)."""
+    from leafstudio.sources.leafends import base_end_index, climb_to_tip, sharpen_end
+
+    if joint is not None:
+        base = int(np.argmin(np.linalg.norm(outline - joint, axis=1)))
+        apex = int(np.argmax(np.linalg.norm(outline - outline[base], axis=1)))
+        return outline, base, apex, "petiole"
+    if base_end == "auto":
+        first, cue = base_end_index(outline, line, veins)
+    else:
+        direction = {"left": (-1, 0), "right": (1, 0), "top": (0, -1), "bottom": (0, 1)}[base_end]
+        first, cue = int(np.argmax(line.ends @ np.array(direction, float))), "given"
+    ends = line.ends[[first, 1 - first]]  # base, apex
+    tip = climb_to_tip(outline, int(np.argmin(np.linalg.norm(outline - ends[1], axis=1))), ends[0])
+    ends[1] = outline[tip]
+    inward = (ends[1] - ends[0]) / max(np.linalg.norm(ends[1] - ends[0]), 1e-12)
+    for k, direction in ((0, inward), (1, -inward)):  # pointed ends put back where blur cut them
+        at = int(np.argmin(np.linalg.norm(outline - ends[k], axis=1)))
+        outline, at = sharpen_end(outline, at, direction)
+        ends[k] = outline[at]
+    base, apex = (int(np.argmin(np.linalg.norm(outline - end, axis=1))) for end in ends)
+    return outline, base, apex, cue
+
+
+def leaf_from_photo(
+    image: np.ndarray,
+    length: float | None = None,
+    base_end: str = "auto",
+    veins: str = "grow",
+    venation: str = "pinnate",
+    points: int | None = None,
+    seed: int = 0,
+) -> PhotoLeaf:
+    """The leaf in an (h, w, 3 or 4) uint8 photo (see the module docstring).
+
+    Parameters
+    ----------
+    length : float, optional
+        Base to apex in the output's units; default 1.
+    base_end : {"auto", "left", "right", "top", "bottom"}, default: "auto"
+        Where the base is when no petiole shows it.
+    veins : {"grow", "none"}, default: "grow"
+        Grow veins inside the outline (leafstudio.forms.grow_veins) or leave none.
+    points : int, optional
+        Boundary points; default one per 2 pixels of outline, 200 to 2000.
+    """
+    if base_end not in BASE_ENDS:
+        raise LeafError(f"unknown base end {base_end!r}; use one of {', '.join(BASE_ENDS)}")
+    if veins not in ("grow", "none"):
+        raise LeafError(f"--veins must be grow or none, got {veins!r}")
+    if length is not None and not (np.isfinite(length) and length > 0):
+        raise LeafError(f"--length must be a number above 0, got {length}")
+    if image.ndim != 3 or min(image.shape[:2]) < 16:
+        raise LeafError("the image is too small (under 16 pixels a side)")
+    leaf_mask = _leaf_component(foreground(image))
+    blade, joint = _cut_petiole(leaf_mask)
+    outline = _outline(blade, points)
+    field = line = None
+    if joint is None:
+        blade, joint, field, line = _cut_stalk(outline, image, blade)
+        if joint is not None:
+            outline = _outline(blade, points)
+    outline, base, apex, cue = _ends(outline, base_end, joint, field, line)
+    start = np.array([outline[base, 0], -outline[base, 1]])  # y up
+    axis = np.array([outline[apex, 0], -outline[apex, 1]]) - start
+    pixels_long = float(np.linalg.norm(axis))
+    if pixels_long < 8:
+        raise LeafError("no leaf found: the object is too small")
+    scale = (1.0 if length is None else float(length)) / pixels_long
+    c, s = axis / pixels_long
+    rotate = np.array([[c, s], [-s, c]])  # turns the base-to-apex axis onto +x
+    q = np.column_stack([outline[:, 0], -outline[:, 1]]) - start
+    xy = scale * q @ rotate.T
+    # back: q = rotate.T @ xy / scale; (column, row) = (q_x + start_x, -(q_y + start_y))
+    back = rotate.T / scale
+    pixel_from_world = np.array(
+        [[back[0, 0], back[0, 1], start[0]], [-back[1, 0], -back[1, 1], -start[1]]]
+    )
+    boundary = np.column_stack([xy, np.zeros(len(xy))])
+    grown: list[np.ndarray] = []
+    if veins == "grow":
+        from leafstudio.forms import grow_veins
+
+        grown = grow_veins(boundary, venation, base=np.zeros(2), seed=seed, apex=xy[apex])
+    return PhotoLeaf(
+        leaf=Leaf(boundary=boundary, veins=grown),
+        pixel_from_world=pixel_from_world,
+        outline_px=outline,
+        blade=blade,
+        petiole=joint is not None,
+        base_cue=cue,
+    )
+
+
+def save_photo_leaf(found: PhotoLeaf, image_path: str | Path, path: str | Path) -> None:
+    """Write the leaf; a .leaf.json also keeps the photo (its path relative to the project) and
+    its pixel map, which the texture of `reconstruct --texture PHOTO` and the app need
+    (sources/leafphoto.py)."""
+    from leafstudio.sources.files import save_leaf
+    from leafstudio.sources.leafphoto import LeafPhoto
+
+    if not str(path).lower().endswith(".json"):
+        save_leaf(found.leaf, path)
+        return
+    save_leaf(found.leaf, path, photo=LeafPhoto.of(found, image_path).entry(path))
+
+
+PHOTO_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp")
+
+
+def is_photo(path: str | Path) -> bool:
+    """Whether a path names an image the photo reader takes (by its suffix)."""
+    return Path(path).suffix.lower() in PHOTO_SUFFIXES
+
+
+def read_photo_leaf(path: str | Path, **options) -> PhotoLeaf:
+    """leaf_from_photo on an image file; LeafError naming the file (the app opens photos so)."""
+    from leafstudio._shared.inputs import read_image
+
+    image = read_image(path)
+    try:
+        return leaf_from_photo(image, **options)
+    except LeafError as exc:
+        raise LeafError(exc.problem, str(path)) from None

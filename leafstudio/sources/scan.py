@@ -1,0 +1,171 @@
+"""Reading leaf scans: point clouds of a leaf's whole surface (.ply, .pcd, .xyz, .csv, .txt).
+
+Only x, y, z are read; extra columns or properties (normals, colours, intensities) are ignored.
+Leaf files with labelled boundary and veins are sources/files.py's business; this reads raw scans.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from leafstudio._shared.extras import require
+from leafstudio._shared.inputs import (
+    check_input_file,
+    check_not_a_folder,
+    check_pcd_header,
+    parse_number,
+    ply_xyz,
+    read_ply,
+    read_text,
+)
+from leafstudio.core.prepare.plausibility import COVER_SPREAD, surface_spread
+from leafstudio.errors import LeafError, shorten
+from leafstudio.model import Leaf
+
+SCAN_SUFFIXES = (".ply", ".pcd", ".xyz", ".csv", ".txt")
+MIN_SCAN_POINTS = 50
+LEAF_COLUMNS = 4  # x y z [label]: a point list with more columns is a scan
+
+
+def _fast_rows(text: str) -> np.ndarray | None:
+    """x, y, z of a well-formed point list by numpy's compiled reader (about 3 times faster than
+    the line loop at 1e6 lines); None when it is not well formed (a header after data, short or
+    ragged lines...), for _text_rows to read it and name the faulty line."""
+    import io
+
+    skip = 0
+    for line in io.StringIO(text):  # a header: leading lines whose first field is not a number
+        fields = line.split("#", 1)[0].replace(",", " ").replace(";", " ").split()
+        if fields:
+            try:
+                float(fields[0])
+                break
+            except ValueError:
+                pass
+        skip += 1
+    else:
+        return None
+    try:
+        rows = np.loadtxt(
+            io.StringIO(text.replace(",", " ").replace(";", " ")),
+            usecols=(0, 1, 2), skiprows=skip, comments="#", ndmin=2, dtype=float,
+        )  # fmt: skip
+    except (ValueError, IndexError):
+        return None
+    return rows
+
+
+def _text_rows(path: Path, text: str) -> np.ndarray:
+    """x, y, z of each numeric line of a point list (comma, semicolon or whitespace separated)."""
+    fast = _fast_rows(text)
+    if fast is not None:
+        return fast
+    rows: list[list[float]] = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        fields = line.split("#", 1)[0].replace(",", " ").replace(";", " ").split()
+        if not fields:
+            continue
+        try:
+            values = [parse_number(f) for f in fields[:3]]
+        except ValueError:
+            if not rows:  # a header line
+                continue
+            raise LeafError(
+                f"line {number}: not a number in {shorten(line.strip())!r}", str(path)
+            ) from None
+        if len(values) < 3:
+            raise LeafError(f"line {number}: needs x, y and z, got {len(values)} values", str(path))
+        rows.append(values)
+    return np.asarray(rows, dtype=float).reshape(-1, 3)
+
+
+def _pcd_rows(path: Path) -> np.ndarray:
+    """x, y, z of a PCD file (ASCII or binary) through open3d, which reports nothing on failure."""
+    check_pcd_header(path)  # point counts against the file's size, before open3d allocates
+    try:
+        o3d = require("open3d", "reading .pcd scans")
+    except LeafError as exc:
+        raise LeafError(exc.problem, str(path)) from None
+
+    with o3d.utility.VerbosityContextManager(o3d.utility.VerbosityLevel.Error):
+        cloud = o3d.io.read_point_cloud(str(path), format="pcd")
+    points = np.asarray(cloud.points, dtype=float)
+    if len(points) == 0:
+        raise LeafError("not a readable PCD file, or it holds no points", str(path))
+    return points
+
+
+def _ply_rows(path: Path) -> np.ndarray:
+    return ply_xyz(read_ply(path), path)[0]  # header checked against the file's size first
+
+
+def read_scan(path: str | os.PathLike) -> np.ndarray:
+    """The (n, 3) points of a leaf scan.
+
+    Raises
+    ------
+    LeafError
+        With the file's name, if it is missing, unreadable, of an unknown type, holds NaN or
+        infinite coordinates, or has fewer than MIN_SCAN_POINTS points.
+    """
+    path = Path(path)
+    check_not_a_folder(path)
+    suffix = path.suffix.lower()
+    if suffix not in SCAN_SUFFIXES:
+        raise LeafError(
+            f"unknown scan type {suffix or '(none)'!r}; use one of {', '.join(SCAN_SUFFIXES)}",
+            str(path),
+        )
+    check_input_file(path)  # a regular file (not a FIFO or a device) of a bounded size
+    if suffix == ".ply":
+        points = _ply_rows(path)
+    elif suffix == ".pcd":
+        points = _pcd_rows(path)
+    else:
+        points = _text_rows(path, read_text(path))
+    if len(points) == 0:
+        raise LeafError("holds no points", str(path))
+    if not np.all(np.isfinite(points)):
+        raise LeafError("NaN or infinite coordinates", str(path))
+    if len(points) < MIN_SCAN_POINTS:
+        raise LeafError(
+            f"too few points for a leaf scan: {len(points)} (need {MIN_SCAN_POINTS})", str(path)
+        )
+    return points
+
+
+def is_scan_file(path: str) -> bool:
+    """True for a file only a scan reader takes: a .pcd, or a point list whose first row of
+    numbers has more than x, y, z and a label (normals, colours)."""
+    path_ = Path(path)
+    suffix = path_.suffix.lower()
+    if suffix == ".pcd":
+        return True
+    if suffix not in SCAN_SUFFIXES or suffix == ".ply":
+        return False
+    try:
+        with path_.open(encoding="utf-8") as handle:
+            for line in handle:
+                fields = line.split("#", 1)[0].replace(",", " ").replace(";", " ").split()
+                if fields:
+                    try:
+                        return len([float(f) for f in fields]) > LEAF_COLUMNS
+                    except ValueError:
+                        continue  # a header
+    except (OSError, UnicodeDecodeError):
+        return False
+    return False
+
+
+def looks_like_scan(leaf: Leaf) -> bool:
+    """True when an unlabelled point list covers a surface (a scan) rather than tracing an
+    outline (plausibility.surface_spread, the test the pipeline refuses a scan as a boundary
+    by). Its 12 nearest neighbours spread in two directions within a dense noisy outline's
+    band too: the app opened such a boundary (24,000 points, noise 0.1% of the length) as a
+    scan and extracted a leaf from it."""
+    if leaf.veins or len(leaf.boundary) < MIN_SCAN_POINTS:
+        return False
+    return surface_spread(leaf.boundary) > COVER_SPREAD

@@ -1,0 +1,210 @@
+"""The one path from a file to a leaf, and from a leaf to a checked result.
+
+The command line (`reconstruct`, `extract`), `batch` and the app all open files here, so they
+accept and refuse the same files with the same messages (docs/architecture.md, "Data flow"):
+
+- `open_file`: whatever a user may open (a photo, a project, a point list, a scan), decided in
+  one order: photo by suffix, project by suffix, then a point list, read as a scan when only a
+  scan reader takes it or when its points cover a surface instead of tracing an outline.
+- `open_scan`: a scan read, checked (`check_scan`: the same refusal everywhere) and extracted.
+- `reconstruct`: the pipeline run on an opened leaf, with every warning the input and the
+  result give, and the distances from a scan's blade to the surface.
+
+Examples
+--------
+>>> from leafstudio import workflows
+>>> from leafstudio.sources.demos import demo
+>>> done = workflows.reconstruct(workflows.Opened("nested", "leaf", demo("nested")),
+...                              Params(k=3, grid=48))
+>>> done.result.chosen_k
+3
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from leafstudio.analysis.fidelity import scan_distances
+from leafstudio.core.pipeline import Pipeline, Result
+from leafstudio.core.plane import fit_frame
+from leafstudio.core.prepare.outline import ORDERED_STEP_RATIO, ring_crossings
+from leafstudio.core.prepare.plausibility import leaf_warnings
+from leafstudio.errors import LeafError
+from leafstudio.model import Leaf, Params
+from leafstudio.sources.extract import OUTLINE_POINTS, Extraction, check_scan, extract_leaf
+from leafstudio.sources.files import load_leaf, load_project
+from leafstudio.sources.photo import PhotoLeaf, is_photo, read_photo_leaf
+from leafstudio.sources.scan import is_scan_file, looks_like_scan, read_scan
+
+Kind = Literal["leaf", "project", "scan", "photo"]
+
+
+@dataclass(frozen=True)
+class Opened:
+    """A file read and checked: its leaf, and what else the file held.
+
+    Attributes
+    ----------
+    path : str
+        The file as the user named it (errors name it so).
+    kind : {"leaf", "project", "scan", "photo"}
+        What the file turned out to be.
+    leaf : Leaf
+        Boundary and veins: read, extracted from the scan, or found in the photo.
+    params : Params or None
+        A project's saved parameters.
+    sketch : dict or None
+        A project's saved sketch (the app's control points), as stored.
+    scan : (n, 3) float array or None
+        A scan's points.
+    extraction : Extraction or None
+        What `extract_leaf` found in the scan (blade, petiole, length).
+    photo : PhotoLeaf or None
+        What was found in a photo (its outline's map to the photo's pixels).
+    notes : tuple of str
+        Warnings about the input (`check_scan` with `force`).
+    """
+
+    path: str
+    kind: Kind
+    leaf: Leaf
+    params: Params | None = None
+    sketch: dict[str, Any] | None = None
+    scan: np.ndarray | None = None
+    extraction: Extraction | None = None
+    photo: PhotoLeaf | None = None
+    notes: tuple[str, ...] = ()
+
+
+def open_scan(
+    path: str, *, base_end: str = "auto", points: int = OUTLINE_POINTS, force: bool = False
+) -> Opened:
+    """Read a scan, check that it is plausibly one leaf, and extract its boundary and veins.
+
+    Parameters
+    ----------
+    path : str
+        A scan file (.ply, .pcd, .xyz, .csv, .txt; x, y, z read).
+    base_end : str, default: "auto"
+        Which end of the scan is the leaf's base (`extract --base-end`).
+    points : int, default: 200
+        Boundary points to take.
+    force : bool, default: False
+        Turn the plausibility refusals into warnings (`Opened.notes`).
+
+    Raises
+    ------
+    LeafError
+        Naming `path`: unreadable, not leaf-like, or no blade found.
+    """
+    scan = read_scan(path)
+    try:
+        notes = check_scan(scan, force=force)
+        found = extract_leaf(scan, base_end, points)
+    except LeafError as exc:
+        raise LeafError(exc.problem, str(path)) from None
+    return Opened(str(path), "scan", found.leaf, scan=scan, extraction=found, notes=tuple(notes))
+
+
+def open_file(path: str, *, force: bool = False) -> Opened:
+    """Open any file a user may give: a photo, a project, a point list or PLY leaf, or a scan.
+
+    A point list that only a scan reader takes (more columns than x, y, z and a label, or a
+    .pcd), or whose points cover a surface instead of tracing an outline, opens as a scan.
+
+    Raises
+    ------
+    LeafError
+        Naming `path`: unreadable, malformed, a boundary that crosses itself, a scan that is not
+        plausibly one leaf.
+    """
+    path = str(path)
+    if is_photo(path):
+        found = read_photo_leaf(path)
+        return Opened(path, "photo", found.leaf, photo=found)
+    if path.lower().endswith(".json"):
+        leaf, params, sketch = load_project(path)
+        opened = Opened(path, "project", leaf, params=params, sketch=sketch or None)
+    else:
+        try:
+            leaf = load_leaf(path)
+        except LeafError:
+            if is_scan_file(path):
+                return open_scan(path, force=force)
+            raise
+        if looks_like_scan(leaf):
+            return open_scan(path, force=force)
+        opened = Opened(path, "leaf", leaf)
+    if opened.sketch is None:
+        crossing = boundary_crossing(leaf)
+        if crossing is not None:
+            x, y, z = crossing
+            raise LeafError(
+                f"the boundary crosses itself near ({x:.4g}, {y:.4g}, {z:.4g}); its points must "
+                "go once around the leaf",
+                path,
+            )
+    return opened
+
+
+def boundary_crossing(leaf: Leaf) -> np.ndarray | None:
+    """Where a leaf's boundary crosses itself, as a (3,) world point, when its points trace the
+    outline in order (an unordered cloud is ordered by the pipeline, not read as given)."""
+    points = leaf.boundary
+    if len(points) < 4:
+        return None
+    try:
+        frame = fit_frame(points, leaf.vein_points)
+    except LeafError:
+        return None
+    xy, _ = frame.to_plane(points)
+    steps = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1)
+    spacing = float(np.median(cKDTree(xy).query(xy, k=2)[0][:, 1]))  # as prepare/outline.py
+    if spacing <= 0 or steps.max() > ORDERED_STEP_RATIO * spacing:
+        return None
+    found = ring_crossings(xy)
+    if not len(found):
+        return None
+    return frame.to_world(found[:1], np.zeros(1))[0]
+
+
+@dataclass(frozen=True)
+class Reconstruction:
+    """A result with every warning its input and its run gave, and its fit to a scan."""
+
+    result: Result
+    warnings: list[str] = field(default_factory=list)
+    scan_fit: dict[str, Any] | None = None
+
+
+def reconstruct(
+    opened: Opened, params: Params, pipeline: Pipeline | None = None
+) -> Reconstruction:
+    """Run the pipeline on an opened leaf (through `pipeline`, to reuse its stage cache).
+
+    Returns
+    -------
+    Reconstruction
+        The result; the input's notes, the leaf's plausibility warnings and the result's own
+        warnings, in that order; for a scan, the distances from its blade points to the surface
+        (`analysis.fidelity.scan_distances`).
+
+    Raises
+    ------
+    LeafError
+        Naming the opened file.
+    """
+    try:
+        result = (pipeline or Pipeline(opened.leaf)).run(params)
+    except LeafError as exc:
+        raise LeafError(exc.problem, opened.path) from None
+    warnings = [*opened.notes, *leaf_warnings(opened.leaf), *result.warnings]
+    fit = None
+    if opened.scan is not None and opened.extraction is not None:
+        blade = opened.scan[opened.extraction.blade]
+        fit = scan_distances(result.triangle_mesh, blade, result.length)
+    return Reconstruction(result, warnings, fit)

@@ -1,0 +1,194 @@
+"""The reconstruction as a whole: the issue's accuracy and mesh-quality figures on the demos and
+on harder leaves, the stage cache, and the meshers."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import leafstudio as ls
+from leafstudio.sources.demos import PAPER_K
+from tests import leaves
+
+
+def _check_quality(result: ls.Result, boundary_mean: float, boundary_max: float, vein_mean: float):
+    m = result.metrics
+    assert m["boundary"]["mean"] <= boundary_mean
+    assert m["boundary"]["max"] <= boundary_max
+    assert m["veins"]["mean"] <= vein_mean
+    assert m["mesh"]["components"] == 1
+    assert m["mesh"]["boundary_loops"] == 1
+    assert m["mesh"]["non_manifold_edges"] == 0
+
+
+def _check_coverage(covered: float, spilled: float, spill_limit: float = 0.005):
+    assert covered >= 0.99
+    assert spilled <= spill_limit
+
+
+@pytest.fixture(scope="module", params=["nested", "parallel"])
+def demo_result(request) -> tuple[str, ls.Result]:
+    name = request.param
+    return name, ls.reconstruct(ls.demo(name), ls.Params(k=PAPER_K[name], grid=128))
+
+
+def test_demo_is_several_times_closer_than_the_paper(demo_result):
+    """Table 1 of the paper: means 4.25e-3/9.77e-3 (nested) and 17.37e-3/11.41e-3 (parallel)."""
+    _, result = demo_result
+    _check_quality(result, boundary_mean=1e-3, boundary_max=5e-3, vein_mean=5e-3)
+
+
+def test_demo_mesh_covers_the_leaf_and_nothing_else(demo_result):
+    name, result = demo_result
+    _check_coverage(*leaves.coverage(result, leaves.halfwidth_region(name)))
+
+
+def test_surface_vanishes_on_the_margin_and_rises_inside(demo_result):
+    _, result = demo_result
+    outline = result.polygon
+    assert np.abs(result.height(outline)).max() < 2e-3
+    inside = result.grid.points[result.inside & (result.g_grid > 0.02)]
+    assert result.height(inside).min() > 0  # every vein is above the plane
+
+
+def test_surface_is_smooth_inside(demo_result):
+    """The gradient is continuous: finite differences agree with the closed form everywhere."""
+    _, result = demo_result
+    pts = result.grid.points[result.inside & (result.g_grid > 0.01)][::37]
+    eps = 1e-6
+    fd = np.column_stack(
+        [
+            (result.height(pts + [eps, 0]) - result.height(pts - [eps, 0])) / (2 * eps),
+            (result.height(pts + [0, eps]) - result.height(pts - [0, eps])) / (2 * eps),
+        ]
+    )
+    np.testing.assert_allclose(
+        result.surface.gradient(pts), fd, atol=2e-5 + 1e-4 * np.abs(fd).max()
+    )
+
+
+def test_bpa_mesher_follows_the_paper(demo_result):
+    name, result = demo_result
+    bpa = ls.Pipeline(ls.demo(name)).run(result.params.with_(mesher="bpa"))
+    m = bpa.metrics
+    assert m["mesh"]["triangles"] > 1000
+    assert m["boundary"]["mean"] <= 1e-3
+    assert m["veins"]["mean"] <= 5e-3
+    covered, spilled = leaves.coverage(bpa, leaves.halfwidth_region(name))
+    assert covered >= 0.98 and spilled <= 0.005
+
+
+def test_moved_leaf_gives_the_same_surface():
+    """Rotated and translated far from the origin: the same distances, the same region."""
+    leaf, rot, shift = leaves.moved(ls.demo("nested"))
+    result = ls.reconstruct(leaf, ls.Params(k=3))
+    _check_quality(result, boundary_mean=1e-3, boundary_max=5e-3, vein_mean=5e-3)
+    _check_coverage(*leaves.coverage(result, leaves.halfwidth_region("nested"), rot, shift))
+
+
+@pytest.mark.parametrize("name", ["nested", "parallel"])
+def test_noisy_shuffled_leaf_with_duplicates(name):
+    result = ls.reconstruct(leaves.noisy(name), ls.Params(k=PAPER_K[name]))
+    _check_quality(result, boundary_mean=1e-3, boundary_max=5e-3, vein_mean=5e-3)
+    _check_coverage(*leaves.coverage(result, leaves.halfwidth_region(name)))
+
+
+def test_concave_lobed_leaf_with_palmate_veins():
+    leaf, region = leaves.lobed()
+    result = ls.reconstruct(leaf, ls.Params(k=6))
+    _check_quality(result, boundary_mean=1e-3, boundary_max=5e-3, vein_mean=5e-3)
+    _check_coverage(*leaves.coverage(result, region))
+    # the notches between lobes stay outside: no triangle crosses them
+    notch = np.array([[np.cos(np.pi / 5), np.sin(np.pi / 5)]]) * 0.5 * 0.72
+    assert result.surface.implicit(notch)[0] < 0
+
+
+def test_narrow_leaf_keeps_its_sharp_tip():
+    leaf, region = leaves.narrow()
+    result = ls.reconstruct(leaf, ls.Params(k=3))
+    _check_quality(result, boundary_mean=1e-3, boundary_max=5e-3, vein_mean=5e-3)
+    _check_coverage(*leaves.coverage(result, region))
+    tip_x = np.asarray(result.mesh.points)[:, 0].max()
+    assert tip_x > 0.999  # the mesh reaches the very tip
+
+
+def test_changing_k_reruns_only_the_mixture_and_after():
+    pipe = ls.Pipeline(ls.demo("nested"))
+    first = pipe.run(ls.Params(k=3, grid=64))
+    assert first.ran == ("frame", "implicit", "grid", "guide", "gmm", "surface", "mesh")
+    second = pipe.run(ls.Params(k=4, grid=64))
+    assert second.ran == ("gmm", "surface", "mesh")
+    assert not np.allclose(first.mesh.points, second.mesh.points)
+    third = pipe.run(ls.Params(k=4, grid=64, mesher="bpa"))
+    assert third.ran == ("mesh",)
+    assert pipe.run(ls.Params(k=4, grid=64, mesher="bpa")).ran == ()
+
+
+def test_same_seed_same_surface_other_seed_other_samples():
+    a = ls.reconstruct(ls.demo("parallel"), ls.Params(k=2, grid=64, seed=5))
+    b = ls.reconstruct(ls.demo("parallel"), ls.Params(k=2, grid=64, seed=5))
+    c = ls.reconstruct(ls.demo("parallel"), ls.Params(k=2, grid=64, seed=6))
+    np.testing.assert_array_equal(a.mesh.points, b.mesh.points)
+    assert not np.array_equal(a.em_samples, c.em_samples)
+
+
+def test_cancelled_run_raises_between_stages():
+    from leafstudio.core.pipeline import Cancelled
+
+    seen: list[str] = []
+    with pytest.raises(Cancelled):
+        ls.Pipeline(ls.demo("nested")).run(
+            ls.Params(grid=32), on_stage=seen.append, should_stop=lambda: len(seen) >= 2
+        )
+    assert seen == ["frame", "implicit"]
+
+
+def test_leaf_without_veins_is_flat_with_a_warning():
+    leaf = ls.Leaf(boundary=ls.demo("nested").boundary)
+    with pytest.warns(UserWarning, match="flat"):
+        result = ls.reconstruct(leaf, ls.Params(grid=48))
+    assert np.abs(result.mesh.point_data["height"]).max() < 1e-12
+    assert result.metrics["mesh"]["boundary_loops"] == 1
+
+
+def test_veins_below_the_plane_give_a_dip_not_a_clip():
+    """Signed heights: a vein under the boundary's plane pulls the surface below it."""
+    leaf = ls.demo("parallel")
+    lowered = [leaf.veins[0], leaf.veins[1] * [1, 1, -1]]
+    result = ls.reconstruct(ls.Leaf(boundary=leaf.boundary, veins=lowered), ls.Params(k=2))
+    z = result.mesh.point_data["height"]
+    assert z.min() < -0.04 and z.max() > 0.04
+    assert result.metrics["veins"]["mean"] <= 5e-3
+
+
+def test_too_many_components_for_the_data_is_an_error():
+    with pytest.raises(ls.LeafError, match="more than the data supports"):
+        ls.reconstruct(ls.demo("nested"), ls.Params(k=64, grid=8, samples=100))
+
+
+def test_veins_outside_the_boundary_are_an_error():
+    leaf = ls.demo("nested")
+    far = leaf.veins[0] + [0, 0.5, 0]
+    with pytest.raises(ls.LeafError, match=r"vein 1: .* outside the boundary"):
+        ls.reconstruct(ls.Leaf(boundary=leaf.boundary, veins=[far]))
+
+
+def test_a_run_and_its_metrics_need_no_vtk_and_the_polydata_holds_the_same_mesh():
+    code = (
+        "import sys, leafstudio as ls\n"
+        "r = ls.reconstruct(ls.demo('nested'), ls.Params(k=3, grid=48))\n"
+        "r.metrics\n"
+        "print(sorted(m for m in ('pyvista', 'vtkmodules') if m in sys.modules))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+    result = ls.reconstruct(ls.demo("nested"), ls.Params(k=3, grid=48))
+    arrays, poly = result.triangle_mesh, result.mesh
+    np.testing.assert_array_equal(poly.points, arrays.points)
+    np.testing.assert_array_equal(poly.regular_faces, arrays.regular_faces)
+    for name, values in arrays.point_data.items():
+        np.testing.assert_array_equal(poly.point_data[name], values)
+    assert result.mesh is poly  # built once

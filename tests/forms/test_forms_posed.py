@@ -1,0 +1,102 @@
+"""Posed forms keep their veins (review finding, session 3): a fold or curl that raises the
+margin higher than the blade is wide turns the boundary's PCA plane on edge to the blade (a
+symmetric fold's halves then fall on each other there), and make_form clipped the veins to the
+outline seen in that plane: `make_form("elliptic", fold=75)` had no veins, not even its midrib
+(1524 of 2912 posed forms lost veins, 916 all of them). On edge, the veins are now tested in the
+blade's own plane, z = 0, where the pose only added heights."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+import shapely
+from shapely.geometry import Polygon
+
+from leafstudio.core.plane import fit_frame
+from leafstudio.core.prepare.vein_order import veins_inside_outline
+from leafstudio.forms import Form
+from leafstudio.forms.make import LIMITS, VEIN_SLACK, make_form, seen_on_edge
+from leafstudio.forms.terms import SHAPES
+
+FOLDS = (LIMITS["fold"][0], -60.0, 45.0, 60.0, LIMITS["fold"][1])
+CURLS = (LIMITS["curl"][0], 0.0, LIMITS["curl"][1])
+WAVES = (0.0, LIMITS["wave"][1])
+POSES = list(itertools.product(FOLDS, CURLS, WAVES))
+# a sample of the grid: every shape at its usual aspect and at 20, each with every fifth pose
+GRID = [
+    (shape, aspect, pose)
+    for i, (shape, aspect) in enumerate(itertools.product(SHAPES, (None, 20.0)))
+    for pose in POSES[i % 5 :: 5]
+]
+
+
+@pytest.mark.parametrize("shape,aspect", list(itertools.product(SHAPES, (None, 20.0))))
+def test_every_posed_form_keeps_its_midrib_and_all_its_veins(shape, aspect):
+    flat = Form(shape, aspect=aspect).leaf()
+    poses = [pose for s, a, pose in GRID if (s, a) == (shape, aspect)]
+    for fold, curl, wave in poses:
+        leaf = Form(shape, aspect=aspect, fold=fold, curl=curl, wave=wave).leaf()
+        assert len(leaf.veins) == len(flat.veins), (fold, curl, wave)
+        midrib, flat_midrib = leaf.veins[0], flat.veins[0]
+        # the same midrib, base to apex, only raised by the pose
+        assert np.linalg.norm(midrib[0, :2] - flat_midrib[0, :2]) < 0.01
+        assert np.linalg.norm(midrib[-1, :2] - flat_midrib[-1, :2]) < 0.01
+        blade = Polygon(leaf.boundary[:, :2]).buffer(0.005)
+        for vein in leaf.veins:  # inside the outline in the blade's own plane
+            assert shapely.contains_xy(blade, vein[:, 0], vein[:, 1]).all()
+
+
+def test_the_reported_poses():
+    """The colleague's two: every vein was dropped. The cause: the boundary's PCA plane (the
+    pipeline's) contains the blade's normal, z, so the outline seen there is a side view."""
+    for terms in (dict(fold=75.0), dict(aspect=20.0, curl=-1.0, fold=60.0)):
+        leaf = make_form("elliptic", **terms)
+        normal = fit_frame(leaf.boundary, np.vstack(leaf.veins)).normal
+        assert abs(normal[2]) < 1e-3  # on edge to the blade
+        assert veins_inside_outline(leaf.boundary, leaf.veins, -VEIN_SLACK) == []  # the old clip
+        assert len(leaf.veins) == len(make_form("elliptic").veins) == 13
+
+
+def test_a_pose_the_pipeline_sees_on_its_plane_is_clipped_there_as_before():
+    """A mild pose tilts the PCA plane but not on edge: the veins are still clipped to the
+    outline as the pipeline sees it (vein ends that stray over 1% outside it are refused)."""
+    leaf = make_form("ovate", margin="serrate", fold=25.0, curl=0.15, wave=0.02)
+    again = veins_inside_outline(leaf.boundary, leaf.veins, -VEIN_SLACK)
+    assert len(again) == len(leaf.veins) == len(make_form("ovate", margin="serrate").veins)
+    assert all(np.array_equal(a, v) for a, v in zip(again, leaf.veins, strict=True))
+
+
+def test_the_form_command_writes_a_posed_leaf_with_its_veins(tmp_path, capsys):
+    from leafstudio.cli import main
+    from leafstudio.sources.files import load_leaf
+
+    out = tmp_path / "x.leaf.json"
+    argv = ["form", "elliptic", "--aspect", "20", "--curl", "-1", "--fold", "60"]
+    assert main([*argv, "-o", str(out)]) == 0
+    assert "13 veins" in capsys.readouterr().err
+    assert len(load_leaf(str(out)).veins) == 13
+
+
+def test_a_form_seen_on_edge_is_refused_as_a_mesh_in_one_line(tmp_path, capsys):
+    """The pipeline takes the boundary's PCA plane for the leaf's (paper, step 1): seen on edge,
+    a posed form came out as a side view (its veins dropped), or now, with its veins, "vein 1:
+    49 of 49 points lie outside the boundary"; `form -o MESH` says why instead."""
+    from leafstudio.cli import main
+
+    argv = ["form", "elliptic", "--aspect", "20", "--curl", "-1", "--fold", "60", "-o"]
+    assert main([*argv, str(tmp_path / "x.obj")]) == 2
+    err = capsys.readouterr().err
+    assert "on edge" in err and "--fold" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "x.obj").exists()
+    assert seen_on_edge(make_form("elliptic", aspect=20.0, curl=-1.0, fold=60.0))
+    assert not seen_on_edge(make_form("reniform", fold=75.0))  # on edge too, but seen whole
+    assert not seen_on_edge(make_form("ovate", fold=25.0, curl=0.15, wave=0.02))
+
+
+def test_a_side_on_form_warns_through_the_api():
+    from leafstudio.forms.make import SIDE_ON
+
+    with pytest.warns(UserWarning, match=SIDE_ON.split(",")[0]):
+        make_form("elliptic", fold=75.0)

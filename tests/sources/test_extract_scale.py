@@ -1,0 +1,78 @@
+"""`extract` at scan scale and at any size (issue 10, finding 3): large scans are thinned to voxel
+centroids (the work no longer grows with the square of the points), the masks still cover every
+point, and degenerate or huge scans end in a LeafError, not a crash."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from leafstudio.errors import LeafError
+from leafstudio.sources.extract import BUDGET, extract_leaf, voxel_thinning
+from tests.sources.test_extract import _scan, _surface, assert_outline_is_the_blades
+
+
+def _big_scan(n: int, seed: int = 3) -> tuple[np.ndarray, int]:
+    """n blade points on the known surface, a petiole at -x and a few outliers; and n."""
+    parts = _scan(seed, int(2.2 * n), n, n // 60, n // 400)
+    return np.vstack([parts["blade"], parts["petiole"], parts["outliers"]]), n
+
+
+@pytest.fixture(scope="module")
+def big():
+    points, n = _big_scan(120_000)
+    return points, n, extract_leaf(points)
+
+
+def test_a_large_scan_is_thinned_and_its_outline_is_the_blade(big):
+    points, n, found = big
+    assert_outline_is_the_blades(found)
+    assert len(found.blade) == len(points) and len(found.petiole) == len(points)
+    assert found.blade[:n].mean() > 0.99
+    assert not found.blade[n + n // 60 :].any()  # no outlier
+    far_petiole = points[n : n + n // 60, 0] < -0.56
+    assert not found.blade[n : n + n // 60][far_petiole].any()
+    assert found.length == pytest.approx(1.0, abs=0.03)
+    b = found.leaf.boundary
+    assert np.abs(b[:, 2] - _surface(b[:, 0], b[:, 1])).max() < 4e-3
+
+
+def test_voxel_thinning_keeps_at_most_the_budget_and_maps_every_point():
+    rng = np.random.default_rng(0)
+    blob = rng.normal(size=(200_000, 3))  # a volume, not a surface: the first guess overshoots
+    kept, cell, size = voxel_thinning(blob, 5000)
+    assert 2500 <= len(kept) <= 5000
+    assert cell is not None and cell.shape == (len(blob),) and cell.max() == len(kept) - 1
+    # each centroid is the mean of the points mapped to it
+    for c in (0, len(kept) // 2, len(kept) - 1):
+        np.testing.assert_allclose(kept[c], blob[cell == c].mean(axis=0), atol=1e-12)
+        assert np.ptp(blob[cell == c], axis=0).max() <= size  # one cube's points
+    same, none, zero = voxel_thinning(blob[:100], 5000)
+    assert none is None and zero == 0 and np.array_equal(same, blob[:100])
+
+
+def test_a_blob_larger_than_the_budget_is_refused_cleanly_or_read():
+    rng = np.random.default_rng(1)
+    blob = rng.normal(size=(3 * BUDGET, 3))
+    try:
+        extract_leaf(blob)
+    except LeafError as exc:
+        assert "\n" not in str(exc)
+
+
+def test_a_noisy_line_is_a_leaf_error_not_a_crash():
+    rng = np.random.default_rng(0)
+    t = rng.uniform(0, 1, 2000)
+    line = np.column_stack([t, 1e-3 * rng.normal(size=2000), 1e-3 * rng.normal(size=2000)])
+    with pytest.raises(LeafError):
+        extract_leaf(line)
+
+
+@pytest.mark.parametrize("factor", [1e-9, 1e200])
+def test_a_scan_in_any_units_gives_the_same_leaf_scaled(factor):
+    points, _ = _big_scan(6000, seed=4)
+    base = extract_leaf(points)
+    scaled = extract_leaf(points * factor)
+    assert scaled.length == pytest.approx(base.length * factor, rel=1e-9)
+    np.testing.assert_allclose(scaled.leaf.boundary / factor, base.leaf.boundary, atol=1e-9)
+    np.testing.assert_array_equal(scaled.blade, base.blade)

@@ -1,0 +1,135 @@
+"""Leaf files in and out: every format round-trips, and every malformed file says what is wrong."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from plyfile import PlyData
+
+import leafstudio as ls
+from leafstudio.sources.files import load_project, save_leaf
+
+
+def _same(a: ls.Leaf, b: ls.Leaf, atol: float = 1e-8) -> None:
+    np.testing.assert_allclose(a.boundary, b.boundary, atol=atol)
+    assert len(a.veins) == len(b.veins)
+    for va, vb in zip(a.veins, b.veins, strict=True):
+        np.testing.assert_allclose(va, vb, atol=atol)
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".txt", ".xyz", ".ply", ".leaf.json"])
+def test_leaf_round_trips(tmp_path: Path, suffix: str):
+    leaf = ls.demo("nested")
+    path = tmp_path / f"leaf{suffix}"
+    save_leaf(leaf, path)
+    _same(leaf, ls.load_leaf(path))
+
+
+def test_project_keeps_params_and_sketch(tmp_path: Path):
+    path = tmp_path / "p.leaf.json"
+    params = ls.Params(k=5, grid=64, mesher="bpa")
+    save_leaf(ls.demo("parallel"), path, params=params, sketch={"boundary": [[0, 0], [1, 0]]})
+    _, loaded, sketch = load_project(path)
+    assert loaded == params
+    assert sketch == {"boundary": [[0, 0], [1, 0]]}
+    assert [p.name for p in tmp_path.iterdir()] == ["p.leaf.json"]  # no temporary file left
+
+
+def test_whitespace_and_header_and_unlabelled_boundary_with_vein_files(tmp_path: Path):
+    leaf = ls.demo("nested")
+    boundary = tmp_path / "b.xyz"
+    boundary.write_text("X Y Z\n" + "\n".join("  ".join(map(str, p)) for p in leaf.boundary))
+    vein = tmp_path / "v.csv"
+    vein.write_text("\n".join(",".join(map(str, p)) for p in leaf.veins[0]))
+    loaded = ls.load_leaf(boundary, veins=[vein])
+    np.testing.assert_allclose(loaded.boundary, leaf.boundary)
+    np.testing.assert_allclose(loaded.veins[0], leaf.veins[0])
+
+
+def test_ply_labels_survive(tmp_path: Path):
+    """pyvista's PLY reader drops extra vertex properties; ours keeps the label."""
+    path = tmp_path / "leaf.ply"
+    save_leaf(ls.demo("parallel"), path)
+    assert len(ls.load_leaf(path).veins) == len(ls.demo("parallel").veins)
+
+
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        ("", "holds no points"),
+        ("x,y,z\n", "holds no points"),
+        ("0 0 0\n1 0\n", "line 2: expected 3 or 4 columns"),
+        ("0 0 0 0 0\n", "line 1: expected 3 or 4 columns"),
+        ("0 0 0\n1 0 nan\n0 1 0\n", "line 2: NaN or infinite"),
+        ("0 0 0\n1 0 inf\n0 1 0\n", "line 2: NaN or infinite"),
+        ("0 0 0\n1 0 zero\n", "line 2: not a number"),
+        ("0 0 0 0\n1 0 0 0\n0 1 0 1.5\n", "labels must be whole numbers"),
+        ("0 0 0 0\n1 0 0 0\n0 1 0 1\n", "at least 3 boundary points"),
+        ("0 0 0\n1 0 0 0\n", "line 2: 4 columns where earlier lines have 3"),
+    ],
+)
+def test_bad_point_files_say_what_is_wrong(tmp_path: Path, content: str, message: str):
+    path = tmp_path / "bad.csv"
+    path.write_text(content)
+    with pytest.raises(ls.LeafError, match=message) as err:
+        ls.load_leaf(path)
+    assert str(path) in str(err.value)
+
+
+def test_missing_unknown_and_binary_files(tmp_path: Path):
+    with pytest.raises(ls.LeafError, match="no such file"):
+        ls.load_leaf(tmp_path / "none.csv")
+    with pytest.raises(ls.LeafError, match=r"unknown file type '\.dat'"):
+        ls.load_leaf(tmp_path / "leaf.dat")
+    binary = tmp_path / "bin.txt"
+    binary.write_bytes(b"\xff\xfe\x00\x81")
+    with pytest.raises(ls.LeafError, match="not a text file"):
+        ls.load_leaf(binary)
+    broken = tmp_path / "broken.ply"
+    broken.write_text("not a ply at all")
+    with pytest.raises(ls.LeafError, match="not a readable PLY"):
+        ls.load_leaf(broken)
+
+
+def test_bad_projects(tmp_path: Path):
+    path = tmp_path / "bad.leaf.json"
+    path.write_text("{oops")
+    with pytest.raises(ls.LeafError, match="not valid JSON"):
+        ls.load_leaf(path)
+    path.write_text('{"boundary": []}')
+    with pytest.raises(ls.LeafError, match="not a LeafStudio project"):
+        ls.load_leaf(path)
+
+
+@pytest.mark.parametrize("suffix", [".ply", ".obj", ".stl", ".vtp", ".vtk"])
+def test_mesh_export_by_extension(tmp_path: Path, suffix: str):
+    import pyvista as pv
+
+    result = ls.reconstruct(ls.demo("nested"), ls.Params(grid=32))
+    path = tmp_path / f"leaf{suffix}"
+    ls.save_mesh(result, path)
+    back = pv.read(path)
+    assert back.n_cells == result.mesh.n_cells
+    np.testing.assert_allclose(back.bounds, result.mesh.bounds, atol=1e-5)
+    if suffix != ".stl":  # STL stores each triangle's corners apart
+        np.testing.assert_allclose(back.points, result.mesh.points, atol=1e-5)
+
+
+def test_a_triangle_mesh_exports_as_vtp_and_ply_without_a_polydata(tmp_path: Path):
+    import pyvista as pv
+
+    result = ls.reconstruct(ls.demo("nested"), ls.Params(grid=32))
+    for suffix in (".vtp", ".ply"):
+        ls.save_mesh(result.triangle_mesh, tmp_path / f"leaf{suffix}")
+        back = pv.read(tmp_path / f"leaf{suffix}")
+        np.testing.assert_allclose(back.points, result.triangle_mesh.points, atol=1e-6)
+        assert back.n_cells == len(result.triangle_mesh.regular_faces)
+    vertex = PlyData.read(tmp_path / "leaf.ply")["vertex"]  # VTK's reader drops the arrays
+    np.testing.assert_allclose(vertex["height"], result.triangle_mesh.point_data["height"])
+    assert "mesh" not in result.__dict__  # no PolyData of the result was made
+
+
+def test_unknown_mesh_type(tmp_path: Path):
+    result = ls.reconstruct(ls.demo("nested"), ls.Params(grid=32))
+    with pytest.raises(ls.LeafError, match="unknown mesh type"):
+        ls.save_mesh(result, tmp_path / "leaf.dae")
