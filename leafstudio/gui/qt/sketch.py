@@ -6,7 +6,8 @@ dragged); selecting a point of another curve takes the Select tool, or Ctrl or S
 exists from its first click, which snaps onto a vein nearby (a branch). The view moves only when
 asked (Fit, the wheel) or when a document opens. With Mirror on, each edit is reflected across
 the midrib's curve (gui/model/midrib.py). Where the boundary crosses itself it is marked in
-red. A side view (gui/qt/profile_view.py) shows the chosen vein's heights along it, with handles to drag.
+red. A side view (gui/qt/profile_view.py) shows the chosen vein's heights along it, with
+handles to drag.
 
 The editor never changes the document itself: it emits `preview(sketch)` while a point is dragged
 (so the 3D view follows) and `committed(before, after, text)` when an edit is done; the session
