@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 import leafstudio as ls
-from leafstudio.cli import _params_for, build_parser, main
+from leafstudio.cli import build_parser, main
+from leafstudio.cli.options import params_for as _params_for
 from leafstudio.core import pipeline
 from leafstudio.core.pipeline import STAGE_INPUTS, STAGE_KEYS, STAGES, Pipeline
 from leafstudio.errors import LeafError

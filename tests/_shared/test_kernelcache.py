@@ -53,20 +53,20 @@ def test_a_failed_cache_write_does_not_fail_the_run(monkeypatch):
 
 
 def test_a_first_run_says_it_compiles(monkeypatch, tmp_path, caplog):
-    from leafstudio import cli
+    from leafstudio.cli import options
 
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
     assert not kernelcache.kernels_cached()
     logger = logging.getLogger("leafstudio")
     monkeypatch.setattr(logger, "propagate", True)
     with caplog.at_level(logging.INFO, logger="leafstudio"):
-        cli._compiling_notice()
+        options.compiling_notice()
     assert "compiling the numerical kernels" in caplog.text
     kernelcache.mark_cached()
     assert kernelcache.kernels_cached()
     caplog.clear()
     with caplog.at_level(logging.INFO, logger="leafstudio"):
-        cli._compiling_notice()
+        options.compiling_notice()
     assert "compiling" not in caplog.text
 
 

@@ -1,0 +1,95 @@
+"""A batch's settings and its trait table's columns: what every input is run with, and the key
+that tells `resume` which earlier rows still stand."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass, field
+
+from leafstudio.model import Params
+from leafstudio.sources.extract import OUTLINE_POINTS
+
+FORMATS = ("ply", "glb", "obj", "vtp", "none")  # mesh types save_mesh writes, or none
+DEFAULT_TABLE = "traits.csv"
+
+SHAPE_COLUMNS = (
+    "area",
+    "projected_area",
+    "perimeter",
+    "length",
+    "width",
+    "aspect_ratio",
+    "height",
+)
+CURVATURE_COLUMNS = tuple(
+    f"{name}_{stat}"
+    for name in ("mean_curvature", "gaussian_curvature")
+    for stat in ("mean", "min", "max")
+)
+SCAN_COLUMNS = ("scan_points", "scan_mean", "scan_p95", "scan_beyond_1pct", "scan_beyond_2pct")
+INT_COLUMNS = frozenset({"k", "grid", "scan_points"})
+FLOAT_COLUMNS = frozenset(
+    {*SHAPE_COLUMNS, *CURVATURE_COLUMNS, *SCAN_COLUMNS, "seconds"} - INT_COLUMNS
+)
+
+
+def columns(scans: bool) -> tuple[str, ...]:
+    """The trait table's columns, in order (the scan distances only for scans)."""
+    return (
+        "input",
+        "status",
+        "error",
+        "mesh",
+        "k",
+        "grid",
+        *SHAPE_COLUMNS,
+        *CURVATURE_COLUMNS,
+        *(SCAN_COLUMNS if scans else ()),
+        "warnings",
+        "seconds",
+        "sha256",
+        "mesh_sha256",
+        "settings",
+    )
+
+
+@dataclass(frozen=True)
+class Settings:
+    """What every input of a batch is run with.
+
+    Parameters
+    ----------
+    params : Params
+        The reconstruction settings (the same for every input, so traits compare; a project's
+        saved parameters are not applied).
+    scans : bool, default: False
+        Inputs are 3D scans: extract boundary and veins, then reconstruct, then measure the
+        distances from the scan's blade points to the surface.
+    format : str, default: "ply"
+        Mesh format (one of FORMATS; "none" writes no meshes).
+    force : bool, default: False
+        With scans: a scan that does not look like one leaf (extract's plausibility check) is
+        reconstructed anyway, its problems the row's warnings, as `extract --force`; without it
+        the row fails with extract's line.
+    """
+
+    params: Params = field(default_factory=Params)
+    scans: bool = False
+    format: str = "ply"
+    force: bool = False
+
+    def key(self) -> str:
+        """A short hash of the settings: rows made with other settings are not resumed."""
+        text = json.dumps(
+            {
+                "params": self.params.to_dict(),
+                "scans": self.scans,
+                "format": self.format,
+                "points": OUTLINE_POINTS,
+                "force": self.force,
+            },
+            sort_keys=True,
+        )
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+

@@ -1,0 +1,134 @@
+"""One input's job, in a worker process: read, (extract,) reconstruct, measure, write its mesh,
+and return its table row; a bad input becomes a failed row, never an exception."""
+
+from __future__ import annotations
+
+import signal
+import time
+import warnings
+from pathlib import Path
+from typing import Any
+
+from leafstudio.batch.plan import Job, file_hash
+from leafstudio.batch.settings import CURVATURE_COLUMNS, SHAPE_COLUMNS, columns
+from leafstudio.errors import LeafError, error_line
+
+_PINNED = False
+
+
+def pin_threads() -> None:
+    """One BLAS thread and one numba thread in this process (the workers run side by side);
+    done once per process."""
+    global _PINNED
+    if _PINNED:
+        return
+    import numba
+    from threadpoolctl import threadpool_limits
+
+    numba.set_num_threads(1)  # for any parallel kernel (leafstudio's are serial today)
+    threadpool_limits(1)  # after numba: its OpenMP layer too
+    _PINNED = True
+
+
+def worker_start() -> None:
+    """Pool initializer: pin threads, then import the pipeline once per worker. Ctrl-C reaches
+    the whole process group: the parent stops the batch (and lets running jobs finish)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    pin_threads()
+    import leafstudio.core.pipeline  # noqa: F401
+
+
+def _number(x: Any) -> float | None:
+    return None if x is None else float(x)
+
+
+def _traits(result: Any) -> dict[str, Any]:
+    """The shape and curvature columns of a Result (core/measure.py)."""
+    from leafstudio.core.measure import curvature_summary, shape_measurements
+
+    mesh = result.triangle_mesh
+    shape = shape_measurements(mesh, result.frame, result.polygon)
+    curvature = curvature_summary(mesh)
+    row = {name: _number(shape[name]) for name in SHAPE_COLUMNS}
+    for name in CURVATURE_COLUMNS:
+        array, stat = name.rsplit("_", 1)
+        row[name] = _number(curvature[array][stat]) if array in curvature else None
+    return row
+
+
+def _reconstruct(job: Job) -> dict[str, Any]:
+    """Read, (extract,) reconstruct, measure and write one input; raises on bad input. It opens,
+    fails and warns as `leafstudio extract` (for a scan) then `reconstruct` would: both go
+    through workflows."""
+    from leafstudio import workflows
+    from leafstudio.sources.files import load_leaf
+
+    settings = job.settings
+    try:
+        if settings.scans:
+            opened = workflows.open_scan(job.path, force=settings.force)
+        else:
+            opened = workflows.Opened(job.path, "leaf", load_leaf(job.path))
+        done = workflows.reconstruct(opened, settings.params)
+    except LeafError as exc:
+        raise LeafError(exc.problem, job.input) from None
+    result = done.result
+    row: dict[str, Any] = {"k": result.chosen_k, "grid": settings.params.grid, **_traits(result)}
+    if done.scan_fit is not None:
+        found = done.scan_fit
+        row.update(
+            scan_points=found["points"],
+            scan_mean=_number(found.get("mean")),
+            scan_p95=_number(found.get("p95")),
+            scan_beyond_1pct=_number(found.get("beyond_1pct")),
+            scan_beyond_2pct=_number(found.get("beyond_2pct")),
+        )
+    if job.mesh:
+        from leafstudio.assets.export import save_mesh
+
+        # the bare mesh: normals, UVs and the point arrays, without the texture image and the
+        # closed-form normals a Result gets (a second per leaf; `reconstruct` writes those)
+        save_mesh(result.triangle_mesh, Path(job.out_dir) / job.mesh)
+        row["mesh"] = job.mesh
+        row["mesh_sha256"] = file_hash(Path(job.out_dir) / job.mesh)  # --resume checks it
+    row["warnings"] = "; ".join(done.warnings) or None
+    return row
+
+
+def _as_listed(exc: Exception, job: Job) -> Exception:
+    """The error naming the input as the user listed it (the worker reads its absolute path)."""
+    if isinstance(exc, LeafError) and exc.source == job.path:
+        return LeafError(exc.problem, job.input)
+    if isinstance(exc, FileNotFoundError):
+        return LeafError("no such file", job.input)
+    if isinstance(exc, IsADirectoryError):
+        return LeafError("is a folder, not a file", job.input)
+    if isinstance(exc, OSError) and exc.filename == job.path:
+        return LeafError(f"cannot be read ({exc.strerror or exc})", job.input)
+    return exc
+
+
+def run_job(job: Job) -> dict[str, Any]:
+    """One input's table row: `ok` with its traits, or `failed` with the one-line message that
+    `leafstudio reconstruct` would print. Never raises for a bad input (the batch goes on)."""
+    pin_threads()
+    start = time.perf_counter()
+    row: dict[str, Any] = dict.fromkeys(columns(job.settings.scans))
+    row.update(input=job.input, settings=job.settings.key())
+    try:
+        row["sha256"] = file_hash(job.path)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # library chatter; the run's notes are in the row
+            row.update(_reconstruct(job), status="ok")
+    except Exception as exc:
+        row.update({c: None for c in row if c not in ("input", "settings", "sha256")})
+        row.update(status="failed", error=error_line(_as_listed(exc, job)))
+    row["seconds"] = round(time.perf_counter() - start, 4)
+    return row
+
+
+def run_failed(job: Job, exc: BaseException) -> dict[str, Any]:
+    """A failed row for a job that could not be run at all."""
+    row: dict[str, Any] = dict.fromkeys(columns(job.settings.scans))
+    row.update(input=job.input, settings=job.settings.key(), status="failed", error=error_line(exc))
+    return row

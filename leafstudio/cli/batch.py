@@ -1,0 +1,101 @@
+"""`leafstudio batch`: the command-line side of leafstudio.batch (a progress bar, each failure's
+line, one summary line, the exit code)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+from leafstudio.batch import FORMATS, Batch, batch
+from leafstudio.cli.options import add_param_flags, params_for
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """The `batch` subcommand: many inputs, a worker pool or a Dask cluster (leafstudio/batch)."""
+    bat = sub.add_parser(
+        "batch", help="reconstruct many leaves or scans: meshes and a trait table"
+    )
+    bat.add_argument("inputs", nargs="+", metavar="INPUT", help="files, folders or glob patterns")
+    bat.add_argument("-o", "--output", required=True, metavar="OUTDIR", help="folder for meshes")
+    bat.add_argument("--scans", action="store_true", help="inputs are 3D scans: extract first")
+    bat.add_argument(
+        "--traits", metavar="FILE", help=".csv, .json or .parquet (default OUTDIR/traits.csv)"
+    )
+    bat.add_argument("--format", choices=FORMATS, default="ply")
+    add_param_flags(bat)
+    bat.add_argument("--jobs", type=int, default=None, help="worker processes (default: cores)")
+    bat.add_argument(
+        "--scheduler", metavar="ADDRESS", help="a Dask scheduler (tcp://HOST:PORT), or local"
+    )
+    bat.add_argument("--resume", action="store_true", help="skip inputs already done")
+    bat.add_argument("--fail-fast", action="store_true", help="stop at the first failure")
+    bat.add_argument(
+        "--force",
+        action="store_true",
+        help="with --scans: go on with a cloud that does not look like one leaf (as extract "
+        "--force: its problems become the row's warnings)",
+    )
+
+
+def summary(run: Batch, seconds: float) -> str:
+    """The one line printed at the end of a batch."""
+    ok = run.ok + run.resumed
+    ran = run.ok + run.failed
+    parts = [f"{run.total} inputs: {ok} ok, {run.failed} failed"]
+    if run.resumed:
+        parts.append(f"{run.resumed} already done")
+    if ok + run.failed < run.total:
+        parts.append(f"{run.total - ok - run.failed} not run")
+    if run.stopped:
+        parts.append("stopped at the first failure")
+    rate = ran / seconds if seconds > 0 else 0.0
+    return (
+        f"leafstudio: batch: {', '.join(parts)}; {seconds:.1f} s ({rate:.2f} per second); "
+        f"table {run.table.path}"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """`leafstudio batch`: run the batch with a progress bar on stderr (when it is a terminal),
+    each failure's line as it happens and one summary line. Exit 0, or 1 if any input failed."""
+    from tqdm import tqdm
+
+    running = batch(
+        args.inputs,
+        params_for(args, None),
+        args.output,
+        scans=args.scans,
+        traits=args.traits,
+        format=args.format,
+        jobs=args.jobs,
+        scheduler=args.scheduler,
+        resume=args.resume,
+        fail_fast=args.fail_fast,
+        force=args.force,
+    )
+    start = time.perf_counter()
+    bar = tqdm(
+        total=running.total,
+        file=sys.stderr,
+        disable=not sys.stderr.isatty(),
+        unit="leaf",
+        dynamic_ncols=True,
+        desc="leafstudio batch",
+    )
+    try:
+        with bar:
+            for row in running:
+                if row["status"] != "ok":
+                    internal = str(row["error"]).startswith("internal error:")
+                    bar.write(
+                        f"leafstudio: {'' if internal else 'error: '}{row['error']}", sys.stderr
+                    )
+                bar.set_postfix(failed=running.failed, refresh=False)
+                bar.update(1)
+    except KeyboardInterrupt:
+        print(f"{summary(running, time.perf_counter() - start)}; interrupted (--resume goes on)",
+              file=sys.stderr)  # fmt: skip
+        raise
+    print(summary(running, time.perf_counter() - start), file=sys.stderr)
+    return 1 if running.failed else 0

@@ -1,0 +1,37 @@
+"""`leafstudio compare`: our surface beside screened Poisson (distances, spill, time)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from leafstudio.cli.options import EXIT_OK, add_run_options, settings
+from leafstudio.errors import LeafError
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """The `compare` subcommand."""
+    com = sub.add_parser(
+        "compare", help="our surface beside screened Poisson: distances, spill, time"
+    )
+    add_run_options(com)
+    com.add_argument("--json", action="store_true", help="print JSON instead of a table")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Print the comparison, as a table or JSON."""
+    from leafstudio.analysis.compare import compare, format_comparison
+    from leafstudio.sources.files import load_leaf
+
+    leaf = load_leaf(args.input, veins=args.vein)
+    params = settings(args)
+    try:
+        report = compare(leaf, params)
+    except LeafError as exc:
+        raise LeafError(exc.problem, args.input) from None
+    report.pop("meshes")
+    if args.json:
+        print(json.dumps({"input": args.input, **report}, indent=2))
+    else:
+        print(format_comparison(report))
+    return EXIT_OK

@@ -1,0 +1,21 @@
+"""`leafstudio gui` (and `leafstudio` alone): open the app."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """The `gui` subcommand."""
+    gui = sub.add_parser("gui", help="open the app (on FILE, or on the nested demo)")
+    gui.add_argument("file", nargs="?", help="a leaf file, project or leaf scan to open")
+    gui.add_argument(
+        "--screenshot", metavar="PNG", help="save the window once reconstructed, then exit"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the app on the file given (the nested demo without one)."""
+    from leafstudio.gui.qt.app import run_app
+
+    return run_app(getattr(args, "file", None), getattr(args, "screenshot", None))

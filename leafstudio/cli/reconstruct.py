@@ -1,0 +1,150 @@
+"""`leafstudio reconstruct`: a leaf's mesh, and on request its figures, metrics, turntable and the
+distances to a scan of the real leaf."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from leafstudio.cli.options import EXIT_OK, add_run_options, run_pipeline
+from leafstudio.errors import LeafError
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """The `reconstruct` subcommand."""
+    from leafstudio.render.figure import FIGURE_SCALARS
+
+    rec = sub.add_parser("reconstruct", help="reconstruct a leaf and write its mesh")
+    add_run_options(rec)
+    rec.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        metavar="MESH",
+        help=".ply, .obj (+ .mtl, _texture.png), .glb, .gltf, .stl, .3mf, .vtp or .vtk",
+    )
+    rec.add_argument(
+        "--figure", metavar="PNG", help="also render iso and top views with the input points"
+    )
+    rec.add_argument(
+        "--colour-by",
+        choices=FIGURE_SCALARS,
+        default="height",
+        help="what the figure's colours show (default height)",
+    )
+    rec.add_argument(
+        "--metrics", metavar="JSON", help="write Table-1 distances and mesh facts here"
+    )
+    rec.add_argument(
+        "--against",
+        metavar="SCAN",
+        help="a scan of the real leaf: report the distances from its points to the surface",
+    )
+
+    rec.add_argument(
+        "--texture",
+        default="auto",
+        metavar="auto|none|IMAGE",
+        help="the mesh's texture: auto (generated: blade and veins), none, or an image (a photo "
+        "the leaf came from by `leafstudio photo` maps back onto itself; default auto)",
+    )
+    rec.add_argument(
+        "--thickness",
+        metavar="T",
+        help="write a closed solid T thick: a fraction of the leaf length (0.01) or a length "
+        "with its unit for a leaf in millimetres (0.4mm)",
+    )
+    rec.add_argument(
+        "--lod",
+        type=int,
+        default=0,
+        metavar="N",
+        help="also write N coarser levels of detail, each with half the triangles",
+    )
+    rec.add_argument(
+        "--turntable", metavar="GIF|MP4", help="also render the leaf turning once (for slides)"
+    )
+    rec.add_argument(
+        "--steps-figure", metavar="PNG", help="also render the pipeline's steps side by side"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Read, check, compute everything, then write every output together (safewrite.staged):
+    a run that fails anywhere leaves all old outputs as they were."""
+    from leafstudio._shared.safewrite import check_outputs, staged, write_bytes
+    from leafstudio.assets.export import save_mesh
+    from leafstudio.assets.writers import MESH_SUFFIXES
+    from leafstudio.render.figure import check_figure_path
+    from leafstudio.sources.files import load_leaf
+
+    out = Path(args.output)
+    if not out.name.lower().endswith(MESH_SUFFIXES):
+        raise LeafError(f"unknown mesh type; use one of {', '.join(MESH_SUFFIXES)}", str(out))
+    figure = check_figure_path(args.figure) if args.figure else None
+    from leafstudio.assets.export import asset_options, check_asset_options
+
+    check_asset_options(args.texture, args.thickness, args.lod)
+    from leafstudio.render.slides import check_turntable_path
+
+    turntable = check_turntable_path(args.turntable) if args.turntable else None
+    steps = check_figure_path(args.steps_figure) if args.steps_figure else None
+    outputs = [out, args.metrics, figure, turntable, steps]  # every file this command writes
+    check_outputs([args.input, *args.vein, args.against], outputs)
+    leaf = load_leaf(args.input, veins=args.vein)
+    scan = None
+    if args.against:
+        from leafstudio.sources.scan import read_scan
+
+        scan = read_scan(args.against)
+    params, result = run_pipeline(args, leaf)
+    fidelity = None
+    if scan is not None:
+        from leafstudio.analysis.fidelity import scan_distances
+        from leafstudio.sources.extract import split_scan
+
+        blade = split_scan(scan)[0]
+        fidelity = {
+            "all": scan_distances(result.triangle_mesh, scan, result.length),
+            "blade": scan_distances(result.triangle_mesh, scan[blade], result.length),
+        }
+    metrics = None
+    if args.metrics:
+        metrics = {
+            "input": args.input,
+            "params": params.to_dict(),
+            "k": result.chosen_k,
+            **result.metrics,
+            "warnings": args.warnings,
+        }
+        if fidelity is not None:
+            metrics["fidelity"] = {"scan": args.against, **fidelity}
+    with staged():  # every output is written in this block; renamed over the old ones at its end
+        options = asset_options(args.texture, args.thickness, args.lod, args.input, result.length)
+        save_mesh(result, out, **options)
+        if figure is not None:
+            from leafstudio._shared.safewrite import replace_atomically
+            from leafstudio.render.figure import render_figure
+
+            replace_atomically(figure, lambda tmp: render_figure(result, tmp, args.colour_by))
+        if metrics is not None:
+            write_bytes(args.metrics, json.dumps(metrics, indent=2) + "\n")
+        if turntable is not None or steps is not None:
+            from leafstudio._shared.safewrite import replace_atomically
+            from leafstudio.render.slides import render_steps, render_turntable
+
+            if turntable is not None:
+                replace_atomically(turntable, lambda tmp: render_turntable(result, tmp))
+            if steps is not None:
+                replace_atomically(steps, lambda tmp: render_steps(result, tmp))
+    if fidelity is not None:
+        for part, what in (("all", "all"), ("blade", "blade (no outliers, no petiole)")):
+            f = fidelity[part]
+            print(
+                f"{args.against}: {what}: {f['points']} points to the surface: mean "
+                f"{f['mean']:.4g}, median {f['median']:.4g}, 95% {f['p95']:.4g}, max "
+                f"{f['max']:.4g}; beyond 1% of the leaf length {f['beyond_1pct']:.1%}, beyond 2% "
+                f"{f['beyond_2pct']:.1%} (leaf length {result.length:.4g})"
+            )
+    return EXIT_OK
