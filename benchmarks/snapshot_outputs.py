@@ -67,7 +67,7 @@ def _numbers(value: Any) -> Any:
     if isinstance(value, float):
         return float(f"{value:.9g}")
     if isinstance(value, str):
-        return re.sub(r"/\S*?/tmp\w+/", "OUT/", value)
+        return re.sub(r"/\S*?/tmp\w+/", "OUT/", value.replace(str(SCANS), "SCANS"))
     return value
 
 

@@ -28,7 +28,12 @@ def _as_points(values: Any, what: str) -> np.ndarray:
     """Return `values` as a finite (n, 3) float array, or raise LeafError naming `what`."""
     if values is None or isinstance(values, (str, bytes)):
         raise LeafError(f"{what} must be a list of x, y, z points, got {_short(values)}")
-    raw = np.asarray(values) if not isinstance(values, np.ndarray) else values
+    try:
+        raw = np.asarray(values) if not isinstance(values, np.ndarray) else values
+    except (TypeError, ValueError, OverflowError) as exc:  # ragged rows: numpy's ValueError
+        raise LeafError(
+            f"{what} must be an (n, 3) array of x, y, z points (rows of three numbers)"
+        ) from exc
     if raw.dtype.kind == "c":
         raise LeafError(f"{what} must be real numbers, not complex ones")
     if raw.dtype.kind not in "biuf" and raw.size:

@@ -99,3 +99,14 @@ def coverage(
     )
     share = fidelity.coverage(result.mesh, frame, np.asarray(region.exterior.coords)[:-1])
     return share["covered"], share["outside"]
+
+
+def metric_numbers(metrics: dict) -> list[float]:
+    """Every number in a Result's (nested) metrics."""
+    out: list[float] = []
+    for value in metrics.values():
+        if isinstance(value, dict):
+            out += metric_numbers(value)
+        elif isinstance(value, int | float) and not isinstance(value, bool):
+            out.append(float(value))
+    return out

@@ -18,6 +18,7 @@ import shapely
 from leafstudio._shared.extras import LazyModule
 from leafstudio.core.analysis import table_metrics, triangles_of
 from leafstudio.core.plane import Frame
+from leafstudio.core.prepare.units import Units
 from leafstudio.core.trianglemesh import MeshLike, TriangleMesh
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf, Params
@@ -46,7 +47,10 @@ def poisson_surface(leaf: Leaf, normal: np.ndarray, depth: int = POISSON_DEPTH) 
         has crashed on small machines.
     """
     points = np.vstack([leaf.boundary, leaf.vein_points])
-    cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
+    # at about unit size: open3d's Poisson crashed (SIGSEGV) on leaves scaled by 1e-90 or 1e300
+    # (fuzzing, issue 24)
+    units = Units.exact(points)
+    cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(units.to_unit(points)))
     cloud.estimate_normals(o3d.geometry.KDTreeSearchParamKNN(NORMAL_NEIGHBOURS))
     cloud.orient_normals_to_align_with_direction(np.asarray(normal, dtype=float))
     mesh, _ = o3d.geometry.TriangleMesh.create_from_point_cloud_poisson(
@@ -55,7 +59,7 @@ def poisson_surface(leaf: Leaf, normal: np.ndarray, depth: int = POISSON_DEPTH) 
     triangles = np.asarray(mesh.triangles, dtype=np.int64)
     if len(triangles) == 0:
         raise LeafError("screened Poisson made no surface from these points")
-    return TriangleMesh(points=np.asarray(mesh.vertices), regular_faces=triangles)
+    return TriangleMesh(points=units.to_world(np.asarray(mesh.vertices)), regular_faces=triangles)
 
 
 def spill_area(mesh: MeshLike, frame: Frame, polygon: np.ndarray) -> float:
@@ -99,6 +103,10 @@ def compare(leaf: Leaf, params: Params | None = None) -> dict[str, Any]:
     from leafstudio.core.pipeline import Pipeline
 
     params = params or Params()
+    # at about unit size (an exact map): distances and areas of a leaf at 1e150 overflow
+    # float64 squares, so both meshes are measured there and the figures mapped back
+    units = Units.exact(leaf.boundary)
+    leaf = units.leaf(leaf)
     Pipeline(leaf).run(params)  # a process's first run loads the compiled kernels: time the next
     start = time.perf_counter()
     result = Pipeline(leaf).run(params)
@@ -108,16 +116,21 @@ def compare(leaf: Leaf, params: Params | None = None) -> dict[str, Any]:
     poisson_seconds = time.perf_counter() - start
 
     def report(mesh: MeshLike, seconds: float) -> dict[str, Any]:
-        return {
-            **table_metrics(mesh, leaf),
-            "spill": spill_area(mesh, result.frame, result.polygon),
-            "seconds": seconds,
-        }
+        table = table_metrics(mesh, leaf)
+        scale = units.scale
+        for part in ("boundary", "veins"):
+            table[part] = {k: None if v is None else v * scale for k, v in table[part].items()}
+        table["mesh"]["area"] *= scale**2
+        spill = spill_area(mesh, result.frame, result.polygon) * scale**2
+        return {**table, "spill": spill, "seconds": seconds}
+
+    def in_world(mesh: TriangleMesh) -> TriangleMesh:
+        return TriangleMesh(points=units.to_world(mesh.points), regular_faces=mesh.regular_faces)
 
     return {
         "ours": {**report(result.triangle_mesh, ours_seconds), "k": result.chosen_k},
         "poisson": report(poisson, poisson_seconds),
-        "meshes": {"ours": result.triangle_mesh, "poisson": poisson},
+        "meshes": {"ours": in_world(result.triangle_mesh), "poisson": in_world(poisson)},
     }
 
 

@@ -32,11 +32,14 @@ from __future__ import annotations
 import numpy as np
 import shapely
 from scipy.spatial import ConvexHull, QhullError, cKDTree
-from shapely.geometry import LineString, MultiLineString, Polygon
+from shapely.geometry import LineString, MultiLineString, Point, Polygon
 
+from leafstudio.core.prepare.units import Units
 from leafstudio.errors import LeafError
+from leafstudio.model import SEED_MAX
 
 VENATION_KINDS = ("pinnate", "palmate", "parallel", "arcuate")
+BASE_REACH = 0.05  # a base farther outside the outline than this share of its size is refused
 HEIGHT_RATIO = 0.25  # vein height over its distance to the margin (sources/demos.py: h = 0.25 w)
 BROAD_STEP = 0.035  # the growth step of a broad blade, as a share of the square root of its area
 STEP = 0.02  # growth step D, in leaf lengths
@@ -487,17 +490,66 @@ def grow_veins(
         The midrib first (palmate: then the other primaries), each vein from its start to its
         end, in the boundary's coordinates; z is the height (for a 2D outline, above z = 0).
     """
+    points = np.asarray(boundary, dtype=float)
+    if points.ndim != 2 or points.shape[1] not in (2, 3) or len(points) < 3:
+        raise LeafError(
+            f"the outline must be an (n, 2) or (n, 3) array, n >= 3, got {points.shape}"
+        )
+    if not np.all(np.isfinite(points)):
+        raise LeafError("the outline contains NaN or infinite coordinates")
+    # grown at about unit size whatever the outline's units (1e-90 or 1e300: no overflow), by
+    # an exact map, so that a leaf of ordinary size gets the very same veins; then mapped back
+    units = Units.exact(points)
+    if np.ptp(points, axis=0).max() == 0:
+        raise LeafError("the outline encloses no area (its points lie on one line)")
+
+    def unit(at: np.ndarray | None) -> np.ndarray | None:
+        if at is None:
+            return None
+        at = np.asarray(at, dtype=float).ravel()
+        if not np.all(np.isfinite(at)):
+            raise LeafError(f"a point of the midrib's ends is not finite: {at}")
+        return (at - units.offset[: len(at)]) / units.scale
+
+    veins = _grow_unit(
+        units.to_unit(points), venation, secondaries, unit(base), seed, apex=unit(apex)
+    )
+    offset = np.r_[units.offset, 0.0][:3]  # a 2D outline: (x, y, 0), z is the height above 0
+    return [offset + units.scale * v for v in veins]
+
+
+def _grow_unit(
+    boundary: np.ndarray,
+    venation: str,
+    secondaries: int | None,
+    base: np.ndarray | None,
+    seed: int,
+    *,
+    apex: np.ndarray | None,
+) -> list[np.ndarray]:
+    """grow_veins on an outline of unit size centred on the origin."""
     if venation not in VENATION_KINDS:
         raise LeafError(f"unknown venation {venation!r}; choose from {', '.join(VENATION_KINDS)}")
     count = DEFAULT_SECONDARIES[venation] if secondaries is None else int(secondaries)
     if not 0 <= count <= 40:
         raise LeafError(f"secondaries must be between 0 and 40, got {count}")
+    whole = isinstance(seed, int | np.integer) and not isinstance(seed, bool)
+    if not whole or not 0 <= seed <= SEED_MAX:
+        raise LeafError(f"the seed must be a whole number from 0 to {SEED_MAX}, got {seed!r}")
     rng = np.random.default_rng(seed)
     xy, heights, frame, base_xy = _plane(boundary, base)
     size = float(np.ptp(xy, axis=0).max())
     if size == 0 or Polygon(xy).convex_hull.area <= 1e-9 * size**2:
         raise LeafError("the outline encloses no area (its points lie on one line)")
     poly = _polygon(xy)
+    if base_xy is not None and not poly.contains(Point(base_xy)):
+        away = poly.exterior.distance(Point(base_xy)) / size
+        if not away <= BASE_REACH:  # veins from there would run outside the blade
+            how_far = f"{away:.3g} of its size" if np.isfinite(away) else "far"
+            raise LeafError(
+                f"the base lies outside the outline, {how_far} from the margin; give a point on "
+                "the margin"
+            )
     origin = None
     if frame is None or not hasattr(frame, "to_plane"):
         origin = np.zeros(2)

@@ -32,6 +32,7 @@ from leafstudio.core.prepare.cloud import (
 from leafstudio.core.prepare.plausibility import ZIGZAG
 from leafstudio.errors import LeafError
 
+SPARSE_OUTLINE = 48  # an outline of fewer vertices gets points along its edges (_densified)
 # points given in order step at most this many median spacings (a longer step: unordered)
 ORDERED_STEP_RATIO = 8.0
 
@@ -362,7 +363,30 @@ def _checked(outline: Outline, scale: float) -> Outline:
     if abs(float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))) / 2 <= 1e-8 * scale**2:
         raise LeafError("the boundary points do not enclose any area")
     ring = _canonical(polygon, np.arange(len(polygon)))
-    return Outline(polygon[ring], outline.heights[ring], outline.noise, outline.smoothed)
+    polygon, heights = _densified(polygon[ring], outline.heights[ring])
+    return Outline(polygon, heights, outline.noise, outline.smoothed)
+
+
+def _densified(polygon: np.ndarray, heights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A polygon of few vertices with points added along its edges (heights linear between
+    its vertices), about SPARSE_OUTLINE of them in all; a denser one as it is.
+
+    The MPU implicit fits a line to the boundary points near each cell: a triangle or a
+    pentagon leaves most cells without points (fuzzing, issue 24: NaN curvatures for 3
+    vertices, an outline holding no grid node for 4 to 7). The added points lie on the
+    polygon's own edges, so the outline does not change.
+    """
+    n = len(polygon)
+    if n >= SPARSE_OUTLINE:
+        return polygon, heights
+    ends = np.roll(np.arange(n), -1)
+    lengths = np.linalg.norm(polygon[ends] - polygon, axis=1)
+    parts = np.maximum(np.ceil(lengths / lengths.sum() * SPARSE_OUTLINE), 1).astype(int)
+    t = np.concatenate([np.arange(k) / k for k in parts])
+    start = np.repeat(np.arange(n), parts)
+    end = ends[start]
+    points = polygon[start] + t[:, None] * (polygon[end] - polygon[start])
+    return points, heights[start] + t * (heights[end] - heights[start])
 
 
 def leaf_polygon(points: np.ndarray) -> np.ndarray:

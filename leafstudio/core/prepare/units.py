@@ -28,6 +28,7 @@ POINT_ARRAY_POWER = {
     "k2": -1,
     "gaussian_curvature": -2,
 }
+FAR_FROM_ORIGIN = 1e6  # Units.exact moves points this many sizes from the origin onto it
 LENGTH_FIGURES = ("perimeter", "length", "width", "height")
 AREA_FIGURES = ("area", "projected_area")
 
@@ -52,6 +53,27 @@ class Units:
         if not np.isfinite(side) or side <= 0:
             side = 1.0
         return cls(centre, side)
+
+    @classmethod
+    def exact(cls, points: np.ndarray) -> Units:
+        """About unit size, exactly: the scale a power of two, and the points moved only when
+        farther than FAR_FROM_ORIGIN sizes from the origin. Both maps then round nothing, so a
+        computation at unit size gives a leaf of ordinary size and place the very same result
+        to the last bit, and one at 1e-90 or 1e300 no under- or overflow.
+
+        Parameters
+        ----------
+        points : (n, d) float array
+            Finite points, d = 2 or 3, at least one.
+        """
+        points = np.asarray(points, dtype=float)
+        lo, hi = points.min(axis=0), points.max(axis=0)
+        centre = lo / 2 + hi / 2
+        side = float(np.max(hi / 2 - lo / 2)) * 2
+        if not np.isfinite(side) or side <= 0:
+            return cls(np.zeros_like(centre), 1.0)
+        far = np.max(np.abs(centre)) > FAR_FROM_ORIGIN * side
+        return cls(centre if far else np.zeros_like(centre), float(2.0 ** np.round(np.log2(side))))
 
     def to_unit(self, points: np.ndarray) -> np.ndarray:
         return (np.asarray(points, dtype=float) - self.offset) / self.scale
