@@ -27,10 +27,14 @@ def make_window(qtbot, settings_path) -> MainWindow:
 def wait_result(qtbot, window: MainWindow, check=lambda outcome: True) -> object:
     """Wait until the worker is idle and the shown outcome passes `check`; return it."""
     qtbot.waitUntil(
-        lambda: window.outcome is not None and window.worker.is_idle() and check(window.outcome),
+        lambda: (
+            window.session.shown.outcome is not None
+            and window.worker.is_idle()
+            and check(window.session.shown.outcome)
+        ),
         timeout=WAIT_MS,
     )
-    return window.outcome
+    return window.session.shown.outcome
 
 
 def image_pixels(image: QImage) -> np.ndarray:

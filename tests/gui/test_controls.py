@@ -249,7 +249,7 @@ def test_a_typed_value_in_the_window_is_one_undo_step(window, qtbot):
     type_into(qtbot, window.panel.fields["k"], "14")
     outcome = wait_result(qtbot, window, lambda o: o.result.params.k == 14)
     assert outcome.result.params == FAST.with_(k=14)
-    assert window.undo_stack.undo_text() == "Change K"
+    assert window.session.history.undo_text() == "Change K"
     window.session.undo()
     assert window.panel.params().k == FAST.k and window.panel.fields["k"].text() == str(FAST.k)
     assert window.panel.k.maximum() == PARAMS["k"].panel_range[1]  # back to the declared range
@@ -430,7 +430,7 @@ def test_an_undo_while_a_slider_is_held_leaves_its_drag_no_base_from_before(wind
     assert history.index == 1 and history.steps[0].before is undone
     window.undo_action.trigger()
     assert session.state is undone
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
 
 
 def test_undo_to_auto_k_is_not_overridden_by_k_typed_and_not_applied(window, qtbot):
@@ -451,4 +451,4 @@ def test_undo_to_auto_k_is_not_overridden_by_k_typed_and_not_applied(window, qtb
     wait_result(qtbot, window, lambda o: o.result.params.k == "auto")
     qtbot.wait(THROTTLE_MS * 3)  # a change would have been sent by now
     assert window.session.params == FAST.with_(k="auto") and window.panel.auto_k.isChecked()
-    assert window.worker.is_idle() and window.outcome.result.params.k == "auto"
+    assert window.worker.is_idle() and window.session.shown.outcome.result.params.k == "auto"

@@ -18,7 +18,7 @@ from .test_sketch import click
 
 def leaf_fill(window: MainWindow) -> tuple[float, float]:
     """Share of the 3D view's width and height the mesh's points span on screen."""
-    xy = window.viewport.display_points(np.asarray(window.result.triangle_mesh.points)[::7])
+    xy = window.viewport.display_points(np.asarray(window.session.result.triangle_mesh.points)[::7])
     w, h = window.viewport.plotter.renderer.GetSize()
     return np.ptp(xy[:, 0]) / w, np.ptp(xy[:, 1]) / h
 
@@ -39,10 +39,10 @@ def test_the_sketch_view_holds_still_while_drawing_and_fit_shows_the_whole_leaf(
     before = view.transform()
     for xy in ellipse_clicks()[[0, 4, 8]]:
         click(qtbot, view, xy)
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     for xy in ellipse_clicks()[[2, 6, 10]]:
         click(qtbot, view, xy)
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     assert view.transform() == before  # no jump onto the first three points
     view.scale(3, 3)
     view.fit()
@@ -56,7 +56,7 @@ def test_each_demo_is_framed_and_a_parameter_change_keeps_the_camera(window, qtb
     wide, high = leaf_fill(window)
     assert max(wide, high) >= 0.6 and min(wide, high) >= 0.35, (wide, high)  # nested, in iso
     window.open_demo("parallel")
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     wide, high = leaf_fill(window)
     assert max(wide, high) >= 0.6 and min(wide, high) >= 0.35, (wide, high)
     window.viewport.plotter.camera.azimuth = 25.0  # the user turns the view
@@ -95,13 +95,13 @@ def test_a_new_vein_started_on_the_midrib_branches_and_never_selects(window, qtb
     for vein in veins[-2:]:
         assert len(vein) == 2
         assert np.linalg.norm(vein[0, :2] - midrib[3, :2]) < 0.02  # starts on the midrib
-    assert view.active == count + 1 and window.undo_stack.undo_text() == "Add point"
+    assert view.active == count + 1 and window.session.history.undo_text() == "Add point"
 
 
 def test_a_drag_that_crosses_the_boundary_is_red_and_keeps_the_last_mesh(window, qtbot):
     view = window.editor.view
     boundary = view.sketch.boundary
-    shown = window.result
+    shown = window.session.result
     mesh = window.viewport.plotter.actors["mesh"]
     points = np.asarray(mesh.mapper.dataset.points).copy()
     top = int(np.argmax(boundary[:, 1]))
@@ -111,35 +111,36 @@ def test_a_drag_that_crosses_the_boundary_is_red_and_keeps_the_last_mesh(window,
     QTest.mouseMove(view.viewport(), target)
     qtbot.waitUntil(lambda: len(view.crossings) > 0, timeout=10_000)
     assert "crosses itself" in window.status_text.text()
-    assert window.result is shown
+    assert window.session.result is shown
     np.testing.assert_array_equal(np.asarray(mesh.mapper.dataset.points), points)
     QTest.mouseMove(view.viewport(), press + QPoint(2, 0))
     QTest.mouseRelease(view.viewport(), Qt.MouseButton.LeftButton, pos=press + QPoint(2, 0))
     qtbot.waitUntil(lambda: len(view.crossings) == 0, timeout=10_000)
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
 
 
-def test_a_loaded_boundary_that_crosses_itself_is_refused_with_where(window, tmp_path):
+def test_a_loaded_boundary_that_crosses_itself_is_refused_with_where(window, qtbot, tmp_path):
     t = np.linspace(0, 2 * np.pi, 80, endpoint=False)
     path = tmp_path / "eight.csv"
     rows = np.column_stack([np.cos(t), 0.3 * np.sin(2 * t), np.zeros(80)])
     path.write_text("\n".join(",".join(f"{v:.6f}" for v in row) for row in rows) + "\n")
-    leaf = window.doc.leaf
-    assert not window.open_path(str(path))
+    leaf = window.session.state.leaf
+    with qtbot.waitSignal(window.failure_shown, timeout=30_000):
+        window.open_path(str(path))  # read off the main thread
     assert "crosses itself near" in window.last_error_box.text()
-    assert window.doc.leaf is leaf
+    assert window.session.state.leaf is leaf
     window.last_error_box.close()
 
 
 def test_vein_colours_match_between_the_views(window):
     names = window.viewport.actor_names("points")
-    for i in range(len(window.result.leaf.veins)):
+    for i in range(len(window.session.result.leaf.veins)):
         actor = window.viewport.plotter.actors[f"points:vein{i}"]
         assert f"points:vein{i}" in names
         expected = QColor(vein_color(i))
         got = [round(c * 255) for c in actor.prop.color.float_rgb]
         assert got == [expected.red(), expected.green(), expected.blue()]
-    assert len(window.editor.view.sketch.veins) == len(window.result.leaf.veins)
+    assert len(window.editor.view.sketch.veins) == len(window.session.result.leaf.veins)
 
 
 def test_a_parameter_change_is_undone_and_redone_with_ctrl_y(window, qtbot):
@@ -163,7 +164,7 @@ def test_a_new_result_updates_the_drawn_actors_in_place(window, qtbot):
     wait_result(qtbot, window, lambda o: o.result.params.seed == window.panel.seed.value())
     assert window.viewport.plotter.actors["mesh"] is mesh  # no new actor, mapper or lookup table
     assert window.viewport.plotter.actors["points:vein0"] is vein
-    assert mesh.mapper.dataset.n_points == window.result.mesh.n_points
+    assert mesh.mapper.dataset.n_points == window.session.result.mesh.n_points
 
 
 def test_point_sizes_follow_the_pixel_ratio(window, qtbot, monkeypatch):
@@ -207,16 +208,16 @@ def test_mirror_editing_adds_the_reflected_point_and_a_profile_is_one_step(windo
     boundary = view.sketch.boundary
     assert len(boundary) == 6  # the two off-axis clicks gained mirror images
     assert np.isclose(boundary[:, 1].min(), -0.15, atol=0.01)
-    steps = window.undo_stack.count()
+    steps = window.session.history.count()
     window.editor.curve.setCurrentIndex(1)
     window.editor.curve.activated.emit(1)
     window.editor.profile_start.setValue(0.06)
     window.editor.profile_end.setValue(0.01)
     qtbot.mouseClick(window.editor.profile, Qt.MouseButton.LeftButton)
     np.testing.assert_allclose(view.sketch.veins[0][:, 2], [0.06, 0.01])
-    assert window.undo_stack.count() == steps + 1
-    assert window.undo_stack.undo_text() == "Vein profile"
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    assert window.session.history.count() == steps + 1
+    assert window.session.history.undo_text() == "Vein profile"
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
 
 
 def test_a_scan_opened_after_another_is_framed_on_its_own_blade(window, qtbot, tmp_path):
@@ -232,7 +233,7 @@ def test_a_scan_opened_after_another_is_framed_on_its_own_blade(window, qtbot, t
         path = write_points(tmp_path / f"scan{i}.txt", rows)
         window.session.history.set_clean()
         assert window.open_path(path)
-        qtbot.waitUntil(lambda p=path: window.path == p, timeout=60_000)
-        wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+        qtbot.waitUntil(lambda p=path: window.session.state.path == p, timeout=60_000)
+        wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
         wide, high = leaf_fill(window)
         assert max(wide, high) >= 0.6 and min(wide, high) >= 0.35, (i, wide, high)

@@ -183,4 +183,3 @@ def test_a_pose_seen_side_on_is_said_under_the_pose_and_goes_with_a_milder_one(
     panel.fold.setValue(20.0)
     panel.choose_now()
     assert not panel.pose_note.isVisibleTo(panel)
-

@@ -31,7 +31,7 @@ def test_a_camera_keeping_the_bottom_free_frames_the_blade_above_it(name):
 
 def _display_heights(window) -> np.ndarray:
     """Display y of the mesh's points as a share of the view's height (0 at its bottom)."""
-    points = np.asarray(window.result.triangle_mesh.points)[::5]
+    points = np.asarray(window.session.result.triangle_mesh.points)[::5]
     height = window.viewport.plotter.renderer.GetSize()[1]
     return window.viewport.display_points(points)[:, 1] / height
 
@@ -40,21 +40,19 @@ def test_the_leaf_is_framed_clear_of_the_height_colour_bar(window, qtbot):
     assert window.viewport.plotter.scalar_bars  # the height bar along the bottom
     for name in ("nested", "parallel"):
         window.open_demo(name)
-        wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+        wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
         assert np.quantile(_display_heights(window), 0.01) >= BAR_BAND - 0.01, name
 
 
-def test_a_drawn_leaf_gets_the_iso_view_of_the_whole_leaf_unless_the_user_turned_it(
-    window, qtbot
-):
+def test_a_drawn_leaf_gets_the_iso_view_of_the_whole_leaf_unless_the_user_turned_it(window, qtbot):
     window.new_sketch()
     view = window.editor.view
     for xy in ellipse_clicks()[[0, 4, 8]]:  # a sliver first: its own best iso
         click(qtbot, view, xy)
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     for xy in ellipse_clicks()[[1, 2, 3, 5, 6, 7, 9, 10, 11]]:
         click(qtbot, view, xy)
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     plotter = window.viewport.plotter
     grown = camera(window)
     window.viewport.camera("iso")  # what the Iso button shows for the whole leaf
@@ -65,12 +63,12 @@ def test_a_drawn_leaf_gets_the_iso_view_of_the_whole_leaf_unless_the_user_turned
     window.new_sketch()  # again, but the user turns the view after the sliver
     for xy in ellipse_clicks()[[0, 4, 8]]:
         click(qtbot, view, xy)
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     plotter.camera.azimuth = 40.0
     turned = np.asarray(plotter.camera.position) - np.asarray(plotter.camera.focal_point)
     for xy in ellipse_clicks()[[1, 2, 3, 5, 6, 7, 9, 10, 11]]:
         click(qtbot, view, xy)
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     now = np.asarray(plotter.camera.position) - np.asarray(plotter.camera.focal_point)
     cosine = now @ turned / np.linalg.norm(now) / np.linalg.norm(turned)
     assert cosine > 1 - 1e-9  # the user's direction kept, the leaf refitted along it

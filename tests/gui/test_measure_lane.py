@@ -151,7 +151,7 @@ def test_in_the_window_a_failed_request_leaves_the_shown_result_measured(
         lambda: window.worker.is_idle() and window.session.shown.measured_id == shown,
         timeout=WAIT_MS,
     )
-    assert window.session.shown_id == shown and window.result.params.k == 5
+    assert window.session.shown_id == shown and window.session.result.params.k == 5
     assert (
         window.status_text.text().startswith("Failed:") and "one line" in window.status_text.text()
     )

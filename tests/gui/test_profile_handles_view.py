@@ -285,23 +285,23 @@ def test_in_the_window_a_drag_a_nudge_and_a_removal_are_undo_steps_that_bring_ba
     window.activateWindow()
     qtbot.waitUntil(window.isActiveWindow)
     original, pixel = view.sketch.veins[0][:, 2].copy(), height_per_pixel(side)
-    steps = window.undo_stack.count()
+    steps = window.session.history.count()
     QTest.mousePress(side, Qt.MouseButton.LeftButton, pos=spot(side, 2))
     QTest.mouseMove(side, spot(side, 2) + QPoint(0, -1))
     QTest.mouseRelease(side, Qt.MouseButton.LeftButton, pos=spot(side, 2) + QPoint(0, -1))
-    assert window.undo_stack.count() == steps + 1
+    assert window.session.history.count() == steps + 1
     assert 0 < np.abs(view.sketch.veins[0][:, 2] - original).max() <= 1.01 * pixel
     assert side.hasFocus() and side.selected == 2
     QTest.keyClick(side, Qt.Key.Key_Up)
-    assert window.undo_stack.count() == steps + 2
-    assert window.undo_stack.undo_text() == "Vein profile"
-    assert window.doc.sketch is view.sketch  # the session holds what the editor shows
+    assert window.session.history.count() == steps + 2
+    assert window.session.history.undo_text() == "Vein profile"
+    assert window.session.state.sketch is view.sketch  # the session holds what the editor shows
     assert side.selected == 2  # still chosen: the next press goes on from it
     nudged, handles = view.sketch.veins[0][:, 2].copy(), side.profile.t.copy()
     QTest.keyClick(side, Qt.Key.Key_Delete)
-    assert window.undo_stack.count() == steps + 3 and len(side.profile.t) == len(handles) - 1
+    assert window.session.history.count() == steps + 3 and len(side.profile.t) == len(handles) - 1
     assert not np.array_equal(view.sketch.veins[0][:, 2], nudged)
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     window.session.undo()
     np.testing.assert_array_equal(view.sketch.veins[0][:, 2], nudged)
     np.testing.assert_array_equal(side.profile.t, handles)  # the removed handle is back
@@ -310,7 +310,7 @@ def test_in_the_window_a_drag_a_nudge_and_a_removal_are_undo_steps_that_bring_ba
     for _ in range(3):
         window.session.undo()
     np.testing.assert_array_equal(view.sketch.veins[0][:, 2], original)
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
 
 
 # --- review s3 finding 3: an undo or redo during an edit of the side view -------------------------
@@ -322,7 +322,7 @@ def press_key(widget: QWidget, kind: QEvent.Type, key: Qt.Key, repeat: bool = Fa
 def on_the_midrib(window, qtbot) -> ProfileView:
     """K made 5 (one "Change K" step), the midrib chosen, handle 2 selected, keys to the view."""
     window.session.set_params(window.session.params.with_(k=5))
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     window.editor.curve.setCurrentIndex(1)
     window.editor.curve.activated.emit(1)
     window.activateWindow()
@@ -352,7 +352,7 @@ def test_an_undo_while_up_is_held_ends_the_run_and_the_next_step_starts_after_it
     assert history.index == 1 and history.steps[0].before is undone
     window.undo_action.trigger()
     assert session.state is undone and session.params.k == 3  # was K 5: the undone change
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
 
 
 @pytest.mark.parametrize("move", ["undo", "redo"])
@@ -380,7 +380,7 @@ def test_an_undo_or_redo_during_a_handle_drag_drops_the_drag(window, qtbot, move
     assert history.steps[history.index - 1].before is moved_to
     window.undo_action.trigger()
     assert session.state is moved_to
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
 
 
 @pytest.mark.parametrize("how", ["keys", "drag"])

@@ -30,7 +30,7 @@ def test_a_new_result_is_rendered_once(window, qtbot):
     qtbot.wait(300)  # time for any render queued behind it
     assert len(renders) == 1
     label = window.viewport.plotter.actors["k_label"]
-    assert label.input == f"K = {window.outcome.result.chosen_k}"
+    assert label.input == f"K = {window.session.shown.outcome.result.chosen_k}"
 
 
 def test_the_k_label_is_one_text_actor_updated_in_place(window, qtbot):
@@ -39,7 +39,7 @@ def test_the_k_label_is_one_text_actor_updated_in_place(window, qtbot):
     window.panel.k.setValue(5)
     wait_result(qtbot, window, lambda o: o.result.params.k == 5)
     assert plotter.actors["k_label"] is label  # not made anew (nor its font fitted anew)
-    assert label.input == f"K = {window.outcome.result.chosen_k}"
+    assert label.input == f"K = {window.session.shown.outcome.result.chosen_k}"
 
 
 def test_a_result_is_measured_once_drawn_and_not_when_a_newer_one_waits(qtbot):
@@ -190,7 +190,7 @@ def test_no_measuring_while_a_slider_is_held(window, qtbot, monkeypatch):
     window.worker.done.connect(lambda kind, *_: kind == PIPELINE and measured.append(1))
     monkeypatch.setattr(window.panel, "is_dragging", lambda: True)
     window.panel.k.setValue(5)
-    qtbot.waitUntil(lambda: window.outcome.result.params.k == 5, timeout=WAIT_MS)
+    qtbot.waitUntil(lambda: window.session.shown.outcome.result.params.k == 5, timeout=WAIT_MS)
     qtbot.wait(300)  # drawn by now, and not measured
     assert measured == [] and not window.worker.is_idle()
     monkeypatch.setattr(window.panel, "is_dragging", lambda: False)

@@ -59,10 +59,10 @@ def wait_fidelity(qtbot, window: MainWindow) -> dict[str, str]:
     """Wait until the shown result's scan distances are in the panel; return their rows."""
     qtbot.waitUntil(
         lambda: (
-            window.fidelity is not None
-            and window.fidelity[0] == window.session.last_id
-            and window.result is not None
-            and window.result.leaf is window.doc.leaf
+            window.session.shown.fidelity is not None
+            and window.session.shown.fidelity[0] == window.session.last_id
+            and window.session.result is not None
+            and window.session.result.leaf is window.session.state.leaf
             and bool(panel_section(window, FIDELITY))
         ),
         timeout=WAIT_MS,
@@ -98,24 +98,27 @@ def scan_window(qtbot, tmp_path, monkeypatch):
 
 def test_a_scan_opens_as_an_editable_leaf_with_its_points_and_distances(scan_window, qtbot):
     window = scan_window
-    extracted = window.scan.extraction.leaf
-    assert window.doc.leaf is extracted and window.path.endswith("scan.txt")
+    extracted = window.session.state.scan.extraction.leaf
+    assert window.session.state.leaf is extracted and window.session.state.path.endswith("scan.txt")
     assert window.extract_threads and threading.main_thread().ident not in window.extract_threads
-    assert window.result.mesh.n_points > 100 and "mesh" in window.viewport.plotter.actors
+    assert window.session.result.mesh.n_points > 100 and "mesh" in window.viewport.plotter.actors
     sketch = window.editor.view.sketch
     assert len(sketch.boundary) >= 3 and len(sketch.veins) == len(extracted.veins) >= 1
 
     rows = wait_fidelity(qtbot, window)
-    assert int(rows["Points"]) == window.scan.extraction.blade.sum() > 500
+    assert int(rows["Points"]) == window.session.state.scan.extraction.blade.sum() > 500
     mean, top = float(rows["Mean"]), float(rows["Max"])
-    assert 0 < mean < 0.01 * window.result.length and mean <= top
+    assert 0 < mean < 0.01 * window.session.result.length and mean <= top
     assert rows["Beyond 2% of length"].endswith("%")
     assert window.measurements.topLevelItem(0).text(0) == FIDELITY  # shown first
     assert panel_section(window, "Scan → mesh distance (all points)")
 
     actors = window.viewport.plotter.actors
     assert actors["scan:blade"].GetVisibility()
-    assert actors["scan:blade"].mapper.dataset.n_points == window.scan.extraction.blade.sum()
+    assert (
+        actors["scan:blade"].mapper.dataset.n_points
+        == window.session.state.scan.extraction.blade.sum()
+    )
     layer_item(window, "scan").setCheckState(Qt.CheckState.Unchecked)
     assert not actors["scan:blade"].GetVisibility()
     layer_item(window, "scan").setCheckState(Qt.CheckState.Checked)
@@ -124,16 +127,16 @@ def test_a_scan_opens_as_an_editable_leaf_with_its_points_and_distances(scan_win
     view = window.editor.view  # an edit: a new leaf, a new mesh, its distances recomputed
     view.selected = (-1, 0)
     view.delete_selected()
-    assert window.isWindowModified() and window.doc.leaf is not extracted
+    assert window.isWindowModified() and window.session.state.leaf is not extracted
     wait_fidelity(qtbot, window)
-    assert window.scan is not None and window.undo_stack.canUndo()
-    window.undo_stack.undo()
-    assert window.doc.leaf is extracted
+    assert window.session.state.scan is not None and window.session.history.can_undo()
+    window.session.history.undo()
+    assert window.session.state.leaf is extracted
     wait_fidelity(qtbot, window)
 
 
 def test_a_bad_scan_shows_a_dialog_and_keeps_the_mesh(window, qtbot, tmp_path):
-    leaf, mesh = window.doc.leaf, window.result.mesh
+    leaf, mesh = window.session.state.leaf, window.session.result.mesh
     line = np.column_stack([np.linspace(0, 1, 80), np.zeros((80, 2)), np.ones((80, 3))])
     for name, path in (
         ("line.txt", write_points(tmp_path / "line.txt", line)),  # read, but no blade in it
@@ -145,7 +148,11 @@ def test_a_bad_scan_shows_a_dialog_and_keeps_the_mesh(window, qtbot, tmp_path):
         box = window.last_error_box
         assert box.isVisible() and name in box.text()
         box.close()
-        assert window.doc.leaf is leaf and window.result.mesh is mesh and window.scan is None
+        assert (
+            window.session.state.leaf is leaf
+            and window.session.result.mesh is mesh
+            and window.session.state.scan is None
+        )
         assert "mesh" in window.viewport.plotter.actors
 
 
@@ -157,8 +164,8 @@ def test_the_poisson_layer_appears_beside_our_mesh_when_switched_on(window, qtbo
     actor = window.viewport.plotter.actors["poisson"]
     assert actor.GetVisibility() and actor.prop.opacity < 1
     assert len(threads) == 1 and threads[0] != threading.main_thread().ident
-    side = window.result.frame.v
-    ours = np.asarray(window.result.mesh.points) @ side
+    side = window.session.result.frame.v
+    ours = np.asarray(window.session.result.mesh.points) @ side
     theirs = np.asarray(actor.mapper.dataset.points) @ side
     assert theirs.min() > ours.max()  # beside ours, not over it
     window.panel.k.setValue(4)  # same leaf: the surface stays
@@ -184,7 +191,11 @@ def test_a_scan_still_being_read_is_superseded_by_a_later_open(window, qtbot, tm
     path = write_points(tmp_path / "scan.txt", synthetic_scan())
     assert window.open_path(path)
     window.open_demo("parallel")  # opened before the scan is read: the demo stays
-    demo_leaf = window.doc.leaf
-    qtbot.waitUntil(window.tasks.is_idle, timeout=WAIT_MS)
+    demo_leaf = window.session.state.leaf
+    qtbot.waitUntil(window.worker.is_idle, timeout=WAIT_MS)
     wait_result(qtbot, window, lambda o: o.result.leaf is demo_leaf)
-    assert window.doc.leaf is demo_leaf and window.scan is None and window.path is None
+    assert (
+        window.session.state.leaf is demo_leaf
+        and window.session.state.scan is None
+        and window.session.state.path is None
+    )

@@ -34,40 +34,40 @@ def test_sketching_with_clicks_gives_a_mesh(window, qtbot):
     sketch = window.editor.view.sketch
     assert sketch.boundary.shape == (10, 2) and len(sketch.veins) == 1
     assert sketch.veins[0].shape == (4, 3) and np.all(sketch.veins[0][:, 2] > 0)
-    outcome = wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    outcome = wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     mesh = outcome.result.mesh
     assert mesh.n_points > 100
     assert mesh.point_data["height"].max() > 0.5 * sketch.veins[0][:, 2].max()
     xy = np.asarray(mesh.points)[:, :2]
     assert 0.03 < xy[:, 0].min() < 0.1 and 0.9 < xy[:, 0].max() < 0.97  # the clicked ellipse
-    assert window.undo_stack.count() == 14  # 10 + 4: a vein exists from its first point
+    assert window.session.history.count() == 14  # 10 + 4: a vein exists from its first point
 
 
 def test_undo_and_redo_every_edit(window, qtbot):
     sketch_leaf(qtbot, window)
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
-    full = window.doc.leaf
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
+    full = window.session.state.leaf
     assert window.undo_action.shortcut() == QKeySequence(QKeySequence.StandardKey.Undo)
     assert window.redo_action.shortcut() == QKeySequence(QKeySequence.StandardKey.Redo)
     window.undo_action.trigger()
     assert window.editor.view.sketch.veins[0].shape == (3, 3)
-    outcome = wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    outcome = wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     assert outcome.result.leaf is not full
     for _ in range(3):
-        window.undo_stack.undo()
+        window.session.history.undo()
     assert window.editor.view.sketch.boundary.shape == (10, 2)
     assert window.editor.view.sketch.veins == ()  # no empty vein is kept
-    window.undo_stack.redo()  # the vein with its first point
+    window.session.history.redo()  # the vein with its first point
     window.redo_action.trigger()
     assert window.editor.view.sketch.veins[0].shape == (2, 3)
-    while window.undo_stack.canRedo():
-        window.undo_stack.redo()
-    np.testing.assert_allclose(window.doc.leaf.vein_points, full.vein_points)
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    while window.session.history.can_redo():
+        window.session.history.redo()
+    np.testing.assert_allclose(window.session.state.leaf.vein_points, full.vein_points)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
 
 
 def test_dragging_a_point_of_a_loaded_leaf_updates_live_and_undoes_to_the_original(window, qtbot):
-    original = window.doc.leaf
+    original = window.session.state.leaf
     view = window.editor.view
     tip = int(np.argmax(view.sketch.boundary[:, 0]))
     start = view.sketch.boundary[tip].copy()
@@ -79,15 +79,17 @@ def test_dragging_a_point_of_a_loaded_leaf_updates_live_and_undoes_to_the_origin
         QTest.mouseMove(view.viewport(), press + QPoint(12 * step, 0))
         qtbot.waitUntil(lambda: window.worker.is_idle(), timeout=60_000)
     QTest.mouseRelease(view.viewport(), Qt.MouseButton.LeftButton, pos=press + QPoint(60, 0))
-    outcome = wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    outcome = wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     assert len(shown) >= 3  # the 3D view followed the drag
-    assert window.undo_stack.count() == 1 and window.undo_stack.undoText() == "Move point"
+    assert (
+        window.session.history.count() == 1 and window.session.history.undo_text() == "Move point"
+    )
     moved = view.sketch.boundary[tip]
     assert moved[0] > start[0] + 1e-3
     length = np.ptp(np.asarray(outcome.result.mesh.points)[:, 0])  # the tip moved outward
     assert length > np.ptp(original.boundary[:, 0]) + 1e-3
-    window.undo_stack.undo()
-    assert window.doc.leaf is original
+    window.session.history.undo()
+    assert window.session.state.leaf is original
     wait_result(qtbot, window, lambda o: o.result.leaf is original)
 
 
@@ -100,7 +102,7 @@ def test_right_click_deletes_and_height_spin_box_sets_a_vein_height(window, qtbo
     assert view.selected == (0, 2) and window.editor.height.isEnabled()
     window.editor.height.setValue(0.08)
     assert view.sketch.veins[0][2, 2] == 0.08
-    assert window.undo_stack.count() == 2
+    assert window.session.history.count() == 2
     assert view.selected[0] != BOUNDARY
 
 
@@ -110,7 +112,7 @@ def test_an_undo_during_a_point_drag_drops_the_drag(window, qtbot):
     before it); the next drag's step starts from the state the undo made."""
     session, history, view = window.session, window.session.history, window.editor.view
     session.set_params(session.params.with_(k=5))  # "Change K": 3 -> 5
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     tip = int(np.argmax(view.sketch.boundary[:, 0]))
     press = view.view_point(view.sketch.boundary[tip]).toPoint()
     QTest.mousePress(view.viewport(), Qt.MouseButton.LeftButton, pos=press)
@@ -128,7 +130,7 @@ def test_an_undo_during_a_point_drag_drops_the_drag(window, qtbot):
     assert history.index == 1 and history.undo_text() == "Move point"
     window.undo_action.trigger()
     assert session.state is undone  # was K 5: the undone change came back
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
 
 
 def test_an_undo_that_removes_the_dragged_point_ends_the_drag_without_an_error(window, qtbot):
@@ -145,4 +147,4 @@ def test_an_undo_that_removes_the_dragged_point_ends_the_drag_without_an_error(w
     QTest.mouseMove(view.viewport(), press + QPoint(0, 20))
     QTest.mouseRelease(view.viewport(), Qt.MouseButton.LeftButton, pos=press + QPoint(0, 20))
     assert window.session.state is undone and history.index == steps
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)

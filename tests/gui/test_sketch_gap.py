@@ -25,13 +25,14 @@ def never_done(window) -> None:
     window.session.submit = lambda leaf, params, interrupt: 10**9
 
 
-def open_parallel(window, tmp_path, how: str) -> None:
+def open_parallel(window, qtbot, tmp_path, how: str) -> None:
     if how == "demo":
         window.open_demo("parallel")
     else:
         path = tmp_path / "parallel.leaf.json"
         save_leaf(demo("parallel"), path)
-        assert window.open_path(str(path))
+        assert window.open_path(str(path))  # read off the main thread
+        qtbot.waitUntil(lambda: window.session.state.path == str(path), timeout=30_000)
 
 
 @pytest.mark.parametrize("how", ["demo", "file"])
@@ -42,7 +43,7 @@ def test_a_click_before_the_new_leafs_sketch_arrives_leaves_the_new_document_alo
     old = view.sketch
     assert len(old.boundary) >= 3
     never_done(window)
-    open_parallel(window, tmp_path, how)
+    open_parallel(window, qtbot, tmp_path, how)
     opened = session.state
     assert opened.sketch is None
     for xy in (old.boundary[0], old.boundary.mean(axis=0), (0.3, 0.1)):
@@ -54,7 +55,7 @@ def test_a_click_before_the_new_leafs_sketch_arrives_leaves_the_new_document_alo
 
 def test_the_editor_takes_the_new_leafs_sketch_with_its_first_result(window, qtbot, tmp_path):
     session, view = window.session, window.editor.view
-    open_parallel(window, tmp_path, "file")
+    open_parallel(window, qtbot, tmp_path, "file")
     opened = session.state
     wait_result(qtbot, window, lambda o: o.result.leaf is opened.leaf)
     assert window.editor.isEnabled() and not window.editor.waiting.isVisible()
@@ -63,7 +64,7 @@ def test_the_editor_takes_the_new_leafs_sketch_with_its_first_result(window, qtb
     click(qtbot, view, view.sketch.boundary[tip] + (0.05, 0.0))  # an edit of the new leaf
     assert session.history.count() == 1 and session.state.sketch is not None
     assert len(session.state.sketch.boundary) == len(session.derived.boundary) + 1
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
 
 
 def test_a_new_sketch_is_editable_at_once_and_a_failed_open_gives_back_the_old_sketch(
@@ -89,7 +90,7 @@ def test_an_undo_back_to_a_loaded_leaf_of_another_document_waits_for_its_sketch(
     session, view = window.session, window.editor.view
     nested = session.state
     session.new_document(demo("parallel"), title="parallel")  # as the Forms gallery does
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     parallel = view.sketch
     never_done(window)
     window.undo_action.trigger()

@@ -54,7 +54,7 @@ def test_a_new_document_starts_with_no_point_selected_on_the_boundary(window, qt
     assert view.active == 1 and view.selected == (1, 1)
     window.session.history.set_clean()
     window.open_demo("nested")
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     assert view.active == BOUNDARY and view.selected is None
     assert window.editor.curve.currentIndex() == 0
 

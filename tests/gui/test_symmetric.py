@@ -124,19 +124,22 @@ def test_in_the_window_mirror_is_saved_reopened_and_undone(window, qtbot, tmp_pa
     sketch_leaf(qtbot, window)
     editor = window.editor
     editor.mirror.setChecked(True)
-    assert window.session.state.sketch.symmetric and window.is_modified()
-    assert window.undo_stack.undo_text() == "Mirror on"
+    assert window.session.state.sketch.symmetric and window.session.is_modified()
+    assert window.session.history.undo_text() == "Mirror on"
     path = tmp_path / "drawn.leaf.json"
     assert window.save_to(str(path))
     editor.mirror.setChecked(False)  # a later change, not saved
-    assert window.is_modified() and not window.session.state.sketch.symmetric
+    assert window.session.is_modified() and not window.session.state.sketch.symmetric
     window.session.undo()
-    assert editor.mirror.isChecked() and not window.is_modified()  # the checkbox follows undo
+    assert (
+        editor.mirror.isChecked() and not window.session.is_modified()
+    )  # the checkbox follows undo
     editor.mirror.setChecked(False)
     assert window.open_path(str(path))
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    qtbot.waitUntil(lambda: window.session.state.path == str(path), timeout=30_000)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     assert editor.mirror.isChecked() and editor.view.mirror
-    assert window.session.state.sketch.symmetric and not window.is_modified()
+    assert window.session.state.sketch.symmetric and not window.session.is_modified()
     window.new_sketch()  # a new drawing starts with Mirror off
     assert not editor.mirror.isChecked()
 

@@ -43,7 +43,7 @@ def test_the_texture_colouring_shows_what_an_export_writes(window, qtbot, tmp_pa
     from PySide6.QtWidgets import QFileDialog, QInputDialog
 
     image = _show_texture(window, qtbot)
-    result = window.result
+    result = window.session.result
     assert image.shape == (1024, 1024, 4)
     glb = tmp_path / "leaf.glb"
     assert window.save_mesh(str(glb))  # the leaf's texture: the generated one
@@ -116,9 +116,10 @@ def photo(tmp_path):
 def _open(window, qtbot, path) -> None:
     assert window.open_path(str(path))
     qtbot.waitUntil(
-        lambda: window.doc.leaf is not None and window.path == str(path), timeout=WAIT_MS
+        lambda: window.session.state.leaf is not None and window.session.state.path == str(path),
+        timeout=WAIT_MS,
     )
-    wait_result(qtbot, window, lambda outcome: outcome.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda outcome: outcome.result.leaf is window.session.state.leaf)
 
 
 def test_a_photo_leaf_keeps_its_photo_through_save_reopen_and_export(
@@ -130,7 +131,7 @@ def test_a_photo_leaf_keeps_its_photo_through_save_reopen_and_export(
 
     _open(window, qtbot, photo)
     image = _show_texture(window, qtbot)
-    expected = np.asarray(base_color(window.result, window.doc.photo.texture()))
+    expected = np.asarray(base_color(window.session.result, window.session.state.photo.texture()))
     np.testing.assert_array_equal(image, expected)
     inside = image[..., 3] == 255
     assert np.all(np.abs(np.median(image[inside][:, :3], axis=0) - (62, 118, 44)) <= 12)
@@ -138,13 +139,13 @@ def test_a_photo_leaf_keeps_its_photo_through_save_reopen_and_export(
     project = tmp_path / "projects" / "oak.leaf.json"
     project.parent.mkdir()
     assert window.save_to(str(project))
-    leaf = window.doc.leaf
+    leaf = window.session.state.leaf
     window.open_demo("nested")  # another leaf, then the project again
-    wait_result(qtbot, window, lambda outcome: window.doc.photo is None)
+    wait_result(qtbot, window, lambda outcome: window.session.state.photo is None)
     with qtbot.waitSignal(window.texture_shown, timeout=WAIT_MS):
         _open(window, qtbot, project)
-    assert window.doc.photo.image == photo.resolve()
-    np.testing.assert_allclose(window.doc.leaf.boundary, leaf.boundary)
+    assert window.session.state.photo.image == photo.resolve()
+    np.testing.assert_allclose(window.session.state.leaf.boundary, leaf.boundary)
     np.testing.assert_array_equal(window.viewport.texture_actor_image(), expected)
 
     offered = {}
@@ -167,19 +168,21 @@ def test_a_missing_photo_is_said_and_the_generated_texture_shown(window, qtbot, 
     _open(window, qtbot, photo)
     project = tmp_path / "oak.leaf.json"
     assert window.save_to(str(project))
-    leaf = window.doc.leaf
+    leaf = window.session.state.leaf
     shutil.move(photo, tmp_path / "elsewhere.png")
     window.open_demo("nested")
-    wait_result(qtbot, window, lambda outcome: window.doc.photo is None)
+    wait_result(qtbot, window, lambda outcome: window.session.state.photo is None)
     with qtbot.waitSignal(window.notice_shown, timeout=WAIT_MS) as notice:
         assert window.open_path(str(project))
     assert "missing" in notice.args[0] and "oak.png" in notice.args[0]
     assert "missing" in window.last_error_box.text()
     window.last_error_box.close()
-    wait_result(qtbot, window, lambda outcome: outcome.result.leaf is window.doc.leaf)
-    np.testing.assert_allclose(window.doc.leaf.boundary, leaf.boundary)  # the leaf is there
+    wait_result(qtbot, window, lambda outcome: outcome.result.leaf is window.session.state.leaf)
+    np.testing.assert_allclose(
+        window.session.state.leaf.boundary, leaf.boundary
+    )  # the leaf is there
     image = _show_texture(window, qtbot)
-    np.testing.assert_array_equal(image, np.asarray(base_color(window.result, "auto")))
+    np.testing.assert_array_equal(image, np.asarray(base_color(window.session.result, "auto")))
     assert window.save_to(str(project))  # the photo's place is kept for when it comes back
     assert '"oak.png"' in project.read_text() or "photos/oak.png" in project.read_text()
     assert not window.save_mesh(str(tmp_path / "x.glb"), texture="photo")  # said, not written
@@ -201,7 +204,7 @@ def test_an_unreadable_photo_is_said_and_the_generated_one_shown(window, qtbot, 
     window.last_error_box.close()
     qtbot.waitUntil(lambda: window.viewport.texture_key is not None, timeout=WAIT_MS)
     assert window.viewport.texture_key[0] == ("auto",)
-    generated = np.asarray(base_color(window.result, "auto"))
+    generated = np.asarray(base_color(window.session.result, "auto"))
     np.testing.assert_array_equal(window.viewport.texture_actor_image(), generated)
 
 

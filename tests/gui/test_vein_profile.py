@@ -135,7 +135,7 @@ def test_dragging_a_handle_in_the_side_view_sets_the_veins_heights_and_one_undo_
     side = editor.profile_view
     assert side.isVisible() and side.profile is not None and side.vein == 0
     before = view.sketch.veins[0][:, 2].copy()
-    steps = window.undo_stack.count()
+    steps = window.session.history.count()
     handle = len(side.profile.t) // 2
     press = side.to_view(side.profile.t[handle], side.profile.h[handle]).toPoint()
     assert side.handle_at(press) == handle
@@ -149,16 +149,18 @@ def test_dragging_a_handle_in_the_side_view_sets_the_veins_heights_and_one_undo_
     assert len(previews) == 3  # the 3D view followed the drag live
     assert after.max() > before.max() + 1e-6  # dragged up: the vein rose
     assert np.count_nonzero(~np.isclose(after, before, rtol=0, atol=1e-12)) >= 2  # whole vein
-    assert window.doc.sketch is view.sketch  # the session holds what the editor shows
-    assert window.undo_stack.count() == steps + 1
-    assert window.undo_stack.undo_text() == "Vein profile"
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)  # the 3D view caught up
+    assert window.session.state.sketch is view.sketch  # the session holds what the editor shows
+    assert window.session.history.count() == steps + 1
+    assert window.session.history.undo_text() == "Vein profile"
+    wait_result(
+        qtbot, window, lambda o: o.result.leaf is window.session.state.leaf
+    )  # the 3D view caught up
     window.session.undo()
     np.testing.assert_array_equal(view.sketch.veins[0][:, 2], before)
     fresh = Profile.of_vein(view.sketch.vein_fractions(0), before)  # handles kept, on the heights
     np.testing.assert_allclose(side.profile.t, fresh.t, rtol=0, atol=1e-12)
     np.testing.assert_allclose(side.profile.h, fresh.h, rtol=0, atol=1e-12)
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
 
 
 def test_the_side_view_follows_a_dark_palette(window):
@@ -183,7 +185,7 @@ def test_with_mirror_on_a_side_veins_profile_and_a_click_follow_the_bent_midrib(
     editor.mirror.setChecked(True)
     choose_vein(window, 1)  # the side vein; vein 3 is its mirror image
     side = editor.profile_view
-    steps = window.undo_stack.count()
+    steps = window.session.history.count()
     press = side.to_view(side.profile.t[0], side.profile.h[0]).toPoint()
     QTest.mousePress(side, Qt.MouseButton.LeftButton, pos=press)
     QTest.mouseMove(side, press + QPoint(0, -25))
@@ -191,7 +193,7 @@ def test_with_mirror_on_a_side_veins_profile_and_a_click_follow_the_bent_midrib(
     veins = view.sketch.veins
     assert veins[1][0, 2] > bent.veins[1][0, 2] + 1e-6
     np.testing.assert_allclose(veins[2][:, 2], veins[1][:, 2])  # the mirror vein followed
-    assert window.undo_stack.count() == steps + 1
+    assert window.session.history.count() == steps + 1
     choose_vein(window, -1)  # the boundary: a click beside the bent midrib gains its mirror
     midrib = view.sketch.vein_curve(0)
     spot = np.array([0.5, 0.27])  # between two boundary points, above the midrib's lowest
@@ -203,4 +205,4 @@ def test_with_mirror_on_a_side_veins_profile_and_a_click_follow_the_bent_midrib(
     assert offsets[0] * offsets[1] < 0  # one on each side of the midrib's curve
     far = distance_to(midrib, added)
     assert np.isclose(far[0], far[1], rtol=0.02)
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)

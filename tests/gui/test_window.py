@@ -37,7 +37,7 @@ def mesh_actor_points(window: MainWindow) -> np.ndarray:
 
 
 def test_the_demo_result_appears(window, qtbot):
-    result = window.result
+    result = window.session.result
     assert result is not None and result.mesh.n_points > 100
     assert "mesh" in window.viewport.plotter.actors
     assert len(mesh_actor_points(window)) == result.mesh.n_points
@@ -66,8 +66,8 @@ def test_a_slider_storm_runs_a_few_times_and_shows_the_last_value(window, qtbot,
     qtbot.waitUntil(lambda: window.session.params.k == values[-1], timeout=5_000)
     wait_result(qtbot, window, lambda o: o.request.id == window.session.last_id)
     assert 1 <= len(pipeline_calls) <= 3
-    assert window.result.params.k == values[-1]
-    assert len(mesh_actor_points(window)) == window.result.mesh.n_points
+    assert window.session.result.params.k == values[-1]
+    assert len(mesh_actor_points(window)) == window.session.result.mesh.n_points
 
 
 def test_layers_switch_on_and_off_and_actors_are_replaced_not_piled(window, qtbot):
@@ -104,7 +104,11 @@ def test_layers_switch_on_and_off_and_actors_are_replaced_not_piled(window, qtbo
 def test_save_reopen_and_compare(window, qtbot, tmp_path):
     window.panel.k.setValue(4)
     wait_result(qtbot, window, lambda o: o.result.params.k == 4)
-    leaf, params, mesh = window.doc.leaf, window.panel.params(), window.result.mesh
+    leaf, params, mesh = (
+        window.session.state.leaf,
+        window.panel.params(),
+        window.session.result.mesh,
+    )
     path = tmp_path / "saved.leaf.json"
     assert window.save_to(str(path))
     assert not window.isWindowModified()
@@ -113,9 +117,9 @@ def test_save_reopen_and_compare(window, qtbot, tmp_path):
     assert other.open_path(str(path))
     wait_result(qtbot, other)
     assert other.panel.params() == params
-    np.testing.assert_allclose(other.doc.leaf.boundary, leaf.boundary)
-    assert len(other.doc.leaf.veins) == len(leaf.veins)
-    np.testing.assert_allclose(other.result.mesh.points, mesh.points, atol=1e-9)
+    np.testing.assert_allclose(other.session.state.leaf.boundary, leaf.boundary)
+    assert len(other.session.state.leaf.veins) == len(leaf.veins)
+    np.testing.assert_allclose(other.session.result.mesh.points, mesh.points, atol=1e-9)
     assert str(path.resolve()) in other.recent_files()
     close_window(other)
 
@@ -123,25 +127,26 @@ def test_save_reopen_and_compare(window, qtbot, tmp_path):
 def test_a_bad_file_shows_an_error_and_keeps_the_mesh(window, qtbot, tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("x,y,z\n1,2\n")
-    leaf, points = window.doc.leaf, mesh_actor_points(window).copy()
-    assert not window.open_path(str(bad))
+    leaf, points = window.session.state.leaf, mesh_actor_points(window).copy()
+    with qtbot.waitSignal(window.failure_shown, timeout=30_000):
+        window.open_path(str(bad))  # read off the main thread
     box = window.last_error_box
     assert box is not None and box.isVisible() and "bad.csv" in box.text()
     assert "line 2" in box.text()
     box.close()
-    assert window.doc.leaf is leaf
+    assert window.session.state.leaf is leaf
     np.testing.assert_array_equal(mesh_actor_points(window), points)
 
 
 def test_a_leaf_that_cannot_be_reconstructed_keeps_the_old_one(window, qtbot, tmp_path):
     line = tmp_path / "line.csv"
     line.write_text("\n".join(f"{t},{2 * t},0" for t in np.linspace(0, 1, 20)) + "\n")
-    leaf, result = window.doc.leaf, window.result
+    leaf, result = window.session.state.leaf, window.session.result
     with qtbot.waitSignal(window.failure_shown, timeout=30_000) as failure:
         assert window.open_path(str(line))
     assert "line" in failure.args[0]
-    assert window.doc.leaf is leaf and window.result is result
-    assert window.path is None  # still the demo
+    assert window.session.state.leaf is leaf and window.session.result is result
+    assert window.session.state.path is None  # still the demo
     assert "line" in window.last_error_box.text()
     window.last_error_box.close()
 
@@ -182,13 +187,13 @@ def test_export_mesh_and_open_by_drag_and_drop(window, qtbot, tmp_path):
     for suffix in (".ply", ".vtp"):
         out = tmp_path / f"leaf{suffix}"
         assert window.save_mesh(str(out))
-        assert pv.read(out).n_points == window.result.mesh.n_points
+        assert pv.read(out).n_points == window.session.result.mesh.n_points
     assert not window.save_mesh(str(tmp_path / "leaf.xyz"))  # not a mesh type: an error box
     window.last_error_box.close()
 
     dropped = tmp_path / "dropped.leaf.json"
     window.save_to(str(dropped))
-    before = window.doc.leaf
+    before = window.session.state.leaf
     mime = QMimeData()
     mime.setUrls([QUrl.fromLocalFile(str(dropped))])
     event = QDropEvent(
@@ -198,11 +203,11 @@ def test_export_mesh_and_open_by_drag_and_drop(window, qtbot, tmp_path):
         Qt.MouseButton.NoButton,
         Qt.KeyboardModifier.NoModifier,
     )
-    window.dropEvent(event)
-    assert window.path == str(dropped)
-    assert window.doc.leaf is not before
-    np.testing.assert_allclose(window.doc.leaf.boundary, before.boundary)
-    wait_result(qtbot, window, lambda o: o.result.leaf is window.doc.leaf)
+    window.dropEvent(event)  # read off the main thread
+    qtbot.waitUntil(lambda: window.session.state.leaf is not before, timeout=30_000)
+    assert window.session.state.path == str(dropped)
+    np.testing.assert_allclose(window.session.state.leaf.boundary, before.boundary)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
 
 
 def test_export_a_textured_gltf_and_a_solid(window, qtbot, tmp_path):
@@ -231,9 +236,9 @@ def test_open_a_photo_finds_the_leaf_and_reconstructs_it(window, qtbot, tmp_path
     photo = tmp_path / "leaf.png"
     Image.fromarray(image).save(photo)
     assert window.open_path(str(photo))
-    qtbot.waitUntil(lambda: window.path == str(photo), timeout=60_000)
-    wait_result(qtbot, window, lambda outcome: outcome.result.leaf is window.doc.leaf)
-    found = window.doc.leaf
+    qtbot.waitUntil(lambda: window.session.state.path == str(photo), timeout=60_000)
+    wait_result(qtbot, window, lambda outcome: outcome.result.leaf is window.session.state.leaf)
+    found = window.session.state.leaf
     assert np.ptp(found.boundary[:, 0]) == pytest.approx(1.0, abs=0.05)  # base 0, apex at 1
     assert len(found.veins) >= 3  # grown
     blank = tmp_path / "blank.png"
@@ -242,7 +247,7 @@ def test_open_a_photo_finds_the_leaf_and_reconstructs_it(window, qtbot, tmp_path
         window.open_path(str(blank))
     assert "no leaf found" in failed.args[0]
     window.last_error_box.close()
-    assert window.doc.leaf is found  # the current leaf is kept
+    assert window.session.state.leaf is found  # the current leaf is kept
 
 
 def test_the_export_dialog_offers_the_texture(window, qtbot, tmp_path, monkeypatch):

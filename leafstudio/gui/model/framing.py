@@ -204,3 +204,12 @@ def project(
     depth = -(rel @ direction)
     tan = np.tan(np.radians(view_angle) / 2)
     return (rel @ right) / (depth * tan * aspect), (rel @ up) / (depth * tan)
+
+
+@dataclass
+class Framing:
+    """How the 3D view should frame a result: `reset` (a new document: the iso preset) or
+    `refit` (the sketch grew past the view: same direction, the whole leaf in view)."""
+
+    bounds: BladeBounds
+    reset: bool

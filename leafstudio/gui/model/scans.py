@@ -22,7 +22,7 @@ from leafstudio.core.pipeline import Result
 from leafstudio.core.trianglemesh import MeshLike, polydata, vertex_normals
 from leafstudio.gui.model.layers import Piece, cloud
 from leafstudio.sources.extract import Extraction
-from leafstudio.workflows import open_scan
+from leafstudio.workflows import Opened
 
 BLADE_COLOR, DROPPED_COLOR, POISSON_COLOR = "#2e7d32", "#c62828", "#e08a1e"
 POISSON_GAP = 0.15  # the Poisson surface sits this share of the leaf length beside our mesh
@@ -39,23 +39,16 @@ class ScanData:
     pieces: list[Piece]
 
 
-def load_scan(path: str) -> ScanData:
-    """Open a scan as every command does (workflows.open_scan: read, checked, extracted), with
-    its blade and dropped points as layers.
-
-    Raises
-    ------
-    LeafError
-        With the file's name: unreadable, not plausibly one leaf, or no blade found.
-    """
-    opened = open_scan(path)
+def scan_data(opened: Opened) -> ScanData:
+    """An opened scan (workflows.open_scan: read, checked, extracted) with its blade and
+    dropped points as layers."""
     points, extraction = opened.scan, opened.extraction
     blade = extraction.blade
     pieces = [
         Piece("scan:blade", partial(cloud, points[blade]), _dots(BLADE_COLOR, 3.0)),
         Piece("scan:dropped", partial(cloud, points[~blade]), _dots(DROPPED_COLOR, 4.0)),
     ]
-    return ScanData(str(path), points, extraction, pieces)
+    return ScanData(opened.path, points, extraction, pieces)
 
 
 def _dots(color: str, size: float) -> dict[str, Any]:

@@ -6,13 +6,20 @@ For other features (the forms gallery, imports): `Session.new_document(leaf, ske
 title=...)` replaces the document as ONE undo step (Ctrl+Z brings the previous one back);
 `Session.open_document(...)` does the same for a file, clearing the history instead.
 
+Files open here too (`open_path`: read on the worker's side lane through workflows.open_file,
+the path the command line and batch take), as do demos and new sketches; the side jobs of the
+shown result (the scan's distances, the Poisson surface, the texture) live in `session.side`
+(side.py).
+
 Every user story can be played on a Session in plain pytest: give it a `submit` callable that
-records or runs requests, then hand it `accept_result` / `accept_failure` as the worker would.
+records or runs requests, then hand it `accept_result` / `accept_failure` as the worker would;
+side jobs and file reading run at once (jobs.run_now) unless a `run` is given.
 """
 
 from __future__ import annotations
 
 import logging
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -21,169 +28,25 @@ import numpy as np
 
 from leafstudio.core.plane import Frame
 from leafstudio.core.prepare.outline import ring_crossings
-from leafstudio.errors import LeafError
-from leafstudio.gui.model.framing import BladeBounds, blade_bounds
+from leafstudio.gui.model.framing import BladeBounds, Framing, blade_bounds
+from leafstudio.gui.model.history import Event, History, State, Step
+from leafstudio.gui.model.jobs import Job, Run, describe, run_now
+from leafstudio.gui.model.opening import Document, missing_photo_message, read_document
+from leafstudio.gui.model.side import SideJobs
 from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.model import PARAMS, Leaf, Params
+from leafstudio.sources.demos import PAPER_K, demo
+from leafstudio.sources.photo import is_photo
+
+__all__ = ["Event", "Framing", "History", "Session", "State", "Step", "describe"]
 
 log = logging.getLogger("leafstudio.gui")
-
-
-class Event:
-    """A list of callbacks: `connect(f)`, `disconnect(f)`, `emit(*args)` (no Qt)."""
-
-    def __init__(self) -> None:
-        self._callbacks: list[Callable[..., Any]] = []
-
-    def connect(self, callback: Callable[..., Any]) -> None:
-        self._callbacks.append(callback)
-
-    def disconnect(self, callback: Callable[..., Any]) -> None:
-        self._callbacks.remove(callback)
-
-    def emit(self, *args: Any) -> None:
-        for callback in list(self._callbacks):
-            callback(*args)
-
-
-@dataclass(frozen=True, eq=False)
-class State:
-    """One snapshot of what is edited; undo and redo swap snapshots.
-
-    leaf is None while a sketch has fewer than 3 boundary points; sketch is None for a leaf read
-    from points (until it is first edited). `serial` numbers documents: a new one is framed.
-    """
-
-    leaf: Leaf | None
-    sketch: Sketch | None
-    params: Params
-    path: str | None = None
-    title: str = "untitled"
-    scan: Any = None  # gui.scans.ScanData
-    serial: int = 0
-    photo: Any = None  # assets.leafphoto.LeafPhoto: the photo the leaf was found in
-
-
-@dataclass(frozen=True, eq=False)
-class Step:
-    """One undoable edit."""
-
-    text: str
-    before: State
-    after: State
-
-
-class History:
-    """Undo and redo over State snapshots, with a clean mark (the saved state)."""
-
-    def __init__(self, moved: Callable[[State], None] | None = None) -> None:
-        self.moved = moved  # called with the state that undo or redo makes current
-        self.steps: list[Step] = []
-        self.index = 0  # steps[:index] are done
-        self.clean_index: int | None = 0
-        self.changed = Event()
-
-    def push(self, step: Step) -> None:
-        if self.clean_index is not None and self.clean_index > self.index:
-            self.clean_index = None  # the saved state was undone and is now out of reach
-        del self.steps[self.index :]
-        self.steps.append(step)
-        self.index += 1
-        self.changed.emit()
-
-    def undo(self) -> State | None:
-        if not self.can_undo():
-            return None
-        self.index -= 1
-        state = self.steps[self.index].before
-        if self.moved is not None:
-            self.moved(state)
-        self.changed.emit()
-        return state
-
-    def redo(self) -> State | None:
-        if not self.can_redo():
-            return None
-        self.index += 1
-        state = self.steps[self.index - 1].after
-        if self.moved is not None:
-            self.moved(state)
-        self.changed.emit()
-        return state
-
-    def can_undo(self) -> bool:
-        return self.index > 0
-
-    def can_redo(self) -> bool:
-        return self.index < len(self.steps)
-
-    def undo_text(self) -> str:
-        return self.steps[self.index - 1].text if self.can_undo() else ""
-
-    def redo_text(self) -> str:
-        return self.steps[self.index].text if self.can_redo() else ""
-
-    def count(self) -> int:
-        return len(self.steps)
-
-    def is_clean(self) -> bool:
-        return self.index == self.clean_index
-
-    def set_clean(self) -> None:
-        self.clean_index = self.index
-        self.changed.emit()
-
-    def clear(self) -> None:
-        self.steps.clear()
-        self.index, self.clean_index = 0, 0
-        self.changed.emit()
-
-    # the QUndoStack names the window's older callers use
-    def canUndo(self) -> bool:
-        return self.can_undo()
-
-    def canRedo(self) -> bool:
-        return self.can_redo()
-
-    def undoText(self) -> str:
-        return self.undo_text()
-
-    def setClean(self) -> None:
-        self.set_clean()
-
-    def isClean(self) -> bool:
-        return self.is_clean()
 
 
 def _param_text(before: Params, after: Params) -> str:
     """The undo step's name: the parameters changed, as their messages name them."""
     changed = [p.what for n, p in PARAMS.items() if getattr(before, n) != getattr(after, n)]
     return "Change " + ", ".join(changed)
-
-
-def describe(exc: BaseException) -> str:
-    """The one line the window shows for a failure (the traceback goes to the log)."""
-    if isinstance(exc, LeafError):
-        return str(exc)
-    return f"{type(exc).__name__}: {exc} (details in the log)"
-
-
-def missing_photo_message(photo: Any) -> str:
-    """What the window says when a leaf's photo is not where its project says."""
-    return (
-        f"The photo this leaf was found in is missing ({photo.image}): the leaf shows and exports "
-        "the texture generated from it instead. Put the photo back and open the project again "
-        "to use it; saving keeps the photo's place in the project."
-    )
-
-
-@dataclass
-class Framing:
-    """How the 3D view should frame a result: `reset` (a new document: the iso preset) or
-    `refit` (the sketch grew past the view: same direction, the whole leaf in view)."""
-
-    bounds: BladeBounds
-    reset: bool
 
 
 @dataclass
@@ -215,6 +78,9 @@ class Session:
         Queues a reconstruction and returns its request id (the window passes the worker's).
     params : Params
         The parameters of the first document.
+    run : jobs.Run, optional
+        Starts a side job, `run(kind, function, *args) -> Job` (the window passes the worker's
+        `start`); jobs.run_now, at once, by default.
 
     Events
     ------
@@ -238,14 +104,22 @@ class Session:
         The sketch's boundary crossings, (c, 2) plane points (empty when it does not cross).
     noticed(str)
         A message for the user that is not a failure (a project's photo is missing).
+    opening(str, str)
+        A file is being read: its path, and what it is read as ("photo", "scan" or "file").
+    opened(str)
+        A file read became the document (the window adds it to the recent files).
+    open_failed(str, str)
+        A file could not be opened: what it was read as, and why; the document stays.
     """
 
     def __init__(
         self,
         submit: Callable[[Leaf, Params, bool], int] | None = None,
         params: Params | None = None,
+        run: Run | None = None,
     ) -> None:
         self.submit = submit or (lambda leaf, params, interrupt: 0)
+        self.run = run or run_now
         self.state = State(None, None, params or Params())
         self.history = History(moved=self._history_moved)
         self.shown = Shown()
@@ -257,13 +131,17 @@ class Session:
         self.state_changed, self.result_shown, self.failed = Event(), Event(), Event()
         self.cleared, self.sketch_shown, self.crossing = Event(), Event(), Event()
         self.noticed, self.sketch_waiting = Event(), Event()
-        self.chosen_texture: str | None = None  # an image picked for the export, shown too
+        self.opening, self.opened, self.open_failed = Event(), Event(), Event()
+        self.chosen_texture: Any = None  # a texture picked for the export, shown too
+        self._open_due: Job | None = None  # the file being read; another open supersedes it
+        self._drawn_due: threading.Event | None = None  # the outcome being drawn (Outcome.drawn)
         self._serials = 0
         self._requested: dict[int, tuple[int, str]] = {}  # request id -> serial, reason
         self._framed: tuple[int, BladeBounds] | None = None
         self._edit_base: State | None = None
         self._param_base: State | None = None
         self._fallback: _Fallback | None = None
+        self.side = SideJobs(self)
 
     # --- reading -------------------------------------------------------------------------------
     @property
@@ -361,8 +239,52 @@ class Session:
         return self.new_document(leaf, sketch, title, undoable=False, **kw)
 
     def new_sketch(self) -> int:
-        """An empty sketch to draw in."""
-        return self.open_document(None, Sketch(), "new sketch")
+        """An empty sketch to draw in (a file being read is forgotten)."""
+        self._open_due = None
+        return self.open_document(None, Sketch(), "new sketch", params=self.params)
+
+    def open_demo(self, name: str) -> int:
+        """A built-in leaf with the paper's K (a file being read is forgotten)."""
+        self._open_due = None
+        params = self.params.with_(k=PAPER_K.get(name, self.params.k))
+        return self.open_document(demo(name), None, f"{name} demo", params=params)
+
+    def open_path(self, path: str, *, as_scan: bool = False) -> Job:
+        """Read a file off the main thread (opening.read_document on the side lane: the one
+        decision path of the command line and batch; `as_scan`: File > Open scan) and make it
+        the document once read, with its saved parameters or the current ones. A newer open, a
+        demo or a new sketch supersedes it; a failure reports `open_failed` and keeps the
+        document."""
+        what = "photo" if is_photo(path) else "scan" if as_scan else "file"
+        self.opening.emit(path, what)
+        job = self._open_due = self.run("open", read_document, path, as_scan)
+        job.on_done(lambda document: self._opened(job, document))
+        job.on_failed(lambda exc: self._open_failed(job, what, exc))
+        return job
+
+    def _opened(self, job: Job, document: Document) -> None:
+        if job is not self._open_due:
+            return
+        self._open_due = None
+        d = document
+        params = d.params or self.params
+        self.open_document(
+            d.leaf, d.sketch, d.title, params=params, path=d.path, scan=d.scan, photo=d.photo
+        )
+        self.opened.emit(d.path)
+        if d.notice:
+            self.noticed.emit(d.notice)
+
+    def _open_failed(self, job: Job, what: str, exc: BaseException) -> None:
+        if job is self._open_due:
+            self._open_due = None
+            self.open_failed.emit(what, describe(exc))
+
+    def choose_texture(self, texture: Any) -> None:
+        """A texture picked for an export (an assets.export `texture` option): the view shows
+        it too, until another document opens."""
+        self.chosen_texture = texture
+        self.side.update_texture()
 
     def saved(self, path: str) -> None:
         """The document was written to `path`: it is now its file and unmodified."""
@@ -493,6 +415,20 @@ class Session:
         return self.last_id
 
     # --- worker reports ------------------------------------------------------------------------
+    def accept_drawable(self, outcome: Any) -> bool:
+        """The worker's outcome to draw (accept_result); the worker measures it once it is on
+        screen (Outcome.drawn, set by `drawn`), an older one at once: it will never be."""
+        if self._drawn_due is not None:
+            self._drawn_due.set()  # a newer result replaces it before its render
+        self._drawn_due = outcome.drawn
+        return self.accept_result(outcome)
+
+    def drawn(self) -> None:
+        """The shown result is on screen (or will not be): it may be measured."""
+        if self._drawn_due is not None:
+            self._drawn_due.set()
+            self._drawn_due = None
+
     def accept_result(self, outcome: Any) -> bool:
         """A finished reconstruction: shown unless a newer one was shown already."""
         request_id = outcome.request.id
@@ -518,7 +454,10 @@ class Session:
         if framing is not None:
             self._framed = (serial, framing.bounds)
         self.message = ""
+        if framing is not None and framing.reset:
+            self.side.texture_key = None  # another leaf's image: the view drops it
         self.result_shown.emit(outcome, framing)
+        self.side.result_shown(outcome)
         return True
 
     def accept_measured(self, request_id: int) -> bool:

@@ -10,8 +10,6 @@ import ctypes.util
 import os
 import sys
 
-from leafstudio.errors import LeafError
-
 NO_DISPLAY = (
     "leafstudio: cannot open a display ({why}); run the app under a virtual display with "
     "`xvfb-run -a leafstudio`, or use `leafstudio reconstruct` without a window"
@@ -75,34 +73,39 @@ def run_app(path: str | None = None, screenshot: str | None = None) -> int:
     app.setApplicationName("LeafStudio")
     app.setOrganizationName(SETTINGS[0])
     window = MainWindow(QSettings(*SETTINGS))
+    status: dict[str, int] = {"code": 0}
+
+    def failed(message: str) -> None:
+        """The file given (or the demo) cannot be shown: one line, exit 2, as the CLI says it."""
+        where = path or "demo"
+        text = message if message.startswith(f"{where}: ") else f"{where}: {message}"
+        print(f"leafstudio: error: {text}", file=sys.stderr)
+        status["code"] = 2
+        window.close()
+
     if path is None:
         window.open_demo("nested")
-    elif not window.open_path(path):
-        window.worker.shutdown()
-        raise LeafError(window.last_error_box.text() if window.last_error_box else "cannot open")
+    else:  # read off the main thread like any open
+        window.open_path(path)
+    if screenshot is None and path is not None:  # a file that cannot be read ends the app
+        opened = {"done": False}
+        window.session.opened.connect(lambda _path: opened.update(done=True))
+        window.session.open_failed.connect(lambda _what, text: opened["done"] or failed(text))
     app.aboutToQuit.connect(window.worker.shutdown)
-    app.aboutToQuit.connect(window.tasks.shutdown)
     window.show()
     if screenshot is not None:
-        status: dict[str, int] = {"code": 0}
 
         def grab(*_: object) -> None:
             app.processEvents()
             if not grab_window(window, window.viewport).save(screenshot):
                 print(f"leafstudio: error: {screenshot}: cannot write the PNG", file=sys.stderr)
                 status["code"] = 2
-            window.undo_stack.setClean()
-            window.close()
-
-        def failed(message: str) -> None:
-            where = path or "demo"
-            text = message if message.startswith(f"{where}: ") else f"{where}: {message}"
-            print(f"leafstudio: error: {text}", file=sys.stderr)
-            status["code"] = 2
+            window.session.history.set_clean()
             window.close()
 
         window.measurements_shown.connect(lambda: QTimer.singleShot(100, grab))
         window.failure_shown.connect(failed)
         app.exec()
         return status["code"]
-    return app.exec()
+    code = app.exec()
+    return status["code"] or code

@@ -9,7 +9,6 @@ cannot be opened or reconstructed leaves the current document.
 from __future__ import annotations
 
 import json
-import threading
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -42,28 +41,22 @@ from PySide6.QtWidgets import (
 from leafstudio.assets.export import TEXTURED_SUFFIXES, save_mesh
 from leafstudio.assets.writers import MESH_SUFFIXES
 from leafstudio.errors import LeafError
+from leafstudio.gui.model.jobs import Job
 from leafstudio.gui.model.layers import LAYERS, MESH_COLORINGS
 from leafstudio.gui.model.measurements import measurement_rows
-from leafstudio.gui.model.scans import (
-    ScanData,
-    fidelity_sections,
-    load_scan,
-    poisson_piece,
-)
-from leafstudio.gui.model.session import Framing, History, Session, State, describe
-from leafstudio.gui.model.sketch_model import Sketch
-from leafstudio.gui.model.textures import TEXTURE, TEXTURE_LABEL, texture_image, texture_key
+from leafstudio.gui.model.scans import ScanData
+from leafstudio.gui.model.session import Framing, Session, State
+from leafstudio.gui.model.textures import TEXTURE, TEXTURE_LABEL
 from leafstudio.gui.qt import explain, forms_dock
 from leafstudio.gui.qt.controls import ParamPanel
 from leafstudio.gui.qt.sketch import SketchEditor
 from leafstudio.gui.qt.status import StatusText
 from leafstudio.gui.qt.viewport import CAMERAS, Viewport
 from leafstudio.gui.qt.worker import PIPELINE, Outcome, Worker
-from leafstudio.model import Leaf, Params
-from leafstudio.sources.demos import DEMOS, PAPER_K, demo
-from leafstudio.sources.files import LEAF_SUFFIXES, load_leaf, load_project, save_leaf
-from leafstudio.sources.scan import SCAN_SUFFIXES, is_scan_file, looks_like_scan
-from leafstudio.workflows import boundary_crossing
+from leafstudio.model import Params
+from leafstudio.sources.demos import DEMOS
+from leafstudio.sources.files import LEAF_SUFFIXES, save_leaf
+from leafstudio.sources.scan import SCAN_SUFFIXES
 
 APP_NAME = "LeafStudio"
 PROJECT_SUFFIX = ".leaf.json"
@@ -77,16 +70,6 @@ ABOUT = (
     "partition-of-unity implicit for the leaf region, a height guide from the veins, a Gaussian "
     "mixture fitted by EM, and a mesh trimmed at the margin.</p>"
 )
-
-
-def _task(job, token: object = None):
-    """A side job for the worker: `job(*args)`, returning (token, value) so that the answer
-    names what it belongs to (`token` None: the first argument)."""
-
-    def run(context: object, *args: object) -> tuple[object, object]:
-        return (args[0] if token is None else token), job(*args)
-
-    return run
 
 
 def _file_filter() -> str:
@@ -122,16 +105,11 @@ class MainWindow(QMainWindow):
         self.resize(1500, 920)
 
         self.last_error_box: QMessageBox | None = None
-        self._scan_due = 0  # the job reading the scan to open; another open supersedes it
-        self._scan_shown: ScanData | None = None
-        self._poisson_leaf: Leaf | None = None  # the leaf of the Poisson surface drawn or due
-        self._texture_due: tuple | None = None  # (job id, key) of the texture being made
+        self._scan_shown: ScanData | None = None  # the scan whose layer is drawn
 
         self.worker = Worker(self)
         self.worker.measure_after_drawn = True  # measuring would slow the render down
-        self._drawn_due: threading.Event | None = None  # the outcome the viewport is drawing
-        self.tasks = self.worker  # side tasks run on the same worker (their own lane)
-        self.session = Session(self.worker.submit_pipeline)
+        self.session = Session(self.worker.submit_pipeline, run=self.worker.start)
         self.viewport = Viewport(self)
         self.viewport.rendered.connect(self._on_rendered)
         self.setCentralWidget(self.viewport)
@@ -146,8 +124,8 @@ class MainWindow(QMainWindow):
 
         self.worker.stage_started.connect(self._on_stage)
         self.worker.yielded.connect(self._on_yielded)
-        self.worker.done.connect(self._on_done)
-        self.worker.failed.connect(self._on_failed)
+        self.worker.done.connect(self._on_measured)
+        self.worker.failed.connect(self._on_pipeline_failed)
         self._stage_timer = QTimer(self)
         self._stage_timer.setSingleShot(True)
         self._stage_timer.setInterval(STAGE_LABEL_MS)
@@ -163,6 +141,14 @@ class MainWindow(QMainWindow):
         session.crossing.connect(self.editor.view.set_crossings)
         session.noticed.connect(self._on_notice)
         session.history.changed.connect(self._on_history)
+        session.opening.connect(self._on_opening)
+        session.opened.connect(self._add_recent)
+        session.open_failed.connect(self._on_open_failed)
+        side = session.side
+        side.fidelity_shown.connect(self._show_measurements)
+        side.poisson_shown.connect(lambda pieces: self.viewport.set_layer("poisson", pieces))
+        side.texture_shown.connect(self._on_texture)
+        side.note.connect(self._on_side_note)
         self.panel.changed.connect(self._on_params)
         self.panel.released.connect(self._on_params_released)
         self.panel.released.connect(self._on_rendered)  # measure what the drag left shown
@@ -393,51 +379,15 @@ class MainWindow(QMainWindow):
         self.recent_menu.setEnabled(bool(self.recent_files()))
 
     # --- documents -----------------------------------------------------------------------------
-    # The document, parameters, results and history live in self.session (session.py, no Qt);
-    # these properties read it for the window's older callers.
-    @property
-    def doc(self) -> State:
-        """The current document (leaf, sketch, params, path, title, scan)."""
-        return self.session.state
-
-    @property
-    def path(self) -> str | None:
-        return self.session.state.path
-
-    @property
-    def result(self):
-        """The last good Result on screen, or None."""
-        return self.session.result
-
-    @property
-    def outcome(self) -> Outcome | None:
-        return self.session.shown.outcome
-
-    @property
-    def scan(self) -> ScanData | None:
-        return self.session.state.scan
-
-    @property
-    def fidelity(self) -> tuple[int, list] | None:
-        return self.session.shown.fidelity
-
-    @property
-    def undo_stack(self) -> History:
-        return self.session.history
-
-    def is_modified(self) -> bool:
-        """True when there are edits (sketch or parameters) not saved."""
-        return self.session.is_modified()
-
     def _update_title(self) -> None:
         state = self.session.state
         name = Path(state.path).name if state.path else state.title
         self.setWindowTitle(f"{name}[*] — {APP_NAME}")
-        self.setWindowModified(self.is_modified())
+        self.setWindowModified(self.session.is_modified())
 
     def _confirm_discard(self) -> bool:
         """Ask what to do with unsaved changes; True when it is fine to go on."""
-        if not self.is_modified():
+        if not self.session.is_modified():
             return True
         answer = QMessageBox.question(
             self,
@@ -454,69 +404,27 @@ class MainWindow(QMainWindow):
     def open_demo(self, name: str) -> None:
         """Open a built-in leaf with the paper's K."""
         if self._confirm_discard():
-            self._scan_due = None
-            params = self.panel.params()
-            params = params.with_(k=PAPER_K.get(name, params.k))
-            self.session.open_document(demo(name), None, f"{name} demo", params=params)
+            self.session.open_demo(name)
 
-    def open_path(self, path: str) -> bool:
-        """Open a leaf file or project; on failure show why and keep the current leaf."""
-        from leafstudio.sources.photo import is_photo
+    def open_path(self, path: str, as_scan: bool = False) -> Job:
+        """Open a file (Session.open_path: read off the main thread, as every command reads it);
+        a failure says why and keeps the current leaf. The reading job's handle."""
+        return self.session.open_path(path, as_scan=as_scan)
 
-        if is_photo(path):
-            return self.open_photo(path)
-        try:
-            params, sketch, photo, photo_problem = None, None, None, ""
-            if path.lower().endswith(".json"):
-                leaf, params, stored = load_project(path)
-                try:
-                    sketch = Sketch.from_dict(stored) if stored else None
-                except (TypeError, ValueError, KeyError) as exc:
-                    raise LeafError(f"bad sketch ({exc})", path) from None
-                photo, photo_problem = self._project_photo(path)
-            else:
-                try:
-                    leaf = load_leaf(path)
-                except LeafError:
-                    if is_scan_file(path):
-                        return self.open_scan(path)
-                    raise
-                if looks_like_scan(leaf):
-                    return self.open_scan(path)
-            crossing = boundary_crossing(leaf) if sketch is None else None
-            if crossing is not None:
-                x, y, z = crossing
-                raise LeafError(
-                    f"the boundary crosses itself near ({x:.4g}, {y:.4g}, {z:.4g}); its points "
-                    "must go once around the leaf",
-                    path,
-                )
-        except LeafError as exc:
-            self.show_error("Cannot open the file", str(exc))
-            return False
-        except OSError as exc:
-            self.show_error("Cannot open the file", f"{path}: {exc.strerror or exc}")
-            return False
-        self._scan_due = None
-        params = params or self.panel.params()
-        self.session.open_document(
-            leaf, sketch, Path(path).name, params=params, path=path, photo=photo
-        )
-        self._add_recent(path)
-        if photo_problem:
-            self._on_notice(photo_problem)
-        return True
+    def _on_opening(self, path: str, what: str) -> None:
+        name = Path(path).name
+        text = {
+            "photo": f"Finding the leaf in the photo {name}…",
+            "scan": f"Reading the scan {name} and extracting its leaf…",
+        }
+        self.status_text.setStyleSheet("")
+        self.status_text.setText(text.get(what, f"Opening {name}…"))
 
-    @staticmethod
-    def _project_photo(path: str) -> tuple[object, str]:
-        """The photo a project remembers (sources/leafphoto.py) or None, and what is wrong with
-        its entry ("" if nothing): a bad entry costs the texture, never the leaf."""
-        from leafstudio.sources.leafphoto import project_photo
-
-        try:
-            return project_photo(path), ""
-        except LeafError as exc:
-            return None, f"{exc}: the leaf shows and exports the texture generated from it."
+    def _on_open_failed(self, what: str, message: str) -> None:
+        self.status_text.setStyleSheet("color: #b00020")
+        self.status_text.setText(f"Failed: {message}")
+        self.show_error(f"Cannot open the {what}", message)
+        self.failure_shown.emit(message)
 
     def open_dialog(self) -> None:
         """File > Open."""
@@ -524,64 +432,45 @@ class MainWindow(QMainWindow):
         if path:
             self.open_path(path)
 
-    def open_scan(self, path: str) -> bool:
-        """Read a scan and extract its leaf off the main thread; the leaf then opens like any
-        loaded leaf (editable as a sketch), with the scan's points as a layer. Failures show a
-        message and keep the current leaf. True: the scan is being read."""
-        self.status_text.setStyleSheet("")
-        self.status_text.setText(f"Reading the scan {Path(path).name} and extracting its leaf…")
-        self._scan_due = self.worker.submit("scan", _task(load_scan), path)
-        return True
-
-    def open_photo(self, path: str) -> bool:
-        """Find the leaf in a photo off the main thread (sources/photo.py: outline, petiole cut,
-        veins grown); it then opens like any loaded leaf and is reconstructed. True: the photo is
-        being read."""
-        from leafstudio.sources.photo import read_photo_leaf
-
-        self.status_text.setStyleSheet("")
-        self.status_text.setText(f"Finding the leaf in the photo {Path(path).name}…")
-        self._scan_due = self.worker.submit("photo", _task(read_photo_leaf), path)
-        return True
-
     def open_photo_dialog(self) -> None:
         """File > Open photo."""
         path = self._ask_to_open("Open a photo of a leaf", _photo_filter())
         if path:
-            self.open_photo(path)
+            self.open_path(path)
 
     def open_scan_dialog(self) -> None:
         """File > Open scan."""
         path = self._ask_to_open("Open a leaf scan", _scan_filter())
         if path:
-            self.open_scan(path)
+            self.open_path(path, as_scan=True)
 
     def _ask_to_open(self, title: str, filters: str) -> str:
         """A file chosen in an open dialog beside the current file, once unsaved changes are
         dealt with; "" when cancelled."""
         if not self._confirm_discard():
             return ""
-        start = str(Path(self.path).parent) if self.path else str(Path.home())
+        path = self.session.state.path
+        start = str(Path(path).parent) if path else str(Path.home())
         return QFileDialog.getOpenFileName(self, title, start, filters)[0]
 
     def new_sketch(self) -> None:
         """File > New sketch: an empty sketch to draw a leaf in."""
         if not self._confirm_discard():
             return
-        self._scan_due = None
-        self.session.open_document(None, Sketch(), "new sketch", params=self.panel.params())
+        self.session.new_sketch()
         self.sketch_dock.show()
         self.sketch_dock.raise_()
 
     def save(self) -> bool:
         """File > Save: write the project; Save as when it has no project file yet."""
-        if self.path is None or not self.path.lower().endswith(PROJECT_SUFFIX):
+        path = self.session.state.path
+        if path is None or not path.lower().endswith(PROJECT_SUFFIX):
             return self.save_as()
-        return self.save_to(self.path)
+        return self.save_to(path)
 
     def save_as(self) -> bool:
         """File > Save as."""
-        start = self.path or str(Path.home() / f"leaf{PROJECT_SUFFIX}")
+        start = self.session.state.path or str(Path.home() / f"leaf{PROJECT_SUFFIX}")
         if not start.lower().endswith(PROJECT_SUFFIX):
             start = str(Path(start).with_suffix("")) + PROJECT_SUFFIX
         path, _ = QFileDialog.getSaveFileName(
@@ -615,44 +504,23 @@ class MainWindow(QMainWindow):
         the format holds them); `thickness` ("0.01" of the length, or "0.4mm") makes it a closed
         solid; `texture` is None (the leaf's: what the Texture colouring shows), "auto"
         (generated from the leaf), "none", "photo" (the photo the leaf was found in) or an image
-        file, mapped as `reconstruct --texture` maps it (see _texture_option)."""
-        if self.result is None:
+        file, mapped as `reconstruct --texture` maps it (SideJobs.texture_option)."""
+        result = self.session.result
+        if result is None:
             self.show_error("Nothing to export", "There is no reconstructed mesh yet.")
             return False
         try:
-            option = self._texture_option(texture)
+            option = self.session.side.texture_option(texture)
             solid = None
             if thickness is not None:
                 from leafstudio.assets.solid import thickness_in_mesh_units
 
-                solid = thickness_in_mesh_units(thickness, self.result.length)
-            save_mesh(self.result, path, texture=option, thickness=solid)
+                solid = thickness_in_mesh_units(thickness, result.length)
+            save_mesh(result, path, texture=option, thickness=solid)
         except (LeafError, OSError) as exc:
             self.show_error("Cannot export the mesh", str(exc))
             return False
         return True
-
-    def _texture_option(self, texture: object) -> object:
-        """assets.export's `texture` for a choice: None is the session's (Session.texture);
-        "photo" the photo the leaf was found in; an image is mapped through that photo's pixel
-        map when the leaf has one (as `reconstruct PROJECT --texture IMAGE`), else stretched over
-        the UV square. LeafError for a missing photo or an unreadable image."""
-        from leafstudio._shared.inputs import read_image
-        from leafstudio.assets.export import TEXTURES
-        from leafstudio.sources.leafphoto import PhotoTexture
-
-        photo = self.session.state.photo
-        if texture is None:
-            return self.session.texture()
-        if isinstance(texture, PhotoTexture) or texture in TEXTURES:
-            return texture
-        if texture == "photo":
-            if photo is None or not photo.exists():
-                where = photo.image if photo is not None else self.session.state.title
-                raise LeafError("the photo this leaf was found in is missing", str(where))
-            return photo.texture()
-        read_image(str(texture))  # refused before any work
-        return PhotoTexture(str(texture), photo.pixel_from_world if photo is not None else None)
 
     def export_mesh_dialog(self) -> None:
         """File > Export mesh; the texture chosen is the one the Texture colouring shows next."""
@@ -665,14 +533,13 @@ class MainWindow(QMainWindow):
         if texture is None:
             return
         try:
-            option = self._texture_option(texture)
+            option = self.session.side.texture_option(texture)
         except LeafError as exc:
             self.show_error("Cannot export the mesh", str(exc))
             return
         textured = Path(path).suffix.lower() in TEXTURED_SUFFIXES
         if self.save_mesh(path, texture=option) and textured:
-            self.session.chosen_texture = option
-            self._update_texture()
+            self.session.choose_texture(option)
 
     TEXTURE_CHOICES = (
         "Generated from the leaf (blade and veins)",
@@ -775,38 +642,20 @@ class MainWindow(QMainWindow):
         key = item.data(Qt.ItemDataRole.UserRole)
         self.viewport.set_visible(key, item.checkState() == Qt.CheckState.Checked)
         if key == "poisson":
-            self._update_poisson()
-
-    def _update_poisson(self) -> None:
-        """Compute the Poisson surface of the shown leaf when its layer is on and it is not
-        there yet; when the layer is off, forget a surface that no longer fits the leaf."""
-        leaf = self.result.leaf if self.result is not None else None
-        if leaf is self._poisson_leaf:
-            return
-        if self.viewport.visible["poisson"] and self.result is not None:
-            self._poisson_leaf = leaf
-            self.worker.submit("poisson", _task(poisson_piece, token=leaf), self.result)
-        else:
-            self._poisson_leaf = None
-            self.viewport.set_layer("poisson", [])
+            self.session.side.set_poisson(self.viewport.visible["poisson"])
 
     def _on_coloring(self, row: int) -> None:
         """The Layers dock's colouring: a scalar, or the texture (made on the side lane)."""
         self.viewport.set_mesh_coloring(self.coloring.itemData(row))
-        self._update_texture()
+        self.session.side.set_texture_shown(self.viewport.mesh_coloring == TEXTURE)
 
-    def _update_texture(self) -> None:
-        """Have the texture of the shown leaf made off the main thread when the mesh shows the
-        texture and the one on it is not the leaf's (gui/model/textures.py); it is drawn when
-        done."""
-        if self.viewport.mesh_coloring != TEXTURE or self.result is None:
-            return
-        source = self.session.texture()
-        key = texture_key(self.result, source)
-        if key == self.viewport.texture_key or (self._texture_due and self._texture_due[1] == key):
-            return
-        job = self.worker.submit("texture", _task(texture_image, token=key), self.result, source)
-        self._texture_due = (job, key)
+    def _on_side_note(self, note: str) -> None:
+        """A side job failed without harm (the Poisson surface, the generated texture)."""
+        self.status_text.setText(f"{self.status_text.text()} — {note}")
+
+    def _on_texture(self, image: object, key: tuple) -> None:
+        self.viewport.set_texture(image, key)
+        self.texture_shown.emit()
 
     def _on_notice(self, message: str) -> None:
         """A message that is not a failure (the leaf is still shown): a box and the status."""
@@ -820,7 +669,6 @@ class MainWindow(QMainWindow):
         if reason in ("document", "undo", "fallback"):
             self.editor.drop_edit()  # a drag or key run under way: its step would mix documents
             self.panel.set_params(state.params)
-            self._update_texture()
         if state.scan is not self._scan_shown:
             self._scan_shown = state.scan
             self.viewport.set_layer("scan", state.scan.pieces if state.scan is not None else [])
@@ -828,8 +676,8 @@ class MainWindow(QMainWindow):
 
     def _on_cleared(self) -> None:
         self.viewport.clear()
-        if self.scan is not None:
-            self.viewport.set_layer("scan", self.scan.pieces)
+        if (scan := self.session.state.scan) is not None:
+            self.viewport.set_layer("scan", scan.pieces)
         self.measurements.clear()
         self.status_text.setStyleSheet("")
         self.status_text.setText(self.session.message)
@@ -847,12 +695,6 @@ class MainWindow(QMainWindow):
         self._stage_timer.stop()
         self._show_timings(outcome)
         self.editor.view.set_crossings(self.session.crossings)
-        if self.scan is not None:
-            rid = outcome.request.id
-            job = _task(fidelity_sections, token=rid)
-            self.worker.submit("fidelity", job, result.triangle_mesh, self.scan, result.length)
-        self._update_poisson()
-        self._update_texture()
         self.result_shown.emit(outcome)
 
     def _on_session_failed(self, message: str, fell_back: bool) -> None:
@@ -877,82 +719,30 @@ class MainWindow(QMainWindow):
             self.status_text.setText(f"Running: {self._stage}…")
 
     def _on_yielded(self, kind: str, job_id: int, value: object) -> None:
-        if kind == PIPELINE:
-            if self._drawn_due is not None:
-                self._drawn_due.set()  # a newer result replaces it before its render
-            self._drawn_due = value.drawn
-            if not self.session.accept_result(value):
-                self._on_rendered()  # not shown: no render to wait for
+        if kind == PIPELINE and not self.session.accept_drawable(value):
+            self._on_rendered()  # not shown: no render to wait for
 
     def _on_rendered(self) -> None:
         """The shown result is on screen: the worker may measure it (Worker.measure_after_drawn);
         while a slider is held, not before it is let go (measuring takes the pipeline's lane
         for ~0.1 s at grid 512, which the drag's next value would wait for)."""
-        if self._drawn_due is not None and not self.panel.is_dragging():
-            self._drawn_due.set()
-            self._drawn_due = None
+        if not self.panel.is_dragging():
+            self.session.drawn()
 
-    def _on_done(self, kind: str, job_id: int, value: object) -> None:
-        if kind == PIPELINE:
-            if self.session.accept_measured(job_id) and self.result is not None:
-                if not self.session.message:  # not after a failure's message (Worker._failed)
-                    self.status_text.setText(
-                        self.status_text.text() + f" · measurements {1000 * value:.0f} ms"
-                    )
-                self._show_measurements()
+    def _on_measured(self, kind: str, job_id: int, seconds: object) -> None:
+        """The pipeline measured a result (side jobs answer through their handles)."""
+        if kind != PIPELINE or not self.session.accept_measured(job_id):
             return
-        token, value = value
-        if kind == "scan" and job_id == self._scan_due:
-            self._scan_due = None
-            leaf = value.extraction.leaf
-            name, params = Path(token).name, self.panel.params()
-            self.session.open_document(leaf, None, name, params=params, path=token, scan=value)
-            self._add_recent(token)
-        elif kind == "photo" and job_id == self._scan_due:
-            from leafstudio.sources.leafphoto import LeafPhoto
-
-            self._scan_due = None
-            name, params = Path(token).name, self.panel.params()
-            photo = LeafPhoto.of(value, token)  # its texture, kept when the project is saved
-            self.session.open_document(
-                value.leaf, None, name, params=params, path=token, photo=photo
-            )
-            self._add_recent(token)
-        elif kind == "texture" and self._texture_due == (job_id, token):
-            self._texture_due = None
-            self.viewport.set_texture(value, token)
-            self.texture_shown.emit()
-        elif kind == "fidelity" and self.session.accept_fidelity(token, value):
+        if self.session.result is not None:
+            if not self.session.message:  # not after a failure's message (Worker._failed)
+                self.status_text.setText(
+                    self.status_text.text() + f" · measurements {1000 * seconds:.0f} ms"
+                )
             self._show_measurements()
-        elif kind == "poisson" and token is self._poisson_leaf:
-            self.viewport.set_layer("poisson", [value])
 
-    def _on_failed(self, kind: str, job_id: int, exc: BaseException) -> None:
-        message = describe(exc)
+    def _on_pipeline_failed(self, kind: str, job_id: int, exc: BaseException) -> None:
         if kind == PIPELINE:
             self.session.accept_failure(job_id, exc)
-        elif kind in ("scan", "photo") and job_id == self._scan_due:
-            self._scan_due = None
-            self.status_text.setStyleSheet("color: #b00020")
-            self.status_text.setText(f"Failed: {message}")
-            self.show_error(f"Cannot open the {kind}", message)
-            self.failure_shown.emit(message)
-        elif kind == "fidelity" and self.scan is not None:
-            self.session.accept_fidelity(
-                self.session.shown_id, [("Scan → mesh distance", [("Failed", message)])]
-            )
-            self._show_measurements()
-        elif kind == "poisson":
-            self._poisson_leaf = None
-            self.status_text.setText(self.status_text.text() + f" — Poisson failed: {message}")
-        elif kind == "texture" and self._texture_due and self._texture_due[0] == job_id:
-            self._texture_due = None
-            if self.session.texture() != "auto":  # an unreadable image: the generated texture
-                self.session.chosen_texture = "auto"
-                self._on_notice(f"Cannot show the texture: {message}. The generated one is shown.")
-                self._update_texture()
-            else:
-                self.status_text.setText(self.status_text.text() + f" — texture: {message}")
 
     def _show_timings(self, outcome: Outcome) -> None:
         ms = [f"{name} {1000 * t:.0f} ms" for name, t in outcome.timings.items()]
@@ -969,7 +759,7 @@ class MainWindow(QMainWindow):
     def _show_measurements(self) -> None:
         """Fill the panel once the shown result is measured; with a scan open, its distances
         follow (measurements_shown fires when they are in)."""
-        result, shown = self.result, self.session.shown
+        result, shown = self.session.result, self.session.shown
         if result is None or shown.measured_id != self.session.shown_id:
             return
         if not self.measurements_dock.isVisible():  # filled when shown: no cost while hidden
@@ -979,7 +769,8 @@ class MainWindow(QMainWindow):
         self._measurements_due = False
         sections = measurement_rows(result)
         fidelity = shown.fidelity
-        waiting = self.scan is not None and (fidelity is None or fidelity[0] != shown.measured_id)
+        scan = self.session.state.scan
+        waiting = scan is not None and (fidelity is None or fidelity[0] != shown.measured_id)
         if waiting:  # the scan's sections first: with a scan open, they are what matters
             sections.insert(0, ("Scan → mesh distance", [("Computing…", "")]))
         elif fidelity is not None:

@@ -13,7 +13,8 @@ the measuring at its next step (a few tens of ms at most), so that measuring nev
 the steps done are kept on the Result, and when that newer request fails the lane goes back to
 measure what is shown. Failures are reported as exception objects and logged with their
 traceback. The pipeline's Pipeline object lives on its lane, so a parameter change reuses the
-stages it does not affect. Qt signals carry the reports to the main thread.
+stages it does not affect. Qt signals carry the reports to the main thread; a side job started
+with `start` also answers through its own handle (gui/model/jobs.py), on the main thread.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from PySide6.QtCore import QObject, Signal
 
 from leafstudio.core.pipeline import Cancelled, Pipeline, Result
 from leafstudio.errors import LeafError
+from leafstudio.gui.model.jobs import Job
 from leafstudio.gui.model.layers import Piece, build_layers
 from leafstudio.model import Leaf, Params
 
@@ -38,8 +40,7 @@ log = logging.getLogger("leafstudio.gui")
 PIPELINE = "pipeline"
 LANES = {
     PIPELINE: "pipeline",
-    "scan": "side",
-    "photo": "side",
+    "open": "side",
     "fidelity": "side",
     "poisson": "side",
     "texture": "side",
@@ -122,6 +123,9 @@ class Worker(QObject):
         self._pending: dict[str, _Job] = {}
         self._running: dict[str, _Job | None] = {lane: None for lane in set(self.lanes.values())}
         self._last_id = 0
+        self._handles: dict[int, Job] = {}  # started jobs not yet answered (main thread only)
+        self.done.connect(self._answer_done)
+        self.failed.connect(self._answer_failed)
         self._quit = False
         self._pipeline: Pipeline | None = None  # touched on the pipeline lane only
         self._shown: Outcome | None = None  # the last outcome yielded (pipeline lane only)
@@ -148,6 +152,26 @@ class Worker(QObject):
             self._pending[kind] = _Job(self._last_id, kind, job, args, interrupt)
             self._wake.notify_all()
             return self._last_id
+
+    def start(self, kind: str, function: Callable[..., Any], *args: Any) -> Job:
+        """Queue `function(*args)` as a side job (the Session's `run`, jobs.Run), replacing a
+        waiting job of its kind; its handle reports how it ended, on the main thread."""
+        job = Job()
+        with self._wake:
+            replaced = self._pending.get(kind)  # never runs: no answer
+            job.id = self.submit(kind, _plain(function), *args)
+        if replaced is not None:
+            self._handles.pop(replaced.id, None)
+        self._handles[job.id] = job
+        return job
+
+    def _answer_done(self, _kind: str, job_id: int, value: object) -> None:
+        if (job := self._handles.pop(job_id, None)) is not None:
+            job.finish(value)
+
+    def _answer_failed(self, _kind: str, job_id: int, exc: BaseException) -> None:
+        if (job := self._handles.pop(job_id, None)) is not None:
+            job.fail(exc)
 
     def submit_pipeline(self, leaf: Leaf, params: Params, interrupt: bool = True) -> int:
         """Queue a reconstruction (the Session's `submit`)."""
@@ -280,6 +304,15 @@ class Worker(QObject):
                 self._pending[PIPELINE] = _Job(
                     outcome.request.id, PIPELINE, self._measure, (outcome,), False
                 )
+
+
+def _plain(function: Callable[..., Any]) -> Callable[..., Any]:
+    """A job for `submit` that runs `function(*args)` without the context."""
+
+    def run(_context: Context, *args: Any) -> Any:
+        return function(*args)
+
+    return run
 
 
 _STOPPED = object()

@@ -1,0 +1,134 @@
+"""Issue 20, finding 3: the session, not the window, opens files (through workflows.open_file,
+the command line's path), owns the side jobs (texture, Poisson, the scan's distances) and hears
+how each job ended through its own handle. All without Qt: the jobs run at once."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from leafstudio.gui.model.jobs import Job, run_now
+from leafstudio.gui.model.session import Session
+from leafstudio.sources.demos import demo
+from leafstudio.sources.files import save_leaf
+
+from .test_scan import synthetic_scan, write_points
+from .test_session import FAST, Runner
+
+
+def opened_session() -> tuple[Session, Runner, dict[str, list]]:
+    runner = Runner()
+    session = Session(runner, FAST)
+    got: dict[str, list] = {"opened": [], "failed": [], "opening": []}
+    session.opened.connect(got["opened"].append)
+    session.open_failed.connect(lambda what, message: got["failed"].append((what, message)))
+    session.opening.connect(lambda path, what: got["opening"].append(what))
+    return session, runner, got
+
+
+def test_a_job_handle_says_how_its_job_ended_even_to_a_late_listener():
+    done = run_now("x", lambda a, b: a + b, 2, 3)
+    seen: list = []
+    done.on_done(seen.append).on_failed(seen.append)
+    assert done.finished and seen == [5]
+    failed = run_now("x", lambda: 1 / 0)
+    failed.on_done(seen.append).on_failed(lambda exc: seen.append(type(exc)))
+    assert seen == [5, ZeroDivisionError]
+    pending = Job(7)
+    pending.on_done(seen.append)
+    assert not pending.finished and seen == [5, ZeroDivisionError]
+    pending.finish("late")
+    assert seen[-1] == "late"
+
+
+def test_the_session_opens_a_project_with_its_parameters(tmp_path):
+    session, runner, got = opened_session()
+    path = tmp_path / "p.leaf.json"
+    save_leaf(demo("nested"), path, FAST.with_(k=4))
+    job = session.open_path(str(path))
+    assert job.finished and got["opened"] == [str(path)] and got["opening"] == ["file"]
+    assert session.state.path == str(path) and session.params == FAST.with_(k=4)
+    np.testing.assert_allclose(session.leaf.boundary, demo("nested").boundary)
+    assert runner.requests[-1][1] == FAST.with_(k=4) and not session.is_modified()
+
+
+def test_a_point_list_that_is_a_scan_opens_as_a_scan(tmp_path):
+    session, runner, got = opened_session()
+    path = write_points(tmp_path / "scan.txt", synthetic_scan())
+    session.open_path(path)
+    assert got["opened"] == [path] and session.state.scan is not None
+    assert [p.name for p in session.state.scan.pieces] == ["scan:blade", "scan:dropped"]
+    runner.finish(session)
+    fidelity = session.shown.fidelity  # the scan's distances, computed after the result
+    assert fidelity is not None and fidelity[0] == session.shown_id
+    assert fidelity[1][0][0].startswith("Scan → mesh distance")
+
+
+@pytest.mark.parametrize(
+    ("name", "rows", "words"),
+    [
+        (  # a figure eight: refused where the command line refuses it
+            "eight.csv",
+            np.column_stack(
+                [
+                    np.cos(np.linspace(0, 2 * np.pi, 80, endpoint=False)),
+                    0.3 * np.sin(2 * np.linspace(0, 2 * np.pi, 80, endpoint=False)),
+                    np.zeros(80),
+                ]
+            ),
+            "crosses itself near",
+        ),
+        (
+            "blob.xyz",
+            np.random.default_rng(1).normal(size=(2000, 3)),
+            "does not look like one leaf",
+        ),
+    ],
+)
+def test_a_file_the_command_line_refuses_is_refused_and_the_document_kept(
+    tmp_path, name, rows, words
+):
+    session, _runner, got = opened_session()
+    session.open_demo("nested")
+    before = session.state
+    path = write_points(tmp_path / name, rows)
+    session.open_path(path)
+    assert got["opened"] == [] and len(got["failed"]) == 1
+    what, message = got["failed"][0]
+    assert what == "file" and words in message and name in message and "\n" not in message
+    assert session.state is before
+
+
+def test_a_demo_or_a_new_sketch_supersedes_a_file_still_being_read(tmp_path):
+    pending: list[Job] = []
+
+    def later(kind, function, *args):  # a worker that has not answered yet
+        pending.append(Job(len(pending) + 1))
+        pending[-1].work = (function, args)
+        return pending[-1]
+
+    session = Session(Runner(), FAST, run=later)
+    path = tmp_path / "p.leaf.json"
+    save_leaf(demo("parallel"), path)
+    job = session.open_path(str(path))
+    session.open_demo("nested")
+    function, args = job.work
+    job.finish(function(*args))  # the file arrives after the demo was chosen
+    assert session.state.title == "nested demo" and session.state.path is None
+
+
+def test_the_texture_is_made_when_shown_and_a_bad_image_falls_back_to_the_generated_one(tmp_path):
+    session, runner, _got = opened_session()
+    shown, notes = [], []
+    session.side.texture_shown.connect(lambda image, key: shown.append(key))
+    session.noticed.connect(notes.append)
+    session.open_demo("nested")
+    runner.finish(session)
+    assert shown == []  # the mesh does not show the texture: nothing made
+    session.side.set_texture_shown(True)
+    assert len(shown) == 1 and shown[0][0] == ("auto",)
+    session.side.set_texture_shown(True)
+    assert len(shown) == 1  # already on the mesh
+    session.choose_texture(str(tmp_path / "missing.png"))
+    assert session.texture() == "auto" and "Cannot show the texture" in notes[-1]
+    assert len(shown) == 1 and session.side.texture_key == shown[0]
