@@ -421,14 +421,14 @@ def test_an_undo_while_a_slider_is_held_leaves_its_drag_no_base_from_before(wind
     slider.setSliderDown(True)
     slider.setValue(6)
     qtbot.waitUntil(lambda: session.params.k == 6)
-    window.undo_action.trigger()
+    window.actions["edit.undo"].trigger()
     undone = session.state
     assert undone.params.k == 3 and slider.value() == 3
     slider.setValue(4)
     qtbot.waitUntil(lambda: session.params.k == 4)
     slider.setSliderDown(False)  # let go: one step, from the state the undo made
     assert history.index == 1 and history.steps[0].before is undone
-    window.undo_action.trigger()
+    window.actions["edit.undo"].trigger()
     assert session.state is undone
     wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
 
@@ -447,7 +447,7 @@ def test_undo_to_auto_k_is_not_overridden_by_k_typed_and_not_applied(window, qtb
     qtbot.waitUntil(field.hasFocus)
     field.selectAll()
     qtbot.keyClicks(field, "7")
-    window.undo_action.trigger()
+    window.actions["edit.undo"].trigger()
     wait_result(qtbot, window, lambda o: o.result.params.k == "auto")
     qtbot.wait(THROTTLE_MS * 3)  # a change would have been sent by now
     assert window.session.params == FAST.with_(k="auto") and window.panel.auto_k.isChecked()

@@ -144,16 +144,16 @@ def test_vein_colours_match_between_the_views(window):
 
 
 def test_a_parameter_change_is_undone_and_redone_with_ctrl_y(window, qtbot):
-    assert QKeySequence("Ctrl+Y") in window.redo_action.shortcuts()
-    assert QKeySequence("Ctrl+Shift+Z") in window.redo_action.shortcuts()
+    assert QKeySequence("Ctrl+Y") in window.actions["edit.redo"].shortcuts()
+    assert QKeySequence("Ctrl+Shift+Z") in window.actions["edit.redo"].shortcuts()
     k = window.panel.k.value()
     window.panel.k.setValue(k + 4)
-    assert window.undo_action.isEnabled() and "K" in window.undo_action.text()
+    assert window.actions["edit.undo"].isEnabled() and "K" in window.actions["edit.undo"].text()
     assert window.isWindowModified()
-    window.undo_action.trigger()
+    window.actions["edit.undo"].trigger()
     assert window.panel.k.value() == k and window.session.params.k == k
     wait_result(qtbot, window, lambda o: o.result.params.k == k)
-    window.redo_action.trigger()
+    window.actions["edit.redo"].trigger()
     assert window.panel.k.value() == k + 4
 
 

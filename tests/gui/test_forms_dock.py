@@ -49,7 +49,7 @@ def test_each_choice_shows_its_definition(qtbot):
 
 
 def test_a_chosen_form_becomes_the_document_as_an_editable_sketch(window, panel, qtbot):
-    assert isinstance(window.forms_dock, QDockWidget)
+    assert isinstance(window.docks["Forms"], QDockWidget)
     before = window.session.leaf
     panel.gallery.setCurrentRow(list(SHAPES).index("cordate"))
     panel.margin.setCurrentText("serrate")

@@ -340,7 +340,7 @@ def test_an_undo_while_up_is_held_ends_the_run_and_the_next_step_starts_after_it
     side = on_the_midrib(window, qtbot)
     press_key(side, QEvent.Type.KeyPress, Qt.Key.Key_Up)  # held: the run's first preview
     assert history.count() == 1 and window.editor.view.sketch is session.state.sketch
-    window.undo_action.trigger()
+    window.actions["edit.undo"].trigger()
     undone = session.state
     assert undone.params.k == 3 and undone.sketch is None  # the loaded leaf, as opened
     press_key(side, QEvent.Type.KeyPress, Qt.Key.Key_Up, repeat=True)  # the key repeats
@@ -350,7 +350,7 @@ def test_an_undo_while_up_is_held_ends_the_run_and_the_next_step_starts_after_it
     press_key(side, QEvent.Type.KeyPress, Qt.Key.Key_Down)  # an ordinary nudge later
     press_key(side, QEvent.Type.KeyRelease, Qt.Key.Key_Down)
     assert history.index == 1 and history.steps[0].before is undone
-    window.undo_action.trigger()
+    window.actions["edit.undo"].trigger()
     assert session.state is undone and session.params.k == 3  # was K 5: the undone change
     wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
 
@@ -362,12 +362,12 @@ def test_an_undo_or_redo_during_a_handle_drag_drops_the_drag(window, qtbot, move
     session, history = window.session, window.session.history
     side = on_the_midrib(window, qtbot)
     if move == "redo":
-        window.undo_action.trigger()  # K 3, "Change K" to redo
+        window.actions["edit.undo"].trigger()  # K 3, "Change K" to redo
     count, start = history.count(), spot(side, 2)
     QTest.mousePress(side, Qt.MouseButton.LeftButton, pos=start)
     QTest.mouseMove(side, start + QPoint(0, -6))
     assert session.state.sketch is not None  # the drag's preview
-    (window.undo_action if move == "undo" else window.redo_action).trigger()
+    (window.actions["edit.undo"] if move == "undo" else window.actions["edit.redo"]).trigger()
     moved_to = session.state
     assert side.grabbed is None and moved_to.params.k == (3 if move == "undo" else 5)
     QTest.mouseMove(side, start + QPoint(0, -12))
@@ -378,7 +378,7 @@ def test_an_undo_or_redo_during_a_handle_drag_drops_the_drag(window, qtbot, move
     QTest.mouseMove(side, start + QPoint(0, -6))
     QTest.mouseRelease(side, Qt.MouseButton.LeftButton, pos=start + QPoint(0, -6))
     assert history.steps[history.index - 1].before is moved_to
-    window.undo_action.trigger()
+    window.actions["edit.undo"].trigger()
     assert session.state is moved_to
     wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
 

@@ -47,9 +47,9 @@ def test_undo_and_redo_every_edit(window, qtbot):
     sketch_leaf(qtbot, window)
     wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     full = window.session.state.leaf
-    assert window.undo_action.shortcut() == QKeySequence(QKeySequence.StandardKey.Undo)
-    assert window.redo_action.shortcut() == QKeySequence(QKeySequence.StandardKey.Redo)
-    window.undo_action.trigger()
+    assert window.actions["edit.undo"].shortcut() == QKeySequence(QKeySequence.StandardKey.Undo)
+    assert window.actions["edit.redo"].shortcut() == QKeySequence(QKeySequence.StandardKey.Redo)
+    window.actions["edit.undo"].trigger()
     assert window.editor.view.sketch.veins[0].shape == (3, 3)
     outcome = wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     assert outcome.result.leaf is not full
@@ -58,7 +58,7 @@ def test_undo_and_redo_every_edit(window, qtbot):
     assert window.editor.view.sketch.boundary.shape == (10, 2)
     assert window.editor.view.sketch.veins == ()  # no empty vein is kept
     window.session.history.redo()  # the vein with its first point
-    window.redo_action.trigger()
+    window.actions["edit.redo"].trigger()
     assert window.editor.view.sketch.veins[0].shape == (2, 3)
     while window.session.history.can_redo():
         window.session.history.redo()
@@ -118,7 +118,7 @@ def test_an_undo_during_a_point_drag_drops_the_drag(window, qtbot):
     QTest.mousePress(view.viewport(), Qt.MouseButton.LeftButton, pos=press)
     QTest.mouseMove(view.viewport(), press + QPoint(12, 0))
     assert session.state.sketch is view.sketch  # the drag's preview
-    window.undo_action.trigger()
+    window.actions["edit.undo"].trigger()
     undone = session.state
     assert undone.params.k == 3 and view._drag is None
     QTest.mouseMove(view.viewport(), press + QPoint(24, 0))
@@ -128,7 +128,7 @@ def test_an_undo_during_a_point_drag_drops_the_drag(window, qtbot):
     QTest.mouseMove(view.viewport(), press + QPoint(12, 0))
     QTest.mouseRelease(view.viewport(), Qt.MouseButton.LeftButton, pos=press + QPoint(12, 0))
     assert history.index == 1 and history.undo_text() == "Move point"
-    window.undo_action.trigger()
+    window.actions["edit.undo"].trigger()
     assert session.state is undone  # was K 5: the undone change came back
     wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
 
@@ -141,7 +141,7 @@ def test_an_undo_that_removes_the_dragged_point_ends_the_drag_without_an_error(w
     press = view.view_point(view.sketch.veins[0][-1, :2]).toPoint()
     QTest.mousePress(view.viewport(), Qt.MouseButton.LeftButton, pos=press)
     QTest.mouseMove(view.viewport(), press + QPoint(0, 10))
-    window.undo_action.trigger()  # the point's "Add point" undone
+    window.actions["edit.undo"].trigger()  # the point's "Add point" undone
     undone, steps = window.session.state, history.index
     assert view.sketch.veins[0].shape == (3, 3) and view.sketch is undone.sketch
     QTest.mouseMove(view.viewport(), press + QPoint(0, 20))

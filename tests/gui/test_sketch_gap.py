@@ -93,7 +93,7 @@ def test_an_undo_back_to_a_loaded_leaf_of_another_document_waits_for_its_sketch(
     wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     parallel = view.sketch
     never_done(window)
-    window.undo_action.trigger()
+    window.actions["edit.undo"].trigger()
     assert session.state is nested and view.sketch is not parallel
     assert not window.editor.isEnabled()
     click(qtbot, view, parallel.boundary[0])

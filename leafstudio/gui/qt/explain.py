@@ -6,7 +6,6 @@ turntable (GIF or MP4) and of the steps side by side (PNG) for slides (render/sl
 from __future__ import annotations
 
 from PySide6.QtCore import Qt
-from PySide6.QtGui import QAction
 from PySide6.QtWidgets import (
     QApplication,
     QCheckBox,
@@ -19,6 +18,8 @@ from PySide6.QtWidgets import (
     QVBoxLayout,
     QWidget,
 )
+
+from leafstudio.gui.qt.actions import Action
 
 # (title, caption, the layers shown)
 STEPS: tuple[tuple[str, str, frozenset[str]], ...] = (
@@ -269,16 +270,6 @@ class ViewAids(QWidget):
         self._label = label
 
 
-def _menu(window, title: str):
-    """The window's menu of that title (MainWindow.menus), made if it has none."""
-    menus = getattr(window, "menus", None)
-    if menus is None:
-        menus = window.menus = {}
-    if title not in menus:
-        menus[title] = window.menuBar().addMenu(title)
-    return menus[title]
-
-
 def export_slide(window, kind: str, path: str) -> bool:
     """Write the shown result's turntable or steps figure to `path`; errors in the window."""
     from leafstudio.errors import LeafError
@@ -299,45 +290,52 @@ def export_slide(window, kind: str, path: str) -> bool:
     return True
 
 
-def install(window) -> None:
-    """Add View > Steps of the pipeline, File > Export turntable / steps figure, a tooltip on
-    every layer, and the view aids (height exaggeration, kept colour range, K) under the layers."""
+def install(window) -> ViewAids:
+    """Add View > Steps of the pipeline, File > Export turntable / steps figure (rows of the
+    window's action table), a tooltip on every layer, and the view aids (height exaggeration,
+    kept colour range, K) under the layers; returns the view aids."""
     add_layer_help(window)
     aids = ViewAids(window)
-    layout = window.layers_dock.widget().layout()
-    layout.insertWidget(max(layout.count() - 1, 0), aids)  # above the stretch
+    window.layers.add_widget(aids)
     window.result_shown.connect(lambda _outcome: aids.apply())
     window.layer_list.itemChanged.connect(lambda _item: aids.apply())
     window.coloring.currentIndexChanged.connect(lambda _row: aids.apply())
     window.edges.toggled.connect(lambda _on: aids.apply())
-    window.view_aids = aids
+    window.add_actions(explain_actions())
+    return aids
 
-    def steps() -> None:
-        window.steps_dialog = StepsDialog(window)
-        window.steps_dialog.show()
 
-    def ask(kind: str, caption: str, filters: str, suffix: str) -> None:
+def explain_actions() -> tuple[Action, ...]:
+    """The Steps view and the exports for slides, as rows of the window's action table."""
+    dialogs: list[StepsDialog] = []  # the open one, kept while it is shown
+
+    def steps(window) -> None:
+        dialogs[:] = [StepsDialog(window)]
+        dialogs[0].show()
+
+    def ask(window, kind: str, caption: str, filters: str, suffix: str) -> None:
         path, _ = QFileDialog.getSaveFileName(window, caption, "", filters)
         if path:
             export_slide(window, kind, path if "." in path.rsplit("/", 1)[-1] else path + suffix)
 
-    view = _menu(window, "View")
-    action = QAction("&Steps of the pipeline…", window)
-    action.setToolTip("Walk through the pipeline one step at a time, each step explained.")
-    action.triggered.connect(steps)
-    view.addAction(action)
-    files = _menu(window, "File")
-    quit_action = getattr(window, "quit_action", None)
-    for kind, text, filters, suffix in (
-        ("turntable", "Export &turntable…", "Animations (*.gif *.mp4)", ".gif"),
-        ("steps", "Export steps &figure…", "PNG (*.png)", ".png"),
-    ):
-        act = QAction(text, window)
-        act.triggered.connect(
-            lambda _=False, k=kind, t=text, f=filters, s=suffix: ask(k, t.replace("&", ""), f, s)
+    exports = tuple(
+        Action(
+            f"file.export_{kind}",
+            "File",
+            text,
+            lambda w, k=kind, t=text, f=filters, s=suffix: ask(w, k, t.replace("&", ""), f, s),
+            before="file.quit",
         )
-        if quit_action is not None:
-            files.insertAction(quit_action, act)
-        else:
-            files.addAction(act)
-    window.explain_actions = action
+        for kind, text, filters, suffix in (
+            ("turntable", "Export &turntable…", "Animations (*.gif *.mp4)", ".gif"),
+            ("steps", "Export steps &figure…", "PNG (*.png)", ".png"),
+        )
+    )
+    view = Action(
+        "view.steps",
+        "View",
+        "&Steps of the pipeline…",
+        steps,
+        tooltip="Walk through the pipeline one step at a time, each step explained.",
+    )
+    return (view, *exports)

@@ -318,8 +318,9 @@ class FormsPanel(QWidget):
 
 
 def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPanel:
-    """Add the Forms dock to the main window: a chosen form becomes the document through the
-    window's session (one undo step); Grow veins edits the current sketch (one undo step)."""
+    """Add the Forms dock to the main window (a tab beside the Sketch dock): a chosen form
+    becomes the document through the window's session (one undo step); Grow veins edits the
+    current sketch (one undo step). Returns the dock's panel."""
     panel = FormsPanel()
     session = window.session
     made = {"serial": None}  # the document the gallery made last
@@ -365,12 +366,7 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
     panel.chosen.connect(choose)
     panel.grow.connect(grow)
     _add_grow_row(window.editor, grow)
-    window.forms_dock = window._dock("Forms", panel, dock_area)
-    sketch_dock = getattr(window, "sketch_dock", None)
-    if sketch_dock is not None:  # a tab beside the sketch: both want the height
-        window.tabifyDockWidget(sketch_dock, window.forms_dock)
-        sketch_dock.raise_()
-    window.forms_panel = panel
+    window.add_dock("Forms", panel, dock_area, tab_with="Sketch")  # both want the height
     return panel
 
 

@@ -1,0 +1,76 @@
+"""The Layers dock's panel: a checkable list of the 3D view's layers (gui/model/layers.py), the
+mesh's edges, what its colours show, and the camera presets. Features add their widgets below
+(`add_widget`: explain.py's view aids)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from PySide6.QtCore import Qt
+from PySide6.QtWidgets import (
+    QCheckBox,
+    QComboBox,
+    QHBoxLayout,
+    QListWidget,
+    QListWidgetItem,
+    QPushButton,
+    QVBoxLayout,
+    QWidget,
+)
+
+from leafstudio.gui.model.layers import LAYERS, MESH_COLORINGS
+from leafstudio.gui.model.textures import TEXTURE, TEXTURE_LABEL
+from leafstudio.gui.qt.viewport import CAMERAS
+
+COLORING_TIP = (
+    "What the mesh's colours show: its height above the leaf's plane, how it bends "
+    "(mean or Gaussian curvature; red bends one way, blue the other), or the texture an "
+    "export writes (blade and veins, the photo the leaf came from, or the image chosen "
+    "in Export mesh) mapped through the mesh's UVs, as Blender shows it."
+)
+
+
+class LayersPanel(QWidget):
+    """The layer list (`list`: each item's UserRole data is its layer key), `edges`, `coloring`
+    (each item's data a MESH_COLORINGS name or TEXTURE) and a button per camera preset."""
+
+    def __init__(self, camera: Callable[[str], object], parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.list, self.edges = QListWidget(), QCheckBox("Show mesh edges")
+        for key, label, on in LAYERS:
+            item = QListWidgetItem(label)
+            item.setData(Qt.ItemDataRole.UserRole, key)
+            item.setFlags(item.flags() | Qt.ItemFlag.ItemIsUserCheckable)
+            item.setCheckState(Qt.CheckState.Checked if on else Qt.CheckState.Unchecked)
+            self.list.addItem(item)
+        self.list.setMaximumHeight(self.list.sizeHintForRow(0) * len(LAYERS) + 8)
+        self.edges.setToolTip("Draw the triangles' edges on the mesh.")
+        self.coloring = QComboBox()
+        for name, (label, _) in MESH_COLORINGS.items():
+            self.coloring.addItem(f"Colour by {label}", name)
+        self.coloring.addItem(f"Show the {TEXTURE_LABEL}", TEXTURE)
+        self.coloring.setToolTip(COLORING_TIP)
+        cameras = QHBoxLayout()
+        for preset in CAMERAS:
+            button = QPushButton(preset.capitalize())
+            button.setToolTip(f"Look at the leaf from the {preset} view.")
+            button.clicked.connect(lambda _=False, p=preset: camera(p))
+            cameras.addWidget(button)
+        column = QVBoxLayout(self)
+        column.addWidget(self.list)
+        column.addWidget(self.edges)
+        column.addWidget(self.coloring)
+        column.addLayout(cameras)
+        column.addStretch(1)
+
+    def add_widget(self, widget: QWidget) -> None:
+        """A feature's widget under the presets (above the stretch)."""
+        layout = self.layout()
+        layout.insertWidget(max(layout.count() - 1, 0), widget)
+
+    def set_checked(self, key: str, on: bool) -> None:
+        """Check or uncheck layer `key`'s item (its view follows through itemChanged)."""
+        for row in range(self.list.count()):
+            item = self.list.item(row)
+            if item.data(Qt.ItemDataRole.UserRole) == key:
+                item.setCheckState(Qt.CheckState.Checked if on else Qt.CheckState.Unchecked)
