@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from PySide6.QtCore import QSettings
@@ -15,8 +17,11 @@ FAST = Params(k=3, grid=48, samples=1500)  # small enough for quick runs, same c
 WAIT_MS = 60_000
 
 
-def make_window(qtbot, settings_path) -> MainWindow:
+def make_window(qtbot, settings_path, params: Params | None = None) -> MainWindow:
+    """A shown window; `params`: the parameters it remembers from a last run (its first)."""
     settings = QSettings(str(settings_path), QSettings.Format.IniFormat)
+    if params is not None:
+        settings.setValue("params", json.dumps(params.to_dict()))
     window = MainWindow(settings)
     qtbot.addWidget(window)
     window.show()
@@ -68,8 +73,7 @@ def never_block_on_questions(monkeypatch):
 @pytest.fixture
 def window(qtbot, tmp_path):
     """The main window on the nested demo at a small grid, with its first result shown."""
-    win = make_window(qtbot, tmp_path / "settings.ini")
-    win.panel.set_params(FAST)
+    win = make_window(qtbot, tmp_path / "settings.ini", FAST)
     win.open_demo("nested")
     wait_result(qtbot, win)
     yield win

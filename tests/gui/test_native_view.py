@@ -75,8 +75,7 @@ def test_the_opengl_widget_is_the_fallback_and_draws_the_leaf(qtbot, tmp_path, m
     from pyvistaqt import QtInteractor
 
     monkeypatch.setenv(WIDGET_ENV, "opengl")
-    win = make_window(qtbot, tmp_path / "settings.ini")
-    win.panel.set_params(FAST)
+    win = make_window(qtbot, tmp_path / "settings.ini", FAST)
     win.open_demo("nested")
     wait_result(qtbot, win)
     assert isinstance(win.viewport.plotter, QtInteractor)
@@ -87,8 +86,7 @@ def test_the_opengl_widget_is_the_fallback_and_draws_the_leaf(qtbot, tmp_path, m
 @pytest.mark.skipif(not Path("/proc/self/fd").is_dir(), reason="counts the process's sockets")
 def test_closing_the_window_releases_the_views_x_connections(qtbot, tmp_path):
     before = _x_sockets()
-    win = make_window(qtbot, tmp_path / "settings.ini")
-    win.panel.set_params(FAST)
+    win = make_window(qtbot, tmp_path / "settings.ini", FAST)
     win.open_demo("nested")
     wait_result(qtbot, win)
     assert _x_sockets() > before  # VTK's own connections to the X server, while it draws

@@ -86,9 +86,8 @@ def record_threads(monkeypatch, name: str, module=scans) -> list[int]:
 @pytest.fixture
 def scan_window(qtbot, tmp_path, monkeypatch):
     """A window that opened a synthetic 6-column scan (as `leafstudio gui SCAN` would)."""
-    win = make_window(qtbot, tmp_path / "settings.ini")
+    win = make_window(qtbot, tmp_path / "settings.ini", FAST)
     win.extract_threads = record_threads(monkeypatch, "extract_leaf", workflows)
-    win.panel.set_params(FAST)
     path = write_points(tmp_path / "scan.txt", synthetic_scan())
     assert win.open_path(path)  # a scan, not a leaf: read and extracted off the main thread
     wait_fidelity(qtbot, win)

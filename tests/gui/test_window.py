@@ -174,7 +174,7 @@ def test_parameters_and_layers_are_remembered(qtbot, tmp_path):
     first.layer_list.item(2).setCheckState(Qt.CheckState.Checked)
     close_window(first)
     second = make_window(qtbot, tmp_path / "s.ini")
-    assert second.panel.params() == FAST.with_(k=7, seed=11)
+    assert second.panel.params() == second.session.params == FAST.with_(k=7, seed=11)
     assert second.layer_list.item(2).checkState() == Qt.CheckState.Checked
     close_window(second)
 
