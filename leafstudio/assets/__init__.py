@@ -1,5 +1,5 @@
 """Assets for 3D tools: meshes with normals, UVs and textures (glTF, OBJ, PLY, ...), solid leaves
-for printing, levels of detail, and leaves from photos (DESIGN.md: assets)."""
+for printing, levels of detail, and leaves from photos (docs/architecture.md, "Where to add")."""
 
 from leafstudio.assets.asset import MeshAsset, UVMap, leaf_asset, mesh_asset
 from leafstudio.assets.export import mesh_assets, photo_transform, save_mesh

@@ -1,6 +1,7 @@
 """The command line: `leafstudio [gui|reconstruct|measure|compare|demo|extract|batch|form|veins|
 photo] ...`, one module per command (each with add_parser and run; options.py holds what several
-share). This module holds the parser, the logging and the error handling.
+share). This module holds the parser, the logging and the error handling (docs/architecture.md,
+"Command line").
 
 Every failure is one line on stderr naming the file and the problem, with exit code 2.
 """

@@ -1,7 +1,8 @@
 """Leaves from the botanical vocabulary, and veins grown inside any outline.
 
 - `Form` / `make_form`: a leaf from terms (shape, apex, base, margin, venation, relief, seed),
-  following the forms' convention (DESIGN.md): base at the origin, apex on +x at length 1.
+  following the forms' convention (docs/architecture.md): base at the origin, apex on +x at
+  length 1.
 - `grow_veins`: veins of a chosen kind inside any outline (space colonization, Runions et al. 2005).
 - `terms`: every term with its definition in plain words.
 """

@@ -1,10 +1,10 @@
 """A leaf from botanical terms: the outline (outline.py), grown veins (veins.py) and relief.
 
-The convention (DESIGN.md): the blade's base, where the midrib meets it, is at the origin; the
-apex lies on +x and the outline's farthest point along +x is at x = 1; the blade lies in z = 0
-apart from its relief. Relief is heights on the boundary and the veins, so it goes through the
-pipeline like any leaf's: the fold and the wave on the boundary become the base surface b(x), the
-veins' heights above it the Gaussian mixture.
+The convention (docs/architecture.md): the blade's base, where the midrib meets it, is at the
+origin; the apex lies on +x and the outline's farthest point along +x is at x = 1; the blade lies
+in z = 0 apart from its relief. Relief is heights on the boundary and the veins, so it goes through
+the pipeline like any leaf's: the fold and the wave on the boundary become the base surface b(x),
+the veins' heights above it the Gaussian mixture.
 """
 
 from __future__ import annotations

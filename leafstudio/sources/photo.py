@@ -23,9 +23,9 @@
    (leafends.py), of which the base is the one `base_end` names (left, right, top, bottom) or, by
    default, the one with a basal notch (cordate, sagittate), else the one the veins lean away
    from, else the wider one.
-6. The leaf follows the forms' convention (DESIGN.md): the base at the origin, the apex on +x at
-   `length` (base to apex), z = 0. The affine map from those coordinates back to the photo's
-   pixels is kept (in the project, "photo": {"pixel_from_world": ...}) so that `reconstruct
+6. The leaf follows the forms' convention (docs/architecture.md): the base at the origin, the apex
+   on +x at `length` (base to apex), z = 0. The affine map from those coordinates back to the
+   photo's pixels is kept (in the project, "photo": {"pixel_from_world": ...}) so that `reconstruct
    --texture PHOTO` maps each pixel back where it was.
 """
 
