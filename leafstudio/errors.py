@@ -10,6 +10,20 @@ class LeafError(ValueError):
         What is wrong, in plain words.
     source : str, optional
         The file (or other origin) the problem belongs to; prefixed to the message.
+
+    Attributes
+    ----------
+    problem, source : str, str or None
+        The two parts, apart (a caller that knows the file adds it: `LeafError(e.problem, path)`).
+
+    Examples
+    --------
+    >>> import leafstudio as ls
+    >>> try:
+    ...     ls.load_leaf("missing.csv")
+    ... except ls.LeafError as exc:
+    ...     print(exc.source, "|", exc.problem)
+    missing.csv | no such file
     """
 
     def __init__(self, message: str, source: str | None = None) -> None:

@@ -73,6 +73,23 @@ class Leaf:
         Points on the leaf margin, in any order; duplicates and mild noise are fine.
     veins : list of (m_i, 3) float arrays, default: []
         Points along each vein, ordered from its start to its end where known.
+
+    Raises
+    ------
+    LeafError
+        For points that are not finite (n, 3) numbers, or a leaf too large or too small to
+        measure in float64.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import leafstudio as ls
+    >>> t = np.linspace(0, 2 * np.pi, 100, endpoint=False)
+    >>> boundary = np.column_stack([np.cos(t), 0.4 * np.sin(t), np.zeros(100)])
+    >>> midrib = np.column_stack([np.linspace(-0.9, 0.9, 20), np.zeros(20), np.full(20, 0.05)])
+    >>> leaf = ls.Leaf(boundary, [midrib])
+    >>> leaf.boundary.shape, leaf.vein_points.shape
+    ((100, 3), (20, 3))
     """
 
     boundary: np.ndarray
@@ -213,7 +230,23 @@ class Params:
 
 
 PARAMS: dict[str, Param] = declared(Params)  # each field's declaration, in field order
-Params.__doc__ = f"{Params.__doc__}{numpy_doc(PARAMS)}"
+_PARAMS_EXAMPLES = """
+    Raises
+    ------
+    LeafError
+        For a value out of its range or of the wrong kind, naming the parameter.
+
+    Examples
+    --------
+    >>> import leafstudio as ls
+    >>> params = ls.Params(k=3, grid=64)
+    >>> params.with_(k="auto").k
+    'auto'
+    >>> ls.Params(k=0)
+    Traceback (most recent call last):
+    leafstudio.errors.LeafError: K must be between 1 and 64, got 0
+"""
+Params.__doc__ = f"{Params.__doc__}{numpy_doc(PARAMS)}{_PARAMS_EXAMPLES}"
 
 
 def as_leaf(value: Any) -> Leaf:

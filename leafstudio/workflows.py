@@ -67,6 +67,13 @@ class Opened:
         What was found in a photo (its outline's map to the photo's pixels).
     notes : tuple of str
         Warnings about the input (`check_scan` with `force`).
+
+    Examples
+    --------
+    >>> from leafstudio.workflows import Opened
+    >>> from leafstudio.sources.demos import demo
+    >>> Opened("nested", "leaf", demo("nested")).kind
+    'leaf'
     """
 
     path: str
@@ -96,10 +103,33 @@ def open_scan(
     force : bool, default: False
         Turn the plausibility refusals into warnings (`Opened.notes`).
 
+    Returns
+    -------
+    Opened
+        kind "scan": the extracted leaf (`points` boundary points, the veins lifted onto the
+        scan), the scan's (n, 3) points and the extraction (which points are the blade).
+
     Raises
     ------
     LeafError
         Naming `path`: unreadable, not leaf-like, or no blade found.
+
+    Examples
+    --------
+    A scan of an elliptic blade with a raised midrib, as a scanner's points:
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> xy = rng.uniform(-1, 1, (6000, 2)) * [1, 0.4]
+    >>> xy = xy[xy[:, 0] ** 2 + (xy[:, 1] / 0.4) ** 2 < 1]
+    >>> scan = np.column_stack([xy, 0.05 * np.exp(-((xy[:, 1] / 0.05) ** 2))])
+    >>> path = Path(tempfile.mkdtemp()) / "scan.xyz"
+    >>> np.savetxt(path, scan)
+    >>> opened = open_scan(path)
+    >>> opened.kind, opened.leaf.boundary.shape, opened.scan.shape
+    ('scan', (200, 3), (4710, 3))
     """
     scan = read_scan(path)
     try:
@@ -116,11 +146,39 @@ def open_file(path: str, *, force: bool = False) -> Opened:
     A point list that only a scan reader takes (more columns than x, y, z and a label, or a
     .pcd), or whose points cover a surface instead of tracing an outline, opens as a scan.
 
+    Parameters
+    ----------
+    path : str or path-like
+        A photo (.png, .jpg, ...), a project (.leaf.json), a leaf file (.csv, .txt, .xyz,
+        .ply) or a scan (.ply, .pcd, .xyz, .csv, .txt).
+    force : bool, default: False
+        For a scan: turn the plausibility refusals into warnings (see `open_scan`).
+
+    Returns
+    -------
+    Opened
+        The leaf, what the file turned out to be (`kind`) and what else it held.
+
     Raises
     ------
     LeafError
         Naming `path`: unreadable, malformed, a boundary that crosses itself, a scan that is not
         plausibly one leaf.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from leafstudio.sources.demos import demo
+    >>> from leafstudio.sources.files import save_leaf
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> save_leaf(demo("nested"), folder / "leaf.csv")
+    >>> opened = open_file(folder / "leaf.csv")
+    >>> opened.kind, len(opened.leaf.veins)
+    ('leaf', 7)
+    >>> save_leaf(demo("nested"), folder / "leaf.leaf.json", Params(k=4))
+    >>> open_file(folder / "leaf.leaf.json").params.k
+    4
     """
     path = str(path)
     if is_photo(path):
@@ -153,7 +211,25 @@ def open_file(path: str, *, force: bool = False) -> Opened:
 
 def boundary_crossing(leaf: Leaf) -> np.ndarray | None:
     """Where a leaf's boundary crosses itself, as a (3,) world point, when its points trace the
-    outline in order (an unordered cloud is ordered by the pipeline, not read as given)."""
+    outline in order (an unordered cloud is ordered by the pipeline, not read as given).
+
+    Parameters
+    ----------
+    leaf : Leaf
+        Its (n, 3) boundary is read in the given order.
+
+    Returns
+    -------
+    (3,) float array or None
+        A crossing point, or None when the boundary does not cross itself or is not ordered.
+
+    Examples
+    --------
+    >>> from leafstudio.model import Leaf
+    >>> bow_tie = Leaf([[0, 0, 0], [1, 1, 0], [1, 0, 0], [0, 1, 0], [0.5, -0.2, 0]])
+    >>> boundary_crossing(bow_tie).tolist()
+    [0.5, 0.5, 0.0]
+    """
     points = leaf.boundary
     if len(points) < 4:
         return None
@@ -174,7 +250,18 @@ def boundary_crossing(leaf: Leaf) -> np.ndarray | None:
 
 @dataclass(frozen=True)
 class Reconstruction:
-    """A result with every warning its input and its run gave, and its fit to a scan."""
+    """A result with every warning its input and its run gave, and its fit to a scan.
+
+    Attributes
+    ----------
+    result : Result
+        The pipeline's result.
+    warnings : list of str
+        The input's notes, the leaf's plausibility warnings, the run's own, in that order.
+    scan_fit : dict or None
+        For a scan, the distances from its blade points to the surface: points, mean, median,
+        p95, max and the shares beyond 1% and 2% of the leaf length (`length`).
+    """
 
     result: Result
     warnings: list[str] = field(default_factory=list)
@@ -185,6 +272,15 @@ def reconstruct(
     opened: Opened, params: Params, pipeline: Pipeline | None = None
 ) -> Reconstruction:
     """Run the pipeline on an opened leaf (through `pipeline`, to reuse its stage cache).
+
+    Parameters
+    ----------
+    opened : Opened
+        From `open_file` or `open_scan` (or built from a Leaf).
+    params : Params
+        The reconstruction's settings.
+    pipeline : Pipeline, optional
+        A pipeline of `opened.leaf` whose cached stages to reuse; default a fresh one.
 
     Returns
     -------
@@ -197,6 +293,13 @@ def reconstruct(
     ------
     LeafError
         Naming the opened file.
+
+    Examples
+    --------
+    >>> from leafstudio.sources.demos import demo
+    >>> done = reconstruct(Opened("nested", "leaf", demo("nested")), Params(k=3, grid=48))
+    >>> done.result.chosen_k, done.warnings, done.scan_fit
+    (3, [], None)
     """
     try:
         result = (pipeline or Pipeline(opened.leaf)).run(params)

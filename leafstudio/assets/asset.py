@@ -40,7 +40,24 @@ SCALARS = ("height", *CURVATURE_ARRAYS)  # the per-vertex scalars written where 
 
 @dataclass(frozen=True)
 class UVMap:
-    """Leaf-plane points to UVs by one scale factor (see the module docstring)."""
+    """Leaf-plane points to UVs by one scale factor (see the module docstring).
+
+    Attributes
+    ----------
+    centre : (2,) float array
+        The plane point mapped to (1/2, 1/2).
+    size : float
+        The plane length of the UV square's side.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> uv = UVMap.around(np.array([[0.0, 0.0], [2.0, 1.0]]))
+    >>> uv(np.array([[1.0, 0.5]])).tolist()  # the box's centre
+    [[0.5, 0.5]]
+    >>> uv.to_plane(uv(np.array([[2.0, 1.0]]))).tolist()
+    [[2.0, 1.0]]
+    """
 
     centre: np.ndarray  # (2,) plane point mapped to (1/2, 1/2)
     size: float  # plane length of the UV square's side, S
@@ -86,6 +103,22 @@ class MeshAsset:
         The base colour (RGBA, alpha 0 outside the leaf) and a tangent-space normal map.
     name : str
         The mesh's name in formats that keep one (glTF).
+    solid : bool
+        A closed solid (solid.py) rather than an open sheet.
+    plane_normal, plane_u : (3,) float arrays or None
+        The leaf plane's normal (on the normals' side) and its axis along s.
+    plane_xy, outline : (n, 2) and (b, 2) float arrays or None
+        The vertices, and the leaf's outline if known, in that plane.
+
+    Examples
+    --------
+    >>> import leafstudio as ls
+    >>> from leafstudio.assets import leaf_asset
+    >>> asset = leaf_asset(ls.reconstruct(ls.demo("nested"), ls.Params(k=3, grid=32)))
+    >>> asset.points.shape, asset.faces.shape, asset.normals.shape, asset.uv.shape
+    ((372, 3), (504, 3), (372, 3), (372, 2))
+    >>> asset.with_(name="oak").name
+    'oak'
     """
 
     points: np.ndarray
@@ -171,7 +204,28 @@ def leaf_uvs(result: Result, xy: np.ndarray | None = None) -> np.ndarray:
 
 
 def leaf_asset(result: Result) -> MeshAsset:
-    """The result's mesh with closed-form normals, UVs and its scalars (no texture yet)."""
+    """The result's mesh with closed-form normals, UVs and its scalars (no texture yet).
+
+    Parameters
+    ----------
+    result : Result
+        A reconstruction; its surface gives the normals (from z's gradient, not the faces).
+
+    Returns
+    -------
+    MeshAsset
+        (n, 3) points, (m, 3) faces, (n, 3) unit normals, (n, 2) UVs in [0, 1]², and the
+        point data height, mean_curvature, gaussian_curvature, k1, k2.
+
+    Examples
+    --------
+    >>> import leafstudio as ls
+    >>> asset = leaf_asset(ls.reconstruct(ls.demo("nested"), ls.Params(k=3, grid=32)))
+    >>> sorted(asset.point_data)
+    ['gaussian_curvature', 'height', 'k1', 'k2', 'mean_curvature']
+    >>> bool(0 < asset.uv.min() and asset.uv.max() < 1)
+    True
+    """
     mesh = result.triangle_mesh
     points = np.asarray(mesh.points, dtype=float)
     xy = result.frame.to_plane(points)[0]
@@ -194,7 +248,26 @@ def outline_distance(polygon: np.ndarray, xy: np.ndarray) -> np.ndarray:
 def mesh_asset(mesh: Any) -> MeshAsset:
     """Any triangle mesh (a TriangleMesh or pyvista.PolyData) without its surface: area-weighted
     vertex normals (toward the side its faces wind counter-clockwise) and UVs in its own PCA
-    plane, by the same rule as a leaf's."""
+    plane, by the same rule as a leaf's.
+
+    Parameters
+    ----------
+    mesh : TriangleMesh or pyvista.PolyData
+        (n, 3) points and triangles; its point arrays are kept.
+
+    Returns
+    -------
+    MeshAsset
+        Without texture, outline or tangents.
+
+    Examples
+    --------
+    >>> import leafstudio as ls
+    >>> result = ls.reconstruct(ls.demo("nested"), ls.Params(k=3, grid=32))
+    >>> asset = mesh_asset(result.triangle_mesh)
+    >>> asset.normals.shape, asset.uv.shape
+    ((372, 3), (372, 2))
+    """
     points = np.asarray(mesh.points, dtype=float)
     faces = triangles_of(mesh).astype(np.int64)
     normals = vertex_normals(points, faces)

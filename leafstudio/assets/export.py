@@ -31,7 +31,36 @@ TEXTURED_SUFFIXES = (".obj", ".glb", ".gltf")  # the formats that carry a textur
 
 def photo_transform(leaf_path: str | os.PathLike) -> np.ndarray | None:
     """The (2, 3) world-to-pixel map a `leafstudio photo` project stores, or None (not a project,
-    or a project without a photo); LeafError for a malformed entry."""
+    or a project without a photo); LeafError for a malformed entry.
+
+    Parameters
+    ----------
+    leaf_path : str or path-like
+        The leaf file a mesh is made from.
+
+    Returns
+    -------
+    (2, 3) float array or None
+        Maps a leaf point's (x, y, 1) to the photo's (column, row).
+
+    Raises
+    ------
+    LeafError
+        For a project whose "photo" entry is malformed.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import leafstudio as ls
+    >>> path = Path(tempfile.mkdtemp()) / "leaf.leaf.json"
+    >>> photo = {"image": "leaf.png", "pixel_from_world": [[100, 0, 10], [0, -100, 50]]}
+    >>> ls.save_leaf(ls.demo("nested"), path, photo=photo)
+    >>> photo_transform(path).tolist()
+    [[100.0, 0.0, 10.0], [0.0, -100.0, 50.0]]
+    >>> photo_transform(path.with_name("leaf.csv")) is None
+    True
+    """
     if not str(leaf_path).lower().endswith(".json"):
         return None
     data = load_json(leaf_path)
@@ -75,6 +104,9 @@ def mesh_assets(
 
     Parameters
     ----------
+    result_or_mesh : Result, TriangleMesh or pyvista.PolyData
+        A Result gets the surface's closed-form normals and its generated texture; a bare
+        mesh area-weighted normals and no image ("auto" then means none).
     texture : "auto", "none", an image path or a PhotoTexture, default: "auto"
     thickness : float, optional
         Turn the sheet into a closed solid this thick (in the mesh's units; solid.py).
@@ -82,6 +114,26 @@ def mesh_assets(
         Coarser levels of detail to add, each with half the triangles of the one before (lod.py).
     gltf : bool, default: False
         Whether the target holds a normal map (glTF does; the other formats do not).
+
+    Returns
+    -------
+    list of MeshAsset
+        `lod` + 1 assets, finest first, named "leaf" (or "leaf_LOD0", "leaf_LOD1", ...).
+
+    Raises
+    ------
+    LeafError
+        For an image that cannot be read, or a thickness the mesh cannot take.
+
+    Examples
+    --------
+    >>> import leafstudio as ls
+    >>> result = ls.reconstruct(ls.demo("nested"), ls.Params(k=3, grid=32))
+    >>> levels = mesh_assets(result, texture="none", lod=1)
+    >>> [(a.name, len(a.faces)) for a in levels]
+    [('leaf_LOD0', 504), ('leaf_LOD1', 252)]
+    >>> mesh_assets(result, texture="none", thickness=0.01)[0].solid
+    True
     """
     result = result_or_mesh if hasattr(result_or_mesh, "surface") else None
     if result is not None:
@@ -111,8 +163,46 @@ def save_mesh(
     thickness: float | None = None,
     lod: int = 0,
 ) -> None:
-    """Write the mesh by the path's suffix (MESH_SUFFIXES) with normals, UVs, scalars, texture;
-    see mesh_assets for the options."""
+    """Write the mesh by the path's suffix (MESH_SUFFIXES) with normals, UVs, scalars, texture.
+
+    Every file is replaced atomically, and together with its companions (an OBJ's .mtl and
+    texture, the levels of detail): a failed write leaves the old files as they were.
+
+    Parameters
+    ----------
+    result_or_mesh : Result, TriangleMesh or pyvista.PolyData
+        What to write (see `mesh_assets`).
+    path : str or path-like
+        .ply, .obj (with .mtl and _texture.png beside it), .stl, .vtp, .vtk, .glb, .gltf,
+        .3mf (`assets/writers.WRITERS`).
+    texture : "auto", "none", an image path or a PhotoTexture, default: "auto"
+        The image of formats that carry one (OBJ, glTF); "auto" generates the leaf's.
+    thickness : float, optional
+        Write a closed solid this thick (in the mesh's units).
+    lod : int, default: 0
+        Coarser levels of detail to add (0 to 8): glTF keeps them in the file, the other
+        formats write NAME_lod1.EXT, ...
+
+    Raises
+    ------
+    LeafError
+        For an unknown suffix, a bad option, an image that would be overwritten, or a file
+        that cannot be written.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import leafstudio as ls
+    >>> result = ls.reconstruct(ls.demo("nested"), ls.Params(k=3, grid=32))
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> ls.save_mesh(result, folder / "leaf.obj")
+    >>> sorted(p.name for p in folder.iterdir())
+    ['leaf.mtl', 'leaf.obj', 'leaf_texture.png']
+    >>> ls.save_mesh(result, folder / "leaf.xyz")
+    Traceback (most recent call last):
+    leafstudio.errors.LeafError: .../leaf.xyz: unknown mesh type '.xyz'; use one of .ply, ...
+    """
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in MESH_SUFFIXES:

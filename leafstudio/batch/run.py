@@ -192,13 +192,28 @@ def batch(
     Returns
     -------
     Batch
-        Iterate over it to run the batch: one row (dict) per input as it completes.
+        Iterate over it to run the batch: one row (dict) per input as it completes, with the
+        trait table's columns (input, status, error, mesh, k, grid, area, ...).
+
+    Raises
+    ------
+    LeafError
+        For a bad option (an unknown format or table type, a table that would overwrite an
+        input); a bad input is a "failed" row instead, and the others go on.
 
     Examples
     --------
+    >>> import tempfile
+    >>> from pathlib import Path
     >>> import leafstudio as ls
-    >>> for row in ls.batch(["scans/"], ls.Params(grid=64), "out", scans=True):  # doctest: +SKIP
-    ...     print(row["input"], row["status"], row["area"])
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> for name in ("nested", "parallel"):
+    ...     ls.save_leaf(ls.demo(name), folder / "leaves" / f"{name}.csv")
+    >>> rows = ls.batch([folder / "leaves"], ls.Params(k=2, grid=32), folder / "out", jobs=1)
+    >>> sorted((row["mesh"], row["status"]) for row in rows)
+    [('nested.ply', 'ok'), ('parallel.ply', 'ok')]
+    >>> sorted(p.name for p in (folder / "out").iterdir())
+    ['nested.ply', 'parallel.ply', 'traits.csv']
     """
     if isinstance(inputs, str | os.PathLike):
         inputs = [inputs]

@@ -138,7 +138,39 @@ class SurfaceStage:
 
 @dataclass
 class Result:
-    """Everything one run produced; the mesh is in the input's (world) coordinates."""
+    """Everything one run produced; the mesh is in the input's (world) coordinates.
+
+    Attributes
+    ----------
+    leaf, params : Leaf, Params
+        What was reconstructed, and how.
+    frame : Frame
+        The boundary's PCA plane: `frame.to_plane` maps (n, 3) world points to (n, 2) plane
+        points and heights, `frame.to_world` back.
+    triangle_mesh : TriangleMesh
+        The mesh as arrays: (n, 3) `points`, (m, 3) `regular_faces`, and (n,) point arrays
+        height, mean_curvature, gaussian_curvature, k1, k2.
+    mesh : pyvista.PolyData
+        The same mesh for VTK, made on first use.
+    metrics : dict
+        Table-1 distances ("boundary", "veins"), mesh facts ("mesh"), sizes ("leaf"), curvature
+        ranges ("curvature"); measured on first use.
+    chosen_k : int
+        The K the surface uses (the BIC's choice when params.k is "auto").
+    warnings : list of str
+        What the run noticed (a leaf without veins is flat, ...).
+    ran, timings : tuple of str, dict of str to float
+        The stages this run computed (the others came from the cache), and their seconds.
+
+    Examples
+    --------
+    >>> import leafstudio as ls
+    >>> result = ls.reconstruct(ls.demo("nested"), ls.Params(k=3, grid=32))
+    >>> result.triangle_mesh.points.shape, result.chosen_k
+    ((372, 3), 3)
+    >>> result.metrics["mesh"]["components"], round(result.metrics["leaf"]["length"], 6)
+    (1, 1.0)
+    """
 
     leaf: Leaf
     params: Params
@@ -163,7 +195,27 @@ class Result:
     _steps: analysis.Steps | None = field(default=None, init=False, repr=False, compare=False)
 
     def height(self, xy: np.ndarray) -> np.ndarray:
-        """z of the surface at (n, 2) plane points (differentiable; see surface.py)."""
+        """z of the surface at (n, 2) plane points (differentiable; see surface.py).
+
+        Parameters
+        ----------
+        xy : (n, 2) or (2,) float array
+            Points in the plane frame's coordinates (`frame.to_plane` of world points).
+
+        Returns
+        -------
+        (n,) float array
+            The surface's height above the plane there, z(x) = b(x) + tanh(g/δ) Σ a_k N_k(x).
+
+        Examples
+        --------
+        >>> import leafstudio as ls
+        >>> result = ls.reconstruct(ls.demo("nested"), ls.Params(k=3, grid=32))
+        >>> midrib = np.array([[0.3, 0.0, 0.0], [0.5, 0.0, 0.0], [0.7, 0.0, 0.0]])
+        >>> xy, _ = result.frame.to_plane(midrib)
+        >>> result.height(xy).round(3).tolist()  # heights along the midrib, base to tip
+        [0.016, 0.031, 0.036]
+        """
         return self.surface(np.atleast_2d(np.asarray(xy, dtype=float)))
 
     @property
@@ -361,6 +413,19 @@ class Pipeline:
             Called with a stage's name just before it runs.
         should_stop : callable, optional
             Polled between stages; when it returns True the run raises Cancelled.
+
+        Returns
+        -------
+        Result
+            `Result.ran` names the stages this run computed.
+
+        Raises
+        ------
+        LeafError
+            For input the reconstruction cannot take (too few boundary points, a boundary that
+            crosses itself, veins far outside it, ...), or params that are not valid Params.
+        Cancelled
+            When `should_stop` said so.
         """
         params = as_params(params)  # Params, None or a dict; a clear error for anything else
         timings: dict[str, float] = {}
@@ -566,6 +631,33 @@ def reconstruct(leaf: Leaf, params: Params | None = None) -> Result:
 
     Warnings (such as a leaf without veins being flat) are issued with `warnings.warn` and kept in
     `Result.warnings`.
+
+    Parameters
+    ----------
+    leaf : Leaf
+        The (n, 3) boundary and (m_i, 3) veins, in any units and position.
+    params : Params, optional
+        The settings; default Params() (K 3, grid 128).
+
+    Returns
+    -------
+    Result
+        The surface, its mesh in the leaf's coordinates, and the measurements.
+
+    Raises
+    ------
+    LeafError
+        For input the reconstruction cannot take, saying why.
+
+    Examples
+    --------
+    >>> import leafstudio as ls
+    >>> result = ls.reconstruct(ls.demo("parallel"), ls.Params(k=2, grid=32))
+    >>> result.chosen_k, result.triangle_mesh.points.shape[1]
+    (2, 3)
+    >>> ls.reconstruct(ls.Leaf([[0, 0, 0], [1, 0, 0]]))
+    Traceback (most recent call last):
+    leafstudio.errors.LeafError: the boundary needs at least 3 distinct points, got 2
     """
     result = Pipeline(leaf).run(as_params(params))
     for note in result.warnings:

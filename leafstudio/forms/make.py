@@ -60,12 +60,46 @@ class _Still:
 class Form:
     """A leaf form by its terms (terms.py lists and defines them); None means the shape's usual.
 
+    The leaf follows the forms' convention: base at the origin, apex on +x at length 1, the
+    blade in z = 0 apart from its relief.
+
+    Parameters
+    ----------
+    shape : str, default: "elliptic"
+        One of `SHAPES` (linear, lanceolate, ..., ovate, cordate, ...).
+    apex, base : str, optional
+        Apex and base terms (acute, obtuse, rounded, ...; cuneate, rounded, truncate, ...);
+        default the shape's usual. Shapes defined by their base (cordate, reniform, sagittate,
+        hastate) refuse another base.
+    margin : str, default: "entire"
+        entire, serrate, serrulate, dentate, crenate, sinuate or lobed.
+    teeth, lobes : int, optional
+        Teeth along a toothed margin, lobes of a lobed one; default the margin's usual.
+    venation : {"pinnate", "palmate", "parallel", "arcuate"}, default: "pinnate"
+    secondaries : int, optional
+        Secondary veins on each side (see `grow_veins`).
+    aspect : float, optional
+        Length over width; default the shape's usual.
+    fold, curl, wave : float, default: 0.0
+        Relief: the fold along the midrib (degrees), the curl along the length, the margin's
+        wave amplitude.
+    seed : int, default: 0
+        0 gives the form exactly; other seeds vary it a little, the same seed the same leaf.
+
+    Raises
+    ------
+    LeafError
+        For an unknown term or a value out of its range, in the words of `leafstudio form`.
+
     Examples
     --------
     >>> from leafstudio.forms import Form
     >>> leaf = Form("ovate", margin="serrate", teeth=30).leaf()
     >>> float(leaf.boundary[:, 0].max())
     1.0
+    >>> Form("roundish")
+    Traceback (most recent call last):
+    leafstudio.errors.LeafError: unknown shape 'roundish'; choose from linear, ...
     """
 
     shape: str = "elliptic"
@@ -148,7 +182,13 @@ class Form:
         )
 
     def leaf(self) -> Leaf:
-        """The leaf: boundary and grown veins, with heights for the fold, curl and wave."""
+        """The leaf: boundary and grown veins, with heights for the fold, curl and wave.
+
+        Returns
+        -------
+        Leaf
+            The (n, 3) outline and the veins (midrib first), in the forms' convention.
+        """
         outline = self.outline()
         xy = outline.xy
         veins = grow_veins(
@@ -215,5 +255,34 @@ def _veins_on_blade(boundary: np.ndarray, veins: list[np.ndarray]) -> list[np.nd
 
 
 def make_form(shape: str = "elliptic", **terms: Any) -> Leaf:
-    """The leaf of a form: `make_form("ovate", margin="serrate", teeth=30)` (see Form)."""
+    """The leaf of a form: `make_form("ovate", margin="serrate", teeth=30)`.
+
+    Parameters
+    ----------
+    shape : str, default: "elliptic"
+        One of `SHAPES`.
+    **terms
+        The other terms of `Form` (apex, base, margin, teeth, lobes, venation, secondaries,
+        aspect, fold, curl, wave, seed).
+
+    Returns
+    -------
+    Leaf
+        The (n, 3) outline and the (m_i, 3) veins, midrib first: base at the origin, apex on +x
+        at length 1, z = 0 apart from the relief.
+
+    Raises
+    ------
+    LeafError
+        For an unknown term or a value out of its range.
+
+    Examples
+    --------
+    >>> from leafstudio.forms import make_form
+    >>> leaf = make_form("ovate", margin="serrate", teeth=30)
+    >>> leaf.boundary.shape, len(leaf.veins)
+    ((704, 3), 13)
+    >>> leaf.veins[0][0, :2].round(3).tolist()  # the midrib starts at the base
+    [0.01, 0.0]
+    """
     return Form(shape, **terms).leaf()

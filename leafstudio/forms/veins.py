@@ -489,6 +489,21 @@ def grow_veins(
     list of (m_i, 3) float arrays
         The midrib first (palmate: then the other primaries), each vein from its start to its
         end, in the boundary's coordinates; z is the height (for a 2D outline, above z = 0).
+
+    Raises
+    ------
+    LeafError
+        For an unknown venation, or an outline too small or degenerate to grow veins in.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from leafstudio.forms import grow_veins
+    >>> t = np.linspace(0, 2 * np.pi, 200, endpoint=False)
+    >>> outline = np.column_stack([0.5 + 0.5 * np.cos(t), 0.25 * np.sin(t)])
+    >>> veins = grow_veins(outline, "pinnate", secondaries=4)
+    >>> len(veins), veins[0].shape
+    (9, (49, 3))
     """
     points = np.asarray(boundary, dtype=float)
     if points.ndim != 2 or points.shape[1] not in (2, 3) or len(points) < 3:

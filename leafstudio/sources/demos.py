@@ -81,7 +81,33 @@ HALFWIDTH = {"nested": _nested_halfwidth, "parallel": _parallel_halfwidth}
 
 
 def demo(name: str) -> Leaf:
-    """A built-in leaf by name (see DEMOS)."""
+    """A built-in leaf by name: the paper's two examples, rebuilt from its equations.
+
+    Parameters
+    ----------
+    name : {"nested", "parallel"}
+        "nested": Fig. 8's pinnate veins (a midrib and three pairs of side veins); "parallel":
+        Fig. 9's two parallel veins. Both have length 1, base at the origin, apex on +x.
+
+    Returns
+    -------
+    Leaf
+        238 boundary points in z = 0 and the veins with their heights.
+
+    Raises
+    ------
+    LeafError
+        For an unknown name.
+
+    Examples
+    --------
+    >>> import leafstudio as ls
+    >>> leaf = ls.demo("nested")
+    >>> leaf.boundary.shape, len(leaf.veins)
+    ((238, 3), 7)
+    >>> len(ls.demo("parallel").veins)
+    2
+    """
     from leafstudio.errors import LeafError
 
     if name not in DEMOS:

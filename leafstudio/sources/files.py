@@ -179,10 +179,39 @@ def load_project(path: str | os.PathLike) -> tuple[Leaf, Params | None, dict[str
 def load_leaf(path: str | os.PathLike, veins: Sequence[str | os.PathLike] = ()) -> Leaf:
     """Read a leaf from a point list, a labelled PLY or a project; `veins` adds one vein per file.
 
+    Parameters
+    ----------
+    path : str or path-like
+        A point list (.csv, .txt, .xyz: rows `x y z [label]`, label 0 the boundary, 1..n vein
+        n, comma or whitespace separated, an optional header line; without labels, a boundary),
+        a PLY with an integer vertex property `label`, or a project (.leaf.json).
+    veins : sequence of paths, default: ()
+        Files of one vein each (a point list or PLY, labels ignored), added after the file's own.
+
+    Returns
+    -------
+    Leaf
+        The (n, 3) boundary and one (m_i, 3) array per vein, as read (a project's parameters and
+        sketch are left out: see `load_project`).
+
     Raises
     ------
     LeafError
         With the file's name and the problem, for anything unreadable or malformed.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import leafstudio as ls
+    >>> path = Path(tempfile.mkdtemp()) / "leaf.csv"
+    >>> ls.save_leaf(ls.demo("parallel"), path)
+    >>> leaf = ls.load_leaf(path)
+    >>> leaf.boundary.shape, [v.shape for v in leaf.veins]
+    ((238, 3), [(48, 3), (48, 3)])
+    >>> ls.load_leaf(path.with_name("missing.csv"))
+    Traceback (most recent call last):
+    leafstudio.errors.LeafError: .../missing.csv: no such file
     """
     path = Path(path)
     if isinstance(veins, (str, os.PathLike)):
@@ -250,7 +279,39 @@ def save_leaf(
     photo: dict[str, Any] | None = None,
 ) -> None:
     """Write a leaf as .leaf.json (with params, sketch and the photo it came from), a labelled
-    point list or PLY."""
+    point list or PLY, atomically (a failed write leaves the old file as it was).
+
+    Parameters
+    ----------
+    leaf : Leaf
+        The (n, 3) boundary and the (m_i, 3) veins.
+    path : str or path-like
+        Its suffix chooses the format: .leaf.json/.json (a project), .csv/.txt/.xyz (rows
+        `x y z label`, with a header), .ply (vertices with a `label` property).
+    params : Params, optional
+        Saved with a project (ignored by the other formats); `load_project` gives them back.
+    sketch : dict, optional
+        The app's sketch (control points), saved with a project.
+    photo : dict, optional
+        The photo the leaf came from, `{"image": PATH, "pixel_from_world": [[...], [...]]}`.
+
+    Raises
+    ------
+    LeafError
+        For an unknown suffix, or a file that cannot be written.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import leafstudio as ls
+    >>> path = Path(tempfile.mkdtemp()) / "nested.leaf.json"
+    >>> ls.save_leaf(ls.demo("nested"), path, ls.Params(k=3))
+    >>> from leafstudio.sources.files import load_project
+    >>> leaf, params, sketch = load_project(path)
+    >>> params.k, len(leaf.veins)
+    (3, 7)
+    """
     path = Path(path)
     suffix = _suffix(path)
     labels = np.concatenate(

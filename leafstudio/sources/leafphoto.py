@@ -26,7 +26,24 @@ from leafstudio.errors import LeafError
 
 @dataclass(frozen=True)
 class PhotoTexture:
-    """A photo and the affine map (2, 3) from world (x, y) to its (column, row)."""
+    """A photo and the affine map (2, 3) from world (x, y) to its (column, row).
+
+    The `texture` of `save_mesh`: with a map, each pixel lands on the mesh where it was in the
+    photo the leaf came from (`leafstudio photo`); without one, the image covers the UV square.
+
+    Attributes
+    ----------
+    image : str or path-like
+        The image file.
+    pixel_from_world : (2, 3) float array or None
+        A leaf point's (x, y, 1) to the photo's (column, row); see `assets.photo_transform`.
+
+    Examples
+    --------
+    >>> from leafstudio.assets import PhotoTexture
+    >>> PhotoTexture("leaf.png").pixel_from_world is None
+    True
+    """
 
     image: str | os.PathLike
     pixel_from_world: np.ndarray | None = None
