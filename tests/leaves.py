@@ -1,4 +1,15 @@
-"""Test leaves with known regions: the demos moved in 3D, noisy, lobed and narrow ones."""
+"""The tests' shared builders: leaves and scans with known answers, one place for all.
+
+- demos moved in 3D, noisy, lobed and narrow leaves with their exact regions (`moved`, `noisy`,
+  `lobed`, `narrow`, `coverage`), and every number of a Result's metrics (`metric_numbers`);
+- ellipses: as points (`ellipse`), as a scanner's noisy shuffled cloud (`ellipse_cloud`), as a
+  sketch's clicks (`sketch_ellipse`, `sketch_clicks`); random star-shaped leaves (`random_leaf`);
+- narrow bent blades: outlines and filled strips (`bend`, `bent_strap`, `bent_filled_strip`);
+- a synthetic scan with a blade of known outline, a petiole and outliers (`synthetic_scan`,
+  `scan_blade_outline`, `scan_surface`, `assert_outline_is_the_blades`).
+
+Tests import builders from here (or tests/photos.py for photos), never from another test module.
+"""
 
 from __future__ import annotations
 
@@ -110,3 +121,152 @@ def metric_numbers(metrics: dict) -> list[float]:
         elif isinstance(value, int | float) and not isinstance(value, bool):
             out.append(float(value))
     return out
+
+
+# --- ellipses ------------------------------------------------------------------------------------
+
+
+def ellipse(
+    n: int = 400,
+    a: float = 1.0,
+    b: float = 0.4,
+    *,
+    centre: tuple[float, float] = (0.0, 0.0),
+    sigma: float = 0.0,
+    seed: int = 0,
+    shuffle: bool = False,
+    even: bool = True,
+) -> np.ndarray:
+    """(n, 3) points on the ellipse ((x - cx) / a)² + ((y - cy) / b)² = 1 in z = 0, in order
+    counter-clockwise from (cx + a, cy): evenly spaced in angle, or at random angles (`even`
+    False), with Gaussian noise `sigma` in x and y, shuffled if asked."""
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    if not even:
+        t = np.sort(rng.uniform(0, 2 * np.pi, n))
+    points = np.column_stack([centre[0] + a * np.cos(t), centre[1] + b * np.sin(t), np.zeros(n)])
+    points[:, :2] += rng.normal(0, sigma, (n, 2))  # drawn even for sigma 0: same shuffles
+    return rng.permutation(points) if shuffle else points
+
+
+def ellipse_cloud(
+    n: int, sigma: float, seed: int = 0, shuffle: bool = True, even: bool = True
+) -> np.ndarray:
+    """(n, 3) points on the ellipse x²/4 + y² = 1 (area 2π) as a scanner gives a boundary:
+    Gaussian noise σ in x and y, shuffled."""
+    return ellipse(n, 2.0, 1.0, sigma=sigma, seed=seed, shuffle=shuffle, even=even)
+
+
+def sketch_ellipse(n: int = 12, a: float = 0.5, b: float = 0.2) -> np.ndarray:
+    """(n, 2) sketch clicks round an ellipse centred at (0.5, 0), across the unit leaf."""
+    return ellipse(n, a, b, centre=(0.5, 0.0))[:, :2]
+
+
+def sketch_clicks(n: int = 12) -> np.ndarray:
+    """(n, 2) sketch clicks round an ellipse from x = 0.05 to 0.95, 0.4 wide."""
+    return sketch_ellipse(n, 0.45, 0.2)
+
+
+def random_leaf(seed: int, n: int, noise: float, size: float) -> tuple[Leaf, float]:
+    """A random star-shaped leaf (a few Fourier modes of the radius), length about `size`,
+    rotated in 3D, shuffled, with duplicates and noise of `noise` of its length; its exact area."""
+    rng = np.random.default_rng(seed)
+    modes = rng.normal(0, 0.08, (3, 2)) / np.arange(2, 5)[:, None]
+    t = np.linspace(0, 2 * np.pi, 20000, endpoint=False)
+    stretch = rng.uniform(1.2, 2.0)
+
+    def outline(t: np.ndarray) -> np.ndarray:
+        r = 1 + sum(a * np.cos(k * t) + b * np.sin(k * t) for k, (a, b) in enumerate(modes, 2))
+        return np.column_stack([stretch * r * np.cos(t), r * np.sin(t)])
+
+    exact = shapely.Polygon(outline(t))
+    length = float(np.ptp(outline(t)[:, 0]))
+    scale = size / length
+    xy = outline(rng.uniform(0, 2 * np.pi, n)) + rng.normal(0, noise * length, (n, 2))
+    points = np.column_stack([xy, np.zeros(n)])
+    points = np.vstack([points, points[rng.choice(n, n // 5)]])  # duplicates
+    rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    points = rng.permutation(points) @ rotation.T * scale + rng.uniform(-5, 5, 3) * size
+    return Leaf(boundary=points, veins=[]), exact.area * scale**2
+
+
+# --- narrow bent blades --------------------------------------------------------------------------
+
+
+def bend(along: np.ndarray, across: np.ndarray, bend: float) -> np.ndarray:
+    """(n, 3) points of a blade 1 long whose midline is an arc turning `bend` radians (0:
+    straight), at `along` (0 to 1) on the midline and `across` off it."""
+    turn = bend * (along - 0.5)
+    if bend == 0:
+        centre = np.column_stack([along - 0.5, 0 * along])
+    else:
+        centre = np.column_stack([np.sin(turn), 1 - np.cos(turn)]) / bend
+    normal = np.column_stack([-np.sin(turn), np.cos(turn)])
+    return np.column_stack([centre + across[:, None] * normal, 0 * along])
+
+
+def bent_strap(points: int, aspect: float, bend_by: float, noise: float = 0.0, seed: int = 0):
+    """A narrow outline 1 long, `aspect` times longer than wide, bent `bend_by` radians along its
+    midline (a curved grass or iris leaf traced as an outline), `points` points in order, with
+    noise of `noise` of its length."""
+    t = np.linspace(0, 1, points // 2)
+    half = 0.5 / aspect * np.sin(np.pi * t) ** 0.5
+    outline = np.vstack([bend(t, half, bend_by), bend(t, -half, bend_by)[::-1]])
+    return outline + noise * np.random.default_rng(seed).normal(size=outline.shape)
+
+
+def bent_filled_strip(points: int, aspect: float, bend_by: float, seed: int = 0) -> np.ndarray:
+    """Points all over a bent strip (a scan of a curved grass-like leaf), the strip of
+    bent_strap, with the scanner's noise of 0.2% of the length off its plane."""
+    rng = np.random.default_rng(seed)
+    t = rng.uniform(0, 1, points)
+    across = 0.5 / aspect * rng.uniform(-1, 1, points) * np.sin(np.pi * t) ** 0.5
+    cloud = bend(t, across, bend_by)
+    cloud[:, 2] = 0.05 * t**2 + 0.002 * rng.normal(size=points)
+    return cloud
+
+
+# --- a synthetic scan ----------------------------------------------------------------------------
+
+
+def scan_blade_outline(t: np.ndarray) -> np.ndarray:
+    """The synthetic scan's blade outline (egg-shaped, length 1, wider toward -x) at angles t."""
+    return np.column_stack([0.5 * np.cos(t), 0.2 * np.sin(t) * (1 - 0.3 * np.cos(t))])
+
+
+def scan_surface(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The synthetic scan's blade heights."""
+    return 0.3 * x**2 + 0.6 * y**2 - 0.1 * x
+
+
+def synthetic_scan(
+    seed: int = 0,
+    candidates: int = 9000,
+    blade_points: int | None = None,
+    petiole_points: int = 150,
+    outlier_points: int = 25,
+) -> dict[str, np.ndarray]:
+    """A synthetic scan: the blade's surface (the `candidates` uniform points inside its outline,
+    at most `blade_points` of them), a petiole sticking out at -x, and outliers; (n_i, 3) points
+    under "blade", "petiole" and "outliers"."""
+    rng = np.random.default_rng(seed)
+    region = shapely.Polygon(scan_blade_outline(np.linspace(0, 2 * np.pi, 400, endpoint=False)))
+    xy = rng.uniform([-0.5, -0.27], [0.5, 0.27], size=(candidates, 2))
+    xy = xy[shapely.contains_xy(region, xy[:, 0], xy[:, 1])][:blade_points]
+    blade = np.column_stack([xy, scan_surface(xy[:, 0], xy[:, 1])])
+    along = rng.uniform(-0.8, -0.49, petiole_points)
+    petiole = np.column_stack(
+        [along, rng.normal(0, 0.004, petiole_points), scan_surface(-0.5, 0) - 0.2 * (along + 0.5)]
+    )
+    outliers = rng.uniform([-1, -1, -0.5], [1, 1, 0.5], size=(outlier_points, 3))
+    return {"blade": blade, "petiole": petiole, "outliers": outliers}
+
+
+def assert_outline_is_the_blades(found) -> None:
+    """The extracted outline is the synthetic scan's blade (scan_blade_outline), to 4% of its
+    area and 0.03."""
+    known = shapely.Polygon(scan_blade_outline(np.linspace(0, 2 * np.pi, 400, endpoint=False)))
+    got = shapely.Polygon(found.leaf.boundary[:, :2])
+    assert got.is_valid
+    assert known.symmetric_difference(got).area < 0.04 * known.area
+    assert shapely.hausdorff_distance(known.exterior, got.exterior) < 0.03

@@ -49,6 +49,7 @@ def report():
     return compare(ls.demo("nested"), ls.Params(k=3, grid=48))
 
 
+@pytest.mark.open3d
 def test_poisson_spills_far_past_the_margin_and_ours_does_not(report):
     ours, poisson = report["ours"], report["poisson"]
     assert ours["spill"] < 1e-9
@@ -64,12 +65,14 @@ def test_poisson_spills_far_past_the_margin_and_ours_does_not(report):
     assert len(report["meshes"]["poisson"].regular_faces) == poisson["mesh"]["triangles"]
 
 
+@pytest.mark.open3d
 def test_comparison_table_has_both_columns(report):
     table = format_comparison(report)
     assert "ours (K = 3)" in table and "Poisson" in table
     assert "spill" in table and "time (s)" in table
 
 
+@pytest.mark.open3d
 def test_cli_compare_prints_json(tmp_path, capsys):
     ls.save_leaf(ls.demo("parallel"), tmp_path / "p.leaf.json")
     assert (

@@ -200,6 +200,7 @@ def test_trimesh_reads_normals_uvs_and_texture_back(nested: ls.Result, tmp_path:
         assert back.visual.material.image.size == (1024, 1024)
 
 
+@pytest.mark.open3d
 @pytest.mark.parametrize("suffix", [".glb", ".gltf", ".obj", ".ply"])
 def test_open3d_reads_normals_and_uvs_back(nested: ls.Result, tmp_path: Path, suffix: str):
     import open3d as o3d
@@ -326,6 +327,7 @@ def test_outline_mask_matches_the_mesh_margin(nested: ls.Result):
     assert np.mean(binary_dilation(edge, iterations=1)[row.clip(0, 511), col.clip(0, 511)]) > 0.99
 
 
+@pytest.mark.open3d
 def test_levels_of_detail_halve_the_triangles_and_keep_the_margin(nested: ls.Result, tmp_path):
     import shapely
 

@@ -37,6 +37,7 @@ def test_reconstruct_writes_mesh_and_table1_metrics(tmp_path: Path, nested_csv: 
     assert data["mesh"]["non_manifold_edges"] == 0 and data["mesh"]["area"] > 0.16
 
 
+@pytest.mark.open3d
 def test_bpa_mesher_and_seed_from_the_command_line(tmp_path: Path, nested_csv: Path):
     metrics = tmp_path / "m.json"
     code = main(["reconstruct", str(nested_csv), "-o", str(tmp_path / "a.ply"), "--mesher", "bpa",

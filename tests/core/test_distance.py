@@ -36,6 +36,7 @@ def test_flat_triangles_and_vertices_of_no_triangle():
     assert len(mesh_distances(TRIANGLE, np.array([[0, 1, 2]]), np.zeros((0, 3)))) == 0
 
 
+@pytest.mark.open3d
 def test_a_reconstructed_leaf_agrees_with_open3d():
     import open3d as o3d
 

@@ -13,13 +13,9 @@ import leafstudio as ls
 from leafstudio.cli import main
 from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.measure import FIELDS, format_table, leaf_measurements
+from tests.leaves import ellipse as _ellipse
 
 A, B = 1.0, 0.4  # the ellipse leaf's semi-axes
-
-
-def _ellipse(n: int = 400) -> np.ndarray:
-    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    return np.column_stack([A * np.cos(t), B * np.sin(t), np.zeros(n)])
 
 
 def _moved(points: np.ndarray) -> np.ndarray:

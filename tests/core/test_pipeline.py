@@ -70,6 +70,7 @@ def test_surface_is_smooth_inside(demo_result):
     )
 
 
+@pytest.mark.open3d
 def test_bpa_mesher_follows_the_paper(demo_result):
     name, result = demo_result
     bpa = ls.Pipeline(ls.demo(name)).run(result.params.with_(mesher="bpa"))
@@ -122,6 +123,7 @@ def test_changing_k_reruns_only_the_mixture_and_after():
     second = pipe.run(ls.Params(k=4, grid=64))
     assert second.ran == ("gmm", "surface", "mesh")
     assert not np.allclose(first.mesh.points, second.mesh.points)
+    pytest.importorskip("open3d")  # the mesher alone changed: ball pivoting
     third = pipe.run(ls.Params(k=4, grid=64, mesher="bpa"))
     assert third.ran == ("mesh",)
     assert pipe.run(ls.Params(k=4, grid=64, mesher="bpa")).ran == ()

@@ -11,6 +11,7 @@ from PySide6.QtTest import QTest
 
 from leafstudio.gui.model.layers import vein_color
 from leafstudio.gui.qt.main_window import MainWindow
+from tests.leaves import sketch_clicks as ellipse_clicks
 
 from .conftest import wait_result
 from .test_sketch import click
@@ -26,11 +27,6 @@ def leaf_fill(window: MainWindow) -> tuple[float, float]:
 def camera(window: MainWindow) -> np.ndarray:
     cam = window.viewport.plotter.camera
     return np.array([*cam.position, *cam.focal_point, *cam.up])
-
-
-def ellipse_clicks(n: int = 12) -> np.ndarray:
-    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    return np.column_stack([0.5 + 0.45 * np.cos(t), 0.2 * np.sin(t)])
 
 
 def test_the_sketch_view_holds_still_while_drawing_and_fit_shows_the_whole_leaf(window, qtbot):

@@ -155,6 +155,7 @@ def test_a_bad_scan_shows_a_dialog_and_keeps_the_mesh(window, qtbot, tmp_path):
         assert "mesh" in window.viewport.plotter.actors
 
 
+@pytest.mark.open3d
 def test_the_poisson_layer_appears_beside_our_mesh_when_switched_on(window, qtbot, monkeypatch):
     threads = record_threads(monkeypatch, "poisson_surface")
     assert "poisson" not in window.viewport.plotter.actors  # off: not computed

@@ -10,7 +10,8 @@ import pytest
 
 from leafstudio.model import Leaf
 from leafstudio.sources.scan import looks_like_scan, read_scan
-from tests.core.prepare.test_clouds import _ellipse, _random_leaf
+from tests.leaves import ellipse_cloud as _ellipse
+from tests.leaves import random_leaf as _random_leaf
 
 REAL = Path(__file__).resolve().parents[3] / "shared" / "realleaves"
 
@@ -30,7 +31,7 @@ def test_a_bent_narrow_outline_opens_as_a_boundary_and_a_bent_strip_scan_as_a_sc
     """Session 3: the app asks the pipeline's question, so a curved grass leaf's outline (aspect
     30, bent 1 rad, noise 0.2%) opened as a scan (0.51) and the scan of a bent strip as a
     boundary (0.17); now the other way round."""
-    from tests.core.prepare.test_scan_as_boundary import bent_filled_strip, bent_strap
+    from tests.leaves import bent_filled_strip, bent_strap
 
     assert not looks_like_scan(Leaf(bent_strap(5000, 30, 1.0, 0.002), []))
     assert looks_like_scan(Leaf(bent_filled_strip(5000, 25, 2.0), []))

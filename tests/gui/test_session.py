@@ -26,6 +26,7 @@ from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.model import Leaf, Params
 from leafstudio.sources.demos import demo
 from leafstudio.workflows import boundary_crossing
+from tests.leaves import sketch_ellipse as ellipse
 
 FAST = Params(k=3, grid=40, samples=1200)
 
@@ -71,11 +72,6 @@ def events(session: Session) -> dict[str, list]:
     session.sketch_shown.connect(lambda sketch, fit: got["sketch"].append(fit))
     session.crossing.connect(lambda points: got["crossing"].append(len(points)))
     return got
-
-
-def ellipse(n: int = 12, a: float = 0.5, b: float = 0.2) -> np.ndarray:
-    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    return np.column_stack([0.5 + a * np.cos(t), b * np.sin(t)])
 
 
 def draw(session: Session, sketch: Sketch, points: np.ndarray) -> Sketch:

@@ -12,13 +12,9 @@ from leafstudio.gui.model.session import Session
 from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.gui.model.vein_profile import MIN_GAP, PROFILE_HANDLES, Profile
 from leafstudio.sources.demos import demo
+from tests.leaves import sketch_clicks as ellipse
 
 from .conftest import wait_result
-
-
-def ellipse(n: int = 12) -> np.ndarray:
-    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    return np.column_stack([0.5 + 0.45 * np.cos(t), 0.2 * np.sin(t)])
 
 
 def leaf_with_vein(points: int) -> Sketch:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 import pytest
 import shapely
@@ -11,53 +13,14 @@ from leafstudio.errors import LeafError
 from leafstudio.sources.extract import extract_leaf, lift
 from leafstudio.sources.files import load_leaf
 from leafstudio.sources.scan import read_scan
-
-
-def _outline_at(t: np.ndarray) -> np.ndarray:
-    """The known blade outline (egg-shaped, length 1, wider toward -x) at angles t."""
-    return np.column_stack([0.5 * np.cos(t), 0.2 * np.sin(t) * (1 - 0.3 * np.cos(t))])
-
-
-def _surface(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    return 0.3 * x**2 + 0.6 * y**2 - 0.1 * x
-
-
-def _scan(
-    seed: int = 0,
-    candidates: int = 9000,
-    blade_points: int | None = None,
-    petiole_points: int = 150,
-    outlier_points: int = 25,
-) -> dict[str, np.ndarray]:
-    """A synthetic scan: the blade's surface (the `candidates` uniform points inside its outline,
-    at most `blade_points` of them), a petiole sticking out at -x, and outliers."""
-    rng = np.random.default_rng(seed)
-    region = shapely.Polygon(_outline_at(np.linspace(0, 2 * np.pi, 400, endpoint=False)))
-    xy = rng.uniform([-0.5, -0.27], [0.5, 0.27], size=(candidates, 2))
-    xy = xy[shapely.contains_xy(region, xy[:, 0], xy[:, 1])][:blade_points]
-    blade = np.column_stack([xy, _surface(xy[:, 0], xy[:, 1])])
-    along = rng.uniform(-0.8, -0.49, petiole_points)
-    petiole = np.column_stack(
-        [along, rng.normal(0, 0.004, petiole_points), _surface(-0.5, 0) - 0.2 * (along + 0.5)]
-    )
-    outliers = rng.uniform([-1, -1, -0.5], [1, 1, 0.5], size=(outlier_points, 3))
-    return {"blade": blade, "petiole": petiole, "outliers": outliers}
+from tests.leaves import assert_outline_is_the_blades, scan_surface, synthetic_scan
 
 
 @pytest.fixture(scope="module")
 def scan():
-    parts = _scan()
+    parts = synthetic_scan()
     points = np.vstack([parts["blade"], parts["petiole"], parts["outliers"]])
     return parts, points, extract_leaf(points)
-
-
-def assert_outline_is_the_blades(found) -> None:
-    """The extracted outline is the known blade's (_outline_at), to 4% of its area and 0.03."""
-    known = shapely.Polygon(_outline_at(np.linspace(0, 2 * np.pi, 400, endpoint=False)))
-    got = shapely.Polygon(found.leaf.boundary[:, :2])
-    assert got.is_valid
-    assert known.symmetric_difference(got).area < 0.04 * known.area
-    assert shapely.hausdorff_distance(known.exterior, got.exterior) < 0.03
 
 
 def test_the_outline_of_a_scan_with_outliers_and_a_petiole_is_the_blade(scan):
@@ -74,7 +37,7 @@ def test_the_boundary_is_lifted_to_the_scans_heights_and_evenly_spaced(scan):
     _, _, found = scan
     b = found.leaf.boundary
     assert len(b) == 200
-    assert np.abs(b[:, 2] - _surface(b[:, 0], b[:, 1])).max() < 4e-3
+    assert np.abs(b[:, 2] - scan_surface(b[:, 0], b[:, 1])).max() < 4e-3
     steps = np.linalg.norm(np.diff(np.vstack([b, b[:1]])[:, :2], axis=0), axis=1)
     assert steps.max() < 1.3 * np.median(steps)
 
@@ -84,7 +47,7 @@ def test_the_midrib_runs_from_the_petiole_to_the_tip_on_the_surface(scan):
     midrib = found.leaf.veins[0]
     assert midrib[0, 0] < -0.45 and midrib[-1, 0] > 0.45
     assert np.abs(midrib[:, 1]).max() < 0.03
-    assert np.abs(midrib[:, 2] - _surface(midrib[:, 0], midrib[:, 1])).max() < 2e-3
+    assert np.abs(midrib[:, 2] - scan_surface(midrib[:, 0], midrib[:, 1])).max() < 2e-3
     assert len(found.leaf.veins) >= 5  # side veins too
     region = shapely.Polygon(found.leaf.boundary[:, :2])
     for vein in found.leaf.veins:
@@ -92,7 +55,7 @@ def test_the_midrib_runs_from_the_petiole_to_the_tip_on_the_surface(scan):
 
 
 def test_the_base_end_can_be_given():
-    parts = _scan(seed=1)
+    parts = synthetic_scan(seed=1)
     points = np.vstack([parts["blade"], parts["outliers"]])
     midrib = extract_leaf(points, base_end="+x").leaf.veins[0]
     assert midrib[0, 0] > 0.45 and midrib[-1, 0] < -0.45
@@ -124,17 +87,32 @@ def test_scans_are_read_with_extra_columns_and_headers(tmp_path):
     rows = [",".join(f"{v:.9g}" for v in (*p, 0.1, 0.2, 0.9, 1, 2, 3, 4)) for p in points]
     txt.write_text("x,y,z,nx,ny,nz,r,g,b,a\n" + "\n".join(rows) + "\n")
     assert np.allclose(read_scan(txt), points)
-    pcd = tmp_path / "scan.pcd"
-    header = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
-    header += f"WIDTH {len(points)}\nHEIGHT 1\nPOINTS {len(points)}\nDATA ascii\n"
-    pcd.write_text(header + "\n".join(" ".join(f"{v:.6f}" for v in p) for p in points))
-    assert np.allclose(read_scan(pcd), points, atol=1e-5)
     from plyfile import PlyData, PlyElement
 
     data = np.empty(len(points), dtype=[("x", "f8"), ("y", "f8"), ("z", "f8"), ("red", "u1")])
     data["x"], data["y"], data["z"], data["red"] = *points.T, 7
     PlyData([PlyElement.describe(data, "vertex")]).write(str(tmp_path / "scan.ply"))
     assert np.allclose(read_scan(tmp_path / "scan.ply"), points)
+
+
+def _pcd(path, points: np.ndarray) -> None:
+    header = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+    header += f"WIDTH {len(points)}\nHEIGHT 1\nPOINTS {len(points)}\nDATA ascii\n"
+    path.write_text(header + "\n".join(" ".join(f"{v:.6f}" for v in p) for p in points))
+
+
+@pytest.mark.open3d
+def test_pcd_scans_are_read(tmp_path):
+    points = np.random.default_rng(3).normal(size=(60, 3))
+    _pcd(tmp_path / "scan.pcd", points)
+    assert np.allclose(read_scan(tmp_path / "scan.pcd"), points, atol=1e-5)
+
+
+def test_a_pcd_scan_without_open3d_says_which_extra_reads_it(tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "open3d", None)  # import open3d fails, as when missing
+    _pcd(tmp_path / "scan.pcd", np.random.default_rng(3).normal(size=(60, 3)))
+    with pytest.raises(LeafError, match=r"reading \.pcd scans needs open3d.*leafstudio\[open3d\]"):
+        read_scan(tmp_path / "scan.pcd")
 
 
 @pytest.mark.parametrize(
@@ -159,7 +137,7 @@ def test_a_bad_scan_is_one_line_and_exit_2(tmp_path, capsys, name, content, mess
 
 
 def test_extract_writes_a_leaf_that_reconstructs(tmp_path, capsys):
-    parts = _scan(seed=4)
+    parts = synthetic_scan(seed=4)
     scan_file = tmp_path / "scan.xyz"
     np.savetxt(scan_file, np.vstack([parts["blade"], parts["petiole"], parts["outliers"]]))
     out = tmp_path / "leaf.leaf.json"
@@ -192,7 +170,7 @@ def test_the_outline_count_changes_only_the_outline(scan):
 def test_a_base_end_with_a_minus_sign_is_taken_as_written(tmp_path, capsys):
     """Review finding: `--base-end -x`, as --help writes it, was read as an option ("expected
     one argument"); only `--base-end=-x` worked."""
-    parts = _scan(seed=1)
+    parts = synthetic_scan(seed=1)
     scan = tmp_path / "scan.xyz"
     np.savetxt(scan, np.vstack([parts["blade"], parts["outliers"]]))
     out = tmp_path / "leaf.csv"

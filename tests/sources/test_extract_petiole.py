@@ -14,7 +14,7 @@ import shapely
 
 from leafstudio.sources.extract import clean_scan, extract_leaf
 from leafstudio.sources.scan import read_scan
-from tests.sources.test_extract import _outline_at, _scan
+from tests.leaves import scan_blade_outline, synthetic_scan
 
 REAL = Path(__file__).resolve().parents[3] / "shared" / "realleaves"
 SCANS = sorted(REAL.glob("*.txt")) if REAL.is_dir() else []
@@ -41,13 +41,13 @@ def _beyond_outline(points: np.ndarray, found) -> float:
 def test_a_blade_part_scanned_sparsely_stays_in_the_blade():
     """A third of the blade with a quarter of the points (seen obliquely): it was the largest
     piece the ball test left, so it was taken as the petiole and cut off the outline."""
-    parts = _scan(candidates=20000)
+    parts = synthetic_scan(candidates=20000)
     blade = parts["blade"]
     sparse = blade[:, 0] > 0.15
     keep = ~sparse | (np.arange(len(blade)) % 4 == 0)
     points = np.vstack([blade[keep], parts["petiole"], parts["outliers"]])
     found = extract_leaf(points)
-    known = shapely.Polygon(_outline_at(np.linspace(0, 2 * np.pi, 400, endpoint=False)))
+    known = shapely.Polygon(scan_blade_outline(np.linspace(0, 2 * np.pi, 400, endpoint=False)))
     got = shapely.Polygon(found.leaf.boundary[:, :2])
     assert known.symmetric_difference(got).area < 0.04 * known.area  # before: 21%
     n = int(keep.sum())

@@ -9,12 +9,12 @@ import pytest
 
 from leafstudio.errors import LeafError
 from leafstudio.sources.extract import BUDGET, extract_leaf, voxel_thinning
-from tests.sources.test_extract import _scan, _surface, assert_outline_is_the_blades
+from tests.leaves import assert_outline_is_the_blades, scan_surface, synthetic_scan
 
 
 def _big_scan(n: int, seed: int = 3) -> tuple[np.ndarray, int]:
     """n blade points on the known surface, a petiole at -x and a few outliers; and n."""
-    parts = _scan(seed, int(2.2 * n), n, n // 60, n // 400)
+    parts = synthetic_scan(seed, int(2.2 * n), n, n // 60, n // 400)
     return np.vstack([parts["blade"], parts["petiole"], parts["outliers"]]), n
 
 
@@ -34,7 +34,7 @@ def test_a_large_scan_is_thinned_and_its_outline_is_the_blade(big):
     assert not found.blade[n : n + n // 60][far_petiole].any()
     assert found.length == pytest.approx(1.0, abs=0.03)
     b = found.leaf.boundary
-    assert np.abs(b[:, 2] - _surface(b[:, 0], b[:, 1])).max() < 4e-3
+    assert np.abs(b[:, 2] - scan_surface(b[:, 0], b[:, 1])).max() < 4e-3
 
 
 def test_voxel_thinning_keeps_at_most_the_budget_and_maps_every_point():

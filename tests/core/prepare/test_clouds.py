@@ -17,19 +17,10 @@ from leafstudio.core.analysis import margin_creases
 from leafstudio.core.grid import make_grid
 from leafstudio.core.mesher import MAX_EDGE, conforming_grid_mesh
 from leafstudio.core.prepare.outline import contains, trace_outline
+from tests.leaves import ellipse_cloud as _ellipse
+from tests.leaves import random_leaf as _random_leaf
 
 ELLIPSE_AREA = 2 * np.pi  # semi-axes 2 and 1
-
-
-def _ellipse(n: int, sigma: float, seed: int = 0, shuffle: bool = True, even: bool = True):
-    """(n, 3) points on the ellipse x²/4 + y² = 1 with Gaussian noise σ in x and y."""
-    rng = np.random.default_rng(seed)
-    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    if not even:
-        t = np.sort(rng.uniform(0, 2 * np.pi, n))
-    points = np.column_stack([2 * np.cos(t), np.sin(t), np.zeros(n)])
-    points[:, :2] += rng.normal(0, sigma, (n, 2))
-    return rng.permutation(points) if shuffle else points
 
 
 def _midrib(n: int = 50) -> np.ndarray:
@@ -123,29 +114,6 @@ def test_clean_boundaries_keep_their_points_on_the_mesh():
         assert not outline.smoothed
         np.testing.assert_array_equal(np.sort(outline.polygon, axis=0),
                                       np.sort(leaf.boundary[:, :2], axis=0))  # fmt: skip
-
-
-def _random_leaf(seed: int, n: int, noise: float, size: float) -> tuple[ls.Leaf, float]:
-    """A random star-shaped leaf (a few Fourier modes of the radius), length about `size`,
-    rotated in 3D, shuffled, with duplicates and noise of `noise` of its length; its exact area."""
-    rng = np.random.default_rng(seed)
-    modes = rng.normal(0, 0.08, (3, 2)) / np.arange(2, 5)[:, None]
-    t = np.linspace(0, 2 * np.pi, 20000, endpoint=False)
-    stretch = rng.uniform(1.2, 2.0)
-
-    def outline(t: np.ndarray) -> np.ndarray:
-        r = 1 + sum(a * np.cos(k * t) + b * np.sin(k * t) for k, (a, b) in enumerate(modes, 2))
-        return np.column_stack([stretch * r * np.cos(t), r * np.sin(t)])
-
-    exact = shapely.Polygon(outline(t))
-    length = float(np.ptp(outline(t)[:, 0]))
-    scale = size / length
-    xy = outline(rng.uniform(0, 2 * np.pi, n)) + rng.normal(0, noise * length, (n, 2))
-    points = np.column_stack([xy, np.zeros(n)])
-    points = np.vstack([points, points[rng.choice(n, n // 5)]])  # duplicates
-    rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
-    points = rng.permutation(points) @ rotation.T * scale + rng.uniform(-5, 5, 3) * size
-    return ls.Leaf(boundary=points, veins=[]), exact.area * scale**2
 
 
 @settings(

@@ -23,7 +23,10 @@ from leafstudio.forms.make import seen_on_edge
 from leafstudio.forms.terms import MARGINS
 from leafstudio.sources.demos import demo
 from leafstudio.sources.scan import read_scan
-from tests.core.prepare.test_clouds import _ellipse, _random_leaf
+from tests.leaves import bend as _bend
+from tests.leaves import bent_filled_strip, bent_strap
+from tests.leaves import ellipse_cloud as _ellipse
+from tests.leaves import random_leaf as _random_leaf
 
 REAL = Path(__file__).resolve().parents[4] / "shared" / "realleaves"
 SCANS = sorted(REAL.glob("*.txt")) if REAL.is_dir() else []
@@ -146,39 +149,6 @@ def test_a_dense_striped_scan_is_a_surface(spacing):
     """Looked at closer than the spacing it reads as lines (a finer second look tried in
     session 2 accepted it as a boundary), so the neighbourhood stays wider than the stripes."""
     assert surface_spread(striped_scan(spacing)) > COVER_SPREAD
-
-
-def _bend(along: np.ndarray, across: np.ndarray, bend: float) -> np.ndarray:
-    """(n, 3) points of a blade 1 long whose midline is an arc turning `bend` radians (0:
-    straight), at `along` (0 to 1) on the midline and `across` off it."""
-    turn = bend * (along - 0.5)
-    if bend == 0:
-        centre = np.column_stack([along - 0.5, 0 * along])
-    else:
-        centre = np.column_stack([np.sin(turn), 1 - np.cos(turn)]) / bend
-    normal = np.column_stack([-np.sin(turn), np.cos(turn)])
-    return np.column_stack([centre + across[:, None] * normal, 0 * along])
-
-
-def bent_strap(points: int, aspect: float, bend: float, noise: float = 0.0, seed: int = 0):
-    """A narrow outline 1 long, `aspect` times longer than wide, bent `bend` radians along its
-    midline (a curved grass or iris leaf traced as an outline), `points` points in order, with
-    noise of `noise` of its length."""
-    t = np.linspace(0, 1, points // 2)
-    half = 0.5 / aspect * np.sin(np.pi * t) ** 0.5
-    outline = np.vstack([_bend(t, half, bend), _bend(t, -half, bend)[::-1]])
-    return outline + noise * np.random.default_rng(seed).normal(size=outline.shape)
-
-
-def bent_filled_strip(points: int, aspect: float, bend: float, seed: int = 0) -> np.ndarray:
-    """Points all over a bent strip (a scan of a curved grass-like leaf), the strip of
-    bent_strap, with the scanner's noise of 0.2% of the length off its plane."""
-    rng = np.random.default_rng(seed)
-    t = rng.uniform(0, 1, points)
-    across = 0.5 / aspect * rng.uniform(-1, 1, points) * np.sin(np.pi * t) ** 0.5
-    cloud = _bend(t, across, bend)
-    cloud[:, 2] = 0.05 * t**2 + 0.002 * rng.normal(size=points)
-    return cloud
 
 
 def narrow_striped_scan(spacing: float, along: bool = True, bend: float = 0.0) -> np.ndarray:
