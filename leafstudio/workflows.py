@@ -183,7 +183,10 @@ def open_file(path: str, *, force: bool = False) -> Opened:
     path = str(path)
     if is_photo(path):
         found = read_photo_leaf(path)
-        return Opened(path, "photo", found.leaf, photo=found)
+        grown = ("the photo shows no midrib: its veins were grown",)
+        return Opened(
+            path, "photo", found.leaf, photo=found, notes=grown if found.veins_from == "grown" else ()
+        )
     if path.lower().endswith(".json"):
         leaf, params, sketch = load_project(path)
         opened = Opened(path, "project", leaf, params=params, sketch=sketch or None)

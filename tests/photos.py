@@ -21,6 +21,25 @@ def _finish(rgb: np.ndarray, noise: float, blur: float, seed: int) -> np.ndarray
     return np.clip(np.rint(rgb), 0, 255).astype(np.uint8)
 
 
+def photo_pixels(
+    outline: np.ndarray,
+    angle: float = 25.0,
+    pixels_per_unit: float = 360.0,
+    size: tuple[int, int] = (760, 620),
+):
+    """form_photo's map from the leaf's (x, y) to the photo's (column, row) pixels."""
+    width, height = size
+    a = np.deg2rad(angle)
+    rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    centre_world = (outline[:, :2].min(axis=0) + outline[:, :2].max(axis=0)) / 2
+
+    def to_pixels(xy: np.ndarray) -> np.ndarray:
+        turned = (np.asarray(xy)[:, :2] - centre_world) @ rot.T * pixels_per_unit
+        return np.column_stack([width / 2 + turned[:, 0], height / 2 - turned[:, 1]])
+
+    return to_pixels
+
+
 def form_photo(
     outline: np.ndarray,
     veins: list[np.ndarray] = (),
@@ -38,13 +57,7 @@ def form_photo(
     from PIL import Image, ImageDraw
 
     width, height = size
-    a = np.deg2rad(angle)
-    rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
-    centre_world = (outline[:, :2].min(axis=0) + outline[:, :2].max(axis=0)) / 2
-
-    def to_pixels(xy: np.ndarray) -> np.ndarray:
-        turned = (np.asarray(xy)[:, :2] - centre_world) @ rot.T * pixels_per_unit
-        return np.column_stack([width / 2 + turned[:, 0], height / 2 - turned[:, 1]])
+    to_pixels = photo_pixels(outline, angle, pixels_per_unit, size)
 
     ss = 4
     canvas = Image.new("RGB", (width * ss, height * ss), BACKGROUND)

@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from leafstudio.errors import LeafError
-from leafstudio.sources.photo import BASE_ENDS
+from leafstudio.sources.photo import BASE_ENDS, VEIN_CHOICES
 
 
 def add_photo_parser(sub: argparse._SubParsersAction) -> None:
@@ -23,8 +23,12 @@ def add_photo_parser(sub: argparse._SubParsersAction) -> None:
         help="where the base is when no petiole shows it (default auto: the end of the blade's "
         "mirror axis with a basal notch, else the one the veins lean away from, else the wider)",
     )  # fmt: skip
-    p.add_argument("--veins", choices=("grow", "none"), default="grow")
-    p.add_argument("--venation", default="pinnate", help="for --veins grow (default pinnate)")
+    p.add_argument(
+        "--veins", choices=VEIN_CHOICES, default="auto",
+        help="trace: the veins the photo shows; grow: grown inside the outline; auto (default): "
+        "traced where the photo shows a midrib, else grown; none",
+    )  # fmt: skip
+    p.add_argument("--venation", default="pinnate", help="for grown veins (default pinnate)")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="vein growth's variant")
 
 
@@ -49,7 +53,17 @@ def run_photo(args: argparse.Namespace) -> int:
         f"{', petiole cut off' if found.petiole else ''}"
         f"{guess if found.base_cue == 'wider end' else ''}"
         f"; wrote {len(found.leaf.boundary)} "
-        f"boundary points and {len(found.leaf.veins)} veins to {args.output}",
+        f"boundary points and {len(found.leaf.veins)} veins "
+        f"({_veins_from(found.veins_from, args.veins)}) to {args.output}",
         file=sys.stderr,
     )
     return 0
+
+
+def _veins_from(found: str, asked: str) -> str:
+    """Where the veins written came from, in words."""
+    if found == "photo":
+        return "traced in the photo"
+    if found == "grown":
+        return "grown: the photo shows no midrib" if asked == "auto" else "grown"
+    return "none: the photo shows no midrib" if asked == "trace" else "none asked for"

@@ -533,6 +533,13 @@ def grow_veins(
     return [offset + units.scale * v for v in veins]
 
 
+def check_seed(seed: object) -> None:
+    """LeafError unless `seed` is a whole number numpy's generators take."""
+    whole = isinstance(seed, int | np.integer) and not isinstance(seed, bool)
+    if not whole or not 0 <= seed <= SEED_MAX:
+        raise LeafError(f"the seed must be a whole number from 0 to {SEED_MAX}, got {seed!r}")
+
+
 def _grow_unit(
     boundary: np.ndarray,
     venation: str,
@@ -548,9 +555,7 @@ def _grow_unit(
     count = DEFAULT_SECONDARIES[venation] if secondaries is None else int(secondaries)
     if not 0 <= count <= 40:
         raise LeafError(f"secondaries must be between 0 and 40, got {count}")
-    whole = isinstance(seed, int | np.integer) and not isinstance(seed, bool)
-    if not whole or not 0 <= seed <= SEED_MAX:
-        raise LeafError(f"the seed must be a whole number from 0 to {SEED_MAX}, got {seed!r}")
+    check_seed(seed)
     rng = np.random.default_rng(seed)
     xy, heights, frame, base_xy = _plane(boundary, base)
     size = float(np.ptp(xy, axis=0).max())

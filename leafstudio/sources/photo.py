@@ -44,6 +44,7 @@ if TYPE_CHECKING:
     from leafstudio.sources.leafends import Midline, VeinField
 
 BASE_ENDS = ("auto", "left", "right", "top", "bottom")
+VEIN_CHOICES = ("auto", "trace", "grow", "none")
 SECOND_OBJECT = 0.25  # a second object this large (of the largest) means several leaves
 SMALLEST_LEAF = 0.002  # of the image's pixels: less is no leaf
 LARGEST_LEAF = 0.9  # of the image's pixels: more means no plain background
@@ -76,6 +77,9 @@ class PhotoLeaf:
     base_cue : str
         What told the base: "petiole", "given" (base_end), "notch", "veins" or "wider end"
         (leafends.base_end_index); the last is a guess.
+    veins_from : str
+        "photo" (traced in the photo: photo_veins.py), "grown" (forms.grow_veins: none
+        visible, or asked for) or "none".
     """
 
     leaf: Leaf
@@ -84,6 +88,7 @@ class PhotoLeaf:
     blade: np.ndarray
     petiole: bool
     base_cue: str = "petiole"
+    veins_from: str = "none"
 
 
 def foreground(image: np.ndarray) -> np.ndarray:
@@ -305,7 +310,7 @@ def leaf_from_photo(
     image: np.ndarray,
     length: float | None = None,
     base_end: str = "auto",
-    veins: str = "grow",
+    veins: str = "auto",
     venation: str = "pinnate",
     points: int | None = None,
     seed: int = 0,
@@ -318,15 +323,22 @@ def leaf_from_photo(
         Base to apex in the output's units; default 1.
     base_end : {"auto", "left", "right", "top", "bottom"}, default: "auto"
         Where the base is when no petiole shows it.
-    veins : {"grow", "none"}, default: "grow"
-        Grow veins inside the outline (leafstudio.forms.grow_veins) or leave none.
+    veins : {"auto", "trace", "grow", "none"}, default: "auto"
+        "trace": the veins the photo shows (photo_veins.py: the midrib and the secondaries
+        that stand out), or none if it shows none; "grow": veins grown inside the outline
+        (leafstudio.forms.grow_veins); "auto": traced where the photo shows a midrib, else
+        grown; "none": no veins. PhotoLeaf.veins_from says which.
     points : int, optional
         Boundary points; default one per 2 pixels of outline, 200 to 2000.
     """
     if base_end not in BASE_ENDS:
         raise LeafError(f"unknown base end {base_end!r}; use one of {', '.join(BASE_ENDS)}")
-    if veins not in ("grow", "none"):
-        raise LeafError(f"--veins must be grow or none, got {veins!r}")
+    if veins not in VEIN_CHOICES:
+        raise LeafError(f"--veins must be one of {', '.join(VEIN_CHOICES)}, got {veins!r}")
+    if veins in ("auto", "grow"):
+        from leafstudio.forms.veins import check_seed
+
+        check_seed(seed)
     if length is not None and not (np.isfinite(length) and length > 0):
         raise LeafError(f"--length must be a number above 0, got {length}")
     if image.ndim != 3 or min(image.shape[:2]) < 16:
@@ -356,19 +368,61 @@ def leaf_from_photo(
         [[back[0, 0], back[0, 1], start[0]], [-back[1, 0], -back[1, 1], -start[1]]]
     )
     boundary = np.column_stack([xy, np.zeros(len(xy))])
-    grown: list[np.ndarray] = []
-    if veins == "grow":
+
+    def to_world(px: np.ndarray) -> np.ndarray:
+        return scale * (np.column_stack([px[:, 0], -px[:, 1]]) - start) @ rotate.T
+
+    found: list[np.ndarray] = []
+    veins_from = "none"
+    if veins in ("auto", "trace"):
+        from leafstudio.sources.photo_veins import trace_veins
+
+        traced = trace_veins(image, blade, outline[base], outline[apex])
+        if traced.seen:
+            found = [_lifted(to_world(_smoothed(v)), xy) for v in traced.veins]
+            veins_from = "photo"
+    if veins == "grow" or (veins == "auto" and not found):
         from leafstudio.forms import grow_veins
 
-        grown = grow_veins(boundary, venation, base=np.zeros(2), seed=seed, apex=xy[apex])
+        found = grow_veins(boundary, venation, base=np.zeros(2), seed=seed, apex=xy[apex])
+        veins_from = "grown"
     return PhotoLeaf(
-        leaf=Leaf(boundary=boundary, veins=grown),
+        leaf=Leaf(boundary=boundary, veins=found),
         pixel_from_world=pixel_from_world,
         outline_px=outline,
         blade=blade,
         petiole=joint is not None,
         base_cue=cue,
+        veins_from=veins_from,
     )
+
+
+def _smoothed(path: np.ndarray, spacing: float = 3.0) -> np.ndarray:
+    """A traced pixel path without its staircase: resampled every `spacing` pixels along its
+    length and smoothed over a few samples, its ends kept."""
+    from scipy.ndimage import gaussian_filter1d
+
+    steps = np.linalg.norm(np.diff(path, axis=0), axis=1)
+    arc = np.concatenate([[0.0], np.cumsum(steps)])
+    count = max(int(arc[-1] / spacing) + 1, 2)
+    at = np.linspace(0.0, arc[-1], count)
+    even = np.column_stack([np.interp(at, arc, path[:, i]) for i in range(2)])
+    if len(even) < 5:
+        return even
+    smooth = gaussian_filter1d(even, 1.0, axis=0, mode="nearest")
+    smooth[[0, -1]] = even[[0, -1]]
+    return smooth
+
+
+def _lifted(vein_xy: np.ndarray, outline_xy: np.ndarray) -> np.ndarray:
+    """A traced vein with the forms' relief: HEIGHT_RATIO times its distance to the margin."""
+    import shapely
+
+    from leafstudio.forms.veins import HEIGHT_RATIO
+
+    margin = shapely.LinearRing(outline_xy)
+    gap = shapely.distance(margin, shapely.points(vein_xy))
+    return np.column_stack([vein_xy, HEIGHT_RATIO * gap])
 
 
 def save_photo_leaf(found: PhotoLeaf, image_path: str | Path, path: str | Path) -> None:

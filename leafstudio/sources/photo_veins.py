@@ -1,0 +1,199 @@
+"""The veins a photo shows: traced, not invented.
+
+1. Ridges: scikit-image's Sato filter (the Hessian's eigenvalues, several widths) on the grey
+   levels of the blade, for light veins and for dark ones; the stronger kind is kept. The
+   margin's own edge is left out (MARGIN_SKIP ridge widths in from the outline).
+2. The midrib: the cheapest path from the base to the apex where a pixel costs the inverse of
+   its ridge strength (skimage.graph.route_through_array). It is taken as seen when the ridge
+   along it is clearly stronger than the blade's typical pixel (MIDRIB_CLEAR); a blade without
+   visible veins has no such path and the veins are grown instead (photo.py).
+3. Secondaries: the strong ridges (hysteresis between RIDGE_LOW and RIDGE_HIGH) away from the
+   midrib, thinned to one-pixel skeletons; each piece longer than MIN_VEIN of the blade's
+   length is one vein, its longest path, from the end nearer the midrib (joined to the midrib
+   when it stops short of it by less than JOIN of the length).
+
+All in pixels, (column, row) as the outline; photo.py maps them to the leaf's coordinates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+RIDGE_WIDTHS = (1.0, 2.0, 3.0)  # Sato sigmas, in pixels, for a blade LENGTH_PIXELS long
+LENGTH_PIXELS = 500.0  # the widths scale with the blade's length beyond this
+MARGIN_SKIP = 3.0  # ridge widths in from the outline where ridges are not looked for
+MIDRIB_CLEAR = 3.0  # the midrib's median ridge strength over the blade's median, at least
+RIDGE_LOW, RIDGE_HIGH = 0.2, 0.4  # hysteresis, as shares of the blade's strongest ridges
+STRONGEST = 99.5  # percentile of the blade's ridge strength taken as 1
+MIN_CONTRAST = 0.01  # that percentile's Sato response (grey levels 0-1) below which none is seen
+MIN_VEIN = 0.06  # a secondary is at least this share of the blade's length
+JOIN = 0.05  # a secondary stopping this share of the length short of the midrib is joined to it
+MIDRIB_BAND = 2.5  # ridge widths either side of the midrib that belong to it
+
+
+@dataclass(frozen=True)
+class TracedVeins:
+    """Veins seen in a photo, in (column, row) pixels: the midrib from base to apex first."""
+
+    veins: list[np.ndarray] = field(default_factory=list)
+    midrib_strength: float = 0.0  # the midrib's median ridge over the blade's median
+
+    @property
+    def seen(self) -> bool:
+        """Whether the photo shows a midrib (else nothing here is to be trusted)."""
+        return bool(self.veins) and self.midrib_strength >= MIDRIB_CLEAR
+
+
+def ridge_strength(image: np.ndarray, blade: np.ndarray, widths: np.ndarray) -> np.ndarray:
+    """(h, w) ridge strength in [0, 1] on the blade's inner pixels, 0 elsewhere."""
+    from scipy.ndimage import distance_transform_edt
+    from skimage.filters import sato
+
+    grey = image[..., :3].astype(float) @ np.array([0.299, 0.587, 0.114]) / 255
+    inner = distance_transform_edt(blade) > MARGIN_SKIP * widths.max()
+    if inner.sum() < 16:
+        return np.zeros(blade.shape)
+    best, best_level = None, -1.0
+    for dark in (False, True):
+        response = sato(grey, sigmas=widths, black_ridges=dark, mode="reflect")
+        response[~inner] = 0.0
+        level = float(np.percentile(response[inner], STRONGEST))
+        if level > best_level:
+            best, best_level = response, level
+    assert best is not None
+    if best_level < MIN_CONTRAST:  # an even blade: what stands out is sensor noise
+        return np.zeros(blade.shape)
+    return np.clip(best / best_level, 0.0, 1.0)
+
+
+def trace_veins(
+    image: np.ndarray, blade: np.ndarray, base: np.ndarray, apex: np.ndarray
+) -> TracedVeins:
+    """The veins the photo shows (see the module docstring).
+
+    Parameters
+    ----------
+    image : (h, w, 3 or 4) uint8 array
+    blade : (h, w) bool array
+        The blade's pixels (petiole cut off).
+    base, apex : (2,) float arrays
+        The midrib's ends, (column, row).
+
+    Returns
+    -------
+    TracedVeins
+    """
+    rows, cols = np.nonzero(blade)
+    if not len(rows):
+        return TracedVeins()
+    (r0, c0), (r1, c1) = (rows.min(), cols.min()), (rows.max() + 1, cols.max() + 1)
+    corner = np.array([c0, r0], dtype=float)  # the blade's box: the filters run on it alone
+    image, blade = image[r0:r1, c0:c1], blade[r0:r1, c0:c1]
+    base, apex = np.asarray(base) - corner, np.asarray(apex) - corner
+    length = float(np.linalg.norm(apex - base))
+    widths = np.asarray(RIDGE_WIDTHS) * max(1.0, length / LENGTH_PIXELS)
+    strength = ridge_strength(image, blade, widths)
+    inside = strength[blade]
+    if not inside.size or not np.any(inside > 0):
+        return TracedVeins()
+    midrib = _midrib(strength, blade, base, apex)
+    along = strength[midrib[:, 1].astype(int), midrib[:, 0].astype(int)]
+    midrib, along = _trimmed(midrib, along, strength > 0)
+    core = along[len(along) // 10 : max(len(along) - len(along) // 10, 1)]
+    typical = float(np.median(inside[inside > 0]))
+    clear = float(np.median(core)) / max(typical, 1e-12)
+    veins = [midrib, *_secondaries(strength, midrib, widths, length)]
+    return TracedVeins(veins=[v + corner for v in veins], midrib_strength=clear)
+
+
+def _midrib(
+    strength: np.ndarray, blade: np.ndarray, base: np.ndarray, apex: np.ndarray
+) -> np.ndarray:
+    """The cheapest base-to-apex path, (n, 2) pixel centres (column, row)."""
+    from skimage.graph import route_through_array
+
+    cost = 1.0 / (strength + 0.02)
+    cost[~blade] = 1e3  # the path may touch the margin at its ends, never leave the blade
+    h, w = blade.shape
+
+    def pixel(at: np.ndarray) -> tuple[int, int]:
+        col, row = np.clip(np.floor(at), 0, [w - 1, h - 1]).astype(int)
+        return int(row), int(col)
+
+    path, _ = route_through_array(cost, pixel(base), pixel(apex), geometric=True)
+    rows, cols = np.asarray(path).T
+    return np.column_stack([cols, rows]) + 0.5
+
+
+def _trimmed(
+    path: np.ndarray, along: np.ndarray, inner: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The path without the ends where it runs off any ridge through the blade's inner part
+    (the base and apex found from the outline need not be where the photo's midrib ends); the
+    margin band, where no ridge is looked for, is kept."""
+    rows, cols = path[:, 1].astype(int), path[:, 0].astype(int)
+    off_ridge = inner[rows, cols] & (along < RIDGE_LOW)
+    on_ridge = np.flatnonzero(along >= RIDGE_LOW)
+    if not len(on_ridge):
+        return path, along
+    first, last = int(on_ridge[0]), int(on_ridge[-1])
+    start = first if off_ridge[:first].any() else 0
+    end = last + 1 if off_ridge[last + 1 :].any() else len(path)
+    return path[start:end], along[start:end]
+
+
+def _secondaries(
+    strength: np.ndarray, midrib: np.ndarray, widths: np.ndarray, length: float
+) -> list[np.ndarray]:
+    """Long skeleton branches of the strong ridges off the midrib, each from its midrib end."""
+    from scipy.ndimage import distance_transform_edt
+    from scipy.spatial import cKDTree
+    from skimage.filters import apply_hysteresis_threshold
+    from skimage.measure import label
+    from skimage.morphology import skeletonize
+
+    near_midrib = np.ones(strength.shape, dtype=bool)
+    near_midrib[midrib[:, 1].astype(int), midrib[:, 0].astype(int)] = False
+    near_midrib = distance_transform_edt(near_midrib) <= MIDRIB_BAND * widths.max()
+    ridges = apply_hysteresis_threshold(strength, RIDGE_LOW, RIDGE_HIGH) & ~near_midrib
+    skeleton = skeletonize(ridges)
+    pieces = label(skeleton, connectivity=2)
+    midrib_tree = cKDTree(midrib)
+    veins = []
+    for piece in range(1, int(pieces.max()) + 1):
+        rows, cols = np.nonzero(pieces == piece)
+        if len(rows) < MIN_VEIN * length:
+            continue
+        path = _longest_path(np.column_stack([cols, rows]) + 0.5)
+        gaps, nearest = midrib_tree.query(path[[0, -1]])
+        if gaps[1] < gaps[0]:
+            path, gaps, nearest = path[::-1], gaps[::-1], nearest[::-1]
+        if float(np.linalg.norm(path[-1] - path[0])) < MIN_VEIN * length:
+            continue  # a tight curl or a blob, not a vein
+        if gaps[0] <= JOIN * length:
+            path = np.vstack([midrib[nearest[0]], path])
+        veins.append(path)
+    return veins
+
+
+def _longest_path(pixels: np.ndarray) -> np.ndarray:
+    """The longest shortest path through 8-connected skeleton pixels (two sweeps of Dijkstra),
+    in order."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import dijkstra
+    from scipy.spatial import cKDTree
+
+    pairs = cKDTree(pixels).query_pairs(1.5, output_type="ndarray")
+    steps = np.linalg.norm(pixels[pairs[:, 0]] - pixels[pairs[:, 1]], axis=1)
+    n = len(pixels)
+    graph = coo_matrix((steps, (pairs[:, 0], pairs[:, 1])), shape=(n, n)).tocsr()
+    first = np.nan_to_num(dijkstra(graph, directed=False, indices=0), posinf=-1.0)
+    start = int(np.argmax(first))
+    dist, previous = dijkstra(graph, directed=False, indices=start, return_predecessors=True)
+    end = int(np.argmax(np.nan_to_num(dist, posinf=-1.0)))
+    order = [end]
+    while order[-1] != start and previous[order[-1]] >= 0:
+        order.append(int(previous[order[-1]]))
+    return pixels[order[::-1]]
