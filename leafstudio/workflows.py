@@ -183,10 +183,9 @@ def open_file(path: str, *, force: bool = False) -> Opened:
     path = str(path)
     if is_photo(path):
         found = read_photo_leaf(path)
-        grown = ("the photo shows no midrib: its veins were grown",)
-        return Opened(
-            path, "photo", found.leaf, photo=found, notes=grown if found.veins_from == "grown" else ()
-        )
+        grown = found.veins_from == "grown"
+        notes = ("the photo shows no midrib: its veins were grown",) if grown else ()
+        return Opened(path, "photo", found.leaf, photo=found, notes=notes)
     if path.lower().endswith(".json"):
         leaf, params, sketch = load_project(path)
         opened = Opened(path, "project", leaf, params=params, sketch=sketch or None)
