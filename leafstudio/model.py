@@ -163,13 +163,13 @@ class Params:
     ).field()  # fmt: skip
     samples: int = Whole(
         default=4000, low=100, high=1_000_000, slider=(500, 20_000), step=500,
-        what="EM sample count", label="EM samples", stage="gmm", flag="--samples", metavar="N",
+        what="EM sample count", label="EM samples", stage="samples", flag="--samples", metavar="N",
         help="How many random points, drawn where the height guide p(x) is high, the Gaussian "
         "mixture is fitted to by EM. More points give a steadier fit",
     ).field()  # fmt: skip
     seed: int = Whole(
         default=0, low=0, high=SEED_MAX,
-        what="seed", label="Seed", stage="gmm", flag="--seed", metavar="S",
+        what="seed", label="Seed", stage="samples", flag="--seed", metavar="S",
         help="The random seed of the sampling and of EM: the same seed always gives the same leaf",
     ).field()  # fmt: skip
     mesher: str = Choice(

@@ -210,9 +210,11 @@ def test_a_parameter_change_reruns_its_stage_and_those_after_it_and_gives_a_fres
     assert keys == expected
     leaf = ls.demo("nested")
     pipe = Pipeline(leaf)
-    pipe.run(base)
+    first = pipe.run(base)
     cached = pipe.run(changed)
-    assert set(cached.ran) == expected
+    # a lazy stage runs when first asked for (the layout: for the conforming mesher only)
+    lazy = {s for s in STAGES if pipeline.STAGE_TABLE[s].lazy}
+    assert expected - lazy <= set(cached.ran) <= expected | (lazy - set(first.ran))
     fresh = Pipeline(leaf).run(changed)
     np.testing.assert_array_equal(cached.triangle_mesh.points, fresh.triangle_mesh.points)
     np.testing.assert_array_equal(

@@ -17,7 +17,7 @@ signed distance, because each f_i has a unit gradient.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
@@ -67,7 +67,6 @@ class MPUImplicit:
     coef: np.ndarray
     points: np.ndarray
     depth: np.ndarray
-    _last: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def evaluate(self, xy: np.ndarray, gradient: bool = False):
         """g at (n, 2) points; with `gradient`, also its (n, 2) gradient.
@@ -85,24 +84,8 @@ class MPUImplicit:
         Piecewise: the B-splines are C1, so ∇²g jumps where a point crosses t = 1/3 or t = 1 of
         some cell. Far from the leaf (no support covers the point) g = −|x − b| and
         ∇²g = −(I − u uᵀ) / |x − b| with u = ∇g.
-
-        For a read-only `xy` the (read-only) result is kept and returned again when asked for
-        the very same array: the pipeline asks for it at the mesh's vertices after every K.
         """
-        return self._kept(xy, lambda: self._blend(xy, 2))
-
-    def _kept(self, xy: np.ndarray, compute: Callable[[], tuple[np.ndarray, ...]]):
-        """compute(), kept (read-only) for a read-only `xy`, returned again for the same array."""
-        frozen = isinstance(xy, np.ndarray) and not xy.flags.writeable
-        last = self._last.get("derivatives")
-        if frozen and last is not None and last[0] is xy:
-            return last[1]
-        result = compute()
-        if frozen:
-            for array in result:
-                array.flags.writeable = False
-            self._last["derivatives"] = (xy, result)
-        return result
+        return self._blend(xy, 2)
 
     def on_grid(self, grid: Grid) -> np.ndarray:
         """g at every node of a regular grid, (ny * nx,) in grid order: the same values as
@@ -114,13 +97,10 @@ class MPUImplicit:
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """`derivatives(xy)` where xy ends with the grid nodes flagged in the (ny * nx,) bool
         `nodes`, in grid order (a mesh's vertices: the outline, then grid nodes). Those rows are
-        summed by grid rows; a read-only `xy` keeps the result for `derivatives` to return."""
-        def compute() -> tuple[np.ndarray, ...]:
-            head = len(xy) - int(np.count_nonzero(nodes))
-            parts = zip(self._blend(xy[:head], 2), self._grid_blend(grid, nodes, 2), strict=True)
-            return tuple(np.concatenate(part) for part in parts)
-
-        return self._kept(xy, compute)
+        summed by grid rows (the pipeline's layout stage keeps them for the curvatures)."""
+        head = len(xy) - int(np.count_nonzero(nodes))
+        parts = zip(self._blend(xy[:head], 2), self._grid_blend(grid, nodes, 2), strict=True)
+        return tuple(np.concatenate(part) for part in parts)  # type: ignore[return-value]
 
     def _grid_blend(self, grid: Grid, nodes: np.ndarray, degree: int):
         """_blend at the grid nodes flagged in the (ny * nx,) bool `nodes`, in grid order."""

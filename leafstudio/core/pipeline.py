@@ -1,38 +1,46 @@
-"""The staged pipeline with a cache per stage, and its Result.
+"""The staged pipeline with one cache of stage outputs (StageStore), and its Result.
 
-| stage    | depends on                          | output                                   |
-|----------|-------------------------------------|------------------------------------------|
-| frame    | the leaf, margin                    | PCA frame, 2D polygon, 2D veins, heights |
-|          |                                     | above the base b(x) (base.py)            |
-| implicit | frame, mpu_tolerance                | the MPU implicit g                       |
-| grid     | frame, grid                         | the regular grid                         |
-| guide    | implicit, grid                      | g and p(x) on the grid                   |
-| gmm      | guide, k, samples, seed             | the EM mixture                           |
-| surface  | gmm, taper, refine                  | amplitudes, z on the kept grid nodes     |
-| mesh     | surface, mesher, radius_factor      | the triangle mesh in world coordinates   |
+| stage    | depends on                             | output                                   |
+|----------|----------------------------------------|------------------------------------------|
+| frame    | the leaf, margin                       | PCA frame, 2D polygon, 2D veins, heights |
+|          |                                        | above the base b(x) (base.py)            |
+| implicit | frame, mpu_tolerance                   | the MPU implicit g                       |
+| grid     | frame, grid                            | the regular grid                         |
+| guide    | implicit, grid                         | g and p(x) on the grid                   |
+| samples  | guide, samples, seed                   | the EM samples drawn from p (lazy)       |
+| gmm      | samples, k                             | the EM mixture                           |
+| surface  | gmm, taper, refine                     | amplitudes, z on the kept grid nodes     |
+| layout   | guide                                  | the conforming mesh in the plane and g's |
+|          |                                        | derivatives at its vertices (lazy)       |
+| mesh     | surface, layout, mesher, radius_factor | the triangle mesh in world coordinates   |
 
-A stage reruns only when a value it depends on changed, so moving K reruns gmm, surface and mesh.
-Each parameter's stage is declared with it (model.Params); the cache keys (STAGE_KEYS) follow from
-those declarations and this table's stage inputs (STAGE_INPUTS; tests/test_params.py checks that
-this table says the same).
+A stage reruns only when a value it depends on changed, so moving K reruns gmm, surface and mesh
+(the samples and the layout are kept). Each parameter's stage is declared with it (model.Params);
+the cache keys (STAGE_KEYS) follow from those declarations and this table's stage inputs
+(STAGE_TABLE; tests/test_params.py checks that this table says the same). A lazy stage runs
+only when a later stage asks for it. Every output goes through one StageStore, keyed by the
+leaf's fingerprint and the stage's parameters; numba's on-disk cache of compiled kernels
+(_shared/kernelcache.py) is a compile cache, not a store of results.
 """
 
 from __future__ import annotations
 
+import hashlib
 import threading
 import time
 import warnings
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
 from leafstudio.core import analysis, mesher
 from leafstudio.core.autok import choose_mixture
 from leafstudio.core.base import PLANAR, BaseSurface, fit_base
-from leafstudio.core.curvature import surface_curvatures
+from leafstudio.core.curvature import graph_curvatures
 from leafstudio.core.gmm import Mixture, fit_mixture, fit_signed_mixture, sample_guide
 from leafstudio.core.grid import Grid, make_grid
 from leafstudio.core.height import height_guide
@@ -40,8 +48,10 @@ from leafstudio.core.measure import curvature_summary, shape_measurements
 from leafstudio.core.mpu import MPUImplicit, build_mpu
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.prepare.outline import (
+    EdgeBands,
     contains,
     distinct_indices,
+    edge_bands,
     outward_normals,
     thin_outline,
     thin_veins,
@@ -62,29 +72,6 @@ from leafstudio.model import K_AUTO, PARAMS, Leaf, Params, as_leaf, as_params
 if TYPE_CHECKING:
     import pyvista as pv
 
-STAGE_INPUTS: dict[str, tuple[str, ...]] = {  # the table's "depends on", less the parameters
-    "frame": (),
-    "implicit": ("frame",),
-    "grid": ("frame",),
-    "guide": ("implicit", "grid"),
-    "gmm": ("guide",),
-    "surface": ("gmm",),
-    "mesh": ("surface",),
-}
-STAGES = tuple(STAGE_INPUTS)
-
-
-def _stage_keys() -> dict[str, tuple[str, ...]]:
-    """Each stage's cache key: the parameters declared for it (model.Params, `stage`) and those
-    of every stage it reads, in field order."""
-    keys: dict[str, set[str]] = {}
-    for stage, inputs in STAGE_INPUTS.items():
-        own = {name for name, p in PARAMS.items() if p.stage == stage}
-        keys[stage] = own.union(*(keys[i] for i in inputs))
-    return {stage: tuple(n for n in PARAMS if n in names) for stage, names in keys.items()}
-
-
-STAGE_KEYS = _stage_keys()
 MIN_NODES_PER_COMPONENT = 5
 GUIDE_STEP = 0.5  # the guide's curves are thinned to this fraction of the grid step (height.py)
 VEIN_OUTSIDE_TOLERANCE = 0.01  # vein points may stray this fraction of the leaf length outside
@@ -109,6 +96,13 @@ class FrameStage:
     length: float  # leaf length along its main axis
     polygon_h: np.ndarray | None = None  # (b,) the outline points' own heights; None: planar
     base: BaseSurface | None = None  # b(x) through the outline's heights; None: b ≡ 0
+    bands: EdgeBands | None = None  # the polygon's edge_bands, for contains
+    notes: tuple[str, ...] = ()  # what the run should warn of (dropped loops, a flat leaf)
+
+    @property
+    def flat(self) -> bool:
+        """No vein rises off the base: the surface is the base (or the plane) itself."""
+        return not self.veins or not np.any(np.abs(self.vein_h) > 1e-9 * self.length)
 
     @property
     def vein_xy(self) -> np.ndarray:
@@ -282,9 +276,7 @@ class Result:
         return {**table, "leaf": {**shape, "k": self.chosen_k}, "curvature": curvature}
 
 
-def _frame_stage(
-    leaf: Leaf, margin: str = "auto", units: Units | None = None
-) -> tuple[FrameStage, list[str]]:
+def _frame_stage(leaf: Leaf, margin: str = "auto", units: Units | None = None) -> FrameStage:
     scale, offset = (units.scale, units.offset) if units is not None else (1.0, None)
     check_not_a_surface(leaf.boundary)  # a whole scan given as the boundary: an error
     check_boundary(leaf.boundary, scale, offset)  # a figure eight would lose a lobe: an error
@@ -296,6 +288,7 @@ def _frame_stage(
     outline = trace_outline(xy, boundary_h, margin)  # input points, or a noisy cloud's mean
     kept_vertices = thin_outline(outline.polygon)  # a few thousand vertices at most
     polygon = outline.polygon[kept_vertices]
+    bands = edge_bands(polygon)
     length = float(np.ptp(polygon[:, 0]))
     if np.max(np.abs(boundary_h)) <= PLANAR * length:  # planar: no base
         polygon_h = np.zeros(len(polygon))
@@ -313,7 +306,7 @@ def _frame_stage(
     for i, (v_xy, v_h) in enumerate(projected):
         keep = distinct[i][kept[i]]  # dense veins: a few thousand points in all (thin_veins)
         v_xy = v_xy[keep]
-        outside = ~contains(polygon, v_xy)
+        outside = ~contains(polygon, v_xy, bands)
         if outside.any():
             from shapely import LinearRing, distance, points
 
@@ -332,7 +325,7 @@ def _frame_stage(
         notes.append("no veins given: the leaf is flat")
     elif all(np.allclose(h, 0, atol=1e-9 * length) for h in heights):
         notes.append("all veins lie in the boundary's plane: the leaf is flat")
-    stage = FrameStage(
+    return FrameStage(
         frame=frame,
         polygon=polygon,
         veins=veins,
@@ -340,8 +333,9 @@ def _frame_stage(
         length=length,
         polygon_h=None if base is None else polygon_h,
         base=base,
+        bands=bands,
+        notes=tuple(notes),
     )
-    return stage, notes
 
 
 def _flat_mixture(center: np.ndarray) -> Mixture:
@@ -354,8 +348,106 @@ def _flat_mixture(center: np.ndarray) -> Mixture:
     )
 
 
+class StageStore:
+    """The one cache of stage outputs, keyed by the leaf's fingerprint and the parameters the
+    stage reads (its own and those of every stage before it, STAGE_KEYS).
+
+    As in trimesh's caching.py, an entry holds only while what it was computed from is the same:
+    the key names the leaf by a digest of its coordinates (Leaf.fingerprint), so a store may be
+    shared between Pipelines and a different leaf with the same parameters misses. Each stage
+    keeps its `per_stage` most recent outputs (1: the last run's, as a Pipeline needs to rerun
+    only what a parameter change invalidates).
+    """
+
+    def __init__(self, per_stage: int = 1) -> None:
+        self.per_stage = per_stage
+        self._entries: dict[str, OrderedDict[tuple[Any, ...], Any]] = {}
+
+    def get(self, stage: str, key: tuple[Any, ...]) -> Any:
+        """The output stored for `stage` under `key`, or MISSING."""
+        entries = self._entries.get(stage)
+        if entries is None or key not in entries:
+            return MISSING
+        entries.move_to_end(key)
+        return entries[key]
+
+    def put(self, stage: str, key: tuple[Any, ...], value: Any) -> None:
+        """Keep `value` as `stage`'s output under `key` (the oldest beyond per_stage goes)."""
+        entries = self._entries.setdefault(stage, OrderedDict())
+        entries[key] = value
+        entries.move_to_end(key)
+        while len(entries) > self.per_stage:
+            entries.popitem(last=False)
+
+    def stages(self) -> tuple[str, ...]:
+        """The stages with an output kept."""
+        return tuple(name for name, entries in self._entries.items() if entries)
+
+
+MISSING = object()  # StageStore.get: no output kept under that key
+
+
+def leaf_key(leaf: Leaf) -> bytes:
+    """A 16-byte digest of the leaf's coordinates (Leaf.fingerprint): the store's leaf key."""
+    return hashlib.blake2b(leaf.fingerprint(), digest_size=16).digest()
+
+
+class StageRun:
+    """One Pipeline.run: the stage outputs asked for so far, each from the store or computed.
+
+    A stage's function reads the outputs of the stages it depends on as ``run["name"]`` and the
+    parameters as ``run.params``; reading a stage that is not upstream of it is an error (its
+    output could be stale: the cache key would not cover it).
+    """
+
+    def __init__(
+        self,
+        pipeline: Pipeline,
+        params: Params,
+        on_stage: Callable[[str], None] | None,
+        should_stop: Callable[[], bool] | None,
+    ) -> None:
+        self.pipeline, self.params = pipeline, params
+        self.on_stage, self.should_stop = on_stage, should_stop
+        self.outputs: dict[str, Any] = {}
+        self.timings: dict[str, float] = {}
+        self.ran: list[str] = []
+        self._running: list[str] = []  # the stages being computed, innermost last
+
+    def __getitem__(self, name: str) -> Any:
+        if self._running and name not in UPSTREAM[self._running[-1]]:
+            raise KeyError(f"stage {self._running[-1]!r} reads {name!r}, not among its inputs")
+        if name in self.outputs:
+            return self.outputs[name]
+        store = self.pipeline.store
+        key = (self.pipeline.leaf_key, *(getattr(self.params, k) for k in STAGE_KEYS[name]))
+        value = store.get(name, key)
+        if value is MISSING:
+            value = self._compute(name)
+            store.put(name, key, value)
+        self.outputs[name] = value
+        return value
+
+    def _compute(self, name: str) -> Any:
+        if self.should_stop is not None and self.should_stop():
+            raise Cancelled
+        if self.on_stage is not None:
+            self.on_stage(name)
+        start = time.perf_counter()
+        inner = sum(self.timings.values())
+        self._running.append(name)
+        try:
+            value = STAGE_TABLE[name].compute(self)
+        finally:
+            self._running.pop()
+        # a stage's own time: less that of the (lazy) stages it asked for meanwhile
+        self.timings[name] = time.perf_counter() - start - (sum(self.timings.values()) - inner)
+        self.ran.append(name)
+        return value
+
+
 class Pipeline:
-    """The staged reconstruction of one leaf, caching each stage's last output.
+    """The staged reconstruction of one leaf, keeping each stage's last output (StageStore).
 
     Examples
     --------
@@ -367,36 +459,12 @@ class Pipeline:
     ('gmm', 'surface', 'mesh')
     """
 
-    def __init__(self, leaf: Leaf) -> None:
+    def __init__(self, leaf: Leaf, store: StageStore | None = None) -> None:
         self.leaf = leaf = as_leaf(leaf)  # a clear TypeError for anything else
         self.units = Units.of(leaf)  # the stages run on the leaf at unit size (units.py)
-        self._unit_leaf = self.units.leaf(leaf)
-        self._cache: dict[str, tuple[tuple[Any, ...], Any]] = {}
-        self._layout: tuple[GuideStage, tuple[np.ndarray, ...]] | None = None
-        self._drawn: tuple[GuideStage, tuple[int, int], np.ndarray] | None = None
-
-    def _samples(self, guide: GuideStage, grid: Grid, params: Params) -> np.ndarray:
-        """The EM samples drawn from the guide (gmm.sample_guide), kept while the guide stage's
-        output, the sample count and the seed are the same: a new K refits the same samples."""
-        key = (params.samples, params.seed)
-        if self._drawn is None or self._drawn[0] is not guide or self._drawn[1] != key:
-            inside = guide.inside
-            drawn = sample_guide(
-                grid.points[inside], guide.p[inside], params.samples, grid.spacing, params.seed
-            )
-            drawn.flags.writeable = False
-            self._drawn = (guide, key, drawn)
-        return self._drawn[2]
-
-    def _grid_mesh(self, fs: FrameStage, grid: Grid, guide: GuideStage) -> tuple[np.ndarray, ...]:
-        """The conforming mesh in the plane (mesher.conforming_grid_mesh), kept while the guide
-        stage's output is the same: it depends on nothing later (K and the fit only lift it)."""
-        if self._layout is None or self._layout[0] is not guide:
-            layout = mesher.conforming_grid_mesh(fs.polygon, grid, guide.inside)
-            for array in layout:  # shared by the runs that follow, and MPUImplicit.derivatives
-                array.flags.writeable = False  # keeps its result for a read-only array
-            self._layout = (guide, layout)
-        return self._layout[1]
+        self.unit_leaf = self.units.leaf(leaf)
+        self.leaf_key = leaf_key(leaf)
+        self.store = StageStore() if store is None else store
 
     def run(
         self,
@@ -427,56 +495,19 @@ class Pipeline:
         Cancelled
             When `should_stop` said so.
         """
-        params = as_params(params)  # Params, None or a dict; a clear error for anything else
-        timings: dict[str, float] = {}
-        ran: list[str] = []
-
-        def stage(name: str, compute: Callable[[], Any]) -> Any:
-            key = tuple(getattr(params, k) for k in STAGE_KEYS[name])
-            cached = self._cache.get(name)
-            if cached is not None and cached[0] == key:
-                return cached[1]
-            if should_stop is not None and should_stop():
-                raise Cancelled
-            if on_stage is not None:
-                on_stage(name)
-            start = time.perf_counter()
-            value = compute()
-            timings[name] = time.perf_counter() - start
-            ran.append(name)
-            self._cache[name] = (key, value)
-            return value
-
-        fs, notes = stage("frame", lambda: _frame_stage(self._unit_leaf, params.margin, self.units))
-        tol = params.mpu_tolerance * fs.length
-        implicit: MPUImplicit = stage(
-            "implicit",
-            lambda: build_mpu(
-                fs.polygon, outward_normals(fs.polygon), tol, lambda q: contains(fs.polygon, q)
-            ),
-        )
-        grid: Grid = stage("grid", lambda: make_grid(fs.polygon, params.grid))
-        guide: GuideStage = stage("guide", lambda: _guide_stage(fs, implicit, grid))
-        flat = not fs.veins or not np.any(np.abs(fs.vein_h) > 1e-9 * fs.length)
+        run = StageRun(self, as_params(params), on_stage, should_stop)
+        for stage in STAGES:
+            if not STAGE_TABLE[stage].lazy:
+                run[stage]
+        fs: FrameStage = run["frame"]
+        grid: Grid = run["grid"]
+        guide: GuideStage = run["guide"]
+        samples, _ = run["gmm"]
+        surf: SurfaceStage = run["surface"]
         nodes = grid.points[guide.inside]
-        samples, mixture = stage(
-            "gmm",
-            lambda: _gmm_stage(
-                fs, guide, grid, params, flat, lambda: self._samples(guide, grid, params)
-            ),
-        )
-        surf: SurfaceStage = stage(
-            "surface", lambda: _surface_stage(fs, implicit, guide, nodes, mixture, params)
-        )
-        mesh: TriangleMesh = stage(
-            "mesh",
-            lambda: _mesh_stage(
-                fs, implicit, grid, guide, surf, params, lambda: self._grid_mesh(fs, grid, guide)
-            ),
-        )
         unit = Result(
-            leaf=self._unit_leaf,
-            params=params,
+            leaf=self.unit_leaf,
+            params=run.params,
             frame=fs.frame,
             polygon=fs.polygon,
             grid=grid,
@@ -486,11 +517,11 @@ class Pipeline:
             em_samples=samples,
             surface=surf.surface,
             surface_points=fs.frame.to_world(nodes, surf.z),
-            triangle_mesh=mesh,
+            triangle_mesh=run["mesh"],
             length=fs.length,
-            timings=timings,
-            ran=tuple(ran),
-            warnings=list(notes),
+            timings=run.timings,
+            ran=tuple(run.ran),
+            warnings=list(fs.notes),
         )
         return _in_world(unit, self.leaf, self.units)
 
@@ -520,9 +551,33 @@ def _in_world(unit: Result, leaf: Leaf, units: Units) -> Result:
     )
 
 
-def _guide_stage(fs: FrameStage, implicit: MPUImplicit, grid: Grid) -> GuideStage:
+def _frozen(*arrays: np.ndarray) -> None:
+    """Make stored arrays read-only: later runs share them."""
+    for array in arrays:
+        array.flags.writeable = False
+
+
+def _frame(run: StageRun) -> FrameStage:
+    pipe = run.pipeline
+    return _frame_stage(pipe.unit_leaf, run.params.margin, pipe.units)
+
+
+def _implicit(run: StageRun) -> MPUImplicit:
+    fs: FrameStage = run["frame"]
+    tol = run.params.mpu_tolerance * fs.length
+    normals = outward_normals(fs.polygon)
+    return build_mpu(fs.polygon, normals, tol, lambda q: contains(fs.polygon, q, fs.bands))
+
+
+def _grid(run: StageRun) -> Grid:
+    return make_grid(run["frame"].polygon, run.params.grid)
+
+
+def _guide(run: StageRun) -> GuideStage:
+    fs: FrameStage = run["frame"]
+    grid: Grid = run["grid"]
     nodes = grid.points
-    g = implicit.on_grid(grid)
+    g = run["implicit"].on_grid(grid)
     inside = g >= 0
     p = np.zeros(len(nodes))
     p[inside] = height_guide(
@@ -531,15 +586,24 @@ def _guide_stage(fs: FrameStage, implicit: MPUImplicit, grid: Grid) -> GuideStag
     return GuideStage(g=g, p=p, inside=inside)
 
 
-def _gmm_stage(
-    fs: FrameStage,
-    guide: GuideStage,
-    grid: Grid,
-    params: Params,
-    flat: bool,
-    draw: Callable[[], np.ndarray],
-) -> tuple[np.ndarray, Mixture]:
-    if flat:
+def _samples(run: StageRun) -> np.ndarray:
+    """The EM samples drawn from the guide (gmm.sample_guide): a new K refits the same ones."""
+    guide: GuideStage = run["guide"]
+    grid: Grid = run["grid"]
+    inside = guide.inside
+    drawn = sample_guide(
+        grid.points[inside], guide.p[inside], run.params.samples, grid.spacing, run.params.seed
+    )
+    _frozen(drawn)
+    return drawn
+
+
+def _gmm(run: StageRun) -> tuple[np.ndarray, Mixture]:
+    fs: FrameStage = run["frame"]
+    guide: GuideStage = run["guide"]
+    grid: Grid = run["grid"]
+    params = run.params
+    if fs.flat:
         return np.zeros((0, 2)), _flat_mixture(fs.polygon.mean(axis=0))
     p_in = guide.p[guide.inside]
     support = int(np.count_nonzero(p_in))  # grid nodes the samples can come from
@@ -549,12 +613,13 @@ def _gmm_stage(
             f"{support} grid nodes (at least {MIN_NODES_PER_COMPONENT} per component needed); "
             f"lower K or raise the grid resolution"
         )
-    samples = draw()
+    samples = run["samples"]
     # the sign of p at each sample's node: veins above and below the plane are fitted apart
     cell = np.rint((samples - grid.origin) / grid.spacing).astype(int)
     ny, nx = grid.shape
     cell = np.clip(cell, 0, [nx - 1, ny - 1])
     positive = guide.p[cell[:, 1] * nx + cell[:, 0]] >= 0
+
     def fit(k: int) -> Mixture:
         return fit_signed_mixture(
             samples, positive, lambda part, k_part: fit_mixture(part, k_part, params.seed), k
@@ -565,53 +630,66 @@ def _gmm_stage(
     return samples, mixture
 
 
-def _surface_stage(
-    fs: FrameStage,
-    implicit: MPUImplicit,
-    guide: GuideStage,
-    nodes: np.ndarray,
-    mixture: Mixture,
-    params: Params,
-) -> SurfaceStage:
+def _surface(run: StageRun) -> SurfaceStage:
+    fs: FrameStage = run["frame"]
+    guide: GuideStage = run["guide"]
+    nodes = run["grid"].points[guide.inside]
     g_in = guide.g[guide.inside]
     surface = fit_surface(
-        mixture,
-        implicit,
+        run["gmm"][1],
+        run["implicit"],
         nodes,
         g_in,
         guide.p[guide.inside],
         fs.vein_xy,
         fs.vein_h,
-        params.taper,
-        params.refine,
-        params.seed,
+        run.params.taper,
+        run.params.refine,
+        run.params.seed,
         base=fs.base,
     )
     return SurfaceStage(surface=surface, z=surface(nodes, g_in))
 
 
-def _mesh_stage(
-    fs: FrameStage,
-    implicit: MPUImplicit,
-    grid: Grid,
-    guide: GuideStage,
-    surf: SurfaceStage,
-    params: Params,
-    grid_mesh: Callable[[], tuple[np.ndarray, ...]],
-) -> TriangleMesh:
-    nodes = grid.points[guide.inside]
+class Layout(NamedTuple):
+    """The conforming mesh in the plane and g's derivatives at its vertices: they depend on
+    nothing after the guide (K and the fit only lift the mesh)."""
+
+    xy: np.ndarray  # (v, 2) the outline, points added in the band, the kept grid nodes
+    triangles: np.ndarray  # (t, 3)
+    kept: np.ndarray  # (ny * nx,) bool: the grid nodes among the vertices
+    implicit_at: tuple[np.ndarray, np.ndarray, np.ndarray]  # g, ∇g, ∇²g at xy
+
+
+def _layout(run: StageRun) -> Layout:
+    grid: Grid = run["grid"]
+    xy, triangles, kept = mesher.conforming_grid_mesh(
+        run["frame"].polygon, grid, run["guide"].inside
+    )
+    implicit_at = run["implicit"].derivatives_on_grid(xy, grid, kept)
+    _frozen(xy, triangles, kept, *implicit_at)
+    return Layout(xy, triangles, kept, implicit_at)
+
+
+def _mesh(run: StageRun) -> TriangleMesh:
+    fs: FrameStage = run["frame"]
+    grid: Grid = run["grid"]
+    guide: GuideStage = run["guide"]
+    surf: SurfaceStage = run["surface"]
+    params = run.params
     n_outline = len(fs.polygon)
     # the margin at the boundary points' own heights (0 in the plane for a planar one, eq. 3);
     # the kept grid nodes' heights are already known
     rim = np.zeros(n_outline) if fs.polygon_h is None else fs.polygon_h
+    implicit_at = None
     if params.mesher == "conforming":
-        xy, triangles, kept = grid_mesh()
-        implicit.derivatives_on_grid(xy, grid, kept)  # kept for the curvatures below
+        layout: Layout = run["layout"]
+        xy, triangles, kept, implicit_at = layout
         added = xy[n_outline : len(xy) - int(np.count_nonzero(kept))]  # against slivers
         z = np.concatenate([rim, surf.surface(added), surf.z[kept[guide.inside]]])
         world = fs.frame.to_world(xy, z)
     else:
-        xy = np.vstack([fs.polygon, nodes])
+        xy = np.vstack([fs.polygon, grid.points[guide.inside]])
         z = np.concatenate([rim, surf.z])
         world = fs.frame.to_world(xy, z)
         grad = surf.surface.gradient(xy)
@@ -619,11 +697,67 @@ def _mesh_stage(
         normals /= np.linalg.norm(normals, axis=1, keepdims=True)
         triangles = mesher.ball_pivoting(world, normals, grid.spacing, params.radius_factor)
     on_margin = np.arange(len(xy)) < n_outline  # both meshers put the outline first
+    _, grad, hess = surf.surface.derivatives(xy, on_margin, implicit_at)
     return TriangleMesh(
         points=world,
         regular_faces=triangles,
-        point_data={"height": z, **surface_curvatures(surf.surface, xy, on_margin)},
+        point_data={"height": z, **graph_curvatures(grad, hess)},
     )
+
+
+class Stage(NamedTuple):
+    """One row of the stage table: its name, the stages whose outputs it reads, and how it is
+    computed from them (``compute(run)``; parameters from ``run.params``). A lazy stage runs
+    only when a later one asks for it (the layout: for the conforming mesher only)."""
+
+    name: str
+    inputs: tuple[str, ...]
+    compute: Callable[[StageRun], Any]
+    lazy: bool = False
+
+
+#: The stages in order (the module docstring's table). A new step is a row here, a function
+#: of a StageRun, and its parameters declared with stage=its name (model.Params).
+STAGE_TABLE: dict[str, Stage] = {
+    s.name: s
+    for s in (
+        Stage("frame", (), _frame),
+        Stage("implicit", ("frame",), _implicit),
+        Stage("grid", ("frame",), _grid),
+        Stage("guide", ("implicit", "grid"), _guide),
+        Stage("samples", ("guide",), _samples, lazy=True),
+        Stage("gmm", ("samples",), _gmm),
+        Stage("surface", ("gmm",), _surface),
+        Stage("layout", ("guide",), _layout, lazy=True),
+        Stage("mesh", ("surface", "layout"), _mesh),
+    )
+}
+
+
+STAGE_INPUTS: dict[str, tuple[str, ...]] = {s.name: s.inputs for s in STAGE_TABLE.values()}
+STAGES = tuple(STAGE_TABLE)
+
+
+def _upstream() -> dict[str, frozenset[str]]:
+    """Each stage's inputs, their inputs and so on: what its function may read."""
+    found: dict[str, frozenset[str]] = {}
+    for stage, inputs in STAGE_INPUTS.items():
+        found[stage] = frozenset(inputs).union(*(found[i] for i in inputs))
+    return found
+
+
+def _stage_keys() -> dict[str, tuple[str, ...]]:
+    """Each stage's cache key: the parameters declared for it (model.Params, `stage`) and those
+    of every stage it reads, in field order."""
+    keys: dict[str, set[str]] = {}
+    for stage, inputs in STAGE_INPUTS.items():
+        own = {name for name, p in PARAMS.items() if p.stage == stage}
+        keys[stage] = own.union(*(keys[i] for i in inputs))
+    return {stage: tuple(n for n in PARAMS if n in names) for stage, names in keys.items()}
+
+
+UPSTREAM = _upstream()
+STAGE_KEYS = _stage_keys()
 
 
 def reconstruct(leaf: Leaf, params: Params | None = None) -> Result:

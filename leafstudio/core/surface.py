@@ -67,12 +67,19 @@ class HeightSurface:
         return grad if self.base is None else grad + self.base.derivatives(xy)[1]
 
     def derivatives(
-        self, xy: np.ndarray, margin: np.ndarray | None = None
+        self,
+        xy: np.ndarray,
+        margin: np.ndarray | None = None,
+        implicit_at: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """z (n,), ∇z (n, 2) and ∇²z (n, 2, 2) in closed form (for curvature; see curvature.py).
-        Where the (n,) bool `margin` is set, the limits from inside the leaf."""
+        Where the (n,) bool `margin` is set, the limits from inside the leaf. `implicit_at`: g,
+        ∇g and ∇²g at `xy` when they are known already (the pipeline's layout stage has them at
+        the mesh's vertices: they do not change with K)."""
         xy = np.atleast_2d(np.asarray(xy, dtype=float))
-        taper = taper_derivatives(*implicit_derivatives(self.implicit, xy), self.delta, margin)
+        if implicit_at is None:
+            implicit_at = implicit_derivatives(self.implicit, xy)
+        taper = taper_derivatives(*implicit_at, self.delta, margin)
         z, grad, hess = product_derivatives(taper, self.mixture.derivatives(xy))
         if self.base is None:
             return z, grad, hess

@@ -119,7 +119,9 @@ def test_narrow_leaf_keeps_its_sharp_tip():
 def test_changing_k_reruns_only_the_mixture_and_after():
     pipe = ls.Pipeline(ls.demo("nested"))
     first = pipe.run(ls.Params(k=3, grid=64))
-    assert first.ran == ("frame", "implicit", "grid", "guide", "gmm", "surface", "mesh")
+    assert first.ran == (
+        "frame", "implicit", "grid", "guide", "samples", "gmm", "surface", "layout", "mesh"
+    )
     second = pipe.run(ls.Params(k=4, grid=64))
     assert second.ran == ("gmm", "surface", "mesh")
     assert not np.allclose(first.mesh.points, second.mesh.points)

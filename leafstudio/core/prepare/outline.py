@@ -11,7 +11,7 @@ mean position. Everything is linear in the number of points but for one sort of 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from typing import NamedTuple
 
 import numpy as np
 import shapely
@@ -458,28 +458,40 @@ def outward_normals(polygon: np.ndarray, smoothing: int = 2) -> np.ndarray:
     return normal / np.where(length > 0, length, 1.0)
 
 
-def contains(polygon: np.ndarray, xy: np.ndarray) -> np.ndarray:
-    """(n,) bool: which points lie inside the polygon (or on its edge).
+class EdgeBands(NamedTuple):
+    """A polygon's edges filed into horizontal bands (edge_bands), for `contains`."""
 
-    The crossing-number test, compiled: the polygon's edges are filed into horizontal bands, so
-    each point only tests the few edges of its band.
-    """
+    y0: float  # the lowest band's bottom
+    height: float  # each band's height
+    n_bands: int
+    tolerance: float  # points this near an edge count as on it
+    starts: np.ndarray  # (n_bands + 1,) int64: band b's edges are edges[starts[b]:starts[b + 1]]
+    edges: np.ndarray  # (s,) int64 edge indices (edge e runs from vertex e to e + 1)
+
+
+def edge_bands(polygon: np.ndarray) -> EdgeBands:
+    """The (b, 2) polygon's edges filed by horizontal band, about two edges a band: built once
+    for a polygon that is tested many times (the pipeline keeps its outline's in its frame
+    stage)."""
     polygon = kernel_array(polygon)
-    xy = kernel_array(np.atleast_2d(xy)).reshape(-1, 2)
-    bands = _edge_bands(polygon.tobytes(), len(polygon))
-    return _inside(polygon, xy, *bands)
-
-
-@lru_cache(maxsize=8)
-def _edge_bands(key: bytes, n: int) -> tuple[float, float, int, float, np.ndarray, np.ndarray]:
-    """The polygon's edges filed by horizontal band (cached: one polygon is tested many times)."""
-    polygon = np.frombuffer(key).reshape(n, 2)
-    n_bands = max(1, n // 2)
+    n_bands = max(1, len(polygon) // 2)
     y0, y1 = float(polygon[:, 1].min()), float(polygon[:, 1].max())
     height = max(y1 - y0, 1e-300) / n_bands
     tolerance = 1e-12 * float(np.ptp(polygon, axis=0).max())
     starts, edges = _file_edges(polygon, y0, height, n_bands)
-    return y0, height, n_bands, tolerance, starts, edges
+    return EdgeBands(y0, height, n_bands, tolerance, starts, edges)
+
+
+def contains(polygon: np.ndarray, xy: np.ndarray, bands: EdgeBands | None = None) -> np.ndarray:
+    """(n,) bool: which points lie inside the polygon (or on its edge).
+
+    The crossing-number test, compiled: the polygon's edges are filed into horizontal bands
+    (`bands`: the polygon's edge_bands when they are known already), so each point only tests
+    the few edges of its band.
+    """
+    polygon = kernel_array(polygon)
+    xy = kernel_array(np.atleast_2d(xy)).reshape(-1, 2)
+    return _inside(polygon, xy, *(edge_bands(polygon) if bands is None else bands))
 
 
 @njit(cache=True, nogil=True)

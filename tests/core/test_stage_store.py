@@ -1,0 +1,105 @@
+"""The one cache of stage outputs (pipeline.StageStore): a stage is recomputed exactly when its
+inputs change, keyed by the leaf's fingerprint and the parameters it reads."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import leafstudio as ls
+from leafstudio.core import pipeline
+from leafstudio.core.pipeline import Pipeline, Stage, StageRun, StageStore
+
+PARAMS = ls.Params(k=3, grid=48, samples=800)
+EVERY_STAGE = ("frame", "implicit", "grid", "guide", "samples", "gmm", "surface", "layout", "mesh")
+
+
+def test_a_new_k_reruns_the_mixture_and_after_and_reuses_the_implicit_and_guide_outputs():
+    pipe = Pipeline(ls.demo("nested"))
+    first = pipe.run(PARAMS)
+    assert first.ran == EVERY_STAGE
+    second = pipe.run(PARAMS.with_(k=4))
+    assert second.ran == ("gmm", "surface", "mesh")
+    assert second.unit.g_grid is first.unit.g_grid  # the guide's very output, not a copy
+    assert second.unit.em_samples is first.unit.em_samples  # the samples stage's
+    assert second.unit.surface.implicit is first.unit.surface.implicit
+    assert not np.array_equal(second.triangle_mesh.points, first.triangle_mesh.points)
+
+
+def test_a_new_seed_draws_new_samples_but_keeps_the_guide():
+    pipe = Pipeline(ls.demo("nested"))
+    pipe.run(PARAMS)
+    assert pipe.run(PARAMS.with_(seed=7)).ran == ("samples", "gmm", "surface", "mesh")
+
+
+def test_the_same_parameters_again_run_nothing_and_give_the_same_mesh():
+    pipe = Pipeline(ls.demo("parallel"))
+    first = pipe.run(PARAMS)
+    again = pipe.run(PARAMS)
+    assert again.ran == () and again.timings == {}
+    assert again.unit.triangle_mesh is first.unit.triangle_mesh
+
+
+def test_a_different_leaf_with_the_same_parameters_misses_a_shared_store():
+    store = StageStore()
+    Pipeline(ls.demo("nested"), store).run(PARAMS)
+    assert Pipeline(ls.demo("parallel"), store).run(PARAMS).ran == EVERY_STAGE
+
+
+def test_an_equal_leaf_hits_a_shared_store_and_a_store_keeps_several_leaves():
+    store = StageStore(per_stage=2)
+    nested, parallel = ls.demo("nested"), ls.demo("parallel")
+    Pipeline(nested, store).run(PARAMS)
+    Pipeline(parallel, store).run(PARAMS)
+    copy = ls.Leaf(nested.boundary.copy(), [v.copy() for v in nested.veins])
+    assert Pipeline(copy, store).run(PARAMS).ran == ()  # keyed by coordinates, not identity
+    moved = ls.Leaf(nested.boundary + [0, 0, 1e-9], nested.veins)
+    assert Pipeline(moved, store).run(PARAMS).ran == EVERY_STAGE
+
+
+def test_a_cached_run_gives_what_a_fresh_pipeline_gives():
+    pipe = Pipeline(ls.demo("nested"))
+    pipe.run(PARAMS.with_(k=5, mesher="bpa"))
+    cached = pipe.run(PARAMS)
+    fresh = Pipeline(ls.demo("nested")).run(PARAMS)
+    for name in ("points", "regular_faces"):
+        np.testing.assert_array_equal(
+            getattr(cached.triangle_mesh, name), getattr(fresh.triangle_mesh, name)
+        )
+    for name, values in fresh.triangle_mesh.point_data.items():
+        np.testing.assert_array_equal(cached.triangle_mesh.point_data[name], values)
+
+
+def test_the_store_keeps_per_stage_outputs_most_recent_first():
+    store = StageStore(per_stage=2)
+    for key in ("a", "b", "c"):
+        store.put("gmm", (key,), key)
+    assert store.get("gmm", ("a",)) is pipeline.MISSING
+    assert store.get("gmm", ("b",)) == "b"  # now the most recent: "c" goes next
+    store.put("gmm", ("d",), "d")
+    assert store.get("gmm", ("c",)) is pipeline.MISSING
+    assert store.stages() == ("gmm",)
+
+
+def test_a_stage_that_reads_an_output_it_does_not_depend_on_is_refused(monkeypatch):
+    def sneaky(run: StageRun):
+        return run["mesh"]  # grid does not depend on the mesh: its key would not cover it
+
+    monkeypatch.setitem(pipeline.STAGE_TABLE, "grid", Stage("grid", ("frame",), sneaky))
+    with pytest.raises(KeyError, match="'grid' reads 'mesh'"):
+        Pipeline(ls.demo("nested")).run(PARAMS)
+
+
+def test_the_layout_keeps_the_implicits_derivatives_at_the_mesh_vertices():
+    """They used to be kept on the MPUImplicit by array identity (a side cache); now they are
+    the layout stage's output, read-only, and equal to a fresh evaluation."""
+    pipe = Pipeline(ls.demo("nested"))
+    result = pipe.run(PARAMS)
+    implicit = result.unit.surface.implicit
+    assert not hasattr(implicit, "_last")
+    run = StageRun(pipe, PARAMS, None, None)
+    layout = run["layout"]
+    assert run.ran == []  # from the store
+    for kept, fresh in zip(layout.implicit_at, implicit.derivatives(layout.xy), strict=True):
+        assert not kept.flags.writeable
+        np.testing.assert_allclose(kept, fresh, rtol=1e-12, atol=1e-12)
