@@ -19,7 +19,7 @@ from functools import partial
 import leafstudio as ls
 from leafstudio.analysis.compare import compare
 from leafstudio.core.curvature import surface_curvatures
-from leafstudio.core.measure import leaf_measurements
+from leafstudio.core.evaluate import leaf_measurements
 from leafstudio.sources.demos import PAPER_K
 
 

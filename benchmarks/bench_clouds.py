@@ -34,7 +34,7 @@ import numpy as np
 import shapely
 
 import leafstudio as ls
-from leafstudio.core.analysis import margin_creases
+from leafstudio.core.evaluate import margin_creases
 from leafstudio.core.prepare.outline import trace_outline
 
 SIZES = (10_000, 50_000, 100_000, 1_000_000)

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import leafstudio as ls
 from leafstudio.analysis.fidelity import scan_distances
-from leafstudio.core.analysis import margin_creases
+from leafstudio.core.evaluate import margin_creases
 from leafstudio.sources.extract import extract_leaf
 from leafstudio.sources.scan import read_scan
 

@@ -31,7 +31,7 @@ from bench_gui import ScreenLog, wait_until_idle  # a sibling script: benchmarks
 from PySide6.QtCore import QEventLoop, QSettings, Qt, QTimer
 from PySide6.QtWidgets import QApplication
 
-from leafstudio.core import analysis
+from leafstudio.core import evaluate
 from leafstudio.core.pipeline import Cancelled
 from leafstudio.gui.qt.main_window import MainWindow
 from leafstudio.gui.qt.worker import PIPELINE, Worker
@@ -133,13 +133,13 @@ def run(grid: int, trials: int, side_lane: bool) -> dict:
             measure_on_side_lane(window.worker)
         window.show()
         log: dict = {"started": {}, "measured": {}, "measuring": []}
-        distances = analysis.point_to_mesh_distance  # measuring's first step, old code or new
+        distances = evaluate.point_to_mesh_distance  # measuring's first step, old code or new
 
         def logged(mesh, points):
             log["measuring"].append(time.perf_counter())
             return distances(mesh, points)
 
-        analysis.point_to_mesh_distance = logged
+        evaluate.point_to_mesh_distance = logged
 
         def on_stage(kind: str, job_id: int, _name: str) -> None:
             if kind == PIPELINE and job_id not in log["started"]:
@@ -162,7 +162,7 @@ def run(grid: int, trials: int, side_lane: bool) -> dict:
         ]
         window.session.history.set_clean()
         window.close()
-        analysis.point_to_mesh_distance = distances
+        evaluate.point_to_mesh_distance = distances
     during = [r for r in rows if r["during_measuring"]]
     figures: dict = {"trials": len(rows), "trials_during_measuring": len(during)}
     if during:

@@ -92,14 +92,16 @@ def _cache_folder() -> Path:
 
 
 def _stamp() -> Path:
-    """A file named after the kernels' sources (names, sizes, times) and numba's version."""
+    """A file named after the kernels' sources (every module under core/, by its path there,
+    size and time) and numba's version."""
     import numba
 
     digest = hashlib.sha256(numba.__version__.encode())
     digest.update(sys.version.encode())
     for source in sorted(CORE.rglob("*.py")):
         info = source.stat()
-        digest.update(f"{source.name}:{info.st_size}:{info.st_mtime_ns}".encode())
+        name = source.relative_to(CORE).as_posix()  # core/prepare's modules by their folder too
+        digest.update(f"{name}:{info.st_size}:{info.st_mtime_ns}".encode())
     return _cache_folder() / f"leafstudio-kernels-{digest.hexdigest()[:16]}.stamp"
 
 

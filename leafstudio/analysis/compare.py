@@ -16,7 +16,7 @@ import numpy as np
 import shapely
 
 from leafstudio._shared.extras import LazyModule
-from leafstudio.core.analysis import table_metrics, triangles_of
+from leafstudio.core.evaluate import table_metrics, triangles_of
 from leafstudio.core.plane import Frame
 from leafstudio.core.prepare.units import Units
 from leafstudio.core.trianglemesh import MeshLike, TriangleMesh

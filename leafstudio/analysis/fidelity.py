@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 import shapely
 
-from leafstudio.core import analysis
+from leafstudio.core import evaluate
 from leafstudio.core.plane import Frame
 from leafstudio.core.trianglemesh import MeshLike
 
@@ -27,7 +27,7 @@ def scan_distances(mesh: MeshLike, points: np.ndarray, length: float) -> dict[st
     0.02
     """
     return distance_summary(
-        analysis.point_to_mesh_distance(mesh, np.asarray(points, dtype=float)), length
+        evaluate.point_to_mesh_distance(mesh, np.asarray(points, dtype=float)), length
     )
 
 
@@ -52,7 +52,7 @@ def coverage(mesh: MeshLike, frame: Frame, outline: np.ndarray) -> dict[str, Any
     """How the mesh, seen from along the plane normal, covers the (b, 2) outline in the frame's
     plane: the share of the outline's area covered, the mesh area outside it (as a share of the
     outline's area), and the number of connected pieces."""
-    triangles = analysis.triangles_of(mesh)
+    triangles = evaluate.triangles_of(mesh)
     xy, _ = frame.to_plane(np.asarray(mesh.points))
     footprint = shapely.union_all(shapely.polygons(xy[triangles]))
     region = shapely.Polygon(outline)
@@ -60,5 +60,5 @@ def coverage(mesh: MeshLike, frame: Frame, outline: np.ndarray) -> dict[str, Any
     return {
         "covered": float(footprint.intersection(region).area / area),
         "outside": float(footprint.difference(region).area / area),
-        "pieces": analysis.connected_pieces(triangles),
+        "pieces": evaluate.connected_pieces(triangles),
     }

@@ -24,8 +24,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from leafstudio.core.analysis import triangles_of
 from leafstudio.core.curvature import CURVATURE_ARRAYS
+from leafstudio.core.evaluate import triangles_of
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.trianglemesh import vertex_normals
 

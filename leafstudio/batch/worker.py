@@ -43,8 +43,8 @@ def _number(x: Any) -> float | None:
 
 
 def _traits(result: Any) -> dict[str, Any]:
-    """The shape and curvature columns of a Result (core/measure.py)."""
-    from leafstudio.core.measure import curvature_summary, shape_measurements
+    """The shape and curvature columns of a Result (core/evaluate.py)."""
+    from leafstudio.core.evaluate import curvature_summary, shape_measurements
 
     mesh = result.triangle_mesh
     shape = shape_measurements(mesh, result.frame, result.polygon)

@@ -17,7 +17,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Print the reconstructed leaf's measurements, as a table or JSON."""
-    from leafstudio.core.measure import format_table, leaf_measurements
+    from leafstudio.core.evaluate import format_table, leaf_measurements
     from leafstudio.sources.files import load_leaf
 
     _, result = run_pipeline(args, load_leaf(args.input, veins=args.vein))

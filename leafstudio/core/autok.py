@@ -1,4 +1,5 @@
-"""Automatic K: the number of Gaussians chosen by the Bayesian information criterion.
+"""Step 4 (section 3.4), K chosen automatically: the number of Gaussians chosen by the Bayesian
+information criterion.
 
 The paper fixes K by hand and names its choice as future work. EM fits a density to the points
 drawn from the height guide, so the natural criterion is that density's BIC on those same points,

@@ -1,4 +1,5 @@
-"""The base surface b(x): a thin-plate spline through the boundary's heights off its plane.
+"""Step 1 (section 3.1) for a margin off its plane, the base surface b(x): a thin-plate spline
+through the boundary's heights off its plane.
 
 The paper puts the whole margin at height 0 in the boundary's PCA plane. Real margins are not
 planar: leaves curl along their length, fold along the midrib and let their margins roll up or

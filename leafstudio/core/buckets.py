@@ -1,4 +1,5 @@
-"""A uniform bucket grid over 2D points, for the compiled (numba) neighbour searches in core.
+"""Support for steps 2, 3 and 5 (no step of its own): a uniform bucket grid over 2D points, for the
+compiled (numba) neighbour searches in core.
 
 The MPU implicit, the height guide and the mesher ask, for many query points at once, which cells
 or data points lie near each query. Sorting the queries into square buckets once (a counting

@@ -1,4 +1,5 @@
-"""Curvature of the leaf: closed-form derivatives of z(x) = T(g/δ)·M(x) and of its graph.
+"""Section 4's differentials, curvature of the leaf: closed-form derivatives of z(x) = T(g/δ)·M(x)
+and of its graph.
 
 The paper's point is a differentiable surface (section 4: "using differentials as curvatures").
 Everything here is exact calculus on the fitted functions, no mesh-based estimates:

@@ -1,4 +1,5 @@
-"""Exact distances from points to a triangle mesh, without holding the GIL for long.
+"""Support for the evaluation (section 4, Table 1): exact distances from points to a triangle mesh,
+without holding the GIL for long.
 
 open3d's raycasting scene did this before, but it held the GIL while building its BVH (about
 100 ms for a grid-512 mesh), so the app's window froze while the worker measured a result; and

@@ -1,4 +1,4 @@
-"""Step 4: a K-component Gaussian mixture fitted by EM to the height guide (eqs. 6-9).
+"""Step 4 (section 3.4): a K-component Gaussian mixture fitted by EM to the height guide (eqs. 6-9).
 
 The paper draws points with density following p(x) and fits π_k, μ_k, Σ_k by EM. A mixture is a
 density that integrates to 1, not a height, so we scale it: z(x) = Σ_k a_k N(x | μ_k, Σ_k), with

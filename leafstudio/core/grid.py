@@ -1,4 +1,5 @@
-"""The regular sampling grid over the leaf's bounding box in the plane."""
+"""Steps 3-5, where they sample: the regular grid over the leaf's bounding box in the plane
+(p(x), the EM samples' cells and z are taken at its nodes; the pipeline's grid stage)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""Step 3: the height guide p(x) of section 3.3 (eqs. 4-5), the probability map on the grid.
+"""Step 3 (section 3.3): the height guide p(x) of section 3.3 (eqs. 4-5), the probability map on the
+grid.
 
 Between the margin and a vein (eq. 4), p rises linearly from 0 at the nearest boundary point b to
 the vein's height h_v at its projection v':
@@ -6,7 +7,7 @@ the vein's height h_v at its projection v':
     p(x) = h_v |b − x| / |b − v'|
 
 When the two nearest height constraints are two veins rather than a vein and the margin (parallel
-veins), eq. 5 applies. Its printed form is garbled; we use, as agreed in DESIGN.md,
+veins), eq. 5 applies. Its printed form is garbled; we use (docs/architecture.md, the surface),
 
     p(x) = h_v (1 − |v' − x| / (2 |v' − v''|))
 

@@ -1,4 +1,5 @@
-"""Step 2: the 2D multi-level partition-of-unity implicit g(x) of section 3.2 (Ohtake et al.).
+"""Step 2 (section 3.2): the 2D multi-level partition-of-unity implicit g(x) of section 3.2 (Ohtake
+et al.).
 
 g(x) = Σ w_i(x) f_i(x) / Σ w_i(x)                                    (eq. 1)
 

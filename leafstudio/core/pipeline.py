@@ -1,4 +1,5 @@
-"""The staged pipeline with one cache of stage outputs (StageStore), and its Result.
+"""Steps 1-5 in order (section 3): the staged pipeline with one cache of stage outputs (StageStore),
+and its Result.
 
 | stage    | depends on                             | output                                   |
 |----------|----------------------------------------|------------------------------------------|
@@ -37,14 +38,14 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
-from leafstudio.core import analysis, mesher
+from leafstudio.core import evaluate, mesher
 from leafstudio.core.autok import choose_mixture
 from leafstudio.core.base import PLANAR, BaseSurface, fit_base
 from leafstudio.core.curvature import graph_curvatures
+from leafstudio.core.evaluate import curvature_summary, shape_measurements
 from leafstudio.core.gmm import Mixture, fit_mixture, fit_signed_mixture, sample_guide
 from leafstudio.core.grid import Grid, make_grid
 from leafstudio.core.height import height_guide
-from leafstudio.core.measure import curvature_summary, shape_measurements
 from leafstudio.core.mpu import MPUImplicit, build_mpu
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.prepare.outline import (
@@ -186,7 +187,7 @@ class Result:
     units: Units | None = None  # how `unit` maps to this one
     # the metrics once measured, and the measuring steps under way (see measure)
     _metrics: dict[str, Any] | None = field(default=None, init=False, repr=False, compare=False)
-    _steps: analysis.Steps | None = field(default=None, init=False, repr=False, compare=False)
+    _steps: evaluate.Steps | None = field(default=None, init=False, repr=False, compare=False)
 
     def height(self, xy: np.ndarray) -> np.ndarray:
         """z of the surface at (n, 2) plane points (differentiable; see surface.py).
@@ -225,7 +226,7 @@ class Result:
 
     @property
     def metrics(self) -> dict[str, Any]:
-        """The paper's Table 1 distances and the mesh's facts (see analysis.table_metrics), the
+        """The paper's Table 1 distances and the mesh's facts (see evaluate.table_metrics), the
         leaf's measurements with the K used ("leaf") and its curvature ranges ("curvature"; see
         measure.py). Measured at unit size and mapped back (units.py): they do not depend on
         the input's units or its distance from the origin. Computed once (see measure)."""
@@ -266,8 +267,8 @@ class Result:
             if should_stop is not None and should_stop():
                 raise Cancelled
 
-    def _metric_steps(self) -> analysis.Steps[dict[str, Any]]:
-        table = yield from analysis.table_steps(self.triangle_mesh, self.leaf)
+    def _metric_steps(self) -> evaluate.Steps[dict[str, Any]]:
+        table = yield from evaluate.table_steps(self.triangle_mesh, self.leaf)
         yield
         area = table["mesh"]["area"]
         shape = shape_measurements(self.triangle_mesh, self.frame, self.polygon, area)

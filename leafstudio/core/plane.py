@@ -1,4 +1,5 @@
-"""Step 1: the PCA plane of the boundary, the 2D frame on it, and signed vein heights (eq. 3)."""
+"""Step 1 (section 3.1): the PCA plane of the boundary, the 2D frame on it, and signed vein heights
+(eq. 3)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""The leaf's height surface z(x): the scaled GMM, tapered so that it vanishes on the margin.
+"""Steps 4-5 (sections 3.4-3.5, eq. 8), the leaf's height surface z(x): the scaled GMM, tapered so
+that it vanishes on the margin.
 
 A Gaussian mixture never reaches zero, so on its own it cannot pass through the boundary. We
 multiply it by a smooth taper of the implicit g:

@@ -1,4 +1,5 @@
-"""The reconstructed mesh as plain arrays, and what the measurements read of any triangle mesh.
+"""Step 5's output (section 3.5), the reconstructed mesh as plain arrays, and what the measurements
+read of any triangle mesh.
 
 The pipeline builds its mesh as numpy arrays and only wraps them in a pyvista.PolyData when one is
 asked for (Result.mesh). A run then never imports VTK (about 60 MB and a third of a second), and

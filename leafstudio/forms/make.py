@@ -18,7 +18,7 @@ import shapely
 
 from leafstudio.core.prepare.vein_order import veins_inside_outline
 from leafstudio.errors import LeafError
-from leafstudio.forms.outline import Outline, form_outline
+from leafstudio.forms.outline import FormOutline, form_outline
 from leafstudio.forms.terms import (
     APEXES,
     DEFAULT_LOBES,
@@ -164,7 +164,7 @@ class Form:
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
 
-    def outline(self) -> Outline:
+    def outline(self) -> FormOutline:
         """The blade's outline in the plane (see outline.py)."""
         rng = np.random.default_rng(self.seed) if self.seed else _Still()
         spec = SHAPES[self.shape]
@@ -208,7 +208,7 @@ class Form:
         """Fold (the halves rise from the midrib) and curl (the midrib bends), as heights."""
         return np.abs(xy[:, 1]) * np.tan(np.deg2rad(self.fold)) + self.curl * xy[:, 0] ** 2
 
-    def _wave(self, outline: Outline) -> np.ndarray:
+    def _wave(self, outline: FormOutline) -> np.ndarray:
         """The margin's waves: WAVES_PER_SIDE along each half, none at the base and apex."""
         z = np.zeros(len(outline.xy))
         if self.wave == 0:

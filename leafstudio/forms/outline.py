@@ -52,7 +52,7 @@ SPACING = 0.005  # the outline's point spacing, in leaf lengths (at most)
 
 
 @dataclass(frozen=True)
-class Outline:
+class FormOutline:
     """A form's outline.
 
     Attributes
@@ -264,7 +264,7 @@ def form_outline(
     aspect: float,
     palmate: bool,
     rng: np.random.Generator,
-) -> Outline:
+) -> FormOutline:
     """The closed outline of a form (terms already checked), base at (0, 0), apex at x = 1."""
     spec = SHAPES[shape]
     x, y = half_profile(spec, apex, base, aspect)
@@ -284,4 +284,4 @@ def form_outline(
     lower = lower * [1.0, -1.0]
     xy = np.vstack([lower, upper[::-1][1:-1]])
     xy /= xy[:, 0].max()
-    return Outline(xy=xy, apex_index=len(lower) - 1)
+    return FormOutline(xy=xy, apex_index=len(lower) - 1)

@@ -46,7 +46,7 @@ def _slotted_square() -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def nested_frame():
-    return _frame_stage(ls.demo("nested"))[0]
+    return _frame_stage(ls.demo("nested"))
 
 
 def test_mpu_value_is_eq1_summed_over_every_cell(nested_frame):
@@ -254,3 +254,16 @@ def test_a_dense_scan_is_thinned_and_still_within_the_issue_figures():
     assert m["boundary"]["mean"] <= 1e-3 and m["boundary"]["max"] <= 5e-3
     assert m["veins"]["mean"] <= 5e-3
     assert m["mesh"]["components"] == 1 and m["mesh"]["boundary_loops"] == 1
+
+
+def test_every_compiled_kernel_lives_where_the_kernel_cache_stamp_looks():
+    """kernelcache's stamp (whether a run will compile) hashes the modules under core/: a kernel
+    elsewhere would change without the stamp noticing."""
+    from pathlib import Path
+
+    from leafstudio._shared import kernelcache
+
+    package = Path(ls.__file__).parent
+    compiled = {p for p in package.rglob("*.py") if "@njit" in p.read_text(encoding="utf-8")}
+    assert compiled and all(kernelcache.CORE in p.parents for p in compiled)
+

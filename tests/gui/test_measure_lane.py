@@ -10,7 +10,7 @@ import threading
 import pytest
 from PySide6.QtCore import Qt
 
-from leafstudio.core import analysis, pipeline
+from leafstudio.core import evaluate, pipeline
 from leafstudio.core.pipeline import Cancelled, Pipeline
 from leafstudio.gui.model.session import Session
 from leafstudio.gui.qt.worker import PIPELINE, Worker
@@ -28,7 +28,7 @@ class HeldMeasuring:
 
     def __init__(self, monkeypatch: pytest.MonkeyPatch, events: list) -> None:
         self.events, self.started, self.submitted = events, threading.Event(), threading.Event()
-        distances, curvature = analysis.point_to_mesh_distance, pipeline.curvature_summary
+        distances, curvature = evaluate.point_to_mesh_distance, pipeline.curvature_summary
 
         def first_step(mesh, points):
             events.append("measuring")
@@ -41,7 +41,7 @@ class HeldMeasuring:
             events.append("measuring")
             return curvature(mesh)
 
-        monkeypatch.setattr(analysis, "point_to_mesh_distance", first_step)
+        monkeypatch.setattr(evaluate, "point_to_mesh_distance", first_step)
         monkeypatch.setattr(pipeline, "curvature_summary", last_step)
 
 
@@ -76,9 +76,9 @@ def test_a_request_made_while_measuring_starts_before_the_measuring_goes_on(
 def test_measuring_stopped_between_steps_goes_on_from_where_it_stopped(monkeypatch):
     result = Pipeline(demo("nested")).run(FAST)
     calls: list[int] = []
-    distances = analysis.point_to_mesh_distance
+    distances = evaluate.point_to_mesh_distance
     monkeypatch.setattr(
-        analysis, "point_to_mesh_distance", lambda m, p: calls.append(1) or distances(m, p)
+        evaluate, "point_to_mesh_distance", lambda m, p: calls.append(1) or distances(m, p)
     )
     with pytest.raises(Cancelled):
         result.measure(should_stop=lambda: True)

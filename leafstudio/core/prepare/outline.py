@@ -95,7 +95,7 @@ def _largest_polygon(geom: shapely.Geometry) -> Polygon | None:
 
 
 @dataclass(frozen=True)
-class Outline:
+class TracedOutline:
     """The leaf outline traced from boundary points (trace_outline).
 
     Attributes
@@ -228,17 +228,21 @@ def _cloud_cells(points: np.ndarray, z: np.ndarray, spacing: float) -> Cells | N
     return None
 
 
-def _exact(points: np.ndarray, z: np.ndarray, sequence: np.ndarray, noise: Noise) -> Outline | None:
+def _exact(
+    points: np.ndarray, z: np.ndarray, sequence: np.ndarray, noise: Noise
+) -> TracedOutline | None:
     """The outline through the points in `sequence` (input points as vertices, _ring), or None."""
     ring = _ring(points, sequence)
     if ring is None:
         return None
     if isinstance(ring, np.ndarray):
-        return Outline(points[ring], z[ring], noise, smoothed=False)
+        return TracedOutline(points[ring], z[ring], noise, smoothed=False)
     return _polygon_outline(points, z, ring, noise)  # repaired: some are no input points
 
 
-def trace_outline(points: np.ndarray, z: np.ndarray | None = None, margin: str = "auto") -> Outline:
+def trace_outline(
+    points: np.ndarray, z: np.ndarray | None = None, margin: str = "auto"
+) -> TracedOutline:
     """The leaf outline from 2D boundary points, ordered or not, clean or noisy, in any number.
 
     Duplicates are dropped. Points given in an order that traces the outline have their noise
@@ -288,13 +292,13 @@ def trace_outline(points: np.ndarray, z: np.ndarray | None = None, margin: str =
     if cells is None:  # the points fill the leaf rather than trace its margin
         cell = max(scale / RASTER, spacing)
         polygon, heights = filled_outline(pts, zs, cell)
-        return _checked(Outline(polygon, heights, Noise(cell, 0.0), smoothed=True), scale)
+        return _checked(TracedOutline(polygon, heights, Noise(cell, 0.0), smoothed=True), scale)
     sequence = _canonical(pts, point_order(cells, pts))
     noise = estimate_noise(pts, zs, sequence)
     if clean(noise):
         ring = _ring(pts, sequence)
         if isinstance(ring, np.ndarray):
-            return _checked(Outline(pts[ring], zs[ring], noise, smoothed=False), scale)
+            return _checked(TracedOutline(pts[ring], zs[ring], noise, smoothed=False), scale)
         # a clean cloud the cells could not trace (walls nearer than its spacing): a small one
         # by the tightest concave hull that passes by every point, else as a noisy one
         hull = _by_concave_hull(pts, spacing) if len(pts) <= HULL_MOST else None
@@ -311,7 +315,7 @@ def trace_outline(points: np.ndarray, z: np.ndarray | None = None, margin: str =
         vertices = np.asarray(poly.exterior.coords)[:-1]
         heights = heights[cKDTree(polygon).query(vertices)[1]]
         polygon = vertices
-    return _checked(Outline(polygon, heights, noise, smoothed=True), scale)
+    return _checked(TracedOutline(polygon, heights, noise, smoothed=True), scale)
 
 
 def _by_concave_hull(points: np.ndarray, spacing: float) -> Polygon | None:
@@ -343,12 +347,12 @@ def _snakes(poly: Polygon, convex: shapely.Geometry) -> bool:
 
 def _polygon_outline(
     points: np.ndarray, z: np.ndarray, hull: Polygon, noise: Noise | None = None
-) -> Outline:
-    """The Outline of a polygon whose vertices are (near) input points, such as their concave
+) -> TracedOutline:
+    """The TracedOutline of a polygon whose vertices are (near) input points, such as their concave
     hull: each vertex takes the height of the input point nearest it."""
     vertices = np.asarray(hull.exterior.coords)[:-1]
     heights = z[cKDTree(points).query(vertices)[1]]
-    return Outline(vertices, heights, noise or Noise(0.0, 0.0), smoothed=False)
+    return TracedOutline(vertices, heights, noise or Noise(0.0, 0.0), smoothed=False)
 
 
 def _clean(noise: Noise, scale: float) -> bool:
@@ -356,7 +360,7 @@ def _clean(noise: Noise, scale: float) -> bool:
     return max(noise.across, noise.height) <= CLEAN_NOISE * scale
 
 
-def _checked(outline: Outline, scale: float) -> Outline:
+def _checked(outline: TracedOutline, scale: float) -> TracedOutline:
     """The outline, if it encloses some area; canonical (counter-clockwise, lowest point first)."""
     polygon = outline.polygon
     x, y = polygon[:, 0], polygon[:, 1]
@@ -364,7 +368,7 @@ def _checked(outline: Outline, scale: float) -> Outline:
         raise LeafError("the boundary points do not enclose any area")
     ring = _canonical(polygon, np.arange(len(polygon)))
     polygon, heights = _densified(polygon[ring], outline.heights[ring])
-    return Outline(polygon, heights, outline.noise, outline.smoothed)
+    return TracedOutline(polygon, heights, outline.noise, outline.smoothed)
 
 
 def _densified(polygon: np.ndarray, heights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

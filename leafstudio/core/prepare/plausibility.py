@@ -233,7 +233,9 @@ def check_boundary(
         )
 
 
-def boundary_loops(boundary: np.ndarray, xy: np.ndarray | None = None) -> list[np.ndarray] | None:
+def boundary_loop_indices(
+    boundary: np.ndarray, xy: np.ndarray | None = None
+) -> list[np.ndarray] | None:
     """The point indices of each closed loop of a boundary given in order as several loops (an
     outline and its holes, or separate outlines), the largest first; None for one loop or an
     unordered cloud. A loop ends where the next point is far (JUMP median steps) from it. `xy`:
@@ -265,7 +267,7 @@ def boundary_loops(boundary: np.ndarray, xy: np.ndarray | None = None) -> list[n
 
 
 def keep_outer_loop(boundary: np.ndarray) -> tuple[np.ndarray, list[str]]:
-    """The boundary's largest loop when it is given as several loops (see boundary_loops), with
+    """The boundary's largest loop when it is given as several loops (boundary_loop_indices), with
     a warning naming what was kept and what was dropped; otherwise the boundary as it is."""
     import shapely
 
@@ -273,7 +275,7 @@ def keep_outer_loop(boundary: np.ndarray) -> tuple[np.ndarray, list[str]]:
     if len(points) < LOOPS_FROM:
         return boundary, []
     xy = _plane_coordinates(points)[0]  # projected once, for the loops and the holes
-    loops = boundary_loops(points, xy)
+    loops = boundary_loop_indices(points, xy)
     if loops is None:
         return boundary, []
     outer = shapely.Polygon(xy[loops[0][:: max(1, len(loops[0]) // CHECKED_POINTS)]]).buffer(0)

@@ -17,7 +17,7 @@ import numpy as np
 
 from leafstudio.analysis.compare import poisson_surface
 from leafstudio.analysis.fidelity import FAR, NEAR, distance_summary
-from leafstudio.core.analysis import point_to_mesh_distance
+from leafstudio.core.evaluate import point_to_mesh_distance
 from leafstudio.core.pipeline import Result
 from leafstudio.core.trianglemesh import MeshLike, polydata, vertex_normals
 from leafstudio.gui.model.layers import Piece, cloud

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 import leafstudio as ls
 from leafstudio.cli import main
-from leafstudio.core.analysis import margin_creases
+from leafstudio.core.evaluate import margin_creases
 from leafstudio.core.grid import make_grid
 from leafstudio.core.mesher import MAX_EDGE, conforming_grid_mesh
 from leafstudio.core.prepare.outline import contains, trace_outline
@@ -164,7 +164,7 @@ def test_finding8_a_sparse_heart_has_no_slivers_from_its_sinus(corners):
     """Finding 8 as a user meets it: a heart-shaped (cordate) sketch of a few dozen clean points
     with a midrib from its notch, grid 128. The old mesher joined the notch to the waist by
     triangles 0.09-0.13 of the leaf length long; now no edge is longer than a few grid cells."""
-    from leafstudio.core.analysis import triangles_of
+    from leafstudio.core.evaluate import triangles_of
 
     t = np.linspace(0, 2 * np.pi, corners, endpoint=False)
     x = 16 * np.sin(t) ** 3
