@@ -129,11 +129,14 @@ def mesh_assets(
     --------
     >>> import leafstudio as ls
     >>> result = ls.reconstruct(ls.demo("nested"), ls.Params(k=3, grid=32))
-    >>> levels = mesh_assets(result, texture="none", lod=1)
-    >>> [(a.name, len(a.faces)) for a in levels]
-    [('leaf_LOD0', 504), ('leaf_LOD1', 252)]
-    >>> mesh_assets(result, texture="none", thickness=0.01)[0].solid
-    True
+    >>> [(a.name, len(a.faces)) for a in mesh_assets(result, texture="none")]
+    [('leaf', 504)]
+    >>> solid = mesh_assets(result, texture="none", thickness=0.01)[0]
+    >>> solid.solid, len(solid.faces) > 2 * 504  # both sides and the rim
+    (True, True)
+
+    With open3d installed (the `open3d` extra), `lod=1` adds a level with half the triangles:
+    `[('leaf_LOD0', 504), ('leaf_LOD1', 252)]`.
     """
     result = result_or_mesh if hasattr(result_or_mesh, "surface") else None
     if result is not None:
