@@ -8,13 +8,8 @@ import shapely
 
 import leafstudio as ls
 from leafstudio.core.plane import Frame
-from leafstudio.gui.model.sketch_model import (
-    BOUNDARY,
-    Sketch,
-    closed_curve,
-    insert_index,
-    open_curve,
-)
+from leafstudio.gui.model.curves import closed_curve, insert_index, open_curve
+from leafstudio.gui.model.sketch_model import BOUNDARY, Sketch
 
 SQUARE = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
 
@@ -116,7 +111,7 @@ def test_a_loaded_toothed_leaf_keeps_its_teeth_when_one_point_is_moved(shape, te
     boundary point wiped every tooth and the edit failed ("vein 1: 2 of 113 points lie outside
     the boundary"). The derived boundary now follows the outline within its tolerance."""
     from leafstudio.forms import make_form
-    from leafstudio.gui.model.sketch_model import OUTLINE_TOLERANCE
+    from leafstudio.gui.model.curves import OUTLINE_TOLERANCE
 
     result = ls.reconstruct(make_form(shape, **terms), ls.Params(grid=64))
     sketch = Sketch.from_result(result)

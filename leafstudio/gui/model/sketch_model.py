@@ -2,8 +2,8 @@
 
 A sketch is an immutable snapshot, so undo and redo simply swap snapshots. The boundary is a closed
 curve (a periodic cubic spline through its control points); each vein is an open curve through its
-control points, each carrying a height above the plane. Curves use centripetal parameters, which
-keep a spline from looping between close points. No Qt here: the editor in sketch.py draws it.
+control points, each carrying a height above the plane; the splines are curves.py's. No Qt here:
+the editor in gui/qt/sketch.py draws it.
 """
 
 from __future__ import annotations
@@ -13,18 +13,22 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
-import shapely
-from scipy.interpolate import CubicSpline
 from scipy.spatial import cKDTree
 
 from leafstudio.core.plane import Frame
+from leafstudio.gui.model.curves import (
+    SAMPLES_PER_SPAN,
+    closed_curve,
+    even_by_length,
+    insert_index,
+    open_curve,
+    outline_controls,
+    plane_arc_lengths,
+)
 from leafstudio.gui.model.midrib import Midrib
 from leafstudio.model import Leaf
 
 BOUNDARY = -1  # curve index of the boundary; veins are 0, 1, ...
-SAMPLES_PER_SPAN = 16  # curve points per span between two control points
-MIN_BOUNDARY_SAMPLES = 120
-DERIVED_BOUNDARY_POINTS = 24  # control points when a loaded leaf becomes a sketch
 DERIVED_VEIN_POINTS = 8
 RELIEF_NEIGHBOURS = 4  # a boundary point's height: inverse-distance mean of this many relief points
 FOLD_REACH = 1.0  # a mirror image this far into a bend (in radii of curvature) is folded over
@@ -35,131 +39,6 @@ def _identity_frame() -> Frame:
     return Frame(
         origin=np.zeros(3), u=np.array([1.0, 0, 0]), v=np.array([0, 1.0, 0]), normal=np.eye(3)[2]
     )
-
-
-def _centripetal(points: np.ndarray) -> np.ndarray:
-    """Cumulative centripetal parameter of (n, d) points (square root of chord lengths)."""
-    steps = np.sqrt(np.linalg.norm(np.diff(points, axis=0), axis=1))
-    return np.concatenate([[0.0], np.cumsum(steps)])
-
-
-def _drop_repeats(points: np.ndarray, closed: bool) -> np.ndarray:
-    """Control points without consecutive duplicates (a spline cannot pass twice in no time)."""
-    if len(points) < 2:
-        return points
-    ahead = np.roll(points, -1, axis=0) if closed else points[1:]
-    same = np.all(np.isclose(points[: len(ahead)], ahead, rtol=0, atol=1e-12), axis=1)
-    keep = np.ones(len(points), dtype=bool)
-    keep[: len(ahead)] &= ~same
-    return points[keep]
-
-
-def _span_samples(t: np.ndarray, per_span: int) -> np.ndarray:
-    """Parameters spaced evenly within each span [t_i, t_i+1], every t_i included."""
-    inner = np.linspace(0.0, 1.0, per_span, endpoint=False)
-    return np.append((t[:-1, None] + np.diff(t)[:, None] * inner).ravel(), t[-1])
-
-
-def closed_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.ndarray:
-    """Points along the periodic cubic spline through (n, 2) control points, n >= 3.
-
-    Returns
-    -------
-    (s, 2) float array
-        Counter-ordered like the control points, without repeating the first point.
-    """
-    control = _drop_repeats(np.asarray(control, dtype=float), closed=True)
-    if len(control) < 3:
-        return control
-    loop = np.vstack([control, control[:1]])
-    t = _centripetal(loop)
-    spline = CubicSpline(t, loop, bc_type="periodic")
-    per_span = max(per_span, -(-MIN_BOUNDARY_SAMPLES // len(control)))
-    return spline(_span_samples(t, per_span)[:-1])
-
-
-def open_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.ndarray:
-    """Points along the natural cubic spline through (m, d) control points (a line for m = 2)."""
-    control = _drop_repeats(np.asarray(control, dtype=float), closed=False)
-    if len(control) < 2:
-        return control
-    t = _centripetal(control)
-    s = _span_samples(t, per_span)
-    if len(control) == 2:
-        return control[0] + np.outer(s / t[-1], control[1] - control[0])
-    return CubicSpline(t, control, bc_type="natural")(s)
-
-
-def plane_arc_lengths(points: np.ndarray) -> np.ndarray:
-    """(n,) length along the (n, d) points' polyline, in the plane (x, y), from the first."""
-    steps = np.linalg.norm(np.diff(points[:, :2], axis=0), axis=1)
-    return np.concatenate([[0.0], np.cumsum(steps)])
-
-
-def _even_indices(points: np.ndarray, count: int, closed: bool) -> np.ndarray:
-    """Indices of `count` of the (n, d) points spread evenly by arc length (in the plane)."""
-    path = np.vstack([points, points[:1]]) if closed else points
-    arc = plane_arc_lengths(path)
-    targets = np.linspace(0.0, arc[-1], count, endpoint=not closed)
-    return np.unique(np.clip(np.searchsorted(arc, targets), 0, len(points) - 1))
-
-
-def _even_by_length(points: np.ndarray, count: int, closed: bool) -> np.ndarray:
-    """`count` of the (n, d) points spread evenly by arc length along them (indices kept)."""
-    return points[_even_indices(points, count, closed)]
-
-
-OUTLINE_TOLERANCE = 0.005  # a derived boundary's spline stays this close (of the extent) to it
-
-
-def _outline_controls(polygon: np.ndarray) -> np.ndarray:
-    """Control points whose closed spline follows the (n, 2) outline polygon within
-    OUTLINE_TOLERANCE of its extent: the corners the outline's Douglas-Peucker simplification
-    keeps (tooth tips, sinuses), among points spread evenly along it, more of them until the
-    spline is close enough. An even spread alone (24 points) smoothed every tooth away."""
-    polygon = np.asarray(polygon, dtype=float)
-    extent = float(np.ptp(polygon, axis=0).max()) if len(polygon) else 0.0
-    if len(polygon) <= DERIVED_BOUNDARY_POINTS or extent == 0.0:
-        return polygon
-    tolerance = OUTLINE_TOLERANCE * extent
-    ring = shapely.LinearRing(polygon)
-    corners = shapely.get_coordinates(shapely.simplify(ring, tolerance))
-    index_of = {tuple(p): i for i, p in enumerate(polygon)}
-    keep = {index_of[tuple(p)] for p in corners if tuple(p) in index_of}
-    count = DERIVED_BOUNDARY_POINTS
-    while True:
-        spread = _even_indices(polygon, count, closed=True)
-        chosen = np.array(sorted(keep | set(spread.tolist())))
-        control = polygon[chosen]
-        curve = shapely.LinearRing(closed_curve(control))
-        if len(chosen) == len(polygon) or np.all(
-            shapely.distance(shapely.points(polygon), curve) <= 2 * tolerance
-        ):
-            return control
-        count *= 2
-
-
-def insert_index(control: np.ndarray, xy: np.ndarray, closed: bool) -> int:
-    """Where a new point `xy` belongs in the control polygon: the place that lengthens it least.
-
-    Between two neighbours a and b that costs |a - p| + |p - b| - |a - b|; an open curve may also
-    grow at either end, costing the distance to that end. Clicking around an outline in order
-    thus appends, and clicking beside a span inserts into it.
-    """
-    control = np.asarray(control, dtype=float)[:, :2]
-    n = len(control)
-    if n < 2:
-        return n
-    a = control if closed else control[:-1]
-    b = np.roll(control, -1, axis=0) if closed else control[1:]
-    dist = lambda p, q: np.linalg.norm(p - q, axis=-1)  # noqa: E731
-    costs = dist(a, xy) + dist(xy, b) - dist(a, b)
-    best = int(np.argmin(costs))
-    if not closed:
-        ends = (dist(control[0], xy), dist(control[-1], xy))
-        if min(ends) < costs[best]:
-            return 0 if ends[0] < ends[1] else n
-    return best + 1
 
 
 @dataclass(frozen=True)
@@ -518,11 +397,11 @@ class Sketch:
         """A sketch approximating a reconstructed leaf: control points spread along its outline
         and along each vein, on the leaf's own plane (the pipeline's frame), the boundary's
         heights kept as its relief."""
-        boundary = _outline_controls(result.polygon)
+        boundary = outline_controls(result.polygon)
         relief = np.column_stack(result.frame.to_plane(result.leaf.boundary))
         veins = []
         for vein in result.leaf.veins:
             xy, h = result.frame.to_plane(vein)
             points = np.column_stack([xy, h])
-            veins.append(_even_by_length(points, min(DERIVED_VEIN_POINTS, len(points)), False))
+            veins.append(even_by_length(points, min(DERIVED_VEIN_POINTS, len(points)), False))
         return cls(boundary=boundary, veins=tuple(veins), frame=result.frame, relief=relief)

@@ -19,7 +19,8 @@ import numpy as np
 from scipy.interpolate import PchipInterpolator
 from scipy.spatial import cKDTree
 
-from leafstudio.gui.model.sketch_model import Sketch, plane_arc_lengths
+from leafstudio.gui.model.curves import plane_arc_lengths
+from leafstudio.gui.model.sketch_model import Sketch
 
 PROFILE_HANDLES = 5  # handles of a profile made from a vein of this many points or more
 MIN_GAP = 0.02  # the least share of the length between two neighbouring handles

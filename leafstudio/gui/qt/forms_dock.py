@@ -36,7 +36,8 @@ from leafstudio.core.prepare.outline import ring_crossings
 from leafstudio.forms import SHAPES, VENATION_KINDS, Form, definition, grow_veins
 from leafstudio.forms.make import SIDE_ON
 from leafstudio.forms.terms import APEXES, DEFAULT_LOBES, MARGINS, RELIEF, TOOTHED, USER_BASES
-from leafstudio.gui.model.sketch_model import Sketch, closed_curve
+from leafstudio.gui.model.curves import closed_curve
+from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.model import Leaf
 
 THUMBNAIL = 84  # pixels

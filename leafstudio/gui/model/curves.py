@@ -1,0 +1,140 @@
+"""The sketch's curves on the leaf plane, without Qt: splines through control points (the
+boundary closed and periodic, each vein open) with centripetal parameters, which keep a spline
+from looping between close points; arc lengths, even resampling, and where a new control point
+goes. Sketch (sketch_model.py) draws its curves with these.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import shapely
+from scipy.interpolate import CubicSpline
+
+SAMPLES_PER_SPAN = 16  # curve points per span between two control points
+MIN_BOUNDARY_SAMPLES = 120
+DERIVED_BOUNDARY_POINTS = 24  # control points when a loaded leaf becomes a sketch
+
+
+def _centripetal(points: np.ndarray) -> np.ndarray:
+    """Cumulative centripetal parameter of (n, d) points (square root of chord lengths)."""
+    steps = np.sqrt(np.linalg.norm(np.diff(points, axis=0), axis=1))
+    return np.concatenate([[0.0], np.cumsum(steps)])
+
+
+def _drop_repeats(points: np.ndarray, closed: bool) -> np.ndarray:
+    """Control points without consecutive duplicates (a spline cannot pass twice in no time)."""
+    if len(points) < 2:
+        return points
+    ahead = np.roll(points, -1, axis=0) if closed else points[1:]
+    same = np.all(np.isclose(points[: len(ahead)], ahead, rtol=0, atol=1e-12), axis=1)
+    keep = np.ones(len(points), dtype=bool)
+    keep[: len(ahead)] &= ~same
+    return points[keep]
+
+
+def _span_samples(t: np.ndarray, per_span: int) -> np.ndarray:
+    """Parameters spaced evenly within each span [t_i, t_i+1], every t_i included."""
+    inner = np.linspace(0.0, 1.0, per_span, endpoint=False)
+    return np.append((t[:-1, None] + np.diff(t)[:, None] * inner).ravel(), t[-1])
+
+
+def closed_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.ndarray:
+    """Points along the periodic cubic spline through (n, 2) control points, n >= 3.
+
+    Returns
+    -------
+    (s, 2) float array
+        Counter-ordered like the control points, without repeating the first point.
+    """
+    control = _drop_repeats(np.asarray(control, dtype=float), closed=True)
+    if len(control) < 3:
+        return control
+    loop = np.vstack([control, control[:1]])
+    t = _centripetal(loop)
+    spline = CubicSpline(t, loop, bc_type="periodic")
+    per_span = max(per_span, -(-MIN_BOUNDARY_SAMPLES // len(control)))
+    return spline(_span_samples(t, per_span)[:-1])
+
+
+def open_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.ndarray:
+    """Points along the natural cubic spline through (m, d) control points (a line for m = 2)."""
+    control = _drop_repeats(np.asarray(control, dtype=float), closed=False)
+    if len(control) < 2:
+        return control
+    t = _centripetal(control)
+    s = _span_samples(t, per_span)
+    if len(control) == 2:
+        return control[0] + np.outer(s / t[-1], control[1] - control[0])
+    return CubicSpline(t, control, bc_type="natural")(s)
+
+
+def plane_arc_lengths(points: np.ndarray) -> np.ndarray:
+    """(n,) length along the (n, d) points' polyline, in the plane (x, y), from the first."""
+    steps = np.linalg.norm(np.diff(points[:, :2], axis=0), axis=1)
+    return np.concatenate([[0.0], np.cumsum(steps)])
+
+
+def _even_indices(points: np.ndarray, count: int, closed: bool) -> np.ndarray:
+    """Indices of `count` of the (n, d) points spread evenly by arc length (in the plane)."""
+    path = np.vstack([points, points[:1]]) if closed else points
+    arc = plane_arc_lengths(path)
+    targets = np.linspace(0.0, arc[-1], count, endpoint=not closed)
+    return np.unique(np.clip(np.searchsorted(arc, targets), 0, len(points) - 1))
+
+
+def even_by_length(points: np.ndarray, count: int, closed: bool) -> np.ndarray:
+    """`count` of the (n, d) points spread evenly by arc length along them (indices kept)."""
+    return points[_even_indices(points, count, closed)]
+
+
+OUTLINE_TOLERANCE = 0.005  # a derived boundary's spline stays this close (of the extent) to it
+
+
+def outline_controls(polygon: np.ndarray) -> np.ndarray:
+    """Control points whose closed spline follows the (n, 2) outline polygon within
+    OUTLINE_TOLERANCE of its extent: the corners the outline's Douglas-Peucker simplification
+    keeps (tooth tips, sinuses), among points spread evenly along it, more of them until the
+    spline is close enough. An even spread alone (24 points) smoothed every tooth away."""
+    polygon = np.asarray(polygon, dtype=float)
+    extent = float(np.ptp(polygon, axis=0).max()) if len(polygon) else 0.0
+    if len(polygon) <= DERIVED_BOUNDARY_POINTS or extent == 0.0:
+        return polygon
+    tolerance = OUTLINE_TOLERANCE * extent
+    ring = shapely.LinearRing(polygon)
+    corners = shapely.get_coordinates(shapely.simplify(ring, tolerance))
+    index_of = {tuple(p): i for i, p in enumerate(polygon)}
+    keep = {index_of[tuple(p)] for p in corners if tuple(p) in index_of}
+    count = DERIVED_BOUNDARY_POINTS
+    while True:
+        spread = _even_indices(polygon, count, closed=True)
+        chosen = np.array(sorted(keep | set(spread.tolist())))
+        control = polygon[chosen]
+        curve = shapely.LinearRing(closed_curve(control))
+        if len(chosen) == len(polygon) or np.all(
+            shapely.distance(shapely.points(polygon), curve) <= 2 * tolerance
+        ):
+            return control
+        count *= 2
+
+
+def insert_index(control: np.ndarray, xy: np.ndarray, closed: bool) -> int:
+    """Where a new point `xy` belongs in the control polygon: the place that lengthens it least.
+
+    Between two neighbours a and b that costs |a - p| + |p - b| - |a - b|; an open curve may also
+    grow at either end, costing the distance to that end. Clicking around an outline in order
+    thus appends, and clicking beside a span inserts into it.
+    """
+    control = np.asarray(control, dtype=float)[:, :2]
+    n = len(control)
+    if n < 2:
+        return n
+    a = control if closed else control[:-1]
+    b = np.roll(control, -1, axis=0) if closed else control[1:]
+    dist = lambda p, q: np.linalg.norm(p - q, axis=-1)  # noqa: E731
+    costs = dist(a, xy) + dist(xy, b) - dist(a, b)
+    best = int(np.argmin(costs))
+    if not closed:
+        ends = (dist(control[0], xy), dist(control[-1], xy))
+        if min(ends) < costs[best]:
+            return 0 if ends[0] < ends[1] else n
+    return best + 1
