@@ -16,7 +16,7 @@ Stories (each shot is the whole window, `DIR/s3-story-<name>.png`):
 
 For each shot the JSON gives the leaf's framing in the 3D view: the share of the viewport's width
 and height that the result mesh's points span on screen (projected with the renderer's world to
-display transform, as tests/gui/test_drawing.py measures it), the same for the blade's robust
+display transform, as tests/gui/qt/test_drawing.py measures it), the same for the blade's robust
 bounds (gui/model/framing.py: 1st-99th percentiles, the points the camera frames), the share of mesh
 points that fall outside the view (clipped) or under the height colour bar, and whether the
 sketch view's transform changed while drawing. The issue's framing target: >= 60% along one

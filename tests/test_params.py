@@ -1,6 +1,6 @@
 """Each parameter declared once (model.PARAMS), and the places derived from it agree: validation,
 the command line's flags, the stage cache's keys and the pipeline's stage table. (The panel's
-controls are checked in tests/gui/test_controls.py.)"""
+controls are checked in tests/gui/qt/test_controls.py.)"""
 
 from __future__ import annotations
 

@@ -11,13 +11,12 @@ from leafstudio.core.pipeline import Pipeline
 from leafstudio.gui.model.layers import LAYERS, SIDE_LAYERS, build_layers
 from leafstudio.gui.model.measurements import measurement_rows
 from leafstudio.sources.demos import demo
+from tests.gui.builders import FAST
 
-from .conftest import FAST
 
-
-@pytest.fixture(scope="module")
-def result():
-    return Pipeline(demo("nested")).run(FAST)
+@pytest.fixture
+def result(demo_result):
+    return demo_result("nested")
 
 
 def test_every_layer_is_built_with_unique_names(result):

@@ -21,10 +21,11 @@ from PySide6.QtWidgets import QFileDialog, QWidget
 
 from leafstudio.gui.qt.native_view import WIDGET_ENV, NativePlotter
 from leafstudio.gui.qt.viewport import grab_window
+from tests.gui.builders import FAST
 
-from .conftest import FAST, close_window, coloured_share, image_pixels, make_window, wait_result
+from .conftest import close_window, coloured_share, image_pixels, make_window, wait_result
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 def _x_sockets() -> int:

@@ -13,7 +13,7 @@ from leafstudio.sources.scan import looks_like_scan, read_scan
 from tests.leaves import ellipse_cloud as _ellipse
 from tests.leaves import random_leaf as _random_leaf
 
-REAL = Path(__file__).resolve().parents[3] / "shared" / "realleaves"
+REAL = Path(__file__).resolve().parents[4] / "shared" / "realleaves"
 
 
 @pytest.mark.parametrize("noise", [1e-3, 1e-2])

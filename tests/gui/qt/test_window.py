@@ -13,8 +13,9 @@ from PySide6.QtWidgets import QMessageBox
 from leafstudio.core.pipeline import Pipeline
 from leafstudio.gui.model.layers import LAYERS
 from leafstudio.gui.qt.main_window import MainWindow
+from tests.gui.builders import FAST
 
-from .conftest import FAST, close_window, make_window, wait_result
+from .conftest import close_window, make_window, wait_result
 
 
 @pytest.fixture

@@ -11,8 +11,9 @@ from PySide6.QtGui import QImage
 from leafstudio.gui.qt.app import display_problem, run_app
 from leafstudio.sources.demos import demo
 from leafstudio.sources.files import save_leaf
+from tests.gui.builders import FAST
 
-from .conftest import FAST, coloured_share, image_pixels
+from .conftest import coloured_share, image_pixels
 
 
 def test_without_a_display_the_app_says_how_to_run_it(monkeypatch, capsys):

@@ -5,7 +5,7 @@ from __future__ import annotations
 from PySide6.QtCore import Qt
 
 from leafstudio.gui.qt import explain
-from tests.gui.conftest import wait_result
+from tests.gui.qt.conftest import wait_result
 
 
 def _checked(window) -> set[str]:

@@ -6,18 +6,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from leafstudio.core.pipeline import Pipeline
 from leafstudio.gui.model.framing import best_iso, blade_bounds, fit_camera, project, projected_fill
 from leafstudio.gui.qt.viewport import BAR_BAND
-from leafstudio.sources.demos import demo
 
-from .conftest import FAST, wait_result
+from .conftest import wait_result
 from .test_drawing import camera, click, ellipse_clicks, leaf_fill
 
 
 @pytest.mark.parametrize("name", ["nested", "parallel"])
-def test_a_camera_keeping_the_bottom_free_frames_the_blade_above_it(name):
-    result = Pipeline(demo(name)).run(FAST)
+def test_a_camera_keeping_the_bottom_free_frames_the_blade_above_it(name, demo_result):
+    result = demo_result(name)
     bounds = blade_bounds(result.triangle_mesh.points, result.frame)
     for aspect in (0.8, 1.3, 1.8):
         direction, up = best_iso(bounds, 30.0, aspect, BAR_BAND)

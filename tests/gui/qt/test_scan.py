@@ -16,24 +16,11 @@ from leafstudio.gui.model import scans
 from leafstudio.gui.qt.main_window import MainWindow
 from leafstudio.model import Leaf
 from leafstudio.sources.scan import is_scan_file, looks_like_scan
+from tests.gui.builders import FAST, synthetic_scan, write_points
 
-from .conftest import FAST, WAIT_MS, close_window, make_window, wait_result
+from .conftest import WAIT_MS, close_window, make_window, wait_result
 
 FIDELITY = "Scan → mesh distance (blade points)"
-
-
-def synthetic_scan(n: int = 900, seed: int = 0) -> np.ndarray:
-    """(m, 6) points of a curved elliptic blade (length 2) with made-up normals: a scan."""
-    rng = np.random.default_rng(seed)
-    xy = rng.uniform([-1.0, -0.4], [1.0, 0.4], size=(n, 2))
-    xy = xy[xy[:, 0] ** 2 + (xy[:, 1] / 0.4) ** 2 < 1]
-    z = 0.15 * xy[:, 0] ** 2 - 0.3 * xy[:, 1] ** 2
-    return np.column_stack([xy, z, np.tile([0.0, 0.0, 1.0], (len(xy), 1))])
-
-
-def write_points(path, rows: np.ndarray) -> str:
-    path.write_text("\n".join(",".join(f"{v:.6f}" for v in row) for row in rows) + "\n")
-    return str(path)
 
 
 def layer_item(window: MainWindow, key: str) -> QListWidgetItem:

@@ -10,7 +10,7 @@ from PySide6.QtWidgets import QDockWidget
 from leafstudio.forms import SHAPES
 from leafstudio.gui.qt import forms_dock
 from leafstudio.gui.qt.forms_dock import FormsPanel, leaf_sketch, thumbnail
-from tests.gui.conftest import wait_result
+from tests.gui.qt.conftest import wait_result
 
 
 @pytest.fixture
@@ -106,7 +106,7 @@ def test_every_forms_sketch_curve_is_a_simple_outline():
 def _click_outside_the_boundary(qtbot, view) -> None:
     """One drawing click just outside the boundary, between two of its control points (never on
     one): the editor adds one boundary point to the sketch it shows."""
-    from tests.gui.test_sketch import click
+    from tests.gui.qt.test_sketch import click
 
     boundary = view.sketch.boundary
     gaps = np.linalg.norm(np.roll(boundary, -1, axis=0) - boundary, axis=1)

@@ -12,7 +12,8 @@ from leafstudio.gui.model import display_mesh
 from leafstudio.gui.model.display_mesh import display_subset
 from leafstudio.gui.qt.worker import PIPELINE, Worker
 from leafstudio.sources.demos import demo
-from tests.gui.conftest import FAST, WAIT_MS, wait_result
+from tests.gui.builders import FAST
+from tests.gui.qt.conftest import WAIT_MS, wait_result
 
 
 def _count_renders(window) -> list[int]:

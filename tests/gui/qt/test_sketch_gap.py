@@ -13,10 +13,10 @@ from leafstudio.gui.model.sketch_model import BOUNDARY, Sketch
 from leafstudio.model import Leaf
 from leafstudio.sources.demos import demo
 from leafstudio.sources.files import save_leaf
+from tests.gui.builders import Runner, synthetic_scan, write_points
+from tests.gui.model.test_session import FAST
 
 from .conftest import wait_result
-from .test_scan import synthetic_scan, write_points
-from .test_session import FAST, Runner
 from .test_sketch import click
 
 

@@ -16,8 +16,9 @@ from leafstudio.gui.model.session import Session
 from leafstudio.gui.qt.worker import PIPELINE, Worker
 from leafstudio.model import Leaf, Params
 from leafstudio.sources.demos import demo
+from tests.gui.builders import FAST
 
-from .conftest import FAST, WAIT_MS
+from .conftest import WAIT_MS
 
 DIRECT = Qt.ConnectionType.DirectConnection  # logged on the worker's thread, in order
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import sys
 from itertools import pairwise
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -13,7 +12,6 @@ import shapely
 
 from leafstudio.core.pipeline import Pipeline
 from leafstudio.core.prepare.outline import ring_crossings
-from leafstudio.errors import LeafError
 from leafstudio.gui.model.framing import (
     best_iso,
     blade_bounds,
@@ -27,32 +25,9 @@ from leafstudio.model import Leaf, Params
 from leafstudio.sources.demos import demo
 from leafstudio.workflows import boundary_crossing
 from tests.leaves import sketch_ellipse as ellipse
+from tests.gui.builders import Runner
 
 FAST = Params(k=3, grid=40, samples=1200)
-
-
-class Runner:
-    """Stands in for the worker: records requests, runs them when asked."""
-
-    def __init__(self) -> None:
-        self.requests: list[tuple[Leaf, Params]] = []
-
-    def __call__(self, leaf: Leaf, params: Params, interrupt: bool) -> int:
-        self.requests.append((leaf, params))
-        return len(self.requests)
-
-    def finish(self, session: Session, index: int = -1) -> object:
-        """Run request `index` and report it to the session as the worker would."""
-        request_id = len(self.requests) + 1 + index if index < 0 else index + 1
-        leaf, params = self.requests[request_id - 1]
-        try:
-            result = Pipeline(leaf).run(params)
-        except LeafError as exc:
-            session.accept_failure(request_id, exc)
-            return None
-        outcome = SimpleNamespace(request=SimpleNamespace(id=request_id), result=result, layers={})
-        session.accept_result(outcome)
-        return outcome
 
 
 @pytest.fixture

@@ -26,8 +26,9 @@ import leafstudio as ls
 from leafstudio.gui.qt.controls import THROTTLE_MS, ParamPanel
 from leafstudio.model import PARAMS, SEED_MAX, Params
 from leafstudio.paramspec import Choice, Ranged, Switch, Whole
+from tests.gui.builders import FAST
 
-from .conftest import FAST, wait_result
+from .conftest import wait_result
 
 
 def test_every_control_and_its_label_explain_themselves(qtbot):
@@ -313,7 +314,7 @@ import json, sys
 from PySide6.QtTest import QTest
 from PySide6.QtWidgets import QApplication
 app = QApplication([])
-from tests.gui.test_controls import ParamPanel, STEPS, step
+from tests.gui.qt.test_controls import ParamPanel, STEPS, step
 panel = ParamPanel()
 panel.show()
 box, seen = panel.seed, []
@@ -334,7 +335,7 @@ def test_text_int_cannot_read_then_a_step_does_not_crash_the_seed_box(tmp_path):
     """Review s3 #1: superqt read the typed text with a bare int() in stepBy; `--5`, `½` or a lone
     `-` typed and then Up, Page Up, the wheel or an arrow raised inside Qt and killed the app
     (exit 139). Run in a child process, so that a crash fails this test, not the test run."""
-    root = Path(__file__).resolve().parents[2]
+    root = Path(__file__).resolve().parents[3]
     env = {**os.environ, "PYTHONPATH": str(root)}
     done = subprocess.run(
         [sys.executable, "-c", SEED_STEPS_SCRIPT, "--5", "½", "-"],

@@ -12,7 +12,7 @@ from PySide6.QtCore import Qt
 
 from leafstudio.assets.asset import leaf_uvs
 from leafstudio.gui.model.textures import TEXTURE
-from tests.gui.conftest import WAIT_MS, wait_result
+from tests.gui.qt.conftest import WAIT_MS, wait_result
 
 
 def _glb_texture(path) -> np.ndarray:
@@ -99,17 +99,25 @@ def _on_screen(window, world: np.ndarray, shape) -> tuple[int, int]:
     return column, row
 
 
-@pytest.fixture
-def photo(tmp_path):
-    """A photo of a generated ovate leaf with its veins, in its own folder."""
+@pytest.fixture(scope="module")
+def oak_png(tmp_path_factory):
+    """A photo of a generated ovate leaf with its veins, drawn once for the module."""
     from leafstudio.forms import make_form
     from tests.photos import form_photo
 
     form = make_form("ovate")
     image, _, _ = form_photo(form.boundary, form.veins, petiole=0.15, angle=30)
+    path = tmp_path_factory.mktemp("oak") / "oak.png"
+    Image.fromarray(image).save(path)
+    return path
+
+
+@pytest.fixture
+def photo(tmp_path, oak_png):
+    """That photo in this test's own folder (a test may move or spoil it)."""
     path = tmp_path / "photos" / "oak.png"
     path.parent.mkdir()
-    Image.fromarray(image).save(path)
+    shutil.copyfile(oak_png, path)
     return path
 
 

@@ -11,9 +11,9 @@ from leafstudio.gui.model.jobs import Job, run_now
 from leafstudio.gui.model.session import Session
 from leafstudio.sources.demos import demo
 from leafstudio.sources.files import save_leaf
+from tests.gui.builders import Runner, synthetic_scan, write_points
 
-from .test_scan import synthetic_scan, write_points
-from .test_session import FAST, Runner
+from .test_session import FAST
 
 
 def opened_session() -> tuple[Session, Runner, dict[str, list]]:

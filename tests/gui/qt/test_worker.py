@@ -12,8 +12,9 @@ from leafstudio.errors import LeafError
 from leafstudio.gui.qt.worker import PIPELINE, Worker
 from leafstudio.model import Leaf, Params
 from leafstudio.sources.demos import demo
+from tests.gui.builders import FAST
 
-from .conftest import FAST, WAIT_MS
+from .conftest import WAIT_MS
 
 
 @pytest.fixture

@@ -13,7 +13,7 @@ from PySide6.QtWidgets import QApplication, QLineEdit, QVBoxLayout, QWidget
 
 from leafstudio.gui.qt.profile_paint import HANDLE_PIXELS, SELECTED
 from leafstudio.gui.qt.profile_view import BIG_NUDGE, NUDGE, ProfileView
-from tests.gui.test_profile_handles import curled, wiggly_vein
+from tests.gui.model.test_profile_handles import curled, wiggly_vein
 
 from .conftest import wait_result
 

@@ -217,7 +217,7 @@ def test_mirror_editing_adds_the_reflected_point_and_a_profile_is_one_step(windo
 
 
 def test_a_scan_opened_after_another_is_framed_on_its_own_blade(window, qtbot, tmp_path):
-    from .test_scan import synthetic_scan, write_points
+    from tests.gui.builders import synthetic_scan, write_points
 
     first = synthetic_scan()
     second = synthetic_scan(seed=1)
