@@ -40,7 +40,7 @@ class Runner:
         return outcome
 
 
-def synthetic_scan(n: int = 900, seed: int = 0) -> np.ndarray:
+def six_column_scan(n: int = 900, seed: int = 0) -> np.ndarray:
     """(m, 6) points of a curved elliptic blade (length 2) with made-up normals: a scan."""
     rng = np.random.default_rng(seed)
     xy = rng.uniform([-1.0, -0.4], [1.0, 0.4], size=(n, 2))

@@ -24,8 +24,8 @@ from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.model import Leaf, Params
 from leafstudio.sources.demos import demo
 from leafstudio.workflows import boundary_crossing
-from tests.leaves import sketch_ellipse as ellipse
 from tests.gui.builders import Runner
+from tests.leaves import sketch_ellipse as ellipse
 
 FAST = Params(k=3, grid=40, samples=1200)
 

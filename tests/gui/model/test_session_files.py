@@ -11,7 +11,7 @@ from leafstudio.gui.model.jobs import Job, run_now
 from leafstudio.gui.model.session import Session
 from leafstudio.sources.demos import demo
 from leafstudio.sources.files import save_leaf
-from tests.gui.builders import Runner, synthetic_scan, write_points
+from tests.gui.builders import Runner, six_column_scan, write_points
 
 from .test_session import FAST
 
@@ -54,7 +54,7 @@ def test_the_session_opens_a_project_with_its_parameters(tmp_path):
 
 def test_a_point_list_that_is_a_scan_opens_as_a_scan(tmp_path):
     session, runner, got = opened_session()
-    path = write_points(tmp_path / "scan.txt", synthetic_scan())
+    path = write_points(tmp_path / "scan.txt", six_column_scan())
     session.open_path(path)
     assert got["opened"] == [path] and session.state.scan is not None
     assert [p.name for p in session.state.scan.pieces] == ["scan:blade", "scan:dropped"]

@@ -217,10 +217,10 @@ def test_mirror_editing_adds_the_reflected_point_and_a_profile_is_one_step(windo
 
 
 def test_a_scan_opened_after_another_is_framed_on_its_own_blade(window, qtbot, tmp_path):
-    from tests.gui.builders import synthetic_scan, write_points
+    from tests.gui.builders import six_column_scan, write_points
 
-    first = synthetic_scan()
-    second = synthetic_scan(seed=1)
+    first = six_column_scan()
+    second = six_column_scan(seed=1)
     second[:, :3] = second[:, :3] * 3.0 + [20.0, -5.0, 2.0]  # elsewhere, three times larger
     rng = np.random.default_rng(2)
     outliers = rng.uniform(-40, 80, size=(6, 3))  # far stray points in the second scan

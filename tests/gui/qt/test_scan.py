@@ -16,7 +16,7 @@ from leafstudio.gui.model import scans
 from leafstudio.gui.qt.main_window import MainWindow
 from leafstudio.model import Leaf
 from leafstudio.sources.scan import is_scan_file, looks_like_scan
-from tests.gui.builders import FAST, synthetic_scan, write_points
+from tests.gui.builders import FAST, six_column_scan, write_points
 
 from .conftest import WAIT_MS, close_window, make_window, wait_result
 
@@ -75,7 +75,7 @@ def scan_window(qtbot, tmp_path, monkeypatch):
     """A window that opened a synthetic 6-column scan (as `leafstudio gui SCAN` would)."""
     win = make_window(qtbot, tmp_path / "settings.ini", FAST)
     win.extract_threads = record_threads(monkeypatch, "extract_leaf", workflows)
-    path = write_points(tmp_path / "scan.txt", synthetic_scan())
+    path = write_points(tmp_path / "scan.txt", six_column_scan())
     assert win.open_path(path)  # a scan, not a leaf: read and extracted off the main thread
     wait_fidelity(qtbot, win)
     yield win
@@ -163,7 +163,7 @@ def test_the_poisson_layer_appears_beside_our_mesh_when_switched_on(window, qtbo
 
 
 def test_scans_are_told_from_leaves(tmp_path):
-    scan = synthetic_scan()
+    scan = six_column_scan()
     assert looks_like_scan(Leaf(boundary=scan[:, :3], veins=[]))
     t = np.linspace(0, 2 * np.pi, 300, endpoint=False)
     outline = np.column_stack([np.cos(t), 0.4 * np.sin(t), 0.05 * np.sin(3 * t)])
@@ -175,7 +175,7 @@ def test_scans_are_told_from_leaves(tmp_path):
 
 
 def test_a_scan_still_being_read_is_superseded_by_a_later_open(window, qtbot, tmp_path):
-    path = write_points(tmp_path / "scan.txt", synthetic_scan())
+    path = write_points(tmp_path / "scan.txt", six_column_scan())
     assert window.open_path(path)
     window.open_demo("parallel")  # opened before the scan is read: the demo stays
     demo_leaf = window.session.state.leaf

@@ -13,7 +13,7 @@ from leafstudio.gui.model.sketch_model import BOUNDARY, Sketch
 from leafstudio.model import Leaf
 from leafstudio.sources.demos import demo
 from leafstudio.sources.files import save_leaf
-from tests.gui.builders import Runner, synthetic_scan, write_points
+from tests.gui.builders import Runner, six_column_scan, write_points
 from tests.gui.model.test_session import FAST
 
 from .conftest import wait_result
@@ -131,7 +131,7 @@ def test_a_click_or_key_while_a_scans_first_reconstruction_runs_leaves_it_alone(
     session, view = window.session, window.editor.view
     old = view.sketch
     never_done(window)  # the scan is read and extracted; its reconstruction never finishes
-    assert window.open_path(write_points(tmp_path / "scan.txt", synthetic_scan()))
+    assert window.open_path(write_points(tmp_path / "scan.txt", six_column_scan()))
     qtbot.waitUntil(lambda: session.state.scan is not None, timeout=30_000)
     opened = session.state
     click(qtbot, view, old.boundary[0])
