@@ -62,6 +62,8 @@ def bucket_points(
     if size is None:
         size = float(np.sqrt(extent[0] * extent[1] * per_bucket / max(len(xy), 1)))
         size = max(size, float(extent.max()) / 4096)
+        if float(extent.max()) <= 1e-300:  # one point, or all at one place: one bucket (the
+            size = 1.0  # side above, 1e-304, made 4097² buckets and overflowed the indices)
     nx, ny = (np.floor(extent / size).astype(np.int64) + 1).tolist()
     starts, order = _counting_sort(xy, lo, float(size), nx, ny)
     return Buckets(lo=lo, size=float(size), nx=int(nx), ny=int(ny), starts=starts, order=order)

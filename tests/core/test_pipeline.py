@@ -196,3 +196,13 @@ def test_a_run_and_its_metrics_need_no_vtk_and_the_polydata_holds_the_same_mesh(
     for name, values in arrays.point_data.items():
         np.testing.assert_array_equal(poly.point_data[name], values)
     assert result.mesh is poly  # built once
+
+
+def test_the_height_at_one_point_is_the_height_among_others(demo_result):
+    """Result.height of a single point (its buckets once had a side of 1e-304: 4097² buckets
+    and overflowed indices, and the height came out 0)."""
+    _, result = demo_result
+    pairs = result.height(np.array([[0.4, 0.0], [0.6, 0.02]]))
+    single = [float(result.height(np.array([p]))[0]) for p in ([0.4, 0.0], [0.6, 0.02])]
+    assert pairs[0] > 0
+    np.testing.assert_allclose(single, pairs, rtol=1e-12)
