@@ -198,6 +198,14 @@ class Params:
         help="After the EM fit, adjust all bumps together by least squares so that the surface "
         "passes closer to the veins (the paper stops after EM)",
     ).field()  # fmt: skip
+    through_veins: bool = Switch(
+        default=True,
+        what="through veins", label="Surface through veins", stage="surface",
+        flag="--through-veins",
+        help="After the fit, bend the surface smoothly onto every vein point (tapering to "
+        "nothing at the margin), so the drawn veins lie on the leaf; off keeps the paper's pure "
+        "Gaussian-mixture surface, which follows the veins only on average",
+    ).field()  # fmt: skip
     margin: str = Choice(
         default="auto", choices=MARGINS,
         what="margin", label="Margin", stage="frame", flag="--margin",

@@ -50,6 +50,7 @@ CHANGES = {  # for the stage test: a change of each parameter that a small run c
     "radius_factor": 1.5,
     "taper": 0.5,
     "refine": False,
+    "through_veins": False,
     "margin": "smooth",
 }
 

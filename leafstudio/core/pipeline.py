@@ -10,7 +10,7 @@ and its Result.
 | guide    | implicit, grid                         | g and p(x) on the grid                   |
 | samples  | guide, samples, seed                   | the EM samples drawn from p (lazy)       |
 | gmm      | samples, k                             | the EM mixture                           |
-| surface  | gmm, taper, refine                     | amplitudes, z on the kept grid nodes     |
+| surface  | gmm, taper, refine, through_veins      | amplitudes, z on the kept grid nodes     |
 | layout   | guide                                  | the conforming mesh in the plane and g's |
 |          |                                        | derivatives at its vertices (lazy)       |
 | mesh     | surface, layout, mesher, radius_factor | the triangle mesh in world coordinates   |
@@ -40,6 +40,7 @@ import numpy as np
 
 from leafstudio.core import evaluate, mesher
 from leafstudio.core.autok import choose_mixture
+from leafstudio.core.correct import onto_veins
 from leafstudio.core.base import PLANAR, BaseSurface, fit_base
 from leafstudio.core.curvature import graph_curvatures
 from leafstudio.core.evaluate import curvature_summary, shape_measurements
@@ -649,6 +650,8 @@ def _surface(run: StageRun) -> SurfaceStage:
         run.params.seed,
         base=fs.base,
     )
+    if run.params.through_veins:  # onto every vein point (correct.py)
+        surface = onto_veins(surface, fs.veins, fs.heights, fs.length)
     return SurfaceStage(surface=surface, z=surface(nodes, g_in))
 
 

@@ -21,6 +21,7 @@ signed, so veins below the margin pull the surface under it.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import njit
@@ -30,6 +31,9 @@ from leafstudio.core.buckets import kernel_array
 from leafstudio.core.curvature import implicit_derivatives, product_derivatives, taper_derivatives
 from leafstudio.core.gmm import Mixture
 from leafstudio.core.mpu import MPUImplicit
+
+if TYPE_CHECKING:
+    from leafstudio.core.correct import VeinCorrection
 
 VEIN_WEIGHT = 10.0  # the vein rows together weigh this much relative to all grid rows
 RIDGE = 1e-10
@@ -47,6 +51,19 @@ class HeightSurface:
     implicit: MPUImplicit
     delta: float
     base: BaseSurface | None = None  # the base through a non-planar boundary's heights
+    correction: VeinCorrection | None = None  # c(x) onto the veins (correct.py); None: pure GMM
+
+    def relief(self, xy: np.ndarray) -> np.ndarray:
+        """Σ a_k N_k(x) + c(x): what the taper multiplies."""
+        m = self.mixture.value(xy)
+        return m if self.correction is None else m + self.correction.value(xy)
+
+    def _relief_derivatives(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        m = self.mixture.derivatives(xy)
+        if self.correction is None:
+            return m
+        c = self.correction.derivatives(xy)
+        return m[0] + c[0], m[1] + c[1], m[2] + c[2]
 
     def taper(self, g: np.ndarray) -> np.ndarray:
         """T(g / δ), zero outside the leaf."""
@@ -55,13 +72,13 @@ class HeightSurface:
     def __call__(self, xy: np.ndarray, g: np.ndarray | None = None) -> np.ndarray:
         """z at (n, 2) plane points; pass `g` if it is already known there."""
         g = self.implicit(xy) if g is None else g
-        relief = self.taper(g) * self.mixture.value(xy)
+        relief = self.taper(g) * self.relief(xy)
         return relief if self.base is None else self.base(xy) + relief
 
     def gradient(self, xy: np.ndarray) -> np.ndarray:
         """(n, 2) ∇z = T'(g/δ) ∇g M / δ + T ∇M, in closed form."""
         g, grad_g = self.implicit.evaluate(xy, gradient=True)
-        m, grad_m, _ = self.mixture.derivatives(xy)
+        m, grad_m, _ = self._relief_derivatives(xy)
         t = self.taper(g)
         slope = np.where(g > 0, 1 - t**2, 0.0) / self.delta
         grad = (slope * m)[:, None] * grad_g + t[:, None] * grad_m
@@ -81,7 +98,7 @@ class HeightSurface:
         if implicit_at is None:
             implicit_at = implicit_derivatives(self.implicit, xy)
         taper = taper_derivatives(*implicit_at, self.delta, margin)
-        z, grad, hess = product_derivatives(taper, self.mixture.derivatives(xy))
+        z, grad, hess = product_derivatives(taper, self._relief_derivatives(xy))
         if self.base is None:
             return z, grad, hess
         b, grad_b, hess_b = self.base.derivatives(xy)
