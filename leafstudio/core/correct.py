@@ -37,6 +37,7 @@ from leafstudio.core.surface import HeightSurface
 
 CENTER_STEP = 0.008  # vein points closer than this share of the length are one spline centre
 VEIN_SMOOTHING = 1e-9  # λ at unit length (scaled by length²)
+FLAT_SPREAD = 1e-6  # centres spread less than this (of the length) across a line lie on it
 HESSIAN_CUT = 1e-3  # ∇²φ's log r is taken as log max(r, this share of the length)
 MOST_CENTERS = 3000  # beyond this the veins are thinned further (the solve grows as its cube)
 
@@ -146,25 +147,32 @@ def fit_correction(
         return None
     d = np.sqrt(((centers[:, None, :] - centers[None, :, :]) ** 2).sum(axis=2))
     phi = np.where(d > 0, d**2 * np.log(np.maximum(d, 1e-300)), 0.0)
-    poly = np.column_stack([np.ones(len(centers)), centers])
-    m = len(centers)
-    system = np.zeros((m + 3, m + 3))
+    # the linear part along the directions the centres span: a midrib alone is a line, across
+    # which a slope would be undetermined (and blow up)
+    mean = centers.mean(axis=0)
+    _, spread, directions = np.linalg.svd(centers - mean, full_matrices=False)
+    spanned = directions[spread > FLAT_SPREAD * length * np.sqrt(len(centers))]
+    poly = np.column_stack([np.ones(len(centers)), (centers - mean) @ spanned.T])
+    m, q = len(centers), poly.shape[1]
+    system = np.zeros((m + q, m + q))
     t2 = taper**2
     system[:m, :m] = t2[:, None] * phi
     system[np.diag_indices(m)] += VEIN_SMOOTHING * length**2
     system[:m, m:] = t2[:, None] * poly
     system[m:, :m] = poly.T
-    rhs = np.concatenate([taper * residual, np.zeros(3)])
+    rhs = np.concatenate([taper * residual, np.zeros(q)])
     try:
         solution = np.linalg.solve(system, rhs)
     except np.linalg.LinAlgError:
-        solution = np.linalg.lstsq(system, rhs, rcond=None)[0]
+        return None
     if not np.all(np.isfinite(solution)):
         return None
+    slope = spanned.T @ solution[m + 1 :]  # back to a₀ + a₁ x + a₂ y
+    affine = np.array([solution[m] - slope @ mean, *slope])
     return VeinCorrection(
         centers=kernel_array(centers),
         weights=solution[:m].copy(),
-        affine=solution[m:].copy(),
+        affine=affine,
         log_cut=float(np.log(HESSIAN_CUT * length)),
     )
 

@@ -100,3 +100,17 @@ def test_the_correction_has_closed_form_derivatives():
         assert np.allclose(grad[:, axis], numeric, rtol=1e-5, atol=1e-7)
         numeric_h = (c.derivatives(xy + step)[1] - c.derivatives(xy - step)[1]) / (2 * h)
         assert np.allclose(hess[:, axis], numeric_h, rtol=1e-4, atol=1e-5)
+
+
+def test_a_straight_midrib_alone_gives_a_calm_correction():
+    """Centres on one line leave a slope across it undetermined: it must not blow up (it reached
+    1e14 on a curled leaf's midrib before the linear part was restricted to the line)."""
+    t = np.linspace(0, 2 * np.pi, 160, endpoint=False)
+    xy = np.column_stack([0.5 * np.cos(t), 0.2 * np.sin(t)])
+    lift = lambda p: np.column_stack([p, 0.4 * p[:, 0] ** 2 + 0.5 * p[:, 1] ** 2])  # noqa: E731
+    midrib = np.column_stack([np.linspace(-0.46, 0.46, 40), np.zeros(40)])
+    result = _run(ls.Leaf(boundary=lift(xy), veins=[lift(midrib)]), k=3)
+    unit = result.unit
+    c = unit.surface.correction.value(unit.grid.points[unit.inside])
+    assert np.abs(c).max() < 0.01 * unit.length
+    assert result.metrics["veins"]["max"] <= VEIN_TOLERANCE * result.length
