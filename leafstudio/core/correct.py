@@ -20,6 +20,12 @@ is 1 this is the usual smoothing spline, and a vein point on or outside the marg
 no weight, so nothing pulls the margin off the boundary. λ is tiny (VEIN_SMOOTHING): it only keeps
 the solve well posed when vein points nearly coincide.
 
+The spline's centres are the vein points thinned along each vein (CENTER_STEP), less those of
+a later vein within JUNCTION of an earlier one (where a side vein leaves the midrib, the two
+disagree by a little within a grid cell, and meeting both bent the surface into a ridge tighter
+than a thick solid's sheets can follow), and less the points no smooth correction should chase
+(`reachable`).
+
 φ's Hessian has a log r singularity at each centre; ∇²c (curvatures only) cuts the log off at
 HESSIAN_CUT of the length, so a mesh vertex that falls on a vein point gets a finite curvature.
 """
@@ -30,6 +36,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 from numba import njit
+from scipy.spatial import cKDTree
 
 from leafstudio.core.buckets import kernel_array
 from leafstudio.core.prepare.outline import thin_curve
@@ -37,8 +44,11 @@ from leafstudio.core.surface import HeightSurface
 
 CENTER_STEP = 0.008  # vein points closer than this share of the length are one spline centre
 VEIN_SMOOTHING = 1e-9  # λ at unit length (scaled by length²)
+BAND = 0.5  # T below this: the margin band, where a vein point close enough is left as it is
+CLOSE_ENOUGH = 2e-4  # of the length: a band point this close to the surface needs no pinning
 FLAT_SPREAD = 1e-6  # centres spread less than this (of the length) across a line lie on it
 HESSIAN_CUT = 1e-3  # ∇²φ's log r is taken as log max(r, this share of the length)
+JUNCTION = 0.011  # of the length: a vein's points this near an earlier vein's are left to it
 MOST_CENTERS = 3000  # beyond this the veins are thinned further (the solve grows as its cube)
 
 
@@ -112,14 +122,34 @@ def _spline_derivatives(xy, centers, weights, affine, log_cut):
 
 def spline_centers(veins: list[np.ndarray], length: float) -> list[np.ndarray]:
     """Indices kept of each vein's (m_i, 2) points: at least CENTER_STEP · length apart along it
-    (outline.thin_curve), at most MOST_CENTERS in all."""
+    (outline.thin_curve), at most MOST_CENTERS in all, none within JUNCTION · length of an
+    earlier vein's."""
     step = CENTER_STEP * length
     kept = [thin_curve(v, step, keep_end=True) for v in veins]
     total = sum(len(k) for k in kept)
     if total > MOST_CENTERS:
         step *= total / MOST_CENTERS
         kept = [thin_curve(v, step, keep_end=True) for v in veins]
+    laid = np.zeros((0, 2))
+    for i, vein in enumerate(veins):  # at a junction the earlier (longer) vein decides
+        if len(laid):
+            near = cKDTree(laid).query(vein[kept[i]], distance_upper_bound=JUNCTION * length)[0]
+            kept[i] = kept[i][~np.isfinite(near)]
+        laid = np.vstack([laid, vein[kept[i]]])
     return kept
+
+
+def reachable(taper: np.ndarray, residual: np.ndarray, relief: float, length: float) -> np.ndarray:
+    """(m,) bool: the vein points the spline is made to pass through.
+
+    Left out: a point that only a correction higher than the veins' own relief could reach
+    (|r| > relief · T: a vein raised next to the margin, which z = b there cannot follow without
+    a spike), and a point in the margin band (T < BAND) that is already within CLOSE_ENOUGH of the
+    length (a thin tip's midrib: pinning it there only sharpens the tip).
+    """
+    spike = np.abs(residual) > relief * taper
+    settled = (taper < BAND) & (np.abs(residual) <= CLOSE_ENOUGH * length)
+    return (taper > 0) & ~spike & ~settled
 
 
 def fit_correction(
@@ -198,5 +228,6 @@ def onto_veins(
     h = np.concatenate([z[k] for z, k in zip(heights, kept, strict=True)])
     taper = surface.taper(surface.implicit(centers))
     residual = h - taper * surface.relief(centers)
-    correction = fit_correction(centers, taper, residual, length)
+    keep = reachable(taper, residual, float(np.abs(h).max()), length)
+    correction = fit_correction(centers[keep], taper[keep], residual[keep], length)
     return surface if correction is None else replace(surface, correction=correction)

@@ -17,22 +17,25 @@ VEIN_TOLERANCE = 1e-3  # of the length: the issue's target
 
 
 def drawn_leaf() -> ls.Leaf:
-    """As in the app: a 12-point outline, a midrib and four side veins from it, the heights of
-    their control points raised by hand (none on the margin itself, which stays at height 0)."""
+    """As in the app: a 12-point outline, a midrib and four side veins started on it (snapped:
+    they branch at the midrib's height there), the heights of their other control points raised
+    by hand (none on the margin itself, which stays at height 0)."""
     t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
     boundary = np.column_stack([0.5 + 0.5 * np.cos(t), 0.25 * np.sin(t) * (1 + 0.3 * np.sin(t))])
     x = np.linspace(0.05, 0.95, 5)
     midrib = np.column_stack([x, np.zeros(5), [0.03, 0.07, 0.09, 0.06, 0.02]])
-    sides = [
-        np.column_stack([[x0, x0 + 0.08, x0 + 0.15], side * np.array([0, 0.08, 0.15]), h])
-        for x0, side, h in [
-            (0.3, 1, [0.075, 0.06, 0.03]),
-            (0.3, -1, [0.075, 0.07, 0.025]),
-            (0.6, 1, [0.082, 0.05, 0.035]),
-            (0.6, -1, [0.082, 0.065, 0.02]),
-        ]
-    ]
-    leaf = Sketch(boundary=boundary, veins=(midrib, *sides)).to_leaf()
+    sketch = Sketch(boundary=boundary, veins=(midrib,))
+    for x0, side, raised in [
+        (0.3, 1, [0.06, 0.03]),
+        (0.3, -1, [0.07, 0.025]),
+        (0.6, 1, [0.05, 0.035]),
+        (0.6, -1, [0.065, 0.02]),
+    ]:
+        start = sketch.snap_to_vein(np.array([x0, 0.0]), 0.01)
+        assert start is not None
+        rest = np.column_stack([[x0 + 0.08, x0 + 0.15], side * np.array([0.08, 0.15]), raised])
+        sketch = sketch.with_vein(np.vstack([start, rest]))
+    leaf = sketch.to_leaf()
     assert leaf is not None
     return leaf
 
