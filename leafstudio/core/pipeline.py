@@ -40,8 +40,8 @@ import numpy as np
 
 from leafstudio.core import evaluate, mesher
 from leafstudio.core.autok import choose_mixture
-from leafstudio.core.correct import onto_veins
 from leafstudio.core.base import PLANAR, BaseSurface, fit_base
+from leafstudio.core.correct import onto_veins
 from leafstudio.core.curvature import graph_curvatures
 from leafstudio.core.evaluate import curvature_summary, shape_measurements
 from leafstudio.core.gmm import Mixture, fit_mixture, fit_signed_mixture, sample_guide

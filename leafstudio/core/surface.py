@@ -45,7 +45,8 @@ REFINE_GAIN = 1e-5  # stop once a step lowers the cost by less than this fractio
 
 @dataclass(frozen=True)
 class HeightSurface:
-    """z(x) = b(x) + T(g(x)/δ) Σ a_k N_k(x); see the module docstring (b: base.py, or 0)."""
+    """z(x) = b(x) + T(g(x)/δ) (Σ a_k N_k(x) + c(x)); see the module docstring (b: base.py, or
+    0; c: correct.py, or 0)."""
 
     mixture: Mixture
     implicit: MPUImplicit

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import leafstudio as ls
-from leafstudio.core.analysis import margin_creases
+from leafstudio.core.evaluate import margin_creases
 from leafstudio.forms.make import make_form
 from leafstudio.forms.terms import SHAPES
 from leafstudio.gui.model.sketch_model import Sketch
