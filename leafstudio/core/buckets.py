@@ -12,7 +12,7 @@ a second), and the app's main thread keeps running while a kernel does.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -21,11 +21,11 @@ PER_BUCKET = 4  # points per bucket on average over the points' bounding box
 CROWDED_BUCKET = 64  # neighbour_distances hands a set with a bucket this full to a k-d tree
 
 
-@dataclass(frozen=True)
-class Buckets:
+class Buckets(NamedTuple):
     """Points sorted into an (ny, nx) grid of square buckets of side `size` from `lo`.
 
-    The points of bucket b = iy * nx + ix are ``order[starts[b]:starts[b + 1]]``.
+    The points of bucket b = iy * nx + ix are ``order[starts[b]:starts[b + 1]]``. A named tuple:
+    compiled kernels take it whole (numba types it as one argument).
     """
 
     lo: np.ndarray  # (2,) float
@@ -116,15 +116,14 @@ def neighbour_distances(points: np.ndarray, which: np.ndarray) -> np.ndarray:
         from scipy.spatial import cKDTree  # grow with its square; a k-d tree does not
 
         return cKDTree(points).query(points[which], k=2)[0][:, 1]
-    return _neighbour_distances(
-        points, np.asarray(which, dtype=np.int64), b.lo, b.size, b.nx, b.ny, b.starts, b.order
-    )
+    return _neighbour_distances(points, np.asarray(which, dtype=np.int64), b)
 
 
 @njit(cache=True, nogil=True)
-def _neighbour_distances(points, which, lo, size, nx, ny, starts, order):
+def _neighbour_distances(points, which, b):
     """Rings of buckets outward from each query's own until the ring's nearest possible point
     (ring - 1 buckets away) is farther than the best found."""
+    lo, size, nx, ny, starts, order = b
     out = np.full(len(which), np.inf)
     for q in range(len(which)):
         i = which[q]
@@ -159,6 +158,23 @@ def bucket_span(low: float, high: float, lo: float, size: float, count: int) -> 
     return first, last
 
 
+@njit(cache=True, nogil=True)
+def gather(b, x_low, x_high, y_low, y_high, out):
+    """The bucket walk, written once: the indices of the points in every bucket that the box
+    [x_low, x_high] x [y_low, y_high] overlaps, bucket by bucket in row order, into `out`
+    (an (n,) int64 buffer, n the number of points: each point lies in one bucket); returns
+    their count. The caller tests each candidate against its own disc or segment."""
+    x0, x1 = bucket_span(x_low, x_high, b.lo[0], b.size, b.nx)
+    y0, y1 = bucket_span(y_low, y_high, b.lo[1], b.size, b.ny)
+    count = 0
+    for by in range(y0, y1 + 1):
+        for k in range(by * b.nx + x0, by * b.nx + x1 + 1):
+            for j in range(b.starts[k], b.starts[k + 1]):
+                out[count] = b.order[j]
+                count += 1
+    return count
+
+
 def near_edges(polygon: np.ndarray, xy: np.ndarray, radius: float) -> np.ndarray:
     """(n,) bool: which of the (n, 2) points lie within `radius` of an edge of the closed
     (b, 2) polygon; each edge visits only the buckets its box (grown by `radius`) covers."""
@@ -166,30 +182,28 @@ def near_edges(polygon: np.ndarray, xy: np.ndarray, radius: float) -> np.ndarray
     near = np.zeros(len(xy), dtype=bool)
     if len(xy) == 0:
         return near
-    b = bucket_points(xy)
-    _mark_near_edges(kernel_array(polygon), xy, float(radius), b.lo, b.size, b.nx, b.ny,
-                     b.starts, b.order, near)  # fmt: skip
+    _mark_near_edges(kernel_array(polygon), xy, float(radius), bucket_points(xy), near)
     return near
 
 
 @njit(cache=True, nogil=True)
-def _mark_near_edges(polygon, xy, radius, lo, size, nx, ny, starts, order, near):
+def _mark_near_edges(polygon, xy, radius, b, near):
     """Set near[i] for the points within `radius` of an edge of the closed polygon."""
     n = len(polygon)
+    candidates = np.empty(len(xy), np.int64)
     for e in range(n):
         ax, ay = polygon[e, 0], polygon[e, 1]
         bx, by = polygon[(e + 1) % n, 0], polygon[(e + 1) % n, 1]
         ex, ey = bx - ax, by - ay
         length2 = ex * ex + ey * ey
-        x0, x1 = bucket_span(min(ax, bx) - radius, max(ax, bx) + radius, lo[0], size, nx)
-        y0, y1 = bucket_span(min(ay, by) - radius, max(ay, by) + radius, lo[1], size, ny)
-        for cy in range(y0, y1 + 1):
-            for cx in range(x0, x1 + 1):
-                k = cy * nx + cx
-                for j in range(starts[k], starts[k + 1]):
-                    i = order[j]
-                    px, py = xy[i, 0] - ax, xy[i, 1] - ay
-                    t = (px * ex + py * ey) / length2 if length2 > 0 else 0.0
-                    t = min(max(t, 0.0), 1.0)
-                    if (px - t * ex) ** 2 + (py - t * ey) ** 2 <= radius * radius:
-                        near[i] = True
+        count = gather(
+            b, min(ax, bx) - radius, max(ax, bx) + radius, min(ay, by) - radius,
+            max(ay, by) + radius, candidates,
+        )  # fmt: skip
+        for s in range(count):
+            i = candidates[s]
+            px, py = xy[i, 0] - ax, xy[i, 1] - ay
+            t = (px * ex + py * ey) / length2 if length2 > 0 else 0.0
+            t = min(max(t, 0.0), 1.0)
+            if (px - t * ex) ** 2 + (py - t * ey) ** 2 <= radius * radius:
+                near[i] = True

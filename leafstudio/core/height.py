@@ -70,8 +70,8 @@ def nearest_in_groups(
     b = bucket_points(xy, size=max(size, float(extent.max()) / 1024))
     _nearest_groups(
         xy, kernel_array(points), np.asarray(group, dtype=np.int64),
-        np.asarray(values, dtype=float), int(np.max(group)) + 1, b.lo, b.size, b.nx, b.ny,
-        b.starts, b.order, dist, position, value, second,
+        np.asarray(values, dtype=float), int(np.max(group)) + 1, b, dist, position, value,
+        second,
     )  # fmt: skip
     return dist, position, value, second
 
@@ -106,11 +106,10 @@ def _select(points, group, n_groups, pool, n_pool, x0, y0, x1, y1, bound, near, 
 
 
 @njit(cache=True, nogil=True)
-def _nearest_groups(
-    xy, points, group, values, n_groups, lo, size, nx, ny, starts, order, dist, pos, value, second
-):
+def _nearest_groups(xy, points, group, values, n_groups, b, dist, pos, value, second):
     """Per block of BLOCK x BLOCK query buckets a candidate list from all points, per bucket one
     from its block's list (see _select: both exact), then each query scans its bucket's list."""
+    lo, size, nx, ny, starts, order = b
     m = len(points)
     bound = np.empty(n_groups)
     near = np.empty(m)

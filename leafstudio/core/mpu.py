@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -27,7 +28,7 @@ from scipy.spatial import cKDTree
 from leafstudio.core.buckets import (
     Buckets,
     bucket_points,
-    bucket_span,
+    gather,
     kernel_array,
     neighbour_distances,
 )
@@ -37,6 +38,49 @@ ALPHA = 0.75  # support radius = ALPHA * cell diagonal (Ohtake et al.)
 N_MIN = 6  # a ball grows until it holds this many points
 MIN_NORMAL_AGREEMENT = 0.5  # cos of the largest angle between a cell's normals and their mean
 MAX_DEPTH = 12
+
+
+class Cells(NamedTuple):
+    """The implicit's cells as the compiled loops take them: centres c_i (m, 2), support radii
+    r_i (m,), and f_i's coefficients (m, 3)."""
+
+    centers: np.ndarray
+    radii: np.ndarray
+    coef: np.ndarray
+
+
+class Cell(NamedTuple):
+    """One cell inside a compiled loop: its centre, 1 / r_i, and f_i = a x + b y + e."""
+
+    cx: float
+    cy: float
+    scale: float
+    a: float
+    b: float
+    e: float
+
+
+class Sums(NamedTuple):
+    """D = Σ w_i and N = Σ w_i f_i at each query (n,), their gradients (n, 2) and Hessians as
+    (xx, xy, yy) (n, 3); the derivatives are empty (0 rows) when not asked for."""
+
+    big_d: np.ndarray
+    big_n: np.ndarray
+    grad_d: np.ndarray
+    grad_n: np.ndarray
+    hess_d: np.ndarray
+    hess_n: np.ndarray
+
+
+class Lattice(NamedTuple):
+    """A regular grid as the compiled loops take it: node (ix, iy) at (ox + spacing ix,
+    oy + spacing iy), nx by ny nodes."""
+
+    ox: float
+    oy: float
+    spacing: float
+    nx: int
+    ny: int
 
 
 def bspline_weight(t: np.ndarray) -> np.ndarray:
@@ -103,25 +147,24 @@ class MPUImplicit:
         parts = zip(self._blend(xy[:head], 2), self._grid_blend(grid, nodes, 2), strict=True)
         return tuple(np.concatenate(part) for part in parts)  # type: ignore[return-value]
 
+    @property
+    def cells(self) -> Cells:
+        return Cells(self.centers, self.radii, self.coef)
+
     def _grid_blend(self, grid: Grid, nodes: np.ndarray, degree: int):
         """_blend at the grid nodes flagged in the (ny * nx,) bool `nodes`, in grid order."""
         slot = np.full(len(nodes), -1, np.int64)
         flagged = np.flatnonzero(nodes)
         slot[flagged] = np.arange(len(flagged))
-        sums = _grid_sums(
-            grid.origin[0], grid.origin[1], grid.spacing, grid.shape[1], grid.shape[0], slot,
-            len(flagged), self.centers, self.radii, self.coef, degree,
-        )  # fmt: skip
+        (ny, nx), (ox, oy) = grid.shape, grid.origin
+        lattice = Lattice(float(ox), float(oy), float(grid.spacing), int(nx), int(ny))
+        sums = _grid_sums(lattice, slot, len(flagged), self.cells, degree)
         return self._finish(grid.points[flagged], sums, degree)
 
     def _blend(self, xy: np.ndarray, degree: int):
         """g and, up to `degree` (0, 1 or 2), its gradient and Hessian (empty when not asked)."""
         xy = kernel_array(np.atleast_2d(xy))
-        b: Buckets = bucket_points(xy)
-        sums = _blend_sums(
-            xy, self.centers, self.radii, self.coef, b.lo, b.size, b.nx, b.ny, b.starts, b.order,
-            degree,
-        )  # fmt: skip
+        sums = _blend_sums(xy, self.cells, bucket_points(xy), degree)
         return self._finish(xy, sums, degree)
 
     def _finish(self, xy: np.ndarray, sums: tuple[np.ndarray, ...], degree: int):
@@ -179,23 +222,44 @@ def _quotient_rule(big_d, big_n, grad_d, grad_n, hess_d, hess_n, degree):
 
 
 @njit(cache=True, nogil=True)
-def _add_cell(
-    i, dx, dy, x, y, scale, a, b, e, degree, big_d, big_n, grad_d, grad_n, hess_d, hess_n
-):
-    """Add one cell's w, w f and (by degree) their derivatives at query i, offset (dx, dy) from
-    the cell's centre, to D, N, ∇D, ∇N, ∇²D and ∇²N."""
+def _zero_sums(n, degree):
+    """Sums of zeros for n queries, the derivatives' only up to `degree`."""
+    n1, n2 = (n if degree >= 1 else 0), (n if degree == 2 else 0)  # unused sums: empty
+    return Sums(
+        np.zeros(n), np.zeros(n), np.zeros((n1, 2)), np.zeros((n1, 2)), np.zeros((n2, 3)),
+        np.zeros((n2, 3)),
+    )  # fmt: skip
+
+
+@njit(cache=True, nogil=True)
+def _cell(cells, c):
+    """Cell c of `cells` (a Cells) as one Cell."""
+    return Cell(
+        cells.centers[c, 0], cells.centers[c, 1], 1.0 / cells.radii[c], cells.coef[c, 0],
+        cells.coef[c, 1], cells.coef[c, 2],
+    )  # fmt: skip
+
+
+@njit(cache=True, nogil=True)
+def _add_cell(sums, i, x, y, cell, degree):
+    """Add one cell's w, w f and (by degree) their derivatives at query i, at (x, y), to D, N,
+    ∇D, ∇N, ∇²D and ∇²N (eqs. 1-2)."""
+    dx, dy = x - cell.cx, y - cell.cy
+    scale = cell.scale
     t = np.sqrt(dx * dx + dy * dy) * scale
     if t < 1 / 3:
         w, slope, curl = 0.75 - 2.25 * t * t, -4.5, 0.0
     else:
         w, slope, curl = 1.125 * (t - 1) ** 2, 2.25 * (t - 1) / t, 2.25 / t**3
-    f = a * x + b * y + e
-    big_d[i] += w
-    big_n[i] += w * f
+    a, b = cell.a, cell.b
+    f = a * x + b * y + cell.e
+    sums.big_d[i] += w
+    sums.big_n[i] += w * f
     if degree == 0:
         return
     slope *= scale * scale  # ∇w = b'(t)/t · scale² · d
     wx, wy = slope * dx, slope * dy
+    grad_d, grad_n = sums.grad_d, sums.grad_n
     grad_d[i, 0] += wx
     grad_d[i, 1] += wy
     grad_n[i, 0] += wx * f + w * a
@@ -205,6 +269,7 @@ def _add_cell(
     # ∇²w = b'(t)/t · scale² I + (d/dt (b'(t)/t)) / t · scale⁴ d dᵀ
     curl *= scale**4
     hxx, hxy, hyy = slope + curl * dx * dx, curl * dx * dy, slope + curl * dy * dy
+    hess_d, hess_n = sums.hess_d, sums.hess_n
     hess_d[i, 0] += hxx
     hess_d[i, 1] += hxy
     hess_d[i, 2] += hyy
@@ -214,49 +279,36 @@ def _add_cell(
 
 
 @njit(cache=True, nogil=True)
-def _blend_sums(xy, centers, radii, coef, lo, size, nx, ny, starts, order, degree):
-    """D = Σ w_i and N = Σ w_i f_i (eq. 1) at every query; with degree >= 1 also ∇D and ∇N, with
-    degree 2 also ∇²D and ∇²N (as xx, xy, yy)."""
-    n = len(xy)
-    big_d, big_n = np.zeros(n), np.zeros(n)
-    n1, n2 = (n if degree >= 1 else 0), (n if degree == 2 else 0)  # unused sums: empty
-    grad_d, grad_n = np.zeros((n1, 2)), np.zeros((n1, 2))
-    hess_d, hess_n = np.zeros((n2, 3)), np.zeros((n2, 3))
-    for c in range(len(centers)):
-        scale = 1.0 / radii[c]
-        reach = radii[c]
-        a, b, e = coef[c, 0], coef[c, 1], coef[c, 2]
-        x0, x1 = bucket_span(centers[c, 0] - reach, centers[c, 0] + reach, lo[0], size, nx)
-        y0, y1 = bucket_span(centers[c, 1] - reach, centers[c, 1] + reach, lo[1], size, ny)
-        for by in range(y0, y1 + 1):
-            for bx in range(x0, x1 + 1):
-                k = by * nx + bx
-                for j in range(starts[k], starts[k + 1]):
-                    i = order[j]
-                    dx, dy = xy[i, 0] - centers[c, 0], xy[i, 1] - centers[c, 1]
-                    d2 = dx * dx + dy * dy
-                    if d2 >= reach * reach:
-                        continue
-                    _add_cell(
-                        i, dx, dy, xy[i, 0], xy[i, 1], scale, a, b, e, degree,
-                        big_d, big_n, grad_d, grad_n, hess_d, hess_n,
-                    )  # fmt: skip
-    return big_d, big_n, grad_d, grad_n, hess_d, hess_n
+def _blend_sums(xy, cells, b, degree):
+    """D = Σ w_i and N = Σ w_i f_i (eq. 1) at every query (bucketed in the Buckets b); with
+    degree >= 1 also ∇D and ∇N, with degree 2 also ∇²D and ∇²N (as xx, xy, yy)."""
+    sums = _zero_sums(len(xy), degree)
+    candidates = np.empty(len(xy), np.int64)
+    for c in range(len(cells.centers)):
+        cell = _cell(cells, c)
+        reach = cells.radii[c]
+        count = gather(
+            b, cell.cx - reach, cell.cx + reach, cell.cy - reach, cell.cy + reach, candidates
+        )
+        for s in range(count):
+            i = candidates[s]
+            dx, dy = xy[i, 0] - cell.cx, xy[i, 1] - cell.cy
+            if dx * dx + dy * dy >= reach * reach:
+                continue
+            _add_cell(sums, i, xy[i, 0], xy[i, 1], cell, degree)
+    return sums
 
 
 @njit(cache=True, nogil=True)
-def _grid_sums(ox, oy, spacing, nx, ny, slot, n, centers, radii, coef, degree):
-    """_blend_sums at grid nodes: node (ix, iy) at (ox + spacing ix, oy + spacing iy), its row
-    slot[iy * nx + ix] (-1: skipped). Each cell visits, row by row, the nodes within its radius."""
-    big_d, big_n = np.zeros(n), np.zeros(n)
-    n1, n2 = (n if degree >= 1 else 0), (n if degree == 2 else 0)  # unused sums: empty
-    grad_d, grad_n = np.zeros((n1, 2)), np.zeros((n1, 2))
-    hess_d, hess_n = np.zeros((n2, 3)), np.zeros((n2, 3))
-    for c in range(len(centers)):
-        reach = radii[c]
-        scale = 1.0 / reach
-        cx, cy = centers[c, 0], centers[c, 1]
-        a, b, e = coef[c, 0], coef[c, 1], coef[c, 2]
+def _grid_sums(lattice, slot, n, cells, degree):
+    """_blend_sums at the nodes of a Lattice: node (ix, iy) has row slot[iy * nx + ix] among the
+    n queries (-1: skipped). Each cell visits, row by row, the nodes within its radius."""
+    ox, oy, spacing, nx, ny = lattice
+    sums = _zero_sums(n, degree)
+    for c in range(len(cells.centers)):
+        cell = _cell(cells, c)
+        reach = cells.radii[c]
+        cx, cy = cell.cx, cell.cy
         y0 = max(int(np.ceil((cy - reach - oy) / spacing)), 0)
         y1 = min(int(np.floor((cy + reach - oy) / spacing)), ny - 1)
         for iy in range(y0, y1 + 1):
@@ -271,14 +323,10 @@ def _grid_sums(ox, oy, spacing, nx, ny, slot, n, centers, radii, coef, degree):
                     continue
                 x = ox + spacing * ix
                 dx = x - cx
-                d2 = dx * dx + dy * dy
-                if d2 >= reach * reach:
+                if dx * dx + dy * dy >= reach * reach:
                     continue
-                _add_cell(
-                    i, dx, dy, x, y, scale, a, b, e, degree,
-                    big_d, big_n, grad_d, grad_n, hess_d, hess_n,
-                )  # fmt: skip
-    return big_d, big_n, grad_d, grad_n, hess_d, hess_n
+                _add_cell(sums, i, x, y, cell, degree)
+    return sums
 
 
 def _fit_cells(
@@ -290,67 +338,60 @@ def _fit_cells(
     buckets: Buckets,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Linear fits for a batch of cells: coef (m, 3), error (m,), normal agreement (m,), radii."""
-    grid = (buckets.lo, buckets.size, buckets.nx, buckets.ny, buckets.starts, buckets.order)
-    few = _ball_counts(points, centers, radii, *grid) < N_MIN
+    few = _ball_counts(points, centers, radii, buckets) < N_MIN
     if few.any():  # grow the ball until it holds N_MIN points
         dist, _ = tree.query(centers[few], k=N_MIN)
         radii = radii.copy()
         radii[few] = np.maximum(radii[few], dist[:, -1] * 1.0001)
-    coef, error, agreement = _ball_fits(points, normals, centers, radii, *grid)
+    coef, error, agreement = _ball_fits(points, normals, centers, radii, buckets)
     return coef, error, agreement, radii
 
 
 @njit(cache=True, nogil=True)
-def _ball_counts(points, centers, radii, lo, size, nx, ny, starts, order):
+def _ball_counts(points, centers, radii, b):
     """(m,) number of points within radii[c] of centers[c] (closed balls)."""
     counts = np.zeros(len(centers), np.int64)
+    candidates = np.empty(len(points), np.int64)
     for c in range(len(centers)):
         r = radii[c]
-        x0, x1 = bucket_span(centers[c, 0] - r, centers[c, 0] + r, lo[0], size, nx)
-        y0, y1 = bucket_span(centers[c, 1] - r, centers[c, 1] + r, lo[1], size, ny)
-        for by in range(y0, y1 + 1):
-            for bx in range(x0, x1 + 1):
-                k = by * nx + bx
-                for j in range(starts[k], starts[k + 1]):
-                    i = order[j]
-                    dx, dy = points[i, 0] - centers[c, 0], points[i, 1] - centers[c, 1]
-                    if dx * dx + dy * dy <= r * r:
-                        counts[c] += 1
+        cx, cy = centers[c, 0], centers[c, 1]
+        for s in range(gather(b, cx - r, cx + r, cy - r, cy + r, candidates)):
+            i = candidates[s]
+            dx, dy = points[i, 0] - cx, points[i, 1] - cy
+            if dx * dx + dy * dy <= r * r:
+                counts[c] += 1
     return counts
 
 
 @njit(cache=True, nogil=True)
-def _ball_fits(points, normals, centers, radii, lo, size, nx, ny, starts, order):
+def _ball_fits(points, normals, centers, radii, b):
     """Per cell, the line through the B-spline-weighted mean of the points in its ball, normal to
     their weighted mean normal; its largest residual and the smallest normal agreement."""
     m = len(centers)
     coef, error, agreement = np.zeros((m, 3)), np.zeros(m), np.ones(m)
+    candidates = np.empty(len(points), np.int64)
     for c in range(m):
         r = radii[c]
         cx, cy = centers[c, 0], centers[c, 1]
-        x0, x1 = bucket_span(cx - r, cx + r, lo[0], size, nx)
-        y0, y1 = bucket_span(cy - r, cy + r, lo[1], size, ny)
+        count = gather(b, cx - r, cx + r, cy - r, cy + r, candidates)
         wsum, px, py, nx_sum, ny_sum = 0.0, 0.0, 0.0, 0.0, 0.0
-        for by in range(y0, y1 + 1):
-            for bx in range(x0, x1 + 1):
-                k = by * nx + bx
-                for j in range(starts[k], starts[k + 1]):
-                    i = order[j]
-                    dx, dy = points[i, 0] - cx, points[i, 1] - cy
-                    d2 = dx * dx + dy * dy
-                    if d2 > r * r:
-                        continue
-                    t = np.sqrt(d2) / r
-                    w = 1e-3  # points at the rim of a grown ball still count
-                    if t < 1 / 3:
-                        w += 0.75 - 2.25 * t * t
-                    elif t < 1:
-                        w += 1.125 * (t - 1) ** 2
-                    wsum += w
-                    px += w * points[i, 0]
-                    py += w * points[i, 1]
-                    nx_sum += w * normals[i, 0]
-                    ny_sum += w * normals[i, 1]
+        for s in range(count):
+            i = candidates[s]
+            dx, dy = points[i, 0] - cx, points[i, 1] - cy
+            d2 = dx * dx + dy * dy
+            if d2 > r * r:
+                continue
+            t = np.sqrt(d2) / r
+            w = 1e-3  # points at the rim of a grown ball still count
+            if t < 1 / 3:
+                w += 0.75 - 2.25 * t * t
+            elif t < 1:
+                w += 1.125 * (t - 1) ** 2
+            wsum += w
+            px += w * points[i, 0]
+            py += w * points[i, 1]
+            nx_sum += w * normals[i, 0]
+            ny_sum += w * normals[i, 1]
         if wsum == 0:
             continue
         px, py = px / wsum, py / wsum
@@ -358,17 +399,14 @@ def _ball_fits(points, normals, centers, radii, lo, size, nx, ny, starts, order)
         mx, my = nx_sum / length, ny_sum / length
         # f(x) = n̄ · (p̄ − x): positive on the inner side of the outward normals
         coef[c, 0], coef[c, 1], coef[c, 2] = -mx, -my, mx * px + my * py
-        for by in range(y0, y1 + 1):
-            for bx in range(x0, x1 + 1):
-                k = by * nx + bx
-                for j in range(starts[k], starts[k + 1]):
-                    i = order[j]
-                    dx, dy = points[i, 0] - cx, points[i, 1] - cy
-                    if dx * dx + dy * dy > r * r:
-                        continue
-                    residual = abs((points[i, 0] - px) * mx + (points[i, 1] - py) * my)
-                    error[c] = max(error[c], residual)
-                    agreement[c] = min(agreement[c], normals[i, 0] * mx + normals[i, 1] * my)
+        for s in range(count):
+            i = candidates[s]
+            dx, dy = points[i, 0] - cx, points[i, 1] - cy
+            if dx * dx + dy * dy > r * r:
+                continue
+            residual = abs((points[i, 0] - px) * mx + (points[i, 1] - py) * my)
+            error[c] = max(error[c], residual)
+            agreement[c] = min(agreement[c], normals[i, 0] * mx + normals[i, 1] * my)
     return coef, error, agreement
 
 
@@ -407,10 +445,7 @@ def build_mpu(
     second_try = np.zeros(1, dtype=bool)  # the cell's parent was split to mend its sign
     while len(centers):
         radii = np.full(len(centers), ALPHA * 2 * np.sqrt(2) * half)
-        grown = (
-            _ball_counts(points, centers, radii, buckets.lo, buckets.size, buckets.nx, buckets.ny,
-                         buckets.starts, buckets.order) < N_MIN
-        )  # fmt: skip
+        grown = _ball_counts(points, centers, radii, buckets) < N_MIN
         coef, error, agreement, radii = _fit_cells(centers, radii, tree, points, normals, buckets)
         bad = (error > tolerance) | (agreement < MIN_NORMAL_AGREEMENT)
         wrong_sign = np.zeros(len(centers), dtype=bool)

@@ -267,3 +267,24 @@ def test_every_compiled_kernel_lives_where_the_kernel_cache_stamp_looks():
     compiled = {p for p in package.rglob("*.py") if "@njit" in p.read_text(encoding="utf-8")}
     assert compiled and all(kernelcache.CORE in p.parents for p in compiled)
 
+
+
+def test_the_bucket_walk_gathers_every_point_of_a_box_and_none_far_from_it():
+    """buckets.gather, the one bucket walk (the MPU's fits and sums, near_edges): every point in
+    the box, each once, and nothing beyond the buckets the box overlaps."""
+    from leafstudio.core.buckets import bucket_points, gather
+
+    rng = np.random.default_rng(3)
+    points = rng.random((3000, 2)) * [2.0, 1.0]
+    b = bucket_points(points)
+    out = np.empty(len(points), np.int64)
+    boxes = [(0.2, 0.5, 0.1, 0.3), (-1, 3, -1, 2), (1.9, 2.5, 0.9, 1.5), (5, 6, 5, 6)]
+    for x0, x1, y0, y1 in boxes:
+        found = out[: gather(b, x0, x1, y0, y1, out)]
+        assert len(set(found.tolist())) == len(found)
+        x, y = points[:, 0], points[:, 1]
+        inside = np.flatnonzero((x >= x0) & (x <= x1) & (y >= y0) & (y <= y1))
+        assert set(inside.tolist()) <= set(found.tolist())
+        near = points[found]
+        assert np.all(near >= [x0 - b.size, y0 - b.size])
+        assert np.all(near <= [x1 + b.size, y1 + b.size])
