@@ -11,7 +11,7 @@ shapely, Triangle and open3d; never Qt.
 | 4 mixture (3.4, eqs. 6-9)         | samples, gmm      | gmm, autok                          |
 | 4-5 surface z (3.4-3.5, eq. 8)    | surface           | surface, base, curvature            |
 | 5 mesh (3.5)                      | layout, mesh      | mesher, trianglemesh                |
-| the stages in order, one cache    | all               | pipeline                            |
+| the stages in order, one cache    | all               | pipeline, store                     |
 | results (4, Table 1)              | Result.metrics    | evaluate, distance                  |
 
 Support without a step of its own: buckets (the compiled neighbour searches). The stage table

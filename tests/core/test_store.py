@@ -1,5 +1,6 @@
-"""The one cache of stage outputs (pipeline.StageStore): a stage is recomputed exactly when its
-inputs change, keyed by the leaf's fingerprint and the parameters it reads."""
+"""The one cache of stage outputs (store.StageStore, as pipeline.py uses it): a stage is
+recomputed exactly when its inputs change, keyed by the leaf's fingerprint and the parameters it
+reads."""
 
 from __future__ import annotations
 
