@@ -45,6 +45,7 @@ TOOTH = {  # height as a share of the tooth's width, and the share of the width 
 TOOTH_REGION = 0.15  # teeth where the half-width is at least this share of the greatest
 SINUS_REGION = 0.45  # lobe sinuses where the half-width is at least this share of the greatest
 SINUS_DEPTH = 0.6  # a sinus pulls the margin this share of the way to its anchor
+SINUS_WIDTH = 0.2  # a pinnate sinus's bell, as a share of the spacing between sinuses
 PALMATE_ANCHOR = 0.15  # palmate sinuses point at this point of the midrib (x)
 PALMATE_ASPECT = 1.7  # leaves at most this long for their width lobe palmately (with palmate veins)
 POINTS_PER_TOOTH = 10  # at least
@@ -247,10 +248,15 @@ def _lobed_half(
         for j in range(side):
             at = lo + spacing * (j + 0.5 + rng.uniform(-0.08, 0.08))
             k = int(np.searchsorted(s, at))
-            anchor = (PALMATE_ANCHOR if palmate else x[k], 0.0)
             depth = SINUS_DEPTH * rng.uniform(0.9, 1.1)
-            reach = float(np.clip(0.3 * spacing, 0.02, 0.6 * depth * y[k] + 0.02))
-            out = _pull(out, s, at, reach, anchor, depth)
+            if palmate:  # sinuses toward one point of the midrib, as in a maple
+                reach = float(np.clip(0.3 * spacing, 0.02, 0.6 * depth * y[k] + 0.02))
+                out = _pull(out, s, at, reach, (PALMATE_ANCHOR, 0.0), depth)
+            else:  # straight toward the midrib, a bell over the spacing: a U-shaped sinus
+                # between rounded lobes, as in an oak (a narrow pull toward one point made V
+                # sinuses and a zig-zag margin)
+                weight = np.exp(-(((s - at) / (SINUS_WIDTH * spacing)) ** 2))
+                out[:, 1] *= 1 - depth * weight
     return out
 
 
