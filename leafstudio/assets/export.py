@@ -165,8 +165,11 @@ def save_mesh(
     texture: Any = "auto",
     thickness: float | None = None,
     lod: int = 0,
+    length: str | float | None = None,
+    placement: Any = None,
 ) -> None:
-    """Write the mesh by the path's suffix (MESH_SUFFIXES) with normals, UVs, scalars, texture.
+    """Write the mesh by the path's suffix (MESH_SUFFIXES) with normals, UVs, scalars, texture,
+    placed for the format (placement.py: glTF and OBJ Y-up with the base at the origin).
 
     Every file is replaced atomically, and together with its companions (an OBJ's .mtl and
     texture, the levels of detail): a failed write leaves the old files as they were.
@@ -185,6 +188,13 @@ def save_mesh(
     lod : int, default: 0
         Coarser levels of detail to add (0 to 8): glTF keeps them in the file, the other
         formats write NAME_lod1.EXT, ...
+    length : str or float, optional
+        The leaf's real length, base to apex: '8cm', '0.08m', '80mm', or metres. The leaf is
+        scaled to it and written in metres (glTF, OBJ) or millimetres (PLY, STL, 3MF, VTK).
+        Default: the coordinates keep their scale.
+    placement : Placement, optional
+        Where the leaf's base and axes are (placement.py); default: a Result's own (its midrib
+        and outline), a bare mesh's from its margin's plane.
 
     Raises
     ------
@@ -206,6 +216,9 @@ def save_mesh(
     Traceback (most recent call last):
     leafstudio.errors.LeafError: .../leaf.xyz: unknown mesh type '.xyz'; use one of .ply, ...
     """
+    from leafstudio.assets.placement import parse_length
+
+    metres = None if length is None else parse_length(length)
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in MESH_SUFFIXES:
@@ -224,6 +237,7 @@ def save_mesh(
     if suffix not in TEXTURED_SUFFIXES:  # the format holds UVs but no image: make none
         texture = "none"
     assets = mesh_assets(result_or_mesh, texture, thickness, lod, gltf=suffix in (".glb", ".gltf"))
+    assets = placed(result_or_mesh, assets, metres, suffix, placement)
     from leafstudio._shared import safewrite
 
     if safewrite._staging.get() is not None:  # the caller replaces its outputs together
@@ -233,9 +247,38 @@ def save_mesh(
         write_assets(assets, path)
 
 
-def check_asset_options(texture: str, thickness: str | None, lod: int) -> None:
-    """Refuse bad --texture, --thickness and --lod values before any work (LeafError)."""
+def placed(
+    result_or_mesh: Any,
+    assets: list[MeshAsset],
+    metres: float | None,
+    suffix: str,
+    placement: Any = None,
+) -> list[MeshAsset]:
+    """The assets placed for the format `suffix` and scaled to `metres` (placement.py)."""
+    from leafstudio.assets.placement import place
+
+    placement = placement if placement is not None else leaf_placement_of(result_or_mesh)
+    return [place(asset, placement, metres, suffix) for asset in assets]
+
+
+def leaf_placement_of(result_or_mesh: Any):
+    """The Placement of a Result (its midrib and outline), or of a bare mesh (its margin's PCA
+    plane)."""
+    from leafstudio.assets.placement import mesh_placement, result_placement
+
+    if hasattr(result_or_mesh, "surface"):
+        return result_placement(result_or_mesh)
+    asset = mesh_asset(getattr(result_or_mesh, "triangle_mesh", result_or_mesh))
+    return mesh_placement(asset.points, asset.faces, asset.plane_normal)
+
+
+def check_asset_options(
+    texture: str, thickness: str | None, lod: int, length: str | None = None
+) -> None:
+    """Refuse bad --texture, --thickness, --lod and --length values before any work
+    (LeafError)."""
     from leafstudio._shared.inputs import read_image
+    from leafstudio.assets.placement import parse_length
     from leafstudio.assets.solid import parse_thickness
 
     if texture not in TEXTURES:
@@ -244,16 +287,29 @@ def check_asset_options(texture: str, thickness: str | None, lod: int) -> None:
         parse_thickness(thickness)
     if not 0 <= lod <= MAX_LOD:
         raise LeafError(f"--lod must be a whole number from 0 to {MAX_LOD}, got {lod}")
+    if length is not None:
+        parse_length(length)
 
 
 def asset_options(
-    texture: str, thickness: str | None, lod: int, leaf_path: str | os.PathLike, length: float
+    texture: str,
+    thickness: str | None,
+    lod: int,
+    leaf_path: str | os.PathLike,
+    result: Any,
+    length: str | None = None,
 ) -> dict[str, Any]:
     """save_mesh's keyword arguments from the command line's: an image texture is a photo the
-    leaf came from when the leaf's project says so; the thickness in the mesh's units."""
+    leaf came from when the leaf's project says so; the thickness in the mesh's units (a length
+    with its unit is real size when --length gives the leaf's)."""
+    from leafstudio.assets.placement import parse_length
     from leafstudio.assets.solid import thickness_in_mesh_units
 
     if texture not in TEXTURES:
         texture = PhotoTexture(texture, photo_transform(leaf_path))
-    solid = None if thickness is None else thickness_in_mesh_units(thickness, length)
-    return {"texture": texture, "thickness": solid, "lod": lod}
+    metres = None if length is None else parse_length(length)
+    per_unit = None if metres is None else metres / leaf_placement_of(result).length
+    solid = None
+    if thickness is not None:
+        solid = thickness_in_mesh_units(thickness, result.length, per_unit)
+    return {"texture": texture, "thickness": solid, "lod": lod, "length": metres}

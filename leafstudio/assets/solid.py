@@ -59,12 +59,19 @@ def parse_thickness(text: str) -> tuple[float, str | None]:
     return value, unit
 
 
-def thickness_in_mesh_units(text: str, length: float) -> float:
+def thickness_in_mesh_units(
+    text: str, length: float, metres_per_unit: float | None = None
+) -> float:
     """The thickness `text` means (parse_thickness) in the mesh's units: a fraction times the
-    leaf length, or a length converted from its unit to millimetres, the unit a leaf's
-    coordinates are taken to be in (as scans and 3MF files are)."""
+    leaf length, or a length converted from its unit: to metres over `metres_per_unit` when the
+    leaf's real size is known (--length), else to millimetres, the unit a leaf's coordinates are
+    then taken to be in (as scans and 3MF files are)."""
     value, unit = parse_thickness(text)
-    return value * length if unit is None else value * UNITS[unit]
+    if unit is None:
+        return value * length
+    if metres_per_unit is not None:
+        return value * UNITS[unit] * 1e-3 / metres_per_unit
+    return value * UNITS[unit]
 
 
 def boundary_edges(faces: np.ndarray) -> np.ndarray:

@@ -70,7 +70,10 @@ class Batch:
         resume: bool = False,
         fail_fast: bool = False,
         force: bool = False,
+        length: str | float | None = None,
     ) -> None:
+        from leafstudio.assets.placement import parse_length
+
         if format not in FORMATS:
             raise LeafError(f"unknown mesh format {format!r}; use one of {', '.join(FORMATS)}")
         if jobs is not None and jobs < 1:
@@ -78,7 +81,8 @@ class Batch:
         self.out_dir = Path(out_dir)
         if self.out_dir.exists() and not self.out_dir.is_dir():
             raise LeafError("is a file, not a folder", str(self.out_dir))
-        self.settings = Settings(params or Params(), scans, format, force)
+        metres = None if length is None else parse_length(length)
+        self.settings = Settings(params or Params(), scans, format, force, metres)
         self.table = TraitTable(traits if traits else self.out_dir / DEFAULT_TABLE, scans)
         if self.table.is_foreign():  # never write the table over an input or a user's file
             raise LeafError(
@@ -187,7 +191,8 @@ def batch(
         scans (bool), traits (table path: .csv, .json, .parquet; default OUT_DIR/traits.csv),
         format ("ply", "glb", "obj", "vtp", "none"), jobs (worker processes, default the
         cores), scheduler (a Dask scheduler address, or "local"), resume, fail_fast, force
-        (scans that do not look like one leaf are reconstructed anyway, with warnings).
+        (scans that do not look like one leaf are reconstructed anyway, with warnings), length
+        (each leaf's real length, '8cm': meshes at real size, see save_mesh).
 
     Returns
     -------

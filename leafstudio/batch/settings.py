@@ -78,6 +78,7 @@ class Settings:
     scans: bool = False
     format: str = "ply"
     force: bool = False
+    length: float | None = None  # each leaf's real length in metres (save_mesh's length)
 
     def key(self) -> str:
         """A short hash of the settings: rows made with other settings are not resumed."""
@@ -88,6 +89,7 @@ class Settings:
                 "format": self.format,
                 "points": OUTLINE_POINTS,
                 "force": self.force,
+                **({"length": self.length} if self.length is not None else {}),
             },
             sort_keys=True,
         )

@@ -85,10 +85,13 @@ def _reconstruct(job: Job) -> dict[str, Any]:
         )
     if job.mesh:
         from leafstudio.assets.export import save_mesh
+        from leafstudio.assets.placement import result_placement
 
         # the bare mesh: normals, UVs and the point arrays, without the texture image and the
         # closed-form normals a Result gets (a second per leaf; `reconstruct` writes those)
-        save_mesh(result.triangle_mesh, Path(job.out_dir) / job.mesh)
+        mesh = Path(job.out_dir) / job.mesh
+        length, placement = settings.length, result_placement(result)
+        save_mesh(result.triangle_mesh, mesh, length=length, placement=placement)
         row["mesh"] = job.mesh
         row["mesh_sha256"] = file_hash(Path(job.out_dir) / job.mesh)  # --resume checks it
     row["warnings"] = "; ".join(done.warnings) or None

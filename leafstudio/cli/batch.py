@@ -23,6 +23,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--traits", metavar="FILE", help=".csv, .json or .parquet (default OUTDIR/traits.csv)"
     )
     bat.add_argument("--format", choices=FORMATS, default="ply")
+    bat.add_argument(
+        "--length", metavar="L", help="each leaf's real length, base to apex (8cm, 0.08m, 80mm)"
+    )
     add_param_flags(bat)
     bat.add_argument("--jobs", type=int, default=None, help="worker processes (default: cores)")
     bat.add_argument(
@@ -73,6 +76,7 @@ def run(args: argparse.Namespace) -> int:
         resume=args.resume,
         fail_fast=args.fail_fast,
         force=args.force,
+        length=args.length,
     )
     start = time.perf_counter()
     bar = tqdm(

@@ -31,6 +31,9 @@ def add_form_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--wave", type=float, default=0.0, metavar="A", help="margin wave height")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="a variant (default 0)")
     p.add_argument(
+        "--length", metavar="L", help="a mesh's real length, base to apex (8cm, 0.08m, 80mm)"
+    )
+    p.add_argument(
         "-o",
         "--output",
         metavar="FILE",
@@ -77,6 +80,10 @@ def run_form(args: argparse.Namespace) -> int:
         raise LeafError("the output file is needed: -o FILE")
     out = args.output
     mesh = not _is_leaf_file(out)
+    if args.length is not None:
+        from leafstudio.assets.placement import parse_length
+
+        parse_length(args.length)
     if mesh and not out.lower().endswith(MESH_SUFFIXES):
         kinds = ", ".join(dict.fromkeys((*LEAF_SUFFIXES, *MESH_SUFFIXES)))
         raise LeafError(f"unknown file type; use one of {kinds}", out)
@@ -96,7 +103,7 @@ def run_form(args: argparse.Namespace) -> int:
         from leafstudio.core.pipeline import reconstruct
         from leafstudio.model import Params
 
-        save_mesh(reconstruct(leaf, Params()), out)
+        save_mesh(reconstruct(leaf, Params()), out, length=args.length)
     else:
         save_leaf(leaf, out)
     print(

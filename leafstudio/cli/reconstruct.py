@@ -56,6 +56,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "with its unit for a leaf in millimetres (0.4mm)",
     )
     rec.add_argument(
+        "--length",
+        metavar="L",
+        help="the leaf's real length, base to apex (8cm, 0.08m, 80mm): glTF, OBJ and USD in "
+        "metres, STL, 3MF, PLY in millimetres (default: the input's scale)",
+    )
+    rec.add_argument(
         "--lod",
         type=int,
         default=0,
@@ -85,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     figure = check_figure_path(args.figure) if args.figure else None
     from leafstudio.assets.export import asset_options, check_asset_options
 
-    check_asset_options(args.texture, args.thickness, args.lod)
+    check_asset_options(args.texture, args.thickness, args.lod, args.length)
     from leafstudio.render.slides import check_turntable_path
 
     turntable = check_turntable_path(args.turntable) if args.turntable else None
@@ -121,7 +127,9 @@ def run(args: argparse.Namespace) -> int:
         if fidelity is not None:
             metrics["fidelity"] = {"scan": args.against, **fidelity}
     with staged():  # every output is written in this block; renamed over the old ones at its end
-        options = asset_options(args.texture, args.thickness, args.lod, args.input, result.length)
+        options = asset_options(
+            args.texture, args.thickness, args.lod, args.input, result, args.length
+        )
         save_mesh(result, out, **options)
         if figure is not None:
             from leafstudio._shared.safewrite import replace_atomically

@@ -14,7 +14,8 @@ import pytest
 import trimesh
 
 import leafstudio as ls
-from leafstudio.assets import UVMap, leaf_asset, mesh_assets
+from leafstudio.assets import MeshAsset, UVMap, leaf_asset, mesh_assets
+from leafstudio.assets.placement import place, result_placement
 from leafstudio.assets.texture import BLADE, VEIN, outline_mask
 from tests.leaves import moved
 from tests.photos import error_lines
@@ -66,6 +67,11 @@ def gltf_attribute(path: Path, name: str, mesh: int = 0) -> np.ndarray:
     start = view.byteOffset + (accessor.byteOffset or 0)
     data = np.frombuffer(blob, np.float32, accessor.count * width, start)
     return data.reshape(accessor.count, width)
+
+
+def as_written(result: ls.Result, suffix: str) -> MeshAsset:
+    """The leaf's asset placed as the format `suffix` has it (Y-up for glTF and OBJ)."""
+    return place(leaf_asset(result), result_placement(result), None, suffix)
 
 
 def scene_mesh(path: Path) -> trimesh.Trimesh:
@@ -174,7 +180,7 @@ def test_midrib_is_drawn_wider_than_the_secondaries(nested: ls.Result):
 def test_trimesh_reads_normals_uvs_and_texture_back(nested: ls.Result, tmp_path: Path, suffix):
     path = tmp_path / f"leaf{suffix}"
     ls.save_mesh(nested, path)
-    asset = leaf_asset(nested)
+    asset = as_written(nested, suffix)
     back = scene_mesh(path)
     np.testing.assert_allclose(back.vertices, asset.points, atol=1e-6)
     np.testing.assert_array_equal(back.faces, asset.faces)
@@ -208,7 +214,7 @@ def test_open3d_reads_normals_and_uvs_back(nested: ls.Result, tmp_path: Path, su
     path = tmp_path / f"leaf{suffix}"
     ls.save_mesh(nested, path)
     mesh = o3d.io.read_triangle_mesh(str(path))
-    asset = leaf_asset(nested)
+    asset = as_written(nested, suffix)
     assert len(mesh.vertices) == asset.n_points and mesh.has_vertex_normals()
     # open3d may renumber the vertices: match them by position
     from scipy.spatial import cKDTree
@@ -231,7 +237,7 @@ def test_meshio_reads_normals_and_uvs_back(nested: ls.Result, tmp_path: Path, su
     path = tmp_path / f"leaf{suffix}"
     ls.save_mesh(nested, path)
     mesh = meshio.read(path)
-    asset = leaf_asset(nested)
+    asset = as_written(nested, suffix)
     assert len(mesh.cells_dict["triangle"]) == len(asset.faces)
     if suffix == ".obj":
         np.testing.assert_allclose(mesh.point_data["obj:vn"], asset.normals, atol=1e-5)
@@ -344,16 +350,17 @@ def test_levels_of_detail_halve_the_triangles_and_keep_the_margin(nested: ls.Res
         assert coarse == pytest.approx(fine / 2, rel=0.1)
     ring = shapely.LinearRing(nested.polygon)
     full = shapely.Polygon(nested.polygon).area
+    turn, offset = result_placement(nested).transform(None, ".glb")  # a rotation: Y-up
     for name in names[1:]:
         mesh = scene.geometry[name]
-        xy = nested.frame.to_plane(np.asarray(mesh.vertices))[0]
+        xy = nested.frame.to_plane((np.asarray(mesh.vertices) - offset) @ turn)[0]
         rim = np.unique(boundary_edges(np.asarray(mesh.faces)))
         assert shapely.distance(ring, shapely.points(xy[rim])).max() < 5e-4 * nested.length
         area = shapely.union_all(shapely.polygons(xy[np.asarray(mesh.faces)])).area
         assert area == pytest.approx(full, rel=0.01)  # the outline keeps its shape
         assert mesh.visual.uv.shape == (len(mesh.vertices), 2)
         normals = np.asarray(mesh.vertex_normals)
-        assert np.all(normals @ nested.frame.normal > 0)  # closed-form, the upper side
+        assert np.all(normals @ turn @ nested.frame.normal > 0)  # closed-form, the upper side
     ls.save_mesh(nested, tmp_path / "leaf.obj", lod=1)
     assert (tmp_path / "leaf_lod1.obj").is_file() and (tmp_path / "leaf_lod1.mtl").is_file()
 

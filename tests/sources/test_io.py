@@ -105,14 +105,18 @@ def test_bad_projects(tmp_path: Path):
 def test_mesh_export_by_extension(tmp_path: Path, suffix: str):
     import pyvista as pv
 
+    from leafstudio.assets.placement import result_placement
+
     result = ls.reconstruct(ls.demo("nested"), ls.Params(grid=32))
     path = tmp_path / f"leaf{suffix}"
     ls.save_mesh(result, path)
     back = pv.read(path)
     assert back.n_cells == result.mesh.n_cells
-    np.testing.assert_allclose(back.bounds, result.mesh.bounds, atol=1e-5)
+    turn, offset = result_placement(result).transform(None, suffix)  # OBJ: Y-up (placement.py)
+    points = np.asarray(result.mesh.points) @ turn.T + offset
+    np.testing.assert_allclose(back.bounds, pv.PolyData(points).bounds, atol=1e-5)
     if suffix != ".stl":  # STL stores each triangle's corners apart
-        np.testing.assert_allclose(back.points, result.mesh.points, atol=1e-5)
+        np.testing.assert_allclose(back.points, points, atol=1e-5)
 
 
 def test_a_triangle_mesh_exports_as_vtp_and_ply_without_a_polydata(tmp_path: Path):

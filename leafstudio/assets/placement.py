@@ -1,0 +1,176 @@
+"""Where an exported leaf lands in a 3D tool: which way up, where its base is, and how big.
+
+A leaf's coordinates are whatever its input's were (a scan's millimetres, a photo's pixels made
+length 1, a form's unit length), and its relief is along its own plane's normal. Tools expect
+otherwise: glTF is Y-up in metres by spec, DCC tools read OBJ and USD as Y-up, and printing and
+scanning tools take STL, 3MF and PLY as Z-up millimetres. So each format gets one of two
+placements:
+
+- Y-up (glTF, OBJ, USD): the blade lies flat in the XZ plane with its relief along +Y, the base at
+  the origin and the midrib along +X (apex on +X); +Z is the leaf's right side seen from above.
+- Z-up (PLY, STL, 3MF, VTK): the leaf's own coordinates, as today (a scan's mesh still overlays
+  the scan).
+
+The base is where the midrib meets the blade: the midrib (the first vein, as forms and leaf
+files order them) followed back from its first point to the outline. A form's base is thus its
+origin (the forms' convention) and its apex at +X 1. Without veins, the base is the outline's end
+of the leaf plane's long axis. The leaf's length is from the base to the apex along the midrib's
+direction (the farthest outline point that way): a form's 1, a cordate leaf's lobes not counted.
+
+With a length (`--length 8cm`, `length=0.08`), the leaf is scaled to that real size, and written
+in metres for Y-up formats (glTF's unit; USD records metersPerUnit = 1) and in millimetres for
+Z-up ones (3MF's unit; what printers assume of STL). Without one, the coordinates keep their
+scale.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from leafstudio.errors import LeafError
+
+METRES = {"mm": 1e-3, "cm": 1e-2, "m": 1.0}  # a length's units, in metres
+Y_UP_SUFFIXES = (".glb", ".gltf", ".obj", ".usda", ".usdc", ".usdz", ".usd")
+Y_UP_UNIT, Z_UP_UNIT = 1.0, 1e-3  # metres per unit written with a length: m, mm
+
+
+def parse_length(text: str | float) -> float:
+    """A leaf length in metres: '8cm', '0.08m', '80mm' (a bare number is metres).
+
+    Raises
+    ------
+    LeafError
+        If it is not a number with one of the units in METRES, or not above 0.
+    """
+    if isinstance(text, int | float):
+        value, unit = float(text), "m"
+    else:
+        number = r"([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)"
+        match = re.fullmatch(rf"\s*{number}\s*([a-zA-Z]*)\s*", str(text))
+        if not match:
+            raise LeafError(f"--length must be a length with its unit (e.g. 8cm, 0.08m, 80mm), "
+                            f"got {text!r}")  # fmt: skip
+        value, unit = float(match.group(1)), match.group(2).lower() or "m"
+        if unit not in METRES:
+            raise LeafError(f"--length: unknown unit {unit!r}; use one of {', '.join(METRES)}")
+    if not np.isfinite(value) or value <= 0:
+        raise LeafError(f"--length must be above 0, got {text!r}")
+    return value * METRES[unit]
+
+
+@dataclass(frozen=True)
+class Placement:
+    """The leaf's base and axes in its own coordinates.
+
+    Attributes
+    ----------
+    base : (3,) float array
+        The point that goes to the origin.
+    axes : (3, 3) float array
+        Rows: along the midrib (base to apex), across it, and up (the relief's side); a
+        right-handed orthonormal frame.
+    length : float
+        Base to apex along the first axis, in the leaf's units.
+    """
+
+    base: np.ndarray
+    axes: np.ndarray
+    length: float
+
+    def scale(self, metres: float | None, suffix: str) -> float:
+        """Written units per leaf unit: 1 without a length, else to metres (Y-up formats) or
+        millimetres (Z-up ones)."""
+        if metres is None:
+            return 1.0
+        unit = Y_UP_UNIT if suffix.lower() in Y_UP_SUFFIXES else Z_UP_UNIT
+        return metres / unit / self.length
+
+    def transform(self, metres: float | None, suffix: str) -> tuple[np.ndarray, np.ndarray]:
+        """(3, 3) linear part A and (3,) offset c of x -> A x + c for the format `suffix`."""
+        scale = self.scale(metres, suffix)
+        if suffix.lower() not in Y_UP_SUFFIXES:
+            return scale * np.eye(3), np.zeros(3)
+        along, across, up = self.axes
+        rotation = np.stack([along, up, -across])  # X along, Y up, Z = X x Y
+        return scale * rotation, -scale * rotation @ self.base
+
+
+def leaf_placement(
+    frame: Any, polygon: np.ndarray, polygon_h: np.ndarray | None, veins: list[np.ndarray]
+) -> Placement:
+    """The placement of a leaf from its plane frame, (b, 2) outline in that plane, the outline's
+    (b,) heights (None: 0) and its (m_i, 3) veins in the leaf's coordinates (module docstring)."""
+    import shapely
+
+    up = np.asarray(frame.normal, float)
+    midrib = frame.to_plane(veins[0])[0] if veins and len(veins[0]) >= 2 else None
+    chord = None if midrib is None else midrib[-1] - midrib[0]
+    if chord is not None and np.linalg.norm(chord) > 0:
+        direction = chord / np.linalg.norm(chord)
+        start = midrib[0]
+        far = np.ptp(polygon, axis=0).sum() * 2  # a ray long enough to leave the leaf
+        ray = shapely.LineString([start, start - far * direction])
+        hits = shapely.intersection(shapely.LinearRing(polygon), ray)
+        points = shapely.get_coordinates(hits)
+        if len(points):
+            base_xy = points[np.argmin(np.linalg.norm(points - start, axis=1))]
+        else:  # the midrib starts outside the outline: its first point is the base
+            base_xy = start
+    else:
+        direction = np.array([1.0, 0.0])
+        base_xy = polygon[np.argmin(polygon[:, 0])]
+    nearest = np.argmin(np.linalg.norm(polygon - base_xy, axis=1))
+    height = 0.0 if polygon_h is None else float(polygon_h[nearest])
+    base = frame.to_world(base_xy[None], np.array([height]))[0]
+    along = direction[0] * np.asarray(frame.u) + direction[1] * np.asarray(frame.v)
+    across = np.cross(up, along)
+    length = float(((polygon - base_xy) @ direction).max())
+    return Placement(base=base, axes=np.stack([along, across, up]), length=max(length, 1e-12))
+
+
+def result_placement(result: Any) -> Placement:
+    """The placement of a pipeline Result (its frame, outline and midrib)."""
+    polygon_h = getattr(result, "polygon_h", None)
+    return leaf_placement(result.frame, result.polygon, polygon_h, list(result.leaf.veins))
+
+
+def mesh_placement(points: np.ndarray, faces: np.ndarray, up: np.ndarray) -> Placement:
+    """The placement of a bare mesh ((n, 3) points, (m, 3) faces), without veins: the PCA plane
+    of its margin (its boundary edges' vertices, as a leaf's frame is its outline's), `up`'s side
+    up, the base at the low end of the long axis."""
+    from leafstudio.assets.solid import boundary_edges
+    from leafstudio.core.plane import Frame, fit_frame
+
+    rim = np.unique(boundary_edges(faces))
+    frame = fit_frame(points[rim] if len(rim) >= 3 else points, np.zeros((0, 3)))
+    if frame.normal @ up < 0:
+        frame = Frame(frame.origin, frame.u, -frame.v, -frame.normal)
+    xy = frame.to_plane(points)[0]
+    return leaf_placement(frame, xy, None, [])
+
+
+def place(asset: Any, placement: Placement, metres: float | None, suffix: str) -> Any:
+    """The MeshAsset moved, turned and scaled for the format `suffix` (module docstring); its
+    height scales with it and its curvatures inversely."""
+    matrix, offset = placement.transform(metres, suffix)
+    scale = float(np.cbrt(np.linalg.det(matrix)))
+    if np.allclose(matrix, np.eye(3)) and not offset.any():
+        return asset
+    rotation = matrix / scale
+
+    def turn(vectors: np.ndarray | None) -> np.ndarray | None:
+        return None if vectors is None else np.asarray(vectors) @ rotation.T
+
+    power = {"height": 1, "mean_curvature": -1, "k1": -1, "k2": -1, "gaussian_curvature": -2}
+    data = {k: v * scale ** power.get(k, 0) for k, v in asset.point_data.items()}
+    return asset.with_(
+        points=asset.points @ matrix.T + offset,
+        normals=turn(asset.normals),
+        plane_normal=turn(asset.plane_normal),
+        plane_u=turn(asset.plane_u),
+        point_data=data,
+    )

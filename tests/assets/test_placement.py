@@ -1,0 +1,135 @@
+"""Where an exported leaf lands (issue 23, findings 1 and 2): glTF, OBJ and USD Y-up with the blade
+lying flat and the base at the origin, STL, 3MF and PLY Z-up as the leaf's own coordinates, and a
+length with units that scales the leaf to real size (metres in glTF and USD)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+import leafstudio as ls
+from leafstudio.assets.placement import parse_length
+from leafstudio.errors import LeafError
+from leafstudio.forms import make_form
+from tests.leaves import moved
+
+
+@pytest.fixture(scope="module")
+def ovate() -> ls.Result:
+    return ls.reconstruct(make_form("ovate"), ls.Params(grid=48))
+
+
+def read_points(path: Path) -> np.ndarray:
+    loaded = trimesh.load(path, process=False, force="mesh")
+    return np.asarray(loaded.vertices, float)
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".gltf", ".obj"])
+def test_a_form_lies_flat_y_up_with_its_base_at_the_origin(ovate, tmp_path: Path, suffix):
+    """Finding 1: a form's (x, y, z) -- base at the origin, apex at +x 1, relief along z -- is
+    written as glTF's (x, z, -y): the relief is the vertical extent."""
+    path = tmp_path / f"ovate{suffix}"
+    ls.save_mesh(ovate, path)
+    points = read_points(path)
+    own = np.asarray(ovate.triangle_mesh.points, float)
+    np.testing.assert_allclose(points, own[:, [0, 2, 1]] * [1, 1, -1], atol=1e-6)
+    low, high = points.min(axis=0), points.max(axis=0)
+    assert high[1] - low[1] == pytest.approx(np.ptp(own[:, 2]), abs=1e-6)  # the relief, upward
+    assert low[0] == pytest.approx(0, abs=1e-6) and high[0] == pytest.approx(1, abs=1e-6)
+
+
+def test_any_leaf_is_placed_as_its_form_would_be(tmp_path: Path):
+    """A form turned and moved anywhere in 3D is written exactly where the form itself is."""
+    leaf, _, _ = moved(make_form("cordate"), seed=3)
+    here = ls.reconstruct(make_form("cordate"), ls.Params(grid=40))
+    there = ls.reconstruct(leaf, ls.Params(grid=40))
+    ls.save_mesh(here, tmp_path / "here.glb")
+    ls.save_mesh(there, tmp_path / "there.glb")
+    a, b = read_points(tmp_path / "here.glb"), read_points(tmp_path / "there.glb")
+    np.testing.assert_allclose(a.min(axis=0), b.min(axis=0), atol=1e-4)  # a moved input
+    np.testing.assert_allclose(a.max(axis=0), b.max(axis=0), atol=1e-4)  # refits alike
+    normals = trimesh.load(tmp_path / "there.glb", process=False, force="mesh").vertex_normals
+    assert np.median(normals[:, 1]) > 0.9  # the upper side faces +Y
+
+
+@pytest.mark.parametrize("length", ["8cm", "0.08m", "80mm", 0.08])
+def test_a_length_with_units_scales_the_leaf_to_metres(ovate, tmp_path: Path, length):
+    """Finding 2: `length=` makes the leaf that long, base to apex, in metres."""
+    path = tmp_path / "ovate.glb"
+    ls.save_mesh(ovate, path, length=length)
+    points = read_points(path)
+    assert np.ptp(points[:, 0]) == pytest.approx(0.08, rel=1e-6)
+    assert np.ptp(points[:, 1]) == pytest.approx(0.08 * np.ptp(ovate.triangle_mesh.points[:, 2]))
+
+
+@pytest.mark.parametrize("suffix", [".stl", ".ply", ".3mf"])
+def test_printing_formats_stay_z_up_in_millimetres(ovate, tmp_path: Path, suffix):
+    own = np.asarray(ovate.triangle_mesh.points, float)
+    ls.save_mesh(ovate, tmp_path / f"a{suffix}")
+    ls.save_mesh(ovate, tmp_path / f"b{suffix}", length="8cm")
+    a, b = read_points(tmp_path / f"a{suffix}"), read_points(tmp_path / f"b{suffix}")
+    np.testing.assert_allclose(np.ptp(a, axis=0), np.ptp(own, axis=0), rtol=1e-5)
+    np.testing.assert_allclose(np.ptp(b, axis=0), 80 * np.ptp(own, axis=0), rtol=1e-5)
+
+
+def test_a_bare_mesh_lies_flat_too(ovate, tmp_path: Path):
+    ls.save_mesh(ovate.triangle_mesh, tmp_path / "bare.glb", length="8cm")
+    extent = np.ptp(read_points(tmp_path / "bare.glb"), axis=0)
+    own = np.ptp(np.asarray(ovate.triangle_mesh.points, float), axis=0)
+    np.testing.assert_allclose(extent, 0.08 * own[[0, 2, 1]], rtol=1e-3)
+
+
+def test_length_parsing():
+    assert parse_length("8cm") == pytest.approx(0.08)
+    assert parse_length(" 80 mm ") == pytest.approx(0.08)
+    assert parse_length("0.08") == pytest.approx(0.08)
+    for bad in ("8 inches", "cm", "-3cm", "0mm"):
+        with pytest.raises(LeafError, match="--length"):
+            parse_length(bad)
+
+
+def test_cli_length_on_form_and_reconstruct(tmp_path: Path):
+    """`--length` on `form` and `reconstruct`; a thickness with a unit is then real size."""
+    from leafstudio.cli import main
+
+    glb = tmp_path / "ovate.glb"
+    assert main(["form", "ovate", "-o", str(glb), "--length", "80mm"]) == 0
+    assert np.ptp(read_points(glb)[:, 0]) == pytest.approx(0.08, rel=1e-6)
+    leaf = tmp_path / "ovate.leaf.json"
+    assert main(["form", "ovate", "-o", str(leaf)]) == 0
+    stl = tmp_path / "solid.stl"
+    run = ["reconstruct", str(leaf), "--grid", "40", "-o", str(stl), "--length", "8cm"]
+    assert main([*run, "--thickness", "0.5mm"]) == 0
+    solid = trimesh.load(stl, force="mesh")
+    solid.merge_vertices()
+    assert solid.is_watertight
+    area = solid.area / 2  # mm², the two faces of a thin solid
+    assert solid.volume == pytest.approx(area * 0.5, rel=0.05)  # 0.5 mm thick, in millimetres
+
+
+def test_cli_bad_length_is_one_line_exit_2(tmp_path: Path, capsys):
+    from leafstudio.cli import main
+
+    code = main(["form", "ovate", "-o", str(tmp_path / "x.glb"), "--length", "8 inches"])
+    err = capsys.readouterr().err
+    assert code == 2 and "--length" in err and err.count("\n") == 1
+    assert not (tmp_path / "x.glb").exists()
+
+
+def test_batch_length_places_every_mesh(tmp_path: Path):
+    """`batch --length`: each glTF lies flat, base at the origin, at the length given."""
+    from leafstudio.cli import main
+
+    leaf = tmp_path / "in" / "ovate.leaf.json"
+    leaf.parent.mkdir()
+    ls.save_leaf(make_form("ovate"), leaf)
+    out = tmp_path / "out"
+    run = ["batch", str(leaf.parent), "-o", str(out), "--format", "glb", "--grid", "40"]
+    assert main([*run, "--jobs", "1", "--length", "8cm"]) == 0
+    points = read_points(next(out.rglob("*.glb")))
+    assert points.min(axis=0)[0] == pytest.approx(0, abs=1e-9)
+    assert np.ptp(points[:, 0]) == pytest.approx(0.08, rel=1e-6)
+    assert np.ptp(points[:, 1]) < 0.15 * np.ptp(points[:, 2])  # flat: the relief is vertical
