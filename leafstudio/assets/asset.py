@@ -177,10 +177,30 @@ def surface_normals(result: Result, xy: np.ndarray, margin: np.ndarray) -> np.nd
 
 
 def oriented(faces: np.ndarray, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
-    """The faces with each one's winding turned, if need be, to agree with its vertex normals."""
+    """The faces wound consistently (each edge walked once each way) and, as a whole, toward the
+    side their vertex normals point to.
+
+    Not face by face: where the surface is steep (a blade folded 60 degrees and more) a thin
+    facet's own normal can disagree with its corners' closed-form normals, and turning such a
+    face alone would break the winding (and a solid made of it would be inside out there).
+    """
+    faces = consistent(faces, points)
     a, b, c = (points[faces[:, i]] for i in range(3))
     facing = np.einsum("ij,ij->i", np.cross(b - a, c - a), normals[faces].sum(axis=1))
-    return np.where((facing < 0)[:, None], faces[:, ::-1], faces)
+    return faces if facing.sum() >= 0 else faces[:, ::-1].copy()
+
+
+def consistent(faces: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The faces with a consistent winding: as they are when no directed edge repeats (the
+    meshers' own meshes), else through trimesh's repair (ball pivoting's may mix both ways)."""
+    directed = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    if len(np.unique(directed, axis=0)) == len(directed):
+        return faces
+    import trimesh
+
+    mesh = trimesh.Trimesh(points, faces, process=False, validate=False)
+    trimesh.repair.fix_winding(mesh)
+    return np.asarray(mesh.faces, dtype=faces.dtype)
 
 
 def leaf_plane(result: Result) -> LeafPlane:
