@@ -3,6 +3,7 @@
 open3d brings about 1 GiB of packages (dash, flask, jupyter...) that nothing else needs, so it is
 the `open3d` extra (`pip install 'leafstudio[open3d]'`): ball pivoting (mesher "bpa"), the screened
 Poisson comparison, reading .pcd scans and the levels of detail. `./dev setup` installs it.
+usd-core (module pxr, about 160 MB) is the `usd` extra: .usda, .usdc and .usdz meshes.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from typing import Any
 
 from leafstudio.errors import LeafError
 
-EXTRAS = {"open3d": "open3d"}  # module -> the extra that installs it
+EXTRAS = {"open3d": "open3d", "pxr": "usd"}  # module -> the extra that installs it
 
 
 def require(module: str, feature: str) -> ModuleType:

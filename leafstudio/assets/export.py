@@ -26,7 +26,8 @@ from leafstudio.sources.leafphoto import PhotoTexture, pixel_map
 
 TEXTURES = ("auto", "none")
 MAX_LOD = 8
-TEXTURED_SUFFIXES = (".obj", ".glb", ".gltf")  # the formats that carry a texture image
+TEXTURED_SUFFIXES = (".obj", ".glb", ".gltf", ".usda", ".usdc", ".usdz")  # carry a texture image
+NORMAL_MAP_SUFFIXES = (".glb", ".gltf", ".usda", ".usdc", ".usdz")  # and a normal map
 
 
 def photo_transform(leaf_path: str | os.PathLike) -> np.ndarray | None:
@@ -113,7 +114,7 @@ def mesh_assets(
     lod : int, default: 0
         Coarser levels of detail to add, each with half the triangles of the one before (lod.py).
     gltf : bool, default: False
-        Whether the target holds a normal map (glTF does; the other formats do not).
+        Whether the target holds a normal map (glTF and USD do; the other formats do not).
 
     Returns
     -------
@@ -169,7 +170,7 @@ def save_mesh(
     placement: Any = None,
 ) -> None:
     """Write the mesh by the path's suffix (MESH_SUFFIXES) with normals, UVs, scalars, texture,
-    placed for the format (placement.py: glTF and OBJ Y-up with the base at the origin).
+    placed for the format (placement.py: glTF, OBJ and USD Y-up with the base at the origin).
 
     Every file is replaced atomically, and together with its companions (an OBJ's .mtl and
     texture, the levels of detail): a failed write leaves the old files as they were.
@@ -180,17 +181,18 @@ def save_mesh(
         What to write (see `mesh_assets`).
     path : str or path-like
         .ply, .obj (with .mtl and _texture.png beside it), .stl, .vtp, .vtk, .glb, .gltf,
-        .3mf (`assets/writers.WRITERS`).
+        .3mf, .usda, .usdc, .usdz (`assets/writers.WRITERS`).
     texture : "auto", "none", an image path or a PhotoTexture, default: "auto"
-        The image of formats that carry one (OBJ, glTF); "auto" generates the leaf's.
+        The image of formats that carry one (OBJ, glTF, USD); "auto" generates the leaf's.
     thickness : float, optional
         Write a closed solid this thick (in the mesh's units).
     lod : int, default: 0
-        Coarser levels of detail to add (0 to 8): glTF keeps them in the file, the other
+        Coarser levels of detail to add (0 to 8): glTF and USD keep them in the file, the other
         formats write NAME_lod1.EXT, ...
     length : str or float, optional
         The leaf's real length, base to apex: '8cm', '0.08m', '80mm', or metres. The leaf is
-        scaled to it and written in metres (glTF, OBJ) or millimetres (PLY, STL, 3MF, VTK).
+        scaled to it and written in metres (glTF, OBJ, USD) or millimetres (PLY, STL, 3MF,
+        VTK).
         Default: the coordinates keep their scale.
     placement : Placement, optional
         Where the leaf's base and axes are (placement.py); default: a Result's own (its midrib
@@ -236,7 +238,9 @@ def save_mesh(
         refuse_overlap([image], written_paths(path, lod + 1, textured=True))
     if suffix not in TEXTURED_SUFFIXES:  # the format holds UVs but no image: make none
         texture = "none"
-    assets = mesh_assets(result_or_mesh, texture, thickness, lod, gltf=suffix in (".glb", ".gltf"))
+    assets = mesh_assets(
+        result_or_mesh, texture, thickness, lod, gltf=suffix in NORMAL_MAP_SUFFIXES
+    )
     assets = placed(result_or_mesh, assets, metres, suffix, placement)
     from leafstudio._shared import safewrite
 

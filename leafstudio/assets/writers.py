@@ -10,6 +10,8 @@
   Levels of detail are separate meshes leaf_LOD0, leaf_LOD1, ...
 - ``.stl``, ``.3mf``: through trimesh (geometry only; 3MF in millimetres, its unit by spec).
 - ``.vtp``, ``.vtk``: through pyvista, with Normals, the texture coordinates and the scalars.
+- ``.usda``, ``.usdc``, ``.usdz``: through usd-core (usd.py): normals, UVs, the scalars as
+  primvars, a UsdPreviewSurface material with the textures; levels of detail as variants.
 
 Every file is written atomically (safewrite.write_bytes); the OBJ's texture and material go
 first, so an .obj on disk never names a file that is not there.
@@ -26,9 +28,11 @@ import numpy as np
 
 from leafstudio._shared.safewrite import write_bytes
 from leafstudio.assets.asset import MeshAsset
+from leafstudio.assets.usd import USD_SUFFIXES, usd_companions, write_usd
 from leafstudio.errors import LeafError
 
 GLTF_SUFFIXES = (".glb", ".gltf")
+LEVELS_IN_ONE = (*GLTF_SUFFIXES, *USD_SUFFIXES)  # formats that hold every level of detail
 METALLIC, ROUGHNESS, ALPHA_CUTOFF = 0.0, 0.8, 0.5
 SHORT = ("nx", "ny", "nz", "s", "t")  # PLY properties kept as float32
 
@@ -197,11 +201,11 @@ def write_vtk(asset: MeshAsset, path: Path) -> None:
 
 
 def write_assets(assets: Sequence[MeshAsset], path: Path) -> None:
-    """Write the assets (the mesh, then its coarser levels) by the path's suffix: glTF holds them
-    all; other formats write level k > 0 beside it as `<stem>_lod<k><suffix>`."""
+    """Write the assets (the mesh, then its coarser levels) by the path's suffix: glTF and USD
+    hold them all; other formats write level k > 0 beside it as `<stem>_lod<k><suffix>`."""
     suffix = path.suffix.lower()
-    if suffix in GLTF_SUFFIXES:
-        write_gltf(assets, path)
+    if suffix in LEVELS_IN_ONE:
+        WRITERS[suffix](assets, path)
         return
     writer = WRITERS[suffix]
     for level, asset in enumerate(assets):
@@ -211,8 +215,10 @@ def write_assets(assets: Sequence[MeshAsset], path: Path) -> None:
 def written_paths(path: Path, levels: int, textured: bool) -> list[Path]:
     """Every file `write_assets` writes for `levels` levels at `path`."""
     suffix = path.suffix.lower()
-    if suffix in GLTF_SUFFIXES:
+    if suffix in GLTF_SUFFIXES or suffix == ".usdz":
         return [path]
+    if suffix in USD_SUFFIXES:  # the textures beside it
+        return [path, *usd_companions(path)] if textured else [path]
     out = []
     for level in range(levels):
         target = path if level == 0 else lod_path(path, level)
@@ -252,7 +258,7 @@ def vtk_bytes(mesh: Any, suffix: str) -> bytes:
 
 
 # The one table of mesh types: every suffix a mesh can be written as, and its writer (glTF's
-# writer takes every level of detail at once; `write_assets` calls it apart).
+# and USD writers take every level of detail at once; `write_assets` calls them apart).
 WRITERS = {
     ".ply": write_ply,
     ".obj": write_obj,
@@ -262,5 +268,8 @@ WRITERS = {
     ".glb": write_gltf,
     ".gltf": write_gltf,
     ".3mf": write_trimesh_format,
+    ".usda": write_usd,
+    ".usdc": write_usd,
+    ".usdz": write_usd,
 }
 MESH_SUFFIXES = tuple(WRITERS)
