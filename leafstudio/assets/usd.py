@@ -14,6 +14,7 @@ double-sided. Levels of detail are the variant set "LOD" on /Leaf, variants LOD0
 
 from __future__ import annotations
 
+import re
 import tempfile
 from collections.abc import Sequence
 from pathlib import Path
@@ -22,6 +23,7 @@ import numpy as np
 
 from leafstudio._shared.safewrite import write_bytes
 from leafstudio.assets.asset import MeshAsset
+from leafstudio.errors import LeafError
 
 USD_SUFFIXES = (".usda", ".usdc", ".usdz")
 ROOT, MESH, LOOKS = "/Leaf", "/Leaf/Leaf", "/Leaf/Looks"
@@ -149,6 +151,36 @@ def _png(image) -> bytes:
     return png(image)
 
 
+def _crate_bytes(stage, images: dict[str, bytes] | None, path: Path) -> bytes:
+    """The stage as .usdc bytes, or (with `images`) as a .usdz package of it and the images;
+    made in a temporary folder (usd-core writes files), a failure there a LeafError naming
+    `path`."""
+    from pxr import Sdf, Tf
+
+    try:
+        with tempfile.TemporaryDirectory() as folder:
+            crate = Path(folder) / "leaf.usdc"
+            stage.GetRootLayer().Export(str(crate))
+            if images is None:
+                return crate.read_bytes()
+            package = Path(folder) / "leaf.usdz"  # the layer first, then its textures
+            writer = Sdf.ZipFileWriter.CreateNew(str(package))
+            writer.AddFile(str(crate), "leaf.usdc")
+            for name, blob in images.items():
+                (Path(folder) / name).write_bytes(blob)
+                writer.AddFile(str(Path(folder) / name), name)
+            writer.Save()
+            return package.read_bytes()
+    except (OSError, Tf.ErrorException) as exc:
+        found = re.search(r"writing file: ([^'\n]+)", str(exc))
+        reason = getattr(exc, "strerror", None) or (found.group(1).strip() if found else "")
+        raise LeafError(
+            f"cannot be written (usd-core: {reason or 'the file could not be made'}); any old "
+            "file is unchanged",
+            str(path),
+        ) from None
+
+
 def write_usd(assets: Sequence[MeshAsset], path: Path) -> None:
     """.usda, .usdc or .usdz of the assets (module docstring); every file written atomically."""
     first = assets[0]
@@ -168,22 +200,7 @@ def write_usd(assets: Sequence[MeshAsset], path: Path) -> None:
     if suffix == ".usda":
         data = stage.GetRootLayer().ExportToString().encode()
     else:
-        with tempfile.TemporaryDirectory() as folder:
-            crate = Path(folder) / "leaf.usdc"
-            stage.GetRootLayer().Export(str(crate))
-            if suffix == ".usdz":  # the layer first, then its textures, at the package's root
-                from pxr import Sdf
-
-                package = Path(folder) / "leaf.usdz"
-                writer = Sdf.ZipFileWriter.CreateNew(str(package))
-                writer.AddFile(str(crate), "leaf.usdc")
-                for name, blob in images.items():
-                    (Path(folder) / name).write_bytes(blob)
-                    writer.AddFile(str(Path(folder) / name), name)
-                writer.Save()
-                data = package.read_bytes()
-            else:
-                data = crate.read_bytes()
+        data = _crate_bytes(stage, images if suffix == ".usdz" else None, path)
     if suffix != ".usdz":  # the textures first: a file on disk never names a missing one
         for name, blob in images.items():
             write_bytes(path.with_name(name), blob)
