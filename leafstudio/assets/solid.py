@@ -153,6 +153,56 @@ def _outward(
     return np.where(length > 0, out / np.where(length > 0, length, 1), 0.0)
 
 
+def pinches_split(asset: MeshAsset) -> MeshAsset:
+    """The sheet with each pinched vertex (two fans of faces touching at one margin vertex, as
+    ball pivoting leaves) made one vertex per fan: each fan then gets its own wall edge, and the
+    solid stays manifold there."""
+    rim = boundary_edges(asset.faces)
+    pinched = np.flatnonzero(np.bincount(rim[:, 0], minlength=asset.n_points) > 1)
+    if not len(pinched):
+        return asset
+    faces = asset.faces.copy()
+    copies: list[int] = []
+    for vertex in pinched:
+        around = np.flatnonzero((faces == vertex).any(axis=1))
+        fans = _fans(faces[around], vertex)
+        for fan in fans[1:]:
+            rows = around[fan]
+            faces[rows] = np.where(faces[rows] == vertex, asset.n_points + len(copies), faces[rows])
+            copies.append(int(vertex))
+    take = np.concatenate([np.arange(asset.n_points), copies])
+
+    def grown(values: np.ndarray | None) -> np.ndarray | None:
+        return None if values is None else np.asarray(values)[take]
+
+    return asset.with_(
+        points=asset.points[take],
+        faces=faces,
+        normals=asset.normals[take],
+        uv=asset.uv[take],
+        point_data={k: v[take] for k, v in asset.point_data.items()},
+        plane_xy=grown(asset.plane_xy),
+    )
+
+
+def _fans(faces: np.ndarray, vertex: int) -> list[np.ndarray]:
+    """The (k, 3) faces around `vertex` grouped into fans (faces joined by an edge at it), as
+    index arrays."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    others = [set(face) - {vertex} for face in faces.tolist()]
+    rows, cols = [], []
+    for i in range(len(faces)):
+        for j in range(i + 1, len(faces)):
+            if others[i] & others[j]:
+                rows.append(i)
+                cols.append(j)
+    graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(len(faces), len(faces)))
+    count, labels = connected_components(graph, directed=False)
+    return [np.flatnonzero(labels == k) for k in range(count)]
+
+
 def thicken(asset: MeshAsset, thickness: float) -> MeshAsset:
     """The closed solid of an open sheet (see the module docstring); `thickness` in the mesh's
     units."""
@@ -160,6 +210,7 @@ def thicken(asset: MeshAsset, thickness: float) -> MeshAsset:
         raise LeafError(f"the thickness must be above 0, got {thickness}")
     if asset.solid:
         return asset
+    asset = pinches_split(asset)
     n = asset.n_points
     offset = offsets(asset, thickness)
     points = np.vstack([asset.points + offset, asset.points - offset])

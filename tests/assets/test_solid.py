@@ -151,3 +151,16 @@ def test_every_gallery_leaf_makes_a_sound_solid(name: str):
     assert mesh.is_watertight and mesh.is_winding_consistent
     assert mesh.volume == pytest.approx(sheet.area * thickness, rel=0.02)  # > 0: outward
     assert not self_intersecting(solid.points, solid.faces)
+
+
+def test_a_ball_pivoting_sheet_makes_a_closed_solid():
+    """Ball pivoting's mesh has a pinched margin vertex (two fans of faces touching there): one
+    vertex per fan, so every edge of the solid has two faces (was: not watertight)."""
+    result = ls.reconstruct(make_form("cordate"), ls.Params(mesher="bpa"))
+    asset = leaf_asset(result)
+    thickness = 0.01 * result.length
+    solid = thicken(asset, thickness)
+    mesh = trimesh.Trimesh(solid.points, solid.faces, process=False)
+    assert mesh.is_watertight and mesh.is_winding_consistent
+    area = trimesh.Trimesh(asset.points, asset.faces, process=False).area
+    assert mesh.volume == pytest.approx(area * thickness, rel=0.02)
