@@ -1,5 +1,7 @@
-"""Import a LeafStudio .glb into Blender (the `bpy` package) and print what arrived, as JSON:
-meshes, UV layers, the material and its image texture, and the vertex count beside the file's.
+"""Import a LeafStudio .glb (or .gltf, .obj, .usda, .usdc, .usdz) into Blender (the `bpy`
+package) and print what arrived, as JSON: meshes, UV layers, the material and its image texture,
+the vertex count beside the file's (glTF), and the scene's extent in metres along Blender's x, y,
+z (z up): a leaf lying flat has its relief as the z extent and its length as the x extent.
 
 bpy pins numpy < 2, so it lives in a venv of its own, not the project's:
     python3 -m venv /tmp/bpyenv && /tmp/bpyenv/bin/pip install bpy
@@ -32,11 +34,26 @@ def file_vertex_count(path: str) -> int:
 def main(path: str) -> dict:
     import bpy
 
+    from mathutils import Vector
+
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    bpy.ops.import_scene.gltf(filepath=path)
+    suffix = path.lower().rsplit(".", 1)[-1]
+    if suffix in ("glb", "gltf"):
+        bpy.ops.import_scene.gltf(filepath=path)
+    elif suffix == "obj":
+        bpy.ops.wm.obj_import(filepath=path)
+    else:
+        bpy.ops.wm.usd_import(filepath=path)
+    bpy.context.view_layer.update()
     meshes = [o for o in bpy.context.scene.objects if o.type == "MESH"]
     report = {"blender": bpy.app.version_string, "file": path, "meshes": len(meshes)}
-    report["file_vertices"] = file_vertex_count(path)
+    if suffix == "glb":
+        report["file_vertices"] = file_vertex_count(path)
+    corners = [o.matrix_world @ Vector(c) for o in meshes for c in o.bound_box]
+    report["extent_xyz"] = [
+        round(max(c[i] for c in corners) - min(c[i] for c in corners), 6) for i in range(3)
+    ]
+    report["min_xyz"] = [round(min(c[i] for c in corners), 6) for i in range(3)]
     report["objects"] = []
     for obj in meshes:
         mesh = obj.data
