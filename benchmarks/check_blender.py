@@ -33,7 +33,6 @@ def file_vertex_count(path: str) -> int:
 
 def main(path: str) -> dict:
     import bpy
-
     from mathutils import Vector
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
