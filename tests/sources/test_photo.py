@@ -127,6 +127,7 @@ def test_photo_texture_lands_on_the_mesh_margin_within_2_pixels(tmp_path: Path):
     from scipy.spatial import cKDTree
     from skimage.measure import find_contours
 
+    from leafstudio.assets.placement import result_placement
     from leafstudio.assets.solid import boundary_edges
     from leafstudio.cli import main
     from leafstudio.sources.photo import foreground
@@ -148,7 +149,11 @@ def test_photo_texture_lands_on_the_mesh_margin_within_2_pixels(tmp_path: Path):
     pixels = texture.shape[0]
     pixel_from_world = ls.assets.photo_transform(project)
     uv = np.asarray(mesh.visual.uv) * [1, -1] + [0, 1]  # glTF's v runs down: (column, row) / px
-    photo_px = np.asarray(mesh.vertices)[:, :2] @ pixel_from_world[:, :2].T + pixel_from_world[:, 2]
+    # the glTF is Y-up with the base at the origin (assets/placement.py): back to the leaf's own
+    placement = result_placement(ls.reconstruct(ls.load_leaf(project), ls.Params(grid=48)))
+    turn, offset = placement.transform(None, ".glb")
+    world = (np.asarray(mesh.vertices) - offset) @ turn
+    photo_px = world[:, :2] @ pixel_from_world[:, :2].T + pixel_from_world[:, 2]
     # the margin: the mesh's boundary vertices; the distance to the nearest of them bounds the
     # distance to the margin from above
     rim = np.unique(boundary_edges(np.asarray(mesh.faces)))
