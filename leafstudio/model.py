@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field, fields, replace
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -63,6 +63,26 @@ def _as_points(values: Any, what: str) -> np.ndarray:
     return points
 
 
+class Bend(Protocol):
+    """A smooth bend that carries a flat blade into 3D (core/bend.py: Pose)."""
+
+    def apply(self, points: np.ndarray) -> np.ndarray:
+        """(n, 3) flat blade points, bent."""
+        ...
+
+    def flatten(self, points: np.ndarray) -> np.ndarray:
+        """(n, 3) bent points back on the flat blade."""
+        ...
+
+    def key(self) -> bytes:
+        """Bytes that change with the bend."""
+        ...
+
+    def crease(self, points: np.ndarray) -> np.ndarray | None:
+        """(n,) signed distances of flat points from the line the bend creases along, or None."""
+        ...
+
+
 @dataclass(frozen=True, eq=False)
 class Leaf:
     """A leaf as the paper takes it: 3D boundary points and one 3D point set per vein.
@@ -73,6 +93,9 @@ class Leaf:
         Points on the leaf margin, in any order; duplicates and mild noise are fine.
     veins : list of (m_i, 3) float arrays, default: []
         Points along each vein, ordered from its start to its end where known.
+    bend : Bend, optional
+        How the points were bent from a flat blade (a form's fold and curl): reconstruction runs
+        on the flat blade and bends the mesh (core/bend.py). None: the leaf is taken as it is.
 
     Raises
     ------
@@ -94,6 +117,7 @@ class Leaf:
 
     boundary: np.ndarray
     veins: list[np.ndarray] = field(default_factory=list)
+    bend: Bend | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "boundary", _as_points(self.boundary, "boundary"))
@@ -121,6 +145,8 @@ class Leaf:
     def fingerprint(self) -> bytes:
         """Bytes that change whenever any coordinate changes (for caches)."""
         parts = [self.boundary.tobytes()] + [b"|" + v.tobytes() for v in self.veins]
+        if self.bend is not None:
+            parts.append(b"~" + self.bend.key())
         return b"".join(parts)
 
 

@@ -39,6 +39,7 @@ import numpy as np
 from leafstudio.core import evaluate, mesher
 from leafstudio.core.autok import choose_mixture
 from leafstudio.core.base import PLANAR, BaseSurface, fit_base
+from leafstudio.core.bend import bent_result, flat_leaf
 from leafstudio.core.correct import onto_veins
 from leafstudio.core.curvature import graph_curvatures
 from leafstudio.core.evaluate import curvature_summary, shape_measurements
@@ -418,8 +419,9 @@ class Pipeline:
 
     def __init__(self, leaf: Leaf, store: StageStore | None = None) -> None:
         self.leaf = leaf = as_leaf(leaf)  # a clear TypeError for anything else
-        self.units = Units.of(leaf)  # the stages run on the leaf at unit size (units.py)
-        self.unit_leaf = self.units.leaf(leaf)
+        self.flat = flat_leaf(leaf)  # a bent leaf's flat blade (bend.py); else the leaf itself
+        self.units = Units.of(self.flat)  # the stages run on the leaf at unit size (units.py)
+        self.unit_leaf = self.units.leaf(self.flat)
         self.leaf_key = leaf_key(leaf)
         self.store = StageStore() if store is None else store
 
@@ -480,7 +482,7 @@ class Pipeline:
             ran=tuple(run.ran),
             warnings=list(fs.notes),
         )
-        return _in_world(unit, self.leaf, self.units)
+        return bent_result(_in_world(unit, self.flat, self.units), self.leaf, self.units)
 
 
 def _in_world(unit: Result, leaf: Leaf, units: Units) -> Result:

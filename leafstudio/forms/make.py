@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import shapely
 
+from leafstudio.core.bend import Pose
 from leafstudio.core.prepare.vein_order import veins_inside_outline
 from leafstudio.errors import LeafError
 from leafstudio.forms.outline import FormOutline, form_outline
@@ -199,14 +200,14 @@ class Form:
             seed=self.seed,
             apex=xy[outline.apex_index],
         )
-        z = self._pose(xy) + self._wave(outline)
-        boundary = np.column_stack([xy, z])
-        veins = [np.column_stack([v[:, :2], v[:, 2] + self._pose(v[:, :2])]) for v in veins]
-        return Leaf(boundary=boundary, veins=_veins_on_blade(boundary, veins))
-
-    def _pose(self, xy: np.ndarray) -> np.ndarray:
-        """Fold (the halves rise from the midrib) and curl (the midrib bends), as heights."""
-        return np.abs(xy[:, 1]) * np.tan(np.deg2rad(self.fold)) + self.curl * xy[:, 0] ** 2
+        flat = Leaf(np.column_stack([xy, self._wave(outline)]), veins)
+        if self.fold == 0 and self.curl == 0:
+            return Leaf(flat.boundary, _veins_on_blade(flat.boundary, flat.veins))
+        # the leaf knows its pose: reconstruction runs on the flat blade and bends the mesh
+        # (core/bend.py), so no fold or curl stands it on edge; the veins are kept on the blade
+        pose = Pose(self.fold, self.curl)
+        veins = _veins_on_blade(flat.boundary, flat.veins)
+        return Leaf(pose.apply(flat.boundary), [pose.apply(v) for v in veins], bend=pose)
 
     def _wave(self, outline: FormOutline) -> np.ndarray:
         """The margin's waves: WAVES_PER_SIDE along each half, none at the base and apex."""
@@ -233,6 +234,8 @@ def seen_on_edge(leaf: Leaf) -> bool:
     """Whether the pipeline would see this posed form on edge: a whole vein lies outside the
     outline on the boundary's PCA plane, which it takes for the leaf's, so that plane is not the
     blade's and a reconstruction would be a side view of the blade (see _veins_on_blade)."""
+    if leaf.bend is not None:  # reconstructed on its flat blade (core/bend.py)
+        return False
     return len(veins_inside_outline(leaf.boundary, leaf.veins, -VEIN_SLACK)) < len(leaf.veins)
 
 

@@ -1,0 +1,164 @@
+"""Bent leaves: the paper's steps run on the flat blade, and a smooth bend carries the mesh into
+3D (issue 21, build item 1).
+
+A leaf given with a bend (`Leaf.bend`) has its points in 3D, bent. The pipeline flattens them
+(`Bend.flatten`), runs every step of the paper on the flat blade, where the boundary's PCA plane
+is the blade's own plane, and carries the result back (`bent_result`): the mesh, the GMM
+samples and the leaf the metrics are measured against. A leaf without a bend is the case of no
+bend and runs exactly as before.
+
+`Pose` is the bend a form knows (forms/make.py): in the blade's coordinates (the base at the
+origin, the midrib along +x, the relief on +z), a fold raises each half from the midrib,
+z += |y| tan(fold), and a curl bends the midrib, z += curl · x². It is a shear along z, so it is
+undone exactly, and the blade is what the form drew before posing: a fold of 75° or a rolled
+grass blade is reconstructed as well as the flat leaf, where the boundary's PCA plane saw it
+side-on and the mesh broke (issue 21, finding 1).
+
+The heights, curvatures and `Result.height` stay those of the flat blade's surface (its relief);
+the mesh's points are bent.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from leafstudio.core.trianglemesh import TriangleMesh
+from leafstudio.model import Leaf
+
+if TYPE_CHECKING:
+    from leafstudio.core.pipeline import Result
+    from leafstudio.core.prepare.units import Units
+
+
+@dataclass(frozen=True)
+class Pose:
+    """A form's fold (degrees, each half rising from the midrib) and curl (the midrib's bend,
+    z = curl · x²), in the blade's coordinates."""
+
+    fold: float = 0.0
+    curl: float = 0.0
+
+    def lift(self, xy: np.ndarray) -> np.ndarray:
+        """(n,) heights the pose adds at (n, 2) blade points."""
+        xy = np.asarray(xy, dtype=float)
+        return np.abs(xy[:, 1]) * np.tan(np.deg2rad(self.fold)) + self.curl * xy[:, 0] ** 2
+
+    def apply(self, points: np.ndarray) -> np.ndarray:
+        """(n, 3) flat blade points, bent."""
+        points = np.array(points, dtype=float)
+        points[:, 2] += self.lift(points[:, :2])
+        return points
+
+    def flatten(self, points: np.ndarray) -> np.ndarray:
+        """(n, 3) bent points back on the flat blade (the inverse of `apply`)."""
+        points = np.array(points, dtype=float)
+        points[:, 2] -= self.lift(points[:, :2])
+        return points
+
+    def key(self) -> bytes:
+        """Bytes that change with the bend (Leaf.fingerprint)."""
+        return np.array([self.fold, self.curl]).tobytes()
+
+    def crease(self, points: np.ndarray) -> np.ndarray | None:
+        """(n,) signed distances of flat points from the line the bend creases along (the
+        midrib, y = 0, for a fold), or None when it has none: the mesh is cut there first."""
+        return None if self.fold == 0 else np.asarray(points, dtype=float)[:, 1]
+
+
+def flat_leaf(leaf: Leaf) -> Leaf:
+    """The leaf on its flat blade: `leaf` itself when it has no bend."""
+    if leaf.bend is None:
+        return leaf
+    flatten = leaf.bend.flatten
+    return Leaf(boundary=flatten(leaf.boundary), veins=[flatten(v) for v in leaf.veins])
+
+
+def cut_along(mesh: TriangleMesh, side: np.ndarray) -> TriangleMesh:
+    """`mesh` with its triangles cut where the (n,) values `side` pass through 0 (linearly along
+    each edge), point data interpolated: a bend's crease then runs along edges of the mesh
+    instead of across its triangles (a fold's chords cut 0.3% of the length under the midrib)."""
+    faces = mesh.regular_faces
+    signs = np.sign(side)[faces]
+    crossing = np.flatnonzero((signs.max(axis=1) > 0) & (signs.min(axis=1) < 0))
+    if len(crossing) == 0:
+        return mesh
+    points = [mesh.points]
+    data = {name: [values] for name, values in mesh.point_data.items()}
+    made: dict[tuple[int, int], int] = {}
+    count = len(mesh.points)
+
+    def on_edge(a: int, b: int) -> int:
+        nonlocal count
+        key = (min(a, b), max(a, b))
+        if key not in made:
+            t = side[a] / (side[a] - side[b])
+            points.append((mesh.points[a] + t * (mesh.points[b] - mesh.points[a]))[None])
+            for values in data.values():
+                values.append(np.array([values[0][a] + t * (values[0][b] - values[0][a])]))
+            made[key] = count
+            count += 1
+        return made[key]
+
+    new = []
+    for f in crossing:
+        tri = faces[f]
+        s = np.sign(side[tri])
+        zero = np.flatnonzero(s == 0)
+        if len(zero) == 1:  # through a vertex: two triangles
+            i = int(zero[0])
+            a, b, c = tri[i], tri[(i + 1) % 3], tri[(i + 2) % 3]
+            m = on_edge(b, c)
+            new += [(a, b, m), (a, m, c)]
+            continue
+        i = next(k for k in range(3) if s[k] != s[(k + 1) % 3] and s[k] != s[(k + 2) % 3])
+        a, b, c = tri[i], tri[(i + 1) % 3], tri[(i + 2) % 3]  # a alone on its side
+        ab, ca = on_edge(a, b), on_edge(c, a)
+        new += [(a, ab, ca), (ab, b, c), (ab, c, ca)]
+    keep = np.ones(len(faces), dtype=bool)
+    keep[crossing] = False
+    triangles = np.vstack([faces[keep], np.array(new, dtype=faces.dtype)])
+    return TriangleMesh(
+        np.vstack(points),
+        triangles,
+        {name: np.concatenate(values) for name, values in data.items()},
+    )
+
+
+def _bent_mesh(mesh: TriangleMesh, carry, crease) -> TriangleMesh:
+    side = crease(mesh.points)
+    if side is not None:
+        mesh = cut_along(mesh, side)
+    return TriangleMesh(carry(mesh.points), mesh.regular_faces, mesh.point_data)
+
+
+def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
+    """The flat blade's `result` carried into 3D by `leaf.bend`, measured against `leaf` (its
+    unit-size run as well, through `units`); `result` itself when the leaf has no bend."""
+    bend = leaf.bend
+    if bend is None:
+        return result
+
+    def in_units(points: np.ndarray) -> np.ndarray:
+        return units.to_unit(bend.apply(units.to_world(points)))
+
+    def crease_in_units(points: np.ndarray) -> np.ndarray | None:
+        return bend.crease(units.to_world(points))
+
+    unit = result.unit
+    if unit is not None:
+        unit = replace(
+            unit,
+            leaf=units.leaf(leaf),
+            surface_points=in_units(unit.surface_points),
+            triangle_mesh=_bent_mesh(unit.triangle_mesh, in_units, crease_in_units),
+        )
+    return replace(
+        result,
+        leaf=leaf,
+        surface_points=bend.apply(result.surface_points),
+        triangle_mesh=_bent_mesh(result.triangle_mesh, bend.apply, bend.crease),
+        unit=unit,
+    )
