@@ -59,13 +59,15 @@ def test_the_reported_poses():
         assert len(leaf.veins) == len(make_form("elliptic").veins) == 13
 
 
-def test_a_pose_the_pipeline_sees_on_its_plane_is_clipped_there_as_before():
-    """A mild pose tilts the PCA plane but not on edge: the veins are still clipped to the
-    outline as the pipeline sees it (vein ends that stray over 1% outside it are refused)."""
+def test_a_posed_form_keeps_the_veins_of_its_flat_blade():
+    """A posed form knows its pose (Leaf.bend, core/bend.py): its veins are the flat blade's,
+    clipped to the outline on the blade's own plane, and only raised by the pose."""
     leaf = make_form("ovate", margin="serrate", fold=25.0, curl=0.15, wave=0.02)
-    again = veins_inside_outline(leaf.boundary, leaf.veins, -VEIN_SLACK)
-    assert len(again) == len(leaf.veins) == len(make_form("ovate", margin="serrate").veins)
-    assert all(np.array_equal(a, v) for a, v in zip(again, leaf.veins, strict=True))
+    flat = make_form("ovate", margin="serrate", wave=0.02)
+    assert leaf.bend is not None and flat.bend is None
+    assert len(leaf.veins) == len(flat.veins)
+    for vein, flat_vein in zip(leaf.veins, flat.veins, strict=True):
+        assert np.allclose(leaf.bend.flatten(vein), flat_vein)
 
 
 def test_the_form_command_writes_a_posed_leaf_with_its_veins(tmp_path, capsys):
@@ -79,24 +81,23 @@ def test_the_form_command_writes_a_posed_leaf_with_its_veins(tmp_path, capsys):
     assert len(load_leaf(str(out)).veins) == 13
 
 
-def test_a_form_seen_on_edge_is_refused_as_a_mesh_in_one_line(tmp_path, capsys):
-    """The pipeline takes the boundary's PCA plane for the leaf's (paper, step 1): seen on edge,
-    a posed form came out as a side view (its veins dropped), or now, with its veins, "vein 1:
-    49 of 49 points lie outside the boundary"; `form -o MESH` says why instead."""
+def test_a_form_once_seen_on_edge_is_written_as_a_mesh(tmp_path, capsys):
+    """The pipeline took the boundary's PCA plane for the leaf's (paper, step 1): seen on edge, a
+    posed form came out as a side view, and `form -o MESH` refused it. A form now knows its pose
+    and is reconstructed on its flat blade (issue 21): the mesh is written."""
     from leafstudio.cli import main
 
     argv = ["form", "elliptic", "--aspect", "20", "--curl", "-1", "--fold", "60", "-o"]
-    assert main([*argv, str(tmp_path / "x.obj")]) == 2
-    err = capsys.readouterr().err
-    assert "on edge" in err and "--fold" in err and len(err.strip().splitlines()) == 1
-    assert not (tmp_path / "x.obj").exists()
-    assert seen_on_edge(make_form("elliptic", aspect=20.0, curl=-1.0, fold=60.0))
-    assert not seen_on_edge(make_form("reniform", fold=75.0))  # on edge too, but seen whole
-    assert not seen_on_edge(make_form("ovate", fold=25.0, curl=0.15, wave=0.02))
+    assert main([*argv, str(tmp_path / "x.obj")]) == 0
+    assert (tmp_path / "x.obj").exists()
+    for terms in (dict(aspect=20.0, curl=-1.0, fold=60.0), dict(fold=75.0)):
+        assert not seen_on_edge(make_form("elliptic", **terms))
 
 
-def test_a_side_on_form_warns_through_the_api():
-    from leafstudio.forms.make import SIDE_ON
+def test_no_pose_warns_through_the_api():
+    import warnings
 
-    with pytest.warns(UserWarning, match=SIDE_ON.split(",")[0]):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
         make_form("elliptic", fold=75.0)
+        make_form("lanceolate", aspect=30.0, curl=1.0, fold=60.0)

@@ -1,0 +1,171 @@
+"""Bent leaves and surfaces through the veins (issue 21): the issue's table, today's figures
+beside ours.
+
+    .venv/bin/python benchmarks/bench_bent.py [--poses N] [--no-scans] [--scans DIR]
+
+"today" runs each input as the code before issue 21 did: the posed form's points without its
+bend (`Leaf(boundary, veins)`, so the boundary's PCA plane is the leaf's) and the paper's pure
+GMM surface (`through_veins=False`); "ours" runs it as given, with the defaults. Distances are
+shares of the leaf's length.
+
+- forms over poses: every gallery shape at every N-th pose of fold −75..75, curl 0..1 and wave
+  0..0.2 (N = 1: all 50), K = 3, grid 128: largest and mean vein distance, largest boundary
+  distance, refused and warned;
+- the eight scans: extract, then reconstruct at K auto and grid 256; the mean distance from the
+  blade's points to the surface;
+- vein distances: every gallery form (flat) and a drawn leaf with hand-raised veins, with the
+  99th-percentile dihedral angles in the margin band and inside;
+- time at grid 128: a bent form beside the same form flat, best of three.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+import leafstudio as ls
+from leafstudio.core.analysis import margin_creases
+from leafstudio.errors import LeafError
+from leafstudio.forms.make import Form
+from leafstudio.forms.terms import SHAPES
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+from tests.core.test_correct import drawn_leaf  # noqa: E402
+
+SCANS = ROOT.parent / "shared" / "realleaves"
+FOLDS = (-75.0, -45.0, 0.0, 45.0, 75.0)
+CURLS = (0.0, 0.5, 1.0)
+WAVES = (0.0, 0.1)  # wave 0.2 is capped by half the blade's half-width anyway
+POSES = [p for p in itertools.product(FOLDS, CURLS, WAVES) if p != (0.0, 0.0, 0.0)]
+
+
+def _today(leaf: ls.Leaf) -> ls.Leaf:
+    return ls.Leaf(leaf.boundary, leaf.veins)
+
+
+def _run(leaf: ls.Leaf, params: ls.Params) -> tuple[ls.Result | None, bool]:
+    """(the result, or None when refused; whether it warned)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            return ls.reconstruct(leaf, params), bool(caught)
+        except LeafError:
+            return None, bool(caught)
+
+
+def forms_over_poses(every: int) -> None:
+    print(f"\n## forms over poses (every {every}th of 14 shapes x {len(POSES)} poses, grid 128)")
+    print("| run | cases | refused | warned | vein max: median / worst | boundary max: worst |")
+    print("|---|---|---|---|---|---|")
+    cases = [(s, p) for i, (s, p) in enumerate(itertools.product(SHAPES, POSES)) if i % every == 0]
+    for name in ("today", "ours"):
+        refused = warned = 0
+        vein, boundary = [], []
+        for shape, (fold, curl, wave) in cases:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                leaf = Form(shape, fold=fold, curl=curl, wave=wave).leaf()
+            made_warned = bool(caught)
+            if name == "today":
+                leaf = _today(leaf)
+            params = ls.Params(k=3, grid=128, through_veins=name == "ours")
+            result, run_warned = _run(leaf, params)
+            warned += made_warned or run_warned
+            if result is None:
+                refused += 1
+                continue
+            vein.append(result.metrics["veins"]["max"] / result.length)
+            boundary.append(result.metrics["boundary"]["max"] / result.length)
+        print(
+            f"| {name} | {len(cases)} | {refused} | {warned} | {np.median(vein):.1e} / "
+            f"{max(vein):.1e} | {max(boundary):.1e} |"
+        )
+
+
+def scans(folder: Path) -> None:
+    from leafstudio.analysis.fidelity import scan_distances
+    from leafstudio.sources.extract import extract_leaf
+    from leafstudio.sources.scan import read_scan
+
+    paths = sorted(folder.glob("*.txt"))
+    if not paths:
+        print(f"\n(no scans in {folder})")
+        return
+    print("\n## the eight scans (extract, reconstruct at K auto, grid 256): mean distance")
+    print("| scan | today | ours |")
+    print("|---|---|---|")
+    means: dict[str, list[float]] = {"today": [], "ours": []}
+    for path in paths:
+        raw = read_scan(path)
+        ex = extract_leaf(raw)
+        scale = 1.0 / ex.length
+        leaf = ls.Leaf(ex.leaf.boundary * scale, [v * scale for v in ex.leaf.veins])
+        blade = raw[ex.blade] * scale
+        row = []
+        for name in ("today", "ours"):
+            params = ls.Params(k="auto", grid=256, through_veins=name == "ours")
+            result = _run(leaf, params)[0]
+            mean = scan_distances(result.mesh, blade, 1.0)["mean"] if result else float("nan")
+            means[name].append(mean)
+            row.append(f"{mean:.2%}")
+        print(f"| {path.stem} | {' | '.join(row)} |")
+    print(f"| mean | {np.nanmean(means['today']):.2%} | {np.nanmean(means['ours']):.2%} |")
+
+
+def vein_distances() -> None:
+    print("\n## vein distances (flat forms K 3, drawn leaf K 7, grid 128)")
+    print("| leaf | vein max today | ours | p99 margin today / ours | p99 inside today / ours |")
+    print("|---|---|---|---|---|")
+    leaves = [(shape, Form(shape).leaf(), 3) for shape in SHAPES] + [("drawn", drawn_leaf(), 7)]
+    for name, leaf, k in leaves:
+        runs = [_run(leaf, ls.Params(k=k, grid=128, through_veins=on))[0] for on in (False, True)]
+        vein = [r.metrics["veins"]["max"] / r.length for r in runs]
+        creases = [margin_creases(r) for r in runs]
+        print(
+            f"| {name} | {vein[0]:.1e} | {vein[1]:.1e} | {creases[0]['margin_p99']:.1f} / "
+            f"{creases[1]['margin_p99']:.1f} | {creases[0]['interior_p99']:.1f} / "
+            f"{creases[1]['interior_p99']:.1f} |"
+        )
+
+
+def timing() -> None:
+    print("\n## time at grid 128 (best of three, seconds)")
+    print("| form | flat, paper | flat, ours | bent, ours |")
+    print("|---|---|---|---|")
+    for shape, pose in (("ovate", dict(fold=60.0)), ("linear", dict(curl=0.6))):
+        flat, bent = Form(shape).leaf(), Form(shape, **pose).leaf()
+        row = []
+        for leaf, on in ((flat, False), (flat, True), (bent, True)):
+            best = np.inf
+            for _ in range(3):
+                start = time.perf_counter()
+                _run(leaf, ls.Params(k=3, grid=128, through_veins=on))
+                best = min(best, time.perf_counter() - start)
+            row.append(f"{best:.3f}")
+        print(f"| {shape} {pose} | {' | '.join(row)} |")
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--poses", type=int, default=7, help="every N-th form and pose")
+    parser.add_argument("--no-scans", action="store_true")
+    parser.add_argument("--scans", type=Path, default=SCANS)
+    args = parser.parse_args()
+    _run(Form("ovate").leaf(), ls.Params(grid=32))  # compile the kernels before timing
+    timing()
+    vein_distances()
+    forms_over_poses(args.poses)
+    if not args.no_scans:
+        scans(args.scans)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
