@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import shapely
 
+from leafstudio.core.base import fit_base
 from leafstudio.core.bend import Pose
 from leafstudio.core.prepare.vein_order import veins_inside_outline
 from leafstudio.errors import LeafError
@@ -200,7 +201,11 @@ class Form:
             seed=self.seed,
             apex=xy[outline.apex_index],
         )
-        flat = Leaf(np.column_stack([xy, self._wave(outline)]), veins)
+        wave = self._wave(outline)
+        base = fit_base(xy, wave, 1.0)  # the wave's surface (the pipeline's b): veins ride on it
+        if base is not None:
+            veins = [np.column_stack([v[:, :2], v[:, 2] + base(v[:, :2])]) for v in veins]
+        flat = Leaf(np.column_stack([xy, wave]), veins)
         if self.fold == 0 and self.curl == 0:
             return Leaf(flat.boundary, _veins_on_blade(flat.boundary, flat.veins))
         # the leaf knows its pose: reconstruction runs on the flat blade and bends the mesh
