@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 import leafstudio as ls
-from leafstudio.core.analysis import margin_creases
+from leafstudio.core.evaluate import margin_creases
 from leafstudio.errors import LeafError
 from leafstudio.forms.make import Form
 from leafstudio.forms.terms import SHAPES
