@@ -67,10 +67,10 @@ def test_a_drawn_leaf_with_hand_raised_veins_passes_through_them_without_new_cre
         assert ours[band] <= 1.1 * theirs[band]
 
 
-def test_a_folded_form_keeps_its_margin_on_the_boundary():
-    """The correction lives inside the taper: on a base surface (a fold's raised margin) the mesh's
+def test_a_wavy_form_keeps_its_margin_on_the_boundary():
+    """The correction lives inside the taper: on a base surface (a wavy margin's) the mesh's
     margin stays on the boundary's heights, and outside the margin z is the base exactly."""
-    leaf = make_form("elliptic", fold=40)
+    leaf = make_form("elliptic", wave=0.05)
     result = _run(leaf, k=3)
     assert result.metrics["boundary"]["max"] <= 1e-9 * result.length
     unit = result.unit
