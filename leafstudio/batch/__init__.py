@@ -20,7 +20,13 @@ format), executors (local processes, Dask), run (`Batch`, `batch`). The command 
 leafstudio/cli/batch.py.
 """
 
-from leafstudio.batch.executors import INSTALL_CLUSTER, LOCAL_CLUSTER_CONFIG, DaskCluster, LocalPool
+from leafstudio.batch.executors import (
+    INSTALL_CLUSTER,
+    LOCAL_CLUSTER_CONFIG,
+    DaskCluster,
+    LocalPool,
+    check_scheduler,
+)
 from leafstudio.batch.plan import Job, file_hash, find_inputs, plan, resumable
 from leafstudio.batch.run import IN_FLIGHT_PER_WORKER, Batch, batch, remove_temporaries
 from leafstudio.batch.settings import (
@@ -56,6 +62,7 @@ __all__ = [
     "Settings",
     "TraitTable",
     "batch",
+    "check_scheduler",
     "columns",
     "file_hash",
     "find_inputs",

@@ -4,15 +4,18 @@ died with the job in flight) and close()."""
 
 from __future__ import annotations
 
+import multiprocessing
 import signal
+import sys
 import threading
+import types
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 from leafstudio.batch.plan import Job
 from leafstudio.batch.worker import run_failed, run_job, worker_start
-from leafstudio.errors import LeafError
+from leafstudio.errors import LeafError, shorten
 
 # Dask settings for `--scheduler local` (measured: a batch of scans ran 1.5-2x faster): no
 # statistical profiler sampling the task's stack every 10 ms, and no malloc trimming past 64 kB
@@ -24,14 +27,61 @@ LOCAL_CLUSTER_CONFIG = {
 INSTALL_CLUSTER = "pip install 'leafstudio[cluster]' (or: pip install distributed)"
 
 
+def check_scheduler(address: str) -> None:
+    """Refuse, before any work, a scheduler that no run could use (LeafError): Dask distributed
+    not installed, or an address that is neither `local` nor HOST:PORT of a scheme distributed
+    knows (inproc:// names a scheduler inside one process, never this batch's)."""
+    try:
+        import distributed.comm.addressing as addressing  # an optional extra
+    except ImportError:
+        raise LeafError(f"--scheduler needs Dask distributed: {INSTALL_CLUSTER}") from None
+    if address == "local":
+        return
+    try:
+        scheme, _ = addressing.parse_address(address)
+        if scheme == "inproc":
+            raise ValueError("an inproc:// scheduler lives inside one process")
+        addressing.get_address_host_port(address)
+    except (ValueError, TypeError) as exc:
+        raise LeafError(
+            f"not a Dask scheduler address ({shorten(str(exc), 160)}); use tcp://HOST:PORT, or "
+            "local for a cluster on this machine",
+            address,
+        ) from None
+
+
+class _WorkerProcess(multiprocessing.context.SpawnProcess):
+    """A spawned worker that does not import the parent's `__main__`: a plain script calling
+    ls.batch (no `if __name__ == "__main__":` guard) would otherwise run again in every worker,
+    which then fails starting a pool of its own. The worker needs nothing from `__main__`: its
+    job and function are leafstudio's."""
+
+    @staticmethod
+    def _Popen(process_obj: Any) -> Any:  # multiprocessing's name
+        # spawn's preparation data names the main module (its path or name) when it has one;
+        # an empty stand-in, as in an interactive session, names none. Swapped only while the
+        # process is launched, in the thread that submits.
+        main = sys.modules["__main__"]
+        sys.modules["__main__"] = types.ModuleType("__main__")
+        try:
+            return multiprocessing.context.SpawnProcess._Popen(process_obj)
+        finally:
+            sys.modules["__main__"] = main
+
+
+class _WorkerContext(multiprocessing.context.SpawnContext):
+    """The spawn start method, with workers that do not import `__main__` (_WorkerProcess)."""
+
+    Process = _WorkerProcess
+
+
 class LocalPool:
-    """A pool of worker processes on this machine (spawned: each imports once)."""
+    """A pool of worker processes on this machine (spawned: each imports once; see
+    _WorkerProcess)."""
 
     def __init__(self, jobs: int) -> None:
-        import multiprocessing
-
         self.workers = jobs
-        self._context = multiprocessing.get_context("spawn")
+        self._context = _WorkerContext()
         self._pool = self._new_pool()
 
     def _new_pool(self) -> ProcessPoolExecutor:
@@ -73,11 +123,10 @@ class DaskCluster:
     """A Dask distributed cluster: an existing one by address, or a LocalCluster for the run."""
 
     def __init__(self, address: str, jobs: int) -> None:
-        try:
-            from distributed import Client, LocalCluster
-        except ImportError:
-            raise LeafError(f"--scheduler needs Dask distributed: {INSTALL_CLUSTER}") from None
+        check_scheduler(address)
         import logging
+
+        from distributed import Client, LocalCluster  # an optional extra
 
         self._cluster = None
         try:
@@ -98,7 +147,7 @@ class DaskCluster:
                 self._client = Client(self._cluster)
             else:
                 self._client = Client(address, timeout="10s")
-        except OSError as exc:
+        except (OSError, ValueError, TypeError) as exc:  # refused, timed out, or not a scheduler
             if self._cluster is not None:
                 self._cluster.close()
             raise LeafError(f"cannot reach the Dask scheduler ({exc})", address) from None

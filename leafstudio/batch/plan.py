@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from leafstudio._shared.inputs import check_input_file
 from leafstudio.batch.settings import Settings
 from leafstudio.errors import LeafError
 
@@ -131,7 +132,9 @@ def plan(
 
 
 def file_hash(path: str | os.PathLike) -> str:
-    """sha256 of a file's content (hex)."""
+    """sha256 of a file's content (hex); LeafError for anything but a regular file (a pipe
+    would block for ever, /dev/zero never end), checked before it is opened."""
+    check_input_file(path, limit=None)
     with open(path, "rb") as handle:
         return hashlib.file_digest(handle, "sha256").hexdigest()
 
@@ -157,7 +160,7 @@ def resumable(
             same = row.get("sha256") == file_hash(job.path) and (
                 not job.mesh or row.get("mesh_sha256") == file_hash(out_dir / job.mesh)
             )
-        except OSError:
+        except (OSError, LeafError):  # gone, unreadable, or no longer a regular file
             same = False
         if same:
             kept[job.input] = row

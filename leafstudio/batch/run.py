@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from leafstudio._shared.safewrite import stale_part
-from leafstudio.batch.executors import DaskCluster, LocalPool
+from leafstudio.batch.executors import DaskCluster, LocalPool, check_scheduler
 from leafstudio.batch.plan import Job, plan, resumable
 from leafstudio.batch.settings import DEFAULT_TABLE, FORMATS, Settings
 from leafstudio.batch.table import TraitTable
@@ -45,7 +45,8 @@ def remove_temporaries(
 class Batch:
     """A batch run: planned when made (bad arguments raise LeafError at once), run by iterating,
     which yields one row (a dict of the table's columns) per input as it completes; rows resumed
-    from an earlier run come first.
+    from an earlier run come first. When every input failed, iterating ends in a LeafError once
+    every row is yielded and written (a script's loop over the rows then exits non-zero).
 
     Attributes
     ----------
@@ -78,6 +79,8 @@ class Batch:
             raise LeafError(f"unknown mesh format {format!r}; use one of {', '.join(FORMATS)}")
         if jobs is not None and jobs < 1:
             raise LeafError(f"--jobs must be 1 or more, got {jobs}")
+        if scheduler is not None:
+            check_scheduler(scheduler)
         self.out_dir = Path(out_dir)
         if self.out_dir.exists() and not self.out_dir.is_dir():
             raise LeafError("is a file, not a folder", str(self.out_dir))
@@ -108,6 +111,16 @@ class Batch:
         return resumable(self.jobs, self.table.rows(), self.settings, self.out_dir)
 
     def __iter__(self) -> Iterator[dict[str, Any]]:
+        yield from self.run()
+        if self.failed and self.failed == self.total:
+            raise LeafError(
+                f"every input failed ({self.total}); the table's error column says why",
+                str(self.table.path),
+            )
+
+    def run(self) -> Iterator[dict[str, Any]]:
+        """The rows, as iterating yields them, without the error when every input failed (the
+        command line says so in its summary and exit code)."""
         # what a killed run's atomic writes left: meshes under out_dir, the table beside it
         if self.settings.format != "none":
             companions = (".mtl", ".png") if self.settings.format == "obj" else ()
@@ -118,17 +131,18 @@ class Batch:
         self.resumed = len(kept)
         executor = None
         try:
-            self.table.start(kept[j.input] for j in self.jobs if j.input in kept)
-            for job in self.jobs:
-                if job.input in kept:
-                    yield kept[job.input]
-            todo = (job for job in self.jobs if job.input not in kept)
-            if self.resumed < self.total:
+            if self.resumed < self.total:  # first: a scheduler out of reach leaves no table
                 executor = (
                     DaskCluster(self.scheduler, self.workers)
                     if self.scheduler
                     else LocalPool(self.workers)
                 )
+            self.table.start(kept[j.input] for j in self.jobs if j.input in kept)
+            for job in self.jobs:
+                if job.input in kept:
+                    yield kept[job.input]
+            if executor is not None:
+                todo = (job for job in self.jobs if job.input not in kept)
                 yield from self._stream(executor, todo)
         finally:
             if executor is not None:

@@ -13,17 +13,22 @@ from pathlib import Path
 from typing import Any
 
 from leafstudio.batch.settings import FLOAT_COLUMNS, INT_COLUMNS, columns
-from leafstudio.errors import LeafError
+from leafstudio.errors import LeafError, shorten
 
 
 def _parse(name: str, text: str) -> Any:
-    """A CSV cell back to its value ("" is None)."""
+    """A CSV cell back to its value ("" is None); LeafError for a number column that holds
+    something else (a table edited by hand)."""
     if text == "":
         return None
-    if name in INT_COLUMNS:
-        return int(text)
-    if name in FLOAT_COLUMNS:
-        return float(text)
+    try:
+        if name in INT_COLUMNS:
+            return int(text)
+        if name in FLOAT_COLUMNS:
+            return float(text)
+    except ValueError:
+        kind = "a whole number" if name in INT_COLUMNS else "a number"
+        raise LeafError(f"{name} is {shorten(text, 40)!r}, not {kind}") from None
     return text
 
 
@@ -123,7 +128,10 @@ class CsvFormat(_LineFormat):
             return
         for cells in reader:
             if len(cells) == len(header):
-                yield {n: _parse(n, c) for n, c in zip(header, cells, strict=True)}
+                try:
+                    yield {n: _parse(n, c) for n, c in zip(header, cells, strict=True)}
+                except LeafError as exc:
+                    raise LeafError(f"row {reader.line_num - 1}: {exc.problem}") from None
 
     def is_first_line(self, first: str) -> bool:
         return first.startswith("input,status,")
@@ -252,10 +260,17 @@ class TraitTable:
         return not self.format.is_table(self.path)
 
     def rows(self) -> Iterator[dict[str, Any]]:
-        """The complete rows in the journal (a row cut short by a kill is left out)."""
+        """The complete rows in the journal (a row cut short by a kill is left out); LeafError
+        naming the table for a row whose number is not one."""
         source = self.journal if self.journal.exists() else self.path
-        if source.exists():
+        if not source.exists():
+            return
+        try:
             yield from self.format.rows(source)
+        except LeafError as exc:  # a row edited by hand: said, not resumed over (nor dropped)
+            raise LeafError(
+                f"{exc.problem}; correct it, or run without --resume", str(source)
+            ) from None
 
     # writing -----------------------------------------------------------------------------
     def start(self, keep: Iterable[dict[str, Any]] = ()) -> None:

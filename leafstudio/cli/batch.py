@@ -89,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
     )
     try:
         with bar:
-            for row in running:
+            for row in running.run():
                 if row["status"] != "ok":
                     internal = str(row["error"]).startswith("internal error:")
                     bar.write(

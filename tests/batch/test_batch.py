@@ -159,9 +159,8 @@ def test_usage_errors_exit_2(tmp_path, leaves, capsys):
 
 def test_without_distributed_the_scheduler_says_how_to_install_it(tmp_path, leaves, monkeypatch):
     monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed fails
-    run = ls.batch([leaves], ls.Params(grid=32), tmp_path / "out", scheduler="local")
     with pytest.raises(LeafError, match=r"pip install 'leafstudio\[cluster\]'"):
-        list(run)
+        ls.batch([leaves], ls.Params(grid=32), tmp_path / "out", scheduler="local")
 
 
 def test_fail_fast_stops_at_the_first_failure(tmp_path, leaves):

@@ -1,0 +1,143 @@
+"""Issue 24, batch's findings: `ls.batch` from a plain script (no `__main__` guard), a batch whose
+every input failed, a refused --scheduler leaving a table behind, scheduler addresses and a
+damaged --resume table answered in one line, and inputs that are pipes or endless devices."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import leafstudio as ls
+from leafstudio.cli import main
+from leafstudio.errors import LeafError
+
+ROOT = Path(__file__).resolve().parents[2]
+LEAFSTUDIO = [sys.executable, "-m", "leafstudio"]
+
+
+@pytest.fixture(scope="module")
+def leaves(tmp_path_factory) -> Path:
+    """Two leaf files."""
+    root = tmp_path_factory.mktemp("two")
+    demo = ls.demo("nested")
+    for i in range(2):
+        ls.save_leaf(ls.Leaf(boundary=demo.boundary + i, veins=[v + i for v in demo.veins]),
+                     root / f"leaf{i}.csv")  # fmt: skip
+    return root
+
+
+def _script(tmp_path: Path, inputs: str) -> subprocess.CompletedProcess:
+    """The README's `ls.batch` example saved as a plain script (no __main__ guard), and run."""
+    script = tmp_path / "plain.py"
+    script.write_text(
+        "import leafstudio as ls\n"
+        f"for row in ls.batch([{inputs!r}], ls.Params(grid=32), {str(tmp_path / 'out')!r}, "
+        "jobs=1):\n"
+        "    print(row['input'], row['status'], row['error'])\n"
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                          timeout=300, env=env, cwd=tmp_path)  # fmt: skip
+
+
+def test_a_plain_script_without_a_main_guard_runs_its_batch(tmp_path, leaves):
+    """Finding 2: every row failed with "the worker process died" (each spawned worker ran the
+    script again while importing it), a bootstrapping traceback was printed, and it exited 0."""
+    done = _script(tmp_path, str(leaves))
+    assert done.returncode == 0, done.stderr
+    assert "Traceback" not in done.stderr
+    lines = done.stdout.splitlines()
+    assert len(lines) == 2 and all(line.split()[1] == "ok" for line in lines), done.stdout
+
+
+def test_a_batch_whose_every_input_failed_raises(tmp_path):
+    """Finding 3: a script whose every input failed exited 0; ls.batch now raises LeafError once
+    every row is yielded and written, so the script exits non-zero."""
+    bad = tmp_path / "bad.csv"
+    bad.write_text("1 2\n")
+    rows = []
+    with pytest.raises(LeafError, match="every input failed"):
+        rows.extend(ls.batch([bad], ls.Params(grid=32), tmp_path / "out", jobs=1))
+    assert [r["status"] for r in rows] == ["failed"]
+    assert (tmp_path / "out" / "traits.csv").read_text().count("\n") == 2  # the row is written
+    done = _script(tmp_path, str(bad))
+    assert done.returncode != 0 and "every input failed" in done.stderr
+    assert "bad.csv failed" in done.stdout
+
+
+def _line(argv: list[str], capsys) -> str:
+    capsys.readouterr()
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    return err.strip()
+
+
+def test_a_scheduler_refused_for_a_missing_extra_leaves_no_table(tmp_path, leaves, monkeypatch,
+                                                                 capsys):  # fmt: skip
+    """Finding 12: exit 2, but OUTDIR/traits.csv was left behind."""
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed fails
+    out = tmp_path / "out"
+    line = _line(["batch", str(leaves), "-o", str(out), "--scheduler", "local"], capsys)
+    assert "pip install 'leafstudio[cluster]'" in line
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "address",
+    ["foo://127.0.0.1:8786", "tcp://127.0.0.1", "not an address", "tcp://[::1", "inproc://nothing",
+     "LOCAL"],
+)  # fmt: skip
+def test_a_bad_scheduler_address_is_one_line(tmp_path, leaves, capsys, address):
+    """Finding 16: these ended in "internal error" (only OSError was caught)."""
+    pytest.importorskip("distributed")
+    out = tmp_path / "out"
+    line = _line(["batch", str(leaves), "-o", str(out), "--scheduler", address], capsys)
+    assert line.startswith(f"leafstudio: error: {address}: ")
+    assert not out.exists()
+
+
+def test_resume_over_a_table_with_a_damaged_field_is_one_line(tmp_path, leaves, capsys):
+    """Finding 16: `--resume` over a table whose `k` is not a whole number was an internal error."""
+    out = tmp_path / "out"
+    argv = ["batch", str(leaves / "leaf0.csv"), "-o", str(out), "--grid", "32", "--jobs", "1"]
+    assert main(argv) == 0
+    table = out / "traits.csv"
+    header, row = table.read_text().splitlines()
+    names = header.split(",")
+    cells = row.split(",")
+    cells[names.index("k")] = "three"
+    damaged = f"{header}\n{','.join(cells)}\n"
+    table.write_text(damaged)
+    line = _line([*argv, "--resume"], capsys)
+    assert line.startswith(f"leafstudio: error: {table}: ") and "'three'" in line
+    assert table.read_text() == damaged  # left as it was
+
+
+def test_pipes_and_endless_devices_are_refused_in_one_line(tmp_path):
+    """Finding 17: batch hashed each input before checking what it was: a FIFO blocked for ever,
+    a link to /dev/zero read for ever, named outright or inside a folder."""
+    fifo = tmp_path / "pipe.csv"
+    os.mkfifo(fifo)
+    zero = tmp_path / "zero.csv"
+    zero.symlink_to("/dev/zero")
+    folder = tmp_path / "folder"
+    folder.mkdir()
+    os.mkfifo(folder / "inner.csv")
+    (folder / "endless.xyz").symlink_to("/dev/zero")
+    done = subprocess.run(
+        [*LEAFSTUDIO, "batch", str(fifo), str(zero), str(folder), "-o", str(tmp_path / "out"),
+         "--jobs", "1"],
+        capture_output=True, text=True, timeout=240, cwd=tmp_path,
+    )  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    errors = [line for line in done.stderr.splitlines() if line.startswith("leafstudio: error:")]
+    assert sorted(errors) == sorted(
+        f"leafstudio: error: {path}: is a device or a pipe, not a regular file"
+        for path in (fifo, zero, folder / "inner.csv", folder / "endless.xyz")
+    )
+    assert "4 inputs: 0 ok, 4 failed" in done.stderr
