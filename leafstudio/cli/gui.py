@@ -15,7 +15,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the app on the file given (the nested demo without one)."""
+    """Run the app on the file given (the nested demo without one); a screenshot that would
+    replace the file opened is refused before the app starts."""
+    from leafstudio._shared.safewrite import refuse_overlap
     from leafstudio.gui.qt.app import run_app
 
-    return run_app(getattr(args, "file", None), getattr(args, "screenshot", None))
+    path, screenshot = getattr(args, "file", None), getattr(args, "screenshot", None)
+    refuse_overlap([path], [screenshot])
+    return run_app(path, screenshot)

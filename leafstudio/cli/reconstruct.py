@@ -80,8 +80,8 @@ def run(args: argparse.Namespace) -> int:
     """Read, check, compute everything, then write every output together (safewrite.staged):
     a run that fails anywhere leaves all old outputs as they were."""
     from leafstudio._shared.safewrite import check_outputs, staged, write_bytes
-    from leafstudio.assets.export import save_mesh
-    from leafstudio.assets.writers import MESH_SUFFIXES
+    from leafstudio.assets.export import TEXTURES, save_mesh
+    from leafstudio.assets.writers import MESH_SUFFIXES, written_paths
     from leafstudio.render.figure import check_figure_path
     from leafstudio.sources.files import load_leaf
 
@@ -96,8 +96,10 @@ def run(args: argparse.Namespace) -> int:
 
     turntable = check_turntable_path(args.turntable) if args.turntable else None
     steps = check_figure_path(args.steps_figure) if args.steps_figure else None
-    outputs = [out, args.metrics, figure, turntable, steps]  # every file this command writes
-    check_outputs([args.input, *args.vein, args.against], outputs)
+    image = None if args.texture in TEXTURES else args.texture  # an input too
+    meshes = written_paths(out, args.lod + 1, textured=True)  # with the levels and companions
+    outputs = [*meshes, args.metrics, figure, turntable, steps]  # every file this command writes
+    check_outputs([args.input, *args.vein, args.against, image], outputs)
     leaf = load_leaf(args.input, veins=args.vein)
     scan = None
     if args.against:
