@@ -218,7 +218,9 @@ def batch(
     ------
     LeafError
         For a bad option (an unknown format or table type, a table that would overwrite an
-        input); a bad input is a "failed" row instead, and the others go on.
+        input, a --scheduler that cannot be used); a bad input is a "failed" row instead, and
+        the others go on. Iterating raises it at the end, once every row is written, when every
+        input failed.
 
     Examples
     --------
