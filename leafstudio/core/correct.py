@@ -49,7 +49,8 @@ CLOSE_ENOUGH = 2e-4  # of the length: a band point this close to the surface nee
 FLAT_SPREAD = 1e-6  # centres spread less than this (of the length) across a line lie on it
 HESSIAN_CUT = 1e-3  # ∇²φ's log r is taken as log max(r, this share of the length)
 JUNCTION = 0.011  # of the length: a vein's points this near an earlier vein's are left to it
-MOST_CENTERS = 3000  # beyond this the veins are thinned further (the solve grows as its cube)
+MOST_CENTERS = 800  # beyond this the veins are thinned further: the dense solve grows as its
+# cube (3000 centres took seconds a run; the app reruns this on every slider step)
 
 
 @dataclass(frozen=True)
