@@ -101,18 +101,17 @@ def run(args: argparse.Namespace) -> int:
     outputs = [*meshes, args.metrics, figure, turntable, steps]  # every file this command writes
     check_outputs([args.input, *args.vein, args.against, image], outputs)
     leaf = load_leaf(args.input, veins=args.vein)
-    scan = None
-    if args.against:
-        from leafstudio.sources.scan import read_scan
+    against = None
+    if args.against:  # read (and its blade found, as extract finds it) before the run
+        from leafstudio.workflows import open_scan
 
-        scan = read_scan(args.against)
+        against = open_scan(args.against, force=True)
     params, result = run_pipeline(args, leaf)
     fidelity = None
-    if scan is not None:
+    if against is not None:
         from leafstudio.analysis.fidelity import scan_distances
-        from leafstudio.sources.extract import split_scan
 
-        blade = split_scan(scan)[0]
+        scan, blade = against.scan, against.extraction.blade
         fidelity = {
             "all": scan_distances(result.triangle_mesh, scan, result.length),
             "blade": scan_distances(result.triangle_mesh, scan[blade], result.length),
