@@ -319,7 +319,8 @@ class FormsPanel(QWidget):
 
 
 def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPanel:
-    """Add the Forms dock to the main window (a tab beside the Sketch dock): a chosen form
+    """Add the Forms dock to the main window (below the Sketch dock, both in sight at a first
+    start as in the README's picture; a saved layout is restored over it): a chosen form
     becomes the document through the window's session (one undo step); Grow veins edits the
     current sketch (one undo step). Returns the dock's panel."""
     panel = FormsPanel()
@@ -367,7 +368,7 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
     panel.chosen.connect(choose)
     panel.grow.connect(grow)
     _add_grow_row(window.editor, grow)
-    window.add_dock("Forms", panel, dock_area, tab_with="Sketch")  # both want the height
+    window.add_dock("Forms", panel, dock_area)  # stacked below the Sketch dock
     return panel
 
 
