@@ -128,7 +128,7 @@ MARGINS: dict[str, str] = {
     "dentate": "teeth pointing straight outward",
     "crenate": "rounded teeth, with sharp notches between them",
     "sinuate": "a few shallow waves in and out, in the blade's plane",
-    "lobed": "cut into lobes by sinuses deeper than a tenth of the width (--lobes N: N in all)",
+    "lobed": "cut into lobes by sinuses deeper than a tenth of the width",
 }
 TOOTHED = ("serrate", "serrulate", "dentate", "crenate", "sinuate")
 DEFAULT_TEETH = {"serrate": 36, "serrulate": 80, "dentate": 24, "crenate": 24, "sinuate": 8}
@@ -143,18 +143,27 @@ VENATIONS: dict[str, str] = {
     "toward the next (brochidodromous)",
 }
 
-RELIEF: dict[str, str] = {
-    "fold": "--fold DEG: the two halves rise from the midrib by this angle, like a half-open book",
-    "curl": "--curl C: the midrib bends so the apex rises C leaf lengths (droops, if negative)",
-    "wave": "--wave A: the margin rises and falls in waves of this height (in leaf lengths; "
-    "at most half the blade's half-width)",
-    "seed": "--seed S: a variant of the form: tooth spacing, lobe depth, vein angles and width "
-    "vary slightly; the same seed gives the same leaf",
-    "aspect": "--aspect L/W: the length over the greatest width (each shape has its own usual "
-    "value)",
-    "teeth": "--teeth N: N teeth (or waves) in all, on both sides",
-    "lobes": "--lobes N: N lobes in all, with a lobed margin",
-    "secondaries": "--secondaries N: secondary veins on each side of the midrib",
+RELIEF: dict[str, str] = {  # plain words (the app shows them); FLAGS adds the CLI's syntax
+    "fold": "the two halves rise from the midrib by this angle, like a half-open book",
+    "curl": "the midrib bends so the apex rises by this many leaf lengths (droops, if negative)",
+    "wave": "the margin rises and falls in waves of this height (in leaf lengths; at most half "
+    "the blade's half-width)",
+    "seed": "a variant of the form: tooth spacing, lobe depth, vein angles and width vary "
+    "slightly; the same seed gives the same leaf",
+    "aspect": "the length over the greatest width (each shape has its own usual value)",
+    "teeth": "how many teeth (or waves) in all, on both sides",
+    "lobes": "how many lobes in all, with a lobed margin",
+    "secondaries": "how many secondary veins on each side of the midrib",
+}
+FLAGS: dict[str, str] = {  # each RELIEF term's command-line option, for `form --list`
+    "fold": "--fold DEG",
+    "curl": "--curl C",
+    "wave": "--wave A",
+    "seed": "--seed S",
+    "aspect": "--aspect L/W",
+    "teeth": "--teeth N",
+    "lobes": "--lobes N",
+    "secondaries": "--secondaries N",
 }
 
 CATEGORIES: dict[str, dict[str, str]] = {
@@ -192,10 +201,12 @@ def check_term(kind: str, value: str, allowed: dict[str, str] | tuple[str, ...])
 
 
 def format_terms() -> str:
-    """Every term with its definition, grouped, for `leafstudio form --list`."""
+    """Every term with its definition, grouped, for `leafstudio form --list` (the relief
+    terms with their command-line option, e.g. "--teeth N: how many teeth ...")."""
     lines = []
     for group, terms in CATEGORIES.items():
         lines.append(f"{group}:")
         width = max(len(t) for t in terms)
-        lines += [f"  {term:<{width}}  {text}" for term, text in terms.items()]
+        flagged = {t: f"{FLAGS[t]}: {text}" if t in FLAGS else text for t, text in terms.items()}
+        lines += [f"  {term:<{width}}  {text}" for term, text in flagged.items()]
     return "\n".join(lines)

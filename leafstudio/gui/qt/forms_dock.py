@@ -41,6 +41,7 @@ from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.model import Leaf
 
 THUMBNAIL = 84  # pixels
+GALLERY_SPACING = 14  # pixels around each thumbnail and its name
 BOUNDARY_CONTROL = 48  # a form's sketch: about this many boundary control points, plus corners
 CORNER_TURN = 0.35  # radians: outline points turning this sharply (tooth tips, notches) are kept
 VEIN_CONTROL = 8
@@ -49,26 +50,29 @@ _thumbnails: dict[tuple[str, int], QImage] = {}
 
 
 def thumbnail(shape: str, size: int = THUMBNAIL) -> QImage:
-    """The shape's canonical form drawn in a `size` square (outline filled, veins on it); drawn
+    """The shape's canonical form drawn in a `size` square (outline filled, veins on it), sitting
+    on the square's lower edge so that the gallery's name right under it reads as its own; drawn
     once per shape and size, then cached."""
     key = (shape, size)
     if key not in _thumbnails:
-        _thumbnails[key] = draw_leaf(Form(shape).leaf(), size)
+        _thumbnails[key] = draw_leaf(Form(shape).leaf(), size, sit=True)
     return _thumbnails[key]
 
 
-def draw_leaf(leaf: Leaf, size: int) -> QImage:
-    """A leaf's outline and veins seen from above, fitted in a `size` square."""
+def draw_leaf(leaf: Leaf, size: int, sit: bool = False) -> QImage:
+    """A leaf's outline and veins seen from above, fitted in a `size` square: centred, or with
+    `sit` resting on the square's lower edge (a pixel or two below)."""
     image = QImage(size, size, QImage.Format.Format_ARGB32_Premultiplied)
     image.fill(Qt.GlobalColor.transparent)
     xy = leaf.boundary[:, :2]
     lo, hi = xy.min(axis=0), xy.max(axis=0)
     scale = 0.9 * size / max(float((hi - lo).max()), 1e-12)
     centre = (lo + hi) / 2
+    middle = 0.98 * size - (hi - lo)[1] * scale / 2 if sit else size / 2  # the centre's row
 
     def point(p: np.ndarray) -> QPointF:
         q = (p[:2] - centre) * scale
-        return QPointF(size / 2 + q[0], size / 2 - q[1])
+        return QPointF(size / 2 + q[0], middle - q[1])
 
     painter = QPainter(image)
     painter.setRenderHint(QPainter.RenderHint.Antialiasing)
@@ -147,8 +151,8 @@ class FormsPanel(QWidget):
         self.gallery.setIconSize(QSize(THUMBNAIL, THUMBNAIL))
         self.gallery.setResizeMode(QListView.ResizeMode.Adjust)
         self.gallery.setMovement(QListView.Movement.Static)
-        self.gallery.setSpacing(4)
-        self.gallery.setFixedHeight(2 * (THUMBNAIL + 34))
+        self.gallery.setSpacing(GALLERY_SPACING)  # rows apart: each name reads as its picture's
+        self.gallery.setFixedHeight(2 * (THUMBNAIL + 30 + 2 * GALLERY_SPACING))
         for name in SHAPES:
             item = QListWidgetItem(QIcon(QPixmap.fromImage(thumbnail(name))), name)
             item.setData(Qt.ItemDataRole.UserRole, name)
@@ -300,7 +304,7 @@ class FormsPanel(QWidget):
         self.texts["Lobes"].setText(RELIEF["lobes"])
         self.texts["Venation"].setText(definition(form_.venation))
         for name in ("Fold", "Curl", "Wave"):
-            self.texts[name].setText(RELIEF[name.lower()].split(": ", 1)[1])
+            self.texts[name].setText(RELIEF[name.lower()])
 
     def _changed(self, picked: bool = False) -> None:
         self._picked = self._picked or picked

@@ -4,9 +4,14 @@ undo from a parameter field."""
 
 from __future__ import annotations
 
-from PySide6.QtCore import QSettings
+import itertools
+import re
 
-from tests.gui.qt.conftest import close_window, make_window
+import numpy as np
+from PySide6.QtCore import QSettings, Qt
+
+from leafstudio.gui.qt.forms_dock import FormsPanel
+from tests.gui.qt.conftest import close_window, image_pixels, make_window
 
 
 def _shown(dock) -> bool:
@@ -30,3 +35,57 @@ def test_a_fresh_start_shows_the_forms_dock_and_a_saved_layout_is_kept(qtbot, tm
     assert QSettings(str(tmp_path / "fresh.ini"), QSettings.Format.IniFormat).contains(
         "window/state"
     )
+
+
+def _gallery_rows(gallery, image, item) -> tuple[np.ndarray, np.ndarray]:
+    """Rows (viewport pixels) of an item's drawn leaf (green) and of its name (grey text)."""
+    rect = gallery.visualItemRect(item)
+    pixels = image_pixels(image)[rect.top() : rect.bottom() + 1, rect.left() : rect.right() + 1]
+    rgb = pixels.astype(int)
+    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+    leaf = (g > r + 20) & (g > b + 20)
+    text = (rgb.max(axis=2) < 140) & ~leaf
+    return rect.top() + np.flatnonzero(leaf.any(axis=1)), rect.top() + np.flatnonzero(
+        text.any(axis=1)
+    )
+
+
+def test_each_gallery_name_sits_nearer_its_own_picture_than_the_next_rows(qtbot):
+    panel = FormsPanel()
+    qtbot.addWidget(panel)
+    panel.resize(420, 600)
+    panel.show()
+    qtbot.waitExposed(panel)
+    gallery = panel.gallery
+    gallery.setFixedHeight(1200)  # every row in sight
+    qtbot.wait(50)
+    image = gallery.viewport().grab().toImage()
+    items = [gallery.item(i) for i in range(gallery.count())]
+    columns: dict[int, list] = {}
+    for item in items:
+        columns.setdefault(gallery.visualItemRect(item).left(), []).append(item)
+    pairs = 0
+    for column in columns.values():
+        column.sort(key=lambda it: gallery.visualItemRect(it).top())
+        for above, below in itertools.pairwise(column):
+            if gallery.currentItem() in (above, below):
+                continue  # the selection's highlight is not a name's grey
+            leaf, text = _gallery_rows(gallery, image, above)
+            next_leaf, _ = _gallery_rows(gallery, image, below)
+            name = text[text > leaf.max()]
+            own, other = name.min() - leaf.max(), next_leaf.min() - name.max()
+            assert own < other / 2, (above.text(), below.text(), own, other)
+            pairs += 1
+    assert pairs >= 4
+
+
+def test_the_forms_texts_are_words_not_command_line_syntax(qtbot):
+    panel = FormsPanel()
+    qtbot.addWidget(panel)
+    panel.margin.setCurrentText("lobed")
+    texts = [label.text() for label in panel.texts.values()]
+    texts += [box.toolTip() for box in (panel.teeth, panel.lobes, panel.fold, panel.curl)]
+    texts += [box.toolTip() for box in (panel.wave, panel.seed)]
+    texts += [panel.margin.itemData(i, Qt.ItemDataRole.ToolTipRole) for i in range(7)]
+    for text in texts:
+        assert "--" not in text and not re.search(r"\b[A-Z]\b", text.replace("L/W", "")), text
