@@ -88,7 +88,7 @@ class FileCommands:
         return self.session.open_path(path, as_scan=as_scan)
 
     def _on_opening(self, path: str, what: str) -> None:
-        name = Path(path).name
+        self.opened_name = name = Path(path).name
         text = {
             "photo": f"Finding the leaf in the photo {name}…",
             "scan": f"Reading the scan {name} and extracting its leaf…",

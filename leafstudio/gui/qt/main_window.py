@@ -76,6 +76,7 @@ class MainWindow(FileCommands, QMainWindow):
         self.resize(1500, 920)
 
         self.last_error_box: QMessageBox | None = None
+        self.opened_name = ""  # the file opened last (its name), which a failure may concern
         self._scan_shown: object = None  # the scan whose layer is drawn (scans.ScanData)
         # Kept in Python: walking menuBar().actions() can hand back a stale wrapper of another
         # type (a QSurface) under PySide6, seen intermittently in the GUI tests.
@@ -348,9 +349,14 @@ class MainWindow(FileCommands, QMainWindow):
         self.result_shown.emit(outcome)
 
     def _on_session_failed(self, message: str, fell_back: bool) -> None:
+        """A failed reconstruction: said in the status, and over the view while the leaf it
+        concerns is the document; a refused file (fell_back) in a box instead, the good leaf
+        back on screen without another file's message over it."""
         self.status_text.setStyleSheet("color: #b00020")
-        self.status_text.setText(f"Failed: {message}")
-        self.viewport.set_message(message)
+        refused = f"{self.opened_name}: " if fell_back and self.opened_name else ""
+        kept = " (the previous leaf is kept)" if fell_back else ""
+        self.status_text.setText(f"Failed: {refused}{message}{kept}")
+        self.viewport.set_message("" if fell_back else message)
         self.editor.view.set_crossings(self.session.crossings)
         if fell_back:
             self.show_error("Cannot reconstruct this leaf", message)

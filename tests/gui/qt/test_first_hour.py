@@ -6,12 +6,13 @@ from __future__ import annotations
 
 import itertools
 import re
+from dataclasses import replace
 
 import numpy as np
 from PySide6.QtCore import QSettings, Qt
 
 from leafstudio.gui.qt.forms_dock import FormsPanel
-from tests.gui.qt.conftest import close_window, image_pixels, make_window
+from tests.gui.qt.conftest import WAIT_MS, close_window, image_pixels, make_window
 
 
 def _shown(dock) -> bool:
@@ -89,3 +90,43 @@ def test_the_forms_texts_are_words_not_command_line_syntax(qtbot):
     texts += [panel.margin.itemData(i, Qt.ItemDataRole.ToolTipRole) for i in range(7)]
     for text in texts:
         assert "--" not in text and not re.search(r"\b[A-Z]\b", text.replace("L/W", "")), text
+
+
+def _failure_over_view(window) -> bool:
+    return "message" in window.viewport.plotter.actors
+
+
+def test_a_refused_files_message_leaves_the_good_leaf_and_a_new_result_clears_the_status(
+    window, qtbot, tmp_path
+):
+    line = tmp_path / "line.csv"  # reads, but cannot be reconstructed: the demo comes back
+    line.write_text("\n".join(f"{t},{2 * t},0" for t in np.linspace(0, 1, 20)) + "\n")
+    bad = tmp_path / "bad.csv"  # cannot be read
+    bad.write_text("x,y,z\n1,2\n")
+    with qtbot.waitSignal(window.failure_shown, timeout=30_000):
+        window.open_path(str(line))
+    window.last_error_box.close()
+    assert window.session.result is not None  # the demo's good leaf is on screen ...
+    assert not _failure_over_view(window)  # ... without the refused file's message over it
+    assert "line.csv" in window.status_text.text()
+    with qtbot.waitSignal(window.failure_shown, timeout=30_000):
+        window.open_path(str(bad))
+    window.last_error_box.close()
+    assert "bad.csv" in window.status_text.text()
+    with qtbot.waitSignal(window.result_shown, timeout=WAIT_MS):
+        window.panel.set_params(replace(window.session.params, k=window.session.params.k + 1))
+        window._on_params_released()
+    qtbot.waitUntil(lambda: window.worker.is_idle())
+    qtbot.wait(100)
+    assert "Failed" not in window.status_text.text() and not _failure_over_view(window)
+    assert window.status_text.styleSheet() == ""
+
+
+def test_a_failure_over_the_view_goes_with_the_next_document(window, qtbot):
+    window.session.accept_failure(window.session.last_id, ValueError("no such leaf"))
+    assert _failure_over_view(window) and "Failed" in window.status_text.text()
+    with qtbot.waitSignal(window.result_shown, timeout=WAIT_MS):
+        window.open_demo("parallel")
+    qtbot.waitUntil(lambda: window.worker.is_idle())
+    qtbot.wait(100)
+    assert not _failure_over_view(window) and "Failed" not in window.status_text.text()
