@@ -9,6 +9,7 @@ usd-core (module pxr, about 160 MB) is the `usd` extra: .usda, .usdc and .usdz m
 from __future__ import annotations
 
 import importlib
+import importlib.util
 from types import ModuleType
 from typing import Any
 
@@ -17,15 +18,28 @@ from leafstudio.errors import LeafError
 EXTRAS = {"open3d": "open3d", "pxr": "usd"}  # module -> the extra that installs it
 
 
+def needs(module: str, feature: str) -> str:
+    """The sentence saying that `feature` needs `module` and which extra installs it."""
+    extra = EXTRAS.get(module, module)
+    return f"{feature} needs {module}, which is not installed: pip install 'leafstudio[{extra}]'"
+
+
 def require(module: str, feature: str) -> ModuleType:
     """Import `module`, or raise LeafError saying that `feature` needs its extra."""
     try:
         return importlib.import_module(module)
     except ImportError:
-        extra = EXTRAS.get(module, module)
-        raise LeafError(
-            f"{feature} needs {module}, which is not installed: pip install 'leafstudio[{extra}]'"
-        ) from None
+        raise LeafError(needs(module, feature)) from None
+
+
+def missing(module: str, feature: str) -> str:
+    """`needs(module, feature)` when `module` cannot be found, else "": found, not imported
+    (importing open3d takes seconds), so a window can disable what needs it at start."""
+    try:
+        found = importlib.util.find_spec(module) is not None
+    except (ImportError, ValueError):
+        found = False
+    return "" if found else needs(module, feature)
 
 
 class LazyModule:

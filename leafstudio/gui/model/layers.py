@@ -16,6 +16,7 @@ import contourpy
 import numpy as np
 import pyvista as pv
 
+from leafstudio._shared.extras import missing
 from leafstudio.assets.asset import leaf_uvs
 from leafstudio.core.pipeline import Result
 from leafstudio.core.trianglemesh import polydata, vertex_normals
@@ -34,6 +35,15 @@ LAYERS: tuple[tuple[str, str, bool], ...] = (
     ("poisson", "Screened Poisson surface (beside ours)", False),
 )
 SIDE_LAYERS = frozenset({"scan", "poisson"})  # not built from a Result (see scans.py)
+LAYER_EXTRAS = {"poisson": ("open3d", "The screened Poisson surface")}  # module, feature
+
+
+def unavailable(key: str) -> str:
+    """Why layer `key` cannot be shown (the extra to install), or "" when it can."""
+    module, feature = LAYER_EXTRAS.get(key, ("", ""))
+    return missing(module, feature) if module else ""
+
+
 BOUNDARY_COLOR = "#303030"
 VEIN_COLORS = ("#d62728", "#1f77b4", "#ff7f0e", "#9467bd", "#17becf", "#e377c2", "#8c564b")
 SCALAR_BARS = {"mesh": "height", "probability": "p(x)"}

@@ -81,13 +81,14 @@ LAYER_HELP: dict[str, str] = {
 
 
 def add_layer_help(window) -> None:
-    """Give each item of the window's layer list its LAYER_HELP tooltip."""
+    """Give each item of the window's layer list its LAYER_HELP tooltip, after what the item
+    says already (the extra a disabled layer needs)."""
     layers = window.layer_list
     for i in range(layers.count()):
         item = layers.item(i)
         text = LAYER_HELP.get(item.data(Qt.ItemDataRole.UserRole))
         if text:
-            item.setToolTip(text)
+            item.setToolTip(f"{item.toolTip()}\n\n{text}" if item.toolTip() else text)
 
 
 class StepsDialog(QDialog):

@@ -18,7 +18,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from leafstudio.gui.model.layers import LAYERS, MESH_COLORINGS
+from leafstudio.gui.model.layers import LAYERS, MESH_COLORINGS, unavailable
 from leafstudio.gui.model.textures import TEXTURE, TEXTURE_LABEL
 from leafstudio.gui.qt.viewport import CAMERAS
 
@@ -42,6 +42,10 @@ class LayersPanel(QWidget):
             item.setData(Qt.ItemDataRole.UserRole, key)
             item.setFlags(item.flags() | Qt.ItemFlag.ItemIsUserCheckable)
             item.setCheckState(Qt.CheckState.Checked if on else Qt.CheckState.Unchecked)
+            if why := unavailable(key):  # a missing extra: said where the user looks
+                item.setFlags(item.flags() & ~Qt.ItemFlag.ItemIsEnabled)
+                item.setCheckState(Qt.CheckState.Unchecked)
+                item.setToolTip(why)
             self.list.addItem(item)
         self.list.setMaximumHeight(self.list.sizeHintForRow(0) * len(LAYERS) + 8)
         self.edges.setToolTip("Draw the triangles' edges on the mesh.")
@@ -69,8 +73,12 @@ class LayersPanel(QWidget):
         layout.insertWidget(max(layout.count() - 1, 0), widget)
 
     def set_checked(self, key: str, on: bool) -> None:
-        """Check or uncheck layer `key`'s item (its view follows through itemChanged)."""
+        """Check or uncheck layer `key`'s item (its view follows through itemChanged); a
+        disabled one (its extra is missing) stays unchecked."""
         for row in range(self.list.count()):
             item = self.list.item(row)
-            if item.data(Qt.ItemDataRole.UserRole) == key:
+            if (
+                item.data(Qt.ItemDataRole.UserRole) == key
+                and item.flags() & Qt.ItemFlag.ItemIsEnabled
+            ):
                 item.setCheckState(Qt.CheckState.Checked if on else Qt.CheckState.Unchecked)

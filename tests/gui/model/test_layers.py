@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 import threading
 
 import numpy as np
@@ -74,3 +75,11 @@ def test_measurements_show_the_table_1_distances(result):
     table = next(rows for title, rows in sections.items() if title.startswith("Vein points"))
     assert [label for label, _ in table] == ["Min", "Max", "Mean"]
     assert all(value != "–" for _, value in table)
+
+
+def test_a_layer_whose_extra_is_missing_says_which_to_install(monkeypatch):
+    from leafstudio.gui.model.layers import unavailable
+
+    assert unavailable("mesh") == ""
+    monkeypatch.setitem(sys.modules, "open3d", None)  # as if the extra were not installed
+    assert unavailable("poisson").endswith("pip install 'leafstudio[open3d]'")

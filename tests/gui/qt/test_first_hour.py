@@ -6,9 +6,11 @@ from __future__ import annotations
 
 import itertools
 import re
+import sys
 from dataclasses import replace
 
 import numpy as np
+import pytest
 from PySide6.QtCore import QSettings, Qt
 
 from leafstudio.gui.qt.forms_dock import FormsPanel
@@ -130,3 +132,29 @@ def test_a_failure_over_the_view_goes_with_the_next_document(window, qtbot):
     qtbot.waitUntil(lambda: window.worker.is_idle())
     qtbot.wait(100)
     assert not _failure_over_view(window) and "Failed" not in window.status_text.text()
+
+
+def _poisson_item(window):
+    items = [window.layer_list.item(i) for i in range(window.layer_list.count())]
+    return next(it for it in items if it.data(Qt.ItemDataRole.UserRole) == "poisson")
+
+
+def test_without_open3d_the_poisson_layer_is_disabled_and_names_the_extra(
+    qtbot, tmp_path, monkeypatch
+):
+    monkeypatch.setitem(sys.modules, "open3d", None)  # as if the extra were not installed
+    settings = tmp_path / "settings.ini"
+    QSettings(str(settings), QSettings.Format.IniFormat).setValue("layers/poisson", True)
+    window = make_window(qtbot, settings)
+    item = _poisson_item(window)
+    assert not item.flags() & Qt.ItemFlag.ItemIsEnabled
+    assert item.checkState() == Qt.CheckState.Unchecked  # a saved "on" cannot tick it
+    assert "pip install 'leafstudio[open3d]'" in item.toolTip()
+    assert not window.viewport.visible["poisson"]
+
+
+def test_with_open3d_the_poisson_layer_can_be_ticked(qtbot, tmp_path):
+    pytest.importorskip("open3d")
+    window = make_window(qtbot, tmp_path / "settings.ini")
+    item = _poisson_item(window)
+    assert item.flags() & Qt.ItemFlag.ItemIsEnabled and "pip install" not in item.toolTip()
