@@ -20,8 +20,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from PySide6.QtCore import Qt, Signal
-from PySide6.QtGui import QValidator
+from PySide6.QtCore import QEvent, QKeyCombination, QObject, Qt, Signal
+from PySide6.QtGui import QKeySequence, QValidator
 from PySide6.QtWidgets import QCheckBox, QComboBox, QFormLayout, QLabel, QLineEdit, QWidget
 from superqt import QLabeledDoubleSlider, QLabeledSlider, QLargeIntSpinBox
 from superqt.utils import qthrottled
@@ -157,6 +157,29 @@ def _is_slider(widget: QWidget) -> bool:
     return isinstance(widget, QLabeledSlider)  # QLabeledDoubleSlider is one too
 
 
+REDO = (  # the Edit menu's other Redo keys (actions.py)
+    QKeyCombination(
+        Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier, Qt.Key.Key_Z
+    ),
+    QKeyCombination(Qt.KeyboardModifier.ControlModifier, Qt.Key.Key_Y),
+)
+
+
+class _UndoToWindow(QObject):
+    """Undo and Redo pressed in a field with nothing of its own to undo or redo (a value
+    typed and applied with Return: the field was set afresh) go to the window's Edit menu, not
+    to the field, which would take the keys and do nothing; typing not yet applied is still
+    undone in the field."""
+
+    def eventFilter(self, watched: QObject, event: QEvent) -> bool:
+        if event.type() == QEvent.Type.ShortcutOverride and isinstance(watched, QLineEdit):
+            if event.matches(QKeySequence.StandardKey.Undo):
+                return not watched.isUndoAvailable()  # filtered: left to the window
+            if event.matches(QKeySequence.StandardKey.Redo) or event.keyCombination() in REDO:
+                return not watched.isRedoAvailable()
+        return False
+
+
 class ParamPanel(QWidget):
     """Labelled sliders, spin boxes and choices for Params; `params()` reads them all."""
 
@@ -196,6 +219,9 @@ class ParamPanel(QWidget):
         self.note.hide()
         form.addRow(self.note)
         self.auto_k = self.specials["k"]
+        self._undo_to_window = _UndoToWindow(self)
+        for edit in self.findChildren(QLineEdit):  # the fields and the spin boxes' own
+            edit.installEventFilter(self._undo_to_window)
         self._emit_throttled = qthrottled(self._emit, timeout=THROTTLE_MS, leading=True)
         self._shown = Params()
         self._shown_values: dict[str, Any] = {}

@@ -158,3 +158,26 @@ def test_with_open3d_the_poisson_layer_can_be_ticked(qtbot, tmp_path):
     window = make_window(qtbot, tmp_path / "settings.ini")
     item = _poisson_item(window)
     assert item.flags() & Qt.ItemFlag.ItemIsEnabled and "pip install" not in item.toolTip()
+
+
+def test_ctrl_z_in_a_parameter_field_after_return_undoes_in_the_window(window, qtbot):
+    window.activateWindow()
+    qtbot.waitUntil(window.isActiveWindow)
+    field = window.panel.fields["k"]
+    before = window.session.params.k
+    field.setFocus()
+    field.selectAll()
+    qtbot.keyClicks(field, "8")
+    with qtbot.waitSignal(window.result_shown, timeout=WAIT_MS):
+        qtbot.keyClick(field, Qt.Key.Key_Return)
+    assert window.session.params.k == 8 and field.hasFocus()
+    qtbot.keyClick(field, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    assert window.session.params.k == before and field.text() == str(before)
+    qtbot.keyClick(
+        field, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier
+    )
+    assert window.session.params.k == 8 and field.text() == "8"
+    # while a value is being typed, Ctrl+Z undoes the typing in the field
+    qtbot.keyClicks(field, "1")
+    qtbot.keyClick(field, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    assert field.text() == "8" and window.session.params.k == 8
