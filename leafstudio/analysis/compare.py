@@ -17,6 +17,7 @@ import shapely
 
 from leafstudio._shared.extras import LazyModule
 from leafstudio.core.evaluate import table_metrics, triangles_of
+from leafstudio.core.pipeline import Pipeline
 from leafstudio.core.plane import Frame
 from leafstudio.core.prepare.units import Units
 from leafstudio.core.trianglemesh import MeshLike, TriangleMesh
@@ -100,8 +101,6 @@ def compare(leaf: Leaf, params: Params | None = None) -> dict[str, Any]:
         reconstruction; ours a steady run's, after one that loads the compiled kernels);
         "ours" also has "k", the K used; "meshes" holds both (TriangleMesh).
     """
-    from leafstudio.core.pipeline import Pipeline
-
     params = params or Params()
     # at about unit size (an exact map): distances and areas of a leaf at 1e150 overflow
     # float64 squares, so both meshes are measured there and the figures mapped back

@@ -17,10 +17,15 @@ from typing import Any
 
 import numpy as np
 
+from leafstudio._shared import safewrite
 from leafstudio._shared.inputs import load_json, read_image
+from leafstudio._shared.safewrite import refuse_overlap
 from leafstudio.assets import texture as tex
 from leafstudio.assets.asset import MeshAsset, leaf_asset, leaf_plane, mesh_asset
-from leafstudio.assets.writers import MESH_SUFFIXES, write_assets
+from leafstudio.assets.lod import coarser_levels
+from leafstudio.assets.placement import mesh_placement, parse_length, place, result_placement
+from leafstudio.assets.solid import parse_thickness, thicken, thickness_in_mesh_units
+from leafstudio.assets.writers import MESH_SUFFIXES, write_assets, written_paths
 from leafstudio.errors import LeafError
 from leafstudio.sources.leafphoto import PhotoTexture, pixel_map
 
@@ -146,15 +151,11 @@ def mesh_assets(
         base = mesh_asset(getattr(result_or_mesh, "triangle_mesh", result_or_mesh))
     levels = [base]
     if lod:
-        from leafstudio.assets.lod import coarser_levels
-
         levels += coarser_levels(base, result, lod)
     images = _images(result, texture, gltf)
     out = []
     for level, asset in enumerate(levels):
         if thickness is not None:
-            from leafstudio.assets.solid import thicken
-
             asset = thicken(asset, thickness)
         out.append(asset.with_(name=f"leaf_LOD{level}" if lod else "leaf", **images))
     return out
@@ -218,8 +219,6 @@ def save_mesh(
     Traceback (most recent call last):
     leafstudio.errors.LeafError: .../leaf.xyz: unknown mesh type '.xyz'; use one of .ply, ...
     """
-    from leafstudio.assets.placement import parse_length
-
     metres = None if length is None else parse_length(length)
     path = Path(path)
     suffix = path.suffix.lower()
@@ -231,9 +230,6 @@ def save_mesh(
     if not isinstance(lod, int) or not 0 <= lod <= MAX_LOD:
         raise LeafError(f"lod must be a whole number from 0 to {MAX_LOD}, got {lod}")
     if not (isinstance(texture, str) and texture in TEXTURES):  # never write over the image
-        from leafstudio._shared.safewrite import refuse_overlap
-        from leafstudio.assets.writers import written_paths
-
         image = texture.image if isinstance(texture, PhotoTexture) else texture
         refuse_overlap([image], written_paths(path, lod + 1, textured=True))
     if suffix not in TEXTURED_SUFFIXES:  # the format holds UVs but no image: make none
@@ -242,8 +238,6 @@ def save_mesh(
         result_or_mesh, texture, thickness, lod, gltf=suffix in NORMAL_MAP_SUFFIXES
     )
     assets = placed(result_or_mesh, assets, metres, suffix, placement)
-    from leafstudio._shared import safewrite
-
     if safewrite._staging.get() is not None:  # the caller replaces its outputs together
         write_assets(assets, path)
         return
@@ -259,8 +253,6 @@ def placed(
     placement: Any = None,
 ) -> list[MeshAsset]:
     """The assets placed for the format `suffix` and scaled to `metres` (placement.py)."""
-    from leafstudio.assets.placement import place
-
     placement = placement if placement is not None else leaf_placement_of(result_or_mesh)
     return [place(asset, placement, metres, suffix) for asset in assets]
 
@@ -268,8 +260,6 @@ def placed(
 def leaf_placement_of(result_or_mesh: Any):
     """The Placement of a Result (its midrib and outline), or of a bare mesh (its margin's PCA
     plane)."""
-    from leafstudio.assets.placement import mesh_placement, result_placement
-
     if hasattr(result_or_mesh, "surface"):
         return result_placement(result_or_mesh)
     asset = mesh_asset(getattr(result_or_mesh, "triangle_mesh", result_or_mesh))
@@ -281,10 +271,6 @@ def check_asset_options(
 ) -> None:
     """Refuse bad --texture, --thickness, --lod and --length values before any work
     (LeafError)."""
-    from leafstudio._shared.inputs import read_image
-    from leafstudio.assets.placement import parse_length
-    from leafstudio.assets.solid import parse_thickness
-
     if texture not in TEXTURES:
         read_image(texture)
     if thickness is not None:
@@ -306,9 +292,6 @@ def asset_options(
     """save_mesh's keyword arguments from the command line's: an image texture is a photo the
     leaf came from when the leaf's project says so; the thickness in the mesh's units (a length
     with its unit is real size when --length gives the leaf's)."""
-    from leafstudio.assets.placement import parse_length
-    from leafstudio.assets.solid import thickness_in_mesh_units
-
     if texture not in TEXTURES:
         texture = PhotoTexture(texture, photo_transform(leaf_path))
     metres = None if length is None else parse_length(length)

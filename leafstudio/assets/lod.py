@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from leafstudio._shared.extras import require
 from leafstudio.assets.asset import (
     SCALARS,
     MeshAsset,
@@ -24,6 +25,7 @@ from leafstudio.assets.asset import (
     surface_normals,
 )
 from leafstudio.assets.solid import boundary_edges
+from leafstudio.core.curvature import surface_curvatures
 from leafstudio.core.trianglemesh import TriangleMesh
 
 if TYPE_CHECKING:
@@ -35,8 +37,6 @@ FEWEST_TRIANGLES = 8
 
 def decimate(points: np.ndarray, faces: np.ndarray, triangles: int) -> tuple[np.ndarray, ...]:
     """(points, faces) decimated to about `triangles` triangles, the boundary kept."""
-    from leafstudio._shared.extras import require
-
     o3d = require("open3d", "levels of detail (--lod)")
 
     mesh = o3d.geometry.TriangleMesh(
@@ -51,8 +51,6 @@ def _level(asset: MeshAsset, result: Result | None, points: np.ndarray, faces: n
     if result is None:
         level = mesh_asset(TriangleMesh(points, faces))
         return level.with_(faces=oriented(level.faces, level.points, level.normals))
-    from leafstudio.core.curvature import surface_curvatures
-
     xy, z = result.frame.to_plane(points)
     margin = np.zeros(len(points), bool)
     margin[np.unique(boundary_edges(faces))] = True

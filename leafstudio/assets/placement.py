@@ -31,6 +31,8 @@ from typing import Any
 
 import numpy as np
 
+from leafstudio.assets.solid import boundary_edges
+from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.errors import LeafError
 
 METRES = {"mm": 1e-3, "cm": 1e-2, "m": 1.0}  # a length's units, in metres
@@ -142,9 +144,6 @@ def mesh_placement(points: np.ndarray, faces: np.ndarray, up: np.ndarray) -> Pla
     """The placement of a bare mesh ((n, 3) points, (m, 3) faces), without veins: the PCA plane
     of its margin (its boundary edges' vertices, as a leaf's frame is its outline's), `up`'s side
     up, the base at the low end of the long axis."""
-    from leafstudio.assets.solid import boundary_edges
-    from leafstudio.core.plane import Frame, fit_frame
-
     rim = np.unique(boundary_edges(faces))
     frame = fit_frame(points[rim] if len(rim) >= 3 else points, np.zeros((0, 3)))
     if frame.normal @ up < 0:

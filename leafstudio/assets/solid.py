@@ -30,7 +30,7 @@ import re
 
 import numpy as np
 
-from leafstudio.assets.asset import MeshAsset
+from leafstudio.assets.asset import MeshAsset, outline_distance
 from leafstudio.core.trianglemesh import vertex_normals
 from leafstudio.errors import LeafError
 
@@ -89,8 +89,6 @@ def margin_distance(asset: MeshAsset) -> np.ndarray:
     """(n,) each vertex's distance in the leaf plane from the outline (the asset's, else its
     boundary vertices); 0 on the boundary."""
     from scipy.spatial import cKDTree
-
-    from leafstudio.assets.asset import outline_distance
 
     rim = np.unique(boundary_edges(asset.faces))
     if asset.outline is not None:

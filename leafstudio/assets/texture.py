@@ -20,6 +20,7 @@ import numpy as np
 
 from leafstudio.assets.asset import LeafPlane
 from leafstudio.errors import LeafError
+from leafstudio.sources.photo import foreground
 
 BLADE = (78, 128, 50)  # sRGB
 VEIN = (168, 196, 112)
@@ -159,8 +160,6 @@ def _photo_leaf(photo: np.ndarray) -> np.ndarray | None:
     """(h, w) bool: the photo's leaf pixels as `leafstudio photo` segments them (photo.py), less
     the edge where leaf and background blend (EDGE_PIXELS); None if nothing stands out."""
     from scipy.ndimage import binary_erosion
-
-    from leafstudio.sources.photo import foreground
 
     try:
         return binary_erosion(foreground(photo), iterations=EDGE_PIXELS)

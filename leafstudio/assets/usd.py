@@ -21,8 +21,11 @@ from pathlib import Path
 
 import numpy as np
 
+from leafstudio._shared.extras import require
 from leafstudio._shared.safewrite import write_bytes
 from leafstudio.assets.asset import MeshAsset
+from leafstudio.assets.material import ALPHA_CUTOFF, METALLIC, ROUGHNESS, TEXTURE_SUFFIX, png_bytes
+from leafstudio.assets.texture import BLADE
 from leafstudio.errors import LeafError
 
 USD_SUFFIXES = (".usda", ".usdc", ".usdz")
@@ -32,16 +35,12 @@ NORMAL_SUFFIX = "_normal.png"
 
 def usd_companions(path: Path) -> tuple[Path, Path]:
     """The base-colour and normal-map images a .usda or .usdc at `path` refers to."""
-    from leafstudio.assets.writers import TEXTURE_SUFFIX
-
     return path.with_name(f"{path.stem}{TEXTURE_SUFFIX}"), path.with_name(
         f"{path.stem}{NORMAL_SUFFIX}"
     )
 
 
 def _pxr():
-    from leafstudio._shared.extras import require
-
     require("pxr", "USD export (.usda, .usdc, .usdz)")
     from pxr import Gf, Kind, Sdf, Usd, UsdGeom, UsdShade, Vt
 
@@ -72,9 +71,6 @@ def _mesh(stage, asset: MeshAsset) -> None:
 
 def _material(stage, asset: MeshAsset, colour: str | None, normal: str | None):
     """The UsdPreviewSurface material, its textures at the relative asset paths given."""
-    from leafstudio.assets.texture import BLADE
-    from leafstudio.assets.writers import ALPHA_CUTOFF, METALLIC, ROUGHNESS
-
     Gf, _, Sdf, _, UsdGeom, UsdShade, _ = _pxr()
     UsdGeom.Scope.Define(stage, LOOKS)
     material = UsdShade.Material.Define(stage, f"{LOOKS}/Leaf")
@@ -145,12 +141,6 @@ def usd_stage(assets: Sequence[MeshAsset], colour: str | None, normal: str | Non
     return stage
 
 
-def _png(image) -> bytes:
-    from leafstudio.assets.writers import _png as png
-
-    return png(image)
-
-
 def _crate_bytes(stage, images: dict[str, bytes] | None, path: Path) -> bytes:
     """The stage as .usdc bytes, or (with `images`) as a .usdz package of it and the images;
     made in a temporary folder (usd-core writes files), a failure there a LeafError naming
@@ -191,9 +181,9 @@ def write_usd(assets: Sequence[MeshAsset], path: Path) -> None:
     else:
         names = tuple(p.name for p in usd_companions(path))
     if first.texture is not None:
-        images[names[0]] = _png(first.texture)
+        images[names[0]] = png_bytes(first.texture)
     if first.texture is not None and first.normal_map is not None:
-        images[names[1]] = _png(first.normal_map)
+        images[names[1]] = png_bytes(first.normal_map)
     colour = names[0] if names[0] in images else None
     normal = names[1] if names[1] in images else None
     stage = usd_stage(assets, colour, normal)

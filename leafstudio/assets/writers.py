@@ -20,7 +20,6 @@ first, so an .obj on disk never names a file that is not there.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from io import BytesIO
 from pathlib import Path
 from typing import Any
 
@@ -28,12 +27,14 @@ import numpy as np
 
 from leafstudio._shared.safewrite import write_bytes
 from leafstudio.assets.asset import MeshAsset
+from leafstudio.assets.material import ALPHA_CUTOFF, METALLIC, ROUGHNESS, TEXTURE_SUFFIX, png_bytes
+from leafstudio.assets.texture import BLADE
 from leafstudio.assets.usd import USD_SUFFIXES, usd_companions, write_usd
+from leafstudio.core.trianglemesh import polydata
 from leafstudio.errors import LeafError
 
 GLTF_SUFFIXES = (".glb", ".gltf")
 LEVELS_IN_ONE = (*GLTF_SUFFIXES, *USD_SUFFIXES)  # formats that hold every level of detail
-METALLIC, ROUGHNESS, ALPHA_CUTOFF = 0.0, 0.8, 0.5
 SHORT = ("nx", "ny", "nz", "s", "t")  # PLY properties kept as float32
 
 
@@ -58,15 +59,6 @@ def write_ply(asset: MeshAsset, path: Path) -> None:
     write_bytes(path, header.encode("ascii") + b"\n" + little.tobytes() + rows.tobytes())
 
 
-def _png(image) -> bytes:
-    buffer = BytesIO()
-    image.save(buffer, format="PNG")
-    return buffer.getvalue()
-
-
-TEXTURE_SUFFIX = "_texture.png"  # an OBJ's texture: oak.obj -> oak_texture.png
-
-
 def obj_companions(path: Path) -> tuple[Path, Path]:
     """The material file and texture an .obj at `path` refers to."""
     return path.with_suffix(".mtl"), path.with_name(f"{path.stem}{TEXTURE_SUFFIX}")
@@ -75,13 +67,11 @@ def obj_companions(path: Path) -> tuple[Path, Path]:
 def write_obj(asset: MeshAsset, path: Path) -> None:
     """OBJ with vt and vn (one index for all three: no seams), its .mtl and, if the asset has a
     texture, the PNG beside it."""
-    from leafstudio.assets.texture import BLADE
-
     mtl, png = obj_companions(path)
     kd = " ".join(f"{c / 255:.4f}" for c in BLADE)
     lines = ["newmtl leaf", "Ka 0 0 0", "Ks 0 0 0", "illum 1"]
     if asset.texture is not None:
-        write_bytes(png, _png(asset.texture))
+        write_bytes(png, png_bytes(asset.texture))
         lines += ["Kd 1 1 1", f"map_Kd {png.name}", f"map_d {png.name}"]
     else:
         lines.append(f"Kd {kd}")
@@ -110,8 +100,6 @@ def _rows(line: str, values: np.ndarray) -> str:
 def material_of(asset: MeshAsset, textured: bool = True):
     """The asset's double-sided (a sheet) PBR material, with its textures."""
     from trimesh.visual.material import PBRMaterial
-
-    from leafstudio.assets.texture import BLADE
 
     texture = asset.texture if textured else None
     return PBRMaterial(
@@ -193,8 +181,6 @@ def write_trimesh_format(asset: MeshAsset, path: Path) -> None:
 
 def write_vtk(asset: MeshAsset, path: Path) -> None:
     """.vtp or .vtk through pyvista, with Normals, texture coordinates and the scalars."""
-    from leafstudio.core.trianglemesh import polydata
-
     mesh = polydata(asset.points, asset.faces, asset.point_data, normals=asset.normals)
     mesh.active_texture_coordinates = asset.uv.copy()
     write_bytes(path, vtk_bytes(mesh, path.suffix.lower()))

@@ -14,6 +14,8 @@ from typing import Any
 from leafstudio._shared.inputs import check_input_file
 from leafstudio.batch.settings import Settings
 from leafstudio.errors import LeafError
+from leafstudio.sources.files import LEAF_SUFFIXES
+from leafstudio.sources.scan import SCAN_SUFFIXES
 
 
 @dataclass(frozen=True)
@@ -30,11 +32,7 @@ class Job:
 
 def _input_suffixes(scans: bool) -> tuple[str, ...]:
     if scans:
-        from leafstudio.sources.scan import SCAN_SUFFIXES
-
         return SCAN_SUFFIXES
-    from leafstudio.sources.files import LEAF_SUFFIXES
-
     return LEAF_SUFFIXES
 
 

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from leafstudio._shared.safewrite import stale_part
+from leafstudio.assets.placement import parse_length
 from leafstudio.batch.executors import DaskCluster, LocalPool, check_scheduler
 from leafstudio.batch.plan import Job, plan, resumable
 from leafstudio.batch.settings import DEFAULT_TABLE, FORMATS, Settings
@@ -73,8 +74,6 @@ class Batch:
         force: bool = False,
         length: str | float | None = None,
     ) -> None:
-        from leafstudio.assets.placement import parse_length
-
         if format not in FORMATS:
             raise LeafError(f"unknown mesh format {format!r}; use one of {', '.join(FORMATS)}")
         if jobs is not None and jobs < 1:

@@ -12,6 +12,7 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
+from leafstudio._shared.safewrite import replace_atomically, write_bytes
 from leafstudio.batch.settings import FLOAT_COLUMNS, INT_COLUMNS, columns
 from leafstudio.errors import LeafError, shorten
 
@@ -89,8 +90,6 @@ class _LineFormat:
     def finish(self, path: Path, journal: Path) -> None:
         """Rewrite the table sorted by input: the journal's own lines, not parsed (nor held)
         whole."""
-        from leafstudio._shared.safewrite import write_bytes
-
         write_bytes(path, self.header() + "".join(self._sorted_lines(journal)))
 
     def _sorted_lines(self, journal: Path) -> list[str]:
@@ -203,8 +202,6 @@ class ParquetFormat(JsonLinesFormat):
         import pyarrow as pa  # optional extra
         import pyarrow.parquet as pq
 
-        from leafstudio._shared.safewrite import replace_atomically
-
         rows = sorted(self.rows(journal), key=lambda r: str(r.get("input")))
         types = {c: pa.float64() for c in FLOAT_COLUMNS} | {c: pa.int64() for c in INT_COLUMNS}
         schema = pa.schema([(c, types.get(c, pa.string())) for c in self.columns])
@@ -275,8 +272,6 @@ class TraitTable:
     # writing -----------------------------------------------------------------------------
     def start(self, keep: Iterable[dict[str, Any]] = ()) -> None:
         """Start the journal afresh with the rows in `keep` (rows resumed), then open it."""
-        from leafstudio._shared.safewrite import write_bytes
-
         self.path.parent.mkdir(parents=True, exist_ok=True)
         text = self.format.header() + "".join(self.format.line(r) for r in keep)
         if text:

@@ -9,9 +9,14 @@ import warnings
 from pathlib import Path
 from typing import Any
 
+from leafstudio import workflows
+from leafstudio.assets.export import save_mesh
+from leafstudio.assets.placement import result_placement
 from leafstudio.batch.plan import Job, file_hash
 from leafstudio.batch.settings import CURVATURE_COLUMNS, SHAPE_COLUMNS, columns
+from leafstudio.core.evaluate import curvature_summary, shape_measurements
 from leafstudio.errors import LeafError, error_line
+from leafstudio.sources.files import load_leaf
 
 _PINNED = False
 
@@ -44,8 +49,6 @@ def _number(x: Any) -> float | None:
 
 def _traits(result: Any) -> dict[str, Any]:
     """The shape and curvature columns of a Result (core/evaluate.py)."""
-    from leafstudio.core.evaluate import curvature_summary, shape_measurements
-
     mesh = result.triangle_mesh
     shape = shape_measurements(mesh, result.frame, result.polygon)
     curvature = curvature_summary(mesh)
@@ -60,9 +63,6 @@ def _reconstruct(job: Job) -> dict[str, Any]:
     """Read, (extract,) reconstruct, measure and write one input; raises on bad input. It opens,
     fails and warns as `leafstudio extract` (for a scan) then `reconstruct` would: both go
     through workflows."""
-    from leafstudio import workflows
-    from leafstudio.sources.files import load_leaf
-
     settings = job.settings
     try:
         if settings.scans:
@@ -84,9 +84,6 @@ def _reconstruct(job: Job) -> dict[str, Any]:
             scan_beyond_2pct=_number(found.get("beyond_2pct")),
         )
     if job.mesh:
-        from leafstudio.assets.export import save_mesh
-        from leafstudio.assets.placement import result_placement
-
         # the bare mesh: normals, UVs and the point arrays, without the texture image and the
         # closed-form normals a Result gets (a second per leaf; `reconstruct` writes those)
         mesh = Path(job.out_dir) / job.mesh

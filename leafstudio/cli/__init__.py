@@ -16,6 +16,7 @@ import traceback
 import warnings
 from collections.abc import Callable, Sequence
 
+from leafstudio._shared.safewrite import install_signal_cleanup
 from leafstudio.cli import batch, compare, demo, extract, form, gui, measure, photo, reconstruct
 from leafstudio.cli.options import EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_OK, log
 from leafstudio.errors import LeafError, error_line, shorten
@@ -147,8 +148,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     Exit 0: done. Exit 2: bad input or an output that cannot be written, one line on stderr and no
     output changed. Exit 1: a bug (one line; --debug shows the traceback for a report).
     """
-    from leafstudio._shared.safewrite import install_signal_cleanup
-
     argv = _join_dashed_values(list(sys.argv[1:] if argv is None else argv))
     debug = _debugging(argv)
     _configure_logging(0, 0)

@@ -5,8 +5,10 @@ from __future__ import annotations
 import argparse
 import json
 
+from leafstudio.analysis.compare import compare, format_comparison
 from leafstudio.cli.options import EXIT_OK, add_run_options, settings
 from leafstudio.errors import LeafError
+from leafstudio.sources.files import load_leaf
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -20,9 +22,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Print the comparison, as a table or JSON."""
-    from leafstudio.analysis.compare import compare, format_comparison
-    from leafstudio.sources.files import load_leaf
-
     leaf = load_leaf(args.input, veins=args.vein)
     params = settings(args)
     try:

@@ -6,6 +6,8 @@ import argparse
 
 from leafstudio.cli.options import EXIT_OK, log, whole
 from leafstudio.sources.extract import OUTLINE_POINTS
+from leafstudio.sources.files import check_leaf_output, save_leaf
+from leafstudio.workflows import open_scan
 
 
 def _points_value(text: str) -> int:
@@ -42,9 +44,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Extract the scan's leaf, write it and say what was kept."""
-    from leafstudio.sources.files import check_leaf_output, save_leaf
-    from leafstudio.workflows import open_scan
-
     check_leaf_output(args.output, [args.scan])
     opened = open_scan(args.scan, base_end=args.base_end, points=args.points, force=args.force)
     for note in opened.notes:

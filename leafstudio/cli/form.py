@@ -8,9 +8,16 @@ from pathlib import Path
 
 import numpy as np
 
+from leafstudio.assets.export import save_mesh
+from leafstudio.assets.placement import parse_length
+from leafstudio.assets.writers import MESH_SUFFIXES
+from leafstudio.core.pipeline import reconstruct
 from leafstudio.errors import LeafError
-from leafstudio.forms.terms import APEXES, MARGINS, SHAPES, USER_BASES
-from leafstudio.forms.veins import VENATION_KINDS
+from leafstudio.forms.make import SIDE_ON, Form, seen_on_edge
+from leafstudio.forms.terms import APEXES, MARGINS, SHAPES, USER_BASES, format_terms
+from leafstudio.forms.veins import VENATION_KINDS, grow_veins
+from leafstudio.model import Leaf, Params
+from leafstudio.sources.files import LEAF_SUFFIXES, check_leaf_output, load_leaf, save_leaf
 
 
 def add_form_parser(sub: argparse._SubParsersAction) -> None:
@@ -59,18 +66,10 @@ def add_veins_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def _is_leaf_file(name: str) -> bool:
-    from leafstudio.sources.files import LEAF_SUFFIXES
-
     return name.lower().endswith(LEAF_SUFFIXES)
 
 
 def run_form(args: argparse.Namespace) -> int:
-    from leafstudio.assets.export import save_mesh
-    from leafstudio.assets.writers import MESH_SUFFIXES
-    from leafstudio.forms.make import SIDE_ON, Form, seen_on_edge
-    from leafstudio.forms.terms import format_terms
-    from leafstudio.sources.files import LEAF_SUFFIXES, save_leaf
-
     if args.list:
         print(format_terms())
         return 0
@@ -81,8 +80,6 @@ def run_form(args: argparse.Namespace) -> int:
     out = args.output
     mesh = not _is_leaf_file(out)
     if args.length is not None:
-        from leafstudio.assets.placement import parse_length
-
         parse_length(args.length)
     if mesh and not out.lower().endswith(MESH_SUFFIXES):
         kinds = ", ".join(dict.fromkeys((*LEAF_SUFFIXES, *MESH_SUFFIXES)))
@@ -100,9 +97,6 @@ def run_form(args: argparse.Namespace) -> int:
     if mesh and seen_on_edge(leaf):
         raise LeafError(f"{SIDE_ON}; write the leaf (.leaf.json), or lower --fold or --curl")
     if mesh:
-        from leafstudio.core.pipeline import reconstruct
-        from leafstudio.model import Params
-
         save_mesh(reconstruct(leaf, Params()), out, length=args.length)
     else:
         save_leaf(leaf, out)
@@ -126,10 +120,6 @@ def _point(text: str) -> np.ndarray:
 
 
 def run_veins(args: argparse.Namespace) -> int:
-    from leafstudio.forms.veins import grow_veins
-    from leafstudio.model import Leaf
-    from leafstudio.sources.files import check_leaf_output, load_leaf, save_leaf
-
     check_leaf_output(args.output, [args.leaf])
     leaf = load_leaf(args.leaf)
     base = _point(args.base) if args.base else (leaf.veins[0][0] if leaf.veins else None)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from leafstudio._shared.safewrite import refuse_overlap
+
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """The `gui` subcommand."""
@@ -17,8 +19,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the app on the file given (the nested demo without one); a screenshot that would
     replace the file opened is refused before the app starts."""
-    from leafstudio._shared.safewrite import refuse_overlap
-    from leafstudio.gui.qt.app import run_app
+    from leafstudio.gui.qt.app import run_app  # Qt: only for the app
 
     path, screenshot = getattr(args, "file", None), getattr(args, "screenshot", None)
     refuse_overlap([path], [screenshot])

@@ -6,6 +6,8 @@ import argparse
 import json
 
 from leafstudio.cli.options import EXIT_OK, add_run_options, run_pipeline
+from leafstudio.core.evaluate import format_table, leaf_measurements
+from leafstudio.sources.files import load_leaf
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -17,9 +19,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Print the reconstructed leaf's measurements, as a table or JSON."""
-    from leafstudio.core.evaluate import format_table, leaf_measurements
-    from leafstudio.sources.files import load_leaf
-
     _, result = run_pipeline(args, load_leaf(args.input, veins=args.vein))
     values = leaf_measurements(result)
     if args.json:

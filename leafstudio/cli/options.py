@@ -7,7 +7,13 @@ import argparse
 import logging
 from typing import TYPE_CHECKING
 
+from leafstudio._shared.kernelcache import kernels_cached, mark_cached
+from leafstudio.core.pipeline import Pipeline
+from leafstudio.core.prepare.plausibility import leaf_warnings
 from leafstudio.errors import LeafError, shorten
+from leafstudio.model import PARAMS, Params
+from leafstudio.paramspec import Choice, Switch, read_whole
+from leafstudio.sources.files import load_project
 
 if TYPE_CHECKING:
     from leafstudio.paramspec import Param
@@ -18,8 +24,6 @@ log = logging.getLogger("leafstudio")
 
 def whole(text: str, low: int, high: int) -> int:
     """A whole number in [low, high] from the command line (paramspec.read_whole)."""
-    from leafstudio.paramspec import read_whole
-
     value = read_whole(text)
     if value is None:
         raise argparse.ArgumentTypeError(f"must be a whole number, got {shorten(text)!r}")
@@ -43,9 +47,6 @@ def _param_value(param: Param):
 def add_param_flags(parser: argparse.ArgumentParser) -> None:
     """A flag for each reconstruction parameter, as Params declares it (model.PARAMS): unset
     (None) unless given, so that a project's saved value stands."""
-    from leafstudio.model import PARAMS
-    from leafstudio.paramspec import Choice, Switch
-
     group = parser.add_argument_group("reconstruction parameters")
     for name, param in PARAMS.items():
         options = {"dest": name, "default": None, "help": param.help_text().replace("%", "%%")}
@@ -70,8 +71,6 @@ def add_run_options(parser: argparse.ArgumentParser) -> None:
 
 def params_for(args: argparse.Namespace, base: object | None):
     """`base` (Params, else the defaults) with the parameter flags given (add_param_flags)."""
-    from leafstudio.model import PARAMS, Params
-
     params = base if isinstance(base, Params) else Params()
     changes = {name: getattr(args, name) for name in PARAMS}
     return params.with_(**{k: v for k, v in changes.items() if v is not None})
@@ -79,8 +78,6 @@ def params_for(args: argparse.Namespace, base: object | None):
 
 def settings(args: argparse.Namespace):
     """Params from the command line, over a project's saved ones."""
-    from leafstudio.sources.files import load_project
-
     saved = load_project(args.input)[1] if args.input.lower().endswith(".json") else None
     try:  # each flag is checked as it is read (_param_value): a bad one is the command line's
         return params_for(args, saved)
@@ -91,10 +88,6 @@ def settings(args: argparse.Namespace):
 def run_pipeline(args: argparse.Namespace, leaf: object):
     """The Params (see settings) and the pipeline's Result; the run's notes are printed as
     warnings, and the chosen K when K is auto."""
-    from leafstudio._shared.kernelcache import mark_cached
-    from leafstudio.core.pipeline import Pipeline
-    from leafstudio.core.prepare.plausibility import leaf_warnings
-
     params = settings(args)
     compiling_notice()
     try:  # the frame stage refuses a crossing boundary and keeps the largest of several loops
@@ -112,7 +105,5 @@ def run_pipeline(args: argparse.Namespace, leaf: object):
 
 def compiling_notice() -> None:
     """Say so when this run compiles the numerical kernels (the first run, about 20 s)."""
-    from leafstudio._shared.kernelcache import kernels_cached
-
     if not kernels_cached():
         log.info("compiling the numerical kernels (the first run only; about 20 s)")

@@ -5,8 +5,10 @@ from __future__ import annotations
 import argparse
 import sys
 
+from leafstudio._shared.inputs import read_image
 from leafstudio.errors import LeafError
-from leafstudio.sources.photo import BASE_ENDS, VEIN_CHOICES
+from leafstudio.sources.files import check_leaf_output
+from leafstudio.sources.photo import BASE_ENDS, VEIN_CHOICES, leaf_from_photo, save_photo_leaf
 
 
 def add_photo_parser(sub: argparse._SubParsersAction) -> None:
@@ -34,10 +36,6 @@ def add_photo_parser(sub: argparse._SubParsersAction) -> None:
 
 def run_photo(args: argparse.Namespace) -> int:
     """Find the leaf in the photo and write it."""
-    from leafstudio._shared.inputs import read_image
-    from leafstudio.sources.files import check_leaf_output
-    from leafstudio.sources.photo import leaf_from_photo, save_photo_leaf
-
     check_leaf_output(args.output, [args.image])
     image = read_image(args.image)
     try:

@@ -7,13 +7,19 @@ import argparse
 import json
 from pathlib import Path
 
+from leafstudio._shared.safewrite import check_outputs, replace_atomically, staged, write_bytes
+from leafstudio.analysis.fidelity import scan_distances
+from leafstudio.assets.export import TEXTURES, asset_options, check_asset_options, save_mesh
+from leafstudio.assets.writers import MESH_SUFFIXES, written_paths
 from leafstudio.cli.options import EXIT_OK, add_run_options, run_pipeline
 from leafstudio.errors import LeafError
+from leafstudio.sources.files import load_leaf
+from leafstudio.workflows import open_scan
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """The `reconstruct` subcommand."""
-    from leafstudio.render.figure import FIGURE_SCALARS
+    from leafstudio.render.figure import FIGURE_SCALARS  # pyvista and VTK: only when asked for
 
     rec = sub.add_parser("reconstruct", help="reconstruct a leaf and write its mesh")
     add_run_options(rec)
@@ -79,18 +85,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Read, check, compute everything, then write every output together (safewrite.staged):
     a run that fails anywhere leaves all old outputs as they were."""
-    from leafstudio._shared.safewrite import check_outputs, staged, write_bytes
-    from leafstudio.assets.export import TEXTURES, save_mesh
-    from leafstudio.assets.writers import MESH_SUFFIXES, written_paths
-    from leafstudio.render.figure import check_figure_path
-    from leafstudio.sources.files import load_leaf
-
+    from leafstudio.render.figure import check_figure_path  # pyvista and VTK: only when asked for
     out = Path(args.output)
     if not out.name.lower().endswith(MESH_SUFFIXES):
         raise LeafError(f"unknown mesh type; use one of {', '.join(MESH_SUFFIXES)}", str(out))
     figure = check_figure_path(args.figure) if args.figure else None
-    from leafstudio.assets.export import asset_options, check_asset_options
-
     check_asset_options(args.texture, args.thickness, args.lod, args.length)
     from leafstudio.render.slides import check_turntable_path
 
@@ -103,14 +102,10 @@ def run(args: argparse.Namespace) -> int:
     leaf = load_leaf(args.input, veins=args.vein)
     against = None
     if args.against:  # read (and its blade found, as extract finds it) before the run
-        from leafstudio.workflows import open_scan
-
         against = open_scan(args.against, force=True)
     params, result = run_pipeline(args, leaf)
     fidelity = None
     if against is not None:
-        from leafstudio.analysis.fidelity import scan_distances
-
         scan, blade = against.scan, against.extraction.blade
         fidelity = {
             "all": scan_distances(result.triangle_mesh, scan, result.length),
@@ -133,14 +128,12 @@ def run(args: argparse.Namespace) -> int:
         )
         save_mesh(result, out, **options)
         if figure is not None:
-            from leafstudio._shared.safewrite import replace_atomically
             from leafstudio.render.figure import render_figure
 
             replace_atomically(figure, lambda tmp: render_figure(result, tmp, args.colour_by))
         if metrics is not None:
             write_bytes(args.metrics, json.dumps(metrics, indent=2) + "\n")
         if turntable is not None or steps is not None:
-            from leafstudio._shared.safewrite import replace_atomically
             from leafstudio.render.slides import render_steps, render_turntable
 
             if turntable is not None:

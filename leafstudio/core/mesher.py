@@ -19,6 +19,7 @@ import numpy as np
 import triangle
 from numba import njit
 
+from leafstudio._shared.extras import require
 from leafstudio.core.buckets import kernel_array, near_edges
 from leafstudio.core.grid import Grid
 from leafstudio.errors import LeafError
@@ -290,8 +291,6 @@ def ball_pivoting(
     points: np.ndarray, normals: np.ndarray, spacing: float, factor: float
 ) -> np.ndarray:
     """open3d ball pivoting over (n, 3) points with (n, 3) normals; returns (m, 3) triangles."""
-    from leafstudio._shared.extras import require
-
     o3d = require("open3d", "the ball-pivoting mesher (mesher bpa)")  # seconds and 250 MB
 
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))

@@ -34,6 +34,9 @@ import shapely
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 from shapely.geometry import LineString, MultiLineString, Point, Polygon
 
+from leafstudio.core.base import fit_base
+from leafstudio.core.plane import fit_frame
+from leafstudio.core.prepare.outline import leaf_polygon
 from leafstudio.core.prepare.units import Units
 from leafstudio.errors import LeafError
 from leafstudio.model import SEED_MAX
@@ -68,8 +71,6 @@ def _plane(boundary: np.ndarray, base):
     if points.shape[1] == 2 or np.all(points[:, 2] == points[0, 2]):
         z0 = None if points.shape[1] == 2 else float(points[0, 2])
         return points[:, :2].copy(), None, z0, None if b is None else b[:2]
-    from leafstudio.core.plane import fit_frame
-
     frame = fit_frame(points, np.zeros((0, 3)))
     xy, h = frame.to_plane(points)
     if b is not None:
@@ -85,8 +86,6 @@ def _polygon(xy: np.ndarray) -> Polygon:
     poly = Polygon(xy)
     if poly.is_valid and poly.area > 0:
         return poly
-    from leafstudio.core.prepare.outline import leaf_polygon
-
     ring = leaf_polygon(xy)
     poly = Polygon(ring[0] if isinstance(ring, tuple) else ring)
     if not poly.is_valid:
@@ -649,8 +648,6 @@ def _lifter(xy, heights, frame, poly):
     if heights is None:
         z0 = frame if isinstance(frame, float) else 0.0
         return lambda pts, relief: np.column_stack([pts, relief + z0])
-    from leafstudio.core.base import fit_base
-
     ring = np.asarray(poly.exterior.coords)[:-1]
     near = cKDTree(xy).query(ring)[1]
     base = fit_base(ring, heights[near], float(np.sqrt(poly.area) * 2))

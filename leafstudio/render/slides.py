@@ -122,7 +122,7 @@ def render_steps(result: Any, path: str | os.PathLike, size: tuple[int, int] = S
     """Write a PNG with the pipeline's six steps side by side (see the module docstring)."""
     import pyvista as pv
 
-    from leafstudio.render.figure import check_figure_path
+    from leafstudio.render.figure import check_figure_path  # pyvista and VTK: only when asked for
 
     path = check_figure_path(path)
     frame = result.frame

@@ -18,6 +18,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
 
 HEIGHT_RATIO = 0.25
@@ -108,8 +109,6 @@ def demo(name: str) -> Leaf:
     >>> len(ls.demo("parallel").veins)
     2
     """
-    from leafstudio.errors import LeafError
-
     if name not in DEMOS:
         raise LeafError(f"unknown demo {name!r}; choose from {', '.join(DEMOS)}")
     return DEMOS[name]()

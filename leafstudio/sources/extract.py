@@ -32,6 +32,7 @@ from scipy.spatial import Delaunay, cKDTree
 from shapely.geometry import LineString, MultiPoint, Point, Polygon
 
 from leafstudio.core.plane import fixed_sample, principal_extents, principal_spreads
+from leafstudio.core.prepare.plausibility import check_leaf_like
 from leafstudio.core.prepare.vein_order import veins_inside_outline
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
@@ -382,8 +383,6 @@ def check_scan(points: np.ndarray, force: bool = False) -> list[str]:
     """plausibility.check_leaf_like on a scan as extract_leaf sees it (a large one by its voxel
     centroids: linear time). `leafstudio extract` and `batch --scans` both run it first, so they
     refuse the same scans with the same line (or, with `force`, return the same warnings)."""
-    from leafstudio.core.prepare.plausibility import check_leaf_like
-
     return check_leaf_like(voxel_thinning(points, BUDGET)[0], force=force)
 
 

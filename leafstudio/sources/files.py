@@ -25,8 +25,8 @@ from leafstudio._shared.inputs import (
     read_ply,
     read_text,
 )
+from leafstudio._shared.safewrite import check_outputs, write_bytes
 from leafstudio._shared.safewrite import staged as staged  # re-exported: outputs replaced together
-from leafstudio._shared.safewrite import write_bytes
 from leafstudio.errors import LeafError, shorten
 from leafstudio.model import Leaf, Params
 
@@ -243,8 +243,6 @@ def _read_vein(path: Path) -> np.ndarray:
 def check_leaf_output(output: str, inputs: Sequence[str | os.PathLike]) -> None:
     """Refuse, before any work, a leaf output of an unknown type, one that is also one of the
     `inputs`, or one that cannot be written (LeafError naming the output)."""
-    from leafstudio._shared.safewrite import check_outputs
-
     if not output.lower().endswith(LEAF_SUFFIXES):
         raise LeafError(f"unknown leaf type; use one of {', '.join(LEAF_SUFFIXES)}", output)
     check_outputs(list(inputs), [output])

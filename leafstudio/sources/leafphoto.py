@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from leafstudio._shared.inputs import load_json
 from leafstudio.errors import LeafError
 
 
@@ -113,8 +114,6 @@ def project_photo(project: str | os.PathLike) -> LeafPhoto | None:
     LeafError for an unreadable project or a malformed entry."""
     if not str(project).lower().endswith(".json"):
         return None
-    from leafstudio._shared.inputs import load_json
-
     data = load_json(project)
     entry = data.get("photo") if isinstance(data, dict) else None
     return None if entry is None else from_entry(entry, project)

@@ -37,8 +37,22 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from leafstudio._shared.inputs import read_image
 from leafstudio.errors import LeafError
+from leafstudio.forms import grow_veins
+from leafstudio.forms.veins import HEIGHT_RATIO, check_seed
 from leafstudio.model import Leaf
+from leafstudio.sources.files import save_leaf
+from leafstudio.sources.leafends import (
+    VeinField,
+    base_end_index,
+    climb_to_tip,
+    find_stalk,
+    midline,
+    sharpen_end,
+)
+from leafstudio.sources.leafphoto import LeafPhoto
+from leafstudio.sources.photo_veins import trace_veins
 
 if TYPE_CHECKING:
     from leafstudio.sources.leafends import Midline, VeinField
@@ -250,8 +264,6 @@ def _cut_stalk(
     when there is no petiole."""
     from skimage.measure import label
 
-    from leafstudio.sources.leafends import VeinField, find_stalk, midline
-
     veins = VeinField(image, blade)
     line = midline(outline, veins)
     stalk = find_stalk(outline, line)
@@ -283,8 +295,6 @@ def _ends(
 ) -> tuple[np.ndarray, int, int, str]:
     """The outline (its pointed ends sharpened when no petiole shows the base), the indices of
     the base and apex on it, and what told the base (see the module docstring)."""
-    from leafstudio.sources.leafends import base_end_index, climb_to_tip, sharpen_end
-
     if joint is not None:
         base = int(np.argmin(np.linalg.norm(outline - joint, axis=1)))
         apex = int(np.argmax(np.linalg.norm(outline - outline[base], axis=1)))
@@ -336,8 +346,6 @@ def leaf_from_photo(
     if veins not in VEIN_CHOICES:
         raise LeafError(f"--veins must be one of {', '.join(VEIN_CHOICES)}, got {veins!r}")
     if veins in ("auto", "grow"):
-        from leafstudio.forms.veins import check_seed
-
         check_seed(seed)
     if length is not None and not (np.isfinite(length) and length > 0):
         raise LeafError(f"--length must be a number above 0, got {length}")
@@ -375,15 +383,11 @@ def leaf_from_photo(
     found: list[np.ndarray] = []
     veins_from = "none"
     if veins in ("auto", "trace"):
-        from leafstudio.sources.photo_veins import trace_veins
-
         traced = trace_veins(image, blade, outline[base], outline[apex])
         if traced.seen:
             found = [_lifted(to_world(_smoothed(v)), xy) for v in traced.veins]
             veins_from = "photo"
     if veins == "grow" or (veins == "auto" and not found):
-        from leafstudio.forms import grow_veins
-
         found = grow_veins(boundary, venation, base=np.zeros(2), seed=seed, apex=xy[apex])
         veins_from = "grown"
     return PhotoLeaf(
@@ -418,8 +422,6 @@ def _lifted(vein_xy: np.ndarray, outline_xy: np.ndarray) -> np.ndarray:
     """A traced vein with the forms' relief: HEIGHT_RATIO times its distance to the margin."""
     import shapely
 
-    from leafstudio.forms.veins import HEIGHT_RATIO
-
     margin = shapely.LinearRing(outline_xy)
     gap = shapely.distance(margin, shapely.points(vein_xy))
     return np.column_stack([vein_xy, HEIGHT_RATIO * gap])
@@ -429,9 +431,6 @@ def save_photo_leaf(found: PhotoLeaf, image_path: str | Path, path: str | Path) 
     """Write the leaf; a .leaf.json also keeps the photo (its path relative to the project) and
     its pixel map, which the texture of `reconstruct --texture PHOTO` and the app need
     (sources/leafphoto.py)."""
-    from leafstudio.sources.files import save_leaf
-    from leafstudio.sources.leafphoto import LeafPhoto
-
     if not str(path).lower().endswith(".json"):
         save_leaf(found.leaf, path)
         return
@@ -448,8 +447,6 @@ def is_photo(path: str | Path) -> bool:
 
 def read_photo_leaf(path: str | Path, **options) -> PhotoLeaf:
     """leaf_from_photo on an image file; LeafError naming the file (the app opens photos so)."""
-    from leafstudio._shared.inputs import read_image
-
     image = read_image(path)
     try:
         return leaf_from_photo(image, **options)

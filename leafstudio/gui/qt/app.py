@@ -66,8 +66,8 @@ def run_app(path: str | None = None, screenshot: str | None = None) -> int:
     from PySide6.QtCore import QSettings, QTimer
     from PySide6.QtWidgets import QApplication
 
-    from leafstudio.gui.qt.main_window import MainWindow
-    from leafstudio.gui.qt.viewport import grab_window
+    from leafstudio.gui.qt.main_window import MainWindow  # Qt: after the display check
+    from leafstudio.gui.qt.viewport import grab_window  # Qt: after the display check
 
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("LeafStudio")
