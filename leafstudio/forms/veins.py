@@ -59,14 +59,9 @@ DEFAULT_SECONDARIES = {"pinnate": 6, "arcuate": 6, "palmate": 3, "parallel": 3}
 
 
 def _plane(boundary: np.ndarray, base):
-    """(2D outline, heights or None, frame or None, base in 2D or None)."""
+    """(2D outline, heights or None, frame or None, base in 2D or None); the outline is checked
+    already (grow_veins)."""
     points = np.asarray(boundary, dtype=float)
-    if points.ndim != 2 or points.shape[1] not in (2, 3) or len(points) < 3:
-        raise LeafError(
-            f"the outline must be an (n, 2) or (n, 3) array, n >= 3, got {points.shape}"
-        )
-    if not np.all(np.isfinite(points)):
-        raise LeafError("the outline contains NaN or infinite coordinates")
     b = None if base is None else np.asarray(base, dtype=float).ravel()
     if points.shape[1] == 2 or np.all(points[:, 2] == points[0, 2]):
         z0 = None if points.shape[1] == 2 else float(points[0, 2])
