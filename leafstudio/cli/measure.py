@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from leafstudio.cli.options import EXIT_OK, add_run_options, run_pipeline
+from leafstudio.cli.options import EXIT_OK, add_run_options, check_finite, run_pipeline
 from leafstudio.core.evaluate import format_table, leaf_measurements
 from leafstudio.sources.files import load_leaf
 
@@ -21,6 +21,7 @@ def run(args: argparse.Namespace) -> int:
     """Print the reconstructed leaf's measurements, as a table or JSON."""
     _, result = run_pipeline(args, load_leaf(args.input, veins=args.vein))
     values = leaf_measurements(result)
+    check_finite(values, args.input)
     if args.json:
         print(json.dumps({"input": args.input, **values}, indent=2))
     else:

@@ -11,7 +11,7 @@ from leafstudio._shared.safewrite import check_outputs, replace_atomically, stag
 from leafstudio.analysis.fidelity import scan_distances
 from leafstudio.assets.export import TEXTURES, asset_options, check_asset_options, save_mesh
 from leafstudio.assets.writers import MESH_SUFFIXES, written_paths
-from leafstudio.cli.options import EXIT_OK, add_run_options, run_pipeline
+from leafstudio.cli.options import EXIT_OK, add_run_options, check_finite, run_pipeline
 from leafstudio.errors import LeafError
 from leafstudio.sources.files import load_leaf
 from leafstudio.workflows import open_scan
@@ -122,6 +122,7 @@ def run(args: argparse.Namespace) -> int:
         }
         if fidelity is not None:
             metrics["fidelity"] = {"scan": args.against, **fidelity}
+        check_finite(metrics, args.input)
     with staged():  # every output is written in this block; renamed over the old ones at its end
         options = asset_options(
             args.texture, args.thickness, args.lod, args.input, result, args.length

@@ -128,7 +128,9 @@ def leaf_warnings(leaf) -> list[str]:
                 f"length ({length:.4g}); the surface will be that high"
             )
             continue
-        reach = float(np.max(np.linalg.norm(offset - np.outer(offset @ normal, normal), axis=1)))
+        # in leaf lengths: the norm's squares overflowed at 1e154 ("reaches inf", issue 24)
+        in_plane = (offset - np.outer(offset @ normal, normal)) / length
+        reach = float(np.max(np.linalg.norm(in_plane, axis=1))) * length
         if reach > (0.5 + VEIN_REACH) * length:
             notes.append(
                 f"vein {i} reaches {reach:.4g} from the leaf's centre, far outside its boundary "
