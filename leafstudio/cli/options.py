@@ -106,7 +106,8 @@ def run_pipeline(args: argparse.Namespace, leaf: object):
 
 
 def compiling_notice() -> None:
-    """Say so when this run compiles the numerical kernels (the first run, about 20 s)."""
+    """Say so when this run compiles the numerical kernels (the first run: about 20 s of CPU,
+    README "Speed")."""
     if not kernels_cached():
         log.info("compiling the numerical kernels (the first run only; about 20 s)")
 
