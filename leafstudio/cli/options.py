@@ -107,7 +107,7 @@ def run_pipeline(args: argparse.Namespace, leaf: object):
 
 def compiling_notice() -> None:
     """Say so when this run compiles the numerical kernels (the first run: about 20 s of CPU,
-    README "Speed")."""
+    README, "How good and how fast")."""
     if not kernels_cached():
         log.info("compiling the numerical kernels (the first run only; about 20 s)")
 
