@@ -10,6 +10,7 @@ import json
 import math
 import os
 from collections.abc import Sequence
+from dataclasses import replace
 from io import BytesIO
 from pathlib import Path
 from typing import Any
@@ -27,6 +28,7 @@ from leafstudio._shared.inputs import (
 )
 from leafstudio._shared.safewrite import check_outputs, write_bytes
 from leafstudio._shared.safewrite import staged as staged  # re-exported: outputs replaced together
+from leafstudio.core.bend import Pose
 from leafstudio.errors import LeafError, shorten
 from leafstudio.model import Leaf, Params
 
@@ -169,11 +171,26 @@ def load_project(path: str | os.PathLike) -> tuple[Leaf, Params | None, dict[str
         )
     veins = [_project_points(v, f"vein {i + 1}", source) for i, v in enumerate(veins_data)]
     leaf = _checked_leaf(boundary, veins, source)
+    if data.get("bend"):
+        leaf = replace(leaf, bend=_project_bend(data["bend"], source))
     try:
         params = Params.from_dict(data["params"]) if data.get("params") else None
     except (TypeError, LeafError) as exc:
         raise LeafError(f"bad params: {exc}", source) from None
     return leaf, params, dict(data.get("sketch") or {})
+
+
+def _project_bend(value: Any, source: str) -> Pose:
+    """A project's "bend": {"fold": degrees, "curl": c}, the pose a form was made in."""
+    if not isinstance(value, dict) or set(value) - {"fold", "curl"}:
+        raise LeafError('"bend" must be {"fold": degrees, "curl": number}', source)
+    try:
+        fold, curl = float(value.get("fold", 0.0)), float(value.get("curl", 0.0))
+    except (TypeError, ValueError):
+        raise LeafError('"bend" must be {"fold": degrees, "curl": number}', source) from None
+    if not (math.isfinite(fold) and math.isfinite(curl) and abs(fold) < 90):
+        raise LeafError(f'"bend" needs |fold| < 90 degrees and a finite curl, got {value}', source)
+    return Pose(fold, curl)
 
 
 def load_leaf(path: str | os.PathLike, veins: Sequence[str | os.PathLike] = ()) -> Leaf:
@@ -266,6 +283,8 @@ def project_dict(
     }
     if photo is not None:
         data["photo"] = photo
+    if isinstance(leaf.bend, Pose):  # a posed form: reconstructed flat, then bent (core/bend.py)
+        data["bend"] = {"fold": leaf.bend.fold, "curl": leaf.bend.curl}
     return data
 
 
