@@ -508,9 +508,7 @@ def grow_veins(
         raise LeafError("the outline contains NaN or infinite coordinates")
     # grown at about unit size whatever the outline's units (1e-90 or 1e300: no overflow), by
     # an exact map, so that a leaf of ordinary size gets the very same veins; then mapped back
-    units = Units.exact(points)
-    if np.ptp(points, axis=0).max() == 0:
-        raise LeafError("the outline encloses no area (its points lie on one line)")
+    units = Units.exact(points)  # (_grow_unit refuses an outline without area)
 
     def unit(at: np.ndarray | None) -> np.ndarray | None:
         if at is None:

@@ -6,6 +6,7 @@ line; label 0 is the boundary and 1..n are veins. A file without labels is a bou
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -182,14 +183,15 @@ def load_project(path: str | os.PathLike) -> tuple[Leaf, Params | None, dict[str
 
 def _project_bend(value: Any, source: str) -> Pose:
     """A project's "bend": {"fold": degrees, "curl": c}, the pose a form was made in."""
-    if not isinstance(value, dict) or set(value) - {"fold", "curl"}:
-        raise LeafError('"bend" must be {"fold": degrees, "curl": number}', source)
-    try:
-        fold, curl = float(value.get("fold", 0.0)), float(value.get("curl", 0.0))
-    except (TypeError, ValueError):
-        raise LeafError('"bend" must be {"fold": degrees, "curl": number}', source) from None
-    if not (math.isfinite(fold) and math.isfinite(curl) and abs(fold) < 90):
-        raise LeafError(f'"bend" needs |fold| < 90 degrees and a finite curl, got {value}', source)
+    fold = curl = math.nan  # stays nan, and is refused below, unless the entry reads whole
+    if isinstance(value, dict) and not set(value) - {"fold", "curl"}:
+        with contextlib.suppress(TypeError, ValueError):
+            fold, curl = float(value.get("fold", 0.0)), float(value.get("curl", 0.0))
+    if not (abs(fold) < 90 and math.isfinite(curl)):
+        raise LeafError(
+            f'"bend" must be {{"fold": degrees under 90, "curl": a number}}, got {shorten(value)}',
+            source,
+        )
     return Pose(fold, curl)
 
 

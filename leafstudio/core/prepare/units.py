@@ -33,6 +33,14 @@ LENGTH_FIGURES = ("perimeter", "length", "width", "height")
 AREA_FIGURES = ("area", "projected_area")
 
 
+def _box(points: np.ndarray) -> tuple[np.ndarray, float]:
+    """The (n, d) points' bounding-box centre and largest side (0 for a degenerate or infinite
+    box); the halved sums keep huge coordinates finite."""
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    side = float(np.max(hi / 2 - lo / 2)) * 2
+    return lo / 2 + hi / 2, side if np.isfinite(side) and side > 0 else 0.0
+
+
 @dataclass(frozen=True)
 class Units:
     """world = offset + scale · unit, for points; plane coordinates and heights: times scale."""
@@ -44,15 +52,10 @@ class Units:
     def of(cls, leaf: Leaf) -> Units:
         """The boundary's bounding-box centre and its largest side (1 for a degenerate box, which
         the frame stage refuses anyway). The halved sum keeps huge coordinates finite."""
-        points = leaf.boundary
-        if len(points) == 0:
+        if len(leaf.boundary) == 0:
             return cls(np.zeros(3), 1.0)
-        lo, hi = points.min(axis=0), points.max(axis=0)
-        centre = lo / 2 + hi / 2
-        side = float(np.max(hi / 2 - lo / 2)) * 2
-        if not np.isfinite(side) or side <= 0:
-            side = 1.0
-        return cls(centre, side)
+        centre, side = _box(leaf.boundary)
+        return cls(centre, side or 1.0)
 
     @classmethod
     def exact(cls, points: np.ndarray) -> Units:
@@ -66,11 +69,8 @@ class Units:
         points : (n, d) float array
             Finite points, d = 2 or 3, at least one.
         """
-        points = np.asarray(points, dtype=float)
-        lo, hi = points.min(axis=0), points.max(axis=0)
-        centre = lo / 2 + hi / 2
-        side = float(np.max(hi / 2 - lo / 2)) * 2
-        if not np.isfinite(side) or side <= 0:
+        centre, side = _box(np.asarray(points, dtype=float))
+        if not side:
             return cls(np.zeros_like(centre), 1.0)
         far = np.max(np.abs(centre)) > FAR_FROM_ORIGIN * side
         return cls(centre if far else np.zeros_like(centre), float(2.0 ** np.round(np.log2(side))))
