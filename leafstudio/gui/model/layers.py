@@ -53,6 +53,10 @@ MESH_COLORINGS = {
     "mean_curvature": ("mean curvature", "coolwarm"),
     "gaussian_curvature": ("Gaussian curvature", "coolwarm"),
 }
+# a point layer draws at most this many points: software OpenGL (Mesa llvmpipe) spends main-thread
+# time on every point of every render, about 2 µs each here (a 2M-point scan: 7 s a render)
+DISPLAY_POINTS = 25_000
+SPHERE_POINTS = 10_000  # above this many, points are drawn small and flat: the mesh shows through
 CURVATURE_PERCENTILE = 95  # curvature colours span ± this percentile of |value| (margins spike)
 MAP_OFFSET = 0.003  # the probability map sits this fraction of the leaf length below the plane
 
@@ -86,6 +90,29 @@ def cloud(points: np.ndarray) -> pv.PolyData:
     return pv.PolyData(np.asarray(points, dtype=float), deep=True) if len(points) else pv.PolyData()
 
 
+def thinned(points: np.ndarray, budget: int = DISPLAY_POINTS, ordered: bool = False) -> np.ndarray:
+    """At most `budget` of the (n, d) points, to draw (display only: every computation takes
+    them all). Along a curve (`ordered`) they are spread evenly by index; from a cloud a fixed
+    random subset is drawn (a scan's rows often come in scan lines, which a stride would band),
+    in the file's order.
+    """
+    n = len(points)
+    if n <= budget:
+        return points
+    if ordered:
+        return points[np.unique(np.linspace(0, n - 1, budget).round().astype(np.int64))]
+    keep = np.random.default_rng(0).choice(n, size=budget, replace=False)
+    return points[np.sort(keep)]
+
+
+def dots(color: str, size: float, count: int = 0) -> dict[str, Any]:
+    """The style of `count` points drawn: spheres of `size` pixels, or, for many, flat points of
+    at most 2 pixels, which leave the mesh under a dense layer visible."""
+    if count > SPHERE_POINTS:
+        return {"color": color, "point_size": min(size, 2.0)}
+    return {"color": color, "point_size": size, "render_points_as_spheres": True}
+
+
 def polylines(lines: list[np.ndarray]) -> pv.PolyData:
     """(n_i, 3) polylines as one PolyData of line cells."""
     if not lines:
@@ -105,10 +132,6 @@ def vein_color(index: int) -> str:
     if index == 0:
         return VEIN_COLORS[0]
     return VEIN_COLORS[1 + (index - 1) % (len(VEIN_COLORS) - 1)]
-
-
-def _points(color: str, size: float) -> dict[str, Any]:
-    return {"color": color, "point_size": size, "render_points_as_spheres": True}
 
 
 def _color_ranges(point_data: Mapping[str, np.ndarray]) -> dict[str, tuple[float, float]]:
@@ -176,12 +199,16 @@ def _whole_mesh(
 
 
 def _input_pieces(result: Result) -> list[Piece]:
-    size = 7.0
-    pieces = [
-        Piece("points:boundary", partial(cloud, result.leaf.boundary), _points(BOUNDARY_COLOR, 5.0))
-    ]
-    for i, vein in enumerate(result.leaf.veins):
-        pieces.append(Piece(f"points:vein{i}", partial(cloud, vein), _points(vein_color(i), size)))
+    """The input's points, each curve thinned to a share of DISPLAY_POINTS."""
+    curves = [result.leaf.boundary, *result.leaf.veins]
+    budget = DISPLAY_POINTS // len(curves)
+    shown = [thinned(curve, budget, ordered=True) for curve in curves]
+    count = sum(len(points) for points in shown)
+    boundary = dots(BOUNDARY_COLOR, 5.0, count)
+    pieces = [Piece("points:boundary", partial(cloud, shown[0]), boundary)]
+    for i, vein in enumerate(shown[1:]):
+        style = dots(vein_color(i), 7.0, count)
+        pieces.append(Piece(f"points:vein{i}", partial(cloud, vein), style))
     return pieces
 
 
@@ -227,9 +254,11 @@ def _probability_piece(result: Result) -> Piece:
 
 
 def _sample_pieces(result: Result) -> tuple[Piece, Piece]:
-    gmm = Piece("samples", partial(cloud, result.surface_points), _points("#2ca02c", 3.0))
-    em_xyz = result.frame.to_world(result.em_samples, np.zeros(len(result.em_samples)))
-    em = Piece("em", partial(cloud, em_xyz), _points("#7f7f7f", 2.0))
+    surface = thinned(result.surface_points)
+    gmm = Piece("samples", partial(cloud, surface), dots("#2ca02c", 3.0, len(surface)))
+    em_xy = thinned(result.em_samples)
+    em_xyz = result.frame.to_world(em_xy, np.zeros(len(em_xy)))
+    em = Piece("em", partial(cloud, em_xyz), dots("#7f7f7f", 2.0, len(em_xy)))
     return gmm, em
 
 

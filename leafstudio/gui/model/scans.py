@@ -20,7 +20,7 @@ from leafstudio.analysis.fidelity import FAR, NEAR, distance_summary
 from leafstudio.core.evaluate import point_to_mesh_distance
 from leafstudio.core.pipeline import Result
 from leafstudio.core.trianglemesh import MeshLike, polydata, vertex_normals
-from leafstudio.gui.model.layers import Piece, cloud
+from leafstudio.gui.model.layers import DISPLAY_POINTS, Piece, cloud, dots, thinned
 from leafstudio.sources.extract import Extraction
 from leafstudio.workflows import Opened
 
@@ -41,18 +41,18 @@ class ScanData:
 
 def scan_data(opened: Opened) -> ScanData:
     """An opened scan (workflows.open_scan: read, checked, extracted) with its blade and
-    dropped points as layers."""
+    dropped points as layers, thinned to DISPLAY_POINTS together (layers.thinned)."""
     points, extraction = opened.scan, opened.extraction
     blade = extraction.blade
+    share = DISPLAY_POINTS * np.count_nonzero(blade) // max(len(points), 1)
+    kept = thinned(points[blade], share)
+    dropped = thinned(points[~blade], DISPLAY_POINTS - share)
+    count = len(kept) + len(dropped)
     pieces = [
-        Piece("scan:blade", partial(cloud, points[blade]), _dots(BLADE_COLOR, 3.0)),
-        Piece("scan:dropped", partial(cloud, points[~blade]), _dots(DROPPED_COLOR, 4.0)),
+        Piece("scan:blade", partial(cloud, kept), dots(BLADE_COLOR, 3.0, count)),
+        Piece("scan:dropped", partial(cloud, dropped), dots(DROPPED_COLOR, 4.0, count)),
     ]
     return ScanData(opened.path, points, extraction, pieces)
-
-
-def _dots(color: str, size: float) -> dict[str, Any]:
-    return {"color": color, "point_size": size, "render_points_as_spheres": True}
 
 
 def fidelity_sections(

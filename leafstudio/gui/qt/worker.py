@@ -38,6 +38,7 @@ from leafstudio.model import Leaf, Params
 log = logging.getLogger("leafstudio.gui")
 
 PIPELINE = "pipeline"
+SHUTDOWN_WAIT_MS = 100  # the longest closing waits for a running job to stop (see shutdown)
 LANES = {
     PIPELINE: "pipeline",
     "open": "side",
@@ -89,7 +90,8 @@ class Context:
         return self._worker._superseded(self._job)
 
     def stage(self, name: str) -> None:
-        self._worker.stage_started.emit(self._job.kind, self._job.id, name)
+        if not self._worker._quit:
+            self._worker.stage_started.emit(self._job.kind, self._job.id, name)
 
     def newer_waiting(self) -> bool:
         """True when a newer job of this kind waits, interrupting or not."""
@@ -190,8 +192,11 @@ class Worker(QObject):
             jobs = [*self._pending.values(), *(j for j in self._running.values() if j)]
             return not any(lane is None or self.lanes[j.kind] == lane for j in jobs)
 
-    def shutdown(self, wait_ms: int = 10_000) -> None:
-        """Drop waiting jobs, stop running ones at their next check, and wait for the threads."""
+    def shutdown(self, wait_ms: int = SHUTDOWN_WAIT_MS) -> None:
+        """Drop waiting jobs, ask running ones to stop at their next check, and wait for the
+        threads at most `wait_ms`: a job in a long step that cannot check (a compiled kernel, a
+        file being read) is left to end with the process (daemon threads, which report nothing
+        once shut down), so that closing the window never waits for it."""
         with self._wake:
             self._quit = True
             self._pending.clear()
@@ -229,16 +234,19 @@ class Worker(QObject):
                 continue
             except LeafError as exc:
                 log.info("%s %d: %s", job.kind, job.id, exc)
-                self.failed.emit(job.kind, job.id, exc)
-                self._failed(job)
+                self._report_failure(job, exc)
                 continue
             except Exception as exc:  # the window says so; the app keeps running
                 log.error("%s %d failed", job.kind, job.id, exc_info=exc)
-                self.failed.emit(job.kind, job.id, exc)
-                self._failed(job)
+                self._report_failure(job, exc)
                 continue
             if not context.should_stop():
                 self.done.emit(job.kind, job.id, value)
+
+    def _report_failure(self, job: _Job, exc: BaseException) -> None:
+        if not self._quit:  # after shutdown the window may be gone: nobody to tell
+            self.failed.emit(job.kind, job.id, exc)
+            self._failed(job)
 
     def _drain(self, job: _Job, context: Context, values: Iterator[Any]) -> Any:
         try:

@@ -1,0 +1,64 @@
+"""Big inputs in the app, without Qt: what is drawn of them is thinned to a budget (a render
+costs main-thread time per point), while every computation keeps them whole."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from leafstudio.gui.model import layers, scans
+from leafstudio.gui.model.layers import DISPLAY_POINTS, thinned
+from leafstudio.model import Leaf
+
+
+def test_thinned_keeps_few_points_and_caps_many():
+    few = np.arange(30.0).reshape(10, 3)
+    assert thinned(few, 10) is few
+    curve = np.column_stack([np.arange(1000.0), np.zeros(1000)])
+    along = thinned(curve, 100, ordered=True)
+    assert len(along) == 100 and along[0, 0] == 0 and along[-1, 0] == 999  # ends kept
+    assert np.all(np.diff(along[:, 0]) > 0)  # in order, evenly: gaps of 10
+    assert np.ptp(np.diff(along[:, 0])) <= 1
+    cloud = np.random.default_rng(1).random((5000, 3))
+    some = thinned(cloud, 700)
+    assert len(some) == 700
+    rows = {tuple(p) for p in cloud}
+    assert all(tuple(p) in rows for p in some)  # the file's own points
+    assert np.array_equal(some, thinned(cloud, 700))  # the same every time
+
+
+def big_scan(n: int) -> SimpleNamespace:
+    """An opened scan of `n` points (workflows.Opened's fields that scan_data reads)."""
+    points = np.random.default_rng(0).random((n, 3))
+    blade = np.ones(n, dtype=bool)
+    blade[: n // 10] = False
+    return SimpleNamespace(path="big.xyz", scan=points, extraction=SimpleNamespace(blade=blade))
+
+
+def test_a_big_scan_draws_a_capped_number_of_points_small_and_flat():
+    opened = big_scan(300_000)
+    data = scans.scan_data(opened)
+    drawn = [piece.data.n_points for piece in data.pieces]
+    assert sum(drawn) <= DISPLAY_POINTS
+    assert drawn[1] >= 0.09 * sum(drawn)  # the dropped points keep their share
+    for piece in data.pieces:
+        assert not piece.style.get("render_points_as_spheres")  # spheres would hide the mesh
+        assert piece.style["point_size"] <= 2
+    assert len(data.points) == 300_000  # the distances are measured from every point
+
+
+def test_a_small_scan_draws_every_point_as_before():
+    data = scans.scan_data(big_scan(2000))
+    assert [p.data.n_points for p in data.pieces] == [1800, 200]
+    assert data.pieces[0].style["render_points_as_spheres"]
+
+
+def test_a_big_boundary_draws_a_capped_number_of_its_points():
+    t = np.linspace(0, 2 * np.pi, 300_000, endpoint=False)
+    boundary = np.column_stack([np.cos(t), 0.4 * np.sin(t), np.zeros_like(t)])
+    vein = np.column_stack([np.linspace(-0.9, 0.9, 50), np.zeros((50, 2))])
+    result = SimpleNamespace(leaf=Leaf(boundary=boundary, veins=[vein]))
+    pieces = layers._input_pieces(result)
+    drawn = [piece.data.n_points for piece in pieces]
+    assert sum(drawn) <= DISPLAY_POINTS and drawn[1] == 50  # a short vein whole
