@@ -156,7 +156,7 @@ class Params:
 
     Each field is declared once, here: its kind and range, default, help, the pipeline stage it
     invalidates and its command-line flag (paramspec.py). Validation, the stage cache's keys
-    (core/pipeline.py), the parameter panel (gui/qt/controls.py) and the CLI flags (cli/) are
+    (core/stages.py), the parameter panel (gui/qt/controls.py) and the CLI flags (cli/) are
     derived from these declarations (`PARAMS`).
 
     A `slider` range is what the panel's slider offers, inside the valid range: what is worth

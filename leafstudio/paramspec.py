@@ -5,7 +5,7 @@ invalidates, its command-line flag and the panel's slider range.
 `Whole(...).field()`); everything else is derived from that declaration:
 
 - validation: `Params.__post_init__` calls each declaration's `check`;
-- the stage cache's keys: `core/pipeline.STAGE_KEYS` from each declaration's `stage`;
+- the stage cache's keys: `core/stages.STAGE_KEYS` from each declaration's `stage`;
 - the parameter panel (gui/qt/controls.py): widget, range, label and tooltip;
 - the command line (cli/): the flag, its metavar and help, and `parse` for its text.
 
@@ -66,8 +66,8 @@ class Param:
     help : str
         Plain words: the panel's tooltip and the flag's --help (range and default added).
     stage : str
-        The pipeline stage that reads it (core/pipeline.STAGES): that stage, and every stage
-        that reads its output, reruns when it changes (core/pipeline.STAGE_KEYS).
+        The pipeline stage that reads it (core/stages.STAGES): that stage, and every stage
+        that reads its output, reruns when it changes (core/stages.STAGE_KEYS).
     flag : str
         The command-line flag (`--k`); reconstruct, measure, compare and batch take it.
     metavar : str, optional

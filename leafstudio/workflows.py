@@ -31,8 +31,9 @@ from scipy.spatial import cKDTree
 from leafstudio.analysis.fidelity import scan_distances
 from leafstudio.core.pipeline import Pipeline, Result
 from leafstudio.core.plane import fit_frame
-from leafstudio.core.prepare.outline import ORDERED_STEP_RATIO, ring_crossings
+from leafstudio.core.prepare.outline import ORDERED_STEP_RATIO
 from leafstudio.core.prepare.plausibility import leaf_warnings
+from leafstudio.core.prepare.polygon import ring_crossings
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf, Params
 from leafstudio.sources.extract import OUTLINE_POINTS, Extraction, check_scan, extract_leaf

@@ -15,8 +15,9 @@ import pytest
 import leafstudio as ls
 from leafstudio.cli import build_parser, main
 from leafstudio.cli.options import params_for as _params_for
-from leafstudio.core import pipeline
-from leafstudio.core.pipeline import STAGE_INPUTS, STAGE_KEYS, STAGES, Pipeline
+from leafstudio.core import stages
+from leafstudio.core.pipeline import Pipeline
+from leafstudio.core.stages import STAGE_INPUTS, STAGE_KEYS, STAGES
 from leafstudio.errors import LeafError
 from leafstudio.model import K_AUTO_MAX, PARAMS, Params
 from leafstudio.paramspec import Choice, Ranged, Real, Switch, Whole
@@ -184,8 +185,8 @@ def _downstream(stage: str) -> set[str]:
     return found
 
 
-def test_the_stage_table_in_the_pipelines_docstring_says_what_the_keys_are():
-    rows = re.findall(r"^\| (\w+) +\| ([^|]+)\|", pipeline.__doc__, re.MULTILINE)
+def test_the_stage_table_in_the_stages_docstring_says_what_the_keys_are():
+    rows = re.findall(r"^\| (\w+) +\| ([^|]+)\|", stages.__doc__, re.MULTILINE)
     table = {stage: {w.strip() for w in deps.split(",")} for stage, deps in rows if stage in STAGES}
     assert list(table) == list(STAGES)
     for stage, deps in table.items():
@@ -214,7 +215,7 @@ def test_a_parameter_change_reruns_its_stage_and_those_after_it_and_gives_a_fres
     first = pipe.run(base)
     cached = pipe.run(changed)
     # a lazy stage runs when first asked for (the layout: for the conforming mesher only)
-    lazy = {s for s in STAGES if pipeline.STAGE_TABLE[s].lazy}
+    lazy = {s for s in STAGES if stages.STAGE_TABLE[s].lazy}
     assert expected - lazy <= set(cached.ran) <= expected | (lazy - set(first.ran))
     fresh = Pipeline(leaf).run(changed)
     np.testing.assert_array_equal(cached.triangle_mesh.points, fresh.triangle_mesh.points)

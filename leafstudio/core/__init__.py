@@ -3,7 +3,8 @@ shapely, Triangle and open3d; never Qt.
 
 | step (paper)                      | stage(s)          | module                              |
 |-----------------------------------|-------------------|-------------------------------------|
-| before 1: input made ready        | frame             | prepare/ (outline, cloud, units, …) |
+| before 1: input made ready        | frame             | prepare/ (outline, polygon, cloud,  |
+|                                   |                   | units, …)                           |
 | 1 plane, heights (3.1, eq. 3)     | frame             | plane, base                         |
 | 2 implicit g (3.2, eqs. 1-2)      | implicit          | mpu                                 |
 | 3-5 sampling grid                 | grid              | grid                                |
@@ -11,10 +12,10 @@ shapely, Triangle and open3d; never Qt.
 | 4 mixture (3.4, eqs. 6-9)         | samples, gmm      | gmm, autok                          |
 | 4-5 surface z (3.4-3.5, eq. 8)    | surface           | surface, base, curvature            |
 | 5 mesh (3.5)                      | layout, mesh      | mesher, trianglemesh                |
-| the stages in order, one cache    | all               | pipeline, store                     |
-| results (4, Table 1)              | Result.metrics    | evaluate, distance                  |
+| the stages in order, one cache    | all               | pipeline, stages, steps, store      |
+| results (4, Table 1)              | Result.metrics    | result, evaluate, distance          |
 
 Support without a step of its own: buckets (the compiled neighbour searches). The stage table
-itself, with what each stage depends on, is in pipeline.py; docs/architecture.md has the layers
-around core.
+itself, with what each stage depends on, is in stages.py (each stage's function in steps.py);
+docs/architecture.md has the layers around core.
 """

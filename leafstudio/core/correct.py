@@ -39,7 +39,7 @@ from numba import njit
 from scipy.spatial import cKDTree
 
 from leafstudio.core.buckets import kernel_array
-from leafstudio.core.prepare.outline import thin_curve
+from leafstudio.core.prepare.polygon import thin_curve
 from leafstudio.core.surface import HeightSurface
 
 CENTER_STEP = 0.008  # vein points closer than this share of the length are one spline centre
@@ -123,7 +123,7 @@ def _spline_derivatives(xy, centers, weights, affine, log_cut):
 
 def spline_centers(veins: list[np.ndarray], length: float) -> list[np.ndarray]:
     """Indices kept of each vein's (m_i, 2) points: at least CENTER_STEP · length apart along it
-    (outline.thin_curve), at most MOST_CENTERS in all, none within JUNCTION · length of an
+    (polygon.thin_curve), at most MOST_CENTERS in all, none within JUNCTION · length of an
     earlier vein's."""
     step = CENTER_STEP * length
     kept = [thin_curve(v, step, keep_end=True) for v in veins]

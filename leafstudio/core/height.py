@@ -24,7 +24,7 @@ from numba import njit
 from scipy.spatial import cKDTree
 
 from leafstudio.core.buckets import bounds, bucket_points, kernel_array
-from leafstudio.core.prepare.outline import thin_curve
+from leafstudio.core.prepare.polygon import thin_curve
 
 TIE = 1e-9  # relative distance under which nearest points count as tied
 QUERIES_PER_BUCKET = 32  # query points share one candidate list per bucket of about this many

@@ -1,5 +1,5 @@
-"""The pipeline's one cache (pipeline.py): stage outputs keyed by the leaf's fingerprint and the
-parameters each stage reads. No step of the paper; the table of stages that use it is pipeline.py's.
+"""The pipeline's one cache: stage outputs keyed by the leaf's fingerprint and the parameters each
+stage reads. No step of the paper; the table of stages that use it is stages.py's.
 """
 
 from __future__ import annotations

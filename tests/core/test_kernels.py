@@ -16,14 +16,14 @@ from leafstudio.core.grid import make_grid
 from leafstudio.core.height import nearest_in_groups
 from leafstudio.core.mesher import conforming_grid_mesh, inner_nodes
 from leafstudio.core.mpu import bspline_weight, build_mpu
-from leafstudio.core.pipeline import _frame_stage
-from leafstudio.core.prepare.outline import (
+from leafstudio.core.prepare.outline import leaf_polygon
+from leafstudio.core.prepare.polygon import (
     contains,
     distinct_indices,
-    leaf_polygon,
     outward_normals,
     thin_outline,
 )
+from leafstudio.core.steps import frame_stage
 from leafstudio.core.surface import _levenberg_marquardt, _pack, _residual_rows
 from leafstudio.sources.demos import PAPER_K
 
@@ -46,7 +46,7 @@ def _slotted_square() -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def nested_frame():
-    return _frame_stage(ls.demo("nested"))
+    return frame_stage(ls.demo("nested"))
 
 
 def test_mpu_value_is_eq1_summed_over_every_cell(nested_frame):

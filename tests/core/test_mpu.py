@@ -6,8 +6,9 @@ import shapely
 from shapely.geometry import LinearRing
 
 from leafstudio.core.mpu import bspline_weight, build_mpu
-from leafstudio.core.pipeline import _frame_stage
-from leafstudio.core.prepare.outline import contains, leaf_polygon, outward_normals, thin_curve
+from leafstudio.core.prepare.outline import leaf_polygon
+from leafstudio.core.prepare.polygon import contains, outward_normals, thin_curve
+from leafstudio.core.steps import frame_stage
 from leafstudio.sources.demos import demo
 from tests import leaves
 
@@ -112,7 +113,7 @@ def test_a_finely_resampled_outline_keeps_a_compact_quadtree(vertices):
     """The nested demo's outline resampled to 30,000 points and thinned to a few thousand (as a
     dense scan's is): cells beyond its sharp tip, whose balls all grow to the tip's points, were
     split to the depth limit for a sign no split could mend (35,000 cells instead of ~700)."""
-    polygon = _frame_stage(demo("nested")).polygon
+    polygon = frame_stage(demo("nested")).polygon
     closed = np.vstack([polygon, polygon[:1]])
     arc = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(closed, axis=0), axis=1))])
     at = np.linspace(0, arc[-1], 30000, endpoint=False)

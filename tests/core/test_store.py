@@ -1,4 +1,4 @@
-"""The one cache of stage outputs (store.StageStore, as pipeline.py uses it): a stage is
+"""The one cache of stage outputs (store.StageStore, as stages.py uses it): a stage is
 recomputed exactly when its inputs change, keyed by the leaf's fingerprint and the parameters it
 reads."""
 
@@ -8,8 +8,10 @@ import numpy as np
 import pytest
 
 import leafstudio as ls
-from leafstudio.core import pipeline
-from leafstudio.core.pipeline import Pipeline, Stage, StageRun, StageStore
+from leafstudio.core import stages
+from leafstudio.core.pipeline import Pipeline
+from leafstudio.core.stages import Stage, StageRun
+from leafstudio.core.store import MISSING, StageStore
 
 PARAMS = ls.Params(k=3, grid=48, samples=800)
 EVERY_STAGE = ("frame", "implicit", "grid", "guide", "samples", "gmm", "surface", "layout", "mesh")
@@ -75,10 +77,10 @@ def test_the_store_keeps_per_stage_outputs_most_recent_first():
     store = StageStore(per_stage=2)
     for key in ("a", "b", "c"):
         store.put("gmm", (key,), key)
-    assert store.get("gmm", ("a",)) is pipeline.MISSING
+    assert store.get("gmm", ("a",)) is MISSING
     assert store.get("gmm", ("b",)) == "b"  # now the most recent: "c" goes next
     store.put("gmm", ("d",), "d")
-    assert store.get("gmm", ("c",)) is pipeline.MISSING
+    assert store.get("gmm", ("c",)) is MISSING
     assert store.stages() == ("gmm",)
 
 
@@ -86,7 +88,7 @@ def test_a_stage_that_reads_an_output_it_does_not_depend_on_is_refused(monkeypat
     def sneaky(run: StageRun):
         return run["mesh"]  # grid does not depend on the mesh: its key would not cover it
 
-    monkeypatch.setitem(pipeline.STAGE_TABLE, "grid", Stage("grid", ("frame",), sneaky))
+    monkeypatch.setitem(stages.STAGE_TABLE, "grid", Stage("grid", ("frame",), sneaky))
     with pytest.raises(KeyError, match="'grid' reads 'mesh'"):
         Pipeline(ls.demo("nested")).run(PARAMS)
 

@@ -3,7 +3,7 @@ secondary veins from pinnate, arcuate or palmate growth, only its midrib. That w
 growth step (0.02 of the length against a half-width of 0.025), not botany: a linear dicot leaf
 (rosemary, willow, flax) has short steep secondaries; grass-like leaves are parallel-veined
 (`--venation parallel`, which was and is unaffected). The step now scales to a narrow blade's
-half-width (forms.veins.growth_step)."""
+half-width (forms.growth.growth_step)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import shapely
 from shapely.geometry import Polygon
 
 from leafstudio.forms import Form
-from leafstudio.forms.veins import NARROW_STEPS, STEP, growth_step
+from leafstudio.forms.growth import NARROW_STEPS, STEP, growth_step
 
 
 @pytest.mark.parametrize("shape", ["linear", "elliptic", "lanceolate"])

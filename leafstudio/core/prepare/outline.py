@@ -5,13 +5,13 @@ the leaf region; both come from this polygon (trace_outline). A clean boundary k
 as the outline's vertices: ordered input (sketches, sampled curves) in its order, a dense one
 thinned to about MAX_OUTLINE_VERTICES; unordered input in the order a contour round its cells
 gives (cloud.py). A noisy boundary, ordered or not, becomes the smooth outline through its points'
-mean position. Everything is linear in the number of points but for one sort of them.
+mean position. Everything is linear in the number of points but for one sort of them. What the
+stages do with the traced polygon (thinning, normals, the inside test) is in polygon.py.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 import shapely
@@ -30,45 +30,19 @@ from leafstudio.core.prepare.cloud import (
     point_order,
 )
 from leafstudio.core.prepare.plausibility import ZIGZAG
+from leafstudio.core.prepare.polygon import MAX_OUTLINE_VERTICES, distinct_indices, thin_ring
 from leafstudio.errors import LeafError
 
 SPARSE_OUTLINE = 48  # an outline of fewer vertices gets points along its edges (_densified)
 # points given in order step at most this many median spacings (a longer step: unordered)
 ORDERED_STEP_RATIO = 8.0
 
-MAX_OUTLINE_VERTICES = 3000  # a denser outline is thinned to about this many (thin_outline)
 ORDERED_MEAN_EDGE = 4.0  # given order: mean edge at most this many nearest-neighbour spacings
 CLEAN_NOISE = 2e-5  # estimated noise (σ) under this fraction of the size: a clean boundary
 RASTER = 512  # the cloud's cells: at least 1/RASTER of its size
 HULL_MOST = 5000  # a clean cloud the cells cannot trace is tried by concave hulls up to this
 SNAKE = (2.0, 0.25)  # a concave hull this much longer round this share of the area: see _snakes
 _HULL_RATIOS = (0.0, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0)
-
-
-def distinct_indices(points: np.ndarray, scale: float) -> np.ndarray:
-    """Indices of the (n, 2) points left once repeats (within 1e-9 of `scale`) are dropped, in
-    order. Column by column: numpy's reductions along axis 0 of an (n, 2) array are slow."""
-    if len(points) == 0:
-        return np.arange(0)
-    columns = [np.round(points[:, i] / (scale * 1e-9)).astype(np.int64) for i in range(2)]
-    columns = [c - c.min() for c in columns]
-    span_y = int(columns[1].max()) + 1
-    if (float(columns[0].max()) + 1) * span_y >= 2.0**62:  # rare: no one integer each
-        return np.sort(np.unique(np.column_stack(columns), axis=0, return_index=True)[1])
-    keys = columns[0] * span_y + columns[1]
-    ordered = np.sort(keys)  # a plain sort: many times faster than a unique with indices
-    same = ordered[1:] == ordered[:-1]
-    if not same.any():
-        return np.arange(len(keys))
-    # only the points whose key repeats are sorted again (a dense scan has a few such pairs)
-    involved = np.flatnonzero(np.isin(keys, np.unique(ordered[1:][same])))
-    order = np.argsort(keys[involved], kind="stable")
-    grouped = keys[involved][order]
-    first = involved[order[np.r_[True, grouped[1:] != grouped[:-1]]]]  # each repeat's first
-    keep = np.ones(len(keys), dtype=bool)
-    keep[involved] = False
-    keep[first] = True
-    return np.flatnonzero(keep)
 
 
 SPACING_QUERIES = 2000  # points whose nearest neighbour sets the median spacing, at most
@@ -147,8 +121,8 @@ def _orientation(points, sequence):
 
 def _ring(points: np.ndarray, sequence: np.ndarray) -> np.ndarray | Polygon | None:
     """The outline through points[sequence] (canonical), thinned to about MAX_OUTLINE_VERTICES
-    (thin_curve): kept indices into `points` if that is a simple polygon, a repaired polygon if
-    it crosses itself a little, None if it does not trace an outline.
+    (polygon.thin_curve): kept indices into `points` if that is a simple polygon, a repaired
+    polygon if it crosses itself a little, None if it does not trace an outline.
 
     The validity test checks the thinned ring (the one the pipeline uses, at a fraction of the
     cost); a thinned ring that cuts across a narrow slit is thinned less, down to every point,
@@ -161,7 +135,7 @@ def _ring(points: np.ndarray, sequence: np.ndarray) -> np.ndarray | Polygon | No
     step = perimeter / MAX_OUTLINE_VERTICES if many else 0.0
     finest = perimeter / len(sequence)  # below this mean edge, thinning keeps about all
     while step > 0:
-        kept = sequence[_thin_ring(points, sequence, step)]
+        kept = sequence[thin_ring(points, sequence, step)]
         if Polygon(points[kept]).is_valid:
             return kept
         step = step / 2 if step / 2 > finest else 0.0
@@ -183,24 +157,6 @@ def _ring_length(points, sequence):
         a, b = sequence[i], sequence[(i + 1) % n]
         total += np.sqrt((points[b, 0] - points[a, 0]) ** 2 + (points[b, 1] - points[a, 1]) ** 2)
     return total
-
-
-@njit(cache=True, nogil=True)
-def _thin_ring(points, sequence, step):
-    """Positions in `sequence` kept by thin_curve of points[sequence] (without copying them)."""
-    keep = np.zeros(len(sequence), np.bool_)
-    if len(sequence) == 0:
-        return np.flatnonzero(keep)
-    keep[0] = True
-    last = sequence[0]
-    for i in range(1, len(sequence)):
-        p = sequence[i]
-        if (points[p, 0] - points[last, 0]) ** 2 + (points[p, 1] - points[last, 1]) ** 2 >= (
-            step * step
-        ):
-            keep[i] = True
-            last = p
-    return np.flatnonzero(keep)
 
 
 def _given_order(points: np.ndarray, spacing: float) -> np.ndarray | None:
@@ -406,169 +362,6 @@ def leaf_polygon(points: np.ndarray) -> np.ndarray:
     (m, 2) float array
         Polygon vertices, counter-clockwise, not closed: input points for a clean boundary (more
         than MAX_OUTLINE_VERTICES of them come back thinned to about that many, see
-        thin_outline), the smoothed mean outline for a noisy one.
+        polygon.thin_outline), the smoothed mean outline for a noisy one.
     """
     return trace_outline(points).polygon
-
-
-def thin_outline(polygon: np.ndarray, most: int = MAX_OUTLINE_VERTICES) -> np.ndarray:
-    """Indices of the vertices of a polygon with more than `most` of them that are kept, in order.
-
-    Walking round the outline from vertex 0, a vertex is kept once it is at least perimeter / most
-    from the last one kept (thin_curve). A dense scan's outline (tens of thousands of points) then
-    costs the implicit, the guide and the mesher as much as a few thousand, at a spacing far below
-    any grid the app uses, so the dropped points stay within a tiny distance of the kept edges.
-    """
-    if len(polygon) <= most:
-        return np.arange(len(polygon))
-    polygon = kernel_array(polygon)
-    closed = np.vstack([polygon, polygon[:1]])
-    perimeter = float(np.sqrt((np.diff(closed, axis=0) ** 2).sum(axis=1)).sum())
-    return thin_curve(polygon, perimeter / most)
-
-
-def thin_veins(veins: list[np.ndarray], most: int = MAX_OUTLINE_VERTICES) -> list[np.ndarray]:
-    """Indices kept of each vein's (m_i, 2) points, when the veins have more than `most` points
-    in all: thinned (thin_curve) at their total length / most, as thin_outline does the outline
-    (the guide's nearest-vein search costs in proportion to the points)."""
-    if sum(len(v) for v in veins) <= most:
-        return [np.arange(len(v)) for v in veins]
-    total = sum(float(np.sqrt((np.diff(v, axis=0) ** 2).sum(axis=1)).sum()) for v in veins)
-    return [thin_curve(v, total / most, keep_end=True) for v in veins]
-
-
-def thin_curve(points: np.ndarray, step: float, keep_end: bool = False) -> np.ndarray:
-    """Indices of the (n, 2) points kept, in order, when each is dropped that lies nearer than
-    `step` to the last one kept (the first is always kept, and with `keep_end` the last: an
-    open curve's end; unordered points mostly stay)."""
-    points = kernel_array(points)
-    kept = _thin_ring(points, np.arange(len(points)), float(step))
-    if keep_end and len(points) and kept[-1] != len(points) - 1:
-        kept = np.append(kept, len(points) - 1)
-    return kept
-
-
-def outward_normals(polygon: np.ndarray, smoothing: int = 2) -> np.ndarray:
-    """Unit outward normals at the vertices of a counter-clockwise polygon.
-
-    Each normal is perpendicular to the chord between the neighbours `smoothing` steps away, which
-    averages out mild noise.
-    """
-    ahead = np.roll(polygon, -smoothing, axis=0)
-    behind = np.roll(polygon, smoothing, axis=0)
-    tangent = ahead - behind
-    normal = np.column_stack([tangent[:, 1], -tangent[:, 0]])
-    length = np.linalg.norm(normal, axis=1, keepdims=True)
-    return normal / np.where(length > 0, length, 1.0)
-
-
-class EdgeBands(NamedTuple):
-    """A polygon's edges filed into horizontal bands (edge_bands), for `contains`."""
-
-    y0: float  # the lowest band's bottom
-    height: float  # each band's height
-    n_bands: int
-    tolerance: float  # points this near an edge count as on it
-    starts: np.ndarray  # (n_bands + 1,) int64: band b's edges are edges[starts[b]:starts[b + 1]]
-    edges: np.ndarray  # (s,) int64 edge indices (edge e runs from vertex e to e + 1)
-
-
-def edge_bands(polygon: np.ndarray) -> EdgeBands:
-    """The (b, 2) polygon's edges filed by horizontal band, about two edges a band: built once
-    for a polygon that is tested many times (the pipeline keeps its outline's in its frame
-    stage)."""
-    polygon = kernel_array(polygon)
-    n_bands = max(1, len(polygon) // 2)
-    y0, y1 = float(polygon[:, 1].min()), float(polygon[:, 1].max())
-    height = max(y1 - y0, 1e-300) / n_bands
-    tolerance = 1e-12 * float(np.ptp(polygon, axis=0).max())
-    starts, edges = _file_edges(polygon, y0, height, n_bands)
-    return EdgeBands(y0, height, n_bands, tolerance, starts, edges)
-
-
-def contains(polygon: np.ndarray, xy: np.ndarray, bands: EdgeBands | None = None) -> np.ndarray:
-    """(n,) bool: which points lie inside the polygon (or on its edge).
-
-    The crossing-number test, compiled: the polygon's edges are filed into horizontal bands
-    (`bands`: the polygon's edge_bands when they are known already), so each point only tests
-    the few edges of its band.
-    """
-    polygon = kernel_array(polygon)
-    xy = kernel_array(np.atleast_2d(xy)).reshape(-1, 2)
-    return _inside(polygon, xy, *(edge_bands(polygon) if bands is None else bands))
-
-
-@njit(cache=True, nogil=True)
-def _band_range(ya: float, yb: float, y0: float, height: float, n_bands: int) -> tuple[int, int]:
-    first = min(max(int((min(ya, yb) - y0) / height), 0), n_bands - 1)
-    last = min(max(int((max(ya, yb) - y0) / height), 0), n_bands - 1)
-    return first, last
-
-
-@njit(cache=True, nogil=True)
-def _file_edges(polygon, y0, height, n_bands):
-    """(n_bands + 1,) starts and the edge indices of each band, edges of every band they span."""
-    n = len(polygon)
-    starts = np.zeros(n_bands + 1, np.int64)
-    for e in range(n):
-        first, last = _band_range(polygon[e, 1], polygon[(e + 1) % n, 1], y0, height, n_bands)
-        starts[first + 1 : last + 2] += 1
-    for b in range(n_bands):
-        starts[b + 1] += starts[b]
-    edges = np.empty(starts[-1], np.int64)
-    fill = starts[:-1].copy()
-    for e in range(n):
-        first, last = _band_range(polygon[e, 1], polygon[(e + 1) % n, 1], y0, height, n_bands)
-        for b in range(first, last + 1):
-            edges[fill[b]] = e
-            fill[b] += 1
-    return starts, edges
-
-
-@njit(cache=True, nogil=True)
-def _inside(polygon, xy, y0, height, n_bands, tolerance, starts, edges):
-    n = len(polygon)
-    out = np.zeros(len(xy), np.bool_)
-    for i in range(len(xy)):
-        px, py = xy[i, 0], xy[i, 1]
-        if py < y0 - tolerance or py > y0 + height * n_bands + tolerance:
-            continue
-        band = min(max(int((py - y0) / height), 0), n_bands - 1)
-        inside = False
-        for s in range(starts[band], starts[band + 1]):
-            e = edges[s]
-            ax, ay = polygon[e, 0], polygon[e, 1]
-            bx, by = polygon[(e + 1) % n, 0], polygon[(e + 1) % n, 1]
-            # on the edge itself: covered
-            ex, ey = bx - ax, by - ay
-            length2 = ex * ex + ey * ey
-            t = ((px - ax) * ex + (py - ay) * ey) / length2 if length2 > 0 else 0.0
-            t = min(max(t, 0.0), 1.0)
-            if (ax + t * ex - px) ** 2 + (ay + t * ey - py) ** 2 <= tolerance * tolerance:
-                inside = True
-                break
-            if (ay > py) != (by > py) and px < ax + (py - ay) * ex / ey:
-                inside = not inside
-        out[i] = inside
-    return out
-
-
-def ring_crossings(ring: np.ndarray) -> np.ndarray:
-    """Where a closed polyline of (n, 2) points crosses itself: (c, 2) points, empty if never.
-
-    Segments that are not neighbours along the ring and meet are crossings (an STRtree finds
-    the candidate pairs, so a long ring costs little more than a short one).
-    """
-    ring = np.asarray(ring, dtype=float)
-    n = len(ring)
-    if n < 4:
-        return np.zeros((0, 2))
-    ends = np.roll(ring, -1, axis=0)
-    segments = shapely.linestrings(np.stack([ring, ends], axis=1))
-    left, right = shapely.STRtree(segments).query(segments, predicate="intersects")
-    apart = (right > left) & ((right - left) % n > 1) & ((left - right) % n > 1)
-    if not np.any(apart):
-        return np.zeros((0, 2))
-    meet = shapely.intersection(segments[left[apart]], segments[right[apart]])
-    points = shapely.get_coordinates(shapely.centroid(meet))
-    return points.reshape(-1, 2)

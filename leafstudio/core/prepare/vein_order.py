@@ -1,6 +1,6 @@
 """The order of a vein's points: kept when they run along the vein, made canonical when not.
 
-The pipeline thins dense veins along their order (outline.thin_veins, height.height_guide) and
+The pipeline thins dense veins along their order (polygon.thin_veins, height.height_guide) and
 picks vein rows for the surface fit evenly by index, so a shuffled vein used to be thinned to a
 random few of its points (a 1e5-point vein's mean distance to the mesh tripled). A vein whose
 path through its points in the given order is no longer than a few times its extent is taken as

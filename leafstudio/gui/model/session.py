@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from leafstudio.core.plane import Frame
-from leafstudio.core.prepare.outline import ring_crossings
+from leafstudio.core.prepare.polygon import ring_crossings
 from leafstudio.gui.model.framing import BladeBounds, Framing, blade_bounds
 from leafstudio.gui.model.history import Event, History, State, Step
 from leafstudio.gui.model.jobs import Job, Run, describe, run_now

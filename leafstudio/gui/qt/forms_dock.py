@@ -32,7 +32,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from leafstudio.core.prepare.outline import ring_crossings
+from leafstudio.core.prepare.polygon import ring_crossings
 from leafstudio.forms import SHAPES, VENATION_KINDS, Form, definition, grow_veins
 from leafstudio.forms.make import SIDE_ON
 from leafstudio.forms.terms import APEXES, DEFAULT_LOBES, MARGINS, RELIEF, TOOTHED, USER_BASES

@@ -16,7 +16,8 @@ from leafstudio.cli import main
 from leafstudio.core.evaluate import margin_creases
 from leafstudio.core.grid import make_grid
 from leafstudio.core.mesher import MAX_EDGE, conforming_grid_mesh
-from leafstudio.core.prepare.outline import contains, trace_outline
+from leafstudio.core.prepare.outline import trace_outline
+from leafstudio.core.prepare.polygon import contains
 from tests.leaves import ellipse_cloud as _ellipse
 from tests.leaves import random_leaf as _random_leaf
 

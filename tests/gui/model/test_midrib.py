@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import shapely
 
-from leafstudio.core.prepare.outline import ring_crossings
+from leafstudio.core.prepare.polygon import ring_crossings
 from leafstudio.gui.model.midrib import Midrib
 from leafstudio.gui.model.sketch_model import Sketch
 

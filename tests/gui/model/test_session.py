@@ -11,7 +11,7 @@ import pytest
 import shapely
 
 from leafstudio.core.pipeline import Pipeline
-from leafstudio.core.prepare.outline import ring_crossings
+from leafstudio.core.prepare.polygon import ring_crossings
 from leafstudio.gui.model.framing import (
     best_iso,
     blade_bounds,

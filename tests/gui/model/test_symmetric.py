@@ -12,7 +12,7 @@ import pytest
 
 import leafstudio as ls
 from leafstudio.cli import main
-from leafstudio.core.prepare.outline import ring_crossings
+from leafstudio.core.prepare.polygon import ring_crossings
 from leafstudio.gui.model.session import Session
 from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.sources.files import load_project, save_leaf

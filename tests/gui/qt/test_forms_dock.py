@@ -93,7 +93,7 @@ def test_a_forms_sketch_keeps_tooth_tips():
 def test_every_forms_sketch_curve_is_a_simple_outline():
     import itertools
 
-    from leafstudio.core.prepare.outline import ring_crossings
+    from leafstudio.core.prepare.polygon import ring_crossings
     from leafstudio.forms import Form
     from leafstudio.forms.terms import MARGINS
 

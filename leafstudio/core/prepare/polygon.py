@@ -1,0 +1,223 @@
+"""Polygon tools the stages share: repeats dropped, outlines and veins thinned, outward normals,
+the compiled inside test, self-crossings. The outline itself is traced in outline.py; these take
+a polygon (or points along a curve) already in order.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+import shapely
+from numba import njit
+
+from leafstudio.core.buckets import kernel_array
+
+MAX_OUTLINE_VERTICES = 3000  # a denser outline is thinned to about this many (thin_outline)
+
+
+def distinct_indices(points: np.ndarray, scale: float) -> np.ndarray:
+    """Indices of the (n, 2) points left once repeats (within 1e-9 of `scale`) are dropped, in
+    order. Column by column: numpy's reductions along axis 0 of an (n, 2) array are slow."""
+    if len(points) == 0:
+        return np.arange(0)
+    columns = [np.round(points[:, i] / (scale * 1e-9)).astype(np.int64) for i in range(2)]
+    columns = [c - c.min() for c in columns]
+    span_y = int(columns[1].max()) + 1
+    if (float(columns[0].max()) + 1) * span_y >= 2.0**62:  # rare: no one integer each
+        return np.sort(np.unique(np.column_stack(columns), axis=0, return_index=True)[1])
+    keys = columns[0] * span_y + columns[1]
+    ordered = np.sort(keys)  # a plain sort: many times faster than a unique with indices
+    same = ordered[1:] == ordered[:-1]
+    if not same.any():
+        return np.arange(len(keys))
+    # only the points whose key repeats are sorted again (a dense scan has a few such pairs)
+    involved = np.flatnonzero(np.isin(keys, np.unique(ordered[1:][same])))
+    order = np.argsort(keys[involved], kind="stable")
+    grouped = keys[involved][order]
+    first = involved[order[np.r_[True, grouped[1:] != grouped[:-1]]]]  # each repeat's first
+    keep = np.ones(len(keys), dtype=bool)
+    keep[involved] = False
+    keep[first] = True
+    return np.flatnonzero(keep)
+
+
+@njit(cache=True, nogil=True)
+def thin_ring(points, sequence, step):
+    """Positions in `sequence` kept by thin_curve of points[sequence] (without copying them)."""
+    keep = np.zeros(len(sequence), np.bool_)
+    if len(sequence) == 0:
+        return np.flatnonzero(keep)
+    keep[0] = True
+    last = sequence[0]
+    for i in range(1, len(sequence)):
+        p = sequence[i]
+        if (points[p, 0] - points[last, 0]) ** 2 + (points[p, 1] - points[last, 1]) ** 2 >= (
+            step * step
+        ):
+            keep[i] = True
+            last = p
+    return np.flatnonzero(keep)
+
+
+def thin_outline(polygon: np.ndarray, most: int = MAX_OUTLINE_VERTICES) -> np.ndarray:
+    """Indices of the vertices of a polygon with more than `most` of them that are kept, in order.
+
+    Walking round the outline from vertex 0, a vertex is kept once it is at least perimeter / most
+    from the last one kept (thin_curve). A dense scan's outline (tens of thousands of points) then
+    costs the implicit, the guide and the mesher as much as a few thousand, at a spacing far below
+    any grid the app uses, so the dropped points stay within a tiny distance of the kept edges.
+    """
+    if len(polygon) <= most:
+        return np.arange(len(polygon))
+    polygon = kernel_array(polygon)
+    closed = np.vstack([polygon, polygon[:1]])
+    perimeter = float(np.sqrt((np.diff(closed, axis=0) ** 2).sum(axis=1)).sum())
+    return thin_curve(polygon, perimeter / most)
+
+
+def thin_veins(veins: list[np.ndarray], most: int = MAX_OUTLINE_VERTICES) -> list[np.ndarray]:
+    """Indices kept of each vein's (m_i, 2) points, when the veins have more than `most` points
+    in all: thinned (thin_curve) at their total length / most, as thin_outline does the outline
+    (the guide's nearest-vein search costs in proportion to the points)."""
+    if sum(len(v) for v in veins) <= most:
+        return [np.arange(len(v)) for v in veins]
+    total = sum(float(np.sqrt((np.diff(v, axis=0) ** 2).sum(axis=1)).sum()) for v in veins)
+    return [thin_curve(v, total / most, keep_end=True) for v in veins]
+
+
+def thin_curve(points: np.ndarray, step: float, keep_end: bool = False) -> np.ndarray:
+    """Indices of the (n, 2) points kept, in order, when each is dropped that lies nearer than
+    `step` to the last one kept (the first is always kept, and with `keep_end` the last: an
+    open curve's end; unordered points mostly stay)."""
+    points = kernel_array(points)
+    kept = thin_ring(points, np.arange(len(points)), float(step))
+    if keep_end and len(points) and kept[-1] != len(points) - 1:
+        kept = np.append(kept, len(points) - 1)
+    return kept
+
+
+def outward_normals(polygon: np.ndarray, smoothing: int = 2) -> np.ndarray:
+    """Unit outward normals at the vertices of a counter-clockwise polygon.
+
+    Each normal is perpendicular to the chord between the neighbours `smoothing` steps away, which
+    averages out mild noise.
+    """
+    ahead = np.roll(polygon, -smoothing, axis=0)
+    behind = np.roll(polygon, smoothing, axis=0)
+    tangent = ahead - behind
+    normal = np.column_stack([tangent[:, 1], -tangent[:, 0]])
+    length = np.linalg.norm(normal, axis=1, keepdims=True)
+    return normal / np.where(length > 0, length, 1.0)
+
+
+class EdgeBands(NamedTuple):
+    """A polygon's edges filed into horizontal bands (edge_bands), for `contains`."""
+
+    y0: float  # the lowest band's bottom
+    height: float  # each band's height
+    n_bands: int
+    tolerance: float  # points this near an edge count as on it
+    starts: np.ndarray  # (n_bands + 1,) int64: band b's edges are edges[starts[b]:starts[b + 1]]
+    edges: np.ndarray  # (s,) int64 edge indices (edge e runs from vertex e to e + 1)
+
+
+def edge_bands(polygon: np.ndarray) -> EdgeBands:
+    """The (b, 2) polygon's edges filed by horizontal band, about two edges a band: built once
+    for a polygon that is tested many times (the pipeline keeps its outline's in its frame
+    stage)."""
+    polygon = kernel_array(polygon)
+    n_bands = max(1, len(polygon) // 2)
+    y0, y1 = float(polygon[:, 1].min()), float(polygon[:, 1].max())
+    height = max(y1 - y0, 1e-300) / n_bands
+    tolerance = 1e-12 * float(np.ptp(polygon, axis=0).max())
+    starts, edges = _file_edges(polygon, y0, height, n_bands)
+    return EdgeBands(y0, height, n_bands, tolerance, starts, edges)
+
+
+def contains(polygon: np.ndarray, xy: np.ndarray, bands: EdgeBands | None = None) -> np.ndarray:
+    """(n,) bool: which points lie inside the polygon (or on its edge).
+
+    The crossing-number test, compiled: the polygon's edges are filed into horizontal bands
+    (`bands`: the polygon's edge_bands when they are known already), so each point only tests
+    the few edges of its band.
+    """
+    polygon = kernel_array(polygon)
+    xy = kernel_array(np.atleast_2d(xy)).reshape(-1, 2)
+    return _inside(polygon, xy, *(edge_bands(polygon) if bands is None else bands))
+
+
+@njit(cache=True, nogil=True)
+def _band_range(ya: float, yb: float, y0: float, height: float, n_bands: int) -> tuple[int, int]:
+    first = min(max(int((min(ya, yb) - y0) / height), 0), n_bands - 1)
+    last = min(max(int((max(ya, yb) - y0) / height), 0), n_bands - 1)
+    return first, last
+
+
+@njit(cache=True, nogil=True)
+def _file_edges(polygon, y0, height, n_bands):
+    """(n_bands + 1,) starts and the edge indices of each band, edges of every band they span."""
+    n = len(polygon)
+    starts = np.zeros(n_bands + 1, np.int64)
+    for e in range(n):
+        first, last = _band_range(polygon[e, 1], polygon[(e + 1) % n, 1], y0, height, n_bands)
+        starts[first + 1 : last + 2] += 1
+    for b in range(n_bands):
+        starts[b + 1] += starts[b]
+    edges = np.empty(starts[-1], np.int64)
+    fill = starts[:-1].copy()
+    for e in range(n):
+        first, last = _band_range(polygon[e, 1], polygon[(e + 1) % n, 1], y0, height, n_bands)
+        for b in range(first, last + 1):
+            edges[fill[b]] = e
+            fill[b] += 1
+    return starts, edges
+
+
+@njit(cache=True, nogil=True)
+def _inside(polygon, xy, y0, height, n_bands, tolerance, starts, edges):
+    n = len(polygon)
+    out = np.zeros(len(xy), np.bool_)
+    for i in range(len(xy)):
+        px, py = xy[i, 0], xy[i, 1]
+        if py < y0 - tolerance or py > y0 + height * n_bands + tolerance:
+            continue
+        band = min(max(int((py - y0) / height), 0), n_bands - 1)
+        inside = False
+        for s in range(starts[band], starts[band + 1]):
+            e = edges[s]
+            ax, ay = polygon[e, 0], polygon[e, 1]
+            bx, by = polygon[(e + 1) % n, 0], polygon[(e + 1) % n, 1]
+            # on the edge itself: covered
+            ex, ey = bx - ax, by - ay
+            length2 = ex * ex + ey * ey
+            t = ((px - ax) * ex + (py - ay) * ey) / length2 if length2 > 0 else 0.0
+            t = min(max(t, 0.0), 1.0)
+            if (ax + t * ex - px) ** 2 + (ay + t * ey - py) ** 2 <= tolerance * tolerance:
+                inside = True
+                break
+            if (ay > py) != (by > py) and px < ax + (py - ay) * ex / ey:
+                inside = not inside
+        out[i] = inside
+    return out
+
+
+def ring_crossings(ring: np.ndarray) -> np.ndarray:
+    """Where a closed polyline of (n, 2) points crosses itself: (c, 2) points, empty if never.
+
+    Segments that are not neighbours along the ring and meet are crossings (an STRtree finds
+    the candidate pairs, so a long ring costs little more than a short one).
+    """
+    ring = np.asarray(ring, dtype=float)
+    n = len(ring)
+    if n < 4:
+        return np.zeros((0, 2))
+    ends = np.roll(ring, -1, axis=0)
+    segments = shapely.linestrings(np.stack([ring, ends], axis=1))
+    left, right = shapely.STRtree(segments).query(segments, predicate="intersects")
+    apart = (right > left) & ((right - left) % n > 1) & ((left - right) % n > 1)
+    if not np.any(apart):
+        return np.zeros((0, 2))
+    meet = shapely.intersection(segments[left[apart]], segments[right[apart]])
+    points = shapely.get_coordinates(shapely.centroid(meet))
+    return points.reshape(-1, 2)

@@ -1,0 +1,205 @@
+"""The output of a run (Leaf + Params -> Result, section 4): the mesh, the surface, what the
+stages made on the way, and the Table-1 metrics measured on first use (evaluate.py). A run works
+at unit size (prepare/units.py); `in_world` maps its Result to the input's coordinates.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from leafstudio.core import evaluate
+from leafstudio.core.evaluate import curvature_summary, shape_measurements
+from leafstudio.core.grid import Grid
+from leafstudio.core.plane import Frame
+from leafstudio.core.prepare.units import ScaledSurface, Units
+from leafstudio.core.surface import HeightSurface
+from leafstudio.core.trianglemesh import TriangleMesh
+from leafstudio.model import Leaf, Params
+
+if TYPE_CHECKING:
+    import pyvista as pv
+
+
+class Cancelled(Exception):
+    """Raised inside `Pipeline.run` (or `Result.measure`) when its `should_stop` callback says
+    so."""
+
+
+_MEASURING = threading.Lock()  # held while a Result takes one step of its measuring
+
+
+@dataclass
+class Result:
+    """Everything one run produced; the mesh is in the input's (world) coordinates.
+
+    Attributes
+    ----------
+    leaf, params : Leaf, Params
+        What was reconstructed, and how.
+    frame : Frame
+        The boundary's PCA plane: `frame.to_plane` maps (n, 3) world points to (n, 2) plane
+        points and heights, `frame.to_world` back.
+    triangle_mesh : TriangleMesh
+        The mesh as arrays: (n, 3) `points`, (m, 3) `regular_faces`, and (n,) point arrays
+        height, mean_curvature, gaussian_curvature, k1, k2.
+    mesh : pyvista.PolyData
+        The same mesh for VTK, made on first use.
+    metrics : dict
+        Table-1 distances ("boundary", "veins"), mesh facts ("mesh"), sizes ("leaf"), curvature
+        ranges ("curvature"); measured on first use.
+    chosen_k : int
+        The K the surface uses (the BIC's choice when params.k is "auto").
+    warnings : list of str
+        What the run noticed (a leaf without veins is flat, ...).
+    ran, timings : tuple of str, dict of str to float
+        The stages this run computed (the others came from the cache), and their seconds.
+
+    Examples
+    --------
+    >>> import leafstudio as ls
+    >>> result = ls.reconstruct(ls.demo("nested"), ls.Params(k=3, grid=32))
+    >>> result.triangle_mesh.points.shape, result.chosen_k
+    ((372, 3), 3)
+    >>> result.metrics["mesh"]["components"], round(result.metrics["leaf"]["length"], 6)
+    (1, 1.0)
+    """
+
+    leaf: Leaf
+    params: Params
+    frame: Frame
+    polygon: np.ndarray
+    grid: Grid
+    g_grid: np.ndarray  # (ny * nx,) g at every grid node
+    p_grid: np.ndarray  # (ny * nx,) the probability map, 0 outside
+    inside: np.ndarray  # (ny * nx,) bool, g >= 0
+    em_samples: np.ndarray  # (s, 2) points drawn from p for EM
+    surface: HeightSurface
+    surface_points: np.ndarray  # (n, 3) the GMM samples: kept grid nodes lifted, world coords
+    triangle_mesh: TriangleMesh  # the mesh's arrays: points, triangles, height and curvatures
+    length: float
+    timings: dict[str, float] = field(default_factory=dict)
+    ran: tuple[str, ...] = ()
+    warnings: list[str] = field(default_factory=list)
+    unit: Result | None = None  # the same run at unit size (units.py); None: this is it
+    units: Units | None = None  # how `unit` maps to this one
+    # the metrics once measured, and the measuring steps under way (see measure)
+    _metrics: dict[str, Any] | None = field(default=None, init=False, repr=False, compare=False)
+    _steps: evaluate.Steps | None = field(default=None, init=False, repr=False, compare=False)
+
+    def height(self, xy: np.ndarray) -> np.ndarray:
+        """z of the surface at (n, 2) plane points (differentiable; see surface.py).
+
+        Parameters
+        ----------
+        xy : (n, 2) or (2,) float array
+            Points in the plane frame's coordinates (`frame.to_plane` of world points).
+
+        Returns
+        -------
+        (n,) float array
+            The surface's height above the plane there, z(x) = b(x) + tanh(g/δ) Σ a_k N_k(x).
+
+        Examples
+        --------
+        >>> import leafstudio as ls
+        >>> result = ls.reconstruct(ls.demo("nested"), ls.Params(k=3, grid=32))
+        >>> midrib = np.array([[0.3, 0.0, 0.0], [0.5, 0.0, 0.0], [0.7, 0.0, 0.0]])
+        >>> xy, _ = result.frame.to_plane(midrib)
+        >>> result.height(xy).round(2).tolist()  # heights along the midrib, base to tip
+        [0.02, 0.03, 0.04]
+        """
+        return self.surface(np.atleast_2d(np.asarray(xy, dtype=float)))
+
+    @property
+    def chosen_k(self) -> int:
+        """The K the surface uses: params.k, or the one chosen when params.k is "auto"."""
+        return len(self.surface.mixture.weights)
+
+    @cached_property
+    def mesh(self) -> pv.PolyData:
+        """The mesh as a pyvista.PolyData with its point arrays, built on first use: a run itself
+        never creates a VTK object (the app draws from `triangle_mesh` on its main thread)."""
+        return self.triangle_mesh.to_pyvista()
+
+    @property
+    def metrics(self) -> dict[str, Any]:
+        """The paper's Table 1 distances and the mesh's facts (see evaluate.table_metrics), the
+        leaf's measurements with the K used ("leaf") and its curvature ranges ("curvature"; see
+        measure.py). Measured at unit size and mapped back (units.py): they do not depend on
+        the input's units or its distance from the origin. Computed once (see measure)."""
+        return self.measure()
+
+    @property
+    def measured(self) -> bool:
+        """True once `metrics` are computed."""
+        return self._metrics is not None
+
+    def measure(self, should_stop: Callable[[], bool] | None = None) -> dict[str, Any]:
+        """`metrics`, computed in steps (distances, mesh facts, shape, curvature, in pieces):
+        when `should_stop()` is true after a step, Cancelled is raised, and the next call goes
+        on from there (the app stops measuring a shown result when a newer request waits; the
+        steps done are kept)."""
+        if self._metrics is None:
+            if self.unit is not None and self.units is not None:
+                self._metrics = self.units.metrics(self.unit.measure(should_stop))
+            else:
+                self._metrics = self._measure_in_steps(should_stop)
+        return self._metrics
+
+    def _measure_in_steps(self, should_stop: Callable[[], bool] | None) -> dict[str, Any]:
+        while True:
+            with _MEASURING:  # one thread at a time runs the steps (a generator is not shared)
+                if self._metrics is not None:  # another thread finished them meanwhile
+                    return self._metrics
+                if self._steps is None:
+                    self._steps = self._metric_steps()
+                try:
+                    next(self._steps)
+                except StopIteration as stop:
+                    self._metrics, self._steps = stop.value, None
+                    return self._metrics
+                except BaseException:
+                    self._steps = None  # a failed step: the next call starts again
+                    raise
+            if should_stop is not None and should_stop():
+                raise Cancelled
+
+    def _metric_steps(self) -> evaluate.Steps[dict[str, Any]]:
+        table = yield from evaluate.table_steps(self.triangle_mesh, self.leaf)
+        yield
+        area = table["mesh"]["area"]
+        shape = shape_measurements(self.triangle_mesh, self.frame, self.polygon, area)
+        yield
+        curvature = curvature_summary(self.triangle_mesh)
+        return {**table, "leaf": {**shape, "k": self.chosen_k}, "curvature": curvature}
+
+
+def in_world(unit: Result, leaf: Leaf, units: Units) -> Result:
+    """The unit-size run `unit` in the input's coordinates (units.py)."""
+    s = units.scale
+    return Result(
+        leaf=leaf,
+        params=unit.params,
+        frame=units.frame(unit.frame),
+        polygon=s * unit.polygon,
+        grid=units.grid(unit.grid),
+        g_grid=s * unit.g_grid,
+        p_grid=s * unit.p_grid,
+        inside=unit.inside,
+        em_samples=s * unit.em_samples,
+        surface=ScaledSurface(unit.surface, s),  # type: ignore[arg-type]
+        surface_points=units.to_world(unit.surface_points),
+        triangle_mesh=units.mesh(unit.triangle_mesh),
+        length=s * unit.length,
+        timings=unit.timings,
+        ran=unit.ran,
+        warnings=unit.warnings,
+        unit=unit,
+        units=units,
+    )

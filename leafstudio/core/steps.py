@@ -1,0 +1,323 @@
+"""The paper's steps as the pipeline's stages: one function per stage (`compute_<stage>`), each
+reading the outputs of the stages it depends on from a StageRun (stages.py holds the table that
+names them, in order), and the outputs they pass on (FrameStage, GuideStage, SurfaceStage, Layout).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, NamedTuple
+
+import numpy as np
+
+from leafstudio.core import mesher
+from leafstudio.core.autok import choose_mixture
+from leafstudio.core.base import PLANAR, BaseSurface, fit_base
+from leafstudio.core.correct import onto_veins
+from leafstudio.core.curvature import graph_curvatures
+from leafstudio.core.gmm import Mixture, fit_mixture, fit_signed_mixture, sample_guide
+from leafstudio.core.grid import Grid, make_grid
+from leafstudio.core.height import height_guide
+from leafstudio.core.mpu import MPUImplicit, build_mpu
+from leafstudio.core.plane import Frame, fit_frame
+from leafstudio.core.prepare.outline import trace_outline
+from leafstudio.core.prepare.plausibility import (
+    check_boundary,
+    check_not_a_surface,
+    keep_outer_loop,
+)
+from leafstudio.core.prepare.polygon import (
+    EdgeBands,
+    contains,
+    distinct_indices,
+    edge_bands,
+    outward_normals,
+    thin_outline,
+    thin_veins,
+)
+from leafstudio.core.prepare.units import Units
+from leafstudio.core.prepare.vein_order import vein_order
+from leafstudio.core.surface import HeightSurface, fit_surface
+from leafstudio.core.trianglemesh import TriangleMesh
+from leafstudio.errors import LeafError
+from leafstudio.model import K_AUTO, Leaf
+
+if TYPE_CHECKING:
+    from leafstudio.core.stages import StageRun
+
+MIN_NODES_PER_COMPONENT = 5
+GUIDE_STEP = 0.5  # the guide's curves are thinned to this fraction of the grid step (height.py)
+VEIN_OUTSIDE_TOLERANCE = 0.01  # vein points may stray this fraction of the leaf length outside
+
+
+@dataclass(frozen=True)
+class FrameStage:
+    """Step 1 output: the plane frame and everything projected onto it."""
+
+    frame: Frame
+    polygon: np.ndarray  # (b, 2) counter-clockwise leaf outline
+    veins: list[np.ndarray]  # (m_i, 2) per vein
+    heights: list[np.ndarray]  # (m_i,) signed heights per vein above the base, h_v − b(v')
+    length: float  # leaf length along its main axis
+    polygon_h: np.ndarray | None = None  # (b,) the outline points' own heights; None: planar
+    base: BaseSurface | None = None  # b(x) through the outline's heights; None: b ≡ 0
+    bands: EdgeBands | None = None  # the polygon's edge_bands, for contains
+    notes: tuple[str, ...] = ()  # what the run should warn of (dropped loops, a flat leaf)
+
+    @property
+    def flat(self) -> bool:
+        """No vein rises off the base: the surface is the base (or the plane) itself."""
+        return not self.veins or not np.any(np.abs(self.vein_h) > 1e-9 * self.length)
+
+    @property
+    def vein_xy(self) -> np.ndarray:
+        return np.vstack(self.veins) if self.veins else np.zeros((0, 2))
+
+    @property
+    def vein_h(self) -> np.ndarray:
+        return np.concatenate(self.heights) if self.heights else np.zeros(0)
+
+
+@dataclass(frozen=True)
+class GuideStage:
+    """g and p on the grid; `inside` marks the nodes kept (g >= 0)."""
+
+    g: np.ndarray
+    p: np.ndarray
+    inside: np.ndarray
+
+
+@dataclass(frozen=True)
+class SurfaceStage:
+    """The fitted height surface and its values on the kept grid nodes."""
+
+    surface: HeightSurface
+    z: np.ndarray
+
+
+def frame_stage(leaf: Leaf, margin: str = "auto", units: Units | None = None) -> FrameStage:
+    scale, offset = (units.scale, units.offset) if units is not None else (1.0, None)
+    check_not_a_surface(leaf.boundary)  # a whole scan given as the boundary: an error
+    check_boundary(leaf.boundary, scale, offset)  # a figure eight would lose a lobe: an error
+    boundary, notes = keep_outer_loop(leaf.boundary)  # holes, separate loops: dropped, and said
+    if notes:
+        leaf = Leaf(boundary, leaf.veins)
+    frame = fit_frame(leaf.boundary, leaf.vein_points)
+    xy, boundary_h = frame.to_plane(leaf.boundary)
+    outline = trace_outline(xy, boundary_h, margin)  # input points, or a noisy cloud's mean
+    kept_vertices = thin_outline(outline.polygon)  # a few thousand vertices at most
+    polygon = outline.polygon[kept_vertices]
+    bands = edge_bands(polygon)
+    length = float(np.ptp(polygon[:, 0]))
+    if np.max(np.abs(boundary_h)) <= PLANAR * length:  # planar: no base
+        polygon_h = np.zeros(len(polygon))
+    else:
+        polygon_h = outline.heights[kept_vertices]
+    base = fit_base(polygon, polygon_h, length)
+    if outline.smoothed and base is not None:  # a noisy margin: on the smooth base itself
+        polygon_h = base(polygon)
+    veins, heights = [], []
+    projected = [frame.to_plane(vein) for vein in leaf.veins]
+    orders = [vein_order(v_xy) for v_xy, _ in projected]  # shuffled veins sorted (veins.py)
+    projected = [(v_xy[o], v_h[o]) for (v_xy, v_h), o in zip(projected, orders, strict=True)]
+    distinct = [distinct_indices(v_xy, length) for v_xy, _ in projected]
+    kept = thin_veins([v_xy[keep] for (v_xy, _), keep in zip(projected, distinct, strict=True)])
+    for i, (v_xy, v_h) in enumerate(projected):
+        keep = distinct[i][kept[i]]  # dense veins: a few thousand points in all (thin_veins)
+        v_xy = v_xy[keep]
+        outside = ~contains(polygon, v_xy, bands)
+        if outside.any():
+            from shapely import LinearRing, distance, points
+
+            gap = distance(LinearRing(polygon), points(v_xy[outside])).max()
+            if gap > VEIN_OUTSIDE_TOLERANCE * length:
+                raise LeafError(
+                    f"vein {i + 1}: {outside.sum()} of {len(v_xy)} points lie outside the "
+                    f"boundary (up to {gap / length:.1%} of the leaf length)"
+                )
+        veins.append(v_xy)
+        heights.append(v_h[keep] - (base(v_xy) if base is not None else 0.0))
+    if base is not None:
+        if not veins:
+            notes.append("no veins given: the surface only follows the boundary's heights")
+    elif not veins:
+        notes.append("no veins given: the leaf is flat")
+    elif all(np.allclose(h, 0, atol=1e-9 * length) for h in heights):
+        notes.append("all veins lie in the boundary's plane: the leaf is flat")
+    return FrameStage(
+        frame=frame,
+        polygon=polygon,
+        veins=veins,
+        heights=heights,
+        length=length,
+        polygon_h=None if base is None else polygon_h,
+        base=base,
+        bands=bands,
+        notes=tuple(notes),
+    )
+
+
+def _flat_mixture(center: np.ndarray) -> Mixture:
+    """A mixture of amplitude zero: the surface of a leaf without relief."""
+    return Mixture(
+        weights=np.ones(1),
+        means=center[None].copy(),
+        covariances=np.eye(2)[None].copy(),
+        amplitudes=np.zeros(1),
+    )
+
+
+def _frozen(*arrays: np.ndarray) -> None:
+    """Make stored arrays read-only: later runs share them."""
+    for array in arrays:
+        array.flags.writeable = False
+
+
+def compute_frame(run: StageRun) -> FrameStage:
+    pipe = run.pipeline
+    return frame_stage(pipe.unit_leaf, run.params.margin, pipe.units)
+
+
+def compute_implicit(run: StageRun) -> MPUImplicit:
+    fs: FrameStage = run["frame"]
+    tol = run.params.mpu_tolerance * fs.length
+    normals = outward_normals(fs.polygon)
+    return build_mpu(fs.polygon, normals, tol, lambda q: contains(fs.polygon, q, fs.bands))
+
+
+def compute_grid(run: StageRun) -> Grid:
+    return make_grid(run["frame"].polygon, run.params.grid)
+
+
+def compute_guide(run: StageRun) -> GuideStage:
+    fs: FrameStage = run["frame"]
+    grid: Grid = run["grid"]
+    nodes = grid.points
+    g = run["implicit"].on_grid(grid)
+    inside = g >= 0
+    p = np.zeros(len(nodes))
+    p[inside] = height_guide(
+        nodes[inside], fs.polygon, fs.veins, fs.heights, step=GUIDE_STEP * grid.spacing
+    )
+    return GuideStage(g=g, p=p, inside=inside)
+
+
+def compute_samples(run: StageRun) -> np.ndarray:
+    """The EM samples drawn from the guide (gmm.sample_guide): a new K refits the same ones."""
+    guide: GuideStage = run["guide"]
+    grid: Grid = run["grid"]
+    inside = guide.inside
+    drawn = sample_guide(
+        grid.points[inside], guide.p[inside], run.params.samples, grid.spacing, run.params.seed
+    )
+    _frozen(drawn)
+    return drawn
+
+
+def compute_gmm(run: StageRun) -> tuple[np.ndarray, Mixture]:
+    fs: FrameStage = run["frame"]
+    guide: GuideStage = run["guide"]
+    grid: Grid = run["grid"]
+    params = run.params
+    if fs.flat:
+        return np.zeros((0, 2)), _flat_mixture(fs.polygon.mean(axis=0))
+    p_in = guide.p[guide.inside]
+    support = int(np.count_nonzero(p_in))  # grid nodes the samples can come from
+    if params.k != K_AUTO and params.k > support // MIN_NODES_PER_COMPONENT:
+        raise LeafError(
+            f"K = {params.k} is more than the data supports: the height guide covers only "
+            f"{support} grid nodes (at least {MIN_NODES_PER_COMPONENT} per component needed); "
+            f"lower K or raise the grid resolution"
+        )
+    samples = run["samples"]
+    # the sign of p at each sample's node: veins above and below the plane are fitted apart
+    cell = np.rint((samples - grid.origin) / grid.spacing).astype(int)
+    ny, nx = grid.shape
+    cell = np.clip(cell, 0, [nx - 1, ny - 1])
+    positive = guide.p[cell[:, 1] * nx + cell[:, 0]] >= 0
+
+    def fit(k: int) -> Mixture:
+        return fit_signed_mixture(
+            samples, positive, lambda part, k_part: fit_mixture(part, k_part, params.seed), k
+        )
+
+    # auto: K from 1 to 12 (both signs together) by the BIC of the joined fit (autok.py)
+    mixture = choose_mixture(fit, samples)[0] if params.k == K_AUTO else fit(params.k)
+    return samples, mixture
+
+
+def compute_surface(run: StageRun) -> SurfaceStage:
+    fs: FrameStage = run["frame"]
+    guide: GuideStage = run["guide"]
+    nodes = run["grid"].points[guide.inside]
+    g_in = guide.g[guide.inside]
+    surface = fit_surface(
+        run["gmm"][1],
+        run["implicit"],
+        nodes,
+        g_in,
+        guide.p[guide.inside],
+        fs.vein_xy,
+        fs.vein_h,
+        run.params.taper,
+        run.params.refine,
+        run.params.seed,
+        base=fs.base,
+    )
+    if run.params.through_veins:  # onto every vein point (correct.py)
+        surface = onto_veins(surface, fs.veins, fs.heights, fs.length)
+    return SurfaceStage(surface=surface, z=surface(nodes, g_in))
+
+
+class Layout(NamedTuple):
+    """The conforming mesh in the plane and g's derivatives at its vertices: they depend on
+    nothing after the guide (K and the fit only lift the mesh)."""
+
+    xy: np.ndarray  # (v, 2) the outline, points added in the band, the kept grid nodes
+    triangles: np.ndarray  # (t, 3)
+    kept: np.ndarray  # (ny * nx,) bool: the grid nodes among the vertices
+    implicit_at: tuple[np.ndarray, np.ndarray, np.ndarray]  # g, ∇g, ∇²g at xy
+
+
+def compute_layout(run: StageRun) -> Layout:
+    grid: Grid = run["grid"]
+    xy, triangles, kept = mesher.conforming_grid_mesh(
+        run["frame"].polygon, grid, run["guide"].inside
+    )
+    implicit_at = run["implicit"].derivatives_on_grid(xy, grid, kept)
+    _frozen(xy, triangles, kept, *implicit_at)
+    return Layout(xy, triangles, kept, implicit_at)
+
+
+def compute_mesh(run: StageRun) -> TriangleMesh:
+    fs: FrameStage = run["frame"]
+    grid: Grid = run["grid"]
+    guide: GuideStage = run["guide"]
+    surf: SurfaceStage = run["surface"]
+    params = run.params
+    n_outline = len(fs.polygon)
+    # the margin at the boundary points' own heights (0 in the plane for a planar one, eq. 3);
+    # the kept grid nodes' heights are already known
+    rim = np.zeros(n_outline) if fs.polygon_h is None else fs.polygon_h
+    implicit_at = None
+    if params.mesher == "conforming":
+        layout: Layout = run["layout"]
+        xy, triangles, kept, implicit_at = layout
+        added = xy[n_outline : len(xy) - int(np.count_nonzero(kept))]  # against slivers
+        z = np.concatenate([rim, surf.surface(added), surf.z[kept[guide.inside]]])
+        world = fs.frame.to_world(xy, z)
+    else:
+        xy = np.vstack([fs.polygon, grid.points[guide.inside]])
+        z = np.concatenate([rim, surf.z])
+        world = fs.frame.to_world(xy, z)
+        grad = surf.surface.gradient(xy)
+        normals = fs.frame.to_world(-grad, np.ones(len(xy))) - fs.frame.origin
+        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+        triangles = mesher.ball_pivoting(world, normals, grid.spacing, params.radius_factor)
+    on_margin = np.arange(len(xy)) < n_outline  # both meshers put the outline first
+    _, grad, hess = surf.surface.derivatives(xy, on_margin, implicit_at)
+    return TriangleMesh(
+        points=world,
+        regular_faces=triangles,
+        point_data={"height": z, **graph_curvatures(grad, hess)},
+    )
