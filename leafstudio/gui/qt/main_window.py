@@ -26,8 +26,6 @@ from PySide6.QtWidgets import (
     QMainWindow,
     QMenu,
     QMessageBox,
-    QTreeWidget,
-    QTreeWidgetItem,
     QWidget,
 )
 
@@ -41,6 +39,7 @@ from leafstudio.gui.qt.actions import MENU_TITLES, WINDOW_ACTIONS, Action
 from leafstudio.gui.qt.controls import ParamPanel
 from leafstudio.gui.qt.file_commands import APP_NAME, FileCommands
 from leafstudio.gui.qt.layers_panel import LayersPanel
+from leafstudio.gui.qt.measurements_panel import MeasurementsPanel
 from leafstudio.gui.qt.sketch import SketchEditor
 from leafstudio.gui.qt.status import StatusText
 from leafstudio.gui.qt.viewport import Viewport
@@ -96,7 +95,8 @@ class MainWindow(FileCommands, QMainWindow):
         self.layers = LayersPanel(self.viewport.camera)
         self.layer_list, self.edges = self.layers.list, self.layers.edges
         self.coloring = self.layers.coloring
-        self.measurements = QTreeWidget()
+        self.measurements_panel = MeasurementsPanel()  # Copy and Save the table
+        self.measurements = self.measurements_panel.tree
         self.status_text = StatusText()  # not a QLabel: see status.py
         self.add_actions(WINDOW_ACTIONS)
         self._build_docks()
@@ -208,9 +208,8 @@ class MainWindow(FileCommands, QMainWindow):
         self.add_dock("Layers", self.layers, LEFT, listed=True)
         self.editor.setMinimumWidth(380)
         self.add_dock("Sketch", self.editor, RIGHT, listed=True)
-        self.measurements.setHeaderLabels(["Measure", "Value"])
-        self.measurements.setColumnWidth(0, 190)
-        measurements = self.add_dock("Measurements", self.measurements, LEFT, listed=True)
+        self.measurements_panel.failed.connect(self.show_error)
+        measurements = self.add_dock("Measurements", self.measurements_panel, LEFT, listed=True)
         self._measurements_due = False
         measurements.visibilityChanged.connect(
             lambda visible: visible and self._measurements_due and self._show_measurements()
@@ -329,7 +328,7 @@ class MainWindow(FileCommands, QMainWindow):
         self.viewport.clear()
         if (scan := self.session.state.scan) is not None:
             self.viewport.set_layer("scan", scan.pieces)
-        self.measurements.clear()
+        self.measurements_panel.clear()
         self.status_text.setStyleSheet("")
         self.status_text.setText(self.session.message)
 
@@ -431,14 +430,7 @@ class MainWindow(FileCommands, QMainWindow):
             sections.insert(0, ("Scan → mesh distance", [("Computing…", "")]))
         elif fidelity is not None:
             sections[:0] = fidelity[1]
-        self.measurements.setUpdatesEnabled(False)
-        self.measurements.clear()
-        for title, rows in sections:
-            section = QTreeWidgetItem([title, ""])
-            section.addChildren([QTreeWidgetItem([label, value]) for label, value in rows])
-            self.measurements.addTopLevelItem(section)
-            section.setExpanded(True)
-        self.measurements.setUpdatesEnabled(True)
+        self.measurements_panel.show_sections(sections)
         if not waiting:
             self.measurements_shown.emit()
 

@@ -24,6 +24,7 @@ from leafstudio.gui.qt.native_view import make_plotter
 SIZED = ("point_size", "line_width")  # style keys in device pixels: scaled by the pixel ratio
 
 CAMERAS = ("iso", "top", "side")
+MINIMUM_SIZE = (360, 240)  # the view's least width and height, in pixels
 BAR_BAND = 0.13  # the colour bars' share of the view's height, at its bottom, with their titles
 
 
@@ -35,6 +36,7 @@ class Viewport(QWidget):
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.plotter = make_plotter(self)
+        self.setMinimumSize(*MINIMUM_SIZE)  # widening a dock must not squeeze the leaf out
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.plotter.interactor)

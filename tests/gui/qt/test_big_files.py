@@ -3,9 +3,15 @@ figures are benchmarks/bench_gui.py's)."""
 
 from __future__ import annotations
 
+import json
 import threading
 
-from .conftest import close_window
+from PySide6.QtCore import Qt
+from PySide6.QtWidgets import QApplication
+
+from leafstudio.gui.qt.viewport import MINIMUM_SIZE
+
+from .conftest import WAIT_MS, close_window
 
 
 def test_closing_does_not_wait_for_a_job_that_cannot_stop(window, qtbot):
@@ -22,3 +28,40 @@ def test_closing_does_not_wait_for_a_job_that_cannot_stop(window, qtbot):
     assert not ended.is_set()  # closed while the job still runs: not joined
     release.set()
     assert ended.wait(10)
+
+
+def measured(qtbot, window) -> None:
+    qtbot.waitUntil(lambda: bool(window.measurements_panel.sections), timeout=WAIT_MS)
+
+
+def test_ctrl_c_copies_the_whole_table(window, qtbot):
+    measured(qtbot, window)
+    tree = window.measurements
+    tree.setFocus()
+    tree.setCurrentItem(tree.topLevelItem(0).child(0))  # a cell: Ctrl+C copied only it
+    QApplication.clipboard().clear()
+    qtbot.keyClick(tree, Qt.Key.Key_C, Qt.KeyboardModifier.ControlModifier)
+    text = QApplication.clipboard().text()
+    titles = [tree.topLevelItem(i).text(0) for i in range(tree.topLevelItemCount())]
+    assert len(titles) >= 3 and all(title in text.splitlines() for title in titles)
+    assert "Area\t" in text and text == window.measurements_panel.text()
+
+
+def test_section_titles_span_the_panel_and_save_writes_the_table(window, qtbot, tmp_path):
+    measured(qtbot, window)
+    tree = window.measurements
+    section = tree.topLevelItem(1)
+    assert section.isFirstColumnSpanned() and section.toolTip(0) == section.text(0)
+    assert window.measurements_panel.save(str(tmp_path / "m.json"))
+    table = json.loads((tmp_path / "m.json").read_text(encoding="utf-8"))
+    assert section.text(0) in table
+    assert not window.measurements_panel.save(str(tmp_path / "m.txt"))  # said in a box
+    assert window.last_error_box is not None and "m.txt" in window.last_error_box.text()
+
+
+def test_a_wide_dock_leaves_the_view_its_width(window, qtbot):
+    dock, sketch = window.docks["Measurements"], window.docks["Sketch"]
+    window.resizeDocks([dock], [2000], Qt.Orientation.Horizontal)
+    qtbot.wait(50)
+    left_for_the_view = window.width() - dock.width() - sketch.width()
+    assert left_for_the_view >= MINIMUM_SIZE[0] > 300
