@@ -8,11 +8,8 @@ and wrapped into VTK datasets on the main thread when the viewport first asks fo
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
-from functools import cached_property, partial
-from typing import Any
+from functools import partial
 
-import contourpy
 import numpy as np
 import pyvista as pv
 
@@ -21,6 +18,15 @@ from leafstudio.assets.asset import leaf_uvs
 from leafstudio.core.pipeline import Result
 from leafstudio.core.trianglemesh import polydata, vertex_normals
 from leafstudio.gui.model.display_mesh import display_subset
+from leafstudio.gui.model.fields import field_layers
+from leafstudio.gui.model.pieces import (
+    DISPLAY_POINTS,
+    Piece,
+    cloud,
+    dots,
+    polylines,
+    thinned,
+)
 
 # (key, label shown in the layer list, on by default)
 LAYERS: tuple[tuple[str, str, bool], ...] = (
@@ -28,6 +34,7 @@ LAYERS: tuple[tuple[str, str, bool], ...] = (
     ("points", "Input points", True),
     ("curves", "Boundary and vein curves", False),
     ("contour", "Zero contour of g", False),
+    ("implicit", "Implicit g(x): + inside, − outside", False),
     ("probability", "Probability map p(x)", False),
     ("samples", "GMM samples", False),
     ("em", "EM samples", False),
@@ -46,83 +53,14 @@ def unavailable(key: str) -> str:
 
 BOUNDARY_COLOR = "#303030"
 VEIN_COLORS = ("#d62728", "#1f77b4", "#ff7f0e", "#9467bd", "#17becf", "#e377c2", "#8c564b")
-SCALAR_BARS = {"mesh": "height", "probability": "p(x)"}
+SCALAR_BARS = {"mesh": "height", "implicit": "g(x)", "probability": "p(x)"}
 # what the mesh can be coloured by: point array -> (label, colour map)
 MESH_COLORINGS = {
     "height": ("height", "viridis"),
     "mean_curvature": ("mean curvature", "coolwarm"),
     "gaussian_curvature": ("Gaussian curvature", "coolwarm"),
 }
-# a point layer draws at most this many points: software OpenGL (Mesa llvmpipe) spends main-thread
-# time on every point of every render, about 2 µs each here (a 2M-point scan: 7 s a render)
-DISPLAY_POINTS = 25_000
-SPHERE_POINTS = 10_000  # above this many, points are drawn small and flat: the mesh shows through
 CURVATURE_PERCENTILE = 95  # curvature colours span ± this percentile of |value| (margins spike)
-MAP_OFFSET = 0.003  # the probability map sits this fraction of the leaf length below the plane
-
-
-@dataclass(eq=False)
-class Piece:
-    """One actor: a name unique in the scene, how to make its dataset, and its add_mesh keywords.
-
-    `make` wraps arrays prepared beforehand into a VTK dataset, cheaply; `data` calls it once, on
-    the main thread (the viewport), where VTK objects belong.
-    """
-
-    name: str
-    make: Callable[[], pv.DataSet]
-    style: dict[str, Any] = field(default_factory=dict)
-    ranges: dict[str, tuple[float, float]] = field(default_factory=dict)  # colour range per array
-    make_full: Callable[[], pv.DataSet] | None = None  # the whole dataset, when `make` draws less
-
-    @cached_property
-    def data(self) -> pv.DataSet:
-        return self.make()
-
-    @cached_property
-    def full_data(self) -> pv.DataSet:
-        """The whole dataset (a large mesh's every triangle, for its edges); else `data`."""
-        return self.make_full() if self.make_full is not None else self.data
-
-
-def cloud(points: np.ndarray) -> pv.PolyData:
-    """Points as a PolyData of vertices (an empty one for no points), copied into VTK."""
-    return pv.PolyData(np.asarray(points, dtype=float), deep=True) if len(points) else pv.PolyData()
-
-
-def thinned(points: np.ndarray, budget: int = DISPLAY_POINTS, ordered: bool = False) -> np.ndarray:
-    """At most `budget` of the (n, d) points, to draw (display only: every computation takes
-    them all). Along a curve (`ordered`) they are spread evenly by index; from a cloud a fixed
-    random subset is drawn (a scan's rows often come in scan lines, which a stride would band),
-    in the file's order.
-    """
-    n = len(points)
-    if n <= budget:
-        return points
-    if ordered:
-        return points[np.unique(np.linspace(0, n - 1, budget).round().astype(np.int64))]
-    keep = np.random.default_rng(0).choice(n, size=budget, replace=False)
-    return points[np.sort(keep)]
-
-
-def dots(color: str, size: float, count: int = 0) -> dict[str, Any]:
-    """The style of `count` points drawn: spheres of `size` pixels, or, for many, flat points of
-    at most 2 pixels, which leave the mesh under a dense layer visible."""
-    if count > SPHERE_POINTS:
-        return {"color": color, "point_size": min(size, 2.0)}
-    return {"color": color, "point_size": size, "render_points_as_spheres": True}
-
-
-def polylines(lines: list[np.ndarray]) -> pv.PolyData:
-    """(n_i, 3) polylines as one PolyData of line cells."""
-    if not lines:
-        return pv.PolyData()
-    sizes = [len(line) for line in lines]
-    starts = np.cumsum([0, *sizes[:-1]])
-    cells = np.concatenate(
-        [np.r_[size, start + np.arange(size)] for size, start in zip(sizes, starts, strict=True)]
-    )
-    return pv.PolyData(np.vstack(lines), lines=cells, deep=True)
 
 
 def vein_color(index: int) -> str:
@@ -224,53 +162,11 @@ def _curve_pieces(result: Result) -> list[Piece]:
     return pieces
 
 
-def _contour_piece(result: Result) -> Piece:
-    """g = 0 on the grid (contourpy), lifted onto the plane in world coordinates."""
-    ny, nx = result.grid.shape
-    x = result.grid.origin[0] + result.grid.spacing * np.arange(nx)
-    y = result.grid.origin[1] + result.grid.spacing * np.arange(ny)
-    generator = contourpy.contour_generator(
-        x, y, result.g_grid.reshape(ny, nx), line_type=contourpy.LineType.Separate
-    )
-    lines = [
-        result.frame.to_world(line, np.zeros(len(line)))
-        for line in generator.lines(0.0)
-        if len(line) > 1
-    ]
-    return Piece("contour", partial(polylines, lines), {"color": "#e6550d", "line_width": 3})
-
-
-def _probability_piece(result: Result) -> Piece:
-    """The grid's quads in world coordinates, just below the plane, with p(x) (NaN outside)."""
-    ny, nx = result.grid.shape
-    index = np.arange(ny * nx).reshape(ny, nx)
-    corners = [index[:-1, :-1], index[:-1, 1:], index[1:, 1:], index[1:, :-1]]
-    quads = np.column_stack([c.ravel() for c in corners])
-    offset = np.full(ny * nx, -MAP_OFFSET * result.length)
-    points = result.frame.to_world(result.grid.points, offset)
-    values = {"p(x)": np.where(result.inside, result.p_grid, np.nan)}
-    style = {"scalars": "p(x)", "cmap": "magma", "nan_opacity": 0.0, "opacity": 0.9}
-    return Piece("probability", partial(polydata, points, quads, values), style)
-
-
-def _sample_pieces(result: Result) -> tuple[Piece, Piece]:
-    surface = thinned(result.surface_points)
-    gmm = Piece("samples", partial(cloud, surface), dots("#2ca02c", 3.0, len(surface)))
-    em_xy = thinned(result.em_samples)
-    em_xyz = result.frame.to_world(em_xy, np.zeros(len(em_xy)))
-    em = Piece("em", partial(cloud, em_xyz), dots("#7f7f7f", 2.0, len(em_xy)))
-    return gmm, em
-
-
 def build_layers(result: Result) -> dict[str, list[Piece]]:
     """Every layer's pieces for `result`, keyed as in LAYERS."""
-    gmm, em = _sample_pieces(result)
     return {
         "mesh": [_mesh_piece(result)],
         "points": _input_pieces(result),
         "curves": _curve_pieces(result),
-        "contour": [_contour_piece(result)],
-        "probability": [_probability_piece(result)],
-        "samples": [gmm],
-        "em": [em],
+        **field_layers(result),  # drawn over the surface (fields.py)
     }

@@ -68,12 +68,16 @@ LAYER_HELP: dict[str, str] = {
     "points": "The input: boundary points (black) and vein points (a colour per vein), with the "
     "heights the surface must follow.",
     "curves": "The boundary and vein curves through the input points, in order.",
-    "contour": "The zero contour of g (eqs. 1-2): the MPU implicit of the outline is positive "
-    "inside, negative outside; this line is where the surface is cut.",
-    "probability": "p(x), the height guide (eqs. 4-5): each point takes the nearest vein's "
-    "height, falling to zero at the margin; the mixture is fitted to it.",
+    "contour": "The zero contour of g (eqs. 1-2), drawn on top: the MPU implicit of the "
+    "outline is positive inside, negative outside; this line is where the surface is cut.",
+    "implicit": "g(x), the MPU implicit of the outline (eqs. 1-2), coloured over the surface "
+    "and around it: blue inside the leaf (g > 0), red outside (g < 0), white on the margin.",
+    "probability": "p(x), the height guide (eqs. 4-5), coloured over the surface: each point "
+    "takes the nearest vein's height, falling to zero at the margin; the mixture is fitted to "
+    "it.",
     "samples": "The GMM samples: the kept grid nodes lifted to the fitted surface z(x).",
-    "em": "The EM samples: points drawn where p(x) is large; EM fits the K Gaussians to them.",
+    "em": "The EM samples: points drawn where p(x) is large, each coloured by the Gaussian that "
+    "owns it, with each Gaussian's 1σ (thick) and 2σ (thin) ellipses.",
     "scan": "A scan of the real leaf, if one is open, to compare the surface with.",
     "poisson": "Screened Poisson's surface from the same points, beside ours: it spills past "
     "the margin (the paper's Fig. 10).",

@@ -16,6 +16,7 @@ from PySide6.QtGui import QImage, QPainter, QPalette, QPixmap
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
 from leafstudio.core.plane import Frame
+from leafstudio.gui.model.fields import nice_range
 from leafstudio.gui.model.framing import BladeBounds, best_iso, fit_camera, view_direction
 from leafstudio.gui.model.layers import BOUNDARY_COLOR, LAYERS, MESH_COLORINGS, SCALAR_BARS, Piece
 from leafstudio.gui.model.textures import TEXTURE
@@ -43,10 +44,8 @@ class Viewport(QWidget):
         self.visible = {key: on for key, _, on in LAYERS}
         self.show_edges = False
         self.mesh_coloring = "height"
-        self._bar_titles = {
-            "mesh": {label for label, _ in MESH_COLORINGS.values()},
-            "probability": {SCALAR_BARS["probability"]},
-        }
+        self._bar_titles = {key: {title} for key, title in SCALAR_BARS.items()}
+        self._bar_titles["mesh"] = {label for label, _ in MESH_COLORINGS.values()}
         self._mesh_piece: Piece | None = None
         self._texture = None  # pyvista.Texture for the TEXTURE colouring, made on this thread
         self._plain = None  # its stand-in while the image is being made
@@ -305,8 +304,10 @@ class Viewport(QWidget):
         self.redraw()
 
     def _sync_scalar_bars(self) -> None:
-        """Scalar bars for the visible coloured layers; a bar already there for the same title
-        and mapper is kept (making one costs several milliseconds)."""
+        """A scalar bar per visible coloured layer, side by side along the bottom, its ends
+        written in plain decimals (fields.nice_range); the bars already there are kept when
+        the same ones are wanted (making one costs several milliseconds)."""
+        wanted: dict[str, tuple[str, object]] = {}
         for key, title in SCALAR_BARS.items():
             if key == "mesh" and self._mesh_piece is not None:
                 coloring = self.mesh_coloring
@@ -314,37 +315,37 @@ class Viewport(QWidget):
                     coloring if coloring in self._mesh_piece.ranges else "height"
                 ][0]
             names = self.actor_names(key)
-            wanted = self.visible[key] and bool(names)
-            if key == "mesh" and self.mesh_coloring == TEXTURE:
-                wanted = False  # an image, not a colour scale
-            mapper = self.plotter.actors[names[0]].mapper if wanted else None
-            if (
-                wanted
-                and self._bars.get(key) == (title, id(mapper))
-                and title in self.plotter.scalar_bars
-            ):
+            if not (self.visible[key] and names):
                 continue
+            if key == "mesh" and self.mesh_coloring == TEXTURE:
+                continue  # an image, not a colour scale
+            wanted[key] = (title, self.plotter.actors[names[0]].mapper)
+        shown = {key: (title, id(mapper)) for key, (title, mapper) in wanted.items()}
+        if shown == self._bars and all(t in self.plotter.scalar_bars for t, _ in shown.values()):
+            return
+        for key in SCALAR_BARS:
             for stale in self._bar_titles[key] & set(self.plotter.scalar_bars.keys()):
                 self.plotter.remove_scalar_bar(stale, render=False)
-            self._bars.pop(key, None)
-            if wanted:
-                self._bars[key] = (title, id(mapper))
-                left = {"mesh": 0.06, "probability": 0.54}[key]  # side by side along the bottom
-                self.plotter.add_scalar_bar(
-                    title=title,
-                    mapper=mapper,
-                    vertical=False,
-                    position_x=left,
-                    position_y=0.02,
-                    width=0.4,
-                    height=0.08,
-                    color=self.text_color(),
-                    fmt="%.3g",
-                    n_labels=2,  # the ends only: a middle label would sit under the title
-                    title_font_size=14,
-                    label_font_size=12,
-                    render=False,
-                )
+        self._bars = shown
+        gap = 0.1  # room for the end labels of neighbouring bars
+        width = min(0.4, 0.94 / max(len(wanted), 1) - gap)
+        for i, (title, mapper) in enumerate(wanted.values()):
+            low, high = mapper.scalar_range
+            self.plotter.add_scalar_bar(
+                title=title,
+                mapper=mapper,
+                vertical=False,
+                position_x=0.06 + i * (width + gap),
+                position_y=0.02,
+                width=width,
+                height=0.08,
+                color=self.text_color(),
+                fmt=nice_range(low, high)[2],
+                n_labels=2,  # the ends only: a middle label would sit under the title
+                title_font_size=14,
+                label_font_size=12,
+                render=False,
+            )
 
     def set_message(self, text: str, render: bool = True) -> None:
         """A line of text over the view (a failure's message), or none."""

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from leafstudio.core.pipeline import Pipeline
+from leafstudio.gui.model import fields
 from leafstudio.gui.model.layers import LAYERS, SIDE_LAYERS, build_layers
 from leafstudio.gui.model.measurements import measurement_rows
 from leafstudio.sources.demos import demo
@@ -44,20 +45,56 @@ def test_layers_built_off_the_main_thread_hold_no_vtk_object_until_drawn():
     assert (normals @ result.frame.normal > 0.5).all()  # a leaf's shading side faces up
 
 
-def test_the_zero_contour_lies_on_the_plane_along_the_outline(result):
-    contour = build_layers(result)["contour"][0].data
+def test_the_zero_contour_lies_on_the_surface_along_the_outline(result):
+    contour = build_layers(result)["contour"][0].data  # a tube about the line
     xy, height = result.frame.to_plane(np.asarray(contour.points))
-    np.testing.assert_allclose(height, 0.0, atol=1e-9)
+    radius = fields.CONTOUR_RADIUS * result.length
+    lift = fields.LIFT * result.length  # above the surface (z = 0 on a planar margin)
+    assert np.abs(height - lift).max() <= radius * 1.01
     spacing = result.grid.spacing
     gap = np.min(np.linalg.norm(xy[:, None] - result.polygon[None], axis=2), axis=1)
     assert gap.max() < 2 * spacing
 
 
-def test_the_probability_map_is_blank_outside_the_leaf(result):
+def test_fields_lie_over_the_surface_and_em_samples_are_coloured_by_their_gaussian(result):
+    layers = build_layers(result)
+    for key in ("implicit", "probability"):
+        field = layers[key][0]
+        xy, height = result.frame.to_plane(np.asarray(field.data.points))
+        inside = result.inside
+        np.testing.assert_allclose(
+            height[inside], result.height(xy[inside]) + fields.LIFT * result.length, atol=0.01
+        )
+        assert (height[inside] > result.height(xy[inside])).all()  # above: never hidden
+    owner = fields.owners(result)
+    assert len(owner) == len(result.em_samples)
+    em = [piece for piece in layers["em"] if not piece.name.startswith("em:ellipse")]
+    assert len(em) == result.chosen_k
+    assert len({piece.style["color"] for piece in em}) == result.chosen_k
+    assert sum(piece.data.n_points for piece in em) == len(result.em_samples)
+    ellipses = [piece for piece in layers["em"] if piece.name.startswith("em:ellipse")]
+    assert len(ellipses) == 2 * result.chosen_k  # 1σ and 2σ each
+
+
+@pytest.mark.parametrize(
+    ("low", "high", "expected"),
+    [
+        (7.37e-06, 0.0889, (0.0, 0.1, "%.2f")),
+        (0.0, 0.0368, (0.0, 0.04, "%.2f")),
+        (-0.327, 0.378, (-0.4, 0.4, "%.1f")),
+        (3.0, 1234.0, (0.0, 1500.0, "%.0f")),
+    ],
+)
+def test_colour_ranges_are_round_and_written_whole(low, high, expected):
+    assert fields.nice_range(low, high) == expected
+
+
+def test_the_probability_map_covers_the_leaf_only(result):
     surface = build_layers(result)["probability"][0].data
-    p = surface.point_data["p(x)"]
-    assert np.isnan(p[~result.inside]).all() and np.isfinite(p[result.inside]).all()
-    assert surface.n_cells == (result.grid.shape[0] - 1) * (result.grid.shape[1] - 1)
+    corners = np.asarray(surface.regular_faces)
+    assert result.inside[corners].all()  # no cell reaches outside the leaf
+    assert len(np.unique(corners)) > 0.8 * result.inside.sum()  # and most of the inside is drawn
+    assert np.isfinite(surface.point_data["p(x)"]).all()
 
 
 def test_the_mesh_has_colour_ranges_and_curvature_is_centred(result):

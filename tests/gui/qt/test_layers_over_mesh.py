@@ -1,0 +1,64 @@
+"""Issue 22, finding 1: every layer of the method shows when ticked with the mesh on. Ticking a
+layer must change at least 2% of the 3D view's pixels, on each demo and on three gallery forms
+(before: p(x) changed 61 pixels, the EM samples 6, the zero contour a thin line under the
+boundary's dots)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from leafstudio.forms import make_form
+from tests.gui.builders import FAST
+from tests.gui.qt.conftest import close_window, image_pixels, make_window, wait_result
+
+LEAVES = ("nested", "parallel", "ovate", "lobed palmate", "cordate serrate")
+FORMS = {
+    "ovate": lambda: make_form("ovate"),
+    "lobed palmate": lambda: make_form("orbicular", margin="lobed", lobes=5, venation="palmate"),
+    "cordate serrate": lambda: make_form("cordate", margin="serrate", teeth=24),
+}
+CHANGED = 0.02  # the share of the view's pixels a ticked layer must change
+TOLERANCE = 24  # a pixel changed when a channel moved more than this (of 255)
+
+
+def _open(window, qtbot, name: str) -> None:
+    before = window.session.shown_id
+    if name in FORMS:
+        window.session.new_document(FORMS[name](), title=name)
+    else:
+        window.open_demo(name)
+    wait_result(qtbot, window, lambda _o: window.session.shown_id != before)
+
+
+def view_pixels(window) -> np.ndarray:
+    """The 3D view's pixels as rendered now."""
+    window.viewport.plotter.render()
+    return image_pixels(window.viewport.image())
+
+
+def changed_share(a: np.ndarray, b: np.ndarray) -> float:
+    """The share of pixels where any channel moved more than TOLERANCE."""
+    moved = np.abs(a.astype(int) - b.astype(int)).max(axis=2) > TOLERANCE
+    return float(moved.mean())
+
+
+@pytest.mark.parametrize("layer", ["contour", "implicit", "probability", "em", "samples"])
+def test_a_ticked_layer_shows_over_the_mesh(qtbot, tmp_path, layer):
+    window = make_window(qtbot, tmp_path / "settings.ini", FAST)
+    try:
+        window.resize(1280, 800)
+        for key in window.viewport.visible:
+            window.layers.set_checked(key, key in ("mesh", "points"))
+        shares = {}
+        for name in LEAVES:
+            _open(window, qtbot, name)
+            window.viewport.camera("iso")
+            plain = view_pixels(window)
+            window.layers.set_checked(layer, True)
+            ticked = view_pixels(window)
+            window.layers.set_checked(layer, False)
+            shares[name] = round(changed_share(plain, ticked), 4)
+        assert min(shares.values()) >= CHANGED, shares
+    finally:
+        close_window(window)
