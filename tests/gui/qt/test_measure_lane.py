@@ -10,7 +10,8 @@ import threading
 import pytest
 from PySide6.QtCore import Qt
 
-from leafstudio.core import evaluate, pipeline
+from leafstudio.core import evaluate
+from leafstudio.core import result as core_result
 from leafstudio.core.pipeline import Cancelled, Pipeline
 from leafstudio.gui.model.session import Session
 from leafstudio.gui.qt.worker import PIPELINE, Worker
@@ -29,7 +30,7 @@ class HeldMeasuring:
 
     def __init__(self, monkeypatch: pytest.MonkeyPatch, events: list) -> None:
         self.events, self.started, self.submitted = events, threading.Event(), threading.Event()
-        distances, curvature = evaluate.point_to_mesh_distance, pipeline.curvature_summary
+        distances, curvature = evaluate.point_to_mesh_distance, core_result.curvature_summary
 
         def first_step(mesh, points):
             events.append("measuring")
@@ -43,7 +44,7 @@ class HeldMeasuring:
             return curvature(mesh)
 
         monkeypatch.setattr(evaluate, "point_to_mesh_distance", first_step)
-        monkeypatch.setattr(pipeline, "curvature_summary", last_step)
+        monkeypatch.setattr(core_result, "curvature_summary", last_step)
 
 
 @pytest.fixture
