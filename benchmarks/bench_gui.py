@@ -14,6 +14,10 @@ does not use (so that none of its results can stand for it; K = 4, 3 or 6, whose
 what 2 to 7 cost: K = 9 to 11 take several times longer in the surface stage); it reports the
 time from the last move to its result on screen, and the longest stall of the event loop during
 the storm and until the app is idle.
+Big files (`--big` runs only these): a 300,000-point boundary and a 2,000,000-point scan, written
+to a temporary folder; for each, the longest main-thread stall while it opens (from the open call
+until the app is idle with its leaf on screen and measured), while a layer is switched off and on,
+while K changes, and while the window closes during a computation (with the close call's time).
 `LEAFSTUDIO_3D=opengl` measures the 3D view as pyvistaqt's QOpenGLWidget instead of the native
 window (gui/qt/native_view.py). Prints JSON. Timings here are shared-host figures: other work on
 the machine moves them; the main thread's CPU time in one piece is the figure load inflates least.
@@ -29,6 +33,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
 from PySide6.QtCore import QEventLoop, QSettings, Qt, QTimer
 from PySide6.QtWidgets import QApplication
 
@@ -247,18 +252,100 @@ def wait_for_ticks(meter: StallMeter, after: float) -> None:
 
 
 LOAD_AT_START = round(os.getloadavg()[0], 2)
+BIG_BOUNDARY, BIG_SCAN = 300_000, 2_000_000
+
+
+def write_big_files(folder: Path) -> dict[str, tuple[Path, str]]:
+    """The big inputs: a boundary of BIG_BOUNDARY points (an egg-shaped outline, CSV) and a scan
+    of BIG_SCAN points (a curved blade's surface with a petiole and outliers, XYZ); each with
+    the layer the toggle switches."""
+    rng = np.random.default_rng(0)
+    t = np.linspace(0, 2 * np.pi, BIG_BOUNDARY, endpoint=False)
+    outline = np.column_stack([0.5 * np.cos(t), 0.2 * np.sin(t) * (1 - 0.3 * np.cos(t))])
+    boundary = folder / "boundary_300k.csv"
+    np.savetxt(boundary, np.column_stack([outline, np.zeros(len(t))]), delimiter=",", fmt="%.7f")
+    r, a = np.sqrt(rng.random(BIG_SCAN - 10_000)), 2 * np.pi * rng.random(BIG_SCAN - 10_000)
+    x, y = 0.5 * r * np.cos(a), 0.2 * r * np.sin(a) * (1 - 0.3 * np.cos(a))
+    blade = np.column_stack([x, y, 0.3 * x**2 + 0.6 * y**2 - 0.1 * x])
+    along = rng.uniform(-0.8, -0.49, 9800)
+    petiole = np.column_stack([along, rng.normal(0, 0.004, 9800), 0.13 - 0.2 * (along + 0.5)])
+    outliers = rng.uniform([-1, -1, -0.5], [1, 1, 0.5], size=(200, 3))
+    scan = folder / "scan_2m.xyz"
+    np.savetxt(scan, np.vstack([blade, petiole, outliers]), fmt="%.6f")
+    return {"boundary_300k": (boundary, "points"), "scan_2m": (scan, "scan")}
+
+
+def settle(window: MainWindow, meter: StallMeter, seconds: float = 0.3) -> None:
+    """Run the event loop until the worker is idle and `seconds` more (a render queued last)."""
+    wait_until_idle(window)
+    wait_for_ticks(meter, time.perf_counter() + seconds)
+
+
+def measure_big(window: MainWindow, path: Path, layer: str) -> dict:
+    """The longest main-thread stall while `path` opens, a layer toggles, K changes and the
+    window closes during the computation K's change started."""
+    meter, ms = StallMeter(), lambda seconds: round(1000 * seconds, 1)
+    meter.timer.start()
+    window.session.history.set_clean()
+    meter.reset()
+    start = time.perf_counter()
+    window.open_path(str(path))
+    open_call = time.perf_counter() - start
+    wait_for(window.session.opened)
+    wait_for(window.result_shown)
+    settle(window, meter)
+    report = {
+        "open_call_ms": ms(open_call),
+        "open_to_idle_s": round(time.perf_counter() - start, 1),
+        "open_max_stall_ms": ms(meter.worst()),
+        "open_max_main_thread_cpu_in_one_piece_ms": ms(meter.busiest()),
+    }
+    item = next(
+        window.layer_list.item(i)
+        for i in range(window.layer_list.count())
+        if window.layer_list.item(i).data(Qt.ItemDataRole.UserRole) == layer
+    )
+    meter.reset()
+    for state in (Qt.CheckState.Unchecked, Qt.CheckState.Checked):
+        item.setCheckState(state)
+        settle(window, meter)
+    report[f"toggle_{layer}_max_stall_ms"] = ms(meter.worst())
+    report[f"toggle_{layer}_max_main_thread_cpu_in_one_piece_ms"] = ms(meter.busiest())
+    k = window.panel.k.value() + 1
+    meter.reset()
+    window.panel.k.setValue(k)
+    wait_for(window.result_shown)
+    settle(window, meter)
+    report["change_k_max_stall_ms"] = ms(meter.worst())
+    report["change_k_max_main_thread_cpu_in_one_piece_ms"] = ms(meter.busiest())
+    window.panel.k.setValue(k + 1)  # a computation under way
+    wait_requested(window, k + 1)
+    window.session.history.set_clean()
+    meter.reset()
+    start = time.perf_counter()
+    window.close()
+    report["close_during_computation_ms"] = ms(time.perf_counter() - start)
+    meter.timer.stop()
+    return report
 
 
 def main() -> int:
     app = QApplication.instance() or QApplication(sys.argv[:1])
+    report = {}
     with tempfile.TemporaryDirectory() as tmp:
         settings = QSettings(str(Path(tmp) / "bench.ini"), QSettings.Format.IniFormat)
         window = MainWindow(settings)
         window.show()
         app.processEvents()
-        report = {f"grid_{grid}": measure(window, grid) for grid in GRIDS}
+        if "--big" not in sys.argv:
+            report = {f"grid_{grid}": measure(window, grid) for grid in GRIDS}
         window.session.history.set_clean()
         window.close()
+        for name, (path, layer) in write_big_files(Path(tmp)).items():
+            window = MainWindow(settings)
+            window.show()
+            window.panel.set_params(Params(k=3, grid=128))
+            report[name] = measure_big(window, path, layer)
     report["environment"] = {
         "platform": QApplication.platformName(),
         "display": os.environ.get("DISPLAY", ""),

@@ -11,9 +11,10 @@ from typing import Any
 import numpy as np
 import pyvista as pv
 
-# a point layer draws at most this many points: software OpenGL (Mesa llvmpipe) spends main-thread
-# time on every point of every render, about 2 µs each here (a 2M-point scan: 7 s a render)
-DISPLAY_POINTS = 25_000
+from leafstudio.gui.model.thinning import DISPLAY_POINTS, thinned
+
+__all__ = ["DISPLAY_POINTS", "Piece", "cloud", "dots", "polylines", "thinned"]
+
 SPHERE_POINTS = 10_000  # above this many, points are drawn small and flat: the mesh shows through
 
 
@@ -44,21 +45,6 @@ class Piece:
 def cloud(points: np.ndarray) -> pv.PolyData:
     """Points as a PolyData of vertices (an empty one for no points), copied into VTK."""
     return pv.PolyData(np.asarray(points, dtype=float), deep=True) if len(points) else pv.PolyData()
-
-
-def thinned(points: np.ndarray, budget: int = DISPLAY_POINTS, ordered: bool = False) -> np.ndarray:
-    """At most `budget` of the (n, d) points, to draw (display only: every computation takes
-    them all). Along a curve (`ordered`) they are spread evenly by index; from a cloud a fixed
-    random subset is drawn (a scan's rows often come in scan lines, which a stride would band),
-    in the file's order.
-    """
-    n = len(points)
-    if n <= budget:
-        return points
-    if ordered:
-        return points[np.unique(np.linspace(0, n - 1, budget).round().astype(np.int64))]
-    keep = np.random.default_rng(0).choice(n, size=budget, replace=False)
-    return points[np.sort(keep)]
 
 
 def dots(color: str, size: float, count: int = 0) -> dict[str, Any]:

@@ -20,7 +20,8 @@ from leafstudio.analysis.fidelity import FAR, NEAR, distance_summary
 from leafstudio.core.evaluate import point_to_mesh_distance
 from leafstudio.core.pipeline import Result
 from leafstudio.core.trianglemesh import MeshLike, polydata, vertex_normals
-from leafstudio.gui.model.layers import DISPLAY_POINTS, Piece, cloud, dots, thinned
+from leafstudio.gui.model.pieces import Piece, cloud, dots
+from leafstudio.gui.model.thinning import DISPLAY_POINTS, thinned
 from leafstudio.sources.extract import Extraction
 from leafstudio.workflows import Opened
 

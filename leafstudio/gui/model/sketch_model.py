@@ -26,10 +26,13 @@ from leafstudio.gui.model.curves import (
     plane_arc_lengths,
 )
 from leafstudio.gui.model.midrib import Midrib
+from leafstudio.gui.model.thinning import thinned
 from leafstudio.model import Leaf
 
 BOUNDARY = -1  # curve index of the boundary; veins are 0, 1, ...
 DERIVED_VEIN_POINTS = 8
+RELIEF_POINTS = 4000  # a derived sketch keeps at most this many boundary points as its relief
+OUTLINE_POINTS = 4000  # and follows at most this many of the outline's
 RELIEF_NEIGHBOURS = 4  # a boundary point's height: inverse-distance mean of this many relief points
 FOLD_REACH = 1.0  # a mirror image this far into a bend (in radii of curvature) is folded over
 FOLD_SAMPLES = 4  # curve points per span where a fold is looked for (it runs on every drag move)
@@ -396,9 +399,12 @@ class Sketch:
     def from_result(cls, result: Any) -> Sketch:
         """A sketch approximating a reconstructed leaf: control points spread along its outline
         and along each vein, on the leaf's own plane (the pipeline's frame), the boundary's
-        heights kept as its relief."""
-        boundary = outline_controls(result.polygon)
-        relief = np.column_stack(result.frame.to_plane(result.leaf.boundary))
+        heights kept as its relief. A long outline (a 300,000-point boundary) is followed
+        through OUTLINE_POINTS of its points and its relief kept at RELIEF_POINTS: the editor
+        queries them on the main thread (thinning.py)."""
+        boundary = outline_controls(thinned(result.polygon, OUTLINE_POINTS, ordered=True))
+        relief = thinned(result.leaf.boundary, RELIEF_POINTS, ordered=True)
+        relief = np.column_stack(result.frame.to_plane(relief))
         veins = []
         for vein in result.leaf.veins:
             xy, h = result.frame.to_plane(vein)

@@ -7,8 +7,10 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from leafstudio.core.plane import Frame
 from leafstudio.gui.model import layers, scans
-from leafstudio.gui.model.layers import DISPLAY_POINTS, thinned
+from leafstudio.gui.model.sketch_model import RELIEF_POINTS, Sketch
+from leafstudio.gui.model.thinning import DISPLAY_POINTS, thinned
 from leafstudio.model import Leaf
 
 
@@ -62,3 +64,17 @@ def test_a_big_boundary_draws_a_capped_number_of_its_points():
     pieces = layers._input_pieces(result)
     drawn = [piece.data.n_points for piece in pieces]
     assert sum(drawn) <= DISPLAY_POINTS and drawn[1] == 50  # a short vein whole
+
+
+def test_a_big_boundary_becomes_a_light_sketch_of_the_same_outline_and_heights():
+    t = np.linspace(0, 2 * np.pi, 300_000, endpoint=False)
+    xy = np.column_stack([np.cos(t), 0.4 * np.sin(t)])
+    height = 0.1 * xy[:, 0]
+    frame = Frame(np.zeros(3), np.eye(3)[0], np.eye(3)[1], np.eye(3)[2])
+    leaf = Leaf(boundary=np.column_stack([xy, height]))
+    result = SimpleNamespace(polygon=xy, frame=frame, leaf=leaf)
+    sketch = Sketch.from_result(result)
+    assert len(sketch.relief) <= RELIEF_POINTS and len(sketch.boundary) < 100
+    curve = sketch.boundary_curve()
+    assert np.abs(np.hypot(curve[:, 0], curve[:, 1] / 0.4) - 1).max() < 0.01  # the ellipse
+    assert np.allclose(sketch.boundary_heights(curve), 0.1 * curve[:, 0], atol=1e-3)
