@@ -8,7 +8,10 @@ bpy pins numpy < 2, so it lives in a venv of its own, not the project's:
     .venv/bin/leafstudio reconstruct leaf.leaf.json -o leaf.glb
     /tmp/bpyenv/bin/python benchmarks/check_blender.py leaf.glb [--render PNG]
 
---render also renders the imported scene with Cycles on the CPU (a sun, a camera above).
+--render also renders the imported scene with Cycles on the CPU (a sun, a camera above);
+--engine eevee renders with Eevee instead, --backlit puts the sun behind the leaf (translucency).
+For each material the report names the Principled BSDF inputs fed by an image (Base Color, Alpha,
+Normal) and its Transmission Weight (glTF's KHR_materials_transmission).
 """
 
 from __future__ import annotations
@@ -66,7 +69,7 @@ def main(path: str) -> dict:
             sizes = [list(bpy.data.images[name].size) for name in images]
             materials.append(
                 {"name": material.name, "image_textures": images, "image_sizes": sizes,
-                 "backface_culling": material.use_backface_culling}
+                 "backface_culling": material.use_backface_culling, **principled(material)}
             )  # fmt: skip
         report["objects"].append(
             {
@@ -81,8 +84,35 @@ def main(path: str) -> dict:
     return report
 
 
-def render(out: str, pixels: int = 640, samples: int = 24) -> None:
-    """Render the imported leaf from above and aside with Cycles (CPU) to `out`."""
+def principled(material) -> dict:
+    """What the material's Principled BSDF has: the inputs a texture feeds (through any nodes:
+    Base Color, Alpha, Normal) and its Transmission Weight (the glTF importer's reading of
+    KHR_materials_transmission), or {} without one."""
+    nodes = material.node_tree.nodes if material.use_nodes else []
+    bsdf = next((n for n in nodes if n.type == "BSDF_PRINCIPLED"), None)
+    if bsdf is None:
+        return {}
+
+    def from_image(socket) -> bool:
+        links = list(socket.links)
+        while links:
+            node = links.pop().from_node
+            if node.type == "TEX_IMAGE":
+                return True
+            links += [link for s in node.inputs for link in s.links]
+        return False
+
+    fed = [s.name for s in bsdf.inputs if s.is_linked and from_image(s)]
+    weight = bsdf.inputs["Transmission Weight"]
+    return {"textured_inputs": fed, "transmission_weight": round(weight.default_value, 4),
+            "transmission_textured": weight.is_linked}  # fmt: skip
+
+
+def render(
+    out: str, pixels: int = 640, samples: int = 24, engine: str = "CYCLES", backlit: bool = False
+) -> None:
+    """Render the imported leaf from above and aside to `out` (Cycles on the CPU, or Eevee);
+    `backlit` puts the sun behind the leaf, facing the camera (the translucency shows)."""
     import bpy
     from mathutils import Vector
 
@@ -100,21 +130,30 @@ def render(out: str, pixels: int = 640, samples: int = 24) -> None:
     sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", type="SUN"))
     sun.data.energy = 4.0
     sun.rotation_euler = (0.5, 0.3, 0.8)
+    if backlit:  # the light from under the blade, toward the camera above it
+        sun.rotation_euler = (camera.location - centre).to_track_quat("Z", "Y").to_euler()
+        sun.rotation_euler.x += 3.1416
     scene.collection.objects.link(sun)
     world = bpy.data.worlds.new("world")
-    world.color = (0.8, 0.8, 0.8)
+    world.color = (0.15, 0.15, 0.15) if backlit else (0.8, 0.8, 0.8)
     scene.world = world
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = samples
+    engines = scene.render.bl_rna.properties["engine"].enum_items.keys()
+    if engine == "BLENDER_EEVEE" and engine not in engines:  # Blender 4.2 to 4.5's name
+        engine = "BLENDER_EEVEE_NEXT"
+    scene.render.engine = engine
+    if engine == "CYCLES":
+        scene.cycles.device = "CPU"
+        scene.cycles.samples = samples
+    else:
+        scene.eevee.taa_render_samples = samples
     scene.render.resolution_x = scene.render.resolution_y = pixels
     scene.render.filepath = out
     bpy.ops.render.render(write_still=True)
 
 
-def quietly(path: str, out: str | None = None) -> dict:
-    """main(path) (and render to `out`) with Blender's own log lines sent to stderr (stdout is
-    the JSON alone)."""
+def quietly(path: str, out: str | None = None, **how) -> dict:
+    """main(path) (and render to `out`, `how` as render takes it) with Blender's own log lines
+    sent to stderr (stdout is the JSON alone)."""
     import os
 
     sys.stdout.flush()
@@ -123,7 +162,7 @@ def quietly(path: str, out: str | None = None) -> dict:
     try:
         report = main(path)
         if out:
-            render(out)
+            render(out, **how)
         return report
     finally:
         sys.stdout.flush()
@@ -132,5 +171,9 @@ def quietly(path: str, out: str | None = None) -> dict:
 
 
 if __name__ == "__main__":
-    target = sys.argv[sys.argv.index("--render") + 1] if "--render" in sys.argv else None
-    print(json.dumps(quietly(sys.argv[1], target), indent=1))
+    args = sys.argv
+    target = args[args.index("--render") + 1] if "--render" in args else None
+    engine = args[args.index("--engine") + 1].upper() if "--engine" in args else "CYCLES"
+    how = {"engine": "BLENDER_EEVEE" if engine == "EEVEE" else engine,
+           "backlit": "--backlit" in args}  # fmt: skip
+    print(json.dumps(quietly(args[1], target, **how), indent=1))

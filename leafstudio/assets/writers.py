@@ -7,6 +7,8 @@
   NORMAL, TEXCOORD_0, a double-sided PBR material with the base colour (and normal) texture, and
   the scalars as custom attributes _HEIGHT, _MEAN_CURVATURE, _GAUSSIAN_CURVATURE, _K1, _K2;
   with a normal map, TANGENT too (the s axis in each tangent plane: no tangents left to guess).
+  A sheet's material is translucent: KHR_materials_transmission and
+  KHR_materials_diffuse_transmission (material.py says why both).
   Levels of detail are separate meshes leaf_LOD0, leaf_LOD1, ...
 - ``.stl``, ``.3mf``: through trimesh (geometry only; 3MF in millimetres, its unit by spec).
 - ``.vtp``, ``.vtk``: through pyvista, with Normals, the texture coordinates and the scalars.
@@ -27,7 +29,16 @@ import numpy as np
 
 from leafstudio._shared.safewrite import write_bytes
 from leafstudio.assets.asset import MeshAsset
-from leafstudio.assets.material import ALPHA_CUTOFF, METALLIC, ROUGHNESS, TEXTURE_SUFFIX, png_bytes
+from leafstudio.assets.material import (
+    ALPHA_CUTOFF,
+    DIFFUSE_TRANSMISSION,
+    METALLIC,
+    ROUGHNESS,
+    TEXTURE_SUFFIX,
+    TRANSLUCENT_EXTENSIONS,
+    TRANSMISSION,
+    png_bytes,
+)
 from leafstudio.assets.texture import BLADE
 from leafstudio.assets.usd import USD_SUFFIXES, usd_companions, write_usd
 from leafstudio.core.trianglemesh import polydata
@@ -142,12 +153,34 @@ _TANGENT = "_TANGENT"  # trimesh writes custom attributes only, with a leading u
 
 
 def _standard_names(tree: dict) -> None:
-    """glTF tree post-processor: the tangents written as a custom attribute become TANGENT."""
+    """glTF tree post-processor: the tangents written as a custom attribute become TANGENT, and
+    a sheet's material (double-sided) is translucent (`translucent`)."""
     for mesh in tree.get("meshes", []):
         for primitive in mesh.get("primitives", []):
             attributes = primitive.get("attributes", {})
             if _TANGENT in attributes:
                 attributes["TANGENT"] = attributes.pop(_TANGENT)
+    sheets = [m for m in tree.get("materials", []) if m.get("doubleSided")]
+    for material in sheets:
+        translucent(material)
+    if sheets:
+        used = tree.setdefault("extensionsUsed", [])
+        used += [name for name in TRANSLUCENT_EXTENSIONS if name not in used]
+
+
+def translucent(material: dict) -> None:
+    """A glTF material (a JSON dict) given the leaf's translucency (material.py): the
+    transmission factor, and the diffuse transmission coloured by the base colour texture (the
+    light through a blade takes its colour; without a texture, the base colour factor's)."""
+    pbr = material.get("pbrMetallicRoughness", {})
+    diffuse: dict = {"diffuseTransmissionFactor": DIFFUSE_TRANSMISSION}
+    if "baseColorTexture" in pbr:
+        diffuse["diffuseTransmissionColorTexture"] = dict(pbr["baseColorTexture"])
+    else:
+        diffuse["diffuseTransmissionColorFactor"] = pbr.get("baseColorFactor", [1, 1, 1, 1])[:3]
+    extensions = material.setdefault("extensions", {})
+    extensions[TRANSLUCENT_EXTENSIONS[0]] = {"transmissionFactor": TRANSMISSION}
+    extensions[TRANSLUCENT_EXTENSIONS[1]] = diffuse
 
 
 def write_gltf(assets: Sequence[MeshAsset], path: Path) -> None:

@@ -385,3 +385,36 @@ def test_a_failed_obj_export_leaves_the_old_files_as_they_were(nested: ls.Result
     with full, pytest.raises((OSError, ls.LeafError)):
         ls.save_mesh(nested, tmp_path / "leaf.obj", texture="none")
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before  # no .png lost
+
+
+def gltf_json(path: Path) -> dict:
+    """The JSON chunk of a .glb."""
+    data = path.read_bytes()
+    length = int.from_bytes(data[12:16], "little")
+    return json.loads(data[20 : 20 + length])
+
+
+def test_a_sheets_material_is_translucent_and_validates(nested: ls.Result, tmp_path: Path):
+    """Issue 23, item 2: light through the blade. KHR_materials_transmission (ratified, what
+    Blender's importer reads) and KHR_materials_diffuse_transmission (the leaf's own model),
+    coloured by the base colour texture; a solid for printing stays opaque."""
+    from leafstudio.assets.material import DIFFUSE_TRANSMISSION, TRANSMISSION
+
+    ls.save_mesh(nested, tmp_path / "leaf.glb")
+    ls.save_mesh(nested, tmp_path / "plain.glb", texture="none")
+    ls.save_mesh(nested, tmp_path / "solid.glb", thickness=0.01 * nested.length)
+    tree = gltf_json(tmp_path / "leaf.glb")
+    (material,) = tree["materials"]
+    extensions = material["extensions"]
+    assert extensions["KHR_materials_transmission"] == {"transmissionFactor": TRANSMISSION}
+    diffuse = extensions["KHR_materials_diffuse_transmission"]
+    assert diffuse["diffuseTransmissionFactor"] == DIFFUSE_TRANSMISSION
+    base = material["pbrMetallicRoughness"]["baseColorTexture"]
+    assert diffuse["diffuseTransmissionColorTexture"] == base
+    assert set(tree["extensionsUsed"]) >= set(extensions)
+    assert "extensionsRequired" not in tree  # a viewer without them still shows the leaf
+    (plain,) = gltf_json(tmp_path / "plain.glb")["materials"]
+    colour = plain["extensions"]["KHR_materials_diffuse_transmission"]
+    assert colour["diffuseTransmissionColorFactor"] == pytest.approx([c / 255 for c in BLADE])
+    assert "extensions" not in gltf_json(tmp_path / "solid.glb")["materials"][0]
+    assert_valid_gltf(tmp_path / "leaf.glb", tmp_path / "plain.glb")
