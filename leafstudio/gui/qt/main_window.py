@@ -34,7 +34,7 @@ from leafstudio.gui.model.layers import LAYERS
 from leafstudio.gui.model.measurements import measurement_rows
 from leafstudio.gui.model.session import Framing, Session, State
 from leafstudio.gui.model.textures import TEXTURE
-from leafstudio.gui.qt import explain, forms_dock
+from leafstudio.gui.qt import explain, forms_dock, projector
 from leafstudio.gui.qt.actions import MENU_TITLES, WINDOW_ACTIONS, Action
 from leafstudio.gui.qt.controls import ParamPanel
 from leafstudio.gui.qt.file_commands import APP_NAME, FileCommands
@@ -120,6 +120,7 @@ class MainWindow(FileCommands, QMainWindow):
         self.coloring.currentIndexChanged.connect(self._on_coloring)
         self.forms_panel = forms_dock.install(self)  # the Forms gallery; Grow veins in the editor
         self.view_aids = explain.install(self)  # the Steps view, exports for slides, view aids
+        self.dock_layout = projector.install(self)  # docks as tabs on a narrow window
         self._on_history()
         self._restore_settings()
 
@@ -204,7 +205,8 @@ class MainWindow(FileCommands, QMainWindow):
 
     def _build_docks(self) -> None:
         self.panel.setMinimumWidth(300)
-        self.add_dock("Parameters", self.panel, LEFT, listed=True)
+        # scrolled, not squeezed: a window as short as a projector's (720 px) still fits
+        self.add_dock("Parameters", projector.scrolled(self.panel), LEFT, listed=True)
         self.add_dock("Layers", self.layers, LEFT, listed=True)
         self.editor.setMinimumWidth(380)
         self.add_dock("Sketch", self.editor, RIGHT, listed=True)
@@ -404,9 +406,9 @@ class MainWindow(FileCommands, QMainWindow):
         total = sum(outcome.timings.values())
         params = outcome.result.params
         self.status_text.setStyleSheet("")
-        self.status_text.setText(
-            f"K={params.k}, grid {params.grid}: " + " · ".join(ms) + f" (total {1000 * total:.0f}"
-            " ms; stages not listed came from the cache)"
+        self.status_text.setText(  # short enough for a projector; each stage's time in the tip
+            f"K={params.k}, grid {params.grid}: shown in {1000 * total:.0f} ms",
+            tip=" · ".join(ms) + " (stages not listed came from the cache)",
         )
         for note in outcome.result.warnings:
             self.status_text.setText(self.status_text.text() + f" — note: {note}")

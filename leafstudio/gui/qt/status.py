@@ -21,15 +21,20 @@ class StatusText(QWidget):
     def __init__(self, text: str = "", parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self._text = text
+        self._tip = ""
         self.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Fixed)
 
     def text(self) -> str:
         return self._text
 
-    def setText(self, text: str) -> None:
-        if text != self._text:
-            self._text = text
-            self.setToolTip(text)  # the whole line, when it is elided
+    def setText(self, text: str, tip: str = "") -> None:
+        """Show `text`; the tooltip is the whole line, then `tip` (details that would not fit),
+        which a text that extends the line before it (a note added at its end) keeps."""
+        if text != self._text or tip:
+            if not tip and self._text and text.startswith(self._text):
+                tip = self._tip
+            self._text, self._tip = text, tip
+            self.setToolTip(f"{text}\n{tip}" if tip else text)
             self.update()
 
     def sizeHint(self) -> QSize:
