@@ -271,9 +271,7 @@ class Reconstruction:
     scan_fit: dict[str, Any] | None = None
 
 
-def reconstruct(
-    opened: Opened, params: Params, pipeline: Pipeline | None = None
-) -> Reconstruction:
+def reconstruct(opened: Opened, params: Params, pipeline: Pipeline | None = None) -> Reconstruction:
     """Run the pipeline on an opened leaf (through `pipeline`, to reuse its stage cache).
 
     Parameters

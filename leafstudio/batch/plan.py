@@ -29,7 +29,6 @@ class Job:
     settings: Settings
 
 
-
 def _input_suffixes(scans: bool) -> tuple[str, ...]:
     if scans:
         return SCAN_SUFFIXES
@@ -137,7 +136,6 @@ def file_hash(path: str | os.PathLike) -> str:
         return hashlib.file_digest(handle, "sha256").hexdigest()
 
 
-
 def resumable(
     jobs: Sequence[Job], rows: Iterable[dict[str, Any]], settings: Settings, out_dir: Path
 ) -> dict[str, dict[str, Any]]:
@@ -148,11 +146,7 @@ def resumable(
     kept: dict[str, dict[str, Any]] = {}
     for row in rows:
         job = wanted.get(str(row.get("input")))
-        if (
-            job is None
-            or row.get("status") != "ok"
-            or row.get("settings") != key
-        ):
+        if job is None or row.get("status") != "ok" or row.get("settings") != key:
             continue
         try:  # the input unchanged, and its mesh as written (not lost, cut short or edited)
             same = row.get("sha256") == file_hash(job.path) and (

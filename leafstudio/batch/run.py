@@ -42,7 +42,6 @@ def remove_temporaries(
     return removed
 
 
-
 class Batch:
     """A batch run: planned when made (bad arguments raise LeafError at once), run by iterating,
     which yields one row (a dict of the table's columns) per input as it completes; rows resumed

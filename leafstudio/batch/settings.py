@@ -94,4 +94,3 @@ class Settings:
             sort_keys=True,
         )
         return hashlib.sha256(text.encode()).hexdigest()[:16]
-

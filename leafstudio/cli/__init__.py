@@ -17,7 +17,18 @@ import warnings
 from collections.abc import Callable, Sequence
 
 from leafstudio._shared.safewrite import install_signal_cleanup
-from leafstudio.cli import batch, compare, demo, extract, form, gui, measure, photo, reconstruct
+from leafstudio.cli import (
+    batch,
+    compare,
+    demo,
+    extract,
+    form,
+    gui,
+    measure,
+    photo,
+    reconstruct,
+    slides,
+)
 from leafstudio.cli.options import EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_OK, log
 from leafstudio.errors import LeafError, error_line, shorten
 
@@ -70,6 +81,7 @@ def build_parser() -> argparse.ArgumentParser:
         form.add_form_parser,
         form.add_veins_parser,
         photo.add_photo_parser,
+        slides.add_parser,
     ):
         add(sub)
     return parser
@@ -86,6 +98,7 @@ COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
     "form": form.run_form,
     "veins": form.run_veins,
     "photo": photo.run_photo,
+    "slides": slides.run,
 }
 
 

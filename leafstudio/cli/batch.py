@@ -13,9 +13,7 @@ from leafstudio.cli.options import add_param_flags, params_for
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """The `batch` subcommand: many inputs, a worker pool or a Dask cluster (leafstudio/batch)."""
-    bat = sub.add_parser(
-        "batch", help="reconstruct many leaves or scans: meshes and a trait table"
-    )
+    bat = sub.add_parser("batch", help="reconstruct many leaves or scans: meshes and a trait table")
     bat.add_argument("inputs", nargs="+", metavar="INPUT", help="files, folders or glob patterns")
     bat.add_argument("-o", "--output", required=True, metavar="OUTDIR", help="folder for meshes")
     bat.add_argument("--scans", action="store_true", help="inputs are 3D scans: extract first")

@@ -86,6 +86,7 @@ def run(args: argparse.Namespace) -> int:
     """Read, check, compute everything, then write every output together (safewrite.staged):
     a run that fails anywhere leaves all old outputs as they were."""
     from leafstudio.render.figure import check_figure_path  # pyvista and VTK: only when asked for
+
     out = Path(args.output)
     if not out.name.lower().endswith(MESH_SUFFIXES):
         raise LeafError(f"unknown mesh type; use one of {', '.join(MESH_SUFFIXES)}", str(out))

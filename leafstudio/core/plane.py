@@ -93,6 +93,7 @@ def fit_frame(boundary: np.ndarray, vein_points: np.ndarray) -> Frame:
     LeafError
         If there are fewer than 3 distinct boundary points, or they lie on one line.
     """
+
     def degenerate() -> LeafError:
         distinct = _distinct_count_up_to_3(np.round(boundary, 12))
         if distinct < 3:

@@ -102,6 +102,27 @@ def render_turntable(result: Any, path: str | os.PathLike, frames: int = TURNTAB
     return path
 
 
+def mesh_image(result: Any, size: tuple[int, int] = TURNTABLE_SIZE) -> np.ndarray:
+    """The mesh coloured by height from the turntable's first view, off screen.
+
+    Returns
+    -------
+    (h, w, 3) uint8 array
+        The picture, `size` = (w, h) pixels on white.
+    """
+    import pyvista as pv
+
+    with pv.vtk_verbosity("off"):
+        plotter = pv.Plotter(off_screen=True, window_size=list(size))
+        plotter.set_background("white")
+        _mesh_view(plotter, result, _clim(result))
+        plotter.camera_position = _iso_camera(result)
+        plotter.reset_camera()
+        image = plotter.screenshot(return_img=True)
+        plotter.close()
+    return np.asarray(image)[..., :3]
+
+
 def _grid_mesh(result: Any, values: np.ndarray, inside_only: bool = False):
     """The grid in the leaf's plane (z = 0) as a pyvista grid carrying `values`."""
     import pyvista as pv

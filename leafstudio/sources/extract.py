@@ -475,4 +475,3 @@ def _extract(
     boundary = world(boundary_xy, rim[count : 2 * count])
     veins = veins_inside_outline(boundary, [world(v) for v in veins_xy], spacing)
     return Leaf(boundary=boundary, veins=veins), blade, petiole, origin, axes, region
-

@@ -75,6 +75,20 @@ class Action:
         return list(dict.fromkeys(k for k in found if not k.isEmpty()))
 
 
+def show_once(make: Callable[[Any], Any]) -> Callable[[Any], None]:
+    """An action's callback that makes its dialog the first time (`make(window)`) and shows
+    and raises that same dialog every time."""
+    made: list[Any] = []
+
+    def show(window) -> None:
+        if not made:
+            made.append(make(window))
+        made[0].show()
+        made[0].raise_()
+
+    return show
+
+
 KEYS = QKeySequence.StandardKey
 
 # fmt: off

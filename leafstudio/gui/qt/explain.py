@@ -5,6 +5,9 @@ turntable (GIF or MP4) and of the steps side by side (PNG) for slides (render/sl
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import (
     QApplication,
@@ -277,8 +280,14 @@ class ViewAids(QWidget):
 
 def export_slide(window, kind: str, path: str) -> bool:
     """Write the shown result's turntable or steps figure to `path`; errors in the window."""
-    from leafstudio.errors import LeafError
     from leafstudio.render.slides import render_steps, render_turntable
+
+    return export_result(window, render_turntable if kind == "turntable" else render_steps, path)
+
+
+def export_result(window, render: Callable[[Any, str], object], path: str) -> bool:
+    """`render(result, path)` for the shown result, under a wait cursor; errors in the window."""
+    from leafstudio.errors import LeafError
 
     result = window.session.result
     if result is None:
@@ -286,7 +295,7 @@ def export_slide(window, kind: str, path: str) -> bool:
         return False
     QApplication.setOverrideCursor(Qt.CursorShape.WaitCursor)
     try:
-        (render_turntable if kind == "turntable" else render_steps)(result, path)
+        render(result, path)
     except (LeafError, OSError) as exc:
         window.show_error("Cannot export", str(exc))
         return False

@@ -14,8 +14,8 @@ from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
-from PySide6.QtCore import QPointF, QSize, Qt, QTimer, Signal
-from PySide6.QtGui import QColor, QIcon, QImage, QPainter, QPainterPath, QPen, QPixmap
+from PySide6.QtCore import QSize, Qt, QTimer, Signal
+from PySide6.QtGui import QIcon, QImage, QPixmap
 from PySide6.QtWidgets import (
     QComboBox,
     QDoubleSpinBox,
@@ -34,10 +34,14 @@ from PySide6.QtWidgets import (
 
 from leafstudio.core.prepare.polygon import ring_crossings
 from leafstudio.forms import SHAPES, VENATION_KINDS, Form, definition, grow_veins
+from leafstudio.forms.glossary import COMPARISONS
 from leafstudio.forms.make import SIDE_ON
 from leafstudio.forms.terms import APEXES, DEFAULT_LOBES, MARGINS, RELIEF, TOOTHED, USER_BASES
 from leafstudio.gui.model.curves import closed_curve
 from leafstudio.gui.model.sketch_model import Sketch
+from leafstudio.gui.qt.compare_view import FIRST, compare_actions
+from leafstudio.gui.qt.glossary_view import glossary_actions
+from leafstudio.gui.qt.leaf_picture import draw_plane
 from leafstudio.model import Leaf
 
 THUMBNAIL = 84  # pixels
@@ -62,36 +66,7 @@ def thumbnail(shape: str, size: int = THUMBNAIL) -> QImage:
 def draw_leaf(leaf: Leaf, size: int, sit: bool = False) -> QImage:
     """A leaf's outline and veins seen from above, fitted in a `size` square: centred, or with
     `sit` resting on the square's lower edge (a pixel or two below)."""
-    image = QImage(size, size, QImage.Format.Format_ARGB32_Premultiplied)
-    image.fill(Qt.GlobalColor.transparent)
-    xy = leaf.boundary[:, :2]
-    lo, hi = xy.min(axis=0), xy.max(axis=0)
-    scale = 0.9 * size / max(float((hi - lo).max()), 1e-12)
-    centre = (lo + hi) / 2
-    middle = 0.98 * size - (hi - lo)[1] * scale / 2 if sit else size / 2  # the centre's row
-
-    def point(p: np.ndarray) -> QPointF:
-        q = (p[:2] - centre) * scale
-        return QPointF(size / 2 + q[0], middle - q[1])
-
-    painter = QPainter(image)
-    painter.setRenderHint(QPainter.RenderHint.Antialiasing)
-    path = QPainterPath(point(xy[0]))
-    for p in xy[1:]:
-        path.lineTo(point(p))
-    path.closeSubpath()
-    painter.setPen(QPen(QColor("#2f5d1e"), 1.2))
-    painter.setBrush(QColor("#8cc46a"))
-    painter.drawPath(path)
-    painter.setPen(QPen(QColor("#e9f5dc"), 0.9))
-    for vein in leaf.veins:
-        line = QPainterPath(point(vein[0]))
-        for p in vein[1:]:
-            line.lineTo(point(p))
-        painter.setBrush(Qt.BrushStyle.NoBrush)
-        painter.drawPath(line)
-    painter.end()
-    return image
+    return draw_plane(leaf.boundary[:, :2], [v[:, :2] for v in leaf.veins], size, sit=sit)
 
 
 def _turns(xy: np.ndarray) -> np.ndarray:
@@ -326,7 +301,8 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
     """Add the Forms dock to the main window (below the Sketch dock, both in sight at a first
     start as in the README's picture; a saved layout is restored over it): a chosen form
     becomes the document through the window's session (one undo step); Grow veins edits the
-    current sketch (one undo step). Returns the dock's panel."""
+    current sketch (one undo step). Also View > Compare forms and Help > Glossary of leaf
+    terms (compare_view.py, glossary_view.py). Returns the dock's panel."""
     panel = FormsPanel()
     session = window.session
     made = {"serial": None}  # the document the gallery made last
@@ -373,6 +349,8 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
     panel.grow.connect(grow)
     _add_grow_row(window.editor, grow)
     window.add_dock("Forms", panel, dock_area)  # stacked below the Sketch dock
+    window.compared = COMPARISONS[FIRST]  # the forms compared last (slides show them)
+    window.add_actions(compare_actions() + glossary_actions())
     return panel
 
 

@@ -44,7 +44,7 @@ def test_the_demo_result_appears(window, qtbot):
     assert len(mesh_actor_points(window)) == result.mesh.n_points
     qtbot.waitUntil(lambda: window.measurements.topLevelItemCount() >= 3)
     assert "Leaf" in window.measurements.topLevelItem(0).text(0)
-    assert "mesh" in window.status_text.text()  # per-stage timings
+    assert "mesh" in window.status_text.toolTip()  # per-stage timings, under the short line
     assert window.editor.view.sketch.boundary.shape[0] >= 3  # the leaf as an editable sketch
 
 

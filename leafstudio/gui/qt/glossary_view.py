@@ -1,0 +1,93 @@
+"""Help > Glossary of leaf terms: every term a form is made from (shape, apex, base, margin,
+venation) with a small picture and its definition in plain words.
+
+The pictures come from the forms themselves (forms/glossary.term_picture: the leaf's tip for an
+apex, its foot for a base, one side's edge for a margin, the whole leaf for a shape or a
+venation), drawn once per term and size with QPainter and cached for the process; the dialog
+draws them the first time it opens (about half a second for all), not at start-up.
+"""
+
+from __future__ import annotations
+
+from PySide6.QtCore import Qt
+from PySide6.QtGui import QImage, QPixmap
+from PySide6.QtWidgets import (
+    QDialog,
+    QGridLayout,
+    QLabel,
+    QScrollArea,
+    QVBoxLayout,
+    QWidget,
+)
+
+from leafstudio.forms.glossary import PICTURED, term_picture
+from leafstudio.forms.terms import definition
+from leafstudio.gui.qt.actions import Action, show_once
+from leafstudio.gui.qt.leaf_picture import draw_plane
+
+PICTURE = 96  # pixels
+KIND_TITLES = {
+    "shape": "Shapes: the blade's outline as a whole",
+    "apex": "Apexes: the tip (its last quarter)",
+    "base": "Bases: where the blade meets the stalk",
+    "margin": "Margins: the blade's edge",
+    "venation": "Venation: how the veins run",
+}
+_images: dict[tuple[str, str, int], QImage] = {}
+
+
+def term_image(kind: str, term: str, size: int = PICTURE) -> QImage:
+    """The term's picture in a `size` square, drawn once per term and size, then cached."""
+    key = (kind, term, size)
+    if key not in _images:
+        picture = term_picture(kind, term)
+        _images[key] = draw_plane(picture.outline, picture.veins, size, box=picture.box)
+    return _images[key]
+
+
+class GlossaryDialog(QDialog):
+    """Every pictured term, grouped by kind: its picture, its name and its definition."""
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setWindowTitle("Glossary of leaf terms")
+        body = QWidget()
+        grid = QGridLayout(body)
+        grid.setColumnStretch(2, 1)
+        self.pictures: dict[tuple[str, str], QLabel] = {}
+        row = 0
+        for kind, terms in PICTURED.items():
+            heading = QLabel(f"<h3>{KIND_TITLES[kind]}</h3>")
+            grid.addWidget(heading, row, 0, 1, 3)
+            row += 1
+            for term in terms:
+                picture = QLabel()
+                picture.setPixmap(QPixmap.fromImage(term_image(kind, term)))
+                name = QLabel(f"<b>{term}</b>")
+                text = QLabel(definition(term, kind))
+                text.setWordWrap(True)
+                grid.addWidget(picture, row, 0)
+                grid.addWidget(name, row, 1, Qt.AlignmentFlag.AlignVCenter)
+                grid.addWidget(text, row, 2, Qt.AlignmentFlag.AlignVCenter)
+                self.pictures[kind, term] = picture
+                row += 1
+        scroll = QScrollArea()
+        scroll.setWidgetResizable(True)
+        scroll.setWidget(body)
+        column = QVBoxLayout(self)
+        column.addWidget(scroll)
+        self.resize(620, 640)
+
+
+def glossary_actions() -> tuple[Action, ...]:
+    """Help > Glossary of leaf terms, as a row of the window's action table."""
+    return (
+        Action(
+            "help.glossary",
+            "Help",
+            "&Glossary of leaf terms…",
+            show_once(GlossaryDialog),
+            tooltip="Every shape, apex, base, margin and venation term, drawn and defined.",
+            before="help.about",
+        ),
+    )

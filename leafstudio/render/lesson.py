@@ -1,0 +1,81 @@
+"""The lesson's steps in plain words: what each step of the method does, for a first-year
+student, with its equation typeset by matplotlib's mathtext. `leafstudio slides` and the app's
+slides write them; they sit here, below the app, so that the command line has them too.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class LessonStep:
+    """One step of the method.
+
+    Attributes
+    ----------
+    title : str
+        A short title.
+    caption : str
+        Two or three plain sentences.
+    equation : str
+        The step's formula as matplotlib mathtext ("" for none).
+    layers : tuple of str
+        The app's layers that show it (gui/model/layers.LAYERS keys).
+    """
+
+    title: str
+    caption: str
+    equation: str
+    layers: tuple[str, ...]
+
+
+LESSON_STEPS: tuple[LessonStep, ...] = (
+    LessonStep(
+        "1. The leaf's outline and veins",
+        "We start from points on the leaf's edge (black) and along its veins (red). We lay "
+        "them on the flat plane that fits the edge best, like pressing the leaf onto a table. "
+        "Every height is then measured above that plane.",
+        r"$\mathrm{height} = (\mathbf{p} - \mathbf{o}) \cdot \mathbf{n}$",
+        ("points", "curves"),
+    ),
+    LessonStep(
+        "2. Inside or outside the leaf",
+        "A smooth function g tells every point of the plane whether it lies on the leaf: "
+        "positive inside (blue), negative outside (red). Where g is zero, the black line, is "
+        "the leaf's edge.",
+        r"$g(\mathbf{x}) > 0$ inside,   $g(\mathbf{x}) = 0$ on the edge",
+        ("contour", "points"),
+    ),
+    LessonStep(
+        "3. Where the leaf rises",
+        "Each point of the blade takes the height h of the nearest vein, fading to nothing "
+        "at the edge. This map p(x) is a guess of the relief: bright where the leaf stands "
+        "high.",
+        r"$p(\mathbf{x}) = h_v \, \left(1 - \frac{|v' - \mathbf{x}|}{2\,|v' - v''|}\right)$",
+        ("probability", "points"),
+    ),
+    LessonStep(
+        "4. Points where the leaf is high",
+        "We scatter points over the blade, more where p(x) is large. A few bell-shaped hills "
+        "(Gaussians) are fitted to them: each colour is the points one hill gathers, and each "
+        "ellipse shows the hill's width (one and two standard deviations).",
+        r"$\mathbf{x}_i \to \arg\max_k \, \pi_k \, N(\mathbf{x}_i \mid \mu_k, \Sigma_k)$",
+        ("em", "points"),
+    ),
+    LessonStep(
+        "5. The hills make the surface",
+        "The hills are added up and scaled to the veins' heights. A factor tanh(g/δ) brings "
+        "the sum down to zero at the edge, so the surface meets the outline exactly.",
+        r"$z(\mathbf{x}) = b(\mathbf{x}) + \tanh(g/\delta) \, \sum_k a_k \, "
+        r"N(\mathbf{x} \mid \mu_k, \Sigma_k)$",
+        ("samples",),
+    ),
+    LessonStep(
+        "6. The leaf in 3D",
+        "The surface is cut into small triangles and trimmed at the edge: this is the mesh, "
+        "coloured by height. With more hills (a larger K) it can follow more veins.",
+        "",
+        ("mesh", "points"),
+    ),
+)

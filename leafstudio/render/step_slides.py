@@ -1,0 +1,232 @@
+"""A lesson as slides: one slide per step of the method on a leaf (render/lesson.LESSON_STEPS:
+the step's picture, its title, its caption in plain words and its equation), then the forms
+compared side by side (render/forms_figure); written as a PNG per slide and one PDF
+(matplotlib's PdfPages). `leafstudio slides` and the app's File > Export slides write them.
+
+The steps' pictures are plan views of the leaf's plane, drawn with matplotlib at the result's
+unit size: the outline and veins; g with its zero contour; p(x); the EM samples coloured by
+the Gaussian that owns each, with each Gaussian's 1σ and 2σ ellipses; the mixture's heights;
+and the mesh (render/slides.mesh_image, off screen). Each field has its colour bar.
+"""
+
+from __future__ import annotations
+
+import os
+import textwrap
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from leafstudio.errors import LeafError
+from leafstudio.render.lesson import LESSON_STEPS, LessonStep
+
+SLIDE_SIZE = (16.0, 9.0)  # inches
+DPI = 100  # 1600 x 900 pixels per slide
+TITLE_PT, TEXT_PT, EQUATION_PT = 28, 19, 22
+TITLE_CHARS = 26  # characters per title line
+CAPTION_CHARS = 40  # characters per caption line in the right-hand column
+OWNER_COLOURS = "tab10"
+BOUNDARY, VEINS = "#202020", "#d62728"
+
+
+def _plane(result: Any) -> dict[str, Any]:
+    """The arrays a plan view draws, at unit size (every array in one frame)."""
+    unit = result.unit if result.unit is not None else result
+    grid = unit.grid
+    ny, nx = grid.shape
+    x0, y0 = grid.origin
+    extent = (x0, x0 + grid.spacing * (nx - 1), y0, y0 + grid.spacing * (ny - 1))
+    veins = unit.frame.to_plane(unit.leaf.vein_points)[0] if len(unit.leaf.vein_points) else None
+    return {"unit": unit, "shape": (ny, nx), "extent": extent, "veins": veins}
+
+
+def _outline(ax: Any, plane: dict[str, Any], veins: bool = False) -> None:
+    polygon = plane["unit"].polygon
+    ax.plot(*np.vstack([polygon, polygon[:1]]).T, color=BOUNDARY, linewidth=1.5)
+    if veins and plane["veins"] is not None:
+        ax.scatter(*plane["veins"].T, s=10, color=VEINS, zorder=3)
+
+
+def _field(
+    ax: Any, plane: dict[str, Any], values: np.ndarray, cmap: str, label: str, clip=False, **kw
+):
+    """A field of the grid as an image with its colour bar, labelled with its name; `clip`:
+    shown inside the outline only (cut along the outline itself, not the grid's cells)."""
+    image = ax.imshow(
+        np.ma.masked_invalid(values.reshape(plane["shape"])),
+        origin="lower",
+        extent=plane["extent"],
+        cmap=cmap,
+        interpolation="bilinear",
+        **kw,
+    )
+    if clip:
+        from matplotlib.patches import Polygon
+
+        image.set_clip_path(Polygon(plane["unit"].polygon, transform=ax.transData))
+    bar = ax.figure.colorbar(image, ax=ax, orientation="horizontal", fraction=0.06, pad=0.04)
+    bar.set_label(label, fontsize=TEXT_PT)
+    bar.ax.tick_params(labelsize=TEXT_PT - 4)
+    bar.formatter.set_powerlimits((-3, 4))  # 0.0889, not 8.89e-02; tinier ranges in 10^k
+    return image
+
+
+def _ellipse(ax: Any, mean: np.ndarray, cov: np.ndarray, sigmas: float, colour: Any) -> None:
+    from matplotlib.patches import Ellipse
+
+    values, vectors = np.linalg.eigh(cov)
+    angle = float(np.degrees(np.arctan2(vectors[1, 1], vectors[0, 1])))
+    width, height = 2 * sigmas * np.sqrt(np.maximum(values[::-1], 0))
+    ax.add_patch(
+        Ellipse(
+            mean,
+            width,
+            height,
+            angle=angle,
+            fill=False,
+            color=colour,
+            linewidth=2,
+            linestyle="-" if sigmas == 1 else "--",
+        )
+    )
+
+
+def _cropped(image: np.ndarray, margin: int = 12) -> np.ndarray:
+    """The picture cut to what is not white background, with a small margin."""
+    rows, cols = np.nonzero((image < 250).any(axis=2))
+    if not len(rows):
+        return image
+    top, left = max(rows.min() - margin, 0), max(cols.min() - margin, 0)
+    return image[top : rows.max() + margin, left : cols.max() + margin]
+
+
+def step_picture(ax: Any, result: Any, index: int) -> None:
+    """Draw step `index` (0-5, LESSON_STEPS) of `result` on the matplotlib axes `ax`."""
+    plane = _plane(result)
+    unit = plane["unit"]
+    if index == 1:
+        g = np.asarray(unit.g_grid, dtype=float)
+        span = float(np.abs(g).max()) or 1.0
+        _field(ax, plane, g, "RdBu", "g(x): inside > 0 > outside", vmin=-span, vmax=span)
+        ax.contour(
+            g.reshape(plane["shape"]),
+            [0.0],
+            origin="lower",
+            extent=plane["extent"],
+            colors="black",
+            linewidths=2.5,
+        )
+    elif index == 2:
+        p = np.asarray(unit.p_grid, dtype=float)
+        _field(ax, plane, p, "magma", "p(x): the height guide", clip=True)
+    elif index == 3:
+        from matplotlib import colormaps
+
+        mixture = unit.surface.mixture
+        samples = np.asarray(unit.em_samples)
+        owner = np.argmax(mixture.components(samples) * mixture.weights, axis=1)
+        colours = colormaps[OWNER_COLOURS]
+        ax.scatter(*samples.T, s=6, c=[colours(k % 10) for k in owner], zorder=2)
+        for k, (mean, cov) in enumerate(zip(mixture.means, mixture.covariances, strict=True)):
+            for sigmas in (1, 2):
+                _ellipse(ax, mean, cov, sigmas, colours(k % 10))
+    elif index == 4:
+        z = unit.height(unit.grid.points)  # b(x) outside, where tanh(g/δ) is 0: cut off
+        inside = z[unit.inside]
+        _field(
+            ax,
+            plane,
+            z,
+            "viridis",
+            "z(x): height above the plane",
+            clip=True,
+            vmin=float(inside.min()),
+            vmax=float(inside.max()),
+        )
+    if index == 5:
+        from leafstudio.render.slides import mesh_image  # pyvista and VTK: only when asked for
+
+        ax.imshow(_cropped(mesh_image(result, (960, 720))))
+    else:
+        _outline(ax, plane, veins=index in (0, 2))
+        ax.set_aspect("equal")
+        lo, hi = unit.polygon.min(axis=0), unit.polygon.max(axis=0)
+        pad = 0.06 * (hi - lo).max()
+        ax.set_xlim(lo[0] - pad, hi[0] + pad)  # the leaf fills the picture (a wide Gaussian's
+        ax.set_ylim(lo[1] - pad, hi[1] + pad)  # ellipse runs off it)
+    ax.set_axis_off()
+
+
+def step_slide(result: Any, index: int, step: LessonStep | None = None) -> Any:
+    """One slide: step `index`'s picture on the left, its words and equation on the right.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.figure import Figure  # matplotlib: only when slides are asked for
+
+    step = step or LESSON_STEPS[index]
+    figure = Figure(figsize=SLIDE_SIZE)
+    grid = figure.add_gridspec(1, 2, width_ratios=(1.45, 1.0), left=0.02, right=0.98, wspace=0.05)
+    step_picture(figure.add_subplot(grid[0, 0]), result, index)
+    words = figure.add_subplot(grid[0, 1])
+    words.set_axis_off()
+    title = textwrap.fill(step.title, TITLE_CHARS)
+    words.text(0, 0.95, title, fontsize=TITLE_PT, weight="bold", va="top")
+    caption = textwrap.fill(step.caption, CAPTION_CHARS)
+    words.text(
+        0,
+        0.95 - 0.09 * (title.count("\n") + 1),
+        caption,
+        fontsize=TEXT_PT,
+        va="top",
+        linespacing=1.4,
+    )
+    if step.equation:
+        words.text(0, 0.12, step.equation, fontsize=EQUATION_PT, va="bottom")
+    return figure
+
+
+def lesson_slides(result: Any, comparisons: list[tuple[str, Any]] | tuple = ()) -> list[Any]:
+    """Every step's slide for `result`, then a slide per (title, forms) comparison."""
+    from leafstudio.render.forms_figure import compare_figure
+
+    slides = [step_slide(result, i) for i in range(len(LESSON_STEPS))]
+    slides += [compare_figure(forms, title) for title, forms in comparisons]
+    return slides
+
+
+def slide_paths(out: str | os.PathLike, count: int) -> list[Path]:
+    """The files `write_slides` writes for `count` slides to `out`: a .pdf alone, or in a
+    folder a PNG per slide (slide_01.png, ...) and lesson.pdf."""
+    out = Path(out)
+    if out.suffix.lower() == ".pdf":
+        return [out]
+    if out.suffix and not out.is_dir():
+        raise LeafError(
+            "slides go to a folder (a PNG per slide and lesson.pdf) or a .pdf", str(out)
+        )
+    return [out / f"slide_{i + 1:02d}.png" for i in range(count)] + [out / "lesson.pdf"]
+
+
+def write_slides(slides: list[Any], out: str | os.PathLike) -> list[Path]:
+    """Write `slides` (matplotlib Figures) to `out` (see slide_paths), all or none
+    (_shared/safewrite); returns the files written."""
+    from matplotlib.backends.backend_pdf import PdfPages
+
+    from leafstudio._shared.safewrite import replace_atomically, staged
+
+    paths = slide_paths(out, len(slides))
+
+    def pdf(tmp: str) -> None:
+        with PdfPages(tmp) as pages:
+            for figure in slides:
+                pages.savefig(figure)
+
+    with staged():
+        for figure, path in zip(slides, paths[:-1], strict=False):
+            replace_atomically(path, lambda tmp, f=figure: f.savefig(tmp, dpi=DPI, format="png"))
+        replace_atomically(paths[-1], pdf)
+    return paths

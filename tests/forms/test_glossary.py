@@ -1,0 +1,60 @@
+"""The terms drawn and the forms compared (issue 22, "What to build" 4): a picture per term made
+from the forms, and the terms in which compared forms differ."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from leafstudio.errors import LeafError
+from leafstudio.forms import Form
+from leafstudio.forms.glossary import COMPARISONS, PICTURED, compared_terms, term_picture
+
+
+def _shown(picture) -> np.ndarray:
+    """The outline's and the veins' points inside the picture's box."""
+    x0, y0, x1, y1 = picture.box
+    xy = np.vstack([picture.outline, *picture.veins])
+    keep = (xy[:, 0] >= x0) & (xy[:, 0] <= x1) & (xy[:, 1] >= y0) & (xy[:, 1] <= y1)
+    return xy[keep]
+
+
+@pytest.mark.parametrize("kind", list(PICTURED))
+def test_every_term_has_a_picture_that_differs_from_the_others_of_its_kind(kind):
+    shown = [_shown(term_picture(kind, term)) for term in PICTURED[kind]]
+    assert all(len(xy) > 10 for xy in shown)
+    for i, a in enumerate(shown):
+        for b in shown[i + 1 :]:
+            assert len(a) != len(b) or not np.allclose(a, b)
+
+
+def test_an_apex_picture_shows_the_tip_and_a_base_picture_the_foot():
+    apex, base = term_picture("apex", "emarginate"), term_picture("base", "cordate")
+    assert apex.box[0] > 0.5 and apex.box[2] >= 1.0
+    assert base.box[0] < 0.0 < base.box[2] < 0.5  # the cordate lobes reach back past the base
+
+
+def test_a_picture_is_made_once():
+    assert term_picture("margin", "serrate") is term_picture("margin", "serrate")
+
+
+def test_an_unknown_term_is_one_leaf_error():
+    with pytest.raises(LeafError, match="unknown apex 'pointy'"):
+        term_picture("apex", "pointy")
+
+
+def test_compared_forms_are_told_by_the_terms_they_differ_in():
+    ovate, obovate = compared_terms(COMPARISONS["ovate beside obovate"])
+    assert [t[:2] for t in ovate] == [("shape", "ovate")]  # its usual apex and base go with it
+    assert [t[:2] for t in obovate] == [("shape", "obovate")]
+    assert "egg-shaped" in ovate[0][2]
+    margins = compared_terms(COMPARISONS["four margins"])
+    assert [terms[0][1] for terms in margins] == ["entire", "serrate", "crenate", "lobed"]
+    chosen = compared_terms([Form("ovate", apex="acute"), Form("obovate", apex="rounded")])
+    assert [t[0] for t in chosen[0]] == ["shape", "apex"]
+
+
+def test_two_to_four_forms_are_compared():
+    assert all(2 <= len(forms) <= 4 for forms in COMPARISONS.values())
+    with pytest.raises(LeafError, match="one to four forms"):
+        compared_terms([Form("ovate")] * 5)

@@ -1,0 +1,52 @@
+"""View > Compare forms and Help > Glossary of leaf terms (issue 22, "What to build" 4)."""
+
+from __future__ import annotations
+
+from PySide6.QtWidgets import QApplication
+
+from leafstudio.forms.glossary import COMPARISONS, PICTURED
+from leafstudio.gui.qt.compare_view import CompareDialog, comparison_title, export_slides
+from leafstudio.gui.qt.glossary_view import GlossaryDialog
+from tests.gui.qt.conftest import image_pixels
+
+
+def _open(window, action: str, kind):
+    window.actions[action].trigger()
+    QApplication.processEvents()
+    return next(d for d in window.findChildren(kind) if d.isVisible())
+
+
+def test_compare_shows_two_or_four_forms_side_by_side_with_their_terms(window, qtbot):
+    dialog = _open(window, "view.compare_forms", CompareDialog)
+    assert window.compared == COMPARISONS["ovate beside obovate"]
+    leaves = [ax for ax in dialog.canvas.figure.axes if ax.patches]
+    assert len(leaves) == 2
+    dialog.preset.setCurrentText("four margins")
+    assert [f.margin for f in window.compared] == ["entire", "serrate", "crenate", "lobed"]
+    assert len([ax for ax in dialog.canvas.figure.axes if ax.patches]) == 4
+    dialog.boxes[1]["margin"].setCurrentText("dentate")  # a term changed in place
+    assert window.compared[1].margin == "dentate"
+    texts = [t.get_text() for ax in dialog.canvas.figure.axes for t in ax.texts]
+    assert "dentate margin" in texts
+    dialog.close()
+
+
+def test_the_glossary_draws_every_term(window):
+    dialog = _open(window, "help.glossary", GlossaryDialog)
+    assert set(dialog.pictures) == {(k, t) for k, terms in PICTURED.items() for t in terms}
+    acute, emarginate = (
+        image_pixels(dialog.pictures["apex", term].pixmap().toImage())
+        for term in ("acute", "emarginate")
+    )
+    assert (acute != 0).any() and (acute != emarginate).any()
+    dialog.close()
+
+
+def test_export_slides_writes_the_steps_and_the_forms_compared(window, tmp_path):
+    window.compared = COMPARISONS["serrate beside dentate"]
+    folder = tmp_path / "lesson"
+    assert export_slides(window, str(folder))
+    assert len(list(folder.glob("slide_*.png"))) == 7  # six steps, one comparison
+    assert (folder / "lesson.pdf").read_bytes().startswith(b"%PDF")
+    assert comparison_title(window.compared) == "serrate beside dentate"
+    assert "file.export_slides" in window.actions

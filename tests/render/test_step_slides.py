@@ -1,0 +1,88 @@
+"""A lesson saved as slides (issue 22, "What to build" 6): `leafstudio slides` writes a PNG per
+step and per comparison, and one PDF; each step's picture shows what its words say."""
+
+from __future__ import annotations
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+
+import leafstudio as ls
+from leafstudio.cli import main
+from leafstudio.render.lesson import LESSON_STEPS
+from leafstudio.render.step_slides import step_slide
+
+
+@pytest.fixture(scope="module")
+def leaf_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("lesson") / "nested.leaf.json"
+    ls.save_leaf(ls.demo("nested"), path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def result():
+    return ls.reconstruct(ls.demo("nested"), ls.Params(grid=48))
+
+
+def test_slides_writes_a_png_per_step_and_comparison_and_one_pdf(leaf_file, tmp_path, capsys):
+    out = tmp_path / "lesson"
+    argv = ["slides", str(leaf_file), "-o", str(out), "--grid", "48"]
+    assert main([*argv, "--compare", "ovate,obovate", "--compare", "serrate,dentate"]) == 0
+    pngs = sorted(out.glob("slide_*.png"))
+    assert len(pngs) == len(LESSON_STEPS) + 2
+    first, last = iio.imread(pngs[0]), iio.imread(pngs[-1])
+    assert first.shape[:2] == (900, 1600) and first.std() > 5 and last.std() > 5
+    assert not np.array_equal(iio.imread(pngs[1]), iio.imread(pngs[2]))
+    assert (out / "lesson.pdf").stat().st_size > 10_000
+    assert "8 slides" in capsys.readouterr().out
+
+
+def test_slides_to_a_pdf_write_only_the_pdf(leaf_file, tmp_path):
+    pdf = tmp_path / "lesson.pdf"
+    assert main(["slides", str(leaf_file), "-o", str(pdf), "--grid", "48"]) == 0
+    assert pdf.read_bytes().startswith(b"%PDF") and list(tmp_path.iterdir()) == [pdf]
+
+
+@pytest.mark.parametrize(
+    "extra,message",
+    [
+        (["--compare", "ovate"], "two to four terms"),
+        (["--compare", "ovate,pointy"], "unknown term 'pointy'"),
+        (["-o", "slides.txt"], "a folder (a PNG per slide and lesson.pdf) or a .pdf"),
+    ],
+)
+def test_bad_slides_options_are_one_line_and_write_nothing(
+    leaf_file, tmp_path, capsys, monkeypatch, extra, message
+):
+    monkeypatch.chdir(tmp_path)
+    argv = ["slides", str(leaf_file), "-o", "out", "--grid", "48", *extra]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_samples_step_colours_each_gaussians_points_and_draws_its_ellipses(result):
+    figure = step_slide(result, 3)
+    picture = figure.axes[0]
+    colours = np.unique(picture.collections[0].get_facecolors(), axis=0)
+    k = len(result.surface.mixture.weights)
+    assert 2 <= len(colours) <= k
+    assert len(picture.patches) == 2 * k  # 1σ and 2σ
+
+
+def test_each_field_has_a_readable_colour_bar(result):
+    labels = []
+    for index in (1, 2, 4):
+        figure = step_slide(result, index)
+        figure.draw_without_rendering()
+        bar = figure.axes[1]  # the colour bar's axes, after the picture's
+        labels.append(bar.get_xlabel())
+        ticks = [t.get_text() for t in bar.get_xticklabels()]
+        assert not any("e-" in t for t in ticks)  # 0.0889, not 8.89e-02
+    assert labels == [
+        "g(x): inside > 0 > outside",
+        "p(x): the height guide",
+        "z(x): height above the plane",
+    ]
