@@ -208,7 +208,7 @@ class MainWindow(FileCommands, QMainWindow):
         # scrolled, not squeezed: a window as short as a projector's (720 px) still fits
         self.add_dock("Parameters", projector.scrolled(self.panel), LEFT, listed=True)
         self.add_dock("Layers", self.layers, LEFT, listed=True)
-        self.editor.setMinimumWidth(380)
+        self.editor.setMinimumWidth(340)  # with the others, a 1024-px window (projector.py)
         self.add_dock("Sketch", self.editor, RIGHT, listed=True)
         self.measurements_panel.failed.connect(self.show_error)
         measurements = self.add_dock("Measurements", self.measurements_panel, LEFT, listed=True)
