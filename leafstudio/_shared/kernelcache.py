@@ -120,3 +120,6 @@ def mark_cached() -> None:
         if not stamp.exists():
             stamp.parent.mkdir(parents=True, exist_ok=True)
             stamp.touch()
+
+
+NOTICE = "Compiling the numerical kernels (first run only)…"  # the CLI's line, the app's status

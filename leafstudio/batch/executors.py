@@ -4,17 +4,16 @@ died with the job in flight) and close()."""
 
 from __future__ import annotations
 
-import multiprocessing
 import signal
-import sys
 import threading
-import types
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
+from leafstudio._shared.spawn import WorkerContext
 from leafstudio.batch.plan import Job
 from leafstudio.batch.worker import run_failed, run_job, worker_start
+from leafstudio.core.kernels import compile_kernels
 from leafstudio.errors import LeafError, shorten
 
 # Dask settings for `--scheduler local` (measured: a batch of scans ran 1.5-2x faster): no
@@ -50,38 +49,14 @@ def check_scheduler(address: str) -> None:
         ) from None
 
 
-class _WorkerProcess(multiprocessing.context.SpawnProcess):
-    """A spawned worker that does not import the parent's `__main__`: a plain script calling
-    ls.batch (no `if __name__ == "__main__":` guard) would otherwise run again in every worker,
-    which then fails starting a pool of its own. The worker needs nothing from `__main__`: its
-    job and function are leafstudio's."""
-
-    @staticmethod
-    def _Popen(process_obj: Any) -> Any:  # multiprocessing's name
-        # spawn's preparation data names the main module (its path or name) when it has one;
-        # an empty stand-in, as in an interactive session, names none. Swapped only while the
-        # process is launched, in the thread that submits.
-        main = sys.modules["__main__"]
-        sys.modules["__main__"] = types.ModuleType("__main__")
-        try:
-            return multiprocessing.context.SpawnProcess._Popen(process_obj)
-        finally:
-            sys.modules["__main__"] = main
-
-
-class _WorkerContext(multiprocessing.context.SpawnContext):
-    """The spawn start method, with workers that do not import `__main__` (_WorkerProcess)."""
-
-    Process = _WorkerProcess
-
-
 class LocalPool:
     """A pool of worker processes on this machine (spawned: each imports once; see
-    _WorkerProcess)."""
+    _shared/spawn.py)."""
 
     def __init__(self, jobs: int) -> None:
+        compile_kernels()  # a cold cache: compiled once, in parallel, not by every worker
         self.workers = jobs
-        self._context = _WorkerContext()
+        self._context = WorkerContext()
         self._pool = self._new_pool()
 
     def _new_pool(self) -> ProcessPoolExecutor:

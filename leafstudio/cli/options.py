@@ -8,7 +8,7 @@ import logging
 import math
 from typing import TYPE_CHECKING
 
-from leafstudio._shared.kernelcache import kernels_cached, mark_cached
+from leafstudio._shared.kernelcache import NOTICE, kernels_cached, mark_cached
 from leafstudio.core.pipeline import Pipeline
 from leafstudio.core.prepare.plausibility import leaf_warnings
 from leafstudio.errors import LeafError, shorten
@@ -106,10 +106,10 @@ def run_pipeline(args: argparse.Namespace, leaf: object):
 
 
 def compiling_notice() -> None:
-    """Say so when this run compiles the numerical kernels (the first run: about 20 s of CPU,
-    README, "How good and how fast")."""
+    """Say so when this run compiles the numerical kernels (the first run; README, "How good
+    and how fast"): the line the app's status shows then too."""
     if not kernels_cached():
-        log.info("compiling the numerical kernels (the first run only; about 20 s)")
+        log.info(NOTICE)
 
 
 def check_finite(figures: dict, source: str) -> None:

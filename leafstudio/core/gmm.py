@@ -292,8 +292,9 @@ def _m_step(x, resp, reg):
             means[c, 0] += resp[i, c] * x[i, 0]
             means[c, 1] += resp[i, c] * x[i, 1]
     cov = np.zeros((k, 2, 2))
-    for c in range(k):
-        means[c] /= nk[c]
+    for c in range(k):  # element by element: a row's slice assignment compiles numba's
+        means[c, 0] /= nk[c]  # shape-error message, seconds of the first run's compile
+        means[c, 1] /= nk[c]
     for i in range(n):
         for c in range(k):
             dx, dy = x[i, 0] - means[c, 0], x[i, 1] - means[c, 1]
@@ -302,7 +303,9 @@ def _m_step(x, resp, reg):
             cov[c, 0, 1] += r * dx * dy
             cov[c, 1, 1] += r * dy * dy
     for c in range(k):
-        cov[c] /= nk[c]
+        cov[c, 0, 0] /= nk[c]
+        cov[c, 0, 1] /= nk[c]
+        cov[c, 1, 1] /= nk[c]
         cov[c, 1, 0] = cov[c, 0, 1]
         cov[c, 0, 0] += reg
         cov[c, 1, 1] += reg

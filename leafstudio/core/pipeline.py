@@ -12,6 +12,7 @@ from collections.abc import Callable
 
 from leafstudio.core.bend import bent_result, flat_leaf
 from leafstudio.core.grid import Grid
+from leafstudio.core.kernels import compile_kernels
 from leafstudio.core.prepare.units import Units
 from leafstudio.core.result import Cancelled, Result, in_world
 from leafstudio.core.stages import STAGE_TABLE, STAGES, StageRun
@@ -73,6 +74,7 @@ class Pipeline:
             When `should_stop` said so.
         """
         run = StageRun(self, as_params(params), on_stage, should_stop)
+        compile_kernels(on_stage)  # the first run only: in parallel, ahead of the stages
         for stage in STAGES:
             if not STAGE_TABLE[stage].lazy:
                 run[stage]

@@ -204,6 +204,56 @@ def _residual_rows(xy, row_scale, target, t, full):
 
 
 @njit(cache=True, nogil=True)
+def _normal_equations(res, jac):
+    """|r|² , JᵀJ (p, p) and Jᵀr (p,), in loops: numba's `@` and np.linalg compile its BLAS and
+    LAPACK wrappers, about 4 s of CPU at the first run (benchmarks/bench_first_run.py)."""
+    m, p = jac.shape
+    normal, gradient = np.zeros((p, p)), np.zeros(p)
+    cost = 0.0
+    for i in range(m):
+        cost += res[i] * res[i]
+        for a in range(p):
+            gradient[a] += jac[i, a] * res[i]
+            for b in range(a + 1):
+                normal[a, b] += jac[i, a] * jac[i, b]
+    for a in range(p):
+        for b in range(a):
+            normal[b, a] = normal[a, b]
+    return cost, normal, gradient
+
+
+@njit(cache=True, nogil=True)
+def _solve_damped(normal, gradient, damping, diag):
+    """The step s solving (JᵀJ + damping·diag) s = −Jᵀr by Cholesky (the matrix is symmetric
+    positive definite unless singular); None when it is not numerically."""
+    p = len(gradient)
+    low = np.zeros((p, p))
+    for a in range(p):
+        for b in range(a + 1):
+            total = normal[a, b] + (damping * diag[a] if a == b else 0.0)
+            for c in range(b):
+                total -= low[a, c] * low[b, c]
+            if a == b:
+                if not total > 0:  # also NaN
+                    return None
+                low[a, a] = np.sqrt(total)
+            else:
+                low[a, b] = total / low[b, b]
+    step = np.empty(p)
+    for a in range(p):  # L y = −g
+        total = -gradient[a]
+        for c in range(a):
+            total -= low[a, c] * step[c]
+        step[a] = total / low[a, a]
+    for a in range(p - 1, -1, -1):  # Lᵀ s = y
+        total = step[a]
+        for c in range(a + 1, p):
+            total -= low[c, a] * step[c]
+        step[a] = total / low[a, a]
+    return step
+
+
+@njit(cache=True, nogil=True)
 def _levenberg_marquardt(xy, row_scale, target, theta, steps, min_gain):
     """Minimise |r(θ)|² (see _residual_rows) from θ in `steps` iterations at most: Marquardt's
     diagonal scaling, Nielsen's damping update, compiled whole (the loop's numpy calls cost more
@@ -212,24 +262,35 @@ def _levenberg_marquardt(xy, row_scale, target, theta, steps, min_gain):
     A step is kept only if it lowers the cost, so the result is never worse than the start.
     Stops early once an accepted step gains less than `min_gain` of the cost.
     """
+    p = len(theta)
     res, jac = _residual_rows(xy, row_scale, target, theta.reshape(-1, 6), True)
-    cost, normal, gradient = res @ res, jac.T @ jac, jac.T @ res
-    damping, growth = 1e-3 * max(np.max(np.diag(normal)), 1e-300), 2.0
+    cost, normal, gradient = _normal_equations(res, jac)
+    largest = 1e-300
+    for a in range(p):
+        largest = max(largest, normal[a, a])
+    damping, growth = 1e-3 * largest, 2.0
+    diag = np.empty(p)
     for _ in range(steps):
-        diag = np.diag(normal).copy()
-        diag = np.maximum(diag, 1e-12 * diag.max() + 1e-300)
-        system = normal.copy()
-        for i in range(len(diag)):
-            system[i, i] += damping * diag[i]
-        try:
-            step = np.linalg.solve(system, -gradient)
-        except Exception:  # singular: damp harder
+        top = 0.0
+        for a in range(p):
+            top = max(top, normal[a, a])
+        for a in range(p):
+            diag[a] = max(normal[a, a], 1e-12 * top + 1e-300)
+        step = _solve_damped(normal, gradient, damping, diag)
+        if step is None:  # singular: damp harder
             damping, growth = damping * growth, growth * 2
             continue
         trial = theta + step
         trial_res, _ = _residual_rows(xy, row_scale, target, trial.reshape(-1, 6), False)
-        trial_cost = trial_res @ trial_res
-        predicted = -(2 * step @ gradient + step @ (normal @ step))
+        trial_cost = 0.0
+        predicted = 0.0
+        for i in range(len(trial_res)):
+            trial_cost += trial_res[i] * trial_res[i]
+        for a in range(p):
+            curvature = 0.0
+            for b in range(p):
+                curvature += normal[a, b] * step[b]
+            predicted -= step[a] * (2 * gradient[a] + curvature)
         ratio = (cost - trial_cost) / predicted if predicted > 0 else -1.0
         if not ratio > 0:  # also rejects NaN
             damping, growth = damping * growth, growth * 2
@@ -237,7 +298,7 @@ def _levenberg_marquardt(xy, row_scale, target, theta, steps, min_gain):
         gain = cost - trial_cost
         theta = trial
         res, jac = _residual_rows(xy, row_scale, target, theta.reshape(-1, 6), True)
-        cost, normal, gradient = res @ res, jac.T @ jac, jac.T @ res
+        cost, normal, gradient = _normal_equations(res, jac)
         damping *= max(1 / 3, 1 - (2 * ratio - 1) ** 3)
         growth = 2.0
         if gain < min_gain * cost:

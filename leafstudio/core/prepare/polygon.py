@@ -161,7 +161,8 @@ def _file_edges(polygon, y0, height, n_bands):
     starts = np.zeros(n_bands + 1, np.int64)
     for e in range(n):
         first, last = _band_range(polygon[e, 1], polygon[(e + 1) % n, 1], y0, height, n_bands)
-        starts[first + 1 : last + 2] += 1
+        for b in range(first + 1, last + 2):  # not a slice: see gmm._m_step
+            starts[b] += 1
     for b in range(n_bands):
         starts[b + 1] += starts[b]
     edges = np.empty(starts[-1], np.int64)

@@ -181,3 +181,33 @@ def test_ctrl_z_in_a_parameter_field_after_return_undoes_in_the_window(window, q
     qtbot.keyClicks(field, "1")
     qtbot.keyClick(field, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
     assert field.text() == "8" and window.session.params.k == 8
+
+
+def test_the_first_runs_compile_is_said_in_the_status_while_the_window_responds(
+    window, qtbot, monkeypatch
+):
+    """The first run compiles the kernels in worker processes (core/kernels.py); meanwhile the
+    status says so in the CLI's words (issue 24 #5: it said "Running: guide…" for 30 s)."""
+    import threading
+
+    from leafstudio._shared.kernelcache import NOTICE
+    from leafstudio.core import kernels, pipeline
+
+    compiled = threading.Event()
+
+    def compile_kernels(on_start=None, workers=None):  # as a cold cache: say so, then wait
+        on_start(kernels.STAGE)
+        compiled.wait(WAIT_MS / 1000)
+        return True
+
+    monkeypatch.setattr(pipeline, "compile_kernels", compile_kernels)
+    with qtbot.waitSignal(window.result_shown, timeout=WAIT_MS):
+        window.panel.set_params(replace(window.session.params, k=window.session.params.k + 1))
+        window._on_params_released()
+        qtbot.waitUntil(lambda: window.status_text.text() == NOTICE)
+        clicked = []
+        window.docks["Layers"].toggleViewAction().triggered.connect(lambda: clicked.append(1))
+        window.docks["Layers"].toggleViewAction().trigger()  # the window still answers
+        assert clicked
+        compiled.set()
+    assert window.status_text.text() != NOTICE

@@ -1,0 +1,114 @@
+"""The first run's compile, in parallel and ahead of the run (issue 24, What to build 2).
+
+A reconstruction calls 26 compiled kernels. On a cold cache numba compiles each at its first call,
+one after another, in the calling thread and holding the GIL: about 22 s of CPU, measured with
+benchmarks/bench_first_run.py, during which an app's window would not repaint. Here each kernel
+is compiled for the one signature a run uses (`KERNELS`, explicit), by a pool of worker processes
+(one per core), into numba's on-disk cache; the run then loads them (about 0.4 s). The calling
+thread only waits, so the app's window stays responsive meanwhile.
+
+`KERNELS` must name every kernel a run calls from Python with its signature; tests/test_kernels.py
+checks that a run after `compile_kernels` compiles nothing. A kernel it misses still works: the
+run compiles it as before.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor, as_completed
+
+from numba import types
+from numba.core.dispatcher import Dispatcher
+
+from leafstudio._shared import kernelcache
+from leafstudio._shared.spawn import WorkerContext
+from leafstudio.core.buckets import Buckets
+from leafstudio.core.mpu import Cells, Lattice
+
+STAGE = "kernels"  # the name on_stage is called with while compiling
+
+f8, i8 = types.float64, types.int64
+F1, F2, F3 = f8[::1], f8[:, ::1], f8[:, :, ::1]
+I1, B1, B2 = i8[::1], types.boolean[::1], types.boolean[:, ::1]
+RF1, RF2, RF3 = (types.Array(f8, n, "C", readonly=True) for n in (1, 2, 3))
+BUCKETS = types.NamedTuple([F1, f8, i8, i8, I1, I1], Buckets)
+CELLS = types.NamedTuple([F2, F1, F2], Cells)
+LATTICE = types.NamedTuple([f8, f8, f8, i8, i8], Lattice)
+
+# "module:function" -> its argument types; costliest first (compile CPU seconds on the development
+# machine, callees included), so that the pool's workers end together
+KERNELS: dict[str, tuple[types.Type, ...]] = {
+    "surface:_levenberg_marquardt": (F2, F1, F1, F1, i8, f8),
+    "gmm:_em": (F2, I1, i8, f8, f8, i8),
+    "height:_nearest_groups": (F2, F2, I1, F1, i8, BUCKETS, F1, F2, F1, F1),
+    "prepare.polygon:_file_edges": (F2, f8, f8, i8),
+    "mpu:_ball_fits": (F2, F2, F2, F1, BUCKETS),
+    "mpu:_grid_sums": (LATTICE, I1, i8, CELLS, i8),
+    "mpu:_quotient_rule": (F1, F1, F2, F2, F2, F2, i8),
+    "buckets:_neighbour_distances": (F2, I1, BUCKETS),
+    "prepare.polygon:_inside": (F2, F2, f8, f8, i8, f8, I1, I1),
+    "mesher:_split_cells": (B2, B2, i8),
+    "gmm:_kmeans": (F2, F2, f8),
+    "buckets:_counting_sort": (F2, F1, f8, i8, i8),
+    "mpu:_blend_sums": (F2, CELLS, BUCKETS, i8),
+    "mpu:_ball_counts": (F2, F2, F1, BUCKETS),
+    "mesher:_grid_inside": (F2, F1, f8, i8, i8),
+    "height:_nearer_than": (F2, F2, F1),
+    "gmm:_weighted_derivatives": (F2, F2, F3, F1),
+    "gmm:_gaussians": (F2, F2, F3),
+    "buckets:_mark_near_edges": (F2, F2, f8, BUCKETS, B1),
+    "prepare.polygon:thin_ring": (F2, I1, f8),
+    "prepare.cloud:_prediction_misses": (F2, F1, I1, i8),
+    "curvature:_taper": (RF1, RF2, RF3, f8, B1),
+    "curvature:_product": (F1, F2, F3, F1, F2, F3),
+    "curvature:_graph": (F2, F3),
+    "correct:_spline_derivatives": (F2, F2, F1, F1, f8),
+    "correct:_spline_value": (F2, F2, F1, F1),
+    "prepare.outline:_orientation": (F2, I1),
+    "prepare.outline:_ring_length": (F2, I1),
+    "buckets:bounds": (F2,),
+}
+
+
+def dispatcher(name: str) -> Dispatcher:
+    """The compiled kernel `name` ("module:function", module under leafstudio.core)."""
+    module, function = name.split(":")
+    return getattr(importlib.import_module(f"leafstudio.core.{module}"), function)
+
+
+def _compile(name: str) -> str:
+    """In a worker: compile `name` for its signature into numba's on-disk cache."""
+    dispatcher(name).compile(KERNELS[name])
+    return name
+
+
+def compile_kernels(
+    on_start: Callable[[str], None] | None = None, workers: int | None = None
+) -> bool:
+    """Compile the kernels a run needs, when this installation has not yet, in worker processes.
+
+    Parameters
+    ----------
+    on_start : callable, optional
+        Called with STAGE before compiling (not when the cache holds the kernels): a pipeline's
+        on_stage, for the app to say so.
+    workers : int, optional
+        Processes to compile in; default one per core (at most one per kernel).
+
+    Returns
+    -------
+    bool
+        Whether it compiled (False: the cache held them already).
+    """
+    if kernelcache.kernels_cached():
+        return False
+    if on_start is not None:
+        on_start(STAGE)
+    workers = max(1, min(workers or os.cpu_count() or 1, len(KERNELS)))
+    with ProcessPoolExecutor(workers, WorkerContext()) as pool:
+        for future in as_completed([pool.submit(_compile, name) for name in KERNELS]):
+            future.result()
+    kernelcache.mark_cached()
+    return True

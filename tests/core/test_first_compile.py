@@ -1,0 +1,78 @@
+"""The first run's compile (issue 24, What to build 2): core/kernels.KERNELS names every kernel a
+reconstruction calls from Python, with the signature it calls it with, and compile_kernels
+compiles them in worker processes into numba's cache."""
+
+from __future__ import annotations
+
+import ast
+import os
+from pathlib import Path
+
+import pytest
+
+import leafstudio as ls
+from leafstudio._shared import kernelcache
+from leafstudio.core import kernels
+
+CORE = Path(kernels.__file__).parent
+# kernels a reconstruction never calls: distances to a mesh (metrics, scans), clouds' projection
+NOT_IN_A_RUN = {
+    "distance:_centroids", "distance:_morton", "distance:_build", "distance:_distances",
+    "evaluate:_edge_counts", "prepare.cloud:_project_kernel",
+}  # fmt: skip
+
+
+def _compiled(f: ast.FunctionDef) -> bool:
+    return any("njit" in ast.unparse(d) for d in f.decorator_list)
+
+
+def _called_from_python() -> set[str]:
+    """"module:function" of every compiled kernel that a plain function of core calls (by its
+    name: each kernel's is unique in core)."""
+    trees = {
+        path.relative_to(CORE).with_suffix("").as_posix().replace("/", "."): ast.parse(
+            path.read_text()
+        )
+        for path in CORE.rglob("*.py")
+    }
+    functions = {
+        module: [n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef)]
+        for module, tree in trees.items()
+    }
+    kernel = {f.name: m for m, fs in functions.items() for f in fs if _compiled(f)}
+    return {
+        f"{kernel[name]}:{name}"
+        for fs in functions.values()
+        for f in fs
+        if not _compiled(f)
+        for call in ast.walk(f)
+        if isinstance(call, ast.Call) and (name := ast.unparse(call.func)) in kernel
+    }
+
+
+def test_the_table_names_each_kernel_called_from_python():
+    assert set(kernels.KERNELS) == _called_from_python() - NOT_IN_A_RUN
+
+
+def test_each_kernel_of_the_table_is_the_one_a_run_calls():
+    ls.Pipeline(ls.demo("nested")).run(ls.Params())
+    for name, argtypes in kernels.KERNELS.items():
+        assert argtypes in kernels.dispatcher(name).signatures, name
+
+
+def test_a_cold_cache_is_filled_by_worker_processes(monkeypatch, tmp_path):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))  # the workers inherit it
+    monkeypatch.setattr(kernels, "KERNELS", {"buckets:bounds": kernels.KERNELS["buckets:bounds"]})
+    said = []
+    assert kernels.compile_kernels(said.append, workers=1)
+    assert said == [kernels.STAGE]
+    assert any(p.name.startswith("buckets.bounds") for p in tmp_path.rglob("*.nbi"))
+    assert kernelcache.kernels_cached()
+    assert not kernels.compile_kernels(said.append)  # cached now: nothing said or done
+    assert said == [kernels.STAGE]
+
+
+@pytest.fixture(autouse=True)
+def _restore_environment(monkeypatch):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", os.environ.get("NUMBA_CACHE_DIR", ""))
+    yield
