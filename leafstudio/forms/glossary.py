@@ -1,7 +1,7 @@
 """Pictures of the terms, and forms side by side: what a class compares.
 
 - `term_picture(kind, term)`: the outline (and veins) that shows one term, with the part of the
-  leaf's plane to look at (an apex: the leaf's tip; a base: its foot; a margin: one side's edge;
+  leaf's plane to look at (an apex: the leaf's tip; a base: its foot; a margin: the blade's middle;
   a shape or venation: the whole leaf). Made once per term from the forms themselves, then cached.
 - `COMPARISONS`: forms a lesson sets side by side (ovate beside obovate, serrate beside
   dentate, ...), and `compared_terms(forms)`: each form's terms that differ from the others',
@@ -105,7 +105,7 @@ def term_picture(kind: str, term: str) -> TermPicture:
     elif kind == "base":
         box = (lo[0] - 0.05, -1.3 * half, 0.45, 1.3 * half)
     elif kind == "margin":
-        box = (0.15, -0.1 * half, 0.85, 1.15 * half)
+        box = (0.15, -1.1 * half, 0.85, 1.1 * half)
     else:
         box = (*lo, *hi)
     return TermPicture(outline, veins, np.asarray(box, dtype=float))

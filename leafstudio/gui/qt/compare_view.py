@@ -2,8 +2,9 @@
 
 Compare forms: two or four forms side by side in one window, each with the terms in which they
 differ and what those mean (ovate beside obovate, serrate beside dentate), as a class compares
-them. The picture is render/forms_figure.compare_figure on a matplotlib Qt canvas, the very
-figure the slides write. A comparison is chosen from the lessons' list
+them. The picture is render/forms_figure.compare_figure drawn at its slide size and shown
+scaled to the window (fonts and leaves shrink together, never overlapping): the very figure the
+slides write. A comparison is chosen from the lessons' list
 (forms/glossary.COMPARISONS), then each form's shape, margin and venation can be changed; the
 window keeps the forms last compared (`window.compared`).
 
@@ -13,7 +14,9 @@ Export slides: the lesson's steps on the shown leaf and the forms compared last
 
 from __future__ import annotations
 
+import numpy as np
 from PySide6.QtCore import Qt
+from PySide6.QtGui import QImage, QPixmap
 from PySide6.QtWidgets import (
     QApplication,
     QComboBox,
@@ -22,8 +25,8 @@ from PySide6.QtWidgets import (
     QGridLayout,
     QHBoxLayout,
     QLabel,
+    QSizePolicy,
     QVBoxLayout,
-    QWidget,
 )
 
 from leafstudio.errors import LeafError
@@ -52,7 +55,8 @@ class CompareDialog(QDialog):
         self.boxes: list[dict[str, QComboBox]] = []
         self.note = QLabel()
         self.note.setStyleSheet("color: #b00020;")
-        self.canvas: QWidget | None = None
+        self.figure = None  # the matplotlib Figure shown
+        self.picture = FittedPicture()
         top = QHBoxLayout()
         top.addWidget(QLabel("Compare"))
         top.addWidget(self.preset, 1)
@@ -60,6 +64,7 @@ class CompareDialog(QDialog):
         self.column.addLayout(top)
         self.column.addLayout(self.choosers)
         self.column.addWidget(self.note)
+        self.column.addWidget(self.picture, 1)
         self.preset.currentTextChanged.connect(self.set_forms)
         self.resize(1100, 720)
         self.set_forms(FIRST)
@@ -83,13 +88,15 @@ class CompareDialog(QDialog):
             if item.widget() is not None:
                 item.widget().deleteLater()
         self.boxes = []
-        for column, form in enumerate(forms):
+        for row, (kind, _terms) in enumerate(CHOOSERS):
+            self.choosers.addWidget(QLabel(kind.capitalize()), row, 0)
+        for column, form in enumerate(forms, start=1):
             boxes = {}
             for row, (kind, terms) in enumerate(CHOOSERS):
                 box = QComboBox()
                 box.addItems(list(terms))
                 box.setCurrentText(getattr(form, kind))
-                box.setToolTip(f"The {kind} of form {column + 1}")
+                box.setToolTip(f"The {kind} of form {column}")
                 box.currentTextChanged.connect(lambda _t: self.redraw(self.forms()))
                 self.choosers.addWidget(box, row, column)
                 boxes[kind] = box
@@ -98,8 +105,6 @@ class CompareDialog(QDialog):
 
     def redraw(self, forms: tuple[Form, ...]) -> None:
         """Draw `forms` side by side; a form the terms cannot make is said, the last kept."""
-        from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg  # heavy: when shown
-
         from leafstudio.render.forms_figure import compare_figure
 
         QApplication.setOverrideCursor(Qt.CursorShape.WaitCursor)
@@ -112,13 +117,47 @@ class CompareDialog(QDialog):
             QApplication.restoreOverrideCursor()
         self.note.setText("")
         self.window_.compared = forms
-        canvas = FigureCanvasQTAgg(figure)
-        if self.canvas is not None:
-            self.column.replaceWidget(self.canvas, canvas)
-            self.canvas.deleteLater()
-        else:
-            self.column.addWidget(canvas, 1)
-        self.canvas = canvas
+        self.figure = figure
+        self.picture.set_image(figure_image(figure))
+
+
+def figure_image(figure) -> QImage:
+    """A matplotlib Figure drawn at its own size (Agg) as a QImage."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg  # heavy: when shown
+
+    canvas = FigureCanvasAgg(figure)
+    canvas.draw()
+    rgba = np.asarray(canvas.buffer_rgba())
+    height, width = rgba.shape[:2]
+    return QImage(rgba.tobytes(), width, height, 4 * width, QImage.Format.Format_RGBA8888).copy()
+
+
+class FittedPicture(QLabel):
+    """An image scaled to fit the label, its proportions kept."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.image = QImage()
+        self.setAlignment(Qt.AlignmentFlag.AlignCenter)
+        self.setMinimumSize(320, 180)
+        self.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Ignored)
+
+    def set_image(self, image: QImage) -> None:
+        self.image = image
+        self._fit()
+
+    def resizeEvent(self, event) -> None:
+        super().resizeEvent(event)
+        self._fit()
+
+    def _fit(self) -> None:
+        if not self.image.isNull():
+            size = self.size() * self.devicePixelRatioF()
+            scaled = self.image.scaled(
+                size, Qt.AspectRatioMode.KeepAspectRatio, Qt.TransformationMode.SmoothTransformation
+            )
+            scaled.setDevicePixelRatio(self.devicePixelRatioF())
+            self.setPixmap(QPixmap.fromImage(scaled))
 
 
 def comparison_title(forms: tuple[Form, ...]) -> str:

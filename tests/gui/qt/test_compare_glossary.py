@@ -19,14 +19,15 @@ def _open(window, action: str, kind):
 def test_compare_shows_two_or_four_forms_side_by_side_with_their_terms(window, qtbot):
     dialog = _open(window, "view.compare_forms", CompareDialog)
     assert window.compared == COMPARISONS["ovate beside obovate"]
-    leaves = [ax for ax in dialog.canvas.figure.axes if ax.patches]
+    leaves = [ax for ax in dialog.figure.axes if ax.patches]
     assert len(leaves) == 2
+    assert not dialog.picture.pixmap().isNull()
     dialog.preset.setCurrentText("four margins")
     assert [f.margin for f in window.compared] == ["entire", "serrate", "crenate", "lobed"]
-    assert len([ax for ax in dialog.canvas.figure.axes if ax.patches]) == 4
+    assert len([ax for ax in dialog.figure.axes if ax.patches]) == 4
     dialog.boxes[1]["margin"].setCurrentText("dentate")  # a term changed in place
     assert window.compared[1].margin == "dentate"
-    texts = [t.get_text() for ax in dialog.canvas.figure.axes for t in ax.texts]
+    texts = [t.get_text() for ax in dialog.figure.axes for t in ax.texts]
     assert "dentate margin" in texts
     dialog.close()
 
