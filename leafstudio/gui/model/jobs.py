@@ -6,14 +6,21 @@ A `Run` is how the session starts side jobs: `run(kind, function, *args) -> Job`
 the worker's lane and what a newer job of that kind replaces. The window passes
 `Worker.start` (gui/qt/worker.py: off the main thread, reports delivered on it); `run_now`
 runs the job at once, for a session driven without a window.
+
+Cancelling is cooperative: `Job.cancel()` drops the job's answer at once and asks the job to
+stop; a long job calls `cancel_point()` between its steps, which raises Cancelled once its job
+was cancelled (or superseded), and the worker ends it without a report.
 """
 
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import Any
 
+from leafstudio.core.pipeline import Cancelled
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.history import Event
 
@@ -39,20 +46,35 @@ class Job:
         self.id = job_id
         self.done, self.failed = Event(), Event()
         self._end: tuple[str, object] | None = None
+        self.canceller: Callable[[], object] | None = None  # set by whoever runs the job
 
     @property
     def finished(self) -> bool:
         return self._end is not None
 
+    @property
+    def cancelled(self) -> bool:
+        return self._end is not None and self._end[0] == "cancelled"
+
+    def cancel(self) -> None:
+        """Drop the job's answer (neither event fires any more) and ask it to stop at its next
+        `cancel_point`. Nothing when it has ended."""
+        if self._end is None:
+            self._end = ("cancelled", None)
+            if self.canceller is not None:
+                self.canceller()
+
     def finish(self, value: object) -> None:
         """Report the job's value (on the main thread)."""
-        self._end = ("done", value)
-        self.done.emit(value)
+        if self._end is None:
+            self._end = ("done", value)
+            self.done.emit(value)
 
     def fail(self, exc: BaseException) -> None:
         """Report the job's failure (on the main thread)."""
-        self._end = ("failed", exc)
-        self.failed.emit(exc)
+        if self._end is None:
+            self._end = ("failed", exc)
+            self.failed.emit(exc)
 
     def on_done(self, callback: Callable[[Any], object]) -> Job:
         self.done.connect(callback)
@@ -72,6 +94,28 @@ def describe(exc: BaseException) -> str:
     if isinstance(exc, LeafError):
         return str(exc)
     return f"{type(exc).__name__}: {exc} (details in the log)"
+
+
+_running = threading.local()  # the stop check of the job running on this thread
+
+
+@contextmanager
+def running(should_stop: Callable[[], bool]) -> Iterator[None]:
+    """Within it, `cancel_point()` on this thread asks `should_stop` (the worker's job loop)."""
+    before = getattr(_running, "should_stop", None)
+    _running.should_stop = should_stop
+    try:
+        yield
+    finally:
+        _running.should_stop = before
+
+
+def cancel_point() -> None:
+    """Raise Cancelled when the job running on this thread was cancelled or superseded; nothing
+    outside a job. Long jobs call it between their steps."""
+    should_stop = getattr(_running, "should_stop", None)
+    if should_stop is not None and should_stop():
+        raise Cancelled
 
 
 def run_now(kind: str, function: Callable[..., Any], *args: Any) -> Job:

@@ -2,7 +2,8 @@
 (workflows.open_file, or workflows.open_scan for File > Open scan) followed by what the app
 keeps beside the leaf (the project's sketch, the photo the leaf was found in, the scan's
 layers). `read_document` runs on the worker's side lane; the session makes its answer the
-document (Session.open_path).
+document (Session.open_path), unless Cancel came first (Session.cancel_open: the job stops at
+its next `cancel_point` and its answer is dropped).
 """
 
 from __future__ import annotations
@@ -12,9 +13,11 @@ from pathlib import Path
 from typing import Any
 
 from leafstudio.errors import LeafError
+from leafstudio.gui.model.jobs import Job, cancel_point, describe
 from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.model import Leaf, Params
 from leafstudio.sources.leafphoto import LeafPhoto, project_photo
+from leafstudio.sources.photo import is_photo
 from leafstudio.workflows import open_file, open_scan
 
 
@@ -67,6 +70,7 @@ def read_document(path: str, as_scan: bool = False) -> Document:
         opened = open_scan(path) if as_scan else open_file(path)
     except OSError as exc:
         raise LeafError(exc.strerror or str(exc), path) from None
+    cancel_point()  # Cancel while the file was read: no layers, no document
     if opened.kind == "scan":
         from leafstudio.gui.model.scans import scan_data  # pyvista (layers): not for every session
 
@@ -90,6 +94,56 @@ def _project_photo(path: str) -> tuple[LeafPhoto | None, str]:
         return project_photo(path), ""
     except LeafError as exc:
         return None, f"{exc}: the leaf shows and exports the texture generated from it."
+
+
+class FileOpening:
+    """Session's file opening (a mixin: Session holds the events, `run`, `open_document` and
+    `_open_due`, the job reading the file, which another open, a demo or a new sketch
+    supersedes)."""
+
+    def open_path(self, path: str, *, as_scan: bool = False) -> Job:
+        """Read a file off the main thread (opening.read_document on the side lane: the one
+        decision path of the command line and batch; `as_scan`: File > Open scan) and make it
+        the document once read, with its saved parameters or the current ones. A newer open, a
+        demo or a new sketch supersedes it; a failure reports `open_failed` and keeps the
+        document."""
+        if self._open_due is not None:
+            self._open_due.cancel()  # the file being read is superseded
+        what = "photo" if is_photo(path) else "scan" if as_scan else "file"
+        self.opening.emit(path, what)
+        job = self._open_due = self.run("open", read_document, path, as_scan)
+        job.on_done(lambda document: self._opened(job, document))
+        job.on_failed(lambda exc: self._open_failed(job, what, exc))
+        return job
+
+    def cancel_open(self) -> bool:
+        """Stop reading the file being opened (Cancel): the document stays, the reading job is
+        asked to stop at its next step and its answer is dropped; `open_cancelled` says so.
+        False when no file is being read."""
+        job, self._open_due = self._open_due, None
+        if job is None:
+            return False
+        job.cancel()
+        self.open_cancelled.emit()
+        return True
+
+    def _opened(self, job: Job, document: Document) -> None:
+        if job is not self._open_due:
+            return
+        self._open_due = None
+        d = document
+        params = d.params or self.params
+        self.open_document(
+            d.leaf, d.sketch, d.title, params=params, path=d.path, scan=d.scan, photo=d.photo
+        )
+        self.opened.emit(d.path)
+        if d.notice:
+            self.noticed.emit(d.notice)
+
+    def _open_failed(self, job: Job, what: str, exc: BaseException) -> None:
+        if job is self._open_due:
+            self._open_due = None
+            self.open_failed.emit(what, describe(exc))
 
 
 def missing_photo_message(photo: LeafPhoto) -> str:

@@ -31,12 +31,11 @@ from leafstudio.core.prepare.polygon import ring_crossings
 from leafstudio.gui.model.framing import BladeBounds, Framing, blade_bounds
 from leafstudio.gui.model.history import Event, History, State, Step
 from leafstudio.gui.model.jobs import Job, Run, describe, run_now
-from leafstudio.gui.model.opening import Document, missing_photo_message, read_document
+from leafstudio.gui.model.opening import FileOpening, missing_photo_message
 from leafstudio.gui.model.side import SideJobs
 from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.model import PARAMS, Leaf, Params
 from leafstudio.sources.demos import PAPER_K, demo
-from leafstudio.sources.photo import is_photo
 
 __all__ = ["Event", "Framing", "History", "Session", "State", "Step", "describe"]
 
@@ -69,7 +68,7 @@ class _Fallback:
     derived_leaf: Leaf | None = None
 
 
-class Session:
+class Session(FileOpening):
     """The document, parameters, results, pending request and history.
 
     Parameters
@@ -108,6 +107,8 @@ class Session:
         A file is being read: its path, and what it is read as ("photo", "scan" or "file").
     opened(str)
         A file read became the document (the window adds it to the recent files).
+    open_cancelled()
+        The file being read was cancelled (cancel_open); the document stays.
     open_failed(str, str)
         A file could not be opened: what it was read as, and why; the document stays.
     """
@@ -132,6 +133,7 @@ class Session:
         self.cleared, self.sketch_shown, self.crossing = Event(), Event(), Event()
         self.noticed, self.sketch_waiting = Event(), Event()
         self.opening, self.opened, self.open_failed = Event(), Event(), Event()
+        self.open_cancelled = Event()
         self.chosen_texture: Any = None  # a texture picked for the export, shown too
         self._open_due: Job | None = None  # the file being read; another open supersedes it
         self._drawn_due: threading.Event | None = None  # the outcome being drawn (Outcome.drawn)
@@ -239,46 +241,15 @@ class Session:
         return self.new_document(leaf, sketch, title, undoable=False, **kw)
 
     def new_sketch(self) -> int:
-        """An empty sketch to draw in (a file being read is forgotten)."""
-        self._open_due = None
+        """An empty sketch to draw in (a file being read is cancelled)."""
+        self.cancel_open()
         return self.open_document(None, Sketch(), "new sketch", params=self.params)
 
     def open_demo(self, name: str) -> int:
-        """A built-in leaf with the paper's K (a file being read is forgotten)."""
-        self._open_due = None
+        """A built-in leaf with the paper's K (a file being read is cancelled)."""
+        self.cancel_open()
         params = self.params.with_(k=PAPER_K.get(name, self.params.k))
         return self.open_document(demo(name), None, f"{name} demo", params=params)
-
-    def open_path(self, path: str, *, as_scan: bool = False) -> Job:
-        """Read a file off the main thread (opening.read_document on the side lane: the one
-        decision path of the command line and batch; `as_scan`: File > Open scan) and make it
-        the document once read, with its saved parameters or the current ones. A newer open, a
-        demo or a new sketch supersedes it; a failure reports `open_failed` and keeps the
-        document."""
-        what = "photo" if is_photo(path) else "scan" if as_scan else "file"
-        self.opening.emit(path, what)
-        job = self._open_due = self.run("open", read_document, path, as_scan)
-        job.on_done(lambda document: self._opened(job, document))
-        job.on_failed(lambda exc: self._open_failed(job, what, exc))
-        return job
-
-    def _opened(self, job: Job, document: Document) -> None:
-        if job is not self._open_due:
-            return
-        self._open_due = None
-        d = document
-        params = d.params or self.params
-        self.open_document(
-            d.leaf, d.sketch, d.title, params=params, path=d.path, scan=d.scan, photo=d.photo
-        )
-        self.opened.emit(d.path)
-        if d.notice:
-            self.noticed.emit(d.notice)
-
-    def _open_failed(self, job: Job, what: str, exc: BaseException) -> None:
-        if job is self._open_due:
-            self._open_due = None
-            self.open_failed.emit(what, describe(exc))
 
     def choose_texture(self, texture: Any) -> None:
         """A texture picked for an export (an assets.export `texture` option): the view shows

@@ -43,7 +43,7 @@ from leafstudio.gui.qt.file_commands import APP_NAME, FileCommands
 from leafstudio.gui.qt.layers_panel import LayersPanel
 from leafstudio.gui.qt.measurements_panel import MeasurementsPanel
 from leafstudio.gui.qt.sketch import SketchEditor
-from leafstudio.gui.qt.status import StatusText
+from leafstudio.gui.qt.status import Busy, StatusText
 from leafstudio.gui.qt.viewport import Viewport
 from leafstudio.gui.qt.worker import PIPELINE, Outcome, Worker
 from leafstudio.model import Params
@@ -103,6 +103,9 @@ class MainWindow(FileCommands, QMainWindow):
         self.add_actions(WINDOW_ACTIONS)
         self._build_docks()
         self.statusBar().addWidget(self.status_text, 1)
+        self.busy = Busy()  # a file being read: its progress and Cancel
+        self.statusBar().addPermanentWidget(self.busy)
+        self.busy.cancelled.connect(self.session.cancel_open)
 
         self.worker.stage_started.connect(self._on_stage)
         self.worker.yielded.connect(self._on_yielded)
@@ -140,6 +143,10 @@ class MainWindow(FileCommands, QMainWindow):
         session.opening.connect(self._on_opening)
         session.opened.connect(self._add_recent)
         session.open_failed.connect(self._on_open_failed)
+        session.opening.connect(lambda path, _what: self.busy.start(path))
+        for done in (session.opened, session.open_failed, session.open_cancelled):
+            done.connect(lambda *_: self.busy.stop())
+        session.open_cancelled.connect(lambda: self.status_text.setText("Opening cancelled"))
         side.fidelity_shown.connect(self._show_measurements)
         side.poisson_shown.connect(lambda pieces: self.viewport.set_layer("poisson", pieces))
         side.texture_shown.connect(self._on_texture)

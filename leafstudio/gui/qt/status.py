@@ -1,4 +1,5 @@
-"""The status bar's line of text, painted without a layout pass.
+"""The status bar's line of text, painted without a layout pass, and the progress of a file
+being read, with Cancel (Busy).
 
 A QLabel asks its layout for new geometry at every `setText`: the status bar is laid out again
 and the main window repaints once more a moment later. In a window holding the 3D view (a
@@ -9,9 +10,18 @@ status bar's width and one line's height, and repaints only itself when its text
 
 from __future__ import annotations
 
-from PySide6.QtCore import QSize, Qt
+import time
+
+from PySide6.QtCore import QSize, Qt, QTimer, Signal
 from PySide6.QtGui import QPainter, QPaintEvent, QPalette
-from PySide6.QtWidgets import QSizePolicy, QWidget
+from PySide6.QtWidgets import (
+    QHBoxLayout,
+    QLabel,
+    QProgressBar,
+    QPushButton,
+    QSizePolicy,
+    QWidget,
+)
 
 
 class StatusText(QWidget):
@@ -50,3 +60,44 @@ class StatusText(QWidget):
         painter.drawText(
             self.rect(), Qt.AlignmentFlag.AlignVCenter | Qt.AlignmentFlag.AlignLeft, line
         )
+
+
+class Busy(QWidget):
+    """The status bar's progress while a file is read: a busy bar, the seconds so far and
+    Cancel. Hidden when idle; `start(text)` shows it, `stop()` hides it."""
+
+    cancelled = Signal()
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.bar = QProgressBar()
+        self.bar.setRange(0, 0)  # how long a read takes is not known: a busy bar
+        self.bar.setMaximumWidth(120)
+        self.bar.setTextVisible(False)
+        self.seconds = QLabel()
+        self.button = QPushButton("Cancel")
+        self.button.setToolTip("Stop opening this file; the current leaf stays")
+        self.button.clicked.connect(self.cancelled)
+        layout = QHBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        for widget in (self.bar, self.seconds, self.button):
+            layout.addWidget(widget)
+        self._clock = QTimer(self)
+        self._clock.setInterval(1000)
+        self._clock.timeout.connect(self._tick)
+        self._start = 0.0
+        self.hide()
+
+    def start(self, what: str) -> None:
+        self._start = time.monotonic()
+        self.setToolTip(what)
+        self.seconds.setText("0 s")
+        self._clock.start()
+        self.show()
+
+    def stop(self) -> None:
+        self._clock.stop()
+        self.hide()
+
+    def _tick(self) -> None:
+        self.seconds.setText(f"{time.monotonic() - self._start:.0f} s")

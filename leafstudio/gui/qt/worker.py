@@ -31,7 +31,7 @@ from PySide6.QtCore import QObject, Signal
 
 from leafstudio.core.pipeline import Cancelled, Pipeline, Result
 from leafstudio.errors import LeafError
-from leafstudio.gui.model.jobs import Job
+from leafstudio.gui.model.jobs import Job, running
 from leafstudio.gui.model.layers import Piece, build_layers
 from leafstudio.model import Leaf, Params
 
@@ -87,7 +87,7 @@ class Context:
         self._worker, self._job = worker, job
 
     def should_stop(self) -> bool:
-        return self._worker._superseded(self._job)
+        return self._worker._superseded(self._job) or self._job.id in self._worker._cancelled
 
     def stage(self, name: str) -> None:
         if not self._worker._quit:
@@ -123,6 +123,7 @@ class Worker(QObject):
         self.lanes = dict(lanes or LANES)
         self._wake = threading.Condition()
         self._pending: dict[str, _Job] = {}
+        self._cancelled: set[int] = set()  # ids of running jobs asked to stop (Worker.cancel)
         self._running: dict[str, _Job | None] = {lane: None for lane in set(self.lanes.values())}
         self._last_id = 0
         self._handles: dict[int, Job] = {}  # started jobs not yet answered (main thread only)
@@ -165,7 +166,19 @@ class Worker(QObject):
         if replaced is not None:
             self._handles.pop(replaced.id, None)
         self._handles[job.id] = job
+        job.canceller = lambda: self.cancel(job.id)
         return job
+
+    def cancel(self, job_id: int) -> None:
+        """Cancel job `job_id`: dropped if it waits, asked to stop (Context.should_stop,
+        jobs.cancel_point) if it runs; no report either way."""
+        self._handles.pop(job_id, None)
+        with self._wake:
+            for kind, waiting in list(self._pending.items()):
+                if waiting.id == job_id:
+                    del self._pending[kind]
+            if any(job is not None and job.id == job_id for job in self._running.values()):
+                self._cancelled.add(job_id)
 
     def _answer_done(self, _kind: str, job_id: int, value: object) -> None:
         if (job := self._handles.pop(job_id, None)) is not None:
@@ -212,6 +225,9 @@ class Worker(QObject):
 
     def _next(self, lane: str) -> _Job | None:
         with self._wake:
+            done = self._running[lane]
+            if done is not None:
+                self._cancelled.discard(done.id)
             self._running[lane] = None
             while not self._quit:
                 kind = next((k for k in self._pending if self.lanes[k] == lane), None)
@@ -225,11 +241,12 @@ class Worker(QObject):
         while (job := self._next(lane)) is not None:
             context = Context(self, job)
             try:
-                value = job.job(context, *job.args)
-                if inspect.isgenerator(value):
-                    value = self._drain(job, context, value)
-                    if value is _STOPPED:
-                        continue
+                with running(context.should_stop):  # jobs.cancel_point asks the context
+                    value = job.job(context, *job.args)
+                    if inspect.isgenerator(value):
+                        value = self._drain(job, context, value)
+                if value is _STOPPED:
+                    continue
             except Cancelled:
                 continue
             except LeafError as exc:

@@ -6,12 +6,17 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
+from leafstudio.core.pipeline import Cancelled
 from leafstudio.core.plane import Frame
 from leafstudio.gui.model import layers, scans
+from leafstudio.gui.model.jobs import Job, cancel_point, running
+from leafstudio.gui.model.session import Session
 from leafstudio.gui.model.sketch_model import RELIEF_POINTS, Sketch
 from leafstudio.gui.model.thinning import DISPLAY_POINTS, thinned
 from leafstudio.model import Leaf
+from tests.gui.builders import FAST, Runner
 
 
 def test_thinned_keeps_few_points_and_caps_many():
@@ -78,3 +83,38 @@ def test_a_big_boundary_becomes_a_light_sketch_of_the_same_outline_and_heights()
     curve = sketch.boundary_curve()
     assert np.abs(np.hypot(curve[:, 0], curve[:, 1] / 0.4) - 1).max() < 0.01  # the ellipse
     assert np.allclose(sketch.boundary_heights(curve), 0.1 * curve[:, 0], atol=1e-3)
+
+
+# --- open returns at once; Cancel stops the read ---------------------------------------------
+
+
+def test_cancel_drops_the_reading_job_and_keeps_the_document(tmp_path):
+    started: list[Job] = []
+
+    def run(kind, function, *args):  # the worker's start: the job runs later
+        started.append(Job(len(started) + 1))
+        return started[-1]
+
+    session = Session(Runner(), FAST, run=run)
+    session.open_demo("nested")
+    before = session.state
+    seen: list = []
+    session.opened.connect(seen.append)
+    session.open_cancelled.connect(lambda: seen.append("cancelled"))
+    job = session.open_path(str(tmp_path / "big.csv"))
+    assert not job.finished  # open returns before the read is done
+    assert session.cancel_open() and job.cancelled and seen == ["cancelled"]
+    job.finish(object())  # a late answer: dropped
+    assert session.state is before and seen == ["cancelled"]
+    assert not session.cancel_open()  # nothing left to cancel
+    second = session.open_path(str(tmp_path / "a.csv"))
+    session.open_path(str(tmp_path / "b.csv"))
+    assert second.cancelled  # superseded by the newer open
+
+
+def test_cancel_point_stops_only_a_cancelled_job():
+    cancel_point()  # outside a job: nothing
+    with running(lambda: False):
+        cancel_point()
+    with running(lambda: True), pytest.raises(Cancelled):
+        cancel_point()

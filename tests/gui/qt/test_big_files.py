@@ -9,7 +9,9 @@ import threading
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QApplication
 
+from leafstudio.gui.model import opening, scans
 from leafstudio.gui.qt.viewport import MINIMUM_SIZE
+from tests.gui.builders import six_column_scan, write_points
 
 from .conftest import WAIT_MS, close_window
 
@@ -65,3 +67,35 @@ def test_a_wide_dock_leaves_the_view_its_width(window, qtbot):
     qtbot.wait(50)
     left_for_the_view = window.width() - dock.width() - sketch.width()
     assert left_for_the_view >= MINIMUM_SIZE[0] > 300
+
+
+def test_open_returns_at_once_and_cancel_stops_the_read(window, qtbot, monkeypatch, tmp_path):
+    release, reached = threading.Event(), threading.Event()
+    after_read: list[str] = []
+    real_open = opening.open_file
+
+    def slow_open(path):  # a big file: the read takes long
+        reached.set()
+        release.wait(20)
+        return real_open(path)
+
+    def layers_of(opened):  # what read_document would do next, were it not cancelled
+        after_read.append("layers")
+        return None
+
+    monkeypatch.setattr(opening, "open_file", slow_open)
+    monkeypatch.setattr(scans, "scan_data", layers_of)
+    path = write_points(tmp_path / "scan.txt", six_column_scan())
+    before = window.session.state
+    job = window.open_path(path)
+    assert not job.finished and window.busy.isVisible()  # returned while the file is read
+    assert reached.wait(10)
+    qtbot.mouseClick(window.busy.button, Qt.MouseButton.LeftButton)
+    assert job.cancelled and not window.busy.isVisible()
+    assert window.status_text.text() == "Opening cancelled"
+    release.set()
+    qtbot.waitUntil(window.worker.is_idle, timeout=WAIT_MS)
+    qtbot.wait(50)
+    assert after_read == []  # stopped at its next step: the scan's layers were never made
+    assert window.session.state is before and window.opened_name == "scan.txt"
+    assert "scan.txt" not in window.windowTitle()
