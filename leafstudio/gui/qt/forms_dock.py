@@ -192,6 +192,12 @@ class FormsPanel(QWidget):
         column.addWidget(self.shape_text)
         column.addLayout(form)
         column.addWidget(self.grow_button)
+        self.compare_button = QPushButton("Compare forms side by side…")
+        self.compare_button.setToolTip(
+            "Two or four forms side by side with the terms in which they differ (View > "
+            "Compare forms)."
+        )
+        column.addWidget(self.compare_button)
         column.addStretch(1)
         scroll = QScrollArea()  # the definitions take room: scroll rather than squeeze them
         scroll.setWidgetResizable(True)
@@ -351,6 +357,7 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
     window.add_dock("Forms", panel, dock_area)  # stacked below the Sketch dock
     window.compared = COMPARISONS[FIRST]  # the forms compared last (slides show them)
     window.add_actions(compare_actions() + glossary_actions())
+    panel.compare_button.clicked.connect(window.actions["view.compare_forms"].trigger)
     return panel
 
 

@@ -17,7 +17,9 @@ def _open(window, action: str, kind):
 
 
 def test_compare_shows_two_or_four_forms_side_by_side_with_their_terms(window, qtbot):
-    dialog = _open(window, "view.compare_forms", CompareDialog)
+    window.forms_panel.compare_button.click()  # the Forms dock's button, as View > Compare forms
+    QApplication.processEvents()
+    dialog = next(d for d in window.findChildren(CompareDialog) if d.isVisible())
     assert window.compared == COMPARISONS["ovate beside obovate"]
     leaves = [ax for ax in dialog.figure.axes if ax.patches]
     assert len(leaves) == 2

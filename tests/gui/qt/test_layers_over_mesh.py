@@ -47,7 +47,7 @@ def changed_share(a: np.ndarray, b: np.ndarray) -> float:
 def test_a_ticked_layer_shows_over_the_mesh(qtbot, tmp_path, layer):
     window = make_window(qtbot, tmp_path / "settings.ini", FAST)
     try:
-        window.resize(1280, 800)
+        window.resize(1024, 800)  # the 3D view about 600 px wide (docks as tabs: projector.py)
         for key in window.viewport.visible:
             window.layers.set_checked(key, key in ("mesh", "points"))
         shares = {}
