@@ -20,13 +20,13 @@ from leafstudio.core.trianglemesh import polydata, vertex_normals
 from leafstudio.gui.model.display_mesh import display_subset
 from leafstudio.gui.model.fields import field_layers
 from leafstudio.gui.model.pieces import (
-    DISPLAY_POINTS,
     Piece,
     cloud,
     dots,
     polylines,
     thinned,
 )
+from leafstudio.gui.model.thinning import INPUT_POINTS
 
 # (key, label shown in the layer list, on by default)
 LAYERS: tuple[tuple[str, str, bool], ...] = (
@@ -137,9 +137,9 @@ def _whole_mesh(
 
 
 def _input_pieces(result: Result) -> list[Piece]:
-    """The input's points, each curve thinned to a share of DISPLAY_POINTS."""
+    """The input's points, each curve thinned to a share of INPUT_POINTS."""
     curves = [result.leaf.boundary, *result.leaf.veins]
-    budget = DISPLAY_POINTS // len(curves)
+    budget = INPUT_POINTS // len(curves)
     shown = [thinned(curve, budget, ordered=True) for curve in curves]
     count = sum(len(points) for points in shown)
     boundary = dots(BOUNDARY_COLOR, 5.0, count)

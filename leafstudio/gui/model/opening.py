@@ -14,6 +14,7 @@ from typing import Any
 
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.jobs import Job, cancel_point, describe
+from leafstudio.gui.model.reading import is_big, read_apart
 from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.model import Leaf, Params
 from leafstudio.sources.leafphoto import LeafPhoto, project_photo
@@ -58,14 +59,23 @@ class Document:
 
 
 def read_document(path: str, as_scan: bool = False) -> Document:
-    """Open `path` as every command does (`as_scan`: as a scan whatever its points look like).
+    """Open `path` as every command does (`as_scan`: as a scan whatever its points look like);
+    a big file in a process of its own (reading.py), which Cancel ends at once.
 
     Raises
     ------
     LeafError
         Naming `path`: unreadable, malformed, a boundary that crosses itself, a bad sketch, a
         scan that is not plausibly one leaf, no leaf in the photo.
+    Cancelled
+        The job was cancelled (jobs.cancel_point).
     """
+    if is_big(path) and not is_photo(path):
+        return read_apart(_read_document, path, as_scan)
+    return _read_document(path, as_scan)
+
+
+def _read_document(path: str, as_scan: bool) -> Document:
     try:
         opened = open_scan(path) if as_scan else open_file(path)
     except OSError as exc:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 DISPLAY_POINTS = 25_000  # a point layer draws at most this many points
+INPUT_POINTS = 5000  # the input's boundary and veins together: a dotted outline needs fewer
 
 
 def thinned(points: np.ndarray, budget: int = DISPLAY_POINTS, ordered: bool = False) -> np.ndarray:

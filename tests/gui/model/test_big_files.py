@@ -3,6 +3,8 @@ costs main-thread time per point), while every computation keeps them whole."""
 
 from __future__ import annotations
 
+import multiprocessing
+import time
 from types import SimpleNamespace
 
 import numpy as np
@@ -10,13 +12,14 @@ import pytest
 
 from leafstudio.core.pipeline import Cancelled
 from leafstudio.core.plane import Frame
-from leafstudio.gui.model import layers, scans
+from leafstudio.errors import LeafError
+from leafstudio.gui.model import layers, opening, reading, scans
 from leafstudio.gui.model.jobs import Job, cancel_point, running
 from leafstudio.gui.model.session import Session
 from leafstudio.gui.model.sketch_model import RELIEF_POINTS, Sketch
-from leafstudio.gui.model.thinning import DISPLAY_POINTS, thinned
+from leafstudio.gui.model.thinning import DISPLAY_POINTS, INPUT_POINTS, thinned
 from leafstudio.model import Leaf
-from tests.gui.builders import FAST, Runner
+from tests.gui.builders import FAST, Runner, six_column_scan, write_points
 
 
 def test_thinned_keeps_few_points_and_caps_many():
@@ -68,7 +71,7 @@ def test_a_big_boundary_draws_a_capped_number_of_its_points():
     result = SimpleNamespace(leaf=Leaf(boundary=boundary, veins=[vein]))
     pieces = layers._input_pieces(result)
     drawn = [piece.data.n_points for piece in pieces]
-    assert sum(drawn) <= DISPLAY_POINTS and drawn[1] == 50  # a short vein whole
+    assert sum(drawn) <= INPUT_POINTS and drawn[1] == 50  # a short vein whole
 
 
 def test_a_big_boundary_becomes_a_light_sketch_of_the_same_outline_and_heights():
@@ -118,3 +121,40 @@ def test_cancel_point_stops_only_a_cancelled_job():
         cancel_point()
     with running(lambda: True), pytest.raises(Cancelled):
         cancel_point()
+
+
+# --- a big file is read in a process of its own ----------------------------------------------
+
+
+def test_a_big_file_is_read_apart_and_gives_the_same_document(tmp_path, monkeypatch):
+    path = write_points(tmp_path / "scan.txt", six_column_scan())
+    here = opening.read_document(path)  # small: in this thread
+    assert not opening.is_big(path)
+    monkeypatch.setattr(reading, "BIG_FILE_BYTES", 0)
+    calls: list = []
+    real = opening.read_apart
+    monkeypatch.setattr(opening, "read_apart", lambda *a: calls.append(a) or real(*a))
+    apart = opening.read_document(path)
+    assert len(calls) == 1  # read in a process of its own
+    assert apart.path == here.path and apart.scan is not None
+    np.testing.assert_array_equal(apart.leaf.boundary, here.leaf.boundary)
+    np.testing.assert_array_equal(apart.scan.points, here.scan.points)
+    assert [p.data.n_points for p in apart.scan.pieces] == [
+        p.data.n_points for p in here.scan.pieces
+    ]
+
+
+def test_reading_apart_says_what_is_wrong_as_in_the_thread(tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("1,2,3\nnot,a,number\n")
+    with pytest.raises(LeafError) as here:
+        opening._read_document(str(bad), False)
+    with pytest.raises(LeafError) as apart:
+        reading.read_apart(opening._read_document, str(bad), False)
+    assert str(apart.value) == str(here.value)
+
+
+def test_cancel_ends_the_reading_process_at_once(tmp_path):
+    with running(lambda: True), pytest.raises(Cancelled):
+        reading.read_apart(time.sleep, 60)
+    assert not multiprocessing.active_children()

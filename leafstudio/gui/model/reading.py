@@ -1,0 +1,85 @@
+"""A big file is read in a process of its own (no Qt here).
+
+Reading and extracting a 2M-point scan is mostly Python and numpy work that holds the
+interpreter's lock for long stretches: in a thread of the app's process it stalled the window's
+main thread for up to a second at a time, and Cancel could only drop its answer while the read
+went on. In a child process (spawned: the window's process has threads) it shares nothing with
+the window, and Cancel ends it at once. A small file is read in the thread: a child costs a few
+seconds of start-up (imports), more than such a file takes.
+"""
+
+from __future__ import annotations
+
+import logging
+import multiprocessing
+import os
+import traceback
+from collections.abc import Callable
+from typing import Any
+
+from leafstudio.errors import LeafError
+from leafstudio.gui.model.jobs import cancel_point
+
+log = logging.getLogger("leafstudio.gui")
+
+BIG_FILE_BYTES = 8_000_000  # a regular file above this size is read in a process of its own
+POLL_S = 0.05  # how often the waiting thread looks for Cancel
+
+
+def is_big(path: str) -> bool:
+    """True for a regular file of more than BIG_FILE_BYTES."""
+    try:
+        return os.path.isfile(path) and os.path.getsize(path) > BIG_FILE_BYTES
+    except OSError:
+        return False
+
+
+def _child(connection: Any, function: Callable[..., Any], args: tuple) -> None:
+    """In the child: run `function(*args)` and send how it ended."""
+    try:
+        answer: tuple = ("done", function(*args))
+    except LeafError as exc:
+        answer = ("leaf", exc.problem, exc.source)
+    except Exception as exc:  # a bug: named in the parent, its traceback logged there
+        answer = ("error", f"{type(exc).__name__}: {exc}", traceback.format_exc())
+    connection.send(answer)
+    connection.close()
+
+
+def read_apart(function: Callable[..., Any], *args: Any) -> Any:
+    """`function(*args)` in a fresh process, waiting here; what it returns must pickle.
+
+    Raises
+    ------
+    LeafError
+        What the function raised as one (bad input).
+    Cancelled
+        The job was cancelled (jobs.cancel_point): the process is ended at once.
+    RuntimeError
+        The function failed otherwise, or the process died.
+    """
+    context = multiprocessing.get_context("spawn")
+    receive, send = context.Pipe(duplex=False)
+    process = context.Process(target=_child, args=(send, function, args), daemon=True)
+    process.start()
+    send.close()  # the child's end: the parent sees EOF if the child dies
+    try:
+        while not receive.poll(POLL_S):
+            cancel_point()
+        try:
+            answer = receive.recv()
+        except EOFError:
+            raise RuntimeError(
+                f"the reading process ended (exit code {process.exitcode})"
+            ) from None
+    finally:
+        if process.is_alive():
+            process.terminate()
+        process.join(1.0)
+        receive.close()
+    if answer[0] == "leaf":
+        raise LeafError(answer[1], answer[2])
+    if answer[0] == "error":
+        log.error("reading in a process of its own failed:\n%s", answer[2])
+        raise RuntimeError(answer[1])
+    return answer[1]
