@@ -7,8 +7,10 @@ is an empty temporary folder (``NUMBA_CACHE_DIR``), as a new user's first run, a
 - ``cpu_s``: the CPU time of the run, its own and that of any process it waited on;
 - ``warm_s``: the same run again in a new interpreter, the cache now filled.
 
-With ``--kernels`` it also prints each compiled function's own compile time (CPU seconds spent
-compiling it, its callees excluded), largest first: where the first run's seconds go.
+With ``--kernels`` the kernels are compiled in the run's own process, one after another (as
+before core/kernels.py compiled them in parallel), and it prints each compiled function's own
+compile time (CPU seconds spent compiling it, its callees excluded), largest first: where the
+first run's seconds go.
 
 Wall times depend on the machine's load (the development machine has 2 cores shared by several
 jobs): compare ``cpu_s`` between versions, and run it twice.
@@ -50,6 +52,9 @@ if {kernels}:
                 stack[-1][1] += spent
 
     event.register("numba:compile", Cpu())
+    import leafstudio.core.pipeline as pipeline
+
+    pipeline.compile_kernels = lambda *args, **kwargs: False  # in this process, serially
 ls.reconstruct(ls.demo("nested"), ls.Params())
 t2, c2 = time.perf_counter(), time.process_time()
 children = os.times()

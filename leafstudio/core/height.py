@@ -94,7 +94,13 @@ def _select(points, group, n_groups, pool, n_pool, x0, y0, x1, y1, bound, near, 
         fx = max(abs(px - x0), abs(px - x1))
         fy = max(abs(py - y0), abs(py - y1))
         bound[group[j]] = min(bound[group[j]], fx * fx + fy * fy)
-    cut = np.sort(bound)[min(1, n_groups - 1)]
+    least = second = np.inf  # the cut: the second smallest bound (the smallest for one group)
+    for g in range(n_groups):
+        if bound[g] < least:
+            least, second = bound[g], least
+        elif bound[g] < second:
+            second = bound[g]
+    cut = least if n_groups == 1 else second
     count = 0
     for s in range(n_pool):
         j = pool[s]

@@ -230,38 +230,35 @@ def _split_cells(kept, cells, b):
 def _grid_inside(polygon, origin, spacing, ny, nx):
     """(ny * nx,) bool: grid nodes inside the closed polygon, by the crossing rule along each
     row (a node on an edge may go either way; the mesher's clearance drops those anyway)."""
+    # node j of a row is inside when an odd number of the row's crossings lie right of it; a
+    # crossing at x flips the parity of the nodes left of x (no sort: numba's compiles for
+    # seconds at the first run)
     n = len(polygon)
-    counts = np.zeros(ny + 1, np.int64)
-    for pass_ in range(2):
-        if pass_ == 1:
-            for i in range(ny):
-                counts[i + 1] += counts[i]
-            crossings = np.empty(counts[ny], np.float64)
-            fill = counts[:ny].copy()
-        for e in range(n):
-            ax, ay = polygon[e, 0], polygon[e, 1]
-            bx, by = polygon[(e + 1) % n, 0], polygon[(e + 1) % n, 1]
-            if ay == by:
-                continue
-            first = max(int(np.ceil((min(ay, by) - origin[1]) / spacing)) - 1, 0)
-            last = min(int(np.floor((max(ay, by) - origin[1]) / spacing)) + 1, ny - 1)
-            for i in range(first, last + 1):
-                y = origin[1] + i * spacing
-                if (ay > y) != (by > y):
-                    if pass_ == 0:
-                        counts[i + 1] += 1
-                    else:
-                        crossings[fill[i]] = ax + (y - ay) * (bx - ax) / (by - ay)
-                        fill[i] += 1
+    flips = np.zeros((ny, nx + 1), np.bool_)
+    for e in range(n):
+        ax, ay = polygon[e, 0], polygon[e, 1]
+        bx, by = polygon[(e + 1) % n, 0], polygon[(e + 1) % n, 1]
+        if ay == by:
+            continue
+        first = max(int(np.ceil((min(ay, by) - origin[1]) / spacing)) - 1, 0)
+        last = min(int(np.floor((max(ay, by) - origin[1]) / spacing)) + 1, ny - 1)
+        for i in range(first, last + 1):
+            y = origin[1] + i * spacing
+            if (ay > y) != (by > y):
+                x = ax + (y - ay) * (bx - ax) / (by - ay)
+                guess = (x - origin[0]) / spacing
+                m = 0 if guess <= 0 else nx if guess >= nx else int(np.ceil(guess))
+                while m > 0 and origin[0] + (m - 1) * spacing >= x:
+                    m -= 1
+                while m < nx and origin[0] + m * spacing < x:  # m: the nodes left of x
+                    m += 1
+                flips[i, m] = not flips[i, m]
     out = np.zeros(ny * nx, np.bool_)
     for i in range(ny):
-        row = np.sort(crossings[counts[i] : counts[i + 1]])
-        k = 0  # crossings at or left of the node
-        for j in range(nx):
-            x = origin[0] + j * spacing
-            while k < len(row) and row[k] <= x:
-                k += 1
-            out[i * nx + j] = (len(row) - k) % 2 == 1
+        odd = False
+        for j in range(nx - 1, -1, -1):
+            odd = odd != flips[i, j + 1]
+            out[i * nx + j] = odd
     return out
 
 
