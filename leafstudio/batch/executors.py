@@ -23,6 +23,7 @@ LOCAL_CLUSTER_CONFIG = {
     "distributed.worker.profile.enabled": False,
     "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
 }
+CONNECT_S = 8  # seconds a scheduler has to answer
 INSTALL_CLUSTER = "pip install 'leafstudio[cluster]' (or: pip install distributed)"
 
 
@@ -94,6 +95,35 @@ class LocalPool:
         self._pool.shutdown(wait=True, cancel_futures=True)
 
 
+def _connect(address: str) -> Any:
+    """A Client of the Dask scheduler at `address`; LeafError when none answers within
+    CONNECT_S. distributed's own timeout covers connecting, not the handshake: a port that
+    speaks HTTP kept it waiting for ever (issue 24, finding 17). The Client is made in a daemon
+    thread, left behind if it never returns."""
+    from distributed import Client  # an optional extra
+
+    made: dict[str, Any] = {}
+
+    def connect() -> None:
+        try:
+            made["client"] = Client(address, timeout=f"{CONNECT_S}s")
+        except BaseException as exc:  # raised again in the caller's thread
+            made["error"] = exc
+
+    thread = threading.Thread(target=connect, name="leafstudio-dask-connect", daemon=True)
+    thread.start()
+    thread.join(CONNECT_S + 1)
+    if "error" in made:
+        raise made["error"]
+    if "client" not in made:
+        raise LeafError(
+            f"no Dask scheduler answered within {CONNECT_S} s (is this a Dask scheduler's "
+            "address?)",
+            address,
+        )
+    return made["client"]
+
+
 class DaskCluster:
     """A Dask distributed cluster: an existing one by address, or a LocalCluster for the run."""
 
@@ -121,7 +151,9 @@ class DaskCluster:
                     )
                 self._client = Client(self._cluster)
             else:
-                self._client = Client(address, timeout="10s")
+                self._client = _connect(address)
+        except LeafError:
+            raise
         except (OSError, ValueError, TypeError) as exc:  # refused, timed out, or not a scheduler
             if self._cluster is not None:
                 self._cluster.close()

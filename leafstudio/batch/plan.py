@@ -107,7 +107,8 @@ def plan(
     Raises
     ------
     LeafError
-        If no input is found, or two inputs would write the same mesh.
+        If no input is found, two inputs would write the same mesh, or an input's name holds a
+        line break.
     """
     out = Path(out_dir).resolve()
     found = find_inputs(inputs, settings.scans, [out, *exclude])
@@ -117,6 +118,11 @@ def plan(
     common = Path(os.path.commonpath(sorted(roots)))  # file stays where it was listed
     jobs, owners = [], {}
     for shown, _ in found:
+        if len(str(shown).splitlines()) > 1:  # the table's cells are one line: it would name
+            raise LeafError(  # a file that does not exist (issue 24, finding 15)
+                "a file name with a line break cannot be a row of the trait table; rename it",
+                repr(os.fspath(shown)),
+            )
         absolute = Path(os.path.abspath(shown))
         mesh = ""
         if settings.format != "none":

@@ -141,3 +141,45 @@ def test_pipes_and_endless_devices_are_refused_in_one_line(tmp_path):
         for path in (fifo, zero, folder / "inner.csv", folder / "endless.xyz")
     )
     assert "4 inputs: 0 ok, 4 failed" in done.stderr
+
+
+def test_a_scheduler_port_that_speaks_http_is_one_line(tmp_path, leaves):
+    """Finding 17: `--scheduler` at a web server's port ran past 200 s (distributed's timeout
+    covers connecting, not the handshake); now one line, exit 2, after CONNECT_S."""
+    pytest.importorskip("distributed")
+    import http.server
+    import threading
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), http.server.SimpleHTTPRequestHandler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    address = f"tcp://127.0.0.1:{server.server_address[1]}"
+    try:
+        done = subprocess.run(
+            [*LEAFSTUDIO, "batch", str(leaves), "-o", str(tmp_path / "out"), "--scheduler",
+             address],
+            capture_output=True, text=True, timeout=120, cwd=tmp_path,
+        )  # fmt: skip
+    finally:
+        server.shutdown()
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        f"leafstudio: error: {address}: no Dask scheduler answered within 8 s (is this a Dask "
+        "scheduler's address?)"
+    ]
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_input_named_with_a_line_break_is_refused_in_one_line(tmp_path, capsys):
+    """Finding 15: its table row named 'we ird.csv' and 'we ird.ply', files that do not exist
+    (a cell is one line); the batch now refuses it before any work."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    named = folder / "we\nird.csv"
+    ls.save_leaf(ls.demo("nested"), named)
+    out = tmp_path / "out"
+    line = _line(["batch", str(folder), "-o", str(out), "--grid", "32", "--jobs", "1"], capsys)
+    assert line == (
+        f"leafstudio: error: {str(named)!r}: a file name with a line break "
+        "cannot be a row of the trait table; rename it"
+    )
+    assert not out.exists()
