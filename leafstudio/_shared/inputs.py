@@ -239,18 +239,16 @@ def ply_numbers(ply: Any, name: str, path: str | os.PathLike) -> np.ndarray:
 
 
 def read_image(path: str | Path) -> np.ndarray:
-    """An image file as an (h, w, 3 or 4) uint8 array; LeafError if it cannot be read."""
+    """An image file as an (h, w, 3 or 4) uint8 array; LeafError if it cannot be read (a FIFO,
+    which Pillow would wait on for ever, is refused unopened: issue 24, finding 17)."""
     from PIL import Image, UnidentifiedImageError
     from PIL.Image import DecompressionBombError
 
+    check_input_file(path, None)  # Pillow's pixel limit bounds the size
     try:
         with Image.open(path) as image:
             image = image.convert("RGBA" if "A" in image.getbands() else "RGB")
             return np.asarray(image)
-    except FileNotFoundError:
-        raise LeafError("no such file", str(path)) from None
-    except IsADirectoryError:
-        raise LeafError("is a folder, not an image", str(path)) from None
     except DecompressionBombError:
         raise LeafError("not a readable image (too many pixels)", str(path)) from None
     except (UnidentifiedImageError, OSError, ValueError) as exc:

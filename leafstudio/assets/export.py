@@ -27,7 +27,7 @@ from leafstudio.assets.placement import mesh_placement, parse_length, place, res
 from leafstudio.assets.solid import parse_thickness, thicken, thickness_in_mesh_units
 from leafstudio.assets.writers import MESH_SUFFIXES, write_assets, written_paths
 from leafstudio.errors import LeafError
-from leafstudio.sources.leafphoto import PhotoTexture, pixel_map
+from leafstudio.sources.leafphoto import PhotoTexture, pixel_map, project_photo
 
 TEXTURES = ("auto", "none")
 MAX_LOD = 8
@@ -292,8 +292,10 @@ def asset_options(
     """save_mesh's keyword arguments from the command line's: an image texture is a photo the
     leaf came from when the leaf's project says so; the thickness in the mesh's units (a length
     with its unit is real size when --length gives the leaf's)."""
-    if texture not in TEXTURES:
-        texture = PhotoTexture(texture, photo_transform(leaf_path))
+    if texture not in TEXTURES:  # the project's own photo goes back where it was; another
+        own = project_photo(leaf_path)  # image covers the texture as it is (issue 24, #15)
+        same = own is not None and Path(texture).resolve() == own.image
+        texture = PhotoTexture(texture, own.pixel_from_world if same else None)
     metres = None if length is None else parse_length(length)
     per_unit = None if metres is None else metres / leaf_placement_of(result).length
     solid = None

@@ -37,6 +37,9 @@ from leafstudio.errors import LeafError
 MARGIN_SHIFT = 0.5  # an offset moves along the plane at most this fraction of its distance
 MIN_COSINE = 0.2  # the margin's offsets grow by 1/cos(tilt), at most by 1/MIN_COSINE
 FOLD_GRADIENT = 0.5  # the in-plane offset moves at most this much per unit of length
+# a solid's thickness in leaf lengths: thinner, 32-bit floats (STL, 3MF) cannot part its two
+# sheets (1e-9 wrote a solid that was not closed); thicker, it is no leaf (1e308mm wrote ±inf)
+MIN_THICKNESS, MAX_THICKNESS = 1e-5, 10.0
 UNITS = {"um": 1e-3, "mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4}  # in millimetres
 
 
@@ -68,10 +71,17 @@ def thickness_in_mesh_units(
     then taken to be in (as scans and 3MF files are)."""
     value, unit = parse_thickness(text)
     if unit is None:
-        return value * length
-    if metres_per_unit is not None:
-        return value * UNITS[unit] * 1e-3 / metres_per_unit
-    return value * UNITS[unit]
+        thickness = value * length
+    elif metres_per_unit is not None:
+        thickness = value * UNITS[unit] * 1e-3 / metres_per_unit
+    else:
+        thickness = value * UNITS[unit]
+    if not MIN_THICKNESS <= thickness / length <= MAX_THICKNESS:  # also inf and NaN
+        raise LeafError(
+            f"--thickness {text.strip()} is {thickness / length:.3g} of the leaf's length; a "
+            f"solid needs from {MIN_THICKNESS:g} to {MAX_THICKNESS:g} of it"
+        )
+    return thickness
 
 
 def boundary_edges(faces: np.ndarray) -> np.ndarray:

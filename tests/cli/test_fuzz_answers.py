@@ -4,6 +4,9 @@ right, not an internal error or a crash."""
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -84,3 +87,71 @@ def test_a_leaf_whose_area_overflows_is_one_line_not_infinity(tmp_path, command,
     assert main(args) == 2
     assert "too large" in _error_line(capsys)
     assert not (tmp_path / "m.json").exists()
+
+
+@pytest.mark.parametrize("thickness", ["1e308mm", "1e400mm", "1e-9", "1e-320", "1e-9mm"])
+def test_a_thickness_no_solid_can_have_is_one_line(tmp_path, thickness, capsys):
+    """Finding 15: 1e308mm wrote ±inf coordinates, 1e400mm NaN ones, 1e-9 and 1e-320 solids that
+    were not closed (32-bit floats cannot part the two sheets); exit 0 each time."""
+    leaf = tmp_path / "n.leaf.json"
+    ls.save_leaf(ls.demo("nested"), leaf)
+    out = tmp_path / "solid.stl"
+    argv = ["reconstruct", str(leaf), "-o", str(out), "--grid", "32", "--thickness", thickness]
+    assert main(argv) == 2
+    assert f"--thickness {thickness} is " in _error_line(capsys)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("shape", ["blob", "sphere"])
+def test_points_that_fill_a_volume_are_no_boundary(tmp_path, shape, capsys):
+    """Finding 15: a 400-point 3D blob or a 2,000-point sphere given as a boundary became a mesh,
+    with only "no veins given" said."""
+    rng = np.random.default_rng(0)
+    points = rng.normal(size=(400 if shape == "blob" else 2000, 3))
+    if shape == "sphere":
+        points /= np.linalg.norm(points, axis=1)[:, None]
+    path = tmp_path / f"{shape}.csv"
+    np.savetxt(path, points, delimiter=",")
+    out = tmp_path / "o.ply"
+    assert main(["reconstruct", str(path), "-o", str(out), "--grid", "32"]) == 2
+    assert "the boundary points fill a volume, not a line round a leaf" in _error_line(capsys)
+    assert not out.exists()
+    with pytest.raises(ls.LeafError, match="fill a volume"):
+        ls.reconstruct(ls.Leaf(points))
+
+
+def test_another_image_as_texture_of_a_photo_project_covers_it_as_it_is(tmp_path, photo):
+    """Finding 15: `--texture other.png` on a photo's project went through the first photo's
+    pixel map (64% of the texels transparent, the image cropped); the help says another image
+    covers the texture as it is. The project's own photo is still put back where it was."""
+    from leafstudio.assets.export import asset_options
+    from leafstudio.sources.leafphoto import project_photo
+
+    project = tmp_path / "p.leaf.json"
+    assert main(["photo", str(photo), "-o", str(project)]) == 0
+    other = tmp_path / "other.png"
+    Image.new("RGB", (64, 32), (200, 30, 30)).save(other)
+    result = ls.reconstruct(ls.load_leaf(project), ls.Params(grid=32))
+    options = asset_options(str(other), None, 0, project, result)
+    assert options["texture"].pixel_from_world is None  # stretched over the texture, whole
+    own = asset_options(str(photo), None, 0, project, result)
+    assert np.array_equal(own["texture"].pixel_from_world, project_photo(project).pixel_from_world)
+
+
+@pytest.mark.parametrize("command", ["texture", "photo"])
+def test_a_pipe_given_as_an_image_is_one_line(tmp_path, command):
+    """Finding 17: a FIFO given as --texture or to `photo` waited for ever (Pillow opened it)."""
+    fifo = tmp_path / "pipe.png"
+    os.mkfifo(fifo)
+    leaf = tmp_path / "n.leaf.json"
+    ls.save_leaf(ls.demo("nested"), leaf)
+    if command == "texture":
+        argv = ["reconstruct", str(leaf), "-o", str(tmp_path / "o.ply"), "--texture", str(fifo)]
+    else:
+        argv = ["photo", str(fifo), "-o", str(tmp_path / "p.leaf.json")]
+    done = subprocess.run([sys.executable, "-m", "leafstudio", *argv], capture_output=True,
+                          text=True, timeout=120, cwd=tmp_path)  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines()[-1] == (
+        f"leafstudio: error: {fifo}: is a device or a pipe, not a regular file"
+    )

@@ -142,7 +142,15 @@ def leaf_warnings(leaf) -> list[str]:
 def check_not_a_surface(boundary: np.ndarray) -> None:
     """Raise LeafError when the boundary points cover a surface (surface_spread over
     COVER_SPREAD): a scan of the whole leaf given where its boundary belongs, whose outline and
-    area would be meaningless and whose surface would be lost."""
+    area would be meaningless and whose surface would be lost; or fill a volume (a 3D blob or a
+    sphere's points, too sparse to cover a surface: issue 24, finding 15), by the thinness a
+    scan is held to (check_leaf_like)."""
+    spreads = principal_spreads(fixed_sample(boundary, SAMPLE))
+    if spreads[2] > THIN * spreads[0]:
+        raise LeafError(
+            f"the boundary points fill a volume, not a line round a leaf (their thickness is "
+            f"{spreads[2] / spreads[0]:.2f} of their length; a leaf's is under {THIN})"
+        )
     spread = surface_spread(boundary)
     if spread > COVER_SPREAD:
         raise LeafError(
