@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import importlib
 import os
+import time
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor, as_completed
 
@@ -78,15 +79,16 @@ def dispatcher(name: str) -> Dispatcher:
     return getattr(importlib.import_module(f"leafstudio.core.{module}"), function)
 
 
-def _compile(name: str) -> str:
-    """In a worker: compile `name` for its signature into numba's on-disk cache."""
+def _compile(name: str) -> tuple[int, float]:
+    """In a worker: compile `name` for its signature into numba's on-disk cache; the worker's
+    process id and CPU seconds so far."""
     dispatcher(name).compile(KERNELS[name])
-    return name
+    return os.getpid(), time.process_time()
 
 
 def compile_kernels(
     on_start: Callable[[str], None] | None = None, workers: int | None = None
-) -> bool:
+) -> dict[int, float]:
     """Compile the kernels a run needs, when this installation has not yet, in worker processes.
 
     Parameters
@@ -99,16 +101,19 @@ def compile_kernels(
 
     Returns
     -------
-    bool
-        Whether it compiled (False: the cache held them already).
+    dict
+        Each worker's CPU seconds by its process id (benchmarks/bench_first_run.py: the longest
+        is the compile's wall time on an idle machine); empty when the cache held the kernels.
     """
     if kernelcache.kernels_cached():
-        return False
+        return {}
     if on_start is not None:
         on_start(STAGE)
     workers = max(1, min(workers or os.cpu_count() or 1, len(KERNELS)))
+    spent: dict[int, float] = {}
     with ProcessPoolExecutor(workers, WorkerContext()) as pool:
         for future in as_completed([pool.submit(_compile, name) for name in KERNELS]):
-            future.result()
+            pid, seconds = future.result()
+            spent[pid] = max(spent.get(pid, 0.0), seconds)
     kernelcache.mark_cached()
-    return True
+    return spent

@@ -27,8 +27,8 @@ def _compiled(f: ast.FunctionDef) -> bool:
 
 
 def _called_from_python() -> set[str]:
-    """"module:function" of every compiled kernel that a plain function of core calls (by its
-    name: each kernel's is unique in core)."""
+    """Every compiled kernel that a plain function of core calls, as "module:function" (found by
+    its name: each kernel's is unique in core)."""
     trees = {
         path.relative_to(CORE).with_suffix("").as_posix().replace("/", "."): ast.parse(
             path.read_text()
@@ -64,7 +64,8 @@ def test_a_cold_cache_is_filled_by_worker_processes(monkeypatch, tmp_path):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))  # the workers inherit it
     monkeypatch.setattr(kernels, "KERNELS", {"buckets:bounds": kernels.KERNELS["buckets:bounds"]})
     said = []
-    assert kernels.compile_kernels(said.append, workers=1)
+    spent = kernels.compile_kernels(said.append, workers=1)
+    assert len(spent) == 1 and os.getpid() not in spent  # one worker, not this process
     assert said == [kernels.STAGE]
     assert any(p.name.startswith("buckets.bounds") for p in tmp_path.rglob("*.nbi"))
     assert kernelcache.kernels_cached()
