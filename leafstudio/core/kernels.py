@@ -1,15 +1,16 @@
 """The first run's compile, in parallel and ahead of the run (issue 24, What to build 2).
 
-A reconstruction calls 26 compiled kernels. On a cold cache numba compiles each at its first call,
-one after another, in the calling thread and holding the GIL: about 22 s of CPU, measured with
-benchmarks/bench_first_run.py, during which an app's window would not repaint. Here each kernel
-is compiled for the one signature a run uses (`KERNELS`, explicit), by a pool of worker processes
-(one per core), into numba's on-disk cache; the run then loads them (about 0.4 s). The calling
-thread only waits, so the app's window stays responsive meanwhile.
+A reconstruction calls 29 compiled kernels. On a cold cache numba compiles each at its first call,
+one after another, in the calling thread and holding the GIL: 20 s of CPU (24 s before their
+LAPACK, BLAS, sort and slice-assignment calls became loops; benchmarks/bench_first_run.py), during
+which an app's window would not repaint. Here each kernel is compiled for the one signature a run
+uses (`KERNELS`, explicit) by a pool of worker processes (one per core) into numba's on-disk
+cache; the run then loads them (about 0.5 s). The calling thread only waits, so the app's window
+stays responsive meanwhile.
 
-`KERNELS` must name every kernel a run calls from Python with its signature; tests/test_kernels.py
-checks that a run after `compile_kernels` compiles nothing. A kernel it misses still works: the
-run compiles it as before.
+tests/core/test_first_compile.py checks that `KERNELS` names every kernel core calls from Python
+(those of the metrics and of scans aside) with the signature a run calls it with. A kernel it
+missed would still work: the run would compile it, as before.
 """
 
 from __future__ import annotations
