@@ -130,7 +130,7 @@ class Leaf:
         if self.veins is None:
             object.__setattr__(self, "veins", [])
         if isinstance(self.veins, (str, bytes, np.ndarray)) or not hasattr(self.veins, "__iter__"):
-            raise TypeError(
+            raise LeafError(
                 f"veins must be a list of (m, 3) point arrays, one per vein, got "
                 f"{type(self.veins).__name__}"
             )
