@@ -206,7 +206,7 @@ def test_params_keep_plain_python_values():
 
 def test_leaf_checks_its_inputs():
     assert Leaf(np.eye(3), veins=None).veins == []
-    with pytest.raises(TypeError, match="veins must be a list"):
+    with pytest.raises(LeafError, match="veins must be a list"):
         Leaf(np.eye(3), veins="abc")
     with pytest.raises(LeafError, match="not complex"):
         Leaf(np.eye(3) * (1 + 1j))
