@@ -3,30 +3,33 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from functools import cached_property
+from dataclasses import dataclass, field
 
 import numpy as np
 
 
 @dataclass(frozen=True)
 class Grid:
-    """A square-celled grid: `shape` = (ny, nx) nodes from `origin` with spacing `spacing`."""
+    """A square-celled grid: `shape` = (ny, nx) nodes from `origin` with spacing `spacing`.
+
+    `points`, the (ny * nx, 2) node coordinates (x varying fastest, read-only), are made with
+    the grid: the grid stage's output holds them, so they live in the pipeline's one cache with
+    it (store.py) instead of a cache of their own.
+    """
 
     origin: np.ndarray
     spacing: float
     shape: tuple[int, int]
+    points: np.ndarray = field(init=False, repr=False, compare=False)
 
-    @cached_property
-    def points(self) -> np.ndarray:
-        """(ny * nx, 2) node coordinates, x varying fastest (computed once: read-only)."""
+    def __post_init__(self) -> None:
         ny, nx = self.shape
-        xs = self.origin[0] + self.spacing * np.arange(nx)
-        ys = self.origin[1] + self.spacing * np.arange(ny)
-        gx, gy = np.meshgrid(xs, ys)
-        points = np.column_stack([gx.ravel(), gy.ravel()])
+        points = np.empty((ny, nx, 2))
+        points[:, :, 0] = self.origin[0] + self.spacing * np.arange(nx)
+        points[:, :, 1] = (self.origin[1] + self.spacing * np.arange(ny))[:, None]
+        points = points.reshape(-1, 2)
         points.flags.writeable = False
-        return points
+        object.__setattr__(self, "points", points)  # frozen: set once, here
 
 
 def make_grid(points: np.ndarray, resolution: int) -> Grid:

@@ -14,7 +14,7 @@ from leafstudio.core.bend import bent_result, flat_leaf
 from leafstudio.core.grid import Grid
 from leafstudio.core.kernels import compile_kernels
 from leafstudio.core.prepare.units import Units
-from leafstudio.core.result import Cancelled, Result, in_world
+from leafstudio.core.result import Cancelled, Later, Result, in_world
 from leafstudio.core.stages import STAGE_TABLE, STAGES, StageRun
 from leafstudio.core.steps import FrameStage, GuideStage, SurfaceStage
 from leafstudio.core.store import StageStore, leaf_key
@@ -102,7 +102,16 @@ class Pipeline:
             ran=tuple(run.ran),
             warnings=list(fs.notes),
         )
-        return bent_result(in_world(unit, self.flat, self.units), self.leaf, self.units)
+        result = bent_result(in_world(unit, self.flat, self.units), self.leaf, self.units)
+        # what is made from the mesh on first use: entries of the store under the mesh's key
+        key = run.key("mesh")
+        result.measuring = self.store.setdefault("metrics", key, result.new_measuring)
+        result.polydata = self.store.setdefault(
+            "polydata", key, lambda: Later(result.triangle_mesh.to_pyvista)
+        )
+        if result.unit is not None:
+            result.unit.measuring = result.measuring
+        return result
 
 
 def reconstruct(leaf: Leaf, params: Params | None = None) -> Result:

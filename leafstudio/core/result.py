@@ -8,7 +8,6 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -31,7 +30,71 @@ class Cancelled(Exception):
     so."""
 
 
-_MEASURING = threading.Lock()  # held while a Result takes one step of its measuring
+class Measuring:
+    """One run's metrics, measured in steps on first use and then kept: the pipeline's "metrics"
+    entry in its one cache (store.py, keyed as the mesh stage is), shared by the run's Result,
+    its unit-size Result and a later run of the same leaf and parameters.
+
+    `steps` measures at unit size; `units` maps the figures to the input's units (units.py).
+    """
+
+    def __init__(
+        self, steps: Callable[[], evaluate.Steps[dict[str, Any]]], units: Units | None
+    ) -> None:
+        self._make, self._units = steps, units
+        self._steps: evaluate.Steps[dict[str, Any]] | None = None  # the steps under way
+        self._unit: dict[str, Any] | None = None
+        self._world: dict[str, Any] | None = None
+        self._lock = threading.Lock()  # one thread at a time steps (a generator is not shared)
+
+    @property
+    def done(self) -> bool:
+        """True once the metrics are measured."""
+        return self._unit is not None
+
+    def metrics(self, should_stop: Callable[[], bool] | None, in_world: bool) -> dict[str, Any]:
+        """The metrics at unit size, or with `in_world` in the input's units (see Result.measure
+        for `should_stop`)."""
+        unit = self._unit if self._unit is not None else self._measure(should_stop)
+        if not in_world or self._units is None:
+            return unit
+        with self._lock:
+            if self._world is None:
+                self._world = self._units.metrics(unit)
+            return self._world
+
+    def _measure(self, should_stop: Callable[[], bool] | None) -> dict[str, Any]:
+        while True:
+            with self._lock:
+                if self._unit is not None:  # another thread finished them meanwhile
+                    return self._unit
+                if self._steps is None:
+                    self._steps = self._make()
+                try:
+                    next(self._steps)
+                except StopIteration as stop:
+                    self._unit, self._steps = stop.value, None
+                    return self._unit
+                except BaseException:
+                    self._steps = None  # a failed step: the next call starts again
+                    raise
+            if should_stop is not None and should_stop():
+                raise Cancelled
+
+
+class Later:
+    """A value made on first use and then kept: the pipeline's "polydata" entry (the VTK mesh,
+    made on the main thread when asked for, never by a run), keyed as the mesh stage is."""
+
+    def __init__(self, make: Callable[[], Any]) -> None:
+        self._make: Callable[[], Any] | None = make
+        self._value: Any = None
+
+    def get(self) -> Any:
+        """The value, made now if this is the first call."""
+        if self._make is not None:
+            self._value, self._make = self._make(), None
+        return self._value
 
 
 @dataclass
@@ -88,9 +151,10 @@ class Result:
     warnings: list[str] = field(default_factory=list)
     unit: Result | None = None  # the same run at unit size (units.py); None: this is it
     units: Units | None = None  # how `unit` maps to this one
-    # the metrics once measured, and the measuring steps under way (see measure)
-    _metrics: dict[str, Any] | None = field(default=None, init=False, repr=False, compare=False)
-    _steps: evaluate.Steps | None = field(default=None, init=False, repr=False, compare=False)
+    # the metrics and the VTK mesh, entries of the pipeline's cache (Pipeline.run sets them);
+    # not init fields, so a Result copied with other arrays (dataclasses.replace) measures its own
+    measuring: Measuring | None = field(default=None, init=False, repr=False, compare=False)
+    polydata: Later | None = field(default=None, init=False, repr=False, compare=False)
 
     def height(self, xy: np.ndarray) -> np.ndarray:
         """z of the surface at (n, 2) plane points (differentiable; see surface.py).
@@ -121,11 +185,13 @@ class Result:
         """The K the surface uses: params.k, or the one chosen when params.k is "auto"."""
         return len(self.surface.mixture.weights)
 
-    @cached_property
+    @property
     def mesh(self) -> pv.PolyData:
         """The mesh as a pyvista.PolyData with its point arrays, built on first use: a run itself
         never creates a VTK object (the app draws from `triangle_mesh` on its main thread)."""
-        return self.triangle_mesh.to_pyvista()
+        if self.polydata is None:  # a Result no Pipeline made
+            self.polydata = Later(self.triangle_mesh.to_pyvista)
+        return self.polydata.get()
 
     @property
     def metrics(self) -> dict[str, Any]:
@@ -138,37 +204,23 @@ class Result:
     @property
     def measured(self) -> bool:
         """True once `metrics` are computed."""
-        return self._metrics is not None
+        return self.measuring is not None and self.measuring.done
 
     def measure(self, should_stop: Callable[[], bool] | None = None) -> dict[str, Any]:
         """`metrics`, computed in steps (distances, mesh facts, shape, curvature, in pieces):
         when `should_stop()` is true after a step, Cancelled is raised, and the next call goes
         on from there (the app stops measuring a shown result when a newer request waits; the
         steps done are kept)."""
-        if self._metrics is None:
-            if self.unit is not None and self.units is not None:
-                self._metrics = self.units.metrics(self.unit.measure(should_stop))
-            else:
-                self._metrics = self._measure_in_steps(should_stop)
-        return self._metrics
+        if self.measuring is None:  # a Result no Pipeline made
+            self.measuring = self.new_measuring()
+            if self.unit is not None:
+                self.unit.measuring = self.measuring
+        return self.measuring.metrics(should_stop, in_world=self.unit is not None)
 
-    def _measure_in_steps(self, should_stop: Callable[[], bool] | None) -> dict[str, Any]:
-        while True:
-            with _MEASURING:  # one thread at a time runs the steps (a generator is not shared)
-                if self._metrics is not None:  # another thread finished them meanwhile
-                    return self._metrics
-                if self._steps is None:
-                    self._steps = self._metric_steps()
-                try:
-                    next(self._steps)
-                except StopIteration as stop:
-                    self._metrics, self._steps = stop.value, None
-                    return self._metrics
-                except BaseException:
-                    self._steps = None  # a failed step: the next call starts again
-                    raise
-            if should_stop is not None and should_stop():
-                raise Cancelled
+    def new_measuring(self) -> Measuring:
+        """The measuring of this Result's metrics (at unit size, on its unit-size Result)."""
+        unit = self if self.unit is None else self.unit
+        return Measuring(unit._metric_steps, self.units)
 
     def _metric_steps(self) -> evaluate.Steps[dict[str, Any]]:
         table = yield from evaluate.table_steps(self.triangle_mesh, self.leaf)

@@ -21,8 +21,10 @@ A stage reruns only when a value it depends on changed, so moving K reruns gmm, 
 the cache keys (STAGE_KEYS) follow from those declarations and this table's stage inputs
 (STAGE_TABLE; tests/test_params.py checks that this table says the same). A lazy stage runs
 only when a later stage asks for it. Every output goes through one StageStore, keyed by the
-leaf's fingerprint and the stage's parameters; numba's on-disk cache of compiled kernels
-(_shared/kernelcache.py) is a compile cache, not a store of results.
+leaf's fingerprint and the stage's parameters, and so do what is made from a run's mesh after
+the run, on first use: its metrics ("metrics", a result.Measuring) and its VTK mesh ("polydata",
+a result.Later), kept under the mesh stage's key (Pipeline.run). numba's on-disk cache of
+compiled kernels (_shared/kernelcache.py) is a compile cache, not a store of results.
 """
 
 from __future__ import annotations
@@ -33,7 +35,6 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 from leafstudio.core import steps
 from leafstudio.core.result import Cancelled
-from leafstudio.core.store import MISSING
 from leafstudio.model import PARAMS, Params
 
 if TYPE_CHECKING:
@@ -122,14 +123,13 @@ class StageRun:
             raise KeyError(f"stage {self._running[-1]!r} reads {name!r}, not among its inputs")
         if name in self.outputs:
             return self.outputs[name]
-        store = self.pipeline.store
-        key = (self.pipeline.leaf_key, *(getattr(self.params, k) for k in STAGE_KEYS[name]))
-        value = store.get(name, key)
-        if value is MISSING:
-            value = self._compute(name)
-            store.put(name, key, value)
+        value = self.pipeline.store.setdefault(name, self.key(name), lambda: self._compute(name))
         self.outputs[name] = value
         return value
+
+    def key(self, stage: str) -> tuple[Any, ...]:
+        """`stage`'s key in the store: the leaf's digest and the parameters it reads."""
+        return (self.pipeline.leaf_key, *(getattr(self.params, k) for k in STAGE_KEYS[stage]))
 
     def _compute(self, name: str) -> Any:
         if self.should_stop is not None and self.should_stop():

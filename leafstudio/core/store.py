@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import hashlib
 from collections import OrderedDict
+from collections.abc import Callable
 from typing import Any
 
 from leafstudio.model import Leaf
@@ -20,6 +21,11 @@ class StageStore:
     shared between Pipelines and a different leaf with the same parameters misses. Each stage
     keeps its `per_stage` most recent outputs (1: the last run's, as a Pipeline needs to rerun
     only what a parameter change invalidates).
+
+    Besides the stages (stages.STAGE_TABLE) it keeps what is made from a run's mesh on first use,
+    under the mesh stage's key: "metrics" (result.Measuring, measured in steps) and "polydata"
+    (result.Later, the VTK mesh). A value that must not live longer than its inputs belongs here,
+    not in a cache of its own (a cached property, a memoised function, a dict keyed by id()).
     """
 
     def __init__(self, per_stage: int = 1) -> None:
@@ -41,6 +47,14 @@ class StageStore:
         entries.move_to_end(key)
         while len(entries) > self.per_stage:
             entries.popitem(last=False)
+
+    def setdefault(self, stage: str, key: tuple[Any, ...], make: Callable[[], Any]) -> Any:
+        """The output stored for `stage` under `key`, or `make()` stored there and returned."""
+        value = self.get(stage, key)
+        if value is MISSING:
+            value = make()
+            self.put(stage, key, value)
+        return value
 
     def stages(self) -> tuple[str, ...]:
         """The stages with an output kept."""

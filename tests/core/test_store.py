@@ -4,14 +4,19 @@ reads."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 import leafstudio as ls
 from leafstudio.core import stages
+from leafstudio.core.grid import make_grid
 from leafstudio.core.pipeline import Pipeline
 from leafstudio.core.stages import Stage, StageRun
 from leafstudio.core.store import MISSING, StageStore
+from leafstudio.core.trianglemesh import TriangleMesh
 
 PARAMS = ls.Params(k=3, grid=48, samples=800)
 EVERY_STAGE = ("frame", "implicit", "grid", "guide", "samples", "gmm", "surface", "layout", "mesh")
@@ -106,3 +111,50 @@ def test_the_layout_keeps_the_implicits_derivatives_at_the_mesh_vertices():
     for kept, fresh in zip(layout.implicit_at, implicit.derivatives(layout.xy), strict=True):
         assert not kept.flags.writeable
         np.testing.assert_allclose(kept, fresh, rtol=1e-12, atol=1e-12)
+
+
+def test_a_runs_metrics_and_vtk_mesh_are_store_entries_under_the_meshs_key():
+    """They were kept on each Result (a measuring generator under one global lock, a cached
+    property): a rerun of the same leaf and parameters measured and built them again."""
+    pipe = Pipeline(ls.demo("nested"))
+    first = pipe.run(PARAMS)
+    metrics, poly = first.metrics, first.mesh
+    again = pipe.run(PARAMS)
+    assert again.measured and again.metrics is metrics and again.mesh is poly
+    assert {"metrics", "polydata"} <= set(pipe.store.stages())
+    other = pipe.run(PARAMS.with_(k=4))  # another mesh: its own entries
+    assert not other.measured and other.mesh is not poly
+    assert first.metrics is metrics  # the first Result keeps its own once measured
+    assert first.unit.measured and first.unit.metrics["mesh"]["area"] > 0  # shared with its unit
+
+
+def test_a_result_copied_with_another_mesh_measures_that_mesh():
+    result = Pipeline(ls.demo("nested")).run(PARAMS)
+    area = result.metrics["mesh"]["area"]
+    mesh = result.triangle_mesh
+    doubled = TriangleMesh(2 * mesh.points, mesh.regular_faces, mesh.point_data)
+    bigger = replace(result, triangle_mesh=doubled, unit=None, units=None)
+    assert not bigger.measured  # replace carries no figures of the mesh it replaced
+    assert bigger.metrics["mesh"]["area"] == pytest.approx(4 * area)
+    assert bigger.mesh.n_points == len(doubled.points)
+    np.testing.assert_array_equal(bigger.mesh.points, doubled.points)
+
+
+def test_core_keeps_no_cache_beside_the_store():
+    """One cache (issue 20): no cached_property, lru_cache or functools.cache left in core; the
+    grid's nodes are made with the grid (the grid stage's output)."""
+    core = Path(stages.__file__).parent
+    found = [
+        f"{path.relative_to(core)}: {marker}"
+        for path in core.rglob("*.py")
+        for marker in ("cached_property", "lru_cache", "functools.cache", "@cache\n")
+        if marker in path.read_text(encoding="utf-8")
+    ]
+    assert found == []
+    grid = make_grid(np.array([[0.0, 0.0], [1.0, 0.5]]), 16)
+    gx, gy = np.meshgrid(
+        grid.origin[0] + grid.spacing * np.arange(grid.shape[1]),
+        grid.origin[1] + grid.spacing * np.arange(grid.shape[0]),
+    )
+    np.testing.assert_array_equal(grid.points, np.column_stack([gx.ravel(), gy.ravel()]))
+    assert not grid.points.flags.writeable
