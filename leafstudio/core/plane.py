@@ -79,6 +79,14 @@ def _distinct_count_up_to_3(points: np.ndarray) -> int:
     return count
 
 
+TIE = 1e-9  # two sides this close, as a share of the leaf's length, are a tie (fit_frame)
+
+
+def _world_sign(axis: np.ndarray) -> float:
+    """+1 if the (3,) axis's largest component is positive, else -1."""
+    return 1.0 if axis[np.argmax(np.abs(axis))] >= 0 else -1.0
+
+
 def fit_frame(boundary: np.ndarray, vein_points: np.ndarray) -> Frame:
     """PCA plane of the boundary points (paper, step 1), normal oriented toward the veins.
 
@@ -86,7 +94,9 @@ def fit_frame(boundary: np.ndarray, vein_points: np.ndarray) -> Frame:
     ----------
     boundary : (n, 3) float array
     vein_points : (m, 3) float array
-        May be empty; then the normal points along the world axis it is closest to, positively.
+        May be empty; then, or when they lie in the boundary's plane (TIE), the normal points
+        along the world axis it is closest to, positively. u points toward the boundary's
+        farther extreme, and for a symmetric boundary along its closest world axis.
 
     Raises
     ------
@@ -113,15 +123,16 @@ def fit_frame(boundary: np.ndarray, vein_points: np.ndarray) -> Frame:
     u, normal = axes[:, 2].copy(), axes[:, 0].copy()
     if variances[1] < 1e-6 * variances[2]:
         u, normal = np.linalg.svd(centred, full_matrices=False)[2][[0, 2]]
-    if len(vein_points):
-        side = float(np.mean((vein_points - origin) @ normal))
-    else:
-        side = float(normal[np.argmax(np.abs(normal))])
-    if side < 0:
-        normal = -normal
-    # A deterministic in-plane direction: u points toward the boundary's farther extreme.
     along = centred @ u
-    if along.max() < -along.min():
+    tie = TIE * float(along.max() - along.min())
+    # the normal toward the veins' side; u toward the boundary's farther extreme. Where the two
+    # sides are a tie (no veins or veins in the plane; a symmetric outline), rounding must not
+    # choose (moving or scaling the leaf would mirror its frame): the world axes do
+    side = float(np.mean((vein_points - origin) @ normal)) if len(vein_points) else 0.0
+    if (side if abs(side) > tie else _world_sign(normal)) < 0:
+        normal = -normal
+    reach = float(along.max() + along.min())
+    if (reach if abs(reach) > tie else _world_sign(u)) < 0:
         u = -u
     v = np.cross(normal, u)
     return Frame(origin=origin, u=u, v=v, normal=normal)

@@ -65,3 +65,40 @@ def test_a_slender_boundary_keeps_its_plane_normal_to_float_precision():
     frame = fit_frame(flat @ rotation.T + [5.0, -2.0, 7.0], np.zeros((0, 3)))
     expected = rotation @ [0.0, 0.0, 1.0]
     assert abs(abs(frame.normal @ expected) - 1) < 1e-12
+
+
+def _ellipse_3d(n: int = 64) -> np.ndarray:
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    return np.column_stack([np.cos(t), 0.4 * np.sin(t), np.zeros(n)])
+
+
+def test_a_symmetric_outline_keeps_its_axes_whichever_way_rounding_tips_it():
+    """Issue 24, finding 19: u pointed to the boundary's farther extreme, and the normal to the
+    veins' side; for a symmetric outline, or veins in its plane, rounding chose, so moving and
+    scaling a leaf could mirror its frame (the grid then samples it elsewhere: its area changed
+    by up to 1e-3). A tie now goes by the world axes."""
+    veins = np.array([[0.0, 0.0, 0.1]])
+    frames = []
+    for tip in (1e-13, -1e-13):  # the +x extreme a hair farther out, or in
+        boundary = _ellipse_3d()
+        boundary[0, 0] += tip
+        frames.append(fit_frame(boundary, veins))
+    np.testing.assert_array_equal(np.sign(frames[0].u), np.sign(frames[1].u))
+    np.testing.assert_array_equal(np.sign(frames[0].v), np.sign(frames[1].v))
+    flat = [fit_frame(_ellipse_3d(), np.array([[0.2, 0.0, z]])).normal for z in (1e-14, -1e-14)]
+    np.testing.assert_array_equal(flat[0], flat[1])
+
+
+def test_moving_and_scaling_a_symmetric_leaf_keeps_its_area():
+    """Finding 19's cases: the parallel demo (symmetric end to end) moved far and scaled."""
+    import leafstudio as ls
+
+    leaf, params = ls.demo("parallel"), ls.Params(k=3, grid=48)
+    area = ls.reconstruct(leaf, params).metrics["mesh"]["area"]
+    rng = np.random.default_rng(0)
+    for _ in range(6):
+        scale = 10 ** rng.uniform(-6, 6)
+        offset = rng.normal(size=3) * 10 ** rng.uniform(0, 3) * scale
+        moved = ls.Leaf(leaf.boundary * scale + offset, [v * scale + offset for v in leaf.veins])
+        moved_area = ls.reconstruct(moved, params).metrics["mesh"]["area"] / scale**2
+        assert moved_area == pytest.approx(area, rel=1e-9)
