@@ -22,6 +22,7 @@ Examples
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -42,6 +43,9 @@ from leafstudio.sources.photo import PhotoLeaf, is_photo, read_photo_leaf
 from leafstudio.sources.scan import is_scan_file, looks_like_scan, read_scan
 
 Kind = Literal["leaf", "project", "scan", "photo"]
+
+
+MEASURABLE = 1e150  # an area (size²) of a leaf this long stays finite in float64
 
 
 @dataclass(frozen=True)
@@ -312,3 +316,23 @@ def reconstruct(opened: Opened, params: Params, pipeline: Pipeline | None = None
         blade = opened.scan[opened.extraction.blade]
         fit = scan_distances(result.triangle_mesh, blade, result.length)
     return Reconstruction(result, warnings, fit)
+
+
+def check_finite(figures: dict, source: str) -> None:
+    """LeafError naming `source` when a figure is not finite: a leaf near float64's limits has
+    areas (size²) that overflow (fuzzing, issue 24: at 1e154, `measure` printed infinite areas
+    and --metrics held Infinity)."""
+
+    def numbers(value: object) -> list[float]:
+        if isinstance(value, dict):
+            return [n for v in value.values() for n in numbers(v)]
+        if isinstance(value, list | tuple):
+            return [n for v in value for n in numbers(v)]
+        return [float(value)] if isinstance(value, float) else []
+
+    if not all(math.isfinite(n) for n in numbers(figures)):
+        raise LeafError(
+            "the leaf is too large (or too small) to measure: its areas or curvatures overflow; "
+            f"rescale it (coordinates up to about {MEASURABLE:g} are measured)",
+            source,
+        )

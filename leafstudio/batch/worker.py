@@ -74,6 +74,7 @@ def _reconstruct(job: Job) -> dict[str, Any]:
         raise LeafError(exc.problem, job.input) from None
     result = done.result
     row: dict[str, Any] = {"k": result.chosen_k, "grid": settings.params.grid, **_traits(result)}
+    workflows.check_finite(row, job.input)  # as measure: a leaf at 1e160 was an internal error
     if done.scan_fit is not None:
         found = done.scan_fit
         row.update(

@@ -5,9 +5,10 @@ from __future__ import annotations
 import argparse
 import json
 
-from leafstudio.cli.options import EXIT_OK, add_run_options, check_finite, run_pipeline
+from leafstudio.cli.options import EXIT_OK, add_run_options, run_pipeline
 from leafstudio.core.evaluate import format_table, leaf_measurements
 from leafstudio.sources.files import load_leaf
+from leafstudio.workflows import check_finite
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

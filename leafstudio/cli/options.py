@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import argparse
 import logging
-import math
 from typing import TYPE_CHECKING
 
 from leafstudio._shared.kernelcache import NOTICE, kernels_cached, mark_cached
@@ -20,7 +19,6 @@ if TYPE_CHECKING:
     from leafstudio.paramspec import Param
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT = 0, 1, 2
-MEASURABLE = 1e150  # an area (size²) of a leaf this long stays finite in float64
 log = logging.getLogger("leafstudio")
 
 
@@ -110,23 +108,3 @@ def compiling_notice() -> None:
     and how fast"): the line the app's status shows then too."""
     if not kernels_cached():
         log.info(NOTICE)
-
-
-def check_finite(figures: dict, source: str) -> None:
-    """LeafError naming `source` when a figure is not finite: a leaf near float64's limits has
-    areas (size²) that overflow (fuzzing, issue 24: at 1e154, `measure` printed infinite areas
-    and --metrics held Infinity)."""
-
-    def numbers(value: object) -> list[float]:
-        if isinstance(value, dict):
-            return [n for v in value.values() for n in numbers(v)]
-        if isinstance(value, list | tuple):
-            return [n for v in value for n in numbers(v)]
-        return [float(value)] if isinstance(value, float) else []
-
-    if not all(math.isfinite(n) for n in numbers(figures)):
-        raise LeafError(
-            "the leaf is too large (or too small) to measure: its areas or curvatures overflow; "
-            f"rescale it (coordinates up to about {MEASURABLE:g} are measured)",
-            source,
-        )

@@ -11,10 +11,10 @@ from leafstudio._shared.safewrite import check_outputs, replace_atomically, stag
 from leafstudio.analysis.fidelity import scan_distances
 from leafstudio.assets.export import TEXTURES, asset_options, check_asset_options, save_mesh
 from leafstudio.assets.writers import MESH_SUFFIXES, written_paths
-from leafstudio.cli.options import EXIT_OK, add_run_options, check_finite, run_pipeline
+from leafstudio.cli.options import EXIT_OK, add_run_options, run_pipeline
 from leafstudio.errors import LeafError
 from leafstudio.sources.files import load_leaf
-from leafstudio.workflows import open_scan
+from leafstudio.workflows import check_finite, open_scan
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

@@ -183,3 +183,18 @@ def test_an_input_named_with_a_line_break_is_refused_in_one_line(tmp_path, capsy
         "cannot be a row of the trait table; rename it"
     )
     assert not out.exists()
+
+
+def test_a_leaf_too_large_to_measure_is_a_row_naming_it(tmp_path):
+    """Finding 16: a batch row for a leaf scaled by 1e160 said "internal error: LinAlgError" and
+    did not name the input; now the line `measure` gives, naming it."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    leaf = ls.demo("nested")
+    ls.save_leaf(ls.Leaf(leaf.boundary * 1e160, [v * 1e160 for v in leaf.veins]),
+                 folder / "huge.leaf.json")  # fmt: skip
+    rows = []
+    with pytest.raises(LeafError, match="every input failed"):
+        rows.extend(ls.batch([folder], ls.Params(grid=32), tmp_path / "out", jobs=1))
+    assert [r["status"] for r in rows] == ["failed"]
+    assert rows[0]["error"].startswith(f"{folder / 'huge.leaf.json'}: the leaf is too large")
