@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from leafstudio._shared.safewrite import refuse_overlap
+from leafstudio.errors import LeafError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -14,6 +15,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     gui.add_argument(
         "--screenshot", metavar="PNG", help="save the window once reconstructed, then exit"
     )
+    gui.add_argument(
+        "--lesson",
+        metavar="FILE",
+        help="open FILE in the lesson mode: the method one step per screen, full screen "
+        "(arrow keys or space to move, Esc to leave)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -22,5 +29,9 @@ def run(args: argparse.Namespace) -> int:
     from leafstudio.gui.qt.app import run_app  # Qt: only for the app
 
     path, screenshot = getattr(args, "file", None), getattr(args, "screenshot", None)
+    lesson = getattr(args, "lesson", None)
+    if lesson is not None and path is not None and path != lesson:
+        raise LeafError(f"give one leaf to open, FILE or --lesson FILE, not both ({path})")
+    path = lesson if lesson is not None else path
     refuse_overlap([path], [screenshot])
-    return run_app(path, screenshot)
+    return run_app(path, screenshot, lesson=lesson is not None)

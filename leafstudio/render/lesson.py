@@ -42,10 +42,10 @@ LESSON_STEPS: tuple[LessonStep, ...] = (
     LessonStep(
         "2. Inside or outside the leaf",
         "A smooth function g tells every point of the plane whether it lies on the leaf: "
-        "positive inside (blue), negative outside (red). Where g is zero, the black line, is "
+        "positive inside (blue), negative outside (red). Where g is zero, the line around it, is "
         "the leaf's edge.",
         r"$g(\mathbf{x}) > 0$ inside,   $g(\mathbf{x}) = 0$ on the edge",
-        ("contour", "points"),
+        ("implicit", "contour", "points"),  # g over the surface (gui/model/fields.py)
     ),
     LessonStep(
         "3. Where the leaf rises",

@@ -31,7 +31,8 @@ GAUSSIAN_COLORS = (
 ELLIPSE_POINTS = 96
 SIGMAS = (1.0, 2.0)
 EM_POINT_SIZE = 6.0
-SAMPLE_POINT_SIZE = 6.0
+SAMPLE_POINT_SIZE = 8.0
+SAMPLE_COLOR = "#ff4fd8"  # bright pink: apart from every colour map and the background
 
 
 def nice_range(low: float, high: float) -> tuple[float, float, str]:
@@ -182,12 +183,9 @@ def ellipse(mean: np.ndarray, covariance: np.ndarray, sigmas: float) -> np.ndarr
 
 
 def _within(result: Result, line: np.ndarray) -> list[np.ndarray]:
-    """The runs of `line` inside the grid's box (an elongated Gaussian's 2σ ellipse can reach
-    far past the leaf)."""
-    low = np.asarray(result.grid.origin, dtype=float)
-    ny, nx = result.grid.shape
-    high = low + result.grid.spacing * np.array([nx - 1, ny - 1])
-    inside = ((line >= low) & (line <= high)).all(axis=1)
+    """The runs of `line` inside the leaf (g >= 0): an elongated Gaussian's 2σ ellipse can
+    reach far past it, and off the surface a ring only crosses the view."""
+    inside = result.surface.implicit(line) >= 0.0
     edges = np.flatnonzero(np.diff(np.r_[0, inside.astype(int), 0]))
     return [line[a:b] for a, b in zip(edges[::2], edges[1::2], strict=True) if b - a > 1]
 
@@ -199,7 +197,7 @@ def gaussian_color(k: int) -> str:
 
 def em_pieces(result: Result) -> list[Piece]:
     """The EM samples, a piece per Gaussian in its colour, lifted above the surface, and each
-    Gaussian's 1σ and 2σ ellipses on the surface (2σ thinner)."""
+    Gaussian's 1σ and 2σ ellipses on the surface, within the leaf (2σ thinner)."""
     lift = 2 * LIFT * result.length
     xy = np.asarray(result.em_samples, dtype=float).reshape(-1, 2)
     owner = owners(result)
@@ -226,7 +224,7 @@ def samples_piece(result: Result) -> Piece:
     covers half of each."""
     points = thinned(result.surface_points)  # at most DISPLAY_POINTS drawn (pieces.py)
     points = points + 2 * LIFT * result.length * np.asarray(result.frame.normal)
-    style = dots("#ffffff", SAMPLE_POINT_SIZE, len(points))  # white: apart from every map
+    style = dots(SAMPLE_COLOR, SAMPLE_POINT_SIZE, len(points))
     return Piece("samples", partial(cloud, points), style)
 
 

@@ -43,7 +43,7 @@ def display_problem() -> str | None:
     return None
 
 
-def run_app(path: str | None = None, screenshot: str | None = None) -> int:
+def run_app(path: str | None = None, screenshot: str | None = None, lesson: bool = False) -> int:
     """Open the main window on `path` (or the nested demo) and run until it closes.
 
     Parameters
@@ -53,6 +53,9 @@ def run_app(path: str | None = None, screenshot: str | None = None) -> int:
     screenshot : str, optional
         Save the whole window as this PNG once the first result and its measurements are
         shown, then exit.
+    lesson : bool
+        Open the lesson over the window, full screen (lesson_view.py); a screenshot is then
+        the lesson's first step.
 
     Returns
     -------
@@ -93,15 +96,22 @@ def run_app(path: str | None = None, screenshot: str | None = None) -> int:
         window.session.open_failed.connect(lambda _what, text: opened["done"] or failed(text))
     app.aboutToQuit.connect(window.worker.shutdown)
     window.show()
+    shown = window
+    if lesson:
+        from leafstudio.gui.qt.lesson_view import open_lesson  # Qt: after the display check
+
+        shown = open_lesson(window)
     if screenshot is not None:
 
         def grab(*_: object) -> None:
             app.processEvents()
-            if not grab_window(window, window.viewport).save(screenshot):
+            image = shown.grab_all() if lesson else grab_window(window, window.viewport)
+            if not image.save(screenshot):
                 print(f"leafstudio: error: {screenshot}: cannot write the PNG", file=sys.stderr)
                 status["code"] = 2
             window.session.history.set_clean()
             window.close()
+            shown.close()  # the lesson too: the app ends with its last window
 
         window.measurements_shown.connect(lambda: QTimer.singleShot(100, grab))
         window.failure_shown.connect(failed)

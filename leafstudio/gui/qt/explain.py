@@ -163,6 +163,26 @@ K_FONT_PX = 24  # K's label in the view: its size in logical pixels (VTK points 
 K_POSITION = (0.985, 0.98)  # its upper right corner, in the view's normalized coordinates
 
 
+def stretch_matrix(result, scale: float):
+    """A vtkMatrix4x4 stretching the view `scale` times along the leaf's normal, about its plane
+    (None for no stretch or no result): relief is a few percent of a leaf's length."""
+    import numpy as np
+    import vtk
+
+    if result is None or scale == 1.0:
+        return None
+    n, o = np.asarray(result.frame.normal), np.asarray(result.frame.origin)
+    linear = np.eye(3) + (scale - 1.0) * np.outer(n, n)  # stretch along the normal only
+    m = np.eye(4)
+    m[:3, :3] = linear
+    m[:3, 3] = o - linear @ o  # about the leaf's plane
+    matrix = vtk.vtkMatrix4x4()
+    for i in range(4):
+        for j in range(4):
+            matrix.SetElement(i, j, float(m[i, j]))
+    return matrix
+
+
 class ViewAids(QWidget):
     """Height exaggeration (the relief is a few percent of the length), a colour range kept
     while K changes (so K's effect shows), and K written in the view. They act on the actors the
@@ -213,23 +233,7 @@ class ViewAids(QWidget):
         self.apply()
 
     def _matrix(self):
-        import numpy as np
-        import vtk
-
-        result = self.window_.session.result
-        scale = self.exaggeration.value()
-        if result is None or scale == 1.0:
-            return None
-        n, o = np.asarray(result.frame.normal), np.asarray(result.frame.origin)
-        linear = np.eye(3) + (scale - 1.0) * np.outer(n, n)  # stretch along the normal only
-        m = np.eye(4)
-        m[:3, :3] = linear
-        m[:3, 3] = o - linear @ o  # about the leaf's plane
-        matrix = vtk.vtkMatrix4x4()
-        for i in range(4):
-            for j in range(4):
-                matrix.SetElement(i, j, float(m[i, j]))
-        return matrix
+        return stretch_matrix(self.window_.session.result, self.exaggeration.value())
 
     def apply(self) -> None:
         """Exaggeration, kept colours and K's label on what the viewport shows now."""

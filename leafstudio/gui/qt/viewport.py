@@ -43,6 +43,9 @@ class Viewport(QWidget):
         layout.addWidget(self.plotter.interactor)
         self.visible = {key: on for key, _, on in LAYERS}
         self.show_edges = False
+        self.show_bars = (
+            True  # colour bars for the coloured layers (off: the lesson's plan has them)
+        )
         self.mesh_coloring = "height"
         self._bar_titles = {key: {title} for key, title in SCALAR_BARS.items()}
         self._bar_titles["mesh"] = {label for label, _ in MESH_COLORINGS.values()}
@@ -315,7 +318,7 @@ class Viewport(QWidget):
                     coloring if coloring in self._mesh_piece.ranges else "height"
                 ][0]
             names = self.actor_names(key)
-            if not (self.visible[key] and names):
+            if not (self.show_bars and self.visible[key] and names):
                 continue
             if key == "mesh" and self.mesh_coloring == TEXTURE:
                 continue  # an image, not a colour scale

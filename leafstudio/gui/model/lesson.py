@@ -1,0 +1,91 @@
+"""The lesson mode's walk through the method (issue 22): where the class is among the steps
+(render/lesson.LESSON_STEPS, the one list the slides share: title, plain caption, equation, the
+app's layers that show the step), and each step's pictures as PNG bytes for the window: the plan
+view (render/step_slides.step_picture, the slides' own drawing) and the equation typeset with
+matplotlib's mathtext. No Qt here.
+"""
+
+from __future__ import annotations
+
+import io
+
+from leafstudio.core.pipeline import Result
+from leafstudio.render.lesson import LESSON_STEPS, LessonStep
+
+EQUATION_PT = 22  # the equation's size in points (the lesson's words are 18)
+
+
+class Lesson:
+    """Where the class is in `steps`: `index`, moved by next/back/go (clamped)."""
+
+    def __init__(self, steps: tuple[LessonStep, ...] = LESSON_STEPS) -> None:
+        self.steps = steps
+        self.index = 0
+
+    @property
+    def step(self) -> LessonStep:
+        return self.steps[self.index]
+
+    def go(self, index: int) -> bool:
+        """Move to step `index` (clamped); True when the step changed."""
+        index = max(0, min(index, len(self.steps) - 1))
+        changed = index != self.index
+        self.index = index
+        return changed
+
+    def next(self) -> bool:
+        return self.go(self.index + 1)
+
+    def back(self) -> bool:
+        return self.go(self.index - 1)
+
+    def progress(self) -> str:
+        """ "Step 2 of 6", for the footer."""
+        return f"Step {self.index + 1} of {len(self.steps)}"
+
+
+def plan_png(result: Result, index: int, size: tuple[float, float], dpi: float = 96.0) -> bytes:
+    """Step `index`'s plan view of `result` as PNG bytes of `size` pixels.
+
+    Parameters
+    ----------
+    result : Result
+        The reconstruction the lesson shows.
+    index : int
+        The step (0-based, in LESSON_STEPS).
+    size : (float, float)
+        Width and height in pixels.
+    dpi : float
+        Pixels per inch (the screen's), so that the labels keep their point sizes.
+
+    Returns
+    -------
+    bytes
+        A PNG image on white.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from leafstudio.render.step_slides import step_picture  # matplotlib: only when shown
+
+    width, height = max(int(size[0]), 50), max(int(size[1]), 50)
+    figure = Figure(figsize=(width / dpi, height / dpi), dpi=dpi, layout="constrained")
+    FigureCanvasAgg(figure)
+    step_picture(figure.add_subplot(), result, index)
+    out = io.BytesIO()
+    figure.savefig(out, format="png", dpi=dpi, facecolor="white")
+    return out.getvalue()
+
+
+def equation_png(tex: str, dpi: float = 96.0, color: str = "black") -> bytes:
+    """The mathtext `tex` typeset at EQUATION_PT points as PNG bytes ("" for none)."""
+    if not tex:
+        return b""
+    from matplotlib.font_manager import FontProperties
+    from matplotlib.mathtext import math_to_image
+
+    out = io.BytesIO()
+    math_to_image(
+        tex, out, prop=FontProperties(size=EQUATION_PT), dpi=dpi, format="png", color=color
+    )
+    return out.getvalue()

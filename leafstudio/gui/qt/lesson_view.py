@@ -1,0 +1,229 @@
+"""The lesson mode (View > Lesson, `leafstudio gui --lesson FILE`): a window of its own, shown
+full screen over the app, one step of the method per screen (render/lesson.LESSON_STEPS, walked
+by gui/model/lesson.py). The 3D leaf on the left, with the step's layers, in a 3D view of its
+own; beside it the step's title, its plan view (the slides' picture of the step), its caption in
+plain words and its equation typeset. Nothing is drawn over the leaf. The arrow keys and the
+space bar move between the steps, Escape leaves.
+"""
+
+from __future__ import annotations
+
+import contextlib
+
+from PySide6.QtCore import QPoint, QRect, Qt, QTimer
+from PySide6.QtGui import (
+    QCloseEvent,
+    QFont,
+    QGuiApplication,
+    QKeyEvent,
+    QPainter,
+    QPixmap,
+    QResizeEvent,
+)
+from PySide6.QtWidgets import QHBoxLayout, QLabel, QSizePolicy, QVBoxLayout, QWidget
+
+from leafstudio.gui.model.framing import blade_bounds
+from leafstudio.gui.model.lesson import Lesson, equation_png, plan_png
+from leafstudio.gui.qt.actions import Action
+from leafstudio.gui.qt.explain import stretch_matrix
+from leafstudio.gui.qt.viewport import Viewport
+
+TITLE_PT, CAPTION_PT, FOOTER_PT = 26, 18, 14  # at 100% scaling; none under 14 (issue 22)
+STRETCH = 3.0  # the 3D leaf's relief, exaggerated: a few percent of its length is flat to a class
+MINIMUM = (960, 600)  # below this, the words of a step no longer fit beside the leaf
+TEXT_SHARE = 0.44  # the text column's share of the width: the 3D view keeps the rest
+NEXT_KEYS = frozenset({Qt.Key.Key_Right, Qt.Key.Key_Space, Qt.Key.Key_PageDown, Qt.Key.Key_Down})
+BACK_KEYS = frozenset({Qt.Key.Key_Left, Qt.Key.Key_Backspace, Qt.Key.Key_PageUp, Qt.Key.Key_Up})
+FOOTER = "{progress}  ·  → or space: next  ·  ←: back  ·  Esc: leave"
+
+
+def _font(points: float, bold: bool = False) -> QFont:
+    font = QFont()
+    font.setPointSizeF(points)
+    font.setBold(bold)
+    return font
+
+
+class LessonWindow(QWidget):
+    """The lesson over `window`'s session: shows its current result, and each new one."""
+
+    def __init__(self, window) -> None:
+        super().__init__(None, Qt.WindowType.Window)
+        self.window_ = window
+        self.lesson = Lesson()
+        self.setWindowTitle("LeafStudio — lesson")
+        self.setMinimumSize(*MINIMUM)
+        self.setStyleSheet("background: white; color: #202020;")
+        self.viewport = Viewport(self)
+        self.viewport.show_bars = False  # the plan view has the step's colour bar, readable
+        self.title = QLabel()
+        self.title.setFont(_font(TITLE_PT, bold=True))
+        self.title.setWordWrap(True)
+        self.plan = QLabel()
+        self.plan.setAlignment(Qt.AlignmentFlag.AlignCenter)
+        self.plan.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Ignored)
+        self.caption = QLabel()
+        self.caption.setFont(_font(CAPTION_PT))
+        self.caption.setWordWrap(True)
+        self.equation = QLabel()
+        self.equation.setAlignment(Qt.AlignmentFlag.AlignCenter)
+        self.equation.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
+        self.footer = QLabel()
+        self.footer.setFont(_font(FOOTER_PT))
+        self.footer.setStyleSheet("color: #606060;")
+        self.footer.setWordWrap(True)
+        self.text = QWidget()  # the column beside the leaf, TEXT_SHARE of the width
+        column = QVBoxLayout(self.text)
+        column.setContentsMargins(24, 16, 24, 12)
+        column.setSpacing(10)
+        column.addWidget(self.title)
+        column.addWidget(self.plan, 1)
+        column.addWidget(self.caption)
+        column.addWidget(self.equation)
+        column.addWidget(self.footer)
+        row = QHBoxLayout(self)
+        row.setContentsMargins(0, 0, 0, 0)
+        row.setSpacing(0)
+        row.addWidget(self.viewport, 1)
+        row.addWidget(self.text)
+        # the keys reach the lesson, never the 3D view (which would take them as VTK's)
+        self.viewport.plotter.interactor.setFocusPolicy(Qt.FocusPolicy.NoFocus)
+        self.setFocusPolicy(Qt.FocusPolicy.StrongFocus)
+        self._plan_timer = QTimer(self, singleShot=True, interval=120)
+        self._plan_timer.timeout.connect(self._refit)
+        window.result_shown.connect(self._on_result)
+        # on screen here (the app's view may be covered): the result may be measured now
+        self.viewport.rendered.connect(window.session.drawn)
+        self._on_result()
+
+    # --- steps ---------------------------------------------------------------------------------
+    def go(self, index: int) -> None:
+        """Show step `index` (clamped)."""
+        self.lesson.go(index)
+        self.show_step()
+
+    def show_step(self) -> None:
+        """The current step: its layers in the 3D view, its words, equation and plan."""
+        step = self.lesson.step
+        self.title.setText(step.title)
+        self.caption.setText(step.caption)
+        self.footer.setText(FOOTER.format(progress=self.lesson.progress()))
+        ratio = self.devicePixelRatioF()
+        pixmap = QPixmap()  # empty for a step without one
+        pixmap.loadFromData(equation_png(step.equation, dpi=self.logicalDpiY() * ratio))
+        room = int((self.text.width() - 48) * ratio)  # the column less its margins
+        if room > 0 and pixmap.width() > room:  # a long equation shrunk to fit, never cut
+            pixmap = pixmap.scaledToWidth(room, Qt.TransformationMode.SmoothTransformation)
+        pixmap.setDevicePixelRatio(ratio)
+        self.equation.setPixmap(pixmap)
+        self.equation.setVisible(not pixmap.isNull())
+        for key in self.viewport.visible:  # the step's layers only
+            on = key in step.layers
+            if self.viewport.visible[key] != on:
+                self.viewport.set_visible(key, on)
+        self._stretch()
+        self.text.layout().activate()  # the plan's room, with this step's words in place
+        self._draw_plan()
+
+    def _on_result(self, _outcome: object = None) -> None:
+        """A result is shown in the app: the lesson shows it too, framed anew."""
+        outcome = self.window_.session.shown.outcome
+        if outcome is None:
+            self.show_step()
+            return
+        result = outcome.result
+        step = self.lesson.step
+        self.viewport.visible.update({key: key in step.layers for key in self.viewport.visible})
+        bounds = blade_bounds(result.triangle_mesh.points, result.frame)
+        self.viewport.show_layers(outcome.layers, result.frame, bounds, "reset")
+        self.show_step()
+
+    def _stretch(self) -> None:
+        """The relief exaggerated STRETCH times on every actor of the 3D view."""
+        matrix = stretch_matrix(self.window_.session.result, STRETCH)
+        for actor in self.viewport.plotter.actors.values():
+            if hasattr(actor, "SetUserMatrix"):
+                actor.SetUserMatrix(matrix)
+        self.viewport.redraw()
+
+    def _refit(self) -> None:
+        self.viewport.camera("iso")
+        self.show_step()  # the plan and the equation at the column's new size
+
+    def _draw_plan(self) -> None:
+        result = self.window_.session.result
+        if result is None or self.plan.width() < 50:
+            self.plan.clear()
+            return
+        ratio = self.devicePixelRatioF()
+        size = (self.plan.width() * ratio, self.plan.height() * ratio)
+        pixmap = QPixmap()
+        pixmap.loadFromData(plan_png(result, self.lesson.index, size, self.logicalDpiX() * ratio))
+        pixmap.setDevicePixelRatio(ratio)
+        self.plan.setPixmap(pixmap)
+
+    # --- window --------------------------------------------------------------------------------
+    def keyPressEvent(self, event: QKeyEvent) -> None:
+        """→, space, page down: next; ←, backspace, page up: back; Home, End; Esc leaves."""
+        key = event.key()
+        if key in NEXT_KEYS or key in BACK_KEYS:
+            moved = self.lesson.next() if key in NEXT_KEYS else self.lesson.back()
+            if moved:
+                self.show_step()
+        elif key in (Qt.Key.Key_Home, Qt.Key.Key_End):
+            self.go(0 if key == Qt.Key.Key_Home else len(self.lesson.steps) - 1)
+        elif key == Qt.Key.Key_Escape:
+            self.close()
+        else:
+            super().keyPressEvent(event)
+
+    def resizeEvent(self, event: QResizeEvent) -> None:
+        super().resizeEvent(event)
+        self.text.setFixedWidth(int(TEXT_SHARE * self.width()))
+        self._plan_timer.start()  # plan and camera fitted again once resizing rests
+
+    def grab_all(self) -> QPixmap:
+        """The lesson as on screen, with the 3D view from its own frame buffer (a native
+        window: Qt's grab leaves it blank)."""
+        if self._plan_timer.isActive():
+            self._plan_timer.stop()
+            self._refit()
+        pixmap = self.grab()
+        painter = QPainter(pixmap)
+        corner = self.viewport.mapTo(self, QPoint(0, 0))
+        painter.drawImage(QRect(corner, self.viewport.size()), self.viewport.image())
+        painter.end()
+        return pixmap
+
+    def closeEvent(self, event: QCloseEvent) -> None:
+        with contextlib.suppress(RuntimeError, TypeError):
+            self.window_.result_shown.disconnect(self._on_result)
+        self.viewport.close_plotter()
+        event.accept()
+
+
+def open_lesson(window) -> LessonWindow:
+    """Open the lesson over `window`, full screen (one at a time: an open one is raised)."""
+    lesson = getattr(window, "lesson_window", None)
+    if lesson is None or not lesson.isVisible():
+        lesson = window.lesson_window = LessonWindow(window)
+    screen = window.screen() or QGuiApplication.primaryScreen()
+    lesson.setGeometry(screen.geometry())  # the whole screen, even where no window manager
+    lesson.showFullScreen()  # honours full screen (a bare X server, a test's display)
+    lesson.raise_()
+    lesson.activateWindow()
+    lesson.setFocus()
+    return lesson
+
+
+LESSON_ACTIONS = (
+    Action(
+        "view.lesson",
+        "View",
+        "&Lesson",
+        open_lesson,
+        shortcut="F5",
+        tooltip="The method one step per screen, for a class: the 3D leaf, a plan view, the "
+        "step in plain words and its equation. Arrow keys or space to move, Esc to leave.",
+    ),
+)

@@ -1,0 +1,74 @@
+"""The lesson mode (issue 22, "What to build" 2): full window, one step per screen, the keys
+move between steps, fonts of at least 14 points, nothing over the leaf."""
+
+from __future__ import annotations
+
+from PySide6.QtCore import QPoint, QRect, Qt
+from PySide6.QtWidgets import QLabel
+
+from leafstudio.gui.qt.lesson_view import LessonWindow
+from leafstudio.render.lesson import LESSON_STEPS as STEPS
+
+
+def _shown_layers(lesson: LessonWindow) -> set[str]:
+    return {key for key, on in lesson.viewport.visible.items() if on}
+
+
+def test_the_lesson_walks_the_steps_with_the_keys(window, qtbot):
+    lesson = LessonWindow(window)
+    qtbot.addWidget(lesson)
+    lesson.resize(1280, 720)
+    lesson.show()
+    qtbot.waitExposed(lesson)
+    seen = []
+    for key in [Qt.Key.Key_Right, Qt.Key.Key_Space] * 3:
+        seen.append((lesson.title.text(), _shown_layers(lesson)))
+        assert not lesson.plan.pixmap().isNull()
+        assert lesson.equation.pixmap().isNull() == (not lesson.lesson.step.equation)
+        qtbot.keyClick(lesson, key)
+    assert [title for title, _ in seen] == [s.title for s in STEPS]
+    assert [layers for _, layers in seen] == [set(s.layers) for s in STEPS]
+    assert lesson.lesson.index == len(STEPS) - 1  # stops at the last step
+    qtbot.keyClick(lesson, Qt.Key.Key_Left)
+    assert lesson.title.text() == STEPS[-2].title
+    lesson.close()
+
+
+def test_the_leaf_is_large_uncovered_and_the_text_readable(window, qtbot):
+    lesson = LessonWindow(window)
+    qtbot.addWidget(lesson)
+    lesson.resize(1280, 720)
+    lesson.show()
+    qtbot.waitExposed(lesson)
+    qtbot.wait(300)  # the column is sized once the resize rests
+    view = lesson.viewport.geometry()
+    assert view.width() >= lesson.width() / 2
+    labels = lesson.findChildren(QLabel)
+    assert labels
+    for label in labels:
+        if label.isVisible():
+            box = QRect(label.mapTo(lesson, QPoint(0, 0)), label.size())
+            assert not box.intersects(view), label.text()  # nothing over the leaf
+            if label.text():
+                assert label.font().pointSizeF() >= 14, label.text()
+                hint = label.heightForWidth(label.width()) if label.wordWrap() else 0
+                assert hint <= label.height() + 1, label.text()  # the words fit their box
+    lesson.close()
+
+
+def test_view_lesson_opens_it_full_screen_and_esc_leaves(window, qtbot):
+    window.actions["view.lesson"].trigger()
+    lesson = window.lesson_window
+    qtbot.waitExposed(lesson)
+    assert lesson.isFullScreen() or lesson.size() == window.screen().geometry().size()
+    assert lesson.title.text() == STEPS[0].title
+    qtbot.keyClick(lesson, Qt.Key.Key_Escape)
+    assert not lesson.isVisible()
+
+
+def test_gui_lesson_and_another_file_is_one_line_exit_2(tmp_path, capsys):
+    from leafstudio.cli import main
+
+    assert main(["gui", "a.csv", "--lesson", "b.csv"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--lesson" in err[0]
