@@ -30,6 +30,8 @@ from leafstudio._shared.inputs import (
 from leafstudio._shared.safewrite import check_outputs, write_bytes
 from leafstudio._shared.safewrite import staged as staged  # re-exported: outputs replaced together
 from leafstudio.core.bend import Pose
+from leafstudio.core.placed import PlacedPose
+from leafstudio.core.plane import Frame
 from leafstudio.errors import LeafError, shorten
 from leafstudio.model import Leaf, Params
 
@@ -181,18 +183,28 @@ def load_project(path: str | os.PathLike) -> tuple[Leaf, Params | None, dict[str
     return leaf, params, dict(data.get("sketch") or {})
 
 
-def _project_bend(value: Any, source: str) -> Pose:
-    """A project's "bend": {"fold": degrees, "curl": c}, the pose a form was made in."""
+FRAME_KEYS = ("origin", "u", "v", "normal")  # a bend's frame in a project (core/placed.py)
+
+
+def _project_bend(value: Any, source: str) -> Pose | PlacedPose:
+    """A project's "bend": {"fold": degrees, "curl": c}, the pose a form was made in, with the
+    "frame" {"origin", "u", "v", "normal"} of a leaf bent in the app (core/placed.py)."""
     fold = curl = math.nan  # stays nan, and is refused below, unless the entry reads whole
-    if isinstance(value, dict) and not set(value) - {"fold", "curl"}:
-        with contextlib.suppress(TypeError, ValueError):
+    frame = None
+    if isinstance(value, dict) and not set(value) - {"fold", "curl", "frame"}:
+        with contextlib.suppress(TypeError, ValueError, KeyError, AttributeError):
             fold, curl = float(value.get("fold", 0.0)), float(value.get("curl", 0.0))
+            if "frame" in value:
+                axes = [np.asarray(value["frame"][k], float) for k in FRAME_KEYS]
+                good = all(a.shape == (3,) and np.isfinite(a).all() for a in axes)
+                frame = Frame(*axes) if good else None
+                fold = fold if good else math.nan
     if not (abs(fold) < 90 and math.isfinite(curl)):
         raise LeafError(
             f'"bend" must be {{"fold": degrees under 90, "curl": a number}}, got {shorten(value)}',
             source,
         )
-    return Pose(fold, curl)
+    return Pose(fold, curl) if frame is None else PlacedPose(Pose(fold, curl), frame)
 
 
 def load_leaf(path: str | os.PathLike, veins: Sequence[str | os.PathLike] = ()) -> Leaf:
@@ -287,6 +299,11 @@ def project_dict(
         data["photo"] = photo
     if isinstance(leaf.bend, Pose):  # a posed form: reconstructed flat, then bent (core/bend.py)
         data["bend"] = {"fold": leaf.bend.fold, "curl": leaf.bend.curl}
+    elif isinstance(leaf.bend, PlacedPose):  # a leaf bent in the app, about its midrib
+        f, pose = leaf.bend.frame, leaf.bend.pose
+        frame = dict(zip(FRAME_KEYS, (f.origin, f.u, f.v, f.normal), strict=True))
+        data["bend"] = {"fold": pose.fold, "curl": pose.curl}
+        data["bend"]["frame"] = {k: [float(x) for x in a] for k, a in frame.items()}
     return data
 
 

@@ -28,6 +28,7 @@ import numpy as np
 
 from leafstudio.core.plane import Frame
 from leafstudio.core.prepare.polygon import ring_crossings
+from leafstudio.gui.model.bending import Bending
 from leafstudio.gui.model.framing import BladeBounds, Framing, blade_bounds
 from leafstudio.gui.model.history import Event, History, State, Step
 from leafstudio.gui.model.jobs import Job, Run, describe, run_now
@@ -68,7 +69,7 @@ class _Fallback:
     derived_leaf: Leaf | None = None
 
 
-class Session(FileOpening):
+class Session(FileOpening, Bending):
     """The document, parameters, results, pending request and history.
 
     Parameters
@@ -268,14 +269,15 @@ class Session(FileOpening):
         """A sketch during a drag: shown live, not yet an undo step."""
         if self._edit_base is None:
             self._edit_base = self.state
-        self._apply(replace(self.state, leaf=sketch.to_leaf(), sketch=sketch), "edit", live=True)
+        state = replace(self.state, leaf=self.sketch_leaf(sketch), sketch=sketch)
+        self._apply(state, "edit", live=True)
 
     def commit_sketch(self, sketch: Sketch, text: str) -> None:
         """A finished sketch edit: one undo step from before the edit (or drag) began."""
         base = self._edit_base or self.state
         self._edit_base = None
         if self.state.sketch is not sketch:  # a drag's last preview is requested already
-            self._apply(replace(self.state, leaf=sketch.to_leaf(), sketch=sketch), "edit")
+            self._apply(replace(self.state, leaf=self.sketch_leaf(sketch), sketch=sketch), "edit")
         self.history.push(Step(text, base, self.state))
 
     def set_symmetric(self, on: bool) -> None:

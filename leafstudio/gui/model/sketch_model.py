@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial import cKDTree
 
+from leafstudio.core.bend import flat_leaf
 from leafstudio.core.plane import Frame
 from leafstudio.gui.model.curves import (
     SAMPLES_PER_SPAN,
@@ -403,10 +404,11 @@ class Sketch:
         through OUTLINE_POINTS of its points and its relief kept at RELIEF_POINTS: the editor
         queries them on the main thread (thinning.py)."""
         boundary = outline_controls(thinned(result.polygon, OUTLINE_POINTS, ordered=True))
-        relief = thinned(result.leaf.boundary, RELIEF_POINTS, ordered=True)
+        leaf = flat_leaf(result.leaf)  # a bent leaf's flat blade: the sketch draws the blade
+        relief = thinned(leaf.boundary, RELIEF_POINTS, ordered=True)
         relief = np.column_stack(result.frame.to_plane(relief))
         veins = []
-        for vein in result.leaf.veins:
+        for vein in leaf.veins:
             xy, h = result.frame.to_plane(vein)
             points = np.column_stack([xy, h])
             veins.append(even_by_length(points, min(DERIVED_VEIN_POINTS, len(points)), False))

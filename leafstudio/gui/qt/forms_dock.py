@@ -32,6 +32,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from leafstudio.core.bend import flat_leaf
 from leafstudio.core.prepare.polygon import ring_crossings
 from leafstudio.forms import SHAPES, VENATION_KINDS, Form, definition, grow_veins
 from leafstudio.forms.glossary import COMPARISONS
@@ -77,7 +78,9 @@ def _turns(xy: np.ndarray) -> np.ndarray:
 def leaf_sketch(leaf: Leaf, teeth: int = 0) -> Sketch:
     """An editable sketch of a leaf that lies in the z = 0 plane apart from its relief (a form):
     boundary control points spread along it with its corners (tooth tips and notches) kept, each
-    vein's control points spread along it with their heights, the boundary's heights as relief."""
+    vein's control points spread along it with their heights, the boundary's heights as relief.
+    A posed form's sketch is its flat blade (the pose bends the 3D result only)."""
+    leaf = flat_leaf(leaf)
     xy = leaf.boundary[:, :2]
     corners = np.flatnonzero(_turns(xy) > CORNER_TURN)
     count = max(BOUNDARY_CONTROL, 3 * teeth)

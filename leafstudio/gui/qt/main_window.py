@@ -36,7 +36,7 @@ from leafstudio.gui.model.layers import LAYERS
 from leafstudio.gui.model.measurements import measurement_rows
 from leafstudio.gui.model.session import Framing, Session, State
 from leafstudio.gui.model.textures import TEXTURE
-from leafstudio.gui.qt import explain, forms_dock, lesson_view, projector
+from leafstudio.gui.qt import bend_sliders, explain, forms_dock, lesson_view, projector
 from leafstudio.gui.qt.actions import MENU_TITLES, WINDOW_ACTIONS, Action
 from leafstudio.gui.qt.controls import ParamPanel
 from leafstudio.gui.qt.file_commands import APP_NAME, FileCommands
@@ -124,6 +124,7 @@ class MainWindow(FileCommands, QMainWindow):
         self.edges.toggled.connect(self.viewport.set_edges)
         self.coloring.currentIndexChanged.connect(self._on_coloring)
         self.forms_panel = forms_dock.install(self)  # the Forms gallery; Grow veins in the editor
+        self.bend = bend_sliders.install(self)  # Fold and Curl under K and the grid
         self.view_aids = explain.install(self)  # the Steps view, exports for slides, view aids
         self.dock_layout = projector.install(self)  # docks as tabs on a narrow window
         self.add_actions(lesson_view.LESSON_ACTIONS)  # View > Lesson, full screen

@@ -1,0 +1,73 @@
+"""A pose placed on a leaf's own blade: a drawn or loaded leaf bent in the app (issue 21, build
+item 6).
+
+`bend.Pose` works in the blade's coordinates (the base at the origin, the midrib along +x, the
+relief on +z), which are a form's world coordinates. A drawn leaf lies anywhere, its midrib any
+way round: `PlacedPose` carries the pose's `frame` with it (origin at the midrib's base, u along
+the midrib, v across it, the normal the relief's side), maps points into that frame, poses them
+and maps them back. It is a `model.Bend`, so the pipeline flattens and bends it as a form's.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from leafstudio.core.bend import Pose
+from leafstudio.core.plane import Frame, fit_frame
+from leafstudio.model import Leaf
+
+
+@dataclass(frozen=True, eq=False)
+class PlacedPose:
+    """`pose` in the blade coordinates `frame` (world points to blade points and back)."""
+
+    pose: Pose
+    frame: Frame
+
+    def _blade(self, points: np.ndarray) -> np.ndarray:
+        xy, z = self.frame.to_plane(points)
+        return np.column_stack([xy, z])
+
+    def _world(self, blade: np.ndarray) -> np.ndarray:
+        return self.frame.to_world(blade[:, :2], blade[:, 2])
+
+    def apply(self, points: np.ndarray) -> np.ndarray:
+        """(n, 3) flat blade points, bent."""
+        return self._world(self.pose.apply(self._blade(points)))
+
+    def flatten(self, points: np.ndarray) -> np.ndarray:
+        """(n, 3) bent points back on the flat blade (the inverse of `apply`)."""
+        return self._world(self.pose.flatten(self._blade(points)))
+
+    def key(self) -> bytes:
+        """Bytes that change with the pose or its frame (Leaf.fingerprint)."""
+        f = self.frame
+        return self.pose.key() + np.concatenate([f.origin, f.u, f.v, f.normal]).tobytes()
+
+    def crease(self, points: np.ndarray) -> np.ndarray | None:
+        """(n,) signed distances of flat points from the pose's crease (the midrib), or None."""
+        return self.pose.crease(self._blade(points))
+
+
+def blade_frame(leaf: Leaf, plane: Frame | None = None) -> Frame:
+    """The blade coordinates of a flat `leaf` on `plane` (default: its boundary's PCA plane): the
+    origin at the base of its first vein (the midrib), u along that vein's chord from base to
+    tip; without veins, the base is the boundary's end farthest back along the plane's u."""
+    if plane is None:
+        plane = fit_frame(leaf.boundary, leaf.vein_points)
+    xy = plane.to_plane(leaf.boundary)[0]
+    midrib = leaf.veins[0] if leaf.veins else None
+    if midrib is not None and len(midrib) > 1:
+        ends = plane.to_plane(midrib[[0, -1]])[0]
+        chord = ends[1] - ends[0]
+    else:
+        chord = np.zeros(2)
+    if np.linalg.norm(chord) <= 1e-9 * max(float(np.ptp(xy, axis=0).max()), 1e-300):
+        ends = np.array([[xy[:, 0].min(), 0.0], [xy[:, 0].max(), 0.0]])
+        chord = np.array([1.0, 0.0])
+    along = chord / np.linalg.norm(chord)
+    u = along[0] * plane.u + along[1] * plane.v
+    origin = plane.to_world(ends[:1], np.zeros(1))[0]
+    return Frame(origin=origin, u=u, v=np.cross(plane.normal, u), normal=plane.normal)

@@ -1,0 +1,80 @@
+"""A leaf bent live in the app (issue 21, build item 6): the fold and curl sliders set a
+`core.bend.Pose` on the document's leaf, as one undo step per drag.
+
+The document keeps the flat blade's sketch (the editor draws the blade); its leaf is the
+sketch's leaf bent by the pose about its midrib (`core.placed.PlacedPose`), so the pipeline
+reconstructs the flat blade and bends the mesh, and Save writes the pose (sources/files.py). A
+form keeps its own `Pose` (its blade coordinates are the world's). A sketch edit bends the new
+leaf by the same pose, about the midrib as it is now.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+from leafstudio.core.bend import Pose, flat_leaf
+from leafstudio.core.placed import PlacedPose, blade_frame
+from leafstudio.gui.model.history import State, Step
+from leafstudio.model import Bend, Leaf
+
+FLAT = Pose()
+
+
+def pose_of(leaf: Leaf | None) -> Pose:
+    """The pose the leaf is bent by (a flat Pose for none, or a bend the sliders cannot show)."""
+    bend = None if leaf is None else leaf.bend
+    if isinstance(bend, PlacedPose):
+        return bend.pose
+    return bend if isinstance(bend, Pose) else FLAT
+
+
+def posed(
+    flat: Leaf | None, pose: Pose, like: Bend | None = None, plane: Any = None
+) -> Leaf | None:
+    """The flat blade `flat` bent by `pose`: as a form is when `like` (the bend it had) is a
+    plain Pose, else about its midrib on `plane` (a sketch's Frame; default the boundary's PCA
+    plane). The flat pose gives `flat` itself, without a bend."""
+    if flat is None or pose == FLAT:
+        return flat
+    bend: Bend = pose if isinstance(like, Pose) else PlacedPose(pose, blade_frame(flat, plane))
+    return Leaf(bend.apply(flat.boundary), [bend.apply(v) for v in flat.veins], bend=bend)
+
+
+class Bending:
+    """The Session's bend edits (mixed into session.Session, which has the state and history)."""
+
+    state: State
+    _bend_base: State | None = None
+
+    @property
+    def pose(self) -> Pose:
+        """The document's pose (flat when it has none)."""
+        return pose_of(self.state.leaf)
+
+    def sketch_leaf(self, sketch: Any) -> Leaf | None:
+        """The leaf a sketch draws, bent by the document's pose (Session's sketch edits)."""
+        flat = sketch.to_leaf()
+        leaf = self.state.leaf
+        return posed(flat, self.pose, None if leaf is None else leaf.bend, sketch.frame)
+
+    def set_bend(self, pose: Pose, final: bool = True) -> None:
+        """A new pose: `final=False` while a slider is held (shown, not an undo step), `True` on
+        release: one undo step from before the drag. Nothing without a leaf."""
+        leaf = self.state.leaf
+        if self._bend_base is None:
+            self._bend_base = self.state
+        base = self._bend_base
+        if leaf is not None and pose != self.pose:
+            sketch = self.state.sketch
+            plane = sketch.frame if sketch is not None else None
+            bent = posed(flat_leaf(leaf), pose, leaf.bend, plane)
+            if self.state.sketch is None and self._derived_leaf is leaf:
+                self._derived_leaf = bent  # the derived sketch still draws this blade
+            self._apply(replace(self.state, leaf=bent), "edit", live=not final)
+        if final:
+            self._bend_base = None
+            if base.leaf is not self.state.leaf:
+                p = self.pose
+                text = f"Bend: fold {p.fold:g}°, curl {p.curl:g}"
+                self.history.push(Step(text, base, self.state))

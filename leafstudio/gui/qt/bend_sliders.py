@@ -1,0 +1,103 @@
+"""The Fold and Curl sliders in the Parameters panel, under K and the grid (issue 21, build item
+6): they bend the document's leaf live through `Session.set_bend` (gui/model/bending.py), one
+undo step per drag; undo, a new document or an opened project shows its pose on them.
+
+Fold is the angle each half rises from the midrib (as a form's); curl bends the midrib, z =
+curl · x² along it from the base (a leaf of length 1 lifts its apex by curl). The range is the
+Forms dock's: a fold of ±75°, a curl of ±1.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from PySide6.QtCore import QObject, Qt, Signal
+from PySide6.QtWidgets import QFormLayout
+from superqt import QLabeledDoubleSlider
+from superqt.utils import qthrottled
+
+from leafstudio.core.bend import Pose
+from leafstudio.forms.terms import RELIEF
+
+THROTTLE_MS = 80  # as the parameter sliders (controls.py)
+RANGES = {"fold": (-75.0, 75.0, 1), "curl": (-1.0, 1.0, 2)}  # least, most, decimals
+TIPS = {
+    "fold": f"Fold: {RELIEF['fold']}. The sketch keeps the flat blade; the 3D leaf is bent.",
+    "curl": "Curl: the midrib bends up along its length, z = curl · x² from the base (a leaf of "
+    "length 1 lifts its apex by curl; negative droops). The sketch keeps the flat blade.",
+}
+
+
+class BendSliders(QObject):
+    """Two superqt sliders; `changed(pose, final)` on every move, final on release."""
+
+    changed = Signal(object, bool)  # Pose, final
+
+    def __init__(self, parent: QObject | None = None) -> None:
+        super().__init__(parent)
+        self.sliders: dict[str, QLabeledDoubleSlider] = {}
+        for name, (low, high, decimals) in RANGES.items():
+            slider = QLabeledDoubleSlider(Qt.Orientation.Horizontal)
+            slider.setRange(low, high)
+            slider.setDecimals(decimals)
+            slider.setValue(0.0)
+            slider.setToolTip(TIPS[name])
+            slider.valueChanged.connect(self._moved)
+            slider.sliderReleased.connect(self._released)
+            self.sliders[name] = slider
+        self._throttled = qthrottled(self._emit, timeout=THROTTLE_MS, leading=True)
+
+    def pose(self) -> Pose:
+        """The pose the sliders show."""
+        return Pose(**{name: float(s.value()) for name, s in self.sliders.items()})
+
+    def is_dragging(self) -> bool:
+        return any(s.isSliderDown() for s in self.sliders.values())
+
+    def show_pose(self, pose: Pose) -> None:
+        """Show `pose` without emitting (undo, another document)."""
+        for name, slider in self.sliders.items():
+            slider.blockSignals(True)
+            slider.setValue(getattr(pose, name))
+            slider.blockSignals(False)
+
+    def set_enabled(self, on: bool) -> None:
+        for slider in self.sliders.values():
+            slider.setEnabled(on)
+
+    def _moved(self, *_: Any) -> None:
+        if self.is_dragging():
+            self._throttled()
+        else:  # a key, a typed value, a click on the groove: one step at once
+            self._throttled.cancel()
+            self.changed.emit(self.pose(), True)
+
+    def _emit(self) -> None:
+        self.changed.emit(self.pose(), not self.is_dragging())
+
+    def _released(self) -> None:
+        self._throttled.cancel()
+        self.changed.emit(self.pose(), True)
+
+
+def install(window: Any) -> BendSliders:
+    """Put the sliders in the window's Parameters panel under the Grid row, wired to its
+    session both ways. Returns them."""
+    bend = BendSliders(window)
+    panel, session = window.panel, window.session
+    form = panel.layout()
+    assert isinstance(form, QFormLayout)
+    row = form.getWidgetPosition(panel.widgets["grid"])[0] + 1
+    for offset, (name, slider) in enumerate(bend.sliders.items()):
+        form.insertRow(row + offset, name.capitalize(), slider)
+        form.labelForField(slider).setToolTip(TIPS[name])
+    bend.changed.connect(lambda pose, final: session.set_bend(pose, final))
+
+    def shown(*_: Any) -> None:
+        bend.set_enabled(session.leaf is not None)
+        if not bend.is_dragging():
+            bend.show_pose(session.pose)
+
+    session.state_changed.connect(shown)
+    shown()
+    return bend

@@ -1,0 +1,111 @@
+"""A drawn or loaded leaf bent live through the session (issue 21, build item 6): the mesh is
+folded or curled, the sketch stays the flat blade, undo restores, Save and Open keep the pose."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from leafstudio.core.bend import Pose
+from leafstudio.core.placed import PlacedPose
+from leafstudio.forms import SHAPES, Form
+from leafstudio.forms.make import SIDE_ON
+from leafstudio.gui.model.session import Session
+from leafstudio.gui.model.sketch_model import Sketch
+from leafstudio.model import Params
+from leafstudio.sources.demos import demo
+from leafstudio.sources.files import load_project, save_leaf
+from tests.gui.builders import Runner
+from tests.leaves import sketch_ellipse
+
+FAST = Params(k=3, grid=40, samples=1200)
+
+
+def relief(result) -> float:
+    """The mesh's extent across its flat blade's plane (its relief, bend included)."""
+    return float(np.ptp(result.frame.to_plane(result.triangle_mesh.points)[1]))
+
+
+def drawn(angle: float = 0.6) -> tuple[Session, Runner, Sketch]:
+    """A session with a drawn leaf whose midrib runs slanted across the sketch (not along x)."""
+    turn = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+    boundary = (sketch_ellipse(12) - [0.5, 0]) @ turn.T
+    midrib = np.column_stack([np.array([[-0.45, 0], [0.0, 0], [0.45, 0]]) @ turn.T, [0, 0.02, 0]])
+    runner = Runner()
+    session = Session(runner, FAST)
+    sketch = Sketch(boundary=boundary, veins=(midrib,))
+    session.commit_sketch(sketch, "Draw")
+    runner.finish(session)
+    return session, runner, sketch
+
+
+def test_a_fold_folds_the_drawn_leafs_mesh_about_its_midrib_and_undo_restores():
+    session, runner, sketch = drawn()
+    flat_leaf, flat = session.leaf, relief(session.result)
+    session.set_bend(Pose(fold=30), final=False)  # a drag: shown, not yet an undo step
+    session.set_bend(Pose(fold=45), final=True)
+    assert session.history.index == 2 and session.pose == Pose(fold=45)
+    runner.finish(session)
+    folded = relief(session.result)
+    # each half rises |y| tan 45 = up to its half-width (0.2) from the midrib
+    assert folded > flat + 0.15, (flat, folded)
+    assert session.state.sketch is sketch and session.editable_sketch() is sketch  # flat blade
+    bend = session.leaf.bend
+    assert isinstance(bend, PlacedPose)
+    np.testing.assert_allclose(bend.flatten(session.leaf.boundary), flat_leaf.boundary, atol=1e-12)
+    session.undo()
+    assert session.leaf is flat_leaf and session.pose == Pose()
+    runner.finish(session)
+    assert relief(session.result) == pytest.approx(flat)
+    session.redo()
+    assert session.pose == Pose(fold=45)
+
+
+def test_a_sketch_edit_keeps_the_bend_and_the_sketch_shows_the_flat_blade():
+    session, runner, sketch = drawn()
+    session.set_bend(Pose(curl=0.8))
+    edited = sketch.moved(-1, 0, sketch.boundary[0] * 1.05)
+    session.commit_sketch(edited, "Move point")
+    assert session.pose == Pose(curl=0.8) and session.state.sketch is edited
+    runner.finish(session)
+    # the curl lifts the tip by curl * length**2 (0.8 * 0.9**2 = 0.65) on the flat blade's frame
+    assert relief(session.result) > 0.5
+
+
+def test_save_and_open_keep_a_drawn_leafs_bend(tmp_path):
+    session, _, sketch = drawn()
+    session.set_bend(Pose(fold=-40, curl=0.3))
+    path = tmp_path / "bent.leaf.json"
+    save_leaf(session.leaf, path, session.params, sketch.to_dict())
+    leaf, _, _ = load_project(path)
+    assert isinstance(leaf.bend, PlacedPose) and leaf.bend.pose == Pose(fold=-40, curl=0.3)
+    np.testing.assert_allclose(leaf.boundary, session.leaf.boundary)
+    opened = Session(Runner(), FAST)
+    opened.open_path(str(path))
+    assert opened.pose == Pose(fold=-40, curl=0.3)
+    assert opened.leaf.fingerprint() == session.leaf.fingerprint()
+
+
+def test_a_loaded_leaf_bends_and_its_derived_sketch_stays_flat():
+    runner = Runner()
+    session = Session(runner, FAST)
+    session.open_document(demo("parallel"), None, "parallel")
+    runner.finish(session)
+    derived, flat = session.editable_sketch(), relief(session.result)
+    session.set_bend(Pose(fold=50))
+    runner.finish(session)
+    assert relief(session.result) > flat + 0.05
+    assert session.editable_sketch() is derived
+
+
+@pytest.mark.parametrize("shape", sorted(SHAPES))
+def test_every_pose_the_forms_dock_allows_is_taken_without_a_side_on_warning(shape):
+    for fold in (-75, -40, 0, 40, 75):
+        for curl in (-1, 0, 0.5, 1):
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                Form(shape, fold=fold, curl=curl).leaf()
+            said = [str(w.message) for w in caught if str(w.message).startswith(SIDE_ON)]
+            assert not said, (shape, fold, curl)

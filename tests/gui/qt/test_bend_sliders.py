@@ -1,0 +1,35 @@
+"""The Fold and Curl sliders in the Parameters panel bend the leaf in the 3D view (issue 21,
+build item 6): one undo step, the sketch unchanged, undo moves the sliders back."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from leafstudio.core.bend import Pose
+from leafstudio.forms import Form
+from leafstudio.gui.qt.forms_dock import leaf_sketch
+from tests.gui.qt.conftest import wait_result
+
+
+def relief(result) -> float:
+    return float(np.ptp(result.frame.to_plane(result.triangle_mesh.points)[1]))
+
+
+def test_the_fold_slider_folds_the_3d_leaf_as_one_undo_step(window, qtbot):
+    session, fold = window.session, window.bend.sliders["fold"]
+    form = window.panel.layout()
+    assert form.getWidgetPosition(fold)[0] == form.getWidgetPosition(window.panel.grid)[0] + 1
+    flat, sketch = relief(session.result), window.editor.view.sketch
+    steps = session.history.index
+    fold.setValue(45.0)
+    outcome = wait_result(qtbot, window, lambda o: o.result.leaf.bend is not None)
+    assert session.pose == Pose(fold=45.0) and session.history.index == steps + 1
+    assert relief(outcome.result) > flat * 2
+    assert window.editor.view.sketch is sketch  # the editor keeps drawing the flat blade
+    session.undo()
+    assert fold.value() == 0.0 and session.leaf.bend is None
+
+
+def test_a_posed_forms_sketch_is_its_flat_blade():
+    sketch = leaf_sketch(Form("ovate", fold=60, curl=0.5).leaf())
+    assert len(sketch.relief) == 0  # the pose bends the 3D result, not the drawing
