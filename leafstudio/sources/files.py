@@ -192,16 +192,18 @@ def _project_bend(value: Any, source: str) -> Pose | PlacedPose:
     fold = curl = math.nan  # stays nan, and is refused below, unless the entry reads whole
     frame = None
     if isinstance(value, dict) and not set(value) - {"fold", "curl", "frame"}:
-        with contextlib.suppress(TypeError, ValueError, KeyError, AttributeError):
-            fold, curl = float(value.get("fold", 0.0)), float(value.get("curl", 0.0))
-            if "frame" in value:
+        with contextlib.suppress(TypeError, ValueError, KeyError, AttributeError, OverflowError):
+            if "frame" in value:  # read first: a bad frame leaves the fold nan
                 axes = [np.asarray(value["frame"][k], float) for k in FRAME_KEYS]
                 good = all(a.shape == (3,) and np.isfinite(a).all() for a in axes)
-                frame = Frame(*axes) if good else None
-                fold = fold if good else math.nan
+                if not (good and np.allclose(np.array(axes[1:]) @ np.array(axes[1:]).T, np.eye(3))):
+                    raise ValueError
+                frame = Frame(*axes)
+            fold, curl = float(value.get("fold", 0.0)), float(value.get("curl", 0.0))
     if not (abs(fold) < 90 and math.isfinite(curl)):
         raise LeafError(
-            f'"bend" must be {{"fold": degrees under 90, "curl": a number}}, got {shorten(value)}',
+            f'"bend" must be {{"fold": degrees under 90, "curl": a number}} (a "frame": '
+            f'{{"origin", "u", "v", "normal"}}, orthonormal axes), got {shorten(value)}',
             source,
         )
     return Pose(fold, curl) if frame is None else PlacedPose(Pose(fold, curl), frame)

@@ -3,6 +3,7 @@ folded or curled, the sketch stays the flat blade, undo restores, Save and Open 
 
 from __future__ import annotations
 
+import json
 import warnings
 
 import numpy as np
@@ -10,6 +11,7 @@ import pytest
 
 from leafstudio.core.bend import Pose
 from leafstudio.core.placed import PlacedPose
+from leafstudio.errors import LeafError
 from leafstudio.forms import SHAPES, Form
 from leafstudio.forms.make import SIDE_ON
 from leafstudio.gui.model.session import Session
@@ -109,3 +111,23 @@ def test_every_pose_the_forms_dock_allows_is_taken_without_a_side_on_warning(sha
                 Form(shape, fold=fold, curl=curl).leaf()
             said = [str(w.message) for w in caught if str(w.message).startswith(SIDE_ON)]
             assert not said, (shape, fold, curl)
+
+
+@pytest.mark.parametrize(
+    "frame",
+    [
+        0,
+        "x",
+        {"origin": [0, 0, 0]},
+        {k: [1e400, 0, 0] for k in ("origin", "u", "v", "normal")},
+        {"origin": [0, 0, 0], "u": [1, 0, 0], "v": [1, 0, 0], "normal": [0, 0, 1]},
+    ],
+)
+def test_a_projects_bad_bend_frame_is_one_leaf_error(tmp_path, frame):
+    path = tmp_path / "bad.leaf.json"
+    save_leaf(demo("parallel"), path)
+    data = json.loads(path.read_text())
+    data["bend"] = {"fold": 10, "frame": frame}
+    path.write_text(json.dumps(data))
+    with pytest.raises(LeafError, match='"bend" must be'):
+        load_project(path)
