@@ -59,9 +59,7 @@ def _numbers(value: Any) -> Any:
     """The JSON value with timings dropped, floats rounded to 9 significant digits and the
     run's temporary folder named OUT."""
     if isinstance(value, dict):
-        return {
-            k: _numbers(v) for k, v in value.items() if not any(t in k for t in TIMING_KEYS)
-        }
+        return {k: _numbers(v) for k, v in value.items() if not any(t in k for t in TIMING_KEYS)}
     if isinstance(value, list):
         return [_numbers(v) for v in value]
     if isinstance(value, float):
@@ -106,8 +104,15 @@ def snapshot(out: Path) -> dict[str, Any]:
         snap[f"extract {scan.stem}"] = _sha(leaf)
         _reconstruct(leaf, out, scan.stem, snap, "--grid", "96", "--against", str(scan))
     batch_dir = out / "batch"
-    _cli("batch", str(out / "nested.leaf.json"), str(out / "parallel.leaf.json"),
-         "-o", str(batch_dir), "--grid", "64")
+    _cli(
+        "batch",
+        str(out / "nested.leaf.json"),
+        str(out / "parallel.leaf.json"),
+        "-o",
+        str(batch_dir),
+        "--grid",
+        "64",
+    )
     with open(batch_dir / "traits.csv", newline="") as table:
         rows = [
             {k: v for k, v in row.items() if k not in ("seconds", "mesh", "input")}
@@ -119,9 +124,7 @@ def snapshot(out: Path) -> dict[str, Any]:
 
 def compare(before: dict[str, Any], after: dict[str, Any]) -> list[str]:
     """The keys whose values differ (or are missing on one side)."""
-    return [
-        key for key in sorted(set(before) | set(after)) if before.get(key) != after.get(key)
-    ]
+    return [key for key in sorted(set(before) | set(after)) if before.get(key) != after.get(key)]
 
 
 def main() -> int:
