@@ -8,8 +8,18 @@ import json
 import numpy as np
 import pytest
 from PySide6.QtCore import QSettings
-from PySide6.QtGui import QImage
-from PySide6.QtWidgets import QMessageBox
+from PySide6.QtGui import QAction, QImage
+from PySide6.QtWidgets import (
+    QAbstractButton,
+    QApplication,
+    QComboBox,
+    QListWidget,
+    QMessageBox,
+    QStackedWidget,
+    QTabBar,
+    QTabWidget,
+    QWidget,
+)
 
 from leafstudio.gui.qt.main_window import MainWindow
 from leafstudio.model import Params
@@ -24,9 +34,9 @@ def make_window(qtbot, settings_path, params: Params | None = None) -> MainWindo
     if params is not None:
         settings.setValue("params", json.dumps(params.to_dict()))
     window = MainWindow(settings)
-    qtbot.addWidget(window)
+    if qtbot is not None:  # None: the caller closes it (LentWindow)
+        qtbot.addWidget(window)
     window.show()
-    qtbot.waitExposed(window)
     return window
 
 
@@ -71,11 +81,116 @@ def never_block_on_questions(monkeypatch):
     monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: QMessageBox.StandardButton.Discard)
 
 
+class LentWindow:
+    """The one main window the `window` fixture lends to the tests (building one costs about a
+    second): reset before each test to what a new window on the nested demo shows, through the
+    session (an empty sketch, FAST parameters, the demo: a fresh history), and built again when
+    a test left its chrome (toggles, docks, widgets, camera, open boxes) otherwise changed."""
+
+    def __init__(self, folder) -> None:
+        self.folder = folder
+        self.window: MainWindow | None = None
+        self.made = 0
+        self.fresh: tuple[dict, dict] = ({}, {})  # what the window showed when it was new
+        self.view: tuple[dict, bool, int] = ({}, False, 0)  # its layers, edges and colouring
+
+    def lend(self, qtbot) -> MainWindow:
+        win = self.window
+        # a test that replaced the session's way to the worker (test_sketch_gap.never_done)
+        wired = win is not None and win.session.submit == win.worker.submit_pipeline
+        if wired and win.isVisible():
+            session, box = win.session, win.last_error_box
+            if box is not None and not box.isVisible():  # a message the test read and closed
+                win.last_error_box = None
+                box.deleteLater()
+            layers, edges, coloring = self.view  # the view controls a test may have set
+            for key, on in layers.items():
+                win.layers.set_checked(key, on)
+            win.edges.setChecked(edges)
+            win.coloring.setCurrentIndex(coloring)
+            session.new_sketch()  # File > New sketch: no leaf, nothing to reconstruct
+            session.set_params(FAST)
+            session.open_demo("nested")
+            wait_result(qtbot, win, lambda o: o.request.id == session.last_id)
+            # the reset through the session gives what a new window showed
+            assert session_state(win) == self.fresh[0]
+            if chrome(win) == self.fresh[1]:
+                return win
+        self.close()
+        self.made += 1
+        win = make_window(None, self.folder / f"settings{self.made}.ini", FAST)
+        win.open_demo("nested")
+        wait_result(qtbot, win)
+        self.window, self.fresh = win, (session_state(win), chrome(win))
+        self.view = dict(win.viewport.visible), win.edges.isChecked(), win.coloring.currentIndex()
+        return win
+
+    def close(self) -> None:
+        if self.window is not None:
+            close_window(self.window)
+            self.window.deleteLater()
+            self.window = None
+
+
+def session_state(window: MainWindow) -> dict:
+    """What a new window on the nested demo shows of its session: the document, parameters,
+    history and result."""
+    session, outcome = window.session, window.session.shown.outcome
+    return {
+        "document": (session.state.title, session.state.path, session.state.scan),
+        "photo": (session.state.photo, session.texture()),
+        "params": session.params,
+        "history": (session.history.can_undo(), session.history.can_redo(), session.is_modified()),
+        "result": (outcome.request.id == session.last_id, outcome.result.leaf is session.leaf),
+        "mesh": outcome.result.mesh.n_points,
+        "message": session.message,
+        "title": (window.windowTitle(), window.isWindowModified()),
+    }
+
+
+def chrome(window: MainWindow) -> dict:
+    """What a test may change around the session: toggles, lists, combo boxes, docks, the 3D
+    view's layers and camera, the window's size and the boxes open over it."""
+    widgets = window.findChildren(QWidget)
+    plotter = window.viewport.plotter
+    return {
+        "checks": [b.isChecked() for b in window.findChildren(QAbstractButton)],
+        "actions": [a.isChecked() for a in window.findChildren(QAction)],
+        "lists": [
+            [w.item(i).checkState() for i in range(w.count())]
+            for w in window.findChildren(QListWidget)
+        ],
+        "indices": [w.currentIndex() for w in widgets if isinstance(w, INDEXED)],
+        "docks": [(d.isVisible(), d.isFloating()) for d in window.docks.values()],
+        "widgets": len(widgets),
+        "layers": dict(window.viewport.visible),
+        "view": (
+            window.viewport.texture_key,
+            window.viewport.show_edges,
+            window.viewport.mesh_coloring,
+        ),
+        "actors": sorted(name for name in plotter.actors if not name.startswith("vtk")),
+        "unnamed": sum(name.startswith("vtk") for name in plotter.actors),  # named by address
+        "bars": sorted(plotter.scalar_bars.keys()),
+        "camera": np.round(plotter.camera_position.to_list(), 6).tolist(),
+        "size": (window.width(), window.height()),
+        "boxes": [w for w in QApplication.topLevelWidgets() if w.isVisible() and w is not window],
+        "error_box": window.last_error_box,
+    }
+
+
+INDEXED = (QComboBox, QTabBar, QTabWidget, QStackedWidget)
+
+
+@pytest.fixture(scope="session")
+def lent_window(qapp, tmp_path_factory):
+    lent = LentWindow(tmp_path_factory.mktemp("window"))
+    yield lent
+    lent.close()
+
+
 @pytest.fixture
-def window(qtbot, tmp_path):
-    """The main window on the nested demo at a small grid, with its first result shown."""
-    win = make_window(qtbot, tmp_path / "settings.ini", FAST)
-    win.open_demo("nested")
-    wait_result(qtbot, win)
-    yield win
-    close_window(win)
+def window(lent_window, qtbot):
+    """The main window on the nested demo at a small grid, with its first result shown: one
+    window for the whole run (LentWindow), reset to that before each test."""
+    return lent_window.lend(qtbot)

@@ -10,15 +10,11 @@ import sys
 from pathlib import Path
 
 import pytest
-from PySide6.QtCore import QPoint, QPointF, Qt
-from PySide6.QtGui import QWheelEvent
+from PySide6.QtCore import Qt
 from PySide6.QtWidgets import (
-    QApplication,
     QCheckBox,
     QComboBox,
     QLabel,
-    QStyle,
-    QStyleOptionSpinBox,
 )
 from superqt import QLabeledSlider, QLargeIntSpinBox
 
@@ -29,6 +25,7 @@ from leafstudio.paramspec import Choice, Ranged, Switch, Whole
 from tests.gui.builders import FAST
 
 from .conftest import wait_result
+from .stepping import STEPS, step
 
 
 def test_every_control_and_its_label_explain_themselves(qtbot):
@@ -279,42 +276,13 @@ def test_leaving_a_field_or_the_seed_box_reads_what_was_typed(qtbot):
     assert panel.params().grid == 777 and panel.grid.maximum() == 777
 
 
-def step(qtbot, box, how: str) -> None:
-    """Step the box as a user does: a key, the mouse wheel, or a click on its up arrow (or
-    press Return: "return")."""
-    if how == "return":
-        qtbot.keyClick(box, Qt.Key.Key_Return)
-    elif how in ("up", "page up"):
-        qtbot.keyClick(box, Qt.Key.Key_Up if how == "up" else Qt.Key.Key_PageUp)
-    elif how == "wheel":
-        centre = QPointF(box.rect().center())
-        wheel = QWheelEvent(
-            centre,
-            QPointF(box.mapToGlobal(box.rect().center())),
-            QPoint(),
-            QPoint(0, 120),
-            Qt.MouseButton.NoButton,
-            Qt.KeyboardModifier.NoModifier,
-            Qt.ScrollPhase.NoScrollPhase,
-            False,
-        )
-        QApplication.sendEvent(box, wheel)
-    else:
-        option = QStyleOptionSpinBox()
-        box.initStyleOption(option)
-        control = QStyle.ComplexControl.CC_SpinBox
-        up = box.style().subControlRect(control, option, QStyle.SubControl.SC_SpinBoxUp, box)
-        qtbot.mouseClick(box, Qt.MouseButton.LeftButton, pos=up.center())
-
-
-STEPS = ("up", "page up", "wheel", "arrow")  # Page Up: 10 steps
-
 SEED_STEPS_SCRIPT = """
 import json, sys
 from PySide6.QtTest import QTest
 from PySide6.QtWidgets import QApplication
 app = QApplication([])
-from tests.gui.qt.test_controls import ParamPanel, STEPS, step
+from leafstudio.gui.qt.controls import ParamPanel
+from tests.gui.qt.stepping import STEPS, step
 panel = ParamPanel()
 panel.show()
 box, seen = panel.seed, []
