@@ -191,7 +191,10 @@ class Real(Ranged):
             raise LeafError(f"{self.what} must be a number, got {short(value)}")
         if isinstance(value, (complex, np.complexfloating)):
             raise LeafError(f"{self.what} must be a real number, got {short(value)}")
-        number = float(value)
+        try:
+            number = float(value)
+        except OverflowError:  # a Python int beyond any float, e.g. 10**400
+            raise self.out_of_range(short(value)) from None
         if not self.low <= number <= self.high:  # NaN fails this too
             raise self.out_of_range(short(value))
         return number

@@ -109,7 +109,7 @@ def test_validation_takes_each_end_of_the_range_and_refuses_past_it(name):
         below, above = p.low - 1, p.high + 1
     else:
         below, above = np.nextafter(p.low, -np.inf), np.nextafter(p.high, np.inf)
-    for bad in (below, above):
+    for bad in (below, above, 10**400, -(10**400)):  # ints beyond any float overflowed before
         with pytest.raises(LeafError, match=f"^{p.what} must be between"):
             Params(**{name: bad})
 
