@@ -117,17 +117,21 @@ def test_thick_solids_on_a_fine_mesh_keep_their_volume_and_do_not_cross(name, fr
 
 
 def _gallery() -> dict[str, object]:
-    """Every shape of the forms gallery, every margin (on a cordate blade), both demos, and
-    blades folded steeply (their flanks near vertical: issue 23, finding 3)."""
+    """Every shape of the forms gallery with every margin, both demos, and blades folded
+    steeply (their flanks near vertical: issue 23, finding 3; a cordate blade folded 75 degrees
+    made 0.85 x area x T at grid 64)."""
+    from itertools import product
+
     from leafstudio.forms import SHAPES
     from leafstudio.forms.make import Form
     from leafstudio.forms.terms import MARGINS
 
-    cases: dict[str, object] = {f"{s}": (lambda s=s: make_form(s)) for s in SHAPES}
-    for margin in MARGINS:
-        cases[f"cordate-{margin}"] = lambda m=margin: make_form("cordate", margin=m)
-    for shape, fold in (("cordate", 60), ("sagittate", 60)):
+    cases: dict[str, object] = {
+        f"{s}-{m}": (lambda s=s, m=m: make_form(s, margin=m)) for s, m in product(SHAPES, MARGINS)
+    }
+    for shape, fold in (("cordate", 60), ("sagittate", 60), ("cordate", 75), ("hastate", 75)):
         cases[f"{shape}-fold{fold}"] = lambda s=shape, f=fold: Form(s, fold=f).leaf()
+    cases["cordate-fold75-grid64"] = cases["cordate-fold75"]  # where it was 0.85 x area x T
     cases["demo-nested"] = lambda: ls.demo("nested")
     cases["demo-parallel"] = lambda: ls.demo("parallel")
     return cases
@@ -140,7 +144,7 @@ GALLERY = _gallery()
 def test_every_gallery_leaf_makes_a_sound_solid(name: str):
     """Consistent outward winding, positive volume within 2% of area x T, watertight, no
     self-intersection, for every shape and margin the app offers (trimesh and open3d)."""
-    grid = 128 if "fold" in name else 64  # the folds' flanks at the app's default grid
+    grid = 128 if name.endswith(("fold60", "fold75")) else 64  # the folds' flanks at the app's
     result = ls.reconstruct(GALLERY[name](), ls.Params(grid=grid))
     asset = leaf_asset(result)
     sheet = trimesh.Trimesh(asset.points, asset.faces, process=False)

@@ -2,6 +2,10 @@
 blade and veins, the photo the leaf came from, or an image picked for the export), mapped through
 the mesh's UVs (assets/asset.py).
 
+Two colourings show it: "texture (as exported)" as it is, and the Leaf look (LEAF), the same
+image lit as a leaf (the viewport's LEAF_LOOK), the first colouring and the one every leaf opens
+in but a scan (coloring_for).
+
 The image is made on the worker's side lane (texture_image, a numpy array); the viewport wraps it
 into a pyvista Texture on the main thread. texture_key names what the image depends on (the
 texture option and the leaf plane: outline, veins, frame), so that a parameter change that keeps
@@ -21,6 +25,32 @@ from leafstudio.sources.leafphoto import PhotoTexture
 
 TEXTURE = "texture"  # the mesh colouring that shows the texture
 TEXTURE_LABEL = "texture (as exported)"
+LEAF = "leaf"  # the Leaf look: the same texture, lit as a leaf (the default but for scans)
+LEAF_LABEL = "Leaf (lit, veins, translucent)"
+SHOWS_TEXTURE = (LEAF, TEXTURE)  # the colourings that map the texture image
+SCAN_COLORING = "height"  # a scan's: its relief, judged against the scan
+
+
+def coloring_for(is_scan: bool, current: str, automatic: bool) -> tuple[str, bool]:
+    """The mesh colouring for a newly opened leaf, and whether it was chosen here: a scan
+    turns the Leaf look into colour by height (a scan is judged by its relief); the next leaf
+    that is not a scan gets the Leaf look back, unless the user picked height meanwhile. Any
+    other colouring the user picked is kept.
+
+    Examples
+    --------
+    >>> coloring_for(True, LEAF, False)
+    ('height', True)
+    >>> coloring_for(False, "height", True)
+    ('leaf', False)
+    >>> coloring_for(False, "height", False)  # the user's own choice
+    ('height', False)
+    """
+    if is_scan and current == LEAF:
+        return SCAN_COLORING, True
+    if not is_scan and current == SCAN_COLORING and automatic:
+        return LEAF, False
+    return current, automatic and current == SCAN_COLORING
 
 
 def _file_stamp(path: Any) -> tuple:

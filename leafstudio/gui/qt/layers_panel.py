@@ -19,11 +19,13 @@ from PySide6.QtWidgets import (
 )
 
 from leafstudio.gui.model.layers import LAYERS, MESH_COLORINGS, unavailable
-from leafstudio.gui.model.textures import TEXTURE, TEXTURE_LABEL
+from leafstudio.gui.model.textures import LEAF, LEAF_LABEL, TEXTURE, TEXTURE_LABEL
 from leafstudio.gui.qt.viewport import CAMERAS
 
 COLORING_TIP = (
-    "What the mesh's colours show: its height above the leaf's plane, how it bends "
+    "What the mesh's colours show: the leaf as it looks (its texture lit as a leaf: green, "
+    "veins, a sheen, its underside lighter as if lit through; the default but for scans), its "
+    "height above the leaf's plane, how it bends "
     "(mean or Gaussian curvature; red bends one way, blue the other), or the texture an "
     "export writes (blade and veins, the photo the leaf came from, or the image chosen "
     "in Export mesh) mapped through the mesh's UVs, as Blender shows it."
@@ -32,7 +34,7 @@ COLORING_TIP = (
 
 class LayersPanel(QWidget):
     """The layer list (`list`: each item's UserRole data is its layer key), `edges`, `coloring`
-    (each item's data a MESH_COLORINGS name or TEXTURE) and a button per camera preset."""
+    (each item's data LEAF, a MESH_COLORINGS name or TEXTURE) and a button per camera preset."""
 
     def __init__(self, camera: Callable[[str], object], parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -50,6 +52,7 @@ class LayersPanel(QWidget):
         self.list.setMaximumHeight(self.list.sizeHintForRow(0) * len(LAYERS) + 8)
         self.edges.setToolTip("Draw the triangles' edges on the mesh.")
         self.coloring = QComboBox()
+        self.coloring.addItem(LEAF_LABEL, LEAF)
         for name, (label, _) in MESH_COLORINGS.items():
             self.coloring.addItem(f"Colour by {label}", name)
         self.coloring.addItem(f"Show the {TEXTURE_LABEL}", TEXTURE)

@@ -35,7 +35,7 @@ from leafstudio.errors import LeafError
 from leafstudio.gui.model.layers import LAYERS
 from leafstudio.gui.model.measurements import measurement_rows
 from leafstudio.gui.model.session import Framing, Session, State
-from leafstudio.gui.model.textures import TEXTURE
+from leafstudio.gui.model.textures import SHOWS_TEXTURE, coloring_for
 from leafstudio.gui.qt import bend_sliders, explain, forms_dock, lesson_view, projector
 from leafstudio.gui.qt.actions import MENU_TITLES, WINDOW_ACTIONS, Action
 from leafstudio.gui.qt.controls import ParamPanel
@@ -79,6 +79,7 @@ class MainWindow(FileCommands, QMainWindow):
         self.last_error_box: QMessageBox | None = None
         self.opened_name = ""  # the file opened last (its name), which a failure may concern
         self._scan_shown: object = None  # the scan whose layer is drawn (scans.ScanData)
+        self._coloring_automatic = False  # height set for a scan, not by the user
         # Kept in Python: walking menuBar().actions() can hand back a stale wrapper of another
         # type (a QSurface) under PySide6, seen intermittently in the GUI tests.
         self.menus: dict[str, QMenu] = {}
@@ -243,6 +244,7 @@ class MainWindow(FileCommands, QMainWindow):
                 self.layers.set_checked(key, str(on).lower() == "true")
         self.edges.setChecked(str(s.value("view/edges", "false")).lower() == "true")
         self.coloring.setCurrentIndex(max(0, self.coloring.findData(s.value("view/coloring"))))
+        self._on_coloring(self.coloring.currentIndex())  # the first choice emits no change
         self.panel.set_params(self.session.params)
 
     def _on_history(self) -> None:
@@ -309,8 +311,9 @@ class MainWindow(FileCommands, QMainWindow):
 
     def _on_coloring(self, row: int) -> None:
         """The Layers dock's colouring: a scalar, or the texture (made on the side lane)."""
+        self._coloring_automatic = False
         self.viewport.set_mesh_coloring(self.coloring.itemData(row))
-        self.session.side.set_texture_shown(self.viewport.mesh_coloring == TEXTURE)
+        self.session.side.set_texture_shown(self.viewport.mesh_coloring in SHOWS_TEXTURE)
 
     def _on_side_note(self, note: str) -> None:
         """A side job failed without harm (the Poisson surface, the generated texture)."""
@@ -332,6 +335,13 @@ class MainWindow(FileCommands, QMainWindow):
         if reason in ("document", "undo", "fallback"):
             self.editor.drop_edit()  # a drag or key run under way: its step would mix documents
             self.panel.set_params(state.params)
+        if reason == "document":  # the Leaf look, but colour by height for a scan
+            is_scan = state.scan is not None
+            current = self.viewport.mesh_coloring
+            coloring, automatic = coloring_for(is_scan, current, self._coloring_automatic)
+            if coloring != current:
+                self.coloring.setCurrentIndex(self.coloring.findData(coloring))
+            self._coloring_automatic = automatic
         if state.scan is not self._scan_shown:
             self._scan_shown = state.scan
             self.viewport.set_layer("scan", state.scan.pieces if state.scan is not None else [])

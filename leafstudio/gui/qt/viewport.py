@@ -19,7 +19,7 @@ from leafstudio.core.plane import Frame
 from leafstudio.gui.model.fields import nice_range
 from leafstudio.gui.model.framing import BladeBounds, best_iso, fit_camera, view_direction
 from leafstudio.gui.model.layers import BOUNDARY_COLOR, LAYERS, MESH_COLORINGS, SCALAR_BARS, Piece
-from leafstudio.gui.model.textures import TEXTURE
+from leafstudio.gui.model.textures import LEAF, SHOWS_TEXTURE
 from leafstudio.gui.qt.native_view import make_plotter
 
 SIZED = ("point_size", "line_width")  # style keys in device pixels: scaled by the pixel ratio
@@ -46,7 +46,7 @@ class Viewport(QWidget):
         self.show_bars = (
             True  # colour bars for the coloured layers (off: the lesson's plan has them)
         )
-        self.mesh_coloring = "height"
+        self.mesh_coloring = LEAF  # the layers panel's first choice
         self._bar_titles = {key: {title} for key, title in SCALAR_BARS.items()}
         self._bar_titles["mesh"] = {label for label, _ in MESH_COLORINGS.values()}
         self._mesh_piece: Piece | None = None
@@ -171,7 +171,7 @@ class Viewport(QWidget):
 
     def _add(self, key: str, piece: Piece) -> None:
         style = dict(piece.style)
-        if key == "mesh" and self.mesh_coloring == TEXTURE:
+        if key == "mesh" and self.mesh_coloring in SHOWS_TEXTURE:
             self._mesh_piece = piece
             # white under the image (its colours as they are); until the leaf's is made, one
             # texel of the blade's colour (the same actor then takes the image in place).
@@ -180,6 +180,8 @@ class Viewport(QWidget):
             style.update(
                 show_edges=self.show_edges, texture=texture, color="white", force_opaque=True
             )
+            if self.mesh_coloring == LEAF:
+                style.update(LEAF_LOOK)
         elif key == "mesh":
             self._mesh_piece = piece
             coloring = self.mesh_coloring if self.mesh_coloring in piece.ranges else "height"
@@ -279,8 +281,8 @@ class Viewport(QWidget):
         if self._texture is not None:
             self._texture.interpolate = True  # smooth texels, as renderers filter them
         self.texture_key = key
-        if draw and self.mesh_coloring == TEXTURE:
-            self.set_mesh_coloring(TEXTURE)
+        if draw and self.mesh_coloring in SHOWS_TEXTURE:
+            self.set_mesh_coloring(self.mesh_coloring)
 
     def _plain_texture(self):
         """A one-texel texture of the generated blade colour (assets/texture.py)."""
@@ -320,7 +322,7 @@ class Viewport(QWidget):
             names = self.actor_names(key)
             if not (self.show_bars and self.visible[key] and names):
                 continue
-            if key == "mesh" and self.mesh_coloring == TEXTURE:
+            if key == "mesh" and self.mesh_coloring in SHOWS_TEXTURE:
                 continue  # an image, not a colour scale
             wanted[key] = (title, self.plotter.actors[names[0]].mapper)
         shown = {key: (title, id(mapper)) for key, (title, mapper) in wanted.items()}
@@ -450,6 +452,17 @@ def grab_window(window: QWidget, viewport: Viewport) -> QPixmap:
         painter.drawImage(QRect(corner, viewport.size()), viewport.image())
         painter.end()
     return pixmap
+
+
+# The Leaf look (gui/model/textures.LEAF): the texture lit with a waxy sheen, never dark (a blade
+# lets light through), its underside paler and warmer, as a leaf's lit from behind looks.
+LEAF_LOOK = {
+    "ambient": 0.25,
+    "diffuse": 0.85,
+    "specular": 0.25,
+    "specular_power": 18.0,
+    "backface_params": {"ambient": 0.45, "diffuse": 0.75, "color": (1.0, 1.0, 0.72)},
+}
 
 
 def _style_key(style: dict) -> tuple:

@@ -11,7 +11,7 @@ from PIL import Image
 from PySide6.QtCore import Qt
 
 from leafstudio.assets.asset import leaf_uvs
-from leafstudio.gui.model.textures import TEXTURE
+from leafstudio.gui.model.textures import TEXTURE, texture_key
 from tests.gui.qt.conftest import WAIT_MS, wait_result
 
 
@@ -23,9 +23,14 @@ def _glb_texture(path) -> np.ndarray:
 
 
 def _show_texture(window, qtbot) -> np.ndarray:
-    """Switch the mesh to the texture and wait until the leaf's image is on it."""
-    with qtbot.waitSignal(window.texture_shown, timeout=WAIT_MS):
-        window.coloring.setCurrentIndex(window.coloring.findData(TEXTURE))
+    """Switch the mesh to the texture and wait until the leaf's image is on it (the Leaf look,
+    the default, may have had it made already)."""
+    window.coloring.setCurrentIndex(window.coloring.findData(TEXTURE))
+    session = window.session
+    qtbot.waitUntil(
+        lambda: window.viewport.texture_key == texture_key(session.result, session.texture()),
+        timeout=WAIT_MS,
+    )
     return window.viewport.texture_actor_image()
 
 
