@@ -145,7 +145,7 @@ def open_scan(
     return Opened(str(path), "scan", found.leaf, scan=scan, extraction=found, notes=tuple(notes))
 
 
-def open_file(path: str, *, force: bool = False) -> Opened:
+def open_file(path: str, *, force: bool = False, length: float | None = None) -> Opened:
     """Open any file a user may give: a photo, a project, a point list or PLY leaf, or a scan.
 
     A point list that only a scan reader takes (more columns than x, y, z and a label, or a
@@ -158,6 +158,9 @@ def open_file(path: str, *, force: bool = False) -> Opened:
         .ply) or a scan (.ply, .pcd, .xyz, .csv, .txt).
     force : bool, default: False
         For a scan: turn the plausibility refusals into warnings (see `open_scan`).
+    length : float, optional
+        For a photo: the leaf's length base to apex, in the units the leaf gets (default 1;
+        `leafstudio photo --length`).
 
     Returns
     -------
@@ -187,7 +190,7 @@ def open_file(path: str, *, force: bool = False) -> Opened:
     """
     path = str(path)
     if is_photo(path):
-        found = read_photo_leaf(path)
+        found = read_photo_leaf(path, length=length)
         grown = found.veins_from == "grown"
         notes = ("the photo shows no midrib: its veins were grown",) if grown else ()
         return Opened(path, "photo", found.leaf, photo=found, notes=notes)

@@ -12,6 +12,7 @@ detail chosen here, the bytes written by writers.py.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -99,12 +100,20 @@ def base_color(result: Any, texture: Any = "auto") -> Any:
     return _images(result, texture, gltf=False).get("texture")
 
 
+Progress = Callable[[float, str], object]  # (fraction done, what is being done)
+
+
+def _silent(_fraction: float, _what: str) -> None:
+    """The progress report of an export nobody watches."""
+
+
 def mesh_assets(
     result_or_mesh: Any,
     texture: Any = "auto",
     thickness: float | None = None,
     lod: int = 0,
     gltf: bool = False,
+    progress: Progress = _silent,
 ) -> list[MeshAsset]:
     """The asset (and `lod` coarser ones) of a Result or a bare mesh.
 
@@ -120,6 +129,9 @@ def mesh_assets(
         Coarser levels of detail to add, each with half the triangles of the one before (lod.py).
     gltf : bool, default: False
         Whether the target holds a normal map (glTF and USD do; the other formats do not).
+    progress : callable, optional
+        Called as progress(fraction, what) before each step (the mesh, each level of detail,
+        the textures, each solid), fraction in [0, 0.8] (save_mesh reports the rest).
 
     Returns
     -------
@@ -145,17 +157,21 @@ def mesh_assets(
     `[('leaf_LOD0', 504), ('leaf_LOD1', 252)]`.
     """
     result = result_or_mesh if hasattr(result_or_mesh, "surface") else None
+    progress(0.0, "the mesh")
     if result is not None:
         base = leaf_asset(result)
     else:
         base = mesh_asset(getattr(result_or_mesh, "triangle_mesh", result_or_mesh))
     levels = [base]
     if lod:
+        progress(0.1, f"{lod} levels of detail")
         levels += coarser_levels(base, result, lod)
+    progress(0.4, "the textures")
     images = _images(result, texture, gltf)
     out = []
     for level, asset in enumerate(levels):
         if thickness is not None:
+            progress(0.6 + 0.2 * level / len(levels), f"the solid ({level + 1}/{len(levels)})")
             asset = thicken(asset, thickness)
         out.append(asset.with_(name=f"leaf_LOD{level}" if lod else "leaf", **images))
     return out
@@ -169,6 +185,7 @@ def save_mesh(
     lod: int = 0,
     length: str | float | None = None,
     placement: Any = None,
+    progress: Progress = _silent,
 ) -> None:
     """Write the mesh by the path's suffix (MESH_SUFFIXES) with normals, UVs, scalars, texture,
     placed for the format (placement.py: glTF, OBJ and USD Y-up with the base at the origin).
@@ -198,6 +215,9 @@ def save_mesh(
     placement : Placement, optional
         Where the leaf's base and axes are (placement.py); default: a Result's own (its midrib
         and outline), a bare mesh's from its margin's plane.
+    progress : callable, optional
+        Called as progress(fraction, what) before each step, and progress(1, "done") at the
+        end (the app's progress bar; from the thread that writes).
 
     Raises
     ------
@@ -220,13 +240,8 @@ def save_mesh(
     leafstudio.errors.LeafError: .../leaf.xyz: unknown mesh type '.xyz'; use one of .ply, ...
     """
     metres = None if length is None else parse_length(length)
-    path = Path(path)
+    path = check_mesh_path(path)
     suffix = path.suffix.lower()
-    if suffix not in MESH_SUFFIXES:
-        raise LeafError(
-            f"unknown mesh type {suffix or '(none)'!r}; use one of {', '.join(MESH_SUFFIXES)}",
-            str(path),
-        )
     if not isinstance(lod, int) or not 0 <= lod <= MAX_LOD:
         raise LeafError(f"lod must be a whole number from 0 to {MAX_LOD}, got {lod}")
     if not (isinstance(texture, str) and texture in TEXTURES):  # never write over the image
@@ -234,15 +249,29 @@ def save_mesh(
         refuse_overlap([image], written_paths(path, lod + 1, textured=True))
     if suffix not in TEXTURED_SUFFIXES:  # the format holds UVs but no image: make none
         texture = "none"
-    assets = mesh_assets(
-        result_or_mesh, texture, thickness, lod, gltf=suffix in NORMAL_MAP_SUFFIXES
-    )
+    gltf = suffix in NORMAL_MAP_SUFFIXES
+    assets = mesh_assets(result_or_mesh, texture, thickness, lod, gltf, progress)
+    progress(0.8, "placing")
     assets = placed(result_or_mesh, assets, metres, suffix, placement)
+    progress(0.85, f"writing {path.name}")
     if safewrite._staging.get() is not None:  # the caller replaces its outputs together
         write_assets(assets, path)
-        return
-    with safewrite.staged():  # an .obj, its .mtl and .png (and the levels) replaced together
-        write_assets(assets, path)
+    else:
+        with safewrite.staged():  # an .obj, its .mtl and .png (and the levels) together
+            write_assets(assets, path)
+    progress(1.0, "done")
+
+
+def check_mesh_path(path: str | os.PathLike) -> Path:
+    """The path, if its suffix is a mesh type (MESH_SUFFIXES); LeafError naming it if not."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in MESH_SUFFIXES:
+        raise LeafError(
+            f"unknown mesh type {suffix or '(none)'!r}; use one of {', '.join(MESH_SUFFIXES)}",
+            str(path),
+        )
+    return path
 
 
 def placed(

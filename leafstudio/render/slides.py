@@ -78,8 +78,11 @@ def _clim(result: Any) -> tuple[float, float]:
     return (lo, hi) if hi > lo else (lo - 1e-9, hi + 1e-9)
 
 
-def render_turntable(result: Any, path: str | os.PathLike, frames: int = TURNTABLE_FRAMES) -> Path:
-    """Write the mesh turning once about its normal, coloured by height, as a GIF or MP4."""
+def render_turntable(
+    result: Any, path: str | os.PathLike, frames: int = TURNTABLE_FRAMES, progress: Any = None
+) -> Path:
+    """Write the mesh turning once about its normal, coloured by height, as a GIF or MP4;
+    `progress(fraction, what)`, if given, hears of each frame (the app's progress bar)."""
     import imageio.v3 as iio
     import pyvista as pv
 
@@ -91,6 +94,8 @@ def render_turntable(result: Any, path: str | os.PathLike, frames: int = TURNTAB
         plotter.set_background("white")
         _mesh_view(plotter, result, clim)
         for i in range(frames):
+            if progress is not None:
+                progress(0.9 * i / frames, f"frame {i + 1}/{frames}")
             plotter.camera_position = _iso_camera(result, 360.0 * i / frames)
             plotter.render()
             images.append(plotter.screenshot(return_img=True))

@@ -64,6 +64,11 @@ class Job:
             if self.canceller is not None:
                 self.canceller()
 
+    @property
+    def succeeded(self) -> bool:
+        """True once it has ended with a value."""
+        return self._end is not None and self._end[0] == "done"
+
     def finish(self, value: object) -> None:
         """Report the job's value (on the main thread)."""
         if self._end is None:

@@ -58,9 +58,10 @@ class Document:
         return Path(self.path).name
 
 
-def read_document(path: str, as_scan: bool = False) -> Document:
-    """Open `path` as every command does (`as_scan`: as a scan whatever its points look like);
-    a big file in a process of its own (reading.py), which Cancel ends at once.
+def read_document(path: str, as_scan: bool = False, length: float | None = None) -> Document:
+    """Open `path` as every command does (`as_scan`: as a scan whatever its points look like;
+    `length`: a photo's leaf length, photo_length); a big file in a process of its own
+    (reading.py), which Cancel ends at once.
 
     Raises
     ------
@@ -72,12 +73,13 @@ def read_document(path: str, as_scan: bool = False) -> Document:
     """
     if is_big(path) and not is_photo(path):
         return read_apart(_read_document, path, as_scan)
-    return _read_document(path, as_scan)
+    return _read_document(path, as_scan, length)
 
 
-def _read_document(path: str, as_scan: bool) -> Document:
+def _read_document(path: str, as_scan: bool, length: float | None = None) -> Document:
     try:
-        opened = open_scan(path) if as_scan else open_file(path)
+        options = {} if length is None else {"length": length}  # a photo's only
+        opened = open_scan(path) if as_scan else open_file(path, **options)
     except OSError as exc:
         raise LeafError(exc.strerror or str(exc), path) from None
     cancel_point()  # Cancel while the file was read: no layers, no document
@@ -111,17 +113,18 @@ class FileOpening:
     `_open_due`, the job reading the file, which another open, a demo or a new sketch
     supersedes)."""
 
-    def open_path(self, path: str, *, as_scan: bool = False) -> Job:
+    def open_path(self, path: str, *, as_scan: bool = False, length: float | None = None) -> Job:
         """Read a file off the main thread (opening.read_document on the side lane: the one
         decision path of the command line and batch; `as_scan`: File > Open scan) and make it
-        the document once read, with its saved parameters or the current ones. A newer open, a
+        the document once read, with its saved parameters or the current ones (`length`: a
+        photo's leaf length, photo_length). A newer open, a
         demo or a new sketch supersedes it; a failure reports `open_failed` and keeps the
         document."""
         if self._open_due is not None:
             self._open_due.cancel()  # the file being read is superseded
         what = "photo" if is_photo(path) else "scan" if as_scan else "file"
         self.opening.emit(path, what)
-        job = self._open_due = self.run("open", read_document, path, as_scan)
+        job = self._open_due = self.run("open", read_document, path, as_scan, length)
         job.on_done(lambda document: self._opened(job, document))
         job.on_failed(lambda exc: self._open_failed(job, what, exc))
         return job
@@ -163,3 +166,39 @@ def missing_photo_message(photo: LeafPhoto) -> str:
         "the texture generated from it instead. Put the photo back and open the project again "
         "to use it; saving keeps the photo's place in the project."
     )
+
+
+def photo_length(text: str) -> float | None:
+    """The length a photo's leaf is made with, from File > Open photo's field: a length with
+    its unit ('8cm', '80mm', '0.08m') gives the leaf in millimetres (what a thickness with a
+    unit and Export's real length expect), a bare number the leaf's own units; empty: None
+    (length 1). LeafError for anything else.
+
+    Examples
+    --------
+    >>> photo_length("8cm"), photo_length("2.5"), photo_length(" ")
+    (80.0, 2.5, None)
+    """
+    from leafstudio.assets.placement import parse_length
+
+    text = text.strip()
+    if not text:
+        return None
+    if has_unit(text):
+        try:
+            return round(parse_length(text) * 1000, 9)
+        except LeafError as exc:  # said in the dialog's words, not the command line's
+            raise LeafError(exc.problem.replace("--length", "the length")) from None
+    value = float(text)
+    if not (value > 0 and value != float("inf")):
+        raise LeafError(f"the leaf's length must be above 0, got {text}")
+    return value
+
+
+def has_unit(text: str) -> bool:
+    """Whether a length field's text is more than a bare number (a real size: '8cm')."""
+    try:
+        float(text)
+    except ValueError:
+        return bool(text.strip())
+    return False

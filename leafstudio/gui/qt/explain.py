@@ -6,6 +6,7 @@ turntable (GIF or MP4) and of the steps side by side (PNG) for slides (render/sl
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 from PySide6.QtCore import Qt
@@ -282,11 +283,24 @@ class ViewAids(QWidget):
         self._label = label
 
 
-def export_slide(window, kind: str, path: str) -> bool:
-    """Write the shown result's turntable or steps figure to `path`; errors in the window."""
-    from leafstudio.render.slides import render_steps, render_turntable
+def export_slide(window, kind: str, path: str):
+    """Start writing the shown result's turntable or steps figure to `path` in the background
+    (exports.py: its off-screen renders run in the export process, not on this thread): the
+    job's handle, or None if refused (an error box says why)."""
+    from leafstudio.errors import LeafError
+    from leafstudio.gui.model.exports import slide
+    from leafstudio.render.slides import check_turntable_path
 
-    return export_result(window, render_turntable if kind == "turntable" else render_steps, path)
+    result = window.session.result
+    if result is None:
+        window.show_error("Nothing to export", "There is no reconstructed leaf yet.")
+        return None
+    try:
+        name = (check_turntable_path(path) if kind == "turntable" else Path(path)).name
+    except LeafError as exc:
+        window.show_error("Cannot export", str(exc))
+        return None
+    return window.run_export(name, slide, kind, result, path)
 
 
 def export_result(window, render: Callable[[Any, str], object], path: str) -> bool:

@@ -14,6 +14,7 @@ from leafstudio.assets.export import TEXTURED_SUFFIXES, save_mesh
 from leafstudio.assets.writers import MESH_SUFFIXES
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.jobs import Job
+from leafstudio.gui.qt.exports import BackgroundExports
 from leafstudio.sources.files import LEAF_SUFFIXES, save_leaf
 from leafstudio.sources.photo import PHOTO_SUFFIXES
 from leafstudio.sources.scan import SCAN_SUFFIXES
@@ -37,7 +38,7 @@ def _scan_filter() -> str:
     return f"Leaf scans ({patterns});;All files (*)"
 
 
-class FileCommands:
+class FileCommands(BackgroundExports):
     """Open, save and export, for MainWindow (which has `session`, `settings`, `viewport`,
     `status_text`, `docks`, `show_error` and `failure_shown`)."""
 
@@ -108,11 +109,34 @@ class FileCommands:
         if path:
             self.open_path(path)
 
+    PHOTO_LENGTH_PROMPT = (
+        "The leaf's length, base to apex: with its unit (8cm, 80mm: the leaf in millimetres, "
+        "its real size in an export), a number in the leaf's own units, or empty (1)"
+    )
+
     def open_photo_dialog(self) -> None:
-        """File > Open photo."""
+        """File > Open photo: the photo, then the leaf's length (opening.photo_length)."""
+        from PySide6.QtWidgets import QInputDialog
+
+        from leafstudio.gui.model.opening import has_unit, photo_length
+
         path = self._ask_to_open("Open a photo of a leaf", _photo_filter())
-        if path:
-            self.open_path(path)
+        if not path:
+            return
+        last = str(self.settings.value("photo/length", ""))
+        text, ok = QInputDialog.getText(self, "The leaf's length", self.PHOTO_LENGTH_PROMPT,
+                                        text=last)  # fmt: skip
+        if not ok:
+            return
+        try:
+            length = photo_length(text)
+        except LeafError as exc:
+            self.show_error("Cannot open the photo", str(exc))
+            return
+        self.settings.setValue("photo/length", text.strip())
+        if has_unit(text):
+            self.settings.setValue("export/length", text.strip())  # its real size, offered next
+        self.session.open_path(path, length=length)
 
     def open_scan_dialog(self) -> None:
         """File > Open scan."""
@@ -175,28 +199,64 @@ class FileCommands:
         self._add_recent(path)
         return True
 
-    def save_mesh(self, path: str, thickness: str | None = None, texture: object = None) -> bool:
-        """Write the shown mesh to `path` (by its suffix, with normals, UVs and a texture where
-        the format holds them); `thickness` ("0.01" of the length, or "0.4mm") makes it a closed
-        solid; `texture` is None (the leaf's: what the Texture colouring shows), "auto"
-        (generated from the leaf), "none", "photo" (the photo the leaf was found in) or an image
-        file, mapped as `reconstruct --texture` maps it (SideJobs.texture_option)."""
+    def save_mesh(
+        self,
+        path: str,
+        thickness: str | None = None,
+        texture: object = None,
+        length: str | None = None,
+        lod: int = 0,
+    ) -> Job | None:
+        """Start writing the shown mesh to `path` in the background (exports.py: the status
+        bar shows its progress; an error box if it fails), by its suffix, with normals, UVs and
+        a texture where the format holds them; `thickness` ("0.01" of the length, or "0.4mm")
+        makes it a closed solid; `length` ("8cm") scales it to real size (`--length`), `lod`
+        adds coarser levels of detail (`--lod`); `texture`
+        is None (the leaf's: what the Texture colouring shows), "auto" (generated from the
+        leaf), "none", "photo" (the photo the leaf was found in) or an image file, mapped as
+        `reconstruct --texture` maps it (SideJobs.texture_option). The writing job's handle, or
+        None when the options are refused at once (an error box says why)."""
+        from leafstudio.assets.export import check_mesh_path, leaf_placement_of
+        from leafstudio.assets.placement import parse_length
+        from leafstudio.assets.solid import thickness_in_mesh_units
+
         result = self.session.result
         if result is None:
             self.show_error("Nothing to export", "There is no reconstructed mesh yet.")
-            return False
+            return None
         try:
+            check_mesh_path(path)
             option = self.session.side.texture_option(texture)
+            metres = parse_length(length) if length else None
             solid = None
             if thickness is not None:
-                from leafstudio.assets.solid import thickness_in_mesh_units
-
-                solid = thickness_in_mesh_units(thickness, result.length)
-            save_mesh(result, path, texture=option, thickness=solid)
+                per_unit = None if metres is None else metres / leaf_placement_of(result).length
+                solid = thickness_in_mesh_units(thickness, result.length, per_unit)
         except (LeafError, OSError) as exc:
             self.show_error("Cannot export the mesh", str(exc))
-            return False
-        return True
+            return None
+        return self.run_export(
+            Path(path).name, save_mesh, result, path, texture=option, thickness=solid,
+            length=metres, lod=lod,
+        )  # fmt: skip
+
+    LENGTH_PROMPT = (
+        "The leaf's real length, base to apex (8cm, 0.08m, 80mm): the mesh is scaled to it and "
+        "written in metres (glTF, OBJ, USD) or millimetres (STL, 3MF, PLY, VTK). Empty: the "
+        "leaf's own units"
+    )
+
+    def _length_choice(self) -> str | None:
+        """The export's real length ("" to keep the leaf's units), None if cancelled; the last
+        one given (here or in File > Open photo) is offered."""
+        from PySide6.QtWidgets import QInputDialog
+
+        last = str(self.settings.value("export/length", ""))
+        text, ok = QInputDialog.getText(self, "Real size", self.LENGTH_PROMPT, text=last)
+        if not ok:
+            return None
+        self.settings.setValue("export/length", text.strip())
+        return text.strip()
 
     def export_mesh_dialog(self) -> None:
         """File > Export mesh; the texture chosen is the one the Texture colouring shows next."""
@@ -213,8 +273,11 @@ class FileCommands:
         except LeafError as exc:
             self.show_error("Cannot export the mesh", str(exc))
             return
+        length = self._length_choice()
+        if length is None:
+            return
         textured = Path(path).suffix.lower() in TEXTURED_SUFFIXES
-        if self.save_mesh(path, texture=option) and textured:
+        if self.save_mesh(path, texture=option, length=length) is not None and textured:
             self.session.choose_texture(option)
 
     TEXTURE_CHOICES = (
@@ -283,8 +346,12 @@ class FileCommands:
             return
         patterns = "*.stl *.3mf *.obj *.ply *.glb"
         path, _ = QFileDialog.getSaveFileName(self, "Export the solid", "", f"Solids ({patterns})")
-        if path:
-            self.save_mesh(path if Path(path).suffix else path + ".stl", thickness=text)
+        if not path:
+            return
+        length = self._length_choice()
+        if length is not None:
+            path = path if Path(path).suffix else path + ".stl"
+            self.save_mesh(path, thickness=text, length=length)
 
     def export_screenshot_dialog(self) -> None:
         """File > Export screenshot: the 3D view as PNG."""

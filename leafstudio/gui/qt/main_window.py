@@ -68,6 +68,7 @@ class MainWindow(FileCommands, QMainWindow):
     failure_shown = Signal(str)
     texture_shown = Signal()  # a new texture image is on the mesh (the Texture colouring)
     notice_shown = Signal(str)  # a message that is not a failure (a project's photo is missing)
+    export_progress = Signal(float, str)  # from the export lane: fraction done, what (exports)
 
     def __init__(self, settings: QSettings, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -107,6 +108,7 @@ class MainWindow(FileCommands, QMainWindow):
         self.busy = Busy()  # a file being read: its progress and Cancel
         self.statusBar().addPermanentWidget(self.busy)
         self.busy.cancelled.connect(self.session.cancel_open)
+        self._progress_bar()  # the exports' (exports.py), hidden until one runs
 
         self.worker.stage_started.connect(self._on_stage)
         self.worker.yielded.connect(self._on_yielded)
@@ -144,6 +146,7 @@ class MainWindow(FileCommands, QMainWindow):
         session.noticed.connect(self._on_notice)
         session.history.changed.connect(self._on_history)
         session.opening.connect(self._on_opening)
+        self.export_progress.connect(self._on_export_progress)
         session.opened.connect(self._add_recent)
         session.open_failed.connect(self._on_open_failed)
         session.opening.connect(lambda path, _what: self.busy.start(path))
@@ -475,5 +478,6 @@ class MainWindow(FileCommands, QMainWindow):
             return
         self._store_settings()
         self.worker.shutdown()
+        self.close_exports()
         self.viewport.close_plotter()
         event.accept()

@@ -45,6 +45,7 @@ LANES = {
     "fidelity": "side",
     "poisson": "side",
     "texture": "side",
+    "export": "export",  # files written off the main thread (exports.py), never behind a scan
 }
 
 

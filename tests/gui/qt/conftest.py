@@ -53,6 +53,21 @@ def wait_result(qtbot, window: MainWindow, check=lambda outcome: True) -> object
     return window.session.shown.outcome
 
 
+def exported(qtbot, job) -> bool:
+    """Wait for an export the window started in the background (gui/qt/exports.py): True once
+    it wrote its file, False if it failed or was refused at once (job None)."""
+    if job is None:
+        return False
+    qtbot.waitUntil(lambda: job.finished, timeout=WAIT_MS)
+    return job.succeeded
+
+
+def exports_done(qtbot, window: MainWindow) -> None:
+    """Wait until the exports an export dialog started have written their files."""
+    qtbot.waitUntil(lambda: window.worker.is_idle("export"), timeout=WAIT_MS)
+    qtbot.wait(1)  # their answers, queued to this thread
+
+
 def image_pixels(image: QImage) -> np.ndarray:
     """An image's (h, w, 3) RGB pixels, copied out of Qt's buffer."""
     image = image.convertToFormat(QImage.Format.Format_RGB888)

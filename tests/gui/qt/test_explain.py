@@ -5,7 +5,7 @@ from __future__ import annotations
 from PySide6.QtCore import Qt
 
 from leafstudio.gui.qt import explain
-from tests.gui.qt.conftest import wait_result
+from tests.gui.qt.conftest import exported, wait_result
 
 
 def _checked(window) -> set[str]:
@@ -40,8 +40,9 @@ def test_export_turntable_and_steps_figure(window, qtbot, tmp_path):
     assert all(layers.item(i).toolTip() for i in range(layers.count()))  # every layer explained
     texts = [a.text() for a in window.menuBar().actions()[0].menu().actions()]
     assert any("turntable" in t for t in texts) and any("steps" in t for t in texts)
-    assert explain.export_slide(window, "turntable", str(tmp_path / "t.gif"))
-    assert explain.export_slide(window, "steps", str(tmp_path / "s.png"))
+    job = explain.export_slide(window, "turntable", str(tmp_path / "t.gif"))
+    assert exported(qtbot, job)  # in the export process
+    assert exported(qtbot, explain.export_slide(window, "steps", str(tmp_path / "s.png")))
     assert (tmp_path / "t.gif").stat().st_size > 1000 and (tmp_path / "s.png").stat().st_size > 1000
     assert not explain.export_slide(window, "turntable", str(tmp_path / "t.avi"))  # a message
 

@@ -35,6 +35,7 @@ def _display_heights(window) -> np.ndarray:
 
 
 def test_the_leaf_is_framed_clear_of_the_height_colour_bar(window, qtbot):
+    window.coloring.setCurrentIndex(window.coloring.findData("height"))  # (the Leaf look has none)
     assert window.viewport.plotter.scalar_bars  # the height bar along the bottom
     for name in ("nested", "parallel"):
         window.open_demo(name)

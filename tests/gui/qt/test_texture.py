@@ -12,7 +12,7 @@ from PySide6.QtCore import Qt
 
 from leafstudio.assets.asset import leaf_uvs
 from leafstudio.gui.model.textures import TEXTURE, texture_key
-from tests.gui.qt.conftest import WAIT_MS, wait_result
+from tests.gui.qt.conftest import WAIT_MS, exported, exports_done, wait_result
 
 
 def _glb_texture(path) -> np.ndarray:
@@ -51,7 +51,7 @@ def test_the_texture_colouring_shows_what_an_export_writes(window, qtbot, tmp_pa
     result = window.session.result
     assert image.shape == (1024, 1024, 4)
     glb = tmp_path / "leaf.glb"
-    assert window.save_mesh(str(glb))  # the leaf's texture: the generated one
+    assert exported(qtbot, window.save_mesh(str(glb)))  # the leaf's texture: the generated one
     np.testing.assert_array_equal(image, _glb_texture(glb))  # pixel for pixel
     np.testing.assert_allclose(_mesh_uvs(window), leaf_uvs(result), atol=1e-6)
     assert window.viewport.plotter.actors["mesh"].mapper.scalar_visibility is False
@@ -67,8 +67,10 @@ def test_the_texture_colouring_shows_what_an_export_writes(window, qtbot, tmp_pa
     monkeypatch.setattr(QFileDialog, "getSaveFileName", lambda *a, **k: (str(glb), ""))
     monkeypatch.setattr(QFileDialog, "getOpenFileName", lambda *a, **k: (str(picked), ""))
     monkeypatch.setattr(QInputDialog, "getItem", lambda *a, **k: (window.TEXTURE_CHOICES[2], True))
+    monkeypatch.setattr(QInputDialog, "getText", lambda *a, **k: ("", True))  # its own units
     with qtbot.waitSignal(window.texture_shown, timeout=WAIT_MS):
         window.export_mesh_dialog()
+    exports_done(qtbot, window)
     np.testing.assert_array_equal(window.viewport.texture_actor_image(), _glb_texture(glb))
     window.viewport.camera("top")
     window.layer_list.item(1).setCheckState(Qt.CheckState.Unchecked)  # input points off
@@ -171,7 +173,7 @@ def test_a_photo_leaf_keeps_its_photo_through_save_reopen_and_export(
     glb = tmp_path / "oak.glb"
     assert window._texture_choice(str(glb)) == "photo"
     assert offered["items"][offered["current"]] == window.PHOTO_CHOICE.format(name="oak.png")
-    assert window.save_mesh(str(glb))  # no choice given: the photo, as shown
+    assert exported(qtbot, window.save_mesh(str(glb)))  # no choice given: the photo, as shown
     np.testing.assert_array_equal(_glb_texture(glb), expected)
 
 

@@ -15,7 +15,7 @@ from leafstudio.gui.model.layers import LAYERS
 from leafstudio.gui.qt.main_window import MainWindow
 from tests.gui.builders import FAST
 
-from .conftest import close_window, make_window, wait_result
+from .conftest import close_window, exported, exports_done, make_window, wait_result
 
 
 @pytest.fixture
@@ -187,7 +187,7 @@ def test_export_mesh_and_open_by_drag_and_drop(window, qtbot, tmp_path):
 
     for suffix in (".ply", ".vtp"):
         out = tmp_path / f"leaf{suffix}"
-        assert window.save_mesh(str(out))
+        assert exported(qtbot, window.save_mesh(str(out)))
         assert pv.read(out).n_points == window.session.result.mesh.n_points
     assert not window.save_mesh(str(tmp_path / "leaf.xyz"))  # not a mesh type: an error box
     window.last_error_box.close()
@@ -215,11 +215,11 @@ def test_export_a_textured_gltf_and_a_solid(window, qtbot, tmp_path):
     import trimesh
 
     glb = tmp_path / "leaf.glb"
-    assert window.save_mesh(str(glb))
+    assert exported(qtbot, window.save_mesh(str(glb)))
     (mesh,) = trimesh.load(glb, process=False).geometry.values()
     assert mesh.visual.material.baseColorTexture is not None and mesh.visual.uv is not None
     solid = tmp_path / "leaf.stl"
-    assert window.save_mesh(str(solid), thickness="0.01")
+    assert exported(qtbot, window.save_mesh(str(solid), thickness="0.01"))
     assert trimesh.load(solid).is_watertight
     assert not window.save_mesh(str(tmp_path / "bad.stl"), thickness="thick")  # an error box
     window.last_error_box.close()
@@ -264,11 +264,14 @@ def test_the_export_dialog_offers_the_texture(window, qtbot, tmp_path, monkeypat
     monkeypatch.setattr(QInputDialog, "getItem", lambda *a, **k: next(choices))
     monkeypatch.setattr(QFileDialog, "getSaveFileName", lambda *a, **k: (str(glb), ""))
     monkeypatch.setattr(QFileDialog, "getOpenFileName", lambda *a, **k: (str(photo), ""))
+    monkeypatch.setattr(QInputDialog, "getText", lambda *a, **k: ("", True))  # its own units
     window.export_mesh_dialog()  # an image file
+    exports_done(qtbot, window)
     (mesh,) = trimesh.load(glb, process=False).geometry.values()
     image = np.asarray(mesh.visual.material.baseColorTexture.convert("RGB")).reshape(-1, 3)
     assert np.all(np.abs(np.median(image, axis=0) - [200, 30, 10]) <= 12)  # the image's colour
     window.export_mesh_dialog()  # none
+    exports_done(qtbot, window)
     (mesh,) = trimesh.load(glb, process=False).geometry.values()
     assert mesh.visual.material.baseColorTexture is None and mesh.visual.uv is not None
     assert not window.save_mesh(str(glb), texture=str(tmp_path / "missing.png"))  # an error box
