@@ -6,7 +6,8 @@ detail chosen here, the bytes written by writers.py.
 - "none": no image (the material has the blade's colour; UVs are still written);
 - an image path: mapped through the UVs. If the leaf came from that photo (`leafstudio photo`
   stores the map from the leaf's coordinates to the photo's pixels in the project), each pixel
-  lands where it was in the photo; otherwise the image covers the UV square as it is.
+  lands where it was in the photo, and glTF and USD get the normal map of its veins (traced in
+  the photo, so they lie on the photo's); otherwise the image covers the UV square as it is.
 """
 
 from __future__ import annotations
@@ -89,8 +90,11 @@ def _images(result: Any, texture: Any, gltf: bool) -> dict[str, Any]:
         return {"texture": tex.leaf_texture(plane, strokes=strokes), "normal_map": maps}
     photo = texture if isinstance(texture, PhotoTexture) else PhotoTexture(texture)
     image = read_image(photo.image)
-    if photo.pixel_from_world is not None and result is not None:
-        return {"texture": tex.photo_texture(leaf_plane(result), image, photo.pixel_from_world)}
+    if photo.pixel_from_world is not None and result is not None:  # the veins lie on the photo's
+        plane = leaf_plane(result)
+        maps = tex.normal_map(plane) if gltf else None
+        return {"texture": tex.photo_texture(plane, image, photo.pixel_from_world),
+                "normal_map": maps}  # fmt: skip
     return {"texture": tex.stretched_texture(image)}
 
 

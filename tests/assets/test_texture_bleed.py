@@ -138,3 +138,22 @@ def test_padded_textures_still_validate(photo_leaf, tmp_path):
     ls.save_mesh(result, auto)
     for name, report in gltf_reports(photo, auto).items():
         assert report["numErrors"] == 0 and report["numWarnings"] == 0, (name, report["messages"])
+
+
+def test_a_photo_leaf_gets_the_normal_map_of_its_veins(photo_leaf, tmp_path):
+    """Issue 23: a leaf's own material. A photo mapped back onto the leaf it was found in gets
+    the vein relief too (its veins were traced in that photo, so they lie on it); an image that
+    is not the leaf's photo (stretched over the UVs) does not."""
+    from leafstudio.assets.export import mesh_assets
+
+    result, path, pixel_from_world = photo_leaf
+    (asset,) = mesh_assets(result, PhotoTexture(path, pixel_from_world), gltf=True)
+    assert asset.normal_map is not None and asset.normal_map.size == asset.texture.size
+    (stretched,) = mesh_assets(result, PhotoTexture(path, None), gltf=True)
+    assert stretched.normal_map is None
+    (obj,) = mesh_assets(result, PhotoTexture(path, pixel_from_world), gltf=False)
+    assert obj.normal_map is None  # OBJ holds no normal map
+    glb = tmp_path / "photo.glb"
+    ls.save_mesh(result, glb, texture=PhotoTexture(path, pixel_from_world))
+    material = scene_mesh(glb).visual.material
+    assert material.normalTexture is not None and material.baseColorTexture is not None
