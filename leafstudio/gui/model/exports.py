@@ -39,6 +39,20 @@ def _in_child(write: Callable[..., Any], args: tuple, kwargs: dict) -> Any:
     return write(*args, progress=_child_progress, **kwargs)
 
 
+def _unmeasured() -> None:
+    """What a Result's Measuring (core/result.py: a lock, a generator under way) becomes in the
+    export process: none, the exports read no metrics."""
+
+
+def _portable() -> None:
+    """Send Results to the child without their Measuring (it cannot be pickled)."""
+    from multiprocessing.reduction import ForkingPickler
+
+    from leafstudio.core.result import Measuring
+
+    ForkingPickler.register(Measuring, lambda _measuring: (_unmeasured, ()))
+
+
 class ExportProcess:
     """The process exports are written in, started at the first export and kept."""
 
@@ -50,6 +64,7 @@ class ExportProcess:
     def _ready(self) -> tuple[ProcessPoolExecutor, Any]:
         with self._lock:
             if self._pool is None:
+                _portable()
                 context = multiprocessing.get_context("spawn")
                 self._reports = context.Queue()
                 self._pool = ProcessPoolExecutor(
