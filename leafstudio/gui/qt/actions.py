@@ -1,6 +1,6 @@
 """The window's menus as data: a table of actions (id, menu, title, what it does, shortcut, tip)
 that the window builds its menu bar from, as napari's `_qt/_qapp_model/qactions`; a feature
-adds its own rows the same way (explain.py: the Steps view and the exports for slides) through
+adds its own rows the same way (explain.py: the exports for slides) through
 `MainWindow.add_actions`.
 
 An action's callback takes the window. A `submenu` row is a menu filled each time it opens: its

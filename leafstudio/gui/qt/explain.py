@@ -1,6 +1,7 @@
-"""The app explaining itself: a Steps view that walks through the pipeline one step at a time (by
-showing the layers of each step, with a caption tying it to the paper), and File > Export of a
-turntable (GIF or MP4) and of the steps side by side (PNG) for slides (render/slides.py).
+"""The app explaining itself: a tooltip on every layer tying it to the paper, view aids (height
+exaggeration, a kept colour range, K in the view), and File > Export of a turntable (GIF or MP4)
+and of the steps side by side (PNG) for slides (render/slides.py). The steps one at a time, in
+plain words, are the lesson (View > Lesson, lesson_view.py).
 """
 
 from __future__ import annotations
@@ -13,57 +14,14 @@ from PySide6.QtCore import Qt
 from PySide6.QtWidgets import (
     QApplication,
     QCheckBox,
-    QDialog,
     QDoubleSpinBox,
     QFileDialog,
     QHBoxLayout,
-    QLabel,
-    QPushButton,
     QVBoxLayout,
     QWidget,
 )
 
 from leafstudio.gui.qt.actions import Action
-
-# (title, caption, the layers shown)
-STEPS: tuple[tuple[str, str, frozenset[str]], ...] = (
-    (
-        "1. The input on the leaf's plane",
-        "The boundary (black) and vein points (coloured) as given, on the plane that fits the "
-        "boundary best (its PCA plane, step 1 of the paper). Heights are measured from it.",
-        frozenset({"points", "curves"}),
-    ),
-    (
-        "2. g(x): inside or outside",
-        "A smooth function of the outline (the MPU implicit, eqs. 1-2): positive inside the "
-        "leaf, negative outside. Its zero contour, drawn here, is the leaf's margin.",
-        frozenset({"contour", "points"}),
-    ),
-    (
-        "3. p(x): where the relief is",
-        "The height guide (eqs. 4-5): each point takes the height of the nearest vein, falling "
-        "to zero at the margin. Bright: high above the plane.",
-        frozenset({"probability", "points"}),
-    ),
-    (
-        "4. EM samples",
-        "Points drawn where p(x) is large. The Gaussian mixture is fitted to them by EM: each "
-        "Gaussian gathers one cluster of them.",
-        frozenset({"em", "points"}),
-    ),
-    (
-        "5. The Gaussian mixture's surface",
-        "z(x) = b(x) + tanh(g/δ) Σ a_k N(x | μ_k, Σ_k): the K Gaussians, scaled to the veins' "
-        "heights, tapered to zero at the margin by tanh(g/δ). Shown at the grid nodes.",
-        frozenset({"samples"}),
-    ),
-    (
-        "6. The mesh",
-        "The surface triangulated and trimmed at the margin, coloured by height. Change K in "
-        "the Parameters to see how many bumps the mixture can make.",
-        frozenset({"mesh", "points"}),
-    ),
-)
 
 # each layer's tooltip: what it shows and which step of the paper it comes from
 LAYER_HELP: dict[str, str] = {
@@ -97,66 +55,6 @@ def add_layer_help(window) -> None:
         text = LAYER_HELP.get(item.data(Qt.ItemDataRole.UserRole))
         if text:
             item.setToolTip(f"{item.toolTip()}\n\n{text}" if item.toolTip() else text)
-
-
-class StepsDialog(QDialog):
-    """Back / Next through STEPS, switching the window's layers to each step's; closing puts the
-    layers back as they were."""
-
-    def __init__(self, window) -> None:
-        super().__init__(window)
-        self.setWindowTitle("Steps of the pipeline")
-        self.setModal(False)
-        self.window_ = window
-        self.saved = self._states()
-        self.index = 0
-        self.title = QLabel()
-        self.title.setStyleSheet("font-weight: bold;")
-        self.caption = QLabel()
-        self.caption.setWordWrap(True)
-        self.caption.setMinimumWidth(380)
-        self.back, self.next = QPushButton("Back"), QPushButton("Next")
-        self.back.clicked.connect(lambda: self.show_step(self.index - 1))
-        self.next.clicked.connect(lambda: self.show_step(self.index + 1))
-        buttons = QHBoxLayout()
-        buttons.addWidget(self.back)
-        buttons.addWidget(self.next)
-        column = QVBoxLayout(self)
-        column.addWidget(self.title)
-        column.addWidget(self.caption)
-        column.addLayout(buttons)
-        self.show_step(0)
-
-    def _items(self):
-        layers = self.window_.layer_list
-        return [layers.item(i) for i in range(layers.count())]
-
-    def _states(self) -> dict[str, bool]:
-        return {
-            item.data(Qt.ItemDataRole.UserRole): item.checkState() == Qt.CheckState.Checked
-            for item in self._items()
-        }
-
-    def _set(self, shown: dict[str, bool]) -> None:
-        for item in self._items():
-            key = item.data(Qt.ItemDataRole.UserRole)
-            if key in shown:
-                state = Qt.CheckState.Checked if shown[key] else Qt.CheckState.Unchecked
-                if item.checkState() != state:
-                    item.setCheckState(state)
-
-    def show_step(self, index: int) -> None:
-        self.index = max(0, min(index, len(STEPS) - 1))
-        title, caption, layers = STEPS[self.index]
-        self.title.setText(title)
-        self.caption.setText(caption)
-        self.back.setEnabled(self.index > 0)
-        self.next.setEnabled(self.index < len(STEPS) - 1)
-        self._set({key: key in layers for key in self.saved if key not in ("scan", "poisson")})
-
-    def done(self, result: int) -> None:
-        self._set(self.saved)
-        super().done(result)
 
 
 SEE_THROUGH = 0.35  # the mesh's opacity when the layers under it should show
@@ -323,9 +221,9 @@ def export_result(window, render: Callable[[Any, str], object], path: str) -> bo
 
 
 def install(window) -> ViewAids:
-    """Add View > Steps of the pipeline, File > Export turntable / steps figure (rows of the
-    window's action table), a tooltip on every layer, and the view aids (height exaggeration,
-    kept colour range, K) under the layers; returns the view aids."""
+    """Add File > Export turntable / steps figure (rows of the window's action table), a
+    tooltip on every layer, and the view aids (height exaggeration, kept colour range, K) under
+    the layers; returns the view aids."""
     add_layer_help(window)
     aids = ViewAids(window)
     window.layers.add_widget(aids)
@@ -338,12 +236,7 @@ def install(window) -> ViewAids:
 
 
 def explain_actions() -> tuple[Action, ...]:
-    """The Steps view and the exports for slides, as rows of the window's action table."""
-    dialogs: list[StepsDialog] = []  # the open one, kept while it is shown
-
-    def steps(window) -> None:
-        dialogs[:] = [StepsDialog(window)]
-        dialogs[0].show()
+    """The exports for slides, as rows of the window's action table."""
 
     def ask(window, kind: str, caption: str, filters: str, suffix: str) -> None:
         path, _ = QFileDialog.getSaveFileName(window, caption, "", filters)
@@ -363,11 +256,4 @@ def explain_actions() -> tuple[Action, ...]:
             ("steps", "Export steps &figure…", "PNG (*.png)", ".png"),
         )
     )
-    view = Action(
-        "view.steps",
-        "View",
-        "&Steps of the pipeline…",
-        steps,
-        tooltip="Walk through the pipeline one step at a time, each step explained.",
-    )
-    return (view, *exports)
+    return exports

@@ -128,7 +128,7 @@ class MainWindow(FileCommands, QMainWindow):
         self.coloring.currentIndexChanged.connect(self._on_coloring)
         self.forms_panel = forms_dock.install(self)  # the Forms gallery; Grow veins in the editor
         self.bend = bend_sliders.install(self)  # Fold and Curl under K and the grid
-        self.view_aids = explain.install(self)  # the Steps view, exports for slides, view aids
+        self.view_aids = explain.install(self)  # layer tooltips, exports for slides, view aids
         self.dock_layout = projector.install(self)  # docks as tabs on a narrow window
         self.add_actions(lesson_view.LESSON_ACTIONS)  # View > Lesson, full screen
         self._on_history()
