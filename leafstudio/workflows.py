@@ -43,6 +43,7 @@ from leafstudio.sources.photo import PhotoLeaf, is_photo, read_photo_leaf
 from leafstudio.sources.scan import is_scan_file, looks_like_scan, read_scan
 
 Kind = Literal["leaf", "project", "scan", "photo"]
+FAR_FROM_SCAN = 0.01  # of the length: a scan's surface farther on average is warned of
 
 
 MEASURABLE = 1e150  # an area (size²) of a leaf this long stays finite in float64
@@ -270,7 +271,8 @@ class Reconstruction:
         The input's notes, the leaf's plausibility warnings, the run's own, in that order.
     scan_fit : dict or None
         For a scan, the distances from its blade points to the surface: points, mean, median,
-        p95, max and the shares beyond 1% and 2% of the leaf length (`length`).
+        p95, max and the shares beyond 1% and 2% of the leaf length (`length`); a mean beyond
+        FAR_FROM_SCAN of the length adds a warning.
     """
 
     result: Result
@@ -318,6 +320,12 @@ def reconstruct(opened: Opened, params: Params, pipeline: Pipeline | None = None
     if opened.scan is not None and opened.extraction is not None:
         blade = opened.scan[opened.extraction.blade]
         fit = scan_distances(result.triangle_mesh, blade, result.length)
+        if fit.get("mean", 0.0) > FAR_FROM_SCAN * result.length:
+            warnings.append(
+                f"the surface is {fit['mean'] / result.length:.1%} of the leaf's length from the "
+                f"scan on average (95% of points within {fit['p95'] / result.length:.1%}): it "
+                "does not follow this scan well"
+            )
     return Reconstruction(result, warnings, fit)
 
 

@@ -34,6 +34,7 @@ from shapely.geometry import LineString, MultiPoint, Point, Polygon
 from leafstudio.core.plane import fixed_sample, principal_extents, principal_spreads
 from leafstudio.core.prepare.plausibility import check_leaf_like
 from leafstudio.core.prepare.vein_order import veins_inside_outline
+from leafstudio.core.sheet import Scaled, fit_sheet
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
 
@@ -356,23 +357,32 @@ def extract_leaf(
         raise LeafError("the scan's points all coincide")
     unit = (points - centre) / scale
     thinned, cell, size = voxel_thinning(unit, BUDGET)
-    leaf, blade, petiole, origin, axes, region = _extract(thinned, base_end, count)
+    found = _extract(thinned, base_end, count)
+    sheet = fit_sheet(
+        thinned[found[1]], found[4][2], float(np.ptp(thinned[found[1]] @ found[4][0]))
+    )
+    flatten = (lambda q: q) if sheet is None else sheet.flatten
+    flat = thinned if sheet is None else sheet.flatten(thinned)
+    if sheet is not None:  # the blade unrolled (core/sheet.py), its outline and veins found there
+        found = _extract(flat, base_end, count, found[1:3])
+    leaf, blade, petiole, origin, axes, region = found
     if cell is not None:  # each point as its cube's centroid; a petiole stub cut as there
         # a cube whose centroid lies deeper in the region than the cube's diagonal is inside
-        xy = (thinned - origin) @ axes[:2].T
+        xy = (flat - origin) @ axes[:2].T
         deep = shapely.contains_xy(region.buffer(-np.sqrt(3) * size), xy[:, 0], xy[:, 1])
         blade, petiole = blade[cell], petiole[cell]
         test = np.flatnonzero(blade & ~deep[cell])
-        local = (unit[test] - origin) @ axes[:2].T
+        local = (flatten(unit[test]) - origin) @ axes[:2].T
         cut = test[~shapely.contains_xy(region, local[:, 0], local[:, 1])]
         blade[cut], petiole[cut] = False, True
-    length = float(np.ptp((unit[blade] - origin) @ axes[0]))
+    length = float(np.ptp(((flat if cell is None else flatten(unit))[blade] - origin) @ axes[0]))
+    bend = None if sheet is None else Scaled(sheet, centre, scale)
 
     def world(q: np.ndarray) -> np.ndarray:
-        return centre + scale * q
+        return centre + scale * q if bend is None else bend.bent(centre + scale * q)
 
     return Extraction(
-        leaf=Leaf(boundary=world(leaf.boundary), veins=[world(v) for v in leaf.veins]),
+        leaf=Leaf(boundary=world(leaf.boundary), veins=[world(v) for v in leaf.veins], bend=bend),
         blade=blade,
         petiole=petiole,
         length=scale * length,
@@ -426,11 +436,12 @@ def voxel_thinning(points: np.ndarray, budget: int) -> tuple[np.ndarray, np.ndar
 
 
 def _extract(
-    points: np.ndarray, base_end: str, count: int
+    points: np.ndarray, base_end: str, count: int, split: tuple | None = None
 ) -> tuple[Leaf, np.ndarray, np.ndarray, np.ndarray, np.ndarray, Polygon]:
     """extract_leaf on the scan at unit size (and thinned): the leaf, the blade and petiole masks,
-    the blade's plane (origin (3,), axes (3, 3)) and the region the blade's points keep to."""
-    blade, petiole = split_scan(points)
+    the blade's plane (origin (3,), axes (3, 3)) and the region the blade's points keep to.
+    `split`: the blade and petiole masks found before (on the unflattened scan)."""
+    blade, petiole = split_scan(points) if split is None else (split[0].copy(), split[1].copy())
     if blade.sum() < MIN_POINTS:
         raise LeafError(f"found only {blade.sum()} blade points in the scan (need {MIN_POINTS})")
     origin, axes = _plane(points[blade])

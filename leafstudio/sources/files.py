@@ -32,6 +32,7 @@ from leafstudio._shared.safewrite import staged as staged  # re-exported: output
 from leafstudio.core.bend import Pose
 from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame
+from leafstudio.core.sheet import Scaled
 from leafstudio.errors import LeafError, shorten
 from leafstudio.model import Leaf, Params
 
@@ -175,7 +176,7 @@ def load_project(path: str | os.PathLike) -> tuple[Leaf, Params | None, dict[str
     veins = [_project_points(v, f"vein {i + 1}", source) for i, v in enumerate(veins_data)]
     leaf = _checked_leaf(boundary, veins, source)
     if data.get("bend"):
-        leaf = replace(leaf, bend=_project_bend(data["bend"], source))
+        leaf = replace(leaf, bend=_project_bend(data["bend"], source, leaf))
     try:
         params = Params.from_dict(data["params"]) if data.get("params") else None
     except (TypeError, LeafError) as exc:
@@ -186,9 +187,15 @@ def load_project(path: str | os.PathLike) -> tuple[Leaf, Params | None, dict[str
 FRAME_KEYS = ("origin", "u", "v", "normal")  # a bend's frame in a project (core/placed.py)
 
 
-def _project_bend(value: Any, source: str) -> Pose | PlacedPose:
+def _project_bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
     """A project's "bend": {"fold": degrees, "curl": c}, the pose a form was made in, with the
-    "frame" {"origin", "u", "v", "normal"} of a leaf bent in the app (core/placed.py)."""
+    "frame" {"origin", "u", "v", "normal"} of a leaf bent in the app (core/placed.py), or
+    {"sheet": ...}, a scan's bend (core/sheet.py)."""
+    if isinstance(value, dict) and "sheet" in value:
+        try:
+            return Scaled.from_entry(value, np.vstack([leaf.boundary, leaf.vein_points]))
+        except (TypeError, ValueError, KeyError, np.linalg.LinAlgError):
+            raise LeafError('"bend": its "sheet" does not read whole', source) from None
     fold = curl = math.nan  # stays nan, and is refused below, unless the entry reads whole
     frame = None
     if isinstance(value, dict) and not set(value) - {"fold", "curl", "frame"}:
@@ -306,6 +313,8 @@ def project_dict(
         frame = dict(zip(FRAME_KEYS, (f.origin, f.u, f.v, f.normal), strict=True))
         data["bend"] = {"fold": pose.fold, "curl": pose.curl}
         data["bend"]["frame"] = {k: [float(x) for x in a] for k, a in frame.items()}
+    elif isinstance(leaf.bend, Scaled):  # a scan's blade, unrolled (core/sheet.py)
+        data["bend"] = leaf.bend.entry(np.vstack([leaf.boundary, leaf.vein_points]))
     return data
 
 

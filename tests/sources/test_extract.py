@@ -162,7 +162,10 @@ def test_the_outline_count_changes_only_the_outline(scan):
     np.testing.assert_array_equal(fine.blade, coarse.blade)
     np.testing.assert_array_equal(fine.petiole, coarse.petiole)
     assert fine.length == pytest.approx(coarse.length, rel=1e-12)
-    assert [len(v) for v in fine.leaf.veins] == [len(v) for v in coarse.leaf.veins]
+    # the veins end where the outline clips them: on the unrolled blade, a point either way
+    assert len(fine.leaf.veins) == len(coarse.leaf.veins)
+    for a, b in zip(fine.leaf.veins, coarse.leaf.veins, strict=True):
+        assert abs(len(a) - len(b)) <= 1
     outline = shapely.Polygon(coarse.leaf.boundary[:, :2])
     assert shapely.Polygon(fine.leaf.boundary[:, :2]).area == pytest.approx(outline.area, rel=0.01)
 

@@ -1,0 +1,298 @@
+"""A scan's bend: a smooth sheet fitted to all the blade's points, and the blade unrolled onto it
+(issue 21, build item 3).
+
+A curled or rolled real leaf is not a height field over any plane (soybean pot1_1: even a
+thin-plate spline fitted to every point over the PCA plane is 2.1% of the length off), so a scan
+is first unrolled. The blade's points are flattened near-isometrically (`unroll`: geodesic
+distances along a neighbour graph of the points, from a few landmarks, placed in the plane by
+landmark MDS, de Silva & Tenenbaum 2003), then a smooth map from the flat blade into 3D is
+fitted to them (`Sheet`: a thin-plate spline S(u, v) through the points averaged in cells of
+the flat blade, CELLS across the length). A flat point (u, v, w) goes to S(u, v) + w n(u, v),
+n the sheet's unit normal, and a 3D point back to its nearest sheet point (u, v) and its offset
+w along n (Gauss-Newton from the nearest point of a dense sample of the sheet).
+
+The pipeline then runs the paper's steps on the flat blade (core/bend.py), where the relief w
+left over by the sheet is the scanner's noise and the veins' own.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.interpolate import RBFInterpolator, RectBivariateSpline
+from scipy.sparse.csgraph import connected_components, dijkstra
+from scipy.spatial import cKDTree
+
+REACH = 1.8  # cells: cell means closer than this are neighbours in the graph
+MIN_CELLS = 30
+LANDMARKS = 120  # geodesic sources for the landmark MDS
+MOST_KEPT = 0.8  # the graph's largest piece must hold this share of the points
+CELLS = 28  # the blade's length is cut in this many cubes; each cube's mean is a centre
+SMOOTHING = 1e-4  # the thin-plate spline's smoothing, at unit length
+NEWTON = 10  # Gauss-Newton steps of `Sheet.flatten`
+HALVINGS = 4  # a step that goes farther is halved at most this many times
+SAMPLES = 160  # the spline sampled this many times across the flat blade's extent
+PAD = 0.1  # ... and this share of it beyond, on every side
+
+
+def unroll(points: np.ndarray, reach: float) -> np.ndarray | None:
+    """(n, 2) flat coordinates of (n, 3) points on a bent sheet, near-isometric, or None when
+    the points' neighbour graph falls apart (the points are not one sheet).
+
+    Parameters
+    ----------
+    points : (n, 3) float array
+        Points sampling one smooth surface evenly (cell means of a blade's scan points).
+    reach : float
+        Points closer than this are neighbours (a little over the points' spacing).
+
+    Returns
+    -------
+    (n, 2) float array or None
+        The points unrolled, in the points' units.
+    """
+    points = np.asarray(points, dtype=float)
+    n = len(points)
+    if n < MIN_CELLS:
+        return None
+    tree = cKDTree(points)
+    graph = tree.sparse_distance_matrix(tree, reach, output_type="coo_matrix").tocsr()
+    _, label = connected_components(graph, directed=False)
+    main = label == np.argmax(np.bincount(label))
+    if main.mean() < MOST_KEPT:
+        return None
+    inside = np.flatnonzero(main)
+    sources = inside[:: max(1, len(inside) // LANDMARKS)]
+    geo = dijkstra(graph, indices=sources)  # (L, n)
+    squared = geo[:, sources] ** 2
+    mean_rows = squared.mean(1)
+    centred = -0.5 * (squared - squared.mean(0) - mean_rows[:, None] + squared.mean())
+    values, vectors = np.linalg.eigh(centred)
+    top = np.argsort(values)[::-1][:2]
+    if values[top[1]] <= 0:
+        return None
+    flat = np.zeros((n, 2))
+    flat[main] = (
+        -0.5 * (geo[:, main] ** 2 - mean_rows[:, None]).T @ (vectors[:, top] / np.sqrt(values[top]))
+    )
+    if not main.all():  # points off the main piece: placed with their nearest main point
+        flat[~main] = flat[main][cKDTree(points[main]).query(points[~main])[1]]
+    return flat
+
+
+@dataclass(frozen=True, eq=False)
+class Sheet:
+    """The smooth map S(u, v) from a flat blade into 3D, a thin-plate spline through `centers`
+    (m, 2) to `values` (m, 3), and the offsets along its normal (module docstring). A Bend
+    (model.Bend): flat points (u, v, w) are bent by `apply` and unbent by `flatten`."""
+
+    centers: np.ndarray
+    values: np.ndarray
+    smoothing: float
+    up: np.ndarray  # (3,) the side the normal is turned to
+    _pieces: tuple = field(init=False, repr=False)
+    _guess: tuple = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        spline = RBFInterpolator(
+            self.centers, self.values, kernel="thin_plate_spline", smoothing=self.smoothing
+        )
+        lo, hi = self.centers.min(axis=0), self.centers.max(axis=0)
+        step = float(np.max(hi - lo)) / SAMPLES
+        pad = PAD * float(np.max(hi - lo))
+        us, vs = (np.arange(lo[k] - pad, hi[k] + pad + step, step) for k in (0, 1))
+        grid = np.stack(np.meshgrid(us, vs, indexing="ij"), -1).reshape(-1, 2)
+        at = spline(grid).reshape(len(us), len(vs), 3)
+        # the spline sampled and interpolated bicubically: the same surface to 1e-5 of the
+        # length, evaluated in constant time per point (the spline's own sum is over every centre)
+        pieces = tuple(RectBivariateSpline(us, vs, at[:, :, k]) for k in range(3))
+        object.__setattr__(self, "_pieces", pieces)
+        object.__setattr__(self, "_guess", (cKDTree(at.reshape(-1, 3)), grid))
+
+    @property
+    def size(self) -> float:
+        """The flat blade's extent."""
+        return float(np.ptp(self.centers, axis=0).max())
+
+    def __call__(self, uv: np.ndarray, du: int = 0, dv: int = 0) -> np.ndarray:
+        """(n, 3) sheet points (or their derivatives du, dv times along u, v) at (n, 2) flat
+        points."""
+        uv = np.asarray(uv, dtype=float)
+        return np.column_stack([f.ev(uv[:, 0], uv[:, 1], dx=du, dy=dv) for f in self._pieces])
+
+    def frame(self, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """At (n, 2) flat points: the sheet's points, its two tangents S_u, S_v and unit normal,
+        each (n, 3)."""
+        su, sv = self(uv, du=1), self(uv, dv=1)
+        normal = np.cross(su, sv)
+        normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+        normal *= np.where(normal @ self.up < 0, -1.0, 1.0)[:, None]
+        return self(uv), su, sv, normal
+
+    def apply(self, points: np.ndarray) -> np.ndarray:
+        """(n, 3) flat blade points (u, v, w), bent: S(u, v) + w n(u, v)."""
+        points = np.asarray(points, dtype=float)
+        p, _, _, normal = self.frame(points[:, :2])
+        return p + points[:, 2:3] * normal
+
+    def flatten(self, points: np.ndarray) -> np.ndarray:
+        """(n, 3) bent points back on the flat blade: the nearest sheet point's (u, v) and the
+        offset along the normal there."""
+        points = np.asarray(points, dtype=float)
+        tree, grid = self._guess
+        uv = grid[tree.query(points)[1]].copy()
+        miss = np.linalg.norm(self(uv) - points, axis=1)
+        for _ in range(NEWTON):  # Gauss-Newton, each step halved until it comes nearer
+            p, su, sv, _ = self.frame(uv)
+            jac = np.stack([su, sv], axis=2)  # (n, 3, 2)
+            jtj = np.einsum("nki,nkj->nij", jac, jac)
+            jtr = np.einsum("nki,nk->ni", jac, points - p)
+            step = np.linalg.solve(jtj, jtr[..., None])[..., 0]
+            for _ in range(HALVINGS):
+                tried = uv + step
+                now = np.linalg.norm(self(tried) - points, axis=1)
+                better = now < miss
+                uv[better], miss[better] = tried[better], now[better]
+                step[better] = 0.0
+                step *= 0.5
+        p, _, _, normal = self.frame(uv)
+        return np.column_stack([uv, np.einsum("nk,nk->n", points - p, normal)])
+
+    def key(self) -> bytes:
+        """Bytes that change with the sheet."""
+        return self.centers.tobytes() + self.values.tobytes() + np.float64(self.smoothing).tobytes()
+
+    def crease(self, points: np.ndarray) -> None:
+        """A sheet is smooth: no crease."""
+        return None
+
+
+def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None:
+    """The sheet through (n, 3) blade points, or None when they cannot be unrolled (`unroll`).
+
+    Parameters
+    ----------
+    points : (n, 3) float array
+        The blade's scan points.
+    up : (3,) float array
+        The blade's upper side (the sheet's normal is turned towards it).
+    length : float
+        The blade's length, roughly (sets the cells' size).
+
+    Returns
+    -------
+    Sheet or None
+        The sheet; `Sheet.flatten` puts the points on their flat blade.
+    """
+    points = np.asarray(points, dtype=float)
+    cell = length / CELLS
+    keys = np.floor((points - points.min(axis=0)) / cell).astype(np.int64)
+    _, which, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    sums = np.zeros((len(counts), 3))
+    np.add.at(sums, which.ravel(), points)
+    means = sums / counts[:, None]
+    flat = unroll(means, REACH * cell)
+    if flat is None:
+        return None
+    centre = flat.mean(axis=0)
+    axes = np.linalg.svd(flat - centre, full_matrices=False)[2]
+    flat = (flat - centre) @ axes.T  # u along the longest spread
+    sheet = Sheet(flat, means, SMOOTHING * length**2, np.asarray(up, dtype=float))
+    # the graph's paths zigzag, so its distances run a few percent long: the flat blade is
+    # scaled to keep the sheet's area (its median area factor |S_u x S_v| made 1)
+    _, su, sv, _ = sheet.frame(flat)
+    stretch = float(np.sqrt(np.median(np.linalg.norm(np.cross(su, sv), axis=1))))
+    return Sheet(flat * stretch, means, sheet.smoothing, sheet.up)
+
+
+@dataclass(frozen=True, eq=False)
+class Scaled:
+    """`sheet`, fitted at unit size, as a Bend in the world's units: world = centre + scale ·
+    unit, for the flat points and the bent ones alike.
+
+    `flatten` is the nearest sheet point, found by Gauss-Newton; near a tight curl or the
+    sheet's edge it can settle on another sheet point than the one a point was bent from, so
+    the points this bend made (`bent`: the extraction's boundary and veins) are remembered and
+    flattened exactly."""
+
+    sheet: Sheet
+    centre: np.ndarray
+    scale: float
+    made: dict = field(default_factory=dict, repr=False)
+
+    def bent(self, points: np.ndarray) -> np.ndarray:
+        """`apply`, remembering each bent point's flat one for `flatten`."""
+        points = np.asarray(points, dtype=float)
+        bent = self.apply(points)
+        self.made.update(zip(map(bytes, bent), points, strict=True))
+        return bent
+
+    def apply(self, points: np.ndarray) -> np.ndarray:
+        """(n, 3) flat blade points, bent (`Sheet.apply`)."""
+        return self.centre + self.scale * self.sheet.apply((points - self.centre) / self.scale)
+
+    def flatten(self, points: np.ndarray) -> np.ndarray:
+        """(n, 3) bent points back on the flat blade (`Sheet.flatten`)."""
+        points = np.asarray(points, dtype=float)
+        known = np.array([bytes(p) in self.made for p in points], dtype=bool)
+        flat = np.empty_like(points)
+        if known.any():
+            flat[known] = [self.made[bytes(p)] for p in points[known]]
+        if not known.all():
+            unit = (points[~known] - self.centre) / self.scale
+            flat[~known] = self.centre + self.scale * self.sheet.flatten(unit)
+        return flat
+
+    def key(self) -> bytes:
+        """Bytes that change with the bend."""
+        return self.sheet.key() + np.append(self.centre, self.scale).tobytes()
+
+    def entry(self, points: np.ndarray) -> dict:
+        """The bend as a project keeps it (sources/files.py): the sheet, and the flat points of
+        the (n, 3) bent `points` (the leaf's boundary and veins, stacked)."""
+        sheet = self.sheet
+        return {
+            "sheet": {
+                "centers": sheet.centers.tolist(),
+                "values": sheet.values.tolist(),
+                "smoothing": sheet.smoothing,
+                "up": sheet.up.tolist(),
+                "centre": self.centre.tolist(),
+                "scale": self.scale,
+                "flat": self.flatten(points).tolist(),
+            }
+        }
+
+    @classmethod
+    def from_entry(cls, entry: dict, points: np.ndarray) -> Scaled:
+        """The bend `entry` wrote, its flat points paired with the (n, 3) bent `points` again.
+
+        Raises
+        ------
+        ValueError, TypeError, KeyError
+            For an entry that does not read whole (the caller names the file).
+        """
+        sheet = entry["sheet"]
+        centers, values = np.array(sheet["centers"], float), np.array(sheet["values"], float)
+        flat = np.array(sheet["flat"], float).reshape(-1, 3)
+        if (
+            centers.shape != (len(values), 2)
+            or values.shape[1:] != (3,)
+            or len(centers) < MIN_CELLS
+        ):
+            raise ValueError("the sheet's centres and values do not match")
+        if len(flat) != len(points):
+            raise ValueError("the sheet's flat points do not match the leaf's")
+        up = np.array(sheet["up"], float).reshape(3)
+        bend = cls(
+            Sheet(centers, values, float(sheet["smoothing"]), up),
+            np.array(sheet["centre"], float).reshape(3),
+            float(sheet["scale"]),
+        )
+        bend.made.update(zip(map(bytes, np.asarray(points, dtype=float)), flat, strict=True))
+        return bend
+
+    def crease(self, points: np.ndarray) -> None:
+        """A sheet is smooth: no crease."""
+        return None

@@ -1,0 +1,53 @@
+"""The sheet a scan's blade is unrolled onto (core/sheet.py, issue 21 item 3)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from leafstudio.core.sheet import fit_sheet, unroll
+
+
+def rolled(uv: np.ndarray, radius: float = 0.08) -> np.ndarray:
+    """(n, 2) flat points rolled across (v) on a cylinder of `radius` along u: a blade whose
+    halves curl up past the vertical (no height field over any plane holds it)."""
+    angle = uv[:, 1] / radius
+    return np.column_stack([uv[:, 0], radius * np.sin(angle), radius * (1 - np.cos(angle))])
+
+
+def _blade(n: int = 4000, seed: int = 0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    uv = rng.uniform([-0.5, -0.2], [0.5, 0.2], (3 * n, 2))
+    return uv[(uv[:, 0] / 0.5) ** 2 + (uv[:, 1] / 0.2) ** 2 < 1][:n]
+
+
+def test_a_rolled_blade_unrolls_near_isometrically():
+    uv = _blade()
+    cells = fit_sheet(rolled(uv), np.array([0.0, 0.0, 1.0]), 1.0)
+    assert cells is not None
+    flat = cells.flatten(rolled(uv))
+    # distances in the plane are the blade's own, up to a few percent
+    pick = np.random.default_rng(1).integers(0, len(uv), (500, 2))
+    true = np.linalg.norm(uv[pick[:, 0]] - uv[pick[:, 1]], axis=1)
+    got = np.linalg.norm(flat[pick[:, 0], :2] - flat[pick[:, 1], :2], axis=1)
+    assert np.median(np.abs(got - true)) < 0.02
+    # every point near the sheet (the cubes' means cut a curl's chords a little)
+    assert np.abs(flat[:, 2]).mean() < 1.5e-3 and np.abs(flat[:, 2]).max() < 1e-2
+
+
+def test_bent_points_flatten_back_and_offsets_follow_the_normal():
+    uv = _blade(2000)
+    sheet = fit_sheet(rolled(uv), np.array([0.0, 0.0, 1.0]), 1.0)
+    flat = sheet.flatten(rolled(uv))
+    lifted = flat + [0.0, 0.0, 0.01]
+    bent = sheet.apply(lifted)
+    back = sheet.flatten(bent)
+    np.testing.assert_allclose(back, lifted, atol=1e-6)
+    # the normal is turned to `up` at the midrib: the lifted midrib points rise
+    mid = np.abs(uv[:, 1]) < 0.01
+    assert np.all(bent[mid, 2] > rolled(uv)[mid, 2])
+
+
+def test_points_that_are_not_one_sheet_are_not_unrolled():
+    rng = np.random.default_rng(0)
+    two = np.vstack([rng.uniform(0, 0.2, (200, 3)), rng.uniform(0, 0.2, (200, 3)) + 5.0])
+    assert unroll(two, 0.05) is None
