@@ -11,8 +11,9 @@ shares of the leaf's length.
 - forms over poses: every gallery shape at every N-th pose of fold −75..75, curl 0..1 and wave
   0..0.2 (N = 1: all 50), K = 3, grid 128: largest and mean vein distance, largest boundary
   distance, refused and warned;
-- the eight scans: extract, then reconstruct at K auto and grid 256; the mean distance from the
-  blade's points to the surface;
+- the eight scans: open_scan then reconstruct with the defaults (the blade unrolled onto a sheet,
+  core/sheet.py); the mean and 95th-percentile distance from the blade's points to the surface,
+  beside the figures before the sheet (measured at baf1042);
 - vein distances: every gallery form (flat) and a drawn leaf with hand-raised veins, with the
   99th-percentile dihedral angles in the margin band and inside;
 - time at grid 128: a bent form beside the same form flat, best of three.
@@ -89,34 +90,47 @@ def forms_over_poses(every: int) -> None:
         )
 
 
+# open_scan then reconstruct with the defaults at baf1042 (before core/sheet.py): the mean and
+# 95th-percentile scan-to-surface distance, shares of the length
+BEFORE_SHEET = {
+    "soybean_11_20190508T043118_pot1_1": (2.00, 5.46),
+    "soybean_11_20190508T043118_pot1_15": (1.15, 3.07),
+    "soybean_11_20190508T043118_pot1_17": (0.86, 2.22),
+    "soybean_11_20190508T043118_pot1_36": (0.77, 2.06),
+    "sugarbeet_f00012_20170829T010129_pot1_1": (0.47, 1.27),
+    "sugarbeet_f00012_20170830T140748_pot2_3": (0.89, 2.38),
+    "sugarbeet_f00012_20170904T033001_pot2_1": (0.44, 1.38),
+    "sugarbeet_f00012_20170904T115033_pot1_7": (1.25, 3.72),
+}
+
+
 def scans(folder: Path) -> None:
-    from leafstudio.analysis.fidelity import scan_distances
-    from leafstudio.sources.extract import extract_leaf
-    from leafstudio.sources.scan import read_scan
+    """open_scan then reconstruct with the defaults (as `extract` then `reconstruct`, batch and
+    the app): the scan fit (mean, 95th percentile) over the length, and the flat blade's length."""
+    from leafstudio import workflows
 
     paths = sorted(folder.glob("*.txt"))
     if not paths:
         print(f"\n(no scans in {folder})")
         return
-    print("\n## the eight scans (extract, reconstruct at K auto, grid 256): mean distance")
-    print("| scan | today | ours |")
-    print("|---|---|---|")
-    means: dict[str, list[float]] = {"today": [], "ours": []}
+    print("\n## the eight scans (open_scan, reconstruct with the defaults): distance / length")
+    print("| scan | mean before | p95 before | mean | p95 | length | CPU s |")
+    print("|---|---|---|---|---|---|---|")
+    means, before = [], []
     for path in paths:
-        raw = read_scan(path)
-        ex = extract_leaf(raw)
-        scale = 1.0 / ex.length
-        leaf = ls.Leaf(ex.leaf.boundary * scale, [v * scale for v in ex.leaf.veins])
-        blade = raw[ex.blade] * scale
-        row = []
-        for name in ("today", "ours"):
-            params = ls.Params(k="auto", grid=256, through_veins=name == "ours")
-            result = _run(leaf, params)[0]
-            mean = scan_distances(result.mesh, blade, 1.0)["mean"] if result else float("nan")
-            means[name].append(mean)
-            row.append(f"{mean:.2%}")
-        print(f"| {path.stem} | {' | '.join(row)} |")
-    print(f"| mean | {np.nanmean(means['today']):.2%} | {np.nanmean(means['ours']):.2%} |")
+        start = time.process_time()
+        opened = workflows.open_scan(str(path))
+        fit = workflows.reconstruct(opened, ls.Params()).scan_fit
+        cpu = time.process_time() - start
+        mean, p95 = fit["mean"] / fit["length"], fit["p95"] / fit["length"]
+        was = BEFORE_SHEET.get(path.stem, (float("nan"), float("nan")))
+        means.append(mean)
+        before.append(was[0])
+        print(
+            f"| {path.stem} | {was[0]:.2f}% | {was[1]:.2f}% | {mean:.2%} | {p95:.2%} | "
+            f"{fit['length']:.1f} | {cpu:.1f} |"
+        )
+    print(f"| mean | {np.nanmean(before):.2f}% | | {np.mean(means):.2%} | | | |")
 
 
 def vein_distances() -> None:
