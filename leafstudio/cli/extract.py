@@ -50,6 +50,11 @@ def run(args: argparse.Namespace) -> int:
         log.warning(f"{args.scan}: {note}")
     found, scan = opened.extraction, opened.scan
     save_leaf(found.leaf, args.output)
+    if found.leaf.bend is not None and not str(args.output).lower().endswith(".json"):
+        log.warning(
+            f"{args.output}: a point list keeps the bent points, not the blade's sheet they were "
+            "found on (core/sheet.py); write a .leaf.json to reconstruct the blade unrolled"
+        )
     other = len(scan) - found.blade.sum() - found.petiole.sum()
     print(
         f"{args.scan}: blade of {found.blade.sum()} of {len(scan)} points (dropped: petiole "
