@@ -16,6 +16,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from leafstudio.core.bend import flat_leaf
+from leafstudio.core.sheet import Scaled
 from leafstudio.core.plane import Frame
 from leafstudio.gui.model.curves import (
     SAMPLES_PER_SPAN,
@@ -87,6 +88,10 @@ class Sketch:
     symmetric : bool
         Mirror editing is on: each edit is reflected across the midrib (`mirrored`). A property
         of the drawing, saved with it (a project's "sketch" without it: off).
+    bend : Bend or None
+        A scan's sheet (core/sheet.Scaled) the sketch's leaf was derived from, kept by the leaves
+        it draws (not saved with the sketch: the project keeps the leaf's). A pose is the
+        session's (gui/model/bending.py).
     """
 
     boundary: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
@@ -94,6 +99,7 @@ class Sketch:
     frame: Frame = field(default_factory=_identity_frame)
     relief: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     symmetric: bool = False
+    bend: Any = None
 
     def __post_init__(self) -> None:
         boundary = np.asarray(self.boundary, dtype=float).reshape(-1, 2)
@@ -126,7 +132,10 @@ class Sketch:
             if len(vein):
                 curve = self.vein_curve(i)
                 veins.append(self.frame.to_world(curve[:, :2], curve[:, 2]))
-        return Leaf(boundary=boundary, veins=veins)
+        if self.bend is None:
+            return Leaf(boundary=boundary, veins=veins)
+        bent = getattr(self.bend, "bent", self.bend.apply)  # a sheet remembers what it bent
+        return Leaf(boundary=bent(boundary), veins=[bent(v) for v in veins], bend=self.bend)
 
     def boundary_heights(self, xy: np.ndarray) -> np.ndarray:
         """(s,) heights of (s, 2) plane points on the boundary, from the relief (0 without)."""
@@ -412,4 +421,10 @@ class Sketch:
             xy, h = result.frame.to_plane(vein)
             points = np.column_stack([xy, h])
             veins.append(even_by_length(points, min(DERIVED_VEIN_POINTS, len(points)), False))
-        return cls(boundary=boundary, veins=tuple(veins), frame=result.frame, relief=relief)
+        return cls(
+            boundary=boundary,
+            veins=tuple(veins),
+            frame=result.frame,
+            relief=relief,
+            bend=result.leaf.bend if isinstance(result.leaf.bend, Scaled) else None,
+        )
