@@ -16,8 +16,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from leafstudio.core.bend import flat_leaf
-from leafstudio.core.sheet import Scaled
 from leafstudio.core.plane import Frame
+from leafstudio.core.sheet import Scaled
 from leafstudio.gui.model.curves import (
     SAMPLES_PER_SPAN,
     closed_curve,
