@@ -29,6 +29,12 @@ def pose_of(leaf: Leaf | None) -> Pose:
     return bend if isinstance(bend, Pose) else FLAT
 
 
+def can_pose(leaf: Leaf | None) -> bool:
+    """Whether the sliders may bend this leaf: it is flat or bent by a pose. A scan bent by the
+    sheet fitted to its points (core/sheet.py) is not: a pose would replace that fit."""
+    return leaf is not None and (leaf.bend is None or isinstance(leaf.bend, (Pose, PlacedPose)))
+
+
 def posed(
     flat: Leaf | None, pose: Pose, like: Bend | None = None, plane: Any = None
 ) -> Leaf | None:
@@ -60,8 +66,11 @@ class Bending:
 
     def set_bend(self, pose: Pose, final: bool = True) -> None:
         """A new pose: `final=False` while a slider is held (shown, not an undo step), `True` on
-        release: one undo step from before the drag. Nothing without a leaf."""
+        release: one undo step from before the drag. Nothing without a leaf, or for a leaf
+        the sliders may not bend (`can_pose`)."""
         leaf = self.state.leaf
+        if not can_pose(leaf):
+            return
         if self._bend_base is None:
             self._bend_base = self.state
         base = self._bend_base

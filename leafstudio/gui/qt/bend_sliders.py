@@ -18,6 +18,7 @@ from superqt.utils import qthrottled
 
 from leafstudio.core.bend import Pose
 from leafstudio.forms.terms import RELIEF
+from leafstudio.gui.model.bending import can_pose
 
 THROTTLE_MS = 80  # as the parameter sliders (controls.py)
 RANGES = {"fold": (-75.0, 75.0, 1), "curl": (-1.0, 1.0, 2)}  # least, most, decimals
@@ -26,6 +27,10 @@ TIPS = {
     "curl": "Curl: the midrib bends up along its length, z = curl · x² from the base (a leaf of "
     "length 1 lifts its apex by curl; negative droops). The sketch keeps the flat blade.",
 }
+SHEET_TIP = (
+    "This scan is bent by the smooth sheet fitted to all its points; a fold or curl would "
+    "replace that fit, so the sliders are off for it."
+)
 
 
 class BendSliders(QObject):
@@ -61,9 +66,11 @@ class BendSliders(QObject):
             slider.setValue(getattr(pose, name))
             slider.blockSignals(False)
 
-    def set_enabled(self, on: bool) -> None:
-        for slider in self.sliders.values():
+    def set_enabled(self, on: bool, why_not: str = "") -> None:
+        """Enable the sliders, or disable them with `why_not` as their tooltip."""
+        for name, slider in self.sliders.items():
             slider.setEnabled(on)
+            slider.setToolTip(TIPS[name] if on or not why_not else why_not)
 
     def _moved(self, *_: Any) -> None:
         if self.is_dragging():
@@ -94,7 +101,8 @@ def install(window: Any) -> BendSliders:
     bend.changed.connect(lambda pose, final: session.set_bend(pose, final))
 
     def shown(*_: Any) -> None:
-        bend.set_enabled(session.leaf is not None)
+        leaf = session.leaf
+        bend.set_enabled(can_pose(leaf), SHEET_TIP if leaf is not None else "")
         if not bend.is_dragging():
             bend.show_pose(session.pose)
 

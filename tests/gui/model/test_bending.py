@@ -11,12 +11,14 @@ import pytest
 
 from leafstudio.core.bend import Pose
 from leafstudio.core.placed import PlacedPose
+from leafstudio.core.sheet import fit_sheet
 from leafstudio.errors import LeafError
 from leafstudio.forms import SHAPES, Form
 from leafstudio.forms.make import SIDE_ON
+from leafstudio.gui.model.bending import can_pose
 from leafstudio.gui.model.session import Session
 from leafstudio.gui.model.sketch_model import Sketch
-from leafstudio.model import Params
+from leafstudio.model import Leaf, Params
 from leafstudio.sources.demos import demo
 from leafstudio.sources.files import load_project, save_leaf
 from tests.gui.builders import Runner
@@ -100,6 +102,24 @@ def test_a_loaded_leaf_bends_and_its_derived_sketch_stays_flat():
     runner.finish(session)
     assert relief(session.result) > flat + 0.05
     assert session.editable_sketch() is derived
+
+
+def test_a_scan_bent_by_its_fitted_sheet_is_not_replaced_by_a_pose():
+    """A slider moved on a scan that opened with its sheet (core/sheet.py) replaced the fit."""
+    uv = np.random.default_rng(0).uniform([-0.5, -0.2], [0.5, 0.2], (6000, 2))
+    uv = uv[(uv[:, 0] / 0.5) ** 2 + (uv[:, 1] / 0.2) ** 2 < 1]
+    angle = uv[:, 1] / 0.3
+    cloud = np.column_stack([uv[:, 0], 0.3 * np.sin(angle), 0.3 * (1 - np.cos(angle))])
+    sheet = fit_sheet(cloud, np.array([0.0, 0.0, 1.0]), 1.0)
+    assert sheet is not None
+    flat = sketch_ellipse(40)
+    leaf = Leaf(sheet.apply(np.column_stack([flat, np.zeros(len(flat))])), [], bend=sheet)
+    session = Session(Runner(), FAST)
+    session.open_document(leaf, None, "scan")
+    assert not can_pose(session.leaf) and can_pose(demo("parallel"))
+    before = session.state
+    session.set_bend(Pose(fold=30))
+    assert session.state is before and session.leaf.bend is sheet and session.history.index == 0
 
 
 @pytest.mark.parametrize("shape", sorted(SHAPES))
