@@ -79,7 +79,8 @@ class Bend(Protocol):
         ...
 
     def crease(self, points: np.ndarray) -> np.ndarray | None:
-        """(n,) signed distances of flat points from the line the bend creases along, or None."""
+        """(n,) signed distances of flat points from the line the bend creases along ((m, n) for
+        m lines, cut in turn), or None."""
         ...
 
 

@@ -35,6 +35,9 @@ def add_form_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--aspect", type=float, metavar="L/W", help="length over greatest width")
     p.add_argument("--fold", type=float, default=0.0, metavar="DEG", help="halves raised by DEG")
     p.add_argument("--curl", type=float, default=0.0, metavar="C", help="apex raised C lengths")
+    p.add_argument(
+        "--roll", type=float, default=0.0, metavar="R", help="margins rolled up R half turns"
+    )
     p.add_argument("--wave", type=float, default=0.0, metavar="A", help="margin wave height")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="a variant (default 0)")
     p.add_argument(
@@ -90,6 +93,7 @@ def run_form(args: argparse.Namespace) -> int:
         **{n: getattr(args, n) for n in names},
         fold=args.fold,
         curl=args.curl,
+        roll=args.roll,
         wave=args.wave,
         seed=args.seed,
     )

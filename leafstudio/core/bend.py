@@ -9,8 +9,10 @@ bend and runs exactly as before.
 
 `Pose` is the bend a form knows (forms/make.py): in the blade's coordinates (the base at the
 origin, the midrib along +x, the relief on +z), a fold raises each half from the midrib,
-z += |y| tan(fold), and a curl bends the midrib, z += curl · x². It is a shear along z, so it is
-undone exactly, and the blade is what the form drew before posing: a fold of 75° or a rolled
+z += |y| tan(fold), and a curl bends the midrib, z += curl · x², a shear along z; a roll then
+bends each cross-section into a circular arc of curvature `roll` (an isometry: widths are kept,
+heights are offsets along the rolled normal, as a grass blade or a young leaf rolls; a relief
+as high as the roll's radius is drawn in by 1 - height / radius). Both are undone exactly, and the blade is what the form drew before posing: a fold of 75° or a rolled
 grass blade is reconstructed as well as the flat leaf, where the boundary's PCA plane saw it
 side-on and the mesh broke (issue 21, finding 1).
 
@@ -33,13 +35,18 @@ if TYPE_CHECKING:
     from leafstudio.core.prepare.units import Units
 
 
+ROLL_STEP = 0.1  # radians of roll between cuts: a chord's sag 0.1% of the radius, its area 0.04%
+
+
 @dataclass(frozen=True)
 class Pose:
-    """A form's fold (degrees, each half rising from the midrib) and curl (the midrib's bend,
-    z = curl · x²), in the blade's coordinates."""
+    """A form's fold (degrees, each half rising from the midrib), curl (the midrib's bend,
+    z = curl · x²) and roll (the cross-section's curvature, 1 / its radius; positive rolls
+    the margins up), in the blade's coordinates."""
 
     fold: float = 0.0
     curl: float = 0.0
+    roll: float = 0.0
 
     def lift(self, xy: np.ndarray) -> np.ndarray:
         """(n,) heights the pose adds at (n, 2) blade points."""
@@ -47,25 +54,49 @@ class Pose:
         return np.abs(xy[:, 1]) * np.tan(np.deg2rad(self.fold)) + self.curl * xy[:, 0] ** 2
 
     def apply(self, points: np.ndarray) -> np.ndarray:
-        """(n, 3) flat blade points, bent."""
+        """(n, 3) flat blade points, bent: lifted by the fold and curl, then rolled."""
         points = np.array(points, dtype=float)
         points[:, 2] += self.lift(points[:, :2])
+        if self.roll != 0:
+            r = 1.0 / self.roll  # the axis: y = 0, z = r; the height is taken off the radius
+            angle, radius = points[:, 1] * self.roll, r - points[:, 2]
+            points[:, 1], points[:, 2] = np.sin(angle) * radius, r - np.cos(angle) * radius
         return points
 
     def flatten(self, points: np.ndarray) -> np.ndarray:
-        """(n, 3) bent points back on the flat blade (the inverse of `apply`)."""
+        """(n, 3) bent points back on the flat blade (the inverse of `apply`, for points nearer
+        the roll's axis than its radius and less than half a turn round it)."""
         points = np.array(points, dtype=float)
+        if self.roll != 0:
+            r = 1.0 / self.roll
+            sign = np.sign(r)
+            y, z = sign * points[:, 1], sign * (r - points[:, 2])
+            points[:, 1] = np.arctan2(y, z) * r
+            points[:, 2] = r - sign * np.hypot(y, z)
         points[:, 2] -= self.lift(points[:, :2])
         return points
 
     def key(self) -> bytes:
-        """Bytes that change with the bend (Leaf.fingerprint)."""
-        return np.array([self.fold, self.curl]).tobytes()
+        """Bytes that change with the bend (Leaf.fingerprint); no roll keeps today's."""
+        terms = [self.fold, self.curl] + ([self.roll] if self.roll != 0 else [])
+        return np.array(terms).tobytes()
+
+    def entry(self) -> dict[str, float]:
+        """The project's "bend" entry (sources/files.py): "roll" only when there is one."""
+        entry = {"fold": self.fold, "curl": self.curl}
+        return entry | ({"roll": self.roll} if self.roll != 0 else {})
 
     def crease(self, points: np.ndarray) -> np.ndarray | None:
-        """(n,) signed distances of flat points from the line the bend creases along (the
-        midrib, y = 0, for a fold), or None when it has none: the mesh is cut there first."""
-        return None if self.fold == 0 else np.asarray(points, dtype=float)[:, 1]
+        """(n,) or (m, n) signed distances of flat points from the lines the bend creases along
+        (the midrib, y = 0, for a fold; lines along the midrib ROLL_STEP radians of roll apart,
+        so no chord cuts across a roll), or None when it has none: the mesh is cut there first."""
+        y = np.asarray(points, dtype=float)[:, 1]
+        lines = [0.0] if self.fold != 0 else []
+        if self.roll != 0 and len(y):
+            step = ROLL_STEP / abs(self.roll)
+            ends = np.ceil(np.abs([y.min(), y.max()]) / step)
+            lines += [j * step for j in range(-int(ends[0]), int(ends[1]) + 1) if j != 0]
+        return None if not lines else y[None, :] - np.array(lines)[:, None]
 
 
 def flat_leaf(leaf: Leaf) -> Leaf:
@@ -129,8 +160,8 @@ def cut_along(mesh: TriangleMesh, side: np.ndarray) -> TriangleMesh:
 
 def _bent_mesh(mesh: TriangleMesh, carry, crease) -> TriangleMesh:
     side = crease(mesh.points)
-    if side is not None:
-        mesh = cut_along(mesh, side)
+    for line in range(0 if side is None else len(np.atleast_2d(side))):
+        mesh = cut_along(mesh, np.atleast_2d(crease(mesh.points))[line])
     return TriangleMesh(carry(mesh.points), mesh.regular_faces, mesh.point_data)
 
 

@@ -220,6 +220,8 @@ VENATIONS: dict[str, str] = {
 RELIEF: dict[str, str] = {  # plain words (the app shows them); FLAGS adds the CLI's syntax
     "fold": "the two halves rise from the midrib by this angle, like a half-open book",
     "curl": "the midrib bends so the apex rises by this many leaf lengths (droops, if negative)",
+    "roll": "the margins roll up across the midrib, as a grass blade rolls: 1 closes the blade "
+    "into a tube at its widest, 0.5 makes a half-pipe (rolls down, if negative)",
     "wave": "the margin rises and falls in waves of this height (in leaf lengths; at most half "
     "the blade's half-width)",
     "seed": "a variant of the form: tooth spacing, lobe depth, vein angles and width vary "
@@ -232,6 +234,7 @@ RELIEF: dict[str, str] = {  # plain words (the app shows them); FLAGS adds the C
 FLAGS: dict[str, str] = {  # each RELIEF term's command-line option, for `form --list`
     "fold": "--fold DEG",
     "curl": "--curl C",
+    "roll": "--roll R",
     "wave": "--wave A",
     "seed": "--seed S",
     "aspect": "--aspect L/W",

@@ -188,7 +188,7 @@ FRAME_KEYS = ("origin", "u", "v", "normal")  # a bend's frame in a project (core
 
 
 def _project_bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
-    """A project's "bend": {"fold": degrees, "curl": c}, the pose a form was made in, with the
+    """A project's "bend": {"fold": degrees, "curl": c, "roll": curvature}, the pose a form was made in, with the
     "frame" {"origin", "u", "v", "normal"} of a leaf bent in the app (core/placed.py), or
     {"sheet": ...}, a scan's bend (core/sheet.py)."""
     if isinstance(value, dict) and "sheet" in value:
@@ -196,9 +196,9 @@ def _project_bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Sc
             return Scaled.from_entry(value, np.vstack([leaf.boundary, leaf.vein_points]))
         except (TypeError, ValueError, KeyError, np.linalg.LinAlgError):
             raise LeafError('"bend": its "sheet" does not read whole', source) from None
-    fold = curl = math.nan  # stays nan, and is refused below, unless the entry reads whole
+    fold = curl = roll = math.nan  # stays nan, and is refused below, unless the entry reads whole
     frame = None
-    if isinstance(value, dict) and not set(value) - {"fold", "curl", "frame"}:
+    if isinstance(value, dict) and not set(value) - {"fold", "curl", "roll", "frame"}:
         with contextlib.suppress(TypeError, ValueError, KeyError, AttributeError, OverflowError):
             if "frame" in value:  # read first: a bad frame leaves the fold nan
                 axes = [np.asarray(value["frame"][k], float) for k in FRAME_KEYS]
@@ -207,13 +207,15 @@ def _project_bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Sc
                     raise ValueError
                 frame = Frame(*axes)
             fold, curl = float(value.get("fold", 0.0)), float(value.get("curl", 0.0))
-    if not (abs(fold) < 90 and math.isfinite(curl)):
+            roll = float(value.get("roll", 0.0))
+    if not (abs(fold) < 90 and math.isfinite(curl) and math.isfinite(roll)):
         raise LeafError(
-            f'"bend" must be {{"fold": degrees under 90, "curl": a number}} (a "frame": '
+            f'"bend" must be {{"fold": degrees under 90, "curl", "roll": numbers}} (a "frame": '
             f'{{"origin", "u", "v", "normal"}}, orthonormal axes), got {shorten(value)}',
             source,
         )
-    return Pose(fold, curl) if frame is None else PlacedPose(Pose(fold, curl), frame)
+    pose = Pose(fold, curl, roll)
+    return pose if frame is None else PlacedPose(pose, frame)
 
 
 def load_leaf(path: str | os.PathLike, veins: Sequence[str | os.PathLike] = ()) -> Leaf:
@@ -307,11 +309,11 @@ def project_dict(
     if photo is not None:
         data["photo"] = photo
     if isinstance(leaf.bend, Pose):  # a posed form: reconstructed flat, then bent (core/bend.py)
-        data["bend"] = {"fold": leaf.bend.fold, "curl": leaf.bend.curl}
+        data["bend"] = leaf.bend.entry()
     elif isinstance(leaf.bend, PlacedPose):  # a leaf bent in the app, about its midrib
         f, pose = leaf.bend.frame, leaf.bend.pose
         frame = dict(zip(FRAME_KEYS, (f.origin, f.u, f.v, f.normal), strict=True))
-        data["bend"] = {"fold": pose.fold, "curl": pose.curl}
+        data["bend"] = pose.entry()
         data["bend"]["frame"] = {k: [float(x) for x in a] for k, a in frame.items()}
     elif isinstance(leaf.bend, Scaled):  # a scan's blade, unrolled (core/sheet.py)
         data["bend"] = leaf.bend.entry(np.vstack([leaf.boundary, leaf.vein_points]))

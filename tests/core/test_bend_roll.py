@@ -1,0 +1,119 @@
+"""A rolled blade (issue 21, build item 1): the cross-section across the midrib bent into a
+circular arc, as a grass blade or a young leaf rolls, isometrically (widths kept)."""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+
+import leafstudio as ls
+from leafstudio.core.bend import Pose
+from leafstudio.forms.make import Form
+
+ROLLED = [
+    ("lanceolate", {"aspect": 30, "roll": 1.0}),  # a grass blade closed into a tube
+    ("linear", {"roll": 1.0}),
+    ("ovate", {"roll": 0.5, "fold": 20}),
+]
+CORNERS = np.array([[1 / 3, 1 / 3, 1 / 3], [0.5, 0.5, 0], [0, 0.5, 0.5], [0.5, 0, 0.5]])
+
+
+def _area(mesh) -> float:
+    c = mesh.points[mesh.regular_faces]
+    return float(0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1).sum())
+
+
+def off_surface(rolled, flat, pose: Pose) -> np.ndarray:
+    """Distances from the rolled mesh (its triangles' centres and edge midpoints) to the form's
+    own surface rolled: each point unrolled exactly (`Pose.flatten`, distances along the rolled
+    normal kept) and compared with the flat blade's surface there (its triangle, linearly)."""
+    faces = rolled.regular_faces
+    corners = pose.flatten(rolled.points)[faces]  # (f, 3, 3) on the flat blade
+    a, b, c = (corners[:, i, :2] for i in range(3))
+    frame = np.stack([b - a, c - a], axis=2)
+    ok = np.abs(np.linalg.det(frame)) > 1e-14
+    out = []
+    for w in CORNERS:
+        back = pose.flatten(np.einsum("k,fkd->fd", w, rolled.points[faces]))[ok]
+        st = np.linalg.solve(frame[ok], (back[:, :2] - a[ok])[..., None])[..., 0]
+        z = corners[ok, :, 2]
+        h = z[:, 0] + st[:, 0] * (z[:, 1] - z[:, 0]) + st[:, 1] * (z[:, 2] - z[:, 0])
+        out.append(np.abs(back[:, 2] - h))
+    return np.concatenate(out)
+
+
+@pytest.mark.parametrize(("shape", "terms"), ROLLED)
+def test_a_rolled_forms_mesh_lies_on_its_rolled_surface_and_keeps_its_area(shape, terms):
+    """The form's own surface is its flat blade's (the veins' relief) rolled: the mesh is that
+    flat mesh rolled, its chords within 2e-3 of the length (mean and 95th percentile), the
+    veins and boundary as close as a fold's or curl's, and a roll alone keeps the blade's area
+    (the mesh's sheet, its relief taken off: the relief is carried along the rolled normal, so
+    on a tube as tight as the veins are high it is drawn in, see core/bend.py)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no side-on warning
+        leaf = Form(shape, **terms).leaf()
+        result = ls.reconstruct(leaf, ls.Params(k=3, grid=128))
+    pose = leaf.bend
+    assert isinstance(pose, Pose) and pose.roll > 0
+    blade = ls.Leaf(pose.flatten(leaf.boundary), [pose.flatten(v) for v in leaf.veins])
+    flat = ls.reconstruct(blade, ls.Params(k=3, grid=128)).triangle_mesh
+    mesh = result.triangle_mesh
+    n = len(flat.points)
+    np.testing.assert_allclose(pose.flatten(mesh.points[:n]), flat.points, atol=1e-9)
+    off = off_surface(mesh, flat, pose) / result.length
+    assert off.mean() <= 2e-3 and np.percentile(off, 95) <= 2e-3
+    assert result.metrics["veins"]["max"] <= 2e-3 * result.length
+    assert result.metrics["boundary"]["max"] <= 1e-9 * result.length
+    if pose.fold == 0:  # a roll alone is an isometry
+        sheet = pose.flatten(mesh.points) * [1, 1, 0]
+        rolled = type(mesh)(pose.apply(sheet), mesh.regular_faces)
+        assert _area(rolled) == pytest.approx(
+            _area(type(mesh)(sheet, mesh.regular_faces)), rel=0.01
+        )
+
+
+def test_a_roll_is_undone_exactly():
+    pose = Pose(fold=10, curl=0.05, roll=3.0)  # within the axis, under half a turn
+    rng = np.random.default_rng(1)
+    points = np.column_stack(
+        [rng.uniform(0, 1, 50), rng.uniform(-0.3, 0.3, 50), rng.normal(0, 0.01, 50)]
+    )
+    np.testing.assert_allclose(pose.flatten(pose.apply(points)), points, atol=1e-12)
+    # widths kept: a straight cross-section keeps its length
+    v = np.linspace(-0.3, 0.3, 2001)
+    section = Pose(roll=9.0).apply(np.column_stack([np.full_like(v, 0.5), v, np.zeros_like(v)]))
+    assert np.linalg.norm(np.diff(section, axis=0), axis=1).sum() == pytest.approx(0.6, rel=1e-6)
+
+
+def test_no_roll_is_todays_pose_and_project(tmp_path):
+    assert Pose(40, 0.3, 0.0).key() == np.array([40.0, 0.3]).tobytes()
+    plain, rolled0 = Form("ovate", fold=40).leaf(), Form("ovate", fold=40, roll=0.0).leaf()
+    assert np.array_equal(plain.boundary, rolled0.boundary) and plain.bend == rolled0.bend
+    path = tmp_path / "x.leaf.json"
+    ls.save_leaf(rolled0, path)
+    assert json.loads(path.read_text())["bend"] == {"fold": 40.0, "curl": 0.0}
+
+
+def test_a_rolled_project_opens_rolled_and_a_bad_roll_is_one_error(tmp_path):
+    leaf = Form("ovate", roll=0.5).leaf()
+    path = tmp_path / "rolled.leaf.json"
+    ls.save_leaf(leaf, path)
+    assert ls.load_leaf(path).bend == leaf.bend
+    data = json.loads(path.read_text())
+    data["bend"] = {"roll": "x"}
+    path.write_text(json.dumps(data))
+    with pytest.raises(ls.LeafError) as caught:
+        ls.load_leaf(path)
+    assert "\n" not in str(caught.value) and "roll" in str(caught.value)
+
+
+def test_the_cli_writes_a_rolled_grass_blade(tmp_path, capsys):
+    from leafstudio.cli import main
+
+    out = tmp_path / "x.glb"
+    assert main(["form", "lanceolate", "--aspect", "30", "--roll", "1", "-o", str(out)]) == 0
+    assert out.stat().st_size > 0
+    assert "edge" not in capsys.readouterr().err
