@@ -13,8 +13,9 @@ z += |y| tan(fold), and a curl bends the midrib, z += curl · x², a shear along
 bends each cross-section into a circular arc of curvature `roll` (an isometry: widths are kept,
 heights are offsets along the rolled normal, as a grass blade or a young leaf rolls; a relief
 as high as the roll's radius is drawn in by 1 - height / radius). Both are undone exactly, and
-the blade is what the form drew before posing: a fold of 75° or a rolled grass blade is reconstructed as well as the flat leaf, where the boundary's PCA plane saw it
-side-on and the mesh broke (issue 21, finding 1).
+the blade is what the form drew before posing: a fold of 75° or a rolled grass blade is
+reconstructed as well as the flat leaf, where the boundary's PCA plane saw it side-on and the
+mesh broke (issue 21, finding 1).
 
 The heights, curvatures and `Result.height` stay those of the flat blade's surface (its relief);
 the mesh's points are bent.

@@ -189,8 +189,8 @@ FRAME_KEYS = ("origin", "u", "v", "normal")  # a bend's frame in a project (core
 
 def _project_bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
     """A project's "bend": {"fold": degrees, "curl": c, "roll": curvature}, the pose a form was
-    made in, with the "frame" {"origin", "u", "v", "normal"} of a leaf bent in the app (core/placed.py), or
-    {"sheet": ...}, a scan's bend (core/sheet.py)."""
+    made in, with the "frame" {"origin", "u", "v", "normal"} of a leaf bent in the app
+    (core/placed.py), or {"sheet": ...}, a scan's bend (core/sheet.py)."""
     if isinstance(value, dict) and "sheet" in value:
         try:
             return Scaled.from_entry(value, np.vstack([leaf.boundary, leaf.vein_points]))

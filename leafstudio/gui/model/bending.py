@@ -85,5 +85,7 @@ class Bending:
             self._bend_base = None
             if base.leaf is not self.state.leaf:
                 p = self.pose
-                text = f"Bend: fold {p.fold:g}°, curl {p.curl:g}"
+                text = f"Bend: fold {p.fold:g}°, curl {p.curl:g}" + (
+                    f", roll {p.roll:g}" if p.roll else ""
+                )
                 self.history.push(Step(text, base, self.state))

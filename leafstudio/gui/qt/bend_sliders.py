@@ -1,10 +1,11 @@
-"""The Fold and Curl sliders in the Parameters panel, under K and the grid (issue 21, build item
-6): they bend the document's leaf live through `Session.set_bend` (gui/model/bending.py), one
+"""The Fold, Curl and Roll sliders in the Parameters panel, under K and the grid (issue 21, build
+item 6): they bend the document's leaf live through `Session.set_bend` (gui/model/bending.py), one
 undo step per drag; undo, a new document or an opened project shows its pose on them.
 
 Fold is the angle each half rises from the midrib (as a form's); curl bends the midrib, z =
-curl · x² along it from the base (a leaf of length 1 lifts its apex by curl). The range is the
-Forms dock's: a fold of ±75°, a curl of ±1.
+curl · x² along it from the base (a leaf of length 1 lifts its apex by curl); roll bends each
+cross-section into an arc of radius 1 / roll, widths kept. The range is the Forms dock's: a fold
+of ±75°, a curl of ±1; a roll of ±20 closes a blade 0.16 wide into a tube.
 """
 
 from __future__ import annotations
@@ -21,11 +22,17 @@ from leafstudio.forms.terms import RELIEF
 from leafstudio.gui.model.bending import can_pose
 
 THROTTLE_MS = 80  # as the parameter sliders (controls.py)
-RANGES = {"fold": (-75.0, 75.0, 1), "curl": (-1.0, 1.0, 2)}  # least, most, decimals
+RANGES = {  # least, most, decimals
+    "fold": (-75.0, 75.0, 1),
+    "curl": (-1.0, 1.0, 2),
+    "roll": (-20.0, 20.0, 1),
+}
 TIPS = {
     "fold": f"Fold: {RELIEF['fold']}. The sketch keeps the flat blade; the 3D leaf is bent.",
     "curl": "Curl: the midrib bends up along its length, z = curl · x² from the base (a leaf of "
     "length 1 lifts its apex by curl; negative droops). The sketch keeps the flat blade.",
+    "roll": "Roll: the blade rolls across its midrib into arcs of radius 1 / roll (in the leaf's "
+    "lengths; negative rolls down), widths kept. The sketch keeps the flat blade.",
 }
 SHEET_TIP = (
     "This scan is bent by the smooth sheet fitted to all its points; a fold or curl would "
@@ -34,7 +41,7 @@ SHEET_TIP = (
 
 
 class BendSliders(QObject):
-    """Two superqt sliders; `changed(pose, final)` on every move, final on release."""
+    """Three superqt sliders; `changed(pose, final)` on every move, final on release."""
 
     changed = Signal(object, bool)  # Pose, final
 

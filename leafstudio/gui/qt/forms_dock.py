@@ -147,6 +147,7 @@ class FormsPanel(QWidget):
         self.lobes = self._spin(QSpinBox(), 2, 15, DEFAULT_LOBES, RELIEF["lobes"])
         self.fold = self._spin(QDoubleSpinBox(), -75, 75, 0, RELIEF["fold"], " °", 5)
         self.curl = self._spin(QDoubleSpinBox(), -1, 1, 0, RELIEF["curl"], "", 0.05)
+        self.roll = self._spin(QDoubleSpinBox(), -1, 1, 0, RELIEF["roll"], "", 0.05)
         self.wave = self._spin(QDoubleSpinBox(), 0, 0.2, 0, RELIEF["wave"], "", 0.005)
         self.seed = self._spin(QSpinBox(), 0, 1_000_000, 0, RELIEF["seed"])
         self.variant = QPushButton("New variant")
@@ -170,6 +171,7 @@ class FormsPanel(QWidget):
             ("Venation", self.venation),
             ("Fold", self.fold),
             ("Curl", self.curl),
+            ("Roll", self.roll),
             ("Wave", self.wave),
         ):
             text = QLabel()
@@ -269,6 +271,7 @@ class FormsPanel(QWidget):
             venation=self.venation.currentText(),
             fold=self.fold.value(),
             curl=self.curl.value(),
+            roll=self.roll.value(),
             wave=self.wave.value(),
             seed=self.seed.value(),
         )
@@ -287,7 +290,7 @@ class FormsPanel(QWidget):
         self.texts["Teeth"].setText(RELIEF["teeth"])
         self.texts["Lobes"].setText(RELIEF["lobes"])
         self.texts["Venation"].setText(definition(form_.venation))
-        for name in ("Fold", "Curl", "Wave"):
+        for name in ("Fold", "Curl", "Roll", "Wave"):
             self.texts[name].setText(RELIEF[name.lower()])
 
     def _changed(self, picked: bool = False) -> None:

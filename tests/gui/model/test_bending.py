@@ -151,3 +151,19 @@ def test_a_projects_bad_bend_frame_is_one_leaf_error(tmp_path, frame):
     path.write_text(json.dumps(data))
     with pytest.raises(LeafError, match='"bend" must be'):
         load_project(path)
+
+
+def test_a_drawn_leaf_rolls_and_its_project_keeps_the_roll(tmp_path):
+    """Roll (issue 21): the blade rolled across its slanted midrib; the sketch stays flat."""
+    session, runner, sketch = drawn()
+    runner.finish(session)
+    flat = relief(session.result)
+    session.set_bend(Pose(roll=6.0))
+    assert session.pose == Pose(roll=6.0) and session.state.sketch is sketch
+    runner.finish(session)
+    assert relief(session.result) > flat + 0.05  # the margins rise towards the roll's axis
+    path = tmp_path / "rolled.leaf.json"
+    save_leaf(session.leaf, path, session.params, sketch.to_dict())
+    assert json.loads(path.read_text())["bend"]["roll"] == 6.0
+    leaf, _, _ = load_project(path)
+    assert isinstance(leaf.bend, PlacedPose) and leaf.bend.pose == Pose(roll=6.0)
