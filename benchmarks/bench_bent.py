@@ -1,22 +1,23 @@
 """Bent leaves and surfaces through the veins (issue 21): the issue's table, today's figures
 beside ours.
 
-    .venv/bin/python benchmarks/bench_bent.py [--poses N] [--no-scans] [--scans DIR]
+    .venv/bin/python benchmarks/bench_bent.py [--poses N] [--no-scans] [--scans DIR] [--rolled]
 
 "today" runs each input as the code before issue 21 did: the posed form's points without its
 bend (`Leaf(boundary, veins)`, so the boundary's PCA plane is the leaf's) and the paper's pure
 GMM surface (`through_veins=False`); "ours" runs it as given, with the defaults. Distances are
 shares of the leaf's length.
 
-- forms over poses: every gallery shape at every N-th pose of fold −75..75, curl 0..1 and wave
-  0..0.2 (N = 1: all 50), K = 3, grid 128: largest and mean vein distance, largest boundary
+- forms over poses: every gallery shape at every N-th pose of fold −75..75, curl 0..1, roll 0..1
+  and wave 0..0.2 (N = 1: all 89), K = 3, grid 128: largest and mean vein distance, largest boundary
   distance, refused and warned;
 - the eight scans: open_scan then reconstruct with the defaults (the blade unrolled onto a sheet,
   core/sheet.py); the mean and 95th-percentile distance from the blade's points to the surface,
   beside the figures before the sheet (measured at baf1042);
 - vein distances: every gallery form (flat) and a drawn leaf with hand-raised veins, with the
   99th-percentile dihedral angles in the margin band and inside;
-- time at grid 128: a bent form beside the same form flat, best of three.
+- time at grid 128: a bent form beside the same form flat, best of three;
+- rolled forms: the mesh's distance to the form's own surface rolled, and the blade's area.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 import leafstudio as ls
+from leafstudio.core.bend import Pose
 from leafstudio.core.evaluate import margin_creases
 from leafstudio.errors import LeafError
 from leafstudio.forms.make import Form
@@ -44,7 +46,8 @@ SCANS = ROOT.parent / "shared" / "realleaves"
 FOLDS = (-75.0, -45.0, 0.0, 45.0, 75.0)
 CURLS = (0.0, 0.5, 1.0)
 WAVES = (0.0, 0.1)  # wave 0.2 is capped by half the blade's half-width anyway
-POSES = [p for p in itertools.product(FOLDS, CURLS, WAVES) if p != (0.0, 0.0, 0.0)]
+ROLLS = (0.0, 0.5, 1.0)  # shares of a half turn at the widest: 1 closes the blade into a tube
+POSES = [p for p in itertools.product(FOLDS, CURLS, WAVES, ROLLS) if any(p)]
 
 
 def _today(leaf: ls.Leaf) -> ls.Leaf:
@@ -69,10 +72,10 @@ def forms_over_poses(every: int) -> None:
     for name in ("today", "ours"):
         refused = warned = 0
         vein, boundary = [], []
-        for shape, (fold, curl, wave) in cases:
+        for shape, (fold, curl, wave, roll) in cases:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
-                leaf = Form(shape, fold=fold, curl=curl, wave=wave).leaf()
+                leaf = Form(shape, fold=fold, curl=curl, wave=wave, roll=roll).leaf()
             made_warned = bool(caught)
             if name == "today":
                 leaf = _today(leaf)
@@ -149,6 +152,36 @@ def vein_distances() -> None:
         )
 
 
+def rolled_forms() -> None:
+    """Rolled forms: the mesh against the form's own surface rolled (tests/core/test_bend_roll.py)
+    and the blade's area rolled over flat."""
+    from tests.core.test_bend_roll import _area, off_surface
+
+    print("\n## rolled forms (grid 128): distance to the own rolled surface, blade area kept")
+    print("| form | mean | 95th pct | max | blade area rolled / flat |")
+    print("|---|---|---|---|---|")
+    for shape, terms in (
+        ("lanceolate", dict(aspect=30.0, roll=1.0)),
+        ("linear", dict(roll=1.0)),
+        ("ovate", dict(roll=0.5)),
+        ("ovate", dict(roll=0.5, fold=45.0, curl=0.5)),
+    ):
+        leaf = Form(shape, **terms).leaf()
+        pose = leaf.bend
+        mesh = ls.reconstruct(leaf, ls.Params(k=3, grid=128)).triangle_mesh
+        blade = ls.Leaf(pose.flatten(leaf.boundary), [pose.flatten(v) for v in leaf.veins])
+        flat = ls.reconstruct(blade, ls.Params(k=3, grid=128))
+        off = off_surface(mesh, flat.triangle_mesh, pose) / flat.length
+        sheet = pose.flatten(mesh.points) * [1, 1, 0]
+        ratio = _area(type(mesh)(Pose(roll=pose.roll).apply(sheet), mesh.regular_faces)) / _area(
+            type(mesh)(sheet, mesh.regular_faces)
+        )
+        print(
+            f"| {shape} {terms} | {off.mean():.1e} | {np.percentile(off, 95):.1e} | "
+            f"{off.max():.1e} | {ratio:.4f} |"
+        )
+
+
 def timing() -> None:
     print("\n## time at grid 128 (best of three, seconds)")
     print("| form | flat, paper | flat, ours | bent, ours |")
@@ -171,8 +204,12 @@ def main() -> int:
     parser.add_argument("--poses", type=int, default=7, help="every N-th form and pose")
     parser.add_argument("--no-scans", action="store_true")
     parser.add_argument("--scans", type=Path, default=SCANS)
+    parser.add_argument("--rolled", action="store_true", help="only the rolled forms' table")
     args = parser.parse_args()
     _run(Form("ovate").leaf(), ls.Params(grid=32))  # compile the kernels before timing
+    rolled_forms()
+    if args.rolled:
+        return 0
     timing()
     vein_distances()
     forms_over_poses(args.poses)

@@ -9,8 +9,8 @@ bend and runs exactly as before.
 
 `Pose` is the bend a form knows (forms/make.py): in the blade's coordinates (the base at the
 origin, the midrib along +x, the relief on +z), a fold raises each half from the midrib,
-z += |y| tan(fold), and a curl bends the midrib, z += curl · x², a shear along z; a roll then
-bends each cross-section into a circular arc of curvature `roll` (an isometry: widths are kept,
+z += |y| tan(fold), and a curl bends the midrib, z += curl · x², a shear along z, after a roll
+has bent each cross-section into a circular arc of curvature `roll` (an isometry: widths are kept,
 heights are offsets along the rolled normal, as a grass blade or a young leaf rolls; a relief
 as high as the roll's radius is drawn in by 1 - height / radius). Both are undone exactly, and
 the blade is what the form drew before posing: a fold of 75° or a rolled grass blade is
@@ -55,26 +55,26 @@ class Pose:
         return np.abs(xy[:, 1]) * np.tan(np.deg2rad(self.fold)) + self.curl * xy[:, 0] ** 2
 
     def apply(self, points: np.ndarray) -> np.ndarray:
-        """(n, 3) flat blade points, bent: lifted by the fold and curl, then rolled."""
+        """(n, 3) flat blade points, bent: rolled, then lifted by the fold and curl."""
         points = np.array(points, dtype=float)
-        points[:, 2] += self.lift(points[:, :2])
         if self.roll != 0:
             r = 1.0 / self.roll  # the axis: y = 0, z = r; the height is taken off the radius
             angle, radius = points[:, 1] * self.roll, r - points[:, 2]
             points[:, 1], points[:, 2] = np.sin(angle) * radius, r - np.cos(angle) * radius
+        points[:, 2] += self.lift(points[:, :2])
         return points
 
     def flatten(self, points: np.ndarray) -> np.ndarray:
-        """(n, 3) bent points back on the flat blade (the inverse of `apply`, for points nearer
-        the roll's axis than its radius and less than half a turn round it)."""
+        """(n, 3) bent points back on the flat blade (the inverse of `apply`, for a relief
+        lower than the roll's radius and less than half a turn of roll each side)."""
         points = np.array(points, dtype=float)
+        points[:, 2] -= self.lift(points[:, :2])
         if self.roll != 0:
             r = 1.0 / self.roll
             sign = np.sign(r)
             y, z = sign * points[:, 1], sign * (r - points[:, 2])
             points[:, 1] = np.arctan2(y, z) * r
             points[:, 2] = r - sign * np.hypot(y, z)
-        points[:, 2] -= self.lift(points[:, :2])
         return points
 
     def key(self) -> bytes:
