@@ -29,6 +29,10 @@ MIN_CELLS = 30
 LANDMARKS = 120  # geodesic sources for the landmark MDS
 MOST_KEPT = 0.8  # the graph's largest piece must hold this share of the points
 CELLS = 28  # the blade's length is cut in this many cubes; each cube's mean is a centre
+# a sheet of length L crosses at most about 2 CELLS**2 of the cubes of side L / CELLS (the eight
+# shared scans: 283 to 1,119 cubes); points that fill many more fill a volume, not a sheet (a
+# Gaussian blob of 15,000 points: 8,946 cubes, and the spline through them took 17 s)
+MOST_CELLS = 3 * CELLS**2
 SMOOTHING = 1e-4  # the thin-plate spline's smoothing, at unit length
 NEWTON = 10  # Gauss-Newton steps of `Sheet.flatten`
 HALVINGS = 4  # a step that goes farther is halved at most this many times
@@ -183,7 +187,8 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     Returns
     -------
     Sheet or None
-        The sheet; `Sheet.flatten` puts the points on their flat blade.
+        The sheet; `Sheet.flatten` puts the points on their flat blade. None also for points
+        that fill a volume (more than MOST_CELLS cubes).
     """
     points = np.asarray(points, dtype=float)
     cell = length / CELLS
@@ -192,6 +197,8 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     sums = np.zeros((len(counts), 3))
     np.add.at(sums, which.ravel(), points)
     means = sums / counts[:, None]
+    if len(means) > MOST_CELLS:  # a volume of points, not a sheet
+        return None
     flat = unroll(means, REACH * cell)
     if flat is None:
         return None
