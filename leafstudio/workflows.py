@@ -146,7 +146,9 @@ def open_scan(
     return Opened(str(path), "scan", found.leaf, scan=scan, extraction=found, notes=tuple(notes))
 
 
-def open_file(path: str, *, force: bool = False, length: float | None = None) -> Opened:
+def open_file(
+    path: str, *, force: bool = False, length: float | None = None, pixel_size: float | None = None
+) -> Opened:
     """Open any file a user may give: a photo, a project, a point list or PLY leaf, or a scan.
 
     A point list that only a scan reader takes (more columns than x, y, z and a label, or a
@@ -162,6 +164,9 @@ def open_file(path: str, *, force: bool = False, length: float | None = None) ->
     length : float, optional
         For a photo: the leaf's length base to apex, in the units the leaf gets (default 1;
         `leafstudio photo --length`).
+    pixel_size : float, optional
+        For a photo without `length`: one pixel's length in the leaf's units (a ruler's);
+        without either, the photo's own DPI when it records one (sources/photo_scale.py).
 
     Returns
     -------
@@ -191,7 +196,7 @@ def open_file(path: str, *, force: bool = False, length: float | None = None) ->
     """
     path = str(path)
     if is_photo(path):
-        found = read_photo_leaf(path, length=length)
+        found = read_photo_leaf(path, length=length, pixel_size=pixel_size)
         grown = found.veins_from == "grown"
         notes = ("the photo shows no midrib: its veins were grown",) if grown else ()
         return Opened(path, "photo", found.leaf, photo=found, notes=notes)

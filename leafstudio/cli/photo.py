@@ -5,10 +5,14 @@ from __future__ import annotations
 import argparse
 import sys
 
-from leafstudio._shared.inputs import read_image
-from leafstudio.errors import LeafError
 from leafstudio.sources.files import check_leaf_output
-from leafstudio.sources.photo import BASE_ENDS, VEIN_CHOICES, leaf_from_photo, save_photo_leaf
+from leafstudio.sources.photo import (
+    BASE_ENDS,
+    VEIN_CHOICES,
+    PhotoLeaf,
+    read_photo_leaf,
+    save_photo_leaf,
+)
 
 
 def add_photo_parser(sub: argparse._SubParsersAction) -> None:
@@ -19,7 +23,11 @@ def add_photo_parser(sub: argparse._SubParsersAction) -> None:
         "-o", "--output", required=True, metavar="LEAF",
         help=".leaf.json (keeps the photo's pixel map for --texture), .csv, .txt, .xyz or .ply",
     )  # fmt: skip
-    p.add_argument("--length", type=float, metavar="L", help="base to apex (default 1)")
+    p.add_argument(
+        "--length", type=float, metavar="L",
+        help="base to apex (default: the photo's own scale in millimetres when its file records "
+        "a resolution, as a flatbed scan's DPI; else 1)",
+    )  # fmt: skip
     p.add_argument(
         "--base-end", choices=BASE_ENDS, default="auto",
         help="where the base is when no petiole shows it (default auto: the end of the blade's "
@@ -37,19 +45,17 @@ def add_photo_parser(sub: argparse._SubParsersAction) -> None:
 def run_photo(args: argparse.Namespace) -> int:
     """Find the leaf in the photo and write it."""
     check_leaf_output(args.output, [args.image])
-    image = read_image(args.image)
-    try:
-        found = leaf_from_photo(
-            image, args.length, args.base_end, args.veins, args.venation, seed=args.seed
-        )
-    except LeafError as exc:
-        raise LeafError(exc.problem, args.image) from None
+    found = read_photo_leaf(
+        args.image, length=args.length, base_end=args.base_end, veins=args.veins,
+        venation=args.venation, seed=args.seed,
+    )  # fmt: skip
     save_photo_leaf(found, args.image, args.output)
     guess = "; base at the wider end (a guess: --base-end names it)"
     print(
         f"{args.image}: leaf of {int(found.blade.sum())} pixels"
         f"{', petiole cut off' if found.petiole else ''}"
         f"{guess if found.base_cue == 'wider end' else ''}"
+        f"{_size(found)}"
         f"; wrote {len(found.leaf.boundary)} "
         f"boundary points and {len(found.leaf.veins)} veins "
         f"({_veins_from(found.veins_from, args.veins)}) to {args.output}",
@@ -65,3 +71,12 @@ def _veins_from(found: str, asked: str) -> str:
     if found == "grown":
         return "grown: the photo shows no midrib" if asked == "auto" else "grown"
     return "none: the photo shows no midrib" if asked == "trace" else "none asked for"
+
+
+def _size(found: PhotoLeaf) -> str:
+    """The leaf's size and what set it, when the photo's own scale did or nothing did."""
+    if found.scale.startswith("the photo's"):
+        return f"; {found.length:.4g} mm long ({found.scale}; --length overrides)"
+    if not found.scale:
+        return "; length 1 (the photo records no scale: --length gives its real one)"
+    return ""

@@ -94,6 +94,11 @@ class PhotoLeaf:
     veins_from : str
         "photo" (traced in the photo: photo_veins.py), "grown" (forms.grow_veins: none
         visible, or asked for) or "none".
+    length : float
+        Base to apex, in the leaf's units.
+    scale : str
+        What set the length: "" (none: length 1), "given" (`length`), "pixel size"
+        (`pixel_size`: a ruler), or "the photo's N DPI" (read_photo_leaf, photo_scale.py).
     """
 
     leaf: Leaf
@@ -103,6 +108,8 @@ class PhotoLeaf:
     petiole: bool
     base_cue: str = "petiole"
     veins_from: str = "none"
+    length: float = 1.0
+    scale: str = ""
 
 
 def foreground(image: np.ndarray) -> np.ndarray:
@@ -324,6 +331,7 @@ def leaf_from_photo(
     venation: str = "pinnate",
     points: int | None = None,
     seed: int = 0,
+    pixel_size: float | None = None,
 ) -> PhotoLeaf:
     """The leaf in an (h, w, 3 or 4) uint8 photo (see the module docstring).
 
@@ -340,6 +348,9 @@ def leaf_from_photo(
         grown; "none": no veins. PhotoLeaf.veins_from says which.
     points : int, optional
         Boundary points; default one per 2 pixels of outline, 200 to 2000.
+    pixel_size : float, optional
+        The length of one pixel in the output's units (the photo's own scale: its DPI, a
+        ruler); used when `length` is not given, so the leaf comes out at its real size.
     """
     if base_end not in BASE_ENDS:
         raise LeafError(f"unknown base end {base_end!r}; use one of {', '.join(BASE_ENDS)}")
@@ -349,6 +360,8 @@ def leaf_from_photo(
         check_seed(seed)
     if length is not None and not (np.isfinite(length) and length > 0):
         raise LeafError(f"--length must be a number above 0, got {length}")
+    if pixel_size is not None and not (np.isfinite(pixel_size) and pixel_size > 0):
+        raise LeafError(f"a pixel's size must be a number above 0, got {pixel_size}")
     if image.ndim != 3 or min(image.shape[:2]) < 16:
         raise LeafError("the image is too small (under 16 pixels a side)")
     leaf_mask = _leaf_component(foreground(image))
@@ -365,7 +378,13 @@ def leaf_from_photo(
     pixels_long = float(np.linalg.norm(axis))
     if pixels_long < 8:
         raise LeafError("no leaf found: the object is too small")
-    scale = (1.0 if length is None else float(length)) / pixels_long
+    if length is not None:
+        length, how = float(length), "given"
+    elif pixel_size is not None:
+        length, how = float(pixel_size) * pixels_long, "pixel size"
+    else:
+        length, how = 1.0, ""
+    scale = length / pixels_long
     c, s = axis / pixels_long
     rotate = np.array([[c, s], [-s, c]])  # turns the base-to-apex axis onto +x
     q = np.column_stack([outline[:, 0], -outline[:, 1]]) - start
@@ -398,6 +417,8 @@ def leaf_from_photo(
         petiole=joint is not None,
         base_cue=cue,
         veins_from=veins_from,
+        length=length,
+        scale=how,
     )
 
 
@@ -446,9 +467,21 @@ def is_photo(path: str | Path) -> bool:
 
 
 def read_photo_leaf(path: str | Path, **options) -> PhotoLeaf:
-    """leaf_from_photo on an image file; LeafError naming the file (the app opens photos so)."""
+    """leaf_from_photo on an image file; LeafError naming the file (the app opens photos so).
+    Without a length or a pixel size, the file's own resolution, when it records one that is a
+    scale (photo_scale.py), makes the leaf its real size in millimetres (`scale` says so)."""
+    from dataclasses import replace
+
+    from leafstudio.sources.photo_scale import dpi_pixel_size
+
     image = read_image(path)
+    dpi = None
+    if options.get("length") is None and options.get("pixel_size") is None:
+        dpi = dpi_pixel_size(path)
+        if dpi is not None:
+            options["pixel_size"] = dpi[0]
     try:
-        return leaf_from_photo(image, **options)
+        found = leaf_from_photo(image, **options)
     except LeafError as exc:
         raise LeafError(exc.problem, str(path)) from None
+    return found if dpi is None else replace(found, scale=f"the photo's {dpi[1]:g} DPI")

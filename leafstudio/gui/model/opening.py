@@ -58,10 +58,13 @@ class Document:
         return Path(self.path).name
 
 
-def read_document(path: str, as_scan: bool = False, length: float | None = None) -> Document:
+def read_document(
+    path: str, as_scan: bool = False, length: float | None = None, pixel_size: float | None = None
+) -> Document:
     """Open `path` as every command does (`as_scan`: as a scan whatever its points look like;
-    `length`: a photo's leaf length, photo_length); a big file in a process of its own
-    (reading.py), which Cancel ends at once.
+    `length`: a photo's leaf length, photo_length; `pixel_size`: a photo pixel's, the ruler's in
+    photo_import.py); a big file in a process of its own (reading.py), which Cancel ends at
+    once.
 
     Raises
     ------
@@ -73,12 +76,15 @@ def read_document(path: str, as_scan: bool = False, length: float | None = None)
     """
     if is_big(path) and not is_photo(path):
         return read_apart(_read_document, path, as_scan)
-    return _read_document(path, as_scan, length)
+    return _read_document(path, as_scan, length, pixel_size)
 
 
-def _read_document(path: str, as_scan: bool, length: float | None = None) -> Document:
+def _read_document(
+    path: str, as_scan: bool, length: float | None = None, pixel_size: float | None = None
+) -> Document:
     try:
-        options = {} if length is None else {"length": length}  # a photo's only
+        sizes = {"length": length, "pixel_size": pixel_size}  # a photo's only
+        options = {key: value for key, value in sizes.items() if value is not None}
         opened = open_scan(path) if as_scan else open_file(path, **options)
     except OSError as exc:
         raise LeafError(exc.strerror or str(exc), path) from None
@@ -113,18 +119,25 @@ class FileOpening:
     `_open_due`, the job reading the file, which another open, a demo or a new sketch
     supersedes)."""
 
-    def open_path(self, path: str, *, as_scan: bool = False, length: float | None = None) -> Job:
+    def open_path(
+        self,
+        path: str,
+        *,
+        as_scan: bool = False,
+        length: float | None = None,
+        pixel_size: float | None = None,
+    ) -> Job:
         """Read a file off the main thread (opening.read_document on the side lane: the one
         decision path of the command line and batch; `as_scan`: File > Open scan) and make it
-        the document once read, with its saved parameters or the current ones (`length`: a
-        photo's leaf length, photo_length). A newer open, a
+        the document once read, with its saved parameters or the current ones (`length`,
+        `pixel_size`: a photo's leaf length or pixel size, photo_import.py). A newer open, a
         demo or a new sketch supersedes it; a failure reports `open_failed` and keeps the
         document."""
         if self._open_due is not None:
             self._open_due.cancel()  # the file being read is superseded
         what = "photo" if is_photo(path) else "scan" if as_scan else "file"
         self.opening.emit(path, what)
-        job = self._open_due = self.run("open", read_document, path, as_scan, length)
+        job = self._open_due = self.run("open", read_document, path, as_scan, length, pixel_size)
         job.on_done(lambda document: self._opened(job, document))
         job.on_failed(lambda exc: self._open_failed(job, what, exc))
         return job

@@ -109,34 +109,30 @@ class FileCommands(BackgroundExports):
         if path:
             self.open_path(path)
 
-    PHOTO_LENGTH_PROMPT = (
-        "The leaf's length, base to apex: with its unit (8cm, 80mm: the leaf in millimetres, "
-        "its real size in an export), a number in the leaf's own units, or empty (1)"
-    )
-
     def open_photo_dialog(self) -> None:
-        """File > Open photo: the photo, then the leaf's length (opening.photo_length)."""
-        from PySide6.QtWidgets import QInputDialog
+        """File > Open photo: the photo, then its dialog (photo_dialog.py: the leaf's length, or a
+        ruler clicked on the photo, or the photo's own DPI); a leaf made at its real size has
+        that length offered by the export next."""
+        from PySide6.QtWidgets import QDialog
 
-        from leafstudio.gui.model.opening import has_unit, photo_length
+        from leafstudio.gui.model.photo_import import PhotoImport, real_length_text
+        from leafstudio.gui.qt.photo_dialog import PhotoDialog
 
         path = self._ask_to_open("Open a photo of a leaf", _photo_filter())
         if not path:
             return
-        last = str(self.settings.value("photo/length", ""))
-        text, ok = QInputDialog.getText(self, "The leaf's length", self.PHOTO_LENGTH_PROMPT,
-                                        text=last)  # fmt: skip
-        if not ok:
+        model = PhotoImport.of(path, str(self.settings.value("photo/length", "")))
+        dialog = self.photo_dialog = PhotoDialog(model, self)
+        if dialog.exec() != QDialog.DialogCode.Accepted:
             return
-        try:
-            length = photo_length(text)
-        except LeafError as exc:
-            self.show_error("Cannot open the photo", str(exc))
-            return
-        self.settings.setValue("photo/length", text.strip())
-        if has_unit(text):
-            self.settings.setValue("export/length", text.strip())  # its real size, offered next
-        self.session.open_path(path, length=length)
+        options = model.options()  # checked by the dialog's OK
+        self.settings.setValue("photo/length", model.length.strip())
+        job = self.session.open_path(path, **options)
+        if model.real_size() and model.from_what() == "length":
+            self.settings.setValue("export/length", model.length.strip())
+        elif model.real_size():  # the leaf's real size, offered by the export next
+            job.on_done(lambda document: self.settings.setValue(
+                "export/length", real_length_text(document.leaf.boundary)))  # fmt: skip
 
     def open_scan_dialog(self) -> None:
         """File > Open scan."""

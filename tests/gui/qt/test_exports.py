@@ -62,7 +62,20 @@ def test_the_export_dialog_takes_a_real_length(window, qtbot, tmp_path, monkeypa
     assert solid.volume == pytest.approx(solid.area / 2 * 0.5, rel=0.05)  # 0.5 mm thick
 
 
-def test_open_photo_asks_the_leafs_length(window, qtbot, tmp_path, monkeypatch):
+def _answer_photo_dialog(monkeypatch, answer) -> None:
+    """File > Open photo's dialog answered by `answer(dialog)` instead of a user."""
+    from leafstudio.gui.qt.photo_dialog import PhotoDialog
+
+    def fake_exec(dialog: PhotoDialog) -> int:
+        answer(dialog)
+        dialog.try_accept()
+        return dialog.result()
+
+    monkeypatch.setattr(PhotoDialog, "exec", fake_exec)
+
+
+@pytest.fixture
+def oak(tmp_path, monkeypatch):
     from leafstudio.forms import make_form
     from tests.photos import form_photo
 
@@ -71,19 +84,47 @@ def test_open_photo_asks_the_leafs_length(window, qtbot, tmp_path, monkeypatch):
     path = tmp_path / "oak.png"
     Image.fromarray(image).save(path)
     monkeypatch.setattr(QFileDialog, "getOpenFileName", lambda *a, **k: (str(path), ""))
-    monkeypatch.setattr(QInputDialog, "getText", lambda *a, **k: ("8cm", True))
+    return path
+
+
+def test_open_photo_asks_the_leafs_length(window, qtbot, oak, monkeypatch):
+    _answer_photo_dialog(monkeypatch, lambda dialog: dialog.length.setText("8cm"))
     window.open_photo_dialog()
-    qtbot.waitUntil(lambda: window.session.state.path == str(path), timeout=WAIT_MS)
+    qtbot.waitUntil(lambda: window.session.state.path == str(oak), timeout=WAIT_MS)
     wait_result(qtbot, window, lambda outcome: outcome.result.leaf is window.session.state.leaf)
     boundary = window.session.state.leaf.boundary
     assert np.ptp(boundary[:, 0]) == pytest.approx(80, rel=0.03)  # millimetres, base to apex
     assert window.settings.value("export/length") == "8cm"  # the export offers its real size
 
-    monkeypatch.setattr(QInputDialog, "getText", lambda *a, **k: ("eight", True))
-    window.open_photo_dialog()  # refused in the window, the leaf kept
-    assert "length" in window.last_error_box.text()
-    window.last_error_box.close()
-    assert window.session.state.path == str(path)
+    _answer_photo_dialog(monkeypatch, lambda dialog: dialog.length.setText("eight"))
+    window.open_photo_dialog()  # refused in the dialog, the leaf kept
+    assert "length" in window.photo_dialog.summary.text()
+    assert window.session.state.path == str(oak)
+
+
+def test_open_photo_takes_a_ruler_clicked_on_the_photo(window, qtbot, oak, monkeypatch):
+    """Two clicks on the photo 50 mm apart: the leaf (360 photo pixels long) at its real size."""
+    from PySide6.QtCore import QPoint, Qt
+
+    def ruler(dialog) -> None:
+        picture = dialog.picture
+        ends = (20, 200), (20 + round(360 * picture.zoom), 200)  # 360 photo pixels apart
+        for x, y in ends:
+            qtbot.mouseClick(picture, Qt.MouseButton.LeftButton, pos=QPoint(x, y))
+        dialog.length.setText("")
+        dialog.distance.setText("50 mm")
+        assert "pixels are 50 mm" in dialog.summary.text()
+
+    _answer_photo_dialog(monkeypatch, ruler)
+    window.open_photo_dialog()
+    ruler_pixels = window.photo_dialog.model.ruler_pixels()
+    assert ruler_pixels == pytest.approx(360, abs=2)
+    qtbot.waitUntil(lambda: window.session.state.path == str(oak), timeout=WAIT_MS)
+    length = float(np.max(window.session.state.leaf.boundary[:, 0]))
+    assert length == pytest.approx(50 * 360 / ruler_pixels, rel=0.03)  # millimetres
+    qtbot.waitUntil(lambda: window.settings.value("export/length", "").endswith("mm"),
+                    timeout=WAIT_MS)  # fmt: skip
+    assert float(window.settings.value("export/length")[:-2]) == pytest.approx(length, rel=1e-3)
 
 
 def test_photo_lengths():
