@@ -11,7 +11,6 @@ too. No Qt here.
 
 from __future__ import annotations
 
-import multiprocessing
 import queue
 import threading
 from collections.abc import Callable
@@ -19,6 +18,7 @@ from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
+from leafstudio._shared.spawn import WorkerContext
 from leafstudio.errors import LeafError
 
 POLL_S = 0.05  # how often the waiting thread relays the child's progress
@@ -65,7 +65,7 @@ class ExportProcess:
         with self._lock:
             if self._pool is None:
                 _portable()
-                context = multiprocessing.get_context("spawn")
+                context = WorkerContext()  # a plain script has no __main__ guard
                 self._reports = context.Queue()
                 self._pool = ProcessPoolExecutor(
                     1, mp_context=context, initializer=_start_child, initargs=(self._reports,)

@@ -5,18 +5,20 @@ interpreter's lock for long stretches: in a thread of the app's process it stall
 main thread for up to a second at a time, and Cancel could only drop its answer while the read
 went on. In a child process (spawned: the window's process has threads) it shares nothing with
 the window, and Cancel ends it at once. A small file is read in the thread: a child costs a few
-seconds of start-up (imports), more than such a file takes.
+seconds of start-up (imports), more than such a file takes. The child does not import the
+parent's `__main__` (_shared/spawn.py): a plain script driving a Session, without an
+`if __name__ == "__main__":` guard, would otherwise run again in it and fail.
 """
 
 from __future__ import annotations
 
 import logging
-import multiprocessing
 import os
 import traceback
 from collections.abc import Callable
 from typing import Any
 
+from leafstudio._shared.spawn import WorkerContext
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.jobs import cancel_point
 
@@ -58,7 +60,7 @@ def read_apart(function: Callable[..., Any], *args: Any) -> Any:
     RuntimeError
         The function failed otherwise, or the process died.
     """
-    context = multiprocessing.get_context("spawn")
+    context = WorkerContext()
     receive, send = context.Pipe(duplex=False)
     process = context.Process(target=_child, args=(send, function, args), daemon=True)
     process.start()

@@ -4,7 +4,11 @@ costs main-thread time per point), while every computation keeps them whole."""
 from __future__ import annotations
 
 import multiprocessing
+import os
+import subprocess
+import sys
 import time
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -20,6 +24,8 @@ from leafstudio.gui.model.sketch_model import RELIEF_POINTS, Sketch
 from leafstudio.gui.model.thinning import DISPLAY_POINTS, INPUT_POINTS, thinned
 from leafstudio.model import Leaf
 from tests.gui.builders import FAST, Runner, six_column_scan, write_points
+
+ROOT = Path(__file__).resolve().parents[3]
 
 
 def test_thinned_keeps_few_points_and_caps_many():
@@ -158,3 +164,26 @@ def test_cancel_ends_the_reading_process_at_once(tmp_path):
     with running(lambda: True), pytest.raises(Cancelled):
         reading.read_apart(time.sleep, 60)
     assert not multiprocessing.active_children()
+
+
+def test_a_plain_script_opens_a_big_file_through_the_session(tmp_path):
+    """Issue 24 (build item 3's spirit): a script without an `if __name__ == "__main__":` guard
+    that opened a big file through the session spawned the reading process, which ran the script
+    again while importing it and failed ("bootstrapping phase")."""
+    path = write_points(tmp_path / "scan.txt", six_column_scan())
+    script = tmp_path / "plain.py"
+    script.write_text(
+        "from leafstudio.gui.model import reading\n"
+        "from leafstudio.gui.model.session import Session\n"
+        "reading.BIG_FILE_BYTES = 0  # every file is big: read in a process of its own\n"
+        "session = Session()\n"
+        "session.open_failed.connect(lambda what, why: print('failed', why))\n"
+        "session.opened.connect(lambda path: print('opened', len(session.leaf.boundary)))\n"
+        f"session.open_path({path!r})\n"
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                          timeout=300, env=env, cwd=tmp_path)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert "Traceback" not in done.stderr and "bootstrapping" not in done.stderr
+    assert done.stdout.startswith("opened 200"), done.stdout
