@@ -1,5 +1,5 @@
 """Worker processes started by spawn that do not import the parent's `__main__` (for the batch's
-pool and the first run's kernel compile)."""
+pool)."""
 
 from __future__ import annotations
 

@@ -4,9 +4,10 @@ A reconstruction calls 29 compiled kernels. On a cold cache numba compiles each 
 one after another, in the calling thread and holding the GIL: 20 s of CPU (24 s before their
 LAPACK, BLAS, sort and slice-assignment calls became loops; benchmarks/bench_first_run.py), during
 which an app's window would not repaint. Here each kernel is compiled for the one signature a run
-uses (`KERNELS`, explicit) by a pool of worker processes (one per core) into numba's on-disk
-cache; the run then loads them (about 0.5 s). The calling thread only waits, so the app's window
-stays responsive meanwhile.
+uses (`KERNELS`, explicit) by worker processes (one per core: fresh interpreters that import only
+the kernels' modules, each taking the costliest kernel left) into numba's on-disk cache; the run
+then loads them (about 0.5 s). The calling thread only waits, so the app's window stays
+responsive meanwhile.
 
 tests/core/test_first_compile.py checks that `KERNELS` names every kernel core calls from Python
 (those of the metrics and of scans aside) with the signature a run calls it with. A kernel it
@@ -17,15 +18,16 @@ from __future__ import annotations
 
 import importlib
 import os
-import time
+import queue
+import subprocess
+import sys
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import ThreadPoolExecutor
 
 from numba import types
 from numba.core.dispatcher import Dispatcher
 
 from leafstudio._shared import kernelcache
-from leafstudio._shared.spawn import WorkerContext
 from leafstudio.core.buckets import Buckets
 from leafstudio.core.mpu import Cells, Lattice
 
@@ -80,15 +82,68 @@ def dispatcher(name: str) -> Dispatcher:
     return getattr(importlib.import_module(f"leafstudio.core.{module}"), function)
 
 
-def _compile(name: str) -> tuple[int, float]:
-    """In a worker: compile `name` for its signature into numba's on-disk cache; the worker's
-    process id and CPU seconds so far."""
-    dispatcher(name).compile(KERNELS[name])
-    return os.getpid(), time.process_time()
+# A worker: a fresh interpreter that imports leafstudio as a bare package (its __init__ would
+# import the whole library, ~0.4 s of CPU in each worker, on the critical path) and only the
+# kernels' modules, then compiles each kernel named on its standard input, answering with its
+# CPU seconds so far. sys.argv[1] is the package's folder.
+WORKER = """
+import sys, time, types
+package = types.ModuleType("leafstudio")
+package.__path__ = [sys.argv[1]]
+sys.modules["leafstudio"] = package
+from leafstudio._shared import kernelcache
+kernelcache.configure()
+from leafstudio.core.kernels import KERNELS, dispatcher
+for line in sys.stdin:
+    dispatcher(line.strip()).compile(KERNELS[line.strip()])
+    print(time.process_time(), flush=True)
+"""
+
+
+def _worker(todo: queue.SimpleQueue, done: queue.SimpleQueue) -> tuple[int, float]:
+    """Start a worker and hand it kernels from `todo` until none are left, putting each compiled
+    one's name on `done`; its process id and CPU seconds. A worker that cannot start, dies or
+    fails to compile a kernel stops: the run compiles what is left, as it would without this."""
+    command = [sys.executable, "-c", WORKER, str(kernelcache.CORE.parent)]
+    seconds = 0.0
+    try:
+        process = subprocess.Popen(
+            command,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,  # a failure is the run's to report, as without this
+            text=True,
+        )
+    except OSError:
+        return 0, seconds
+    with process:
+        assert process.stdin is not None and process.stdout is not None
+        try:
+            while (name := _next(todo)) is not None:
+                process.stdin.write(name + "\n")
+                process.stdin.flush()
+                answer = process.stdout.readline()
+                if not answer:
+                    break
+                seconds = float(answer)
+                done.put(name)
+            process.stdin.close()
+        except OSError:  # a broken pipe: the worker died
+            pass
+    return process.pid, seconds
+
+
+def _next(todo: queue.SimpleQueue) -> str | None:
+    try:
+        return todo.get_nowait()
+    except queue.Empty:
+        return None
 
 
 def compile_kernels(
-    on_start: Callable[[str], None] | None = None, workers: int | None = None
+    on_start: Callable[[str], None] | None = None,
+    workers: int | None = None,
+    on_progress: Callable[[int, int], None] | None = None,
 ) -> dict[int, float]:
     """Compile the kernels a run needs, when this installation has not yet, in worker processes.
 
@@ -98,7 +153,10 @@ def compile_kernels(
         Called with STAGE before compiling (not when the cache holds the kernels): a pipeline's
         on_stage, for the app to say so.
     workers : int, optional
-        Processes to compile in; default one per core (at most one per kernel).
+        Processes to compile in; default one per core (at most one per kernel). Each takes the
+        costliest kernel left when it is free.
+    on_progress : callable, optional
+        Called with (kernels compiled, kernels in all) after each, in the calling thread.
 
     Returns
     -------
@@ -111,10 +169,24 @@ def compile_kernels(
     if on_start is not None:
         on_start(STAGE)
     workers = max(1, min(workers or os.cpu_count() or 1, len(KERNELS)))
-    spent: dict[int, float] = {}
-    with ProcessPoolExecutor(workers, WorkerContext()) as pool:
-        for future in as_completed([pool.submit(_compile, name) for name in KERNELS]):
-            pid, seconds = future.result()
-            spent[pid] = max(spent.get(pid, 0.0), seconds)
-    kernelcache.mark_cached()
+    todo: queue.SimpleQueue = queue.SimpleQueue()
+    for name in KERNELS:
+        todo.put(name)
+    done: queue.SimpleQueue = queue.SimpleQueue()
+    with ThreadPoolExecutor(workers) as pool:
+        running = [pool.submit(_worker, todo, done) for _ in range(workers)]
+        compiled = 0
+        while compiled < len(KERNELS):
+            try:
+                done.get(timeout=0.1)
+            except queue.Empty:
+                if all(f.done() for f in running) and done.empty():
+                    break  # a worker died: the run compiles what is left
+                continue
+            compiled += 1
+            if on_progress is not None:
+                on_progress(compiled, len(KERNELS))
+        spent = dict(f.result() for f in running)
+    if compiled == len(KERNELS):
+        kernelcache.mark_cached()
     return spent

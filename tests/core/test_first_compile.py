@@ -64,13 +64,22 @@ def test_a_cold_cache_is_filled_by_worker_processes(monkeypatch, tmp_path):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))  # the workers inherit it
     monkeypatch.setattr(kernels, "KERNELS", {"buckets:bounds": kernels.KERNELS["buckets:bounds"]})
     said = []
-    spent = kernels.compile_kernels(said.append, workers=1)
+    progress = []
+    spent = kernels.compile_kernels(said.append, 1, lambda *counts: progress.append(counts))
     assert len(spent) == 1 and os.getpid() not in spent  # one worker, not this process
     assert said == [kernels.STAGE]
+    assert progress == [(1, 1)]
     assert any(p.name.startswith("buckets.bounds") for p in tmp_path.rglob("*.nbi"))
     assert kernelcache.kernels_cached()
     assert not kernels.compile_kernels(said.append)  # cached now: nothing said or done
     assert said == [kernels.STAGE]
+
+
+def test_a_worker_that_dies_leaves_the_kernels_to_the_run(monkeypatch, tmp_path):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(kernels, "WORKER", "import sys; sys.exit(1)")
+    assert kernels.compile_kernels(workers=2)  # both workers started, and stopped
+    assert not kernelcache.kernels_cached()  # not marked: the next run says it compiles
 
 
 @pytest.fixture(autouse=True)
