@@ -29,6 +29,7 @@ from typing import Any, Literal
 import numpy as np
 from scipy.spatial import cKDTree
 
+from leafstudio._shared import progress
 from leafstudio.analysis.fidelity import scan_distances
 from leafstudio.core.pipeline import Pipeline, Result
 from leafstudio.core.plane import fit_frame
@@ -137,13 +138,21 @@ def open_scan(
     >>> opened.kind, opened.leaf.boundary.shape, opened.scan.shape
     ('scan', (200, 3), (4710, 3))
     """
-    scan = read_scan(path)
+    return _scan_opened(str(path), read_scan(path), base_end, points, force)
+
+
+def _scan_opened(
+    path: str, scan: np.ndarray, base_end: str = "auto", points: int = OUTLINE_POINTS,
+    force: bool = False,
+) -> Opened:  # fmt: skip
+    """A scan's points read from `path`, checked and extracted (open_scan)."""
+    progress.report(None, "finding the leaf in the scan")  # no fraction: the busy bar turns
     try:
         notes = check_scan(scan, force=force)
         found = extract_leaf(scan, base_end, points)
     except LeafError as exc:
-        raise LeafError(exc.problem, str(path)) from None
-    return Opened(str(path), "scan", found.leaf, scan=scan, extraction=found, notes=tuple(notes))
+        raise LeafError(exc.problem, path) from None
+    return Opened(path, "scan", found.leaf, scan=scan, extraction=found, notes=tuple(notes))
 
 
 def open_file(
@@ -210,8 +219,8 @@ def open_file(
             if is_scan_file(path):
                 return open_scan(path, force=force)
             raise
-        if looks_like_scan(leaf):
-            return open_scan(path, force=force)
+        if looks_like_scan(leaf):  # its points as read (unlabelled): not read a second time
+            return _scan_opened(path, leaf.boundary, force=force)
         opened = Opened(path, "leaf", leaf)
     if opened.sketch is None:
         crossing = boundary_crossing(leaf)

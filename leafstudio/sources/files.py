@@ -10,6 +10,7 @@ import contextlib
 import json
 import math
 import os
+import re
 from collections.abc import Sequence
 from dataclasses import replace
 from io import BytesIO
@@ -19,7 +20,9 @@ from typing import Any
 import numpy as np
 
 from leafstudio._shared.inputs import (
+    block_rows,
     check_not_a_folder,
+    line_blocks,
     load_json,
     parse_number,
     ply_numbers,
@@ -48,42 +51,83 @@ def _suffix(path: Path) -> str:
 
 
 def read_point_table(path: Path, columns: Sequence[int] = (3, 4)) -> np.ndarray:
-    """Numbers from a point list, (n, c) with c one of `columns`; header and blank lines skipped."""
-    rows: list[list[float]] = []
-    width = None
-    for number, line in enumerate(read_text(path).splitlines(), start=1):
+    """Numbers from a point list, (n, c) with c one of `columns`; header and blank lines skipped.
+    Read in blocks of lines (line_blocks: each reported as read), each by numpy's reader when it
+    holds only numbers, else line by line, which names the first faulty line."""
+    table = _PointTable(path, columns)
+    for first, block in line_blocks(read_text(path)):
+        table.add(first, block)
+    if not table.parts:
+        raise LeafError("holds no points", str(path))
+    return np.vstack(table.parts)
+
+
+class _PointTable:
+    """The rows of a point list read so far (read_point_table), block by block."""
+
+    def __init__(self, path: Path, columns: Sequence[int]) -> None:
+        self.path, self.columns = path, tuple(columns)
+        self.parts: list[np.ndarray] = []
+        self.width: int | None = None  # the columns of the rows read so far
+        self.header = False  # a header line was skipped (only one, before any row)
+
+    def add(self, first: int, block: str) -> None:
+        """The rows of `block`, whose first line is line `first` of the file."""
+        fast = self._fast(block)
+        if fast is not None:
+            self.parts.append(fast)
+            self.width = fast.shape[1]
+            return
+        rows = [row for number, line in enumerate(block.splitlines(), start=first)
+                if (row := self._row(number, line)) is not None]  # fmt: skip
+        if rows:
+            self.parts.append(np.asarray(rows, dtype=float))
+
+    def _fast(self, block: str) -> np.ndarray | None:
+        """The block by numpy's reader, when it holds nothing but numbers and separators (no
+        header, comment or word: there numpy's reader and parse_number could differ) and its
+        rows are finite and as wide as they must be; else None."""
+        if not block.isascii() or _NOT_PLAIN.search(block):
+            return None
+        rows = block_rows(block)
+        if rows is None or not np.all(np.isfinite(rows)):
+            return None
+        width = rows.shape[1]
+        return rows if (self.width or width) == width and width in self.columns else None
+
+    def _row(self, number: int, line: str) -> list[float] | None:
+        """Line `number`'s numbers, None for a blank or header line; LeafError naming it if bad."""
         text = line.split("#", 1)[0].strip()
         if not text:
-            continue
-        fields = [f for f in text.replace(",", " ").replace(";", " ").split()]
+            return None
+        path = str(self.path)
+        fields = text.replace(",", " ").replace(";", " ").split()
         try:
             values = [parse_number(f) for f in fields]
         except ValueError:
-            if not rows and width is None:  # a header line
-                width = -1
-                continue
-            raise LeafError(
-                f"line {number}: not a number in {shorten(text)!r}", str(path)
-            ) from None
-        if len(values) not in columns:
-            expected = " or ".join(str(c) for c in columns)
+            if self.width is None and not self.header:  # a header line
+                self.header = True
+                return None
+            raise LeafError(f"line {number}: not a number in {shorten(text)!r}", path) from None
+        if len(values) not in self.columns:
+            expected = " or ".join(str(c) for c in self.columns)
             scan = "; a scan (x y z with normals or colours)? `leafstudio extract` takes a leaf's"
             raise LeafError(
                 f"line {number}: expected {expected} columns (x y z [label]), got {len(values)}"
                 + (f"{scan} boundary and veins from it" if len(values) > 4 else ""),
-                str(path),
+                path,
             )
-        if rows and len(values) != len(rows[0]):
+        if self.width is not None and len(values) != self.width:
             raise LeafError(
-                f"line {number}: {len(values)} columns where earlier lines have {len(rows[0])}",
-                str(path),
+                f"line {number}: {len(values)} columns where earlier lines have {self.width}", path
             )
         if not all(math.isfinite(v) for v in values):
-            raise LeafError(f"line {number}: NaN or infinite value", str(path))
-        rows.append(values)
-    if not rows:
-        raise LeafError("holds no points", str(path))
-    return np.asarray(rows, dtype=float)
+            raise LeafError(f"line {number}: NaN or infinite value", path)
+        self.width = len(values)
+        return values
+
+
+_NOT_PLAIN = re.compile(r"[^0-9eE+\-.,;\s]")  # any other character: read line by line
 
 
 def _split_labels(xyz: np.ndarray, labels: np.ndarray | None, source: str) -> Leaf:

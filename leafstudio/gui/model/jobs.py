@@ -7,6 +7,9 @@ the worker's lane and what a newer job of that kind replaces. The window passes
 `Worker.start` (gui/qt/worker.py: off the main thread, reports delivered on it); `run_now`
 runs the job at once, for a session driven without a window.
 
+A job tells how far it has come with `_shared/progress.report(fraction, what)` (the readers do,
+after each block of lines): its handle's `progressed` event hears it, on the main thread.
+
 Cancelling is cooperative: `Job.cancel()` drops the job's answer at once and asks the job to
 stop; a long job calls `cancel_point()` between its steps, which raises Cancelled once its job
 was cancelled (or superseded), and the worker ends it without a report.
@@ -20,6 +23,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
+from leafstudio._shared import progress
 from leafstudio.core.pipeline import Cancelled
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.history import Event
@@ -38,13 +42,18 @@ class Job:
         The job's return value.
     failed(BaseException)
         What it raised (already logged).
+    progressed(float | None, str)
+        How far it has come (None: not known) and what it is doing, while it runs.
 
-    A callback connected with `on_done` / `on_failed` after the job ended is called at once.
+    A callback connected with `on_done` / `on_failed` after the job ended is called at once,
+    one connected with `on_progress` hears the progress reported before it too.
     """
 
     def __init__(self, job_id: int = 0) -> None:
         self.id = job_id
-        self.done, self.failed = Event(), Event()
+        self.done, self.failed, self.progressed = Event(), Event(), Event()
+        self._progress: list[tuple[float | None, str]] = []  # what was reported so far
+        self.progressed.connect(lambda *told: self._progress.append(told))
         self._end: tuple[str, object] | None = None
         self.canceller: Callable[[], object] | None = None  # set by whoever runs the job
 
@@ -87,6 +96,12 @@ class Job:
             callback(self._end[1])
         return self
 
+    def on_progress(self, callback: Callable[[float | None, str], object]) -> Job:
+        for told in self._progress:  # a job run at once (run_now) reported before this
+            callback(*told)
+        self.progressed.connect(callback)
+        return self
+
     def on_failed(self, callback: Callable[[BaseException], object]) -> Job:
         self.failed.connect(callback)
         if self._end is not None and self._end[0] == "failed":
@@ -105,12 +120,16 @@ _running = threading.local()  # the stop check of the job running on this thread
 
 
 @contextmanager
-def running(should_stop: Callable[[], bool]) -> Iterator[None]:
-    """Within it, `cancel_point()` on this thread asks `should_stop` (the worker's job loop)."""
+def running(
+    should_stop: Callable[[], bool], listener: progress.Listener | None = None
+) -> Iterator[None]:
+    """Within it, `cancel_point()` on this thread asks `should_stop` (the worker's job loop) and
+    `progress.report` tells `listener`."""
     before = getattr(_running, "should_stop", None)
     _running.should_stop = should_stop
     try:
-        yield
+        with progress.reporting(listener):
+            yield
     finally:
         _running.should_stop = before
 
@@ -127,7 +146,8 @@ def run_now(kind: str, function: Callable[..., Any], *args: Any) -> Job:
     """Run `function(*args)` at once and return its ended handle (a session without a window)."""
     job = Job()
     try:
-        value = function(*args)
+        with progress.reporting(job.progressed.emit):
+            value = function(*args)
     except LeafError as exc:
         log.info("%s: %s", kind, exc)
         job.fail(exc)

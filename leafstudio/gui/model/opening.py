@@ -4,6 +4,11 @@ keeps beside the leaf (the project's sketch, the photo the leaf was found in, th
 layers). `read_document` runs on the worker's side lane; the session makes its answer the
 document (Session.open_path), unless Cancel came first (Session.cancel_open: the job stops at
 its next `cancel_point` and its answer is dropped).
+
+Opening lasts until the file's first result is shown: Cancel during that first reconstruction
+stops it and brings the previous document back, as a failure would (the first run of a big file
+or of a cold kernel cache can take long). The read's progress (_shared/progress.report: the
+readers' blocks of lines) reaches the window as `open_progress`.
 """
 
 from __future__ import annotations
@@ -135,23 +140,51 @@ class FileOpening:
         document."""
         if self._open_due is not None:
             self._open_due.cancel()  # the file being read is superseded
+        self._open_run = None  # an earlier file's first run: this file's replaces it
         what = "photo" if is_photo(path) else "scan" if as_scan else "file"
         self.opening.emit(path, what)
-        job = self._open_due = self.run("open", read_document, path, as_scan, length, pixel_size)
+        job = self._open_due = self.run("open", read_document, path, as_scan, length)
+        job.on_progress(lambda fraction, doing: self._open_progress(job, fraction, doing))
         job.on_done(lambda document: self._opened(job, document))
         job.on_failed(lambda exc: self._open_failed(job, what, exc))
         return job
 
     def cancel_open(self) -> bool:
-        """Stop reading the file being opened (Cancel): the document stays, the reading job is
-        asked to stop at its next step and its answer is dropped; `open_cancelled` says so.
-        False when no file is being read."""
+        """Stop opening a file (Cancel): while it is read, the reading job is asked to stop at
+        its next step and its answer is dropped, the document stays; during its first
+        reconstruction, that is stopped and the previous document comes back (none: an empty
+        sketch). `open_cancelled` says so. False when no file is being opened."""
         job, self._open_due = self._open_due, None
-        if job is None:
+        if job is not None:
+            job.cancel()
+        elif self._open_run is not None:
+            self._cancel_first_run()
+        else:
             return False
-        job.cancel()
         self.open_cancelled.emit()
+        self.open_ended.emit()
         return True
+
+    def _cancel_first_run(self) -> None:
+        """Stop the opened file's first reconstruction (and any request after it), drop what
+        they may still answer, and bring the previous document back."""
+        first, self._open_run = self._open_run, None
+        for request in [r for r in self._requested if r >= first]:
+            self.cancel_request(request)
+        self._ignored_upto = self.last_id  # a result already on its way is not shown
+        if not self._restore_fallback():
+            self.new_sketch()
+
+    def open_settled(self, request_id: int) -> None:
+        """Request `request_id` was shown or failed: the opened file's first result, if it is
+        (or a later one), ends the opening."""
+        if self._open_run is not None and request_id >= self._open_run:
+            self._open_run = None
+            self.open_ended.emit()
+
+    def _open_progress(self, job: Job, fraction: float | None, doing: str) -> None:
+        if job is self._open_due:
+            self.open_progress.emit(fraction, doing)
 
     def _opened(self, job: Job, document: Document) -> None:
         if job is not self._open_due:
@@ -159,17 +192,23 @@ class FileOpening:
         self._open_due = None
         d = document
         params = d.params or self.params
-        self.open_document(
+        request = self.open_document(
             d.leaf, d.sketch, d.title, params=params, path=d.path, scan=d.scan, photo=d.photo
         )
         self.opened.emit(d.path)
         if d.notice:
             self.noticed.emit(d.notice)
+        if request and self.shown_id < request:  # Cancel now stops its first reconstruction
+            self._open_run = request
+            self.open_progress.emit(None, "reconstructing")
+        else:
+            self.open_ended.emit()
 
     def _open_failed(self, job: Job, what: str, exc: BaseException) -> None:
         if job is self._open_due:
             self._open_due = None
             self.open_failed.emit(what, describe(exc))
+            self.open_ended.emit()
 
 
 def missing_photo_message(photo: LeafPhoto) -> str:

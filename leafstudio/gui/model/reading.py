@@ -7,7 +7,9 @@ went on. In a child process (spawned: the window's process has threads) it share
 the window, and Cancel ends it at once. A small file is read in the thread: a child costs a few
 seconds of start-up (imports), more than such a file takes. The child does not import the
 parent's `__main__` (_shared/spawn.py): a plain script driving a Session, without an
-`if __name__ == "__main__":` guard, would otherwise run again in it and fail.
+`if __name__ == "__main__":` guard, would otherwise run again in it and fail. What the readers
+report in the child (_shared/progress.report) comes back through the pipe and is reported again
+in the waiting thread, where the app's busy bar hears it.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import traceback
 from collections.abc import Callable
 from typing import Any
 
+from leafstudio._shared import progress
 from leafstudio._shared.spawn import WorkerContext
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.jobs import cancel_point
@@ -37,9 +40,14 @@ def is_big(path: str) -> bool:
 
 
 def _child(connection: Any, function: Callable[..., Any], args: tuple) -> None:
-    """In the child: run `function(*args)` and send how it ended."""
+    """In the child: run `function(*args)`, sending its progress, and send how it ended."""
+
+    def tell(fraction: float | None, what: str) -> None:
+        connection.send(("progress", fraction, what))
+
     try:
-        answer: tuple = ("done", function(*args))
+        with progress.reporting(tell):
+            answer: tuple = ("done", function(*args))
     except LeafError as exc:
         answer = ("leaf", exc.problem, exc.source)
     except Exception as exc:  # a bug: named in the parent, its traceback logged there
@@ -49,7 +57,8 @@ def _child(connection: Any, function: Callable[..., Any], args: tuple) -> None:
 
 
 def read_apart(function: Callable[..., Any], *args: Any) -> Any:
-    """`function(*args)` in a fresh process, waiting here; what it returns must pickle.
+    """`function(*args)` in a fresh process, waiting here; what it returns must pickle. Its
+    progress (_shared/progress.report in the child) is reported again on this thread.
 
     Raises
     ------
@@ -66,14 +75,19 @@ def read_apart(function: Callable[..., Any], *args: Any) -> Any:
     process.start()
     send.close()  # the child's end: the parent sees EOF if the child dies
     try:
-        while not receive.poll(POLL_S):
+        while True:
             cancel_point()
-        try:
-            answer = receive.recv()
-        except EOFError:
-            raise RuntimeError(
-                f"the reading process ended (exit code {process.exitcode})"
-            ) from None
+            if not receive.poll(POLL_S):
+                continue
+            try:
+                answer = receive.recv()
+            except EOFError:
+                raise RuntimeError(
+                    f"the reading process ended (exit code {process.exitcode})"
+                ) from None
+            if answer[0] != "progress":
+                break
+            progress.report(*answer[1:])
     finally:
         if process.is_alive():
             process.terminate()

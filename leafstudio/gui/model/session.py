@@ -81,6 +81,9 @@ class Session(FileOpening, Bending):
     run : jobs.Run, optional
         Starts a side job, `run(kind, function, *args) -> Job` (the window passes the worker's
         `start`); jobs.run_now, at once, by default.
+    cancel : callable(int), optional
+        Stops a reconstruction `submit` queued, by its request id (the window passes the
+        worker's `cancel`): Cancel during an opened file's first run.
 
     Events
     ------
@@ -109,7 +112,12 @@ class Session(FileOpening, Bending):
     opened(str)
         A file read became the document (the window adds it to the recent files).
     open_cancelled()
-        The file being read was cancelled (cancel_open); the document stays.
+        Opening the file was cancelled (cancel_open): the document stays, or comes back.
+    open_progress(float | None, str)
+        How far opening the file has come (None: not known) and what it is doing ("reading",
+        "reconstructing"...).
+    open_ended()
+        Opening the file is over: its first result is shown, or it failed or was cancelled.
     open_failed(str, str)
         A file could not be opened: what it was read as, and why; the document stays.
     """
@@ -119,9 +127,11 @@ class Session(FileOpening, Bending):
         submit: Callable[[Leaf, Params, bool], int] | None = None,
         params: Params | None = None,
         run: Run | None = None,
+        cancel: Callable[[int], object] | None = None,
     ) -> None:
         self.submit = submit or (lambda leaf, params, interrupt: 0)
         self.run = run or run_now
+        self.cancel_request = cancel or (lambda request_id: None)
         self.state = State(None, None, params or Params())
         self.history = History(moved=self._history_moved)
         self.shown = Shown()
@@ -134,9 +144,11 @@ class Session(FileOpening, Bending):
         self.cleared, self.sketch_shown, self.crossing = Event(), Event(), Event()
         self.noticed, self.sketch_waiting = Event(), Event()
         self.opening, self.opened, self.open_failed = Event(), Event(), Event()
-        self.open_cancelled = Event()
+        self.open_cancelled, self.open_progress, self.open_ended = Event(), Event(), Event()
         self.chosen_texture: Any = None  # a texture picked for the export, shown too
         self._open_due: Job | None = None  # the file being read; another open supersedes it
+        self._open_run: int | None = None  # the opened file's first run, until it is shown
+        self._ignored_upto = 0  # requests of a cancelled first run: their answers are dropped
         self._drawn_due: threading.Event | None = None  # the outcome being drawn (Outcome.drawn)
         self._serials = 0
         self._requested: dict[int, tuple[int, str]] = {}  # request id -> serial, reason
@@ -405,7 +417,7 @@ class Session(FileOpening, Bending):
     def accept_result(self, outcome: Any) -> bool:
         """A finished reconstruction: shown unless a newer one was shown already."""
         request_id = outcome.request.id
-        if request_id < self.shown_id:
+        if request_id < self.shown_id or request_id <= self._ignored_upto:
             return False
         self.shown = Shown(outcome, 0, None)
         if self._fallback is not None and request_id >= self._fallback.request:
@@ -431,6 +443,7 @@ class Session(FileOpening, Bending):
             self.side.texture_key = None  # another leaf's image: the view drops it
         self.result_shown.emit(outcome, framing)
         self.side.result_shown(outcome)
+        self.open_settled(request_id)
         return True
 
     def accept_measured(self, request_id: int) -> bool:
@@ -452,19 +465,28 @@ class Session(FileOpening, Bending):
         fails brings the previous one back. True when the failure concerns what is shown."""
         if request_id < self.shown_id or request_id < self.last_id:
             return False
+        if request_id <= self._ignored_upto:
+            return False
         self.message = describe(exc)
         fallback = self._fallback
-        if fallback is not None and request_id >= fallback.request and self.result is not None:
-            self._fallback = None
-            self._drop_edit()  # an edit begun on the failed document
-            self.state = fallback.state
-            self.derived, self._derived_leaf = fallback.derived, fallback.derived_leaf
-            h = self.history
-            h.steps, h.index, h.clean_index = fallback.steps, fallback.index, fallback.clean
-            h.changed.emit()
-            self.state_changed.emit(self.state, "fallback")
-            self.sketch_shown.emit(self.editable_sketch() or Sketch(), True)
-            self.failed.emit(self.message, True)
-            return True
-        self.failed.emit(self.message, False)
+        fell_back = fallback is not None and request_id >= fallback.request
+        self.failed.emit(self.message, fell_back and self._restore_fallback())
+        self.open_settled(request_id)
+        return True
+
+    def _restore_fallback(self) -> bool:
+        """Bring back the document from before a newly opened one (its first run failed or was
+        cancelled), with its history; False when there is none to bring back."""
+        fallback = self._fallback
+        if fallback is None or self.result is None:
+            return False
+        self._fallback = None
+        self._drop_edit()  # an edit begun on the failed document
+        self.state = fallback.state
+        self.derived, self._derived_leaf = fallback.derived, fallback.derived_leaf
+        h = self.history
+        h.steps, h.index, h.clean_index = fallback.steps, fallback.index, fallback.clean
+        h.changed.emit()
+        self.state_changed.emit(self.state, "fallback")
+        self.sketch_shown.emit(self.editable_sketch() or Sketch(), True)
         return True

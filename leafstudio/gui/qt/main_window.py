@@ -90,7 +90,9 @@ class MainWindow(FileCommands, QMainWindow):
         self.worker = Worker(self)
         self.worker.measure_after_drawn = True  # measuring would slow the render down
         params = self.saved_params() or Params()
-        self.session = Session(self.worker.submit_pipeline, params, run=self.worker.start)
+        self.session = Session(
+            self.worker.submit_pipeline, params, run=self.worker.start, cancel=self.worker.cancel
+        )
         self.viewport = Viewport(self)
         self.viewport.rendered.connect(self._on_rendered)
         self.setCentralWidget(self.viewport)
@@ -105,7 +107,7 @@ class MainWindow(FileCommands, QMainWindow):
         self.add_actions(WINDOW_ACTIONS)
         self._build_docks()
         self.statusBar().addWidget(self.status_text, 1)
-        self.busy = Busy()  # a file being read: its progress and Cancel
+        self.busy = Busy()  # a file opening: its progress and Cancel
         self.statusBar().addPermanentWidget(self.busy)
         self.busy.cancelled.connect(self.session.cancel_open)
         self._progress_bar()  # the exports' (exports.py), hidden until one runs
@@ -150,8 +152,8 @@ class MainWindow(FileCommands, QMainWindow):
         session.opened.connect(self._add_recent)
         session.open_failed.connect(self._on_open_failed)
         session.opening.connect(lambda path, _what: self.busy.start(path))
-        for done in (session.opened, session.open_failed, session.open_cancelled):
-            done.connect(lambda *_: self.busy.stop())
+        session.open_progress.connect(self.busy.progress)
+        session.open_ended.connect(self.busy.stop)
         session.open_cancelled.connect(lambda: self.status_text.setText("Opening cancelled"))
         side.fidelity_shown.connect(self._show_measurements)
         side.poisson_shown.connect(lambda pieces: self.viewport.set_layer("poisson", pieces))

@@ -63,8 +63,9 @@ class StatusText(QWidget):
 
 
 class Busy(QWidget):
-    """The status bar's progress while a file is read: a busy bar, the seconds so far and
-    Cancel. Hidden when idle; `start(text)` shows it, `stop()` hides it."""
+    """The status bar's progress while a file opens (read, then its first reconstruction): the
+    fraction read when the reader tells it (`progress`), else a busy bar; what is being done,
+    the seconds so far and Cancel. Hidden when idle; `start(text)` shows it, `stop()` hides it."""
 
     cancelled = Signal()
 
@@ -86,18 +87,32 @@ class Busy(QWidget):
         self._clock.setInterval(1000)
         self._clock.timeout.connect(self._tick)
         self._start = 0.0
+        self._doing = ""
         self.hide()
 
     def start(self, what: str) -> None:
         self._start = time.monotonic()
         self.setToolTip(what)
-        self.seconds.setText("0 s")
+        self.bar.setRange(0, 0)
+        self._doing = "reading"
+        self._tick()
         self._clock.start()
         self.show()
+
+    def progress(self, fraction: float | None, doing: str) -> None:
+        """`fraction` of `doing` is done (None: not known, a busy bar)."""
+        if fraction is None:
+            self.bar.setRange(0, 0)
+            self._doing = doing
+        else:
+            self.bar.setRange(0, 1000)
+            self.bar.setValue(round(1000 * fraction))
+            self._doing = f"{doing} {100 * fraction:.0f}%"
+        self._tick()
 
     def stop(self) -> None:
         self._clock.stop()
         self.hide()
 
     def _tick(self) -> None:
-        self.seconds.setText(f"{time.monotonic() - self._start:.0f} s")
+        self.seconds.setText(f"{self._doing} · {time.monotonic() - self._start:.0f} s")

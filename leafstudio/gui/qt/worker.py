@@ -94,6 +94,11 @@ class Context:
         if not self._worker._quit:
             self._worker.stage_started.emit(self._job.kind, self._job.id, name)
 
+    def progress(self, fraction: float | None, what: str) -> None:
+        """How far the job has come (_shared/progress.report on its thread)."""
+        if not self._worker._quit:
+            self._worker.progressed.emit(self._job.kind, self._job.id, fraction, what)
+
     def newer_waiting(self) -> bool:
         """True when a newer job of this kind waits, interrupting or not."""
         return self._job.kind in self._worker._pending
@@ -112,12 +117,15 @@ class Worker(QObject):
         Kind, job id and the job's return value.
     failed(str, int, object)
         Kind, job id and the exception (already logged with its traceback).
+    progressed(str, int, object, str)
+        Kind, job id, the fraction done (or None) and what the job is doing.
     """
 
     stage_started = Signal(str, int, str)
     yielded = Signal(str, int, object)
     done = Signal(str, int, object)
     failed = Signal(str, int, object)
+    progressed = Signal(str, int, object, str)
 
     def __init__(self, parent: QObject | None = None, lanes: dict[str, str] | None = None) -> None:
         super().__init__(parent)
@@ -130,6 +138,7 @@ class Worker(QObject):
         self._handles: dict[int, Job] = {}  # started jobs not yet answered (main thread only)
         self.done.connect(self._answer_done)
         self.failed.connect(self._answer_failed)
+        self.progressed.connect(self._answer_progress)
         self._quit = False
         self._pipeline: Pipeline | None = None  # touched on the pipeline lane only
         self._shown: Outcome | None = None  # the last outcome yielded (pipeline lane only)
@@ -189,6 +198,10 @@ class Worker(QObject):
         if (job := self._handles.pop(job_id, None)) is not None:
             job.fail(exc)
 
+    def _answer_progress(self, _kind: str, job_id: int, fraction: object, what: str) -> None:
+        if (job := self._handles.get(job_id)) is not None:
+            job.progressed.emit(fraction, what)
+
     def submit_pipeline(self, leaf: Leaf, params: Params, interrupt: bool = True) -> int:
         """Queue a reconstruction (the Session's `submit`)."""
         with self._wake:
@@ -242,7 +255,7 @@ class Worker(QObject):
         while (job := self._next(lane)) is not None:
             context = Context(self, job)
             try:
-                with running(context.should_stop):  # jobs.cancel_point asks the context
+                with running(context.should_stop, context.progress):  # jobs.cancel_point
                     value = job.job(context, *job.args)
                     if inspect.isgenerator(value):
                         value = self._drain(job, context, value)

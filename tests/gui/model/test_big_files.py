@@ -14,6 +14,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from leafstudio._shared import inputs
 from leafstudio.core.pipeline import Cancelled
 from leafstudio.core.plane import Frame
 from leafstudio.errors import LeafError
@@ -187,3 +188,94 @@ def test_a_plain_script_opens_a_big_file_through_the_session(tmp_path):
     assert done.returncode == 0, done.stderr
     assert "Traceback" not in done.stderr and "bootstrapping" not in done.stderr
     assert done.stdout.startswith("opened 200"), done.stdout
+
+
+# --- a read's progress; Cancel stops the first reconstruction too (issue 24, build item 4) ----
+
+
+def ellipse_file(path: Path, n: int) -> str:
+    """A boundary file of `n` points (about 27 characters a line)."""
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    rows = np.column_stack([np.cos(t), 0.4 * np.sin(t), np.zeros(n)])
+    np.savetxt(path, rows, delimiter=",", fmt="%.7f")
+    return str(path)
+
+
+def test_reading_a_file_reports_its_fraction_then_its_first_run(tmp_path, monkeypatch):
+    """The busy bar showed no fraction: the readers read the whole text at once and said nothing."""
+    monkeypatch.setattr(inputs, "BLOCK_CHARS", 8192)  # about 300 lines a block
+    path = ellipse_file(tmp_path / "leaf.csv", 3000)
+    runner = Runner()
+    session = Session(runner, FAST)
+    heard: list = []
+    session.open_progress.connect(lambda fraction, doing: heard.append((fraction, doing)))
+    session.open_ended.connect(lambda: heard.append("ended"))
+    session.open_path(path)
+    fractions = [f for f, doing in heard[:-1] if doing == "reading"]
+    assert len(fractions) >= 9 and fractions == sorted(fractions) and fractions[-1] == 1.0
+    assert heard[-1] == (None, "reconstructing")  # opened: its first run is under way
+    runner.finish(session)
+    assert heard[-1] == "ended"
+
+
+def test_a_file_read_apart_reports_its_fraction_through_the_pipe(tmp_path):
+    path = ellipse_file(tmp_path / "leaf.csv", 100_000)  # 2.7 MB: three blocks
+    heard: list = []
+    with running(lambda: False, lambda fraction, doing: heard.append((fraction, doing))):
+        document = reading.read_apart(opening._read_document, path, False)
+    assert len(document.leaf.boundary) == 100_000
+    assert [f for f, _ in heard] == sorted(f for f, _ in heard) and len(heard) >= 3
+    assert heard[-1] == (1.0, "reading")
+
+
+def opened_after_demo(tmp_path, cancelled: list) -> tuple[Session, Runner, object]:
+    """A session on the nested demo (its result shown), then a file opened: its first run waits."""
+    runner = Runner()
+    session = Session(runner, FAST, cancel=cancelled.append)
+    session.open_demo("nested")
+    runner.finish(session)
+    before = session.state
+    session.open_path(ellipse_file(tmp_path / "leaf.csv", 300))
+    assert session.leaf is not before.leaf and session.last_id == 2
+    return session, runner, before
+
+
+def test_cancel_during_the_first_run_stops_it_and_brings_the_previous_leaf_back(tmp_path):
+    """Cancel covered only the read: the first reconstruction of a big file (or of a cold kernel
+    cache) ran on, and the busy bar had gone."""
+    cancelled: list[int] = []
+    session, runner, before = opened_after_demo(tmp_path, cancelled)
+    heard: list = []
+    session.open_cancelled.connect(lambda: heard.append("cancelled"))
+    session.open_ended.connect(lambda: heard.append("ended"))
+    shown = session.result
+    assert session.cancel_open()
+    assert cancelled == [2] and heard == ["cancelled", "ended"]
+    assert session.state is before and session.result is shown
+    assert not session.history.can_undo() and not session.is_modified()
+    runner.finish(session, 1)  # its answer, already on its way: dropped
+    assert session.state is before and session.result is shown
+    assert not session.cancel_open()  # nothing left to cancel
+
+
+def test_cancel_stops_an_edit_made_during_the_first_run_too(tmp_path):
+    cancelled: list[int] = []
+    session, _runner, before = opened_after_demo(tmp_path, cancelled)
+    session.set_params(session.params.with_(k=4))
+    assert session.last_id == 3
+    assert session.cancel_open() and cancelled == [2, 3] and session.state is before
+
+
+def test_the_first_run_shown_ends_the_opening_and_cancel_then_does_nothing(tmp_path):
+    cancelled: list[int] = []
+    session, runner, _ = opened_after_demo(tmp_path, cancelled)
+    runner.finish(session)
+    assert not session.cancel_open() and cancelled == []
+
+
+def test_cancel_of_a_first_file_without_a_previous_leaf_leaves_an_empty_sketch(tmp_path):
+    cancelled: list[int] = []
+    session = Session(Runner(), FAST, cancel=cancelled.append)
+    session.open_path(ellipse_file(tmp_path / "leaf.csv", 300))
+    assert session.cancel_open() and cancelled == [1]
+    assert session.leaf is None and session.state.sketch is not None

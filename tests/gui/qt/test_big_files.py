@@ -99,3 +99,50 @@ def test_open_returns_at_once_and_cancel_stops_the_read(window, qtbot, monkeypat
     assert after_read == []  # stopped at its next step: the scan's layers were never made
     assert window.session.state is before and window.opened_name == "scan.txt"
     assert "scan.txt" not in window.windowTitle()
+
+
+def test_the_busy_bar_shows_the_read_fraction_and_cancel_stops_the_first_run(
+    window, qtbot, monkeypatch, tmp_path
+):
+    """Issue 24, build item 4: a read showed a busy bar, never a fraction; and the bar went away
+    once the file was read, so the first reconstruction (long for a big file or a cold kernel
+    cache) could not be cancelled."""
+    import numpy as np
+
+    from leafstudio._shared import inputs
+    from leafstudio.gui.qt import worker as worker_module
+
+    monkeypatch.setattr(inputs, "BLOCK_CHARS", 4096)
+    started, stopped = threading.Event(), threading.Event()
+
+    class SlowPipeline(worker_module.Pipeline):
+        def run(self, params, on_stage=None, should_stop=None):  # the file's first run
+            started.set()
+            while not should_stop():
+                threading.Event().wait(0.01)
+            stopped.set()
+            raise worker_module.Cancelled
+
+    t = np.linspace(0, 2 * np.pi, 1000, endpoint=False)
+    path = tmp_path / "leaf.csv"
+    np.savetxt(path, np.column_stack([np.cos(t), 0.4 * np.sin(t), 0 * t]), delimiter=",")
+    heard: list = []
+    window.session.open_progress.connect(lambda *told: heard.append(told))
+    before, shown = window.session.state, window.session.result
+    monkeypatch.setattr(worker_module, "Pipeline", SlowPipeline)
+    window.open_path(str(path))
+    qtbot.waitUntil(started.is_set, timeout=WAIT_MS)  # read, then its first run began
+    qtbot.waitUntil(lambda: heard and heard[-1] == (None, "reconstructing"), timeout=WAIT_MS)
+    fractions = [f for f, doing in heard if doing == "reading"]
+    assert len(fractions) >= 5 and fractions[-1] == 1.0  # through the worker's signal
+    assert window.busy.isVisible() and "reconstructing" in window.busy.seconds.text()
+    qtbot.mouseClick(window.busy.button, Qt.MouseButton.LeftButton)
+    assert stopped.wait(10)  # the run stopped at its next check
+    assert not window.busy.isVisible() and window.status_text.text() == "Opening cancelled"
+    assert window.session.state is before and window.session.result is shown
+    qtbot.waitUntil(window.worker.is_idle, timeout=WAIT_MS)
+    window.busy.start("x")
+    window.busy.progress(0.25, "reading")
+    assert window.busy.bar.maximum() == 1000 and window.busy.bar.value() == 250
+    assert window.busy.seconds.text().startswith("reading 25%")
+    window.busy.stop()
