@@ -219,6 +219,14 @@ class Worker(QObject):
             jobs = [*self._pending.values(), *(j for j in self._running.values() if j)]
             return not any(lane is None or self.lanes[j.kind] == lane for j in jobs)
 
+    def join(self, timeout_s: float) -> bool:
+        """After shutdown: wait up to `timeout_s` for the lanes' threads to end (a test's
+        teardown, so that no job outlives it); True when they all did."""
+        deadline = time.monotonic() + timeout_s
+        for thread in self._threads:
+            thread.join(max(0.0, deadline - time.monotonic()))
+        return not any(thread.is_alive() for thread in self._threads)
+
     def shutdown(self, wait_ms: int = SHUTDOWN_WAIT_MS) -> None:
         """Drop waiting jobs, ask running ones to stop at their next check, and wait for the
         threads at most `wait_ms`: a job in a long step that cannot check (a compiled kernel, a
@@ -263,21 +271,23 @@ class Worker(QObject):
                     continue
             except Cancelled:
                 continue
-            except LeafError as exc:
-                log.info("%s %d: %s", job.kind, job.id, exc)
-                self._report_failure(job, exc)
-                continue
             except Exception as exc:  # the window says so; the app keeps running
-                log.error("%s %d failed", job.kind, job.id, exc_info=exc)
                 self._report_failure(job, exc)
                 continue
             if not context.should_stop():
                 self.done.emit(job.kind, job.id, value)
 
     def _report_failure(self, job: _Job, exc: BaseException) -> None:
-        if not self._quit:  # after shutdown the window may be gone: nobody to tell
-            self.failed.emit(job.kind, job.id, exc)
-            self._failed(job)
+        """Log a failure and tell the window; neither after shutdown: the window may be gone,
+        and so may the log's stream (a test's captured output, closed once the test ended)."""
+        if self._quit:
+            return
+        if isinstance(exc, LeafError):  # bad input: said in the window, no traceback
+            log.info("%s %d: %s", job.kind, job.id, exc)
+        else:
+            log.error("%s %d failed", job.kind, job.id, exc_info=exc)
+        self.failed.emit(job.kind, job.id, exc)
+        self._failed(job)
 
     def _drain(self, job: _Job, context: Context, values: Iterator[Any]) -> Any:
         try:

@@ -143,6 +143,7 @@ class LentWindow:
     def close(self) -> None:
         if self.window is not None:
             close_window(self.window)
+            self.window.worker.join(WAIT_MS / 1000)  # no job outlives the window's tests
             self.window.deleteLater()
             self.window = None
 

@@ -52,6 +52,7 @@ def worker():
     w = Worker()
     yield w
     w.shutdown()
+    w.join(WAIT_MS / 1000)  # no job outlives the test (nor logs once its output is closed)
 
 
 @pytest.mark.parametrize("interrupt", [True, False], ids=["typed-value", "slider-drag"])

@@ -22,6 +22,7 @@ def worker():
     w = Worker()
     yield w
     w.shutdown()
+    w.join(WAIT_MS / 1000)  # no job outlives the test (nor logs once its output is closed)
 
 
 def collect(worker: Worker) -> dict[str, list]:
@@ -109,3 +110,22 @@ def test_the_pipeline_cache_is_kept_between_runs_of_one_leaf(worker, qtbot):
     outcome = got["yielded"][-1][2]
     assert "frame" not in outcome.result.ran and "layers" in outcome.timings
     assert "veins" in outcome.result.metrics  # computed on the worker thread
+
+
+def test_a_job_that_fails_after_shutdown_logs_nothing(worker, caplog):
+    """A job of a closed window that failed later logged its traceback into a stream that was
+    gone by then (a test's captured output: "I/O operation on closed file")."""
+    started, release = threading.Event(), threading.Event()
+
+    def fails_late() -> None:
+        started.set()
+        release.wait(WAIT_MS / 1000)
+        raise RuntimeError("failed after the window closed")
+
+    worker.start("open", fails_late)
+    assert started.wait(WAIT_MS / 1000)
+    worker.shutdown()
+    with caplog.at_level(logging.DEBUG, logger="leafstudio.gui"):
+        release.set()
+        assert worker.join(WAIT_MS / 1000)
+    assert "failed after the window closed" not in caplog.text
