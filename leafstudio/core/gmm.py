@@ -65,6 +65,21 @@ class Mixture:
         """Σ a_k N_k(x) at (n, 2) points."""
         return self.components(xy) @ self.amplitudes
 
+    def owners(self, xy: np.ndarray) -> np.ndarray:
+        """(n,) the Gaussian that owns each of (n, 2) points: the largest π_k N_k(x) (the
+        responsibility of eq. 7's E step)."""
+        if len(xy) == 0:
+            return np.zeros(0, dtype=int)
+        return np.argmax(self.components(xy) * self.weights[None, :], axis=1)
+
+    def scaled(self, scale: float) -> Mixture:
+        """EM's mixture on plane points multiplied by `scale` (a unit-size run's in the input's
+        units): means × s, covariances × s² (inf past about 1e154: such a leaf is measured, not
+        drawn); the weights, and EM's amplitudes (its weights), as they are."""
+        with np.errstate(over="ignore"):
+            covariances = scale * (scale * self.covariances)
+        return Mixture(self.weights, scale * self.means, covariances, self.amplitudes)
+
     def derivatives(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Value (n,), gradient (n, 2) and Hessian (n, 2, 2) of Σ a_k N_k(x), in closed form.
 

@@ -81,7 +81,7 @@ class Pipeline:
         fs: FrameStage = run["frame"]
         grid: Grid = run["grid"]
         guide: GuideStage = run["guide"]
-        samples, _ = run["gmm"]
+        samples, em_mixture = run["gmm"]
         surf: SurfaceStage = run["surface"]
         nodes = grid.points[guide.inside]
         unit = Result(
@@ -94,6 +94,7 @@ class Pipeline:
             p_grid=guide.p,
             inside=guide.inside,
             em_samples=samples,
+            em_mixture=em_mixture,
             surface=surf.surface,
             surface_points=fs.frame.to_world(nodes, surf.z),
             triangle_mesh=run["mesh"],

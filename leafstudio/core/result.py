@@ -14,6 +14,7 @@ import numpy as np
 
 from leafstudio.core import evaluate
 from leafstudio.core.evaluate import curvature_summary, shape_measurements
+from leafstudio.core.gmm import Mixture
 from leafstudio.core.grid import Grid
 from leafstudio.core.plane import Frame
 from leafstudio.core.prepare.units import ScaledSurface, Units
@@ -118,6 +119,11 @@ class Result:
         ranges ("curvature"); measured on first use.
     chosen_k : int
         The K the surface uses (the BIC's choice when params.k is "auto").
+    em_samples, em_mixture : (s, 2) float array, gmm.Mixture
+        The EM samples drawn from the height guide p(x), in the plane, and the mixture EM
+        fitted to them (the gmm stage's output); `surface.mixture` is refined from it (its
+        Gaussians can move far from the samples they came from: the lesson colours the samples
+        by EM's own).
     warnings : list of str
         What the run noticed (a leaf without veins is flat, ...).
     ran, timings : tuple of str, dict of str to float
@@ -142,6 +148,7 @@ class Result:
     p_grid: np.ndarray  # (ny * nx,) the probability map, 0 outside
     inside: np.ndarray  # (ny * nx,) bool, g >= 0
     em_samples: np.ndarray  # (s, 2) points drawn from p for EM
+    em_mixture: Mixture  # the mixture EM fitted to them (the surface's is refined from it)
     surface: HeightSurface
     surface_points: np.ndarray  # (n, 3) the GMM samples: kept grid nodes lifted, world coords
     triangle_mesh: TriangleMesh  # the mesh's arrays: points, triangles, height and curvatures
@@ -245,6 +252,7 @@ def in_world(unit: Result, leaf: Leaf, units: Units) -> Result:
         p_grid=s * unit.p_grid,
         inside=unit.inside,
         em_samples=s * unit.em_samples,
+        em_mixture=unit.em_mixture.scaled(s),
         surface=ScaledSurface(unit.surface, s),  # type: ignore[arg-type]
         surface_points=units.to_world(unit.surface_points),
         triangle_mesh=units.mesh(unit.triangle_mesh),

@@ -22,60 +22,78 @@ class LessonStep:
         The step's formula as matplotlib mathtext ("" for none).
     layers : tuple of str
         The app's layers that show it (gui/model/layers.LAYERS keys).
+    picture : str
+        What its picture draws (render/step_slides.step_picture): "points", "plane",
+        "implicit", "guide", "em", "heights" or "mesh".
     """
 
     title: str
     caption: str
     equation: str
     layers: tuple[str, ...]
+    picture: str
 
 
 LESSON_STEPS: tuple[LessonStep, ...] = (
     LessonStep(
-        "1. The leaf's outline and veins",
-        "We start from points on the leaf's edge (black) and along its veins (red). We lay "
-        "them on the flat plane that fits the edge best, like pressing the leaf onto a table. "
-        "Every height is then measured above that plane.",
-        r"$\mathrm{height} = (\mathbf{p} - \mathbf{o}) \cdot \mathbf{n}$",
-        ("points", "curves"),
+        "1. Points on the leaf",
+        "We start from points measured on the leaf: along its edge (black) and along its veins "
+        "(red), as a scanner or a drawing gives them. Each point has its own x, y and z.",
+        r"$\mathbf{p}_i = (x_i,\ y_i,\ z_i)$",
+        ("points",),
+        "points",
     ),
     LessonStep(
-        "2. Inside or outside the leaf",
+        "2. The leaf's plane",
+        "We lay the points on the flat plane that fits the edge best, like pressing the leaf "
+        "onto a table, and join the edge's points into an outline. Every height is then "
+        "measured above that plane: the veins' heights are in colour.",
+        r"$\mathrm{height} = (\mathbf{p} - \mathbf{o}) \cdot \mathbf{n}$",
+        ("points", "curves"),
+        "plane",
+    ),
+    LessonStep(
+        "3. Inside or outside the leaf",
         "A smooth function g tells every point of the plane whether it lies on the leaf: "
         "positive inside (blue), negative outside (red). Where g is zero, the line around it, is "
         "the leaf's edge.",
         r"$g(\mathbf{x}) > 0$ inside,   $g(\mathbf{x}) = 0$ on the edge",
         ("implicit", "contour", "points"),  # g over the surface (gui/model/fields.py)
+        "implicit",
     ),
     LessonStep(
-        "3. Where the leaf rises",
+        "4. Where the leaf rises",
         "Each point of the blade takes the height h of the nearest vein, fading to nothing "
         "at the edge. This map p(x) is a guess of the relief: bright where the leaf stands "
         "high.",
         r"$p(\mathbf{x}) = h_v \, \left(1 - \frac{|v' - \mathbf{x}|}{2\,|v' - v''|}\right)$",
         ("probability", "points"),
+        "guide",
     ),
     LessonStep(
-        "4. Points where the leaf is high",
+        "5. Points where the leaf is high",
         "We scatter points over the blade, more where p(x) is large. A few bell-shaped hills "
         "(Gaussians) are fitted to them: each colour is the points one hill gathers, and each "
         "ellipse shows the hill's width (one and two standard deviations).",
         r"$\mathbf{x}_i \to \arg\max_k \, \pi_k \, N(\mathbf{x}_i \mid \mu_k, \Sigma_k)$",
         ("em", "points"),
+        "em",
     ),
     LessonStep(
-        "5. The hills make the surface",
+        "6. The hills make the surface",
         "The hills are added up and scaled to the veins' heights. A factor tanh(g/δ) brings "
         "the sum down to zero at the edge, so the surface meets the outline exactly.",
         r"$z(\mathbf{x}) = b(\mathbf{x}) + \tanh(g/\delta) \, \sum_k a_k \, "
         r"N(\mathbf{x} \mid \mu_k, \Sigma_k)$",
         ("samples",),
+        "heights",
     ),
     LessonStep(
-        "6. The leaf in 3D",
+        "7. The leaf in 3D",
         "The surface is cut into small triangles and trimmed at the edge: this is the mesh, "
         "coloured by height. With more hills (a larger K) it can follow more veins.",
         "",
         ("mesh", "points"),
+        "mesh",
     ),
 )

@@ -4,9 +4,11 @@ compared side by side (render/forms_figure); written as a PNG per slide and one 
 (matplotlib's PdfPages). `leafstudio slides` and the app's File > Export slides write them.
 
 The steps' pictures are plan views of the leaf's plane, drawn with matplotlib at the result's
-unit size: the outline and veins; g with its zero contour; p(x); the EM samples coloured by
-the Gaussian that owns each, with each Gaussian's 1σ and 2σ ellipses; the mixture's heights;
-and the mesh (render/slides.mesh_image, off screen). Each field has its colour bar.
+unit size (each step's `picture`): the input's points as given, seen obliquely; the outline on
+the plane with the veins' heights above it; g with its zero contour; p(x); the EM samples
+coloured by the Gaussian of EM's mixture that owns each, with each Gaussian's 1σ and 2σ
+ellipses; the mixture's heights; and the mesh (render/slides.mesh_image, off screen). Each
+field has its colour bar.
 """
 
 from __future__ import annotations
@@ -102,10 +104,11 @@ def _cropped(image: np.ndarray, margin: int = 12) -> np.ndarray:
 
 
 def step_picture(ax: Any, result: Any, index: int) -> None:
-    """Draw step `index` (0-5, LESSON_STEPS) of `result` on the matplotlib axes `ax`."""
+    """Draw step `index` (LESSON_STEPS, its `picture`) of `result` on the matplotlib axes `ax`."""
     plane = _plane(result)
     unit = plane["unit"]
-    if index == 1:
+    picture = LESSON_STEPS[index].picture
+    if picture == "implicit":
         g = np.asarray(unit.g_grid, dtype=float)
         span = float(np.abs(g).max()) or 1.0
         _field(ax, plane, g, "RdBu", "g(x): inside > 0 > outside", vmin=-span, vmax=span)
@@ -117,21 +120,21 @@ def step_picture(ax: Any, result: Any, index: int) -> None:
             colors="black",
             linewidths=2.5,
         )
-    elif index == 2:
+    elif picture == "guide":
         p = np.asarray(unit.p_grid, dtype=float)
         _field(ax, plane, p, "magma", "p(x): the height guide", clip=True)
-    elif index == 3:
+    elif picture == "em":
         from matplotlib import colormaps
 
-        mixture = unit.surface.mixture
+        mixture = unit.em_mixture  # EM's own: the surface's is refined from it
         samples = np.asarray(unit.em_samples)
-        owner = np.argmax(mixture.components(samples) * mixture.weights, axis=1)
+        owner = mixture.owners(samples)
         colours = colormaps[OWNER_COLOURS]
         ax.scatter(*samples.T, s=6, c=[colours(k % 10) for k in owner], zorder=2)
         for k, (mean, cov) in enumerate(zip(mixture.means, mixture.covariances, strict=True)):
             for sigmas in (1, 2):
                 _ellipse(ax, mean, cov, sigmas, colours(k % 10))
-    elif index == 4:
+    elif picture == "heights":
         z = unit.height(unit.grid.points)  # b(x) outside, where tanh(g/δ) is 0: cut off
         inside = z[unit.inside]
         _field(
@@ -144,18 +147,55 @@ def step_picture(ax: Any, result: Any, index: int) -> None:
             vmin=float(inside.min()),
             vmax=float(inside.max()),
         )
-    if index == 5:
+    elif picture == "plane":
+        _heights_on_plane(ax, plane)
+    if picture == "mesh":
         from leafstudio.render.slides import mesh_image  # pyvista and VTK: only when asked for
 
         ax.imshow(_cropped(mesh_image(result, (960, 720))))
+    elif picture == "points":
+        _points(ax, plane)
     else:
-        _outline(ax, plane, veins=index in (0, 2))
+        if picture != "plane":
+            _outline(ax, plane, veins=picture == "guide")
         ax.set_aspect("equal")
         lo, hi = unit.polygon.min(axis=0), unit.polygon.max(axis=0)
         pad = 0.06 * (hi - lo).max()
         ax.set_xlim(lo[0] - pad, hi[0] + pad)  # the leaf fills the picture (a wide Gaussian's
         ax.set_ylim(lo[1] - pad, hi[1] + pad)  # ellipse runs off it)
     ax.set_axis_off()
+
+
+def _points(ax: Any, plane: dict[str, Any]) -> None:
+    """The input's points as given, seen obliquely (x across, y and z up): dots, nothing joined."""
+    unit = plane["unit"]
+    leaf = unit.leaf
+
+    def oblique(points: np.ndarray) -> np.ndarray:
+        x, y, z = points.T
+        return np.column_stack([x + 0.35 * y, z + 0.5 * y])
+
+    ax.scatter(*oblique(leaf.boundary).T, s=12, color=BOUNDARY, zorder=2)
+    if len(leaf.vein_points):
+        ax.scatter(*oblique(leaf.vein_points).T, s=12, color=VEINS, zorder=3)
+    ax.set_aspect("equal")
+
+
+def _heights_on_plane(ax: Any, plane: dict[str, Any]) -> None:
+    """The outline on the leaf's plane (filled), and the vein points at their heights above it
+    (in colour, with its bar)."""
+    unit = plane["unit"]
+    polygon = np.vstack([unit.polygon, unit.polygon[:1]])
+    ax.fill(*polygon.T, color="#e8f3e0", zorder=1)
+    ax.plot(*polygon.T, color=BOUNDARY, linewidth=1.5, zorder=2)
+    if not len(unit.leaf.vein_points):
+        return
+    xy, height = unit.frame.to_plane(unit.leaf.vein_points)
+    dots = ax.scatter(*xy.T, s=14, c=height, cmap="viridis", zorder=3)
+    bar = ax.figure.colorbar(dots, ax=ax, orientation="horizontal", fraction=0.06, pad=0.04)
+    bar.set_label("height above the plane", fontsize=TEXT_PT)
+    bar.ax.tick_params(labelsize=TEXT_PT - 4)
+    bar.formatter.set_powerlimits((-3, 4))
 
 
 def step_slide(result: Any, index: int, step: LessonStep | None = None) -> Any:

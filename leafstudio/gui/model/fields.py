@@ -164,13 +164,9 @@ def contour_piece(result: Result) -> Piece:
 
 
 def owners(result: Result) -> np.ndarray:
-    """(s,) the index of the Gaussian that owns each EM sample: the largest π_k N_k(x) (the
-    responsibility of eq. 7's E step)."""
-    mixture = result.surface.mixture
-    if len(result.em_samples) == 0:
-        return np.zeros(0, dtype=int)
-    weighted = mixture.components(result.em_samples) * mixture.weights[None, :]
-    return np.argmax(weighted, axis=1)
+    """(s,) the index of the Gaussian of EM's mixture that owns each EM sample (Mixture.owners;
+    not the refined mixture of the surface, whose Gaussians moved off the samples)."""
+    return result.em_mixture.owners(np.asarray(result.em_samples, dtype=float).reshape(-1, 2))
 
 
 def ellipse(mean: np.ndarray, covariance: np.ndarray, sigmas: float) -> np.ndarray:
@@ -203,7 +199,7 @@ def em_pieces(result: Result) -> list[Piece]:
     owner = owners(result)
     keep = thinned(np.arange(len(xy)))  # at most DISPLAY_POINTS drawn (pieces.py)
     xy, owner = xy[keep], owner[keep]
-    mixture = result.surface.mixture
+    mixture = result.em_mixture
     pieces = []
     for k in range(len(mixture.weights)):
         mine = xy[owner == k]

@@ -12,6 +12,7 @@ from leafstudio.core.pipeline import Pipeline
 from leafstudio.gui.model import fields
 from leafstudio.gui.model.layers import LAYERS, SIDE_LAYERS, build_layers
 from leafstudio.gui.model.measurements import measurement_rows
+from leafstudio.model import Leaf, Params
 from leafstudio.sources.demos import demo
 from tests.gui.builders import FAST
 
@@ -74,6 +75,36 @@ def test_fields_lie_over_the_surface_and_em_samples_are_coloured_by_their_gaussi
     assert sum(piece.data.n_points for piece in em) == len(result.em_samples)
     ellipses = [piece for piece in layers["em"] if piece.name.startswith("em:ellipse")]
     assert len(ellipses) == 2 * result.chosen_k  # 1σ and 2σ each
+
+
+def test_em_samples_are_coloured_by_ems_own_mixture_not_the_refined_one(demo_result):
+    """Issue 22: the samples were coloured by the surface's refined mixture, whose Gaussians
+    moved off them: on the nested demo one Gaussian owned 99.5% of the samples."""
+    result = demo_result("nested", Params())
+    refined = result.surface.mixture.owners(result.em_samples)
+    assert np.bincount(refined).max() > 0.9 * len(refined)  # why the refined one does not do
+    owner = fields.owners(result)
+    shares = np.bincount(owner, minlength=result.chosen_k) / len(owner)
+    assert shares.min() > 0.1 and shares.max() < 0.6, shares
+    layers = build_layers(result)
+    for k in range(result.chosen_k):  # each Gaussian's 1σ ellipse is centred on EM's mean
+        (ring,) = [p for p in layers["em"] if p.name == f"em:ellipse1:{k}"]
+        xy = result.frame.to_plane(np.asarray(ring.data.points))[0]
+        assert np.allclose(xy.mean(axis=0), result.em_mixture.means[k], atol=0.05)
+
+
+def test_ems_mixture_is_in_the_leafs_own_units():
+    """The surface's mixture is kept at unit size (units.py): drawn over a leaf in millimetres
+    its ellipses sat 80 times too close to the origin."""
+    leaf = demo("nested")
+    params = FAST.with_(seed=3)
+    unit = Pipeline(leaf).run(params)
+    big = Leaf(boundary=80 * leaf.boundary + 7, veins=[80 * v + 7 for v in leaf.veins])
+    world = Pipeline(big).run(params)
+    np.testing.assert_array_equal(fields.owners(world), fields.owners(unit))
+    ratio = world.em_mixture.covariances / unit.em_mixture.covariances
+    np.testing.assert_allclose(ratio, 80**2, rtol=1e-6)
+    np.testing.assert_allclose(world.em_mixture.weights, unit.em_mixture.weights)
 
 
 @pytest.mark.parametrize(
