@@ -13,7 +13,8 @@ shares of the leaf's length.
   distance, refused and warned;
 - the eight scans: open_scan then reconstruct with the defaults (the blade unrolled onto a sheet,
   core/sheet.py); the mean and 95th-percentile distance from the blade's points to the surface,
-  beside the figures before the sheet (measured at baf1042);
+  beside the figures before the sheet (measured at baf1042), and the mesh's area standing out of
+  the scan as a fin (analysis/fidelity.fin_share);
 - vein distances: every gallery form (flat) and a drawn leaf with hand-raised veins, with the
   99th-percentile dihedral angles in the margin band and inside;
 - time at grid 128: a bent form beside the same form flat, best of three;
@@ -32,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 import leafstudio as ls
+from leafstudio.analysis.fidelity import fin_share
 from leafstudio.core.bend import Pose
 from leafstudio.core.evaluate import margin_creases
 from leafstudio.errors import LeafError
@@ -117,23 +119,26 @@ def scans(folder: Path) -> None:
         print(f"\n(no scans in {folder})")
         return
     print("\n## the eight scans (open_scan, reconstruct with the defaults): distance / length")
-    print("| scan | mean before | p95 before | mean | p95 | length | CPU s |")
-    print("|---|---|---|---|---|---|---|")
+    print("| scan | mean before | p95 before | mean | p95 | fin | length | CPU s |")
+    print("|---|---|---|---|---|---|---|---|")
     means, before = [], []
     for path in paths:
         start = time.process_time()
         opened = workflows.open_scan(str(path))
-        fit = workflows.reconstruct(opened, ls.Params()).scan_fit
+        done = workflows.reconstruct(opened, ls.Params())
         cpu = time.process_time() - start
+        fit = done.scan_fit
+        blade = opened.scan[opened.extraction.blade]
+        fin = fin_share(done.result.triangle_mesh, blade, fit["length"])
         mean, p95 = fit["mean"] / fit["length"], fit["p95"] / fit["length"]
         was = BEFORE_SHEET.get(path.stem, (float("nan"), float("nan")))
         means.append(mean)
         before.append(was[0])
         print(
-            f"| {path.stem} | {was[0]:.2f}% | {was[1]:.2f}% | {mean:.2%} | {p95:.2%} | "
+            f"| {path.stem} | {was[0]:.2f}% | {was[1]:.2f}% | {mean:.2%} | {p95:.2%} | {fin:.2%} | "
             f"{fit['length']:.1f} | {cpu:.1f} |"
         )
-    print(f"| mean | {np.nanmean(before):.2f}% | | {np.mean(means):.2%} | | | |")
+    print(f"| mean | {np.nanmean(before):.2f}% | | {np.mean(means):.2%} | | | | |")
 
 
 def vein_distances() -> None:

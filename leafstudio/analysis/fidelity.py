@@ -7,12 +7,15 @@ from typing import Any
 
 import numpy as np
 import shapely
+from scipy.spatial import cKDTree
 
 from leafstudio.core import evaluate
 from leafstudio.core.plane import Frame
 from leafstudio.core.trianglemesh import MeshLike
 
 NEAR, FAR = 0.01, 0.02  # shares of the leaf length for the "beyond" figures
+FIN_NEIGHBOURS = 16  # a fin's side: the mean direction to this many nearest scan points ...
+ONE_SIDE = 0.85  # ... at least this long (points all round a triangle: a hole it spans)
 
 
 def scan_distances(mesh: MeshLike, points: np.ndarray, length: float) -> dict[str, Any]:
@@ -62,3 +65,32 @@ def coverage(mesh: MeshLike, frame: Frame, outline: np.ndarray) -> dict[str, Any
         "outside": float(footprint.difference(region).area / area),
         "pieces": evaluate.connected_pieces(triangles),
     }
+
+
+def fin_share(mesh: MeshLike, points: np.ndarray, length: float) -> float:
+    """The share of the mesh's area that stands out of a scan as a fin: triangles farther than
+    FAR of the length from every one of the (n, 3) scan points, with those points all to one
+    side of them (the mean of the unit vectors to the FIN_NEIGHBOURS nearest at least ONE_SIDE
+    long). A triangle over a hole in the scan has scan points all round it and is no fin.
+
+    Examples
+    --------
+    >>> import numpy as np, pyvista as pv
+    >>> plane = pv.Plane(i_size=1, j_size=1, i_resolution=8, j_resolution=8).triangulate()
+    >>> xy = np.random.default_rng(0).uniform(-0.5, 0.5, (2000, 2))
+    >>> scan = np.column_stack([xy, 0 * xy[:, 0]])
+    >>> fin_share(plane, scan, 1.0), round(fin_share(plane, scan[xy[:, 0] < 0.2], 1.0), 2)
+    (0.0, 0.25)
+    """
+    points = np.asarray(points, dtype=float)
+    corners = np.asarray(mesh.points, dtype=float)[evaluate.triangles_of(mesh)]
+    area = np.linalg.norm(
+        np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
+    )
+    centres = corners.mean(axis=1)
+    near, which = cKDTree(points).query(centres, k=min(FIN_NEIGHBOURS, len(points)))
+    towards = points[which] - centres[:, None]
+    towards /= np.maximum(np.linalg.norm(towards, axis=2, keepdims=True), 1e-300)
+    side = np.linalg.norm(towards.mean(axis=1), axis=1)
+    fin = (near[:, 0] > FAR * length) & (side >= ONE_SIDE)
+    return float(area[fin].sum() / area.sum()) if area.sum() > 0 else 0.0

@@ -119,6 +119,11 @@ class Sheet:
         """The flat blade's extent."""
         return float(np.ptp(self.centers, axis=0).max())
 
+    def centres_flat(self) -> np.ndarray:
+        """(m, 3) the flat points (u, v, 0) of the cube means the sheet was fitted to: where the
+        flat blade is known (sources/extract.py keeps the outline near them)."""
+        return np.column_stack([self.centers, np.zeros(len(self.centers))])
+
     def __call__(self, uv: np.ndarray, du: int = 0, dv: int = 0) -> np.ndarray:
         """(n, 3) sheet points (or their derivatives du, dv times along u, v) at (n, 2) flat
         points."""

@@ -34,7 +34,7 @@ from shapely.geometry import LineString, MultiPoint, Point, Polygon
 from leafstudio.core.plane import fixed_sample, principal_extents, principal_spreads
 from leafstudio.core.prepare.plausibility import check_leaf_like
 from leafstudio.core.prepare.vein_order import veins_inside_outline
-from leafstudio.core.sheet import Scaled, fit_sheet
+from leafstudio.core.sheet import CELLS, Scaled, fit_sheet
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
 
@@ -64,6 +64,7 @@ BUDGET = 40_000  # larger scans are thinned to at most this many voxel centroids
 THINNING_PASSES = 8
 PROBES = 10_000  # blade_points counts a ball's points among this many at most
 SAMPLE = 50_000  # the voxel size is first sought on this many of the points
+HELD = 1.0  # a flattened blade's outline keeps within this many sheet cells of a cube mean
 
 
 @dataclass(frozen=True)
@@ -224,6 +225,20 @@ def _outline(xy: np.ndarray, length: float) -> Polygon:
     return shapely.geometry.polygon.orient(Polygon(hull.exterior))
 
 
+def _held_part(polygon: Polygon, means: np.ndarray, reach: float) -> Polygon:
+    """The outline's largest part within `reach` of the (m, 2) cube means the sheet was fitted
+    to, without holes. The concave hull bridges bays of the flattened blade that hold no scan
+    point (a stray point, a scanner's gap); the sheet there is extrapolated, folds, and the mesh
+    bent onto it stood out of the scan as a fin (soybean pot1_1's top)."""
+    held = MultiPoint(means).buffer(2 * reach, quad_segs=4).buffer(-reach, quad_segs=4)
+    part = polygon.intersection(held)  # closed: no slit where a few cube means are missing
+    polys = [g for g in getattr(part, "geoms", [part]) if isinstance(g, Polygon) and g.area > 0]
+    kept = Polygon(max(polys, key=lambda g: g.area).exterior) if polys else polygon
+    if kept.area >= (1 - 1e-9) * polygon.area:  # nothing cut: the outline as it was, from its start
+        return polygon
+    return shapely.geometry.polygon.orient(kept)
+
+
 def _resample(polygon: Polygon, count: int) -> np.ndarray:
     """(count, 2) points evenly spaced around the polygon's outline, counter-clockwise."""
     ring = polygon.exterior
@@ -358,13 +373,13 @@ def extract_leaf(
     unit = (points - centre) / scale
     thinned, cell, size = voxel_thinning(unit, BUDGET)
     found = _extract(thinned, base_end, count)
-    sheet = fit_sheet(
-        thinned[found[1]], found[4][2], float(np.ptp(thinned[found[1]] @ found[4][0]))
-    )
+    span = float(np.ptp(thinned[found[1]] @ found[4][0]))
+    sheet = fit_sheet(thinned[found[1]], found[4][2], span)
     flatten = (lambda q: q) if sheet is None else sheet.flatten
     flat = thinned if sheet is None else sheet.flatten(thinned)
     if sheet is not None:  # the blade unrolled (core/sheet.py), its outline and veins found there
-        found = _extract(flat, base_end, count, found[1:3])
+        held = (sheet.centres_flat(), HELD * span / CELLS)
+        found = _extract(flat, base_end, count, found[1:3], held)
     leaf, blade, petiole, origin, axes, region = found
     if cell is not None:  # each point as its cube's centroid; a petiole stub cut as there
         # a cube whose centroid lies deeper in the region than the cube's diagonal is inside
@@ -436,11 +451,16 @@ def voxel_thinning(points: np.ndarray, budget: int) -> tuple[np.ndarray, np.ndar
 
 
 def _extract(
-    points: np.ndarray, base_end: str, count: int, split: tuple | None = None
+    points: np.ndarray,
+    base_end: str,
+    count: int,
+    split: tuple | None = None,
+    held: tuple[np.ndarray, float] | None = None,
 ) -> tuple[Leaf, np.ndarray, np.ndarray, np.ndarray, np.ndarray, Polygon]:
     """extract_leaf on the scan at unit size (and thinned): the leaf, the blade and petiole masks,
     the blade's plane (origin (3,), axes (3, 3)) and the region the blade's points keep to.
-    `split`: the blade and petiole masks found before (on the unflattened scan)."""
+    `split`: the blade and petiole masks found before (on the unflattened scan); `held`: on a
+    flattened blade, the sheet's cube means (m, 3) and how far from them the sheet is known."""
     blade, petiole = split_scan(points) if split is None else (split[0].copy(), split[1].copy())
     if blade.sum() < MIN_POINTS:
         raise LeafError(f"found only {blade.sum()} blade points in the scan (need {MIN_POINTS})")
@@ -450,6 +470,8 @@ def _extract(
     if np.ptp(xy[:, 1]) < 1e-3 * np.ptp(xy[:, 0]):
         raise LeafError("the scan's points lie on a line, not a leaf surface")
     polygon = _outline(xy, float(np.ptp(xy[:, 0])))
+    if held is not None:
+        polygon = _held_part(polygon, ((held[0] - origin) @ axes.T)[:, :2], held[1])
     boundary_xy = _resample(polygon, count)
     # the veins, the region and the rim's smoothing at a spacing of their own: --points sets how
     # finely the outline is written, not what is blade (it did), nor the cost (quadratic in it)
