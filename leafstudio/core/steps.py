@@ -265,7 +265,7 @@ def compute_surface(run: StageRun) -> SurfaceStage:
         base=fs.base,
     )
     if run.params.through_veins:  # onto every vein point (correct.py)
-        surface = onto_veins(surface, fs.veins, fs.heights, fs.length)
+        surface = onto_veins(surface, fs.veins, fs.heights, fs.length, (nodes, surface.taper(g_in)))
     return SurfaceStage(surface=surface, z=surface(nodes, g_in))
 
 
