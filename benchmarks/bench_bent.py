@@ -8,16 +8,18 @@ bend (`Leaf(boundary, veins)`, so the boundary's PCA plane is the leaf's) and th
 GMM surface (`through_veins=False`); "ours" runs it as given, with the defaults. Distances are
 shares of the leaf's length.
 
-- forms over poses: every gallery shape at every N-th pose of fold −75..75, curl 0..1, roll 0..1
-  and wave 0..0.2 (N = 1: all 89), K = 3, grid 128: largest and mean vein distance, largest boundary
-  distance, refused and warned;
+- forms over poses: every gallery shape at every N-th pose of fold −75..75, curl 0..1, roll 0..1,
+  wave 0..0.1 and twist 0..0.5 (N = 1: all 179), K = 3, grid 128: largest and mean vein distance,
+  largest boundary distance, refused and warned; ours also the mesh's distance to the form's own
+  surface (its flat blade's mesh bent: tests/core/test_bend_roll.off_surface), the mean and 95th
+  percentile of every case's mean and 95th percentile (target 2e-3);
 - the eight scans: open_scan then reconstruct with the defaults (the blade unrolled onto a sheet,
   core/sheet.py); the mean and 95th-percentile distance from the blade's points to the surface,
   beside the figures before the sheet (measured at baf1042), and the mesh's area standing out of
   the scan as a fin (analysis/fidelity.fin_share);
 - vein distances: every gallery form (flat) and a drawn leaf with hand-raised veins, with the
   99th-percentile dihedral angles in the margin band and inside;
-- time at grid 128: a bent form beside the same form flat, best of three;
+- CPU time at grid 128: a bent form beside the same form flat, best of three;
 - rolled forms: the mesh's distance to the form's own surface rolled, and the blade's area.
 """
 
@@ -49,7 +51,8 @@ FOLDS = (-75.0, -45.0, 0.0, 45.0, 75.0)
 CURLS = (0.0, 0.5, 1.0)
 WAVES = (0.0, 0.1)  # wave 0.2 is capped by half the blade's half-width anyway
 ROLLS = (0.0, 0.5, 1.0)  # shares of a half turn at the widest: 1 closes the blade into a tube
-POSES = [p for p in itertools.product(FOLDS, CURLS, WAVES, ROLLS) if any(p)]
+TWISTS = (0.0, 0.5)  # half turns of the apex against the base
+POSES = [p for p in itertools.product(FOLDS, CURLS, WAVES, ROLLS, TWISTS) if any(p)]
 
 
 def _today(leaf: ls.Leaf) -> ls.Leaf:
@@ -68,16 +71,21 @@ def _run(leaf: ls.Leaf, params: ls.Params) -> tuple[ls.Result | None, bool]:
 
 def forms_over_poses(every: int) -> None:
     print(f"\n## forms over poses (every {every}th of 14 shapes x {len(POSES)} poses, grid 128)")
-    print("| run | cases | refused | warned | vein max: median / worst | boundary max: worst |")
-    print("|---|---|---|---|---|---|")
+    from tests.core.test_bend_roll import off_surface
+
+    print(
+        "| run | cases | refused | warned | vein max: median / worst | boundary max: worst | "
+        "own surface: worst mean / worst p95 |"
+    )
+    print("|---|---|---|---|---|---|---|")
     cases = [(s, p) for i, (s, p) in enumerate(itertools.product(SHAPES, POSES)) if i % every == 0]
     for name in ("today", "ours"):
         refused = warned = 0
-        vein, boundary = [], []
-        for shape, (fold, curl, wave, roll) in cases:
+        vein, boundary, own = [], [], []
+        for shape, (fold, curl, wave, roll, twist) in cases:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
-                leaf = Form(shape, fold=fold, curl=curl, wave=wave, roll=roll).leaf()
+                leaf = Form(shape, fold=fold, curl=curl, wave=wave, roll=roll, twist=twist).leaf()
             made_warned = bool(caught)
             if name == "today":
                 leaf = _today(leaf)
@@ -89,9 +97,18 @@ def forms_over_poses(every: int) -> None:
                 continue
             vein.append(result.metrics["veins"]["max"] / result.length)
             boundary.append(result.metrics["boundary"]["max"] / result.length)
+            if name == "ours" and leaf.bend is not None:
+                pose = leaf.bend
+                blade = ls.Leaf(pose.flatten(leaf.boundary), [pose.flatten(v) for v in leaf.veins])
+                flat = ls.reconstruct(blade, params).triangle_mesh
+                off = off_surface(result.triangle_mesh, flat, pose) / result.length
+                own.append((off.mean(), np.percentile(off, 95)))
+        worst = np.max(own, axis=0) if own else (np.nan, np.nan)
         print(
             f"| {name} | {len(cases)} | {refused} | {warned} | {np.median(vein):.1e} / "
-            f"{max(vein):.1e} | {max(boundary):.1e} |"
+            f"{max(vein):.1e} | {max(boundary):.1e} | "
+            + ("-" if name == "today" else f"{worst[0]:.1e} / {worst[1]:.1e}")
+            + " |"
         )
 
 
@@ -188,18 +205,22 @@ def rolled_forms() -> None:
 
 
 def timing() -> None:
-    print("\n## time at grid 128 (best of three, seconds)")
+    print("\n## CPU time at grid 128 (best of three, seconds; CPU: the machine may be shared)")
     print("| form | flat, paper | flat, ours | bent, ours |")
     print("|---|---|---|---|")
-    for shape, pose in (("ovate", dict(fold=60.0)), ("linear", dict(curl=0.6))):
+    for shape, pose in (
+        ("ovate", dict(fold=60.0)),
+        ("linear", dict(curl=0.6)),
+        ("ovate", dict(fold=45.0, curl=0.5, roll=0.5, twist=0.5)),
+    ):
         flat, bent = Form(shape).leaf(), Form(shape, **pose).leaf()
         row = []
         for leaf, on in ((flat, False), (flat, True), (bent, True)):
             best = np.inf
             for _ in range(3):
-                start = time.perf_counter()
+                start = time.process_time()
                 _run(leaf, ls.Params(k=3, grid=128, through_veins=on))
-                best = min(best, time.perf_counter() - start)
+                best = min(best, time.process_time() - start)
             row.append(f"{best:.3f}")
         print(f"| {shape} {pose} | {' | '.join(row)} |")
 

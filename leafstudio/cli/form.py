@@ -38,6 +38,7 @@ def add_form_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--roll", type=float, default=0.0, metavar="R", help="margins rolled up R half turns"
     )
+    p.add_argument("--twist", type=float, default=0.0, metavar="T", help="apex turned T half turns")
     p.add_argument("--wave", type=float, default=0.0, metavar="A", help="margin wave height")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="a variant (default 0)")
     p.add_argument(
@@ -94,6 +95,7 @@ def run_form(args: argparse.Namespace) -> int:
         fold=args.fold,
         curl=args.curl,
         roll=args.roll,
+        twist=args.twist,
         wave=args.wave,
         seed=args.seed,
     )

@@ -12,7 +12,9 @@ origin, the midrib along +x, the relief on +z), a fold raises each half from the
 z += |y| tan(fold), and a curl bends the midrib, z += curl · x², a shear along z, after a roll
 has bent each cross-section into a circular arc of curvature `roll` (an isometry: widths are kept,
 heights are offsets along the rolled normal, as a grass blade or a young leaf rolls; a relief
-as high as the roll's radius is drawn in by 1 - height / radius). Both are undone exactly, and
+as high as the roll's radius is drawn in by 1 - height / radius), and a twist turns each
+cross-section about the midrib by twist · x radians (a helicoid: the blade as a twisted grass
+blade or a propeller; after the fold, before the curl). All are undone exactly, and
 the blade is what the form drew before posing: a fold of 75° or a rolled grass blade is
 reconstructed as well as the flat leaf, where the boundary's PCA plane saw it side-on and the
 mesh broke (issue 21, finding 1).
@@ -48,6 +50,7 @@ class Pose:
     fold: float = 0.0
     curl: float = 0.0
     roll: float = 0.0
+    twist: float = 0.0  # radians the cross-section turns about the midrib per unit of length
 
     def lift(self, xy: np.ndarray) -> np.ndarray:
         """(n,) heights the pose adds at (n, 2) blade points."""
@@ -55,20 +58,31 @@ class Pose:
         return np.abs(xy[:, 1]) * np.tan(np.deg2rad(self.fold)) + self.curl * xy[:, 0] ** 2
 
     def apply(self, points: np.ndarray) -> np.ndarray:
-        """(n, 3) flat blade points, bent: rolled, then lifted by the fold and curl."""
+        """(n, 3) flat blade points, bent: rolled, lifted by the fold, twisted about the midrib,
+        then lifted by the curl (no twist: the fold's and curl's lifts at once, as before)."""
         points = np.array(points, dtype=float)
         if self.roll != 0:
             r = 1.0 / self.roll  # the axis: y = 0, z = r; the height is taken off the radius
             angle, radius = points[:, 1] * self.roll, r - points[:, 2]
             points[:, 1], points[:, 2] = np.sin(angle) * radius, r - np.cos(angle) * radius
-        points[:, 2] += self.lift(points[:, :2])
+        if self.twist == 0:
+            points[:, 2] += self.lift(points[:, :2])
+            return points
+        points[:, 2] += Pose(self.fold).lift(points[:, :2])
+        points[:, 1:] = _turned(points, self.twist)
+        points[:, 2] += Pose(curl=self.curl).lift(points[:, :2])
         return points
 
     def flatten(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) bent points back on the flat blade (the inverse of `apply`, for a relief
         lower than the roll's radius and less than half a turn of roll each side)."""
         points = np.array(points, dtype=float)
-        points[:, 2] -= self.lift(points[:, :2])
+        if self.twist == 0:
+            points[:, 2] -= self.lift(points[:, :2])
+        else:  # x is kept by every step: each is undone at the x it was done at
+            points[:, 2] -= Pose(curl=self.curl).lift(points[:, :2])
+            points[:, 1:] = _turned(points, -self.twist)
+            points[:, 2] -= Pose(self.fold).lift(points[:, :2])
         if self.roll != 0:
             r = 1.0 / self.roll
             sign = np.sign(r)
@@ -78,14 +92,17 @@ class Pose:
         return points
 
     def key(self) -> bytes:
-        """Bytes that change with the bend (Leaf.fingerprint); no roll keeps today's."""
+        """Bytes that change with the bend (Leaf.fingerprint); no roll or twist keeps today's."""
         terms = [self.fold, self.curl] + ([self.roll] if self.roll != 0 else [])
+        terms += [np.inf, self.twist] if self.twist != 0 else []  # inf: no roll's key alike
         return np.array(terms).tobytes()
 
     def entry(self) -> dict[str, float]:
-        """The project's "bend" entry (sources/files.py): "roll" only when there is one."""
+        """The project's "bend" entry (sources/files.py): "roll" and "twist" only when there
+        are."""
         entry = {"fold": self.fold, "curl": self.curl}
-        return entry | ({"roll": self.roll} if self.roll != 0 else {})
+        entry |= {"roll": self.roll} if self.roll != 0 else {}
+        return entry | ({"twist": self.twist} if self.twist != 0 else {})
 
     def crease(self, points: np.ndarray) -> np.ndarray | None:
         """(n,) or (m, n) signed distances of flat points from the lines the bend creases along
@@ -98,6 +115,14 @@ class Pose:
             ends = np.ceil(np.abs([y.min(), y.max()]) / step)
             lines += [j * step for j in range(-int(ends[0]), int(ends[1]) + 1) if j != 0]
         return None if not lines else y[None, :] - np.array(lines)[:, None]
+
+
+def _turned(points: np.ndarray, twist: float) -> np.ndarray:
+    """(n, 2) y and z of (n, 3) points turned about the x axis by twist · x radians."""
+    angle = twist * points[:, 0]
+    c, s = np.cos(angle), np.sin(angle)
+    y, z = points[:, 1], points[:, 2]
+    return np.column_stack([c * y - s * z, s * y + c * z])
 
 
 def flat_leaf(leaf: Leaf) -> Leaf:

@@ -46,6 +46,7 @@ LIMITS = {  # name: (lowest, highest)
     "fold": (-75.0, 75.0),
     "curl": (-1.0, 1.0),
     "roll": (-1.0, 1.0),
+    "twist": (-1.0, 1.0),
     "wave": (0.0, 0.2),
 }
 
@@ -83,10 +84,11 @@ class Form:
         Secondary veins on each side (see `grow_veins`).
     aspect : float, optional
         Length over width; default the shape's usual.
-    fold, curl, roll, wave : float, default: 0.0
+    fold, curl, roll, wave, twist : float, default: 0.0
         Relief: the fold along the midrib (degrees), the curl along the length, the roll
         across it (the share of a half turn the widest margins roll through: 1 closes the
-        blade into a tube; negative rolls them down), the margin's wave amplitude.
+        blade into a tube; negative rolls them down), the margin's wave amplitude, the twist
+        about the midrib (half turns of the apex against the base).
     seed : int, default: 0
         0 gives the form exactly; other seeds vary it a little, the same seed the same leaf.
 
@@ -120,6 +122,7 @@ class Form:
     wave: float = 0.0
     seed: int = 0
     roll: float = 0.0
+    twist: float = 0.0
 
     def __post_init__(self) -> None:
         check_term("shape", self.shape, SHAPES)
@@ -209,12 +212,12 @@ class Form:
         if base is not None:
             veins = [np.column_stack([v[:, :2], v[:, 2] + base(v[:, :2])]) for v in veins]
         flat = Leaf(np.column_stack([xy, wave]), veins)
-        if self.fold == 0 and self.curl == 0 and self.roll == 0:
+        if self.fold == 0 and self.curl == 0 and self.roll == 0 and self.twist == 0:
             return Leaf(flat.boundary, _veins_on_blade(flat.boundary, flat.veins))
         # the leaf knows its pose: reconstruction runs on the flat blade and bends the mesh
         # (core/bend.py), so no fold or curl stands it on edge; the veins are kept on the blade
         half_width = float(np.abs(xy[:, 1]).max())  # the roll's curvature: its share of a turn
-        pose = Pose(self.fold, self.curl, self.roll * np.pi / half_width)
+        pose = Pose(self.fold, self.curl, self.roll * np.pi / half_width, self.twist * np.pi)
         veins = _veins_on_blade(flat.boundary, flat.veins)
         return Leaf(pose.apply(flat.boundary), [pose.apply(v) for v in veins], bend=pose)
 
@@ -275,7 +278,7 @@ def make_form(shape: str = "elliptic", **terms: Any) -> Leaf:
         One of `SHAPES`.
     **terms
         The other terms of `Form` (apex, base, margin, teeth, lobes, venation, secondaries,
-        aspect, fold, curl, roll, wave, seed).
+        aspect, fold, curl, roll, wave, twist, seed).
 
     Returns
     -------

@@ -222,6 +222,8 @@ RELIEF: dict[str, str] = {  # plain words (the app shows them); FLAGS adds the C
     "curl": "the midrib bends so the apex rises by this many leaf lengths (droops, if negative)",
     "roll": "the margins roll up across the midrib, as a grass blade rolls: 1 closes the blade "
     "into a tube at its widest, 0.5 makes a half-pipe (rolls down, if negative)",
+    "twist": "the blade turns about its midrib, as a twisted grass blade: the apex this many half "
+    "turns against the base (the other way, if negative)",
     "wave": "the margin rises and falls in waves of this height (in leaf lengths; at most half "
     "the blade's half-width)",
     "seed": "a variant of the form: tooth spacing, lobe depth, vein angles and width vary "
@@ -235,6 +237,7 @@ FLAGS: dict[str, str] = {  # each RELIEF term's command-line option, for `form -
     "fold": "--fold DEG",
     "curl": "--curl C",
     "roll": "--roll R",
+    "twist": "--twist T",
     "wave": "--wave A",
     "seed": "--seed S",
     "aspect": "--aspect L/W",

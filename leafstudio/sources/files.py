@@ -232,17 +232,17 @@ FRAME_KEYS = ("origin", "u", "v", "normal")  # a bend's frame in a project (core
 
 
 def _project_bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
-    """A project's "bend": {"fold": degrees, "curl": c, "roll": curvature}, the pose a form was
-    made in, with the "frame" {"origin", "u", "v", "normal"} of a leaf bent in the app
-    (core/placed.py), or {"sheet": ...}, a scan's bend (core/sheet.py)."""
+    """A project's "bend": {"fold": degrees, "curl": c, "roll": curvature, "twist": radians per
+    length}, the pose a form was made in, with the "frame" {"origin", "u", "v", "normal"} of a
+    leaf bent in the app (core/placed.py), or {"sheet": ...}, a scan's bend (core/sheet.py)."""
     if isinstance(value, dict) and "sheet" in value:
         try:
             return Scaled.from_entry(value, np.vstack([leaf.boundary, leaf.vein_points]))
         except (TypeError, ValueError, KeyError, np.linalg.LinAlgError):
             raise LeafError('"bend": its "sheet" does not read whole', source) from None
-    fold = curl = roll = math.nan  # stays nan, and is refused below, unless the entry reads whole
+    fold = curl = roll = twist = math.nan  # stays nan, and is refused below, unless it reads whole
     frame = None
-    if isinstance(value, dict) and not set(value) - {"fold", "curl", "roll", "frame"}:
+    if isinstance(value, dict) and not set(value) - {"fold", "curl", "roll", "twist", "frame"}:
         with contextlib.suppress(TypeError, ValueError, KeyError, AttributeError, OverflowError):
             if "frame" in value:  # read first: a bad frame leaves the fold nan
                 axes = [np.asarray(value["frame"][k], float) for k in FRAME_KEYS]
@@ -251,14 +251,14 @@ def _project_bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Sc
                     raise ValueError
                 frame = Frame(*axes)
             fold, curl = float(value.get("fold", 0.0)), float(value.get("curl", 0.0))
-            roll = float(value.get("roll", 0.0))
-    if not (abs(fold) < 90 and math.isfinite(curl) and math.isfinite(roll)):
+            roll, twist = float(value.get("roll", 0.0)), float(value.get("twist", 0.0))
+    if not (abs(fold) < 90 and all(math.isfinite(t) for t in (curl, roll, twist))):
         raise LeafError(
-            f'"bend" must be {{"fold": degrees under 90, "curl", "roll": numbers}} (a "frame": '
-            f'{{"origin", "u", "v", "normal"}}, orthonormal axes), got {shorten(value)}',
+            f'"bend" must be {{"fold": degrees under 90, "curl", "roll", "twist": numbers}} (a '
+            f'"frame": {{"origin", "u", "v", "normal"}}, orthonormal axes), got {shorten(value)}',
             source,
         )
-    pose = Pose(fold, curl, roll)
+    pose = Pose(fold, curl, roll, twist)
     return pose if frame is None else PlacedPose(pose, frame)
 
 

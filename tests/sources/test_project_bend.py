@@ -32,7 +32,7 @@ def test_a_flat_leafs_project_has_no_bend(tmp_path):
     assert ls.load_leaf(path).bend is None
 
 
-@pytest.mark.parametrize("bend", [{"fold": 95}, {"fold": "x"}, [60], {"twist": 1}])
+@pytest.mark.parametrize("bend", [{"fold": 95}, {"fold": "x"}, [60], {"wobble": 1}, {"twist": "x"}])
 def test_a_bad_bend_is_one_leaf_error(tmp_path, bend):
     path = tmp_path / "bad.leaf.json"
     ls.save_leaf(ls.demo("nested"), path)

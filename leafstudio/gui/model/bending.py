@@ -85,7 +85,9 @@ class Bending:
             self._bend_base = None
             if base.leaf is not self.state.leaf:
                 p = self.pose
-                text = f"Bend: fold {p.fold:g}°, curl {p.curl:g}" + (
-                    f", roll {p.roll:g}" if p.roll else ""
+                text = (
+                    f"Bend: fold {p.fold:g}°, curl {p.curl:g}"
+                    + (f", roll {p.roll:g}" if p.roll else "")
+                    + (f", twist {p.twist:g}" if p.twist else "")
                 )
                 self.history.push(Step(text, base, self.state))

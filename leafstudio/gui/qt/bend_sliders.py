@@ -1,11 +1,13 @@
-"""The Fold, Curl and Roll sliders in the Parameters panel, under K and the grid (issue 21, build
-item 6): they bend the document's leaf live through `Session.set_bend` (gui/model/bending.py), one
-undo step per drag; undo, a new document or an opened project shows its pose on them.
+"""The Fold, Curl, Roll and Twist sliders in the Parameters panel, under K and the grid (issue 21,
+build item 6): they bend the document's leaf live through `Session.set_bend`
+(gui/model/bending.py), one undo step per drag; undo, a new document or an opened project
+shows its pose on them.
 
 Fold is the angle each half rises from the midrib (as a form's); curl bends the midrib, z =
 curl · x² along it from the base (a leaf of length 1 lifts its apex by curl); roll bends each
-cross-section into an arc of radius 1 / roll, widths kept. The range is the Forms dock's: a fold
-of ±75°, a curl of ±1; a roll of ±20 closes a blade 0.16 wide into a tube.
+cross-section into an arc of radius 1 / roll, widths kept; twist turns each cross-section about
+the midrib by twist · x radians. The range is the Forms dock's: a fold of ±75°, a curl of ±1; a
+roll of ±20 closes a blade 0.16 wide into a tube; a twist of ±3.1 turns the apex half a turn.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ RANGES = {  # least, most, decimals
     "fold": (-75.0, 75.0, 1),
     "curl": (-1.0, 1.0, 2),
     "roll": (-20.0, 20.0, 1),
+    "twist": (-3.1, 3.1, 2),
 }
 TIPS = {
     "fold": f"Fold: {RELIEF['fold']}. The sketch keeps the flat blade; the 3D leaf is bent.",
@@ -33,6 +36,9 @@ TIPS = {
     "length 1 lifts its apex by curl; negative droops). The sketch keeps the flat blade.",
     "roll": "Roll: the blade rolls across its midrib into arcs of radius 1 / roll (in the leaf's "
     "lengths; negative rolls down), widths kept. The sketch keeps the flat blade.",
+    "twist": "Twist: each cross-section turns about the midrib by twist · x radians from the "
+    "base (a leaf of length 1 turns its apex by twist; 3.1 is half a turn). The sketch keeps "
+    "the flat blade.",
 }
 SHEET_TIP = (
     "This scan is bent by the smooth sheet fitted to all its points; a fold or curl would "

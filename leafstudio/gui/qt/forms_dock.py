@@ -148,6 +148,7 @@ class FormsPanel(QWidget):
         self.fold = self._spin(QDoubleSpinBox(), -75, 75, 0, RELIEF["fold"], " °", 5)
         self.curl = self._spin(QDoubleSpinBox(), -1, 1, 0, RELIEF["curl"], "", 0.05)
         self.roll = self._spin(QDoubleSpinBox(), -1, 1, 0, RELIEF["roll"], "", 0.05)
+        self.twist = self._spin(QDoubleSpinBox(), -1, 1, 0, RELIEF["twist"], "", 0.05)
         self.wave = self._spin(QDoubleSpinBox(), 0, 0.2, 0, RELIEF["wave"], "", 0.005)
         self.seed = self._spin(QSpinBox(), 0, 1_000_000, 0, RELIEF["seed"])
         self.variant = QPushButton("New variant")
@@ -172,6 +173,7 @@ class FormsPanel(QWidget):
             ("Fold", self.fold),
             ("Curl", self.curl),
             ("Roll", self.roll),
+            ("Twist", self.twist),
             ("Wave", self.wave),
         ):
             text = QLabel()
@@ -272,6 +274,7 @@ class FormsPanel(QWidget):
             fold=self.fold.value(),
             curl=self.curl.value(),
             roll=self.roll.value(),
+            twist=self.twist.value(),
             wave=self.wave.value(),
             seed=self.seed.value(),
         )
