@@ -13,6 +13,9 @@ Tests import builders from here (or tests/photos.py for photos), never from anot
 
 from __future__ import annotations
 
+import functools
+from pathlib import Path
+
 import numpy as np
 import shapely
 from scipy.spatial.transform import Rotation
@@ -270,3 +273,15 @@ def assert_outline_is_the_blades(found) -> None:
     assert got.is_valid
     assert known.symmetric_difference(got).area < 0.04 * known.area
     assert shapely.hausdorff_distance(known.exterior, got.exterior) < 0.03
+
+
+@functools.cache
+def extracted_scan(path: Path) -> tuple[np.ndarray, object]:
+    """A real scan's (n, 3) points, read-only, and what `extract_leaf` finds in them: extracted
+    once per test process (1-2 s a scan) for the tests that only read them."""
+    from leafstudio.sources.extract import extract_leaf
+    from leafstudio.sources.scan import read_scan
+
+    points = read_scan(path)
+    points.setflags(write=False)
+    return points, extract_leaf(points)

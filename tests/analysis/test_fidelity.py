@@ -13,8 +13,7 @@ import leafstudio as ls
 from leafstudio.analysis.fidelity import coverage, scan_distances
 from leafstudio.cli import main
 from leafstudio.core.plane import Frame
-from leafstudio.sources.extract import extract_leaf
-from leafstudio.sources.scan import read_scan
+from tests.leaves import extracted_scan
 
 
 def _plane() -> pv.PolyData:
@@ -93,8 +92,7 @@ REAL = Path(__file__).resolve().parents[3] / "shared" / "realleaves"
 
 @pytest.mark.skipif(not REAL.is_dir(), reason="the real leaf scans are not beside the repository")
 def test_a_real_sugar_beet_leaf_from_its_scan_is_close_to_the_scan():
-    raw = read_scan(REAL / "sugarbeet_f00012_20170829T010129_pot1_1.txt")
-    found = extract_leaf(raw)
+    raw, found = extracted_scan(REAL / "sugarbeet_f00012_20170829T010129_pot1_1.txt")
     scale = 1.0 / found.length
     leaf = ls.Leaf(
         boundary=found.leaf.boundary * scale, veins=[v * scale for v in found.leaf.veins]

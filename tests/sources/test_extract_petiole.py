@@ -13,8 +13,7 @@ import pytest
 import shapely
 
 from leafstudio.sources.extract import clean_scan, extract_leaf
-from leafstudio.sources.scan import read_scan
-from tests.leaves import scan_blade_outline, synthetic_scan
+from tests.leaves import extracted_scan, scan_blade_outline, synthetic_scan
 
 REAL = Path(__file__).resolve().parents[3] / "shared" / "realleaves"
 SCANS = sorted(REAL.glob("*.txt")) if REAL.is_dir() else []
@@ -65,8 +64,8 @@ def test_the_outline_keeps_the_whole_blade_of_a_real_scan(path):
     """Before: 12.6% (soybean pot1_1), 18.2% (sugar beet pot1_7), 0.3-2.4% of the others' clean
     points beyond the outline; then at most 0.04% in the PCA plane. On the unrolled blade (core/
     sheet.py) at most 0.6%: a few points across a tight curl flatten onto the other layer."""
-    points = read_scan(path)
-    assert _beyond_outline(points, extract_leaf(points)) < 0.01
+    points, found = extracted_scan(path)
+    assert _beyond_outline(points, found) < 0.01
 
 
 @needs_scans
@@ -75,7 +74,7 @@ def test_a_sugar_beets_petiole_is_its_strand(path):
     """Each sugar beet scan has a long petiole: what extract calls the petiole is a strand (its
     second spread under a third of its first), at least 100 points. Before, pot1_7's was a sheet
     of blade (0.64) and its 241-point strand was dropped as clutter."""
-    found = extract_leaf(read_scan(path))
+    points, found = extracted_scan(path)
     assert found.petiole.sum() >= 100
-    spread = _spreads(read_scan(path)[found.petiole])
+    spread = _spreads(points[found.petiole])
     assert spread[1] < 0.35 * spread[0]
