@@ -48,6 +48,11 @@ def run_until(done, timeout_s: float = 900.0) -> None:
         loop.exec()
 
 
+def _total(meter: StallMeter, until: float, since: float) -> float:
+    """All the main thread's CPU time between two ticks from `since` to `until`."""
+    return sum(busy for t, _, busy in meter.samples if since < t <= until)
+
+
 def measure(meter: StallMeter, start) -> dict:
     """The stall while the export `start()` begins runs, until its job has ended."""
     meter.reset()
@@ -59,6 +64,7 @@ def measure(meter: StallMeter, start) -> dict:
     return {
         "longest_stall_ms": round(1000 * meter.worst(t1 + 0.05, t0), 1),
         "busiest_main_thread_cpu_ms": round(1000 * meter.busiest(t1 + 0.05, t0), 1),
+        "main_thread_cpu_ms": round(1000 * _total(meter, t1 + 0.05, t0), 1),
         "export_s": round(t1 - t0, 2),
         "written": ok,
     }

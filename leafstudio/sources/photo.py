@@ -22,7 +22,9 @@
    farthest from it); otherwise the two ends of the blade's midline, its best mirror axis
    (leafends.py), of which the base is the one `base_end` names (left, right, top, bottom) or, by
    default, the one with a basal notch (cordate, sagittate), else the one the veins lean away
-   from, else the wider one.
+   from, else the wider one. When the photo shows a midrib (photo_veins.ridge_midline) whose ends
+   lie elsewhere than the mirror axis's (ENDS_AGREE), its ends are taken instead: a lopsided or
+   unrolled blade's mirror axis can run across it. The traced midrib stops where its ridge does.
 6. The leaf follows the forms' convention (docs/architecture.md): the base at the origin, the apex
    on +x at `length` (base to apex), z = 0. The affine map from those coordinates back to the
    photo's pixels is kept (in the project, "photo": {"pixel_from_world": ...}) so that `reconstruct
@@ -40,7 +42,7 @@ import numpy as np
 from leafstudio._shared.inputs import read_image
 from leafstudio.errors import LeafError
 from leafstudio.forms import grow_veins
-from leafstudio.forms.veins import HEIGHT_RATIO, check_seed
+from leafstudio.forms.veins import check_seed
 from leafstudio.model import Leaf
 from leafstudio.sources.files import save_leaf
 from leafstudio.sources.leafends import (
@@ -52,7 +54,7 @@ from leafstudio.sources.leafends import (
     sharpen_end,
 )
 from leafstudio.sources.leafphoto import LeafPhoto
-from leafstudio.sources.photo_veins import trace_veins
+from leafstudio.sources.photo_veins import lifted, ridge_midline, smoothed, trace_veins
 
 if TYPE_CHECKING:
     from leafstudio.sources.leafends import Midline, VeinField
@@ -69,6 +71,7 @@ STALK_ELONGATION = 4.0  # this many times longer than wide,
 STALK_FILL = 0.65  # and fills more than this share of its length times its widest width,
 STALK_EVEN = 0.88  # and is as wide near one end as near the other (_evenness), to this share
 STALK_MARGIN = 1.5  # pixels: a petiole found along the midline is cut this much wider
+ENDS_AGREE = 0.05  # the photo's midrib moves the outline's ends when farther than this (of length)
 PETIOLE_FIT = 1.6  # the second opening's disk, in petiole half-widths
 
 
@@ -293,6 +296,22 @@ def _cut_stalk(
     return rest, stalk.joint, veins, line
 
 
+def _photo_midline(
+    image: np.ndarray, blade: np.ndarray, outline: np.ndarray, line: Midline
+) -> tuple[Midline, np.ndarray | None]:
+    """The outline's midline, or the midrib the photo shows (photo_veins.ridge_midline) when its
+    ends lie elsewhere (farther than ENDS_AGREE of the length from the midline's); and the
+    visible ridge's path (None if none)."""
+    found = ridge_midline(image, blade, outline)
+    if found is None:
+        return line, None
+    ridge, path = found
+    ends, other = ridge.ends, line.ends
+    gap = min(np.linalg.norm(ends - other, axis=1).max(),
+              np.linalg.norm(ends - other[::-1], axis=1).max())  # fmt: skip
+    return (line if gap <= ENDS_AGREE * max(line.length, ridge.length) else ridge), path
+
+
 def _ends(
     outline: np.ndarray,
     base_end: str,
@@ -367,11 +386,13 @@ def leaf_from_photo(
     leaf_mask = _leaf_component(foreground(image))
     blade, joint = _cut_petiole(leaf_mask)
     outline = _outline(blade, points)
-    field = line = None
+    field = line = ridge = None
     if joint is None:
         blade, joint, field, line = _cut_stalk(outline, image, blade)
         if joint is not None:
             outline = _outline(blade, points)
+        elif veins in ("auto", "trace"):
+            line, ridge = _photo_midline(image, blade, outline, line)
     outline, base, apex, cue = _ends(outline, base_end, joint, field, line)
     start = np.array([outline[base, 0], -outline[base, 1]])  # y up
     axis = np.array([outline[apex, 0], -outline[apex, 1]]) - start
@@ -402,9 +423,14 @@ def leaf_from_photo(
     found: list[np.ndarray] = []
     veins_from = "none"
     if veins in ("auto", "trace"):
-        traced = trace_veins(image, blade, outline[base], outline[apex])
+        reach = None
+        if ridge is not None:  # the visible ridge's ends, the base's first
+            near_base = np.linalg.norm(ridge[0] - outline[base]) < np.linalg.norm(
+                ridge[-1] - outline[base])  # fmt: skip
+            reach = ridge[[0, -1]] if near_base else ridge[[-1, 0]]
+        traced = trace_veins(image, blade, outline[base], outline[apex], reach)
         if traced.seen:
-            found = [_lifted(to_world(_smoothed(v)), xy) for v in traced.veins]
+            found = [lifted(to_world(smoothed(v)), xy) for v in traced.veins]
             veins_from = "photo"
     if veins == "grow" or (veins == "auto" and not found):
         found = grow_veins(boundary, venation, base=np.zeros(2), seed=seed, apex=xy[apex])
@@ -420,32 +446,6 @@ def leaf_from_photo(
         length=length,
         scale=how,
     )
-
-
-def _smoothed(path: np.ndarray, spacing: float = 3.0) -> np.ndarray:
-    """A traced pixel path without its staircase: resampled every `spacing` pixels along its
-    length and smoothed over a few samples, its ends kept."""
-    from scipy.ndimage import gaussian_filter1d
-
-    steps = np.linalg.norm(np.diff(path, axis=0), axis=1)
-    arc = np.concatenate([[0.0], np.cumsum(steps)])
-    count = max(int(arc[-1] / spacing) + 1, 2)
-    at = np.linspace(0.0, arc[-1], count)
-    even = np.column_stack([np.interp(at, arc, path[:, i]) for i in range(2)])
-    if len(even) < 5:
-        return even
-    smooth = gaussian_filter1d(even, 1.0, axis=0, mode="nearest")
-    smooth[[0, -1]] = even[[0, -1]]
-    return smooth
-
-
-def _lifted(vein_xy: np.ndarray, outline_xy: np.ndarray) -> np.ndarray:
-    """A traced vein with the forms' relief: HEIGHT_RATIO times its distance to the margin."""
-    import shapely
-
-    margin = shapely.LinearRing(outline_xy)
-    gap = shapely.distance(margin, shapely.points(vein_xy))
-    return np.column_stack([vein_xy, HEIGHT_RATIO * gap])
 
 
 def save_photo_leaf(found: PhotoLeaf, image_path: str | Path, path: str | Path) -> None:

@@ -12,14 +12,22 @@
    length is one vein, its longest path, from the end nearer the midrib (joined to the midrib
    when it stops short of it by less than JOIN of the length).
 
+4. The midrib's own ends (ridge_midline), for photo.py when the outline's mirror axis runs
+   elsewhere: the strong ridges' skeleton followed from its deepest pixels, straight on through
+   junctions, carried on to the outline.
+
 All in pixels, (column, row) as the outline; photo.py maps them to the leaf's coordinates.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from leafstudio.sources.leafends import Midline
 
 RIDGE_WIDTHS = (1.0, 2.0, 3.0)  # Sato sigmas, in pixels, for a blade LENGTH_PIXELS long
 LENGTH_PIXELS = 500.0  # the widths scale with the blade's length beyond this
@@ -69,7 +77,11 @@ def ridge_strength(image: np.ndarray, blade: np.ndarray, widths: np.ndarray) -> 
 
 
 def trace_veins(
-    image: np.ndarray, blade: np.ndarray, base: np.ndarray, apex: np.ndarray
+    image: np.ndarray,
+    blade: np.ndarray,
+    base: np.ndarray,
+    apex: np.ndarray,
+    reach: np.ndarray | None = None,
 ) -> TracedVeins:
     """The veins the photo shows (see the module docstring).
 
@@ -80,6 +92,9 @@ def trace_veins(
         The blade's pixels (petiole cut off).
     base, apex : (2,) float arrays
         The midrib's ends, (column, row).
+    reach : (2, 2) float array, optional
+        Where the midrib's visible ridge ends (ridge_midline's path), base end first: the
+        midrib is cut there when it runs on past it (a stalk's stub, bare of ridges).
 
     Returns
     -------
@@ -100,7 +115,10 @@ def trace_veins(
         return TracedVeins()
     midrib = _midrib(strength, blade, base, apex)
     along = strength[midrib[:, 1].astype(int), midrib[:, 0].astype(int)]
-    midrib, along = _trimmed(midrib, along, strength > 0)
+    band = 2 * MARGIN_SKIP * float(widths.max())
+    midrib, along = _trimmed(midrib, along, strength > 0, band)
+    if reach is not None:
+        midrib, along = _within_reach(midrib, along, np.asarray(reach) - corner, band)
     core = along[len(along) // 10 : max(len(along) - len(along) // 10, 1)]
     typical = float(np.median(inside[inside > 0]))
     clear = float(np.median(core)) / max(typical, 1e-12)
@@ -128,19 +146,36 @@ def _midrib(
 
 
 def _trimmed(
-    path: np.ndarray, along: np.ndarray, inner: np.ndarray
+    path: np.ndarray, along: np.ndarray, inner: np.ndarray, band: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """The path without the ends where it runs off any ridge through the blade's inner part
-    (the base and apex found from the outline need not be where the photo's midrib ends); the
-    margin band, where no ridge is looked for, is kept."""
+    (the base and apex found from the outline need not be where the photo's midrib ends), or
+    runs on longer than `band` pixels through the margin band (where no ridge is looked for:
+    crossing it is kept, running along a narrow stalk's stub is not)."""
     rows, cols = path[:, 1].astype(int), path[:, 0].astype(int)
     off_ridge = inner[rows, cols] & (along < RIDGE_LOW)
     on_ridge = np.flatnonzero(along >= RIDGE_LOW)
     if not len(on_ridge):
         return path, along
     first, last = int(on_ridge[0]), int(on_ridge[-1])
-    start = first if off_ridge[:first].any() else 0
-    end = last + 1 if off_ridge[last + 1 :].any() else len(path)
+    steps = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
+    start = first if off_ridge[:first].any() or steps[first] > band else 0
+    long_tail = steps[-1] - steps[last] > band
+    end = last + 1 if off_ridge[last + 1 :].any() or long_tail else len(path)
+    return path[start:end], along[start:end]
+
+
+def _within_reach(
+    path: np.ndarray, along: np.ndarray, reach: np.ndarray, band: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The path cut at its points nearest the visible ridge's two ends, where it runs on past
+    them by more than `band` pixels."""
+    steps = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
+    first, last = (int(np.argmin(np.linalg.norm(path - end, axis=1))) for end in reach)
+    if first > last:
+        return path, along
+    start = first if steps[first] > band else 0
+    end = last + 1 if steps[-1] - steps[last] > band else len(path)
     return path[start:end], along[start:end]
 
 
@@ -197,3 +232,193 @@ def _longest_path(pixels: np.ndarray) -> np.ndarray:
     while order[-1] != start and previous[order[-1]] >= 0:
         order.append(int(previous[order[-1]]))
     return pixels[order[::-1]]
+
+
+def ridge_midline(
+    image: np.ndarray, blade: np.ndarray, outline: np.ndarray
+) -> tuple[Midline, np.ndarray] | None:
+    """The midrib the photo shows: a Midline with its two ends where it meets the outline, and
+    the ridge's own (n, 2) path in pixels (column, row); None when the photo shows no clear
+    ridges.
+
+    The strong ridges (hysteresis, as the secondaries) are thinned to skeletons. The midrib is
+    followed from the skeleton's deepest pixel in the blade (the midrib runs down the middle,
+    secondaries out to the margin) both ways, each step to the skeleton pixel a few pixels ahead
+    that turns least (under FOLLOW_TURN; across gaps up to MARGIN_SKIP ridge widths, where the
+    filter loses the midrib at a junction), so it goes straight through junctions where a
+    secondary branches off. Each end is carried on along the path's last END_RUN of its length
+    to the outline (the margin band has no ridges).
+
+    Parameters
+    ----------
+    image : (h, w, 3 or 4) uint8 array
+    blade : (h, w) bool array
+    outline : (n, 2) float array
+        The blade's outline, (column, row).
+    """
+    from scipy.ndimage import convolve, distance_transform_edt
+    from skimage.filters import apply_hysteresis_threshold
+    from skimage.morphology import skeletonize
+
+    from leafstudio.sources.leafends import Midline
+
+    rows, cols = np.nonzero(blade)
+    if not len(rows):
+        return None
+    (r0, c0), (r1, c1) = (rows.min(), cols.min()), (rows.max() + 1, cols.max() + 1)
+    corner = np.array([c0, r0], dtype=float)
+    image, blade = image[r0:r1, c0:c1], blade[r0:r1, c0:c1]
+    size = float(np.hypot(*blade.shape))
+    widths = np.asarray(RIDGE_WIDTHS) * max(1.0, size / LENGTH_PIXELS)
+    strength = ridge_strength(image, blade, widths)
+    if not np.any(strength > 0):
+        return None
+    skeleton = skeletonize(apply_hysteresis_threshold(strength, RIDGE_LOW, RIDGE_HIGH))
+    neighbours = convolve(skeleton.astype(int), np.ones((3, 3), int), mode="constant") - 1
+    knots = skeleton & (neighbours != 2)  # junctions and ends
+    simple = skeleton & (distance_transform_edt(~knots) > FOLLOW_AHEAD[1])  # on a clear line
+    if not simple.any():
+        return None
+    depth = distance_transform_edt(blade)
+    srow, scol = np.nonzero(skeleton)
+    pixels = np.column_stack([scol, srow]) + 0.5
+    gap = MARGIN_SKIP * float(widths.max())
+    best, best_weight = None, 0.0
+    for seed in _seeds(simple, depth, FOLLOW_SEEDS, MIN_VEIN * size):
+        near = pixels[np.linalg.norm(pixels - seed, axis=1) <= FOLLOW_AHEAD[1]]
+        heading = np.linalg.eigh(np.cov((near - seed).T))[1][:, -1]
+        halves = [_follow(pixels, seed, way * heading, gap) for way in (-1, 1)]
+        path = np.vstack([halves[0][::-1], halves[1][1:]])
+        weight = _weight(path, depth)
+        if weight > best_weight:
+            best, best_weight = path, weight
+    if best is None or float(np.linalg.norm(best[-1] - best[0])) < MIN_VEIN * size:
+        return None
+    path = best
+    local = outline - corner
+    ends = np.array([_to_outline(path, local), _to_outline(path[::-1], local)]) + corner
+    span = float(np.linalg.norm(ends[1] - ends[0]))
+    line = Midline(ends=ends, along=(ends[1] - ends[0]) / max(span, 1e-12), mirror=0.0)
+    return line, path + corner
+
+
+FOLLOW_SEEDS = 6  # the midrib is followed from this many of the deepest ridge pixels
+FOLLOW_AHEAD = (2.0, 5.0)  # pixels: the next step is to a skeleton pixel this far ahead
+FOLLOW_TURN = 55.0  # degrees: the most a step turns from the path's heading
+FOLLOW_HEADING = 12.0  # pixels: the heading is the path's direction over this much of it
+END_RUN = 0.08  # of the midrib's length: the direction an end is carried on to the outline
+
+
+def _seeds(simple: np.ndarray, depth: np.ndarray, count: int, apart: float) -> list[np.ndarray]:
+    """Up to `count` pixels of `simple`, deepest first, at least `apart` from each other,
+    (column, row) pixel centres."""
+    rows, cols = np.nonzero(simple)
+    order = np.argsort(depth[rows, cols])[::-1]
+    seeds: list[np.ndarray] = []
+    for i in order:
+        at = np.array([cols[i], rows[i]]) + 0.5
+        if all(np.linalg.norm(at - s) >= apart for s in seeds):
+            seeds.append(at)
+            if len(seeds) == count:
+                break
+    return seeds
+
+
+def _weight(path: np.ndarray, depth: np.ndarray) -> float:
+    """A path's length, each step weighed by its depth in the blade."""
+    steps = np.linalg.norm(np.diff(path, axis=0), axis=1)
+    at = np.clip(path[1:].astype(int), 0, [depth.shape[1] - 1, depth.shape[0] - 1])
+    return float(np.sum(steps * depth[at[:, 1], at[:, 0]]))
+
+
+def _follow(pixels: np.ndarray, start: np.ndarray, heading: np.ndarray, gap: float) -> np.ndarray:
+    """The path from `start` along skeleton `pixels` (m, 2), each step the one that turns least
+    from the heading (FOLLOW_AHEAD, FOLLOW_TURN), across gaps up to `gap` pixels; (n, 2)."""
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(pixels)
+    used = np.zeros(len(pixels), dtype=bool)
+    path = [start]
+    cos_turn = np.cos(np.deg2rad(FOLLOW_TURN))
+    for _ in range(len(pixels)):
+        here = path[-1]
+        used[tree.query_ball_point(here, FOLLOW_AHEAD[0])] = True
+        step = None
+        for reach in (FOLLOW_AHEAD[1], gap):
+            ahead = [i for i in tree.query_ball_point(here, reach) if not used[i]]
+            if not ahead:
+                continue
+            offsets = pixels[ahead] - here
+            lengths = np.linalg.norm(offsets, axis=1)
+            cosines = offsets @ heading / np.maximum(lengths, 1e-12)
+            ok = (cosines >= cos_turn) & (lengths >= FOLLOW_AHEAD[0] * (reach == gap))
+            if ok.any():
+                pick = np.flatnonzero(ok)[np.argmax(cosines[ok] - 0.01 * lengths[ok])]
+                step = pixels[ahead[pick]]
+                break
+        if step is None:
+            break
+        path.append(step)
+        back = _back_along(path, FOLLOW_HEADING)
+        direction = step - back
+        if np.linalg.norm(direction) > 0:
+            heading = direction / np.linalg.norm(direction)
+    return np.array(path)
+
+
+def _back_along(path: list[np.ndarray], distance: float) -> np.ndarray:
+    """The point `distance` back along the path from its last point (its first if shorter)."""
+    total = 0.0
+    for k in range(len(path) - 1, 0, -1):
+        total += float(np.linalg.norm(path[k] - path[k - 1]))
+        if total >= distance:
+            return path[k - 1]
+    return path[0]
+
+
+def _to_outline(path: np.ndarray, outline: np.ndarray) -> np.ndarray:
+    """Where the path, carried on from its first point backwards (along its first END_RUN),
+    meets the outline; the nearest outline point if the line misses it."""
+    import shapely
+
+    steps = np.linalg.norm(np.diff(path, axis=0), axis=1)
+    arc = np.concatenate([[0.0], np.cumsum(steps)])
+    back = path[min(int(np.searchsorted(arc, END_RUN * arc[-1])), len(path) - 1)]
+    direction = path[0] - back
+    norm = float(np.linalg.norm(direction))
+    ring = shapely.LinearRing(outline)
+    if norm > 0:
+        reach = float(np.ptp(outline, axis=0).sum())
+        ray = shapely.LineString([path[0], path[0] + direction / norm * reach])
+        hits = shapely.get_coordinates(ray.intersection(ring))
+        if len(hits):
+            return hits[np.argmin(np.linalg.norm(hits - path[0], axis=1))]
+    return outline[np.argmin(np.linalg.norm(outline - path[0], axis=1))]
+
+
+def smoothed(path: np.ndarray, spacing: float = 3.0) -> np.ndarray:
+    """A traced pixel path without its staircase: resampled every `spacing` pixels along its
+    length and smoothed over a few samples, its ends kept."""
+    from scipy.ndimage import gaussian_filter1d
+
+    steps = np.linalg.norm(np.diff(path, axis=0), axis=1)
+    arc = np.concatenate([[0.0], np.cumsum(steps)])
+    count = max(int(arc[-1] / spacing) + 1, 2)
+    at = np.linspace(0.0, arc[-1], count)
+    even = np.column_stack([np.interp(at, arc, path[:, i]) for i in range(2)])
+    if len(even) < 5:
+        return even
+    smooth = gaussian_filter1d(even, 1.0, axis=0, mode="nearest")
+    smooth[[0, -1]] = even[[0, -1]]
+    return smooth
+
+
+def lifted(vein_xy: np.ndarray, outline_xy: np.ndarray) -> np.ndarray:
+    """A traced vein with the forms' relief: HEIGHT_RATIO times its distance to the margin."""
+    import shapely
+
+    from leafstudio.forms.veins import HEIGHT_RATIO
+
+    margin = shapely.LinearRing(outline_xy)
+    gap = shapely.distance(margin, shapely.points(vein_xy))
+    return np.column_stack([vein_xy, HEIGHT_RATIO * gap])

@@ -42,16 +42,15 @@ def test_a_forms_drawn_midrib_is_traced_within_2_percent(shape, angle):
     assert len(found.leaf.veins) - 1 >= 0.6 * (len(leaf.veins) - 1)  # most secondaries seen
 
 
-# On these four outlines (the scans' blades unrolled, core/sheet.py) the photo's base and apex
-# (found from the outline alone) lie off the drawn midrib's ends, and the path between them leaves
-# it (bays of soybean pot1_1, the notches pot1_17 and the sugar beets' unrolled blades were read
-# to have); on the PCA plane's outlines it was pot1_1, pot1_17 and sugar beet pot2_3
+# On these two outlines the ends are still found elsewhere: soybean pot1_1's unrolled blade has
+# lobes the petiole test takes for a stalk; pot1_17's drawn secondaries cross its midrib, whose
+# base is a hook, so the path between the ends leaves it. The other six's ends come from the
+# midrib the photo shows where the outline's mirror axis runs elsewhere (photo.py, step 5)
 ENDS_ELSEWHERE = (
     "soybean_11_20190508T043118_pot1_1",
     "soybean_11_20190508T043118_pot1_17",
-    "sugarbeet_f00012_20170829T010129_pot1_1",
-    "sugarbeet_f00012_20170904T115033_pot1_7",
 )
+CANVAS = (820, 820)  # the 560-pixel leaf turned 30 degrees fits with a margin
 
 
 @pytest.mark.parametrize(
@@ -73,10 +72,10 @@ def test_a_real_leafs_outline_with_drawn_veins_gives_its_midrib(scan):
     outline = frame.to_plane(leaf.boundary)[0]
     veins = [frame.to_plane(v)[0] for v in leaf.veins]
     ppu = 560.0 / float(np.ptp(outline, axis=0).max())
-    image, _, _ = form_photo(outline, veins, angle=30.0, pixels_per_unit=ppu)
+    image, _, _ = form_photo(outline, veins, angle=30.0, pixels_per_unit=ppu, size=CANVAS)
     found = leaf_from_photo(image, length=1.0)
     assert found.veins_from == "photo"
-    drawn_px = photo_pixels(outline, 30.0, ppu)(veins[0])
+    drawn_px = photo_pixels(outline, 30.0, ppu, CANVAS)(veins[0])
     traced = found.leaf.veins[0][:, :2]
     traced_px = np.column_stack([traced, np.ones(len(traced))]) @ found.pixel_from_world.T
     dense = shapely.get_coordinates(shapely.segmentize(shapely.LineString(traced_px), 1.0))
