@@ -119,3 +119,19 @@ def slide(kind: str, result: Any, path: str, progress: Callable[[float, str], An
         written = render_steps(result, path)
     progress(1.0, "done")
     return written
+
+
+def slides(
+    result: Any, compared: list[tuple[str, Any]], path: str, progress: Callable[[float, str], Any]
+) -> Any:
+    """Write the lesson's steps on `result` and the `compared` forms (title, forms) as slides
+    to `path` (render/step_slides.py: a .pdf, or a folder of PNGs with the PDF), telling
+    `progress`; in the export process (matplotlib draws each slide)."""
+    from leafstudio.render.step_slides import lesson_slides, write_slides
+
+    progress(0.1, "drawing the slides")
+    made = lesson_slides(result, compared)
+    progress(0.6, "writing the slides")
+    written = write_slides(made, path)
+    progress(1.0, "done")
+    return written

@@ -14,6 +14,8 @@ Export slides: the lesson's steps on the shown leaf and the forms compared last
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 from PySide6.QtCore import Qt
 from PySide6.QtGui import QImage, QPixmap
@@ -34,7 +36,6 @@ from leafstudio.forms import SHAPES, VENATION_KINDS, Form
 from leafstudio.forms.glossary import COMPARISONS, compared_terms
 from leafstudio.forms.terms import MARGINS
 from leafstudio.gui.qt.actions import Action, show_once
-from leafstudio.gui.qt.explain import export_result
 
 CHOOSERS = (("shape", tuple(SHAPES)), ("margin", tuple(MARGINS)), ("venation", VENATION_KINDS))
 FIRST = "ovate beside obovate"
@@ -165,13 +166,19 @@ def comparison_title(forms: tuple[Form, ...]) -> str:
     return " beside ".join(terms[0][1] for terms in compared_terms(forms))
 
 
-def export_slides(window, path: str) -> bool:
-    """Write the lesson's steps on the shown leaf and the forms compared last as slides to
-    `path` (a .pdf, or a folder: a PNG per slide and lesson.pdf); errors in the window."""
-    from leafstudio.render.step_slides import lesson_slides, write_slides  # heavy: when asked
+def export_slides(window, path: str):
+    """Start writing the lesson's steps on the shown leaf and the forms compared last as slides
+    to `path` (a .pdf, or a folder: a PNG per slide and lesson.pdf) in the background, as the
+    other exports (exports.py); the job's handle, or None when there is no leaf (an error box
+    says so)."""
+    from leafstudio.gui.model.exports import slides
 
+    result = window.session.result
+    if result is None:
+        window.show_error("Nothing to export", "There is no reconstructed leaf yet.")
+        return None
     compared = [(comparison_title(window.compared), window.compared)]
-    return export_result(window, lambda r, p: write_slides(lesson_slides(r, compared), p), path)
+    return window.run_export(Path(path).name, slides, result, compared, path)
 
 
 def _ask_slides(window) -> None:

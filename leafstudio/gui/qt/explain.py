@@ -6,13 +6,10 @@ plain words, are the lesson (View > Lesson, lesson_view.py).
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import (
-    QApplication,
     QCheckBox,
     QDoubleSpinBox,
     QFileDialog,
@@ -199,25 +196,6 @@ def export_slide(window, kind: str, path: str):
         window.show_error("Cannot export", str(exc))
         return None
     return window.run_export(name, slide, kind, result, path)
-
-
-def export_result(window, render: Callable[[Any, str], object], path: str) -> bool:
-    """`render(result, path)` for the shown result, under a wait cursor; errors in the window."""
-    from leafstudio.errors import LeafError
-
-    result = window.session.result
-    if result is None:
-        window.show_error("Nothing to export", "There is no reconstructed leaf yet.")
-        return False
-    QApplication.setOverrideCursor(Qt.CursorShape.WaitCursor)
-    try:
-        render(result, path)
-    except (LeafError, OSError) as exc:
-        window.show_error("Cannot export", str(exc))
-        return False
-    finally:
-        QApplication.restoreOverrideCursor()
-    return True
 
 
 def install(window) -> ViewAids:

@@ -7,6 +7,11 @@ hold the window up through Python's lock): the mesh, its levels of detail, textu
 made and written there (assets/ holds no Qt or VTK), reporting progress(fraction, what) through
 the window's `export_progress` signal, which Qt queues to the main thread. Turntables and the
 steps figure too: their off-screen renders run on the export process's own main thread.
+
+Exports run one after another, in the order asked: each has a kind of its own on the export lane
+(the worker replaces a waiting job of the same kind, which would drop a second export queued
+behind a running one without a word), and the status line names the one running and how many
+wait.
 """
 
 from __future__ import annotations
@@ -24,11 +29,13 @@ EXPORT = "export"  # the worker's kind (and lane) for exports
 
 
 class BackgroundExports:
-    """Exports in the background, for MainWindow (which has `session`, `status_text`,
-    `statusBar`, `show_error` and the `export_progress` signal)."""
+    """Exports in the background, for MainWindow (which has `session`, `worker`,
+    `status_text`, `statusBar`, `show_error` and the `export_progress` signal)."""
 
     _export_bar: QProgressBar | None = None
     _export_process: ExportProcess | None = None
+    _export_count = 0  # exports asked for so far: each one's own kind
+    _export_queue: list[str] | None = None  # the names of the exports not yet written, in order
 
     def close_exports(self) -> None:
         """End the export process (the window closes)."""
@@ -36,21 +43,52 @@ class BackgroundExports:
             self._export_process.close()
 
     def run_export(self, name: str, write: Callable[..., Any], *args: Any, **kwargs: Any) -> Job:
-        """Start `write(*args, progress=..., **kwargs)` on the export lane; the status bar shows
-        its progress, the status line says when `name` is written, an error box why not."""
-        bar = self._progress_bar()
-        bar.setValue(0)
-        bar.setFormat(f"{name}: %p%")
-        bar.show()
-        self.status_text.setStyleSheet("")
-        self.status_text.setText(f"Exporting {name}…")
+        """Start `write(*args, progress=..., **kwargs)` on the export lane, after the exports
+        already asked for; the status bar shows its progress, the status line says when `name`
+        is written, an error box why not."""
+        if self._export_queue is None:
+            self._export_queue = []
+        self._export_queue.append(name)
+        if len(self._export_queue) == 1:
+            self._show_running()
+        else:
+            self._say_queued()
         if self._export_process is None:
             self._export_process = ExportProcess()
         run = self._export_process.run  # in a process of its own (gui/model/exports.py)
-        job = self.session.run(EXPORT, partial(run, write, *args, progress=self._report, **kwargs))
+        BackgroundExports._export_count += 1
+        kind = f"{EXPORT} {BackgroundExports._export_count}"  # never replaces a waiting one
+        self.worker.lanes[kind] = self.worker.lanes[EXPORT]
+        job = self.session.run(kind, partial(run, write, *args, progress=self._report, **kwargs))
         job.on_done(lambda _value: self._exported(name))
         job.on_failed(lambda exc: self._export_failed(name, exc))
         return job
+
+    def _show_running(self) -> None:
+        """The bar and the status line for the export at the head of the queue."""
+        assert self._export_queue
+        bar = self._progress_bar()
+        bar.setValue(0)
+        bar.setFormat(f"{self._export_queue[0]}: %p%")
+        bar.show()
+        self._say_queued()
+
+    def _say_queued(self) -> None:
+        queue = self._export_queue or []
+        waiting = f" ({len(queue) - 1} more queued)" if len(queue) > 1 else ""
+        self.status_text.setStyleSheet("")
+        self.status_text.setText(f"Exporting {queue[0]}…{waiting}")
+
+    def _export_ended(self, name: str) -> bool:
+        """Take `name` off the queue; start showing the next one. Whether one is next."""
+        queue = self._export_queue or []
+        if name in queue:
+            queue.remove(name)
+        if queue:
+            self._show_running()
+            return True
+        self._progress_bar().hide()
+        return False
 
     def _report(self, fraction: float, what: str) -> None:
         """progress(fraction, what) for a writer: from any thread (a queued signal)."""
@@ -62,11 +100,11 @@ class BackgroundExports:
         bar.setToolTip(what)
 
     def _exported(self, name: str) -> None:
-        self._progress_bar().hide()
-        self.status_text.setText(f"Exported {name}")
+        if not self._export_ended(name):
+            self.status_text.setText(f"Exported {name}")
 
     def _export_failed(self, name: str, exc: BaseException) -> None:
-        self._progress_bar().hide()
+        self._export_ended(name)
         self.status_text.setStyleSheet("color: #b00020")
         self.status_text.setText(f"Not exported: {name}")
         self.show_error(f"Cannot export {name}", describe(exc))

@@ -254,6 +254,27 @@ class FileCommands(BackgroundExports):
         self.settings.setValue("export/length", text.strip())
         return text.strip()
 
+    LOD_PROMPT = (
+        "Levels of detail: how many coarser meshes to write beside this one, each with half the "
+        "triangles of the one before (glTF and USD keep them in the file, other formats write "
+        "NAME_lod1, NAME_lod2, …; --lod on the command line). 0: none"
+    )
+
+    def _lod_choice(self) -> int | None:
+        """The export's levels of detail (0 for none), None if cancelled; the last one given is
+        offered."""
+        from PySide6.QtWidgets import QInputDialog
+
+        from leafstudio.assets.export import MAX_LOD
+
+        last = int(self.settings.value("export/lod", 0) or 0)
+        levels, ok = QInputDialog.getInt(self, "Levels of detail", self.LOD_PROMPT, last, 0,
+                                         MAX_LOD)  # fmt: skip
+        if not ok:
+            return None
+        self.settings.setValue("export/lod", int(levels))
+        return int(levels)
+
     def export_mesh_dialog(self) -> None:
         """File > Export mesh; the texture chosen is the one the Texture colouring shows next."""
         patterns = " ".join(f"*{s}" for s in MESH_SUFFIXES)
@@ -272,8 +293,12 @@ class FileCommands(BackgroundExports):
         length = self._length_choice()
         if length is None:
             return
+        lod = self._lod_choice()
+        if lod is None:
+            return
         textured = Path(path).suffix.lower() in TEXTURED_SUFFIXES
-        if self.save_mesh(path, texture=option, length=length) is not None and textured:
+        job = self.save_mesh(path, texture=option, length=length, lod=lod)
+        if job is not None and textured:
             self.session.choose_texture(option)
 
     TEXTURE_CHOICES = (

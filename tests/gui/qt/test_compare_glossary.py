@@ -7,7 +7,7 @@ from PySide6.QtWidgets import QApplication
 from leafstudio.forms.glossary import COMPARISONS, PICTURED
 from leafstudio.gui.qt.compare_view import CompareDialog, comparison_title, export_slides
 from leafstudio.gui.qt.glossary_view import GlossaryDialog
-from tests.gui.qt.conftest import image_pixels
+from tests.gui.qt.conftest import exported, image_pixels
 
 
 def _open(window, action: str, kind):
@@ -45,10 +45,12 @@ def test_the_glossary_draws_every_term(window):
     dialog.close()
 
 
-def test_export_slides_writes_the_steps_and_the_forms_compared(window, tmp_path):
+def test_export_slides_writes_the_steps_and_the_forms_compared(window, qtbot, tmp_path):
     window.compared = COMPARISONS["serrate beside dentate"]
     folder = tmp_path / "lesson"
-    assert export_slides(window, str(folder))
+    job = export_slides(window, str(folder))
+    assert job is not None and not job.finished  # drawn and written off the main thread
+    assert exported(qtbot, job)
     assert len(list(folder.glob("slide_*.png"))) == 7  # six steps, one comparison
     assert (folder / "lesson.pdf").read_bytes().startswith(b"%PDF")
     assert comparison_title(window.compared) == "serrate beside dentate"

@@ -133,3 +133,29 @@ def test_photo_lengths():
     for bad in ("-1", "0", "nan", "8 parsecs"):
         with pytest.raises(LeafError):
             photo_length(bad)
+
+
+def test_the_export_dialog_offers_levels_of_detail(window, qtbot, tmp_path, monkeypatch):
+    pytest.importorskip("open3d")
+    ply = tmp_path / "leaf.ply"
+    monkeypatch.setattr(QFileDialog, "getSaveFileName", lambda *a, **k: (str(ply), ""))
+    monkeypatch.setattr(QInputDialog, "getText", lambda *a, **k: ("", True))
+    monkeypatch.setattr(QInputDialog, "getInt", lambda *a, **k: (2, True))
+    window.export_mesh_dialog()
+    exports_done(qtbot, window)
+    faces = [len(trimesh.load(tmp_path / name, process=False).faces)
+             for name in ("leaf.ply", "leaf_lod1.ply", "leaf_lod2.ply")]  # fmt: skip
+    assert faces[0] > faces[1] > faces[2]  # each coarser than the one before
+    assert window.settings.value("export/lod") in (2, "2")  # offered next time
+
+
+def test_a_second_export_queued_behind_a_running_one_is_written_too(window, qtbot, tmp_path):
+    """Three exports asked for at once: the worker used to replace the waiting second one with
+    the third, silently; now they run in turn and the status line counts those waiting."""
+    jobs = [window.save_mesh(str(tmp_path / f"leaf{i}.usda")) for i in range(3)]
+    assert "(2 more queued)" in window.status_text.text()
+    for job in jobs:
+        assert exported(qtbot, job)
+    assert all((tmp_path / f"leaf{i}.usda").exists() for i in range(3))
+    assert window.status_text.text() == "Exported leaf2.usda"
+    assert not window._export_bar.isVisible()

@@ -68,6 +68,7 @@ def test_the_texture_colouring_shows_what_an_export_writes(window, qtbot, tmp_pa
     monkeypatch.setattr(QFileDialog, "getOpenFileName", lambda *a, **k: (str(picked), ""))
     monkeypatch.setattr(QInputDialog, "getItem", lambda *a, **k: (window.TEXTURE_CHOICES[2], True))
     monkeypatch.setattr(QInputDialog, "getText", lambda *a, **k: ("", True))  # its own units
+    monkeypatch.setattr(QInputDialog, "getInt", lambda *a, **k: (0, True))  # no levels of detail
     with qtbot.waitSignal(window.texture_shown, timeout=WAIT_MS):
         window.export_mesh_dialog()
     exports_done(qtbot, window)

@@ -265,6 +265,7 @@ def test_the_export_dialog_offers_the_texture(window, qtbot, tmp_path, monkeypat
     monkeypatch.setattr(QFileDialog, "getSaveFileName", lambda *a, **k: (str(glb), ""))
     monkeypatch.setattr(QFileDialog, "getOpenFileName", lambda *a, **k: (str(photo), ""))
     monkeypatch.setattr(QInputDialog, "getText", lambda *a, **k: ("", True))  # its own units
+    monkeypatch.setattr(QInputDialog, "getInt", lambda *a, **k: (0, True))  # no levels of detail
     window.export_mesh_dialog()  # an image file
     exports_done(qtbot, window)
     (mesh,) = trimesh.load(glb, process=False).geometry.values()
