@@ -22,8 +22,12 @@ from leafstudio.assets.asset import LeafPlane
 from leafstudio.errors import LeafError
 from leafstudio.sources.photo import foreground
 
-BLADE = (78, 128, 50)  # sRGB
-VEIN = (168, 196, 112)
+# A leaf's greens, sRGB: little blue, as a leaf reflects (and transmits) little. Blender's
+# Principled BSDF tints transmitted light by the square root of the base colour (a ray crosses
+# two interfaces of a solid; a blade is one sheet), so a bluish base colour turns pale against
+# the light: (78, 128, 50) transmitted a grey-mint (143, 181, 118), (70, 120, 22) a yellow-green
+BLADE = (70, 120, 22)
+VEIN = (160, 190, 70)
 TEXTURE_PIXELS = 1024
 SUPERSAMPLE = 2  # drawn at this multiple, then reduced (anti-aliased edges)
 MIDRIB_WIDTH = 0.012  # of the leaf length
