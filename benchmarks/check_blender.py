@@ -130,9 +130,11 @@ def render(
     sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", type="SUN"))
     sun.data.energy = 4.0
     sun.rotation_euler = (0.5, 0.3, 0.8)
-    if backlit:  # the light from under the blade, toward the camera above it
+    if backlit:  # the light from under the blade, toward the camera above it, exposed for the
+        # glow (at 4 the light through the blade overexposes and AgX bleaches it)
         sun.rotation_euler = (camera.location - centre).to_track_quat("Z", "Y").to_euler()
         sun.rotation_euler.x += 3.1416
+        sun.data.energy = 2.0
     scene.collection.objects.link(sun)
     world = bpy.data.worlds.new("world")
     world.color = (0.15, 0.15, 0.15) if backlit else (0.8, 0.8, 0.8)

@@ -282,7 +282,7 @@ def test_texture_none_still_writes_uvs_and_a_coloured_material(nested: ls.Result
     assert back.visual.uv.shape == (len(back.vertices), 2)
     ls.save_mesh(nested, tmp_path / "leaf.obj", texture="none")
     assert not (tmp_path / "leaf_texture.png").exists()
-    assert "Kd 0.3" in (tmp_path / "leaf.mtl").read_text()
+    assert f"Kd {BLADE[0] / 255:.4f}" in (tmp_path / "leaf.mtl").read_text()  # the blade green
 
 
 def test_cli_texture_option(tmp_path: Path):

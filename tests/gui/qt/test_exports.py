@@ -45,6 +45,7 @@ def test_the_export_dialog_takes_a_real_length(window, qtbot, tmp_path, monkeypa
     monkeypatch.setattr(QFileDialog, "getSaveFileName", lambda *a, **k: (str(glb), ""))
     monkeypatch.setattr(QInputDialog, "getItem", lambda *a, **k: (window.TEXTURE_CHOICES[1], True))
     monkeypatch.setattr(QInputDialog, "getText", lambda *a, **k: ("8cm", True))
+    monkeypatch.setattr(QInputDialog, "getInt", lambda *a, **k: (0, True))
     window.export_mesh_dialog()
     exports_done(qtbot, window)
     mesh = trimesh.load(glb, force="mesh", process=False)
