@@ -143,7 +143,7 @@ class FileOpening:
         self._open_run = None  # an earlier file's first run: this file's replaces it
         what = "photo" if is_photo(path) else "scan" if as_scan else "file"
         self.opening.emit(path, what)
-        job = self._open_due = self.run("open", read_document, path, as_scan, length)
+        job = self._open_due = self.run("open", read_document, path, as_scan, length, pixel_size)
         job.on_progress(lambda fraction, doing: self._open_progress(job, fraction, doing))
         job.on_done(lambda document: self._opened(job, document))
         job.on_failed(lambda exc: self._open_failed(job, what, exc))
