@@ -20,7 +20,8 @@ shares of the leaf's length.
 - vein distances: every gallery form (flat) and a drawn leaf with hand-raised veins, with the
   99th-percentile dihedral angles in the margin band and inside;
 - CPU time at grid 128: a bent form beside the same form flat, best of three;
-- rolled forms: the mesh's distance to the form's own surface rolled, and the blade's area.
+- rolled forms: the mesh's distance to the form's own surface rolled, and the blade's area;
+- curves in 3D unfolded: posed forms without their pose, against their own surface.
 """
 
 from __future__ import annotations
@@ -204,6 +205,45 @@ def rolled_forms() -> None:
         )
 
 
+# the posed forms stripped of their pose, reconstructed before core/unfold.py (at fa99d4f): the
+# mean and 95th-percentile distance between the mesh and the form's own, both ways, over the length
+BEFORE_UNFOLD = {
+    ("ovate", "fold 45"): (2.0e-03, 1.1e-02),
+    ("ovate", "fold 75"): (3.9e-02, 1.3e-01),
+    ("linear", "curl 0.6"): (1.7e-02, 7.2e-02),
+    ("ovate", "roll 0.5"): (2.2e-03, 1.0e-02),
+    ("ovate", "fold 45 curl 0.5"): (6.7e-04, 2.1e-03),
+    ("lanceolate", "aspect 30 roll 1"): (4.5e-03, 7.0e-03),
+}
+
+
+def unfolded_forms() -> None:
+    """Posed forms given as curves in 3D without their pose (tests/core/test_unfold.py): the mesh
+    against the form's own surface, and the pose fitted to the curves (core/unfold.py)."""
+    from leafstudio.core.unfold import fit_pose
+    from tests.core.test_unfold import off_own_surface
+
+    print("\n## curves in 3D unfolded (grid 128): distance to the own surface, both ways")
+    print("| form | mean before | p95 before | mean | p95 | pose fitted | fit CPU s |")
+    print("|---|---|---|---|---|---|---|")
+    for (shape, pose), was in BEFORE_UNFOLD.items():
+        words = pose.split()
+        terms = {k: float(v) for k, v in zip(words[::2], words[1::2], strict=True)}
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            leaf = Form(shape, **terms).leaf()
+        start = time.process_time()
+        fitted = fit_pose(ls.Leaf(leaf.boundary, leaf.veins))
+        cpu = time.process_time() - start
+        off = off_own_surface(leaf)
+        p = fitted.pose if fitted is not None else None
+        got = "none" if p is None else f"fold {p.fold:.1f} curl {p.curl:.2f} roll {p.roll:.2f}"
+        print(
+            f"| {shape} {pose} | {was[0]:.1e} | {was[1]:.1e} | {off.mean():.1e} | "
+            f"{np.percentile(off, 95):.1e} | {got} | {cpu:.2f} |"
+        )
+
+
 def timing() -> None:
     print("\n## CPU time at grid 128 (best of three, seconds; CPU: the machine may be shared)")
     print("| form | flat, paper | flat, ours | bent, ours |")
@@ -234,6 +274,7 @@ def main() -> int:
     args = parser.parse_args()
     _run(Form("ovate").leaf(), ls.Params(grid=32))  # compile the kernels before timing
     rolled_forms()
+    unfolded_forms()
     if args.rolled:
         return 0
     timing()

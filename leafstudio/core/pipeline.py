@@ -18,6 +18,7 @@ from leafstudio.core.result import Cancelled, Later, Result, in_world
 from leafstudio.core.stages import STAGE_TABLE, STAGES, StageRun
 from leafstudio.core.steps import FrameStage, GuideStage, SurfaceStage
 from leafstudio.core.store import StageStore, leaf_key
+from leafstudio.core.unfold import unfolded
 from leafstudio.model import Leaf, Params, as_leaf, as_params
 
 __all__ = ["Cancelled", "Pipeline", "Result", "reconstruct"]
@@ -37,7 +38,9 @@ class Pipeline:
     """
 
     def __init__(self, leaf: Leaf, store: StageStore | None = None) -> None:
-        self.leaf = leaf = as_leaf(leaf)  # a clear TypeError for anything else
+        # a clear TypeError for anything else; curves bent in 3D without a bend get the one
+        # that lays them flat (unfold.py)
+        self.leaf = leaf = unfolded(as_leaf(leaf))
         self.flat = flat_leaf(leaf)  # a bent leaf's flat blade (bend.py); else the leaf itself
         self.units = Units.of(self.flat)  # the stages run on the leaf at unit size (units.py)
         self.unit_leaf = self.units.leaf(self.flat)

@@ -1,0 +1,174 @@
+"""Curves in 3D unfolded (issue 21, build item 2): a leaf given as boundary and veins in 3D
+without a bend (a posed form saved without its pose, a drawn leaf lifted in the side view) gets
+the bend that lays them flat, fitted to them.
+
+A leaf's margin and midrib lie on its flat blade (the relief rides on the side veins); a fold,
+curl or roll lifts them off any plane, and the boundary's PCA plane then sees a folded or curled
+blade side-on (a fold of 75°: the mesh 5% of the length off the form's own surface on average).
+`fit_pose` finds the blade's frame (the base at the midrib's first point, u along it) and the
+`Pose` (fold, curl, roll) whose `flatten` brings the margin and the midrib nearest one plane, by
+least squares over the frame's rotation and the pose's three terms. The leaf is unfolded only
+when its margin is well off a plane and the pose lays it much flatter than the best quadratic
+height field over that plane would: a flat, cupped or gently bent leaf runs as before (its
+margin's heights go to the paper's base b(x)).
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import shapely
+from scipy.optimize import least_squares
+from scipy.spatial.transform import Rotation
+
+from leafstudio.core.bend import Pose
+from leafstudio.core.placed import PlacedPose
+from leafstudio.core.plane import Frame
+from leafstudio.model import Leaf
+
+OFF_PLANE = 0.2  # a margin this far off its PCA plane (RMS, share of its RMS width) may be bent
+FIT_POINTS = 60  # the margin and the midrib thinned to about this many points each for the fit
+EXPLAINED = 0.25  # ... and is unfolded when the fitted pose leaves at most this share of what
+# the best quadratic height field over that plane leaves (the paper's base takes such a margin)
+FOLD_LIMIT = 85.0  # degrees: the fold's search range, each way
+FOLDS = (0.0, 60.0, -60.0)  # the fold's first guesses
+CURL_LIMIT = 10.0  # the curl's search range, each way, over the length
+# fold, curl, roll (0, 1, 2): all three first (a leaf no pose explains is left after one fit),
+# then the fewer that may do as well
+TERMS = ((0, 1, 2), (0,), (1,), (2,), (0, 1))
+SIMPLER = 1.5  # fewer terms are taken when they leave at most this much more than all three
+CLOSE = 2e-4  # ... plus this share of the length
+VEINS_OUT = 0.02  # an unfolding that leaves more of the veins' points outside the outline is wrong
+
+
+def _off_plane(points: np.ndarray) -> tuple[float, float]:
+    """RMS distance of (n, 3) points from their PCA plane, and their RMS spread across (the
+    second)."""
+    centred = points - points.mean(axis=0)
+    spreads = np.sqrt(np.maximum(np.linalg.eigvalsh(centred.T @ centred / len(points)), 0))
+    return float(spreads[0]), float(spreads[1])
+
+
+def _off_quadric(points: np.ndarray) -> float:
+    """RMS distance of (n, 3) points from the quadratic height field over their PCA plane that
+    fits them best: what the paper's base b(x) already takes (a cupped or gently curled margin)."""
+    centred = points - points.mean(axis=0)
+    axes = np.linalg.eigh(centred.T @ centred)[1][:, ::-1]
+    x, y, z = (centred @ axes).T
+    design = np.column_stack([np.ones_like(x), x, y, x * x, x * y, y * y])
+    fit = np.linalg.lstsq(design, z, rcond=None)[0]
+    return float(np.sqrt(np.mean((design @ fit - z) ** 2)))
+
+
+def _starts(boundary: np.ndarray, midrib: np.ndarray) -> list[np.ndarray]:
+    """(3, 3) first frames (rows u, v, normal): u along the midrib's chord; the normal the
+    boundary's PCA normal, or the way the margin stands from the midrib (a fold's side)."""
+    u = midrib[-1] - midrib[0]
+    u = u / np.linalg.norm(u)
+    centred = boundary - boundary.mean(axis=0)
+    normals = [np.linalg.eigh(centred.T @ centred)[1][:, 0], boundary.mean(0) - midrib.mean(0)]
+    frames = []
+    for n in normals:
+        n = n - (n @ u) * u
+        if np.linalg.norm(n) < 1e-9:
+            continue
+        n = n / np.linalg.norm(n)
+        frames.append(np.array([u, np.cross(n, u), n]))
+    return frames
+
+
+def _lies_flat(bend: PlacedPose, leaf: Leaf) -> bool:
+    """Whether `bend` unfolds `leaf` into a blade: its outline not crossing itself, and the
+    veins' points inside it (all but VEINS_OUT of them)."""
+    flat = bend.frame.to_plane(bend.flatten(leaf.boundary))[0]
+    if not shapely.LinearRing(flat).is_simple:
+        return False
+    region = shapely.Polygon(flat).buffer(1e-3 * float(np.ptp(flat, axis=0).max()))
+    veins = bend.frame.to_plane(bend.flatten(np.vstack(leaf.veins)))[0]
+    return bool(np.mean(~shapely.contains_xy(region, veins[:, 0], veins[:, 1])) <= VEINS_OUT)
+
+
+def fit_pose(leaf: Leaf) -> PlacedPose | None:
+    """The bend that lays `leaf`'s margin and midrib flat, or None when the leaf is flat enough
+    as it is or no pose explains its bend (module docstring).
+
+    Parameters
+    ----------
+    leaf : Leaf
+        Boundary and veins in 3D (the midrib first), without a bend.
+
+    Returns
+    -------
+    PlacedPose or None
+        The fitted fold, curl and roll in the blade's frame (base at the midrib's first point).
+    """
+    if leaf.bend is not None or not leaf.veins or len(leaf.veins[0]) < 3:
+        return None
+    boundary, midrib = leaf.boundary, leaf.veins[0]
+    length = float(np.linalg.norm(np.ptp(boundary, axis=0)))
+    before, width = _off_plane(boundary)
+    if not before > OFF_PLANE * width:
+        return None
+    before = _off_quadric(boundary)  # the pose must do much better than a height field
+    boundary = boundary[:: max(1, len(boundary) // FIT_POINTS)]  # enough to fit six numbers
+    midrib = np.vstack([midrib[:: max(1, len(midrib) // FIT_POINTS)], midrib[-1:]])
+    origin = midrib[0]
+    points = boundary - origin  # the margin lies flat; the midrib, with its relief, need not
+    weight = 1.0 / np.sqrt(len(points))
+    # the margin's farthest from the midrib's chord: at most the flat blade's half-width, so a
+    # roll up to half a turn each side is within pi / reach, a quarter turn the roll's first guess
+    chord = (midrib[-1] - origin) / np.linalg.norm(midrib[-1] - origin)
+    reach = float(np.linalg.norm(points - np.outer(points @ chord, chord), axis=1).max())
+    most = np.pi * length / reach
+
+    def pose_of(x: np.ndarray) -> Pose:
+        return Pose(float(x[3]), float(x[4]) / length, float(x[5]) / length)
+
+    def full(y: np.ndarray, terms: tuple[int, ...]) -> np.ndarray:
+        """(7,) the rotation, fold, curl, roll and the base's height from a fit's (4 + k,)."""
+        x = np.zeros(7)
+        x[:3], x[6] = y[:3], y[3]
+        x[[3 + t for t in terms]] = y[4:]
+        return x
+
+    fits = []  # (rms, terms, x, axes) per subset of the pose's terms
+    for terms in TERMS:
+        best = None
+        folds = FOLDS if 0 in terms else (0.0,)
+        rolls = (0.0, most / 2, -most / 2) if 2 in terms else (0.0,)
+        for axes, fold, roll in itertools.product(_starts(boundary, midrib), folds, rolls):
+
+            def residual(y: np.ndarray, axes: np.ndarray = axes, terms=terms) -> np.ndarray:
+                x = full(y, terms)
+                blade = points @ Rotation.from_rotvec(x[:3]).apply(axes).T - [0, 0, x[6] * length]
+                return weight * pose_of(x).flatten(blade)[:, 2] / length
+
+            y0 = np.zeros(4 + len(terms))
+            y0[4:] = [(fold, 0.0, roll)[t] for t in terms]
+            hi = [np.pi] * 3 + [1.0] + [(FOLD_LIMIT, CURL_LIMIT, most)[t] for t in terms]
+            lo = [-h for h in hi]
+            fit = least_squares(residual, y0, bounds=(lo, hi))
+            if best is None or fit.cost < best[0].cost:
+                best = (fit, axes)
+        x = full(best[0].x, terms)
+        u, v, n = Rotation.from_rotvec(x[:3]).apply(best[1])
+        bend = PlacedPose(pose_of(x), Frame(origin=origin + x[6] * length * n, u=u, v=v, normal=n))
+        rms = float(np.sqrt(2 * best[0].cost)) * length
+        if len(terms) == 3 and rms > EXPLAINED * before:
+            return None
+        if _lies_flat(bend, leaf):
+            fits.append((rms, terms, bend))
+    if not fits:
+        return None
+    least = min(f[0] for f in fits)
+    # the fewest terms that do about as well as all: a fold mimicked by a roll and a curl is not
+    enough = SIMPLER * least + CLOSE * length
+    after, _, bend = min(fits, key=lambda f: (f[0] > enough, len(f[1])))
+    return bend if after <= EXPLAINED * before else None
+
+
+def unfolded(leaf: Leaf) -> Leaf:
+    """`leaf` with the bend `fit_pose` finds for it; the leaf itself when none is needed."""
+    bend = fit_pose(leaf)
+    return leaf if bend is None else Leaf(leaf.boundary, leaf.veins, bend=bend)
