@@ -38,6 +38,7 @@ NEWTON = 10  # Gauss-Newton steps of `Sheet.flatten`
 HALVINGS = 4  # a step that goes farther is halved at most this many times
 SAMPLES = 160  # the spline sampled this many times across the flat blade's extent
 PAD = 0.1  # ... and this share of it beyond, on every side
+STEP = 1e-4  # fit_sheet's central differences, a share of the flat blade's extent
 
 
 def unroll(points: np.ndarray, reach: float) -> np.ndarray | None:
@@ -210,12 +211,15 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     centre = flat.mean(axis=0)
     axes = np.linalg.svd(flat - centre, full_matrices=False)[2]
     flat = (flat - centre) @ axes.T  # u along the longest spread
-    sheet = Sheet(flat, means, SMOOTHING * length**2, np.asarray(up, dtype=float))
+    smoothing = SMOOTHING * length**2
     # the graph's paths zigzag, so its distances run a few percent long: the flat blade is
-    # scaled to keep the sheet's area (its median area factor |S_u x S_v| made 1)
-    _, su, sv, _ = sheet.frame(flat)
-    stretch = float(np.sqrt(np.median(np.linalg.norm(np.cross(su, sv), axis=1))))
-    return Sheet(flat * stretch, means, sheet.smoothing, sheet.up)
+    # scaled to keep the sheet's area (its median area factor |S_u x S_v| made 1, by central
+    # differences of the spline at the centres: a Sheet sampled for it cost as much as the last)
+    spline = RBFInterpolator(flat, means, kernel="thin_plate_spline", smoothing=smoothing)
+    h = STEP * float(np.ptp(flat, axis=0).max())
+    du, dv = ((spline(flat + d) - spline(flat - d)) / (2 * h) for d in ([h, 0.0], [0.0, h]))
+    stretch = float(np.sqrt(np.median(np.linalg.norm(np.cross(du, dv), axis=1))))
+    return Sheet(flat * stretch, means, smoothing, np.asarray(up, dtype=float))
 
 
 @dataclass(frozen=True, eq=False)

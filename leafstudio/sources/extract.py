@@ -230,7 +230,8 @@ def _held_part(polygon: Polygon, means: np.ndarray, reach: float) -> Polygon:
     to, without holes. The concave hull bridges bays of the flattened blade that hold no scan
     point (a stray point, a scanner's gap); the sheet there is extrapolated, folds, and the mesh
     bent onto it stood out of the scan as a fin (soybean pot1_1's top)."""
-    held = MultiPoint(means).buffer(2 * reach, quad_segs=4).buffer(-reach, quad_segs=4)
+    discs = shapely.buffer(shapely.points(means), 2 * reach, quad_segs=4)  # a MultiPoint's
+    held = shapely.union_all(discs).buffer(-reach, quad_segs=4)  # buffer: 40 times the time
     part = polygon.intersection(held)  # closed: no slit where a few cube means are missing
     polys = [g for g in getattr(part, "geoms", [part]) if isinstance(g, Polygon) and g.area > 0]
     kept = Polygon(max(polys, key=lambda g: g.area).exterior) if polys else polygon
