@@ -105,6 +105,26 @@ def fit_pose(leaf: Leaf) -> PlacedPose | None:
     """
     if leaf.bend is not None or not leaf.veins or len(leaf.veins[0]) < 3:
         return None
+    lo, hi = leaf.boundary.min(axis=0), leaf.boundary.max(axis=0)
+    centre, half = lo / 2 + hi / 2, float(np.max(hi / 2 - lo / 2))
+    if not (np.isfinite(half) and half > 0):
+        return None
+
+    def unit(points: np.ndarray) -> np.ndarray:  # about unit size: no overflow at 1e300
+        return (points / 2 - centre / 2) / half
+
+    bend = _fit(Leaf(unit(leaf.boundary), [unit(v) for v in leaf.veins]))
+    if bend is None:
+        return None
+    pose, frame = bend.pose, bend.frame
+    return PlacedPose(
+        Pose(pose.fold, pose.curl / (2 * half), pose.roll / (2 * half)),
+        Frame(origin=centre + 2 * half * frame.origin, u=frame.u, v=frame.v, normal=frame.normal),
+    )
+
+
+def _fit(leaf: Leaf) -> PlacedPose | None:
+    """fit_pose on the leaf at about unit size."""
     boundary, midrib = leaf.boundary, leaf.veins[0]
     length = float(np.linalg.norm(np.ptp(boundary, axis=0)))
     before, width = _off_plane(boundary)
