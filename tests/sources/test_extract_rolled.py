@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from leafstudio import workflows
-from leafstudio.errors import LeafError
+from leafstudio.core.placed import PlacedPose
 from leafstudio.model import Leaf, Params
 from leafstudio.sources.files import load_project, save_leaf
 from tests.core.test_sheet import rolled
@@ -65,11 +65,16 @@ def test_a_surface_far_from_its_scan_is_warned_of(done):
     assert any("from the scan on average" in w for w in warned)
 
 
-def test_without_its_bend_the_rolled_scan_was_refused(done):
-    """Today's path (the leaf's points over their PCA plane) refuses it: its veins leave the
-    outline seen from above."""
-    leaf = done[0].leaf
-    with pytest.raises(LeafError, match="outside the boundary"):
-        workflows.reconstruct(
-            workflows.Opened("rolled", "leaf", Leaf(leaf.boundary, leaf.veins)), Params(grid=64)
-        )
+def test_without_its_bend_the_rolled_scans_curves_are_unfolded(done):
+    """Its boundary and veins alone, without the sheet: the boundary's PCA plane refused them
+    (the veins left the outline seen from above); now a roll is fitted to them (core/unfold.py)
+    and the surface stays near the scan."""
+    opened, _ = done
+    leaf = opened.leaf
+    curves = workflows.Opened(
+        "rolled", "scan", Leaf(leaf.boundary, leaf.veins), scan=opened.scan,
+        extraction=opened.extraction,
+    )  # fmt: skip
+    run = workflows.reconstruct(curves, Params(grid=64))
+    assert isinstance(run.result.leaf.bend, PlacedPose) and run.result.leaf.bend.pose.roll != 0
+    assert run.scan_fit["mean"] < 0.01 * run.scan_fit["length"]
