@@ -12,6 +12,7 @@ a second), and the app's main thread keeps running while a kernel does.
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -69,16 +70,12 @@ def bucket_points(
     return Buckets(lo=lo, size=float(size), nx=int(nx), ny=int(ny), starts=starts, order=order)
 
 
-@njit(cache=True, nogil=True)
 def bounds(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(2,) lower and upper corners of the box around (n >= 1, 2) points (numpy's min(axis=0)
-    on an (n, 2) array is many times slower)."""
-    lo, hi = xy[0].copy(), xy[0].copy()
-    for i in range(1, len(xy)):
-        for k in range(2):
-            lo[k] = min(lo[k], xy[i, k])
-            hi[k] = max(hi[k], xy[i, k])
-    return lo, hi
+    """(2,) lower and upper corners of the box around (n >= 1, 2) points, column by column
+    (numpy's min(axis=0) on an (n, 2) array is many times slower; a compiled loop was as fast,
+    0.37 against 0.55 ms at 139,000 points, and cost 0.3 s of the first run's compile)."""
+    x, y = xy[:, 0], xy[:, 1]
+    return np.array([x.min(), y.min()]), np.array([x.max(), y.max()])
 
 
 @njit(cache=True, nogil=True)
@@ -94,7 +91,9 @@ def _counting_sort(xy, lo, size, nx, ny):
         starts[key[i] + 1] += 1
     for b in range(nx * ny):
         starts[b + 1] += starts[b]
-    fill = starts[:-1].copy()
+    fill = np.empty(nx * ny, np.int64)
+    for b in range(nx * ny):  # not a slice's copy: code of its own at the first run's compile
+        fill[b] = starts[b]
     order = np.empty(n, np.int64)
     for i in range(n):
         order[fill[key[i]]] = i
@@ -124,7 +123,7 @@ def _neighbour_distances(points, which, b):
     """Rings of buckets outward from each query's own until the ring's nearest possible point
     (ring - 1 buckets away) is farther than the best found."""
     lo, size, nx, ny, starts, order = b
-    out = np.full(len(which), np.inf)
+    out = np.empty(len(which))
     for q in range(len(which)):
         i = which[q]
         px, py = points[i, 0], points[i, 1]
@@ -153,8 +152,8 @@ def _neighbour_distances(points, which, b):
 @njit(cache=True, nogil=True)
 def bucket_span(low: float, high: float, lo: float, size: float, count: int) -> tuple[int, int]:
     """The first and last bucket, along one axis, that the interval [low, high] overlaps."""
-    first = max(int(np.floor((low - lo) / size)), 0)
-    last = min(int(np.floor((high - lo) / size)), count - 1)
+    first = max(math.floor((low - lo) / size), 0)
+    last = min(math.floor((high - lo) / size), count - 1)
     return first, last
 
 

@@ -13,6 +13,7 @@ Two meshers, both returning plane coordinates, heights and triangles:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -108,7 +109,8 @@ def conforming_grid_mesh(
     kept = np.zeros(ny * nx, dtype=bool)
     kept[candidates[inner_nodes(polygon, grid.points[candidates], grid.spacing)]] = True
     cells = ~_crossed_cells(polygon, grid)
-    vertex, grid_tris, band, outline = _split_cells(kept.reshape(ny, nx), cells, b)
+    vertex, grid_tris, band, n_band, outline, n_out = _split_cells(kept.reshape(ny, nx), cells, b)
+    band, outline = band[:n_band], outline[:n_out]
 
     # the band: the polygon, the kept nodes not surrounded by full cells, the full cells' outline,
     # and points added where the band would have long triangles (_long_edge_midpoints)
@@ -165,14 +167,20 @@ def _split_cells(kept, cells, b):
     - vertex (ny * nx,): each kept node's vertex index (b, b + 1, ... in grid order), else -1;
     - the two counter-clockwise triangles of each full cell (four kept corners, not crossed;
       `cells` is narrowed to those in place);
-    - band: the kept nodes not surrounded by four full cells, in grid order;
-    - outline (s, 2): the full cells' outline edges as indices into [polygon, band nodes].
+    - band: the kept nodes not surrounded by four full cells, in grid order (the first n_band);
+    - outline (s, 2): the full cells' outline edges as indices into [polygon, band nodes] (the
+      first n_out rows).
+
+    No np.full and no slices: each compiles code of its own (the first run's compile).
     """
     ny, nx = kept.shape
-    vertex = np.full(ny * nx, -1, np.int64)
+    vertex = np.empty(ny * nx, np.int64)
+    local = np.empty(ny * nx, np.int64)
     count = b
     for i in range(ny):
         for j in range(nx):
+            local[i * nx + j] = -1
+            vertex[i * nx + j] = -1
             if kept[i, j]:
                 vertex[i * nx + j] = count
                 count += 1
@@ -192,7 +200,6 @@ def _split_cells(kept, cells, b):
                 tris[t, 0], tris[t, 1], tris[t, 2] = v0, v1, v2
                 tris[t + 1, 0], tris[t + 1, 1], tris[t + 1, 2] = v0, v2, v3
                 t += 2
-    local = np.full(ny * nx, -1, np.int64)
     band = np.empty(count - b, np.int64)
     n_band = 0
     for i in range(ny):
@@ -223,7 +230,7 @@ def _split_cells(kept, cells, b):
                 if left != right:
                     outline[n_out, 0], outline[n_out, 1] = local[i * nx + j], local[i * nx + nx + j]
                     n_out += 1
-    return vertex, tris, band[:n_band], outline[:n_out]
+    return vertex, tris, band, n_band, outline, n_out
 
 
 @njit(cache=True, nogil=True)
@@ -240,14 +247,14 @@ def _grid_inside(polygon, origin, spacing, ny, nx):
         bx, by = polygon[(e + 1) % n, 0], polygon[(e + 1) % n, 1]
         if ay == by:
             continue
-        first = max(int(np.ceil((min(ay, by) - origin[1]) / spacing)) - 1, 0)
-        last = min(int(np.floor((max(ay, by) - origin[1]) / spacing)) + 1, ny - 1)
+        first = max(math.ceil((min(ay, by) - origin[1]) / spacing) - 1, 0)
+        last = min(math.floor((max(ay, by) - origin[1]) / spacing) + 1, ny - 1)
         for i in range(first, last + 1):
             y = origin[1] + i * spacing
             if (ay > y) != (by > y):
                 x = ax + (y - ay) * (bx - ax) / (by - ay)
                 guess = (x - origin[0]) / spacing
-                m = 0 if guess <= 0 else nx if guess >= nx else int(np.ceil(guess))
+                m = 0 if guess <= 0 else nx if guess >= nx else math.ceil(guess)
                 while m > 0 and origin[0] + (m - 1) * spacing >= x:
                     m -= 1
                 while m < nx and origin[0] + m * spacing < x:  # m: the nodes left of x

@@ -17,6 +17,7 @@ signed distance, because each f_i has a unit gradient.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -309,14 +310,14 @@ def _grid_sums(lattice, slot, n, cells, degree):
         cell = _cell(cells, c)
         reach = cells.radii[c]
         cx, cy = cell.cx, cell.cy
-        y0 = max(int(np.ceil((cy - reach - oy) / spacing)), 0)
-        y1 = min(int(np.floor((cy + reach - oy) / spacing)), ny - 1)
+        y0 = max(math.ceil((cy - reach - oy) / spacing), 0)
+        y1 = min(math.floor((cy + reach - oy) / spacing), ny - 1)
         for iy in range(y0, y1 + 1):
             y = oy + spacing * iy
             dy = y - cy
             half = np.sqrt(max(reach * reach - dy * dy, 0.0))
-            x0 = max(int(np.floor((cx - half - ox) / spacing)), 0)
-            x1 = min(int(np.ceil((cx + half - ox) / spacing)), nx - 1)
+            x0 = max(math.floor((cx - half - ox) / spacing), 0)
+            x1 = min(math.ceil((cx + half - ox) / spacing), nx - 1)
             for ix in range(x0, x1 + 1):
                 i = slot[iy * nx + ix]
                 if i < 0:
@@ -368,9 +369,10 @@ def _ball_fits(points, normals, centers, radii, b):
     """Per cell, the line through the B-spline-weighted mean of the points in its ball, normal to
     their weighted mean normal; its largest residual and the smallest normal agreement."""
     m = len(centers)
-    coef, error, agreement = np.zeros((m, 3)), np.zeros(m), np.ones(m)
+    coef, error, agreement = np.zeros((m, 3)), np.zeros(m), np.empty(m)
     candidates = np.empty(len(points), np.int64)
     for c in range(m):
+        agreement[c] = 1.0  # not np.ones: code of its own at the first run's compile
         r = radii[c]
         cx, cy = centers[c, 0], centers[c, 1]
         count = gather(b, cx - r, cx + r, cy - r, cy + r, candidates)

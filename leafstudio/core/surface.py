@@ -186,14 +186,20 @@ def _refine(mixture: Mixture, xy: np.ndarray, row_scale: np.ndarray, target: np.
 
 
 @njit(cache=True, nogil=True)
-def _residual_rows(xy, row_scale, target, t, full):
-    """Residuals r_i = s_i z(x_i) − y_i (m,) with z = Σ a_k N_k and θ packed as in _pack, and with
-    `full` their closed-form Jacobian (m, 6K)."""
+def _residual_rows(xy, row_scale, target, t, jac):
+    """Residuals r_i = s_i z(x_i) − y_i (m,) with z = Σ a_k N_k and θ packed as in _pack, and
+    their closed-form Jacobian into `jac` (m, 6K) unless it has no rows (a trial step's cost).
+
+    In loops, and one signature: an array expression compiles a loop function of its own, and a
+    literal True or False as the last argument compiled this kernel twice (1.1 s of CPU at the
+    first run, benchmarks/bench_first_run.py --kernels)."""
     k = len(t)
+    full = len(jac) > 0
     res = np.empty(len(xy))
-    jac = np.empty((len(xy) if full else 0, 6 * k))
-    r11, r22 = np.exp(t[:, 3]), np.exp(t[:, 5])
-    norm = r11 * r22 / (2 * np.pi)
+    r11, r22, norm = np.empty(k), np.empty(k), np.empty(k)
+    for c in range(k):
+        r11[c], r22[c] = np.exp(t[c, 3]), np.exp(t[c, 5])
+        norm[c] = r11[c] * r22[c] / (2 * np.pi)
     for i in range(len(xy)):
         value = 0.0
         for c in range(k):
@@ -211,7 +217,7 @@ def _residual_rows(xy, row_scale, target, t, full):
                 jac[i, 6 * c + 4] = scaled * (-e1 * dy)
                 jac[i, 6 * c + 5] = scaled * (1 - e2 * r22[c] * dy)
         res[i] = row_scale[i] * value - target[i]
-    return res, jac
+    return res
 
 
 @njit(cache=True, nogil=True)
@@ -274,7 +280,8 @@ def _levenberg_marquardt(xy, row_scale, target, theta, steps, min_gain):
     Stops early once an accepted step gains less than `min_gain` of the cost.
     """
     p = len(theta)
-    res, jac = _residual_rows(xy, row_scale, target, theta.reshape(-1, 6), True)
+    jac, no_jac = np.empty((len(xy), p)), np.empty((0, p))
+    res = _residual_rows(xy, row_scale, target, theta.reshape(-1, 6), jac)
     cost, normal, gradient = _normal_equations(res, jac)
     largest = 1e-300
     for a in range(p):
@@ -291,8 +298,10 @@ def _levenberg_marquardt(xy, row_scale, target, theta, steps, min_gain):
         if step is None:  # singular: damp harder
             damping, growth = damping * growth, growth * 2
             continue
-        trial = theta + step
-        trial_res, _ = _residual_rows(xy, row_scale, target, trial.reshape(-1, 6), False)
+        trial = np.empty(p)
+        for a in range(p):
+            trial[a] = theta[a] + step[a]
+        trial_res = _residual_rows(xy, row_scale, target, trial.reshape(-1, 6), no_jac)
         trial_cost = 0.0
         predicted = 0.0
         for i in range(len(trial_res)):
@@ -308,7 +317,7 @@ def _levenberg_marquardt(xy, row_scale, target, theta, steps, min_gain):
             continue
         gain = cost - trial_cost
         theta = trial
-        res, jac = _residual_rows(xy, row_scale, target, theta.reshape(-1, 6), True)
+        res = _residual_rows(xy, row_scale, target, theta.reshape(-1, 6), jac)
         cost, normal, gradient = _normal_equations(res, jac)
         damping *= max(1 / 3, 1 - (2 * ratio - 1) ** 3)
         growth = 2.0

@@ -12,6 +12,7 @@ import pytest
 
 import leafstudio as ls
 from leafstudio._shared import kernelcache
+from leafstudio._shared.kernelcache import NOTICE
 from leafstudio.core import kernels
 
 CORE = Path(kernels.__file__).parent
@@ -62,17 +63,18 @@ def test_each_kernel_of_the_table_is_the_one_a_run_calls():
 
 def test_a_cold_cache_is_filled_by_worker_processes(monkeypatch, tmp_path):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))  # the workers inherit it
-    monkeypatch.setattr(kernels, "KERNELS", {"buckets:bounds": kernels.KERNELS["buckets:bounds"]})
+    one = "prepare.outline:_ring_length"
+    monkeypatch.setattr(kernels, "KERNELS", {one: kernels.KERNELS[one]})
     said = []
-    progress = []
-    spent = kernels.compile_kernels(said.append, 1, lambda *counts: progress.append(counts))
+    spent = kernels.compile_kernels(said.append, workers=1)
     assert len(spent) == 1 and os.getpid() not in spent  # one worker, not this process
-    assert said == [kernels.STAGE]
-    assert progress == [(1, 1)]
-    assert any(p.name.startswith("buckets.bounds") for p in tmp_path.rglob("*.nbi"))
+    assert said == [kernels.STAGE, f"{kernels.STAGE} 1/1"]  # the app's status: compiling_notice
+    assert [kernels.compiling_notice(s) for s in said] == [NOTICE, f"{NOTICE} 1/1"]
+    assert any(p.name.startswith("outline._ring_length") for p in tmp_path.rglob("*.nbi"))
     assert kernelcache.kernels_cached()
     assert not kernels.compile_kernels(said.append)  # cached now: nothing said or done
-    assert said == [kernels.STAGE]
+    assert len(said) == 2
+    assert kernels.compiling_notice("guide") is None
 
 
 def test_a_worker_that_dies_leaves_the_kernels_to_the_run(monkeypatch, tmp_path):

@@ -179,7 +179,7 @@ def test_levenberg_marquardt_recovers_a_mixture_and_never_worsens_the_start():
     start = Mixture(truth.weights, truth.means + 0.05, truth.covariances * 1.3, truth.amplitudes)
 
     def cost(theta):
-        res, _ = _residual_rows(xy, ones, target, theta.reshape(-1, 6), False)
+        res = _residual_rows(xy, ones, target, theta.reshape(-1, 6), np.empty((0, len(theta))))
         return res @ res
 
     fitted = _levenberg_marquardt(xy, ones, target, _pack(start), 60, 0.0)

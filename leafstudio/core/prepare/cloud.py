@@ -74,28 +74,25 @@ def estimate_noise(xy: np.ndarray, z: np.ndarray, sequence: np.ndarray) -> Noise
     )
 
 
-@njit(cache=True, nogil=True)
-def _prediction_misses(xy, z, sequence, step):
+def _prediction_misses(
+    xy: np.ndarray, z: np.ndarray, sequence: np.ndarray, step: int
+) -> tuple[np.ndarray, np.ndarray]:
     """Squared misses (across, in height) of the cubic prediction at every `step`-th point of
-    the closed ring xy[sequence]."""
+    the closed ring xy[sequence]. (Not compiled: at most NOISE_SAMPLE points, 0.25 ms for a
+    million-point ring, where it cost 0.3 s of the first run's compile.)"""
     n = len(sequence)
-    m = (n + step - 1) // step
-    across, height = np.empty(m), np.empty(m)
+    i = np.arange(0, n, step)
+    p = sequence[i]
+    a, b, c, d = (sequence[(i + shift) % n] for shift in (-2, -1, 1, 2))
     c0, c1 = -1 / 6, 2 / 3
-    for q in range(m):
-        i = q * step
-        p = sequence[i]
-        a, b = sequence[(i - 2) % n], sequence[(i - 1) % n]
-        c, d = sequence[(i + 1) % n], sequence[(i + 2) % n]
-        px = c0 * (xy[a, 0] + xy[d, 0]) + c1 * (xy[b, 0] + xy[c, 0])
-        py = c0 * (xy[a, 1] + xy[d, 1]) + c1 * (xy[b, 1] + xy[c, 1])
-        pz = c0 * (z[a] + z[d]) + c1 * (z[b] + z[c])
-        tx, ty = xy[d, 0] - xy[a, 0], xy[d, 1] - xy[a, 1]
-        norm = np.sqrt(tx * tx + ty * ty)
-        miss = (-(xy[p, 0] - px) * ty + (xy[p, 1] - py) * tx) / norm if norm > 0 else 0.0
-        across[q] = miss * miss
-        height[q] = (z[p] - pz) ** 2
-    return across, height
+    px = c0 * (xy[a, 0] + xy[d, 0]) + c1 * (xy[b, 0] + xy[c, 0])
+    py = c0 * (xy[a, 1] + xy[d, 1]) + c1 * (xy[b, 1] + xy[c, 1])
+    pz = c0 * (z[a] + z[d]) + c1 * (z[b] + z[c])
+    tx, ty = xy[d, 0] - xy[a, 0], xy[d, 1] - xy[a, 1]
+    norm = np.sqrt(tx * tx + ty * ty)
+    miss = -(xy[p, 0] - px) * ty + (xy[p, 1] - py) * tx
+    across = np.divide(miss, norm, out=np.zeros(len(i)), where=norm > 0)
+    return across * across, (z[p] - pz) ** 2
 
 
 @dataclass(frozen=True)

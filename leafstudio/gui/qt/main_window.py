@@ -29,8 +29,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from leafstudio._shared.kernelcache import NOTICE
-from leafstudio.core.kernels import STAGE as COMPILING
+from leafstudio.core.kernels import compiling_notice
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.layers import LAYERS
 from leafstudio.gui.model.measurements import measurement_rows
@@ -399,8 +398,8 @@ class MainWindow(FileCommands, QMainWindow):
     def _show_stage(self) -> None:
         if not self.worker.is_idle(PIPELINE):
             self.status_text.setStyleSheet("")
-            compiling = self._stage == COMPILING  # the first run, in worker processes
-            self.status_text.setText(NOTICE if compiling else f"Running: {self._stage}…")
+            notice = compiling_notice(self._stage)  # the first run, in worker processes
+            self.status_text.setText(notice or f"Running: {self._stage}…")
 
     def _on_yielded(self, kind: str, job_id: int, value: object) -> None:
         if kind == PIPELINE and not self.session.accept_drawable(value):
