@@ -23,7 +23,7 @@ Examples
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -31,11 +31,13 @@ from scipy.spatial import cKDTree
 
 from leafstudio._shared import progress
 from leafstudio.analysis.fidelity import scan_distances
+from leafstudio.core.bend import flat_leaf
 from leafstudio.core.pipeline import Pipeline, Result
 from leafstudio.core.plane import fit_frame
 from leafstudio.core.prepare.outline import ORDERED_STEP_RATIO
 from leafstudio.core.prepare.plausibility import leaf_warnings
 from leafstudio.core.prepare.polygon import ring_crossings
+from leafstudio.core.unfold import unfolded
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf, Params
 from leafstudio.sources.extract import OUTLINE_POINTS, Extraction, check_scan, extract_leaf
@@ -222,8 +224,13 @@ def open_file(
         if looks_like_scan(leaf):  # its points as read (unlabelled): not read a second time
             return _scan_opened(path, leaf.boundary, force=force)
         opened = Opened(path, "leaf", leaf)
-    if opened.sketch is None:
-        crossing = boundary_crossing(leaf)
+    if opened.sketch is None:  # a drawn project's leaf is its sketch's, as drawn
+        # curves in 3D without a bend are unfolded here, once, so that the leaf the app and the
+        # commands hold is the one reconstructed (core/unfold.py; the pipeline's own call then
+        # finds the bend given)
+        leaf = unfolded(leaf)
+        opened = replace(opened, leaf=leaf)
+        crossing = boundary_crossing(flat_leaf(leaf))
         if crossing is not None:
             x, y, z = crossing
             raise LeafError(
