@@ -7,6 +7,7 @@ from PySide6.QtWidgets import QApplication
 from leafstudio.forms.glossary import COMPARISONS, PICTURED
 from leafstudio.gui.qt.compare_view import CompareDialog, comparison_title, export_slides
 from leafstudio.gui.qt.glossary_view import GlossaryDialog
+from leafstudio.render.lesson import LESSON_STEPS
 from tests.gui.qt.conftest import exported, image_pixels
 
 
@@ -51,7 +52,8 @@ def test_export_slides_writes_the_steps_and_the_forms_compared(window, qtbot, tm
     job = export_slides(window, str(folder))
     assert job is not None and not job.finished  # drawn and written off the main thread
     assert exported(qtbot, job)
-    assert len(list(folder.glob("slide_*.png"))) == 7  # six steps, one comparison
+    slides = len(LESSON_STEPS) + 1  # every step, then the comparison
+    assert len(list(folder.glob("slide_*.png"))) == slides
     assert (folder / "lesson.pdf").read_bytes().startswith(b"%PDF")
     assert comparison_title(window.compared) == "serrate beside dentate"
     assert "file.export_slides" in window.actions
