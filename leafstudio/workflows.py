@@ -22,7 +22,6 @@ Examples
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
@@ -31,6 +30,7 @@ from scipy.spatial import cKDTree
 
 from leafstudio._shared import progress
 from leafstudio.analysis.fidelity import scan_distances
+from leafstudio.core import evaluate
 from leafstudio.core.bend import flat_leaf
 from leafstudio.core.pipeline import Pipeline, Result
 from leafstudio.core.plane import fit_frame
@@ -47,9 +47,6 @@ from leafstudio.sources.scan import is_scan_file, looks_like_scan, read_scan
 
 Kind = Literal["leaf", "project", "scan", "photo"]
 FAR_FROM_SCAN = 0.01  # of the length: a scan's surface farther on average is warned of
-
-
-MEASURABLE = 1e150  # an area (size²) of a leaf this long stays finite in float64
 
 
 @dataclass(frozen=True)
@@ -351,20 +348,8 @@ def reconstruct(opened: Opened, params: Params, pipeline: Pipeline | None = None
 
 
 def check_finite(figures: dict, source: str) -> None:
-    """LeafError naming `source` when a figure is not finite: a leaf near float64's limits has
-    areas (size²) that overflow (fuzzing, issue 24: at 1e154, `measure` printed infinite areas
-    and --metrics held Infinity)."""
-
-    def numbers(value: object) -> list[float]:
-        if isinstance(value, dict):
-            return [n for v in value.values() for n in numbers(v)]
-        if isinstance(value, list | tuple):
-            return [n for v in value for n in numbers(v)]
-        return [float(value)] if isinstance(value, float) else []
-
-    if not all(math.isfinite(n) for n in numbers(figures)):
-        raise LeafError(
-            "the leaf is too large (or too small) to measure: its areas or curvatures overflow; "
-            f"rescale it (coordinates up to about {MEASURABLE:g} are measured)",
-            source,
-        )
+    """evaluate.check_finite, its LeafError naming `source`."""
+    try:
+        evaluate.check_finite(figures)
+    except LeafError as exc:
+        raise LeafError(exc.problem, source) from None

@@ -7,6 +7,7 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -109,3 +110,24 @@ def test_reconstruct_on_a_small_random_leaf_is_a_result_or_one_leaf_error(
         return
     points = result.triangle_mesh.points
     assert len(points) and np.isfinite(points).all()
+
+
+FINDING_18_LEAF = [
+    [5e-324, 0.5, 0.5], [1, 1e300, 0], [-1, 0.5, 1e-300], [0, 5e-324, 0], [1e-300, 1e-300, 1e300]
+]  # fmt: skip
+
+
+def test_finding_18s_leaf_after_another_run_is_a_result_whose_metrics_are_one_leaf_error():
+    """Issue 24, finding 18: after a run of the nested demo in the same process this leaf
+    crashed the process (SIGSEGV in the mesher); then it gave a Result whose metrics held an
+    infinite area (its extent is 1e300: its area overflows float64)."""
+    ls.reconstruct(ls.demo("nested"), ls.Params(grid=32))
+    params = ls.Params(k=3, grid=68, mpu_tolerance=0.02542281920342735, samples=776,
+                       seed=1680591309, margin="exact")  # fmt: skip
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # no veins: flat
+        result = ls.reconstruct(ls.Leaf(FINDING_18_LEAF), params)
+    assert np.isfinite(result.triangle_mesh.points).all()
+    with pytest.raises(ls.LeafError, match="too large") as exc:
+        result.metrics  # noqa: B018
+    _one_line(exc.value)

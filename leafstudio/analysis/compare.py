@@ -119,8 +119,9 @@ def compare(leaf: Leaf, params: Params | None = None) -> dict[str, Any]:
         scale = units.scale
         for part in ("boundary", "veins"):
             table[part] = {k: None if v is None else v * scale for k, v in table[part].items()}
-        table["mesh"]["area"] *= scale**2
-        spill = spill_area(mesh, result.frame, result.polygon) * scale**2
+        area = scale * scale  # not scale**2, which raises past 1e154 (inf: said by the caller)
+        table["mesh"]["area"] *= area
+        spill = spill_area(mesh, result.frame, result.polygon) * area
         return {**table, "spill": spill, "seconds": seconds}
 
     def in_world(mesh: TriangleMesh) -> TriangleMesh:

@@ -70,11 +70,12 @@ def _reconstruct(job: Job) -> dict[str, Any]:
         else:
             opened = workflows.Opened(job.path, "leaf", load_leaf(job.path))
         done = workflows.reconstruct(opened, settings.params)
+        result = done.result
+        row: dict[str, Any] = {"k": result.chosen_k, "grid": settings.params.grid}
+        row.update(_traits(result))  # LeafError: a leaf at 1e160 is too large to measure
     except LeafError as exc:
         raise LeafError(exc.problem, job.input) from None
-    result = done.result
-    row: dict[str, Any] = {"k": result.chosen_k, "grid": settings.params.grid, **_traits(result)}
-    workflows.check_finite(row, job.input)  # as measure: a leaf at 1e160 was an internal error
+    workflows.check_finite(row, job.input)
     if done.scan_fit is not None:
         found = done.scan_fit
         row.update(

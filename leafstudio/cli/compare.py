@@ -9,6 +9,7 @@ from leafstudio.analysis.compare import compare, format_comparison
 from leafstudio.cli.options import EXIT_OK, add_run_options, settings
 from leafstudio.errors import LeafError
 from leafstudio.sources.files import load_leaf
+from leafstudio.workflows import check_finite
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -29,6 +30,7 @@ def run(args: argparse.Namespace) -> int:
     except LeafError as exc:
         raise LeafError(exc.problem, args.input) from None
     report.pop("meshes")
+    check_finite(report, args.input)  # areas of a leaf past about 1e154 overflow: one line
     if args.json:
         print(json.dumps({"input": args.input, **report}, indent=2))
     else:

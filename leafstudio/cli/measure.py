@@ -7,6 +7,7 @@ import json
 
 from leafstudio.cli.options import EXIT_OK, add_run_options, run_pipeline
 from leafstudio.core.evaluate import format_table, leaf_measurements
+from leafstudio.errors import LeafError
 from leafstudio.sources.files import load_leaf
 from leafstudio.workflows import check_finite
 
@@ -21,7 +22,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Print the reconstructed leaf's measurements, as a table or JSON."""
     _, result = run_pipeline(args, load_leaf(args.input, veins=args.vein))
-    values = leaf_measurements(result)
+    try:
+        values = leaf_measurements(result)  # LeafError: a leaf too large to measure
+    except LeafError as exc:
+        raise LeafError(exc.problem, args.input) from None
     check_finite(values, args.input)
     if args.json:
         print(json.dumps({"input": args.input, **values}, indent=2))

@@ -114,11 +114,15 @@ def run(args: argparse.Namespace) -> int:
         }
     metrics = None
     if args.metrics:
+        try:
+            measured = result.metrics  # LeafError: a leaf too large to measure
+        except LeafError as exc:
+            raise LeafError(exc.problem, args.input) from None
         metrics = {
             "input": args.input,
             "params": params.to_dict(),
             "k": result.chosen_k,
-            **result.metrics,
+            **measured,
             "warnings": args.warnings,
         }
         if fidelity is not None:

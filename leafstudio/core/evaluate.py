@@ -23,6 +23,7 @@ from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.distance import mesh_distances
 from leafstudio.core.plane import Frame
 from leafstudio.core.trianglemesh import MeshLike
+from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
 
 
@@ -347,3 +348,26 @@ def format_table(values: dict[str, Any]) -> str:
         )
     width = max(len(label) for label, _ in rows)
     return "\n".join(f"{label:<{width}}  {value}" for label, value in rows)
+
+
+MEASURABLE = 1e150  # an area (size²) of a leaf this long stays finite in float64
+
+
+def check_finite(figures: Any) -> None:
+    """LeafError when a figure (a float anywhere in nested dicts and lists) is not finite: a
+    leaf near float64's limits has areas (size²) that overflow (fuzzing, issue 24: at 1e154,
+    `measure` printed infinite areas and --metrics held Infinity; `Result.metrics` of a leaf
+    spanning 1e300 held an infinite area)."""
+
+    def numbers(value: object) -> list[float]:
+        if isinstance(value, dict):
+            return [n for v in value.values() for n in numbers(v)]
+        if isinstance(value, list | tuple):
+            return [n for v in value for n in numbers(v)]
+        return [float(value)] if isinstance(value, float) else []
+
+    if not all(np.isfinite(numbers(figures))):
+        raise LeafError(
+            "the leaf is too large (or too small) to measure: its areas or curvatures overflow; "
+            f"rescale it (coordinates up to about {MEASURABLE:g} are measured)"
+        )

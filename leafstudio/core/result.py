@@ -61,7 +61,9 @@ class Measuring:
             return unit
         with self._lock:
             if self._world is None:
-                self._world = self._units.metrics(unit)
+                world = self._units.metrics(unit)
+                evaluate.check_finite(world)  # past about 1e154 an area is inf: LeafError
+                self._world = world
             return self._world
 
     def _measure(self, should_stop: Callable[[], bool] | None) -> dict[str, Any]:
