@@ -102,3 +102,23 @@ def test_moving_and_scaling_a_symmetric_leaf_keeps_its_area():
         moved = ls.Leaf(leaf.boundary * scale + offset, [v * scale + offset for v in leaf.veins])
         moved_area = ls.reconstruct(moved, params).metrics["mesh"]["area"] / scale**2
         assert moved_area == pytest.approx(area, rel=1e-9)
+
+
+def test_a_mirror_symmetric_outline_starts_at_the_same_point_whatever_the_rounding():
+    """Issue 24, finding 19: the outline starts at its lowest point by x, then y; a cordate
+    leaf's two lowest points (mirrored across the midrib) were 1e-15 apart in x, so rounding
+    chose the start, the boundary was thinned from there, and moved and scaled its area changed
+    by 5e-4. An x within 1e-9 of the width of the lowest now ties, and y decides."""
+    from leafstudio.core.prepare.outline import _canonical
+
+    t = np.linspace(0, 2 * np.pi, 40, endpoint=False)
+    ring = np.column_stack([np.cos(t), 0.5 * np.sin(t)])
+    ring = ring[np.abs(ring[:, 0] + 1) > 1e-6]  # no single lowest point: two mirrored ones
+    starts = []
+    for tip in (1e-15, -1e-15):
+        points = ring.copy()
+        lowest = np.flatnonzero(points[:, 0] == points[:, 0].min())
+        points[lowest[0], 0] += tip  # one of the two a hair farther out, or in
+        sequence = _canonical(points, np.arange(len(points)))
+        starts.append(tuple(np.round(points[sequence[0]], 9)))
+    assert starts[0] == starts[1] and starts[0][1] < 0  # the lower one by y, both times

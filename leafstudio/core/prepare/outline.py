@@ -33,6 +33,7 @@ from leafstudio.core.prepare.plausibility import ZIGZAG
 from leafstudio.core.prepare.polygon import MAX_OUTLINE_VERTICES, distinct_indices, thin_ring
 from leafstudio.errors import LeafError
 
+START_TIE = 1e-9  # of the width: x this near the lowest ties for the outline's start (_orientation)
 SPARSE_OUTLINE = 48  # an outline of fewer vertices gets points along its edges (_densified)
 # points given in order step at most this many median spacings (a longer step: unordered)
 ORDERED_STEP_RATIO = 8.0
@@ -104,19 +105,24 @@ def _canonical(points: np.ndarray, sequence: np.ndarray) -> np.ndarray:
 @njit(cache=True, nogil=True)
 def _orientation(points, sequence):
     """Twice the signed area of the ring points[sequence], and the position in `sequence` of
-    its lowest point by (x, y)."""
+    its lowest point by x, then y: an x within START_TIE of the ring's width from the lowest
+    is a tie. Rounding must not choose between a symmetric outline's two lowest points (issue
+    24, finding 19: a cordate leaf moved and scaled started its outline at the other one, the
+    boundary was thinned from there, and its area changed by 5e-4)."""
     n = len(sequence)
     area = 0.0
-    start = 0
+    low, high = np.inf, -np.inf
     for i in range(n):
         a, b = sequence[i], sequence[(i + 1) % n]
         area += points[a, 0] * points[b, 1] - points[b, 0] * points[a, 1]
-        s = sequence[start]
-        if points[a, 0] < points[s, 0] or (
-            points[a, 0] == points[s, 0] and points[a, 1] < points[s, 1]
-        ):
+        low, high = min(low, points[a, 0]), max(high, points[a, 0])
+    tie = low + START_TIE * (high - low)
+    start = -1
+    for i in range(n):
+        a = sequence[i]
+        if points[a, 0] <= tie and (start < 0 or points[a, 1] < points[sequence[start], 1]):
             start = i
-    return area, start
+    return area, max(start, 0)
 
 
 def _ring(points: np.ndarray, sequence: np.ndarray) -> np.ndarray | Polygon | None:
