@@ -162,9 +162,10 @@ def test_reading_apart_says_what_is_wrong_as_in_the_thread(tmp_path):
 
 
 def test_cancel_ends_the_reading_process_at_once(tmp_path):
+    before = set(multiprocessing.active_children())  # a first run's compile may have its own
     with running(lambda: True), pytest.raises(Cancelled):
         reading.read_apart(time.sleep, 60)
-    assert not multiprocessing.active_children()
+    assert set(multiprocessing.active_children()) <= before
 
 
 def test_a_plain_script_opens_a_big_file_through_the_session(tmp_path):
