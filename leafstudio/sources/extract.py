@@ -29,7 +29,7 @@ import shapely
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import Delaunay, cKDTree
-from shapely.geometry import LineString, MultiPoint, Point, Polygon
+from shapely.geometry import MultiPoint, Polygon
 
 from leafstudio.core.plane import fixed_sample, principal_extents, principal_spreads
 from leafstudio.core.prepare.plausibility import check_leaf_like
@@ -37,6 +37,7 @@ from leafstudio.core.prepare.vein_order import veins_inside_outline
 from leafstudio.core.sheet import CELLS, Scaled, fit_sheet
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
+from leafstudio.sources.scan_veins import chord_at, midline, side_veins
 
 MIN_POINTS = 50
 OUTLIER_FACTOR = 3.0  # a point whose mean neighbour distance exceeds this many medians is noise
@@ -55,10 +56,6 @@ STRAND = 0.35  # a petiole's second spread is at most this share of its first (t
 # petioles: 0.06-0.23; the pieces of blade the ball test leaves: sheets 0.60-0.64, strips 0.12-0.34)
 STICK_OUT = 0.5  # ... and its far end this share of its length from the blade (petioles: 0.92-1.05;
 # strips along the margin: 0.09-0.18)
-SIDE_STATIONS = (0.2, 0.35, 0.5, 0.65, 0.8)  # where side veins leave the midrib (arc length)
-SIDE_ANGLE = np.deg2rad(50.0)
-SIDE_REACH = 0.85  # side veins stop at this share of the way to the margin
-MIDRIB_REACH = (0.02, 0.98)  # the midrib's span along base -> tip
 AXES = {"+x": 0, "-x": 0, "+y": 1, "-y": 1, "+z": 2, "-z": 2}
 BUDGET = 40_000  # larger scans are thinned to at most this many voxel centroids
 THINNING_PASSES = 8
@@ -260,7 +257,7 @@ def _base_point(
             return outline[np.argmin(np.linalg.norm(outline - attach, axis=1))]
         lo, hi = u.min(), u.max()
         polygon = Polygon(outline)
-        width = [_chord(polygon, lo + f * (hi - lo)).length for f in (0.25, 0.75)]
+        width = [chord_at(polygon, lo + f * (hi - lo)).length for f in (0.25, 0.75)]
         side = 1.0 if width[1] > width[0] else -1.0
     elif base_end in AXES:
         sign = 1.0 if base_end[0] == "+" else -1.0
@@ -271,73 +268,6 @@ def _base_point(
     else:
         raise LeafError(f"base end must be auto or one of {', '.join(AXES)}, got {base_end!r}")
     return outline[np.argmax(side * u)]
-
-
-def _chord(polygon: Polygon, u: float):
-    """The polygon's cross-section at plane coordinate x = u (a line or several)."""
-    lo, hi = polygon.bounds[1] - 1, polygon.bounds[3] + 1
-    return polygon.intersection(LineString([(u, lo), (u, hi)]))
-
-
-def _midline(outline: np.ndarray, base: np.ndarray, spacing: float) -> np.ndarray:
-    """(m, 2) the midrib in the plane, from the base to the tip (the outline point farthest from
-    the base) through the middles of the cross-sections square to the base-tip line."""
-    tip = outline[np.argmax(np.linalg.norm(outline - base, axis=1))]
-    along = (tip - base) / np.linalg.norm(tip - base)
-    across = np.array([-along[1], along[0]])
-    rotation = np.column_stack([along, across])  # plane -> (along, across)
-    polygon = Polygon((outline - base) @ rotation)
-    span = float(np.linalg.norm(tip - base))
-    stations = span * np.linspace(*MIDRIB_REACH, max(int(span / spacing), 8))
-    middle = []
-    previous = 0.0
-    for u in stations:
-        chord = _chord(polygon, u)
-        parts = [g for g in getattr(chord, "geoms", [chord]) if isinstance(g, LineString)]
-        parts = [p for p in parts if p.length > 0]
-        if not parts:
-            continue
-        part = min(parts, key=lambda p: p.distance(Point(u, previous)))
-        previous = part.centroid.y
-        middle.append((u, previous))
-    line = np.asarray(middle)
-    if len(line) < 3:
-        raise LeafError("could not trace a midrib across the blade")
-    if len(line) >= 5:  # smooth the middle's wobble, keep the ends
-        smooth = np.convolve(line[:, 1], np.ones(5) / 5, mode="same")
-        line[2:-2, 1] = smooth[2:-2]
-    return base + line @ rotation.T
-
-
-def _side_veins(polygon: Polygon, midrib: np.ndarray, covered, spacing: float) -> list[np.ndarray]:
-    """(k_i, 2) side veins: from midrib stations toward the margin at SIDE_ANGLE, toward the tip,
-    up to SIDE_REACH of the way, cut at the first gap in the scan."""
-    steps = np.linalg.norm(np.diff(midrib, axis=0), axis=1)
-    arc = np.concatenate([[0.0], np.cumsum(steps)])
-    reach = 4 * float(np.hypot(*np.ptp(midrib, axis=0)))
-    veins = []
-    for station in SIDE_STATIONS:
-        i = int(np.clip(np.searchsorted(arc, station * arc[-1]), 1, len(midrib) - 2))
-        tangent = midrib[i + 1] - midrib[i - 1]
-        tangent /= np.linalg.norm(tangent)
-        for turn in (SIDE_ANGLE, -SIDE_ANGLE):
-            c, s = np.cos(turn), np.sin(turn)
-            direction = np.array([c * tangent[0] - s * tangent[1], s * tangent[0] + c * tangent[1]])
-            ray = LineString([midrib[i], midrib[i] + reach * direction])
-            hit = polygon.exterior.intersection(ray)
-            if hit.is_empty:
-                continue
-            distance = min(Point(midrib[i]).distance(p) for p in getattr(hit, "geoms", [hit]))
-            count = int(SIDE_REACH * distance / spacing)
-            if count < 4:
-                continue
-            t = np.linspace(0, SIDE_REACH * distance, count + 1)[1:]
-            path = midrib[i] + t[:, None] * direction
-            ok = covered(path)
-            stop = int(np.argmin(ok)) if not ok.all() else len(path)
-            if stop >= 4:
-                veins.append(path[:stop])
-    return veins
 
 
 def extract_leaf(
@@ -488,14 +418,14 @@ def _extract(
         )
     xy, h = local[blade, :2], local[blade, 2]
     base = _base_point(base_end, axes, boundary_xy, xy, local[petiole, :2])
-    midrib = _midline(boundary_xy, base, spacing)
+    midrib = midline(boundary_xy, base, spacing)
     gaps = cKDTree(xy)
     reach = 2.0 * float(np.percentile(gaps.query(xy, k=2)[0][:, 1], 95))
 
     def covered(q: np.ndarray) -> np.ndarray:
         return np.isfinite(gaps.query(q, distance_upper_bound=reach)[0])
 
-    veins_xy = [midrib, *_side_veins(polygon, midrib, covered, spacing)]
+    veins_xy = [midrib, *side_veins(polygon, midrib, covered, spacing)]
 
     def world(q: np.ndarray, z: np.ndarray | None = None) -> np.ndarray:
         z = lift(q, xy, h) if z is None else z

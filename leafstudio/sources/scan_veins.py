@@ -1,0 +1,82 @@
+"""An extracted scan blade's veins, in its flat plane (extract.py, step 4): the midrib from the
+base to the tip through the middles of the blade's cross-sections, and side veins straight from
+the midrib toward the margin at SIDE_ANGLE, cut where the scan has a gap."""
+
+from __future__ import annotations
+
+import numpy as np
+from shapely.geometry import LineString, Point, Polygon
+
+from leafstudio.errors import LeafError
+
+SIDE_STATIONS = (0.2, 0.35, 0.5, 0.65, 0.8)  # where side veins leave the midrib (arc length)
+SIDE_ANGLE = np.deg2rad(50.0)
+SIDE_REACH = 0.85  # side veins stop at this share of the way to the margin
+MIDRIB_REACH = (0.02, 0.98)  # the midrib's span along base -> tip
+
+
+def chord_at(polygon: Polygon, u: float):
+    """The polygon's cross-section at plane coordinate x = u (a line or several)."""
+    lo, hi = polygon.bounds[1] - 1, polygon.bounds[3] + 1
+    return polygon.intersection(LineString([(u, lo), (u, hi)]))
+
+
+def midline(outline: np.ndarray, base: np.ndarray, spacing: float) -> np.ndarray:
+    """(m, 2) the midrib in the plane, from the base to the tip (the outline point farthest from
+    the base) through the middles of the cross-sections square to the base-tip line."""
+    tip = outline[np.argmax(np.linalg.norm(outline - base, axis=1))]
+    along = (tip - base) / np.linalg.norm(tip - base)
+    across = np.array([-along[1], along[0]])
+    rotation = np.column_stack([along, across])  # plane -> (along, across)
+    polygon = Polygon((outline - base) @ rotation)
+    span = float(np.linalg.norm(tip - base))
+    stations = span * np.linspace(*MIDRIB_REACH, max(int(span / spacing), 8))
+    middle = []
+    previous = 0.0
+    for u in stations:
+        chord = chord_at(polygon, u)
+        parts = [g for g in getattr(chord, "geoms", [chord]) if isinstance(g, LineString)]
+        parts = [p for p in parts if p.length > 0]
+        if not parts:
+            continue
+        part = min(parts, key=lambda p: p.distance(Point(u, previous)))
+        previous = part.centroid.y
+        middle.append((u, previous))
+    line = np.asarray(middle)
+    if len(line) < 3:
+        raise LeafError("could not trace a midrib across the blade")
+    if len(line) >= 5:  # smooth the middle's wobble, keep the ends
+        smooth = np.convolve(line[:, 1], np.ones(5) / 5, mode="same")
+        line[2:-2, 1] = smooth[2:-2]
+    return base + line @ rotation.T
+
+
+def side_veins(polygon: Polygon, midrib: np.ndarray, covered, spacing: float) -> list[np.ndarray]:
+    """(k_i, 2) side veins: from midrib stations toward the margin at SIDE_ANGLE, toward the tip,
+    up to SIDE_REACH of the way, cut at the first gap in the scan."""
+    steps = np.linalg.norm(np.diff(midrib, axis=0), axis=1)
+    arc = np.concatenate([[0.0], np.cumsum(steps)])
+    reach = 4 * float(np.hypot(*np.ptp(midrib, axis=0)))
+    veins = []
+    for station in SIDE_STATIONS:
+        i = int(np.clip(np.searchsorted(arc, station * arc[-1]), 1, len(midrib) - 2))
+        tangent = midrib[i + 1] - midrib[i - 1]
+        tangent /= np.linalg.norm(tangent)
+        for turn in (SIDE_ANGLE, -SIDE_ANGLE):
+            c, s = np.cos(turn), np.sin(turn)
+            direction = np.array([c * tangent[0] - s * tangent[1], s * tangent[0] + c * tangent[1]])
+            ray = LineString([midrib[i], midrib[i] + reach * direction])
+            hit = polygon.exterior.intersection(ray)
+            if hit.is_empty:
+                continue
+            distance = min(Point(midrib[i]).distance(p) for p in getattr(hit, "geoms", [hit]))
+            count = int(SIDE_REACH * distance / spacing)
+            if count < 4:
+                continue
+            t = np.linspace(0, SIDE_REACH * distance, count + 1)[1:]
+            path = midrib[i] + t[:, None] * direction
+            ok = covered(path)
+            stop = int(np.argmin(ok)) if not ok.all() else len(path)
+            if stop >= 4:
+                veins.append(path[:stop])
+    return veins
