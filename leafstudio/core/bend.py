@@ -136,51 +136,42 @@ def flat_leaf(leaf: Leaf) -> Leaf:
 def cut_along(mesh: TriangleMesh, side: np.ndarray) -> TriangleMesh:
     """`mesh` with its triangles cut where the (n,) values `side` pass through 0 (linearly along
     each edge), point data interpolated: a bend's crease then runs along edges of the mesh
-    instead of across its triangles (a fold's chords cut 0.3% of the length under the midrib)."""
+    instead of across its triangles (a fold's chords cut 0.3% of the length under the midrib).
+    In whole arrays: a roll cuts the mesh along some 30 lines."""
     faces = mesh.regular_faces
     signs = np.sign(side)[faces]
-    crossing = np.flatnonzero((signs.max(axis=1) > 0) & (signs.min(axis=1) < 0))
-    if len(crossing) == 0:
+    crossing = (signs.max(axis=1) > 0) & (signs.min(axis=1) < 0)
+    if not crossing.any():
         return mesh
-    points = [mesh.points]
-    data = {name: [values] for name, values in mesh.point_data.items()}
-    made: dict[tuple[int, int], int] = {}
-    count = len(mesh.points)
+    tri, s = faces[crossing], signs[crossing]
+    through = (s == 0).any(axis=1)  # through a vertex (the other two on either side)
+    # each triangle turned so that its first corner is the zero (through a vertex) or alone on
+    # its side (else): the cut runs through edges (b, c), or (a, b) and (c, a)
+    first = np.where(through, np.argmax(s == 0, axis=1), np.argmax(s * s.sum(1)[:, None] < 0, 1))
+    turn = (first[:, None] + np.arange(3)) % 3
+    a, b, c = np.take_along_axis(tri, turn, axis=1).T
+    ends = np.vstack([np.column_stack([b, c])[through], np.column_stack([a, b])[~through],
+                      np.column_stack([c, a])[~through]])  # fmt: skip
+    keys, at = np.unique(np.sort(ends, axis=1), axis=0, return_inverse=True)
+    t = side[keys[:, 0]] / (side[keys[:, 0]] - side[keys[:, 1]])
+    index = len(mesh.points) + at.ravel()
+    n_through = int(through.sum())
+    m, ab, ca = index[:n_through], index[n_through:][: len(a) - n_through], index[len(a) :]
+    a1, b1, c1 = a[through], b[through], c[through]
+    a2, b2, c2 = a[~through], b[~through], c[~through]
+    new = np.vstack([
+        np.column_stack([a1, b1, m]), np.column_stack([a1, m, c1]),
+        np.column_stack([a2, ab, ca]), np.column_stack([ab, b2, c2]), np.column_stack([ab, c2, ca]),
+    ])  # fmt: skip
 
-    def on_edge(a: int, b: int) -> int:
-        nonlocal count
-        key = (min(a, b), max(a, b))
-        if key not in made:
-            t = side[a] / (side[a] - side[b])
-            points.append((mesh.points[a] + t * (mesh.points[b] - mesh.points[a]))[None])
-            for values in data.values():
-                values.append(np.array([values[0][a] + t * (values[0][b] - values[0][a])]))
-            made[key] = count
-            count += 1
-        return made[key]
+    def between(values: np.ndarray) -> np.ndarray:
+        lo, hi = values[keys[:, 0]], values[keys[:, 1]]
+        return lo + (t.reshape(-1, *([1] * (values.ndim - 1)))) * (hi - lo)
 
-    new = []
-    for f in crossing:
-        tri = faces[f]
-        s = np.sign(side[tri])
-        zero = np.flatnonzero(s == 0)
-        if len(zero) == 1:  # through a vertex: two triangles
-            i = int(zero[0])
-            a, b, c = tri[i], tri[(i + 1) % 3], tri[(i + 2) % 3]
-            m = on_edge(b, c)
-            new += [(a, b, m), (a, m, c)]
-            continue
-        i = next(k for k in range(3) if s[k] != s[(k + 1) % 3] and s[k] != s[(k + 2) % 3])
-        a, b, c = tri[i], tri[(i + 1) % 3], tri[(i + 2) % 3]  # a alone on its side
-        ab, ca = on_edge(a, b), on_edge(c, a)
-        new += [(a, ab, ca), (ab, b, c), (ab, c, ca)]
-    keep = np.ones(len(faces), dtype=bool)
-    keep[crossing] = False
-    triangles = np.vstack([faces[keep], np.array(new, dtype=faces.dtype)])
     return TriangleMesh(
-        np.vstack(points),
-        triangles,
-        {name: np.concatenate(values) for name, values in data.items()},
+        np.vstack([mesh.points, between(mesh.points)]),
+        np.vstack([faces[~crossing], new.astype(faces.dtype)]),
+        {name: np.concatenate([v, between(v)]) for name, v in mesh.point_data.items()},
     )
 
 
