@@ -96,25 +96,3 @@ def test_no_roll_is_todays_pose_and_project(tmp_path):
     path = tmp_path / "x.leaf.json"
     ls.save_leaf(rolled0, path)
     assert json.loads(path.read_text())["bend"] == {"fold": 40.0, "curl": 0.0}
-
-
-def test_a_rolled_project_opens_rolled_and_a_bad_roll_is_one_error(tmp_path):
-    leaf = Form("ovate", roll=0.5).leaf()
-    path = tmp_path / "rolled.leaf.json"
-    ls.save_leaf(leaf, path)
-    assert ls.load_leaf(path).bend == leaf.bend
-    data = json.loads(path.read_text())
-    data["bend"] = {"roll": "x"}
-    path.write_text(json.dumps(data))
-    with pytest.raises(ls.LeafError) as caught:
-        ls.load_leaf(path)
-    assert "\n" not in str(caught.value) and "roll" in str(caught.value)
-
-
-def test_the_cli_writes_a_rolled_grass_blade(tmp_path, capsys):
-    from leafstudio.cli import main
-
-    out = tmp_path / "x.glb"
-    assert main(["form", "lanceolate", "--aspect", "30", "--roll", "1", "-o", str(out)]) == 0
-    assert out.stat().st_size > 0
-    assert "edge" not in capsys.readouterr().err

@@ -1,6 +1,7 @@
 """A twisted blade (issue 21, build item 1): each cross-section turned about the midrib by
 twist · x radians, a helicoid, as a twisted grass blade; undone exactly, reconstructed on the
-flat blade."""
+flat blade. The project and command-line checks of a pose term are written once here, for the
+roll and the twist alike."""
 
 from __future__ import annotations
 
@@ -58,7 +59,7 @@ def test_a_twist_is_undone_exactly_and_keeps_the_midrib():
     np.testing.assert_allclose(section[5], [0.5, 0, 0], atol=1e-12)
 
 
-def test_no_twist_is_todays_pose_and_a_twisted_project_opens_twisted(tmp_path):
+def test_no_twist_is_todays_pose_and_a_project_stores_the_twist_in_radians(tmp_path):
     assert Pose(40, 0.3).key() == np.array([40.0, 0.3]).tobytes()
     assert Pose(40, 0.3, twist=1.0).key() != Pose(40, 0.3, roll=1.0).key()
     plain, twisted0 = Form("ovate", fold=40).leaf(), Form("ovate", fold=40, twist=0.0).leaf()
@@ -67,20 +68,34 @@ def test_no_twist_is_todays_pose_and_a_twisted_project_opens_twisted(tmp_path):
     path = tmp_path / "twisted.leaf.json"
     ls.save_leaf(leaf, path)
     assert json.loads(path.read_text())["bend"]["twist"] == pytest.approx(0.5 * np.pi)
+
+
+@pytest.mark.parametrize("term", ["roll", "twist"])
+def test_a_posed_project_opens_posed_and_a_bad_term_is_one_error(tmp_path, term):
+    leaf = Form("ovate", **{term: 0.5}).leaf()
+    path = tmp_path / f"{term}.leaf.json"
+    ls.save_leaf(leaf, path)
     assert ls.load_leaf(path).bend == leaf.bend
     data = json.loads(path.read_text())
-    data["bend"] = {"twist": "x"}
+    data["bend"] = {term: "x"}
     path.write_text(json.dumps(data))
     with pytest.raises(ls.LeafError) as caught:
         ls.load_leaf(path)
-    assert "\n" not in str(caught.value) and "twist" in str(caught.value)
+    assert "\n" not in str(caught.value) and term in str(caught.value)
 
 
-def test_the_cli_writes_a_twisted_grass_blade(tmp_path, capsys):
+@pytest.mark.parametrize("flag", ["--roll", "--twist"])
+def test_the_cli_writes_a_rolled_or_twisted_grass_blade(tmp_path, capsys, flag):
     from leafstudio.cli import main
 
     out = tmp_path / "x.glb"
-    assert main(["form", "lanceolate", "--aspect", "30", "--twist", "1", "-o", str(out)]) == 0
+    assert main(["form", "lanceolate", "--aspect", "30", flag, "1", "-o", str(out)]) == 0
     assert out.stat().st_size > 0
     assert "edge" not in capsys.readouterr().err
+
+
+def test_the_cli_refuses_a_twist_past_its_range(tmp_path):
+    from leafstudio.cli import main
+
+    out = tmp_path / "x.glb"
     assert main(["form", "ovate", "--twist", "3", "-o", str(out)]) == 2
