@@ -54,7 +54,14 @@ from leafstudio.sources.leafends import (
     sharpen_end,
 )
 from leafstudio.sources.leafphoto import LeafPhoto
-from leafstudio.sources.photo_veins import lifted, ridge_midline, smoothed, trace_veins
+from leafstudio.sources.photo_veins import (
+    Ridges,
+    find_ridges,
+    lifted,
+    ridge_midline,
+    smoothed,
+    trace_veins,
+)
 
 if TYPE_CHECKING:
     from leafstudio.sources.leafends import Midline, VeinField
@@ -297,12 +304,12 @@ def _cut_stalk(
 
 
 def _photo_midline(
-    image: np.ndarray, blade: np.ndarray, outline: np.ndarray, line: Midline
+    ridges: Ridges | None, outline: np.ndarray, line: Midline
 ) -> tuple[Midline, np.ndarray | None]:
     """The outline's midline, or the midrib the photo shows (photo_veins.ridge_midline) when its
     ends lie elsewhere (farther than ENDS_AGREE of the length from the midline's); and the
     visible ridge's path (None if none)."""
-    found = ridge_midline(image, blade, outline)
+    found = ridge_midline(ridges, outline)
     if found is None:
         return line, None
     ridge, path = found
@@ -386,13 +393,14 @@ def leaf_from_photo(
     leaf_mask = _leaf_component(foreground(image))
     blade, joint = _cut_petiole(leaf_mask)
     outline = _outline(blade, points)
-    field = line = ridge = None
+    field = line = ridge = ridges = None
     if joint is None:
         blade, joint, field, line = _cut_stalk(outline, image, blade)
         if joint is not None:
             outline = _outline(blade, points)
         elif veins in ("auto", "trace"):
-            line, ridge = _photo_midline(image, blade, outline, line)
+            ridges = find_ridges(image, blade)  # once: the veins below use it too
+            line, ridge = _photo_midline(ridges, outline, line)
     outline, base, apex, cue = _ends(outline, base_end, joint, field, line)
     start = np.array([outline[base, 0], -outline[base, 1]])  # y up
     axis = np.array([outline[apex, 0], -outline[apex, 1]]) - start
@@ -428,7 +436,9 @@ def leaf_from_photo(
             near_base = np.linalg.norm(ridge[0] - outline[base]) < np.linalg.norm(
                 ridge[-1] - outline[base])  # fmt: skip
             reach = ridge[[0, -1]] if near_base else ridge[[-1, 0]]
-        traced = trace_veins(image, blade, outline[base], outline[apex], reach)
+        if ridges is None:
+            ridges = find_ridges(image, blade)
+        traced = trace_veins(ridges, outline[base], outline[apex], reach)
         if traced.seen:
             found = [lifted(to_world(smoothed(v)), xy) for v in traced.veins]
             veins_from = "photo"

@@ -2,7 +2,8 @@
 
 1. Ridges: scikit-image's Sato filter (the Hessian's eigenvalues, several widths) on the grey
    levels of the blade, for light veins and for dark ones; the stronger kind is kept. The
-   margin's own edge is left out (MARGIN_SKIP ridge widths in from the outline).
+   margin's own edge is left out (MARGIN_SKIP ridge widths in from the outline). It is run once
+   per photo (find_ridges) and its Ridges shared by steps 2 to 4: it is most of a photo's time.
 2. The midrib: the cheapest path from the base to the apex where a pixel costs the inverse of
    its ridge strength (skimage.graph.route_through_array). It is taken as seen when the ridge
    along it is clearly stronger than the blade's typical pixel (MIDRIB_CLEAR); a blade without
@@ -29,8 +30,8 @@ import numpy as np
 if TYPE_CHECKING:
     from leafstudio.sources.leafends import Midline
 
-RIDGE_WIDTHS = (1.0, 2.0, 3.0)  # Sato sigmas, in pixels, for a blade LENGTH_PIXELS long
-LENGTH_PIXELS = 500.0  # the widths scale with the blade's length beyond this
+RIDGE_WIDTHS = (1.0, 2.0, 3.0)  # Sato sigmas, in pixels, for a blade box LENGTH_PIXELS across
+LENGTH_PIXELS = 500.0  # the widths scale with the blade box's diagonal beyond this
 MARGIN_SKIP = 3.0  # ridge widths in from the outline where ridges are not looked for
 MIDRIB_CLEAR = 3.0  # the midrib's median ridge strength over the blade's median, at least
 RIDGE_LOW, RIDGE_HIGH = 0.2, 0.4  # hysteresis, as shares of the blade's strongest ridges
@@ -76,9 +77,50 @@ def ridge_strength(image: np.ndarray, blade: np.ndarray, widths: np.ndarray) -> 
     return np.clip(best / best_level, 0.0, 1.0)
 
 
+@dataclass(frozen=True)
+class Ridges:
+    """The ridge filter run once on a photo's blade, shared by the midrib's ends (ridge_midline)
+    and the veins (trace_veins): the filter is most of a photo's reading time.
+
+    Attributes
+    ----------
+    strength : (h, w) float array
+        ridge_strength on the blade's box.
+    blade : (h, w) bool array
+        The blade's pixels in its box.
+    corner : (2,) float array
+        The box's first pixel in the photo, (column, row).
+    widths : (k,) float array
+        The filter's widths in pixels (RIDGE_WIDTHS, scaled with the blade box's diagonal).
+    """
+
+    strength: np.ndarray
+    blade: np.ndarray
+    corner: np.ndarray
+    widths: np.ndarray
+
+    @property
+    def any(self) -> bool:
+        """Whether the blade shows any ridge."""
+        return bool(np.any(self.strength > 0))
+
+
+def find_ridges(image: np.ndarray, blade: np.ndarray) -> Ridges | None:
+    """The ridges of an (h, w, 3 or 4) uint8 photo on its (h, w) bool blade, on the blade's box
+    alone; None when the blade is empty."""
+    rows, cols = np.nonzero(blade)
+    if not len(rows):
+        return None
+    (r0, c0), (r1, c1) = (rows.min(), cols.min()), (rows.max() + 1, cols.max() + 1)
+    box = blade[r0:r1, c0:c1]
+    size = float(np.hypot(*box.shape))  # the box's diagonal: about the length, or more
+    widths = np.asarray(RIDGE_WIDTHS) * max(1.0, size / LENGTH_PIXELS)
+    strength = ridge_strength(image[r0:r1, c0:c1], box, widths)
+    return Ridges(strength, box, np.array([c0, r0], dtype=float), widths)
+
+
 def trace_veins(
-    image: np.ndarray,
-    blade: np.ndarray,
+    ridges: Ridges | None,
     base: np.ndarray,
     apex: np.ndarray,
     reach: np.ndarray | None = None,
@@ -87,9 +129,8 @@ def trace_veins(
 
     Parameters
     ----------
-    image : (h, w, 3 or 4) uint8 array
-    blade : (h, w) bool array
-        The blade's pixels (petiole cut off).
+    ridges : Ridges or None
+        find_ridges on the photo and its blade (petiole cut off).
     base, apex : (2,) float arrays
         The midrib's ends, (column, row).
     reach : (2, 2) float array, optional
@@ -100,19 +141,12 @@ def trace_veins(
     -------
     TracedVeins
     """
-    rows, cols = np.nonzero(blade)
-    if not len(rows):
+    if ridges is None or not ridges.any:
         return TracedVeins()
-    (r0, c0), (r1, c1) = (rows.min(), cols.min()), (rows.max() + 1, cols.max() + 1)
-    corner = np.array([c0, r0], dtype=float)  # the blade's box: the filters run on it alone
-    image, blade = image[r0:r1, c0:c1], blade[r0:r1, c0:c1]
+    strength, blade, corner, widths = ridges.strength, ridges.blade, ridges.corner, ridges.widths
     base, apex = np.asarray(base) - corner, np.asarray(apex) - corner
     length = float(np.linalg.norm(apex - base))
-    widths = np.asarray(RIDGE_WIDTHS) * max(1.0, length / LENGTH_PIXELS)
-    strength = ridge_strength(image, blade, widths)
     inside = strength[blade]
-    if not inside.size or not np.any(inside > 0):
-        return TracedVeins()
     midrib = _midrib(strength, blade, base, apex)
     along = strength[midrib[:, 1].astype(int), midrib[:, 0].astype(int)]
     band = 2 * MARGIN_SKIP * float(widths.max())
@@ -234,9 +268,7 @@ def _longest_path(pixels: np.ndarray) -> np.ndarray:
     return pixels[order[::-1]]
 
 
-def ridge_midline(
-    image: np.ndarray, blade: np.ndarray, outline: np.ndarray
-) -> tuple[Midline, np.ndarray] | None:
+def ridge_midline(ridges: Ridges | None, outline: np.ndarray) -> tuple[Midline, np.ndarray] | None:
     """The midrib the photo shows: a Midline with its two ends where it meets the outline, and
     the ridge's own (n, 2) path in pixels (column, row); None when the photo shows no clear
     ridges.
@@ -251,8 +283,8 @@ def ridge_midline(
 
     Parameters
     ----------
-    image : (h, w, 3 or 4) uint8 array
-    blade : (h, w) bool array
+    ridges : Ridges or None
+        find_ridges on the photo and its blade.
     outline : (n, 2) float array
         The blade's outline, (column, row).
     """
@@ -262,17 +294,10 @@ def ridge_midline(
 
     from leafstudio.sources.leafends import Midline
 
-    rows, cols = np.nonzero(blade)
-    if not len(rows):
+    if ridges is None or not ridges.any:
         return None
-    (r0, c0), (r1, c1) = (rows.min(), cols.min()), (rows.max() + 1, cols.max() + 1)
-    corner = np.array([c0, r0], dtype=float)
-    image, blade = image[r0:r1, c0:c1], blade[r0:r1, c0:c1]
+    strength, blade, corner, widths = ridges.strength, ridges.blade, ridges.corner, ridges.widths
     size = float(np.hypot(*blade.shape))
-    widths = np.asarray(RIDGE_WIDTHS) * max(1.0, size / LENGTH_PIXELS)
-    strength = ridge_strength(image, blade, widths)
-    if not np.any(strength > 0):
-        return None
     skeleton = skeletonize(apply_hysteresis_threshold(strength, RIDGE_LOW, RIDGE_HIGH))
     neighbours = convolve(skeleton.astype(int), np.ones((3, 3), int), mode="constant") - 1
     knots = skeleton & (neighbours != 2)  # junctions and ends
