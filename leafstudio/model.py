@@ -80,7 +80,7 @@ class Bend(Protocol):
 
     def crease(self, points: np.ndarray) -> np.ndarray | None:
         """(n,) signed distances of flat points from the line the bend creases along ((m, n) for
-        m lines, cut in turn), or None."""
+        m parallel lines, each row the first's less a constant), or None."""
         ...
 
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import leafstudio as ls
-from leafstudio.core.bend import Pose, cut_along
+from leafstudio.core.bend import Pose, carried, cut_along, cut_levels
 from leafstudio.core.trianglemesh import TriangleMesh
 from leafstudio.forms.make import Form, seen_on_edge
 
@@ -59,14 +59,8 @@ def test_the_bent_mesh_is_the_flat_blades_mesh_bent():
 
 
 def test_a_cut_keeps_the_area_and_leaves_no_triangle_across_the_line():
-    x, y = np.meshgrid(np.linspace(0, 1, 5), np.linspace(-0.5, 0.45, 5))
-    points = np.column_stack([x.ravel(), y.ravel(), np.zeros(25)])
-    faces = []
-    for i in range(4):
-        for j in range(4):
-            a = 5 * i + j
-            faces += [(a, a + 1, a + 6), (a, a + 6, a + 5)]
-    mesh = TriangleMesh(points, np.array(faces), {"height": points[:, 0].copy()})
+    mesh = _grid_mesh(5, 0.45)
+    points = mesh.points
     cut = cut_along(mesh, points[:, 1] - 0.01)
     corners = cut.points[cut.regular_faces]
     area = 0.5 * np.linalg.norm(
@@ -76,3 +70,47 @@ def test_a_cut_keeps_the_area_and_leaves_no_triangle_across_the_line():
     side = np.sign(np.round(corners[:, :, 1] - 0.01, 12))
     assert not np.any((side.max(axis=1) > 0) & (side.min(axis=1) < 0))
     assert np.allclose(cut.point_data["height"], cut.points[:, 0])  # interpolated linearly
+
+
+def test_cuts_along_many_levels_leave_no_triangle_across_any_and_no_crack():
+    """Levels closer than a triangle is wide (a tight roll's lines): every piece lies between two
+    levels, the area is kept and every edge inside the sheet has two triangles (no point cut twice,
+    which would open a crack)."""
+    mesh = _grid_mesh(7, 0.5, jitter=0.03)
+    points = mesh.points
+    levels = np.concatenate([np.linspace(-0.4, 0.4, 23), [points[10, 1]]])  # one through a vertex
+    cut_faces, plan = cut_levels(mesh.regular_faces, points[:, 1], levels)
+    cut = TriangleMesh(carried(points, plan), cut_faces)
+    assert _area(cut) == pytest.approx(_area(mesh))
+    corners = cut.points[cut_faces]
+    for level in levels:
+        side = np.sign(np.round(corners[:, :, 1] - level, 12))
+        assert not np.any((side.max(axis=1) > 0) & (side.min(axis=1) < 0))
+    count, count_before = _edge_uses(cut_faces), _edge_uses(mesh.regular_faces)
+    # the outline's edges are cut into pieces, the inside ones all shared by two triangles
+    assert (count <= 2).all() and (count == 1).sum() >= (count_before == 1).sum()
+    assert np.unique(np.round(cut.points, 12), axis=0).shape[0] == len(cut.points)
+
+
+def _area(mesh: TriangleMesh) -> float:
+    c = mesh.points[mesh.regular_faces]
+    return float(0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1).sum())
+
+
+def _edge_uses(faces: np.ndarray) -> np.ndarray:
+    """How many faces hold each edge."""
+    edges = np.sort(np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    return np.unique(edges, axis=0, return_counts=True)[1]
+
+
+def _grid_mesh(n: int, top: float, jitter: float = 0.0) -> TriangleMesh:
+    """n x n points over [0, 1] x [-0.5, top], moved at random by up to `jitter`, in triangles,
+    with a "height" array of x."""
+    x, y = np.meshgrid(np.linspace(0, 1, n), np.linspace(-0.5, top, n))
+    points = np.column_stack([x.ravel(), y.ravel(), np.zeros(n * n)])
+    points[:, :2] += np.random.default_rng(3).uniform(-jitter, jitter, (n * n, 2))
+    a = (n * np.arange(n - 1)[:, None] + np.arange(n - 1)).ravel()
+    faces = np.vstack(
+        [np.column_stack([a, a + 1, a + n + 1]), np.column_stack([a, a + n + 1, a + n])]
+    )
+    return TriangleMesh(points, faces, {"height": points[:, 0].copy()})

@@ -19,6 +19,8 @@ ROLLED = [
     ("linear", {"roll": 1.0}),
     ("ovate", {"roll": 0.5, "fold": 20}),
     ("ovate", {"roll": 0.5, "fold": 45, "curl": 0.5}),  # lifted past the roll's axis before
+    ("ovate", {"roll": 1.0, "wave": 0.1}),  # a wave as high as the tube's radius: refused before
+    ("linear", {"roll": 0.5, "wave": 0.1}),  # the wave's surface overshoots the radius inside
 ]
 CORNERS = np.array([[1 / 3, 1 / 3, 1 / 3], [0.5, 0.5, 0], [0, 0.5, 0.5], [0.5, 0, 0.5]])
 
@@ -50,7 +52,8 @@ def off_surface(rolled, flat, pose: Pose) -> np.ndarray:
 def posed_form_on_its_surface(shape: str, terms: dict) -> tuple[Pose, TriangleMesh]:
     """A posed form reconstructed with no side-on warning, checked to be its flat blade's mesh
     posed: the flat mesh's vertices exactly, its chords within 2e-3 of the length of the form's
-    own surface (mean and 95th percentile), the veins within 2e-3 and the boundary exact.
+    own surface (mean and 95th percentile), the veins within 2e-3 beyond the flat blade's and the
+    boundary exact.
     Returns the form's pose and the mesh."""
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no side-on warning
@@ -59,13 +62,16 @@ def posed_form_on_its_surface(shape: str, terms: dict) -> tuple[Pose, TriangleMe
     pose = leaf.bend
     assert isinstance(pose, Pose)
     blade = ls.Leaf(pose.flatten(leaf.boundary), [pose.flatten(v) for v in leaf.veins])
-    flat = ls.reconstruct(blade, ls.Params(k=3, grid=128)).triangle_mesh
-    mesh = result.triangle_mesh
+    flat_result = ls.reconstruct(blade, ls.Params(k=3, grid=128))
+    flat, mesh = flat_result.triangle_mesh, result.triangle_mesh
     n = len(flat.points)
     np.testing.assert_allclose(pose.flatten(mesh.points[:n]), flat.points, atol=1e-9)
     off = off_surface(mesh, flat, pose) / result.length
     assert off.mean() <= 2e-3 and np.percentile(off, 95) <= 2e-3
-    assert result.metrics["veins"]["max"] <= 2e-3 * result.length
+    # the pose moves the veins no farther off than 2e-3 of the length beyond the flat blade's
+    # own (a waved blade's surface misses its veins by 7e-3 flat)
+    flat_veins = flat_result.metrics["veins"]["max"]
+    assert result.metrics["veins"]["max"] <= flat_veins + 2e-3 * result.length
     assert result.metrics["boundary"]["max"] <= 1e-9 * result.length
     return pose, mesh
 
@@ -93,6 +99,10 @@ def test_a_roll_is_undone_exactly():
     points = np.column_stack(
         [rng.uniform(0, 1, 50), rng.uniform(-0.3, 0.3, 50), rng.normal(0, 0.01, 50)]
     )
+    np.testing.assert_allclose(pose.flatten(pose.apply(points)), points, atol=1e-12)
+    # a relief past the roll's axis (1 / 9) either way is undone as well: it is drawn in
+    # toward the axis, never through it
+    points[:, 2] = rng.uniform(-0.3, 0.3, 50)
     np.testing.assert_allclose(pose.flatten(pose.apply(points)), points, atol=1e-12)
     # widths kept: a straight cross-section keeps its length
     v = np.linspace(-0.3, 0.3, 2001)
