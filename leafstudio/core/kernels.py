@@ -10,7 +10,10 @@ kernel is compiled for the one signature a run uses (`KERNELS`, explicit) by wor
 (one per core: fresh interpreters that import only the kernels' modules, each taking the
 costliest kernel left) into numba's on-disk cache; the run then loads them (about 0.5 s). The
 calling thread only waits, and says how many are done, so the app's window stays responsive and
-its status counts them.
+its status counts them. A run asked to stop (the app's Cancel, its window closing) ends the
+workers at once (`should_stop`, polled every POLL_S; at exit, any still running): the kernels they
+had compiled stay in the cache (numba writes each file whole, by renaming), the next run compiles
+the rest.
 
 Compiled only where a loop beats numpy at grid 512 (139,000 points): curvature's and the
 mixture's per-point loops are 5-10 times faster than numpy's whole-array expressions there
@@ -23,11 +26,13 @@ missed would still work: the run would compile it, as before.
 
 from __future__ import annotations
 
+import atexit
 import importlib
 import os
 import queue
 import subprocess
 import sys
+import threading
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 
@@ -38,6 +43,7 @@ from leafstudio._shared import kernelcache
 from leafstudio.core.buckets import Buckets
 from leafstudio.core.mpu import Cells, Lattice
 
+POLL_S = 0.1  # how often the compile looks whether it should stop
 STAGE = "kernels"  # the name on_stage is called with while compiling ("kernels 3/26" after each)
 
 f8, i8 = types.float64, types.int64
@@ -114,10 +120,46 @@ for line in sys.stdin:
 """
 
 
-def _worker(todo: queue.SimpleQueue, done: queue.SimpleQueue) -> tuple[int, float]:
+class _Crew:
+    """One compile's worker processes: a stop ends them, and any started after it, and only
+    them; those still running at exit are ended too (a window closed while compiling)."""
+
+    def __init__(self) -> None:
+        self.processes: set[subprocess.Popen] = set()
+        self.stopped = False
+        self.lock = threading.Lock()
+
+    def join(self, process: subprocess.Popen) -> None:
+        with self.lock:
+            self.processes.add(process)
+            if self.stopped:
+                process.kill()
+
+    def leave(self, process: subprocess.Popen) -> None:
+        with self.lock:
+            self.processes.discard(process)
+
+    def end(self) -> None:
+        with self.lock:
+            self.stopped = True
+            for process in self.processes:
+                process.kill()
+
+
+_CREWS: set[_Crew] = set()  # the compiles under way
+
+
+@atexit.register
+def _end_all() -> None:
+    for crew in list(_CREWS):
+        crew.end()
+
+
+def _worker(todo: queue.SimpleQueue, done: queue.SimpleQueue, crew: _Crew) -> tuple[int, float]:
     """Start a worker and hand it kernels from `todo` until none are left, putting each compiled
-    one's name on `done`; its process id and CPU seconds. A worker that cannot start, dies or
-    fails to compile a kernel stops: the run compiles what is left, as it would without this."""
+    one's name on `done`; its process id and CPU seconds. A worker that cannot start, dies, is
+    ended (a stopped run) or fails to compile a kernel stops: the run compiles what is left, as
+    it would without this."""
     command = [sys.executable, "-c", WORKER, str(kernelcache.CORE.parent)]
     seconds = 0.0
     try:
@@ -130,6 +172,7 @@ def _worker(todo: queue.SimpleQueue, done: queue.SimpleQueue) -> tuple[int, floa
         )
     except OSError:
         return 0, seconds
+    crew.join(process)
     with process:
         assert process.stdin is not None and process.stdout is not None
         try:
@@ -144,6 +187,7 @@ def _worker(todo: queue.SimpleQueue, done: queue.SimpleQueue) -> tuple[int, floa
             process.stdin.close()
         except OSError:  # a broken pipe: the worker died
             pass
+    crew.leave(process)
     return process.pid, seconds
 
 
@@ -155,7 +199,9 @@ def _next(todo: queue.SimpleQueue) -> str | None:
 
 
 def compile_kernels(
-    on_stage: Callable[[str], None] | None = None, workers: int | None = None
+    on_stage: Callable[[str], None] | None = None,
+    workers: int | None = None,
+    should_stop: Callable[[], bool] | None = None,
 ) -> dict[int, float]:
     """Compile the kernels a run needs, when this installation has not yet, in worker processes.
 
@@ -168,6 +214,10 @@ def compile_kernels(
     workers : int, optional
         Processes to compile in; default one per core (at most one per kernel). Each takes the
         costliest kernel left when it is free.
+    should_stop : callable, optional
+        Polled every POLL_S while the workers compile; when it returns True they are ended and
+        this returns at once, the cache not marked (the run that called it then raises
+        Cancelled at its first stage).
 
     Returns
     -------
@@ -184,12 +234,19 @@ def compile_kernels(
     for name in KERNELS:
         todo.put(name)
     done: queue.SimpleQueue = queue.SimpleQueue()
+    crew = _Crew()
+    _CREWS.add(crew)
     with ThreadPoolExecutor(workers) as pool:
-        running = [pool.submit(_worker, todo, done) for _ in range(workers)]
+        running = [pool.submit(_worker, todo, done, crew) for _ in range(workers)]
         compiled = 0
         while compiled < len(KERNELS):
+            if should_stop is not None and should_stop():
+                while _next(todo) is not None:  # none handed out any more
+                    pass
+                crew.end()
+                break
             try:
-                done.get(timeout=0.1)
+                done.get(timeout=POLL_S)
             except queue.Empty:
                 if all(f.done() for f in running) and done.empty():
                     break  # a worker died: the run compiles what is left
@@ -198,6 +255,7 @@ def compile_kernels(
             if on_stage is not None:
                 on_stage(f"{STAGE} {compiled}/{len(KERNELS)}")
         spent = dict(f.result() for f in running)
+    _CREWS.discard(crew)
     if compiled == len(KERNELS):
         kernelcache.mark_cached()
     return spent

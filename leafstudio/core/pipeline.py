@@ -78,7 +78,8 @@ class Pipeline:
             When `should_stop` said so.
         """
         run = StageRun(self, as_params(params), on_stage, should_stop)
-        compile_kernels(on_stage)  # the first run only: in parallel, ahead of the stages
+        # the first run only: in parallel, ahead of the stages (stopped, the first stage raises)
+        compile_kernels(on_stage, should_stop=should_stop)
         for stage in STAGES:
             if not STAGE_TABLE[stage].lazy:
                 run[stage]

@@ -14,6 +14,7 @@ import leafstudio as ls
 from leafstudio._shared import kernelcache
 from leafstudio._shared.kernelcache import NOTICE
 from leafstudio.core import kernels
+from leafstudio.core.pipeline import Cancelled
 
 CORE = Path(kernels.__file__).parent
 # kernels a reconstruction never calls: distances to a mesh (metrics, scans), clouds' projection
@@ -82,6 +83,47 @@ def test_a_worker_that_dies_leaves_the_kernels_to_the_run(monkeypatch, tmp_path)
     monkeypatch.setattr(kernels, "WORKER", "import sys; sys.exit(1)")
     assert kernels.compile_kernels(workers=2)  # both workers started, and stopped
     assert not kernelcache.kernels_cached()  # not marked: the next run says it compiles
+
+
+def _cached_kernels(folder: Path) -> set[str]:
+    """The kernels whose index numba wrote in `folder` ("_ring_length", ...)."""
+    return {p.name.split(".")[1].split("-")[0] for p in folder.rglob("*.nbi")}
+
+
+def test_a_stopped_compile_ends_its_workers_and_the_next_one_compiles_the_rest(
+    monkeypatch, tmp_path
+):
+    """Cancel (or a closed window) during the first run's compile: the workers are ended at
+    once, not left to compile on; the kernel compiled stays cached and the next compile does
+    the rest (issue 24, first hour)."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    # a cheap kernel, then one that takes seconds: the stop comes while it compiles
+    names = ["prepare.outline:_ring_length", "surface:_levenberg_marquardt"]
+    monkeypatch.setattr(kernels, "KERNELS", {n: kernels.KERNELS[n] for n in names})
+    said: list[str] = []
+    spent = kernels.compile_kernels(said.append, workers=1, should_stop=lambda: len(said) > 1)
+    assert said == [kernels.STAGE, f"{kernels.STAGE} 1/2"]
+    (pid,) = spent
+    assert not Path(f"/proc/{pid}").exists()  # ended (and reaped), not compiling on
+    assert _cached_kernels(tmp_path) == {"_ring_length"}  # the second was cut short
+    assert not kernelcache.kernels_cached()
+    assert kernels.compile_kernels(said.append, workers=1)  # the next run: no broken cache
+    assert said[-1] == f"{kernels.STAGE} 2/2"
+    assert {"_ring_length", "_levenberg_marquardt"} <= _cached_kernels(tmp_path)
+    assert kernelcache.kernels_cached()
+
+
+def test_a_run_stopped_while_compiling_is_cancelled(monkeypatch, tmp_path):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    one = "surface:_levenberg_marquardt"
+    monkeypatch.setattr(kernels, "KERNELS", {one: kernels.KERNELS[one]})
+    said: list[str] = []
+    with pytest.raises(Cancelled):
+        ls.Pipeline(ls.demo("nested")).run(
+            ls.Params(), on_stage=said.append, should_stop=lambda: bool(said)
+        )
+    assert said == [kernels.STAGE]  # stopped while compiling: no stage ran
+    assert not _cached_kernels(tmp_path)
 
 
 @pytest.fixture(autouse=True)

@@ -129,3 +129,38 @@ def test_a_job_that_fails_after_shutdown_logs_nothing(worker, caplog):
         release.set()
         assert worker.join(WAIT_MS / 1000)
     assert "failed after the window closed" not in caplog.text
+
+
+@pytest.mark.parametrize("how", ["cancel", "close"])
+def test_cancel_or_closing_during_the_first_compile_ends_it(
+    worker, qtbot, monkeypatch, tmp_path, how
+):
+    """Cancel (or the window closing) while the first run compiles the kernels in worker
+    processes ends them, where the compile ran on to its end (issue 24)."""
+    from leafstudio._shared import kernelcache
+    from leafstudio.core import kernels
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))  # a cold cache, filled by the workers
+    one = "surface:_levenberg_marquardt"  # seconds to compile
+    monkeypatch.setattr(kernels, "KERNELS", {one: kernels.KERNELS[one]})
+    compiling = threading.Event()
+    ended: list[set] = []
+    started = kernels._Crew.join
+
+    def join(crew, process):  # the worker process is up: the compile is under way
+        started(crew, process)
+        ended.append(crew.processes)
+        compiling.set()
+
+    monkeypatch.setattr(kernels._Crew, "join", join)
+    got = collect(worker)
+    job = worker.submit_pipeline(demo("nested"), FAST)
+    assert compiling.wait(WAIT_MS / 1000)
+    worker.cancel(job) if how == "cancel" else worker.shutdown()
+    qtbot.waitUntil(worker.is_idle, timeout=WAIT_MS)
+    if how == "close":
+        assert worker.join(WAIT_MS / 1000)
+    qtbot.waitUntil(lambda: not ended[0], timeout=WAIT_MS)  # the crew's process left it
+    assert not list(tmp_path.rglob("*.nbi"))  # cut short: nothing compiled to the end
+    assert not kernelcache.kernels_cached()
+    assert not got["yielded"] and not got["failed"]
