@@ -29,6 +29,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from leafstudio._shared import progress
+from leafstudio._shared.inputs import check_file_kind
 from leafstudio.analysis.fidelity import scan_distances
 from leafstudio.core import evaluate
 from leafstudio.core.bend import flat_leaf
@@ -203,6 +204,7 @@ def open_file(
     4
     """
     path = str(path)
+    check_file_kind(path)  # a pipe named leaf.csv is not opened (its sniffing would block)
     if is_photo(path):
         found = read_photo_leaf(path, length=length, pixel_size=pixel_size)
         grown = found.veins_from == "grown"

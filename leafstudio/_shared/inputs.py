@@ -40,18 +40,42 @@ _NUMBER = re.compile(
 
 
 FOLDER = "is a folder, not a file (`leafstudio batch` takes folders)"
+# what a path is, when it is not a regular file: (stat's test, the one line that says so)
+SPECIAL_FILES = (
+    (stat.S_ISFIFO, "is a named pipe, not a file"),
+    (stat.S_ISCHR, "is a device, not a file"),
+    (stat.S_ISBLK, "is a device, not a file"),
+    (stat.S_ISSOCK, "is a socket, not a file"),
+)
 
 
-def check_not_a_folder(path: str | os.PathLike) -> None:
-    """Refuse a folder given where an input file belongs, before its name's suffix is judged (a
-    folder has none, and "unknown file type '(none)'" did not say what was wrong)."""
-    if Path(path).is_dir():
+def special_file(mode: int) -> str | None:
+    """What a path of stat mode `mode` is when it is neither a regular file nor a folder ("is a
+    named pipe, not a file"); None for those two. Such a file is never opened: a named pipe
+    blocks until something writes to it, /dev/zero never ends."""
+    if stat.S_ISREG(mode) or stat.S_ISDIR(mode):
+        return None
+    return next((said for test, said in SPECIAL_FILES if test(mode)), "is not a regular file")
+
+
+def check_file_kind(path: str | os.PathLike) -> None:
+    """Refuse a folder, a named pipe, a device or a socket given where an input file belongs,
+    saying which, before its name's suffix is judged or anything opens it ("unknown file type
+    '(none)'" did not say what was wrong; a pipe named .csv hung the app). A path that does not
+    exist passes: its reader says so."""
+    try:
+        mode = Path(path).stat().st_mode
+    except OSError:
+        return
+    if stat.S_ISDIR(mode):
         raise LeafError(FOLDER, str(path))
+    if (said := special_file(mode)) is not None:
+        raise LeafError(said, str(path))
 
 
 def check_input_file(path: str | os.PathLike, limit: int | None = MAX_TEXT_BYTES) -> int:
     """The size of `path`, a regular file that exists; refused (LeafError) if it is missing, a
-    folder, a device or a pipe, or larger than `limit` bytes."""
+    folder, a named pipe, a device or a socket, or larger than `limit` bytes."""
     path = Path(path)
     try:
         info = path.stat()
@@ -59,10 +83,7 @@ def check_input_file(path: str | os.PathLike, limit: int | None = MAX_TEXT_BYTES
         raise LeafError("no such file", str(path)) from None
     except OSError as exc:
         raise LeafError(f"cannot be read ({exc.strerror or exc})", str(path)) from None
-    if stat.S_ISDIR(info.st_mode):
-        raise LeafError(FOLDER, str(path))
-    if not stat.S_ISREG(info.st_mode):
-        raise LeafError("is a device or a pipe, not a regular file", str(path))
+    check_file_kind(path)
     if limit is not None and info.st_size > limit:
         raise LeafError(
             f"is too large ({info.st_size / 2**20:.0f} MiB; at most {limit / 2**20:.0f} MiB)",

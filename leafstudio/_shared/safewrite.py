@@ -21,6 +21,7 @@ import threading
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
+from leafstudio._shared.inputs import special_file
 from leafstudio.errors import LeafError
 
 PART_MARK = "leafstudio-part"  # in every temporary file's name
@@ -122,8 +123,8 @@ def check_target(path: str | os.PathLike) -> Path:
     if info is not None:
         if stat.S_ISDIR(info.st_mode):
             raise LeafError("is a folder, not a file", str(path))
-        if not stat.S_ISREG(info.st_mode):
-            raise LeafError("is a device or a pipe, not a regular file", str(path))
+        if (said := special_file(info.st_mode)) is not None:
+            raise LeafError(said, str(path))
     parent = path.parent
     if parent.exists() and not parent.is_dir():
         raise LeafError(f"cannot be written: {parent} is not a folder", str(path))

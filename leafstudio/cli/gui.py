@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from leafstudio._shared.inputs import check_file_kind
 from leafstudio._shared.safewrite import refuse_overlap
 from leafstudio.errors import LeafError
 
@@ -24,8 +25,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the app on the file given (the nested demo without one); a screenshot that would
-    replace the file opened is refused before the app starts."""
+    """Run the app on the file given (the nested demo without one); a folder, a named pipe or a
+    device given as the file, and a screenshot that would replace the file opened, are refused
+    before the app starts."""
     from leafstudio.gui.qt.app import run_app  # Qt: only for the app
 
     path, screenshot = getattr(args, "file", None), getattr(args, "screenshot", None)
@@ -33,5 +35,7 @@ def run(args: argparse.Namespace) -> int:
     if lesson is not None and path is not None and path != lesson:
         raise LeafError(f"give one leaf to open, FILE or --lesson FILE, not both ({path})")
     path = lesson if lesson is not None else path
+    if path is not None:
+        check_file_kind(path)
     refuse_overlap([path], [screenshot])
     return run_app(path, screenshot, lesson=lesson is not None)

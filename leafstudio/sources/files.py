@@ -21,7 +21,7 @@ import numpy as np
 
 from leafstudio._shared.inputs import (
     block_rows,
-    check_not_a_folder,
+    check_file_kind,
     line_blocks,
     load_json,
     parse_number,
@@ -302,7 +302,7 @@ def load_leaf(path: str | os.PathLike, veins: Sequence[str | os.PathLike] = ()) 
     path = Path(path)
     if isinstance(veins, (str, os.PathLike)):
         veins = [veins]  # one vein file given alone, not a sequence of one-letter names
-    check_not_a_folder(path)
+    check_file_kind(path)
     suffix = _suffix(path)
     if suffix in POINT_SUFFIXES:
         table = read_point_table(path)

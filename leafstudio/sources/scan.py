@@ -14,8 +14,8 @@ import numpy as np
 from leafstudio._shared.extras import require
 from leafstudio._shared.inputs import (
     block_rows,
+    check_file_kind,
     check_input_file,
-    check_not_a_folder,
     check_pcd_header,
     line_blocks,
     parse_number,
@@ -113,7 +113,7 @@ def read_scan(path: str | os.PathLike) -> np.ndarray:
         infinite coordinates, or has fewer than MIN_SCAN_POINTS points.
     """
     path = Path(path)
-    check_not_a_folder(path)
+    check_file_kind(path)
     suffix = path.suffix.lower()
     if suffix not in SCAN_SUFFIXES:
         raise LeafError(

@@ -67,3 +67,42 @@ def test_an_outputs_missing_folder_is_created_and_said(tmp_path, capsys):
     assert f"created the folder {tmp_path / 'new'} for {target}" in err
     assert main(["demo", "nested", "-o", str(target)]) == 0  # it exists now: nothing said
     assert "created" not in capsys.readouterr().err
+
+
+def _special_files(tmp_path) -> dict[str, tuple[str, str]]:
+    """A named pipe with no suffix and one named leaf.csv, a device behind a .xyz name, a socket:
+    each path with what the one line says it is."""
+    import os
+    import socket
+
+    os.mkfifo(tmp_path / "pipe")
+    os.mkfifo(tmp_path / "leaf.csv")
+    (tmp_path / "zero.xyz").symlink_to("/dev/zero")
+    listening = socket.socket(socket.AF_UNIX)
+    listening.bind(str(tmp_path / "sock.csv"))
+    listening.close()
+    return {
+        "pipe": (str(tmp_path / "pipe"), "is a named pipe, not a file"),
+        "pipe.csv": (str(tmp_path / "leaf.csv"), "is a named pipe, not a file"),
+        "device": (str(tmp_path / "zero.xyz"), "is a device, not a file"),
+        "socket": (str(tmp_path / "sock.csv"), "is a socket, not a file"),
+    }
+
+
+@pytest.mark.parametrize("kind", ["pipe", "pipe.csv", "device", "socket"])
+@pytest.mark.parametrize(
+    "command", ["gui", "reconstruct", "measure", "compare", "extract", "veins", "photo", "slides"]
+)
+def test_a_pipe_a_device_or_a_socket_given_as_the_input_is_said_to_be_one(
+    tmp_path, capsys, command, kind
+):
+    """Issue 24: `gui FIFO` (and every command) said "unknown file type '(none)'", and `gui`
+    given a pipe named leaf.csv waited for ever (the app sniffed it for a scan); now one line
+    that says what it is, exit 2, before anything opens it."""
+    path, said = _special_files(tmp_path)[kind]
+    outputs = {"reconstruct": "o.ply", "extract": "o.leaf.json", "veins": "o.leaf.json",
+               "photo": "o.leaf.json", "slides": "slides"}  # fmt: skip
+    out = ["-o", str(tmp_path / outputs[command])] if command in outputs else []
+    assert main([command, path, *out]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"leafstudio: error: {path}: {said}"]

@@ -155,5 +155,5 @@ def test_a_pipe_given_as_an_image_is_one_line(tmp_path, command):
                           text=True, timeout=120, cwd=tmp_path)  # fmt: skip
     assert done.returncode == 2, done.stderr
     assert done.stderr.strip().splitlines()[-1] == (
-        f"leafstudio: error: {fifo}: is a device or a pipe, not a regular file"
+        f"leafstudio: error: {fifo}: is a named pipe, not a file"
     )

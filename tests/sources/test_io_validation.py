@@ -107,10 +107,10 @@ def test_devices_are_refused_by_their_type(tmp_path, device):
         pytest.skip(f"no {device}")
     link = tmp_path / "leaf.csv"
     link.symlink_to(device)
-    _refused(link, "a device or a pipe")
+    _refused(link, "is a device, not a file")
     scan = tmp_path / "scan.xyz"
     scan.symlink_to(device)
-    with pytest.raises(LeafError, match="a device or a pipe"):
+    with pytest.raises(LeafError, match="is a device, not a file"):
         read_scan(scan)
 
 

@@ -282,8 +282,8 @@ class Worker(QObject):
         and so may the log's stream (a test's captured output, closed once the test ended)."""
         if self._quit:
             return
-        if isinstance(exc, LeafError):  # bad input: said in the window, no traceback
-            log.info("%s %d: %s", job.kind, job.id, exc)
+        if isinstance(exc, LeafError):  # bad input: said in the window (and by `gui FILE` once)
+            log.debug("%s %d: %s", job.kind, job.id, exc)
         else:
             log.error("%s %d failed", job.kind, job.id, exc_info=exc)
         self.failed.emit(job.kind, job.id, exc)
