@@ -100,21 +100,40 @@ def outline_controls(polygon: np.ndarray) -> np.ndarray:
     if len(polygon) <= DERIVED_BOUNDARY_POINTS or extent == 0.0:
         return polygon
     tolerance = OUTLINE_TOLERANCE * extent
-    ring = shapely.LinearRing(polygon)
-    corners = shapely.get_coordinates(shapely.simplify(ring, tolerance))
-    index_of = {tuple(p): i for i, p in enumerate(polygon)}
-    keep = {index_of[tuple(p)] for p in corners if tuple(p) in index_of}
+    corners = shapely.get_coordinates(shapely.simplify(shapely.LinearRing(polygon), tolerance))
+    # the corners are some of the polygon's own points: find them as complex keys, not in a dict
+    keys = polygon[:, 0] + 1j * polygon[:, 1]
+    keep = np.flatnonzero(np.isin(keys, corners[:, 0] + 1j * corners[:, 1]))
     count = DERIVED_BOUNDARY_POINTS
     while True:
-        spread = _even_indices(polygon, count, closed=True)
-        chosen = np.array(sorted(keep | set(spread.tolist())))
+        chosen = np.union1d(keep, _even_indices(polygon, count, closed=True))
         control = polygon[chosen]
-        curve = shapely.LinearRing(closed_curve(control))
         if len(chosen) == len(polygon) or np.all(
-            shapely.distance(shapely.points(polygon), curve) <= 2 * tolerance
+            _span_distances(polygon, chosen, closed_curve(control)) <= 2 * tolerance
         ):
             return control
         count *= 2
+
+
+def _span_distances(polygon: np.ndarray, chosen: np.ndarray, curve: np.ndarray) -> np.ndarray:
+    """(n,) distance of each of the (n, 2) polygon's points to the span of the closed spline
+    `curve` (closed_curve of polygon[chosen], chosen sorted) between the two control points the
+    point lies between: at least its distance to the whole curve, so a check that passes on it
+    passes on the curve; n times a span's samples, where the whole curve's distance was n times
+    all its samples (20 ms for a 4000-point outline, on the main thread when a file opens)."""
+    spans = len(chosen)
+    if len(curve) % spans:  # closed_curve dropped a repeated control point: no span per pair
+        return shapely.distance(shapely.points(polygon), shapely.LinearRing(curve))
+    per_span = len(curve) // spans
+    ring = np.vstack([curve, curve[:1]])
+    span = (np.searchsorted(chosen, np.arange(len(polygon)), side="right") - 1) % spans
+    starts = span[:, None] * per_span + np.arange(per_span)  # (n, per_span) segment starts
+    a, b = ring[starts], ring[starts + 1]
+    ab, ap = b - a, polygon[:, None, :] - a
+    length2 = np.einsum("nkd,nkd->nk", ab, ab)
+    along = np.clip(np.einsum("nkd,nkd->nk", ap, ab) / np.where(length2 > 0, length2, 1), 0, 1)
+    off = ap - along[..., None] * ab
+    return np.sqrt(np.einsum("nkd,nkd->nk", off, off).min(axis=1))
 
 
 def insert_index(control: np.ndarray, xy: np.ndarray, closed: bool) -> int:

@@ -123,3 +123,28 @@ def test_a_loaded_toothed_leaf_keeps_its_teeth_when_one_point_is_moved(shape, te
     again = ls.reconstruct(edited.to_leaf(), ls.Params(grid=64))
     area = result.metrics["leaf"]["projected_area"]
     assert again.metrics["leaf"]["projected_area"] == pytest.approx(area, rel=0.01)
+
+
+@pytest.mark.parametrize("repeat", [False, True])
+def test_the_span_distance_check_bounds_the_distance_to_the_whole_curve(repeat):
+    """outline_controls checks each outline point against its own span of the spline (20 ms of
+    shapely on the main thread when a big file opened): never nearer than the whole curve,
+    and equal to it where the spline follows the outline; a repeated control point (no span
+    per pair) is measured against the whole curve."""
+    from leafstudio.gui.model.curves import _span_distances
+
+    t = np.linspace(0, 2 * np.pi, 3000, endpoint=False)
+    r = 1 + 0.1 * np.sin(23 * t)
+    polygon = np.column_stack([r * np.cos(t), 0.6 * r * np.sin(t)])
+    chosen = np.arange(0, 3000, 40)
+    control = polygon[chosen]
+    if repeat:
+        control = np.insert(control, 5, control[5], axis=0)
+        chosen = np.insert(chosen, 5, chosen[5])
+    curve = closed_curve(control)
+    whole = shapely.distance(shapely.points(polygon), shapely.LinearRing(curve))
+    spans = _span_distances(polygon, chosen, curve)
+    assert np.all(spans >= whole - 1e-12)
+    near = spans < 0.5 * np.median(spans[spans > 0])  # points the spline follows closely
+    np.testing.assert_allclose(spans[near], whole[near], atol=1e-12)
+    assert np.all(spans[chosen] <= 1e-12)  # the spline passes through its control points
