@@ -30,7 +30,8 @@ def _compiled(f: ast.FunctionDef) -> bool:
 
 def _called_from_python() -> set[str]:
     """Every compiled kernel that a plain function of core calls, as "module:function" (found by
-    its name: each kernel's is unique in core)."""
+    its name: each kernel's is unique in core, but a plain function of the calling module may
+    share it, as bend._split does distance._split's)."""
     trees = {
         path.relative_to(CORE).with_suffix("").as_posix().replace("/", "."): ast.parse(
             path.read_text()
@@ -49,6 +50,7 @@ def _called_from_python() -> set[str]:
         if not _compiled(f)
         for call in ast.walk(f)
         if isinstance(call, ast.Call) and (name := ast.unparse(call.func)) in kernel
+        if not any(g.name == name and not _compiled(g) for g in fs)  # the module's own
     }
 
 
