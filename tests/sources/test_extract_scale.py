@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from leafstudio.errors import LeafError
+from leafstudio.sources import extract
 from leafstudio.sources.extract import BUDGET, extract_leaf, voxel_thinning
 from tests.leaves import assert_outline_is_the_blades, scan_surface, synthetic_scan
 
@@ -35,6 +36,18 @@ def test_a_large_scan_is_thinned_and_its_outline_is_the_blade(big):
     assert found.length == pytest.approx(1.0, abs=0.03)
     b = found.leaf.boundary
     assert np.abs(b[:, 2] - scan_surface(b[:, 0], b[:, 1])).max() < 4e-3
+
+
+def test_a_large_scan_flattens_only_its_margin_and_ends_and_loses_nothing(big, monkeypatch):
+    """Only the points of cubes near the outline or the blade's ends are flattened (issue 24: a
+    2-million-point scan spent most of its opening flattening every point): the masks and the
+    length are those that flattening every point gives."""
+    points, _, found = big
+    monkeypatch.setattr(extract, "ENDS", 1e9)  # every cube counts as at an end
+    every = extract_leaf(points)
+    np.testing.assert_array_equal(found.blade, every.blade)
+    np.testing.assert_array_equal(found.petiole, every.petiole)
+    assert found.length == pytest.approx(every.length, rel=1e-9)
 
 
 def test_voxel_thinning_keeps_at_most_the_budget_and_maps_every_point():
