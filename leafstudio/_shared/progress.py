@@ -6,6 +6,11 @@ nothing happens unless a listener was installed on the thread with `reporting(ca
 app's worker (gui/model/jobs.py), which shows a fraction in the busy bar, or the process a big
 file is read in (gui/model/reading.py), which sends it to the app. Passing a callback through
 every reader's signature would touch the public API (`ls.load_leaf`) for the app's sake.
+
+A step inside a longer piece of work reports its own fractions within `share(start, end)`: they
+reach the listener as that part of the whole (a scan's sheet, fitted within its extraction). A
+report is also a point where the work may stop: the app's listener raises Cancelled there once
+the job was cancelled (gui/model/jobs.running).
 """
 
 from __future__ import annotations
@@ -36,3 +41,19 @@ def report(fraction: float | None, what: str = "reading") -> None:
     listener = getattr(_local, "listener", None)
     if listener is not None:
         listener(None if fraction is None else min(max(float(fraction), 0.0), 1.0), what)
+
+
+@contextmanager
+def share(start: float, end: float) -> Iterator[None]:
+    """Within it, a fraction f reported on this thread reaches the listener as start + f (end -
+    start): a step's own progress, as its part of the work around it."""
+    before = getattr(_local, "listener", None)
+    if before is None:
+        yield
+        return
+
+    def scaled(fraction: float | None, what: str) -> object:
+        return before(None if fraction is None else start + fraction * (end - start), what)
+
+    with reporting(scaled):
+        yield

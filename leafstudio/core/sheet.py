@@ -24,6 +24,8 @@ from scipy.interpolate import RBFInterpolator, RectBivariateSpline
 from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
 
+from leafstudio._shared import progress
+
 REACH = 1.8  # cells: cell means closer than this are neighbours in the graph
 MIN_CELLS = 30
 LANDMARKS = 120  # geodesic sources for the landmark MDS
@@ -40,6 +42,8 @@ HALVINGS = 4  # a step that goes farther is halved at most this many times
 SAMPLES = 160  # the spline sampled this many times across the flat blade's extent
 PAD = 0.1  # ... and this share of it beyond, on every side
 STEP = 1e-4  # fit_sheet's central differences, a share of the flat blade's extent
+UNROLLING = "unrolling the blade"  # what fit_sheet's progress reports say it does
+CHUNKS = 8  # the spline is sampled in this many parts, its progress reported after each
 
 
 def unroll(points: np.ndarray, reach: float) -> np.ndarray | None:
@@ -109,7 +113,11 @@ class Sheet:
         pad = PAD * float(np.max(hi - lo))
         us, vs = (np.arange(lo[k] - pad, hi[k] + pad + step, step) for k in (0, 1))
         grid = np.stack(np.meshgrid(us, vs, indexing="ij"), -1).reshape(-1, 2)
-        at = spline(grid).reshape(len(us), len(vs), 3)
+        parts = []  # in parts: most of a scan's sheet's time, and a Cancel may stop it between
+        for k, part in enumerate(np.array_split(grid, CHUNKS), start=1):
+            parts.append(spline(part))
+            progress.report(k / CHUNKS, UNROLLING)
+        at = np.vstack(parts).reshape(len(us), len(vs), 3)
         # the spline sampled and interpolated bicubically: the same surface to 1e-5 of the
         # length, evaluated in constant time per point (the spline's own sum is over every centre)
         pieces = tuple(RectBivariateSpline(us, vs, at[:, :, k]) for k in range(3))
@@ -223,6 +231,7 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
         that fill a volume (more than MOST_CELLS cubes).
     """
     points = np.asarray(points, dtype=float)
+    progress.report(0.0, UNROLLING)
     cell = length / CELLS
     keys = np.floor((points - points.min(axis=0)) / cell).astype(np.int64)
     _, which, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
@@ -234,6 +243,7 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     flat = unroll(means, REACH * cell)
     if flat is None:
         return None
+    progress.report(0.1, UNROLLING)
     centre = flat.mean(axis=0)
     axes = np.linalg.svd(flat - centre, full_matrices=False)[2]
     flat = (flat - centre) @ axes.T  # u along the longest spread
@@ -245,7 +255,8 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     h = STEP * float(np.ptp(flat, axis=0).max())
     du, dv = ((spline(flat + d) - spline(flat - d)) / (2 * h) for d in ([h, 0.0], [0.0, h]))
     stretch = float(np.sqrt(np.median(np.linalg.norm(np.cross(du, dv), axis=1))))
-    return Sheet(flat * stretch, means, smoothing, np.asarray(up, dtype=float))
+    with progress.share(0.2, 1.0):  # sampling the sheet: the rest of the time
+        return Sheet(flat * stretch, means, smoothing, np.asarray(up, dtype=float))
 
 
 @dataclass(frozen=True, eq=False)

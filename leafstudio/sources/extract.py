@@ -31,6 +31,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import Delaunay, cKDTree
 from shapely.geometry import MultiPoint, Polygon
 
+from leafstudio._shared import progress
 from leafstudio.core.plane import fixed_sample, principal_extents, principal_spreads
 from leafstudio.core.prepare.plausibility import check_leaf_like
 from leafstudio.core.prepare.vein_order import veins_inside_outline
@@ -62,6 +63,7 @@ THINNING_PASSES = 8
 PROBES = 10_000  # blade_points counts a ball's points among this many at most
 SAMPLE = 50_000  # the voxel size is first sought on this many of the points
 HELD = 1.0  # a flattened blade's outline keeps within this many sheet cells of a cube mean
+FINDING = "finding the leaf in the scan"  # what extract_leaf's progress reports say it does
 ENDS = 4.0  # a big scan's blade ends are sought in cubes this many diagonals from the outermost
 
 
@@ -303,15 +305,23 @@ def extract_leaf(
     if not scale > 0 or not np.isfinite(scale):
         raise LeafError("the scan's points all coincide")
     unit = (points - centre) / scale
+    # each step's share of the time, on a 2-million-point scan and on soybean pot1_1 (whose
+    # sheet costs most: its blade fills more cubes), in progress reports (the app's busy bar)
+    progress.report(0.0, FINDING)
     thinned, cell, size = voxel_thinning(unit, BUDGET)
+    progress.report(0.1, FINDING)
     found = _extract(thinned, base_end, count)
+    progress.report(0.3, FINDING)
     span = float(np.ptp(thinned[found[1]] @ found[4][0]))
-    sheet = fit_sheet(thinned[found[1]], found[4][2], span)
+    with progress.share(0.3, 0.75):
+        sheet = fit_sheet(thinned[found[1]], found[4][2], span)
     flatten = (lambda q: q) if sheet is None else sheet.flatten
     flat = thinned if sheet is None else sheet.flatten(thinned)
+    progress.report(0.8, FINDING)
     if sheet is not None:  # the blade unrolled (core/sheet.py), its outline and veins found there
         held = (sheet.centres_flat(), HELD * span / CELLS)
         found = _extract(flat, base_end, count, found[1:3], held)
+    progress.report(0.9, FINDING)
     leaf, blade, petiole, origin, axes, region = found
     length = float(np.ptp((flat[blade] - origin) @ axes[0]))
     if cell is not None:  # each point as its cube's centroid; a petiole stub cut as there
@@ -333,6 +343,7 @@ def extract_leaf(
         at_ends = ~cut & ends[cell[test]]
         length = float(np.ptp(local[at_ends, 0])) if at_ends.any() else length
     bend = None if sheet is None else Scaled(sheet, centre, scale)
+    progress.report(1.0, FINDING)
 
     def world(q: np.ndarray) -> np.ndarray:
         return centre + scale * q if bend is None else bend.bent(centre + scale * q)

@@ -124,11 +124,18 @@ def running(
     should_stop: Callable[[], bool], listener: progress.Listener | None = None
 ) -> Iterator[None]:
     """Within it, `cancel_point()` on this thread asks `should_stop` (the worker's job loop) and
-    `progress.report` tells `listener`."""
+    `progress.report` tells `listener`, then is a cancel point too (a scan's extraction, which
+    knows nothing of jobs, stops at its next report)."""
     before = getattr(_running, "should_stop", None)
     _running.should_stop = should_stop
+
+    def told(fraction: float | None, what: str) -> None:
+        if listener is not None:
+            listener(fraction, what)
+        cancel_point()
+
     try:
-        with progress.reporting(listener):
+        with progress.reporting(told):
             yield
     finally:
         _running.should_stop = before
