@@ -10,6 +10,11 @@ comparison, .pcd scans, levels of detail. A test of those is marked `@pytest.mar
 skips where it is not installed; check with it hidden, as a machine without it has it:
 `PYTHONPATH=DIR:. python -m pytest`, DIR holding a sitecustomize.py that sets
 `sys.modules["open3d"] = None`.
+
+With pytest-xdist (`./dev test`), the numba kernels are compiled once in the controller before
+the workers start: on a cold cache each worker's first reconstruction would otherwise compile
+them at the same time as the other's (four compiling processes on two cores), and the GUI tests'
+waits for a window's first result ran out.
 """
 
 from __future__ import annotations
@@ -28,6 +33,16 @@ def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line(
         "markers", "open3d: the test needs open3d (the open3d extra); skipped without it"
     )
+    if _xdist_controller(config):
+        from leafstudio.core.kernels import compile_kernels
+
+        compile_kernels()  # in parallel processes; nothing to do on a warm cache (the stamp)
+
+
+def _xdist_controller(config: pytest.Config) -> bool:
+    """This process hands tests to xdist workers (`-n N`), which start after it is configured."""
+    workers = getattr(config.option, "numprocesses", None)
+    return bool(workers) and not hasattr(config, "workerinput")
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
