@@ -22,7 +22,7 @@
    farthest from it); otherwise the two ends of the blade's midline, its best mirror axis
    (leafends.py), of which the base is the one `base_end` names (left, right, top, bottom) or, by
    default, the one with a basal notch (cordate, sagittate), else the one the veins lean away
-   from, else the wider one. When the photo shows a midrib (photo_veins.ridge_midline) whose ends
+   from, else the wider one. When the photo shows a midrib (photo_midrib.ridge_midline) whose ends
    lie elsewhere than the mirror axis's (ENDS_AGREE), its ends are taken instead: a lopsided or
    unrolled blade's mirror axis can run across it. The traced midrib stops where its ridge does.
 6. The leaf follows the forms' convention (docs/architecture.md): the base at the origin, the apex
@@ -54,14 +54,8 @@ from leafstudio.sources.leafends import (
     sharpen_end,
 )
 from leafstudio.sources.leafphoto import LeafPhoto
-from leafstudio.sources.photo_veins import (
-    Ridges,
-    find_ridges,
-    lifted,
-    ridge_midline,
-    smoothed,
-    trace_veins,
-)
+from leafstudio.sources.photo_midrib import along_midrib, ridge_midline
+from leafstudio.sources.photo_veins import Ridges, find_ridges, lifted, smoothed, trace_veins
 
 if TYPE_CHECKING:
     from leafstudio.sources.leafends import Midline, VeinField
@@ -305,18 +299,18 @@ def _cut_stalk(
 
 def _photo_midline(
     ridges: Ridges | None, outline: np.ndarray, line: Midline
-) -> tuple[Midline, np.ndarray | None]:
-    """The outline's midline, or the midrib the photo shows (photo_veins.ridge_midline) when its
-    ends lie elsewhere (farther than ENDS_AGREE of the length from the midline's); and the
-    visible ridge's path (None if none)."""
+) -> tuple[Midline, tuple[Midline, np.ndarray] | None]:
+    """The outline's midline, or the midrib the photo shows (photo_midrib.ridge_midline) when its
+    ends lie elsewhere (farther than ENDS_AGREE of the length from the midline's); and what
+    ridge_midline found (None if nothing)."""
     found = ridge_midline(ridges, outline)
     if found is None:
         return line, None
-    ridge, path = found
+    ridge = found[0]
     ends, other = ridge.ends, line.ends
     gap = min(np.linalg.norm(ends - other, axis=1).max(),
               np.linalg.norm(ends - other[::-1], axis=1).max())  # fmt: skip
-    return (line if gap <= ENDS_AGREE * max(line.length, ridge.length) else ridge), path
+    return (line if gap <= ENDS_AGREE * max(line.length, ridge.length) else ridge), found
 
 
 def _ends(
@@ -431,14 +425,11 @@ def leaf_from_photo(
     found: list[np.ndarray] = []
     veins_from = "none"
     if veins in ("auto", "trace"):
-        reach = None
-        if ridge is not None:  # the visible ridge's ends, the base's first
-            near_base = np.linalg.norm(ridge[0] - outline[base]) < np.linalg.norm(
-                ridge[-1] - outline[base])  # fmt: skip
-            reach = ridge[[0, -1]] if near_base else ridge[[-1, 0]]
-        if ridges is None:
+        if ridges is None:  # a petiole told the ends: the visible midrib is looked for now
             ridges = find_ridges(image, blade)
-        traced = trace_veins(ridges, outline[base], outline[apex], reach)
+            ridge = ridge_midline(ridges, outline)
+        path = along_midrib(ridge, ridges, outline[base], outline[apex])
+        traced = trace_veins(ridges, outline[base], outline[apex], path)
         if traced.seen:
             found = [lifted(to_world(smoothed(v)), xy) for v in traced.veins]
             veins_from = "photo"

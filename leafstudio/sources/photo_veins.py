@@ -2,20 +2,21 @@
 
 1. Ridges: scikit-image's Sato filter (the Hessian's eigenvalues, several widths) on the grey
    levels of the blade, for light veins and for dark ones; the stronger kind is kept. The
-   margin's own edge is left out (MARGIN_SKIP ridge widths in from the outline). It is run once
-   per photo (find_ridges) and its Ridges shared by steps 2 to 4: it is most of a photo's time.
-2. The midrib: the cheapest path from the base to the apex where a pixel costs the inverse of
-   its ridge strength (skimage.graph.route_through_array). It is taken as seen when the ridge
-   along it is clearly stronger than the blade's typical pixel (MIDRIB_CLEAR); a blade without
-   visible veins has no such path and the veins are grown instead (photo.py).
+   outline's own edge is left out: the grey levels beyond EDGE pixels in from it are the
+   blade's own carried out, so a vein is seen up to the margin and the margin is not one. It
+   is run once per photo (find_ridges) and its Ridges shared by the steps below and by
+   photo_midrib.py: it is most of a photo's time.
+2. The midrib: the ridge the photo shows running down the blade (photo_midrib.along_midrib),
+   carried on towards the base and the apex as far as the ridges go, so it stops where the
+   visible midrib stops; without one, the cheapest path from the base to the apex where a pixel
+   costs the inverse of its ridge strength (skimage.graph.route_through_array), trimmed where
+   it runs off the ridges. It is taken as seen when the ridge along it is clearly stronger
+   than the blade's typical pixel (MIDRIB_CLEAR); a blade without visible veins has no such
+   path and the veins are grown instead (photo.py).
 3. Secondaries: the strong ridges (hysteresis between RIDGE_LOW and RIDGE_HIGH) away from the
    midrib, thinned to one-pixel skeletons; each piece longer than MIN_VEIN of the blade's
    length is one vein, its longest path, from the end nearer the midrib (joined to the midrib
    when it stops short of it by less than JOIN of the length).
-
-4. The midrib's own ends (ridge_midline), for photo.py when the outline's mirror axis runs
-   elsewhere: the strong ridges' skeleton followed from its deepest pixels, straight on through
-   junctions, carried on to the outline.
 
 All in pixels, (column, row) as the outline; photo.py maps them to the leaf's coordinates.
 """
@@ -23,16 +24,13 @@ All in pixels, (column, row) as the outline; photo.py maps them to the leaf's co
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from leafstudio.sources.leafends import Midline
-
 RIDGE_WIDTHS = (1.0, 2.0, 3.0)  # Sato sigmas, in pixels, for a blade box LENGTH_PIXELS across
 LENGTH_PIXELS = 500.0  # the widths scale with the blade box's diagonal beyond this
-MARGIN_SKIP = 3.0  # ridge widths in from the outline where ridges are not looked for
+MARGIN_SKIP = 3.0  # ridge widths: the gaps a path crosses, the margin band it may run through
+EDGE = 3.0  # pixels in from the outline (its blur) where ridges are not looked for
 MIDRIB_CLEAR = 3.0  # the midrib's median ridge strength over the blade's median, at least
 RIDGE_LOW, RIDGE_HIGH = 0.2, 0.4  # hysteresis, as shares of the blade's strongest ridges
 STRONGEST = 99.5  # percentile of the blade's ridge strength taken as 1
@@ -56,14 +54,23 @@ class TracedVeins:
 
 
 def ridge_strength(image: np.ndarray, blade: np.ndarray, widths: np.ndarray) -> np.ndarray:
-    """(h, w) ridge strength in [0, 1] on the blade's inner pixels, 0 elsewhere."""
-    from scipy.ndimage import distance_transform_edt
+    """(h, w) ridge strength in [0, 1] on the blade's inner pixels, 0 elsewhere.
+
+    The outline's own edge would read as a ridge: the grey levels beyond EDGE pixels in from it
+    are replaced by the blade's own, carried out smoothly (a normalised convolution over twice
+    the widest width), so a vein is seen up to the margin and the margin is not one."""
+    from scipy.ndimage import distance_transform_edt, gaussian_filter
     from skimage.filters import sato
 
     grey = image[..., :3].astype(float) @ np.array([0.299, 0.587, 0.114]) / 255
-    inner = distance_transform_edt(blade) > MARGIN_SKIP * widths.max()
+    inner = distance_transform_edt(blade) > EDGE
     if inner.sum() < 16:
         return np.zeros(blade.shape)
+    reach = 2.0 * float(widths.max())
+    weight = gaussian_filter(inner.astype(float), reach)
+    carried = gaussian_filter(np.where(inner, grey, 0.0), reach) / np.maximum(weight, 1e-12)
+    carried = np.where(weight > 1e-3, carried, float(np.median(grey[inner])))
+    grey = np.where(inner, grey, carried)
     best, best_level = None, -1.0
     for dark in (False, True):
         response = sato(grey, sigmas=widths, black_ridges=dark, mode="reflect")
@@ -123,7 +130,7 @@ def trace_veins(
     ridges: Ridges | None,
     base: np.ndarray,
     apex: np.ndarray,
-    reach: np.ndarray | None = None,
+    ridge: np.ndarray | None = None,
 ) -> TracedVeins:
     """The veins the photo shows (see the module docstring).
 
@@ -133,9 +140,10 @@ def trace_veins(
         find_ridges on the photo and its blade (petiole cut off).
     base, apex : (2,) float arrays
         The midrib's ends, (column, row).
-    reach : (2, 2) float array, optional
-        Where the midrib's visible ridge ends (ridge_midline's path), base end first: the
-        midrib is cut there when it runs on past it (a stalk's stub, bare of ridges).
+    ridge : (n, 2) float array, optional
+        The midrib's visible ridge, base end first (along_midrib): the midrib is that ridge,
+        carried on towards the base and the apex as far as the ridges go. Without it, the
+        cheapest base-to-apex path, trimmed where it runs off the ridges.
 
     Returns
     -------
@@ -147,12 +155,18 @@ def trace_veins(
     base, apex = np.asarray(base) - corner, np.asarray(apex) - corner
     length = float(np.linalg.norm(apex - base))
     inside = strength[blade]
-    midrib = _midrib(strength, blade, base, apex)
-    along = strength[midrib[:, 1].astype(int), midrib[:, 0].astype(int)]
-    band = 2 * MARGIN_SKIP * float(widths.max())
-    midrib, along = _trimmed(midrib, along, strength > 0, band)
-    if reach is not None:
-        midrib, along = _within_reach(midrib, along, np.asarray(reach) - corner, band)
+    if ridge is None:
+        midrib = cheapest_path(strength, blade, base, apex)
+        along = strength[midrib[:, 1].astype(int), midrib[:, 0].astype(int)]
+        band = 2 * MARGIN_SKIP * float(widths.max())
+        midrib, along = _trimmed(midrib, along, strength > 0, band)
+    else:
+        ridge = np.asarray(ridge) - corner
+        gap = float(widths.max())  # a ridge fading at its end, not a gap to the margin
+        ends = [_carried(cheapest_path(strength, blade, ridge[k], end)[1:], ridges, gap)
+                for k, end in ((0, base), (-1, apex))]  # fmt: skip
+        midrib = np.vstack([ends[0][::-1], ridge, ends[1]])
+        along = strength[midrib[:, 1].astype(int), midrib[:, 0].astype(int)]
     core = along[len(along) // 10 : max(len(along) - len(along) // 10, 1)]
     typical = float(np.median(inside[inside > 0]))
     clear = float(np.median(core)) / max(typical, 1e-12)
@@ -160,7 +174,27 @@ def trace_veins(
     return TracedVeins(veins=[v + corner for v in veins], midrib_strength=clear)
 
 
-def _midrib(
+def _carried(piece: np.ndarray, ridges: Ridges, gap: float) -> np.ndarray:
+    """The start of a path (m, 2) out from a ridge's end, as far as the ridge goes on: each
+    point on a ridge or in the EDGE band reached from one, across gaps up to `gap` pixels."""
+    from scipy.ndimage import distance_transform_edt
+
+    if not len(piece):
+        return piece
+    rows, cols = piece[:, 1].astype(int), piece[:, 0].astype(int)
+    edge = distance_transform_edt(ridges.blade)[rows, cols] <= EDGE
+    good = (ridges.strength[rows, cols] >= RIDGE_LOW) | edge
+    steps = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(piece, axis=0), axis=1))])
+    keep, last = 0, -np.inf  # points kept; where the last good one lies along the piece
+    for k in range(len(piece)):
+        if steps[k] - (last if np.isfinite(last) else 0.0) > gap:
+            break
+        if good[k]:
+            keep, last = k + 1, steps[k]
+    return piece[:keep]
+
+
+def cheapest_path(
     strength: np.ndarray, blade: np.ndarray, base: np.ndarray, apex: np.ndarray
 ) -> np.ndarray:
     """The cheapest base-to-apex path, (n, 2) pixel centres (column, row)."""
@@ -196,20 +230,6 @@ def _trimmed(
     start = first if off_ridge[:first].any() or steps[first] > band else 0
     long_tail = steps[-1] - steps[last] > band
     end = last + 1 if off_ridge[last + 1 :].any() or long_tail else len(path)
-    return path[start:end], along[start:end]
-
-
-def _within_reach(
-    path: np.ndarray, along: np.ndarray, reach: np.ndarray, band: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """The path cut at its points nearest the visible ridge's two ends, where it runs on past
-    them by more than `band` pixels."""
-    steps = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
-    first, last = (int(np.argmin(np.linalg.norm(path - end, axis=1))) for end in reach)
-    if first > last:
-        return path, along
-    start = first if steps[first] > band else 0
-    end = last + 1 if steps[-1] - steps[last] > band else len(path)
     return path[start:end], along[start:end]
 
 
@@ -266,159 +286,6 @@ def _longest_path(pixels: np.ndarray) -> np.ndarray:
     while order[-1] != start and previous[order[-1]] >= 0:
         order.append(int(previous[order[-1]]))
     return pixels[order[::-1]]
-
-
-def ridge_midline(ridges: Ridges | None, outline: np.ndarray) -> tuple[Midline, np.ndarray] | None:
-    """The midrib the photo shows: a Midline with its two ends where it meets the outline, and
-    the ridge's own (n, 2) path in pixels (column, row); None when the photo shows no clear
-    ridges.
-
-    The strong ridges (hysteresis, as the secondaries) are thinned to skeletons. The midrib is
-    followed from the skeleton's deepest pixel in the blade (the midrib runs down the middle,
-    secondaries out to the margin) both ways, each step to the skeleton pixel a few pixels ahead
-    that turns least (under FOLLOW_TURN; across gaps up to MARGIN_SKIP ridge widths, where the
-    filter loses the midrib at a junction), so it goes straight through junctions where a
-    secondary branches off. Each end is carried on along the path's last END_RUN of its length
-    to the outline (the margin band has no ridges).
-
-    Parameters
-    ----------
-    ridges : Ridges or None
-        find_ridges on the photo and its blade.
-    outline : (n, 2) float array
-        The blade's outline, (column, row).
-    """
-    from scipy.ndimage import convolve, distance_transform_edt
-    from skimage.filters import apply_hysteresis_threshold
-    from skimage.morphology import skeletonize
-
-    from leafstudio.sources.leafends import Midline
-
-    if ridges is None or not ridges.any:
-        return None
-    strength, blade, corner, widths = ridges.strength, ridges.blade, ridges.corner, ridges.widths
-    size = float(np.hypot(*blade.shape))
-    skeleton = skeletonize(apply_hysteresis_threshold(strength, RIDGE_LOW, RIDGE_HIGH))
-    neighbours = convolve(skeleton.astype(int), np.ones((3, 3), int), mode="constant") - 1
-    knots = skeleton & (neighbours != 2)  # junctions and ends
-    simple = skeleton & (distance_transform_edt(~knots) > FOLLOW_AHEAD[1])  # on a clear line
-    if not simple.any():
-        return None
-    depth = distance_transform_edt(blade)
-    srow, scol = np.nonzero(skeleton)
-    pixels = np.column_stack([scol, srow]) + 0.5
-    gap = MARGIN_SKIP * float(widths.max())
-    best, best_weight = None, 0.0
-    for seed in _seeds(simple, depth, FOLLOW_SEEDS, MIN_VEIN * size):
-        near = pixels[np.linalg.norm(pixels - seed, axis=1) <= FOLLOW_AHEAD[1]]
-        heading = np.linalg.eigh(np.cov((near - seed).T))[1][:, -1]
-        halves = [_follow(pixels, seed, way * heading, gap) for way in (-1, 1)]
-        path = np.vstack([halves[0][::-1], halves[1][1:]])
-        weight = _weight(path, depth)
-        if weight > best_weight:
-            best, best_weight = path, weight
-    if best is None or float(np.linalg.norm(best[-1] - best[0])) < MIN_VEIN * size:
-        return None
-    path = best
-    local = outline - corner
-    ends = np.array([_to_outline(path, local), _to_outline(path[::-1], local)]) + corner
-    span = float(np.linalg.norm(ends[1] - ends[0]))
-    line = Midline(ends=ends, along=(ends[1] - ends[0]) / max(span, 1e-12), mirror=0.0)
-    return line, path + corner
-
-
-FOLLOW_SEEDS = 6  # the midrib is followed from this many of the deepest ridge pixels
-FOLLOW_AHEAD = (2.0, 5.0)  # pixels: the next step is to a skeleton pixel this far ahead
-FOLLOW_TURN = 55.0  # degrees: the most a step turns from the path's heading
-FOLLOW_HEADING = 12.0  # pixels: the heading is the path's direction over this much of it
-END_RUN = 0.08  # of the midrib's length: the direction an end is carried on to the outline
-
-
-def _seeds(simple: np.ndarray, depth: np.ndarray, count: int, apart: float) -> list[np.ndarray]:
-    """Up to `count` pixels of `simple`, deepest first, at least `apart` from each other,
-    (column, row) pixel centres."""
-    rows, cols = np.nonzero(simple)
-    order = np.argsort(depth[rows, cols])[::-1]
-    seeds: list[np.ndarray] = []
-    for i in order:
-        at = np.array([cols[i], rows[i]]) + 0.5
-        if all(np.linalg.norm(at - s) >= apart for s in seeds):
-            seeds.append(at)
-            if len(seeds) == count:
-                break
-    return seeds
-
-
-def _weight(path: np.ndarray, depth: np.ndarray) -> float:
-    """A path's length, each step weighed by its depth in the blade."""
-    steps = np.linalg.norm(np.diff(path, axis=0), axis=1)
-    at = np.clip(path[1:].astype(int), 0, [depth.shape[1] - 1, depth.shape[0] - 1])
-    return float(np.sum(steps * depth[at[:, 1], at[:, 0]]))
-
-
-def _follow(pixels: np.ndarray, start: np.ndarray, heading: np.ndarray, gap: float) -> np.ndarray:
-    """The path from `start` along skeleton `pixels` (m, 2), each step the one that turns least
-    from the heading (FOLLOW_AHEAD, FOLLOW_TURN), across gaps up to `gap` pixels; (n, 2)."""
-    from scipy.spatial import cKDTree
-
-    tree = cKDTree(pixels)
-    used = np.zeros(len(pixels), dtype=bool)
-    path = [start]
-    cos_turn = np.cos(np.deg2rad(FOLLOW_TURN))
-    for _ in range(len(pixels)):
-        here = path[-1]
-        used[tree.query_ball_point(here, FOLLOW_AHEAD[0])] = True
-        step = None
-        for reach in (FOLLOW_AHEAD[1], gap):
-            ahead = [i for i in tree.query_ball_point(here, reach) if not used[i]]
-            if not ahead:
-                continue
-            offsets = pixels[ahead] - here
-            lengths = np.linalg.norm(offsets, axis=1)
-            cosines = offsets @ heading / np.maximum(lengths, 1e-12)
-            ok = (cosines >= cos_turn) & (lengths >= FOLLOW_AHEAD[0] * (reach == gap))
-            if ok.any():
-                pick = np.flatnonzero(ok)[np.argmax(cosines[ok] - 0.01 * lengths[ok])]
-                step = pixels[ahead[pick]]
-                break
-        if step is None:
-            break
-        path.append(step)
-        back = _back_along(path, FOLLOW_HEADING)
-        direction = step - back
-        if np.linalg.norm(direction) > 0:
-            heading = direction / np.linalg.norm(direction)
-    return np.array(path)
-
-
-def _back_along(path: list[np.ndarray], distance: float) -> np.ndarray:
-    """The point `distance` back along the path from its last point (its first if shorter)."""
-    total = 0.0
-    for k in range(len(path) - 1, 0, -1):
-        total += float(np.linalg.norm(path[k] - path[k - 1]))
-        if total >= distance:
-            return path[k - 1]
-    return path[0]
-
-
-def _to_outline(path: np.ndarray, outline: np.ndarray) -> np.ndarray:
-    """Where the path, carried on from its first point backwards (along its first END_RUN),
-    meets the outline; the nearest outline point if the line misses it."""
-    import shapely
-
-    steps = np.linalg.norm(np.diff(path, axis=0), axis=1)
-    arc = np.concatenate([[0.0], np.cumsum(steps)])
-    back = path[min(int(np.searchsorted(arc, END_RUN * arc[-1])), len(path) - 1)]
-    direction = path[0] - back
-    norm = float(np.linalg.norm(direction))
-    ring = shapely.LinearRing(outline)
-    if norm > 0:
-        reach = float(np.ptp(outline, axis=0).sum())
-        ray = shapely.LineString([path[0], path[0] + direction / norm * reach])
-        hits = shapely.get_coordinates(ray.intersection(ring))
-        if len(hits):
-            return hits[np.argmin(np.linalg.norm(hits - path[0], axis=1))]
-    return outline[np.argmin(np.linalg.norm(outline - path[0], axis=1))]
 
 
 def smoothed(path: np.ndarray, spacing: float = 3.0) -> np.ndarray:

@@ -13,21 +13,24 @@ from leafstudio.sources.photo import leaf_from_photo
 from tests.photos import REALLEAVES, form_photo, photo_pixels
 
 SCANS = sorted(REALLEAVES.glob("*.txt"))
-COVERED = 0.8  # of the drawn midrib the traced one follows, at least
 
 
-def _traced_midrib_gap(found, drawn_px: np.ndarray) -> float:
-    """The farthest any point of the traced midrib lies from the drawn one, in shares of the
-    drawn one's base-to-tip length (in the photo's pixels); the traced one must also follow
-    at least COVERED of the drawn one's points within 2%."""
+def _whole_length_gap(found, drawn_px: np.ndarray) -> float:
+    """The farthest any point of either midrib, the traced one or the drawn one, lies from the
+    other, over their whole lengths, in shares of the drawn one's base-to-tip length (in the
+    photo's pixels): the traced midrib follows the drawn one all along, and stops where it
+    stops (a drawn midrib that stops short of the outline is the one the photo shows)."""
     traced = found.leaf.veins[0][:, :2]
     traced_px = np.column_stack([traced, np.ones(len(traced))]) @ found.pixel_from_world.T
     length = float(np.linalg.norm(drawn_px[-1] - drawn_px[0]))
-    drawn, traced_line = shapely.LineString(drawn_px), shapely.LineString(traced_px)
-    dense = shapely.get_coordinates(shapely.segmentize(drawn, 2.0))
-    covered = shapely.distance(traced_line, shapely.points(dense)) <= 0.02 * length
-    assert covered.mean() >= COVERED, covered.mean()
-    return float(shapely.distance(drawn, shapely.points(traced_px)).max()) / length
+    lines = shapely.LineString(drawn_px), shapely.LineString(traced_px)
+    farthest = [
+        shapely.distance(
+            other, shapely.points(shapely.get_coordinates(shapely.segmentize(line, 1.0)))
+        ).max()
+        for line, other in (lines, lines[::-1])
+    ]
+    return float(max(farthest)) / length
 
 
 @pytest.mark.parametrize("shape", ["ovate", "cordate", "lanceolate", "obovate"])
@@ -38,32 +41,29 @@ def test_a_forms_drawn_midrib_is_traced_within_2_percent(shape, angle):
     found = leaf_from_photo(image, length=1.0)
     assert found.veins_from == "photo"
     drawn_px = photo_pixels(leaf.boundary, angle)(leaf.veins[0])
-    assert _traced_midrib_gap(found, drawn_px) <= 0.02
+    assert _whole_length_gap(found, drawn_px) <= 0.02
     assert len(found.leaf.veins) - 1 >= 0.6 * (len(leaf.veins) - 1)  # most secondaries seen
 
 
-# On these two outlines the ends are still found elsewhere: soybean pot1_1's unrolled blade has
-# lobes the petiole test takes for a stalk; pot1_17's drawn secondaries cross its midrib, whose
-# base is a hook, so the path between the ends leaves it. The other six's ends come from the
-# midrib the photo shows where the outline's mirror axis runs elsewhere (photo.py, step 5)
-ENDS_ELSEWHERE = (
-    "soybean_11_20190508T043118_pot1_1",
-    "soybean_11_20190508T043118_pot1_17",
-)
+# soybean pot1_1's drawn midrib is no midrib a photo can show: 18% of it crosses the background
+# (its unrolled blade, core/sheet.py, does not hold it) and it starts 28% of the length inside
+# the blade, so no reader of the blade can follow it
+DRAWN_OFF_THE_BLADE = ("soybean_11_20190508T043118_pot1_1",)
 CANVAS = (820, 820)  # the 560-pixel leaf turned 30 degrees fits with a margin
 
 
 @pytest.mark.parametrize(
     "scan",
     [
-        pytest.param(p, marks=pytest.mark.xfail(strict=True, reason="ends found elsewhere"))
-        if p.stem in ENDS_ELSEWHERE else p
+        pytest.param(p, marks=pytest.mark.xfail(strict=True, reason="drawn midrib off the blade"))
+        if p.stem in DRAWN_OFF_THE_BLADE else p
         for p in SCANS
     ],
     ids=lambda p: p.stem,
 )  # fmt: skip
 def test_a_real_leafs_outline_with_drawn_veins_gives_its_midrib(scan):
-    """The middle 80% of the traced midrib lies within 2% of the length of the drawn one."""
+    """The traced midrib lies within 2% of the length of the drawn one over its whole length,
+    both ways (_whole_length_gap)."""
     from leafstudio.core.bend import flat_leaf
     from leafstudio.workflows import open_scan
 
@@ -76,14 +76,20 @@ def test_a_real_leafs_outline_with_drawn_veins_gives_its_midrib(scan):
     found = leaf_from_photo(image, length=1.0)
     assert found.veins_from == "photo"
     drawn_px = photo_pixels(outline, 30.0, ppu, CANVAS)(veins[0])
-    traced = found.leaf.veins[0][:, :2]
-    traced_px = np.column_stack([traced, np.ones(len(traced))]) @ found.pixel_from_world.T
-    dense = shapely.get_coordinates(shapely.segmentize(shapely.LineString(traced_px), 1.0))
-    middle = dense[len(dense) // 10 : len(dense) - len(dense) // 10]
-    length = float(np.linalg.norm(drawn_px[-1] - drawn_px[0]))
-    assert shapely.distance(shapely.LineString(drawn_px), shapely.points(middle)).max() <= (
-        0.02 * length
-    )
+    assert _whole_length_gap(found, drawn_px) <= 0.02
+
+
+def test_a_drawn_midrib_off_its_blade_is_no_reference():
+    """Why pot1_1 is expected to fail: its drawn midrib leaves the blade it is drawn on."""
+    from leafstudio.core.bend import flat_leaf
+    from leafstudio.workflows import open_scan
+
+    (scan,) = (p for p in SCANS if p.stem in DRAWN_OFF_THE_BLADE)
+    leaf = flat_leaf(open_scan(str(scan)).leaf)
+    frame = fit_frame(leaf.boundary, np.zeros((0, 3)))
+    blade = shapely.Polygon(frame.to_plane(leaf.boundary)[0])
+    midrib = shapely.LineString(frame.to_plane(leaf.veins[0])[0])
+    assert midrib.difference(blade).length > 0.1 * midrib.length
 
 
 def test_a_photo_without_visible_veins_grows_them_and_says_so(tmp_path, capsys):
