@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import leafstudio as ls
+from leafstudio.core import correct
 from leafstudio.core.evaluate import margin_creases
 from leafstudio.forms.make import make_form
 from leafstudio.forms.terms import SHAPES
@@ -65,6 +66,41 @@ def test_a_drawn_leaf_with_hand_raised_veins_passes_through_them_without_new_cre
     ours, theirs = margin_creases(through), margin_creases(paper)
     for band in ("margin_p99", "interior_p99"):
         assert ours[band] <= 1.1 * theirs[band]
+
+
+@pytest.mark.parametrize(("shape", "interior"), [("ovate", 4.8), ("oblong", 6.0)])
+def test_a_broad_forms_midrib_is_no_tighter_ridge_than_its_veins_need(shape, interior):
+    """A form's veins stand a quarter of their distance to the margin high: a roof, 14° each side
+    of the midrib. Pinned exactly, the correction drew that crest tight (99th-percentile interior
+    dihedral 5.0° on ovate, 6.4° on oblong; the paper's surface, 6.5e-3 off the midrib, 3.4°);
+    each vein point may stay correct.TOLERANCE off where the spline then bends less."""
+    result = _run(make_form(shape), k=3)
+    assert result.metrics["veins"]["max"] <= VEIN_TOLERANCE * result.length
+    assert margin_creases(result)["interior_p99"] <= interior
+
+
+def test_values_within_their_slack_bend_the_spline_less():
+    """correct._within: a spike on a line of values is lowered within its slack, every value
+    stays within it, and the spline's bending energy falls."""
+    centers = np.column_stack([np.linspace(0, 1, 21), np.zeros(21)])
+    centers[::2, 1] = 0.05  # two rows: a 2-D spline
+    target = np.where(np.arange(21) == 10, 0.01, 0.0)
+    taper, slack = np.ones(21), 0.004
+    exact = correct.fit_correction(centers, taper, target, 1.0)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(correct, "TOLERANCE", slack)
+        relaxed = correct.fit_correction(centers, taper, target, 1.0)
+    assert exact is not None and relaxed is not None
+    values = relaxed.value(centers)
+    assert np.all(np.abs(values - target) <= slack + 1e-9)
+    assert values[10] < 0.01 - 0.5 * slack
+
+    def energy(c: correct.VeinCorrection) -> float:  # wᵀ Φ w
+        d = np.linalg.norm(centers[:, None] - centers[None], axis=2)
+        phi = np.where(d > 0, d**2 * np.log(np.maximum(d, 1e-300)), 0.0)
+        return float(c.weights @ phi @ c.weights)
+
+    assert energy(relaxed) < 0.5 * energy(exact)
 
 
 def test_a_wavy_form_keeps_its_margin_on_the_boundary():
