@@ -48,6 +48,7 @@ from leafstudio.gui.qt.worker import PIPELINE, Outcome, Worker
 from leafstudio.model import Params
 
 STAGE_LABEL_MS = 250  # the running stage is shown at most this often (each repaint costs time)
+NEXT_TURN_MS = 1  # a result is drawn a timer later (a zero-delay call precedes due input)
 LEFT, RIGHT = Qt.DockWidgetArea.LeftDockWidgetArea, Qt.DockWidgetArea.RightDockWidgetArea
 ABOUT = (
     "<h3>LeafStudio</h3>"
@@ -115,6 +116,7 @@ class MainWindow(FileCommands, QMainWindow):
         self.worker.yielded.connect(self._on_yielded)
         self.worker.done.connect(self._on_measured)
         self.worker.failed.connect(self._on_pipeline_failed)
+        self._result_due: tuple[Outcome, Framing | None] | None = None  # drawn next turn
         self._stage_timer = QTimer(self)
         self._stage_timer.setSingleShot(True)
         self._stage_timer.setInterval(STAGE_LABEL_MS)
@@ -352,6 +354,7 @@ class MainWindow(FileCommands, QMainWindow):
         self._update_title()
 
     def _on_cleared(self) -> None:
+        self._result_due = None
         self.viewport.clear()
         if (scan := self.session.state.scan) is not None:
             self.viewport.set_layer("scan", scan.pieces)
@@ -360,13 +363,26 @@ class MainWindow(FileCommands, QMainWindow):
         self.status_text.setText(self.session.message)
 
     def _on_result(self, outcome: Outcome, framing: Framing | None) -> None:
-        result = outcome.result
-        start = time.perf_counter()
-        frame = self.session.view_frame() or result.frame
+        """Drawn a turn after the session's work on it (a new leaf's derived sketch): two short
+        pauses, not one of 32 ms (a 2M-point scan); a newer result then keeps a reset framing."""
+        due = self._result_due
+        if due is None:
+            QTimer.singleShot(NEXT_TURN_MS, self, self._show_result)
+        elif due[1] is not None:  # not drawn yet: a new document's reset, or a refit
+            reset = due[1].reset or (framing is not None and framing.reset)
+            framing = Framing((framing or due[1]).bounds, reset)
+        self._result_due = (outcome, framing)
+
+    def _show_result(self) -> None:
+        if self._result_due is None:  # cleared meanwhile (a new sketch)
+            return
+        (outcome, framing), self._result_due = self._result_due, None
+        start, side = time.perf_counter(), self.session.side
+        frame = self.session.view_frame() or outcome.result.frame
         how = None if framing is None else ("reset" if framing.reset else "refit")
         bounds = framing.bounds if framing is not None else None
-        if how == "reset" and self.viewport.texture_key is not None:  # another leaf's image
-            self.viewport.set_texture(None, None, draw=False)
+        if how == "reset" and self.viewport.texture_key not in (None, side.texture_key):
+            self.viewport.set_texture(None, None, draw=False)  # another leaf's image
         self.viewport.show_layers(outcome.layers, frame, bounds, how)
         outcome.timings["draw"] = time.perf_counter() - start
         self._stage_timer.stop()
