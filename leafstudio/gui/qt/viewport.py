@@ -129,13 +129,16 @@ class Viewport(QWidget):
 
     def set_layer(self, key: str, pieces: list[Piece]) -> None:
         """Replace one layer's pieces (the scan and Poisson layers, which come apart from
-        results); drawn now if the layer is on, else when it is switched on."""
+        results); drawn now if the layer is on, else when it is switched on. Nothing drawn
+        before or after (a hidden Poisson layer with each result): no render."""
         self._pieces[key] = pieces
+        drawn = bool(self._names[key])
         if self.visible[key]:
             self._draw_layer(key)
         else:
             self._remove_layer(key)
-        self.redraw()
+        if drawn or self._names[key]:
+            self.redraw()
 
     def redraw(self) -> None:
         """Schedule one render of the scene, in a later turn of the event loop than the work
