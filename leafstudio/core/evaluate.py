@@ -43,9 +43,6 @@ def point_to_mesh_distance(mesh: MeshLike, points: np.ndarray) -> np.ndarray:
     return mesh_distances(np.asarray(mesh.points, dtype=float), triangles_of(mesh), points)
 
 
-SMALL_BUCKET = 32  # edge_counts: a vertex with more edges than this has them sorted by np.sort
-
-
 def _summary(values: np.ndarray) -> dict[str, float | None]:
     if len(values) == 0:
         return {"min": None, "max": None, "mean": None}
@@ -81,14 +78,17 @@ def _edge_counts(triangles, n):
     e = 0
     for v in range(n):
         lo, hi = start[v], start[v + 1]
-        if hi - lo > SMALL_BUCKET:  # a hub vertex (a fan): no quadratic sort
-            other[lo:hi] = np.sort(other[lo:hi])
-        for i in range(lo + 1, hi):  # a grid mesh's vertex has about six neighbours
-            x, j = other[i], i - 1
-            while j >= lo and other[j] > x:
-                other[j + 1] = other[j]
-                j -= 1
-            other[j + 1] = x
+        gap = 1  # Shell's sort: insertion sort (gap 1) for a grid vertex's six neighbours, no
+        while gap < (hi - lo) // 3:  # quadratic one for a hub's fan; np.sort cost 3.5 s of
+            gap = 3 * gap + 1  # the first measuring's compile
+        while gap > 0:
+            for i in range(lo + gap, hi):
+                x, j = other[i], i - gap
+                while j >= lo and other[j] > x:
+                    other[j + gap] = other[j]
+                    j -= gap
+                other[j + gap] = x
+            gap //= 3
         i = lo
         while i < hi:
             j = i

@@ -17,7 +17,6 @@ from leafstudio.cli import main
 from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.evaluate import (
     FIELDS,
-    SMALL_BUCKET,
     count_border_loops,
     edge_counts,
     format_table,
@@ -164,8 +163,8 @@ rng = np.random.default_rng(7)
 MESHES = {
     "grid": grid_mesh(40),
     "shuffled grid": rng.permutation(grid_mesh(30)),
-    "fan": fan(20 * SMALL_BUCKET),
-    "reversed fan": fan(3 * SMALL_BUCKET)[::-1, ::-1],
+    "fan": fan(640),  # a hub vertex: Shell's sort, not a quadratic one
+    "reversed fan": fan(96)[::-1, ::-1],
     "random with repeats": rng.integers(0, 60, (500, 3)),
     "one triangle three times": np.array([[0, 1, 2], [2, 1, 0], [0, 1, 2]]),
     "none": np.empty((0, 3), np.int64),
