@@ -240,27 +240,42 @@ def carried_data(point_data: dict[str, np.ndarray], plan: Plan) -> dict[str, np.
     return {name: carried(v, plan) for name, v in point_data.items()}
 
 
-def _crease_cuts(mesh: TriangleMesh, crease) -> tuple[np.ndarray, Plan]:
+def _crease_cuts(mesh: TriangleMesh, crease, trim=None) -> tuple[np.ndarray, Plan]:
     """The mesh's faces cut along the bend's creases, and the plan of the new points. The
     creases are parallel lines: the first one's distances and the others' offsets from it say
-    where each runs."""
+    where each runs. `trim` (a scan's holes, core/sheet.Scaled.trim): the faces also cut where
+    it is zero, and those where it is negative dropped."""
     side = crease(mesh.points)
-    if side is None:
-        return mesh.regular_faces, []
-    side = np.atleast_2d(side)
-    return cut_levels(mesh.regular_faces, side[0], side[0, 0] - side[:, 0])
+    faces, plan = mesh.regular_faces, []
+    if side is not None:
+        side = np.atleast_2d(side)
+        faces, plan = cut_levels(faces, side[0], side[0, 0] - side[:, 0])
+    cut = None if trim is None else trim(carried(mesh.points, plan))
+    if cut is None:
+        return faces, plan
+    faces, more = cut_levels(faces, cut, np.zeros(1))
+    return faces[carried(cut, more)[faces].mean(axis=1) >= 0], plan + more
 
 
-def _bent_meshes(meshes: list[TriangleMesh], carries: list, creases: list) -> list[TriangleMesh]:
-    """Each mesh cut along the bend's creases (`creases`, in its units) and carried into 3D by
-    its `carry`; a mesh with the first's faces (one mesh at another size) is cut as it was."""
-    cuts = _crease_cuts(meshes[0], creases[0])
+def _bent_meshes(
+    meshes: list[TriangleMesh], carries: list, creases: list, trims: list | None = None
+) -> list[TriangleMesh]:
+    """Each mesh cut along the bend's creases (`creases`, in its units), trimmed (`trims`, see
+    _crease_cuts; the points no face keeps dropped) and carried into 3D by its `carry`; a mesh
+    with the first's faces (one mesh at another size) is cut as it was."""
+    trims = trims or [None] * len(meshes)
+    cuts = _crease_cuts(meshes[0], creases[0], trims[0])
     out = []
-    for mesh, carry, crease in zip(meshes, carries, creases, strict=True):
+    for mesh, carry, crease, trim in zip(meshes, carries, creases, trims, strict=True):
         same = np.array_equal(mesh.regular_faces, meshes[0].regular_faces)
-        faces, plan = cuts if same else _crease_cuts(mesh, crease)
-        points = carry(carried(mesh.points, plan))
-        out.append(TriangleMesh(points, faces, carried_data(mesh.point_data, plan)))
+        faces, plan = cuts if same else _crease_cuts(mesh, crease, trim)
+        points, data = carried(mesh.points, plan), carried_data(mesh.point_data, plan)
+        if trim is not None and len(used := np.unique(faces)) < len(points):
+            index = np.zeros(len(points), dtype=faces.dtype)
+            index[used] = np.arange(len(used))
+            points, faces = points[used], index[faces]
+            data = {name: values[used] for name, values in data.items()}
+        out.append(TriangleMesh(carry(points), faces, data))
     return out
 
 
@@ -276,11 +291,14 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
 
     unit = result.unit
     meshes, carries, creases = [result.triangle_mesh], [bend.apply], [bend.crease]
+    trim = getattr(bend, "trim", None)  # a scan's holes (core/sheet.Scaled.trim)
+    trims = [trim]
     if unit is not None:  # the same mesh at unit size: cut along the same lines
         meshes.append(unit.triangle_mesh)
         carries.append(in_units)
         creases.append(lambda points: bend.crease(units.to_world(points)))
-    bent = _bent_meshes(meshes, carries, creases)
+        trims.append(None if trim is None else lambda points: trim(units.to_world(points)))
+    bent = _bent_meshes(meshes, carries, creases, trims)
     if unit is not None:
         unit = replace(
             unit,

@@ -20,6 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import shapely
 from scipy.interpolate import RBFInterpolator, RectBivariateSpline
 from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
@@ -267,12 +268,14 @@ class Scaled:
     `flatten` is the nearest sheet point, found by Gauss-Newton; near a tight curl or the
     sheet's edge it can settle on another sheet point than the one a point was bent from, so
     the points this bend made (`bent`: the extraction's boundary and veins) are remembered and
-    flattened exactly."""
+    flattened exactly. `holes`: the blade's real holes (sources/scan_holes.py), (k, 2) rings in
+    the sheet's (u, v), which `trim` cuts out of the mesh."""
 
     sheet: Sheet
     centre: np.ndarray
     scale: float
     made: dict = field(default_factory=dict, repr=False)
+    holes: tuple[np.ndarray, ...] = ()
 
     def bent(self, points: np.ndarray) -> np.ndarray:
         """`apply`, remembering each bent point's flat one for `flatten`."""
@@ -299,7 +302,21 @@ class Scaled:
 
     def key(self) -> bytes:
         """Bytes that change with the bend."""
-        return self.sheet.key() + np.append(self.centre, self.scale).tobytes()
+        rings = b"".join(np.asarray(r, dtype=float).tobytes() + b"|" for r in self.holes)
+        return self.sheet.key() + np.append(self.centre, self.scale).tobytes() + rings
+
+    def trim(self, points: np.ndarray) -> np.ndarray | None:
+        """(n,) signed distances of (n, 3) flat blade points from the holes' edges, negative
+        inside a hole (core/bend.py cuts the mesh there and drops what is inside), or None when
+        the blade has none."""
+        if not self.holes:
+            return None
+        uv = (np.asarray(points, dtype=float)[:, :2] - self.centre[:2]) / self.scale
+        rings = shapely.polygons(list(self.holes))
+        cut = shapely.union_all(rings)
+        distance = shapely.distance(shapely.boundary(cut), shapely.points(uv))
+        inside = shapely.contains_xy(cut, uv[:, 0], uv[:, 1])
+        return self.scale * np.where(inside, -distance, distance)
 
     def entry(self, points: np.ndarray) -> dict:
         """The bend as a project keeps it (sources/files.py): the sheet, and the flat points of
@@ -314,6 +331,7 @@ class Scaled:
                 "centre": self.centre.tolist(),
                 "scale": self.scale,
                 "flat": self.flatten(points).tolist(),
+                "holes": [np.asarray(r).tolist() for r in self.holes],
             }
         }
 
@@ -338,10 +356,14 @@ class Scaled:
         if len(flat) != len(points):
             raise ValueError("the sheet's flat points do not match the leaf's")
         up = np.array(sheet["up"], float).reshape(3)
+        rings = tuple(np.array(r, float).reshape(-1, 2) for r in sheet.get("holes", []))
+        if any(len(r) < 4 for r in rings):
+            raise ValueError("a hole's outline has fewer than three corners")
         bend = cls(
             Sheet(centers, values, float(sheet["smoothing"]), up),
             np.array(sheet["centre"], float).reshape(3),
             float(sheet["scale"]),
+            holes=rings,
         )
         bend.made.update(zip(map(bytes, np.asarray(points, dtype=float)), flat, strict=True))
         return bend

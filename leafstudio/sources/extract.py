@@ -38,6 +38,7 @@ from leafstudio.core.prepare.vein_order import veins_inside_outline
 from leafstudio.core.sheet import CELLS, Scaled, fit_sheet
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
+from leafstudio.sources.scan_holes import holes
 from leafstudio.sources.scan_veins import chord_at, midline, side_veins
 
 MIN_POINTS = 50
@@ -342,7 +343,11 @@ def extract_leaf(
         blade[test[cut]], petiole[test[cut]] = False, True
         at_ends = ~cut & ends[cell[test]]
         length = float(np.ptp(local[at_ends, 0])) if at_ends.any() else length
-    bend = None if sheet is None else Scaled(sheet, centre, scale)
+    bend = None
+    if sheet is not None:  # holes in the flat blade, in the sheet's (u, v)
+        xy = (flat[found[1]] - origin) @ axes[:2].T
+        rings = [(origin + np.pad(r, ((0, 0), (0, 1))) @ axes)[:, :2] for r in holes(region, xy)]
+        bend = Scaled(sheet, centre, scale, holes=tuple(rings))
     progress.report(1.0, FINDING)
 
     def world(q: np.ndarray) -> np.ndarray:
