@@ -5,8 +5,9 @@ kind component) holding the mesh /Leaf/Leaf and its material /Leaf/Looks/Leaf. T
 vertex normals, UVs as primvars:st, the scalars as float primvars (height, curvatures), and the
 material is a UsdPreviewSurface: base colour (and, from the texture's alpha, the cut-out outline
 of a sheet) and a normal map from the textures, otherwise the blade's colour. A sheet is
-double-sided. Levels of detail are the variant set "LOD" on /Leaf, variants LOD0, LOD1, ...
-(LOD0 selected), each holding its own /Leaf/Leaf.
+double-sided, and its material carries its translucency as its own inputs (diffuseTransmission,
+thinWalled; _translucency says why not as a shader). Levels of detail are the variant set "LOD"
+on /Leaf, variants LOD0, LOD1, ... (LOD0 selected), each holding its own /Leaf/Leaf.
 
 .usda and .usdc write their textures beside them (`<stem>_texture.png`, `<stem>_normal.png`);
 .usdz packs them in.
@@ -24,13 +25,30 @@ import numpy as np
 from leafstudio._shared.extras import require
 from leafstudio._shared.safewrite import write_bytes
 from leafstudio.assets.asset import MeshAsset
-from leafstudio.assets.material import ALPHA_CUTOFF, METALLIC, ROUGHNESS, TEXTURE_SUFFIX, png_bytes
+from leafstudio.assets.material import (
+    ALPHA_CUTOFF,
+    DIFFUSE_TRANSMISSION,
+    METALLIC,
+    ROUGHNESS,
+    TEXTURE_SUFFIX,
+    png_bytes,
+)
 from leafstudio.assets.texture import BLADE
 from leafstudio.errors import LeafError
 
 USD_SUFFIXES = (".usda", ".usdc", ".usdz")
 ROOT, MESH, LOOKS = "/Leaf", "/Leaf/Leaf", "/Leaf/Looks"
 NORMAL_SUFFIX = "_normal.png"
+TRANSLUCENCY_INPUTS = {  # name: (Sdf value type, value, documentation)
+    "diffuseTransmission": (
+        "Float",
+        DIFFUSE_TRANSMISSION,
+        "Share of the diffuse light a sheet transmits through the blade, Lambertian and coloured "
+        "by the base colour (glTF's KHR_materials_diffuse_transmission); UsdPreviewSurface has "
+        "no input for it",
+    ),
+    "thinWalled": ("Bool", True, "The blade is a sheet with no inside (MDL's thin_walled)"),
+}
 
 
 def usd_companions(path: Path) -> tuple[Path, Path]:
@@ -79,6 +97,8 @@ def _material(stage, asset: MeshAsset, colour: str | None, normal: str | None):
     surface.CreateInput("metallic", Sdf.ValueTypeNames.Float).Set(METALLIC)
     surface.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(ROUGHNESS)
     material.CreateSurfaceOutput().ConnectToSource(surface.ConnectableAPI(), "surface")
+    if not asset.solid:
+        _translucency(material)
     diffuse = surface.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f)
     if colour is None:
         diffuse.Set(Gf.Vec3f(*(c / 255 for c in BLADE)))
@@ -114,6 +134,19 @@ def _material(stage, asset: MeshAsset, colour: str | None, normal: str | None):
             bump.CreateOutput("rgb", Sdf.ValueTypeNames.Float3)
         )
     return material
+
+
+def _translucency(material) -> None:
+    """A sheet's translucency as the material's own inputs (TRANSLUCENCY_INPUTS), for pipelines
+    that map them onto their renderer's translucent material: UsdPreviewSurface has no input
+    for it, and an MDL shader (Omniverse's OmniSurface, thin-walled with diffuse transmission)
+    fails usd-core's validators (no 'mdl' in its shader registry, OmniSurface.mdl unresolvable
+    outside Omniverse), even in a variant not selected."""
+    _, _, Sdf, _, _, _, _ = _pxr()
+    for name, (kind, value, doc) in TRANSLUCENCY_INPUTS.items():
+        put = material.CreateInput(name, getattr(Sdf.ValueTypeNames, kind))
+        put.Set(value)
+        put.GetAttr().SetDocumentation(doc)
 
 
 def usd_stage(assets: Sequence[MeshAsset], colour: str | None, normal: str | None):

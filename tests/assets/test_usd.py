@@ -68,6 +68,25 @@ def test_usd_is_y_up_in_metres_with_normals_uvs_and_its_textures(nested, tmp_pat
 
 
 @pytest.mark.parametrize("suffix", SUFFIXES)
+def test_a_usd_sheet_carries_its_translucency_and_a_solid_does_not(nested, tmp_path, suffix):
+    """UsdPreviewSurface has no translucency input: the material's own inputs carry it, the
+    share glTF's KHR_materials_diffuse_transmission writes, and the validators still pass."""
+    from leafstudio.assets.material import DIFFUSE_TRANSMISSION
+
+    for thickness, sheet in ((None, True), (0.01, False)):
+        path = tmp_path / f"{'sheet' if sheet else 'solid'}{suffix}"
+        ls.save_mesh(nested, path, thickness=thickness)
+        assert validation_errors(path) == []
+        stage = Usd.Stage.Open(str(path))
+        material = UsdShade.Material(stage.GetPrimAtPath("/Leaf/Looks/Leaf"))
+        share, thin = material.GetInput("diffuseTransmission"), material.GetInput("thinWalled")
+        if sheet:
+            assert share.Get() == pytest.approx(DIFFUSE_TRANSMISSION) and thin.Get() is True
+        else:
+            assert not share and not thin
+
+
+@pytest.mark.parametrize("suffix", SUFFIXES)
 def test_usd_levels_of_detail_are_variants(nested, tmp_path, suffix):
     path = tmp_path / f"leaf{suffix}"
     ls.save_mesh(nested, path, lod=2, texture="none")
