@@ -18,9 +18,9 @@ the blade is what the form drew before posing: a fold of 75° or a rolled grass 
 reconstructed as well as the flat leaf, where the boundary's PCA plane saw it side-on and the
 mesh broke (issue 21, finding 1).
 
-The roll carries a relief h (a margin's wave, raised veins) along the rolled normal, conformally:
-the cross-section's point (v, h) goes to radius R exp(-h / R) about the axis at angle v / R (the
-complex exponential, R = 1 / roll), which is R - h to first order. A relief as high as the
+The roll carries a relief h (a margin's wave, raised veins) along the rolled normal: the
+cross-section's point (v, h) goes to the angle v / R about the axis (R = 1 / roll) at radius
+R - h outward, R exp(-h / R) inward (the same slope where h = 0). A relief as high as the
 radius, which R - h took through the axis (a wave of 0.1 on a tube: 15 of the pose grid's 101
 poses were refused), is drawn in toward it and never through, so every relief is undone exactly.
 
@@ -70,7 +70,7 @@ class Pose:
             r = 1.0 / self.roll  # the axis: y = 0, z = r; the height scales the radius
             # a half turn at most: a tube's margins at exactly ±π stay on their side
             angle = np.clip(points[:, 1] * self.roll, -np.pi, np.pi)
-            radius = r * np.exp(-points[:, 2] * self.roll)
+            radius = r * _rolled_radius(points[:, 2] * self.roll)
             points[:, 1], points[:, 2] = np.sin(angle) * radius, r - np.cos(angle) * radius
         if self.twist == 0:
             points[:, 2] += self.lift(points[:, :2])
@@ -95,7 +95,7 @@ class Pose:
             sign = np.sign(r)
             y, z = sign * points[:, 1], sign * (r - points[:, 2])
             points[:, 1] = np.arctan2(y, z) * r
-            points[:, 2] = -r * np.log(np.hypot(y, z) * abs(self.roll))
+            points[:, 2] = r * _unrolled_height(np.hypot(y, z) * abs(self.roll))
         return points
 
     def key(self) -> bytes:
@@ -122,6 +122,19 @@ class Pose:
             ends = np.ceil(np.abs([y.min(), y.max()]) / step)
             lines += [j * step for j in range(-int(ends[0]), int(ends[1]) + 1) if j != 0]
         return None if not lines else y[None, :] - np.array(lines)[:, None]
+
+
+def _rolled_radius(u: np.ndarray) -> np.ndarray:
+    """The rolled radius over the roll's, for heights u in radii toward the axis: 1 - u outward
+    (u <= 0, along the rolled normal as on the flat blade), exp(-u) inward (the same slope at 0,
+    and never through the axis)."""
+    return np.where(u <= 0, 1 - u, np.exp(-np.maximum(u, 0)))
+
+
+def _unrolled_height(k: np.ndarray) -> np.ndarray:
+    """The inverse of `_rolled_radius`: heights in radii toward the axis, for radii k over the
+    roll's."""
+    return np.where(k >= 1, 1 - k, -np.log(np.minimum(k, 1)))
 
 
 def _turned(points: np.ndarray, twist: float) -> np.ndarray:
