@@ -44,6 +44,7 @@ if TYPE_CHECKING:
 
 
 ROLL_STEP = 0.1  # radians of roll between cuts: a chord's sag 0.1% of the radius, its area 0.04%
+SEAM = 0.1  # flat_curve: points this share of a half turn from a tube's seam may lie either side
 
 
 @dataclass(frozen=True)
@@ -149,8 +150,45 @@ def flat_leaf(leaf: Leaf) -> Leaf:
     """The leaf on its flat blade: `leaf` itself when it has no bend."""
     if leaf.bend is None:
         return leaf
-    flatten = leaf.bend.flatten
-    return Leaf(boundary=flatten(leaf.boundary), veins=[flatten(v) for v in leaf.veins])
+    bend = leaf.bend
+    return Leaf(
+        boundary=flat_curve(bend, leaf.boundary, ring=True),
+        veins=[flat_curve(bend, v) for v in leaf.veins],
+    )
+
+
+def flat_curve(bend, points: np.ndarray, ring: bool = False) -> np.ndarray:
+    """(n, 3) flat points of a curve's (n, 3) bent points, in order along it (`ring`: closed).
+
+    A tube's margins meet where the roll reaches half a turn, and a point there flattens onto
+    either margin: one a hair past the seam (a pose fitted to the curves, core/unfold.py) went to
+    the other one and the outline crossed itself (a grass blade rolled into a tube). A point
+    within SEAM of the seam keeps the side of the last point before it that is clear of it."""
+    flat = bend.flatten(points)
+    pose = getattr(bend, "pose", bend)  # a Pose, or a PlacedPose's
+    roll = float(getattr(pose, "roll", 0.0))
+    if roll == 0 or len(flat) < 2:
+        return flat
+    frame = getattr(bend, "frame", None)  # blade coordinates: a PlacedPose's frame, or the world
+    xy, z = (flat[:, :2].copy(), flat[:, 2]) if frame is None else frame.to_plane(flat)
+    half = np.pi / abs(roll)  # the seam's v
+    clear = np.abs(xy[:, 1]) < (1 - SEAM) * half
+    if clear.all() or not clear.any():
+        return flat
+    order = np.arange(len(flat))
+    if ring:  # from a clear point: each run along the seam has one before it
+        order = np.roll(order, -int(np.argmax(clear)))
+    last = np.where(clear[order], np.arange(len(order)), -1)
+    last = np.maximum.accumulate(last)
+    last[last < 0] = int(np.argmax(clear[order]))  # an open curve's first run: the next clear
+    side = np.sign(xy[order[last], 1])
+    v = xy[order, 1]
+    wrong = ~clear[order] & (np.sign(v) != side) & (side != 0)
+    if not wrong.any():
+        return flat
+    v[wrong] += side[wrong] * 2 * half
+    xy[order, 1] = v
+    return np.column_stack([xy, z]) if frame is None else frame.to_world(xy, z)
 
 
 Plan = list[tuple[np.ndarray, np.ndarray]]  # per cut: (k, 2) edges cut and (k,) where along them
