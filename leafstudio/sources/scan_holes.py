@@ -41,7 +41,7 @@ def holes(region: Polygon, xy: np.ndarray) -> list[np.ndarray]:
         return []
     gap = float(np.percentile(cKDTree(xy).query(xy, k=2)[0][:, 1], 95))
     radius = HOLE * gap
-    if not radius > 0:
+    if not radius > 0 or not _room(region, xy, radius):
         return []
     near = shapely.union_all(shapely.buffer(shapely.points(xy), radius, quad_segs=ROUND))
     far = region.difference(near)  # the centres of the empty discs
@@ -53,3 +53,17 @@ def holes(region: Polygon, xy: np.ndarray) -> list[np.ndarray]:
         parts = [g for g in getattr(hole, "geoms", [hole]) if isinstance(g, Polygon)]
         found += [np.asarray(g.exterior.coords) for g in parts if g.area > 0]
     return found
+
+
+def _room(region: Polygon, xy: np.ndarray, radius: float) -> bool:
+    """Whether an empty disc of `radius` may fit among the (n, 2) points within `region`: a
+    grid of half its radius has a node within `radius` / (2 sqrt 2) of the disc's centre, that
+    far at least from every point inside the disc. A quick no for a blade without a hole (the
+    union of the points' discs cost 0.1 s a scan)."""
+    step = radius / 2
+    lo, hi = np.asarray(region.bounds[:2]), np.asarray(region.bounds[2:])
+    u, v = (np.arange(lo[k], hi[k] + step, step) for k in (0, 1))
+    nodes = np.stack(np.meshgrid(u, v), -1).reshape(-1, 2)
+    nodes = nodes[shapely.contains_xy(region, nodes[:, 0], nodes[:, 1])]
+    clear = cKDTree(xy).query(nodes, distance_upper_bound=radius)[0]
+    return bool(np.any(clear >= radius - step / np.sqrt(2)))
