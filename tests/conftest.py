@@ -14,15 +14,20 @@ skips where it is not installed; check with it hidden, as a machine without it h
 With pytest-xdist (`./dev test`), the numba kernels are compiled once in the controller before
 the workers start: on a cold cache each worker's first reconstruction would otherwise compile
 them at the same time as the other's (four compiling processes on two cores), and the GUI tests'
-waits for a window's first result ran out.
+waits for a window's first result ran out. The controller also lends the workers a folder they
+share for the run (SHARED: a real scan extracted by one worker is read by the other).
 """
 
 from __future__ import annotations
 
 import importlib.util
+import os
+import shutil
+import tempfile
 
 import pytest
 
+SHARED = "LEAFSTUDIO_TEST_SHARED"  # the run's shared folder (tests/leaves.extracted_scan)
 HAS_OPEN3D = importlib.util.find_spec("open3d") is not None  # found, not imported: seconds
 
 
@@ -37,6 +42,12 @@ def pytest_configure(config: pytest.Config) -> None:
         from leafstudio.core.kernels import compile_kernels
 
         compile_kernels()  # in parallel processes; nothing to do on a warm cache (the stamp)
+        os.environ[SHARED] = tempfile.mkdtemp(prefix="leafstudio-tests-")  # workers inherit it
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    if _xdist_controller(config) and SHARED in os.environ:
+        shutil.rmtree(os.environ.pop(SHARED), ignore_errors=True)
 
 
 def _xdist_controller(config: pytest.Config) -> bool:

@@ -14,6 +14,8 @@ Tests import builders from here (or tests/photos.py for photos), never from anot
 from __future__ import annotations
 
 import functools
+import os
+import pickle
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +26,7 @@ from leafstudio.analysis import fidelity
 from leafstudio.core.plane import Frame
 from leafstudio.model import Leaf
 from leafstudio.sources.demos import HALFWIDTH, demo
+from tests.conftest import SHARED
 
 
 def halfwidth_region(name: str, n: int = 4000) -> shapely.Polygon:
@@ -278,10 +281,20 @@ def assert_outline_is_the_blades(found) -> None:
 @functools.cache
 def extracted_scan(path: Path) -> tuple[np.ndarray, object]:
     """A real scan's (n, 3) points, read-only, and what `extract_leaf` finds in them: extracted
-    once per test process (1-2 s a scan) for the tests that only read them."""
+    once per test run (1-2 s a scan) for the tests that only read them. Under pytest-xdist the
+    first worker to need a scan leaves its extraction in the run's shared folder for the other
+    (a pickle, written whole: at worst both extract it)."""
+    from leafstudio._shared.safewrite import write_bytes
     from leafstudio.sources.extract import extract_leaf
     from leafstudio.sources.scan import read_scan
 
     points = read_scan(path)
     points.setflags(write=False)
-    return points, extract_leaf(points)
+    folder = os.environ.get(SHARED)
+    kept = Path(folder or ".") / f"{Path(path).stem}.extracted.pickle"
+    if folder and kept.exists():
+        return points, pickle.loads(kept.read_bytes())
+    found = extract_leaf(points)
+    if folder:
+        write_bytes(kept, pickle.dumps(found))
+    return points, found

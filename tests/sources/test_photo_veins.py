@@ -10,6 +10,7 @@ from leafstudio.cli import main
 from leafstudio.core.plane import fit_frame
 from leafstudio.forms import make_form
 from leafstudio.sources.photo import leaf_from_photo
+from tests.leaves import extracted_scan
 from tests.photos import REALLEAVES, form_photo, photo_pixels
 
 SCANS = sorted(REALLEAVES.glob("*.txt"))
@@ -65,9 +66,8 @@ def test_a_real_leafs_outline_with_drawn_veins_gives_its_midrib(scan):
     """The traced midrib lies within 2% of the length of the drawn one over its whole length,
     both ways (_whole_length_gap)."""
     from leafstudio.core.bend import flat_leaf
-    from leafstudio.workflows import open_scan
 
-    leaf = flat_leaf(open_scan(str(scan)).leaf)  # the blade as drawn: unrolled (core/sheet.py)
+    leaf = flat_leaf(extracted_scan(scan)[1].leaf)  # the blade as drawn: unrolled (core/sheet.py)
     frame = fit_frame(leaf.boundary, np.zeros((0, 3)))
     outline = frame.to_plane(leaf.boundary)[0]
     veins = [frame.to_plane(v)[0] for v in leaf.veins]
