@@ -21,6 +21,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from leafstudio.gui.model.textures import LEAF, TEXTURE, texture_key
 from leafstudio.gui.qt.main_window import MainWindow
 from leafstudio.model import Params
 from tests.gui.builders import FAST
@@ -51,6 +52,21 @@ def wait_result(qtbot, window: MainWindow, check=lambda outcome: True) -> object
         timeout=WAIT_MS,
     )
     return window.session.shown.outcome
+
+
+def textured(qtbot, window: MainWindow) -> None:
+    """Wait until the mesh shows its texture, when its colouring shows one (the Leaf look, a
+    new window's): the image is made on the side lane and arrives after the result, so a window
+    lent before it came was compared with its fresh self with or without it, by chance, and
+    built again for nothing (12 of the 32 windows a run of tests/gui/qt built)."""
+    session = window.session
+    qtbot.waitUntil(
+        lambda: (
+            window.viewport.mesh_coloring not in (LEAF, TEXTURE)
+            or window.viewport.texture_key == texture_key(session.result, session.texture())
+        ),
+        timeout=WAIT_MS,
+    )
 
 
 def exported(qtbot, job) -> bool:
@@ -127,6 +143,7 @@ class LentWindow:
             session.set_params(FAST)
             session.open_demo("nested")
             wait_result(qtbot, win, lambda o: o.request.id == session.last_id)
+            textured(qtbot, win)
             # the reset through the session gives what a new window showed
             assert session_state(win) == self.fresh[0]
             if chrome(win) == self.fresh[1]:
@@ -136,6 +153,7 @@ class LentWindow:
         win = make_window(None, self.folder / f"settings{self.made}.ini", FAST)
         win.open_demo("nested")
         wait_result(qtbot, win)
+        textured(qtbot, win)
         self.window, self.fresh = win, (session_state(win), chrome(win))
         self.view = dict(win.viewport.visible), win.edges.isChecked(), win.coloring.currentIndex()
         return win
