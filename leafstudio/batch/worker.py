@@ -6,6 +6,8 @@ from __future__ import annotations
 import signal
 import time
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -22,8 +24,8 @@ _PINNED = False
 
 
 def pin_threads() -> None:
-    """One BLAS thread and one numba thread in this process (the workers run side by side);
-    done once per process."""
+    """One BLAS thread and one numba thread for the rest of this process (a batch worker: the
+    workers run side by side); done once per process."""
     global _PINNED
     if _PINNED:
         return
@@ -33,6 +35,26 @@ def pin_threads() -> None:
     numba.set_num_threads(1)  # for any parallel kernel (leafstudio's are serial today)
     threadpool_limits(1)  # after numba: its OpenMP layer too
     _PINNED = True
+
+
+@contextmanager
+def _one_thread() -> Iterator[None]:
+    """One BLAS and one numba thread while a job runs in a process that is not a pinned worker
+    (a Dask worker, or a caller's own process), given back after: a job run in the caller's
+    process must not change its threads (a later fit there would differ in its last digits)."""
+    if _PINNED:
+        yield
+        return
+    import numba
+    from threadpoolctl import threadpool_limits
+
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        with threadpool_limits(1):
+            yield
+    finally:
+        numba.set_num_threads(threads)
 
 
 def worker_start() -> None:
@@ -113,7 +135,12 @@ def _as_listed(exc: Exception, job: Job) -> Exception:
 def run_job(job: Job) -> dict[str, Any]:
     """One input's table row: `ok` with its traits, or `failed` with the one-line message that
     `leafstudio reconstruct` would print. Never raises for a bad input (the batch goes on)."""
-    pin_threads()
+    with _one_thread():
+        return _run(job)
+
+
+def _run(job: Job) -> dict[str, Any]:
+    """run_job's work, with the threads already set."""
     start = time.perf_counter()
     row: dict[str, Any] = dict.fromkeys(columns(job.settings.scans))
     row.update(input=job.input, settings=job.settings.key())
