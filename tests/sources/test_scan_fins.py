@@ -52,7 +52,7 @@ def test_the_scans_stay_close_to_their_surfaces(scans):
 def test_a_real_hole_stays_open_and_no_other_scan_gains_one(scans):
     """pot1_7: 1.97% of the mesh's area spanned its hole, now none; the other seven have no hole
     and keep at most 0.1% of their area that far (triangles along the margin: 0.02% on soybean
-    pot1_1 with the BLAS threads of this machine, 0.098% with one, as a batch test leaves it)."""
+    pot1_1 with the BLAS threads of this machine, 0.098% with one BLAS thread)."""
     holes = {name[-12:]: count for name, (*_, count) in scans.items()}
     spans = {name[-12:]: far for name, (_, _, far, _) in scans.items()}
     assert holes == {name: int(name.endswith("pot1_7")) for name in holes}, holes
