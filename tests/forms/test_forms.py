@@ -350,6 +350,9 @@ def test_fold_curl_and_wave_are_heights():
     waved = leaf_of(shape="ovate", wave=0.03)
     assert np.ptp(waved.boundary[:, 2]) == pytest.approx(0.06, rel=0.05)
     assert waved.boundary[0, 2] == 0  # none at the base
+    # and flat there: the wave fades in, so the two halves meet at the base without a V
+    near = np.linalg.norm(waved.boundary[:, :2] - waved.boundary[0, :2], axis=1) < 0.03
+    assert np.abs(waved.boundary[near, 2]).max() < 0.1 * 0.03
 
 
 def test_same_seed_same_leaf_other_seeds_vary_a_little():
