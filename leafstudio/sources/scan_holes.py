@@ -39,9 +39,10 @@ def holes(region: Polygon, xy: np.ndarray) -> list[np.ndarray]:
     """
     if len(xy) < 3:
         return []
-    gap = float(np.percentile(cKDTree(xy).query(xy, k=2)[0][:, 1], 95))
+    tree = cKDTree(xy)
+    gap = float(np.percentile(tree.query(xy, k=2)[0][:, 1], 95))
     radius = HOLE * gap
-    if not radius > 0 or not _room(region, xy, radius):
+    if not radius > 0 or not _room(region, tree, radius):
         return []
     near = shapely.union_all(shapely.buffer(shapely.points(xy), radius, quad_segs=ROUND))
     far = region.difference(near)  # the centres of the empty discs
@@ -55,8 +56,8 @@ def holes(region: Polygon, xy: np.ndarray) -> list[np.ndarray]:
     return found
 
 
-def _room(region: Polygon, xy: np.ndarray, radius: float) -> bool:
-    """Whether an empty disc of `radius` may fit among the (n, 2) points within `region`: a
+def _room(region: Polygon, tree: cKDTree, radius: float) -> bool:
+    """Whether an empty disc of `radius` may fit among the points of `tree` within `region`: a
     grid of half its radius has a node within `radius` / (2 sqrt 2) of the disc's centre, that
     far at least from every point inside the disc. A quick no for a blade without a hole (the
     union of the points' discs cost 0.1 s a scan)."""
@@ -65,5 +66,5 @@ def _room(region: Polygon, xy: np.ndarray, radius: float) -> bool:
     u, v = (np.arange(lo[k], hi[k] + step, step) for k in (0, 1))
     nodes = np.stack(np.meshgrid(u, v), -1).reshape(-1, 2)
     nodes = nodes[shapely.contains_xy(region, nodes[:, 0], nodes[:, 1])]
-    clear = cKDTree(xy).query(nodes, distance_upper_bound=radius)[0]
+    clear = tree.query(nodes, distance_upper_bound=radius)[0]
     return bool(np.any(clear >= radius - step / np.sqrt(2)))
