@@ -67,6 +67,12 @@ def check_file_kind(path: str | os.PathLike) -> None:
         mode = Path(path).stat().st_mode
     except OSError:
         return
+    _refuse_kind(mode, path)
+
+
+def _refuse_kind(mode: int, path: str | os.PathLike) -> None:
+    """LeafError when stat mode `mode` is not a regular file's (check_file_kind's test, for a
+    caller that has stat'ed `path` already)."""
     if stat.S_ISDIR(mode):
         raise LeafError(FOLDER, str(path))
     if (said := special_file(mode)) is not None:
@@ -83,7 +89,7 @@ def check_input_file(path: str | os.PathLike, limit: int | None = MAX_TEXT_BYTES
         raise LeafError("no such file", str(path)) from None
     except OSError as exc:
         raise LeafError(f"cannot be read ({exc.strerror or exc})", str(path)) from None
-    check_file_kind(path)
+    _refuse_kind(info.st_mode, path)  # the stat above: not a second one
     if limit is not None and info.st_size > limit:
         raise LeafError(
             f"is too large ({info.st_size / 2**20:.0f} MiB; at most {limit / 2**20:.0f} MiB)",
