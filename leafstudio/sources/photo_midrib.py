@@ -108,7 +108,7 @@ def ridge_midline(ridges: Ridges | None, outline: np.ndarray) -> tuple[Midline, 
     simple = skeleton & (distance_transform_edt(~knots) > FOLLOW_AHEAD[1])  # on a clear line
     if not simple.any():
         return None
-    depth = distance_transform_edt(blade)
+    depth = ridges.depth
     srow, scol = np.nonzero(skeleton)
     pixels = np.column_stack([scol, srow]) + 0.5
     gap = MARGIN_SKIP * float(widths.max())

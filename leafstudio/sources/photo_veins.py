@@ -24,6 +24,7 @@ All in pixels, (column, row) as the outline; photo.py maps them to the leaf's co
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -111,6 +112,14 @@ class Ridges:
         """Whether the blade shows any ridge."""
         return bool(np.any(self.strength > 0))
 
+    @cached_property
+    def depth(self) -> np.ndarray:
+        """(h, w) each pixel's distance in pixels from the nearest one off the blade, made once
+        (the midrib's seeds and both its carried ends use it)."""
+        from scipy.ndimage import distance_transform_edt
+
+        return distance_transform_edt(self.blade)
+
 
 def find_ridges(image: np.ndarray, blade: np.ndarray) -> Ridges | None:
     """The ridges of an (h, w, 3 or 4) uint8 photo on its (h, w) bool blade, on the blade's box
@@ -177,12 +186,10 @@ def trace_veins(
 def _carried(piece: np.ndarray, ridges: Ridges, gap: float) -> np.ndarray:
     """The start of a path (m, 2) out from a ridge's end, as far as the ridge goes on: each
     point on a ridge or in the EDGE band reached from one, across gaps up to `gap` pixels."""
-    from scipy.ndimage import distance_transform_edt
-
     if not len(piece):
         return piece
     rows, cols = piece[:, 1].astype(int), piece[:, 0].astype(int)
-    edge = distance_transform_edt(ridges.blade)[rows, cols] <= EDGE
+    edge = ridges.depth[rows, cols] <= EDGE
     good = (ridges.strength[rows, cols] >= RIDGE_LOW) | edge
     steps = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(piece, axis=0), axis=1))])
     keep, last = 0, -np.inf  # points kept; where the last good one lies along the piece
