@@ -236,26 +236,31 @@ def compile_kernels(
     done: queue.SimpleQueue = queue.SimpleQueue()
     crew = _Crew()
     _CREWS.add(crew)
-    with ThreadPoolExecutor(workers) as pool:
-        running = [pool.submit(_worker, todo, done, crew) for _ in range(workers)]
-        compiled = 0
-        while compiled < len(KERNELS):
-            if should_stop is not None and should_stop():
-                while _next(todo) is not None:  # none handed out any more
-                    pass
-                crew.end()
-                break
+    try:
+        with ThreadPoolExecutor(workers) as pool:
+            running = [pool.submit(_worker, todo, done, crew) for _ in range(workers)]
+            compiled = 0
             try:
-                done.get(timeout=POLL_S)
-            except queue.Empty:
-                if all(f.done() for f in running) and done.empty():
-                    break  # a worker died: the run compiles what is left
-                continue
-            compiled += 1
-            if on_stage is not None:
-                on_stage(f"{STAGE} {compiled}/{len(KERNELS)}")
-        spent = dict(f.result() for f in running)
-    _CREWS.discard(crew)
+                while compiled < len(KERNELS):
+                    if should_stop is not None and should_stop():
+                        break
+                    try:
+                        done.get(timeout=POLL_S)
+                    except queue.Empty:
+                        if all(f.done() for f in running) and done.empty():
+                            break  # a worker died: the run compiles what is left
+                        continue
+                    compiled += 1
+                    if on_stage is not None:
+                        on_stage(f"{STAGE} {compiled}/{len(KERNELS)}")
+            finally:  # stopped, or on_stage raised: no worker compiles on
+                if compiled < len(KERNELS):
+                    while _next(todo) is not None:  # none handed out any more
+                        pass
+                    crew.end()
+            spent = dict(f.result() for f in running)
+    finally:
+        _CREWS.discard(crew)
     if compiled == len(KERNELS):
         kernelcache.mark_cached()
     return spent

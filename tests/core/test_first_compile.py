@@ -115,6 +115,24 @@ def test_a_stopped_compile_ends_its_workers_and_the_next_one_compiles_the_rest(
     assert kernelcache.kernels_cached()
 
 
+def test_a_compile_whose_progress_callback_raises_ends_its_workers(monkeypatch, tmp_path):
+    """A progress callback that raises (a job cancelled through it) ends the workers at once
+    too: the pool waited for every kernel before, and the crew stayed registered."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    names = ["prepare.outline:_ring_length", "surface:_levenberg_marquardt"]
+    monkeypatch.setattr(kernels, "KERNELS", {n: kernels.KERNELS[n] for n in names})
+
+    def stop_at_first_kernel(stage: str) -> None:
+        if stage.endswith("1/2"):
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        kernels.compile_kernels(stop_at_first_kernel, workers=1)
+    assert _cached_kernels(tmp_path) == {"_ring_length"}  # the second was cut short
+    assert not kernels._CREWS
+    assert not kernelcache.kernels_cached()
+
+
 def test_a_run_stopped_while_compiling_is_cancelled(monkeypatch, tmp_path):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
     one = "surface:_levenberg_marquardt"
