@@ -47,6 +47,7 @@ from leafstudio.sources.extract import (
     Extraction,
     check_scan,
     extract_leaf,
+    unit_scan,
 )
 from leafstudio.sources.files import load_leaf, load_project
 from leafstudio.sources.photo import PhotoLeaf, is_photo, read_photo_leaf
@@ -154,9 +155,10 @@ def _scan_opened(
     """A scan's points read from `path`, checked and extracted (open_scan)."""
     progress.report(0.0, FINDING)
     try:
-        notes = check_scan(scan, force=force)
+        at_unit = unit_scan(scan)  # thinned once, for the check and the extraction
+        notes = check_scan(scan, force=force, at_unit=at_unit)
         with progress.share(0.1, 1.0):  # check_scan: a tenth of a big scan's time
-            found = extract_leaf(scan, base_end, points)
+            found = extract_leaf(scan, base_end, points, at_unit=at_unit)
     except LeafError as exc:
         raise LeafError(exc.problem, path) from None
     return Opened(path, "scan", found.leaf, scan=scan, extraction=found, notes=tuple(notes))

@@ -275,7 +275,10 @@ def _base_point(
 
 
 def extract_leaf(
-    points: np.ndarray, base_end: str = "auto", count: int = OUTLINE_POINTS
+    points: np.ndarray,
+    base_end: str = "auto",
+    count: int = OUTLINE_POINTS,
+    at_unit: UnitScan | None = None,
 ) -> Extraction:
     """Boundary and veins of the leaf in a scan of its surface.
 
@@ -288,28 +291,23 @@ def extract_leaf(
         or a world direction "+x", "-x", "+y", "-y", "+z", "-z" (the base is the end that way).
     count : int, default: 200
         Boundary points; the veins are sampled at the same spacing.
+    at_unit : UnitScan, optional
+        `unit_scan(points)`, when the caller made it already (check_scan took it too).
 
     Raises
     ------
     LeafError
         If the scan has too few points or no blade can be found.
     """
-    points = np.asarray(points, dtype=float)
-    if len(points) < MIN_POINTS:
-        raise LeafError(f"too few points for a leaf scan: {len(points)} (need {MIN_POINTS})")
     if count < 8:
         raise LeafError(f"the boundary needs at least 8 points, got {count}")
-    if not np.all(np.isfinite(points)):
-        raise LeafError("the scan holds NaN or infinite coordinates")
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    centre, scale = lo / 2 + hi / 2, float(np.max(hi / 2 - lo / 2)) * 2
-    if not scale > 0 or not np.isfinite(scale):
-        raise LeafError("the scan's points all coincide")
-    unit = (points - centre) / scale
     # each step's share of the time, on a 2-million-point scan and on soybean pot1_1 (whose
     # sheet costs most: its blade fills more cubes), in progress reports (the app's busy bar)
     progress.report(0.0, FINDING)
-    thinned, cell, size = voxel_thinning(unit, BUDGET)
+    if at_unit is None:
+        at_unit = unit_scan(points)
+    centre, scale, unit = at_unit.centre, at_unit.scale, at_unit.unit
+    thinned, cell, size = at_unit.thinned, at_unit.cell, at_unit.size
     progress.report(0.1, FINDING)
     found = _extract(thinned, base_end, count)
     progress.report(0.3, FINDING)
@@ -361,11 +359,46 @@ def extract_leaf(
     )
 
 
-def check_scan(points: np.ndarray, force: bool = False) -> list[str]:
+@dataclass(frozen=True, eq=False)
+class UnitScan:
+    """A scan moved and scaled to unit size (nothing overflows at 1e200), and thinned to at most
+    BUDGET voxel centroids (voxel_thinning: the thinned points, each point's cube, the cubes'
+    side). Made once for a scan's check and its extraction: thinning 2 million points takes
+    a second, and both see the scan so."""
+
+    centre: np.ndarray  # (3,)
+    scale: float
+    unit: np.ndarray  # (n, 3): (points - centre) / scale
+    thinned: np.ndarray  # (m, 3) at unit size
+    cell: np.ndarray | None  # (n,) each point's cube in `thinned`; None: not thinned
+    size: float
+
+
+def unit_scan(points: np.ndarray) -> UnitScan:
+    """`points` at unit size and thinned (UnitScan); LeafError when they cannot be a scan."""
+    points = np.asarray(points, dtype=float)
+    if len(points) < MIN_POINTS:
+        raise LeafError(f"too few points for a leaf scan: {len(points)} (need {MIN_POINTS})")
+    if not np.all(np.isfinite(points)):
+        raise LeafError("the scan holds NaN or infinite coordinates")
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    centre, scale = lo / 2 + hi / 2, float(np.max(hi / 2 - lo / 2)) * 2
+    if not scale > 0 or not np.isfinite(scale):
+        raise LeafError("the scan's points all coincide")
+    unit = (points - centre) / scale
+    return UnitScan(centre, scale, unit, *voxel_thinning(unit, BUDGET))
+
+
+def check_scan(
+    points: np.ndarray, force: bool = False, at_unit: UnitScan | None = None
+) -> list[str]:
     """plausibility.check_leaf_like on a scan as extract_leaf sees it (a large one by its voxel
-    centroids: linear time). `leafstudio extract` and `batch --scans` both run it first, so they
-    refuse the same scans with the same line (or, with `force`, return the same warnings)."""
-    return check_leaf_like(voxel_thinning(points, BUDGET)[0], force=force)
+    centroids: linear time; the check is scale-free). `leafstudio extract` and `batch --scans`
+    both run it first, so they refuse the same scans with the same line (or, with `force`,
+    return the same warnings). `at_unit`: `unit_scan(points)`, made once for both."""
+    if at_unit is None:
+        at_unit = unit_scan(points)
+    return check_leaf_like(at_unit.thinned, force=force)
 
 
 def voxel_thinning(points: np.ndarray, budget: int) -> tuple[np.ndarray, np.ndarray | None, float]:

@@ -50,6 +50,25 @@ def test_a_large_scan_flattens_only_its_margin_and_ends_and_loses_nothing(big, m
     assert found.length == pytest.approx(every.length, rel=1e-9)
 
 
+def test_a_large_scan_is_thinned_once_for_its_check_and_its_extraction(big, monkeypatch):
+    """Opening a scan thins it once (issue 24): check_scan and extract_leaf both thinned the
+    scan's points before, a second each for 2 million; the extraction is the same."""
+    from leafstudio import workflows
+
+    points, _, found = big
+    calls = []
+
+    def counted(at: np.ndarray, budget: int):
+        calls.append(len(at))
+        return voxel_thinning(at, budget)
+
+    monkeypatch.setattr(extract, "voxel_thinning", counted)
+    opened = workflows._scan_opened("big.xyz", points)
+    assert calls == [len(points)]
+    np.testing.assert_array_equal(opened.extraction.blade, found.blade)
+    np.testing.assert_array_equal(opened.leaf.boundary, found.leaf.boundary)
+
+
 def test_voxel_thinning_keeps_at_most_the_budget_and_maps_every_point():
     rng = np.random.default_rng(0)
     blob = rng.normal(size=(200_000, 3))  # a volume, not a surface: the first guess overshoots
