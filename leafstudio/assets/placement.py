@@ -13,9 +13,12 @@ placements:
 
 The base is where the midrib meets the blade: the midrib (the first vein, as forms and leaf
 files order them) followed back from its first point to the outline. A form's base is thus its
-origin (the forms' convention) and its apex at +X 1. Without veins, the base is the outline's end
-of the leaf plane's long axis. The leaf's length is from the base to the apex along the midrib's
-direction (the farthest outline point that way): a form's 1, a cordate leaf's lobes not counted.
+origin (the forms' convention) and its apex at +X 1. Without veins, the base is the outline's
+end of the leaf plane's long axis. The leaf's length is from the base to the apex along the
+midrib's direction (the farthest outline point that way): a form's 1, a cordate leaf's lobes not
+counted. A bent leaf's (a posed form, a scan on its sheet) are found on its flat blade and
+carried by the bend: the base bent, the axes the midrib's and the blade's there, the length the
+flat blade's.
 
 With a length (`--length 8cm`, `length=0.08`), the leaf is scaled to that real size, and written
 in metres for Y-up formats (glTF's unit; USD records metersPerUnit = 1) and in millimetres for
@@ -32,12 +35,14 @@ from typing import Any
 import numpy as np
 
 from leafstudio.assets.solid import boundary_edges
+from leafstudio.core.bend import flat_leaf
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.errors import LeafError
 
 METRES = {"mm": 1e-3, "cm": 1e-2, "m": 1.0}  # a length's units, in metres
 Y_UP_SUFFIXES = (".glb", ".gltf", ".obj", ".usda", ".usdc", ".usdz", ".usd")
 Y_UP_UNIT, Z_UP_UNIT = 1.0, 1e-3  # metres per unit written with a length: m, mm
+STEP = 1e-3  # carried: the bend's differences at the base, a share of the length
 
 
 def parse_length(text: str | float) -> float:
@@ -135,9 +140,38 @@ def leaf_placement(
 
 
 def result_placement(result: Any) -> Placement:
-    """The placement of a pipeline Result (its frame, outline and midrib)."""
+    """The placement of a pipeline Result (its frame, outline and midrib): a bent leaf's found on
+    its flat blade, where the frame and outline are, and carried by its bend (`carried`)."""
     polygon_h = getattr(result, "polygon_h", None)
-    return leaf_placement(result.frame, result.polygon, polygon_h, list(result.leaf.veins))
+    leaf = result.leaf
+    flat = flat_leaf(leaf)
+    placement = leaf_placement(result.frame, result.polygon, polygon_h, list(flat.veins))
+    return placement if leaf.bend is None else carried(placement, leaf.bend)
+
+
+def carried(placement: Placement, bend: Any) -> Placement:
+    """The flat blade's `placement` carried by `bend` (model.Bend): the base bent, the axes the
+    midrib's direction and the blade's across it there (central differences, STEP of the
+    length: a form's pose bends symmetrically about its base and keeps its frame), its length
+    the flat blade's. A scan's sheet unrolls the blade into a plane of its own, nowhere near
+    the scan's (a soybean's base was placed 8.3 mm off its 46 mm mesh)."""
+    along, across, _ = placement.axes
+    step = STEP * placement.length
+    base = placement.base
+
+    def chord(direction: np.ndarray) -> np.ndarray:
+        ends = bend.apply(np.stack([base + step * direction, base - step * direction]))
+        return ends[0] - ends[1]
+
+    bent_along = _unit(chord(along))
+    bent_across = chord(across)
+    bent_across = _unit(bent_across - (bent_across @ bent_along) * bent_along)
+    axes = np.stack([bent_along, bent_across, np.cross(bent_along, bent_across)])
+    return Placement(bend.apply(base[None])[0], axes, placement.length)
+
+
+def _unit(vector: np.ndarray) -> np.ndarray:
+    return vector / np.linalg.norm(vector)
 
 
 def mesh_placement(points: np.ndarray, faces: np.ndarray, up: np.ndarray) -> Placement:

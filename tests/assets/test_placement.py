@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import shapely
 import trimesh
 
 import leafstudio as ls
@@ -133,3 +134,34 @@ def test_batch_length_places_every_mesh(tmp_path: Path):
     assert points.min(axis=0)[0] == pytest.approx(0, abs=1e-9)
     assert np.ptp(points[:, 0]) == pytest.approx(0.08, rel=1e-6)
     assert np.ptp(points[:, 1]) < 0.15 * np.ptp(points[:, 2])  # flat: the relief is vertical
+
+
+def test_a_scan_bent_by_its_sheet_is_placed_by_its_own_base(tmp_path: Path):
+    """A scan's leaf bent by its fitted sheet (core/sheet.py) was placed by its flat blade's
+    frame, the bent midrib read in it: the base of a soybean scan landed 8.3 mm off the mesh
+    and a sugar beet's length was read as 25 of its 54 mm. Here an ovate form rolled across its
+    midrib on a cylinder (a sheet's bend, as `extract` fits one): exported at 8 cm, its base is
+    at the origin, its midrib along +X, its length 8 cm and its roll the vertical extent."""
+    from leafstudio.core.sheet import fit_sheet
+
+    def rolled(points: np.ndarray, radius: float = 0.3) -> np.ndarray:
+        angle = points[:, 1] / radius
+        return np.column_stack(
+            [points[:, 0], radius * np.sin(angle), radius * (1 - np.cos(angle)) + points[:, 2]]
+        )
+
+    form = make_form("ovate")
+    blade = shapely.Polygon(form.boundary[:, :2])
+    uv = np.random.default_rng(0).uniform([0, -0.35], [1, 0.35], (9000, 2))
+    uv = uv[shapely.contains_xy(blade, uv[:, 0], uv[:, 1])]
+    sheet = fit_sheet(rolled(np.column_stack([uv, np.zeros(len(uv))])), np.array([0, 0, 1.0]), 1)
+    assert sheet is not None
+    leaf = ls.Leaf(rolled(form.boundary), [rolled(v) for v in form.veins], bend=sheet)
+    ls.save_mesh(ls.reconstruct(leaf, ls.Params(grid=40)), tmp_path / "scan.glb", length="8cm")
+    points = read_points(tmp_path / "scan.glb")
+    assert np.linalg.norm(points, axis=1).min() < 0.01 * 0.08  # the base at the origin
+    assert points[:, 0].min() > -0.01 * 0.08
+    assert np.ptp(points[:, 0]) == pytest.approx(0.08, rel=0.02)
+    sag = 0.3 * (1 - np.cos(np.ptp(form.boundary[:, 1]) / 2 / 0.3))  # the roll's own height
+    relief = np.ptp(ls.reconstruct(form, ls.Params(grid=40)).triangle_mesh.points[:, 2])
+    assert 0.08 * sag < np.ptp(points[:, 1]) < 0.08 * (sag + relief)  # the roll, upward
