@@ -1,17 +1,21 @@
 """Import a LeafStudio .glb (or .gltf, .obj, .usda, .usdc, .usdz) into Blender (the `bpy`
 package) and print what arrived, as JSON: meshes, UV layers, the material and its image texture,
-the vertex count beside the file's (glTF), and the scene's extent in metres along Blender's x, y,
-z (z up): a leaf lying flat has its relief as the z extent and its length as the x extent.
+the vertex count beside the file's (glTF), the scene's extent in metres along Blender's x, y,
+z (z up): a leaf lying flat has its relief as the z extent and its length as the x extent, and
+its vertex nearest the origin (the base is there).
 
-bpy pins numpy < 2, so it lives in a venv of its own, not the project's:
-    python3 -m venv /tmp/bpyenv && /tmp/bpyenv/bin/pip install bpy
+The issue's client is Blender 4.5 LTS (bpy 4.5 is built for Python 3.11); bpy pins numpy < 2, so
+it lives in a venv of its own, not the project's:
+    python3.11 -m venv /tmp/bpy45 && /tmp/bpy45/bin/pip install "bpy==4.5.*"
     .venv/bin/leafstudio reconstruct leaf.leaf.json -o leaf.glb
-    /tmp/bpyenv/bin/python benchmarks/check_blender.py leaf.glb [--render PNG]
+    /tmp/bpy45/bin/python benchmarks/check_blender.py leaf.glb [--render PNG]
 
 --render also renders the imported scene with Cycles on the CPU (a sun, a camera above);
 --engine eevee renders with Eevee instead, --backlit puts the sun behind the leaf (translucency).
 For each material the report names the Principled BSDF inputs fed by an image (Base Color, Alpha,
-Normal) and its Transmission Weight (glTF's KHR_materials_transmission).
+Normal) and its Transmission Weight (glTF's KHR_materials_transmission), and a .glb's
+extensions_used: Blender 4.5's importer reads KHR_materials_transmission, not
+KHR_materials_diffuse_transmission, and USD's diffuseTransmission input not at all.
 """
 
 from __future__ import annotations
@@ -21,12 +25,16 @@ import struct
 import sys
 
 
-def file_vertex_count(path: str) -> int:
-    """POSITION accessors' counts summed over the file's meshes (from the GLB's JSON chunk)."""
+def glb_json(path: str) -> dict:
+    """The GLB's JSON chunk."""
     with open(path, "rb") as handle:
         data = handle.read()
     length = struct.unpack_from("<I", data, 12)[0]
-    gltf = json.loads(data[20 : 20 + length])
+    return json.loads(data[20 : 20 + length])
+
+
+def file_vertex_count(gltf: dict) -> int:
+    """POSITION accessors' counts summed over the file's meshes."""
     return sum(
         gltf["accessors"][p["attributes"]["POSITION"]]["count"]
         for mesh in gltf["meshes"]
@@ -49,13 +57,19 @@ def main(path: str) -> dict:
     bpy.context.view_layer.update()
     meshes = [o for o in bpy.context.scene.objects if o.type == "MESH"]
     report = {"blender": bpy.app.version_string, "file": path, "meshes": len(meshes)}
-    if suffix == "glb":
-        report["file_vertices"] = file_vertex_count(path)
+    if suffix == "glb":  # the importer reads only the extensions it knows (Blender 4.5 and 5.0:
+        # not KHR_materials_diffuse_transmission; the Transmission Weight is the other one's)
+        gltf = glb_json(path)
+        report["file_vertices"] = file_vertex_count(gltf)
+        report["extensions_used"] = gltf.get("extensionsUsed", [])
     corners = [o.matrix_world @ Vector(c) for o in meshes for c in o.bound_box]
     report["extent_xyz"] = [
         round(max(c[i] for c in corners) - min(c[i] for c in corners), 6) for i in range(3)
     ]
     report["min_xyz"] = [round(min(c[i] for c in corners), 6) for i in range(3)]
+    points = [o.matrix_world @ v.co for o in meshes for v in o.data.vertices]
+    # the leaf's base is at the origin: its nearest vertex there (0 up to the mesh's spacing)
+    report["nearest_vertex_to_origin"] = round(min(p.length for p in points), 6)
     report["objects"] = []
     for obj in meshes:
         mesh = obj.data
@@ -126,6 +140,8 @@ def render(
     scene.collection.objects.link(camera)
     camera.location = centre + Vector((0.6, -0.9, 1.1)) * size
     camera.rotation_euler = (centre - camera.location).to_track_quat("-Z", "Y").to_euler()
+    # Blender's default clip (0.1 to 100 m) cut the near half off a 6 cm leaf seen from 9 cm
+    camera.data.clip_start, camera.data.clip_end = 0.01 * size, 100 * size
     scene.camera = camera
     sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", type="SUN"))
     sun.data.energy = 4.0

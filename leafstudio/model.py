@@ -83,6 +83,11 @@ class Bend(Protocol):
         m parallel lines, each row the first's less a constant), or None."""
         ...
 
+    def trim(self, points: np.ndarray) -> np.ndarray | None:
+        """(n,) signed distances of (n, 3) flat points from the edges of the blade's holes,
+        negative inside one (core/bend.py cuts them out of the mesh), or None without holes."""
+        ...
+
 
 @dataclass(frozen=True, eq=False)
 class Leaf:

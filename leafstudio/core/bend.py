@@ -99,6 +99,17 @@ class Pose:
             points[:, 2] = r * _unrolled_height(np.hypot(y, z) * abs(self.roll))
         return points
 
+    def flat_curve(self, points: np.ndarray, ring: bool = False) -> np.ndarray:
+        """`flatten` for a curve's (n, 3) points in order along it (`ring`: closed): a rolled
+        tube's points near its seam kept on their side (`unseamed`)."""
+        flat = self.flatten(points)
+        flat[:, 1] = unseamed(flat[:, 1], self.roll, ring)
+        return flat
+
+    def trim(self, points: np.ndarray) -> None:
+        """A pose cuts nothing out of the blade (model.Bend.trim)."""
+        return None
+
     def key(self) -> bytes:
         """Bytes that change with the bend (Leaf.fingerprint); no roll or twist keeps today's."""
         terms = [self.fold, self.curl] + ([self.roll] if self.roll != 0 else [])
@@ -158,48 +169,42 @@ def flat_leaf(leaf: Leaf) -> Leaf:
 
 
 def flat_curve(bend, points: np.ndarray, ring: bool = False) -> np.ndarray:
-    """(n, 3) flat points of a curve's (n, 3) bent points, in order along it (`ring`: closed).
+    """(n, 3) flat points of a curve's (n, 3) bent points, in order along it (`ring`: closed):
+    a pose's own `flat_curve` (a tube's seam, `unseamed`), else the bend's `flatten`."""
+    own = getattr(bend, "flat_curve", None)  # Pose, PlacedPose
+    return bend.flatten(points) if own is None else own(points, ring)
+
+
+def unseamed(v: np.ndarray, roll: float, ring: bool = False) -> np.ndarray:
+    """(n,) flat v (across the midrib) of a curve's points, in order along it, with the points
+    near a tube's seam on their side.
 
     A tube's margins meet where the roll reaches half a turn, and a point there flattens onto
     either margin: one a hair past the seam (a pose fitted to the curves, core/unfold.py) went to
     the other one and the outline crossed itself (a grass blade rolled into a tube). A point
     within SEAM of the seam keeps the side of the last point before it that is clear of it."""
-    flat = bend.flatten(points)
-    pose = getattr(bend, "pose", bend)  # a Pose, or a PlacedPose's
-    roll = float(getattr(pose, "roll", 0.0))
-    if roll == 0 or len(flat) < 2:
-        return flat
-    frame = getattr(bend, "frame", None)  # blade coordinates: a PlacedPose's frame, or the world
-    xy, z = (flat[:, :2].copy(), flat[:, 2]) if frame is None else frame.to_plane(flat)
+    if roll == 0 or len(v) < 2:
+        return v
     half = np.pi / abs(roll)  # the seam's v
-    clear = np.abs(xy[:, 1]) < (1 - SEAM) * half
+    clear = np.abs(v) < (1 - SEAM) * half
     if clear.all() or not clear.any():
-        return flat
-    order = np.arange(len(flat))
+        return v
+    order = np.arange(len(v))
     if ring:  # from a clear point: each run along the seam has one before it
         order = np.roll(order, -int(np.argmax(clear)))
     last = np.where(clear[order], np.arange(len(order)), -1)
     last = np.maximum.accumulate(last)
     last[last < 0] = int(np.argmax(clear[order]))  # an open curve's first run: the next clear
-    side = np.sign(xy[order[last], 1])
-    v = xy[order, 1]
-    wrong = ~clear[order] & (np.sign(v) != side) & (side != 0)
-    if not wrong.any():
-        return flat
-    v[wrong] += side[wrong] * 2 * half
-    xy[order, 1] = v
-    return np.column_stack([xy, z]) if frame is None else frame.to_world(xy, z)
+    side = np.sign(v[order[last]])
+    along = v[order]
+    wrong = ~clear[order] & (np.sign(along) != side) & (side != 0)
+    along[wrong] += side[wrong] * 2 * half
+    out = np.array(v, dtype=float)
+    out[order] = along
+    return out
 
 
 Plan = list[tuple[np.ndarray, np.ndarray]]  # per cut: (k, 2) edges cut and (k,) where along them
-
-
-def cut_along(mesh: TriangleMesh, side: np.ndarray) -> TriangleMesh:
-    """`mesh` with its triangles cut where the (n,) values `side` pass through 0 (linearly along
-    each edge), point data interpolated: a bend's crease then runs along edges of the mesh
-    instead of across its triangles (a fold's chords cut 0.3% of the length under the midrib)."""
-    faces, plan = cut_levels(mesh.regular_faces, side, np.zeros(1))
-    return TriangleMesh(carried(mesh.points, plan), faces, carried_data(mesh.point_data, plan))
 
 
 def cut_levels(faces: np.ndarray, q: np.ndarray, levels: np.ndarray) -> tuple[np.ndarray, Plan]:
@@ -291,37 +296,36 @@ def carried_data(point_data: dict[str, np.ndarray], plan: Plan) -> dict[str, np.
     return {name: carried(v, plan) for name, v in point_data.items()}
 
 
-def _crease_cuts(mesh: TriangleMesh, crease, trim=None) -> tuple[np.ndarray, Plan]:
-    """The mesh's faces cut along the bend's creases, and the plan of the new points. The
-    creases are parallel lines: the first one's distances and the others' offsets from it say
-    where each runs. `trim` (a scan's holes, core/sheet.Scaled.trim): the faces also cut where
-    it is zero, and those where it is negative dropped."""
+def _crease_cuts(mesh: TriangleMesh, crease, trim) -> tuple[np.ndarray, Plan, bool]:
+    """The mesh's faces cut along the bend's creases, the plan of the new points, and whether
+    `trim` cut any. The creases are parallel lines: the first one's distances and the others'
+    offsets from it say where each runs. `trim` (model.Bend.trim: a scan's holes): the faces
+    also cut where it is zero, and those where it is negative dropped."""
     side = crease(mesh.points)
     faces, plan = mesh.regular_faces, []
     if side is not None:
         side = np.atleast_2d(side)
         faces, plan = cut_levels(faces, side[0], side[0, 0] - side[:, 0])
-    cut = None if trim is None else trim(carried(mesh.points, plan))
+    cut = trim(carried(mesh.points, plan))
     if cut is None:
-        return faces, plan
+        return faces, plan, False
     faces, more = cut_levels(faces, cut, np.zeros(1))
-    return faces[carried(cut, more)[faces].mean(axis=1) >= 0], plan + more
+    return faces[carried(cut, more)[faces].mean(axis=1) >= 0], plan + more, True
 
 
 def _bent_meshes(
-    meshes: list[TriangleMesh], carries: list, creases: list, trims: list | None = None
+    meshes: list[TriangleMesh], carries: list, creases: list, trims: list
 ) -> list[TriangleMesh]:
     """Each mesh cut along the bend's creases (`creases`, in its units), trimmed (`trims`, see
     _crease_cuts; the points no face keeps dropped) and carried into 3D by its `carry`; a mesh
     with the first's faces (one mesh at another size) is cut as it was."""
-    trims = trims or [None] * len(meshes)
     cuts = _crease_cuts(meshes[0], creases[0], trims[0])
     out = []
     for mesh, carry, crease, trim in zip(meshes, carries, creases, trims, strict=True):
         same = np.array_equal(mesh.regular_faces, meshes[0].regular_faces)
-        faces, plan = cuts if same else _crease_cuts(mesh, crease, trim)
+        faces, plan, trimmed = cuts if same else _crease_cuts(mesh, crease, trim)
         points, data = carried(mesh.points, plan), carried_data(mesh.point_data, plan)
-        if trim is not None and len(used := np.unique(faces)) < len(points):
+        if trimmed and len(used := np.unique(faces)) < len(points):
             index = np.zeros(len(points), dtype=faces.dtype)
             index[used] = np.arange(len(used))
             points, faces = points[used], index[faces]
@@ -342,13 +346,12 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
 
     unit = result.unit
     meshes, carries, creases = [result.triangle_mesh], [bend.apply], [bend.crease]
-    trim = getattr(bend, "trim", None)  # a scan's holes (core/sheet.Scaled.trim)
-    trims = [trim]
+    trims = [bend.trim]  # a scan's holes (core/sheet.Scaled.trim)
     if unit is not None:  # the same mesh at unit size: cut along the same lines
         meshes.append(unit.triangle_mesh)
         carries.append(in_units)
         creases.append(lambda points: bend.crease(units.to_world(points)))
-        trims.append(None if trim is None else lambda points: trim(units.to_world(points)))
+        trims.append(lambda points: bend.trim(units.to_world(points)))
     bent = _bent_meshes(meshes, carries, creases, trims)
     if unit is not None:
         unit = replace(

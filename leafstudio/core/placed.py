@@ -41,6 +41,15 @@ class PlacedPose:
         """(n, 3) bent points back on the flat blade (the inverse of `apply`)."""
         return self._world(self.pose.flatten(self._blade(points)))
 
+    def flat_curve(self, points: np.ndarray, ring: bool = False) -> np.ndarray:
+        """`flatten` for a curve's (n, 3) points in order along it (`ring`: closed), a rolled
+        tube's points near its seam kept on their side (`Pose.flat_curve`)."""
+        return self._world(self.pose.flat_curve(self._blade(points), ring))
+
+    def trim(self, points: np.ndarray) -> None:
+        """A pose cuts nothing out of the blade (model.Bend.trim)."""
+        return None
+
     def key(self) -> bytes:
         """Bytes that change with the pose or its frame (Leaf.fingerprint)."""
         f = self.frame

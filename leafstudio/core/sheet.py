@@ -212,6 +212,10 @@ class Sheet:
         """A sheet is smooth: no crease."""
         return None
 
+    def trim(self, points: np.ndarray) -> None:
+        """A bare sheet has no holes (`Scaled.trim` has a scan's)."""
+        return None
+
 
 def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None:
     """The sheet through (n, 3) blade points, or None when they cannot be unrolled (`unroll`).

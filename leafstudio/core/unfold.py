@@ -22,7 +22,7 @@ import shapely
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from leafstudio.core.bend import Pose, flat_curve
+from leafstudio.core.bend import Pose
 from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame
 from leafstudio.model import Leaf
@@ -81,11 +81,11 @@ def _starts(boundary: np.ndarray, midrib: np.ndarray) -> list[np.ndarray]:
 def _lies_flat(bend: PlacedPose, leaf: Leaf) -> bool:
     """Whether `bend` unfolds `leaf` into a blade: its outline not crossing itself, and the
     veins' points inside it (all but VEINS_OUT of them)."""
-    flat = bend.frame.to_plane(flat_curve(bend, leaf.boundary, ring=True))[0]
+    flat = bend.frame.to_plane(bend.flat_curve(leaf.boundary, ring=True))[0]
     if not shapely.LinearRing(flat).is_simple:
         return False
     region = shapely.Polygon(flat).buffer(1e-3 * float(np.ptp(flat, axis=0).max()))
-    veins = bend.frame.to_plane(np.vstack([flat_curve(bend, v) for v in leaf.veins]))[0]
+    veins = bend.frame.to_plane(np.vstack([bend.flat_curve(v) for v in leaf.veins]))[0]
     return bool(np.mean(~shapely.contains_xy(region, veins[:, 0], veins[:, 1])) <= VEINS_OUT)
 
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import leafstudio as ls
-from leafstudio.core.bend import Pose, carried, cut_along, cut_levels
+from leafstudio.core.bend import Pose, carried, carried_data, cut_levels
 from leafstudio.core.trianglemesh import TriangleMesh
 from leafstudio.forms.make import Form, seen_on_edge
 
@@ -61,7 +61,8 @@ def test_the_bent_mesh_is_the_flat_blades_mesh_bent():
 def test_a_cut_keeps_the_area_and_leaves_no_triangle_across_the_line():
     mesh = _grid_mesh(5, 0.45)
     points = mesh.points
-    cut = cut_along(mesh, points[:, 1] - 0.01)
+    faces, plan = cut_levels(mesh.regular_faces, points[:, 1], np.array([0.01]))
+    cut = TriangleMesh(carried(points, plan), faces, carried_data(mesh.point_data, plan))
     corners = cut.points[cut.regular_faces]
     area = 0.5 * np.linalg.norm(
         np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
