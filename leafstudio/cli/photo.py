@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from leafstudio.assets.placement import parse_length
+from leafstudio.errors import LeafError
 from leafstudio.sources.files import check_leaf_output
 from leafstudio.sources.photo import (
     BASE_ENDS,
@@ -24,9 +26,10 @@ def add_photo_parser(sub: argparse._SubParsersAction) -> None:
         help=".leaf.json (keeps the photo's pixel map for --texture), .csv, .txt, .xyz or .ply",
     )  # fmt: skip
     p.add_argument(
-        "--length", type=float, metavar="L",
-        help="base to apex (default: the photo's own scale in millimetres when its file records "
-        "a resolution, as a flatbed scan's DPI; else 1)",
+        "--length", type=photo_length, metavar="L",
+        help="base to apex: with a unit (6cm, 60mm) in millimetres, else in the leaf's own "
+        "units (default: the photo's own scale in millimetres when its file records a "
+        "resolution, as a flatbed scan's DPI; else 1)",
     )  # fmt: skip
     p.add_argument(
         "--base-end", choices=BASE_ENDS, default="auto",
@@ -40,6 +43,19 @@ def add_photo_parser(sub: argparse._SubParsersAction) -> None:
     )  # fmt: skip
     p.add_argument("--venation", default="pinnate", help="for grown veins (default pinnate)")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="vein growth's variant")
+
+
+def photo_length(text: str) -> float:
+    """`--length`: a bare number as it is, a length with its unit (6cm, as `form` and
+    `reconstruct` take it) in millimetres, the unit a photo's own scale gives."""
+    try:
+        return float(text)
+    except ValueError:
+        try:
+            return parse_length(text) * 1e3
+        except LeafError as error:  # argparse names the option itself
+            said = str(error).removeprefix("--length").lstrip(": ")
+            raise argparse.ArgumentTypeError(said) from None
 
 
 def run_photo(args: argparse.Namespace) -> int:

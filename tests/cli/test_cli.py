@@ -145,3 +145,30 @@ def test_console_script_never_shows_a_traceback(tmp_path: Path):
         run.stderr.strip()
         == f"leafstudio: error: {bad}: line 2: expected 3 or 4 columns (x y z [label]), got 2"
     )
+
+
+@pytest.mark.parametrize(("length", "expected"), [("6cm", 60.0), ("60mm", 60.0), ("3", 3.0)])
+def test_photo_length_takes_units_as_form_and_reconstruct_do(tmp_path: Path, length, expected):
+    """`photo --length 6cm` was refused ("invalid float value") where `form` and `reconstruct`
+    take it: with a unit, the leaf is written in millimetres (a photo's own scale, its DPI); a
+    bare number stays the leaf's length in its own units."""
+    from PIL import Image
+
+    import leafstudio as ls
+    from leafstudio.forms import make_form
+    from tests.photos import form_photo
+
+    form = make_form("ovate")
+    photo = tmp_path / "photo.png"
+    Image.fromarray(form_photo(form.boundary, form.veins)[0]).save(photo)
+    out = tmp_path / "leaf.leaf.json"
+    assert main(["photo", str(photo), "-o", str(out), "--length", length, "--veins", "none"]) == 0
+    boundary = ls.load_leaf(out).boundary
+    assert np.ptp(boundary, axis=0).max() == pytest.approx(expected, rel=0.03)
+
+
+def test_photo_bad_length_is_one_line_exit_2(tmp_path: Path, capsys):
+    code = main(["photo", str(tmp_path / "x.png"), "-o", str(tmp_path / "x.leaf.json"),
+                 "--length", "6 inches"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 2 and "--length" in err and err.count("\n") == 1
