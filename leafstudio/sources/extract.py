@@ -23,6 +23,7 @@ masks go back to every scan point through its voxel. Smaller scans are used as t
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import shapely
@@ -39,7 +40,7 @@ from leafstudio.core.sheet import CELLS, Scaled, fit_sheet
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
 from leafstudio.sources.scan_holes import holes
-from leafstudio.sources.scan_veins import chord_at, midline, side_veins
+from leafstudio.sources.scan_veins import PETIOLE_SHARE, base_point, midline, side_veins
 
 MIN_POINTS = 50
 OUTLIER_FACTOR = 3.0  # a point whose mean neighbour distance exceeds this many medians is noise
@@ -53,12 +54,10 @@ LIFT_NEIGHBOURS = 16
 RIM_KERNEL = np.array([1.0, 2.0, 3.0, 2.0, 1.0])  # smooths the margin's heights along it
 OUTLINE_POINTS = 200  # the outline's default count; its spacing sets the veins' and the rim's
 OPENING = 0.015  # the outline is opened by this share of the length (drops thin stubs)
-PETIOLE_SHARE = 0.02  # fewer points than this share of the blade's do not mark the base
 STRAND = 0.35  # a petiole's second spread is at most this share of its first (the real scans'
 # petioles: 0.06-0.23; the pieces of blade the ball test leaves: sheets 0.60-0.64, strips 0.12-0.34)
 STICK_OUT = 0.5  # ... and its far end this share of its length from the blade (petioles: 0.92-1.05;
 # strips along the margin: 0.09-0.18)
-AXES = {"+x": 0, "-x": 0, "+y": 1, "-y": 1, "+z": 2, "-z": 2}
 BUDGET = 40_000  # larger scans are thinned to at most this many voxel centroids
 THINNING_PASSES = 8
 PROBES = 10_000  # blade_points counts a ball's points among this many at most
@@ -88,6 +87,20 @@ class Extraction:
     blade: np.ndarray
     petiole: np.ndarray
     length: float
+
+
+class _Found(NamedTuple):
+    """What `_extract` found on the scan at unit size: the leaf, the blade and petiole masks, the
+    blade point nearest the base, the blade's plane, the region its points keep to and holes."""
+
+    leaf: Leaf
+    blade: np.ndarray  # (n,) bool
+    petiole: np.ndarray  # (n,) bool
+    base: int | None  # the blade point nearest a base the petiole or an axis told
+    origin: np.ndarray  # (3,)
+    axes: np.ndarray  # (3, 3) rows: u (length), v, normal
+    region: Polygon
+    holes: list[np.ndarray]  # (k, 2) rings in the plane: on a flattened blade (scan_holes.py)
 
 
 def _neighbour_spacing(points: np.ndarray) -> np.ndarray:
@@ -248,32 +261,6 @@ def _resample(polygon: Polygon, count: int) -> np.ndarray:
     return shapely.get_coordinates(shapely.line_interpolate_point(ring, steps))
 
 
-def _base_point(
-    base_end: str, axes: np.ndarray, outline: np.ndarray, xy: np.ndarray, petiole: np.ndarray
-) -> np.ndarray:
-    """(2,) the blade's base in the plane: where the petiole joins (auto, if there is one), else
-    the outline's extreme along the main axis at the base end (auto: the wider end)."""
-    u = outline[:, 0]
-    if base_end == "auto":
-        if len(petiole) >= PETIOLE_SHARE * len(xy):
-            joint = cKDTree(xy).query(petiole)[0]
-            attach = petiole[np.argsort(joint)[: max(3, len(petiole) // 10)]].mean(axis=0)
-            return outline[np.argmin(np.linalg.norm(outline - attach, axis=1))]
-        lo, hi = u.min(), u.max()
-        polygon = Polygon(outline)
-        width = [chord_at(polygon, lo + f * (hi - lo)).length for f in (0.25, 0.75)]
-        side = 1.0 if width[1] > width[0] else -1.0
-    elif base_end in AXES:
-        sign = 1.0 if base_end[0] == "+" else -1.0
-        along = sign * axes[0, AXES[base_end]]
-        if abs(along) < 1e-6:
-            raise LeafError(f"base end {base_end}: the leaf's length lies across that axis")
-        side = float(np.sign(along))
-    else:
-        raise LeafError(f"base end must be auto or one of {', '.join(AXES)}, got {base_end!r}")
-    return outline[np.argmax(side * u)]
-
-
 def extract_leaf(
     points: np.ndarray,
     base_end: str = "auto",
@@ -311,17 +298,17 @@ def extract_leaf(
     progress.report(0.1, FINDING)
     found = _extract(thinned, base_end, count)
     progress.report(0.3, FINDING)
-    span = float(np.ptp(thinned[found[1]] @ found[4][0]))
+    span = float(np.ptp(thinned[found.blade] @ found.axes[0]))
     with progress.share(0.3, 0.75):
-        sheet = fit_sheet(thinned[found[1]], found[4][2], span)
+        sheet = fit_sheet(thinned[found.blade], found.axes[2], span)
     flatten = (lambda q: q) if sheet is None else sheet.flatten
     flat = thinned if sheet is None else sheet.flatten(thinned)
     progress.report(0.8, FINDING)
     if sheet is not None:  # the blade unrolled (core/sheet.py), its outline and veins found there
         held = (sheet.centres_flat(), HELD * span / CELLS)
-        found = _extract(flat, base_end, count, found[1:3], held)
+        found = _extract(flat, base_end, count, (found.blade, found.petiole, found.base), held)
     progress.report(0.9, FINDING)
-    leaf, blade, petiole, origin, axes, region = found
+    leaf, blade, petiole, _, origin, axes, region, _ = found
     length = float(np.ptp((flat[blade] - origin) @ axes[0]))
     if cell is not None:  # each point as its cube's centroid; a petiole stub cut as there
         # a point lies within its cube's diagonal of the cube's centroid: a cube whose centroid
@@ -343,8 +330,7 @@ def extract_leaf(
         length = float(np.ptp(local[at_ends, 0])) if at_ends.any() else length
     bend = None
     if sheet is not None:  # holes in the flat blade, in the sheet's (u, v)
-        xy = (flat[found[1]] - origin) @ axes[:2].T
-        rings = [(origin + np.pad(r, ((0, 0), (0, 1))) @ axes)[:, :2] for r in holes(region, xy)]
+        rings = [(origin + np.pad(r, ((0, 0), (0, 1))) @ axes)[:, :2] for r in found.holes]
         bend = Scaled(sheet, centre, scale, holes=tuple(rings))
     progress.report(1.0, FINDING)
 
@@ -444,13 +430,13 @@ def _extract(
     points: np.ndarray,
     base_end: str,
     count: int,
-    split: tuple | None = None,
+    split: tuple[np.ndarray, np.ndarray, int | None] | None = None,
     held: tuple[np.ndarray, float] | None = None,
-) -> tuple[Leaf, np.ndarray, np.ndarray, np.ndarray, np.ndarray, Polygon]:
-    """extract_leaf on the scan at unit size (and thinned): the leaf, the blade and petiole masks,
-    the blade's plane (origin (3,), axes (3, 3)) and the region the blade's points keep to.
-    `split`: the blade and petiole masks found before (on the unflattened scan); `held`: on a
-    flattened blade, the sheet's cube means (m, 3) and how far from them the sheet is known."""
+) -> _Found:
+    """extract_leaf on the scan at unit size (and thinned). `split`: the blade and petiole
+    masks and the base's blade point found before (on the unflattened scan, where a petiole and
+    a world axis mean what they say; None for the wider end); `held`: on a flattened blade, the
+    sheet's cube means (m, 3) and how far from them the sheet is known."""
     blade, petiole = split_scan(points) if split is None else (split[0].copy(), split[1].copy())
     if blade.sum() < MIN_POINTS:
         raise LeafError(f"found only {blade.sum()} blade points in the scan (need {MIN_POINTS})")
@@ -476,10 +462,22 @@ def _extract(
             f"{MIN_POINTS}): the scan does not look like a leaf surface"
         )
     xy, h = local[blade, :2], local[blade, 2]
-    base = _base_point(base_end, axes, boundary_xy, xy, local[petiole, :2])
+    # the base: on the flat blade, its wider end (the points cut there are the held part's, no
+    # petiole: soybean pot1_1's base landed in a bay by them); the petiole's end or a world
+    # axis's as found on the unflattened scan (a petiole's flat points lie off the sheet)
+    told = local[petiole, :2] if split is None else np.zeros((0, 2))
+    carried = None if split is None else split[2]
+    if carried is None:
+        base = base_point(base_end, axes, boundary_xy, xy, told)
+    else:
+        base = boundary_xy[np.argmin(np.linalg.norm(boundary_xy - local[carried, :2], axis=1))]
+    base_at = None
+    if split is None and (base_end != "auto" or len(told) >= PETIOLE_SHARE * len(xy)):
+        base_at = int(np.flatnonzero(blade)[np.argmin(np.linalg.norm(xy - base, axis=1))])
     midrib = midline(boundary_xy, base, spacing)
-    gaps = cKDTree(xy)
-    reach = 2.0 * float(np.percentile(gaps.query(xy, k=2)[0][:, 1], 95))
+    gaps = cKDTree(xy)  # the blade's points and their gap, for the side veins and the holes
+    gap = float(np.percentile(gaps.query(xy, k=2)[0][:, 1], 95))
+    reach = 2.0 * gap
 
     def covered(q: np.ndarray) -> np.ndarray:
         return np.isfinite(gaps.query(q, distance_upper_bound=reach)[0])
@@ -497,4 +495,6 @@ def _extract(
     rim = np.convolve(np.tile(lift(boundary_xy, xy, h), 3), kernel / kernel.sum(), "same")
     boundary = world(boundary_xy, rim[count : 2 * count])
     veins = veins_inside_outline(boundary, [world(v) for v in veins_xy], spacing)
-    return Leaf(boundary=boundary, veins=veins), blade, petiole, origin, axes, region
+    rings = holes(region, gaps, gap) if held is not None else []
+    leaf = Leaf(boundary=boundary, veins=veins)
+    return _Found(leaf, blade, petiole, base_at, origin, axes, region, rings)

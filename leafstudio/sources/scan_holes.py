@@ -22,25 +22,26 @@ HOLE = 4.0  # the smallest hole's radius, in point gaps
 ROUND = 8  # segments of a quarter circle in the discs
 
 
-def holes(region: Polygon, xy: np.ndarray) -> list[np.ndarray]:
-    """(k, 2) rings of the holes in (n, 2) blade points within their outline `region`.
+def holes(region: Polygon, tree: cKDTree, gap: float) -> list[np.ndarray]:
+    """(k, 2) rings of the holes among the blade points of `tree` within their outline `region`.
 
     Parameters
     ----------
     region : Polygon
         The blade's outline (a little widened), in the points' plane.
-    xy : (n, 2) float array
-        The blade's points in that plane.
+    tree : cKDTree
+        Over the blade's (n, 2) points in that plane (extract.py's, built once for the veins too).
+    gap : float
+        The 95th percentile of the points' nearest-neighbour distances.
 
     Returns
     -------
     list of (k, 2) float arrays
         Each hole's outline, closed (its first point repeated last); none for a blade without one.
     """
+    xy = tree.data
     if len(xy) < 3:
         return []
-    tree = cKDTree(xy)
-    gap = float(np.percentile(tree.query(xy, k=2)[0][:, 1], 95))
     radius = HOLE * gap
     if not radius > 0 or not _room(region, tree, radius):
         return []

@@ -46,22 +46,10 @@ def test_a_forms_drawn_midrib_is_traced_within_2_percent(shape, angle):
     assert len(found.leaf.veins) - 1 >= 0.6 * (len(leaf.veins) - 1)  # most secondaries seen
 
 
-# soybean pot1_1's drawn midrib is no midrib a photo can show: 18% of it crosses the background
-# (its unrolled blade, core/sheet.py, does not hold it) and it starts 28% of the length inside
-# the blade, so no reader of the blade can follow it
-DRAWN_OFF_THE_BLADE = ("soybean_11_20190508T043118_pot1_1",)
 CANVAS = (820, 820)  # the 560-pixel leaf turned 30 degrees fits with a margin
 
 
-@pytest.mark.parametrize(
-    "scan",
-    [
-        pytest.param(p, marks=pytest.mark.xfail(strict=True, reason="drawn midrib off the blade"))
-        if p.stem in DRAWN_OFF_THE_BLADE else p
-        for p in SCANS
-    ],
-    ids=lambda p: p.stem,
-)  # fmt: skip
+@pytest.mark.parametrize("scan", SCANS, ids=lambda p: p.stem)
 def test_a_real_leafs_outline_with_drawn_veins_gives_its_midrib(scan):
     """The traced midrib lies within 2% of the length of the drawn one over its whole length,
     both ways (_whole_length_gap)."""
@@ -77,19 +65,6 @@ def test_a_real_leafs_outline_with_drawn_veins_gives_its_midrib(scan):
     assert found.veins_from == "photo"
     drawn_px = photo_pixels(outline, 30.0, ppu, CANVAS)(veins[0])
     assert _whole_length_gap(found, drawn_px) <= 0.02
-
-
-def test_a_drawn_midrib_off_its_blade_is_no_reference():
-    """Why pot1_1 is expected to fail: its drawn midrib leaves the blade it is drawn on."""
-    from leafstudio.core.bend import flat_leaf
-    from leafstudio.workflows import open_scan
-
-    (scan,) = (p for p in SCANS if p.stem in DRAWN_OFF_THE_BLADE)
-    leaf = flat_leaf(open_scan(str(scan)).leaf)
-    frame = fit_frame(leaf.boundary, np.zeros((0, 3)))
-    blade = shapely.Polygon(frame.to_plane(leaf.boundary)[0])
-    midrib = shapely.LineString(frame.to_plane(leaf.veins[0])[0])
-    assert midrib.difference(blade).length > 0.1 * midrib.length
 
 
 def test_a_photo_without_visible_veins_grows_them_and_says_so(tmp_path, capsys):
