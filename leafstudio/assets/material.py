@@ -12,7 +12,8 @@ METALLIC, ROUGHNESS, ALPHA_CUTOFF = 0.0, 0.8, 0.5
 # BSDF's Transmission Weight; the validator checks it) and KHR_materials_diffuse_transmission
 # (the leaf's own model, a Lambertian lobe through the blade, for renderers that know it; not
 # yet ratified, neither Blender 4.5's nor 5.0's importer reads it). Where both are read, the
-# first takes its share and the second the rest (the diffuse-transmission spec's mix).
+# first takes its share and the second the rest (the diffuse-transmission spec's mix). An OBJ's
+# MTL carries the first as `Tf` (Blender's OBJ importer reads it as the Transmission Weight).
 TRANSMISSION = 0.2  # the share of the diffuse lobe turned into rough transmission
 DIFFUSE_TRANSMISSION = 0.4  # the share of the diffuse lobe transmitted, Lambertian
 TRANSLUCENT_EXTENSIONS = ("KHR_materials_transmission", "KHR_materials_diffuse_transmission")

@@ -2,7 +2,8 @@
 
 - ``.ply``: binary, vertices x y z nx ny nz s t and the scalars (height, curvatures).
 - ``.obj``: v, vt, vn and faces f a/a/a, with `<stem>.mtl` and the texture
-  `<stem>_texture.png` beside it (not `<stem>.png`: often the photo the leaf came from).
+  `<stem>_texture.png` beside it (not `<stem>.png`: often the photo the leaf came from); a
+  sheet's MTL has `Tf`, its translucency.
 - ``.glb``, ``.gltf``: glTF 2.0 through trimesh (one file; .gltf with its buffers embedded):
   NORMAL, TEXCOORD_0, a double-sided PBR material with the base colour (and normal) texture, and
   the scalars as custom attributes _HEIGHT, _MEAN_CURVATURE, _GAUSSIAN_CURVATURE, _K1, _K2;
@@ -77,7 +78,10 @@ def obj_companions(path: Path) -> tuple[Path, Path]:
 
 def write_obj(asset: MeshAsset, path: Path) -> None:
     """OBJ with vt and vn (one index for all three: no seams), its .mtl and, if the asset has a
-    texture, the PNG beside it."""
+    texture, the PNG beside it; a sheet's MTL has glTF's transmission as `Tf` (material.py).
+
+    No normal map: Blender 4.5's importer reads `map_Bump` as one but loads the image as sRGB,
+    which tilts every normal (the veins' relief was lost and the blade shaded darker)."""
     mtl, png = obj_companions(path)
     kd = " ".join(f"{c / 255:.4f}" for c in BLADE)
     lines = ["newmtl leaf", "Ka 0 0 0", "Ks 0 0 0", "illum 1"]
@@ -86,6 +90,8 @@ def write_obj(asset: MeshAsset, path: Path) -> None:
         lines += ["Kd 1 1 1", f"map_Kd {png.name}", f"map_d {png.name}"]
     else:
         lines.append(f"Kd {kd}")
+    if not asset.solid:
+        lines.append(f"Tf {TRANSMISSION} {TRANSMISSION} {TRANSMISSION}")
     write_bytes(mtl, ("\n".join(lines) + "\n").encode())
     rows = [f"# LeafStudio leaf: {asset.n_points} vertices, {len(asset.faces)} triangles",
             f"mtllib {mtl.name}", f"o {asset.name}"]  # fmt: skip

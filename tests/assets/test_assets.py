@@ -418,3 +418,19 @@ def test_a_sheets_material_is_translucent_and_validates(nested: ls.Result, tmp_p
     assert colour["diffuseTransmissionColorFactor"] == pytest.approx([c / 255 for c in BLADE])
     assert "extensions" not in gltf_json(tmp_path / "solid.glb")["materials"][0]
     assert_valid_gltf(tmp_path / "leaf.glb", tmp_path / "plain.glb")
+
+
+def test_an_obj_carries_its_translucency_to_blender(nested: ls.Result, tmp_path):
+    """Blender 4.5's OBJ importer made a glTF's translucent leaf opaque: the MTL named only the
+    base colour. It reads `Tf` as the Principled BSDF's Transmission Weight (bpy 4.5.15,
+    benchmarks/check_blender.py), so a sheet's MTL has the glTF's share of transmission; a solid
+    stays opaque. (No normal map: that importer loads a `map_Bump` image as sRGB, writers.py.)"""
+    from leafstudio.assets.material import TRANSMISSION
+
+    ls.save_mesh(nested, tmp_path / "leaf.obj")
+    ls.save_mesh(nested, tmp_path / "plain.obj", texture="none")
+    for name in ("leaf.mtl", "plain.mtl"):
+        lines = (tmp_path / name).read_text().splitlines()
+        assert f"Tf {TRANSMISSION} {TRANSMISSION} {TRANSMISSION}" in lines
+    ls.save_mesh(nested, tmp_path / "solid.obj", thickness=0.01 * nested.length)
+    assert "Tf" not in (tmp_path / "solid.mtl").read_text()
