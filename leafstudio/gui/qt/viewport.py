@@ -63,6 +63,8 @@ class Viewport(QWidget):
         self._bars: dict[str, tuple] = {}
         self._placed: tuple | None = None  # the preset and camera the view last framed with
         self._redraw_due = False
+        self._made = False  # an actor made since the last render (its first render sets it up)
+        self._later: set[str] = set()  # layers that wait for that render (set_layer)
         self.plotter.render_window.AddObserver("EndEvent", self._on_render_end)
         self.apply_palette()
 
@@ -130,9 +132,19 @@ class Viewport(QWidget):
     def set_layer(self, key: str, pieces: list[Piece]) -> None:
         """Replace one layer's pieces (the scan and Poisson layers, which come apart from
         results); drawn now if the layer is on, else when it is switched on. Nothing drawn
-        before or after (a hidden Poisson layer with each result): no render."""
+        before or after (a hidden Poisson layer with each result): no render.
+
+        A layer whose actors are new waits for the render due when another actor was made
+        since the last one (an opened scan's points after the mesh recoloured by height): the
+        first render of a new kind of actor sets up its shaders, tens of milliseconds of the
+        main thread each under software OpenGL, so two new kinds take two renders."""
         self._pieces[key] = pieces
         drawn = bool(self._names[key])
+        if self._made and not drawn and pieces and self.visible[key] and self.isVisible():
+            self._later.add(key)
+            self.redraw()
+            return
+        self._later.discard(key)
         if self.visible[key]:
             self._draw_layer(key)
         else:
@@ -154,9 +166,18 @@ class Viewport(QWidget):
         self.plotter.interactor.update()  # VTK renders at the widget's paint
 
     def _on_render_end(self, *_: object) -> None:
+        self._made = False
+        if self._later:
+            QTimer.singleShot(0, self, self._draw_later)
         if self._announce:
             self._announce = False
             self.rendered.emit()
+
+    def _draw_later(self) -> None:
+        """Draw the layers that waited for a render (set_layer)."""
+        later, self._later = self._later, set()
+        for key in sorted(later):
+            self.set_layer(key, self._pieces.get(key, []))
 
     def _draw_layer(self, key: str) -> None:
         pieces = self._pieces.get(key, [])
@@ -218,6 +239,7 @@ class Viewport(QWidget):
             actor.prop.show_edges = bool(style.get("show_edges", actor.prop.show_edges))
             actor.SetVisibility(self.visible[key])
             return
+        self._made = True
         actor = self.plotter.add_mesh(
             data,
             name=piece.name,
@@ -247,6 +269,7 @@ class Viewport(QWidget):
         for key in self._names:
             self._remove_layer(key)
         self._pieces.clear()
+        self._later.clear()
         self._mesh_piece = None
         self._sync_scalar_bars()
         self._has_content = False

@@ -209,3 +209,31 @@ def test_no_measuring_while_a_slider_is_held(window, qtbot, monkeypatch):
     window.panel.released.emit()
     qtbot.waitUntil(lambda: measured == [1], timeout=WAIT_MS)
     assert window.session.shown.measured_id == window.session.shown_id
+
+
+def test_a_new_layer_waits_for_the_render_of_an_actor_made_before_it(window, qtbot):
+    """An opened scan recolours the mesh by height (a new actor) and adds its points (new
+    actors too): each new kind of actor sets up its shaders at its first render, tens of ms of
+    the main thread under software OpenGL, so the points wait for the mesh's render and each
+    render sets up one (issue 24: the scan's opening stalled 56-60 ms in that one render)."""
+    from functools import partial
+
+    from leafstudio.gui.model.pieces import Piece, cloud, dots
+
+    qtbot.wait(200)  # whatever the first result left to paint
+    viewport = window.viewport
+    scene: list[set[str]] = []  # the actors of each render
+    viewport.plotter.render_window.AddObserver(
+        "StartEvent", lambda *_: scene.append(set(viewport.plotter.actors))
+    )
+    points = np.random.default_rng(0).normal(size=(20_000, 3)) * [0.3, 0.1, 0.01]
+    scan = [Piece("scan:blade", partial(cloud, points), dots("#2e7d32", 3.0, len(points)))]
+    before = viewport.mesh_coloring
+    viewport.set_mesh_coloring("height")  # a new mesh actor
+    viewport.set_layer("scan", scan)
+    qtbot.waitUntil(lambda: viewport.actor_names("scan") == ["scan:blade"], timeout=WAIT_MS)
+    qtbot.wait(200)  # its render
+    first = next(i for i, names in enumerate(scene) if "scan:blade" in names)
+    assert first >= 1  # the recoloured mesh had a render of its own
+    viewport.set_mesh_coloring(before)
+    viewport.set_layer("scan", [])
