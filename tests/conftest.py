@@ -39,9 +39,10 @@ def pytest_configure(config: pytest.Config) -> None:
         "markers", "open3d: the test needs open3d (the open3d extra); skipped without it"
     )
     if _xdist_controller(config):
-        from leafstudio.core.kernels import compile_kernels
+        from leafstudio.core.kernels import TABLES, compile_kernels
 
-        compile_kernels()  # in parallel processes; nothing to do on a warm cache (the stamp)
+        # every table, in parallel processes; nothing to do on a warm cache (the stamps)
+        compile_kernels(tables=TABLES)
         os.environ[SHARED] = tempfile.mkdtemp(prefix="leafstudio-tests-")  # workers inherit it
 
 

@@ -86,14 +86,15 @@ def _choose_folder() -> Path | None:
     return None
 
 
-def _cache_folder() -> Path:
+def cache_folder() -> Path:
+    """Where numba keeps the kernels now (NUMBA_CACHE_DIR, or beside the sources)."""
     folder = os.environ.get("NUMBA_CACHE_DIR")
     return Path(folder) if folder else CORE / "__pycache__"
 
 
-def _stamp() -> Path:
-    """A file named after the kernels' sources (every module under core/, by its path there,
-    size and time) and numba's version."""
+def _stamp(table: str = "kernels") -> Path:
+    """A file named after a table of kernels (core/kernels.TABLES), their sources (every module
+    under core/, by its path there, size and time) and numba's version."""
     import numba
 
     digest = hashlib.sha256(numba.__version__.encode())
@@ -102,21 +103,21 @@ def _stamp() -> Path:
         info = source.stat()
         name = source.relative_to(CORE).as_posix()  # core/prepare's modules by their folder too
         digest.update(f"{name}:{info.st_size}:{info.st_mtime_ns}".encode())
-    return _cache_folder() / f"leafstudio-kernels-{digest.hexdigest()[:16]}.stamp"
+    return cache_folder() / f"leafstudio-{table}-{digest.hexdigest()[:16]}.stamp"
 
 
-def kernels_cached() -> bool:
-    """Whether a run has compiled and cached the current kernels already."""
+def kernels_cached(table: str = "kernels") -> bool:
+    """Whether the current kernels of `table` (a run's by default) are compiled and cached."""
     try:
-        return _stamp().exists()
+        return _stamp(table).exists()
     except OSError:
         return True  # cannot tell: say nothing rather than something wrong
 
 
-def mark_cached() -> None:
-    """Record that the kernels are compiled (after a successful run); best effort."""
+def mark_cached(table: str = "kernels") -> None:
+    """Record that the kernels of `table` are compiled (after a successful run); best effort."""
     with contextlib.suppress(OSError):
-        stamp = _stamp()
+        stamp = _stamp(table)
         if not stamp.exists():
             stamp.parent.mkdir(parents=True, exist_ok=True)
             stamp.touch()

@@ -13,7 +13,7 @@ from typing import Any
 from leafstudio._shared.spawn import WorkerContext
 from leafstudio.batch.plan import Job
 from leafstudio.batch.worker import run_failed, run_job, worker_start
-from leafstudio.core.kernels import compile_kernels
+from leafstudio.core.kernels import TABLES, compile_kernels
 from leafstudio.errors import LeafError, shorten
 
 # Dask settings for `--scheduler local` (measured: a batch of scans ran 1.5-2x faster): no
@@ -55,7 +55,8 @@ class LocalPool:
     _shared/spawn.py)."""
 
     def __init__(self, jobs: int) -> None:
-        compile_kernels()  # a cold cache: compiled once, in parallel, not by every worker
+        # a cold cache: compiled once, in parallel, not by every worker (a row is measured too)
+        compile_kernels(tables=TABLES)
         self.workers = jobs
         self._context = WorkerContext()
         self._pool = self._new_pool()

@@ -20,6 +20,7 @@ from numba import njit
 from scipy.spatial import cKDTree
 
 from leafstudio.core.buckets import kernel_array
+from leafstudio.core.kernels import ensure_compiled
 
 LEAF = 4  # triangles per leaf box at most
 MORTON_BITS = 10  # per axis
@@ -37,6 +38,7 @@ def mesh_distances(vertices: np.ndarray, triangles: np.ndarray, points: np.ndarr
         if len(vertices) == 0:
             return np.full(len(points), np.inf)
         return cKDTree(vertices).query(points)[0]
+    ensure_compiled()  # a cold cache: in worker processes, not holding this one's GIL
     codes = _morton(_centroids(vertices, triangles))
     order = np.argsort(codes, kind="stable")
     tree = _build(vertices, triangles[order], codes[order])

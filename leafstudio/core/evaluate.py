@@ -21,6 +21,7 @@ from numba import njit
 from leafstudio.core.buckets import kernel_array
 from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.distance import mesh_distances
+from leafstudio.core.kernels import ensure_compiled
 from leafstudio.core.plane import Frame
 from leafstudio.core.trianglemesh import MeshLike
 from leafstudio.errors import LeafError
@@ -54,6 +55,7 @@ def edge_counts(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     triangles share each. Compiled: edges bucketed by their lower vertex, each bucket sorted
     (np.unique on one key per edge sorted all of them: 23 ms at grid 512, now 2 ms)."""
     triangles = kernel_array(np.asarray(triangles).reshape(-1, 3), np.int64)
+    ensure_compiled()
     return _edge_counts(triangles, int(triangles.max(initial=-1)) + 1)
 
 

@@ -19,9 +19,16 @@ Compiled only where a loop beats numpy at grid 512 (139,000 points): curvature's
 mixture's per-point loops are 5-10 times faster than numpy's whole-array expressions there
 (temporaries of (n, 2, 2)); the ring loops 10 times at a million-point cloud.
 
-tests/core/test_first_compile.py checks that `KERNELS` names every kernel core calls from Python
-(those of the metrics and of scans aside) with the signature a run calls it with. A kernel it
-missed would still work: the run would compile it, as before.
+The kernels a run calls on some inputs only (a cloud's projection) and those of measuring
+(distances to a mesh: the metrics, a scan's fidelity; edge counts) are a second table,
+`MEASURING`, compiled the same way when first needed (`ensure_compiled`: in the app, after the
+first result is on screen, its status saying so), so that the first reconstruction does not
+wait for them and the app's process never compiles them holding the GIL (its window stalled
+while they compiled on the worker thread). Set-up compiles both tables (`./dev setup`).
+
+tests/core/test_first_compile.py checks that the tables name every kernel core calls from
+Python, with the signature it is called with. A kernel they missed would still work: the
+caller would compile it, as before.
 """
 
 from __future__ import annotations
@@ -48,7 +55,7 @@ STAGE = "kernels"  # the name on_stage is called with while compiling ("kernels 
 
 f8, i8 = types.float64, types.int64
 F1, F2, F3 = f8[::1], f8[:, ::1], f8[:, :, ::1]
-I1, B1, B2 = i8[::1], types.boolean[::1], types.boolean[:, ::1]
+I1, I2, B1, B2 = i8[::1], i8[:, ::1], types.boolean[::1], types.boolean[:, ::1]
 RF1, RF2, RF3 = (types.Array(f8, n, "C", readonly=True) for n in (1, 2, 3))
 BUCKETS = types.NamedTuple([F1, f8, i8, i8, I1, I1], Buckets)
 CELLS = types.NamedTuple([F2, F1, F2], Cells)
@@ -84,6 +91,26 @@ KERNELS: dict[str, tuple[types.Type, ...]] = {
     "prepare.outline:_orientation": (F2, I1),
     "prepare.outline:_ring_length": (F2, I1),
 }
+# what measuring calls (a mesh's distances and edges) and a run on some inputs (a cloud's
+# projection onto its outline), costliest first; compiled when first needed (ensure_compiled)
+MEASURING: dict[str, tuple[types.Type, ...]] = {
+    "distance:_distances": (F2, F2, I2, I1, I1, I1, I1, F2, F2),
+    "distance:_build": (F2, I2, I1),
+    "prepare.cloud:_project_kernel": (F2, I1, F2, F2, F1, F1, i8, F1),
+    "distance:_morton": (F2,),
+    "evaluate:_edge_counts": (I2, i8),
+    "distance:_centroids": (F2, I2),
+}
+MEASURE = "measuring"  # MEASURING's name (its stamp's: kernelcache.kernels_cached)
+TABLES = (STAGE, MEASURE)  # every table, by name
+SIGNATURES = {**KERNELS, **MEASURING}  # what a worker process compiles each kernel for
+_COMPILING = threading.Lock()  # one compile at a time: a second caller waits for the first's
+_READY: set[tuple[str, str]] = set()  # (table, cache folder) this process knows to be cached
+
+
+def table(name: str) -> dict[str, tuple[types.Type, ...]]:
+    """The kernels of table `name`: STAGE, KERNELS; MEASURE, MEASURING."""
+    return {STAGE: KERNELS, MEASURE: MEASURING}[name]
 
 
 def compiling_notice(stage: str) -> str | None:
@@ -113,9 +140,9 @@ package.__path__ = [sys.argv[1]]
 sys.modules["leafstudio"] = package
 from leafstudio._shared import kernelcache
 kernelcache.configure()
-from leafstudio.core.kernels import KERNELS, dispatcher
+from leafstudio.core.kernels import SIGNATURES, dispatcher
 for line in sys.stdin:
-    dispatcher(line.strip()).compile(KERNELS[line.strip()])
+    dispatcher(line.strip()).compile(SIGNATURES[line.strip()])
     print(time.process_time(), flush=True)
 """
 
@@ -202,8 +229,10 @@ def compile_kernels(
     on_stage: Callable[[str], None] | None = None,
     workers: int | None = None,
     should_stop: Callable[[], bool] | None = None,
+    tables: tuple[str, ...] = (STAGE,),
 ) -> dict[int, float]:
-    """Compile the kernels a run needs, when this installation has not yet, in worker processes.
+    """Compile the kernels of `tables` this installation has not compiled yet, in worker
+    processes.
 
     Parameters
     ----------
@@ -215,9 +244,12 @@ def compile_kernels(
         Processes to compile in; default one per core (at most one per kernel). Each takes the
         costliest kernel left when it is free.
     should_stop : callable, optional
-        Polled every POLL_S while the workers compile; when it returns True they are ended and
-        this returns at once, the cache not marked (the run that called it then raises
-        Cancelled at its first stage).
+        Polled every POLL_S while the workers compile (or while another thread's compile runs);
+        when it returns True they are ended and this returns at once, the cache not marked (the
+        run that called it then raises Cancelled at its first stage).
+    tables : tuple of str, default: ("kernels",)
+        Which tables (TABLES): the run's kernels (a pipeline's first run), MEASURE (what
+        measuring calls: ensure_compiled), or both (set-up, a batch).
 
     Returns
     -------
@@ -225,42 +257,82 @@ def compile_kernels(
         Each worker's CPU seconds by its process id (benchmarks/bench_first_run.py: the longest
         is the compile's wall time on an idle machine); empty when the cache held the kernels.
     """
-    if kernelcache.kernels_cached():
+    if all(_cached(t) for t in tables):
         return {}
+    while not _COMPILING.acquire(timeout=POLL_S):  # another thread compiles: wait for it
+        if should_stop is not None and should_stop():
+            return {}
+    try:
+        todo_tables = [t for t in tables if not _cached(t)]  # the other thread's may be done
+        names = [name for t in todo_tables for name in table(t)]
+        spent = _compile(names, on_stage, workers, should_stop) if names else {}
+        for t in todo_tables:
+            _cached(t)  # remembered once marked
+        return spent
+    finally:
+        _COMPILING.release()
+
+
+def ensure_compiled(tables: tuple[str, ...] = (MEASURE,)) -> None:
+    """Compile `tables` in worker processes if this installation has not (compile_kernels);
+    a set look-up once they are. Called before the first use of a MEASURING kernel."""
+    compile_kernels(tables=tables)
+
+
+def _cached(name: str) -> bool:
+    """Whether table `name` is compiled into the cache in use (remembered once it is)."""
+    key = (name, str(kernelcache.cache_folder()))
+    if key in _READY:
+        return True
+    if kernelcache.kernels_cached(name):
+        _READY.add(key)
+        return True
+    return False
+
+
+def _compile(
+    names: list[str],
+    on_stage: Callable[[str], None] | None,
+    workers: int | None,
+    should_stop: Callable[[], bool] | None,
+) -> dict[int, float]:
+    """Compile `names` (of SIGNATURES) in worker processes; each worker's CPU seconds. Marks the
+    tables whose kernels are all compiled (kernelcache.mark_cached)."""
     if on_stage is not None:
         on_stage(STAGE)
-    workers = max(1, min(workers or os.cpu_count() or 1, len(KERNELS)))
+    workers = max(1, min(workers or os.cpu_count() or 1, len(names)))
     todo: queue.SimpleQueue = queue.SimpleQueue()
-    for name in KERNELS:
+    for name in names:
         todo.put(name)
     done: queue.SimpleQueue = queue.SimpleQueue()
+    compiled: set[str] = set()
     crew = _Crew()
     _CREWS.add(crew)
     try:
         with ThreadPoolExecutor(workers) as pool:
             running = [pool.submit(_worker, todo, done, crew) for _ in range(workers)]
-            compiled = 0
             try:
-                while compiled < len(KERNELS):
+                while len(compiled) < len(names):
                     if should_stop is not None and should_stop():
                         break
                     try:
-                        done.get(timeout=POLL_S)
+                        compiled.add(done.get(timeout=POLL_S))
                     except queue.Empty:
                         if all(f.done() for f in running) and done.empty():
-                            break  # a worker died: the run compiles what is left
+                            break  # a worker died: the callers compile what is left
                         continue
-                    compiled += 1
                     if on_stage is not None:
-                        on_stage(f"{STAGE} {compiled}/{len(KERNELS)}")
+                        on_stage(f"{STAGE} {len(compiled)}/{len(names)}")
             finally:  # stopped, or on_stage raised: no worker compiles on
-                if compiled < len(KERNELS):
+                if len(compiled) < len(names):
                     while _next(todo) is not None:  # none handed out any more
                         pass
                     crew.end()
             spent = dict(f.result() for f in running)
     finally:
         _CREWS.discard(crew)
-    if compiled == len(KERNELS):
-        kernelcache.mark_cached()
+    for name in TABLES:
+        kernels = table(name).keys()
+        if kernels & set(names) and kernels <= compiled:
+            kernelcache.mark_cached(name)
     return spent

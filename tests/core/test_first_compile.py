@@ -6,22 +6,20 @@ from __future__ import annotations
 
 import ast
 import os
+import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import leafstudio as ls
 from leafstudio._shared import kernelcache
 from leafstudio._shared.kernelcache import NOTICE
-from leafstudio.core import kernels
+from leafstudio.core import evaluate, kernels
 from leafstudio.core.pipeline import Cancelled
 
 CORE = Path(kernels.__file__).parent
-# kernels a reconstruction never calls: distances to a mesh (metrics, scans), clouds' projection
-NOT_IN_A_RUN = {
-    "distance:_centroids", "distance:_morton", "distance:_build", "distance:_distances",
-    "evaluate:_edge_counts", "prepare.cloud:_project_kernel",
-}  # fmt: skip
+ROOT = CORE.parents[1]
 
 
 def _compiled(f: ast.FunctionDef) -> bool:
@@ -54,14 +52,42 @@ def _called_from_python() -> set[str]:
     }
 
 
-def test_the_table_names_each_kernel_called_from_python():
-    assert set(kernels.KERNELS) == _called_from_python() - NOT_IN_A_RUN
+def test_the_tables_name_each_kernel_called_from_python():
+    assert set(kernels.KERNELS) | set(kernels.MEASURING) == _called_from_python()
+    assert not set(kernels.KERNELS) & set(kernels.MEASURING)
+    assert kernels.SIGNATURES == {**kernels.KERNELS, **kernels.MEASURING}
 
 
-def test_each_kernel_of_the_table_is_the_one_a_run_calls():
-    ls.Pipeline(ls.demo("nested")).run(ls.Params())
-    for name, argtypes in kernels.KERNELS.items():
+def test_each_kernel_of_the_tables_is_the_one_a_run_or_measuring_calls():
+    from tests.leaves import noisy
+
+    assert ls.Pipeline(ls.demo("nested")).run(ls.Params()).metrics
+    ls.Pipeline(noisy("nested")).run(ls.Params(grid=32))  # a cloud: its projection
+    for name, argtypes in kernels.SIGNATURES.items():
         assert argtypes in kernels.dispatcher(name).signatures, name
+
+
+def test_measuring_compiles_its_kernels_in_worker_processes(monkeypatch, tmp_path):
+    """The metrics' and a scan's distances compile in worker processes when first needed (issue
+    24, #5): the app's process compiled them on its worker thread, holding the GIL for seconds
+    (its window stalled, the measurements came ~25 s after the leaf)."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))  # the workers inherit it
+    one = "evaluate:_edge_counts"
+    monkeypatch.setattr(kernels, "MEASURING", {one: kernels.MEASURING[one]})
+    assert not kernelcache.kernels_cached(kernels.MEASURE)
+    evaluate.edge_counts(np.array([[0, 1, 2], [0, 2, 3]]))
+    assert any(p.name.startswith("evaluate._edge_counts") for p in tmp_path.rglob("*.nbi"))
+    assert kernelcache.kernels_cached(kernels.MEASURE)
+    assert not kernelcache.kernels_cached()  # the run's table is its own
+
+
+def test_set_up_compiles_every_table(monkeypatch):
+    """`./dev setup` compiles the run's and measuring's kernels, then runs once."""
+    command = re.search(r'^SETUP_RUN="([^"]*)"', (ROOT / "dev").read_text(), re.M).group(1)
+    asked = []
+    monkeypatch.setattr(kernels, "compile_kernels", lambda **kw: asked.append(kw["tables"]))
+    exec(command, {})  # the set-up's own command, compiling nothing here
+    assert asked == [kernels.TABLES]
 
 
 def test_a_cold_cache_is_filled_by_worker_processes(monkeypatch, tmp_path):

@@ -26,6 +26,7 @@ from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from leafstudio.core.buckets import bounds, kernel_array
+from leafstudio.core.kernels import ensure_compiled
 
 NOISE_SAMPLE = 20000  # points whose prediction misses estimate the noise, at most
 MAX_GROWTH = 8  # the occupied cells are grown by at most this many to close round the inside
@@ -238,6 +239,7 @@ def _project(
     """Arc position along the closed `ring` of each point's nearest place on the edges within
     `reach` of its vertex `near`."""
     t = np.empty(len(points))
+    ensure_compiled()
     _project_kernel(
         kernel_array(points), np.asarray(near, dtype=np.int64), kernel_array(ring),
         kernel_array(edges), kernel_array(lengths), kernel_array(arc), reach, t,

@@ -20,14 +20,7 @@ from pathlib import Path
 
 from PySide6.QtCore import QSettings, Qt, QTimer, Signal
 from PySide6.QtGui import QAction, QCloseEvent, QDragEnterEvent, QDropEvent
-from PySide6.QtWidgets import (
-    QDockWidget,
-    QListWidgetItem,
-    QMainWindow,
-    QMenu,
-    QMessageBox,
-    QWidget,
-)
+from PySide6.QtWidgets import QDockWidget, QListWidgetItem, QMainWindow, QMenu, QMessageBox, QWidget
 
 from leafstudio.core.kernels import compiling_notice
 from leafstudio.errors import LeafError
@@ -432,6 +425,10 @@ class MainWindow(FileCommands, QMainWindow):
         """The pipeline measured a result (side jobs answer through their handles)."""
         if kind != PIPELINE or not self.session.accept_measured(job_id):
             return
+        self._stage_timer.stop()
+        if compiling_notice(self._stage) is not None and self.session.result is not None:
+            self._stage = ""  # measuring compiled its kernels first: the result's line again
+            self._show_timings(self.session.shown.outcome)
         if self.session.result is not None:
             if not self.session.message:  # not after a failure's message (Worker._failed)
                 self.status_text.setText(

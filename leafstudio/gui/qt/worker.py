@@ -29,6 +29,7 @@ from typing import Any
 
 from PySide6.QtCore import QObject, Signal
 
+from leafstudio.core.kernels import MEASURE, compile_kernels
 from leafstudio.core.pipeline import Cancelled, Pipeline, Result
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.jobs import Job, running
@@ -325,7 +326,13 @@ class Worker(QObject):
         if self.measure_after_drawn:
             self._wait_drawn(outcome, context)
         start = time.perf_counter()
-        outcome.result.measure(lambda: self._quit or context.newer_waiting())
+        stop = lambda: self._quit or context.newer_waiting()  # noqa: E731
+        # a cold cache: measuring's kernels compiled in worker processes (this process would
+        # hold the GIL for seconds), the status saying so as for the first run's
+        compile_kernels(context.stage, should_stop=stop, tables=(MEASURE,))
+        if stop():
+            raise Cancelled
+        outcome.result.measure(stop)
         return time.perf_counter() - start
 
     def _wait_drawn(self, outcome: Outcome, context: Context) -> None:

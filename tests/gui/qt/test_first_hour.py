@@ -212,3 +212,32 @@ def test_the_first_runs_compile_is_said_in_the_status_while_the_window_responds(
         assert clicked
         compiled.set()
     assert not window.status_text.text().startswith(NOTICE)
+
+
+def test_measurings_first_compile_is_said_in_the_status_too(window, qtbot, monkeypatch):
+    """A cold cache's measuring kernels compile in worker processes once the result is on
+    screen (core/kernels.MEASURING), the status saying so; then the result's line is back."""
+    import threading
+
+    from leafstudio._shared.kernelcache import NOTICE
+    from leafstudio.core import kernels
+    from leafstudio.gui.qt import worker
+
+    compiled = threading.Event()
+
+    def compile_kernels(on_stage=None, workers=None, should_stop=None, tables=()):
+        assert tables == (kernels.MEASURE,)
+        on_stage(kernels.STAGE)
+        on_stage(f"{kernels.STAGE} 1/6")
+        compiled.wait(WAIT_MS / 1000)
+        return {}
+
+    monkeypatch.setattr(worker, "compile_kernels", compile_kernels)
+    with qtbot.waitSignal(window.result_shown, timeout=WAIT_MS):
+        window.panel.set_params(replace(window.session.params, k=window.session.params.k + 1))
+        window._on_params_released()
+    qtbot.waitUntil(lambda: window.status_text.text() == f"{NOTICE} 1/6", timeout=WAIT_MS)
+    with qtbot.waitSignal(window.worker.done, timeout=WAIT_MS):
+        compiled.set()
+    text = window.status_text.text()
+    assert text.startswith(f"K={window.session.params.k}") and "measurements" in text
