@@ -237,3 +237,22 @@ def test_a_new_layer_waits_for_the_render_of_an_actor_made_before_it(window, qtb
     assert first >= 1  # the recoloured mesh had a render of its own
     viewport.set_mesh_coloring(before)
     viewport.set_layer("scan", [])
+
+
+def test_a_loaded_leafs_sketch_is_drawn_a_turn_after_its_first_result(window, qtbot, tmp_path):
+    """A loaded leaf's sketch is derived from its first result: the session's work on that
+    result (the derivation, the framing) and the editor's drawing of the sketch are two pauses
+    of the main thread, not one (issue 24: 40 ms together for a 2-million-point scan's)."""
+    from tests.gui.builders import write_points
+
+    t = np.linspace(0, 2 * np.pi, 400, endpoint=False)
+    path = write_points(tmp_path / "leaf.csv", np.column_stack([np.cos(t), 0.4 * np.sin(t), 0 * t]))
+    drawn_then = []
+    session, editor = window.session, window.editor
+    session.result_shown.connect(
+        lambda *_: drawn_then.append(editor.view.sketch is session.derived)
+    )
+    assert window.open_path(path)
+    wait_result(qtbot, window, lambda o: o.result.leaf is session.state.leaf)
+    qtbot.waitUntil(lambda: editor.view.sketch is session.derived, timeout=WAIT_MS)
+    assert drawn_then[0] is False
