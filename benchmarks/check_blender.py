@@ -10,6 +10,7 @@ it lives in a venv of its own, not the project's:
     .venv/bin/leafstudio reconstruct leaf.leaf.json -o leaf.glb
     /tmp/bpy45/bin/python benchmarks/check_blender.py leaf.glb [--render PNG]
 
+--length L (metres, the length the leaf was exported at) adds the issue's checks (`checks`).
 --render also renders the imported scene with Cycles on the CPU (a sun, a camera above);
 --engine eevee renders with Eevee instead, --backlit puts the sun behind the leaf (translucency).
 For each material the report names the Principled BSDF inputs fed by an image (Base Color, Alpha,
@@ -122,6 +123,25 @@ def principled(material) -> dict:
             "transmission_textured": weight.is_linked}  # fmt: skip
 
 
+def checks(report: dict, length: float) -> dict:
+    """The issue's client checks on a report, for a leaf exported at `length` metres: its vertex
+    nearest the origin within 1% of the length (the base), its vertical extent under its width
+    (lying flat, the relief up), its x extent the length within 1% (a flat leaf's; a curled
+    one's is shorter), and its materials' Base Color and Normal fed by images (not OBJ's) and
+    translucent (a Transmission Weight; USD has none)."""
+    x, y, z = report["extent_xyz"]
+    materials = [m for o in report["objects"] for m in o["materials"]]
+    return {
+        "base_at_origin": report["nearest_vertex_to_origin"] <= 0.01 * length,
+        "lies_flat": z < y,
+        "x_extent_is_length": abs(x - length) <= 0.01 * length,
+        "textured": all(
+            {"Base Color", "Normal"} <= set(m.get("textured_inputs", [])) for m in materials
+        ),
+        "translucent": all(m.get("transmission_weight", 0) > 0 for m in materials),
+    }
+
+
 def render(
     out: str, pixels: int = 640, samples: int = 24, engine: str = "CYCLES", backlit: bool = False
 ) -> None:
@@ -194,4 +214,7 @@ if __name__ == "__main__":
     engine = args[args.index("--engine") + 1].upper() if "--engine" in args else "CYCLES"
     how = {"engine": "BLENDER_EEVEE" if engine == "EEVEE" else engine,
            "backlit": "--backlit" in args}  # fmt: skip
-    print(json.dumps(quietly(args[1], target, **how), indent=1))
+    report = quietly(args[1], target, **how)
+    if "--length" in args:  # metres, as the leaf was exported (--length 0.08)
+        report["checks"] = checks(report, float(args[args.index("--length") + 1]))
+    print(json.dumps(report, indent=1))
