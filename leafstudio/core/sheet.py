@@ -322,6 +322,12 @@ class Scaled:
         inside = shapely.contains_xy(cut, uv[:, 0], uv[:, 1])
         return self.scale * np.where(inside, -distance, distance)
 
+    def flat_holes(self) -> list[np.ndarray]:
+        """(k, 3) rings of the holes on the flat blade, in the world's units (what `trim` cuts
+        out of the mesh; the app's sketch of the flat blade shows them)."""
+        return [self.centre + self.scale * np.pad(np.asarray(r, dtype=float), ((0, 0), (0, 1)))
+                for r in self.holes]  # fmt: skip
+
     def entry(self, points: np.ndarray) -> dict:
         """The bend as a project keeps it (sources/files.py): the sheet, and the flat points of
         the (n, 3) bent `points` (the leaf's boundary and veins, stacked)."""

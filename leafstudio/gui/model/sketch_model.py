@@ -421,6 +421,12 @@ class Sketch:
             symmetric=symmetric,
         )
 
+    def hole_curves(self) -> list[np.ndarray]:
+        """(k, 2) rings, on the sketch's plane, of the real holes of the scan its leaf came from
+        (core/sheet.Scaled.flat_holes): the mesh leaves them open, so the flat blade shows them."""
+        rings = self.bend.flat_holes() if hasattr(self.bend, "flat_holes") else []
+        return [self.frame.to_plane(r)[0] for r in rings]
+
     @classmethod
     def from_result(cls, result: Any) -> Sketch:
         """A sketch approximating a reconstructed leaf: control points spread along its outline

@@ -183,6 +183,9 @@ class SketchView(QGraphicsView):
             )
         elif len(self.sketch.boundary) > 1:
             scene.addPath(self._path(self.sketch.boundary, closed=False), self.pen("#909090", 1))
+        base = self.palette().color(QPalette.ColorRole.Base)
+        for ring in self.sketch.hole_curves():  # a scan's real holes: open in the mesh too
+            scene.addPath(self._path(ring, closed=True), self.pen(boundary_color, 1), QBrush(base))
         for i in range(len(self.sketch.veins)):
             curve = self.sketch.vein_curve(i)
             if len(curve) > 1:

@@ -148,3 +148,25 @@ def test_the_span_distance_check_bounds_the_distance_to_the_whole_curve(repeat):
     near = spans < 0.5 * np.median(spans[spans > 0])  # points the spline follows closely
     np.testing.assert_allclose(spans[near], whole[near], atol=1e-12)
     assert np.all(spans[chosen] <= 1e-12)  # the spline passes through its control points
+
+
+def test_a_scans_hole_shows_on_the_sketch_of_its_flat_blade(tmp_path):
+    """Issue 21: a scan's real hole was cut from the mesh only after bending, so the sketch of
+    the flat blade showed none. It now holds the hole's ring where the flat blade has no scan
+    point, inside the outline; a drawn leaf has none."""
+    from leafstudio import workflows
+    from tests.sources.test_scan_holes import RADIUS, _scan
+
+    opened = workflows.open_scan(_scan(tmp_path, hole=True))
+    result = workflows.reconstruct(opened, ls.Params(grid=64)).result
+    sketch = Sketch.from_result(result)
+    (ring,) = sketch.hole_curves()
+    hole = shapely.Polygon(ring)
+    assert shapely.Polygon(sketch.boundary_curve()).contains(hole)
+    true = np.pi * (40.0 * RADIUS) ** 2  # its ring runs through the points around the hole
+    assert 0.8 * true <= hole.area <= 2.0 * true  # (1.6 times the empty disc's area)
+    blade = opened.scan[opened.extraction.blade]
+    flat = sketch.frame.to_plane(opened.leaf.bend.flatten(blade))[0]
+    inside = shapely.contains_xy(hole.buffer(-0.1 * 40.0 * RADIUS), flat[:, 0], flat[:, 1])
+    assert not inside.any()  # where the scan has no point
+    assert Sketch(boundary=ring[:-1]).hole_curves() == []

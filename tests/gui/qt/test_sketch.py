@@ -148,3 +148,25 @@ def test_an_undo_that_removes_the_dragged_point_ends_the_drag_without_an_error(w
     QTest.mouseRelease(view.viewport(), Qt.MouseButton.LeftButton, pos=press + QPoint(0, 20))
     assert window.session.state is undone and history.index == steps
     wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
+
+
+def test_the_sketch_view_draws_a_scans_holes(qtbot):
+    """A scan's real hole (Sketch.hole_curves) is drawn on the flat blade, filled with the
+    view's background: the mesh leaves it open."""
+    from types import SimpleNamespace
+
+    from PySide6.QtWidgets import QGraphicsPathItem
+
+    from leafstudio.gui.model.sketch_model import Sketch
+    from leafstudio.gui.qt.sketch_view import SketchView
+
+    t = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    ring = np.column_stack([0.3 + 0.1 * np.cos(t), 0.1 * np.sin(t), np.zeros_like(t)])
+    bend = SimpleNamespace(flat_holes=lambda: [ring])
+    outline = np.column_stack([np.cos(t), 0.5 * np.sin(t)])
+    view = SketchView()
+    qtbot.addWidget(view)
+    view.set_sketch(Sketch(boundary=outline, bend=bend), fit=True)
+    paths = [i for i in view.scene().items() if isinstance(i, QGraphicsPathItem)]
+    rects = [i.path().boundingRect() for i in paths]
+    assert any(abs(r.center().x() - 0.3) < 1e-6 and abs(r.width() - 0.2) < 1e-3 for r in rects)
