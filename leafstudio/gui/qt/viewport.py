@@ -277,7 +277,8 @@ class Viewport(QWidget):
 
     def actor_names(self, key: str) -> list[str]:
         """Names of the actors currently drawn for layer `key`."""
-        return [n for n in self._names[key] if n in self.plotter.actors]
+        actors = self.plotter.actors  # a new dict at each call: pyvista walks every actor
+        return [n for n in self._names[key] if n in actors]
 
     def set_visible(self, key: str, on: bool) -> None:
         """Switch a layer on or off."""
