@@ -43,6 +43,17 @@ METRES = {"mm": 1e-3, "cm": 1e-2, "m": 1.0}  # a length's units, in metres
 Y_UP_SUFFIXES = (".glb", ".gltf", ".obj", ".usda", ".usdc", ".usdz", ".usd")
 Y_UP_UNIT, Z_UP_UNIT = 1.0, 1e-3  # metres per unit written with a length: m, mm
 STEP = 1e-3  # carried: the bend's differences at the base, a share of the length
+LARGEST_LEAF_METRES = 5.0  # no leaf blade is longer (Victoria's pads reach 3 m): units, not metres
+
+
+def size_note(length: float, suffix: str) -> str | None:
+    """A note when a leaf `length` units long, written without a real length, would be read as
+    an implausibly large leaf: glTF and USD take units as metres, so a photo's or a scan's
+    millimetres arrive as a leaf tens of metres long (issue 23). None when nothing is amiss."""
+    if suffix.lower() not in Y_UP_SUFFIXES or length <= LARGEST_LEAF_METRES:
+        return None
+    return (f"the leaf is {length:.3g} units long, which {suffix} reads as {length:.3g} m; "
+            f"--length gives its real size (e.g. --length {length:.3g}mm)")  # fmt: skip
 
 
 def parse_length(text: str | float) -> float:

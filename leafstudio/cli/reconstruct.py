@@ -9,9 +9,16 @@ from pathlib import Path
 
 from leafstudio._shared.safewrite import check_outputs, replace_atomically, staged, write_bytes
 from leafstudio.analysis.fidelity import scan_distances
-from leafstudio.assets.export import TEXTURES, asset_options, check_asset_options, save_mesh
+from leafstudio.assets.export import (
+    TEXTURES,
+    asset_options,
+    check_asset_options,
+    leaf_placement_of,
+    save_mesh,
+)
+from leafstudio.assets.placement import size_note
 from leafstudio.assets.writers import MESH_SUFFIXES, written_paths
-from leafstudio.cli.options import EXIT_OK, add_run_options, run_pipeline
+from leafstudio.cli.options import EXIT_OK, add_run_options, log, run_pipeline
 from leafstudio.errors import LeafError
 from leafstudio.sources.files import load_leaf
 from leafstudio.workflows import check_finite, open_scan
@@ -105,6 +112,8 @@ def run(args: argparse.Namespace) -> int:
     if args.against:  # read (and its blade found, as extract finds it) before the run
         against = open_scan(args.against, force=True)
     params, result = run_pipeline(args, leaf)
+    if args.length is None and (note := size_note(leaf_placement_of(result).length, out.suffix)):
+        log.warning(f"{args.input}: {note}")
     fidelity = None
     if against is not None:
         scan, blade = against.scan, against.extraction.blade

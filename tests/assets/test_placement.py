@@ -165,3 +165,23 @@ def test_a_scan_bent_by_its_sheet_is_placed_by_its_own_base(tmp_path: Path):
     sag = 0.3 * (1 - np.cos(np.ptp(form.boundary[:, 1]) / 2 / 0.3))  # the roll's own height
     relief = np.ptp(ls.reconstruct(form, ls.Params(grid=40)).triangle_mesh.points[:, 2])
     assert 0.08 * sag < np.ptp(points[:, 1]) < 0.08 * (sag + relief)  # the roll, upward
+
+
+def test_a_leaf_in_millimetres_written_to_gltf_without_a_length_is_noted(tmp_path: Path, capsys):
+    """A photo leaf 60 mm long (`photo --length 6cm`), then `reconstruct -o x.glb` without
+    --length, was a 60 m leaf in glTF, silently (found in Blender 4.5): the run now says so and
+    how to give the real size; with --length, or to a Z-up format, it says nothing."""
+    from leafstudio.cli import main
+
+    form = make_form("ovate")
+    leaf = ls.Leaf(form.boundary * 60, [vein * 60 for vein in form.veins])
+    source = tmp_path / "photo.leaf.json"
+    ls.save_leaf(leaf, source)
+    notes = {}
+    for name, extra in (("x.glb", []), ("y.glb", ["--length", "6cm"]), ("z.ply", [])):
+        run = ["reconstruct", str(source), "--grid", "32", "-o", str(tmp_path / name), *extra]
+        assert main(run) == 0
+        notes[name] = [line for line in capsys.readouterr().err.splitlines() if "reads as" in line]
+    assert len(notes["x.glb"]) == 1 and "60 m" in notes["x.glb"][0]
+    assert "--length" in notes["x.glb"][0]
+    assert notes["y.glb"] == [] and notes["z.ply"] == []
