@@ -149,7 +149,7 @@ def fit_camera(
     up = np.asarray(up, float)
     up = up - (up @ direction) * direction
     up /= np.linalg.norm(up)
-    right = np.cross(up, direction)
+    right = _cross(up, direction)
     corners = bounds.extent_points()
     focus = 0.5 * (corners.min(axis=0) + corners.max(axis=0))
     rel = corners - focus
@@ -187,6 +187,14 @@ def projected_fill(
     return float(np.ptp(sx) / 2), float(np.ptp(sy) / 2)
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a × b of two 3-vectors, as np.cross computes it, without its axis handling (most of the
+    time best_iso spent on the main thread, which calls it for each camera it tries)."""
+    return np.array(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    )
+
+
 def project(
     points: np.ndarray,
     position: np.ndarray,
@@ -199,7 +207,7 @@ def project(
     direction = (position - focus) / np.linalg.norm(position - focus)
     up = up - (up @ direction) * direction
     up /= np.linalg.norm(up)
-    right = np.cross(up, direction)
+    right = _cross(up, direction)
     rel = np.asarray(points, float) - position
     depth = -(rel @ direction)
     tan = np.tan(np.radians(view_angle) / 2)
