@@ -1,8 +1,9 @@
 """Import a LeafStudio .glb (or .gltf, .obj, .usda, .usdc, .usdz) into Blender (the `bpy`
-package) and print what arrived, as JSON: meshes, UV layers, the material and its image texture,
-the vertex count beside the file's (glTF), the scene's extent in metres along Blender's x, y,
-z (z up): a leaf lying flat has its relief as the z extent and its length as the x extent, and
-its vertex nearest the origin (the base is there).
+package) and print what arrived, as JSON: the meshes shown (and those hidden: a glTF's coarser
+levels of detail), UV layers, the material and its image texture, the vertex count beside the
+file's (glTF), the extent of the meshes shown in metres along Blender's x, y, z (z up): a leaf
+lying flat has its relief as the z extent and its length as the x extent, and its vertex
+nearest the origin (the base is there).
 
 The issue's client is Blender 4.5 LTS (bpy 4.5 is built for Python 3.11); bpy pins numpy < 2, so
 it lives in a venv of its own, not the project's:
@@ -56,8 +57,10 @@ def main(path: str) -> dict:
     else:
         bpy.ops.wm.usd_import(filepath=path)
     bpy.context.view_layer.update()
-    meshes = [o for o in bpy.context.scene.objects if o.type == "MESH"]
-    report = {"blender": bpy.app.version_string, "file": path, "meshes": len(meshes)}
+    meshes = shown_meshes()
+    hidden = [o.name for o in bpy.context.scene.objects if o.type == "MESH" and o not in meshes]
+    report = {"blender": bpy.app.version_string, "file": path, "meshes": len(meshes),
+              "hidden_meshes": hidden}  # fmt: skip
     if suffix == "glb":  # the importer reads only the extensions it knows (Blender 4.5 and 5.0:
         # not KHR_materials_diffuse_transmission; the Transmission Weight is the other one's)
         gltf = glb_json(path)
@@ -99,6 +102,14 @@ def main(path: str) -> dict:
     return report
 
 
+def shown_meshes() -> list:
+    """The scene's mesh objects the view layer shows: not those in a collection it excludes
+    (the glTF importer's "Orphan Nodes": a glTF's coarser levels of detail, outside its scene)."""
+    import bpy
+
+    return [o for o in bpy.context.scene.objects if o.type == "MESH" and o.visible_get()]
+
+
 def principled(material) -> dict:
     """What the material's Principled BSDF has: the inputs a texture feeds (through any nodes:
     Base Color, Alpha, Normal) and its Transmission Weight (the glTF importer's reading of
@@ -128,7 +139,8 @@ def checks(report: dict, length: float) -> dict:
     nearest the origin within 1% of the length (the base), its vertical extent under its width
     (lying flat, the relief up), its x extent the length within 1% (a flat leaf's; a curled
     one's is shorter), and its materials' Base Color and Normal fed by images (not OBJ's) and
-    translucent (a Transmission Weight; USD has none)."""
+    translucent (a Transmission Weight; USD has none), and one leaf shown (levels of detail
+    beside it hidden)."""
     x, y, z = report["extent_xyz"]
     materials = [m for o in report["objects"] for m in o["materials"]]
     return {
@@ -139,6 +151,7 @@ def checks(report: dict, length: float) -> dict:
             {"Base Color", "Normal"} <= set(m.get("textured_inputs", [])) for m in materials
         ),
         "translucent": all(m.get("transmission_weight", 0) > 0 for m in materials),
+        "one_leaf_shown": report["meshes"] == 1,
     }
 
 
@@ -151,7 +164,7 @@ def render(
     from mathutils import Vector
 
     scene = bpy.context.scene
-    meshes = [o for o in scene.objects if o.type == "MESH"]
+    meshes = shown_meshes()
     corners = [o.matrix_world @ Vector(c) for o in meshes for c in o.bound_box]
     lo = Vector([min(c[i] for c in corners) for i in range(3)])
     hi = Vector([max(c[i] for c in corners) for i in range(3)])

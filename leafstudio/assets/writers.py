@@ -10,7 +10,9 @@
   with a normal map, TANGENT too (the s axis in each tangent plane: no tangents left to guess).
   A sheet's material is translucent: KHR_materials_transmission and
   KHR_materials_diffuse_transmission (material.py says why both).
-  Levels of detail are separate meshes leaf_LOD0, leaf_LOD1, ...
+  Levels of detail are meshes leaf_LOD0, leaf_LOD1, ..., as MSFT_lod has them: the scene
+  shows leaf_LOD0 (a reader without MSFT_lod, such as Blender 4.5, gets one leaf), whose
+  MSFT_lod extension lists the coarser nodes, outside the scene.
 - ``.stl``, ``.3mf``: through trimesh (geometry only; 3MF in millimetres, its unit by spec).
 - ``.vtp``, ``.vtk``: through pyvista, with Normals, the texture coordinates and the scalars.
 - ``.usda``, ``.usdc``, ``.usdz``: through usd-core (usd.py): normals, UVs, the scalars as
@@ -189,8 +191,35 @@ def translucent(material: dict) -> None:
     extensions[TRANSLUCENT_EXTENSIONS[1]] = diffuse
 
 
+MSFT_LOD = "MSFT_lod"
+
+
+def levels_of_detail(tree: dict, names: Sequence[str]) -> None:
+    """glTF tree post-processor: the nodes `names` (finest first) become levels of detail as
+    the MSFT_lod spec has them: the scene shows the first; the others leave the scene, listed
+    by its `MSFT_lod` ids, with `MSFT_screencoverage` in its extras.
+
+    A reader without MSFT_lod (Blender 4.5) gets one leaf, not every level on top of each
+    other. Each level has half the triangles of the one before, so it takes over at half the
+    screen coverage (triangles as big on screen): 1/2, 1/4, ...; the last is drawn down to 0."""
+    index = {node.get("name"): k for k, node in enumerate(tree["nodes"])}
+    top, *coarser = (index[name] for name in names)
+    for holder in [*tree.get("scenes", []), *tree["nodes"]]:
+        for key in ("nodes", "children"):
+            if key in holder:
+                holder[key] = [k for k in holder[key] if k not in coarser]
+    node = tree["nodes"][top]
+    node.setdefault("extensions", {})[MSFT_LOD] = {"ids": coarser}
+    coverage = [0.5 ** (level + 1) for level in range(len(coarser))]
+    node.setdefault("extras", {})["MSFT_screencoverage"] = [*coverage, 0.0]
+    used = tree.setdefault("extensionsUsed", [])
+    if MSFT_LOD not in used:
+        used.append(MSFT_LOD)
+
+
 def write_gltf(assets: Sequence[MeshAsset], path: Path) -> None:
-    """glTF 2.0 (.glb binary, or .gltf with embedded buffers): one mesh per asset."""
+    """glTF 2.0 (.glb binary, or .gltf with embedded buffers): one mesh per asset; more than
+    one are levels of detail (`levels_of_detail`), the scene showing the first."""
     import trimesh
     from trimesh.exchange.gltf import export_glb, export_gltf
 
@@ -201,11 +230,17 @@ def write_gltf(assets: Sequence[MeshAsset], path: Path) -> None:
         material = materials.setdefault(key, material_of(asset))
         mesh = to_trimesh(asset, material=material)
         scene.add_geometry(mesh, geom_name=asset.name, node_name=asset.name)
+
+    def postprocess(tree: dict) -> None:
+        _standard_names(tree)
+        if len(assets) > 1:
+            levels_of_detail(tree, [asset.name for asset in assets])
+
     if path.suffix.lower() == ".glb":
-        data = export_glb(scene, include_normals=True, tree_postprocessor=_standard_names)
+        data = export_glb(scene, include_normals=True, tree_postprocessor=postprocess)
     else:
         files = export_gltf(
-            scene, include_normals=True, embed_buffers=True, tree_postprocessor=_standard_names
+            scene, include_normals=True, embed_buffers=True, tree_postprocessor=postprocess
         )
         data = files["model.gltf"]
     write_bytes(path, data)

@@ -365,6 +365,42 @@ def test_levels_of_detail_halve_the_triangles_and_keep_the_margin(nested: ls.Res
     assert (tmp_path / "leaf_lod1.obj").is_file() and (tmp_path / "leaf_lod1.mtl").is_file()
 
 
+def scene_nodes(gltf) -> list[int]:
+    """The nodes a glTF's default scene shows: its root nodes and their descendants."""
+    out, todo = [], list(gltf.scenes[gltf.scene or 0].nodes)
+    while todo:
+        out.append(todo.pop(0))
+        todo += gltf.nodes[out[-1]].children or []
+    return out
+
+
+@pytest.mark.open3d
+def test_a_gltf_shows_one_leaf_and_lists_its_coarser_levels_in_msft_lod(nested, tmp_path):
+    """Issue 23: every level was a node of the scene, so Blender 4.5 (which reads no MSFT_lod)
+    showed three overlapping leaves. The scene holds LOD0; the coarser nodes are outside it,
+    named by LOD0's MSFT_lod, with MSFT_screencoverage in its extras (the MSFT_lod spec)."""
+    from pygltflib import GLTF2
+
+    paths = [tmp_path / "leaf.glb", tmp_path / "leaf.gltf"]
+    for path in paths:
+        ls.save_mesh(nested, path, lod=2)
+        gltf = GLTF2.load(str(path))
+        shown = [n for n in scene_nodes(gltf) if gltf.nodes[n].mesh is not None]
+        assert [gltf.nodes[n].name for n in shown] == ["leaf_LOD0"]
+        top = gltf.nodes[shown[0]]
+        ids = top.extensions["MSFT_lod"]["ids"]
+        assert [gltf.nodes[n].name for n in ids] == ["leaf_LOD1", "leaf_LOD2"]
+        meshes = [top.mesh, *(gltf.nodes[n].mesh for n in ids)]
+        counts = [gltf.accessors[gltf.meshes[m].primitives[0].indices].count for m in meshes]
+        assert counts[0] > counts[1] > counts[2]  # finest first
+        coverage = top.extras["MSFT_screencoverage"]
+        assert len(coverage) == 3 and 1 >= coverage[0] > coverage[1] > coverage[2] >= 0
+        assert "MSFT_lod" in gltf.extensionsUsed and "MSFT_lod" not in gltf.extensionsRequired
+    assert_valid_gltf(*paths)
+    ls.save_mesh(nested, paths[0])  # one level: no MSFT_lod
+    assert "MSFT_lod" not in (GLTF2.load(str(paths[0])).extensionsUsed or [])
+
+
 def test_an_obj_never_writes_its_texture_over_the_image_it_maps(nested: ls.Result, tmp_path):
     from PIL import Image
 
