@@ -44,7 +44,8 @@ from PySide6.QtWidgets import QApplication, QMessageBox
 from leafstudio.gui.model.framing import best_iso, blade_bounds
 from leafstudio.gui.model.layers import vein_color
 from leafstudio.gui.qt.main_window import MainWindow
-from leafstudio.gui.qt.viewport import BAR_BAND, grab_window
+from leafstudio.gui.qt.view_camera import BAR_BAND
+from leafstudio.gui.qt.viewport import grab_window
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "realleaves"
 SCANS = (

@@ -16,7 +16,7 @@ from typing import Any
 
 from PySide6.QtGui import QKeySequence
 
-from leafstudio.gui.qt.viewport import CAMERAS
+from leafstudio.gui.qt.view_camera import CAMERAS
 from leafstudio.sources.demos import DEMOS
 
 Shortcut = str | QKeySequence.StandardKey

@@ -20,7 +20,7 @@ from PySide6.QtWidgets import (
 
 from leafstudio.gui.model.layers import LAYERS, MESH_COLORINGS, unavailable
 from leafstudio.gui.model.textures import LEAF, LEAF_LABEL, TEXTURE, TEXTURE_LABEL
-from leafstudio.gui.qt.viewport import CAMERAS
+from leafstudio.gui.qt.view_camera import CAMERAS
 
 COLORING_TIP = (
     "What the mesh's colours show: the leaf as it looks (its texture lit as a leaf: green, "

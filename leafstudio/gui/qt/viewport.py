@@ -1,5 +1,5 @@
 """The 3D view: a pyvista Plotter widget (native_view.py) showing a Result's layers, with camera
-presets.
+presets (view_camera.py).
 
 Every actor has a fixed name; a new result's dataset is copied into the actor already drawn
 (a shallow copy, no new actor, mapper or lookup table), so that what follows a result on the main
@@ -17,19 +17,18 @@ from PySide6.QtWidgets import QVBoxLayout, QWidget
 
 from leafstudio.core.plane import Frame
 from leafstudio.gui.model.fields import nice_range
-from leafstudio.gui.model.framing import BladeBounds, best_iso, fit_camera, view_direction
+from leafstudio.gui.model.framing import BladeBounds
 from leafstudio.gui.model.layers import BOUNDARY_COLOR, LAYERS, MESH_COLORINGS, SCALAR_BARS, Piece
 from leafstudio.gui.model.textures import LEAF, SHOWS_TEXTURE
 from leafstudio.gui.qt.native_view import make_plotter
+from leafstudio.gui.qt.view_camera import CameraPlacing
 
 SIZED = ("point_size", "line_width")  # style keys in device pixels: scaled by the pixel ratio
 
-CAMERAS = ("iso", "top", "side")
 MINIMUM_SIZE = (360, 240)  # the view's least width and height, in pixels
-BAR_BAND = 0.13  # the colour bars' share of the view's height, at its bottom, with their titles
 
 
-class Viewport(QWidget):
+class Viewport(CameraPlacing, QWidget):
     """Draws layers of pieces; `rendered` fires after each new result is on screen."""
 
     rendered = Signal()
@@ -109,14 +108,19 @@ class Viewport(QWidget):
     ) -> None:
         """Replace every layer by the given pieces. `frame` orients the camera presets (the
         plane the sketch shows); `bounds` is the blade's box, framed when `framing` is "reset"
-        (the iso preset) or "refit" (the current direction); otherwise the camera stays."""
+        (the iso preset) or "refit" (the current direction); otherwise the camera stays.
+
+        A fit over a view already drawn is a turn of its own: pieces that need a new actor
+        (a scan with more veins than the leaf before) wait for its render, as in set_layer
+        (a 2M-point scan's fit 10-15 ms and its new actors 22-26 ms were one pause)."""
         self._frame = frame
         if bounds is not None:
             self._bounds = bounds
+        make = framing is None or not (self._has_content and self.isVisible())
         for key, pieces in layers.items():
             self._pieces[key] = pieces
             if self.visible[key]:
-                self._draw_layer(key)
+                self._draw_layer(key, make)
             else:  # drawn when switched on: hidden layers cost nothing per result
                 self._remove_layer(key)
         self._sync_scalar_bars()
@@ -174,18 +178,21 @@ class Viewport(QWidget):
             self.rendered.emit()
 
     def _draw_later(self) -> None:
-        """Draw the layers that waited for a render (set_layer)."""
+        """Draw the layers that waited for a render (set_layer, show_layers)."""
         later, self._later = self._later, set()
         for key in sorted(later):
             self.set_layer(key, self._pieces.get(key, []))
 
-    def _draw_layer(self, key: str) -> None:
+    def _draw_layer(self, key: str, make: bool = True) -> None:
+        """Draw layer `key`'s pieces; with `make` False, those that need a new actor wait for
+        the next render (their old actors hidden meanwhile)."""
         pieces = self._pieces.get(key, [])
         names = [piece.name for piece in pieces]
         for stale in set(self._names[key]) - set(names):
             self.plotter.remove_actor(stale, render=False)
         for piece in pieces:
-            self._add(key, piece)
+            if not self._add(key, piece, make):
+                self._later.add(key)
         self._names[key] = names
 
     def _remove_layer(self, key: str) -> None:
@@ -193,7 +200,9 @@ class Viewport(QWidget):
             self.plotter.remove_actor(name, render=False)
         self._names[key] = []
 
-    def _add(self, key: str, piece: Piece) -> None:
+    def _add(self, key: str, piece: Piece, make: bool = True) -> bool:
+        """Draw a piece in its actor, or in a new one if `make`; False when it needs one and
+        `make` is False."""
         style = dict(piece.style)
         if key == "mesh" and self.mesh_coloring in SHOWS_TEXTURE:
             self._mesh_piece = piece
@@ -219,7 +228,7 @@ class Viewport(QWidget):
         data = piece.full_data if key == "mesh" and self.show_edges else piece.data
         if data.n_points == 0:
             self.plotter.remove_actor(piece.name, render=False)
-            return
+            return True
         ratio = self.pixel_ratio()
         style.update({k: style[k] * ratio for k in SIZED if k in style})
         if style.get("color") == BOUNDARY_COLOR and self._dark():
@@ -238,7 +247,11 @@ class Viewport(QWidget):
                 actor.SetTexture(style["texture"])
             actor.prop.show_edges = bool(style.get("show_edges", actor.prop.show_edges))
             actor.SetVisibility(self.visible[key])
-            return
+            return True
+        if not make:
+            if actor is not None:
+                actor.SetVisibility(False)  # not another result's data under this one's camera
+            return False
         self._made = True
         actor = self.plotter.add_mesh(
             data,
@@ -252,6 +265,7 @@ class Viewport(QWidget):
             actor.prop.interpolation = "phong"
         actor._leafstudio_style = _style_key(style)  # what an in-place update must not change
         actor.SetVisibility(self.visible[key])
+        return True
 
     @staticmethod
     def _same_kind(actor, data, style: dict) -> bool:
@@ -392,68 +406,6 @@ class Viewport(QWidget):
             self.plotter.remove_actor("message", render=False)
         if render:
             self.redraw()
-
-    # --- camera --------------------------------------------------------------------------------
-    def camera(self, preset: str, render: bool = True) -> None:
-        """Look at the blade from the top (along its normal, u to the right and v up, as in the
-        sketch), the side (along its width) or iso, filling most of the view."""
-        direction, up = view_direction(preset, self._frame)
-        if preset == "iso" and self._bounds is not None:
-            direction, up = best_iso(
-                self._bounds, self.plotter.camera.view_angle, self._aspect(), self._bottom()
-            )
-        self._place(direction, up)
-        self._placed = (preset, self._camera_now())
-        if render:
-            self.redraw()
-
-    def refit(self, render: bool = True) -> None:
-        """Frame the blade again (the sketch grew past the view): from the current direction,
-        or, while the camera is still where the iso preset put it, from the iso direction
-        that suits the grown leaf (a few first points are a sliver, turned another way)."""
-        if self._placed is not None and self._placed == ("iso", self._camera_now()):
-            self.camera("iso", render)
-            return
-        camera = self.plotter.camera
-        direction = np.asarray(camera.position) - np.asarray(camera.focal_point)
-        self._place(direction, np.asarray(camera.up))
-        self._placed = None
-        if render:
-            self.redraw()
-
-    def _camera_now(self) -> tuple:
-        camera = self.plotter.camera
-        return tuple(np.round([*camera.position, *camera.focal_point, *camera.up], 9))
-
-    def _bottom(self) -> float:
-        """The share of the view's height kept free for the colour bars (none: 0)."""
-        return BAR_BAND if self._bars else 0.0
-
-    def _aspect(self) -> float:
-        size = self.plotter.interactor.size()
-        return size.width() / max(size.height(), 1)
-
-    def _place(self, direction: np.ndarray, up: np.ndarray) -> None:
-        if self._bounds is None:
-            self.plotter.reset_camera(render=False)
-            return
-        camera = self.plotter.camera
-        position, focus, up = fit_camera(
-            self._bounds, direction, up, camera.view_angle, self._aspect(), bottom=self._bottom()
-        )
-        self.plotter.camera_position = [tuple(position), tuple(focus), tuple(up)]
-        self.plotter.renderer.ResetCameraClippingRange()
-
-    def display_points(self, points: np.ndarray) -> np.ndarray:
-        """(n, 2) display positions (device pixels, y up) of (n, 3) world points in the view,
-        with the camera as it is (for checks of the framing)."""
-        renderer = self.plotter.renderer
-        out = np.empty((len(points), 2))
-        for i, point in enumerate(np.asarray(points, float)):
-            renderer.SetWorldPoint(*point, 1.0)
-            renderer.WorldToDisplay()
-            out[i] = renderer.GetDisplayPoint()[:2]
-        return out
 
     def image(self) -> QImage:
         """The 3D view as drawn now, from VTK's frame buffer: Qt cannot grab a native window

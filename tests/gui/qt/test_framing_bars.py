@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from leafstudio.gui.model.framing import best_iso, blade_bounds, fit_camera, project, projected_fill
-from leafstudio.gui.qt.viewport import BAR_BAND
+from leafstudio.gui.qt.view_camera import BAR_BAND
 
 from .conftest import wait_result
 from .test_drawing import camera, click, ellipse_clicks, leaf_fill

@@ -256,3 +256,34 @@ def test_a_loaded_leafs_sketch_is_drawn_a_turn_after_its_first_result(window, qt
     wait_result(qtbot, window, lambda o: o.result.leaf is session.state.leaf)
     qtbot.waitUntil(lambda: editor.view.sketch is session.derived, timeout=WAIT_MS)
     assert drawn_then[0] is False
+
+
+def test_a_result_that_fits_the_camera_makes_its_new_actors_a_turn_later(
+    window, qtbot, monkeypatch
+):
+    """A new document's result fits the camera (10-15 ms of the main thread) and may need new
+    actors (a scan with more veins than the leaf before: 4-6 ms each); both in one turn made
+    the 2M-point scan's longest pause, 29-49 ms (issue 24). The pieces that reuse an actor are
+    drawn with the fit, the new ones after its render."""
+    from functools import partial
+
+    from leafstudio.gui.model.layers import vein_color
+    from leafstudio.gui.model.pieces import Piece, cloud, dots
+
+    qtbot.wait(200)  # whatever the first result left to paint
+    viewport = window.viewport
+    outcome = window.session.shown.outcome
+    log: list[str] = []
+    viewport.plotter.render_window.AddObserver("StartEvent", lambda *_: log.append("render"))
+    made = viewport.plotter.add_mesh
+    monkeypatch.setattr(
+        viewport.plotter, "add_mesh", lambda *a, **k: log.append("new") or made(*a, **k)
+    )
+    points = np.random.default_rng(0).normal(size=(40, 3)) * 0.1
+    extra = Piece("points:vein99", partial(cloud, points), dots(vein_color(99), 7.0, 40))
+    layers = {**outcome.layers, "points": [*outcome.layers["points"], extra]}
+    viewport.show_layers(layers, outcome.result.frame, None, "reset")  # the blade's bounds kept
+    assert log == []  # the fit done, nothing new made yet
+    qtbot.waitUntil(lambda: "points:vein99" in viewport.actor_names("points"), timeout=WAIT_MS)
+    assert log[:2] == ["render", "new"]  # made after the fit's render
+    viewport.show_layers(outcome.layers, outcome.result.frame)
