@@ -440,7 +440,7 @@ class Session(FileOpening, Bending):
             self._framed = (serial, framing.bounds)
         self.message = ""
         if framing is not None and framing.reset:
-            self.side.texture_key = None  # another leaf's image: the view drops it
+            self.side.new_leaf(result)  # another leaf's image: the view drops it
         self.result_shown.emit(outcome, framing)
         self.side.result_shown(outcome)
         self.open_settled(request_id)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from PIL import Image
 
 from leafstudio.gui.model.jobs import Job, run_now
 from leafstudio.gui.model.session import Session
@@ -131,4 +132,54 @@ def test_the_texture_is_made_when_shown_and_a_bad_image_falls_back_to_the_genera
     assert len(shown) == 1  # already on the mesh
     session.choose_texture(str(tmp_path / "missing.png"))
     assert session.texture() == "auto" and "Cannot show the texture" in notes[-1]
+    assert len(shown) == 1 and session.side.texture_key == shown[0]
+
+
+def test_the_same_leaf_opened_again_keeps_its_texture_and_another_leaf_drops_it():
+    """The texture image depends only on what its key names (textures.texture_key): the same
+    leaf opened again (a demo chosen twice, a file reopened) keeps the image on the mesh rather
+    than making it again (about 0.3 s of CPU at a small grid); another leaf's image goes."""
+    session, runner, _got = opened_session()
+    shown: list = []
+    session.side.texture_shown.connect(lambda image, key: shown.append(key))
+    session.side.set_texture_shown(True)
+    session.open_demo("nested")
+    runner.finish(session)
+    assert len(shown) == 1
+    session.new_sketch()
+    session.open_demo("nested")
+    runner.finish(session)
+    assert len(shown) == 1 and session.side.texture_key == shown[0]
+    session.open_demo("parallel")
+    runner.finish(session)
+    assert len(shown) == 2 and shown[1] != shown[0] and session.side.texture_key == shown[1]
+
+
+def test_an_image_made_for_a_texture_no_longer_wanted_never_replaces_the_one_wanted(tmp_path):
+    """The leaf shows its generated texture; an image is picked, then the generated one again
+    before the picked one is made: the picked image, when it comes, is not put on the mesh."""
+    pending: list[Job] = []
+
+    def later(kind, function, *args):  # texture jobs answer when the test says
+        pending.append(Job(len(pending) + 1))
+        pending[-1].work = (function, args)
+        return pending[-1]
+
+    runner = Runner()
+    session = Session(runner, FAST, run=later)
+    shown: list = []
+    session.side.texture_shown.connect(lambda image, key: shown.append(key))
+    session.side.set_texture_shown(True)
+    session.open_demo("nested")
+    runner.finish(session)
+    function, args = pending[-1].work
+    pending[-1].finish(function(*args))
+    assert len(shown) == 1 and shown[0][0] == ("auto",)
+    picked = tmp_path / "picked.png"
+    Image.fromarray(np.full((8, 8, 3), 90, np.uint8)).save(picked)
+    session.choose_texture(str(picked))
+    picked_job = pending[-1]
+    session.choose_texture("auto")  # the generated one again, before the picked one came
+    function, args = picked_job.work
+    picked_job.finish(function(*args))
     assert len(shown) == 1 and session.side.texture_key == shown[0]

@@ -7,14 +7,22 @@ import json
 
 import numpy as np
 import pytest
+import shiboken6
 from PySide6.QtCore import QSettings
 from PySide6.QtGui import QAction, QImage
 from PySide6.QtWidgets import (
     QAbstractButton,
+    QAbstractSlider,
+    QAbstractSpinBox,
     QApplication,
     QComboBox,
+    QDialog,
+    QDoubleSpinBox,
+    QLineEdit,
     QListWidget,
     QMessageBox,
+    QScrollBar,
+    QSpinBox,
     QStackedWidget,
     QTabBar,
     QTabWidget,
@@ -23,6 +31,7 @@ from PySide6.QtWidgets import (
 
 from leafstudio.gui.model.textures import LEAF, TEXTURE, texture_key
 from leafstudio.gui.qt.main_window import MainWindow
+from leafstudio.gui.qt.photo_dialog import PhotoDialog
 from leafstudio.model import Params
 from tests.gui.builders import FAST
 
@@ -114,9 +123,11 @@ def never_block_on_questions(monkeypatch):
 
 class LentWindow:
     """The one main window the `window` fixture lends to the tests (building one costs about a
-    second): reset before each test to what a new window on the nested demo shows, through the
-    session (an empty sketch, FAST parameters, the demo: a fresh history), and built again when
-    a test left its chrome (toggles, docks, widgets, camera, open boxes) otherwise changed."""
+    second): before each test, what the last one changed around the session (boxes, docks,
+    toggles, fields) is put back (restore), then the session is reset to what a new window on
+    the nested demo shows (an empty sketch, FAST parameters, the demo: a fresh history), unless
+    the last test left the session, its jobs and the sketch editor as they were (untouched).
+    The window is built again when its chrome still differs from a new one's."""
 
     def __init__(self, folder) -> None:
         self.folder = folder
@@ -124,21 +135,23 @@ class LentWindow:
         self.made = 0
         self.fresh: tuple[dict, dict] = ({}, {})  # what the window showed when it was new
         self.view: tuple[dict, bool, int] = ({}, False, 0)  # its layers, edges and colouring
+        self.controls: tuple = ()  # its controls' settings (restore)
+        self.marks: tuple[tuple, tuple] = ((), ())  # its session's, when lent (untouched)
 
     def lend(self, qtbot) -> MainWindow:
         win = self.window
         # a test that replaced the session's way to the worker (test_sketch_gap.never_done)
         wired = win is not None and win.session.submit == win.worker.submit_pipeline
-        if wired and win.isVisible():
-            session, box = win.session, win.last_error_box
-            if box is not None and not box.isVisible():  # a message the test read and closed
-                win.last_error_box = None
-                box.deleteLater()
+        if wired and win.isVisible() and self.restore(win):
+            session = win.session
             layers, edges, coloring = self.view  # the view controls a test may have set
             for key, on in layers.items():
                 win.layers.set_checked(key, on)
             win.edges.setChecked(edges)
             win.coloring.setCurrentIndex(coloring)
+            if self.untouched(win) and chrome(win) == self.fresh[1]:
+                assert session_state(win) == self.fresh[0]
+                return win  # a test that only looked: nothing to reset
             session.new_sketch()  # File > New sketch: no leaf, nothing to reconstruct
             session.set_params(FAST)
             session.open_demo("nested")
@@ -147,6 +160,7 @@ class LentWindow:
             # the reset through the session gives what a new window showed
             assert session_state(win) == self.fresh[0]
             if chrome(win) == self.fresh[1]:
+                self.marks = marks(win)
                 return win
         self.close()
         self.made += 1
@@ -156,7 +170,55 @@ class LentWindow:
         textured(qtbot, win)
         self.window, self.fresh = win, (session_state(win), chrome(win))
         self.view = dict(win.viewport.visible), win.edges.isChecked(), win.coloring.currentIndex()
+        self.controls = controls(win)
+        self.marks = marks(win)
         return win
+
+    def untouched(self, win: MainWindow) -> bool:
+        """True when the last test changed nothing of the session, its jobs or the sketch
+        editor since the window was lent (marks): the reset would give what is there."""
+        (same, equal), (same_now, equal_now) = self.marks, marks(win)
+        return equal == equal_now and all(a is b for a, b in zip(same, same_now, strict=True))
+
+    def restore(self, win: MainWindow) -> bool:
+        """Put back what a test changed around the session, as a user would, rather than build
+        the window again (about a second each, 30 times a run): close the boxes it left open,
+        free the message boxes and photo dialogs it opened (each use makes a new one), lay the
+        docks out again, and turn back its toggles, lists and tabs. What this cannot put back
+        (a dialog made once and kept, Help > Compare) still costs a new window. False when a
+        control is gone (the window is built again)."""
+        try:
+            self._restore(win)
+        except RuntimeError:  # "Internal C++ object already deleted"
+            return False
+        return True
+
+    def _restore(self, win: MainWindow) -> None:
+        for widget in QApplication.topLevelWidgets():
+            if widget.isVisible() and widget is not win:
+                widget.close()
+        for dialog in win.findChildren(QDialog):
+            if isinstance(dialog, ONE_USE) and dialog.isWindow() and not dialog.isVisible():
+                shiboken6.delete(dialog)
+        win.last_error_box = None
+        win.photo_dialog = None
+        state, checks, actions, lists, indices, values, texts = self.controls
+        win.restoreState(state)
+        for on in (True, False):  # an exclusive group's button is checked, not unchecked
+            for button, fresh in checks:
+                if fresh is on and button.isChecked() is not on:
+                    button.click()
+        for action, fresh in actions:
+            if action.isChecked() is not fresh:
+                action.trigger()
+        for item, fresh in lists:
+            item.setCheckState(fresh)
+        for widget, fresh in indices:
+            widget.setCurrentIndex(fresh)
+        for widget, fresh in values:
+            widget.setValue(fresh)
+        for widget, fresh in texts:
+            widget.setText(fresh)
 
     def close(self) -> None:
         if self.window is not None:
@@ -188,13 +250,16 @@ def chrome(window: MainWindow) -> dict:
     widgets = window.findChildren(QWidget)
     plotter = window.viewport.plotter
     return {
-        "checks": [b.isChecked() for b in window.findChildren(QAbstractButton)],
-        "actions": [a.isChecked() for a in window.findChildren(QAction)],
-        "lists": [
-            [w.item(i).checkState() for i in range(w.count())]
+        # by widget, not in the order Qt lists them (moving a dock moves its toggle in it)
+        "checks": {b: b.isChecked() for b in window.findChildren(QAbstractButton)},
+        "actions": {a: a.isChecked() for a in window.findChildren(QAction)},
+        "lists": {
+            w: [w.item(i).checkState() for i in range(w.count())]
             for w in window.findChildren(QListWidget)
-        ],
-        "indices": [w.currentIndex() for w in widgets if isinstance(w, INDEXED)],
+        },
+        "indices": {w: w.currentIndex() for w in widgets if isinstance(w, INDEXED)},
+        "values": {w: w.value() for w in widgets if valued(w)},
+        "texts": {w: w.text() for w in widgets if isinstance(w, QLineEdit)},
         "docks": [(d.isVisible(), d.isFloating()) for d in window.docks.values()],
         "widgets": len(widgets),
         "layers": dict(window.viewport.visible),
@@ -214,6 +279,46 @@ def chrome(window: MainWindow) -> dict:
 
 
 INDEXED = (QComboBox, QTabBar, QTabWidget, QStackedWidget)
+VALUED = (QSpinBox, QDoubleSpinBox, QAbstractSlider)
+ONE_USE = (QMessageBox, PhotoDialog)  # made anew each time they are shown
+
+
+def marks(window: MainWindow) -> tuple[tuple, tuple]:
+    """What any work with the session, its jobs or the sketch editor changes: the objects it
+    replaces (compared by identity) and the values it sets (LentWindow.untouched)."""
+    session, history, view = window.session, window.session.history, window.editor.view
+    same = (session.state, session.shown.outcome, session.derived, view.sketch, *history.steps)
+    equal = (
+        (session.last_id, window.worker.last_id, session.message),  # a job a test started
+        (len(history.steps), history.index, history.clean_index, session.chosen_texture),
+        (window.panel.params() == session.params, view.transform()),
+        (view.active, view.selected, view.select_tool),
+    )
+    return same, equal
+
+
+def controls(window: MainWindow) -> tuple:
+    """The window's dock layout and its controls with their settings (LentWindow.restore)."""
+    lists, widgets = window.findChildren(QListWidget), window.findChildren(QWidget)
+    return (
+        window.saveState(),
+        [(b, b.isChecked()) for b in window.findChildren(QAbstractButton) if b.isCheckable()],
+        [(a, a.isChecked()) for a in window.findChildren(QAction) if a.isCheckable()],
+        [(w.item(i), w.item(i).checkState()) for w in lists for i in range(w.count())],
+        [(w, w.currentIndex()) for w in widgets if isinstance(w, INDEXED)],
+        [(w, w.value()) for w in widgets if valued(w)],
+        [(w, w.text()) for w in widgets if typed(w)],
+    )
+
+
+def valued(widget: QWidget) -> bool:
+    """A spin box or slider (a scroll bar's value follows what its view holds)."""
+    return isinstance(widget, VALUED) and not isinstance(widget, QScrollBar)
+
+
+def typed(widget: QWidget) -> bool:
+    """A line edit of its own (a spin box's is its value)."""
+    return isinstance(widget, QLineEdit) and not isinstance(widget.parent(), QAbstractSpinBox)
 
 
 @pytest.fixture(scope="session")
