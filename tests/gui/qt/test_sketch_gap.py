@@ -77,7 +77,7 @@ def test_a_new_sketch_is_editable_at_once_and_a_failed_open_gives_back_the_old_s
     with qtbot.waitSignal(window.failure_shown, timeout=30_000):
         assert window.open_path(str(line))
     window.last_error_box.close()
-    # the old sketch comes back, drawn a turn later as an awaited sketch is (SketchEditor.set_sketch)
+    # the old sketch comes back a turn later, as an awaited sketch does (SketchEditor.set_sketch)
     qtbot.waitUntil(lambda: len(view.sketch.boundary) == len(old.boundary), timeout=5_000)
     np.testing.assert_array_equal(view.sketch.boundary, old.boundary)  # not an empty sketch
     assert window.editor.isEnabled() and not window.editor.waiting.isVisible()
