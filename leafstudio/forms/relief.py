@@ -50,7 +50,7 @@ def dome(poly: Polygon, ratio: float, base: np.ndarray) -> Callable[[np.ndarray]
     ring = shapely.get_coordinates(poly.exterior.segmentize(CELL))[:-1]
     segments = np.column_stack([np.arange(len(ring)), np.roll(np.arange(len(ring)), -1)])
     mesh = triangle.triangulate(
-        {"vertices": ring, "segments": segments}, f"pq20a{0.5 * CELL**2:.8f}Q"
+        {"vertices": ring, "segments": segments}, f"pq30a{0.5 * CELL**2:.8f}Q"
     )
     points, faces = mesh["vertices"], mesh["triangles"]
     inner = mesh["vertex_markers"].ravel() == 0
