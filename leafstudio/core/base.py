@@ -7,10 +7,9 @@ down. We carry the margin's heights with a smooth base surface over the leaf reg
 
     b(x) = Σ_i w_i φ(|x − c_i|) + a_0 + a_1 x + a_2 y,     φ(r) = r² log r,
 
-the thin-plate spline (the surface of least bending energy, the physics of a thin blade) nearest
-the boundary points' signed heights, with at most `MAX_CENTRES` centres c_i taken evenly along
-the outline so that it stays cheap, fitted by least squares to every boundary point (one small
-dense solve, then O(n · centres) to evaluate).
+the thin-plate spline (the interpolant of least bending energy, the physics of a thin blade)
+through the boundary points' signed heights, with at most `MAX_CENTRES` centres c_i taken evenly
+along the outline so that it stays cheap (one small dense solve, then O(n · centres) to evaluate).
 The Gaussian mixture then models the veins' relief above or below b (see surface.py). For a planar
 boundary there is no base (b ≡ 0 exactly) and the paper's method is unchanged.
 """
@@ -21,8 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-MAX_CENTRES = 192  # centres of the spline, taken evenly along the outline (48 missed a waved
-# sagittate form's margin by 7.5e-3 of its length, 96 by 1.7e-3, 192 by 8e-4)
+MAX_CENTRES = 48  # centres of the spline, taken evenly along the outline
 PLANAR = 1e-9  # boundary heights under this fraction of the leaf length count as planar
 SMOOTHING = 1e-7  # ridge on the spline's kernel (in units of the leaf length), against noise
 
@@ -107,17 +105,7 @@ def _even_along(polygon: np.ndarray, count: int) -> np.ndarray:
 
 
 def fit_base(polygon: np.ndarray, heights: np.ndarray, length: float) -> BaseSurface | None:
-    """The thin-plate spline nearest the outline's heights, or None if the outline is planar.
-
-    The spline has at most `MAX_CENTRES` centres, spread evenly along the outline, but is fitted
-    by least squares to every outline point: an interpolant through the centres alone missed
-    the heights between them (a waved sagittate form's margin by 1.4% of its length with 48
-    centres, and its veins, which ride on the form's own base, by as much).
-
-        min Σ_j (b(x_j) − h_j)² + λ wᵀ Φ w   with   Pᵀ w = 0,
-
-    λ = `SMOOTHING` (tiny: it only keeps the solve well posed), Φ the kernel among the centres
-    and P their affine part; the side condition keeps b linear far away, as a thin-plate spline.
+    """The thin-plate spline through the outline's heights, or None if the outline is planar.
 
     Parameters
     ----------
@@ -138,25 +126,18 @@ def fit_base(polygon: np.ndarray, heights: np.ndarray, length: float) -> BaseSur
     pick = _even_along(polygon, MAX_CENTRES)
     origin = polygon.mean(axis=0)
     centres = (polygon[pick] - origin) / length
-    points = (polygon - origin) / length
     m = len(centres)
-    design = np.hstack([_kernel(_squared_distances(points, centres)), _affine(points)])
-    system = np.zeros((m + 6, m + 6))
-    system[: m + 3, : m + 3] = design.T @ design
-    system[:m, :m] += SMOOTHING * _kernel(_squared_distances(centres, centres))
-    system[:m, m + 3 :] = _affine(centres)
-    system[m + 3 :, :m] = _affine(centres).T
-    rhs = np.concatenate([design.T @ heights, np.zeros(3)])
+    system = np.zeros((m + 3, m + 3))
+    system[:m, :m] = _kernel(_squared_distances(centres, centres)) + SMOOTHING * np.eye(m)
+    poly = np.column_stack([np.ones(m), centres])
+    system[:m, m:] = poly
+    system[m:, :m] = poly.T
+    rhs = np.concatenate([heights[pick], np.zeros(3)])
     solution = np.linalg.lstsq(system, rhs, rcond=None)[0]
     return BaseSurface(
         centres=polygon[pick].copy(),
         weights=solution[:m],
-        affine=solution[m : m + 3],
+        affine=solution[m:],
         origin=origin,
         scale=float(length),
     )
-
-
-def _affine(points: np.ndarray) -> np.ndarray:
-    """(n, 3) the columns 1, x, y of the spline's affine part."""
-    return np.column_stack([np.ones(len(points)), points])
