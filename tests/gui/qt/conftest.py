@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import shiboken6
 from PySide6.QtCore import QSettings
-from PySide6.QtGui import QAction, QImage
+from PySide6.QtGui import QAction, QImage, QPalette
 from PySide6.QtWidgets import (
     QAbstractButton,
     QAbstractSlider,
@@ -202,8 +202,10 @@ class LentWindow:
                 shiboken6.delete(dialog)
         win.last_error_box = None
         win.photo_dialog = None
-        state, checks, actions, lists, indices, values, texts = self.controls
+        state, palette, checks, actions, lists, indices, values, texts = self.controls
         win.restoreState(state)
+        if win.palette() != palette:  # a test that darkened the window (test_render_cost)
+            win.setPalette(palette)
         for on in (True, False):  # an exclusive group's button is checked, not unchecked
             for button, fresh in checks:
                 if fresh is on and button.isChecked() is not on:
@@ -273,6 +275,7 @@ def chrome(window: MainWindow) -> dict:
         "bars": sorted(plotter.scalar_bars.keys()),
         "camera": np.round(plotter.camera_position.to_list(), 6).tolist(),
         "size": (window.width(), window.height()),
+        "palette": window.palette().color(QPalette.ColorRole.Base).name(),
         "boxes": [w for w in QApplication.topLevelWidgets() if w.isVisible() and w is not window],
         "error_box": window.last_error_box,
     }
@@ -302,6 +305,7 @@ def controls(window: MainWindow) -> tuple:
     lists, widgets = window.findChildren(QListWidget), window.findChildren(QWidget)
     return (
         window.saveState(),
+        QPalette(window.palette()),
         [(b, b.isChecked()) for b in window.findChildren(QAbstractButton) if b.isCheckable()],
         [(a, a.isChecked()) for a in window.findChildren(QAction) if a.isCheckable()],
         [(w.item(i), w.item(i).checkState()) for w in lists for i in range(w.count())],
