@@ -184,6 +184,11 @@ class Session(FileOpening, Bending):
             return self.derived
         return None
 
+    def derives(self, leaf: Leaf) -> bool:
+        """Whether `leaf`'s result gives the editor its sketch: a loaded leaf's first."""
+        fresh = self.derived is None or self._derived_leaf is not leaf
+        return self.state.sketch is None and leaf is self.leaf and fresh
+
     def view_frame(self) -> Frame | None:
         """The plane both views show the leaf on: the sketch's (so the 3D top view and the
         sketch are the same way round), else the shown result's."""
@@ -424,9 +429,8 @@ class Session(FileOpening, Bending):
             self._fallback = None
         result = outcome.result
         serial, reason = self._requested.get(request_id, (self.state.serial, "document"))
-        derive = self.derived is None or self._derived_leaf is not result.leaf
-        if self.state.sketch is None and result.leaf is self.leaf and derive:
-            self.derived = Sketch.from_result(result)
+        if self.derives(result.leaf):  # derived by the worker, if it knew (Worker.derives)
+            self.derived = getattr(outcome, "sketch", None) or Sketch.from_result(result)
             self._derived_leaf = result.leaf
             self.sketch_shown.emit(self.derived, True)
         frame = self.view_frame() or result.frame

@@ -433,7 +433,7 @@ class Sketch:
         and along each vein, on the leaf's own plane (the pipeline's frame), the boundary's
         heights kept as its relief. A long outline (a 300,000-point boundary) is followed
         through OUTLINE_POINTS of its points and its relief kept at RELIEF_POINTS: the editor
-        queries them on the main thread (thinning.py)."""
+        queries them on the main thread (thinning.py). Its curves are made with it."""
         boundary = outline_controls(thinned(result.polygon, OUTLINE_POINTS, ordered=True))
         leaf = flat_leaf(result.leaf)  # a bent leaf's flat blade: the sketch draws the blade
         relief = thinned(leaf.boundary, RELIEF_POINTS, ordered=True)
@@ -443,10 +443,13 @@ class Sketch:
             xy, h = result.frame.to_plane(vein)
             points = np.column_stack([xy, h])
             veins.append(even_by_length(points, min(DERIVED_VEIN_POINTS, len(points)), False))
-        return cls(
+        sketch = cls(
             boundary=boundary,
             veins=tuple(veins),
             frame=result.frame,
             relief=relief,
             bend=result.leaf.bend if isinstance(result.leaf.bend, Scaled) else None,
         )
+        for curve in (BOUNDARY, *range(len(veins))):
+            sketch._curve(curve)  # made now: the worker derives it (Worker.derives), not the editor
+        return sketch

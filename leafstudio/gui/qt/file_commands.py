@@ -20,6 +20,14 @@ from leafstudio.sources.photo import PHOTO_SUFFIXES
 from leafstudio.sources.scan import SCAN_SUFFIXES
 
 APP_NAME = "LeafStudio"
+ABOUT = (
+    "<h3>LeafStudio</h3>"
+    "<p>Smooth 3D leaf surfaces from a leaf's boundary and vein points.</p>"
+    "<p>An implementation of Nagai &amp; Tanaya, <i>Leaf Reconstruction Based on Gaussian Mixture "
+    "Model from Point Clouds of Leaf Boundaries and Veins</i>: a PCA plane, a 2D multi-level "
+    "partition-of-unity implicit for the leaf region, a height guide from the veins, a Gaussian "
+    "mixture fitted by EM, and a mesh trimmed at the margin.</p>"
+)
 PROJECT_SUFFIX = ".leaf.json"
 MAX_RECENT = 8
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Iterable
+from functools import partial
 from pathlib import Path
 
 from PySide6.QtCore import QSettings, Qt, QTimer, Signal
@@ -31,26 +32,18 @@ from leafstudio.gui.model.textures import SHOWS_TEXTURE, coloring_for
 from leafstudio.gui.qt import bend_sliders, explain, forms_dock, lesson_view, projector
 from leafstudio.gui.qt.actions import MENU_TITLES, WINDOW_ACTIONS, Action
 from leafstudio.gui.qt.controls import ParamPanel
-from leafstudio.gui.qt.file_commands import APP_NAME, FileCommands
+from leafstudio.gui.qt.file_commands import ABOUT, APP_NAME, FileCommands
 from leafstudio.gui.qt.layers_panel import LayersPanel
 from leafstudio.gui.qt.measurements_panel import MeasurementsPanel
 from leafstudio.gui.qt.sketch import SketchEditor
 from leafstudio.gui.qt.status import Busy, StatusText
+from leafstudio.gui.qt.turns import later
 from leafstudio.gui.qt.viewport import Viewport
 from leafstudio.gui.qt.worker import PIPELINE, Outcome, Worker
 from leafstudio.model import Params
 
 STAGE_LABEL_MS = 250  # the running stage is shown at most this often (each repaint costs time)
-NEXT_TURN_MS = 1  # a result is drawn a timer later (a zero-delay call precedes due input)
 LEFT, RIGHT = Qt.DockWidgetArea.LeftDockWidgetArea, Qt.DockWidgetArea.RightDockWidgetArea
-ABOUT = (
-    "<h3>LeafStudio</h3>"
-    "<p>Smooth 3D leaf surfaces from a leaf's boundary and vein points.</p>"
-    "<p>An implementation of Nagai &amp; Tanaya, <i>Leaf Reconstruction Based on Gaussian Mixture "
-    "Model from Point Clouds of Leaf Boundaries and Veins</i>: a PCA plane, a 2D multi-level "
-    "partition-of-unity implicit for the leaf region, a height guide from the veins, a Gaussian "
-    "mixture fitted by EM, and a mesh trimmed at the margin.</p>"
-)
 
 
 class MainWindow(FileCommands, QMainWindow):
@@ -115,6 +108,7 @@ class MainWindow(FileCommands, QMainWindow):
         self._stage_timer.setInterval(STAGE_LABEL_MS)
         self._stage_timer.timeout.connect(self._show_stage)
         self._stage = ""
+        self.worker.derives = self.session.derives  # a loaded leaf's sketch, off this thread
         self._connect_session()
         self.panel.changed.connect(self._on_params)
         self.panel.released.connect(self._on_params_released)
@@ -314,6 +308,10 @@ class MainWindow(FileCommands, QMainWindow):
         self.viewport.set_mesh_coloring(self.coloring.itemData(row))
         self.session.side.set_texture_shown(self.viewport.mesh_coloring in SHOWS_TEXTURE)
 
+    def _set_coloring(self, coloring: str, automatic: bool) -> None:
+        self.coloring.setCurrentIndex(self.coloring.findData(coloring))
+        self._coloring_automatic = automatic
+
     def _on_side_note(self, note: str) -> None:
         """A side job failed without harm (the Poisson surface, the generated texture)."""
         self.status_text.setText(f"{self.status_text.text()} — {note}")
@@ -338,9 +336,10 @@ class MainWindow(FileCommands, QMainWindow):
             is_scan = state.scan is not None
             current = self.viewport.mesh_coloring
             coloring, automatic = coloring_for(is_scan, current, self._coloring_automatic)
-            if coloring != current:
-                self.coloring.setCurrentIndex(self.coloring.findData(coloring))
-            self._coloring_automatic = automatic
+            if coloring != current:  # the old mesh's new actor: a turn of its own (turns.py)
+                later(self, partial(self._set_coloring, coloring, automatic))
+            else:
+                self._coloring_automatic = automatic
         if state.scan is not self._scan_shown:
             self._scan_shown = state.scan
             self.viewport.set_layer("scan", state.scan.pieces if state.scan is not None else [])
@@ -360,7 +359,7 @@ class MainWindow(FileCommands, QMainWindow):
         pauses, not one of 32 ms (a 2M-point scan); a newer result then keeps a reset framing."""
         due = self._result_due
         if due is None:
-            QTimer.singleShot(NEXT_TURN_MS, self, self._show_result)
+            later(self, self._show_result)
         elif due[1] is not None:  # not drawn yet: a new document's reset, or a refit
             reset = due[1].reset or (framing is not None and framing.reset)
             framing = Framing((framing or due[1]).bounds, reset)

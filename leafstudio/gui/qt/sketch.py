@@ -20,7 +20,6 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from PySide6.QtCore import QTimer
 from PySide6.QtGui import QPalette, QResizeEvent
 from PySide6.QtWidgets import (
     QCheckBox,
@@ -36,6 +35,7 @@ from PySide6.QtWidgets import (
 from leafstudio.gui.model.sketch_model import BOUNDARY, Sketch
 from leafstudio.gui.qt.profile_view import ProfileView
 from leafstudio.gui.qt.sketch_view import CROSSING_COLOR, SketchView
+from leafstudio.gui.qt.turns import later
 
 
 class SketchEditor(QWidget):
@@ -153,7 +153,7 @@ class SketchEditor(QWidget):
         for a 2-million-point scan's)."""
         if self._waiting and self._due is None:
             self._due = (sketch, fit)
-            QTimer.singleShot(0, self, self._show_due)
+            later(self, self._show_due)
             return
         self._due = None
         if self._waiting:

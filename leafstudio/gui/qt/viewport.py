@@ -11,7 +11,7 @@ ratio; the background and text follow the palette. Main thread only (VTK renderi
 from __future__ import annotations
 
 import numpy as np
-from PySide6.QtCore import QEvent, QPoint, QRect, QTimer, Signal
+from PySide6.QtCore import QEvent, QPoint, QRect, Signal
 from PySide6.QtGui import QImage, QPainter, QPalette, QPixmap
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
@@ -21,6 +21,7 @@ from leafstudio.gui.model.framing import BladeBounds
 from leafstudio.gui.model.layers import BOUNDARY_COLOR, LAYERS, MESH_COLORINGS, SCALAR_BARS, Piece
 from leafstudio.gui.model.textures import LEAF, SHOWS_TEXTURE
 from leafstudio.gui.qt.native_view import make_plotter
+from leafstudio.gui.qt.turns import later
 from leafstudio.gui.qt.view_camera import CameraPlacing
 
 SIZED = ("point_size", "line_width")  # style keys in device pixels: scaled by the pixel ratio
@@ -163,7 +164,7 @@ class Viewport(CameraPlacing, QWidget):
         before that turn make one render."""
         if not self._redraw_due:
             self._redraw_due = True
-            QTimer.singleShot(0, self, self._redraw_now)
+            later(self, self._redraw_now)
 
     def _redraw_now(self) -> None:
         self._redraw_due = False
@@ -172,7 +173,7 @@ class Viewport(CameraPlacing, QWidget):
     def _on_render_end(self, *_: object) -> None:
         self._made = False
         if self._later:
-            QTimer.singleShot(0, self, self._draw_later)
+            later(self, self._draw_later)
         if self._announce:
             self._announce = False
             self.rendered.emit()
