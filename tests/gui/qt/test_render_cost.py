@@ -369,3 +369,35 @@ def test_a_loaded_leafs_sketch_is_derived_with_its_curves_off_the_main_thread(
     assert threads and threading.get_ident() not in threads
     made = session.derived.__dict__.get("_curves", {})
     assert set(made) == {BOUNDARY, *range(len(session.derived.veins))}
+
+
+def test_a_results_mesh_and_its_other_layers_are_drawn_in_two_turns_then_rendered_once(
+    window, qtbot, monkeypatch
+):
+    """A result's layers made one main-thread pause of 17-48 ms for a 2M-point scan (issue
+    24): the mesh is drawn with the result, the other layers in a later turn (a due timer
+    fires between), and the render comes after both, once."""
+    from PySide6.QtCore import QTimer
+
+    qtbot.wait(200)  # whatever the first result left to paint
+    viewport, log = window.viewport, []
+    real = viewport._draw_layer
+    monkeypatch.setattr(viewport, "_draw_layer", lambda key, *a: (log.append(key), real(key, *a)))
+    viewport.plotter.render_window.AddObserver("StartEvent", lambda *_: log.append("render"))
+    probe = QTimer()
+    probe.setInterval(0)
+    probe.timeout.connect(lambda: log.append("tick"))
+    outcome = window.session.shown.outcome
+    probe.start()
+    viewport.show_layers(outcome.layers, outcome.result.frame)
+    assert log == ["mesh"]
+    qtbot.waitUntil(lambda: "render" in log, timeout=WAIT_MS)
+    qtbot.wait(100)
+    probe.stop()
+    drawn = [entry for entry in log if entry != "tick"]
+    assert drawn == [
+        "mesh",
+        *[k for k in outcome.layers if k != "mesh" and viewport.visible[k]],
+        "render",
+    ]
+    assert log.index("tick") < log.index(drawn[1])
