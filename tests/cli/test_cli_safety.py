@@ -256,7 +256,12 @@ def test_a_signal_during_a_write_removes_the_temporary_file(tmp_path, sig):
     out = tmp_path / "o.ply"
     out.write_bytes(OLD)
     child = subprocess.Popen(
-        [sys.executable, "-c", WRITER, str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE
+        [sys.executable, "-c", WRITER, str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        # Ctrl-C as at a terminal: a suite started in the background (`cmd &`) hands its
+        # children SIGINT ignored, and Python then leaves it ignored
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     try:
         assert child.stdout.readline().strip() == b"writing"
