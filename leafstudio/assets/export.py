@@ -321,17 +321,26 @@ def asset_options(
     leaf_path: str | os.PathLike,
     result: Any,
     length: str | None = None,
+    placement: Any = None,
 ) -> dict[str, Any]:
     """save_mesh's keyword arguments from the command line's: an image texture is a photo the
     leaf came from when the leaf's project says so; the thickness in the mesh's units (a length
-    with its unit is real size when --length gives the leaf's)."""
+    with its unit is real size when --length gives the leaf's); the result's placement, found
+    once (`placement`, when the caller has it already)."""
     if texture not in TEXTURES:  # the project's own photo goes back where it was; another
         own = project_photo(leaf_path)  # image covers the texture as it is (issue 24, #15)
         same = own is not None and Path(texture).resolve() == own.image
         texture = PhotoTexture(texture, own.pixel_from_world if same else None)
     metres = None if length is None else parse_length(length)
-    per_unit = None if metres is None else metres / leaf_placement_of(result).length
+    placement = placement if placement is not None else leaf_placement_of(result)
+    per_unit = None if metres is None else metres / placement.length
     solid = None
     if thickness is not None:
         solid = thickness_in_mesh_units(thickness, result.length, per_unit)
-    return {"texture": texture, "thickness": solid, "lod": lod, "length": metres}
+    return {
+        "texture": texture,
+        "thickness": solid,
+        "lod": lod,
+        "length": metres,
+        "placement": placement,
+    }

@@ -112,7 +112,8 @@ def run(args: argparse.Namespace) -> int:
     if args.against:  # read (and its blade found, as extract finds it) before the run
         against = open_scan(args.against, force=True)
     params, result = run_pipeline(args, leaf)
-    if args.length is None and (note := size_note(leaf_placement_of(result).length, out.suffix)):
+    placement = leaf_placement_of(result)  # where the leaf's base and axes are, found once
+    if args.length is None and (note := size_note(placement.length, out.suffix)):
         log.warning(f"{args.input}: {note}")
     fidelity = None
     if against is not None:
@@ -139,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
         check_finite(metrics, args.input)
     with staged():  # every output is written in this block; renamed over the old ones at its end
         options = asset_options(
-            args.texture, args.thickness, args.lod, args.input, result, args.length
+            args.texture, args.thickness, args.lod, args.input, result, args.length, placement
         )
         save_mesh(result, out, **options)
         if figure is not None:
