@@ -113,7 +113,7 @@ def frame_stage(leaf: Leaf, margin: str = "auto", units: Units | None = None) ->
         polygon_h = np.zeros(len(polygon))
     else:
         polygon_h = outline.heights[kept_vertices]
-    base = fit_base(polygon, polygon_h, length)
+    base = fit_base(polygon, polygon_h, length, noisy=outline.smoothed)
     if outline.smoothed and base is not None:  # a noisy margin: on the smooth base itself
         polygon_h = base(polygon)
     veins, heights = [], []

@@ -152,8 +152,10 @@ class Blade:
     def inside(self, pts: np.ndarray, margin: float = 0.0) -> np.ndarray:
         pts = np.asarray(pts, dtype=float)
         inside = shapely.contains_xy(self.poly, pts[:, 0], pts[:, 1])
-        if margin > 0:
-            inside &= self.gap(pts) > margin
+        if margin > 0:  # no margin point within `margin` (bounded: a k-d tree query from deep
+            # inside a round blade otherwise visits every margin point)
+            bound = np.nextafter(margin, np.inf)
+            inside &= self.tree.query(pts, distance_upper_bound=bound)[0] > margin
         return inside
 
 

@@ -4,7 +4,7 @@ The convention (docs/architecture.md): the blade's base, where the midrib meets 
 origin; the apex lies on +x and the outline's farthest point along +x is at x = 1; the blade lies
 in z = 0 apart from its relief. Relief is heights on the boundary and the veins, so it goes through
 the pipeline like any leaf's: the fold and the wave on the boundary become the base surface b(x),
-the veins' heights above it the Gaussian mixture.
+the veins' heights above it (a smooth dome, forms/relief.py) the Gaussian mixture.
 """
 
 from __future__ import annotations
@@ -206,6 +206,7 @@ class Form:
             base=np.zeros(2),
             seed=self.seed,
             apex=xy[outline.apex_index],
+            relief="dome",
         )
         wave = self._wave(outline)
         base = fit_base(xy, wave, 1.0)  # the wave's surface (the pipeline's b): veins ride on it

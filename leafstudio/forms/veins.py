@@ -24,7 +24,9 @@ visualization of leaf venation patterns", SIGGRAPH 2005, open venation):
    are parallel-veined (venation "parallel").
 3. Heights: every vein point stands HEIGHT_RATIO times its distance to the margin above the
    blade's base surface (b(x) through a 3D outline's heights, 0 for a flat one), as the demos'
-   midribs do (h = 0.25 w): the blade rises about 14° from the margin to the veins.
+   midribs do (h = 0.25 w): the blade rises about 14° from the margin to the veins, a roof
+   creased along the midrib. Forms ask for relief "dome" instead (relief.py): a smooth membrane
+   as high at its top, with no crease for a surface through the veins to follow.
 
 This module checks the input and runs the method; the blade (its plane, axis and inside tests) is
 in blade.py, steps 1-2 (the primaries, space colonization) in growth.py.
@@ -54,9 +56,11 @@ from leafstudio.forms.growth import (
     stations,
     to_margin,
 )
+from leafstudio.forms.relief import dome
 from leafstudio.model import SEED_MAX
 
 VENATION_KINDS = ("pinnate", "palmate", "parallel", "arcuate")
+RELIEFS = ("roof", "dome")
 BASE_REACH = 0.05  # a base farther outside the outline than this share of its size is refused
 HEIGHT_RATIO = 0.25  # vein height over its distance to the margin (sources/demos.py: h = 0.25 w)
 NARROW_TURN = np.deg2rad(35.0)  # a narrow blade's secondaries leave the midrib at 90° - this
@@ -72,6 +76,7 @@ def grow_veins(
     seed: int = 0,
     *,
     apex: np.ndarray | None = None,
+    relief: str = "roof",
 ) -> list[np.ndarray]:
     """Veins of the chosen kind grown inside any outline (see the module docstring for the method).
 
@@ -90,6 +95,9 @@ def grow_veins(
         Varies the sources and the seeds' places; the same seed gives the same veins.
     apex : (2,) or (3,) float array, optional
         Where the midrib ends; default the margin point farthest from the base.
+    relief : {"roof", "dome"}, default: "roof"
+        The veins' heights: HEIGHT_RATIO times their distance to the margin (a roof, creased
+        along the midrib), or a smooth dome as high at its top (relief.py: the forms' own).
 
     Returns
     -------
@@ -132,7 +140,13 @@ def grow_veins(
         return (at - units.offset[: len(at)]) / units.scale
 
     veins = _grow_unit(
-        units.to_unit(points), venation, secondaries, unit(base), seed, apex=unit(apex)
+        units.to_unit(points),
+        venation,
+        secondaries,
+        unit(base),
+        seed,
+        apex=unit(apex),
+        relief=relief,
     )
     offset = np.r_[units.offset, 0.0][:3]  # a 2D outline: (x, y, 0), z is the height above 0
     return [offset + units.scale * v for v in veins]
@@ -153,10 +167,13 @@ def _grow_unit(
     seed: int,
     *,
     apex: np.ndarray | None,
+    relief: str,
 ) -> list[np.ndarray]:
     """grow_veins on an outline of unit size centred on the origin."""
     if venation not in VENATION_KINDS:
         raise LeafError(f"unknown venation {venation!r}; choose from {', '.join(VENATION_KINDS)}")
+    if relief not in RELIEFS:
+        raise LeafError(f"unknown relief {relief!r}; choose from {', '.join(RELIEFS)}")
     count = DEFAULT_SECONDARIES[venation] if secondaries is None else int(secondaries)
     if not 0 <= count <= 40:
         raise LeafError(f"secondaries must be between 0 and 40, got {count}")
@@ -246,4 +263,7 @@ def _grow_unit(
             if len(path) >= 3 and reaches:  # an open secondary cut short of the margin is dropped
                 veins.append(path)
     lift = lifter(xy, heights, frame, poly)
+    if relief == "dome":
+        rise = dome(blade, HEIGHT_RATIO, np.zeros(2))
+        return [lift(world(vein), length * rise(vein)) for vein in veins]
     return [lift(world(vein), HEIGHT_RATIO * length * blade.gap(vein)) for vein in veins]

@@ -55,10 +55,12 @@ def test_every_gallery_form_passes_through_its_veins(shape):
     assert result.metrics["boundary"]["max"] <= 1e-9 * result.length  # z = b on the margin
 
 
-@pytest.mark.parametrize("shape", ["ovate", "cordate"])
+@pytest.mark.parametrize("shape", ["ovate", "cordate", "sagittate", "spatulate", "elliptic"])
 def test_a_waved_form_passes_through_its_veins(shape):
     """Issue 21: a wave of 0.1 left the midrib's ends 7.1e-3 (ovate) of the length off the mesh,
-    next to the base, where the margin's wave rose at full slope from both sides into a V."""
+    next to the base, where the margin's wave rose at full slope from both sides into a V; then
+    the base b(x), a spline through 48 of the outline's points, missed the heights between them
+    and the veins riding on it: sagittate 4.4e-3, spatulate and elliptic 1.4e-3."""
     result = _run(make_form(shape, wave=0.1), k=3)
     assert result.metrics["veins"]["max"] <= VEIN_TOLERANCE * result.length
 
@@ -76,15 +78,21 @@ def test_a_drawn_leaf_with_hand_raised_veins_passes_through_them_without_new_cre
         assert ours[band] <= 1.1 * theirs[band]
 
 
-@pytest.mark.parametrize(("shape", "interior"), [("ovate", 4.8), ("oblong", 6.0)])
-def test_a_broad_forms_midrib_is_no_tighter_ridge_than_its_veins_need(shape, interior):
-    """A form's veins stand a quarter of their distance to the margin high: a roof, 14° each side
-    of the midrib. Pinned exactly, the correction drew that crest tight (99th-percentile interior
-    dihedral 5.0° on ovate, 6.4° on oblong; the paper's surface, 6.5e-3 off the midrib, 3.4°);
-    each vein point may stay correct.TOLERANCE off where the spline then bends less."""
+@pytest.mark.parametrize(
+    ("shape", "interior"), [("ovate", 3.4), ("oblong", 3.4), ("cordate", 3.4), ("sagittate", 4.0)]
+)
+def test_a_forms_surface_through_its_veins_is_as_smooth_as_the_papers(shape, interior):
+    """A form's veins stood a quarter of their distance to the margin high: a roof, 14° each side
+    of the midrib, which a surface through them had to follow (99th-percentile interior dihedral
+    4.6° on ovate, 5.8° on oblong, 9.9° on sagittate, where the paper's surface, 6.5e-3 off the
+    midrib, had 3.4°). On the forms' smooth dome (forms/relief.py) it is under 3.4° (sagittate,
+    its lobes veinless, 3.4°: under 4°) and the margin band's under 4°, with every vein point
+    within 1e-3 of the length."""
     result = _run(make_form(shape), k=3)
     assert result.metrics["veins"]["max"] <= VEIN_TOLERANCE * result.length
-    assert margin_creases(result)["interior_p99"] <= interior
+    creases = margin_creases(result)
+    assert creases["interior_p99"] <= interior
+    assert creases["margin_p99"] <= 4.0
 
 
 def test_values_within_their_slack_bend_the_spline_less():

@@ -1,0 +1,61 @@
+"""A form's veins stand on a smooth dome (forms/relief.py; issue 21)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from shapely.geometry import Polygon
+
+from leafstudio.errors import LeafError
+from leafstudio.forms import grow_veins
+from leafstudio.forms.blade import Blade
+from leafstudio.forms.relief import dome
+
+
+def _ellipse(a: float = 0.5, b: float = 0.2) -> Blade:
+    t = np.linspace(0, 2 * np.pi, 400, endpoint=False)
+    return Blade(Polygon(np.column_stack([0.5 + a * np.cos(t), b * np.sin(t)])))
+
+
+def test_the_dome_on_an_ellipse_is_the_paraboloid_met_at_the_roofs_slope():
+    """The membrane −Δψ = 1, ψ = 0 on an ellipse's margin is s = 1 − x²/a² − y²/b² scaled, and
+    the dome is s (1 + s) / 2 as high as the roof's top (0.25 b), flattened only around the
+    base (here the left end, far from the points checked); across the middle it meets the
+    margin at the roof's slope."""
+    a, b = 0.5, 0.2
+    heights = dome(_ellipse(a, b), 0.25, np.array([0.0, 0.0]))
+    rng = np.random.default_rng(1)
+    xy = rng.uniform([0.4, -b], [1.0, b], (3000, 2))
+    s = 1 - ((xy[:, 0] - 0.5) / a) ** 2 - (xy[:, 1] / b) ** 2
+    xy, s = xy[s > 0.0], s[s > 0.0]
+    exact = 0.25 * b * s * (1 + s) / 2
+    assert np.abs(heights(xy) - exact).max() <= 5e-4  # of a top 0.05 high
+    edge = np.array([[0.5, b - 1e-3], [0.5, b - 2e-3]])
+    slope = np.diff(heights(edge))[0] / 1e-3
+    assert slope == pytest.approx(0.25, rel=0.05)
+
+
+def test_the_dome_has_no_crease_along_the_midrib():
+    """The roof's slope jumps by half across the midrib (0.25 up, 0.25 down); the dome's is
+    continuous there."""
+    heights = dome(_ellipse(), 0.25, np.array([0.0, 0.0]))
+    step = 0.01
+    at = np.array([[0.6, -step], [0.6, 0.0], [0.6, step]])
+    z = heights(at)
+    jump = ((z[2] - z[1]) - (z[1] - z[0])) / step
+    assert abs(jump) < 0.05
+
+
+def test_grown_veins_keep_the_roof_unless_asked():
+    """Veins grown in a drawn or loaded outline keep today's heights; an unknown relief is a
+    one-line error."""
+    t = np.linspace(0, 2 * np.pi, 200, endpoint=False)
+    outline = np.column_stack([0.5 + 0.5 * np.cos(t), 0.25 * np.sin(t)])
+    roof = grow_veins(outline, "pinnate", secondaries=4)
+    again = grow_veins(outline, "pinnate", secondaries=4, relief="roof")
+    domed = grow_veins(outline, "pinnate", secondaries=4, relief="dome")
+    assert all(np.array_equal(r, s) for r, s in zip(roof, again, strict=True))
+    assert all(np.array_equal(r[:, :2], d[:, :2]) for r, d in zip(roof, domed, strict=True))
+    assert not np.allclose(roof[0][:, 2], domed[0][:, 2])
+    with pytest.raises(LeafError, match="unknown relief"):
+        grow_veins(outline, relief="tent")
