@@ -94,6 +94,11 @@ class NativePlotter(QVTKRenderWindowInteractor, BasePlotter):
         self.interactor = self
         self.ren_win = self.GetRenderWindow()
         self.ren_win.SetMultiSamples(0)
+        # the frame goes to the window's back buffer as colour only: VTK's default for its own
+        # windows also writes the depth buffer there through a full-window shader pass, which
+        # nothing reads, about half of an empty frame's cost under software OpenGL (empty view
+        # 1500x920: 39 -> 20 ms of process CPU; the pixels on screen the same)
+        self.ren_win.SetFrameBlitModeToBlitToCurrent()
         for renderer in self.renderers:
             renderer.view_isometric()
             self.ren_win.AddRenderer(renderer)

@@ -15,9 +15,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from PySide6.QtCore import QPoint, QRect
 from PySide6.QtGui import QImage
 from PySide6.QtOpenGLWidgets import QOpenGLWidget
-from PySide6.QtWidgets import QFileDialog, QWidget
+from PySide6.QtWidgets import QApplication, QFileDialog, QWidget
 
 from leafstudio.gui.qt.native_view import WIDGET_ENV, NativePlotter
 from leafstudio.gui.qt.viewport import grab_window
@@ -51,6 +52,24 @@ def test_the_3d_view_is_a_native_window_and_nothing_in_the_window_is_drawn_with_
         chain.append(chain[-1].parentWidget())
     native = [w for w in window.findChildren(QWidget) if w.internalWinId()]
     assert native and all(w in chain for w in native)
+
+
+def test_the_native_view_blits_its_frame_as_colour_only_and_the_screen_shows_it(window, qtbot):
+    # the hardware blit's depth pass costs half an empty frame under software OpenGL
+    plotter = window.viewport.plotter
+    assert plotter.ren_win.GetFrameBlitMode() == plotter.ren_win.BlitToCurrent
+    plotter.render()
+    qtbot.wait(200)
+    viewport = window.viewport
+    screen = QApplication.primaryScreen()
+    shown = QRect(viewport.mapToGlobal(QPoint(0, 0)), viewport.size()) & screen.geometry()
+    on_screen = image_pixels(screen.grabWindow(0, *shown.getRect()).toImage())
+    corner = shown.topLeft() - viewport.mapToGlobal(QPoint(0, 0))
+    x, y = corner.x(), corner.y()
+    drawn = image_pixels(viewport.image())[y : y + shown.height(), x : x + shown.width()]
+    # the X server's own pixels (a test display may have 16-bit colour: 8 levels apart)
+    assert shown.width() > 100 and shown.height() > 100
+    assert np.abs(on_screen.astype(int) - drawn).max() <= 8
 
 
 def test_the_window_screenshot_and_the_exported_one_show_the_leaf(window, tmp_path, monkeypatch):
