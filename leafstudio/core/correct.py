@@ -167,23 +167,35 @@ def spline_centers(veins: list[np.ndarray], length: float) -> list[np.ndarray]:
     return kept
 
 
-def reachable(taper: np.ndarray, residual: np.ndarray, relief: float, length: float) -> np.ndarray:
+def reachable(
+    taper: np.ndarray,
+    residual: np.ndarray,
+    relief: float,
+    length: float,
+    stretch: np.ndarray | float = 1.0,
+) -> np.ndarray:
     """(m,) bool: the vein points the spline is made to pass through.
 
     Left out: a point that only a correction higher than the veins' own relief could reach
     (|r| > relief · T: a vein raised next to the margin, which z = b there cannot follow without
     a spike), and a point in the margin band (T < BAND) that is already within CLOSE_ENOUGH of the
-    length (a thin tip's midrib: pinning it there only sharpens the tip).
+    length (a thin tip's midrib: pinning it there only sharpens the tip), over its `stretch`
+    (onto_veins).
     """
     spike = np.abs(residual) > relief * taper
-    settled = (taper < BAND) & (np.abs(residual) <= CLOSE_ENOUGH * length)
+    settled = (taper < BAND) & (np.abs(residual) <= CLOSE_ENOUGH * length / stretch)
     return (taper > 0) & ~spike & ~settled
 
 
 def fit_correction(
-    centers: np.ndarray, taper: np.ndarray, residual: np.ndarray, length: float
+    centers: np.ndarray,
+    taper: np.ndarray,
+    residual: np.ndarray,
+    length: float,
+    stretch: np.ndarray | float = 1.0,
 ) -> VeinCorrection | None:
-    """The spline c with T_i c(v_i) within TOLERANCE of r_i at the vein points, bending least.
+    """The spline c with T_i c(v_i) within TOLERANCE of r_i at the vein points (over their
+    `stretch`, onto_veins), bending least.
 
     Parameters
     ----------
@@ -195,6 +207,8 @@ def fit_correction(
         h_i − T_i M(v_i): what the mixture leaves to correct.
     length : float
         The leaf's length (λ and the Hessian's cut-off scale with it).
+    stretch : (m,) float array or float, default 1
+        How many times a distance off the surface grows at each point when the blade is bent.
 
     Returns
     -------
@@ -227,7 +241,8 @@ def fit_correction(
         return scipy.linalg.lu_solve(factors, np.concatenate([t2 * values, np.zeros(q)]))
 
     target = np.divide(residual, taper, out=np.zeros(m), where=taper > 0)
-    solution = spline_of(_within(target, TOLERANCE * length / np.maximum(taper, 1e-3), spline_of))
+    slack = TOLERANCE * length / (np.maximum(taper, 1e-3) * stretch)
+    solution = spline_of(_within(target, slack, spline_of))
     if not np.all(np.isfinite(solution)):
         return None
     slope = spanned.T @ solution[m + 1 :]  # back to a₀ + a₁ x + a₂ y
@@ -276,6 +291,7 @@ def onto_veins(
     heights: list[np.ndarray],
     length: float,
     nodes: tuple[np.ndarray, np.ndarray] | None = None,
+    stretch: list[np.ndarray] | None = None,
 ) -> HeightSurface:
     """`surface` with a VeinCorrection that brings it onto the vein points.
 
@@ -291,6 +307,11 @@ def onto_veins(
         Points inside the leaf and T(g/δ) there, where the correction is checked: a correction
         that adds more than OVERSHOOT times the largest residual anywhere is refitted without
         the vein points of the margin band, and dropped if it still does (see `_tame`).
+    stretch : list of (m_i,) float arrays, optional
+        How many times the leaf's bend lengthens a distance off the blade at each vein point
+        (bend.normal_stretch, at least 1): a fold on a rolled tube shears its section, and a
+        vein point TOLERANCE off the flat surface stood up to 3.9 times that off the bent mesh.
+        Each point's tolerance is divided by it.
     """
     if not veins:
         return surface
@@ -300,9 +321,16 @@ def onto_veins(
     taper = surface.taper(surface.implicit(centers))
     residual = h - taper * surface.relief(centers)
     relief = float(np.abs(h).max())
-    keep = reachable(taper, residual, relief, length)
+    grows = (
+        np.ones(len(h))
+        if stretch is None
+        else np.concatenate([s[k] for s, k in zip(stretch, kept, strict=True)])
+    )
+    keep = reachable(taper, residual, relief, length, grows)
     for pinned in (keep, keep & (taper >= BAND)):
-        correction = fit_correction(centers[pinned], taper[pinned], residual[pinned], length)
+        correction = fit_correction(
+            centers[pinned], taper[pinned], residual[pinned], length, grows[pinned]
+        )
         if correction is None:
             return surface
         if nodes is None or _tame(correction, nodes, np.abs(residual[pinned]).max()):

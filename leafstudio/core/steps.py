@@ -13,6 +13,7 @@ import numpy as np
 from leafstudio.core import mesher
 from leafstudio.core.autok import choose_mixture
 from leafstudio.core.base import PLANAR, BaseSurface, fit_base
+from leafstudio.core.bend import normal_stretch
 from leafstudio.core.correct import onto_veins
 from leafstudio.core.curvature import graph_curvatures
 from leafstudio.core.gmm import Mixture, fit_mixture, fit_signed_mixture, sample_guide
@@ -265,8 +266,37 @@ def compute_surface(run: StageRun) -> SurfaceStage:
         base=fs.base,
     )
     if run.params.through_veins:  # onto every vein point (correct.py)
-        surface = onto_veins(surface, fs.veins, fs.heights, fs.length, (nodes, surface.taper(g_in)))
+        surface = onto_veins(
+            surface,
+            fs.veins,
+            fs.heights,
+            fs.length,
+            (nodes, surface.taper(g_in)),
+            _stretch(run, surface),
+        )
     return SurfaceStage(surface=surface, z=surface(nodes, g_in))
+
+
+def _stretch(run: StageRun, surface: HeightSurface) -> list[np.ndarray] | None:
+    """Per vein, how many times the leaf's bend lengthens a distance off `surface` at each
+    point, at least 1 (bend.normal_stretch); None for a leaf without a bend."""
+    bend = run.pipeline.leaf.bend
+    fs: FrameStage = run["frame"]
+    if bend is None or not fs.veins:
+        return None
+    frame, xy = fs.frame, fs.vein_xy
+    z = surface(xy)
+    slope = surface.gradient(xy)
+    axes = np.array([frame.u, frame.v, frame.normal])
+    unit = frame.origin + np.column_stack([xy, z]) @ axes
+    tangents = np.zeros((len(xy), 3, 3))
+    tangents[:, 0, 0] = tangents[:, 1, 1] = 1.0
+    tangents[:, :2, 2] = slope
+    normal = np.column_stack([-slope, np.ones(len(xy))])
+    tangents[:, 2] = normal / np.linalg.norm(normal, axis=1)[:, None]
+    world = run.pipeline.units.to_world(unit)
+    stretch = np.maximum(normal_stretch(bend, world, tangents @ axes), 1.0)
+    return np.split(stretch, np.cumsum([len(v) for v in fs.veins])[:-1])
 
 
 class Layout(NamedTuple):
