@@ -268,7 +268,6 @@ def test_every_compiled_kernel_lives_where_the_kernel_cache_stamp_looks():
     assert compiled and all(kernelcache.CORE in p.parents for p in compiled)
 
 
-
 def test_the_bucket_walk_gathers_every_point_of_a_box_and_none_far_from_it():
     """buckets.gather, the one bucket walk (the MPU's fits and sums, near_edges): every point in
     the box, each once, and nothing beyond the buckets the box overlaps."""

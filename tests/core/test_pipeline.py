@@ -121,7 +121,7 @@ def test_changing_k_reruns_only_the_mixture_and_after():
     first = pipe.run(ls.Params(k=3, grid=64))
     assert first.ran == (
         "frame", "implicit", "grid", "guide", "samples", "gmm", "surface", "layout", "mesh"
-    )
+    )  # fmt: skip
     second = pipe.run(ls.Params(k=4, grid=64))
     assert second.ran == ("gmm", "surface", "mesh")
     assert not np.allclose(first.mesh.points, second.mesh.points)

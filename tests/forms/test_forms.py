@@ -147,9 +147,10 @@ def test_shapes_meet_their_definitions():
     assert w["deltoid"] < 0.15
     assert w["spatulate"] > 0.7
     spat = outline(shape="spatulate")
-    assert np.abs(spat[(spat[:, 0] > 0.1) & (spat[:, 0] < 0.4), 1]).max() < 0.4 * np.abs(
-        spat[:, 1]
-    ).max()  # a long narrow base
+    assert (
+        np.abs(spat[(spat[:, 0] > 0.1) & (spat[:, 0] < 0.4), 1]).max()
+        < 0.4 * np.abs(spat[:, 1]).max()
+    )  # a long narrow base
     assert r["reniform"] < 1
 
 
@@ -356,8 +357,9 @@ def test_fold_curl_and_wave_are_heights():
 
 
 def test_same_seed_same_leaf_other_seeds_vary_a_little():
-    a, b = leaf_of(shape="ovate", margin="serrate", seed=3), leaf_of(
-        shape="ovate", margin="serrate", seed=3
+    a, b = (
+        leaf_of(shape="ovate", margin="serrate", seed=3),
+        leaf_of(shape="ovate", margin="serrate", seed=3),
     )
     np.testing.assert_array_equal(a.boundary, b.boundary)
     others = [leaf_of(shape="ovate", margin="serrate", seed=s) for s in (1, 2, 4)]

@@ -70,8 +70,10 @@ def test_leaf_follows_the_forms_convention_and_maps_back_to_the_photo():
     ones = np.column_stack([boundary[:, :2], np.ones(len(boundary))])
     np.testing.assert_allclose(ones @ found.pixel_from_world.T, found.outline_px, atol=1e-9)
     assert len(found.leaf.veins) >= 3  # grown: a midrib and secondaries
-    assert shapely.Polygon(boundary[:, :2]).buffer(1e-6).contains(
-        shapely.MultiPoint(np.vstack(found.leaf.veins)[:, :2])
+    assert (
+        shapely.Polygon(boundary[:, :2])
+        .buffer(1e-6)
+        .contains(shapely.MultiPoint(np.vstack(found.leaf.veins)[:, :2]))
     )
 
 
