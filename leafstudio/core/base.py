@@ -165,8 +165,9 @@ def _fit(polygon: np.ndarray, heights: np.ndarray, length: float, count: int) ->
     m = len(centres)
     system = np.zeros((m + 3, m + 3))
     system[:m, :m] = _kernel(_squared_distances(centres, centres)) + SMOOTHING * np.eye(m)
-    system[:m, m:] = _affine(centres)
-    system[m:, :m] = _affine(centres).T
+    affine = np.column_stack([np.ones(m), centres])  # the columns 1, x, y
+    system[:m, m:] = affine
+    system[m:, :m] = affine.T
     rhs = np.concatenate([heights[pick], np.zeros(3)])
     with warnings.catch_warnings():  # symmetric indefinite: LDLᵀ, many times cheaper than
         # lstsq's SVD with 192 centres; lstsq when it is singular (centres on a line)
@@ -182,8 +183,3 @@ def _fit(polygon: np.ndarray, heights: np.ndarray, length: float, count: int) ->
         origin=origin,
         scale=float(length),
     )
-
-
-def _affine(points: np.ndarray) -> np.ndarray:
-    """(n, 3) the columns 1, x, y of the spline's affine part."""
-    return np.column_stack([np.ones(len(points)), points])
