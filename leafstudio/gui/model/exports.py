@@ -4,7 +4,9 @@ A thread was not enough: the export's steps hold Python's global lock for long s
 decimation of each level of detail: about 0.4 s apiece; the first glTF write's imports: 1 s), and
 the window's main thread cannot run meanwhile. One child process (spawned, never forked from the
 Qt process; kept for the next export) runs the writer; its progress comes back through a queue
-that the calling thread (the worker's export lane) relays to `progress`. The child is a process
+that the calling thread (the worker's export lane) relays to `progress`, up to an end mark the
+child puts after the writer's last report (the writer's value comes back through the pool's own
+pipe, and could overtake reports still in the queue's). The child is a process
 of its own, so VTK's off-screen renders (a turntable, the steps figure) run on its main thread
 too. No Qt here.
 """
@@ -13,8 +15,9 @@ from __future__ import annotations
 
 import queue
 import threading
+import time
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
@@ -22,6 +25,7 @@ from leafstudio._shared.spawn import WorkerContext
 from leafstudio.errors import LeafError
 
 POLL_S = 0.05  # how often the waiting thread relays the child's progress
+END_WAIT_S = 5.0  # how long a finished export's end mark may lag behind its value
 
 _reports: Any = None  # in the child: the queue its progress goes to
 
@@ -31,12 +35,24 @@ def _start_child(reports: Any) -> None:
     _reports = reports
 
 
-def _child_progress(fraction: float, what: str) -> None:
-    _reports.put((float(fraction), str(what)))
+def _in_child(run: int, write: Callable[..., Any], args: tuple, kwargs: dict) -> Any:
+    """`write` in the child, its reports tagged with `run`; the end mark (fraction None) after
+    them, whether it returned or raised."""
+
+    def progress(fraction: float, what: str) -> None:
+        _reports.put((run, float(fraction), str(what)))
+
+    try:
+        return write(*args, progress=progress, **kwargs)
+    finally:
+        _reports.put((run, None, ""))
 
 
-def _in_child(write: Callable[..., Any], args: tuple, kwargs: dict) -> Any:
-    return write(*args, progress=_child_progress, **kwargs)
+def _gone(future: Future) -> bool:
+    """Whether the child ended without its end mark: it died, or the pool was shut down."""
+    if not future.done():
+        return False
+    return future.cancelled() or isinstance(future.exception(), BrokenProcessPool)
 
 
 def _unmeasured() -> None:
@@ -60,6 +76,7 @@ class ExportProcess:
         self._lock = threading.Lock()
         self._pool: ProcessPoolExecutor | None = None
         self._reports: Any = None
+        self._runs = 0  # exports run so far: each one's tag on its reports
 
     def _ready(self) -> tuple[ProcessPoolExecutor, Any]:
         with self._lock:
@@ -80,20 +97,37 @@ class ExportProcess:
         relays its progress; returns its value or raises what it raised (LeafError if the
         child died)."""
         pool, reports = self._ready()
+        self._runs += 1
         try:
-            future = pool.submit(_in_child, write, args, kwargs)
-            while True:
-                try:
-                    progress(*reports.get(timeout=POLL_S))
-                    continue
-                except queue.Empty:
-                    if future.done():
-                        break
+            future = pool.submit(_in_child, self._runs, write, args, kwargs)
+            self._relay(self._runs, future, reports, progress)
             return future.result()
         except BrokenProcessPool:
             with self._lock:
                 self._pool = None  # a new one next time
             raise LeafError("the export's process ended before writing the file") from None
+
+    @staticmethod
+    def _relay(
+        run: int, future: Future, reports: Any, progress: Callable[[float, str], Any]
+    ) -> None:
+        """Pass run `run`'s reports to `progress` until its end mark (or the child's end)."""
+        done_at: float | None = None
+        while True:
+            try:
+                tag, fraction, what = reports.get(timeout=POLL_S)
+            except queue.Empty:
+                if future.done() and done_at is None:
+                    done_at = time.monotonic()
+                late = done_at is not None and time.monotonic() - done_at > END_WAIT_S
+                if late or _gone(future):
+                    return
+                continue
+            if tag != run:
+                continue  # an earlier run's, whose waiting thread stopped early
+            if fraction is None:
+                return
+            progress(fraction, what)
 
     def close(self) -> None:
         """End the child at once (the app closes: a file half made is never in place, every
