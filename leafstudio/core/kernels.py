@@ -105,7 +105,8 @@ MEASURE = "measuring"  # MEASURING's name (its stamp's: kernelcache.kernels_cach
 TABLES = (STAGE, MEASURE)  # every table, by name
 SIGNATURES = {**KERNELS, **MEASURING}  # what a worker process compiles each kernel for
 _COMPILING = threading.Lock()  # one compile at a time: a second caller waits for the first's
-_READY: set[tuple[str, str]] = set()  # (table, cache folder) this process knows to be cached
+# (table, cache folder) this process compiles in workers no more: cached, or tried to the end
+_READY: set[tuple[str, str]] = set()
 
 
 def table(name: str) -> dict[str, tuple[types.Type, ...]]:
@@ -266,8 +267,12 @@ def compile_kernels(
         todo_tables = [t for t in tables if not _cached(t)]  # the other thread's may be done
         names = [name for t in todo_tables for name in table(t)]
         spent = _compile(names, on_stage, workers, should_stop) if names else {}
-        for t in todo_tables:
-            _cached(t)  # remembered once marked
+        if should_stop is None or not should_stop():
+            # tried to the end: not again in this process, marked or not (a stamp that cannot
+            # be written, a full disk, or a worker that died: the callers compile the rest
+            # themselves), as ensure_compiled runs at every distance and edge count
+            folder = str(kernelcache.cache_folder())
+            _READY.update((t, folder) for t in todo_tables)
         return spent
     finally:
         _COMPILING.release()

@@ -176,3 +176,21 @@ def test_a_run_stopped_while_compiling_is_cancelled(monkeypatch, tmp_path):
 def _restore_environment(monkeypatch):
     monkeypatch.setenv("NUMBA_CACHE_DIR", os.environ.get("NUMBA_CACHE_DIR", ""))
     yield
+
+
+def test_measurings_compile_is_tried_once_per_process_even_when_its_stamp_is_not_written(
+    monkeypatch, tmp_path
+):
+    """ensure_compiled runs before every distance and edge count: a compile whose stamp could
+    not be written (a full disk: kernelcache makes numba's own writes harmless) or whose worker
+    died started the worker processes again at each call, seconds of CPU every time. A stopped
+    compile is tried again (the next run finishes it)."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    tried: list[list[str]] = []
+    monkeypatch.setattr(kernels, "_compile", lambda names, *_: tried.append(names) or {})
+    kernels.compile_kernels(should_stop=lambda: True, tables=(kernels.MEASURE,))  # stopped
+    kernels.ensure_compiled()  # tried again, to the end
+    kernels.ensure_compiled()
+    evaluate.edge_counts(np.array([[0, 1, 2]]))
+    assert tried == [list(kernels.MEASURING)] * 2  # nothing marked, and tried to the end once
+    assert not kernelcache.kernels_cached(kernels.MEASURE)
