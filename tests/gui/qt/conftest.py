@@ -30,6 +30,7 @@ from PySide6.QtWidgets import (
 )
 
 from leafstudio.gui.model.textures import LEAF, TEXTURE, texture_key
+from leafstudio.gui.qt import turns
 from leafstudio.gui.qt.main_window import MainWindow
 from leafstudio.gui.qt.photo_dialog import PhotoDialog
 from leafstudio.model import Params
@@ -61,6 +62,28 @@ def wait_result(qtbot, window: MainWindow, check=lambda outcome: True) -> object
         timeout=WAIT_MS,
     )
     return window.session.shown.outcome
+
+
+def settled(qtbot, window: MainWindow) -> None:
+    """Wait until the window has nothing left to draw: no job under way, no call waiting for a
+    turn (gui/qt/turns.later: a result, a sketch, layers, a render), no render due; then let
+    the last render's paint run. A test that counts renders or main-thread pieces starts from
+    here: a fixed wait (200 ms) was outlasted by the turns of a busy machine, whose late render
+    or layer the test then counted as its own."""
+    viewport = window.viewport
+
+    def idle() -> bool:
+        return (
+            window.worker.is_idle()
+            and not turns._queue
+            and window._result_due is None
+            and window.editor._due is None
+            and not viewport._redraw_due
+            and not viewport._later
+        )
+
+    qtbot.waitUntil(idle, timeout=WAIT_MS)
+    QApplication.processEvents()  # the paint that the last turn asked for
 
 
 def textured(qtbot, window: MainWindow) -> None:

@@ -16,7 +16,7 @@ from leafstudio.gui.qt import worker as worker_module
 from leafstudio.gui.qt.worker import PIPELINE, Worker
 from leafstudio.sources.demos import demo
 from tests.gui.builders import FAST
-from tests.gui.qt.conftest import WAIT_MS, exported, wait_result
+from tests.gui.qt.conftest import WAIT_MS, exported, settled, wait_result
 
 
 def _count_renders(window) -> list[int]:
@@ -27,11 +27,11 @@ def _count_renders(window) -> list[int]:
 
 
 def test_a_new_result_is_rendered_once(window, qtbot):
-    qtbot.wait(200)  # whatever the first result left to paint
+    settled(qtbot, window)  # whatever the first result left to draw
     renders = _count_renders(window)
     window.panel.k.setValue(5)
     wait_result(qtbot, window, lambda o: o.result.params.k == 5)
-    qtbot.wait(300)  # time for any render queued behind it
+    settled(qtbot, window)  # any render queued behind it
     assert len(renders) == 1
     label = window.viewport.plotter.actors["k_label"]
     assert label.input == f"K = {window.session.shown.outcome.result.chosen_k}"
@@ -189,7 +189,7 @@ def test_a_status_text_repaints_the_window_once(window, qtbot):
                 repaints.append(1)
             return False
 
-    qtbot.wait(300)
+    settled(qtbot, window)  # whatever the first result left to paint
     spy = Repaints()
     window.installEventFilter(spy)
     window.status_text.setText("K=5, grid 48: gmm 3 ms · surface 4 ms (total 7 ms)")
@@ -230,7 +230,7 @@ def test_a_new_layer_waits_for_the_render_of_an_actor_made_before_it(window, qtb
 
     from leafstudio.gui.model.pieces import Piece, cloud, dots
 
-    qtbot.wait(200)  # whatever the first result left to paint
+    settled(qtbot, window)  # whatever the first result left to draw
     viewport = window.viewport
     scene: list[set[str]] = []  # the actors of each render
     viewport.plotter.render_window.AddObserver(
@@ -241,8 +241,7 @@ def test_a_new_layer_waits_for_the_render_of_an_actor_made_before_it(window, qtb
     before = viewport.mesh_coloring
     viewport.set_mesh_coloring("height")  # a new mesh actor
     viewport.set_layer("scan", scan)
-    qtbot.waitUntil(lambda: viewport.actor_names("scan") == ["scan:blade"], timeout=WAIT_MS)
-    qtbot.wait(200)  # its render
+    qtbot.waitUntil(lambda: any("scan:blade" in names for names in scene), timeout=WAIT_MS)
     first = next(i for i, names in enumerate(scene) if "scan:blade" in names)
     assert first >= 1  # the recoloured mesh had a render of its own
     viewport.set_mesh_coloring(before)
@@ -281,7 +280,7 @@ def test_a_result_that_fits_the_camera_makes_its_new_actors_a_turn_later(
     from leafstudio.gui.model.layers import vein_color
     from leafstudio.gui.model.pieces import Piece, cloud, dots
 
-    qtbot.wait(200)  # whatever the first result left to paint
+    settled(qtbot, window)  # whatever the first result left to draw
     viewport = window.viewport
     outcome = window.session.shown.outcome
     log: list[str] = []
@@ -314,7 +313,7 @@ def test_an_opened_scans_main_thread_pieces_each_let_a_due_timer_fire(
 
     from tests.gui.builders import six_column_scan, write_points
 
-    qtbot.wait(200)  # whatever the first result left to paint
+    settled(qtbot, window)  # whatever the first result left to draw
     log: list[str] = []
     probe = QTimer()
     probe.setInterval(0)
@@ -342,7 +341,7 @@ def test_an_opened_scans_main_thread_pieces_each_let_a_due_timer_fire(
         wait_result(qtbot, window, lambda o: o.result.leaf is session.state.leaf)
         qtbot.waitUntil(lambda: window.editor.view.sketch is session.derived, timeout=WAIT_MS)
         qtbot.waitUntil(window.worker.is_idle, timeout=WAIT_MS)
-        qtbot.wait(300)  # the layers and renders queued behind it
+        settled(qtbot, window)  # the layers and renders queued behind it
     finally:
         probe.stop()
         monkeypatch.undo()
@@ -387,7 +386,7 @@ def test_a_results_mesh_and_its_other_layers_are_drawn_in_two_turns_then_rendere
     fires between), and the render comes after both, once."""
     from PySide6.QtCore import QTimer
 
-    qtbot.wait(200)  # whatever the first result left to paint
+    settled(qtbot, window)  # whatever the first result left to draw
     viewport, log = window.viewport, []
     real = viewport._draw_layer
     monkeypatch.setattr(viewport, "_draw_layer", lambda key, *a: (log.append(key), real(key, *a)))
@@ -400,7 +399,7 @@ def test_a_results_mesh_and_its_other_layers_are_drawn_in_two_turns_then_rendere
     viewport.show_layers(outcome.layers, outcome.result.frame)
     assert log == ["mesh"]
     qtbot.waitUntil(lambda: "render" in log, timeout=WAIT_MS)
-    qtbot.wait(100)
+    settled(qtbot, window)  # a second render would come after it
     probe.stop()
     drawn = [entry for entry in log if entry != "tick"]
     assert drawn == [
