@@ -236,8 +236,13 @@ def test_stale_part_names_the_target_of_a_dead_processs_temporary_file():
     assert stale_part("o.ply") is None and stale_part(f".o.ply.x-1.{PART_MARK}.ply") is None
 
 
+# Ctrl-C as at a terminal: a suite started in the background (`cmd &`) hands its children SIGINT
+# ignored, and Python then leaves it ignored; the child script puts Python's own handler back
+# (not a preexec_fn: unsafe in a process with threads, as the suite's worker is, and a child
+# forked from one could deadlock before exec)
 WRITER = """
-import sys, time
+import signal, sys, time
+signal.signal(signal.SIGINT, signal.default_int_handler)
 from pathlib import Path
 from leafstudio._shared.safewrite import install_signal_cleanup, replace_atomically
 install_signal_cleanup()
@@ -259,9 +264,6 @@ def test_a_signal_during_a_write_removes_the_temporary_file(tmp_path, sig):
         [sys.executable, "-c", WRITER, str(out)],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
-        # Ctrl-C as at a terminal: a suite started in the background (`cmd &`) hands its
-        # children SIGINT ignored, and Python then leaves it ignored
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     try:
         assert child.stdout.readline().strip() == b"writing"
