@@ -216,23 +216,37 @@ def test_the_first_runs_compile_is_said_in_the_status_while_the_window_responds(
 
 def test_measurings_first_compile_is_said_in_the_status_too(window, qtbot, monkeypatch):
     """A cold cache's measuring kernels compile in worker processes once the result is on
-    screen (core/kernels.MEASURING), the status saying so; then the result's line is back."""
+    screen (core/kernels.MEASURING), the status saying so; then the result's line is back, and
+    its measurements' time is theirs, not the compile's (here a compile of 1000 s)."""
     import threading
+    import time
 
     from leafstudio._shared.kernelcache import NOTICE
     from leafstudio.core import kernels
     from leafstudio.gui.qt import worker
 
     compiled = threading.Event()
+    spent = [0.0]  # the compile's seconds, on the worker's clock
+
+    class Clock:
+        """The worker's `time`, its perf_counter past the compile's seconds."""
+
+        def __getattr__(self, name: str):
+            return getattr(time, name)
+
+        def perf_counter(self) -> float:
+            return time.perf_counter() + spent[0]
 
     def compile_kernels(on_stage=None, workers=None, should_stop=None, tables=()):
         assert tables == (kernels.MEASURE,)
         on_stage(kernels.STAGE)
         on_stage(f"{kernels.STAGE} 1/6")
         compiled.wait(WAIT_MS / 1000)
+        spent[0] += 1000.0
         return {}
 
     monkeypatch.setattr(worker, "compile_kernels", compile_kernels)
+    monkeypatch.setattr(worker, "time", Clock())
     with qtbot.waitSignal(window.result_shown, timeout=WAIT_MS):
         window.panel.set_params(replace(window.session.params, k=window.session.params.k + 1))
         window._on_params_released()
@@ -241,3 +255,4 @@ def test_measurings_first_compile_is_said_in_the_status_too(window, qtbot, monke
         compiled.set()
     text = window.status_text.text()
     assert text.startswith(f"K={window.session.params.k}") and "measurements" in text
+    assert float(re.search(r"measurements (\d+) ms", text).group(1)) < 1000 * 1000
