@@ -162,9 +162,11 @@ def test_reading_apart_says_what_is_wrong_as_in_the_thread(tmp_path):
 
 
 @pytest.mark.skipif(not hasattr(os, "nice"), reason="no process priorities (os.nice)")
+@pytest.mark.skipif(hasattr(os, "nice") and os.nice(0) >= 19, reason="run at the lowest priority")
 def test_the_reading_process_gives_the_window_the_cores_first():
     """Issue 24: the reading process's start (imports: seconds of CPU) and read took the
-    cores the window's main thread waited for (80-400 ms at a time on a 2-core host)."""
+    cores the window's main thread waited for (80-400 ms at a time on a 2-core host). (A suite
+    run at the lowest priority, `nice -n 19`, has none lower to give its reading process.)"""
     child = reading.read_apart(os.nice, 0)  # os.nice(0): the process's niceness
     assert child == min(os.nice(0) + reading.CHILD_NICENESS, 19) > os.nice(0)
 
