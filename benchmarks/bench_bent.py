@@ -2,6 +2,7 @@
 beside ours.
 
     .venv/bin/python benchmarks/bench_bent.py [--poses N] [--no-scans] [--scans DIR] [--rolled]
+                                              [--veins]
 
 "today" runs each input as the code before issue 21 did: the posed form's points without its
 bend (`Leaf(boundary, veins)`, so the boundary's PCA plane is the leaf's) and the paper's pure
@@ -169,9 +170,9 @@ def vein_distances() -> None:
         vein = [r.metrics["veins"]["max"] / r.length for r in runs]
         creases = [margin_creases(r) for r in runs]
         print(
-            f"| {name} | {vein[0]:.1e} | {vein[1]:.1e} | {creases[0]['margin_p99']:.1f} / "
-            f"{creases[1]['margin_p99']:.1f} | {creases[0]['interior_p99']:.1f} / "
-            f"{creases[1]['interior_p99']:.1f} |"
+            f"| {name} | {vein[0]:.1e} | {vein[1]:.1e} | {creases[0]['margin_p99']:.2f} / "
+            f"{creases[1]['margin_p99']:.2f} | {creases[0]['interior_p99']:.2f} / "
+            f"{creases[1]['interior_p99']:.2f} |"
         )
 
 
@@ -272,8 +273,14 @@ def main() -> int:
     parser.add_argument("--no-scans", action="store_true")
     parser.add_argument("--scans", type=Path, default=SCANS)
     parser.add_argument("--rolled", action="store_true", help="only the rolled forms' table")
+    parser.add_argument(
+        "--veins", action="store_true", help="only the vein distances and smoothness table"
+    )
     args = parser.parse_args()
     _run(Form("ovate").leaf(), ls.Params(grid=32))  # compile the kernels before timing
+    if args.veins:
+        vein_distances()
+        return 0
     rolled_forms()
     unfolded_forms()
     if args.rolled:
