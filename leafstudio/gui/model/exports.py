@@ -104,7 +104,8 @@ class ExportProcess:
             return future.result()
         except BrokenProcessPool:
             with self._lock:
-                self._pool = None  # a new one next time
+                self._pool = None  # a new one next time, with a new queue: this one's pipe
+                reports.close()  # and sending thread go with it
             raise LeafError("the export's process ended before writing the file") from None
 
     @staticmethod

@@ -4,6 +4,7 @@ its "done" report, which was still in the queue's pipe when the writer's value a
 
 from __future__ import annotations
 
+import os
 import threading
 from collections.abc import Callable
 
@@ -46,6 +47,11 @@ def _into(seen: list[float]) -> Callable[[float, str], None]:
     return lambda fraction, _what: seen.append(fraction)
 
 
+def _dying(progress: Callable[[float, str], object]) -> None:
+    progress(0.25, "started")
+    os._exit(3)  # as a crash in a native library ends the child
+
+
 @pytest.fixture(scope="module")
 def exports():
     process = ExportProcess()
@@ -71,3 +77,13 @@ def test_a_failed_export_relays_its_reports_and_raises(exports):
     with pytest.raises(LeafError, match="cannot be written"):
         exports.run(_failing, progress=_into(seen))
     assert seen == [0.5]
+
+
+def test_a_child_that_dies_is_said_and_the_next_export_gets_a_new_one(exports):
+    with pytest.raises(LeafError, match="ended before writing"):
+        exports.run(_dying, progress=_into([]))
+    dead_reports = exports._reports
+    seen: list[float] = []
+    assert exports.run(_chatty, 10, progress=_into(seen)) == 10
+    assert seen[-1] == 1.0 and len(seen) == 10
+    assert exports._reports is not dead_reports and dead_reports._closed  # its pipe let go
