@@ -134,21 +134,23 @@ def principled(material) -> dict:
             "transmission_textured": weight.is_linked}  # fmt: skip
 
 
-def checks(report: dict, length: float) -> dict:
-    """The issue's client checks on a report, for a leaf exported at `length` metres: its vertex
-    nearest the origin within 1% of the length (the base), its vertical extent under its width
-    (lying flat, the relief up), its x extent the length within 1% (a flat leaf's; a curled
-    one's is shorter), and its materials' Base Color and Normal fed by images (not OBJ's) and
+def checks(report: dict, length: float, suffix: str = "glb") -> dict:
+    """The issue's client checks on a report of a `suffix` file, for a leaf exported at `length`
+    metres: its vertex nearest the origin within 1% of the length (the base), its vertical extent
+    under its width (lying flat, the relief up), its x extent the length within 1% (a flat
+    leaf's; a curled one's is shorter), its materials' Base Color and Normal fed by images (an
+    OBJ's Base Color only: its MTL names no normal map, assets/writers.py says why) and
     translucent (a Transmission Weight; USD has none), and one leaf shown (levels of detail
     beside it hidden)."""
     x, y, z = report["extent_xyz"]
     materials = [m for o in report["objects"] for m in o["materials"]]
+    images = {"Base Color"} if suffix == "obj" else {"Base Color", "Normal"}
     return {
         "base_at_origin": report["nearest_vertex_to_origin"] <= 0.01 * length,
         "lies_flat": z < y,
         "x_extent_is_length": abs(x - length) <= 0.01 * length,
         "textured": all(
-            {"Base Color", "Normal"} <= set(m.get("textured_inputs", [])) for m in materials
+            images <= set(m.get("textured_inputs", [])) for m in materials
         ),
         "translucent": all(m.get("transmission_weight", 0) > 0 for m in materials),
         "one_leaf_shown": report["meshes"] == 1,
@@ -229,5 +231,6 @@ if __name__ == "__main__":
            "backlit": "--backlit" in args}  # fmt: skip
     report = quietly(args[1], target, **how)
     if "--length" in args:  # metres, as the leaf was exported (--length 0.08)
-        report["checks"] = checks(report, float(args[args.index("--length") + 1]))
+        suffix = args[1].lower().rsplit(".", 1)[-1]
+        report["checks"] = checks(report, float(args[args.index("--length") + 1]), suffix)
     print(json.dumps(report, indent=1))

@@ -4,8 +4,9 @@ numba caches beside the sources (core/__pycache__ and its subfolders) when they 
 written. In an installation whose package folder is read-only, the kernels go to the user's
 cache folder (XDG_CACHE_HOME, ~/.cache, ~/Library/Caches or LOCALAPPDATA), or to a private
 temporary folder as a last resort, instead of failing at import. `configure()` must run before
-numba is imported (leafstudio/__init__.py calls it first). A stamp in the cache folder, written
-after a run, lets the command line say "compiling" on a first run instead of 20 s of silence.
+numba is imported (leafstudio/__init__.py calls it first). A stamp in the cache folder for each
+table of kernels (core/kernels.TABLES), written once the table is compiled (after a compile or a
+first run), lets the command line say "compiling" on a first run instead of 20 s of silence.
 """
 
 from __future__ import annotations
