@@ -28,7 +28,15 @@ elements on a Triangle mesh read back with Clough-Tocher, made a form 10 times s
 At a sinus's notch (cordate, reniform, sagittate, hastate), where the midrib starts, ψ rises
 as about the square root of the distance: steeper than a smooth surface through the margin
 follows, and the vein correction bent into a bump there. So the dome is multiplied by
-1 − exp(−|x − base|² / BASE_CALM²): flat at the base, unchanged a few BASE_CALM away.
+1 − exp(−|x − base|² / c²): flat at the base, unchanged a few c away. A base is a sinus when
+the blade fills more than SINUS of a small circle around it (the outline turns inward there:
+cordate 280°, reniform 264°, sagittate 326°; a round or truncate base about 180°); there c is
+SINUS_CALM, wide enough that the correction need not bend the surface down into the notch
+(bench_bent --veins, surface through the veins: cordate 99th-percentile margin dihedral
+2.01° with c = 0.15, 1.35° with 0.27; reniform inside 1.79° -> 1.42°; sagittate margin
+2.14° -> 1.55°; at 0.3 sagittate's inside rose to 3.1°). Elsewhere c is BASE_CALM: without
+it orbicular's dihedrals drop (margin 1.20° -> 0.88°, inside 1.34° -> 0.82°) but oblong's
+and hastate's margin rise by 0.01° (1.750° -> 1.759°, 3.980° -> 3.994°), so it stays.
 """
 
 from __future__ import annotations
@@ -42,8 +50,12 @@ from scipy.ndimage import distance_transform_edt, map_coordinates, spline_filter
 
 from leafstudio.forms.blade import Blade
 
-BASE_CALM = 0.15  # the dome is flattened within about this of the midrib's base (a sinus's
-# notch, where ψ rises as the square root of the distance: see the module)
+BASE_CALM = 0.15  # the dome is flattened within about this of the midrib's base (see the module)
+SINUS_CALM = 0.27  # ... and within this of a sinus's notch, where ψ rises as about the square
+# root of the distance
+SINUS = 200.0  # degrees of a small circle around the base inside the blade: more is a sinus
+AROUND = 0.03  # that circle's radius, of the blade's length
+AROUND_POINTS = 720  # points on it
 NODES = 1024  # grid nodes over the blade's bounding box, spread as its sides are long
 FEWEST = 24  # nodes along either side at least (a grass blade's width)
 EXTENDED = 3  # grid rows past the margin filled in for the cubic read-back (its reach is 2)
@@ -82,17 +94,28 @@ def dome(blade: Blade, ratio: float, base: np.ndarray) -> Callable[[np.ndarray],
     if top <= 0:
         return lambda xy: np.zeros(len(np.atleast_2d(xy)))
     radius = _inradius(blade, nodes, inside, step)
+    reach = SINUS_CALM if base_angle(blade, base) > SINUS else BASE_CALM
     coefficients = spline_filter(psi / top, order=3, mode="nearest")
 
     def heights(xy: np.ndarray) -> np.ndarray:
         xy = np.atleast_2d(np.asarray(xy, dtype=float))[:, :2]
         at = ((xy - lower) / step + pad).T
         read = map_coordinates(coefficients, at, order=3, mode="nearest", prefilter=False)
-        calm = 1 - np.exp(-((xy - base) ** 2).sum(axis=1) / BASE_CALM**2)
+        calm = 1 - np.exp(-((xy - base) ** 2).sum(axis=1) / reach**2)
         share = np.clip(read, 0.0, 1.0)
         return ratio * radius * 0.5 * share * (1 + share) * calm
 
     return heights
+
+
+def base_angle(blade: Blade, base: np.ndarray) -> float:
+    """The blade's angle at the midrib's `base`, in degrees: the share of a circle of radius
+    AROUND around it that lies inside the blade (about 180 at a round or truncate base, more at
+    a sinus, less at a cuneate one)."""
+    turn = np.linspace(0.0, 2 * np.pi, AROUND_POINTS, endpoint=False)
+    circle = AROUND * np.column_stack([np.cos(turn), np.sin(turn)])
+    ring = np.asarray(base, dtype=float)[:2] + circle
+    return 360.0 * float(shapely.contains_xy(blade.poly, ring[:, 0], ring[:, 1]).mean())
 
 
 def _inradius(blade: Blade, nodes: np.ndarray, inside: np.ndarray, step: np.ndarray) -> float:

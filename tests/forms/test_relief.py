@@ -6,10 +6,12 @@ import numpy as np
 import pytest
 from shapely.geometry import Polygon
 
+import leafstudio.forms.veins as veins_module
 from leafstudio.errors import LeafError
 from leafstudio.forms import grow_veins
 from leafstudio.forms.blade import Blade
-from leafstudio.forms.relief import dome
+from leafstudio.forms.make import Form
+from leafstudio.forms.relief import SINUS, base_angle, dome
 
 
 def _ellipse(a: float = 0.5, b: float = 0.2) -> Blade:
@@ -59,3 +61,30 @@ def test_grown_veins_keep_the_roof_unless_asked():
     assert not np.allclose(roof[0][:, 2], domed[0][:, 2])
     with pytest.raises(LeafError, match="unknown relief"):
         grow_veins(outline, relief="tent")
+
+
+@pytest.mark.parametrize(
+    ("shape", "sinus"),
+    [
+        ("orbicular", False),
+        ("oblong", False),
+        ("hastate", False),
+        ("cordate", True),
+        ("reniform", True),
+        ("sagittate", True),
+    ],
+)
+def test_a_base_is_a_sinus_where_the_outline_turns_inward(shape, sinus, monkeypatch):
+    """base_angle: a round or truncate base fills about half a small circle around it, a
+    sinus's notch (the lobes reach back past the base) more than SINUS degrees of it."""
+    seen = []
+
+    def spy(blade, ratio, base):
+        seen.append(base_angle(blade, base))
+        return dome(blade, ratio, base)
+
+    monkeypatch.setattr(veins_module, "dome", spy)
+    Form(shape).leaf()
+    assert (seen[0] > SINUS) == sinus
+    if not sinus:
+        assert seen[0] == pytest.approx(180, abs=15)
