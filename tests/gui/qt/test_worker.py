@@ -4,12 +4,14 @@ with their traceback, side tasks run beside the pipeline, nothing runs on the ma
 from __future__ import annotations
 
 import logging
+import os
+import sys
 import threading
 
 import pytest
 
 from leafstudio.errors import LeafError
-from leafstudio.gui.qt.worker import PIPELINE, Worker
+from leafstudio.gui.qt.worker import LANE_NICENESS, PIPELINE, Worker
 from leafstudio.model import Leaf, Params
 from leafstudio.sources.demos import demo
 from tests.gui.builders import FAST
@@ -164,3 +166,20 @@ def test_cancel_or_closing_during_the_first_compile_ends_it(
     assert not list(tmp_path.rglob("*.nbi"))  # cut short: nothing compiled to the end
     assert not kernelcache.kernels_cached()
     assert not got["yielded"] and not got["failed"]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a thread's own niceness")
+def test_every_lane_runs_nicer_than_the_main_thread(worker, qtbot):
+    """A reconstruction or a side job must leave the cores to the window's renders (issue 24:
+    a render stretched from 45 to 100-150 ms while K changed on a 2M-point scan)."""
+    main = os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
+    seen: dict[str, int] = {}
+
+    def niceness(lane: str) -> None:
+        seen[lane] = os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
+
+    for kind in (PIPELINE, "fidelity", "export"):
+        worker.start(kind, niceness, worker.lanes[kind])
+    qtbot.waitUntil(lambda: len(seen) == 3, timeout=WAIT_MS)
+    assert seen == dict.fromkeys(("pipeline", "side", "export"), min(19, main + LANE_NICENESS))
+    assert os.getpriority(os.PRIO_PROCESS, threading.get_native_id()) == main
