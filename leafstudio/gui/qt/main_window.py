@@ -340,9 +340,10 @@ class MainWindow(FileCommands, QMainWindow):
                 later(self, partial(self._set_coloring, coloring, automatic))
             else:
                 self._coloring_automatic = automatic
-        if state.scan is not self._scan_shown:
-            self._scan_shown = state.scan
-            self.viewport.set_layer("scan", state.scan.pieces if state.scan is not None else [])
+        if state.scan is not self._scan_shown:  # after the recolouring above: its new actor's
+            self._scan_shown = state.scan  # render sets up its shaders, then the points' (turns.py)
+            pieces = state.scan.pieces if state.scan is not None else []
+            later(self, partial(self.viewport.set_layer, "scan", pieces))
         self._update_title()
 
     def _on_cleared(self) -> None:
