@@ -149,9 +149,7 @@ def checks(report: dict, length: float, suffix: str = "glb") -> dict:
         "base_at_origin": report["nearest_vertex_to_origin"] <= 0.01 * length,
         "lies_flat": z < y,
         "x_extent_is_length": abs(x - length) <= 0.01 * length,
-        "textured": all(
-            images <= set(m.get("textured_inputs", [])) for m in materials
-        ),
+        "textured": all(images <= set(m.get("textured_inputs", [])) for m in materials),
         "translucent": all(m.get("transmission_weight", 0) > 0 for m in materials),
         "one_leaf_shown": report["meshes"] == 1,
     }
