@@ -2,7 +2,7 @@
 package) and print what arrived, as JSON: the meshes shown (and those hidden: a glTF's coarser
 levels of detail), UV layers, the material and its image texture, the vertex count beside the
 file's (glTF), the extent of the meshes shown in metres along Blender's x, y, z (z up): a leaf
-lying flat has its relief as the z extent and its length as the x extent, and its vertex
+lying flat has its relief as the z extent and its apex at its length along x, and its vertex
 nearest the origin (the base is there).
 
 The issue's client is Blender 4.5 LTS (bpy 4.5 is built for Python 3.11); bpy pins numpy < 2, so
@@ -137,8 +137,9 @@ def principled(material) -> dict:
 def checks(report: dict, length: float, suffix: str = "glb") -> dict:
     """The issue's client checks on a report of a `suffix` file, for a leaf exported at `length`
     metres: its vertex nearest the origin within 1% of the length (the base), its vertical extent
-    under its width (lying flat, the relief up), its x extent the length within 1% (a flat
-    leaf's; a curled one's is shorter), its materials' Base Color and Normal fed by images (an
+    under its width (lying flat, the relief up), its farthest point along x (the apex) at the length
+    within 1% (a flat leaf's; a curled one's is nearer; a cordate leaf's lobes reach behind its
+    base, past the origin), its materials' Base Color and Normal fed by images (an
     OBJ's Base Color only: its MTL names no normal map, assets/writers.py says why) and
     translucent (a Transmission Weight; USD has none), and one leaf shown (levels of detail
     beside it hidden)."""
@@ -148,7 +149,7 @@ def checks(report: dict, length: float, suffix: str = "glb") -> dict:
     return {
         "base_at_origin": report["nearest_vertex_to_origin"] <= 0.01 * length,
         "lies_flat": z < y,
-        "x_extent_is_length": abs(x - length) <= 0.01 * length,
+        "apex_at_length": abs(report["min_xyz"][0] + x - length) <= 0.01 * length,
         "textured": all(images <= set(m.get("textured_inputs", [])) for m in materials),
         "translucent": all(m.get("transmission_weight", 0) > 0 for m in materials),
         "one_leaf_shown": report["meshes"] == 1,
