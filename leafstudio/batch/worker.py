@@ -13,7 +13,7 @@ from typing import Any
 
 from leafstudio import workflows
 from leafstudio.assets.export import save_mesh
-from leafstudio.assets.placement import result_placement
+from leafstudio.assets.placement import result_placement, size_note
 from leafstudio.batch.plan import Job, file_hash
 from leafstudio.batch.settings import CURVATURE_COLUMNS, SHAPE_COLUMNS, columns
 from leafstudio.core.evaluate import curvature_summary, shape_measurements
@@ -98,6 +98,7 @@ def _reconstruct(job: Job) -> dict[str, Any]:
     except LeafError as exc:
         raise LeafError(exc.problem, job.input) from None
     workflows.check_finite(row, job.input)
+    notes = list(done.warnings)
     if done.scan_fit is not None:
         found = done.scan_fit
         row.update(
@@ -115,7 +116,9 @@ def _reconstruct(job: Job) -> dict[str, Any]:
         save_mesh(result.triangle_mesh, mesh, length=length, placement=placement)
         row["mesh"] = job.mesh
         row["mesh_sha256"] = file_hash(Path(job.out_dir) / job.mesh)  # --resume checks it
-    row["warnings"] = "; ".join(done.warnings) or None
+        if length is None and (note := size_note(placement.length, mesh.suffix)):
+            notes.append(note)  # a millimetre leaf that glTF or USD reads as metres
+    row["warnings"] = "; ".join(notes) or None
     return row
 
 

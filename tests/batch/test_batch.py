@@ -446,3 +446,24 @@ def test_a_job_run_in_the_callers_process_gives_its_threads_back(tmp_path):
     row = run_job(plan([path], tmp_path / "out", Settings(ls.Params(grid=int(GRID))))[0])
     assert row["status"] == "ok"
     assert ([pool["num_threads"] for pool in threadpool_info()], numba.get_num_threads()) == before
+
+
+def test_a_millimetre_leaf_written_to_gltf_without_a_length_is_noted_as_reconstruct_notes_it(
+    tmp_path, capsys
+):
+    """A leaf 60 units long (a photo's or a scan's millimetres) written to glTF, which reads
+    units as metres: reconstruct notes it would arrive 60 m long; the batch row did not."""
+    demo = ls.demo("nested")
+    scale = 60.0 / np.ptp(demo.boundary[:, 0])
+    path = tmp_path / "mm.csv"
+    ls.save_leaf(ls.Leaf(demo.boundary * scale, [vein * scale for vein in demo.veins]), path)
+    out = tmp_path / "mm.glb"
+    assert main(["reconstruct", str(path), "-o", str(out), "--grid", GRID]) == 0
+    noted = [w for w in _warned(capsys.readouterr().err, str(path)) if "--length" in w]
+    assert len(noted) == 1
+    params = ls.Params(grid=int(GRID))
+    row = run_job(plan([path], tmp_path / "out", Settings(params, format="glb"))[0])
+    assert row["status"] == "ok" and noted[0] in (row["warnings"] or "")
+    sized = Settings(params, format="glb", length=0.06)  # given its real length: nothing to say
+    row = run_job(plan([path], tmp_path / "sized", sized)[0])
+    assert row["status"] == "ok" and "--length" not in (row["warnings"] or "")
