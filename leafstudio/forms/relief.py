@@ -16,7 +16,8 @@ s = ψ / max ψ the heights are
 R the largest distance to the margin, so the highest point stands where and as high as the
 roof's; across a strip of half-width w, s = 1 − (v/w)² and h meets the margin at the roof's
 slope, ratio (ψ alone, h = ratio R s, twice as steep: a hastate form's narrow veinless lobes
-then creased, 99th-percentile margin dihedral 11.6° against the roof's 6.7°; now 4.0°).
+then creased, 99th-percentile margin dihedral 11.6° against the roof's 6.7°; now 4.0°, and
+1.3° with the lobes' notches flattened, below).
 
 ψ is solved on a regular grid of about NODES nodes over the blade's bounding box: the
 five-point Laplacian, with Shortley-Weller's shorter arms where the margin cuts a grid line
@@ -40,7 +41,19 @@ wider flattening lowers the veins' top (cordate 0.089 -> 0.080 of the length, re
 cordate (margin 2.02° -> 1.50°, inside 1.99° -> 1.60°) but not on sagittate's inside
 (2.93° -> 3.49°). Elsewhere c is BASE_CALM: without
 it orbicular's dihedrals drop (margin 1.20° -> 0.88°, inside 1.34° -> 0.82°) but oblong's
-and hastate's margin rise by 0.01° (1.750° -> 1.759°, 3.980° -> 3.994°), so it stays.
+and hastate's margin rise by 0.01° (1.750° -> 1.759°, 3.980° -> 3.994°, before its lobes'
+notches were flattened), so it stays.
+
+A notch between the blade and a lobe (hastate's two, `notches`) is a corner of the outline
+turned inward, as a sinus's notch is, and ψ rises as steeply beside it: the side veins that
+pass it stood high above what a smooth surface follows, the correction through them (core/
+correct.py) spread a bump of 0.004 of the length into the narrow veinless lobe, and the lobe's
+ridge creased (99th-percentile margin dihedral 3.98° through the veins, 3.66° on the paper's
+surface). The dome is flattened within NOTCH_CALM of each such notch as well: hastate's margin
+band 1.28° through the veins, 1.30° on the paper's surface, inside 1.67° and 1.69° (its veins
+no longer the same: the paper's surface is smoother too). A notch nearer the blade's axis than
+NOTCH_CALM (between the lobes of a lobed margin) is left as it is: flattened, the midrib's dome
+went with it (a lobed ovate form's top 0.056 -> 0.012 of the length).
 """
 
 from __future__ import annotations
@@ -50,13 +63,21 @@ from collections.abc import Callable
 import numpy as np
 import shapely
 from scipy.linalg import solve_banded
-from scipy.ndimage import distance_transform_edt, map_coordinates, spline_filter
+from scipy.ndimage import distance_transform_edt, gaussian_filter1d, map_coordinates, spline_filter
+from shapely.geometry.polygon import orient
 
 from leafstudio.forms.blade import Blade
 
 BASE_CALM = 0.15  # the dome is flattened within about this of the midrib's base (see the module)
 SINUS_CALM = 0.27  # ... and within this of a sinus's notch, where ψ rises as about the square
 # root of the distance
+NOTCH_CALM = 0.22  # ... and within this of a notch between the blade and a lobe (hastate's), see
+# the module (hastate's margin band on the paper's surface / through the veins: 0.15, 1.58° /
+# 1.59°; 0.27, 1.14° / 1.15°)
+NOTCH_SMOOTH = 0.05  # of the length: the outline is smoothed this much along itself (σ) before
+# its notches are found, so that a toothed margin's teeth are none
+NOTCH_CHORD = 0.1  # of the length: a notch's angle is between the chords this far along each way
+NOTCH_STEP = 0.005  # of the length: the outline is resampled this evenly to find its notches
 SINUS = 200.0  # degrees of a small circle around the base inside the blade: more is a sinus
 AROUND = 0.03  # that circle's radius, of the blade's length
 AROUND_POINTS = 720  # points on it
@@ -69,9 +90,9 @@ STEPS = ((1, 0), (-1, 0), (0, 1), (0, -1))  # the four neighbours, in grid index
 
 
 def dome(blade: Blade, ratio: float, base: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
-    """The dome over a blade of length about 1: (n, 2) points -> (n,) heights, `ratio` times
-    the largest distance to the margin at its top and 0 on the margin, flattened around the
-    midrib's `base` (see the module)."""
+    """The dome over a blade of length about 1, its axis along x: (n, 2) points -> (n,) heights,
+    `ratio` times the largest distance to the margin at its top and 0 on the margin, flattened
+    around the midrib's `base` and the notches of lobes off the axis (see the module)."""
     poly = blade.poly
     x0, y0, x1, y1 = poly.bounds
     along = int(np.clip(np.sqrt(NODES * (x1 - x0) / (y1 - y0)), FEWEST, NODES // FEWEST))
@@ -99,6 +120,7 @@ def dome(blade: Blade, ratio: float, base: np.ndarray) -> Callable[[np.ndarray],
         return lambda xy: np.zeros(len(np.atleast_2d(xy)))
     radius = _inradius(blade, nodes, inside, step)
     reach = SINUS_CALM if base_angle(blade, base) > SINUS else BASE_CALM
+    lobes = [p for p in notches(blade) if abs(p[1]) > NOTCH_CALM]  # off the axis y = 0
     coefficients = spline_filter(psi / top, order=3, mode="nearest")
 
     def heights(xy: np.ndarray) -> np.ndarray:
@@ -106,6 +128,8 @@ def dome(blade: Blade, ratio: float, base: np.ndarray) -> Callable[[np.ndarray],
         at = ((xy - lower) / step + pad).T
         read = map_coordinates(coefficients, at, order=3, mode="nearest", prefilter=False)
         calm = 1 - np.exp(-((xy - base) ** 2).sum(axis=1) / reach**2)
+        for notch in lobes:
+            calm *= 1 - np.exp(-((xy - notch) ** 2).sum(axis=1) / NOTCH_CALM**2)
         share = np.clip(read, 0.0, 1.0)
         return ratio * radius * 0.5 * share * (1 + share) * calm
 
@@ -120,6 +144,28 @@ def base_angle(blade: Blade, base: np.ndarray) -> float:
     circle = AROUND * np.column_stack([np.cos(turn), np.sin(turn)])
     ring = np.asarray(base, dtype=float)[:2] + circle
     return 360.0 * float(shapely.contains_xy(blade.poly, ring[:, 0], ring[:, 1]).mean())
+
+
+def notches(blade: Blade) -> np.ndarray:
+    """(k, 2) the outline's notches at the scale of a lobe: where, on the outline resampled every
+    NOTCH_STEP and smoothed by NOTCH_SMOOTH along itself (a toothed margin's teeth gone), the
+    blade's angle between the chords NOTCH_CHORD back and ahead passes SINUS (a sinus's notch at
+    the base, hastate's between the blade and each lobe, a lobed margin's between its lobes)."""
+    ring = np.asarray(orient(blade.poly, 1.0).exterior.coords)  # counterclockwise
+    along = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(ring, axis=0), axis=1))])
+    count = max(int(np.ceil(along[-1] / NOTCH_STEP)), 8)
+    spacing = along[-1] / count
+    even = np.column_stack(
+        [np.interp(np.arange(count) * spacing, along, ring[:, k]) for k in (0, 1)]
+    )
+    smooth = gaussian_filter1d(even, NOTCH_SMOOTH / spacing, axis=0, mode="wrap")
+    reach = max(round(NOTCH_CHORD / spacing), 1)
+    back = np.roll(smooth, reach, axis=0) - smooth
+    ahead = np.roll(smooth, -reach, axis=0) - smooth
+    turn = np.arctan2(back[:, 1], back[:, 0]) - np.arctan2(ahead[:, 1], ahead[:, 0])
+    angle = np.degrees(np.mod(turn, 2 * np.pi))  # the blade's side, left of the way round
+    peak = (angle > SINUS) & (angle >= np.roll(angle, 1)) & (angle > np.roll(angle, -1))
+    return even[peak]  # on the outline itself
 
 
 def _inradius(blade: Blade, nodes: np.ndarray, inside: np.ndarray, step: np.ndarray) -> float:

@@ -11,7 +11,7 @@ from leafstudio.errors import LeafError
 from leafstudio.forms import grow_veins
 from leafstudio.forms.blade import Blade
 from leafstudio.forms.make import Form
-from leafstudio.forms.relief import SINUS, base_angle, dome
+from leafstudio.forms.relief import SINUS, base_angle, dome, notches
 
 
 def _ellipse(a: float = 0.5, b: float = 0.2) -> Blade:
@@ -88,3 +88,46 @@ def test_a_base_is_a_sinus_where_the_outline_turns_inward(shape, sinus, monkeypa
     assert (seen[0] > SINUS) == sinus
     if not sinus:
         assert seen[0] == pytest.approx(180, abs=15)
+
+
+@pytest.mark.parametrize("margin", ["entire", "serrate", "dentate", "crenate", "sinuate"])
+def test_hastate_lobes_notches_are_found_under_any_margin(margin, monkeypatch):
+    """notches: hastate's two notches between the blade and its lobes, whatever the margin's
+    teeth; an ovate form with teeth has none."""
+    seen = []
+
+    def spy(blade, ratio, base):
+        seen.append(notches(blade))
+        return dome(blade, ratio, base)
+
+    monkeypatch.setattr(veins_module, "dome", spy)
+    Form("hastate", margin=margin).leaf()
+    Form("ovate", margin=margin).leaf()
+    lobes, ovate = seen
+    assert len(lobes) == 2 and len(ovate) == 0
+    assert np.allclose(np.sort(lobes[:, 1]), [-0.3, 0.3], atol=0.03)
+    assert np.allclose(lobes[:, 0], 0.15, atol=0.04)
+
+
+def test_the_dome_is_flat_at_a_lobes_notch(monkeypatch):
+    """ψ rises beside hastate's notches between the blade and its lobes as steeply as at a
+    sinus's notch (the vein correction then creased the veinless lobe): the dome is flattened
+    there too. A lobed margin's notches, near the axis, are left (flattened, the midrib's dome
+    went with them)."""
+    domes = []
+
+    def spy(blade, ratio, base):
+        domes.append((blade, dome(blade, ratio, base)))
+        return domes[-1][1]
+
+    monkeypatch.setattr(veins_module, "dome", spy)
+    Form("hastate").leaf()
+    Form("ovate", margin="lobed", lobes=5).leaf()
+    (blade, heights), (lobed, lobed_heights) = domes
+    for notch in notches(blade):
+        way = np.array([0.3, 0.0]) - notch
+        inward = notch + 0.02 * way / np.linalg.norm(way)
+        assert blade.inside(inward[None])[0]
+        assert heights(inward[None])[0] < 1e-4  # 0.0033 before: 0.02 in from the margin
+    assert len(notches(lobed)) == 4
+    assert lobed_heights(np.array([[0.5, 0.0]]))[0] > 0.03  # 0.042; 0.009 flattened
