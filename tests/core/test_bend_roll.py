@@ -11,7 +11,7 @@ import pytest
 
 import leafstudio as ls
 from leafstudio.core.bend import Pose
-from leafstudio.core.correct import TOLERANCE
+from leafstudio.core.correct import BAND_TOLERANCE
 from leafstudio.core.trianglemesh import TriangleMesh
 from leafstudio.forms.make import Form
 
@@ -52,11 +52,10 @@ def off_surface(rolled, flat, pose: Pose) -> np.ndarray:
 
 def posed_form_on_its_surface(shape: str, terms: dict) -> tuple[Pose, TriangleMesh]:
     """A posed form reconstructed with no side-on warning, checked to be its flat blade's mesh
-    posed: the flat mesh's vertices exactly in the plane, their heights within TOLERANCE (where
-    the bend stretches a distance off the blade, the veins are pinned closer: correct.py), its
-    chords within 2e-3 of the length of the form's
-    own surface (mean and 95th percentile), the veins within 2e-3 beyond the flat blade's and the
-    boundary exact.
+    posed: the flat mesh's vertices exactly in the plane, their heights within BAND_TOLERANCE
+    (where the bend stretches a distance off the blade, the veins are pinned closer: correct.py),
+    its chords within 2e-3 of the length of the form's own surface (mean and 95th percentile),
+    the veins within 2e-3 beyond the flat blade's and the boundary exact.
     Returns the form's pose and the mesh."""
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no side-on warning
@@ -70,7 +69,7 @@ def posed_form_on_its_surface(shape: str, terms: dict) -> tuple[Pose, TriangleMe
     n = len(flat.points)
     unposed = pose.flatten(mesh.points[:n])
     np.testing.assert_allclose(unposed[:, :2], flat.points[:, :2], atol=1e-9)
-    assert np.abs(unposed[:, 2] - flat.points[:, 2]).max() <= TOLERANCE * result.length
+    assert np.abs(unposed[:, 2] - flat.points[:, 2]).max() <= BAND_TOLERANCE * result.length
     off = off_surface(mesh, flat, pose) / result.length
     assert off.mean() <= 2e-3 and np.percentile(off, 95) <= 2e-3
     # the pose moves the veins no farther off than 2e-3 of the length beyond the flat blade's

@@ -67,7 +67,9 @@ def test_a_waved_form_passes_through_its_veins(shape):
 
 def test_a_drawn_leaf_with_hand_raised_veins_passes_through_them_without_new_creases():
     """Today 4.9e-3 of the length at K = 7; the creases (99th-percentile dihedral angle in the
-    margin band and inside) stay within a tenth of the paper's surface's."""
+    margin band and inside) stay within 4% of the paper's surface's (the margin band's was 6%
+    rougher, 8.84° against 8.32°, with the vein points in the band held as tight as inside:
+    correct.BAND_TOLERANCE)."""
     leaf = drawn_leaf()
     through = _run(leaf, k=7)
     paper = _run(leaf, k=7, through_veins=False)
@@ -75,7 +77,7 @@ def test_a_drawn_leaf_with_hand_raised_veins_passes_through_them_without_new_cre
     assert through.metrics["veins"]["max"] <= VEIN_TOLERANCE * through.length
     ours, theirs = margin_creases(through), margin_creases(paper)
     for band in ("margin_p99", "interior_p99"):
-        assert ours[band] <= 1.1 * theirs[band]
+        assert ours[band] <= 1.04 * theirs[band]
 
 
 @pytest.mark.parametrize(
@@ -134,6 +136,21 @@ def test_values_within_their_slack_bend_the_spline_less():
         return float(c.weights @ phi @ c.weights)
 
     assert energy(relaxed) < 0.5 * energy(exact)
+
+
+def test_a_vein_point_in_the_margin_band_has_more_slack():
+    """correct.BAND_TOLERANCE: a spike on a line of values in the margin band (T < BAND) is
+    lowered by more than TOLERANCE (over T), within BAND_TOLERANCE; inside (T = 1) by no more
+    than TOLERANCE."""
+    centers = np.column_stack([np.linspace(0, 1, 21), np.zeros(21)])
+    centers[::2, 1] = 0.05
+    target = np.where(np.arange(21) == 10, 0.01, 0.0)
+    for taper, most in ((1.0, correct.TOLERANCE), (0.3, correct.BAND_TOLERANCE)):
+        fitted = correct.fit_correction(centers, np.full(21, taper), taper * target, 1.0)
+        assert fitted is not None
+        off = np.abs(taper * fitted.value(centers) - taper * target)
+        assert off.max() <= most + 1e-9
+        assert off[10] > 0.9 * most
 
 
 def test_a_wavy_form_keeps_its_margin_on_the_boundary():
