@@ -83,7 +83,7 @@ KELVIN_STEP = 0.01  # of ℓ: the tables' step (a table 16 times finer read 1.5 
 KELVIN_END = 16.0  # of ℓ: φ is taken as 0 past this (kei(16) = 3e-6 against kei(0) = −0.79)
 JUNCTION = 0.011  # of the length: a vein's points this near an earlier vein's are left to it
 OVERSHOOT = 6.0  # T·c beyond this many times the largest residual is no smooth correction
-# (the gallery's forms: 0.96-1.18 times; a drawn leaf with hand-raised veins 4.3; a fan of
+# (the gallery's forms: 0.62-1.21 times; a drawn leaf with hand-raised veins 2.8; a fan of
 # basal veins from a sinus's notch into narrow lobes 17)
 TOLERANCE = 4e-4  # of the length: each vein point may stay this far off the surface when that
 # lets the spline bend less (_within)
