@@ -34,13 +34,13 @@ the blade fills more than SINUS of a small circle around it (the outline turns i
 cordate 280°, reniform 264°, sagittate 326°; a round or truncate base about 180°); there c is
 SINUS_CALM, wide enough that the correction need not bend the surface down into the notch
 (bench_bent --veins, surface through the veins: cordate 99th-percentile margin dihedral
-2.01° with c = 0.15, 1.35° with 0.27; reniform inside 1.79° -> 1.42°; sagittate margin
+2.01° with c = 0.15, 1.36° with 0.27; reniform inside 1.79° -> 1.42°; sagittate margin
 2.14° -> 1.55°; at 0.3 sagittate's inside rose to 3.1°). Part of that is a lower dome: the
 wider flattening lowers the veins' top (cordate 0.089 -> 0.080 of the length, reniform
 0.125 -> 0.120, sagittate 0.049 -> 0.037); scaled back to its top, 0.27 still beats 0.15 on
 cordate (margin 2.02° -> 1.50°, inside 1.99° -> 1.60°) but not on sagittate's inside
 (2.93° -> 3.49°). Elsewhere c is BASE_CALM: without
-it orbicular's dihedrals drop (margin 1.20° -> 0.88°, inside 1.34° -> 0.82°) but oblong's
+it orbicular's dihedrals drop (margin 1.21° -> 0.88°, inside 1.33° -> 0.82°) but oblong's
 and hastate's margin rise by 0.01° (1.750° -> 1.759°, 3.980° -> 3.994°, before its lobes'
 notches were flattened), so it stays.
 

@@ -105,7 +105,7 @@ def test_a_sinus_forms_surface_through_its_veins_has_no_dent_at_the_notch(shape,
     """The dome was flattened within 0.15 of the length around the base; at a sinus's notch
     the correction then bent the surface through the veins into a dent (99th-percentile
     dihedral, margin band / inside: cordate 2.01° / 1.98°, reniform 1.22° / 1.79°, sagittate
-    2.14° / 2.81°). Flattened within 0.27 there (forms/relief.py) they are 1.35° / 1.45°,
+    2.14° / 2.81°). Flattened within 0.27 there (forms/relief.py) they are 1.36° / 1.46°,
     1.08° / 1.42° and 1.55° / 2.65°."""
     result = _run(make_form(shape), k=3)
     assert result.metrics["veins"]["max"] <= VEIN_TOLERANCE * result.length
