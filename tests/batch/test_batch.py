@@ -1,5 +1,9 @@
 """leafstudio batch: failed rows beside good ones, resume after a kill, 1 and 2 workers alike, a
-real Dask scheduler and worker, and no progress bar when stderr is piped."""
+real Dask scheduler and worker, and no progress bar when stderr is piped.
+
+In-process batches run on worker processes kept for this file (`warm_pools`, tests/batch/pools.py):
+a test here checks rows, tables and meshes, not a worker's start; the killed batch and the
+progress bar run `leafstudio` itself, in a new process with its own workers."""
 
 from __future__ import annotations
 
@@ -33,6 +37,7 @@ from leafstudio.batch import (
 )
 from leafstudio.cli import main
 from leafstudio.errors import LeafError
+from tests.batch.pools import use_warm_pools
 
 REAL = Path(__file__).resolve().parents[3] / "shared" / "realleaves"
 LEAFSTUDIO = [sys.executable, "-m", "leafstudio"]
@@ -105,6 +110,7 @@ def _copy(folder: Path, to: Path) -> Path:
     return to
 
 
+@pytest.mark.usefixtures("warm_pools")
 def test_bad_files_become_failed_rows_and_the_rest_go_on(tmp_path, leaves, capsys):
     inputs = _copy(leaves, tmp_path / "in")
     (inputs / "empty.csv").write_text("")
@@ -163,6 +169,7 @@ def test_without_distributed_the_scheduler_says_how_to_install_it(tmp_path, leav
         ls.batch([leaves], ls.Params(grid=32), tmp_path / "out", scheduler="local")
 
 
+@pytest.mark.usefixtures("warm_pools")
 def test_fail_fast_stops_at_the_first_failure(tmp_path, leaves):
     inputs = _copy(leaves, tmp_path / "in")
     bad = inputs / "a" / "0bad.csv"  # the first input
@@ -174,6 +181,7 @@ def test_fail_fast_stops_at_the_first_failure(tmp_path, leaves):
     assert len(_rows(tmp_path / "out" / "traits.csv")) == len(rows)
 
 
+@pytest.mark.usefixtures("warm_pools")
 def test_json_lines_and_parquet_tables_and_no_meshes(tmp_path, leaves):
     table = tmp_path / "t.json"
     run = ls.batch([str(leaves / "a")], ls.Params(grid=32), tmp_path / "out", traits=table,
@@ -197,15 +205,18 @@ def test_json_lines_and_parquet_tables_and_no_meshes(tmp_path, leaves):
 
 
 @pytest.fixture(scope="module")
-def clean(tmp_path_factory, scans) -> Path:
+def clean(tmp_path_factory, scans, module_pools) -> Path:
     """A clean batch of the scans on one worker."""
     out = tmp_path_factory.mktemp("clean")
-    rows = list(ls.batch([scans], ls.Params(grid=32), out, scans=True, jobs=1))
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        use_warm_pools(monkeypatch, module_pools)
+        rows = list(ls.batch([scans], ls.Params(grid=32), out, scans=True, jobs=1))
     assert len(rows) == 6 and all(r["status"] == "ok" for r in rows), rows
     assert all(0 <= r["scan_mean"] < 0.05 * r["length"] for r in rows)
     return out
 
 
+@pytest.mark.usefixtures("warm_pools")
 def test_one_and_two_workers_give_the_same_meshes_and_table(tmp_path, scans, clean):
     rows = list(ls.batch([scans], ls.Params(grid=32), tmp_path, scans=True, jobs=2))
     assert len(rows) == 6
@@ -213,6 +224,7 @@ def test_one_and_two_workers_give_the_same_meshes_and_table(tmp_path, scans, cle
     assert _steady(tmp_path / "traits.csv") == _steady(clean / "traits.csv")
 
 
+@pytest.mark.usefixtures("warm_pools")
 def test_killed_batch_resumed_is_the_same_as_a_clean_run(tmp_path, scans, clean):
     killed = tmp_path / "killed"
     argv = ["batch", str(scans), "--scans", "--grid", GRID, "--jobs", "2", "-o"]
@@ -242,6 +254,7 @@ def test_killed_batch_resumed_is_the_same_as_a_clean_run(tmp_path, scans, clean)
     assert not [p for p in killed.rglob(".*")]  # no temporary file left
 
 
+@pytest.mark.usefixtures("warm_pools")
 def test_resume_keeps_only_rows_of_unchanged_inputs_and_settings(tmp_path, leaves):
     inputs = _copy(leaves / "a", tmp_path / "in")
     out = tmp_path / "out"
@@ -387,6 +400,7 @@ def _warned(err: str, source: str) -> list[str]:
     return [line[len(lead) :] for line in err.splitlines() if line.startswith(lead)]
 
 
+@pytest.mark.usefixtures("warm_pools")
 def test_a_scan_row_fails_and_warns_as_extract_and_reconstruct_do(tmp_path, scans, capsys):
     """Issue 15: `batch --scans` did not run extract's plausibility check (check_leaf_like), so
     a cloud of two leaves became an `ok` row. Its row now fails with extract's line, and with

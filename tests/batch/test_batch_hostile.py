@@ -54,6 +54,7 @@ def test_a_plain_script_without_a_main_guard_runs_its_batch(tmp_path, leaves):
     assert len(lines) == 2 and all(line.split()[1] == "ok" for line in lines), done.stdout
 
 
+@pytest.mark.usefixtures("warm_pools")
 def test_a_batch_whose_every_input_failed_raises(tmp_path):
     """Finding 3: a script whose every input failed exited 0; ls.batch now raises LeafError once
     every row is yielded and written, so the script exits non-zero."""
@@ -101,6 +102,7 @@ def test_a_bad_scheduler_address_is_one_line(tmp_path, leaves, capsys, address):
     assert not out.exists()
 
 
+@pytest.mark.usefixtures("warm_pools")
 def test_resume_over_a_table_with_a_damaged_field_is_one_line(tmp_path, leaves, capsys):
     """Finding 16: `--resume` over a table whose `k` is not a whole number was an internal error."""
     out = tmp_path / "out"
@@ -187,6 +189,7 @@ def test_an_input_named_with_a_line_break_is_refused_in_one_line(tmp_path, capsy
     assert not out.exists()
 
 
+@pytest.mark.usefixtures("warm_pools")
 def test_a_leaf_too_large_to_measure_is_a_row_naming_it(tmp_path):
     """Finding 16: a batch row for a leaf scaled by 1e160 said "internal error: LinAlgError" and
     did not name the input; now the line `measure` gives, naming it."""
