@@ -22,30 +22,35 @@ from leafstudio.cli import main
 GRID = ["--grid", "32"]
 OLD = b"OLD CONTENT\n"
 
-# Runs the command line in a child process, after limiting the size of any file it writes (the
-# stand-in for a full disk); SIGXFSZ ignored, so a write past the limit fails with EFBIG. Each
-# argument is one command line as JSON; the child prints [[exit code, stderr], ...] as JSON.
+# Runs command lines in one child process, each after limiting the size of any file it writes
+# (the stand-in for a full disk); SIGXFSZ ignored, so a write past the limit fails with EFBIG.
+# Each argument is [limit in bytes, command line] as JSON; the child prints [[exit code, stderr],
+# ...] as JSON. The limit is the soft one, raised again after each command (one child for many
+# commands and limits: a child's start, imports and kernel loading take seconds).
 CHILD = """
 import io, json, resource, signal, sys
-limit = int(sys.argv[1])
-if limit:
-    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
-    resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+_, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
 from leafstudio.cli import main
 report = []
-for line in sys.argv[2:]:
+for line in sys.argv[1:]:
+    limit, argv = json.loads(line)
     sys.stderr = io.StringIO()
-    code = main(json.loads(line))
+    resource.setrlimit(resource.RLIMIT_FSIZE, (limit, hard))
+    try:
+        code = main(argv)
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (hard, hard))
     report.append([code, sys.stderr.getvalue()])
 sys.stderr = sys.__stderr__
 print(json.dumps(report))
 """
 
 
-def _cli_many(commands: list[list[str]], limit: int, timeout: float = 300) -> list:
-    """[exit code, stderr] of each command, all run in one child process under the size limit."""
+def _cli_many(commands: list[tuple[int, list[str]]], timeout: float = 300) -> list:
+    """[exit code, stderr] of each (size limit, command line), all run in one child process."""
     run = subprocess.run(
-        [sys.executable, "-c", CHILD, str(limit), *(json.dumps(c) for c in commands)],
+        [sys.executable, "-c", CHILD, *(json.dumps(c) for c in commands)],
         capture_output=True,
         text=True,
         timeout=timeout,
@@ -88,38 +93,41 @@ LEAF_SUFFIXES = (".leaf.json", ".csv", ".ply", ".xyz")
 
 @pytest.fixture(scope="module")
 def limited(leaf_csv, tmp_path_factory) -> dict[str, tuple[Path, int, str]]:
-    """Every output format written under a file-size limit, each over an old file: name ->
-    (output, exit code, stderr)."""
+    """Every output format written under a file-size limit, each over an old file, and a run
+    whose figure is past the limit (test_a_failing_figure_write...), all in one child process:
+    name -> (output, exit code, stderr)."""
     folder = tmp_path_factory.mktemp("limited")
-    jobs: dict[str, tuple[Path, list[str]]] = {}
+    jobs: dict[str, tuple[Path, int, list[str]]] = {}
+    # 1500 bytes: less than a leaf or a grid-32 mesh in any format
     for suffix in MESH_SUFFIXES:
         out = folder / f"o{suffix}"
-        jobs[suffix] = (out, ["reconstruct", str(leaf_csv), "-o", str(out), *GRID])
+        jobs[suffix] = (out, 1500, ["reconstruct", str(leaf_csv), "-o", str(out), *GRID])
     for suffix in LEAF_SUFFIXES:
         out = folder / f"leaf{suffix}"
-        jobs[f"leaf{suffix}"] = (out, ["demo", "nested", "-o", str(out)])
-    for out, _ in jobs.values():
+        jobs[f"leaf{suffix}"] = (out, 1500, ["demo", "nested", "-o", str(out)])
+    for out, _, _ in jobs.values():
         out.write_bytes(OLD)
-    # 1500 bytes: less than a leaf or a grid-32 mesh in any format
-    report = _cli_many([args for _, args in jobs.values()], 1500)
+    figure = tmp_path_factory.mktemp("figure")
+    mesh, png, metrics = figure / "o.vtp", figure / "f.png", figure / "m.json"
+    for path in (mesh, png, metrics):
+        path.write_bytes(OLD)
+    # the mesh (about 30 kB) and the metrics fit under 100 kB, the figure (about 180 kB) not
+    args = ["reconstruct", str(leaf_csv), "-o", str(mesh), "--grid", "8", "--k", "1",
+            "--figure", str(png), "--metrics", str(metrics)]  # fmt: skip
+    jobs["figure"] = (figure, 100_000, args)
+    report = _cli_many([(limit, args) for _, limit, args in jobs.values()])
     return {
         name: (out, code, err)
-        for (name, (out, _)), (code, err) in zip(jobs.items(), report, strict=True)
+        for (name, (out, _, _)), (code, err) in zip(jobs.items(), report, strict=True)
     }
 
 
-def test_a_failing_figure_write_keeps_every_output_it_would_have_replaced(leaf_csv, tmp_path):
-    mesh, figure, metrics = tmp_path / "o.vtp", tmp_path / "f.png", tmp_path / "m.json"
-    for path in (mesh, figure, metrics):
-        path.write_bytes(OLD)
-    # the mesh (about 30 kB) and the metrics fit under the limit, the figure (about 180 kB) not
-    args = ["reconstruct", str(leaf_csv), "-o", str(mesh), "--grid", "8", "--k", "1",
-            "--figure", str(figure), "--metrics", str(metrics)]  # fmt: skip
-    [(code, err)] = _cli_many([args], 100_000)
+def test_a_failing_figure_write_keeps_every_output_it_would_have_replaced(limited):
+    folder, code, err = limited["figure"]
     assert code == 2 and "f.png" in _one_line(err)
-    for path in (mesh, figure, metrics):
-        assert path.read_bytes() == OLD
-    assert _leftovers(tmp_path) == []
+    for name in ("o.vtp", "f.png", "m.json"):
+        assert (folder / name).read_bytes() == OLD
+    assert _leftovers(folder) == []
 
 
 @pytest.mark.parametrize("name", [*MESH_SUFFIXES, *(f"leaf{s}" for s in LEAF_SUFFIXES)])
