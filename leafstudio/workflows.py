@@ -29,6 +29,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from leafstudio._shared import progress
+from leafstudio._shared.blas import one_blas_thread
 from leafstudio._shared.inputs import check_file_kind
 from leafstudio.analysis.fidelity import scan_distances
 from leafstudio.core import evaluate
@@ -155,10 +156,11 @@ def _scan_opened(
     """A scan's points read from `path`, checked and extracted (open_scan)."""
     progress.report(0.0, FINDING)
     try:
-        at_unit = unit_scan(scan)  # thinned once, for the check and the extraction
-        notes = check_scan(scan, force=force, at_unit=at_unit)
-        with progress.share(0.1, 1.0):  # check_scan: a tenth of a big scan's time
-            found = extract_leaf(scan, base_end, points, at_unit=at_unit)
+        with one_blas_thread():  # small solves: a second thread only waits (_shared/blas.py)
+            at_unit = unit_scan(scan)  # thinned once, for the check and the extraction
+            notes = check_scan(scan, force=force, at_unit=at_unit)
+            with progress.share(0.1, 1.0):  # check_scan: a tenth of a big scan's time
+                found = extract_leaf(scan, base_end, points, at_unit=at_unit)
     except LeafError as exc:
         raise LeafError(exc.problem, path) from None
     return Opened(path, "scan", found.leaf, scan=scan, extraction=found, notes=tuple(notes))

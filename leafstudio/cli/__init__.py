@@ -16,6 +16,7 @@ import traceback
 import warnings
 from collections.abc import Callable, Sequence
 
+from leafstudio._shared.blas import one_blas_thread
 from leafstudio._shared.safewrite import install_signal_cleanup
 from leafstudio.cli import (
     batch,
@@ -169,7 +170,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         _configure_logging(getattr(args, "verbose", 0) or 0, getattr(args, "quiet", 0) or 0)
         if (args.command or "gui") != "gui":  # the app's event loop keeps SIGTERM's default
             install_signal_cleanup()
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), one_blas_thread():  # the app's lanes too (blas.py)
             warnings.simplefilter("ignore")  # library chatter; our own notes are printed
             code = COMMANDS[args.command or "gui"](args)
         sys.stdout.flush()

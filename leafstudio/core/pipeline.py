@@ -10,6 +10,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable
 
+from leafstudio._shared.blas import one_blas_thread
 from leafstudio.core.bend import bent_result, flat_leaf
 from leafstudio.core.grid import Grid
 from leafstudio.core.kernels import compile_kernels
@@ -80,6 +81,11 @@ class Pipeline:
         run = StageRun(self, as_params(params), on_stage, should_stop)
         # the first run only: in parallel, ahead of the stages (stopped, the first stage raises)
         compile_kernels(on_stage, should_stop=should_stop)
+        with one_blas_thread():  # its solves are small: a second thread only waits (blas.py)
+            return self._result(run)
+
+    def _result(self, run: StageRun) -> Result:
+        """Run the stages `run` needs and make its Result (run)."""
         for stage in STAGES:
             if not STAGE_TABLE[stage].lazy:
                 run[stage]
