@@ -283,7 +283,10 @@ def extracted_scan(path: Path) -> tuple[np.ndarray, object]:
     """A real scan's (n, 3) points, read-only, and what `extract_leaf` finds in them: extracted
     once per test run (1-2 s a scan) for the tests that only read them. Under pytest-xdist the
     first worker to need a scan leaves its extraction in the run's shared folder for the other
-    (a pickle, written whole: at worst both extract it)."""
+    (a pickle, written whole: at worst both extract it). Extracted on one BLAS thread, as
+    workflows.open_scan extracts (the app, `extract`, batch): the same leaf to the bit in a run
+    with xdist or without (tests/sources/test_scan_fins.py compares them)."""
+    from leafstudio._shared.blas import one_blas_thread
     from leafstudio._shared.safewrite import write_bytes
     from leafstudio.sources.extract import extract_leaf
     from leafstudio.sources.scan import read_scan
@@ -294,7 +297,8 @@ def extracted_scan(path: Path) -> tuple[np.ndarray, object]:
     kept = Path(folder or ".") / f"{Path(path).stem}.extracted.pickle"
     if folder and kept.exists():
         return points, pickle.loads(kept.read_bytes())
-    found = extract_leaf(points)
+    with one_blas_thread():
+        found = extract_leaf(points)
     if folder:
         write_bytes(kept, pickle.dumps(found))
     return points, found

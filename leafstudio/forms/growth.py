@@ -124,10 +124,12 @@ def colonize(
     arcuate: bool,
     rng: np.random.Generator,
     tropism: float = TROPISM,
+    step: float | None = None,
 ) -> list[np.ndarray]:
     """Space colonization from the seeds (station, start, preferred direction): each seed's
-    longest path, beginning at its station on a primary, in steps of growth_step."""
-    step = growth_step(poly)
+    longest path, beginning at its station on a primary, in steps of growth_step (`step`: the
+    caller's, when it has it: the inscribed circle is most of the step's cost)."""
+    step = growth_step(poly) if step is None else step
     sources, h = _sources(poly, rng)
     fixed = np.vstack(primaries)
     pos = [fixed] + [s[1][None] for s in seeds]

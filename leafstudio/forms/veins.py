@@ -244,7 +244,9 @@ def _grow_unit(
                 seeds.append((prim[index], prim[index] + 0.5 * step * normal, tip))
         tropism = PALMATE_TROPISM if venation == "palmate" else TROPISM
         paths = (
-            colonize(blade, primaries, seeds, venation == "arcuate", rng, tropism) if seeds else []
+            colonize(blade, primaries, seeds, venation == "arcuate", rng, tropism, step)
+            if seeds
+            else []
         )
         h = float(np.sqrt(blade.area / SOURCES))
         veins = list(primaries)

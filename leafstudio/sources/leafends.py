@@ -181,10 +181,18 @@ class VeinField:
         from scipy.ndimage import distance_transform_edt
         from skimage.feature import structure_tensor
 
-        grey = image[..., :3].astype(float) @ np.array([0.299, 0.587, 0.114])
+        # on the blade's box with a margin wider than the filters' reach (a Sobel pixel and
+        # the Gaussian's 4 sigmas): the inner pixels' tensors are the whole photo's, sooner
+        rows, cols = np.nonzero(blade)
+        reach = 2 + int(np.ceil(4 * TENSOR_SIGMA))
+        top, left = max(rows.min() - reach, 0), max(cols.min() - reach, 0)
+        box = (slice(top, rows.max() + 1 + reach), slice(left, cols.max() + 1 + reach))
+        grey = image[box][..., :3].astype(float) @ np.array([0.299, 0.587, 0.114])
         arr, arc, acc = structure_tensor(grey, sigma=TENSOR_SIGMA, order="rc")
-        rows, cols = np.nonzero(distance_transform_edt(blade) > MARGIN_SKIP)
-        self.xy = np.column_stack([cols, rows]) + 0.5  # (column, row) pixel centres
+        rows, cols = np.nonzero(
+            distance_transform_edt(np.pad(blade[box], 1))[1:-1, 1:-1] > MARGIN_SKIP
+        )
+        self.xy = np.column_stack([cols + left, rows + top]) + 0.5  # (column, row) pixel centres
         self.j = np.column_stack([acc[rows, cols], arc[rows, cols], arr[rows, cols]])  # xx xy yy
 
     def lean(self, through: np.ndarray, along: np.ndarray) -> float:
@@ -318,19 +326,20 @@ class Stalk:
 
 def _widths(polygon: shapely.Polygon, start: np.ndarray, inward: np.ndarray, at: np.ndarray):
     """The blade's width across the midline at distances `at` in from `start`: the piece of
-    each cross-line that holds the midline's point (a petiole in a sinus, not the lobes)."""
+    each cross-line that holds the midline's point (a petiole in a sinus, not the lobes). All
+    cross-lines in one call of GEOS's (vectorised shapely)."""
     normal = np.array([-inward[1], inward[0]])
     reach = 2 * np.sqrt(polygon.area) + polygon.length
+    centres = np.array([start + t * inward for t in at]).reshape(-1, 2)
+    lines = shapely.linestrings(
+        np.stack([centres - reach * normal, centres + reach * normal], axis=1)
+    )
+    pieces, which = shapely.get_parts(shapely.intersection(polygon, lines), return_index=True)
+    holding = (shapely.get_type_id(pieces) == 1) & (
+        shapely.distance(pieces, shapely.points(centres[which])) < 1.0
+    )  # type 1: a LineString
     widths = np.zeros(len(at))
-    for i, t in enumerate(at):
-        centre = start + t * inward
-        cut = polygon.intersection(
-            shapely.LineString([centre - reach * normal, centre + reach * normal])
-        )
-        pieces = [g for g in getattr(cut, "geoms", [cut]) if g.geom_type == "LineString"]
-        point = shapely.Point(centre)
-        holding = [g for g in pieces if g.distance(point) < 1.0]
-        widths[i] = max((g.length for g in holding), default=0.0)
+    np.maximum.at(widths, which[holding], shapely.length(pieces[holding]))
     return widths
 
 

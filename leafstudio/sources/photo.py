@@ -165,7 +165,10 @@ def _opened(leaf: np.ndarray, inside: np.ndarray, radius: float) -> np.ndarray:
     element is slow): the points deeper than r, grown back by r."""
     from scipy.ndimage import distance_transform_edt
 
-    return leaf & (distance_transform_edt(~(inside > radius)) <= radius)
+    core = inside > radius
+    if not core.any():  # nothing deeper (a window of _cut_petiole's): nothing grows back
+        return np.zeros_like(leaf)
+    return leaf & (distance_transform_edt(~core) <= radius)
 
 
 def _stalk_shape(part: np.ndarray) -> tuple[float, float, float]:
@@ -180,12 +183,13 @@ def _stalk_shape(part: np.ndarray) -> tuple[float, float, float]:
     return length, length / width, props.area / max(length * width, 1e-12)
 
 
-def _evenness(part: np.ndarray) -> float:
+def _evenness(part: np.ndarray, corner: tuple[int, int] = (0, 0)) -> float:
     """How even a region's width is along its long axis: the narrower over the wider of its
     widths a fifth of its length in from each end (0.97-1 for a drawn stalk, about 0.79 for
-    the wedge of a spatulate blade's narrow base)."""
+    the wedge of a spatulate blade's narrow base). `corner`: the (row, column) of the mask's
+    first pixel in the photo (a window of it)."""
     rows, cols = np.nonzero(part)
-    pts = np.column_stack([cols, rows]).astype(float)
+    pts = np.column_stack([cols + corner[1], rows + corner[0]]).astype(float)
     if len(pts) < 10:
         return 0.0
     centre = pts.mean(axis=0)
@@ -197,6 +201,14 @@ def _evenness(part: np.ndarray) -> float:
     return float(low / high) if high else 0.0
 
 
+def _window(box: tuple[int, int, int, int], margin: int, shape) -> tuple[slice, slice]:
+    """Slices of a (min row, min column, max row, max column) box grown by `margin` pixels,
+    within an image of `shape`."""
+    r0, c0, r1, c1 = box
+    return (slice(max(r0 - margin, 0), min(r1 + margin, shape[0])),
+            slice(max(c0 - margin, 0), min(c1 + margin, shape[1])))  # fmt: skip
+
+
 def _cut_petiole(leaf: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     """The blade without the petiole, and where the petiole met it (column, row) or None.
 
@@ -204,7 +216,27 @@ def _cut_petiole(leaf: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     each long one's half-width w is read on its skeleton, and a second opening by a disk of
     PETIOLE_FIT w cuts it where the blade widens. What that cuts is a stalk if it is slender and
     of even width (_stalk_shape: STALK_ELONGATION, STALK_FILL); the most even one is the
-    petiole."""
+    petiole.
+
+    All on the leaf's box with a margin of background (2 pixels: the joint's dilation), each
+    part's second opening on the part's box grown by the disk: the same pixels as on the whole
+    photo (a distance transform, an opening, a skeleton or a dilation there sees no farther),
+    in a fraction of the time."""
+    rows, cols = np.nonzero(leaf)
+    box = _window((rows.min(), cols.min(), rows.max() + 1, cols.max() + 1), 2, leaf.shape)
+    blade, joint = _cut_petiole_in(leaf[box], (box[0].start, box[1].start))
+    if joint is None:
+        return leaf, None
+    whole = np.zeros_like(leaf)
+    whole[box] = blade
+    return whole, joint
+
+
+def _cut_petiole_in(
+    leaf: np.ndarray, corner: tuple[int, int]
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """_cut_petiole on the leaf's box (background all round), whose first pixel is at (row,
+    column) `corner` in the photo; the joint in the photo's pixels."""
     from scipy.ndimage import binary_dilation, distance_transform_edt
     from skimage.measure import label, regionprops
     from skimage.morphology import skeletonize
@@ -216,10 +248,12 @@ def _cut_petiole(leaf: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     for part in regionprops(coarse):
         if part.axis_major_length < PETIOLE_LENGTH * radius:
             continue
-        region = coarse == part.label
-        halfwidth = float(np.median(inside[skeletonize(region)]))
+        spine = skeletonize(np.pad(part.image, 1))[1:-1, 1:-1]  # the part's box, background round
+        halfwidth = float(np.median(inside[part.slice][spine]))
         fine = max(PETIOLE_FIT * halfwidth, 1.5)
-        thin = label(leaf & ~_opened(leaf, inside, fine) & region, connectivity=2)
+        at = _window(part.bbox, int(np.ceil(fine)) + 1, leaf.shape)  # what the disk reaches
+        region = coarse[at] == part.label
+        thin = label(leaf[at] & ~_opened(leaf[at], inside[at], fine) & region, connectivity=2)
         if thin.max() == 0:
             continue
         tight = thin == np.argmax(np.bincount(thin.ravel())[1:]) + 1
@@ -228,9 +262,10 @@ def _cut_petiole(leaf: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
             length >= PETIOLE_LENGTH * radius / 2
             and elongation >= STALK_ELONGATION
             and fill > best
-            and _evenness(tight) >= STALK_EVEN
+            and _evenness(tight, (corner[0] + at[0].start, corner[1] + at[1].start)) >= STALK_EVEN
         ):
-            petiole, best = tight, fill
+            petiole, best = np.zeros_like(leaf), fill
+            petiole[at] = tight
     if petiole is None:
         return leaf, None
     blade = leaf & ~petiole
@@ -241,6 +276,7 @@ def _cut_petiole(leaf: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     if not joint.any():
         return leaf, None
     rows, cols = np.nonzero(joint)
+    rows, cols = rows + corner[0], cols + corner[1]
     return blade, np.array([cols.mean() + 0.5, rows.mean() + 0.5])
 
 

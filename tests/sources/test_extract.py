@@ -155,10 +155,9 @@ def test_the_outline_count_changes_only_the_outline(scan):
     a finer outline moved the blade/petiole split and the length, and cost quadratically in it
     (100,000 points ran past a minute). Now the blade, the petiole, the length and the veins'
     sampling are the same whatever the count."""
-    points = scan[1]
-    coarse = extract_leaf(points, count=200)
+    _, points, coarse = scan  # the module's extraction: the default count, 200 outline points
     fine = extract_leaf(points, count=5000)
-    assert len(fine.leaf.boundary) == 5000
+    assert len(coarse.leaf.boundary) == 200 and len(fine.leaf.boundary) == 5000
     np.testing.assert_array_equal(fine.blade, coarse.blade)
     np.testing.assert_array_equal(fine.petiole, coarse.petiole)
     assert fine.length == pytest.approx(coarse.length, rel=1e-12)

@@ -100,10 +100,16 @@ def test_a_noisy_line_is_a_leaf_error_not_a_crash():
         extract_leaf(line)
 
 
-@pytest.mark.parametrize("factor", [1e-9, 1e200])
-def test_a_scan_in_any_units_gives_the_same_leaf_scaled(factor):
+@pytest.fixture(scope="module")
+def unit_scale():
+    """A scan of 6000 blade points and its extraction, once for both factors below."""
     points, _ = _big_scan(6000, seed=4)
-    base = extract_leaf(points)
+    return points, extract_leaf(points)
+
+
+@pytest.mark.parametrize("factor", [1e-9, 1e200])
+def test_a_scan_in_any_units_gives_the_same_leaf_scaled(factor, unit_scale):
+    points, base = unit_scale
     scaled = extract_leaf(points * factor)
     assert scaled.length == pytest.approx(base.length * factor, rel=1e-9)
     np.testing.assert_allclose(scaled.leaf.boundary / factor, base.leaf.boundary, atol=1e-9)

@@ -90,3 +90,21 @@ def test_the_command_line_says_the_veins_were_traced(tmp_path, capsys):
     Image.fromarray(image).save(path)
     assert main(["photo", str(path), "-o", str(tmp_path / "p.leaf.json")]) == 0
     assert "traced in the photo" in capsys.readouterr().err
+
+
+def test_the_ridge_filter_is_scikit_images_sato_both_ways():
+    """photo_veins reads light and dark ridges from one Hessian per width (half the filter's
+    time): equal to the last bit to scikit-image's sato run twice, on a photo with veins."""
+    from skimage.filters import sato
+
+    from leafstudio.sources.photo_veins import _sato_light_and_dark
+
+    leaf = make_form("ovate")
+    image, _, _ = form_photo(leaf.boundary, leaf.veins, angle=25.0, size=(300, 240),
+                             pixels_per_unit=150.0)  # fmt: skip
+    grey = image.astype(float) @ np.array([0.299, 0.587, 0.114]) / 255
+    widths = np.array([1.0, 2.0, 3.0]) * 1.3
+    light, dark = _sato_light_and_dark(grey, widths)
+    assert np.array_equal(light, sato(grey, sigmas=widths, black_ridges=False, mode="reflect"))
+    assert np.array_equal(dark, sato(grey, sigmas=widths, black_ridges=True, mode="reflect"))
+    assert light.max() > 0 and dark.max() > 0

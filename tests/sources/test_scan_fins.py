@@ -16,6 +16,7 @@ import pytest
 import leafstudio as ls
 from leafstudio import workflows
 from leafstudio.analysis.fidelity import fin_share
+from tests.leaves import extracted_scan
 from tests.sources.test_scan_holes import far_share
 
 REAL = Path(__file__).resolve().parents[3] / "shared" / "realleaves"
@@ -29,7 +30,10 @@ def scans() -> dict[str, tuple[float, float, float, int]]:
     than 3% of the length from every blade point, and number of holes."""
     found = {}
     for path in SCANS:
-        opened = workflows.open_scan(str(path))
+        # the run's shared extraction (tests/leaves.py): open_scan's own, as the test below shows
+        points, extraction = extracted_scan(path)
+        opened = workflows.Opened(str(path), "scan", extraction.leaf, scan=points,
+                                  extraction=extraction)  # fmt: skip
         done = workflows.reconstruct(opened, ls.Params())
         blade = opened.scan[opened.extraction.blade]
         fit = done.scan_fit
@@ -37,6 +41,23 @@ def scans() -> dict[str, tuple[float, float, float, int]]:
         far = far_share(done.result.triangle_mesh, blade, fit["length"])
         found[path.stem] = (fin, fit["mean"] / fit["length"], far, len(opened.leaf.bend.holes))
     return found
+
+
+def test_the_shared_extraction_is_what_the_app_opens():
+    """The scans above are the run's shared extractions (extract_leaf on the scan's points,
+    tests/leaves.extracted_scan) instead of eight more openings: open_scan, the path of
+    `extract`, batch and the app, checks the scan and finds the very same leaf in it."""
+    path = REAL / "sugarbeet_f00012_20170829T010129_pot1_1.txt"
+    opened = workflows.open_scan(str(path))
+    points, extraction = extracted_scan(path)
+    np.testing.assert_array_equal(opened.scan, points)
+    np.testing.assert_array_equal(opened.extraction.blade, extraction.blade)
+    leaf, shared = opened.leaf, extraction.leaf
+    np.testing.assert_array_equal(leaf.boundary, shared.boundary)
+    assert len(leaf.veins) == len(shared.veins)
+    for vein, same in zip(leaf.veins, shared.veins, strict=True):
+        np.testing.assert_array_equal(vein, same)
+    assert leaf.bend.key() == shared.bend.key()  # the sheet, its place and scale, the holes
 
 
 def test_no_scan_grows_a_fin(scans):
