@@ -17,6 +17,19 @@ def blas_threads() -> set[int]:
     return {pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"}
 
 
+def threads_seen(monkeypatch, module, name: str) -> list[set[int]]:
+    """The BLAS thread counts `module.name` is called under, one set per call, from now on."""
+    seen: list[set[int]] = []
+    function = getattr(module, name)
+
+    def spy(*args, **kwargs):
+        seen.append(blas_threads())
+        return function(*args, **kwargs)
+
+    monkeypatch.setattr(module, name, spy)
+    return seen
+
+
 @pytest.fixture
 def two_threads():
     """BLAS allowed two threads (the suite's workers run with one: tests/conftest.py)."""
@@ -29,14 +42,7 @@ def two_threads():
 def test_a_reconstruction_solves_on_one_blas_thread_and_gives_the_limit_back(
     two_threads, monkeypatch
 ):
-    seen: list[set[int]] = []
-    fit = correct.fit_correction
-
-    def spy(*args, **kwargs):
-        seen.append(blas_threads())
-        return fit(*args, **kwargs)
-
-    monkeypatch.setattr(correct, "fit_correction", spy)
+    seen = threads_seen(monkeypatch, correct, "fit_correction")
     ls.reconstruct(ls.demo("nested"), ls.Params(grid=32))
     assert seen and all(threads == {1} for threads in seen)
     assert blas_threads() == {2}
@@ -45,14 +51,7 @@ def test_a_reconstruction_solves_on_one_blas_thread_and_gives_the_limit_back(
 def test_opening_a_scan_extracts_on_one_blas_thread(two_threads, monkeypatch, tmp_path):
     import leafstudio.workflows as workflows
 
-    seen: list[set[int]] = []
-    extract = workflows.extract_leaf
-
-    def spy(*args, **kwargs):
-        seen.append(blas_threads())
-        return extract(*args, **kwargs)
-
-    monkeypatch.setattr(workflows, "extract_leaf", spy)
+    seen = threads_seen(monkeypatch, workflows, "extract_leaf")
     rng = np.random.default_rng(0)
     xy = rng.uniform(-1, 1, (6000, 2)) * [1, 0.4]
     xy = xy[xy[:, 0] ** 2 + (xy[:, 1] / 0.4) ** 2 < 1]
@@ -67,12 +66,7 @@ def test_the_apps_lanes_compute_on_one_blas_thread(two_threads, monkeypatch):
     lane's own limit would do nothing (threadpoolctl lets one thread set OpenBLAS's)."""
     import leafstudio.cli as cli
 
-    seen: list[set[int]] = []
-    fit = correct.fit_correction
-
-    def spy(*args, **kwargs):
-        seen.append(blas_threads())
-        return fit(*args, **kwargs)
+    seen = threads_seen(monkeypatch, correct, "fit_correction")
 
     def lane_command(args) -> int:  # as the app does: the pipeline runs on a worker lane
         lane = threading.Thread(target=ls.reconstruct, args=(ls.demo("nested"), ls.Params(grid=32)))
@@ -80,7 +74,6 @@ def test_the_apps_lanes_compute_on_one_blas_thread(two_threads, monkeypatch):
         lane.join(60)
         return 0
 
-    monkeypatch.setattr(correct, "fit_correction", spy)
     monkeypatch.setitem(cli.COMMANDS, "demo", lane_command)
     assert cli.main(["demo", "nested", "-o", "unused.csv"]) == 0
     assert seen and all(threads == {1} for threads in seen)
