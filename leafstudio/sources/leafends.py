@@ -173,6 +173,21 @@ def end_widths(outline: np.ndarray, line: Midline) -> np.ndarray:
     return np.array(widths)
 
 
+def window(box: tuple[int, int, int, int], margin: int, shape) -> tuple[slice, slice]:
+    """Slices of a (min row, min column, max row, max column) box grown by `margin` pixels,
+    within an image of `shape`."""
+    r0, c0, r1, c1 = box
+    return (slice(max(r0 - margin, 0), min(r1 + margin, shape[0])),
+            slice(max(c0 - margin, 0), min(c1 + margin, shape[1])))  # fmt: skip
+
+
+def mask_window(mask: np.ndarray, margin: int) -> tuple[slice, slice]:
+    """Slices of the box of a (rows, columns) mask's pixels grown by `margin` (window): work on
+    a photo's leaf there sees the same pixels, sooner."""
+    rows, cols = np.nonzero(mask)
+    return window((rows.min(), cols.min(), rows.max() + 1, cols.max() + 1), margin, mask.shape)
+
+
 class VeinField:
     """The structure tensor of a photo's grey levels on the blade's inner pixels (MARGIN_SKIP in
     from the outline, whose own edge would swamp the veins'), for `lean`."""
@@ -183,10 +198,8 @@ class VeinField:
 
         # on the blade's box with a margin wider than the filters' reach (a Sobel pixel and
         # the Gaussian's 4 sigmas): the inner pixels' tensors are the whole photo's, sooner
-        rows, cols = np.nonzero(blade)
-        reach = 2 + int(np.ceil(4 * TENSOR_SIGMA))
-        top, left = max(rows.min() - reach, 0), max(cols.min() - reach, 0)
-        box = (slice(top, rows.max() + 1 + reach), slice(left, cols.max() + 1 + reach))
+        box = mask_window(blade, 2 + int(np.ceil(4 * TENSOR_SIGMA)))
+        top, left = box[0].start, box[1].start
         grey = image[box][..., :3].astype(float) @ np.array([0.299, 0.587, 0.114])
         arr, arc, acc = structure_tensor(grey, sigma=TENSOR_SIGMA, order="rc")
         rows, cols = np.nonzero(

@@ -50,8 +50,10 @@ from leafstudio.sources.leafends import (
     base_end_index,
     climb_to_tip,
     find_stalk,
+    mask_window,
     midline,
     sharpen_end,
+    window,
 )
 from leafstudio.sources.leafphoto import LeafPhoto
 from leafstudio.sources.photo_midrib import along_midrib, ridge_midline
@@ -201,14 +203,6 @@ def _evenness(part: np.ndarray, corner: tuple[int, int] = (0, 0)) -> float:
     return float(low / high) if high else 0.0
 
 
-def _window(box: tuple[int, int, int, int], margin: int, shape) -> tuple[slice, slice]:
-    """Slices of a (min row, min column, max row, max column) box grown by `margin` pixels,
-    within an image of `shape`."""
-    r0, c0, r1, c1 = box
-    return (slice(max(r0 - margin, 0), min(r1 + margin, shape[0])),
-            slice(max(c0 - margin, 0), min(c1 + margin, shape[1])))  # fmt: skip
-
-
 def _cut_petiole(leaf: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     """The blade without the petiole, and where the petiole met it (column, row) or None.
 
@@ -222,8 +216,7 @@ def _cut_petiole(leaf: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     part's second opening on the part's box grown by the disk: the same pixels as on the whole
     photo (a distance transform, an opening, a skeleton or a dilation there sees no farther),
     in a fraction of the time."""
-    rows, cols = np.nonzero(leaf)
-    box = _window((rows.min(), cols.min(), rows.max() + 1, cols.max() + 1), 2, leaf.shape)
+    box = mask_window(leaf, 2)
     blade, joint = _cut_petiole_in(leaf[box], (box[0].start, box[1].start))
     if joint is None:
         return leaf, None
@@ -251,7 +244,7 @@ def _cut_petiole_in(
         spine = skeletonize(np.pad(part.image, 1))[1:-1, 1:-1]  # the part's box, background round
         halfwidth = float(np.median(inside[part.slice][spine]))
         fine = max(PETIOLE_FIT * halfwidth, 1.5)
-        at = _window(part.bbox, int(np.ceil(fine)) + 1, leaf.shape)  # what the disk reaches
+        at = window(part.bbox, int(np.ceil(fine)) + 1, leaf.shape)  # what the disk reaches
         region = coarse[at] == part.label
         thin = label(leaf[at] & ~_opened(leaf[at], inside[at], fine) & region, connectivity=2)
         if thin.max() == 0:
