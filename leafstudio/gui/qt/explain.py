@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import (
     QCheckBox,
@@ -17,6 +18,7 @@ from PySide6.QtWidgets import (
     QVBoxLayout,
     QWidget,
 )
+from vtkmodules.vtkCommonMath import vtkMatrix4x4  # one module: `import vtk` loads every one
 
 from leafstudio.gui.qt.actions import Action
 
@@ -62,9 +64,6 @@ K_POSITION = (0.985, 0.98)  # its upper right corner, in the view's normalized c
 def stretch_matrix(result, scale: float):
     """A vtkMatrix4x4 stretching the view `scale` times along the leaf's normal, about its plane
     (None for no stretch or no result): relief is a few percent of a leaf's length."""
-    import numpy as np
-    import vtk
-
     if result is None or scale == 1.0:
         return None
     n, o = np.asarray(result.frame.normal), np.asarray(result.frame.origin)
@@ -72,7 +71,7 @@ def stretch_matrix(result, scale: float):
     m = np.eye(4)
     m[:3, :3] = linear
     m[:3, 3] = o - linear @ o  # about the leaf's plane
-    matrix = vtk.vtkMatrix4x4()
+    matrix = vtkMatrix4x4()
     for i in range(4):
         for j in range(4):
             matrix.SetElement(i, j, float(m[i, j]))
