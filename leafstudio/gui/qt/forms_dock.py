@@ -51,17 +51,29 @@ BOUNDARY_CONTROL = 48  # a form's sketch: about this many boundary control point
 CORNER_TURN = 0.35  # radians: outline points turning this sharply (tooth tips, notches) are kept
 VEIN_CONTROL = 8
 DEBOUNCE_MS = 250
+THUMBNAILS = "thumbnails"  # the worker's job kind (and lane) growing the gallery's veins
 _thumbnails: dict[tuple[str, int], QImage] = {}
 
 
-def thumbnail(shape: str, size: int = THUMBNAIL) -> QImage:
-    """The shape's canonical form drawn in a `size` square (outline filled, veins on it), sitting
-    on the square's lower edge so that the gallery's name right under it reads as its own; drawn
-    once per shape and size, then cached."""
+def thumbnail(shape: str, size: int = THUMBNAIL, leaf: Leaf | None = None) -> QImage:
+    """The shape's canonical form (`leaf`, when grown already) drawn in a `size` square (outline
+    filled, veins on it), sitting on the square's lower edge so that the gallery's name right
+    under it reads as its own; drawn once per shape and size, then cached."""
     key = (shape, size)
     if key not in _thumbnails:
-        _thumbnails[key] = draw_leaf(Form(shape).leaf(), size, sit=True)
+        _thumbnails[key] = draw_leaf(leaf or Form(shape).leaf(), size, sit=True)
     return _thumbnails[key]
+
+
+def outline_thumbnail(shape: str, size: int = THUMBNAIL) -> QImage:
+    """The shape's thumbnail until its veins are grown: the outline alone (1-2 ms a shape)."""
+    return draw_plane(Form(shape).outline().xy, [], size, sit=True)
+
+
+def canonical_leaves(shapes: list[str]) -> dict[str, Leaf]:
+    """Each shape's canonical form with its veins (numpy and shapely only: a side job's work,
+    50 ms a shape, 0.7 s for the gallery, which the window's first start waited for)."""
+    return {shape: Form(shape).leaf() for shape in shapes}
 
 
 def draw_leaf(leaf: Leaf, size: int, sit: bool = False) -> QImage:
@@ -132,7 +144,8 @@ class FormsPanel(QWidget):
         self.gallery.setSpacing(GALLERY_SPACING)  # rows apart: each name reads as its picture's
         self.gallery.setFixedHeight(2 * (THUMBNAIL + 30 + 2 * GALLERY_SPACING))
         for name in SHAPES:
-            item = QListWidgetItem(QIcon(QPixmap.fromImage(thumbnail(name))), name)
+            drawn = _thumbnails.get((name, THUMBNAIL)) or outline_thumbnail(name)
+            item = QListWidgetItem(QIcon(QPixmap.fromImage(drawn)), name)
             item.setData(Qt.ItemDataRole.UserRole, name)
             item.setToolTip(f"{name}: {definition(name)}")
             self.gallery.addItem(item)
@@ -224,6 +237,19 @@ class FormsPanel(QWidget):
         self._timer.stop()  # the first shape is selected, not chosen
         self._picked = False
         self._describe()
+
+    def missing_veins(self) -> list[str]:
+        """The shapes whose thumbnails show their outline alone."""
+        return [name for name in SHAPES if (name, THUMBNAIL) not in _thumbnails]
+
+    def show_veins(self, leaves: dict[str, Leaf]) -> None:
+        """Redraw the thumbnails of `leaves` (shape: canonical form) with their veins."""
+        for row in range(self.gallery.count()):
+            item = self.gallery.item(row)
+            leaf = leaves.get(item.data(Qt.ItemDataRole.UserRole))
+            if leaf is not None:
+                image = thumbnail(item.data(Qt.ItemDataRole.UserRole), leaf=leaf)
+                item.setIcon(QIcon(QPixmap.fromImage(image)))
 
     def show_pose_note(self, text: str) -> None:
         """A note under Fold, Curl and Wave on the chosen pose (none: hidden)."""
@@ -319,6 +345,8 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
     current sketch (one undo step). Also View > Compare forms and Help > Glossary of leaf
     terms (compare_view.py, glossary_view.py). Returns the dock's panel."""
     panel = FormsPanel()
+    if missing := panel.missing_veins():  # grown on a side lane: the window shows at once
+        window.worker.start(THUMBNAILS, canonical_leaves, missing).on_done(panel.show_veins)
     session = window.session
     made = {"serial": None}  # the document the gallery made last
 

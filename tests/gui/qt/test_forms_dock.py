@@ -3,15 +3,18 @@ document (an editable sketch, one undo step), veins grown in the current outline
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 import pytest
+from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QDockWidget
 
-from leafstudio.forms import SHAPES
+from leafstudio.forms import SHAPES, Form
 from leafstudio.gui.qt import forms_dock
 from leafstudio.gui.qt.forms_dock import FormsPanel, leaf_sketch, thumbnail
 from leafstudio.model import Leaf
-from tests.gui.qt.conftest import wait_result
+from tests.gui.qt.conftest import WAIT_MS, close_window, image_pixels, make_window, wait_result
 
 
 @pytest.fixture
@@ -29,6 +32,31 @@ def test_every_shape_has_a_thumbnail_drawn_once(qtbot):
     widget = FormsPanel()
     qtbot.addWidget(widget)
     assert widget.gallery.count() == len(SHAPES)
+
+
+def test_a_new_window_grows_the_gallerys_veins_off_the_main_thread(qtbot, tmp_path, monkeypatch):
+    """The gallery opens with each form's outline and shows its veins once a side lane has grown
+    them (0.7 s the window's first start waited for on the main thread)."""
+    monkeypatch.setattr(forms_dock, "_thumbnails", {})  # as in a new process
+    growers = []
+    grow = Form.leaf
+    monkeypatch.setattr(
+        Form, "leaf", lambda form: growers.append(threading.get_ident()) or grow(form)
+    )
+    window = make_window(qtbot, tmp_path / "settings.ini")
+    gallery = window.forms_panel.gallery
+    qtbot.waitUntil(lambda: not window.forms_panel.missing_veins(), timeout=WAIT_MS)
+    qtbot.waitUntil(lambda: window.worker.is_idle(), timeout=WAIT_MS)
+    assert len(growers) == len(SHAPES) and threading.get_ident() not in growers
+    for row in range(gallery.count()):
+        item = gallery.item(row)
+        shown = item.icon().pixmap(forms_dock.THUMBNAIL).toImage()
+        veined = thumbnail(item.data(Qt.ItemDataRole.UserRole))
+        assert np.array_equal(image_pixels(shown), image_pixels(veined))
+        assert not np.array_equal(
+            image_pixels(shown), image_pixels(forms_dock.outline_thumbnail(item.text()))
+        )
+    close_window(window)
 
 
 def test_each_choice_shows_its_definition(qtbot):
