@@ -7,9 +7,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import shapely
+from shapely import affinity
 
 from leafstudio.forms import make_form
-from leafstudio.sources.leafends import Midline, notch_depths
+from leafstudio.sources.leafends import Midline, _reflect_iou, notch_depths
 from leafstudio.sources.photo import leaf_from_photo
 from tests.photos import form_photo, leaf_frame_match
 
@@ -140,3 +142,20 @@ def test_a_petiole_the_openings_miss_is_found_along_the_midline(shape, petiole, 
     assert found.petiole and found.base_cue == "petiole"
     assert np.linalg.norm(found.pixel_from_world @ [0, 0, 1] - base) < 0.025 * pixels_long
     assert iou(Polygon(found.outline_px), known) >= 0.97
+
+
+@pytest.mark.parametrize("shape", ["ovate", "cordate", "sagittate"])
+def test_the_mirror_score_is_the_iou_of_the_outline_and_its_reflection(shape):
+    """The midline's score (IoU from the intersection alone: the union's area is A + B - I)
+    equals shapely's intersection over union, for axes on and off the blade's midline."""
+    polygon = shapely.Polygon(make_form(shape, margin="serrate").boundary[:, :2]).buffer(0)
+    centre = np.array(polygon.centroid.coords[0])
+    for angle, shift in [(0.0, 0.0), (0.4, 0.02), (1.3, -0.05), (2.9, 0.1)]:
+        normal = np.array([-np.sin(angle), np.cos(angle)])
+        x0, y0 = centre + shift * normal
+        c, s = np.cos(2 * angle), np.sin(2 * angle)
+        mirrored = affinity.affine_transform(
+            polygon, [c, s, s, -c, x0 - c * x0 - s * y0, y0 - s * x0 + c * y0]
+        )
+        iou = polygon.intersection(mirrored).area / polygon.union(mirrored).area
+        assert _reflect_iou(polygon, centre, angle, shift) == pytest.approx(iou, abs=1e-12)
