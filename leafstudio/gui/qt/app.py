@@ -71,7 +71,6 @@ def run_app(path: str | None = None, screenshot: str | None = None, lesson: bool
 
     from leafstudio.gui.qt.main_window import MainWindow  # Qt: after the display check
     from leafstudio.gui.qt.viewport import grab_window  # Qt: after the display check
-    from leafstudio.gui.qt.worker import GALLERY  # Qt: after the display check
 
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("LeafStudio")
@@ -105,7 +104,7 @@ def run_app(path: str | None = None, screenshot: str | None = None, lesson: bool
     if screenshot is not None:
 
         def grab(*_: object) -> None:
-            if not window.worker.is_idle(GALLERY):  # the Forms gallery's veins still growing
+            if window.forms_panel.veins_due():  # the Forms gallery's veins still to come
                 QTimer.singleShot(50, grab)
                 return
             app.processEvents()

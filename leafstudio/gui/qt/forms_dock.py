@@ -12,6 +12,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable
 from dataclasses import replace
+from functools import partial
 
 import numpy as np
 from PySide6.QtCore import QSize, Qt, QTimer, Signal
@@ -39,10 +40,12 @@ from leafstudio.forms.glossary import COMPARISONS
 from leafstudio.forms.make import SIDE_ON
 from leafstudio.forms.terms import APEXES, DEFAULT_LOBES, MARGINS, RELIEF, TOOTHED, USER_BASES
 from leafstudio.gui.model.curves import closed_curve
+from leafstudio.gui.model.jobs import Run
 from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.gui.qt.compare_view import FIRST, compare_actions
 from leafstudio.gui.qt.glossary_view import glossary_actions
 from leafstudio.gui.qt.leaf_picture import draw_plane
+from leafstudio.gui.qt.turns import later
 from leafstudio.model import Leaf
 
 THUMBNAIL = 84  # pixels
@@ -143,6 +146,7 @@ class FormsPanel(QWidget):
         self.gallery.setMovement(QListView.Movement.Static)
         self.gallery.setSpacing(GALLERY_SPACING)  # rows apart: each name reads as its picture's
         self.gallery.setFixedHeight(2 * (THUMBNAIL + 30 + 2 * GALLERY_SPACING))
+        self._veins_due = 0  # thumbnails waiting for their veins (grow_veins)
         for name in SHAPES:
             drawn = _thumbnails.get((name, THUMBNAIL)) or outline_thumbnail(name)
             item = QListWidgetItem(QIcon(QPixmap.fromImage(drawn)), name)
@@ -242,14 +246,34 @@ class FormsPanel(QWidget):
         """The shapes whose thumbnails show their outline alone."""
         return [name for name in SHAPES if (name, THUMBNAIL) not in _thumbnails]
 
+    def grow_veins(self, start: Run) -> None:
+        """Grow the veins of the thumbnails that lack them as a side job (`start`: the worker's,
+        off the main thread: 0.7 s at a first start) and draw them as they come (show_veins)."""
+        if missing := self.missing_veins():
+            self._veins_due = len(missing)
+            job = start(THUMBNAILS, canonical_leaves, missing)
+            job.on_done(self.show_veins).on_failed(lambda _exc: self._veins_drawn(everything=True))
+
+    def veins_due(self) -> bool:
+        """Whether thumbnails still wait for their veins (grown or drawn)."""
+        return self._veins_due > 0
+
     def show_veins(self, leaves: dict[str, Leaf]) -> None:
-        """Redraw the thumbnails of `leaves` (shape: canonical form) with their veins."""
+        """Redraw the thumbnails of `leaves` (shape: canonical form) with their veins, one per
+        turn of the event loop (all 14 at once held the main thread 85 ms at a first start)."""
+        self._veins_due = len(leaves)
         for row in range(self.gallery.count()):
             item = self.gallery.item(row)
-            leaf = leaves.get(item.data(Qt.ItemDataRole.UserRole))
-            if leaf is not None:
-                image = thumbnail(item.data(Qt.ItemDataRole.UserRole), leaf=leaf)
-                item.setIcon(QIcon(QPixmap.fromImage(image)))
+            shape = item.data(Qt.ItemDataRole.UserRole)
+            if shape in leaves:
+                later(self, partial(self._draw_thumbnail, item, shape, leaves[shape]))
+
+    def _draw_thumbnail(self, item: QListWidgetItem, shape: str, leaf: Leaf) -> None:
+        item.setIcon(QIcon(QPixmap.fromImage(thumbnail(shape, leaf=leaf))))
+        self._veins_drawn()
+
+    def _veins_drawn(self, everything: bool = False) -> None:
+        self._veins_due = 0 if everything else max(0, self._veins_due - 1)
 
     def show_pose_note(self, text: str) -> None:
         """A note under Fold, Curl and Wave on the chosen pose (none: hidden)."""
@@ -345,8 +369,7 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
     current sketch (one undo step). Also View > Compare forms and Help > Glossary of leaf
     terms (compare_view.py, glossary_view.py). Returns the dock's panel."""
     panel = FormsPanel()
-    if missing := panel.missing_veins():  # grown on a side lane: the window shows at once
-        window.worker.start(THUMBNAILS, canonical_leaves, missing).on_done(panel.show_veins)
+    panel.grow_veins(window.worker.start)  # off the main thread: the window shows at once
     session = window.session
     made = {"serial": None}  # the document the gallery made last
 

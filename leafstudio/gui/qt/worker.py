@@ -49,7 +49,6 @@ SHUTDOWN_WAIT_MS = 100  # the longest closing waits for a running job to stop (s
 # software OpenGL's threads), stretching a 45 ms render to 100-150 ms while K changed on a
 # 2M-point scan; the processes a lane starts inherit it (the reading child, compile workers)
 LANE_NICENESS = 10
-GALLERY = "gallery"  # the lane growing the Forms gallery's veins (forms_dock.py)
 LANES = {
     PIPELINE: "pipeline",
     "open": "side",
@@ -57,7 +56,7 @@ LANES = {
     "poisson": "side",
     "texture": "side",
     "export": "export",  # files written off the main thread (exports.py), never behind a scan
-    "thumbnails": GALLERY,  # the Forms gallery's veins at a first start, never behind a file
+    "thumbnails": "gallery",  # the Forms gallery's veins at a first start, never behind a file
 }
 
 
