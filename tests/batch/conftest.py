@@ -1,4 +1,4 @@
-"""Batch tests' fixtures: worker processes kept for a test file (tests/batch/pools.py)."""
+"""Batch tests' fixtures: worker processes kept for the session (tests/batch/pools.py)."""
 
 from __future__ import annotations
 
@@ -10,9 +10,10 @@ import pytest
 from tests.batch.pools import use_warm_pools
 
 
-@pytest.fixture(scope="module")
-def module_pools() -> Iterator[dict[int, ProcessPoolExecutor]]:
-    """The module's kept worker pools, ended after its last test."""
+@pytest.fixture(scope="session")
+def kept_pools() -> Iterator[dict[int, ProcessPoolExecutor]]:
+    """The kept worker pools, shared by the batch test files a pytest process runs, ended after
+    its last test: each file started its own before (5-10 s of spawned imports each)."""
     pools: dict[int, ProcessPoolExecutor] = {}
     yield pools
     for pool in pools.values():
@@ -20,6 +21,6 @@ def module_pools() -> Iterator[dict[int, ProcessPoolExecutor]]:
 
 
 @pytest.fixture
-def warm_pools(monkeypatch, module_pools) -> None:
-    """Batches in this test run on the module's kept worker processes (see the module doc)."""
-    use_warm_pools(monkeypatch, module_pools)
+def warm_pools(monkeypatch, kept_pools) -> None:
+    """Batches in this test run on the session's kept worker processes (tests/batch/pools.py)."""
+    use_warm_pools(monkeypatch, kept_pools)

@@ -1,11 +1,12 @@
-"""Worker processes kept for a batch test file (the `warm_pools` fixture, tests/batch/conftest.py):
-each batch runs on workers started once for the file, not spawned and imported anew per batch.
+"""Worker processes kept for the batch tests (the `warm_pools` fixture, tests/batch/conftest.py):
+each batch runs on workers started once per pytest process, not spawned and imported anew per
+batch or per file.
 
 A spawned worker imports numpy, numba and the pipeline and loads the compiled kernels before its
 first row: 4-8 s per batch on this 2-core machine, most of a small batch's time. The fixture
 replaces the batch's LocalPool by WarmPool, which is LocalPool itself (the same compile check,
 spawn context, initializer, SIGINT handling, job submission and outcome) except that its
-ProcessPoolExecutor is kept across the file's batches, one per worker count. Rows and jobs still
+ProcessPoolExecutor is kept across the session's batches, one per worker count. Rows and jobs still
 cross a process boundary and run in pinned workers. Tests whose point is a fresh or dying process
 (a killed batch, a plain script, the console script) do not use it.
 """

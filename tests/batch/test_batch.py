@@ -1,9 +1,9 @@
 """leafstudio batch: failed rows beside good ones, resume after a kill, 1 and 2 workers alike, a
 real Dask scheduler and worker, and no progress bar when stderr is piped.
 
-In-process batches run on worker processes kept for this file (`warm_pools`, tests/batch/pools.py):
-a test here checks rows, tables and meshes, not a worker's start; the killed batch and the
-progress bar run `leafstudio` itself, in a new process with its own workers."""
+In-process batches run on worker processes kept for the session (`warm_pools`,
+tests/batch/pools.py): a test here checks rows, tables and meshes, not a worker's start; the killed
+batch and the progress bar run `leafstudio` itself, in a new process with its own workers."""
 
 from __future__ import annotations
 
@@ -205,11 +205,11 @@ def test_json_lines_and_parquet_tables_and_no_meshes(tmp_path, leaves):
 
 
 @pytest.fixture(scope="module")
-def clean(tmp_path_factory, scans, module_pools) -> Path:
+def clean(tmp_path_factory, scans, kept_pools) -> Path:
     """A clean batch of the scans on one worker."""
     out = tmp_path_factory.mktemp("clean")
     with pytest.MonkeyPatch.context() as monkeypatch:
-        use_warm_pools(monkeypatch, module_pools)
+        use_warm_pools(monkeypatch, kept_pools)
         rows = list(ls.batch([scans], ls.Params(grid=32), out, scans=True, jobs=1))
     assert len(rows) == 6 and all(r["status"] == "ok" for r in rows), rows
     assert all(0 <= r["scan_mean"] < 0.05 * r["length"] for r in rows)
