@@ -119,8 +119,11 @@ class Sheet:
             parts.append(spline(part))
             progress.report(k / CHUNKS, UNROLLING)
         at = np.vstack(parts).reshape(len(us), len(vs), 3)
-        # the spline sampled and interpolated bicubically: the same surface to 1e-5 of the
-        # length, evaluated in constant time per point (the spline's own sum is over every centre)
+        # the spline sampled and interpolated bicubically, evaluated in constant time per point
+        # (the spline's own sum is over every centre); at its centres it departs from the spline
+        # by 1.2e-3 of the blade's size on average (soybean pot1_1; 1.5e-2 at most, where the
+        # spline bends sharply), but sampling twice as finely moved no shared scan's fit by more
+        # than 0.01% of the length (mean of the eight 0.453% -> 0.452%, at 4 times the cost)
         pieces = tuple(RectBivariateSpline(us, vs, at[:, :, k]) for k in range(3))
         object.__setattr__(self, "_pieces", pieces)
         object.__setattr__(self, "_guess", (cKDTree(at.reshape(-1, 3)), grid))
