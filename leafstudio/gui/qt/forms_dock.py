@@ -64,7 +64,9 @@ def thumbnail(shape: str, size: int = THUMBNAIL, leaf: Leaf | None = None) -> QI
     under it reads as its own; drawn once per shape and size, then cached."""
     key = (shape, size)
     if key not in _thumbnails:
-        _thumbnails[key] = draw_leaf(leaf or Form(shape).leaf(), size, sit=True)
+        _thumbnails[key] = draw_leaf(
+            leaf if leaf is not None else Form(shape).leaf(), size, sit=True
+        )
     return _thumbnails[key]
 
 
@@ -146,7 +148,7 @@ class FormsPanel(QWidget):
         self.gallery.setMovement(QListView.Movement.Static)
         self.gallery.setSpacing(GALLERY_SPACING)  # rows apart: each name reads as its picture's
         self.gallery.setFixedHeight(2 * (THUMBNAIL + 30 + 2 * GALLERY_SPACING))
-        self._veins_due = 0  # thumbnails waiting for their veins (grow_veins)
+        self._growing = False  # the thumbnails' veins are being grown (grow_veins)
         for name in SHAPES:
             drawn = _thumbnails.get((name, THUMBNAIL)) or outline_thumbnail(name)
             item = QListWidgetItem(QIcon(QPixmap.fromImage(drawn)), name)
@@ -250,30 +252,26 @@ class FormsPanel(QWidget):
         """Grow the veins of the thumbnails that lack them as a side job (`start`: the worker's,
         off the main thread: 0.7 s at a first start) and draw them as they come (show_veins)."""
         if missing := self.missing_veins():
-            self._veins_due = len(missing)
+            self._growing = True
             job = start(THUMBNAILS, canonical_leaves, missing)
-            job.on_done(self.show_veins).on_failed(lambda _exc: self._veins_drawn(everything=True))
+            job.on_done(self.show_veins).on_failed(lambda _exc: setattr(self, "_growing", False))
 
     def veins_due(self) -> bool:
-        """Whether thumbnails still wait for their veins (grown or drawn)."""
-        return self._veins_due > 0
+        """Whether thumbnails still wait for their veins (grown or drawn; not after a failure)."""
+        return self._growing and bool(self.missing_veins())
 
     def show_veins(self, leaves: dict[str, Leaf]) -> None:
         """Redraw the thumbnails of `leaves` (shape: canonical form) with their veins, one per
         turn of the event loop (all 14 at once held the main thread 85 ms at a first start)."""
-        self._veins_due = len(leaves)
         for row in range(self.gallery.count()):
             item = self.gallery.item(row)
             shape = item.data(Qt.ItemDataRole.UserRole)
             if shape in leaves:
                 later(self, partial(self._draw_thumbnail, item, shape, leaves[shape]))
 
-    def _draw_thumbnail(self, item: QListWidgetItem, shape: str, leaf: Leaf) -> None:
+    @staticmethod
+    def _draw_thumbnail(item: QListWidgetItem, shape: str, leaf: Leaf) -> None:
         item.setIcon(QIcon(QPixmap.fromImage(thumbnail(shape, leaf=leaf))))
-        self._veins_drawn()
-
-    def _veins_drawn(self, everything: bool = False) -> None:
-        self._veins_due = 0 if everything else max(0, self._veins_due - 1)
 
     def show_pose_note(self, text: str) -> None:
         """A note under Fold, Curl and Wave on the chosen pose (none: hidden)."""
