@@ -250,8 +250,9 @@ class FormsPanel(QWidget):
 
     def grow_veins(self, start: Run) -> None:
         """Grow the veins of the thumbnails that lack them as a side job (`start`: the worker's,
-        off the main thread: 0.7 s at a first start) and draw them as they come (show_veins)."""
-        if missing := self.missing_veins():
+        off the main thread: 0.7 s at a first start) and draw them as they come (show_veins);
+        nothing while they grow, or once they are all drawn."""
+        if not self._growing and (missing := self.missing_veins()):
             self._growing = True
             job = start(THUMBNAILS, canonical_leaves, missing)
             job.on_done(self.show_veins).on_failed(lambda _exc: setattr(self, "_growing", False))
@@ -367,7 +368,10 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
     current sketch (one undo step). Also View > Compare forms and Help > Glossary of leaf
     terms (compare_view.py, glossary_view.py). Returns the dock's panel."""
     panel = FormsPanel()
-    panel.grow_veins(window.worker.start)  # off the main thread: the window shows at once
+    # the gallery's veins grow off the main thread once the first leaf is on screen (or could
+    # not be): started with the window, they held up its first result by 0.5-1 s (the GIL)
+    for shown in (window.result_shown, window.failure_shown):
+        shown.connect(lambda *_: panel.grow_veins(window.worker.start))
     session = window.session
     made = {"serial": None}  # the document the gallery made last
 
