@@ -150,7 +150,9 @@ class FormsPanel(QWidget):
         self.gallery.setFixedHeight(2 * (THUMBNAIL + 30 + 2 * GALLERY_SPACING))
         self._growing = False  # the thumbnails' veins are being grown (grow_veins)
         for name in SHAPES:
-            drawn = _thumbnails.get((name, THUMBNAIL)) or outline_thumbnail(name)
+            drawn = _thumbnails.get((name, THUMBNAIL))  # veined already (an earlier window)
+            if drawn is None:
+                drawn = outline_thumbnail(name)
             item = QListWidgetItem(QIcon(QPixmap.fromImage(drawn)), name)
             item.setData(Qt.ItemDataRole.UserRole, name)
             item.setToolTip(f"{name}: {definition(name)}")

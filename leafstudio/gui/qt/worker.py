@@ -56,7 +56,7 @@ LANES = {
     "poisson": "side",
     "texture": "side",
     "export": "export",  # files written off the main thread (exports.py), never behind a scan
-    "thumbnails": "gallery",  # the Forms gallery's veins at a first start, never behind a file
+    "thumbnails": "gallery",  # the Forms gallery's veins after a first result, never behind a file
 }
 
 
