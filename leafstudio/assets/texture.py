@@ -51,7 +51,7 @@ def outline_mask(plane: LeafPlane, pixels: int) -> np.ndarray:
     big = pixels * SUPERSAMPLE
     mask = Image.new("L", (big, big), 0)
     ImageDraw.Draw(mask).polygon([tuple(p) for p in _pixel(plane, plane.polygon, big)], fill=255)
-    return np.asarray(mask.resize((pixels, pixels), Image.Resampling.BOX))
+    return np.asarray(mask.reduce(SUPERSAMPLE))  # box average, 4 times cheaper than resize
 
 
 def _polyline_length(line: np.ndarray) -> float:
@@ -90,7 +90,7 @@ def vein_strokes(plane: LeafPlane, pixels: int) -> np.ndarray:
             r = max(widths[-1], 1.0) / 2
             x, y = px[-1]
             draw.ellipse([x - r, y - r, x + r, y + r], fill=255)
-    return np.asarray(image.resize((pixels, pixels), Image.Resampling.BOX))
+    return np.asarray(image.reduce(SUPERSAMPLE))
 
 
 def leaf_texture(plane: LeafPlane, pixels: int = TEXTURE_PIXELS, strokes: np.ndarray | None = None):
