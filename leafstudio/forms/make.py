@@ -189,14 +189,36 @@ class Form:
             rng,  # type: ignore[arg-type]
         )
 
-    def leaf(self) -> Leaf:
+    def leaf(self, blade: Leaf | None = None) -> Leaf:
         """The leaf: boundary and grown veins, with heights for the fold, curl and wave.
+
+        Parameters
+        ----------
+        blade : Leaf, optional
+            This form's flat blade (`blade()`), when the caller kept it: a change of pose alone
+            then grows no veins again (the Forms dock's pose sliders).
 
         Returns
         -------
         Leaf
             The (n, 3) outline and the veins (midrib first), in the forms' convention.
         """
+        blade = self.blade() if blade is None else blade
+        if self.fold == 0 and self.curl == 0 and self.roll == 0 and self.twist == 0:
+            return blade
+        # the leaf knows its pose: reconstruction runs on the flat blade and bends the mesh
+        # (core/bend.py), so no fold or curl stands it on edge; the veins are kept on the blade
+        half_width = float(np.abs(blade.boundary[:, 1]).max())  # the roll's share of a turn
+        pose = Pose(self.fold, self.curl, self.roll * np.pi / half_width, self.twist * np.pi)
+        return Leaf(pose.apply(blade.boundary), [pose.apply(v) for v in blade.veins], bend=pose)
+
+    def unposed(self) -> Form:
+        """This form without its fold, curl, roll and twist: the terms its blade depends on."""
+        return replace(self, fold=0.0, curl=0.0, roll=0.0, twist=0.0)
+
+    def blade(self) -> Leaf:
+        """The flat blade: the outline with its wave, and the veins grown in it (about 60 ms, the
+        growth most of it); `leaf()` poses it."""
         outline = self.outline()
         xy = outline.xy
         veins = grow_veins(
@@ -212,15 +234,8 @@ class Form:
         base = fit_base(xy, wave, 1.0)  # the wave's surface (the pipeline's b): veins ride on it
         if base is not None:
             veins = [np.column_stack([v[:, :2], v[:, 2] + base(v[:, :2])]) for v in veins]
-        flat = Leaf(np.column_stack([xy, wave]), veins)
-        if self.fold == 0 and self.curl == 0 and self.roll == 0 and self.twist == 0:
-            return Leaf(flat.boundary, _veins_on_blade(flat.boundary, flat.veins))
-        # the leaf knows its pose: reconstruction runs on the flat blade and bends the mesh
-        # (core/bend.py), so no fold or curl stands it on edge; the veins are kept on the blade
-        half_width = float(np.abs(xy[:, 1]).max())  # the roll's curvature: its share of a turn
-        pose = Pose(self.fold, self.curl, self.roll * np.pi / half_width, self.twist * np.pi)
-        veins = _veins_on_blade(flat.boundary, flat.veins)
-        return Leaf(pose.apply(flat.boundary), [pose.apply(v) for v in veins], bend=pose)
+        boundary = np.column_stack([xy, wave])
+        return Leaf(boundary, _veins_on_blade(boundary, veins))
 
     def _wave(self, outline: FormOutline) -> np.ndarray:
         """The margin's waves: WAVES_PER_SIDE along each half, fading to none at the base and
@@ -268,7 +283,7 @@ def _veins_on_blade(boundary: np.ndarray, veins: list[np.ndarray]) -> list[np.nd
     # a fold or curl that raises the margin higher than the blade is wide stands that plane on
     # edge to the blade: the outline there is the blade's side view (a fold's halves fall on
     # each other), and whole veins, often all, the midrib too, fell outside it
-    warnings.warn(f"{SIDE_ON}; lower the fold or curl", stacklevel=3)
+    warnings.warn(f"{SIDE_ON}; lower the fold or curl", stacklevel=4)  # blade's caller's caller
     region = shapely.Polygon(boundary[:, :2]).buffer(VEIN_SLACK)
     kept = [v[shapely.contains_xy(region, v[:, 0], v[:, 1])] for v in veins]
     return [v for v in kept if len(v) >= 2]

@@ -36,8 +36,12 @@ GRID = [
 def test_every_posed_form_keeps_its_midrib_and_all_its_veins(shape, aspect):
     flat = Form(shape, aspect=aspect).leaf()
     poses = [pose for s, a, pose in GRID if (s, a) == (shape, aspect)]
+    blades = {0.0: flat}  # the pose does not change the blade (Form.blade); the wave does
     for fold, curl, wave in poses:
-        leaf = Form(shape, aspect=aspect, fold=fold, curl=curl, wave=wave).leaf()
+        form = Form(shape, aspect=aspect, fold=fold, curl=curl, wave=wave)
+        if wave not in blades:
+            blades[wave] = form.unposed().blade()
+        leaf = form.leaf(blades[wave])
         assert len(leaf.veins) == len(flat.veins), (fold, curl, wave)
         midrib, flat_midrib = leaf.veins[0], flat.veins[0]
         # the same midrib, base to apex, only raised by the pose
@@ -101,3 +105,14 @@ def test_no_pose_warns_through_the_api():
         warnings.simplefilter("error")
         make_form("elliptic", fold=75.0)
         make_form("lanceolate", aspect=30.0, curl=1.0, fold=60.0)
+
+
+@pytest.mark.parametrize("terms", [dict(fold=60.0, curl=0.5), dict(roll=1.0, twist=0.3), {}])
+def test_a_form_posed_from_its_blade_is_the_form_made_whole(terms):
+    """Form.leaf(blade): the blade made once and posed (the Forms dock's pose sliders) is the
+    very leaf the form makes on its own."""
+    form = Form("ovate", margin="serrate", wave=0.02, **terms)
+    whole, posed = form.leaf(), form.leaf(form.unposed().blade())
+    assert np.array_equal(whole.boundary, posed.boundary) and whole.bend == posed.bend
+    assert len(whole.veins) == len(posed.veins)
+    assert all(map(np.array_equal, whole.veins, posed.veins))

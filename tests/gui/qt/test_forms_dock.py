@@ -214,3 +214,25 @@ def test_every_pose_the_dock_allows_is_shown_without_a_side_on_note(window, pane
     panel.fold.setValue(75.0)
     panel.choose_now()
     assert not panel.pose_note.isVisibleTo(panel)
+
+
+def test_a_pose_change_poses_the_blade_made_for_the_last_form(window, panel, qtbot, monkeypatch):
+    """Each change of a pose slider made the whole form again on the main thread, its veins
+    grown anew (about 60 ms a change); the dock now keeps the last blade and only poses it,
+    and a change of any other term grows the new form's veins."""
+    grown: list[Form] = []
+    blade = Form.blade
+    monkeypatch.setattr(Form, "blade", lambda form: grown.append(form) or blade(form))
+    panel.gallery.setCurrentRow(list(SHAPES).index("ovate"))
+    panel.choose_now()
+    for fold in (30.0, 60.0):
+        panel.fold.setValue(fold)
+        panel.choose_now()
+        assert window.session.leaf.bend.fold == fold
+    assert [f.shape for f in grown] == ["ovate"]  # the first choice's blade only
+    panel.margin.setCurrentText("serrate")
+    panel.choose_now()
+    assert len(grown) == 2 and grown[-1].margin == "serrate" and grown[-1].fold == 0
+    posed = grown[-1].with_(fold=60.0).leaf()
+    assert np.array_equal(window.session.leaf.boundary, posed.boundary)
+    assert all(map(np.array_equal, window.session.leaf.veins, posed.veins))
