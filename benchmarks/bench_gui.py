@@ -22,6 +22,9 @@ first render's shader set-up is not the file's). For each, the longest main-thre
 opens (from the open call until the app is idle with its leaf on screen and measured), while a
 layer is switched off and on, while K changes, and while the window closes during a computation
 (with the close call's time).
+`--forms` measures only the Forms dock: for a few shapes, the longest stall and main-thread CPU in
+one piece from choosing the form until its leaf is on screen and measured, then the same for a
+change of the fold slider (the blade kept, posed again).
 `LEAFSTUDIO_3D=opengl` measures the 3D view as pyvistaqt's QOpenGLWidget instead of the native
 window (gui/qt/native_view.py). Prints JSON. Timings here are shared-host figures: other work on
 the machine moves them; the main thread's CPU time in one piece is the figure load inflates least.
@@ -41,6 +44,7 @@ import numpy as np
 from PySide6.QtCore import QEventLoop, QSettings, Qt, QTimer
 from PySide6.QtWidgets import QApplication
 
+from leafstudio.forms import SHAPES
 from leafstudio.gui.qt.main_window import MainWindow
 from leafstudio.model import Params
 
@@ -363,6 +367,39 @@ def measure_start(settings: QSettings) -> dict:
     return report
 
 
+FORM_SHAPES = ("ovate", "cordate", "linear", "orbicular", "lanceolate")
+SHAPE_ROWS = {shape: row for row, shape in enumerate(SHAPES)}  # the gallery's rows
+
+
+def measure_forms(window: MainWindow) -> dict:
+    """The longest stall while a form is chosen in the Forms dock and shown, then while its fold
+    changes (`--forms`); the nested demo on screen first, as the app starts."""
+    meter, ms = StallMeter(), lambda seconds: round(1000 * seconds, 1)
+    panel = window.forms_panel
+    window.open_demo("nested")
+    wait_for(window.result_shown)
+    wait_until_idle(window)
+    meter.timer.start()
+    report = {}
+    for shape in FORM_SHAPES:
+        for what, change in (
+            ("choose", lambda shape=shape: panel.gallery.setCurrentRow(SHAPE_ROWS[shape])),
+            ("fold_40", lambda: panel.fold.setValue(40.0)),
+        ):
+            settle(window, meter)
+            meter.reset()
+            change()
+            panel.choose_now()
+            wait_for(window.result_shown)
+            settle(window, meter)
+            report[f"{shape}_{what}_max_stall_ms"] = ms(meter.worst())
+            report[f"{shape}_{what}_max_main_thread_cpu_in_one_piece_ms"] = ms(meter.busiest())
+        panel.fold.setValue(0.0)
+    meter.timer.stop()
+    window.session.history.set_clean()
+    return report
+
+
 def main() -> int:
     app = QApplication.instance() or QApplication(sys.argv[:1])
     report = {}
@@ -374,6 +411,10 @@ def main() -> int:
         window = MainWindow(settings)
         window.show()
         app.processEvents()
+        if "--forms" in sys.argv:  # the Forms dock only
+            print(json.dumps({"forms": measure_forms(window)}, indent=2))
+            window.close()
+            return 0
         if "--big" not in sys.argv:
             report = {f"grid_{grid}": measure(window, grid) for grid in GRIDS}
         window.session.history.set_clean()

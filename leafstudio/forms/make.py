@@ -218,7 +218,16 @@ class Form:
 
     def blade(self) -> Leaf:
         """The flat blade: the outline with its wave, and the veins grown in it (about 60 ms, the
-        growth most of it); `leaf()` poses it."""
+        growth most of it); `leaf()` poses it. Warns (SIDE_ON) as `blade_and_note` notes."""
+        blade, note = self.blade_and_note()
+        if note:
+            warnings.warn(note, stacklevel=3)  # the caller of leaf(), or of blade()
+        return blade
+
+    def blade_and_note(self) -> tuple[Leaf, str]:
+        """The flat blade (`blade`), and the side-on note when its veins had to be clipped to
+        the outline in the blade's own plane ("" if none): said, not warned, for a caller off
+        the main thread (warnings.catch_warnings is not thread-safe)."""
         outline = self.outline()
         xy = outline.xy
         veins = grow_veins(
@@ -235,7 +244,8 @@ class Form:
         if base is not None:
             veins = [np.column_stack([v[:, :2], v[:, 2] + base(v[:, :2])]) for v in veins]
         boundary = np.column_stack([xy, wave])
-        return Leaf(boundary, _veins_on_blade(boundary, veins))
+        veins, side_on = _veins_on_blade(boundary, veins)
+        return Leaf(boundary, veins), f"{SIDE_ON}; lower the fold or curl" if side_on else ""
 
     def _wave(self, outline: FormOutline) -> np.ndarray:
         """The margin's waves: WAVES_PER_SIDE along each half, fading to none at the base and
@@ -271,22 +281,22 @@ def seen_on_edge(leaf: Leaf) -> bool:
     return len(veins_inside_outline(leaf.boundary, leaf.veins, -VEIN_SLACK)) < len(leaf.veins)
 
 
-def _veins_on_blade(boundary: np.ndarray, veins: list[np.ndarray]) -> list[np.ndarray]:
+def _veins_on_blade(boundary: np.ndarray, veins: list[np.ndarray]) -> tuple[list[np.ndarray], bool]:
     """The posed veins' points inside the posed outline as the pipeline sees it, on the
     boundary's PCA plane, when that outline holds every vein; else inside the outline before
-    posing (the blade's own plane, z = 0, where the pose only added heights)."""
+    posing (the blade's own plane, z = 0, where the pose only added heights), and True: the
+    plane stands on edge to the blade (SIDE_ON)."""
     seen = veins_inside_outline(boundary, veins, -VEIN_SLACK)
     if len(seen) == len(veins):
         # a fold, curl or wave tilts the boundary's plane: a vein end near the margin can fall
         # outside the outline there, and the pipeline refuses such a vein
-        return seen
+        return seen, False
     # a fold or curl that raises the margin higher than the blade is wide stands that plane on
     # edge to the blade: the outline there is the blade's side view (a fold's halves fall on
     # each other), and whole veins, often all, the midrib too, fell outside it
-    warnings.warn(f"{SIDE_ON}; lower the fold or curl", stacklevel=4)  # blade's caller's caller
     region = shapely.Polygon(boundary[:, :2]).buffer(VEIN_SLACK)
     kept = [v[shapely.contains_xy(region, v[:, 0], v[:, 1])] for v in veins]
-    return [v for v in kept if len(v) >= 2]
+    return [v for v in kept if len(v) >= 2], True
 
 
 def make_form(shape: str = "elliptic", **terms: Any) -> Leaf:

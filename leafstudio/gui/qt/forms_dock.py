@@ -9,7 +9,6 @@ cached for the process.
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable
 from dataclasses import replace
 from functools import partial
@@ -37,10 +36,9 @@ from leafstudio.core.bend import flat_leaf
 from leafstudio.core.prepare.polygon import ring_crossings
 from leafstudio.forms import SHAPES, VENATION_KINDS, Form, definition, grow_veins
 from leafstudio.forms.glossary import COMPARISONS
-from leafstudio.forms.make import SIDE_ON
 from leafstudio.forms.terms import APEXES, DEFAULT_LOBES, MARGINS, RELIEF, TOOTHED, USER_BASES
 from leafstudio.gui.model.curves import closed_curve
-from leafstudio.gui.model.jobs import Run
+from leafstudio.gui.model.jobs import Run, describe
 from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.gui.qt.compare_view import FIRST, compare_actions
 from leafstudio.gui.qt.glossary_view import glossary_actions
@@ -55,6 +53,7 @@ CORNER_TURN = 0.35  # radians: outline points turning this sharply (tooth tips, 
 VEIN_CONTROL = 8
 DEBOUNCE_MS = 250
 THUMBNAILS = "thumbnails"  # the worker's job kind (and lane) growing the gallery's veins
+FORM = "form"  # the job kind growing a chosen form's blade (its own lane: never behind those)
 _thumbnails: dict[tuple[str, int], QImage] = {}
 
 
@@ -73,6 +72,13 @@ def thumbnail(shape: str, size: int = THUMBNAIL, leaf: Leaf | None = None) -> QI
 def outline_thumbnail(shape: str, size: int = THUMBNAIL) -> QImage:
     """The shape's thumbnail until its veins are grown: the outline alone (1-2 ms a shape)."""
     return draw_plane(Form(shape).outline().xy, [], size, sit=True)
+
+
+def grow_blade(form: Form) -> tuple[Form, Leaf, str]:
+    """`form` without its pose, its blade and side-on note (Form.blade_and_note): run on the
+    worker's lane, the veins' growth off the main thread."""
+    unposed = form.unposed()
+    return (unposed, *unposed.blade_and_note())
 
 
 def canonical_leaves(shapes: list[str]) -> dict[str, Leaf]:
@@ -376,33 +382,40 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
         shown.connect(lambda *_: panel.grow_veins(window.worker.start))
     session = window.session
     made = {"serial": None}  # the document the gallery made last
-    # the last blade made, its form without a pose and its side-on note: a pose slider's
-    # change poses it (a few ms) instead of growing its veins again (60 ms on this thread)
+    # the last blade grown (its form without a pose, the blade, its side-on note), and the form
+    # waiting for its blade: a blade grows on a lane (60-100 ms, the main thread's before), and
+    # a pose slider's change only poses the last one (a few ms)
     kept: dict[str, tuple[Form, Leaf, str]] = {}
+    waiting: dict[str, Form] = {}
 
-    def blade_of(form: Form) -> tuple[Leaf, str]:
-        unposed = form.unposed()
-        if "blade" not in kept or kept["blade"][0] != unposed:
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always")
-                blade = unposed.blade()
-            side_on = [str(w.message) for w in caught if str(w.message).startswith(SIDE_ON)]
-            kept["blade"] = (unposed, blade, side_on[0] if side_on else "")
-        return kept["blade"][1:]
+    def show(form: Form) -> None:
+        _unposed, blade, side_on = kept["blade"]
+        leaf = form.leaf(blade)
+        panel.show_pose_note(side_on)
+        session.new_document(leaf, leaf_sketch(leaf, form.teeth_count), f"{form.shape} form")
+        made["serial"] = session.state.serial
+
+    def grown(form: Form, blade: tuple[Form, Leaf, str]) -> None:
+        kept["blade"] = blade
+        if waiting.get("form") is form:
+            del waiting["form"]
+            show(form)
+
+    def failed(form: Form, exc: BaseException) -> None:
+        if waiting.get("form") is form:
+            del waiting["form"]
+            window.show_error("Forms", describe(exc))
 
     def choose(form: Form, picked: bool) -> None:
         if not picked and session.state.serial != made["serial"]:
             return  # a term changed while another document is open: only its definition shows
-        try:
-            blade, side_on = blade_of(form)
-            leaf = form.leaf(blade)
-        except Exception as exc:  # shown in the window, never a traceback
-            window.show_error("Forms", str(exc))
+        if "blade" in kept and kept["blade"][0] == form.unposed():
+            waiting.pop("form", None)  # a blade still growing is another form's
+            show(form)
             return
-        panel.show_pose_note(side_on)
-        title = f"{form.shape} form"
-        session.new_document(leaf, leaf_sketch(leaf, form.teeth_count), title)
-        made["serial"] = session.state.serial
+        waiting["form"] = form
+        job = window.worker.start(FORM, grow_blade, form)
+        job.on_done(partial(grown, form)).on_failed(partial(failed, form))
 
     def grow(venation: str) -> None:
         sketch = session.editable_sketch()
