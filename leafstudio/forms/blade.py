@@ -140,6 +140,7 @@ class Blade:
         step = ring.length / max(int(ring.length / 0.002), 64)
         dense = shapely.get_coordinates(ring.segmentize(step))
         self.tree = cKDTree(dense)
+        self.spacing = step  # no margin point farther than half this from a point of the tree
         self.area = poly.area
 
     def __getattr__(self, name: str):
@@ -148,6 +149,19 @@ class Blade:
     def gap(self, pts: np.ndarray) -> np.ndarray:
         """(n,) distance from each point to the margin."""
         return self.tree.query(np.asarray(pts, dtype=float))[0]
+
+    def radius_below(self, across: int = 9) -> float:
+        """A radius the blade's inscribed circle has at least: the largest distance to the
+        margin from the points of an `across` x `across` grid over its box that lie inside, less
+        half the tree's spacing (`gap` is never more than that over the true distance); 0 for a
+        blade with holes, whose margin the tree does not hold."""
+        if self.poly.interiors:
+            return 0.0
+        x0, y0, x1, y1 = self.poly.bounds
+        gx, gy = np.meshgrid(np.linspace(x0, x1, across), np.linspace(y0, y1, across))
+        points = np.column_stack([gx.ravel(), gy.ravel()])
+        points = points[shapely.contains_xy(self.poly, points[:, 0], points[:, 1])]
+        return float(self.gap(points).max()) - self.spacing / 2 if len(points) else 0.0
 
     def inside(self, pts: np.ndarray, margin: float = 0.0) -> np.ndarray:
         pts = np.asarray(pts, dtype=float)

@@ -13,7 +13,9 @@ import shapely
 from shapely.geometry import Polygon
 
 from leafstudio.forms import Form
+from leafstudio.forms.blade import Blade
 from leafstudio.forms.growth import NARROW_STEPS, STEP, growth_step
+from leafstudio.forms.terms import SHAPES
 
 
 @pytest.mark.parametrize("shape", ["linear", "elliptic", "lanceolate"])
@@ -52,3 +54,14 @@ def test_the_step_changes_only_for_narrow_blades():
     half = shapely.maximum_inscribed_circle(narrow).length
     assert growth_step(narrow) == pytest.approx(half / NARROW_STEPS, rel=0.05)
     assert np.isclose(half, 0.02, rtol=0.1)  # 1 / 25 wide
+
+
+@pytest.mark.parametrize("aspect", [None, 8.0, 30.0])
+def test_the_blades_quick_radius_is_never_more_than_its_inscribed_circles(aspect):
+    """growth_step skips the inscribed circle when Blade.radius_below already shows the blade
+    broad enough: that bound must never pass the circle's radius."""
+    for shape in SHAPES:
+        outline = Form(shape, aspect=aspect).outline().xy
+        blade = Blade(Polygon(outline))
+        exact = shapely.maximum_inscribed_circle(blade.poly, 1e-6).length
+        assert 0 < blade.radius_below() <= exact, shape
