@@ -52,10 +52,10 @@ def measure(app: QApplication, grid: int, folder: Path) -> dict:
     window.show()
     window.panel.set_params(Params(k=3, grid=grid))
     window.open_demo("nested")
-    _wait(app, lambda: window.outcome is not None and window.worker.is_idle())
+    _wait(app, lambda: window.session.shown.outcome is not None and window.worker.is_idle())
     window.coloring.setCurrentIndex(window.coloring.findData(TEXTURE))
     _wait(app, lambda: window.viewport.texture_key is not None and window.worker.is_idle())
-    result = window.result
+    result = window.session.result
     steps: dict[str, list[tuple[float, float]]] = {"image": [], "set_texture": [], "render": []}
     for i in range(REPEATS):
         image = _timed(steps["image"], texture_image, result, "auto")
