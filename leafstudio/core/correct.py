@@ -68,6 +68,7 @@ import scipy.special
 from numba import njit
 from scipy.spatial import cKDTree
 
+from leafstudio.core.bending import Bending, lattice, least_bending
 from leafstudio.core.buckets import kernel_array
 from leafstudio.core.prepare.polygon import thin_curve
 from leafstudio.core.surface import HeightSurface
@@ -265,6 +266,7 @@ def reachable(
     relief: float,
     length: float,
     stretch: np.ndarray | float = 1.0,
+    settle: bool = True,
 ) -> np.ndarray:
     """(m,) bool: the vein points the spline is made to pass through.
 
@@ -272,10 +274,12 @@ def reachable(
     (|r| > relief · T: a vein raised next to the margin, which z = b there cannot follow without
     a spike), and a point in the margin band (T < BAND) that is already within CLOSE_ENOUGH of the
     length (a thin tip's midrib: pinning it there only sharpens the tip), over its `stretch`
-    (onto_veins).
+    (onto_veins); unless not `settle` (a correction chosen for the whole surface's bending,
+    bending.py, moves the surface there too).
     """
     spike = np.abs(residual) > relief * taper
-    settled = (taper < BAND) & (np.abs(residual) <= CLOSE_ENOUGH * length / stretch)
+    close = CLOSE_ENOUGH * length / stretch if settle else -1.0
+    settled = (taper < BAND) & (np.abs(residual) <= close)
     return (taper > 0) & ~spike & ~settled
 
 
@@ -285,9 +289,11 @@ def fit_correction(
     residual: np.ndarray,
     length: float,
     stretch: np.ndarray | float = 1.0,
+    bending: Bending | None = None,
 ) -> VeinCorrection | None:
     """The spline c with T_i c(v_i) within TOLERANCE of r_i at the vein points (BAND_TOLERANCE
-    in the margin band; over their `stretch`, onto_veins), bending least.
+    in the margin band; over their `stretch`, onto_veins), bending least: c itself, and then,
+    given `bending`, the whole surface (bending.py).
 
     Parameters
     ----------
@@ -301,6 +307,8 @@ def fit_correction(
         The leaf's length (λ and the Hessian's cut-off scale with it).
     stretch : (m,) float array or float, default 1
         How many times a distance off the surface grows at each point when the blade is bent.
+    bending : Bending, optional
+        The lattice of grid nodes over which the surface's bending is summed (bending.py).
 
     Returns
     -------
@@ -328,7 +336,13 @@ def fit_correction(
     # that is shrunk once more (a rolled and folded deltoid's veins 1.04e-3 of the length off)
     tolerance = np.where(taper < BAND, BAND_TOLERANCE / stretch, TOLERANCE)
     slack = tolerance * length / (np.maximum(taper, 1e-3) * stretch)
-    weights = spline_of(_within(target, slack, spline_of))
+    values = _within(target, slack, spline_of)
+    if bending is not None:  # c per unit value on the lattice: Φ S⁻¹ diag(T²), S the system
+        distance = np.sqrt(((bending.xy[:, None, :] - centers[None, :, :]) ** 2).sum(axis=2))
+        solved = scipy.linalg.lu_solve(factors, _phi(distance / reach).T, trans=1)
+        to_lattice = (t2[:, None] * solved).T
+        values = least_bending(bending, values, target - slack, target + slack, to_lattice)
+    weights = spline_of(values)
     if not np.all(np.isfinite(weights)):
         return None
     return VeinCorrection(
@@ -410,10 +424,15 @@ def onto_veins(
         if stretch is None
         else np.concatenate([s[k] for s, k in zip(stretch, kept, strict=True)])
     )
-    keep = reachable(taper, residual, relief, length, grows)
+    bending = None
+    if nodes is not None:  # the values chosen for the whole surface's bending (bending.py)
+        on, differences = lattice(*nodes)
+        xy = nodes[0][on]
+        bending = Bending(xy, nodes[1][on], surface.relief(xy), differences)
+    keep = reachable(taper, residual, relief, length, grows, settle=bending is None)
     for pinned in (keep, keep & (taper >= BAND)):
         correction = fit_correction(
-            centers[pinned], taper[pinned], residual[pinned], length, grows[pinned]
+            centers[pinned], taper[pinned], residual[pinned], length, grows[pinned], bending
         )
         if correction is None:
             return surface
