@@ -64,6 +64,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.linalg
+import scipy.spatial.distance
 import scipy.special
 from numba import njit
 from scipy.spatial import cKDTree
@@ -338,7 +339,7 @@ def fit_correction(
     slack = tolerance * length / (np.maximum(taper, 1e-3) * stretch)
     values = _within(target, slack, spline_of)
     if bending is not None:  # c per unit value on the lattice: Φ S⁻¹ diag(T²), S the system
-        distance = np.sqrt(((bending.xy[:, None, :] - centers[None, :, :]) ** 2).sum(axis=2))
+        distance = scipy.spatial.distance.cdist(bending.xy, centers)
         solved = scipy.linalg.lu_solve(factors, _phi(distance / reach).T, trans=1)
         to_lattice = (t2[:, None] * solved).T
         values = least_bending(bending, values, target - slack, target + slack, to_lattice)
