@@ -68,7 +68,9 @@ def posed_form_on_its_surface(shape: str, terms: dict) -> tuple[Pose, TriangleMe
     flat, mesh = flat_result.triangle_mesh, result.triangle_mesh
     n = len(flat.points)
     unposed = pose.flatten(mesh.points[:n])
-    np.testing.assert_allclose(unposed[:, :2], flat.points[:, :2], atol=1e-9)
+    # 1e-6: a wave as high as a tube's radius lifts vertices next to the roll's axis, where
+    # the inverse (an arctan2 about it) keeps fewer digits (1.8e-7 there, core/bending.py)
+    np.testing.assert_allclose(unposed[:, :2], flat.points[:, :2], atol=1e-6)
     assert np.abs(unposed[:, 2] - flat.points[:, 2]).max() <= BAND_TOLERANCE * result.length
     off = off_surface(mesh, flat, pose) / result.length
     assert off.mean() <= 2e-3 and np.percentile(off, 95) <= 2e-3
