@@ -19,59 +19,72 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg
 import scipy.sparse
 
 LATTICE_NODES = 2500  # grid nodes, about, on the lattice whose bending is summed
+FINE = 0.97  # T below this: the margin band, where the lattice is finer (see lattice)
 STEPS = 50  # projected gradient steps (100: the same bench_bent --veins rows, 0.01° apart)
 
 
 @dataclass(frozen=True)
 class Bending:
     """The lattice over which the surface's bending is summed: its nodes, T(g/δ) and the
-    mixture's relief M there, and the (r, n) sparse second differences between them."""
+    mixture's relief M there, and DᵀD, D the (r, n) sparse second differences between them."""
 
     xy: np.ndarray  # (n, 2) lattice nodes in the plane
     taper: np.ndarray  # (n,) T(g/δ)
     relief: np.ndarray  # (n,) M, the mixture alone
-    differences: scipy.sparse.csr_matrix  # (r, n)
+    squared: scipy.sparse.csr_matrix  # (n, n) DᵀD
 
 
 def lattice(xy: np.ndarray, taper: np.ndarray) -> tuple[np.ndarray, scipy.sparse.csr_matrix]:
-    """Indices of the (n, 2) grid nodes `xy` on every STRIDE-th row and column (STRIDE so that
-    about LATTICE_NODES are kept) and the second differences between them: (rows, kept) sparse,
-    one row per direction (x, y, and the cross difference) wherever all its nodes are kept."""
-    unique = np.unique(xy[:, 0])
-    spacing = float(np.min(np.diff(unique))) if len(unique) > 1 else 1.0
+    """Indices of the (n, 2) grid nodes `xy` kept on the lattice and the second differences
+    between them, (rows, kept) sparse, one row per direction (x, y, and the cross difference)
+    wherever all its nodes are kept. In the margin band (T < FINE) the lattice takes every
+    stride-th row and column (stride so that about LATTICE_NODES would be kept over the whole
+    blade), farther in every second of those: the surface bends most where the taper brings it
+    down (a stride of 3 left margin bands rougher than the paper's surface), and the solve's cost
+    grows with the nodes."""
+    steps = np.abs(np.diff(xy[:, 0]))  # every step between grid nodes is the spacing's multiple
+    steps = steps[steps > 0]
+    spacing = float(steps.min()) if len(steps) else 1.0
     stride = max(1, round(float(np.sqrt(len(xy) / LATTICE_NODES))))
     cell = np.rint((xy - xy.min(axis=0)) / spacing).astype(np.int64)
+    band = taper < FINE
+    coarse = np.all(cell % (2 * stride) == 0, axis=1)
     on = np.flatnonzero(np.all(cell % stride == 0, axis=1) & (taper > 0))
     if len(on) == 0:
         return on, scipy.sparse.csr_matrix((0, 0))
     at = cell[on] // stride
-    number = -np.ones(at.max(axis=0) + 3, dtype=np.int64)
-    number[at[:, 0] + 1, at[:, 1] + 1] = np.arange(len(on))  # a ring of -1 around the lattice
-    i, j = at[:, 0] + 1, at[:, 1] + 1
+    number = -np.ones(at.max(axis=0) + 5, dtype=np.int64)
+    number[at[:, 0] + 2, at[:, 1] + 2] = np.arange(len(on))  # two rings of -1 around it
+    i, j = at[:, 0] + 2, at[:, 1] + 2
     stencils = (  # (offsets, coefficients) of each second difference
         (((1, 0), (0, 0), (-1, 0)), (1.0, -2.0, 1.0)),
         (((0, 1), (0, 0), (0, -1)), (1.0, -2.0, 1.0)),
         (((1, 1), (-1, -1), (1, -1), (-1, 1)), (0.5, 0.5, -0.5, -0.5)),
     )
+    # farther in, a difference over twice the step is four times one over the step, and stands
+    # for four of them: weighed by 2 / 4
+    levels = ((band[on], 1, 1.0), (~band[on] & coarse[on], 2, 0.5))
     rows, cols, values = [], [], []
     count = 0
-    for offsets, coefficients in stencils:
-        ids = np.stack([number[i + di, j + dj] for di, dj in offsets])
-        full = np.all(ids >= 0, axis=0)
-        n = int(full.sum())
-        for k, weight in enumerate(coefficients):
-            rows.append(count + np.arange(n))
-            cols.append(ids[k, full])
-            values.append(np.full(n, weight))
-        count += n
+    for centre, reach, scale in levels:
+        for offsets, coefficients in stencils:
+            ids = np.stack([number[i + reach * di, j + reach * dj] for di, dj in offsets])
+            full = np.all(ids >= 0, axis=0) & centre
+            n = int(full.sum())
+            for k, weight in enumerate(coefficients):
+                rows.append(count + np.arange(n))
+                cols.append(ids[k, full])
+                values.append(np.full(n, scale * weight))
+            count += n
+    used, col = np.unique(np.concatenate(cols), return_inverse=True)  # the nodes rows reach
     differences = scipy.sparse.csr_matrix(
-        (np.concatenate(values), (np.concatenate(rows), np.concatenate(cols))),
-        shape=(count, len(on)),
+        (np.concatenate(values), (np.concatenate(rows), col)), shape=(count, len(used))
     )
-    return on, differences
+    return on[used], differences
 
 
 def least_bending(
@@ -79,7 +92,8 @@ def least_bending(
     start: np.ndarray,
     lo: np.ndarray,
     hi: np.ndarray,
-    to_lattice: np.ndarray,
+    phi: np.ndarray,
+    spline: np.ndarray,
 ) -> np.ndarray:
     """(m,) values in [lo, hi] from `start` for which T · (M + c) bends least on the lattice.
 
@@ -88,14 +102,21 @@ def least_bending(
     bending : Bending
     start, lo, hi : (m,) float arrays
         The values to start from and their bounds.
-    to_lattice : (n, m) float array
-        c on the lattice's nodes per unit value at each vein point.
+    phi : (n, m) float array
+        φ(|x − v_j| / ℓ) at the lattice's nodes x for each spline centre v_j.
+    spline : (m, m) float array
+        The spline's weights per unit value at each vein point (c on the lattice: phi @ spline).
+
+    The normal matrix is formed as Sᵀ (TΦ)ᵀ DᵀD (TΦ) S: n m² + 2 m³ products where (D T Φ S)ᵀ
+    (D T Φ S) took 3 n m² and a solve of n right-hand sides.
     """
-    d = bending.differences
-    a = np.asarray(d @ (bending.taper[:, None] * to_lattice))  # (r, m): bends per unit value
-    b = d @ (bending.taper * bending.relief)  # the mixture's own bends
-    normal, shift = a.T @ a, a.T @ b
-    largest = float(np.linalg.eigvalsh(normal)[-1])
+    squared = bending.squared
+    tphi = bending.taper[:, None] * phi
+    gram = tphi.T @ np.asarray(squared @ tphi)  # (m, m): the bends of c per unit weight
+    normal = spline.T @ gram @ spline
+    shift = spline.T @ (tphi.T @ (squared @ (bending.taper * bending.relief)))
+    m = len(normal)
+    largest = float(scipy.linalg.eigh(normal, eigvals_only=True, subset_by_index=[m - 1, m - 1])[0])
     if not np.isfinite(largest) or largest <= 0:
         return start
     values = previous = ahead = start
