@@ -7,11 +7,14 @@ through the veins still creased more than the paper's pure GMM surface on some r
 drawn leaf's 8.54° against 8.32°, linear's 7.81° against 7.78°): c bent least where the mixture
 bent most. Here the values are chosen within the same tolerances so that the surface itself,
 z = T · (M + c) over the grid's nodes inside the leaf, bends least: the sum of its squared second
-differences (xx, yy and the cross difference) on a lattice of the nodes STRIDE-d to about
-LATTICE_NODES. c is linear in its values (the spline's weights are one solve of them), so this is
-a small quadratic program in the values, box-constrained, solved by projected gradient steps
-(FISTA) from the values `_within` found. The margin band's 99th-percentile dihedral falls below
-the paper's surface on every gallery form (lanceolate 3.17° -> 1.67°, deltoid 2.19° -> 1.87°).
+differences (xx, yy and the cross difference) on a lattice of the nodes (`lattice`: finer in
+the margin band). c is linear in its values (the spline's weights are one solve of them), so
+this is a small quadratic program in the values, box-constrained, solved by projected gradient
+steps (FISTA) from the residuals themselves (starting from `_within`'s values changed nothing).
+The margin band's 99th-percentile dihedral falls below the paper's surface
+on every gallery form (lanceolate 3.17° -> 1.66°, deltoid 2.19° -> 1.98°), and its inside on all
+but two (oblanceolate 2.94° against 2.85°; orbicular, whose midrib follows the dip of its base's
+flattening, forms/relief.py, 1.30° against 1.08°).
 """
 
 from __future__ import annotations
