@@ -27,18 +27,19 @@ import scipy.sparse
 
 LATTICE_NODES = 2500  # grid nodes, about, on the lattice whose bending is summed
 FINE = 0.97  # T below this: the margin band, where the lattice is finer (see lattice)
+POWER_STEPS = 20  # power steps for the largest eigenvalue of the normal matrix
 STEPS = 50  # projected gradient steps (100: the same bench_bent --veins rows, 0.01° apart)
 
 
 @dataclass(frozen=True)
 class Bending:
     """The lattice over which the surface's bending is summed: its nodes, T(g/δ) and the
-    mixture's relief M there, and DᵀD, D the (r, n) sparse second differences between them."""
+    mixture's relief M there, and the (r, n) sparse second differences D between them."""
 
     xy: np.ndarray  # (n, 2) lattice nodes in the plane
     taper: np.ndarray  # (n,) T(g/δ)
     relief: np.ndarray  # (n,) M, the mixture alone
-    squared: scipy.sparse.csr_matrix  # (n, n) DᵀD
+    differences: scipy.sparse.csr_matrix  # (r, n) D, single precision
 
 
 def lattice(xy: np.ndarray, taper: np.ndarray) -> tuple[np.ndarray, scipy.sparse.csr_matrix]:
@@ -83,9 +84,16 @@ def lattice(xy: np.ndarray, taper: np.ndarray) -> tuple[np.ndarray, scipy.sparse
                 cols.append(ids[k, full])
                 values.append(np.full(n, scale * weight))
             count += n
-    used, col = np.unique(np.concatenate(cols), return_inverse=True)  # the nodes rows reach
+    reached = np.concatenate(cols)
+    used = np.zeros(len(on), dtype=bool)  # the nodes the rows reach, numbered again
+    used[reached] = True
+    renumbered = np.cumsum(used) - 1
     differences = scipy.sparse.csr_matrix(
-        (np.concatenate(values), (np.concatenate(rows), col)), shape=(count, len(used))
+        (
+            np.concatenate(values).astype(np.float32),
+            (np.concatenate(rows), renumbered[reached]),
+        ),
+        shape=(count, int(used.sum())),
     )
     return on[used], differences
 
@@ -110,19 +118,24 @@ def least_bending(
     spline : (m, m) float array
         The spline's weights per unit value at each vein point (c on the lattice: phi @ spline).
 
-    The normal matrix is formed as Sᵀ (TΦ)ᵀ DᵀD (TΦ) S: n m² + 2 m³ products where (D T Φ S)ᵀ
-    (D T Φ S) took 3 n m² and a solve of n right-hand sides.
+    The normal matrix is formed as Sᵀ (TΦ)ᵀ Dᵀ D (TΦ) S: n m² + 2 m³ products where (D T Φ S)ᵀ
+    (D T Φ S) took 3 n m² and a solve of n right-hand sides; in single precision, half the time
+    for the same bench_bent rows.
     """
-    squared = bending.squared
-    tphi = bending.taper[:, None] * phi
-    single = tphi.astype(np.float32)  # single precision: half the time, the same rows
-    gram = (single.T @ np.asarray(squared.astype(np.float32) @ single)).astype(float)
+    d = bending.differences
+    tphi = (bending.taper[:, None] * phi).astype(np.float32)
+    gram = (tphi.T @ np.asarray(d.T @ np.asarray(d @ tphi))).astype(float)
     normal = spline.T @ gram @ spline
-    shift = spline.T @ (tphi.T @ (squared @ (bending.taper * bending.relief)))
-    m = len(normal)
-    largest = float(scipy.linalg.eigh(normal, eigvals_only=True, subset_by_index=[m - 1, m - 1])[0])
-    if not np.isfinite(largest) or largest <= 0:
-        return start
+    bends = d @ (bending.taper * bending.relief).astype(np.float32)
+    shift = spline.T @ (tphi.T @ (d.T @ bends)).astype(float)
+    probe = np.ones(len(normal))
+    for _ in range(POWER_STEPS):  # the largest eigenvalue (normal is positive semi-definite)
+        probe = normal @ probe
+        largest = float(np.linalg.norm(probe))
+        if not np.isfinite(largest) or largest <= 0:
+            return start
+        probe /= largest
+    largest *= 1.1  # the power steps come from below
     values = previous = ahead = start
     momentum = 1.0
     for _ in range(STEPS):

@@ -458,8 +458,7 @@ def onto_veins(
     if nodes is not None:  # the values chosen for the whole surface's bending (bending.py)
         on, differences = lattice(*nodes)
         xy = nodes[0][on]
-        squared = (differences.T @ differences).tocsr()
-        bending = Bending(xy, nodes[1][on], surface.relief(xy), squared)
+        bending = Bending(xy, nodes[1][on], surface.relief(xy), differences)
     keep = reachable(taper, residual, relief, length, grows, settle=bending is None)
     for pinned in (keep, keep & (taper >= BAND)):
         correction = fit_correction(
