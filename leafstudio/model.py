@@ -220,7 +220,7 @@ class Params:
     ).field()  # fmt: skip
     taper: float = Real(
         default=0.35, low=0.01, high=5, slider=(0.05, 1.0), decimals=2,
-        what="taper", label="Margin taper", stage="surface", flag="--taper", metavar="F",
+        what="taper", label="Margin taper", stage="bending", flag="--taper", metavar="F",
         help="How wide the band along the margin is where the surface bends down to the "
         "outline, as a fraction of the leaf's inscribed radius",
     ).field()  # fmt: skip

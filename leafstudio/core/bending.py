@@ -22,7 +22,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 import scipy.sparse
 
 LATTICE_NODES = 2500  # grid nodes, about, on the lattice whose bending is summed
@@ -33,13 +32,14 @@ STEPS = 50  # projected gradient steps (100: the same bench_bent --veins rows, 0
 
 @dataclass(frozen=True)
 class Bending:
-    """The lattice over which the surface's bending is summed: its nodes, T(g/δ) and the
-    mixture's relief M there, and the (r, n) sparse second differences D between them."""
+    """What the surface's bending on the lattice needs that K does not change (the pipeline's
+    bending stage: moving K reruns only `least_bending`'s solve, not these)."""
 
-    xy: np.ndarray  # (n, 2) lattice nodes in the plane
-    taper: np.ndarray  # (n,) T(g/δ)
-    relief: np.ndarray  # (n,) M, the mixture alone
+    on: np.ndarray  # (n,) the grid nodes inside the leaf that are on the lattice
+    taper: np.ndarray  # (n,) T(g/δ) there
     differences: scipy.sparse.csr_matrix  # (r, n) D, single precision
+    phi: np.ndarray  # (n, m) φ(|x − v_j| / ℓ) there for each spline centre v_j
+    gram: np.ndarray  # (m, m) (TΦ)ᵀ DᵀD (TΦ), from single precision
 
 
 def lattice(xy: np.ndarray, taper: np.ndarray) -> tuple[np.ndarray, scipy.sparse.csr_matrix]:
@@ -49,61 +49,75 @@ def lattice(xy: np.ndarray, taper: np.ndarray) -> tuple[np.ndarray, scipy.sparse
     stride-th row and column (stride so that about LATTICE_NODES would be kept over the whole
     blade), farther in every second of those: the surface bends most where the taper brings it
     down (a stride of 3 left margin bands rougher than the paper's surface), and the solve's cost
-    grows with the nodes."""
+    grows with the nodes. The rows are laid out straight in compressed form (a fixed count of
+    entries per row: building D through scipy's coordinate form took 3 of the nested demo's
+    3.7 ms at grid 128)."""
     steps = np.abs(np.diff(xy[:, 0]))  # every step between grid nodes is the spacing's multiple
     steps = steps[steps > 0]
     spacing = float(steps.min()) if len(steps) else 1.0
     stride = max(1, round(float(np.sqrt(len(xy) / LATTICE_NODES))))
     cell = np.rint((xy - xy.min(axis=0)) / spacing).astype(np.int64)
-    band = taper < FINE
-    coarse = np.all(cell % (2 * stride) == 0, axis=1)
-    on = np.flatnonzero(np.all(cell % stride == 0, axis=1) & (taper > 0))
+    on = np.flatnonzero((cell[:, 0] % stride == 0) & (cell[:, 1] % stride == 0) & (taper > 0))
     if len(on) == 0:
-        return on, scipy.sparse.csr_matrix((0, 0))
+        return on, scipy.sparse.csr_matrix((0, 0), dtype=np.float32)
     at = cell[on] // stride
-    number = -np.ones(at.max(axis=0) + 5, dtype=np.int64)
-    number[at[:, 0] + 2, at[:, 1] + 2] = np.arange(len(on))  # two rings of -1 around it
-    i, j = at[:, 0] + 2, at[:, 1] + 2
-    stencils = (  # (offsets, coefficients) of each second difference
-        (((1, 0), (0, 0), (-1, 0)), (1.0, -2.0, 1.0)),
-        (((0, 1), (0, 0), (0, -1)), (1.0, -2.0, 1.0)),
-        (((1, 1), (-1, -1), (1, -1), (-1, 1)), (0.5, 0.5, -0.5, -0.5)),
-    )
+    band = taper[on] < FINE
+    coarse = ~band & ((at[:, 0] | at[:, 1]) % 2 == 0)
+    width = int(at[:, 1].max()) + 5
+    number = np.full((int(at[:, 0].max()) + 5) * width, -1, dtype=np.int64)
+    flat = (at[:, 0] + 2) * width + at[:, 1] + 2
+    number[flat] = np.arange(len(on))  # two rings of -1 around it
     # farther in, a difference over twice the step is four times one over the step, and stands
     # for four of them: weighed by 2 / 4
-    levels = ((band[on], 1, 1.0), (~band[on] & coarse[on], 2, 0.5))
-    rows, cols, values = [], [], []
-    count = 0
-    for centre, reach, scale in levels:
-        for offsets, coefficients in stencils:
-            ids = np.stack([number[i + reach * di, j + reach * dj] for di, dj in offsets])
-            full = np.all(ids >= 0, axis=0) & centre
-            n = int(full.sum())
-            for k, weight in enumerate(coefficients):
-                rows.append(count + np.arange(n))
-                cols.append(ids[k, full])
-                values.append(np.full(n, scale * weight))
-            count += n
-    reached = np.concatenate(cols)
+    columns, values, row_sizes = [], [], []
+    for centre, reach, scale in ((band, 1, 1.0), (coarse, 2, 0.5)):
+        from_centre = flat[centre]
+        for offsets, coefficients in STENCILS:
+            ids = number[from_centre + reach * (offsets[:, 0] * width + offsets[:, 1])[:, None]]
+            ids = ids[:, np.all(ids >= 0, axis=0)]  # (entries, rows)
+            columns.append(ids.T.ravel())
+            values.append(np.tile(scale * coefficients, ids.shape[1]))
+            row_sizes.append(np.full(ids.shape[1], len(offsets)))
+    row_sizes = np.concatenate(row_sizes)
+    reached = np.concatenate(columns)
     used = np.zeros(len(on), dtype=bool)  # the nodes the rows reach, numbered again
     used[reached] = True
     renumbered = np.cumsum(used) - 1
     differences = scipy.sparse.csr_matrix(
         (
             np.concatenate(values).astype(np.float32),
-            (np.concatenate(rows), renumbered[reached]),
+            renumbered[reached],
+            np.concatenate([[0], np.cumsum(row_sizes)]),
         ),
-        shape=(count, int(used.sum())),
+        shape=(len(row_sizes), int(used.sum())),
     )
     return on[used], differences
 
 
+STENCILS = (  # (offsets in rows and columns, coefficients) of each second difference
+    (np.array([(1, 0), (0, 0), (-1, 0)]), np.array([1.0, -2.0, 1.0])),
+    (np.array([(0, 1), (0, 0), (0, -1)]), np.array([1.0, -2.0, 1.0])),
+    (np.array([(1, 1), (-1, -1), (1, -1), (-1, 1)]), np.array([0.5, 0.5, -0.5, -0.5])),
+)
+
+
+def bending_gram(
+    phi: np.ndarray, taper: np.ndarray, differences: scipy.sparse.csr_matrix
+) -> np.ndarray:
+    """(m, m) (TΦ)ᵀ DᵀD (TΦ) for the (n, m) `phi` at the lattice's nodes, formed as
+    (TΦ)ᵀ (Dᵀ (D (TΦ))): n m² products where (D T Φ)ᵀ (D T Φ) takes r m², r = 2.7 n; in single
+    precision, half the time for the same bench_bent rows."""
+    tphi = (taper[:, None] * phi).astype(np.float32)
+    return (tphi.T @ np.asarray(differences.T @ np.asarray(differences @ tphi))).astype(float)
+
+
 def least_bending(
     bending: Bending,
+    pinned: np.ndarray,
+    relief: np.ndarray,
     start: np.ndarray,
     lo: np.ndarray,
     hi: np.ndarray,
-    phi: np.ndarray,
     spline: np.ndarray,
 ) -> np.ndarray:
     """(m,) values in [lo, hi] from `start` for which T · (M + c) bends least on the lattice.
@@ -111,23 +125,21 @@ def least_bending(
     Parameters
     ----------
     bending : Bending
+    pinned : (m,) int array
+        The spline centres (columns of bending.phi) the values are for.
+    relief : (n,) float array
+        M, the mixture alone, at the lattice's nodes.
     start, lo, hi : (m,) float arrays
         The values to start from and their bounds.
-    phi : (n, m) float array
-        φ(|x − v_j| / ℓ) at the lattice's nodes x for each spline centre v_j.
     spline : (m, m) float array
         The spline's weights per unit value at each vein point (c on the lattice: phi @ spline).
 
-    The normal matrix is formed as Sᵀ (TΦ)ᵀ Dᵀ D (TΦ) S: n m² + 2 m³ products where (D T Φ S)ᵀ
-    (D T Φ S) took 3 n m² and a solve of n right-hand sides; in single precision, half the time
-    for the same bench_bent rows.
+    The normal matrix is Sᵀ G S with G the bending gram of the pinned centres (Bending.gram).
     """
-    d = bending.differences
-    tphi = (bending.taper[:, None] * phi).astype(np.float32)
-    gram = (tphi.T @ np.asarray(d.T @ np.asarray(d @ tphi))).astype(float)
-    normal = spline.T @ gram @ spline
-    bends = d @ (bending.taper * bending.relief).astype(np.float32)
-    shift = spline.T @ (tphi.T @ (d.T @ bends)).astype(float)
+    d, taper = bending.differences, bending.taper
+    normal = spline.T @ bending.gram[np.ix_(pinned, pinned)] @ spline
+    bends = d.T @ (d @ (taper * relief).astype(np.float32))
+    shift = spline.T @ (bending.phi[:, pinned].T @ (taper * bends))
     probe = np.ones(len(normal))
     for _ in range(POWER_STEPS):  # the largest eigenvalue (normal is positive semi-definite)
         probe = normal @ probe

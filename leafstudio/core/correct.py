@@ -72,6 +72,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from functools import partial
 
 import numpy as np
 import scipy.linalg
@@ -79,10 +80,11 @@ import scipy.special
 from numba import njit
 from scipy.spatial import cKDTree
 
-from leafstudio.core.bending import Bending, lattice, least_bending
+from leafstudio.core.bending import Bending, bending_gram, lattice, least_bending
 from leafstudio.core.buckets import kernel_array
+from leafstudio.core.mpu import MPUImplicit
 from leafstudio.core.prepare.polygon import thin_curve
-from leafstudio.core.surface import HeightSurface
+from leafstudio.core.surface import HeightSurface, taper_of
 
 CENTER_STEP = 0.008  # vein points closer than this share of the length are one spline centre
 VEIN_SMOOTHING = 1e-9  # λ (φ is dimensionless: φ(0) = π/4)
@@ -105,6 +107,9 @@ RELAX_STEPS = 40
 CHECKED = 2000  # nodes at most where the correction is checked (_tame)
 MOST_CENTERS = 800  # beyond this the veins are thinned further: the dense solve grows as its
 # cube (3000 centres took seconds a run; the app reruns this on every slider step)
+
+#: (target, lo, hi, spline) -> values in [lo, hi]: how fit_correction chooses its values
+Choose = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 
 def _kelvin_tables() -> np.ndarray:
@@ -319,11 +324,11 @@ def fit_correction(
     residual: np.ndarray,
     length: float,
     stretch: np.ndarray | float = 1.0,
-    bending: Bending | None = None,
+    choose: Choose | None = None,
 ) -> VeinCorrection | None:
     """The spline c with T_i c(v_i) within TOLERANCE of r_i at the vein points (BAND_TOLERANCE
-    in the margin band; over their `stretch`, onto_veins), bending least: c itself, and then,
-    given `bending`, the whole surface (bending.py).
+    in the margin band; over their `stretch`, onto_veins), bending least: c itself, or, given
+    `choose`, what it chooses (the whole surface's bending, bending.py).
 
     Parameters
     ----------
@@ -337,8 +342,9 @@ def fit_correction(
         The leaf's length (λ and the Hessian's cut-off scale with it).
     stretch : (m,) float array or float, default 1
         How many times a distance off the surface grows at each point when the blade is bent.
-    bending : Bending, optional
-        The lattice of grid nodes over which the surface's bending is summed (bending.py).
+    choose : callable, optional
+        (target, lo, hi, spline) -> values in [lo, hi], with `spline` the (m, m) weights per
+        unit value (S⁻¹ diag(T²)); default `_within`.
 
     Returns
     -------
@@ -366,12 +372,11 @@ def fit_correction(
     # that is shrunk once more (a rolled and folded deltoid's veins 1.04e-3 of the length off)
     tolerance = np.where(taper < BAND, BAND_TOLERANCE / stretch, TOLERANCE)
     slack = tolerance * length / (np.maximum(taper, 1e-3) * stretch)
-    if bending is None:
+    if choose is None:
         values = _within(target, slack, spline_of)
     else:  # the spline's weights per unit value: S⁻¹ diag(T²)
         spline = scipy.linalg.lu_solve(factors, np.diag(t2), check_finite=False)
-        phi_lattice = _phi_matrix(bending.xy, kernel_array(centers), reach, KELVIN, KELVIN_STEP)
-        values = least_bending(bending, target, target - slack, target + slack, phi_lattice, spline)
+        values = choose(target, target - slack, target + slack, spline)
     weights = spline_of(values)
     if not np.all(np.isfinite(weights)):
         return None
@@ -413,24 +418,62 @@ def _within(
     return values
 
 
+@dataclass(frozen=True)
+class Pinning:
+    """The spline's centres on the veins and, given the grid's nodes, the lattice their
+    correction bends least on: what onto_veins needs that K does not change (the pipeline's
+    bending stage)."""
+
+    kept: list[np.ndarray]  # indices of each vein's points that are centres (spline_centers)
+    centers: np.ndarray  # (m, 2)
+    taper: np.ndarray  # (m,) T(g/δ) at the centres
+    bending: Bending | None  # the lattice (bending.py), with φ for every centre
+
+
+def pinning(
+    veins: list[np.ndarray],
+    length: float,
+    implicit: MPUImplicit,
+    delta: float,
+    nodes: tuple[np.ndarray, np.ndarray] | None = None,
+) -> Pinning:
+    """The spline's centres on the (m_i, 2) `veins` and T there (T = tanh(g/δ)), and, given the
+    grid's nodes inside the leaf and T there, the lattice of them with φ and the bending gram
+    for every centre (bending.py)."""
+    kept = spline_centers(veins, length)
+    centers = np.vstack([v[k] for v, k in zip(veins, kept, strict=True)])
+    taper = taper_of(implicit(centers), delta)
+    if nodes is None:
+        return Pinning(kept, centers, taper, None)
+    on, differences = lattice(*nodes)
+    reach = REACH * length
+    phi = _phi_matrix(kernel_array(nodes[0][on]), kernel_array(centers), reach, KELVIN, KELVIN_STEP)
+    node_taper = nodes[1][on]
+    gram = bending_gram(phi, node_taper, differences)
+    return Pinning(kept, centers, taper, Bending(on, node_taper, differences, phi, gram))
+
+
 def onto_veins(
     surface: HeightSurface,
-    veins: list[np.ndarray],
     heights: list[np.ndarray],
     length: float,
+    pinned: Pinning,
     nodes: tuple[np.ndarray, np.ndarray] | None = None,
     stretch: list[np.ndarray] | None = None,
-) -> HeightSurface:
-    """`surface` with a VeinCorrection that brings it onto the vein points.
+) -> tuple[HeightSurface, np.ndarray | None]:
+    """`surface` with a VeinCorrection that brings it onto the vein points, and c at the nodes
+    when the correction was chosen for the whole surface's bending (on the lattice from its φ).
 
     Parameters
     ----------
     surface : HeightSurface
         The fitted surface (no correction yet).
-    veins, heights : lists of (m_i, 2) and (m_i,) float arrays
-        Each vein's points in the plane and their heights above the base.
+    heights : list of (m_i,) float arrays
+        Each vein's points' heights above the base.
     length : float
         The leaf's length.
+    pinned : Pinning
+        The spline's centres (`pinning` of the veins in the plane) and their lattice.
     nodes : ((n, 2), (n,)) float arrays, optional
         Points inside the leaf and T(g/δ) there, where the correction is checked: a correction
         that adds more than OVERSHOOT times the largest residual anywhere is refitted without
@@ -441,12 +484,8 @@ def onto_veins(
         vein point TOLERANCE off the flat surface stood up to 3.9 times that off the bent mesh.
         Each point's tolerance is divided by it.
     """
-    if not veins:
-        return surface
-    kept = spline_centers(veins, length)
-    centers = np.vstack([v[k] for v, k in zip(veins, kept, strict=True)])
+    kept, centers, taper, bending = pinned.kept, pinned.centers, pinned.taper, pinned.bending
     h = np.concatenate([z[k] for z, k in zip(heights, kept, strict=True)])
-    taper = surface.taper(surface.implicit(centers))
     residual = h - taper * surface.relief(centers)
     relief = float(np.abs(h).max())
     grows = (
@@ -454,21 +493,37 @@ def onto_veins(
         if stretch is None
         else np.concatenate([s[k] for s, k in zip(stretch, kept, strict=True)])
     )
-    bending = None
-    if nodes is not None:  # the values chosen for the whole surface's bending (bending.py)
-        on, differences = lattice(*nodes)
-        xy = nodes[0][on]
-        bending = Bending(xy, nodes[1][on], surface.relief(xy), differences)
+    relief_on = None if bending is None else surface.relief(nodes[0][bending.on])
     keep = reachable(taper, residual, relief, length, grows, settle=bending is None)
-    for pinned in (keep, keep & (taper >= BAND)):
+    for pins in (keep, keep & (taper >= BAND)):
+        columns = np.flatnonzero(pins)
+        choose = None if bending is None else partial(least_bending, bending, columns, relief_on)
         correction = fit_correction(
-            centers[pinned], taper[pinned], residual[pinned], length, grows[pinned], bending
+            centers[pins], taper[pins], residual[pins], length, grows[pins], choose
         )
         if correction is None:
-            return surface
-        if nodes is None or _tame(correction, nodes, np.abs(residual[pinned]).max()):
-            return replace(surface, correction=correction)
-    return surface
+            return surface, None
+        largest = np.abs(residual[pins]).max()
+        if bending is not None:  # c on the lattice from its φ; checked there
+            on_lattice = bending.phi[:, columns] @ correction.weights
+            if np.all(np.abs(bending.taper * on_lattice) <= OVERSHOOT * largest):
+                corrected = replace(surface, correction=correction)
+                return corrected, _at_nodes(correction, nodes[0], bending.on, on_lattice)
+        elif nodes is None or _tame(correction, nodes, largest):
+            return replace(surface, correction=correction), None
+    return surface, None
+
+
+def _at_nodes(
+    correction: VeinCorrection, xy: np.ndarray, on: np.ndarray, on_lattice: np.ndarray
+) -> np.ndarray:
+    """c at the (n, 2) nodes `xy`, known at those of them `on` the lattice."""
+    value = np.empty(len(xy))
+    value[on] = on_lattice
+    rest = np.ones(len(xy), dtype=bool)
+    rest[on] = False
+    value[rest] = correction.value(xy[rest])
+    return value
 
 
 def _tame(correction: VeinCorrection, nodes: tuple[np.ndarray, np.ndarray], largest: float) -> bool:

@@ -10,7 +10,9 @@
 | guide    | implicit, grid                         | g and p(x) on the grid                   |
 | samples  | guide, samples, seed                   | the EM samples drawn from p (lazy)       |
 | gmm      | samples, k                             | the EM mixture                           |
-| surface  | gmm, taper, refine, through_veins      | amplitudes, z on the kept grid nodes     |
+| bending  | guide, taper                           | the vein correction's centres, lattice   |
+|          |                                        | and bending gram (lazy)                  |
+| surface  | gmm, bending, refine, through_veins    | amplitudes, z on the kept grid nodes     |
 | layout   | guide                                  | the conforming mesh in the plane and g's |
 |          |                                        | derivatives at its vertices (lazy)       |
 | mesh     | surface, layout, mesher, radius_factor | the triangle mesh in world coordinates   |
@@ -63,7 +65,8 @@ STAGE_TABLE: dict[str, Stage] = {
         Stage("guide", ("implicit", "grid"), steps.compute_guide),
         Stage("samples", ("guide",), steps.compute_samples, lazy=True),
         Stage("gmm", ("samples",), steps.compute_gmm),
-        Stage("surface", ("gmm",), steps.compute_surface),
+        Stage("bending", ("guide",), steps.compute_bending, lazy=True),
+        Stage("surface", ("gmm", "bending"), steps.compute_surface),
         Stage("layout", ("guide",), steps.compute_layout, lazy=True),
         Stage("mesh", ("surface", "layout"), steps.compute_mesh),
     )

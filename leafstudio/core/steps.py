@@ -14,7 +14,7 @@ from leafstudio.core import mesher
 from leafstudio.core.autok import choose_mixture
 from leafstudio.core.base import PLANAR, BaseSurface, fit_base
 from leafstudio.core.bend import normal_stretch
-from leafstudio.core.correct import onto_veins
+from leafstudio.core.correct import Pinning, onto_veins, pinning
 from leafstudio.core.curvature import graph_curvatures
 from leafstudio.core.gmm import Mixture, fit_mixture, fit_signed_mixture, sample_guide
 from leafstudio.core.grid import Grid, make_grid
@@ -38,7 +38,7 @@ from leafstudio.core.prepare.polygon import (
 )
 from leafstudio.core.prepare.units import Units
 from leafstudio.core.prepare.vein_order import vein_order
-from leafstudio.core.surface import HeightSurface, fit_surface
+from leafstudio.core.surface import HeightSurface, fit_surface, taper_of, taper_width
 from leafstudio.core.trianglemesh import TriangleMesh
 from leafstudio.errors import LeafError
 from leafstudio.model import K_AUTO, Leaf
@@ -247,6 +247,17 @@ def compute_gmm(run: StageRun) -> tuple[np.ndarray, Mixture]:
     return samples, mixture
 
 
+def compute_bending(run: StageRun) -> Pinning:
+    """The vein correction's centres and the lattice it bends least on (correct.pinning): all
+    that K does not change, so moving K reruns only the correction's solve."""
+    fs: FrameStage = run["frame"]
+    guide: GuideStage = run["guide"]
+    g_in = guide.g[guide.inside]
+    delta = taper_width(run.params.taper, g_in)
+    nodes = run["grid"].points[guide.inside]
+    return pinning(fs.veins, fs.length, run["implicit"], delta, (nodes, taper_of(g_in, delta)))
+
+
 def compute_surface(run: StageRun) -> SurfaceStage:
     fs: FrameStage = run["frame"]
     guide: GuideStage = run["guide"]
@@ -265,16 +276,17 @@ def compute_surface(run: StageRun) -> SurfaceStage:
         run.params.seed,
         base=fs.base,
     )
-    if run.params.through_veins:  # onto every vein point (correct.py)
-        surface = onto_veins(
+    correction = None
+    if run.params.through_veins and fs.veins:  # onto every vein point (correct.py)
+        surface, correction = onto_veins(
             surface,
-            fs.veins,
             fs.heights,
             fs.length,
+            run["bending"],
             (nodes, surface.taper(g_in)),
             _stretch(run, surface),
         )
-    return SurfaceStage(surface=surface, z=surface(nodes, g_in))
+    return SurfaceStage(surface=surface, z=surface(nodes, g_in, correction))
 
 
 def _stretch(run: StageRun, surface: HeightSurface) -> list[np.ndarray] | None:

@@ -44,6 +44,16 @@ UNDERFLOW = 600.0  # exp(-q) for q beyond this is taken as 0 (exactly, not a sub
 REFINE_GAIN = 1e-5  # stop once a step lowers the cost by less than this fraction
 
 
+def taper_of(g: np.ndarray, delta: float) -> np.ndarray:
+    """T(g / δ) = tanh(g / δ), zero outside the leaf (g < 0)."""
+    return np.tanh(np.maximum(g, 0.0) / delta)
+
+
+def taper_width(taper: float, inside_g: np.ndarray) -> float:
+    """δ: `taper` times the leaf's inscribed radius, the largest g at the (n,) nodes inside."""
+    return taper * max(float(inside_g.max()), 1e-12)
+
+
 @dataclass(frozen=True)
 class HeightSurface:
     """z(x) = b(x) + T(g(x)/δ) (Σ a_k N_k(x) + c(x)); see the module docstring (b: base.py, or
@@ -69,12 +79,16 @@ class HeightSurface:
 
     def taper(self, g: np.ndarray) -> np.ndarray:
         """T(g / δ), zero outside the leaf."""
-        return np.tanh(np.maximum(g, 0.0) / self.delta)
+        return taper_of(g, self.delta)
 
-    def __call__(self, xy: np.ndarray, g: np.ndarray | None = None) -> np.ndarray:
-        """z at (n, 2) plane points; pass `g` if it is already known there."""
+    def __call__(
+        self, xy: np.ndarray, g: np.ndarray | None = None, correction: np.ndarray | None = None
+    ) -> np.ndarray:
+        """z at (n, 2) plane points; pass `g` if it is already known there, and `correction`,
+        c there, too (correct.onto_veins has it from its lattice)."""
         g = self.implicit(xy) if g is None else g
-        relief = self.taper(g) * self.relief(xy)
+        relief = self.relief(xy) if correction is None else self.mixture.value(xy) + correction
+        relief = self.taper(g) * relief
         return relief if self.base is None else self.base(xy) + relief
 
     def gradient(self, xy: np.ndarray) -> np.ndarray:
@@ -358,7 +372,7 @@ def fit_surface(
     base : BaseSurface, optional
         The base b(x) under a non-planar boundary; p and vein_h are then heights above it.
     """
-    delta = taper * max(float(inside_g.max()), 1e-12)
+    delta = taper_width(taper, inside_g)
     surface = HeightSurface(mixture=mixture, implicit=implicit, delta=delta)
     xy, row_scale, target = _least_squares_rows(
         surface, inside_xy, inside_g, inside_p, vein_xy, vein_h, None, seed

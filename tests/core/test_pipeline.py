@@ -120,7 +120,8 @@ def test_changing_k_reruns_only_the_mixture_and_after():
     pipe = ls.Pipeline(ls.demo("nested"))
     first = pipe.run(ls.Params(k=3, grid=64))
     assert first.ran == (
-        "frame", "implicit", "grid", "guide", "samples", "gmm", "surface", "layout", "mesh"
+        "frame", "implicit", "grid", "guide", "samples", "gmm", "bending", "surface", "layout",
+        "mesh",
     )  # fmt: skip
     second = pipe.run(ls.Params(k=4, grid=64))
     assert second.ran == ("gmm", "surface", "mesh")

@@ -19,7 +19,9 @@ from leafstudio.core.store import MISSING, StageStore
 from leafstudio.core.trianglemesh import TriangleMesh
 
 PARAMS = ls.Params(k=3, grid=48, samples=800)
-EVERY_STAGE = ("frame", "implicit", "grid", "guide", "samples", "gmm", "surface", "layout", "mesh")
+EVERY_STAGE = (
+    "frame", "implicit", "grid", "guide", "samples", "gmm", "bending", "surface", "layout", "mesh"
+)  # fmt: skip
 
 
 def test_a_new_k_reruns_the_mixture_and_after_and_reuses_the_implicit_and_guide_outputs():
