@@ -147,6 +147,11 @@ def _phi(rho: np.ndarray) -> np.ndarray:
     return np.where(t < len(KELVIN) - 1, -value, 0.0)
 
 
+def _phi_among(centers: np.ndarray, reach: float) -> np.ndarray:
+    """(m, m) φ(|v_i − v_j| / ℓ) between the (m, 2) spline centres."""
+    return _phi(np.sqrt(((centers[:, None, :] - centers[None, :, :]) ** 2).sum(axis=2)) / reach)
+
+
 @dataclass(frozen=True)
 class VeinCorrection:
     """c(x) = Σ_j w_j φ(|x − v_j|), φ(r) = −kei(r/ℓ): the correction inside the taper."""
@@ -198,10 +203,12 @@ def _spline_value(xy, centers, weights, reach, table, step):
 
 
 @njit(cache=True, nogil=True)
-def _phi_matrix(xy, centers, reach, table, step):
-    """(n, m) φ(|x_i − v_j|) (bending.py: c on a lattice per unit weight; numpy's `_phi` took
-    six times as long)."""
+def _phi_matrix(xy, centers, reach, table, step, taper):
+    """(n, m) φ(|x_i − v_j|), and T_i φ(|x_i − v_j|) in single precision (bending.py: c on a
+    lattice per unit weight, and the gram's factor; numpy's `_phi` took six times as long, and
+    T φ formed after it, 2.6 MB more to allocate on the nested demo at grid 128, as long again)."""
     out = np.zeros((len(xy), len(centers)))
+    tapered = np.zeros((len(xy), len(centers)), dtype=np.float32)
     scale = 1.0 / (reach * step)
     end = float(len(table) - 1)
     for i in range(len(xy)):
@@ -211,8 +218,10 @@ def _phi_matrix(xy, centers, reach, table, step):
             t = np.sqrt(dx * dx + dy * dy) * scale
             if t < end:
                 k = int(t)
-                out[i, j] = -_read(table, k, 0, t - k)
-    return out
+                value = -_read(table, k, 0, t - k)
+                out[i, j] = value
+                tapered[i, j] = taper[i] * value
+    return out, tapered
 
 
 @njit(cache=True, nogil=True, fastmath={"arcp", "contract"})  # reciprocals and FMAs: 1.3x faster
@@ -325,6 +334,7 @@ def fit_correction(
     length: float,
     stretch: np.ndarray | float = 1.0,
     choose: Choose | None = None,
+    among: np.ndarray | None = None,
 ) -> VeinCorrection | None:
     """The spline c with T_i c(v_i) within TOLERANCE of r_i at the vein points (BAND_TOLERANCE
     in the margin band; over their `stretch`, onto_veins), bending least: c itself, or, given
@@ -345,6 +355,8 @@ def fit_correction(
     choose : callable, optional
         (target, lo, hi, spline) -> values in [lo, hi], with `spline` the (m, m) weights per
         unit value (S⁻¹ diag(T²)); default `_within`.
+    among : (m, m) float array, optional
+        φ between the centres, when known (the pipeline's bending stage has it).
 
     Returns
     -------
@@ -354,7 +366,7 @@ def fit_correction(
     if np.count_nonzero(inside) < 3:
         return None
     reach = REACH * length
-    phi = _phi(np.sqrt(((centers[:, None, :] - centers[None, :, :]) ** 2).sum(axis=2)) / reach)
+    phi = _phi_among(centers, reach) if among is None else among
     m = len(centers)
     t2 = taper**2
     system = t2[:, None] * phi
@@ -442,15 +454,19 @@ def pinning(
     for every centre (bending.py)."""
     kept = spline_centers(veins, length)
     centers = np.vstack([v[k] for v, k in zip(veins, kept, strict=True)])
+    centers = kernel_array(centers)
     taper = taper_of(implicit(centers), delta)
     if nodes is None:
         return Pinning(kept, centers, taper, None)
     on, differences = lattice(*nodes)
     reach = REACH * length
-    phi = _phi_matrix(kernel_array(nodes[0][on]), kernel_array(centers), reach, KELVIN, KELVIN_STEP)
-    node_taper = nodes[1][on]
-    gram = bending_gram(phi, node_taper, differences)
-    return Pinning(kept, centers, taper, Bending(on, node_taper, differences, phi, gram))
+    node_taper = kernel_array(nodes[1][on])
+    phi, tapered = _phi_matrix(
+        kernel_array(nodes[0][on]), centers, reach, KELVIN, KELVIN_STEP, node_taper
+    )
+    gram = bending_gram(tapered, differences)
+    among = _phi_matrix(centers, centers, reach, KELVIN, KELVIN_STEP, np.ones(len(centers)))[0]
+    return Pinning(kept, centers, taper, Bending(on, node_taper, differences, phi, gram, among))
 
 
 def onto_veins(
@@ -496,16 +512,21 @@ def onto_veins(
     relief_on = None if bending is None else surface.relief(nodes[0][bending.on])
     keep = reachable(taper, residual, relief, length, grows, settle=bending is None)
     for pins in (keep, keep & (taper >= BAND)):
-        columns = np.flatnonzero(pins)
-        choose = None if bending is None else partial(least_bending, bending, columns, relief_on)
-        correction = fit_correction(
-            centers[pins], taper[pins], residual[pins], length, grows[pins], choose
-        )
+        if bending is None:
+            correction = fit_correction(
+                centers[pins], taper[pins], residual[pins], length, grows[pins]
+            )
+        else:
+            some = bending.pinned(pins)
+            correction = fit_correction(
+                centers[pins], taper[pins], residual[pins], length, grows[pins],
+                partial(least_bending, some, relief_on), some.among,
+            )  # fmt: skip
         if correction is None:
             return surface, None
         largest = np.abs(residual[pins]).max()
         if bending is not None:  # c on the lattice from its φ; checked there
-            on_lattice = bending.phi[:, columns] @ correction.weights
+            on_lattice = some.phi @ correction.weights
             if np.all(np.abs(bending.taper * on_lattice) <= OVERSHOOT * largest):
                 corrected = replace(surface, correction=correction)
                 return corrected, _at_nodes(correction, nodes[0], bending.on, on_lattice)

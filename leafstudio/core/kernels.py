@@ -87,7 +87,7 @@ KERNELS: dict[str, tuple[types.Type, ...]] = {
     "curvature:_graph": (F2, F3),
     "mpu:_ball_counts": (F2, F2, F1, BUCKETS),
     "correct:_spline_value": (F2, F2, F1, f8, F2, f8),
-    "correct:_phi_matrix": (F2, F2, f8, F2, f8),
+    "correct:_phi_matrix": (F2, F2, f8, F2, f8, F1),
     "prepare.polygon:_thin_ring": (F2, I1, f8),
     "prepare.outline:_orientation": (F2, I1),
     "prepare.outline:_ring_length": (F2, I1),
