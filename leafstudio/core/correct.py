@@ -129,7 +129,10 @@ def _kelvin_tables() -> np.ndarray:
         f0, f1 = f[:-1], f[1:]
         s0, s1 = slope[:-1] * KELVIN_STEP, slope[1:] * KELVIN_STEP
         columns += [f0, s0, 3 * (f1 - f0) - 2 * s0 - s1, 2 * (f0 - f1) + s0 + s1]
-    return np.ascontiguousarray(np.column_stack(columns))
+    table = np.ascontiguousarray(np.column_stack(columns))
+    table[-1] = 0.0  # never an interval read (t < its index): φ = 0 past KELVIN_END, for
+    # the kernels that clamp t to it instead of branching (_spline_value, _phi_matrix)
+    return table
 
 
 KELVIN = _kelvin_tables()
@@ -184,8 +187,11 @@ def _read(table, i, column, u):
     )
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, fastmath=True)
 def _spline_value(xy, centers, weights, reach, table, step):
+    """Σ_j w_j φ(|x_i − v_j|) at each of the (n, 2) points; t clamped to the table's last row
+    (zeros) rather than branched on, and fastmath: the loop runs in vector lanes (8.4 -> 6.2 ms
+    for 5292 nodes and 200 centres)."""
     value = np.empty(len(xy))
     scale = 1.0 / (reach * step)  # r -> ρ / KELVIN_STEP
     end = float(len(table) - 1)
@@ -194,33 +200,32 @@ def _spline_value(xy, centers, weights, reach, table, step):
         v = 0.0
         for j in range(len(centers)):
             dx, dy = x - centers[j, 0], y - centers[j, 1]
-            t = np.sqrt(dx * dx + dy * dy) * scale
-            if t < end:
-                k = int(t)
-                v -= weights[j] * _read(table, k, 0, t - k)
+            t = min(np.sqrt(dx * dx + dy * dy) * scale, end)
+            k = int(t)
+            v -= weights[j] * _read(table, k, 0, t - k)
         value[i] = v
     return value
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, fastmath=True)
 def _phi_matrix(xy, centers, reach, table, step, taper):
     """(n, m) φ(|x_i − v_j|), and T_i φ(|x_i − v_j|) in single precision (bending.py: c on a
     lattice per unit weight, and the gram's factor; numpy's `_phi` took six times as long, and
-    T φ formed after it, 2.6 MB more to allocate on the nested demo at grid 128, as long again)."""
-    out = np.zeros((len(xy), len(centers)))
-    tapered = np.zeros((len(xy), len(centers)), dtype=np.float32)
+    T φ formed after it, 2.6 MB more to allocate on the nested demo at grid 128, as long again).
+    Clamped and in vector lanes as _spline_value (3.2 -> 2.4 ms for 1603 nodes, 200 centres)."""
+    out = np.empty((len(xy), len(centers)))
+    tapered = np.empty((len(xy), len(centers)), dtype=np.float32)
     scale = 1.0 / (reach * step)
     end = float(len(table) - 1)
     for i in range(len(xy)):
         x, y = xy[i, 0], xy[i, 1]
         for j in range(len(centers)):
             dx, dy = x - centers[j, 0], y - centers[j, 1]
-            t = np.sqrt(dx * dx + dy * dy) * scale
-            if t < end:
-                k = int(t)
-                value = -_read(table, k, 0, t - k)
-                out[i, j] = value
-                tapered[i, j] = taper[i] * value
+            t = min(np.sqrt(dx * dx + dy * dy) * scale, end)
+            k = int(t)
+            value = -_read(table, k, 0, t - k)
+            out[i, j] = value
+            tapered[i, j] = taper[i] * value
     return out, tapered
 
 
