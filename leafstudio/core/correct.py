@@ -78,7 +78,6 @@ import numpy as np
 import scipy.linalg
 import scipy.special
 from numba import njit
-from scipy.spatial import cKDTree
 
 from leafstudio.core.bending import Bending, bending_gram, lattice, least_bending
 from leafstudio.core.buckets import kernel_array
@@ -301,10 +300,11 @@ def spline_centers(veins: list[np.ndarray], length: float) -> list[np.ndarray]:
         step *= total / MOST_CENTERS
         kept = [_thin_vein(v, step) for v in veins]
     laid = np.zeros((0, 2))
+    reach = (JUNCTION * length) ** 2
     for i, vein in enumerate(veins):  # at a junction the earlier (longer) vein decides
-        if len(laid):
-            near = cKDTree(laid).query(vein[kept[i]], distance_upper_bound=JUNCTION * length)[0]
-            kept[i] = kept[i][~np.isfinite(near)]
+        if len(laid):  # all pairs: a k-d tree per vein took 1.6 ms on a gallery form
+            apart = ((vein[kept[i], None, :] - laid[None, :, :]) ** 2).sum(axis=2)
+            kept[i] = kept[i][~np.any(apart < reach, axis=1)]
         laid = np.vstack([laid, vein[kept[i]]])
     return kept
 
