@@ -61,7 +61,7 @@ class Pipeline:
         params : Params
         on_stage : callable, optional
             Called with a stage's name just before it runs; on a cold kernel cache first with
-            "kernels", then "kernels 1/27", ... as they are compiled (core/kernels.py).
+            "kernels", then "kernels 1/28", ... as they are compiled (core/kernels.py).
         should_stop : callable, optional
             Polled between stages; when it returns True the run raises Cancelled.
 
