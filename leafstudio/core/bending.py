@@ -65,7 +65,7 @@ def lattice(xy: np.ndarray, taper: np.ndarray) -> tuple[np.ndarray, scipy.sparse
     steps = steps[steps > 0]
     spacing = float(steps.min()) if len(steps) else 1.0
     stride = max(1, round(float(np.sqrt(len(xy) / LATTICE_NODES))))
-    cell = np.rint((xy - xy.min(axis=0)) / spacing).astype(np.int64)
+    cell = np.rint((xy - [xy[:, 0].min(), xy[:, 1].min()]) / spacing).astype(np.int64)
     on = np.flatnonzero((cell[:, 0] % stride == 0) & (cell[:, 1] % stride == 0) & (taper > 0))
     if len(on) == 0:
         return on, scipy.sparse.csr_matrix((0, 0), dtype=np.float32)
@@ -88,7 +88,7 @@ def lattice(xy: np.ndarray, taper: np.ndarray) -> tuple[np.ndarray, scipy.sparse
         from_centre = flat[centre]
         for offsets, coefficients in STENCILS:
             ids = number[from_centre + reach * (offsets[:, 0] * width + offsets[:, 1])[:, None]]
-            ids = ids[:, np.all(ids >= 0, axis=0)]  # (entries, rows)
+            ids = ids[:, np.minimum.reduce(ids) >= 0]  # (entries, rows)
             columns.append(ids.T.ravel())
             values.append(np.tile(scale * coefficients, ids.shape[1]))
             row_sizes.append(np.full(ids.shape[1], len(offsets)))
