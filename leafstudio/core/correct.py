@@ -92,7 +92,10 @@ CLOSE_ENOUGH = 2e-4  # of the length: a band point this close to the surface nee
 HESSIAN_CUT = 1e-3  # ∇²φ's radial parts are read at max(r, this share of the length)
 REACH = 0.1  # ℓ, of the length: the correction fades as e^(−r/ℓ√2) past the veins (0.05: a
 # drawn leaf's margin band 9.1° against the paper's 8.3°; 0.3: reniform's lobes 1.44° against 1.36°)
-KELVIN_STEP = 0.01  # of ℓ: the tables' step (a table 16 times finer read 1.5 times slower)
+KELVIN_STEP = 0.005  # of ℓ: the tables' step (a table 16 times finer read 1.5 times slower;
+# 0.01: ∇c, read from kei''s own table, stood 8e-6 off a finite difference of c on the nested demo
+# at grid 48, with weights up to 1.2 where the values are chosen for the surface's bending,
+# tests/core/test_curvature.py; twice as fine, as fast)
 KELVIN_END = 16.0  # of ℓ: φ is taken as 0 past this (kei(16) = 3e-6 against kei(0) = −0.79)
 JUNCTION = 0.011  # of the length: a vein's points this near an earlier vein's are left to it
 OVERSHOOT = 6.0  # T·c beyond this many times the largest residual is no smooth correction
