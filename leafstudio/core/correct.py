@@ -61,11 +61,10 @@ disagree by a little within a grid cell, and meeting both bent the surface into 
 than a thick solid's sheets can follow), and less the points no smooth correction should chase
 (`reachable`).
 
-kei, kei' and ker are tabulated once (scipy.special, KELVIN_STEP apart up to KELVIN_END, past
-which φ is taken as 0) and read back by cubic Hermite interpolation in the compiled kernels. φ's
-Hessian has a log r singularity at each centre, as the thin-plate spline's; ∇²c (curvatures
-only) reads its radial parts at no less than HESSIAN_CUT of the length, so a mesh vertex that
-falls on a vein point gets a finite curvature.
+φ and its derivatives are read from tables by compiled kernels (kelvin.py); φ's Hessian has a
+log r singularity at each centre, as the thin-plate spline's; ∇²c (curvatures only) reads its
+radial parts at no less than HESSIAN_CUT of the length, so a mesh vertex that falls on a vein
+point gets a finite curvature.
 """
 
 from __future__ import annotations
@@ -76,11 +75,17 @@ from functools import partial
 
 import numpy as np
 import scipy.linalg
-import scipy.special
-from numba import njit
 
 from leafstudio.core.bending import Bending, bending_gram, lattice, least_bending
 from leafstudio.core.buckets import kernel_array
+from leafstudio.core.kelvin import (
+    KELVIN,
+    KELVIN_STEP,
+    phi_at,
+    phi_matrix,
+    spline_derivatives,
+    spline_value,
+)
 from leafstudio.core.mpu import MPUImplicit
 from leafstudio.core.prepare.polygon import thin_curve
 from leafstudio.core.surface import HeightSurface, taper_of
@@ -92,11 +97,6 @@ CLOSE_ENOUGH = 2e-4  # of the length: a band point this close to the surface nee
 HESSIAN_CUT = 1e-3  # ∇²φ's radial parts are read at max(r, this share of the length)
 REACH = 0.1  # ℓ, of the length: the correction fades as e^(−r/ℓ√2) past the veins (0.05: a
 # drawn leaf's margin band 9.1° against the paper's 8.3°; 0.3: reniform's lobes 1.44° against 1.36°)
-KELVIN_STEP = 0.005  # of ℓ: the tables' step (a table 16 times finer read 1.5 times slower;
-# 0.01: ∇c, read from kei''s own table, stood 8e-6 off a finite difference of c on the nested demo
-# at grid 48, with weights up to 1.2 where the values are chosen for the surface's bending,
-# tests/core/test_curvature.py; twice as fine, as fast)
-KELVIN_END = 16.0  # of ℓ: φ is taken as 0 past this (kei(16) = 3e-6 against kei(0) = −0.79)
 JUNCTION = 0.011  # of the length: a vein's points this near an earlier vein's are left to it
 OVERSHOOT = 6.0  # T·c beyond this many times the largest residual is no smooth correction
 # (the gallery's forms: 0.62-1.21 times; a drawn leaf with hand-raised veins 2.8; a fan of
@@ -114,47 +114,9 @@ MOST_CENTERS = 800  # beyond this the veins are thinned further: the dense solve
 Choose = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 
-def _kelvin_tables() -> np.ndarray:
-    """(n, 12): on each interval [ρ_i, ρ_i + KELVIN_STEP], ρ_i = i KELVIN_STEP up to
-    KELVIN_END, the cubic Hermite polynomials (coefficients of 1, u, u², u³, u in [0, 1]) of
-    kei (slopes kei'), kei' (slopes kei'' = ker − kei'/ρ) and ker (slopes ker'). kei'' and ker
-    have a log singularity at ρ = 0: the first interval takes the next node's values there (only
-    ρ < KELVIN_STEP reads them, which the Hessian never does)."""
-    rho = np.arange(0.0, KELVIN_END + 2 * KELVIN_STEP, KELVIN_STEP)
-    inner = rho[1:]
-    kei_d = scipy.special.keip(rho)
-    ker = np.concatenate([[scipy.special.ker(inner[0])], scipy.special.ker(inner)])
-    ker_d = np.concatenate([[scipy.special.kerp(inner[0])], scipy.special.kerp(inner)])
-    kei_dd = np.concatenate([[kei_d[1] / KELVIN_STEP], ker[1:] - kei_d[1:] / inner])
-    columns = []
-    for f, slope in ((scipy.special.kei(rho), kei_d), (kei_d, kei_dd), (ker, ker_d)):
-        f0, f1 = f[:-1], f[1:]
-        s0, s1 = slope[:-1] * KELVIN_STEP, slope[1:] * KELVIN_STEP
-        columns += [f0, s0, 3 * (f1 - f0) - 2 * s0 - s1, 2 * (f0 - f1) + s0 + s1]
-    table = np.ascontiguousarray(np.column_stack(columns))
-    table[-1] = 0.0  # never an interval read (t < its index): φ = 0 past KELVIN_END, for
-    # the kernels that clamp t to it instead of branching (_spline_value, _phi_matrix)
-    return table
-
-
-KELVIN = _kelvin_tables()
-
-
-def _phi(rho: np.ndarray) -> np.ndarray:
-    """φ = −kei at ρ = r/ℓ (any shape) from the tables, 0 from KELVIN_END on (numpy: the
-    solve's (m, m) matrix; the compiled kernels read the same polynomials)."""
-    t = rho / KELVIN_STEP
-    k = np.minimum(t.astype(np.intp), len(KELVIN) - 1)
-    u = t - k
-    value = KELVIN[:, 3].take(k)  # column by column: no (..., 4) temporary
-    for column in (2, 1, 0):
-        value = KELVIN[:, column].take(k) + u * value
-    return np.where(t < len(KELVIN) - 1, -value, 0.0)
-
-
 def _phi_among(centers: np.ndarray, reach: float) -> np.ndarray:
     """(m, m) φ(|v_i − v_j| / ℓ) between the (m, 2) spline centres."""
-    return _phi(np.sqrt(((centers[:, None, :] - centers[None, :, :]) ** 2).sum(axis=2)) / reach)
+    return phi_at(np.sqrt(((centers[:, None, :] - centers[None, :, :]) ** 2).sum(axis=2)) / reach)
 
 
 @dataclass(frozen=True)
@@ -169,117 +131,16 @@ class VeinCorrection:
     def value(self, xy: np.ndarray) -> np.ndarray:
         """c at (n, 2) plane points."""
         xy = kernel_array(np.atleast_2d(np.asarray(xy, dtype=float)))
-        return _spline_value(xy, self.centers, self.weights, self.reach, KELVIN, KELVIN_STEP)
+        return spline_value(xy, self.centers, self.weights, self.reach, KELVIN, KELVIN_STEP)
 
     def derivatives(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """c (n,), ∇c (n, 2) and ∇²c (n, 2, 2) in closed form: with d = x − v, r = |d| and
         ρ = r/ℓ, ∇φ = φ'(r) d/r and ∇²φ = φ'' d dᵀ/r² + φ'/r (I − d dᵀ/r²), where φ' = −kei'(ρ)/ℓ
         and φ'' = −(ker(ρ) − kei'(ρ)/ρ)/ℓ² (read at ρ no less than `cut`)."""
         xy = kernel_array(np.atleast_2d(np.asarray(xy, dtype=float)))
-        return _spline_derivatives(
+        return spline_derivatives(
             xy, self.centers, self.weights, self.reach, self.cut, KELVIN, KELVIN_STEP
         )
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _read(table, i, column, u):
-    """The Hermite polynomial in `column` (0: kei, 4: kei', 8: ker) of interval i at u."""
-    return table[i, column] + u * (
-        table[i, column + 1] + u * (table[i, column + 2] + u * table[i, column + 3])
-    )
-
-
-@njit(cache=True, nogil=True, fastmath=True)
-def _spline_value(xy, centers, weights, reach, table, step):
-    """Σ_j w_j φ(|x_i − v_j|) at each of the (n, 2) points; t clamped to the table's last row
-    (zeros) rather than branched on, and fastmath: the loop runs in vector lanes (8.4 -> 6.2 ms
-    for 5292 nodes and 200 centres)."""
-    value = np.empty(len(xy))
-    scale = 1.0 / (reach * step)  # r -> ρ / KELVIN_STEP
-    end = float(len(table) - 1)
-    for i in range(len(xy)):
-        x, y = xy[i, 0], xy[i, 1]
-        v = 0.0
-        for j in range(len(centers)):
-            dx, dy = x - centers[j, 0], y - centers[j, 1]
-            t = min(np.sqrt(dx * dx + dy * dy) * scale, end)
-            k = int(t)
-            v -= weights[j] * _read(table, k, 0, t - k)
-        value[i] = v
-    return value
-
-
-@njit(cache=True, nogil=True, fastmath=True)
-def _phi_matrix(xy, centers, reach, table, step, taper):
-    """(n, m) φ(|x_i − v_j|), and T_i φ(|x_i − v_j|) in single precision (bending.py: c on a
-    lattice per unit weight, and the gram's factor; numpy's `_phi` took six times as long, and
-    T φ formed after it, 2.6 MB more to allocate on the nested demo at grid 128, as long again).
-    Clamped and in vector lanes as _spline_value (3.2 -> 2.4 ms for 1603 nodes, 200 centres)."""
-    out = np.empty((len(xy), len(centers)))
-    tapered = np.empty((len(xy), len(centers)), dtype=np.float32)
-    scale = 1.0 / (reach * step)
-    end = float(len(table) - 1)
-    for i in range(len(xy)):
-        x, y = xy[i, 0], xy[i, 1]
-        for j in range(len(centers)):
-            dx, dy = x - centers[j, 0], y - centers[j, 1]
-            t = min(np.sqrt(dx * dx + dy * dy) * scale, end)
-            k = int(t)
-            value = -_read(table, k, 0, t - k)
-            out[i, j] = value
-            tapered[i, j] = taper[i] * value
-    return out, tapered
-
-
-@njit(cache=True, nogil=True, fastmath={"arcp", "contract"})  # reciprocals and FMAs: 1.3x faster
-def _spline_derivatives(xy, centers, weights, reach, cut, table, step):
-    n = len(xy)
-    value = np.empty(n)
-    grad = np.empty((n, 2))
-    hess = np.empty((n, 2, 2))
-    scale = 1.0 / (reach * step)
-    end = float(len(table) - 1)
-    held_t = max(cut / step, 1.0)  # ∇²φ's radial parts are read at t no less than this
-    inv_reach = 1.0 / reach
-    inv2 = inv_reach * inv_reach
-    for i in range(n):
-        x, y = xy[i, 0], xy[i, 1]
-        v, gx, gy, flat, hxx, hxy, hyy = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-        for j in range(len(centers)):
-            dx, dy = x - centers[j, 0], y - centers[j, 1]
-            r = np.sqrt(dx * dx + dy * dy)
-            t = r * scale
-            if t >= end:
-                continue
-            w = weights[j]
-            k = int(t)
-            u = t - k
-            v -= w * _read(table, k, 0, u)
-            slope = _read(table, k, 4, u)  # kei'(ρ)
-            inv_r = 1.0 / r if r > 0.0 else 0.0
-            across = -w * slope * inv_r * inv_reach  # w φ'(r)/r (0 on the centre)
-            gx += across * dx
-            gy += across * dy
-            if t < held_t:
-                t = held_t
-                k = int(t)
-                u = t - k
-                across = -w * _read(table, k, 4, u) / (t * step) * inv2
-            bend = -w * _read(table, k, 8, u) * inv2 - 2.0 * across  # w (φ'' − φ'/r)
-            flat += across  # ∇²φ = φ'/r I + (φ'' − φ'/r) d dᵀ/r²
-            if r > 0.0:
-                bend *= inv_r * inv_r
-                hxx += bend * dx * dx
-                hxy += bend * dx * dy
-                hyy += bend * dy * dy
-            else:  # on the centre: the mean of the two radial curvatures, either way
-                hxx += 0.5 * bend
-                hyy += 0.5 * bend
-        value[i] = v
-        grad[i, 0], grad[i, 1] = gx, gy
-        hess[i, 0, 0], hess[i, 1, 1] = flat + hxx, flat + hyy
-        hess[i, 0, 1] = hess[i, 1, 0] = hxy
-    return value, grad, hess
 
 
 def _thin_vein(vein: np.ndarray, step: float) -> np.ndarray:
@@ -469,11 +330,11 @@ def pinning(
     on, differences = lattice(*nodes)
     reach = REACH * length
     node_taper = kernel_array(nodes[1][on])
-    phi, tapered = _phi_matrix(
+    phi, tapered = phi_matrix(
         kernel_array(nodes[0][on]), centers, reach, KELVIN, KELVIN_STEP, node_taper
     )
     gram = bending_gram(tapered, differences)
-    among = _phi_matrix(centers, centers, reach, KELVIN, KELVIN_STEP, np.ones(len(centers)))[0]
+    among = phi_matrix(centers, centers, reach, KELVIN, KELVIN_STEP, np.ones(len(centers)))[0]
     return Pinning(kept, centers, taper, Bending(on, node_taper, differences, phi, gram, among))
 
 
