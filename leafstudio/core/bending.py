@@ -19,9 +19,12 @@ flattening, forms/relief.py, 1.30° against 1.08°).
 What K does not change, the lattice, φ at its nodes and the gram (Bending), is the pipeline's
 bending stage (correct.pinning), kept when only K moves; the surface stage solves the program
 with it, and c at the lattice's nodes, φ times the weights, serves the overshoot check and z
-there. Its cost against the paper's surface through the veins (main, 2026-12, the nested demo at
-grid 128, one BLAS thread, CPU time, main and this alternated): cold 57.2 ms against 57.2, after
-a K change 25.9 against 32.5; ovate cold about 4% over, after a K change 12% under.
+there. Its cost against the paper's surface through the veins as main had it (2026-12-03, grid
+128, one BLAS thread, CPU time of a run, main and this alternated 60 times, min / median): the
+nested demo cold 50.0 / 59.8 ms against 48.9 / 59.2, after a K change 22.6 / 27.3 against
+26.4 / 34.3; ovate cold 94.6 / 114.6 against 88.2 / 106.4 (7% over: 21 more centres, those of
+the band already close enough, pinned here, make the mesh stage's curvatures 14% dearer), after
+a K change 51.4 / 61.0 against 56.0 / 67.4.
 """
 
 from __future__ import annotations
