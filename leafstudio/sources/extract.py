@@ -120,9 +120,10 @@ def _components(points: np.ndarray, radius: float) -> np.ndarray:
     return connected_components(graph, directed=False)[1]
 
 
-def clean_scan(points: np.ndarray) -> np.ndarray:
-    """(n,) bool: the points kept once outliers and small detached clusters are dropped."""
-    spacing = _neighbour_spacing(points)
+def clean_scan(points: np.ndarray, spacing: np.ndarray | None = None) -> np.ndarray:
+    """(n,) bool: the points kept once outliers and small detached clusters are dropped
+    (`spacing`: their _neighbour_spacing, when the caller has it)."""
+    spacing = _neighbour_spacing(points) if spacing is None else spacing
     typical = float(np.median(spacing))
     if not typical > 0:
         raise LeafError("most of the scan's points coincide: no surface to find a leaf on")
@@ -165,14 +166,15 @@ def split_scan(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     largest piece left as the petiole, whatever its shape, dropped 16% of the soybean pot1_1
     blade, and on sugar beet pot1_7 took a piece of the blade for the petiole and the real
     petiole for clutter (review finding)."""
-    clean = clean_scan(points)
+    spacing = _neighbour_spacing(points)  # once: the cleaning and the pieces' link take it
+    clean = clean_scan(points, spacing)
     blade = np.zeros(len(points), dtype=bool)
     blade[np.flatnonzero(clean)[blade_points(points[clean])]] = True
     rest = np.flatnonzero(clean & ~blade)
     petiole = np.zeros(len(points), dtype=bool)
     if len(rest) == 0:
         return blade, petiole
-    link = LINK * float(np.median(_neighbour_spacing(points)))
+    link = LINK * float(np.median(spacing))
     labels = _components(points[rest], link)
     gap = cKDTree(points[blade]).query(points[rest])[0]
     sizes = np.bincount(labels)
