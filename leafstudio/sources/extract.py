@@ -29,8 +29,8 @@ import numpy as np
 import shapely
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
-from scipy.spatial import Delaunay, cKDTree
-from shapely.geometry import MultiPoint, Polygon
+from scipy.spatial import cKDTree
+from shapely.geometry import Polygon
 
 from leafstudio._shared import progress
 from leafstudio.core.plane import fixed_sample, principal_extents, principal_spreads
@@ -40,6 +40,7 @@ from leafstudio.core.sheet import CELLS, Scaled, fit_sheet
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
 from leafstudio.sources.scan_holes import holes
+from leafstudio.sources.scan_outline import held_part, outline, resample
 from leafstudio.sources.scan_veins import PETIOLE_SHARE, base_point, midline, side_veins
 
 MIN_POINTS = 50
@@ -53,7 +54,6 @@ EDGE = 0.3  # margin points, grown back near the core, at least this share (a st
 LIFT_NEIGHBOURS = 16
 RIM_KERNEL = np.array([1.0, 2.0, 3.0, 2.0, 1.0])  # smooths the margin's heights along it
 OUTLINE_POINTS = 200  # the outline's default count; its spacing sets the veins' and the rim's
-OPENING = 0.015  # the outline is opened by this share of the length (drops thin stubs)
 STRAND = 0.35  # a petiole's second spread is at most this share of its first (the real scans'
 # petioles: 0.06-0.23; the pieces of blade the ball test leaves: sheets 0.60-0.64, strips 0.12-0.34)
 STICK_OUT = 0.5  # ... and its far end this share of its length from the blade (petioles: 0.92-1.05;
@@ -90,10 +90,11 @@ class Extraction:
 
 
 class _Found(NamedTuple):
-    """What `_extract` found on the scan at unit size: the leaf, the blade and petiole masks, the
-    blade point nearest the base, the blade's plane, the region its points keep to and holes."""
+    """What `_extract` found on the scan at unit size: the leaf (None until `_veins`), the blade
+    and petiole masks, the blade point nearest the base, the blade's plane, the region its
+    points keep to, holes, and the outline, its points and the base on it in the plane."""
 
-    leaf: Leaf
+    leaf: Leaf | None
     blade: np.ndarray  # (n,) bool
     petiole: np.ndarray  # (n,) bool
     base: int | None  # the blade point nearest a base the petiole or an axis told
@@ -101,6 +102,9 @@ class _Found(NamedTuple):
     axes: np.ndarray  # (3, 3) rows: u (length), v, normal
     region: Polygon
     holes: list[np.ndarray]  # (k, 2) rings in the plane: on a flattened blade (scan_holes.py)
+    polygon: Polygon
+    boundary_xy: np.ndarray  # (count, 2)
+    base_xy: np.ndarray  # (2,)
 
 
 def _neighbour_spacing(points: np.ndarray) -> np.ndarray:
@@ -116,9 +120,10 @@ def _components(points: np.ndarray, radius: float) -> np.ndarray:
     return connected_components(graph, directed=False)[1]
 
 
-def clean_scan(points: np.ndarray) -> np.ndarray:
-    """(n,) bool: the points kept once outliers and small detached clusters are dropped."""
-    spacing = _neighbour_spacing(points)
+def clean_scan(points: np.ndarray, spacing: np.ndarray | None = None) -> np.ndarray:
+    """(n,) bool: the points kept once outliers and small detached clusters are dropped
+    (`spacing`: their _neighbour_spacing, when the caller has it)."""
+    spacing = _neighbour_spacing(points) if spacing is None else spacing
     typical = float(np.median(spacing))
     if not typical > 0:
         raise LeafError("most of the scan's points coincide: no surface to find a leaf on")
@@ -161,14 +166,15 @@ def split_scan(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     largest piece left as the petiole, whatever its shape, dropped 16% of the soybean pot1_1
     blade, and on sugar beet pot1_7 took a piece of the blade for the petiole and the real
     petiole for clutter (review finding)."""
-    clean = clean_scan(points)
+    spacing = _neighbour_spacing(points)  # once: the cleaning and the pieces' link take it
+    clean = clean_scan(points, spacing)
     blade = np.zeros(len(points), dtype=bool)
     blade[np.flatnonzero(clean)[blade_points(points[clean])]] = True
     rest = np.flatnonzero(clean & ~blade)
     petiole = np.zeros(len(points), dtype=bool)
     if len(rest) == 0:
         return blade, petiole
-    link = LINK * float(np.median(_neighbour_spacing(points)))
+    link = LINK * float(np.median(spacing))
     labels = _components(points[rest], link)
     gap = cKDTree(points[blade]).query(points[rest])[0]
     sizes = np.bincount(labels)
@@ -217,50 +223,6 @@ def lift(query: np.ndarray, xy: np.ndarray, h: np.ndarray) -> np.ndarray:
     return np.linalg.solve(normal, rhs[..., None])[:, 0, 0]
 
 
-def _outline(xy: np.ndarray, length: float) -> Polygon:
-    """A concave hull of the points whose edges bridge gaps of up to four times the scan's typical
-    largest point spacing (scanner stripes) and nothing longer, opened by OPENING of the length
-    (so that a stub of petiole narrower than twice that is cut off)."""
-    gaps, _ = cKDTree(xy).query(xy, k=2)
-    bridge = 4.0 * float(np.percentile(gaps[:, 1], 95))
-    simplices = Delaunay(xy).simplices
-    edges = np.linalg.norm(xy[simplices] - xy[np.roll(simplices, 1, axis=1)], axis=2)
-    lo, hi = float(edges.min()), float(edges.max())
-    ratio = float(np.clip((bridge - lo) / max(hi - lo, 1e-300), 0.0, 1.0))
-    hull = shapely.concave_hull(MultiPoint(xy), ratio=ratio)
-    polys = [g for g in getattr(hull, "geoms", [hull]) if isinstance(g, Polygon) and g.area > 0]
-    if not polys:
-        raise LeafError("the scan's points do not cover an area")
-    hull = max(polys, key=lambda g: g.area)
-    radius = OPENING * length
-    opened = hull.buffer(-radius, quad_segs=8).buffer(radius, quad_segs=8)
-    polys = [g for g in getattr(opened, "geoms", [opened]) if isinstance(g, Polygon)]
-    hull = max(polys, key=lambda g: g.area) if polys else hull
-    return shapely.geometry.polygon.orient(Polygon(hull.exterior))
-
-
-def _held_part(polygon: Polygon, means: np.ndarray, reach: float) -> Polygon:
-    """The outline's largest part within `reach` of the (m, 2) cube means the sheet was fitted
-    to, without holes. The concave hull bridges bays of the flattened blade that hold no scan
-    point (a stray point, a scanner's gap); the sheet there is extrapolated, folds, and the mesh
-    bent onto it stood out of the scan as a fin (soybean pot1_1's top)."""
-    discs = shapely.buffer(shapely.points(means), 2 * reach, quad_segs=4)  # a MultiPoint's
-    held = shapely.union_all(discs).buffer(-reach, quad_segs=4)  # buffer: 40 times the time
-    part = polygon.intersection(held)  # closed: no slit where a few cube means are missing
-    polys = [g for g in getattr(part, "geoms", [part]) if isinstance(g, Polygon) and g.area > 0]
-    kept = Polygon(max(polys, key=lambda g: g.area).exterior) if polys else polygon
-    if kept.area >= (1 - 1e-9) * polygon.area:  # nothing cut: the outline as it was, from its start
-        return polygon
-    return shapely.geometry.polygon.orient(kept)
-
-
-def _resample(polygon: Polygon, count: int) -> np.ndarray:
-    """(count, 2) points evenly spaced around the polygon's outline, counter-clockwise."""
-    ring = polygon.exterior
-    steps = np.linspace(0.0, ring.length, count, endpoint=False)
-    return shapely.get_coordinates(shapely.line_interpolate_point(ring, steps))
-
-
 def extract_leaf(
     points: np.ndarray,
     base_end: str = "auto",
@@ -296,7 +258,7 @@ def extract_leaf(
     centre, scale, unit = at_unit.centre, at_unit.scale, at_unit.unit
     thinned, cell, size = at_unit.thinned, at_unit.cell, at_unit.size
     progress.report(0.1, FINDING)
-    found = _extract(thinned, base_end, count)
+    found = _extract(thinned, base_end, count)  # its veins only if no sheet is fitted
     progress.report(0.3, FINDING)
     span = float(np.ptp(thinned[found.blade] @ found.axes[0]))
     with progress.share(0.3, 0.75):
@@ -307,8 +269,9 @@ def extract_leaf(
     if sheet is not None:  # the blade unrolled (core/sheet.py), its outline and veins found there
         held = (sheet.centres_flat(), HELD * span / CELLS)
         found = _extract(flat, base_end, count, (found.blade, found.petiole, found.base), held)
+    found = _veins(flat, found, count, None if sheet is None else held)
     progress.report(0.9, FINDING)
-    leaf, blade, petiole, _, origin, axes, region, _ = found
+    leaf, blade, petiole, _, origin, axes, region = found[:7]
     length = float(np.ptp((flat[blade] - origin) @ axes[0]))
     if cell is not None:  # each point as its cube's centroid; a petiole stub cut as there
         # a point lies within its cube's diagonal of the cube's centroid: a cube whose centroid
@@ -433,22 +396,23 @@ def _extract(
     split: tuple[np.ndarray, np.ndarray, int | None] | None = None,
     held: tuple[np.ndarray, float] | None = None,
 ) -> _Found:
-    """extract_leaf on the scan at unit size (and thinned). `split`: the blade and petiole
-    masks and the base's blade point found before (on the unflattened scan, where a petiole and
-    a world axis mean what they say; None for the wider end); `held`: on a flattened blade, the
-    sheet's cube means (m, 3) and how far from them the sheet is known."""
+    """extract_leaf's blade, outline and base on the scan at unit size (and thinned); `_veins`
+    finds the rest (the first pass's are not needed once the blade is unrolled). `split`: the
+    blade and petiole masks and the base's blade point found before (on the unflattened scan,
+    where a petiole and a world axis mean what they say; None for the wider end); `held`: on a
+    flattened blade, the sheet's cube means (m, 3) and how far from them the sheet is known."""
     blade, petiole = split_scan(points) if split is None else (split[0].copy(), split[1].copy())
     if blade.sum() < MIN_POINTS:
         raise LeafError(f"found only {blade.sum()} blade points in the scan (need {MIN_POINTS})")
     origin, axes = _plane(points[blade])
     local = (points - origin) @ axes.T
-    xy, h = local[blade, :2], local[blade, 2]
+    xy = local[blade, :2]
     if np.ptp(xy[:, 1]) < 1e-3 * np.ptp(xy[:, 0]):
         raise LeafError("the scan's points lie on a line, not a leaf surface")
-    polygon = _outline(xy, float(np.ptp(xy[:, 0])))
+    polygon = outline(xy, float(np.ptp(xy[:, 0])))
     if held is not None:
-        polygon = _held_part(polygon, ((held[0] - origin) @ axes.T)[:, :2], held[1])
-    boundary_xy = _resample(polygon, count)
+        polygon = held_part(polygon, ((held[0] - origin) @ axes.T)[:, :2], held[1])
+    boundary_xy = resample(polygon, count)
     # the veins, the region and the rim's smoothing at a spacing of their own: --points sets how
     # finely the outline is written, not what is blade (it did), nor the cost (quadratic in it)
     spacing = polygon.length / OUTLINE_POINTS
@@ -461,7 +425,7 @@ def _extract(
             f"found only {blade.sum()} blade points within the blade's outline (need "
             f"{MIN_POINTS}): the scan does not look like a leaf surface"
         )
-    xy, h = local[blade, :2], local[blade, 2]
+    xy = local[blade, :2]
     # the base: on the flat blade, its wider end (the points cut there are the held part's, no
     # petiole: soybean pot1_1's base landed in a bay by them); the petiole's end or a world
     # axis's as found on the unflattened scan (a petiole's flat points lie off the sheet)
@@ -474,7 +438,21 @@ def _extract(
     base_at = None
     if split is None and (base_end != "auto" or len(told) >= PETIOLE_SHARE * len(xy)):
         base_at = int(np.flatnonzero(blade)[np.argmin(np.linalg.norm(xy - base, axis=1))])
-    midrib = midline(boundary_xy, base, spacing)
+    return _Found(
+        None, blade, petiole, base_at, origin, axes, region, [], polygon, boundary_xy, base
+    )
+
+
+def _veins(
+    points: np.ndarray, found: _Found, count: int, held: tuple[np.ndarray, float] | None
+) -> _Found:
+    """`found` (by `_extract` on these points) with its leaf: the boundary and veins lifted to
+    the scan's heights, and the holes on a flattened blade (`held`)."""
+    origin, axes, polygon, boundary_xy = found.origin, found.axes, found.polygon, found.boundary_xy
+    local = ((points - origin) @ axes.T)[found.blade]  # as _extract's, to the last bit
+    xy, h = local[:, :2], local[:, 2]
+    spacing = polygon.length / OUTLINE_POINTS  # as _extract's
+    midrib = midline(boundary_xy, found.base_xy, spacing)
     gaps = cKDTree(xy)  # the blade's points and their gap, for the side veins and the holes
     gap = float(np.percentile(gaps.query(xy, k=2)[0][:, 1], 95))
     reach = 2.0 * gap
@@ -495,6 +473,5 @@ def _extract(
     rim = np.convolve(np.tile(lift(boundary_xy, xy, h), 3), kernel / kernel.sum(), "same")
     boundary = world(boundary_xy, rim[count : 2 * count])
     veins = veins_inside_outline(boundary, [world(v) for v in veins_xy], spacing)
-    rings = holes(region, gaps, gap) if held is not None else []
-    leaf = Leaf(boundary=boundary, veins=veins)
-    return _Found(leaf, blade, petiole, base_at, origin, axes, region, rings)
+    rings = holes(found.region, gaps, gap) if held is not None else []
+    return found._replace(leaf=Leaf(boundary=boundary, veins=veins), holes=rings)

@@ -161,14 +161,16 @@ def _follow(pixels: np.ndarray, start: np.ndarray, heading: np.ndarray, gap: flo
     tree = cKDTree(pixels)
     used = np.zeros(len(pixels), dtype=bool)
     path = [start]
+    steps: list[float] = []  # each step's length, for _back_along
     cos_turn = np.cos(np.deg2rad(FOLLOW_TURN))
     for _ in range(len(pixels)):
         here = path[-1]
         used[tree.query_ball_point(here, FOLLOW_AHEAD[0])] = True
         step = None
         for reach in (FOLLOW_AHEAD[1], gap):
-            ahead = [i for i in tree.query_ball_point(here, reach) if not used[i]]
-            if not ahead:
+            ahead = np.asarray(tree.query_ball_point(here, reach), dtype=np.intp)
+            ahead = ahead[~used[ahead]]
+            if not len(ahead):
                 continue
             offsets = pixels[ahead] - here
             lengths = np.linalg.norm(offsets, axis=1)
@@ -180,11 +182,12 @@ def _follow(pixels: np.ndarray, start: np.ndarray, heading: np.ndarray, gap: flo
                 break
         if step is None:
             break
+        steps.append(float(np.linalg.norm(step - here)))
         path.append(step)
-        back = _back_along(path, FOLLOW_HEADING)
-        direction = step - back
-        if np.linalg.norm(direction) > 0:
-            heading = direction / np.linalg.norm(direction)
+        direction = step - _back_along(path, steps, FOLLOW_HEADING)
+        norm = np.linalg.norm(direction)
+        if norm > 0:
+            heading = direction / norm
     return _chain_on(pixels, tree, np.array(path))
 
 
@@ -212,11 +215,12 @@ def _chain_on(pixels: np.ndarray, tree, path: np.ndarray) -> np.ndarray:
     return np.array(out)
 
 
-def _back_along(path: list[np.ndarray], distance: float) -> np.ndarray:
-    """The point `distance` back along the path from its last point (its first if shorter)."""
+def _back_along(path: list[np.ndarray], steps: list[float], distance: float) -> np.ndarray:
+    """The point `distance` back along the path from its last point (its first if shorter);
+    `steps`: the path's step lengths, steps[k - 1] from path[k - 1] to path[k]."""
     total = 0.0
     for k in range(len(path) - 1, 0, -1):
-        total += float(np.linalg.norm(path[k] - path[k - 1]))
+        total += steps[k - 1]
         if total >= distance:
             return path[k - 1]
     return path[0]

