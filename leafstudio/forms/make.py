@@ -203,6 +203,8 @@ class Form:
         Leaf
             The (n, 3) outline and the veins (midrib first), in the forms' convention.
         """
+        if blade is not None and not isinstance(blade, Leaf):
+            raise LeafError(f"blade must be a Leaf (Form.blade()), not {type(blade).__name__}")
         blade = self.blade() if blade is None else blade
         if self.fold == 0 and self.curl == 0 and self.roll == 0 and self.twist == 0:
             return blade

@@ -116,3 +116,10 @@ def test_a_form_posed_from_its_blade_is_the_form_made_whole(terms):
     assert np.array_equal(whole.boundary, posed.boundary) and whole.bend == posed.bend
     assert len(whole.veins) == len(posed.veins)
     assert all(map(np.array_equal, whole.veins, posed.veins))
+
+
+def test_a_blade_that_is_not_a_leaf_is_one_leaf_error():
+    from leafstudio.errors import LeafError
+
+    with pytest.raises(LeafError, match="blade must be a Leaf"):
+        Form("ovate", fold=30.0).leaf(blade=np.zeros((3, 3)))
