@@ -223,7 +223,7 @@ class Form:
         growth most of it); `leaf()` poses it. Warns (SIDE_ON) as `blade_and_note` notes."""
         blade, note = self.blade_and_note()
         if note:
-            warnings.warn(note, stacklevel=3)  # the caller of leaf(), or of blade()
+            warnings.warn(note, stacklevel=3)  # said at leaf()'s caller (the usual way in)
         return blade
 
     def blade_and_note(self) -> tuple[Leaf, str]:
