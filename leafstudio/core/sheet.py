@@ -103,13 +103,14 @@ def spline_on_grid(spline: RBFInterpolator, us: np.ndarray, vs: np.ndarray) -> n
     extent on the shared scans (soybean pot1_1; the others 1e-13 to 1.3e-12), and the extracted
     leaves by at most 5e-9 of their size (where Gauss-Newton stops, SETTLED, moves with it;
     benchmarks/bench_sources.py --compare). Falls back to spline(points) for anything else (a
-    kernel other than the thin-plate one, or a scipy whose RBFInterpolator keeps its
-    coefficients elsewhere)."""
+    kernel other than the thin-plate one, an epsilon other than 1, or a scipy whose
+    RBFInterpolator keeps its coefficients elsewhere)."""
     coeffs = getattr(spline, "_coeffs", None)
     shift, scale = getattr(spline, "_shift", None), getattr(spline, "_scale", None)
     centres = spline.y
     if (
         spline.kernel != "thin_plate_spline"
+        or getattr(spline, "epsilon", 1.0) != 1.0  # scipy scales the kernel's input by it
         or coeffs is None
         or shift is None
         or scale is None

@@ -81,3 +81,7 @@ def test_the_spline_on_a_grid_is_scipys_up_to_rounding():
     np.testing.assert_array_equal(
         spline_on_grid(linear, us, vs), linear(grid).reshape(len(us), len(vs), 3)
     )
+    scaled = RBFInterpolator(uv, rolled(uv), kernel="thin_plate_spline", epsilon=2.0)
+    np.testing.assert_allclose(  # an epsilon scales the kernel's input: scipy's own (review)
+        spline_on_grid(scaled, us, vs), scaled(grid).reshape(len(us), len(vs), 3), atol=1e-12
+    )
