@@ -205,7 +205,10 @@ class Form:
         """
         if blade is not None and not isinstance(blade, Leaf):
             raise LeafError(f"blade must be a Leaf (Form.blade()), not {type(blade).__name__}")
-        blade = self.blade() if blade is None else blade
+        if blade is None:
+            blade, note = self.blade_and_note()
+            if note:
+                warnings.warn(note, stacklevel=2)
         if self.fold == 0 and self.curl == 0 and self.roll == 0 and self.twist == 0:
             return blade
         # the leaf knows its pose: reconstruction runs on the flat blade and bends the mesh
@@ -223,7 +226,7 @@ class Form:
         growth most of it); `leaf()` poses it. Warns (SIDE_ON) as `blade_and_note` notes."""
         blade, note = self.blade_and_note()
         if note:
-            warnings.warn(note, stacklevel=3)  # said at leaf()'s caller (the usual way in)
+            warnings.warn(note, stacklevel=2)
         return blade
 
     def blade_and_note(self) -> tuple[Leaf, str]:

@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import replace
 from functools import partial
+from typing import Any
 
 import numpy as np
 from PySide6.QtCore import QSize, Qt, QTimer, Signal
@@ -386,7 +387,9 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
     # waiting for its blade: a blade grows on a lane (60-100 ms, the main thread's before), and
     # a pose slider's change only poses the last one (a few ms)
     kept: dict[str, tuple[Form, Leaf, str]] = {}
-    waiting: dict[str, Form] = {}
+    # "form": the form to show once its blade has grown, "job": the growth, "serial": the
+    # document open when it was chosen (another one opened meanwhile is not replaced)
+    waiting: dict[str, Any] = {}
 
     def show(form: Form) -> None:
         _unposed, blade, side_on = kept["blade"]
@@ -395,27 +398,37 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
         session.new_document(leaf, leaf_sketch(leaf, form.teeth_count), f"{form.shape} form")
         made["serial"] = session.state.serial
 
-    def grown(form: Form, blade: tuple[Form, Leaf, str]) -> None:
+    def grown(blade: tuple[Form, Leaf, str]) -> None:
         kept["blade"] = blade
-        if waiting.get("form") is form:
-            del waiting["form"]
-            show(form)
+        form = waiting.get("form")
+        if form is not None and form.unposed() == blade[0]:
+            if session.state.serial == waiting.pop("serial"):
+                show(form)
+            waiting.clear()
 
-    def failed(form: Form, exc: BaseException) -> None:
-        if waiting.get("form") is form:
-            del waiting["form"]
+    def failed(unposed: Form, exc: BaseException) -> None:
+        form = waiting.get("form")
+        if form is not None and form.unposed() == unposed:
+            waiting.clear()
             window.show_error("Forms", describe(exc))
 
     def choose(form: Form, picked: bool) -> None:
-        if not picked and session.state.serial != made["serial"]:
+        growing = waiting.get("form")
+        ours = waiting["serial"] if growing is not None else made["serial"]
+        if not picked and session.state.serial != ours:
             return  # a term changed while another document is open: only its definition shows
-        if "blade" in kept and kept["blade"][0] == form.unposed():
-            waiting.pop("form", None)  # a blade still growing is another form's
+        unposed = form.unposed()
+        if "blade" in kept and kept["blade"][0] == unposed:
+            if "job" in waiting:
+                waiting["job"].cancel()  # another form's blade, no longer wanted
+            waiting.clear()
             show(form)
-            return
-        waiting["form"] = form
-        job = window.worker.start(FORM, grow_blade, form)
-        job.on_done(partial(grown, form)).on_failed(partial(failed, form))
+        elif growing is not None and growing.unposed() == unposed:
+            waiting["form"] = form  # its blade is on its way: a pose change needs no other
+        else:
+            job = window.worker.start(FORM, grow_blade, form)
+            job.on_done(grown).on_failed(partial(failed, unposed))
+            waiting.update(form=form, job=job, serial=session.state.serial)
 
     def grow(venation: str) -> None:
         sketch = session.editable_sketch()

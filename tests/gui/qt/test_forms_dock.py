@@ -14,6 +14,7 @@ from leafstudio.forms import SHAPES, Form
 from leafstudio.gui.qt import forms_dock
 from leafstudio.gui.qt.forms_dock import FormsPanel, leaf_sketch, thumbnail
 from leafstudio.model import Leaf
+from leafstudio.sources.demos import demo
 from tests.gui.qt.conftest import WAIT_MS, close_window, image_pixels, make_window, wait_result
 
 
@@ -267,3 +268,32 @@ def test_only_the_last_chosen_form_becomes_the_document(window, panel, qtbot):
     qtbot.wait(50)  # any answer still queued to this thread
     assert window.session.state.title.startswith("linear")
     assert window.session.history.index == 1  # one step: the cordate form never arrived
+
+
+def test_a_pose_changed_while_the_blade_grows_is_the_one_shown(window, panel, qtbot, monkeypatch):
+    """Review: a slider's change that came before the chosen form's blade was dropped (the
+    document was not the gallery's yet), and a pose change started a second growth of the
+    same blade. (A shape no other test here chooses: the dock keeps the last blade.)"""
+    grown: list[Form] = []
+    blade = Form.blade_and_note
+    monkeypatch.setattr(Form, "blade_and_note", lambda f: grown.append(f) or blade(f))
+    serial = window.session.state.serial
+    panel.gallery.setCurrentRow(list(SHAPES).index("reniform"))
+    panel.choose_now()
+    panel.fold.setValue(30.0)
+    panel.chosen.emit(panel.form(), False)  # the debounced change, before the blade came
+    qtbot.waitUntil(lambda: window.session.state.serial != serial, timeout=WAIT_MS)
+    qtbot.waitUntil(lambda: window.worker.is_idle("forms"), timeout=WAIT_MS)
+    assert window.session.state.title.startswith("reniform")
+    assert window.session.leaf.bend is not None and window.session.leaf.bend.fold == 30.0
+    assert [f.shape for f in grown] == ["reniform"]
+
+
+def test_a_document_opened_while_the_blade_grows_is_not_replaced(window, panel, qtbot):
+    panel.gallery.setCurrentRow(list(SHAPES).index("hastate"))
+    panel.choose_now()
+    window.session.open_demo("parallel")  # before the blade came
+    qtbot.waitUntil(lambda: window.worker.is_idle("forms"), timeout=WAIT_MS)
+    qtbot.wait(50)  # the blade's answer, queued to this thread
+    assert not window.session.state.title.startswith("hastate")
+    assert np.array_equal(window.session.leaf.boundary, demo("parallel").boundary)
