@@ -174,8 +174,8 @@ def measure(window: MainWindow, grid: int) -> dict:
         after.append(meter.worst(since=ready["t"]))
         busy.append(meter.busiest(since=ready["t"]))
         total.append(meter.worst())
-        draws.append(window.outcome.timings["draw"])
-        stages.append(window.outcome.timings)
+        draws.append(window.session.shown.outcome.timings["draw"])
+        stages.append(window.session.shown.outcome.timings)
     storm = measure_storm(window, meter, screen)
     meter.timer.stop()
     ms = lambda seconds: round(1000 * seconds, 1)  # noqa: E731
@@ -198,7 +198,7 @@ def measure(window: MainWindow, grid: int) -> dict:
         "stage_ms_median": {
             name: ms(statistics.median(s.get(name, 0.0) for s in stages)) for name in stages[0]
         },
-        "mesh_triangles": int(window.result.mesh.n_cells),
+        "mesh_triangles": int(window.session.result.mesh.n_cells),
     }
 
 

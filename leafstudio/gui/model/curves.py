@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import shapely
-from scipy.interpolate import make_interp_spline
+from scipy.interpolate import CubicSpline, make_interp_spline
 
 SAMPLES_PER_SPAN = 16  # curve points per span between two control points
 MIN_BOUNDARY_SAMPLES = 120
@@ -51,7 +51,9 @@ def closed_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.nd
         return control
     loop = np.vstack([control, control[:1]])
     t = _centripetal(loop)
-    spline = make_interp_spline(t, loop, k=3, bc_type="periodic")
+    # CubicSpline, not make_interp_spline: for a periodic spline the latter solves by a
+    # Woodbury update in Python, 3-9x slower here (0.7-2.5 vs 6-16 ms; the same curve to 1e-15)
+    spline = CubicSpline(t, loop, bc_type="periodic")
     per_span = max(per_span, -(-MIN_BOUNDARY_SAMPLES // len(control)))
     return spline(_span_samples(t, per_span)[:-1])
 
