@@ -35,6 +35,8 @@ import numpy as np
 import scipy.sparse
 from numba import njit
 
+from leafstudio.core.grid import Grid
+
 LATTICE_NODES = 2500  # grid nodes, about, on the lattice whose bending is summed
 FINE = 0.97  # T below this: the margin band, where the lattice is finer (see lattice)
 POWER_STEPS = 20  # power steps for the largest eigenvalue of the normal matrix
@@ -61,21 +63,22 @@ class Bending:
         return replace(self, phi=self.phi[:, pins], gram=self.gram[cross], among=self.among[cross])
 
 
-def lattice(xy: np.ndarray, taper: np.ndarray) -> tuple[np.ndarray, scipy.sparse.csr_matrix]:
-    """Indices of the (n, 2) grid nodes `xy` kept on the lattice and the second differences
-    between them, (rows, kept) sparse, one row per direction (x, y, and the cross difference)
-    wherever all its nodes are kept. In the margin band (T < FINE) the lattice takes every
-    stride-th row and column (stride so that about LATTICE_NODES would be kept over the whole
-    blade), farther in every second of those: the surface bends most where the taper brings it
-    down (a stride of 3 left margin bands rougher than the paper's surface), and the solve's cost
-    grows with the nodes. The rows are laid out straight in compressed form (a fixed count of
-    entries per row: building D through scipy's coordinate form took 3 of the nested demo's
-    3.7 ms at grid 128)."""
-    steps = np.abs(np.diff(xy[:, 0]))  # every step between grid nodes is the spacing's multiple
-    steps = steps[steps > 0]
-    spacing = float(steps.min()) if len(steps) else 1.0
-    stride = max(1, round(float(np.sqrt(len(xy) / LATTICE_NODES))))
-    cell = np.rint((xy - [xy[:, 0].min(), xy[:, 1].min()]) / spacing).astype(np.int64)
+def lattice(
+    grid: Grid, index: np.ndarray, taper: np.ndarray
+) -> tuple[np.ndarray, scipy.sparse.csr_matrix]:
+    """Which of the grid's nodes at the (n,) flat indices `index` (row-major, grid.points's
+    order) are kept on the lattice, as positions in `index`, and the second differences between
+    them, (rows, kept) sparse, one row per direction (x, y, and the cross difference) wherever
+    all its nodes are kept. In the margin band (T < FINE) the lattice takes every stride-th row
+    and column from the nodes' lowest (stride so that about LATTICE_NODES would be kept over the
+    whole blade), farther in every second of those: the surface bends most where the taper
+    brings it down (a stride of 3 left margin bands rougher than the paper's surface), and the
+    solve's cost grows with the nodes. The rows are laid out straight in compressed form (a
+    fixed count of entries per row: building D through scipy's coordinate form took 3 of the
+    nested demo's 3.7 ms at grid 128)."""
+    stride = max(1, round(float(np.sqrt(len(index) / LATTICE_NODES))))
+    row, column = np.divmod(index, grid.shape[1])
+    cell = np.column_stack([column - column.min(), row - row.min()])
     on = np.flatnonzero((cell[:, 0] % stride == 0) & (cell[:, 1] % stride == 0) & (taper > 0))
     if len(on) == 0:
         return on, scipy.sparse.csr_matrix((0, 0), dtype=np.float32)

@@ -78,6 +78,7 @@ import scipy.linalg
 
 from leafstudio.core.bending import Bending, bending_gram, lattice, least_bending
 from leafstudio.core.buckets import kernel_array
+from leafstudio.core.grid import Grid
 from leafstudio.core.kelvin import (
     KELVIN,
     KELVIN_STEP,
@@ -316,26 +317,29 @@ def pinning(
     length: float,
     implicit: MPUImplicit,
     delta: float,
-    nodes: tuple[np.ndarray, np.ndarray] | None = None,
+    grid: Grid | None = None,
+    inside: np.ndarray | None = None,
+    node_taper: np.ndarray | None = None,
 ) -> Pinning:
     """The spline's centres on the (m_i, 2) `veins` and T there (T = tanh(g/δ)), and, given the
-    grid's nodes inside the leaf and T there, the lattice of them with φ and the bending gram
-    for every centre (bending.py)."""
+    grid, its nodes inside the leaf ((ny * nx,) bool) and T there, the lattice of them with φ
+    and the bending gram for every centre (bending.py)."""
     kept = spline_centers(veins, length)
     centers = np.vstack([v[k] for v, k in zip(veins, kept, strict=True)])
     centers = kernel_array(centers)
     taper = taper_of(implicit(centers), delta)
-    if nodes is None:
+    if grid is None or inside is None or node_taper is None:
         return Pinning(kept, centers, taper, None)
-    on, differences = lattice(*nodes)
+    index = np.flatnonzero(inside)
+    on, differences = lattice(grid, index, node_taper)
     reach = REACH * length
-    node_taper = kernel_array(nodes[1][on])
+    lattice_taper = kernel_array(node_taper[on])
     phi, tapered = phi_matrix(
-        kernel_array(nodes[0][on]), centers, reach, KELVIN, KELVIN_STEP, node_taper
+        kernel_array(grid.points[index[on]]), centers, reach, KELVIN, KELVIN_STEP, lattice_taper
     )
     gram = bending_gram(tapered, differences)
     among = phi_matrix(centers, centers, reach, KELVIN, KELVIN_STEP, np.ones(len(centers)))[0]
-    return Pinning(kept, centers, taper, Bending(on, node_taper, differences, phi, gram, among))
+    return Pinning(kept, centers, taper, Bending(on, lattice_taper, differences, phi, gram, among))
 
 
 def onto_veins(

@@ -254,8 +254,8 @@ def compute_bending(run: StageRun) -> Pinning:
     guide: GuideStage = run["guide"]
     g_in = guide.g[guide.inside]
     delta = taper_width(run.params.taper, g_in)
-    nodes = run["grid"].points[guide.inside]
-    return pinning(fs.veins, fs.length, run["implicit"], delta, (nodes, taper_of(g_in, delta)))
+    taper = taper_of(g_in, delta)
+    return pinning(fs.veins, fs.length, run["implicit"], delta, run["grid"], guide.inside, taper)
 
 
 def compute_surface(run: StageRun) -> SurfaceStage:
