@@ -1,20 +1,21 @@
 """The vein correction's values chosen for the whole surface's bending (issue 21, item 4).
 
 correct.py brings the height surface onto the vein points with a spline c, each value c(v_i)
-free within a tolerance. Chosen so that c alone bends least (`correct._within`), the surface
-through the veins still creased more than the paper's pure GMM surface on some rows of
-`bench_bent.py --veins` (99th-percentile dihedral: deltoid's margin band 2.35° against 2.19°, a
-drawn leaf's 8.54° against 8.32°, linear's 7.81° against 7.78°): c bent least where the mixture
-bent most. Here the values are chosen within the same tolerances so that the surface itself,
-z = T · (M + c) over the grid's nodes inside the leaf, bends least: the sum of its squared second
-differences (xx, yy and the cross difference) on a lattice of the nodes (`lattice`: finer in
-the margin band). c is linear in its values (the spline's weights are one solve of them), so
-this is a small quadratic program in the values, box-constrained, solved by projected gradient
-steps (FISTA) from the residuals themselves (starting from `_within`'s values changed nothing).
-The margin band's 99th-percentile dihedral falls below the paper's surface
-on every gallery form (lanceolate 3.17° -> 1.66°, deltoid 2.19° -> 1.98°), and its inside on all
-but two (oblanceolate 2.94° against 2.85°; orbicular, whose midrib follows the dip of its base's
-flattening, forms/relief.py, 1.30° against 1.08°).
+free within a tolerance. Chosen so that c alone bends least (projected gradient steps on c's
+own energy, as it first was), the surface through the veins still creased more than the paper's
+pure GMM surface on some rows of `bench_bent.py --veins` (99th-percentile dihedral: deltoid's
+margin band 2.35° against 2.19°, a drawn leaf's 8.54° against 8.32°, linear's 7.81° against
+7.78°): c bent least where the mixture bent most. Here the values are chosen within the same
+tolerances so that the surface itself, z = T · (M + c) over the grid's nodes inside the leaf,
+bends least: the sum of its squared second differences (xx, yy and the cross difference) on a
+lattice of the nodes (`lattice`: finer in the margin band). c is linear in its values (the
+spline's weights are one solve of them), so this is a small quadratic program in the values,
+box-constrained, solved by projected gradient steps (FISTA) from the residuals themselves
+(starting from c's own least-bending values changed nothing). The margin band's
+99th-percentile dihedral falls below the paper's surface on every gallery form (lanceolate
+3.17° -> 1.66°, deltoid 2.19° -> 1.98°), and its inside on all but two (oblanceolate 2.94°
+against 2.85°; orbicular, whose midrib follows the dip of its base's flattening,
+forms/relief.py, 1.30° against 1.08°).
 
 What K does not change, the lattice, φ at its nodes and the gram (Bending), is the pipeline's
 bending stage (correct.pinning), kept when only K moves; the surface stage solves the program

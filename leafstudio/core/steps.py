@@ -283,7 +283,7 @@ def compute_surface(run: StageRun) -> SurfaceStage:
             fs.heights,
             fs.length,
             run["bending"],
-            (nodes, surface.taper(g_in)),
+            nodes,
             _stretch(run, surface),
         )
     return SurfaceStage(surface=surface, z=surface(nodes, g_in, correction))
