@@ -284,6 +284,7 @@ def onto_veins(
     length: float,
     pinned: Pinning,
     nodes: np.ndarray,
+    mixture: np.ndarray,
     stretch: list[np.ndarray] | None = None,
 ) -> tuple[HeightSurface, np.ndarray | None]:
     """`surface` with a VeinCorrection that brings it onto the vein points, and c at the nodes
@@ -306,6 +307,8 @@ def onto_veins(
         of the band (T small, so c must be r/T there) whose r/T differ a lot over a short way
         (a short basal vein in a narrow lobe, a notch) bent the apex down 25 times the veins'
         relief (a fan of veins from a sinus's notch), for residuals under 1% of the length.
+    mixture : (n,) float array
+        M, the mixture alone, at the nodes (the surface stage has it: z there takes it too).
     stretch : list of (m_i,) float arrays, optional
         How many times the leaf's bend lengthens a distance off the blade at each vein point
         (bend.normal_stretch, at least 1): a fold on a rolled tube shears its section, and a
@@ -321,7 +324,7 @@ def onto_veins(
         if stretch is None
         else np.concatenate([s[k] for s, k in zip(stretch, kept, strict=True)])
     )
-    relief_on = surface.relief(nodes[bending.on])
+    relief_on = mixture[bending.on]
     keep = reachable(taper, residual, relief)
     for pins in (keep, keep & (taper >= BAND)):
         some = bending.pinned(pins)
