@@ -1,20 +1,21 @@
 """The vein correction's values chosen for the whole surface's bending (issue 21, item 4).
 
 correct.py brings the height surface onto the vein points with a spline c, each value c(v_i)
-free within a tolerance. Chosen so that c alone bends least (`correct._within`), the surface
-through the veins still creased more than the paper's pure GMM surface on some rows of
-`bench_bent.py --veins` (99th-percentile dihedral: deltoid's margin band 2.35° against 2.19°, a
-drawn leaf's 8.54° against 8.32°, linear's 7.81° against 7.78°): c bent least where the mixture
-bent most. Here the values are chosen within the same tolerances so that the surface itself,
-z = T · (M + c) over the grid's nodes inside the leaf, bends least: the sum of its squared second
-differences (xx, yy and the cross difference) on a lattice of the nodes (`lattice`: finer in
-the margin band). c is linear in its values (the spline's weights are one solve of them), so
-this is a small quadratic program in the values, box-constrained, solved by projected gradient
-steps (FISTA) from the residuals themselves (starting from `_within`'s values changed nothing).
-The margin band's 99th-percentile dihedral falls below the paper's surface
-on every gallery form (lanceolate 3.17° -> 1.66°, deltoid 2.19° -> 1.98°), and its inside on all
-but two (oblanceolate 2.94° against 2.85°; orbicular, whose midrib follows the dip of its base's
-flattening, forms/relief.py, 1.30° against 1.08°).
+free within a tolerance. Chosen so that c alone bends least (projected gradient steps on c's
+own energy, as it first was), the surface through the veins still creased more than the paper's
+pure GMM surface on some rows of `bench_bent.py --veins` (99th-percentile dihedral: deltoid's
+margin band 2.35° against 2.19°, a drawn leaf's 8.54° against 8.32°, linear's 7.81° against
+7.78°): c bent least where the mixture bent most. Here the values are chosen within the same
+tolerances so that the surface itself, z = T · (M + c) over the grid's nodes inside the leaf,
+bends least: the sum of its squared second differences (xx, yy and the cross difference) on a
+lattice of the nodes (`lattice`: finer in the margin band). c is linear in its values (the
+spline's weights are one solve of them), so this is a small quadratic program in the values,
+box-constrained, solved by projected gradient steps (FISTA) from the residuals themselves
+(starting from c's own least-bending values changed nothing). The margin band's
+99th-percentile dihedral falls below the paper's surface on every gallery form (lanceolate
+3.17° -> 1.66°, deltoid 2.19° -> 1.98°), and its inside on all but two (oblanceolate 2.94°
+against 2.85°; orbicular, whose midrib follows the dip of its base's flattening,
+forms/relief.py, 1.30° against 1.08°).
 
 What K does not change, the lattice, φ at its nodes and the gram (Bending), is the pipeline's
 bending stage (correct.pinning), kept when only K moves; the surface stage solves the program
@@ -34,6 +35,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.sparse
 from numba import njit
+
+from leafstudio.core.grid import Grid
 
 LATTICE_NODES = 2500  # grid nodes, about, on the lattice whose bending is summed
 FINE = 0.97  # T below this: the margin band, where the lattice is finer (see lattice)
@@ -61,21 +64,22 @@ class Bending:
         return replace(self, phi=self.phi[:, pins], gram=self.gram[cross], among=self.among[cross])
 
 
-def lattice(xy: np.ndarray, taper: np.ndarray) -> tuple[np.ndarray, scipy.sparse.csr_matrix]:
-    """Indices of the (n, 2) grid nodes `xy` kept on the lattice and the second differences
-    between them, (rows, kept) sparse, one row per direction (x, y, and the cross difference)
-    wherever all its nodes are kept. In the margin band (T < FINE) the lattice takes every
-    stride-th row and column (stride so that about LATTICE_NODES would be kept over the whole
-    blade), farther in every second of those: the surface bends most where the taper brings it
-    down (a stride of 3 left margin bands rougher than the paper's surface), and the solve's cost
-    grows with the nodes. The rows are laid out straight in compressed form (a fixed count of
-    entries per row: building D through scipy's coordinate form took 3 of the nested demo's
-    3.7 ms at grid 128)."""
-    steps = np.abs(np.diff(xy[:, 0]))  # every step between grid nodes is the spacing's multiple
-    steps = steps[steps > 0]
-    spacing = float(steps.min()) if len(steps) else 1.0
-    stride = max(1, round(float(np.sqrt(len(xy) / LATTICE_NODES))))
-    cell = np.rint((xy - [xy[:, 0].min(), xy[:, 1].min()]) / spacing).astype(np.int64)
+def lattice(
+    grid: Grid, index: np.ndarray, taper: np.ndarray
+) -> tuple[np.ndarray, scipy.sparse.csr_matrix]:
+    """Which of the grid's nodes at the (n,) flat indices `index` (row-major, grid.points's
+    order) are kept on the lattice, as positions in `index`, and the second differences between
+    them, (rows, kept) sparse, one row per direction (x, y, and the cross difference) wherever
+    all its nodes are kept. In the margin band (T < FINE) the lattice takes every stride-th row
+    and column from the nodes' lowest (stride so that about LATTICE_NODES would be kept over the
+    whole blade), farther in every second of those: the surface bends most where the taper
+    brings it down (a stride of 3 left margin bands rougher than the paper's surface), and the
+    solve's cost grows with the nodes. The rows are laid out straight in compressed form (a
+    fixed count of entries per row: building D through scipy's coordinate form took 3 of the
+    nested demo's 3.7 ms at grid 128)."""
+    stride = max(1, round(float(np.sqrt(len(index) / LATTICE_NODES))))
+    row, column = np.divmod(index, grid.shape[1])
+    cell = np.column_stack([column - column.min(), row - row.min()])
     on = np.flatnonzero((cell[:, 0] % stride == 0) & (cell[:, 1] % stride == 0) & (taper > 0))
     if len(on) == 0:
         return on, scipy.sparse.csr_matrix((0, 0), dtype=np.float32)

@@ -34,26 +34,22 @@ needed (the thin-plate spline's plane was undetermined across a lone midrib).
 Pinned exactly, the spline drew a ridge tight onto a vein wherever the veins stand on a roof (a
 form's veins are a quarter of their distance to the margin high: 14° each side of the midrib,
 which the mixture rounds 6.5e-3 of the length low). So each value c(v_i) may move within
-TOLERANCE / T_i of r_i / T_i to where the spline bends least (`_within`, projected gradient steps
-on the bending energy, the factorised system reused): ovate's 99th-percentile interior dihedral
-5.0° -> 4.6°, oblong's 6.4° -> 5.8°, every vein point within 1e-3 of the length on the mesh.
-In the margin band (T_i < BAND) the tolerance is BAND_TOLERANCE: there the surface comes down
-to the margin within a short way, and a vein point held tight beside a corner or a raised vein
-end bends the spline just where the taper creases (p99 margin dihedral at BAND_TOLERANCE =
-TOLERANCE: deltoid 2.45°, spatulate 2.45°, a drawn leaf's 8.84°, its inside 9.15°; now 2.35°,
-2.37°, 8.54°, 9.10°, every vein point within 8e-4 of the length). Where the blade is bent, that
-wider tolerance is divided by the bend's stretch once more (onto_veins).
-
-Given the grid's nodes (as the pipeline gives them), the values are chosen within the same
-tolerances for the whole surface's bending instead, T · (M + c) on a lattice of the nodes
-(bending.py), not c's alone: c then bends against the mixture's own bends rather than where it
-bends least by itself. bench_bent --veins, 99th-percentile dihedral against the paper's surface,
-margin band: linear 7.05° (7.78°), deltoid 1.98° (2.19°), orbicular 1.09° (1.18°), a drawn
-leaf's 8.49° (8.32°, was 8.54°); every gallery form's margin band and inside but oblanceolate's
-and orbicular's inside (2.94° against 2.85°, 1.30° against 1.08°: the dip of the form's base
-flattening) now as smooth or smoother; every vein point still within 8e-4 of the length. The
-points of the band already close enough (CLOSE_ENOUGH) are pinned too then: the surface moves
-there as well.
+TOLERANCE / T_i of r_i / T_i, and the values are chosen so that the whole surface, T · (M + c)
+on a lattice of the grid's nodes, bends least (bending.py): c bends against the mixture's own
+bends. Chosen for c's own bending alone, ovate's 99th-percentile interior dihedral went 5.0° ->
+4.6° and oblong's 6.4° -> 5.8°, but c bent least where the mixture bent most (deltoid's margin
+band 2.35° against the paper's 2.19°). In the margin band (T_i < BAND) the tolerance is
+BAND_TOLERANCE: there the surface comes down to the margin within a short way, and a vein point
+held tight beside a corner or a raised vein end bends the spline just where the taper creases
+(p99 margin dihedral at BAND_TOLERANCE = TOLERANCE, c's own bending: deltoid 2.45°, spatulate
+2.45°, a drawn leaf's 8.84°, its inside 9.15°; then 2.35°, 2.37°, 8.54°, 9.10°). Where the
+blade is bent, that wider tolerance is divided by the bend's stretch once more (fit_correction).
+bench_bent --veins, 99th-percentile dihedral against the paper's surface, margin band: linear
+7.05° (7.78°), deltoid 1.98° (2.19°), orbicular 1.09° (1.18°), a drawn leaf's 8.49° (8.32°);
+every gallery form's margin band and inside but oblanceolate's and orbicular's inside (2.94°
+against 2.85°, 1.30° against 1.08°: the dip of the form's base flattening) as smooth or
+smoother; every vein point within 8e-4 of the length. The points of the band already close to
+the surface are pinned too: the surface moves there as well.
 
 The spline's centres are the vein points thinned along each vein (CENTER_STEP), less those of
 a later vein within JUNCTION of an earlier one (where a side vein leaves the midrib, the two
@@ -69,19 +65,17 @@ point gets a finite curvature.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, replace
-from functools import partial
 
 import numpy as np
 import scipy.linalg
 
 from leafstudio.core.bending import Bending, bending_gram, lattice, least_bending
 from leafstudio.core.buckets import kernel_array
+from leafstudio.core.grid import Grid
 from leafstudio.core.kelvin import (
     KELVIN,
     KELVIN_STEP,
-    phi_at,
     phi_matrix,
     spline_derivatives,
     spline_value,
@@ -93,7 +87,6 @@ from leafstudio.core.surface import HeightSurface, taper_of
 CENTER_STEP = 0.008  # vein points closer than this share of the length are one spline centre
 VEIN_SMOOTHING = 1e-9  # λ (φ is dimensionless: φ(0) = π/4)
 BAND = 0.5  # T below this: the margin band, where a vein point close enough is left as it is
-CLOSE_ENOUGH = 2e-4  # of the length: a band point this close to the surface needs no pinning
 HESSIAN_CUT = 1e-3  # ∇²φ's radial parts are read at max(r, this share of the length)
 REACH = 0.1  # ℓ, of the length: the correction fades as e^(−r/ℓ√2) past the veins (0.05: a
 # drawn leaf's margin band 9.1° against the paper's 8.3°; 0.3: reniform's lobes 1.44° against 1.36°)
@@ -102,21 +95,10 @@ OVERSHOOT = 6.0  # T·c beyond this many times the largest residual is no smooth
 # (the gallery's forms: 0.62-1.21 times; a drawn leaf with hand-raised veins 2.8; a fan of
 # basal veins from a sinus's notch into narrow lobes 17)
 TOLERANCE = 4e-4  # of the length: each vein point may stay this far off the surface when that
-# lets the spline bend less (_within)
+# lets the surface bend less (bending.least_bending)
 BAND_TOLERANCE = 7e-4  # ... and this far in the margin band (T < BAND), see the module
-POWER_STEPS = 12
-RELAX_STEPS = 40
-CHECKED = 2000  # nodes at most where the correction is checked (_tame)
 MOST_CENTERS = 800  # beyond this the veins are thinned further: the dense solve grows as its
 # cube (3000 centres took seconds a run; the app reruns this on every slider step)
-
-#: (target, lo, hi, spline) -> values in [lo, hi]: how fit_correction chooses its values
-Choose = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
-
-
-def _phi_among(centers: np.ndarray, reach: float) -> np.ndarray:
-    """(m, m) φ(|v_i − v_j| / ℓ) between the (m, 2) spline centres."""
-    return phi_at(np.sqrt(((centers[:, None, :] - centers[None, :, :]) ** 2).sum(axis=2)) / reach)
 
 
 @dataclass(frozen=True)
@@ -173,27 +155,13 @@ def spline_centers(veins: list[np.ndarray], length: float) -> list[np.ndarray]:
     return kept
 
 
-def reachable(
-    taper: np.ndarray,
-    residual: np.ndarray,
-    relief: float,
-    length: float,
-    stretch: np.ndarray | float = 1.0,
-    settle: bool = True,
-) -> np.ndarray:
-    """(m,) bool: the vein points the spline is made to pass through.
-
-    Left out: a point that only a correction higher than the veins' own relief could reach
+def reachable(taper: np.ndarray, residual: np.ndarray, relief: float) -> np.ndarray:
+    """(m,) bool: the vein points the spline is made to pass through: those inside the margin
+    (T > 0) but a point that only a correction higher than the veins' own relief could reach
     (|r| > relief · T: a vein raised next to the margin, which z = b there cannot follow without
-    a spike), and a point in the margin band (T < BAND) that is already within CLOSE_ENOUGH of the
-    length (a thin tip's midrib: pinning it there only sharpens the tip), over its `stretch`
-    (onto_veins); unless not `settle` (a correction chosen for the whole surface's bending,
-    bending.py, moves the surface there too).
-    """
-    spike = np.abs(residual) > relief * taper
-    close = CLOSE_ENOUGH * length / stretch if settle else -1.0
-    settled = (taper < BAND) & (np.abs(residual) <= close)
-    return (taper > 0) & ~spike & ~settled
+    a spike). A point of the margin band already close to the surface is pinned too: the
+    values are chosen for the whole surface's bending (bending.py), which moves it there too."""
+    return (taper > 0) & ~(np.abs(residual) > relief * taper)
 
 
 def fit_correction(
@@ -201,13 +169,13 @@ def fit_correction(
     taper: np.ndarray,
     residual: np.ndarray,
     length: float,
-    stretch: np.ndarray | float = 1.0,
-    choose: Choose | None = None,
-    among: np.ndarray | None = None,
+    stretch: np.ndarray | float,
+    bending: Bending,
+    relief: np.ndarray,
 ) -> VeinCorrection | None:
     """The spline c with T_i c(v_i) within TOLERANCE of r_i at the vein points (BAND_TOLERANCE
-    in the margin band; over their `stretch`, onto_veins), bending least: c itself, or, given
-    `choose`, what it chooses (the whole surface's bending, bending.py).
+    in the margin band; over their `stretch`, onto_veins), chosen so that the whole surface,
+    T · (M + c), bends least on the lattice (bending.least_bending).
 
     Parameters
     ----------
@@ -219,13 +187,14 @@ def fit_correction(
         h_i − T_i M(v_i): what the mixture leaves to correct.
     length : float
         The leaf's length (λ and the Hessian's cut-off scale with it).
-    stretch : (m,) float array or float, default 1
-        How many times a distance off the surface grows at each point when the blade is bent.
-    choose : callable, optional
-        (target, lo, hi, spline) -> values in [lo, hi], with `spline` the (m, m) weights per
-        unit value (S⁻¹ diag(T²)); default `_within`.
-    among : (m, m) float array, optional
-        φ between the centres, when known (the pipeline's bending stage has it).
+    stretch : (m,) float array or float
+        How many times a distance off the surface grows at each point when the blade is bent
+        (1: not bent).
+    bending : Bending
+        The lattice, with φ, the gram and φ between the centres, for these m centres
+        (Bending.pinned).
+    relief : (n,) float array
+        M, the mixture alone, at the lattice's nodes.
 
     Returns
     -------
@@ -234,81 +203,59 @@ def fit_correction(
     inside = taper > 0
     if np.count_nonzero(inside) < 3:
         return None
-    reach = REACH * length
-    phi = _phi_among(centers, reach) if among is None else among
     m = len(centers)
     t2 = taper**2
-    system = t2[:, None] * phi
+    system = t2[:, None] * bending.among
     system[np.diag_indices(m)] += VEIN_SMOOTHING
     try:
         factors = scipy.linalg.lu_factor(system, check_finite=False)
     except (np.linalg.LinAlgError, ValueError):
         return None
-
-    def spline_of(values: np.ndarray) -> np.ndarray:  # w with T_i c(v_i) = T_i values_i
-        return scipy.linalg.lu_solve(factors, t2 * values)
-
     target = np.divide(residual, taper, out=np.zeros(m), where=taper > 0)
     # the band's wider tolerance is a flat blade's: where a bend stretches a distance off it,
     # that is shrunk once more (a rolled and folded deltoid's veins 1.04e-3 of the length off)
     tolerance = np.where(taper < BAND, BAND_TOLERANCE / stretch, TOLERANCE)
     slack = tolerance * length / (np.maximum(taper, 1e-3) * stretch)
-    if choose is None:
-        values = _within(target, slack, spline_of)
-    else:  # the spline's weights per unit value: S⁻¹ diag(T²)
-        spline = scipy.linalg.lu_solve(factors, np.diag(t2), check_finite=False)
-        values = choose(target, target - slack, target + slack, spline)
-    weights = spline_of(values)
+    # the spline's weights per unit value: S⁻¹ diag(T²) (w with T_i c(v_i) = T_i values_i)
+    spline = scipy.linalg.lu_solve(factors, np.diag(t2), check_finite=False)
+    values = least_bending(bending, relief, target, target - slack, target + slack, spline)
+    weights = scipy.linalg.lu_solve(factors, t2 * values)
     if not np.all(np.isfinite(weights)):
         return None
     return VeinCorrection(
         centers=kernel_array(centers),
         weights=weights,
-        reach=reach,
+        reach=REACH * length,
         cut=HESSIAN_CUT / REACH,
     )
 
 
-def _within(
-    target: np.ndarray, slack: np.ndarray, spline_of: Callable[[np.ndarray], np.ndarray]
-) -> np.ndarray:
-    """(m,) values within `slack` of `target` whose spline bends least, nearly: projected
-    gradient steps (FISTA) on the bending energy vᵀ K v, whose gradient is the spline's weights
-    (`spline_of`, one back-substitution). The stiffest bends go first: a ridge the spline drew
-    tight onto a vein (a form's midrib, where side veins stand on a roof 14° each side) is
-    widened while every vein point stays within the slack."""
-
-    def weights(values: np.ndarray) -> np.ndarray:
-        return spline_of(values)[: len(values)]
-
-    probe = np.random.default_rng(0).standard_normal(len(target))
-    for _ in range(POWER_STEPS):  # the largest eigenvalue of K: the step
-        probe = weights(probe)
-        largest = float(np.linalg.norm(probe))
-        if not np.isfinite(largest) or largest == 0:
-            return target
-        probe /= largest
-    lo, hi = target - slack, target + slack
-    values = previous = ahead = target
-    momentum = 1.0
-    for _ in range(RELAX_STEPS):
-        values = np.clip(ahead - weights(ahead) / largest, lo, hi)
-        following = 0.5 * (1 + np.sqrt(1 + 4 * momentum**2))
-        ahead = values + (momentum - 1) / following * (values - previous)
-        previous, momentum = values, following
-    return values
-
-
 @dataclass(frozen=True)
 class Pinning:
-    """The spline's centres on the veins and, given the grid's nodes, the lattice their
-    correction bends least on: what onto_veins needs that K does not change (the pipeline's
-    bending stage)."""
+    """The spline's centres on the veins and the lattice their correction bends least on: what
+    onto_veins needs that K does not change (the pipeline's bending stage)."""
 
     kept: list[np.ndarray]  # indices of each vein's points that are centres (spline_centers)
     centers: np.ndarray  # (m, 2)
     taper: np.ndarray  # (m,) T(g/δ) at the centres
-    bending: Bending | None  # the lattice (bending.py), with φ for every centre
+    bending: Bending  # the lattice (bending.py), with φ for every centre
+
+
+def lattice_bending(
+    centers: np.ndarray, length: float, grid: Grid, inside: np.ndarray, node_taper: np.ndarray
+) -> Bending:
+    """The lattice of the grid's nodes inside the leaf ((ny * nx,) bool `inside`, T there
+    `node_taper`) with φ there and the bending gram for each of the (m, 2) `centers`, and φ
+    between the centres (bending.py)."""
+    index = np.flatnonzero(inside)
+    on, differences = lattice(grid, index, node_taper)
+    reach = REACH * length
+    taper = kernel_array(node_taper[on])
+    xy = kernel_array(grid.points[index[on]])
+    phi, tapered = phi_matrix(xy, centers, reach, KELVIN, KELVIN_STEP, taper)
+    gram = bending_gram(tapered, differences)
+    among = phi_matrix(centers, centers, reach, KELVIN, KELVIN_STEP, np.ones(len(centers)))[0]
+    return Bending(on, taper, differences, phi, gram, among)
 
 
 def pinning(
@@ -316,26 +263,19 @@ def pinning(
     length: float,
     implicit: MPUImplicit,
     delta: float,
-    nodes: tuple[np.ndarray, np.ndarray] | None = None,
+    grid: Grid,
+    inside: np.ndarray,
+    node_taper: np.ndarray,
 ) -> Pinning:
-    """The spline's centres on the (m_i, 2) `veins` and T there (T = tanh(g/δ)), and, given the
-    grid's nodes inside the leaf and T there, the lattice of them with φ and the bending gram
-    for every centre (bending.py)."""
+    """The spline's centres on the (m_i, 2) `veins`, T there (T = tanh(g/δ)), and the lattice of
+    the grid's nodes inside the leaf ((ny * nx,) bool `inside`, T there `node_taper`) with φ and
+    the bending gram for every centre (lattice_bending)."""
     kept = spline_centers(veins, length)
     centers = np.vstack([v[k] for v, k in zip(veins, kept, strict=True)])
     centers = kernel_array(centers)
     taper = taper_of(implicit(centers), delta)
-    if nodes is None:
-        return Pinning(kept, centers, taper, None)
-    on, differences = lattice(*nodes)
-    reach = REACH * length
-    node_taper = kernel_array(nodes[1][on])
-    phi, tapered = phi_matrix(
-        kernel_array(nodes[0][on]), centers, reach, KELVIN, KELVIN_STEP, node_taper
-    )
-    gram = bending_gram(tapered, differences)
-    among = phi_matrix(centers, centers, reach, KELVIN, KELVIN_STEP, np.ones(len(centers)))[0]
-    return Pinning(kept, centers, taper, Bending(on, node_taper, differences, phi, gram, among))
+    bending = lattice_bending(centers, length, grid, inside, node_taper)
+    return Pinning(kept, centers, taper, bending)
 
 
 def onto_veins(
@@ -343,11 +283,12 @@ def onto_veins(
     heights: list[np.ndarray],
     length: float,
     pinned: Pinning,
-    nodes: tuple[np.ndarray, np.ndarray] | None = None,
+    nodes: np.ndarray,
+    mixture: np.ndarray,
     stretch: list[np.ndarray] | None = None,
 ) -> tuple[HeightSurface, np.ndarray | None]:
     """`surface` with a VeinCorrection that brings it onto the vein points, and c at the nodes
-    when the correction was chosen for the whole surface's bending (on the lattice from its φ).
+    (on the lattice from its φ); `surface` itself and None when no correction holds.
 
     Parameters
     ----------
@@ -359,10 +300,15 @@ def onto_veins(
         The leaf's length.
     pinned : Pinning
         The spline's centres (`pinning` of the veins in the plane) and their lattice.
-    nodes : ((n, 2), (n,)) float arrays, optional
-        Points inside the leaf and T(g/δ) there, where the correction is checked: a correction
-        that adds more than OVERSHOOT times the largest residual anywhere is refitted without
-        the vein points of the margin band, and dropped if it still does (see `_tame`).
+    nodes : (n, 2) float array
+        The grid's nodes inside the leaf (those `pinned`'s lattice was made of). On the lattice,
+        a correction that adds more than OVERSHOOT times the largest residual is refitted
+        without the vein points of the margin band, and dropped if it still does: pinned points
+        of the band (T small, so c must be r/T there) whose r/T differ a lot over a short way
+        (a short basal vein in a narrow lobe, a notch) bent the apex down 25 times the veins'
+        relief (a fan of veins from a sinus's notch), for residuals under 1% of the length.
+    mixture : (n,) float array
+        M, the mixture alone, at the nodes (the surface stage has it: z there takes it too).
     stretch : list of (m_i,) float arrays, optional
         How many times the leaf's bend lengthens a distance off the blade at each vein point
         (bend.normal_stretch, at least 1): a fold on a rolled tube shears its section, and a
@@ -378,29 +324,20 @@ def onto_veins(
         if stretch is None
         else np.concatenate([s[k] for s, k in zip(stretch, kept, strict=True)])
     )
-    relief_on = None if bending is None else surface.relief(nodes[0][bending.on])
-    keep = reachable(taper, residual, relief, length, grows, settle=bending is None)
+    relief_on = mixture[bending.on]
+    keep = reachable(taper, residual, relief)
     for pins in (keep, keep & (taper >= BAND)):
-        if bending is None:
-            correction = fit_correction(
-                centers[pins], taper[pins], residual[pins], length, grows[pins]
-            )
-        else:
-            some = bending.pinned(pins)
-            correction = fit_correction(
-                centers[pins], taper[pins], residual[pins], length, grows[pins],
-                partial(least_bending, some, relief_on), some.among,
-            )  # fmt: skip
+        some = bending.pinned(pins)
+        correction = fit_correction(
+            centers[pins], taper[pins], residual[pins], length, grows[pins], some, relief_on
+        )
         if correction is None:
             return surface, None
         largest = np.abs(residual[pins]).max()
-        if bending is not None:  # c on the lattice from its φ; checked there
-            on_lattice = some.phi @ correction.weights
-            if np.all(np.abs(bending.taper * on_lattice) <= OVERSHOOT * largest):
-                corrected = replace(surface, correction=correction)
-                return corrected, _at_nodes(correction, nodes[0], bending.on, on_lattice)
-        elif nodes is None or _tame(correction, nodes, largest):
-            return replace(surface, correction=correction), None
+        on_lattice = some.phi @ correction.weights  # c on the lattice from its φ; checked there
+        if np.all(np.abs(bending.taper * on_lattice) <= OVERSHOOT * largest):
+            corrected = replace(surface, correction=correction)
+            return corrected, _at_nodes(correction, nodes, bending.on, on_lattice)
     return surface, None
 
 
@@ -414,16 +351,3 @@ def _at_nodes(
     rest[on] = False
     value[rest] = correction.value(xy[rest])
     return value
-
-
-def _tame(correction: VeinCorrection, nodes: tuple[np.ndarray, np.ndarray], largest: float) -> bool:
-    """Whether T·c stays within OVERSHOOT times the largest residual it corrects at the nodes.
-
-    Pinned points of the margin band (T small, so c must be r/T there) whose r/T differ a lot
-    over a short way (a short basal vein in a narrow lobe, a notch) tilt the spline's affine part
-    steeply: a fan of veins from a sinus's notch bent the apex down 25 times the veins' relief,
-    for residuals under 1% of the length."""
-    xy, taper = nodes
-    every = max(1, len(xy) // CHECKED)  # a tilt is as wide as the blade: a sample finds it
-    tilt = taper[::every] * correction.value(xy[::every])
-    return bool(np.all(np.abs(tilt) <= OVERSHOOT * largest))

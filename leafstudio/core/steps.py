@@ -254,8 +254,8 @@ def compute_bending(run: StageRun) -> Pinning:
     guide: GuideStage = run["guide"]
     g_in = guide.g[guide.inside]
     delta = taper_width(run.params.taper, g_in)
-    nodes = run["grid"].points[guide.inside]
-    return pinning(fs.veins, fs.length, run["implicit"], delta, (nodes, taper_of(g_in, delta)))
+    taper = taper_of(g_in, delta)
+    return pinning(fs.veins, fs.length, run["implicit"], delta, run["grid"], guide.inside, taper)
 
 
 def compute_surface(run: StageRun) -> SurfaceStage:
@@ -276,17 +276,14 @@ def compute_surface(run: StageRun) -> SurfaceStage:
         run.params.seed,
         base=fs.base,
     )
-    correction = None
+    relief = surface.mixture.value(nodes)  # M, once: the correction takes it on its lattice
     if run.params.through_veins and fs.veins:  # onto every vein point (correct.py)
         surface, correction = onto_veins(
-            surface,
-            fs.heights,
-            fs.length,
-            run["bending"],
-            (nodes, surface.taper(g_in)),
-            _stretch(run, surface),
+            surface, fs.heights, fs.length, run["bending"], nodes, relief, _stretch(run, surface)
         )
-    return SurfaceStage(surface=surface, z=surface(nodes, g_in, correction))
+        if correction is not None:
+            relief = relief + correction
+    return SurfaceStage(surface=surface, z=surface(nodes, g_in, relief))
 
 
 def _stretch(run: StageRun, surface: HeightSurface) -> list[np.ndarray] | None:

@@ -82,13 +82,13 @@ class HeightSurface:
         return taper_of(g, self.delta)
 
     def __call__(
-        self, xy: np.ndarray, g: np.ndarray | None = None, correction: np.ndarray | None = None
+        self, xy: np.ndarray, g: np.ndarray | None = None, relief: np.ndarray | None = None
     ) -> np.ndarray:
-        """z at (n, 2) plane points; pass `g` if it is already known there, and `correction`,
-        c there, too (correct.onto_veins has it from its lattice)."""
+        """z at (n, 2) plane points; pass `g` if it is already known there, and `relief`,
+        M + c there, too (the surface stage has M at the grid's nodes, and c from the
+        correction's lattice: correct.onto_veins)."""
         g = self.implicit(xy) if g is None else g
-        relief = self.relief(xy) if correction is None else self.mixture.value(xy) + correction
-        relief = self.taper(g) * relief
+        relief = self.taper(g) * (self.relief(xy) if relief is None else relief)
         return relief if self.base is None else self.base(xy) + relief
 
     def gradient(self, xy: np.ndarray) -> np.ndarray:

@@ -90,21 +90,25 @@ class Extraction:
 
 
 class _Found(NamedTuple):
-    """What `_extract` found on the scan at unit size: the leaf (None until `_veins`), the blade
-    and petiole masks, the blade point nearest the base, the blade's plane, the region its
-    points keep to, holes, and the outline, its points and the base on it in the plane."""
+    """What `_extract` found on the scan at unit size: the blade and petiole masks, the blade
+    point nearest the base, the blade's plane and the points in it, the region its points keep
+    to, and the outline, its points, its spacing and the base on it in the plane; then the leaf
+    and the holes (`_veins`)."""
 
-    leaf: Leaf | None
     blade: np.ndarray  # (n,) bool
     petiole: np.ndarray  # (n,) bool
     base: int | None  # the blade point nearest a base the petiole or an axis told
     origin: np.ndarray  # (3,)
     axes: np.ndarray  # (3, 3) rows: u (length), v, normal
+    local: np.ndarray  # (n, 3) the points in the plane's frame: u, v and the height
     region: Polygon
-    holes: list[np.ndarray]  # (k, 2) rings in the plane: on a flattened blade (scan_holes.py)
     polygon: Polygon
     boundary_xy: np.ndarray  # (count, 2)
+    spacing: float  # the veins', the region's and the rim's (not the outline's: `count`)
     base_xy: np.ndarray  # (2,)
+    leaf: Leaf | None = None  # boundary and veins (`_veins`)
+    holes: tuple[np.ndarray, ...] = ()  # (k, 2) rings in the plane, on a flattened blade
+    # (scan_holes.py)
 
 
 def _neighbour_spacing(points: np.ndarray) -> np.ndarray:
@@ -269,9 +273,10 @@ def extract_leaf(
     if sheet is not None:  # the blade unrolled (core/sheet.py), its outline and veins found there
         held = (sheet.centres_flat(), HELD * span / CELLS)
         found = _extract(flat, base_end, count, (found.blade, found.petiole, found.base), held)
-    found = _veins(flat, found, count, None if sheet is None else held)
+    found = _veins(found, count, None if sheet is None else held)
     progress.report(0.9, FINDING)
-    leaf, blade, petiole, _, origin, axes, region = found[:7]
+    leaf, blade, petiole = found.leaf, found.blade, found.petiole
+    origin, axes, region = found.origin, found.axes, found.region
     length = float(np.ptp((flat[blade] - origin) @ axes[0]))
     if cell is not None:  # each point as its cube's centroid; a petiole stub cut as there
         # a point lies within its cube's diagonal of the cube's centroid: a cube whose centroid
@@ -439,19 +444,27 @@ def _extract(
     if split is None and (base_end != "auto" or len(told) >= PETIOLE_SHARE * len(xy)):
         base_at = int(np.flatnonzero(blade)[np.argmin(np.linalg.norm(xy - base, axis=1))])
     return _Found(
-        None, blade, petiole, base_at, origin, axes, region, [], polygon, boundary_xy, base
+        blade=blade,
+        petiole=petiole,
+        base=base_at,
+        origin=origin,
+        axes=axes,
+        local=local,
+        region=region,
+        polygon=polygon,
+        boundary_xy=boundary_xy,
+        spacing=spacing,
+        base_xy=base,
     )
 
 
-def _veins(
-    points: np.ndarray, found: _Found, count: int, held: tuple[np.ndarray, float] | None
-) -> _Found:
-    """`found` (by `_extract` on these points) with its leaf: the boundary and veins lifted to
-    the scan's heights, and the holes on a flattened blade (`held`)."""
+def _veins(found: _Found, count: int, held: tuple[np.ndarray, float] | None) -> _Found:
+    """`found` (by `_extract`) with its leaf: the boundary and veins lifted to the scan's
+    heights, and the holes on a flattened blade (`held`)."""
     origin, axes, polygon, boundary_xy = found.origin, found.axes, found.polygon, found.boundary_xy
-    local = ((points - origin) @ axes.T)[found.blade]  # as _extract's, to the last bit
+    local = found.local[found.blade]
     xy, h = local[:, :2], local[:, 2]
-    spacing = polygon.length / OUTLINE_POINTS  # as _extract's
+    spacing = found.spacing
     midrib = midline(boundary_xy, found.base_xy, spacing)
     gaps = cKDTree(xy)  # the blade's points and their gap, for the side veins and the holes
     gap = float(np.percentile(gaps.query(xy, k=2)[0][:, 1], 95))
@@ -474,4 +487,4 @@ def _veins(
     boundary = world(boundary_xy, rim[count : 2 * count])
     veins = veins_inside_outline(boundary, [world(v) for v in veins_xy], spacing)
     rings = holes(found.region, gaps, gap) if held is not None else []
-    return found._replace(leaf=Leaf(boundary=boundary, veins=veins), holes=rings)
+    return found._replace(leaf=Leaf(boundary=boundary, veins=veins), holes=tuple(rings))

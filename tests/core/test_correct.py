@@ -9,7 +9,10 @@ import pytest
 
 import leafstudio as ls
 from leafstudio.core import correct
+from leafstudio.core.bending import Bending
+from leafstudio.core.buckets import kernel_array
 from leafstudio.core.evaluate import margin_creases
+from leafstudio.core.grid import make_grid
 from leafstudio.forms.make import make_form
 from leafstudio.forms.terms import SHAPES
 from leafstudio.gui.model.sketch_model import Sketch
@@ -114,26 +117,43 @@ def test_a_sinus_forms_surface_through_its_veins_has_no_dent_at_the_notch(shape,
     assert creases["interior_p99"] <= interior
 
 
-def test_values_within_their_slack_bend_the_spline_less():
-    """correct._within: a spike on a line of values is lowered within its slack, every value
-    stays within it, and the spline's bending energy falls."""
+def _lattice(centers: np.ndarray) -> Bending:
+    """The lattice of a grid's nodes 0.3 about the (m, 2) `centers`, all inside (T = 1), as the
+    pipeline's bending stage makes it (length 1)."""
+    grid = make_grid(np.vstack([centers.min(axis=0) - 0.3, centers.max(axis=0) + 0.3]), 64)
+    inside = np.ones(len(grid.points), dtype=bool)
+    return correct.lattice_bending(kernel_array(centers), 1.0, grid, inside, np.ones(len(inside)))
+
+
+def _fit(centers: np.ndarray, taper: np.ndarray, residual: np.ndarray, bending: Bending):
+    """fit_correction as onto_veins calls it, on a flat mixture (M = 0 on the lattice)."""
+    relief = np.zeros(len(bending.on))
+    return correct.fit_correction(centers, taper, residual, 1.0, 1.0, bending, relief)
+
+
+def test_values_within_their_slack_bend_the_surface_less():
+    """A spike on a line of values is lowered within its slack, every value stays within it,
+    and the surface's bending on the lattice falls (bending.least_bending)."""
     centers = np.column_stack([np.linspace(0, 1, 21), np.zeros(21)])
     centers[::2, 1] = 0.05  # two rows: a 2-D spline
     target = np.where(np.arange(21) == 10, 0.01, 0.0)
     taper, slack = np.ones(21), 0.004
-    exact = correct.fit_correction(centers, taper, target, 1.0)
+    bending = _lattice(centers)
     with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(correct, "TOLERANCE", 0.0)
+        exact = _fit(centers, taper, target, bending)
         mp.setattr(correct, "TOLERANCE", slack)
-        relaxed = correct.fit_correction(centers, taper, target, 1.0)
+        relaxed = _fit(centers, taper, target, bending)
     assert exact is not None and relaxed is not None
+    assert np.allclose(exact.value(centers), target, atol=1e-9)
     values = relaxed.value(centers)
     assert np.all(np.abs(values - target) <= slack + 1e-9)
     assert values[10] < 0.01 - 0.5 * slack
 
-    def energy(c: correct.VeinCorrection) -> float:  # wᵀ Φ w
-        d = np.linalg.norm(centers[:, None] - centers[None], axis=2)
-        phi = np.where(d > 0, d**2 * np.log(np.maximum(d, 1e-300)), 0.0)
-        return float(c.weights @ phi @ c.weights)
+    def energy(c: correct.VeinCorrection) -> float:  # |D T c|² on the lattice
+        return float(
+            np.sum((bending.differences @ (bending.taper * (bending.phi @ c.weights))) ** 2)
+        )
 
     assert energy(relaxed) < 0.5 * energy(exact)
 
@@ -145,8 +165,9 @@ def test_a_vein_point_in_the_margin_band_has_more_slack():
     centers = np.column_stack([np.linspace(0, 1, 21), np.zeros(21)])
     centers[::2, 1] = 0.05
     target = np.where(np.arange(21) == 10, 0.01, 0.0)
+    bending = _lattice(centers)
     for taper, most in ((1.0, correct.TOLERANCE), (0.3, correct.BAND_TOLERANCE)):
-        fitted = correct.fit_correction(centers, np.full(21, taper), taper * target, 1.0)
+        fitted = _fit(centers, np.full(21, taper), taper * target, bending)
         assert fitted is not None
         off = np.abs(taper * fitted.value(centers) - taper * target)
         assert off.max() <= most + 1e-9
@@ -211,7 +232,7 @@ def test_the_correction_fades_away_from_the_veins():
     notch were lowered by 0.02 of the length. Past a few REACH of the veins it is now nothing."""
     vein = np.column_stack([np.linspace(-0.15, 0.15, 31), 0.02 * np.sin(np.linspace(0, 3, 31))])
     residual = 0.004 * np.sin(np.linspace(0, 2 * np.pi, 31)) + 0.003
-    fitted = correct.fit_correction(vein, np.ones(31), residual, 1.0)
+    fitted = _fit(vein, np.ones(31), residual, _lattice(vein))
     assert fitted is not None
     assert np.allclose(fitted.value(vein), residual, atol=correct.TOLERANCE + 1e-9)
     far = np.array([[0.0, 0.5], [0.55, 0.0], [-0.4, -0.4]])  # 0.4-0.5 off the vein
