@@ -75,11 +75,12 @@ def outline_thumbnail(shape: str, size: int = THUMBNAIL) -> QImage:
     return draw_plane(Form(shape).outline().xy, [], size, sit=True)
 
 
-def grow_blade(form: Form) -> tuple[Form, Leaf, str]:
-    """`form` without its pose, its blade and side-on note (Form.blade_and_note): run on the
-    worker's lane, the veins' growth off the main thread."""
+def grow_blade(form: Form) -> tuple[Form, Leaf, str, Sketch]:
+    """`form` without its pose, its blade, side-on note (Form.blade_and_note) and the blade's
+    sketch, which every pose of it shows: run on the worker's lane, off the main thread."""
     unposed = form.unposed()
-    return (unposed, *unposed.blade_and_note())
+    blade, side_on = unposed.blade_and_note()
+    return unposed, blade, side_on, leaf_sketch(blade, unposed.teeth_count)
 
 
 def canonical_leaves(shapes: list[str]) -> dict[str, Leaf]:
@@ -386,19 +387,18 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
     # the last blade grown (its form without a pose, the blade, its side-on note), and the form
     # waiting for its blade: a blade grows on a lane (60-100 ms, the main thread's before), and
     # a pose slider's change only poses the last one (a few ms)
-    kept: dict[str, tuple[Form, Leaf, str]] = {}
+    kept: dict[str, tuple[Form, Leaf, str, Sketch]] = {}
     # "form": the form to show once its blade has grown, "job": the growth, "serial": the
     # document open when it was chosen (another one opened meanwhile is not replaced)
     waiting: dict[str, Any] = {}
 
     def show(form: Form) -> None:
-        _unposed, blade, side_on = kept["blade"]
-        leaf = form.leaf(blade)
+        _unposed, blade, side_on, sketch = kept["blade"]
         panel.show_pose_note(side_on)
-        session.new_document(leaf, leaf_sketch(leaf, form.teeth_count), f"{form.shape} form")
+        session.new_document(form.leaf(blade), sketch, f"{form.shape} form")
         made["serial"] = session.state.serial
 
-    def grown(blade: tuple[Form, Leaf, str]) -> None:
+    def grown(blade: tuple[Form, Leaf, str, Sketch]) -> None:
         kept["blade"] = blade
         form = waiting.get("form")
         if form is not None and form.unposed() == blade[0]:

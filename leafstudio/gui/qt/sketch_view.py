@@ -73,6 +73,7 @@ class SketchView(QGraphicsView):
         self._moved = False
         self._auto_fit = True  # keep the fitted area in view on resize until the user zooms
         self._fitted = EMPTY_VIEW
+        self._drawn: tuple | None = None  # what the scene shows (_drawing), None: redraw
         self.setSceneRect(-1e3, -1e3, 2e3, 2e3)
         self.apply_palette()
 
@@ -111,7 +112,8 @@ class SketchView(QGraphicsView):
             self.active = BOUNDARY
         if self.selected is not None and not self._valid(self.selected):
             self.selected = None
-        self._redraw()
+        if self._drawing() != self._drawn:  # a pose changed in the Forms dock: the same blade
+            self._redraw()
         if fit:
             self.fit()
         self.selection_changed.emit()
@@ -172,7 +174,24 @@ class SketchView(QGraphicsView):
         return QPointF(self.mapFromScene(QPointF(float(xy[0]), float(-xy[1]))))
 
     # --- drawing -------------------------------------------------------------------------------
+    def _drawing(self) -> tuple:
+        """What _redraw draws, as bytes and values: the sketch's curves in the plane (the
+        boundary's relief gives only heights), its holes, the marks and the pens' colours."""
+        sketch = self.sketch
+        return (
+            np.ascontiguousarray(sketch.boundary[:, :2]).tobytes(),
+            tuple(np.ascontiguousarray(vein).tobytes() for vein in sketch.veins),
+            tuple(ring.tobytes() for ring in sketch.hole_curves()),
+            np.asarray(self.crossings).tobytes(),
+            self.active,
+            self.selected,
+            self.palette().color(QPalette.ColorRole.Text).name(),
+            self.palette().color(QPalette.ColorRole.Base).name(),
+            self.devicePixelRatioF(),
+        )
+
     def _redraw(self) -> None:
+        self._drawn = self._drawing()
         scene = self.scene()
         scene.clear()
         outline = self.sketch.boundary_curve()

@@ -297,3 +297,23 @@ def test_a_document_opened_while_the_blade_grows_is_not_replaced(window, panel, 
     qtbot.wait(50)  # the blade's answer, queued to this thread
     assert not window.session.state.title.startswith("hastate")
     assert np.array_equal(window.session.leaf.boundary, demo("parallel").boundary)
+
+
+def test_a_pose_change_keeps_the_sketch_drawn_and_another_form_draws_its_own(window, panel, qtbot):
+    """A pose changes the leaf, not the flat blade the sketch shows: the sketch view drew every
+    curve and point again (10-18 ms of the main thread's piece, issue 24); it now keeps its
+    scene, and a new blade still replaces it."""
+    import shiboken6
+
+    view = window.editor.view
+    panel.gallery.setCurrentRow(list(SHAPES).index("ovate"))
+    choose(qtbot, window, panel)
+    drawn = view.scene().items()
+    panel.fold.setValue(40.0)
+    panel.choose_now()  # at once: the kept blade, posed
+    assert window.session.leaf.bend.fold == 40.0
+    assert all(shiboken6.isValid(item) for item in drawn)
+    assert view.scene().items() == drawn
+    panel.gallery.setCurrentRow(list(SHAPES).index("cordate"))
+    choose(qtbot, window, panel)
+    assert not any(shiboken6.isValid(item) for item in drawn)
