@@ -1,11 +1,33 @@
 """A leaf seen from above as a small picture, with QPainter: the gallery's thumbnails
-(forms_dock.py) and the glossary's pictures (glossary_view.py)."""
+(forms_dock.py) and the glossary's pictures (glossary_view.py); and polylines as painter paths
+made whole by numpy (the sketch and its side view draw theirs with it)."""
 
 from __future__ import annotations
 
 import numpy as np
-from PySide6.QtCore import QPointF, Qt
+from PySide6.QtCore import QByteArray, QDataStream, Qt
 from PySide6.QtGui import QColor, QImage, QPainter, QPainterPath, QPen
+
+PATH_ELEMENT = np.dtype([("type", ">i4"), ("x", ">f8"), ("y", ">f8")])  # as QDataStream has it
+
+
+def polyline_path(xy: np.ndarray, closed: bool = False) -> QPainterPath:
+    """A path through (n, 2+) points (x, y as given), read from the bytes QDataStream writes for
+    a path (a move, then lines; no start, the winding fill): built whole by numpy, where a
+    lineTo per point cost 1.3-1.6 ms per 700 points (12 ms of a 2M-point scan's sketch)."""
+    xy = np.asarray(xy, dtype=float)[:, :2]
+    if closed:
+        xy = np.vstack([xy, xy[:1]])  # as closeSubpath draws it
+    elements = np.empty(len(xy), PATH_ELEMENT)
+    elements["type"] = 1  # QPainterPath.ElementType.LineToElement
+    elements["type"][0] = 0  # MoveToElement
+    elements["x"], elements["y"] = xy[:, 0], xy[:, 1]
+    data = b"".join((np.array([len(xy)], ">i4").tobytes(), elements.tobytes(), bytes(8)))
+    path = QPainterPath()
+    QDataStream(QByteArray(data)) >> path
+    if closed:
+        path.closeSubpath()
+    return path
 
 
 def draw_plane(
@@ -25,25 +47,19 @@ def draw_plane(
     centre = (lo + hi) / 2
     middle = 0.98 * size - (hi - lo)[1] * scale / 2 if sit else size / 2  # the centre's row
 
-    def point(p: np.ndarray) -> QPointF:
-        q = (p[:2] - centre) * scale
-        return QPointF(size / 2 + q[0], middle - q[1])
+    def picture(points: np.ndarray) -> np.ndarray:
+        q = (np.asarray(points, dtype=float)[:, :2] - centre) * scale
+        return np.column_stack([size / 2 + q[:, 0], middle - q[:, 1]])
 
     painter = QPainter(image)
     painter.setRenderHint(QPainter.RenderHint.Antialiasing)
-    path = QPainterPath(point(outline[0]))
-    for p in outline[1:]:
-        path.lineTo(point(p))
-    path.closeSubpath()
+    path = polyline_path(picture(outline), closed=True)
     painter.setPen(QPen(QColor("#2f5d1e"), 1.2))
     painter.setBrush(QColor("#8cc46a"))
     painter.drawPath(path)
     painter.setPen(QPen(QColor("#e9f5dc"), 0.9))
     painter.setBrush(Qt.BrushStyle.NoBrush)
     for vein in veins:
-        line = QPainterPath(point(vein[0]))
-        for p in vein[1:]:
-            line.lineTo(point(p))
-        painter.drawPath(line)
+        painter.drawPath(polyline_path(picture(vein)))
     painter.end()
     return image

@@ -17,6 +17,7 @@ from PySide6.QtGui import (
 )
 
 from leafstudio.gui.model.layers import BOUNDARY_COLOR, vein_color
+from leafstudio.gui.qt.leaf_picture import polyline_path
 
 HANDLE_PIXELS = 9.0
 MARGINS = (10.0, 8.0, 10.0, 16.0)  # left, top, right, bottom (the bottom holds "base" and "tip")
@@ -123,7 +124,9 @@ class ProfilePainting:
                 painter.drawRect(QRectF(spot.x() - ring, spot.y() - ring, 2 * ring, 2 * ring))
 
     def _path(self, t: np.ndarray, h: np.ndarray) -> QPainterPath:
-        path = QPainterPath(self.to_view(float(t[0]), float(h[0])))
-        for share, height in zip(t[1:], h[1:], strict=True):
-            path.lineTo(self.to_view(float(share), float(height)))
-        return path
+        """The line through shares `t` of the length at heights `h` (to_view's, for all at
+        once: a point at a time cost 6-13 ms of a new document's paint, issue 24)."""
+        plot, (lo, hi) = self._plot(), self._heights_range()
+        x = plot.left() + np.asarray(t, dtype=float) * plot.width()
+        y = plot.bottom() - (np.asarray(h, dtype=float) - lo) / (hi - lo) * plot.height()
+        return polyline_path(np.column_stack([x, y]))
