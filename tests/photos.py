@@ -3,6 +3,7 @@ from above (pyvista, shaded), both with noise and blur."""
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 import numpy as np
@@ -137,6 +138,19 @@ def scan_photo(
     return _finish(rgb, noise, blur, seed), shapely.Polygon(px), base
 
 
+@functools.cache
+def _form_leaf(terms: tuple[tuple[str, object], ...]) -> tuple[object, int]:
+    """The form's leaf and its apex's index on the outline, grown once per form for the angles
+    and seeds it is photographed at (the veins' growth: most of a form's 0.08 s)."""
+    from leafstudio.forms import Form
+
+    form = Form(**dict(terms))
+    leaf = form.leaf()
+    for array in (leaf.boundary, *leaf.veins):
+        array.setflags(write=False)  # shared: a test that wrote to it would fail, not the next
+    return leaf, form.outline().apex_index
+
+
 def leaf_frame_match(
     terms: dict, angle: float, seed: int = 0, draw_veins: bool = True, **found_options
 ) -> dict:
@@ -146,11 +160,9 @@ def leaf_frame_match(
     pixels (the segmentation alone), the base's distance from the known one (share of the
     length) and the cue that told the base (PhotoLeaf.base_cue). `draw_veins` False draws the
     blade plain."""
-    from leafstudio.forms import Form
     from leafstudio.sources.photo import leaf_from_photo
 
-    form = Form(**terms)
-    leaf, apex = form.leaf(), form.outline().apex_index
+    leaf, apex = _form_leaf(tuple(sorted(terms.items())))
     known = leaf.boundary[:, :2]
     length = float(np.linalg.norm(known[apex]))  # base to apex, as `--length` means it
     veins = leaf.veins if draw_veins else []
