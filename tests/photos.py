@@ -18,8 +18,17 @@ def _finish(rgb: np.ndarray, noise: float, blur: float, seed: int) -> np.ndarray
     from scipy.ndimage import gaussian_filter
 
     rgb = gaussian_filter(rgb, (blur, blur, 0)) if blur else rgb
-    rgb = rgb + np.random.default_rng(seed).normal(0, noise, rgb.shape)
+    rgb = rgb + _noise(rgb.shape, noise, seed)
     return np.clip(np.rint(rgb), 0, 255).astype(np.uint8)
+
+
+@functools.lru_cache(maxsize=8)
+def _noise(shape: tuple[int, ...], sigma: float, seed: int) -> np.ndarray:
+    """The sensor noise of a photo of `shape`: the same for every photo of that size and seed,
+    drawn once (40 ms a photo; most are of one size and seed 0), read-only."""
+    noise = np.random.default_rng(seed).normal(0, sigma, shape)
+    noise.setflags(write=False)
+    return noise
 
 
 def photo_pixels(
