@@ -3,6 +3,7 @@ from above (pyvista, shaded), both with noise and blur."""
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 import numpy as np
@@ -17,8 +18,17 @@ def _finish(rgb: np.ndarray, noise: float, blur: float, seed: int) -> np.ndarray
     from scipy.ndimage import gaussian_filter
 
     rgb = gaussian_filter(rgb, (blur, blur, 0)) if blur else rgb
-    rgb = rgb + np.random.default_rng(seed).normal(0, noise, rgb.shape)
+    rgb = rgb + _noise(rgb.shape, noise, seed)
     return np.clip(np.rint(rgb), 0, 255).astype(np.uint8)
+
+
+@functools.lru_cache(maxsize=8)
+def _noise(shape: tuple[int, ...], sigma: float, seed: int) -> np.ndarray:
+    """The sensor noise of a photo of `shape`: the same for every photo of that size and seed,
+    drawn once (40 ms a photo; most are of one size and seed 0), read-only."""
+    noise = np.random.default_rng(seed).normal(0, sigma, shape)
+    noise.setflags(write=False)
+    return noise
 
 
 def photo_pixels(
@@ -137,6 +147,19 @@ def scan_photo(
     return _finish(rgb, noise, blur, seed), shapely.Polygon(px), base
 
 
+@functools.cache
+def _form_leaf(terms: tuple[tuple[str, object], ...]) -> tuple[object, int]:
+    """The form's leaf and its apex's index on the outline, grown once per form for the angles
+    and seeds it is photographed at (the veins' growth: most of a form's 0.08 s)."""
+    from leafstudio.forms import Form
+
+    form = Form(**dict(terms))
+    leaf = form.leaf()
+    for array in (leaf.boundary, *leaf.veins):
+        array.setflags(write=False)  # shared: a test that wrote to it would fail, not the next
+    return leaf, form.outline().apex_index
+
+
 def leaf_frame_match(
     terms: dict, angle: float, seed: int = 0, draw_veins: bool = True, **found_options
 ) -> dict:
@@ -146,11 +169,9 @@ def leaf_frame_match(
     pixels (the segmentation alone), the base's distance from the known one (share of the
     length) and the cue that told the base (PhotoLeaf.base_cue). `draw_veins` False draws the
     blade plain."""
-    from leafstudio.forms import Form
     from leafstudio.sources.photo import leaf_from_photo
 
-    form = Form(**terms)
-    leaf, apex = form.leaf(), form.outline().apex_index
+    leaf, apex = _form_leaf(tuple(sorted(terms.items())))
     known = leaf.boundary[:, :2]
     length = float(np.linalg.norm(known[apex]))  # base to apex, as `--length` means it
     veins = leaf.veins if draw_veins else []

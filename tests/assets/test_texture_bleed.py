@@ -37,11 +37,25 @@ def photo_leaf(tmp_path_factory) -> tuple[ls.Result, Path, np.ndarray]:
     return result, path, found.pixel_from_world
 
 
+@pytest.fixture(scope="module")
+def photo_glb(photo_leaf, tmp_path_factory) -> Path:
+    """The photo leaf written to .glb with its photo as texture, once for the tests that read it
+    (each write resamples and pads the photo: about 1 s)."""
+    result, path, pixel_from_world = photo_leaf
+    glb = tmp_path_factory.mktemp("glb") / "photo.glb"
+    ls.save_mesh(result, glb, texture=PhotoTexture(path, pixel_from_world))
+    return glb
+
+
+def _texture_of(path: Path) -> np.ndarray:
+    """The base-colour texture of a .glb, read back (RGBA uint8)."""
+    return np.asarray(scene_mesh(path).visual.material.baseColorTexture.convert("RGBA"))
+
+
 def _glb_texture(result: ls.Result, texture, path: Path) -> np.ndarray:
     """The base-colour texture of the .glb written for `result`, read back (RGBA uint8)."""
     ls.save_mesh(result, path, texture=texture)
-    image = scene_mesh(path).visual.material.baseColorTexture
-    return np.asarray(image.convert("RGBA"))
+    return _texture_of(path)
 
 
 def _assert_no_bleeding(texture: np.ndarray) -> None:
@@ -90,9 +104,9 @@ def _assert_mipmaps_keep_the_leaf_colour(texture: np.ndarray) -> None:
         assert np.max(drift) <= 3, (level, float(np.max(drift)), int(np.sum(drift > 3)))
 
 
-def test_a_photo_texture_has_the_leaf_colour_outside_its_outline(photo_leaf, tmp_path):
+def test_a_photo_texture_has_the_leaf_colour_outside_its_outline(photo_leaf, photo_glb):
     result, path, pixel_from_world = photo_leaf
-    texture = _glb_texture(result, PhotoTexture(path, pixel_from_world), tmp_path / "photo.glb")
+    texture = _texture_of(photo_glb)
     _assert_no_bleeding(texture)
     outside = texture[..., 3] == 0
     to_background = np.linalg.norm(texture[..., :3].astype(float) - BACKGROUND, axis=2)
@@ -130,17 +144,16 @@ def test_an_image_with_alpha_is_padded_too(photo_leaf, tmp_path):
     assert opaque.mean() > 0.2 and np.all(np.abs(texture[opaque][:, :3] - (40, 120, 40)) <= 2)
 
 
-def test_padded_textures_still_validate(photo_leaf, tmp_path):
+def test_padded_textures_still_validate(photo_leaf, photo_glb, tmp_path):
     """The Khronos validator: zero errors and warnings (skips without node and the validator)."""
-    result, path, pixel_from_world = photo_leaf
-    photo, auto = tmp_path / "photo.glb", tmp_path / "auto.gltf"
-    ls.save_mesh(result, photo, texture=PhotoTexture(path, pixel_from_world))
+    result, _, _ = photo_leaf
+    auto = tmp_path / "auto.gltf"
     ls.save_mesh(result, auto)
-    for name, report in gltf_reports(photo, auto).items():
+    for name, report in gltf_reports(photo_glb, auto).items():
         assert report["numErrors"] == 0 and report["numWarnings"] == 0, (name, report["messages"])
 
 
-def test_a_photo_leaf_gets_the_normal_map_of_its_veins(photo_leaf, tmp_path):
+def test_a_photo_leaf_gets_the_normal_map_of_its_veins(photo_leaf, photo_glb):
     """Issue 23: a leaf's own material. A photo mapped back onto the leaf it was found in gets
     the vein relief too (its veins were traced in that photo, so they lie on it); an image that
     is not the leaf's photo (stretched over the UVs) does not."""
@@ -153,7 +166,5 @@ def test_a_photo_leaf_gets_the_normal_map_of_its_veins(photo_leaf, tmp_path):
     assert stretched.normal_map is None
     (obj,) = mesh_assets(result, PhotoTexture(path, pixel_from_world), gltf=False)
     assert obj.normal_map is None  # OBJ holds no normal map
-    glb = tmp_path / "photo.glb"
-    ls.save_mesh(result, glb, texture=PhotoTexture(path, pixel_from_world))
-    material = scene_mesh(glb).visual.material
+    material = scene_mesh(photo_glb).visual.material
     assert material.normalTexture is not None and material.baseColorTexture is not None

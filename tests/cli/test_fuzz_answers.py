@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -14,6 +12,7 @@ from PIL import Image, ImageDraw
 
 import leafstudio as ls
 from leafstudio.cli import main
+from tests.fifos import released
 from tests.leaves import metric_numbers
 
 
@@ -141,7 +140,7 @@ def test_another_image_as_texture_of_a_photo_project_covers_it_as_it_is(tmp_path
 
 
 @pytest.mark.parametrize("command", ["texture", "photo"])
-def test_a_pipe_given_as_an_image_is_one_line(tmp_path, command):
+def test_a_pipe_given_as_an_image_is_one_line(tmp_path, command, capsys):
     """Finding 17: a FIFO given as --texture or to `photo` waited for ever (Pillow opened it)."""
     fifo = tmp_path / "pipe.png"
     os.mkfifo(fifo)
@@ -151,9 +150,8 @@ def test_a_pipe_given_as_an_image_is_one_line(tmp_path, command):
         argv = ["reconstruct", str(leaf), "-o", str(tmp_path / "o.ply"), "--texture", str(fifo)]
     else:
         argv = ["photo", str(fifo), "-o", str(tmp_path / "p.leaf.json")]
-    done = subprocess.run([sys.executable, "-m", "leafstudio", *argv], capture_output=True,
-                          text=True, timeout=120, cwd=tmp_path)  # fmt: skip
-    assert done.returncode == 2, done.stderr
-    assert done.stderr.strip().splitlines()[-1] == (
-        f"leafstudio: error: {fifo}: is a named pipe, not a file"
-    )
+    with released([fifo]) as freed:  # in this process: a command that opens it is released
+        code = main(argv)
+    assert not freed, "the command opened the pipe"
+    assert code == 2
+    assert _error_line(capsys) == f"leafstudio: error: {fifo}: is a named pipe, not a file"

@@ -9,7 +9,7 @@ import pytest
 
 from leafstudio.errors import LeafError
 from leafstudio.sources import extract
-from leafstudio.sources.extract import BUDGET, extract_leaf, voxel_thinning
+from leafstudio.sources.extract import extract_leaf, voxel_thinning
 from tests.leaves import assert_outline_is_the_blades, scan_surface, synthetic_scan
 
 
@@ -25,6 +25,22 @@ def big():
     return points, n, extract_leaf(points)
 
 
+SMALL_BUDGET = 8000  # a budget and a scan three times it, for the tests that extract it again
+
+
+@pytest.fixture(scope="module")
+def budgeted():
+    """A scan three times a smaller BUDGET and its extraction: what the flattening and the
+    thinning do does not depend on the budget's size, and each extraction at 40,000 thinned
+    points took 8 s (the tests below extract the scan a second time)."""
+    points, _ = _big_scan(3 * SMALL_BUDGET)
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        monkeypatch.setattr(extract, "BUDGET", SMALL_BUDGET)
+        found = extract_leaf(points)
+    assert found.blade.sum() > SMALL_BUDGET  # thinned, each point mapped to its cube
+    return points, found
+
+
 def test_a_large_scan_is_thinned_and_its_outline_is_the_blade(big):
     points, n, found = big
     assert_outline_is_the_blades(found)
@@ -38,11 +54,12 @@ def test_a_large_scan_is_thinned_and_its_outline_is_the_blade(big):
     assert np.abs(b[:, 2] - scan_surface(b[:, 0], b[:, 1])).max() < 4e-3
 
 
-def test_a_large_scan_flattens_only_its_margin_and_ends_and_loses_nothing(big, monkeypatch):
+def test_a_large_scan_flattens_only_its_margin_and_ends_and_loses_nothing(budgeted, monkeypatch):
     """Only the points of cubes near the outline or the blade's ends are flattened (issue 24: a
     2-million-point scan spent most of its opening flattening every point): the masks and the
     length are those that flattening every point gives."""
-    points, _, found = big
+    points, found = budgeted
+    monkeypatch.setattr(extract, "BUDGET", SMALL_BUDGET)
     monkeypatch.setattr(extract, "ENDS", 1e9)  # every cube counts as at an end
     every = extract_leaf(points)
     np.testing.assert_array_equal(found.blade, every.blade)
@@ -50,12 +67,13 @@ def test_a_large_scan_flattens_only_its_margin_and_ends_and_loses_nothing(big, m
     assert found.length == pytest.approx(every.length, rel=1e-9)
 
 
-def test_a_large_scan_is_thinned_once_for_its_check_and_its_extraction(big, monkeypatch):
+def test_a_large_scan_is_thinned_once_for_its_check_and_its_extraction(budgeted, monkeypatch):
     """Opening a scan thins it once (issue 24): check_scan and extract_leaf both thinned the
     scan's points before, a second each for 2 million; the extraction is the same."""
     from leafstudio import workflows
 
-    points, _, found = big
+    points, found = budgeted
+    monkeypatch.setattr(extract, "BUDGET", SMALL_BUDGET)
     calls = []
 
     def counted(at: np.ndarray, budget: int):
@@ -83,9 +101,10 @@ def test_voxel_thinning_keeps_at_most_the_budget_and_maps_every_point():
     assert none is None and zero == 0 and np.array_equal(same, blob[:100])
 
 
-def test_a_blob_larger_than_the_budget_is_refused_cleanly_or_read():
+def test_a_blob_larger_than_the_budget_is_refused_cleanly_or_read(monkeypatch):
+    monkeypatch.setattr(extract, "BUDGET", SMALL_BUDGET)  # thinned as a larger one is
     rng = np.random.default_rng(1)
-    blob = rng.normal(size=(3 * BUDGET, 3))
+    blob = rng.normal(size=(3 * SMALL_BUDGET, 3))
     try:
         extract_leaf(blob)
     except LeafError as exc:
