@@ -34,6 +34,7 @@ from PySide6.QtCore import QObject, Signal
 
 from leafstudio.core.kernels import MEASURE, compile_kernels
 from leafstudio.core.pipeline import Cancelled, Pipeline, Result
+from leafstudio.core.store import StageStore
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.jobs import Job, running
 from leafstudio.gui.model.layers import Piece, build_layers
@@ -155,6 +156,9 @@ class Worker(QObject):
         self.progressed.connect(self._answer_progress)
         self._quit = False
         self._pipeline: Pipeline | None = None  # touched on the pipeline lane only
+        # every leaf's pipeline keeps its stages here, keyed on the leaf's coordinates: the same
+        # leaf opened again (a file or demo reopened, a form chosen again) reruns nothing
+        self._store = StageStore()
         self._shown: Outcome | None = None  # the last outcome yielded (pipeline lane only)
         # measure a result only once the window has drawn it (Outcome.drawn), so that measuring
         # never competes with the render for the host's cores (software OpenGL renders on them)
@@ -322,7 +326,7 @@ class Worker(QObject):
         """The pipeline job: run, prepare the layers, yield the Outcome; then measure it (after
         it is shown, so that the metrics do not delay it) and return the seconds spent."""
         if self._pipeline is None or self._pipeline.leaf is not request.leaf:
-            self._pipeline = Pipeline(request.leaf)
+            self._pipeline = Pipeline(request.leaf, self._store)
         result = self._pipeline.run(
             request.params, on_stage=context.stage, should_stop=context.should_stop
         )

@@ -114,6 +114,23 @@ def test_the_pipeline_cache_is_kept_between_runs_of_one_leaf(worker, qtbot):
     assert "veins" in outcome.result.metrics  # computed on the worker thread
 
 
+def test_the_same_leaf_opened_again_reruns_no_stage_and_keeps_its_own_object(worker, qtbot):
+    """The cache is keyed on the leaf's coordinates: the same demo opened again (a new Leaf, as
+    reopening a file gives) was reconstructed from scratch; its result still names the new
+    leaf, and another leaf still runs every stage."""
+    got = collect(worker)
+    first = worker.submit_pipeline(demo("nested"), FAST)
+    qtbot.waitUntil(lambda: any(j == first for _, j, _ in got["done"]), timeout=WAIT_MS)
+    again = demo("nested")
+    request = worker.submit_pipeline(again, FAST)
+    qtbot.waitUntil(lambda: any(j == request for _, j, _ in got["done"]), timeout=WAIT_MS)
+    outcome = got["yielded"][-1][2]
+    assert outcome.result.ran == () and outcome.result.leaf is again
+    other = worker.submit_pipeline(demo("parallel"), FAST)
+    qtbot.waitUntil(lambda: any(j == other for _, j, _ in got["done"]), timeout=WAIT_MS)
+    assert "frame" in got["yielded"][-1][2].result.ran
+
+
 def test_a_job_that_fails_after_shutdown_logs_nothing(worker, caplog):
     """A job of a closed window that failed later logged its traceback into a stream that was
     gone by then (a test's captured output: "I/O operation on closed file")."""
