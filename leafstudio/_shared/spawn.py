@@ -8,8 +8,7 @@ workers are forked from one server process (multiprocessing's forkserver), start
 first worker, which has imported leafstudio already (a worker is then ready in milliseconds).
 The server is a fresh single-threaded process, so this is as safe as spawn from a process with
 threads (the app's). A worker whose parent's environment, working folder or import path has
-changed since the server started (a test's or a script's NUMBA_CACHE_DIR, say), or that is
-started from a thread of another niceness than the one that started the server, is spawned
+changed since the server started (a test's or a script's NUMBA_CACHE_DIR, say) is spawned
 instead, so that every worker sees what a spawned one would. Elsewhere, spawn.
 """
 
@@ -33,11 +32,10 @@ _LOCK = threading.Lock()
 _server: dict[str, Any] = {}  # the fork server's pid and what it started with (_fits)
 
 
-def _state() -> tuple[dict[str, str], str, list[str], int]:
-    """What a child inherits from its parent besides its job: environment, folder, import path
-    and the calling thread's niceness (a worker lane's is higher than the main thread's)."""
+def _state() -> tuple[dict[str, str], str, list[str]]:
+    """What a child inherits from its parent besides its job: environment, folder, path."""
     environ = {key: value for key, value in os.environ.items() if key not in UNREAD}
-    return environ, os.getcwd(), list(sys.path), os.nice(0)
+    return environ, os.getcwd(), list(sys.path)
 
 
 def _forkserver_fits() -> bool:

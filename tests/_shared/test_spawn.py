@@ -31,22 +31,3 @@ def test_a_worker_sees_the_environment_and_folder_its_parent_has_now(monkeypatch
     assert _ask(os.getenv, "LEAFSTUDIO_SPAWN_TEST") == "second"
     monkeypatch.chdir(tmp_path)
     assert os.path.samefile(_ask(os.getcwd), tmp_path)
-
-
-def test_a_worker_started_from_a_nicer_thread_is_as_nice_as_that_thread():
-    """A spawned worker inherits the niceness of the thread that starts it (the app's worker
-    lanes run nicer than its main thread); the server, started from another, must not lend its
-    own."""
-    import threading
-
-    _ask(os.getpid)  # the server started from this thread
-    answers: list[int] = []
-
-    def nicer() -> None:
-        os.nice(2)  # this thread only (Linux)
-        answers.extend([os.nice(0), _ask(os.nice, 0)])
-
-    thread = threading.Thread(target=nicer)
-    thread.start()
-    thread.join()
-    assert answers[1] == answers[0] >= os.nice(0) + 1
