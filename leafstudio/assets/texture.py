@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from leafstudio.assets.asset import LeafPlane
+from leafstudio.core.raster import nearest_set_pixel
 from leafstudio.errors import LeafError
 from leafstudio.sources.photo import foreground
 
@@ -191,18 +192,14 @@ def _photo_leaf(photo: np.ndarray) -> np.ndarray | None:
 
 def _nearest(source: np.ndarray) -> np.ndarray:
     """(h, w) flat index of the `source` texel nearest each texel (some source texel needed).
-    Exact for every texel within PAD_EXACT of the sources' bounding box (the distance transform
+    Exact for every texel within PAD_EXACT of the sources' bounding box (the feature transform
     runs on that box only: a leaf leaves a third of the square or more empty); farther out a
     texel takes the box's texel nearest it."""
-    from scipy.ndimage import distance_transform_edt
-
     h, w = source.shape
     used_rows, used_cols = np.flatnonzero(source.any(axis=1)), np.flatnonzero(source.any(axis=0))
     r0, r1 = max(used_rows[0] - PAD_EXACT, 0), min(used_rows[-1] + PAD_EXACT + 1, h)
     c0, c1 = max(used_cols[0] - PAD_EXACT, 0), min(used_cols[-1] + PAD_EXACT + 1, w)
-    rows, cols = distance_transform_edt(
-        ~source[r0:r1, c0:c1], return_distances=False, return_indices=True
-    )
+    rows, cols = np.divmod(nearest_set_pixel(source[r0:r1, c0:c1]), c1 - c0)
     nearest = (rows + r0) * w + (cols + c0)
     return np.pad(nearest, ((r0, h - r1), (c0, w - c1)), mode="edge")
 

@@ -15,7 +15,8 @@ shapely, Triangle and open3d; never Qt.
 | the stages in order, one cache    | all               | pipeline, stages, steps, store      |
 | results (4, Table 1)              | Result.metrics    | result, evaluate, distance          |
 
-Support without a step of its own: buckets (the compiled neighbour searches). The stage table
-itself, with what each stage depends on, is in stages.py (each stage's function in steps.py);
-docs/architecture.md has the layers around core.
+Support without a step of its own: buckets (the compiled neighbour searches) and raster (the
+nearest set pixel of a mask, for the textures' edge padding). The stage table itself, with what
+each stage depends on, is in stages.py (each stage's function in steps.py); docs/architecture.md
+has the layers around core.
 """

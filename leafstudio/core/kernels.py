@@ -94,8 +94,9 @@ KERNELS: dict[str, tuple[types.Type, ...]] = {
     "prepare.outline:_orientation": (F2, I1),
     "prepare.outline:_ring_length": (F2, I1),
 }
-# what measuring calls (a mesh's distances and edges) and a run on some inputs (a cloud's
-# projection onto its outline), costliest first; compiled when first needed (ensure_compiled)
+# what measuring calls (a mesh's distances and edges), a run on some inputs (a cloud's
+# projection onto its outline) and a texture's edge padding (raster), costliest first;
+# compiled when first needed (ensure_compiled)
 MEASURING: dict[str, tuple[types.Type, ...]] = {
     "distance:_distances": (F2, F2, I2, I1, I1, I1, I1, F2, F2),
     "distance:_build": (F2, I2, I1),
@@ -103,6 +104,7 @@ MEASURING: dict[str, tuple[types.Type, ...]] = {
     "distance:_morton": (F2,),
     "evaluate:_edge_counts": (I2, i8),
     "distance:_centroids": (F2, I2),
+    "raster:_feature_transform": (B2,),
 }
 MEASURE = "measuring"  # MEASURING's name (its stamp's: kernelcache.kernels_cached)
 TABLES = (STAGE, MEASURE)  # every table, by name

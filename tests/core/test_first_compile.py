@@ -59,10 +59,16 @@ def test_the_tables_name_each_kernel_called_from_python():
 
 
 def test_each_kernel_of_the_tables_is_the_one_a_run_or_measuring_calls():
+    from PIL import Image
+
+    from leafstudio.assets.texture import bleed
     from tests.leaves import noisy
 
     assert ls.Pipeline(ls.demo("nested")).run(ls.Params()).metrics
     ls.Pipeline(noisy("nested")).run(ls.Params(grid=32))  # a cloud: its projection
+    rgba = np.zeros((8, 8, 4), np.uint8)
+    rgba[2:5, 3:6] = 200
+    bleed(Image.fromarray(rgba, "RGBA"))  # a texture's edge padding
     for name, argtypes in kernels.SIGNATURES.items():
         assert argtypes in kernels.dispatcher(name).signatures, name
 

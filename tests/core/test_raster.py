@@ -1,0 +1,40 @@
+"""The nearest set pixel of a mask (core/raster.py), the textures' edge padding: exact, and the
+very pixels scipy's feature transform picks, so that textures are what they were."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.ndimage import distance_transform_edt
+
+from leafstudio.core.raster import nearest_set_pixel
+
+
+def _scipy_nearest(mask: np.ndarray) -> np.ndarray:
+    rows, cols = distance_transform_edt(~mask, return_distances=False, return_indices=True)
+    return rows * mask.shape[1] + cols
+
+
+@pytest.mark.parametrize("share", [0.002, 0.02, 0.3, 0.95])
+def test_the_nearest_set_pixel_is_the_one_scipy_finds(share):
+    rng = np.random.default_rng(int(share * 1000))
+    for _ in range(40):
+        h, w = rng.integers(1, 60, 2)
+        mask = rng.random((h, w)) < share
+        mask[rng.integers(h), rng.integers(w)] = True
+        assert np.array_equal(nearest_set_pixel(mask), _scipy_nearest(mask)), (h, w)
+
+
+def test_ties_and_a_leaf_shape_match_scipy():
+    rows, cols = np.mgrid[:300, :400]
+    leaf = ((cols - 200) / 150) ** 2 + ((rows - 150) / 90) ** 2 < 1
+    leaf[150, :] = True  # a midrib running out to both sides: many equal distances
+    for mask in (leaf, ~leaf, leaf[::-1].copy(), np.eye(7, dtype=bool)):
+        assert np.array_equal(nearest_set_pixel(mask), _scipy_nearest(mask))
+
+
+def test_an_empty_mask_has_no_nearest_pixel_and_3d_is_refused():
+    assert (nearest_set_pixel(np.zeros((3, 4), bool)) == -1).all()
+    assert nearest_set_pixel(np.zeros((0, 5), bool)).shape == (0, 5)
+    with pytest.raises(ValueError, match="2D"):
+        nearest_set_pixel(np.ones((2, 2, 2), bool))
