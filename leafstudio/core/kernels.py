@@ -263,13 +263,13 @@ def compile_kernels(
         Each worker's CPU seconds by its process id (benchmarks/bench_first_run.py: the longest
         is the compile's wall time on an idle machine); empty when the cache held the kernels.
     """
-    if all(_cached(t) for t in tables):
+    if all(compiled(t) for t in tables):
         return {}
     while not _COMPILING.acquire(timeout=POLL_S):  # another thread compiles: wait for it
         if should_stop is not None and should_stop():
             return {}
     try:
-        todo_tables = [t for t in tables if not _cached(t)]  # the other thread's may be done
+        todo_tables = [t for t in tables if not compiled(t)]  # the other thread's may be done
         names = [name for t in todo_tables for name in table(t)]
         spent = _compile(names, on_stage, workers, should_stop) if names else {}
         if should_stop is None or not should_stop():
@@ -289,8 +289,9 @@ def ensure_compiled(tables: tuple[str, ...] = (MEASURE,)) -> None:
     compile_kernels(tables=tables)
 
 
-def _cached(name: str) -> bool:
-    """Whether table `name` is compiled into the cache in use (remembered once it is)."""
+def compiled(name: str) -> bool:
+    """Whether table `name` is compiled into the cache in use (remembered once it is): a set
+    look-up once it is."""
     key = (name, str(kernelcache.cache_folder()))
     if key in _READY:
         return True

@@ -1,5 +1,6 @@
 """The nearest set pixel of a mask (core/raster.py), the textures' edge padding: exact, and the
-very pixels scipy's feature transform picks, so that textures are what they were."""
+very pixels scipy's feature transform picks, so that textures are what they were, whether the
+kernel answers (measuring's kernels compiled) or scipy does (before they are)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,15 @@ import numpy as np
 import pytest
 from scipy.ndimage import distance_transform_edt
 
+from leafstudio.core import raster
 from leafstudio.core.raster import nearest_set_pixel
+
+
+@pytest.fixture(params=["kernel", "scipy"], autouse=True)
+def answered_by(request, monkeypatch):
+    """Each test twice: by the compiled kernel, and by scipy as on a cold cache."""
+    monkeypatch.setattr(raster, "compiled", lambda table: request.param == "kernel")
+    return request.param
 
 
 def _scipy_nearest(mask: np.ndarray) -> np.ndarray:
@@ -31,6 +40,14 @@ def test_ties_and_a_leaf_shape_match_scipy():
     leaf[150, :] = True  # a midrib running out to both sides: many equal distances
     for mask in (leaf, ~leaf, leaf[::-1].copy(), np.eye(7, dtype=bool)):
         assert np.array_equal(nearest_set_pixel(mask), _scipy_nearest(mask))
+
+
+def test_the_kernel_answers_once_measurings_kernels_are_compiled(answered_by, monkeypatch):
+    called = []
+    kernel = raster._feature_transform
+    monkeypatch.setattr(raster, "_feature_transform", lambda m: called.append(1) or kernel(m))
+    nearest_set_pixel(np.eye(5, dtype=bool))
+    assert called == ([1] if answered_by == "kernel" else [])
 
 
 def test_an_empty_mask_has_no_nearest_pixel_and_3d_is_refused():
