@@ -6,7 +6,7 @@ import argparse
 import json
 
 from leafstudio.analysis.compare import compare, format_comparison
-from leafstudio.cli.options import EXIT_OK, add_run_options, settings
+from leafstudio.cli.options import EXIT_OK, add_run_options, first_run_said, settings
 from leafstudio.errors import LeafError
 from leafstudio.sources.files import load_leaf
 from leafstudio.workflows import check_finite
@@ -26,7 +26,8 @@ def run(args: argparse.Namespace) -> int:
     leaf = load_leaf(args.input, veins=args.vein)
     params = settings(args)
     try:
-        report = compare(leaf, params)
+        with first_run_said():
+            report = compare(leaf, params)
     except LeafError as exc:
         raise LeafError(exc.problem, args.input) from None
     report.pop("meshes")

@@ -11,6 +11,7 @@ import numpy as np
 from leafstudio.assets.export import save_mesh
 from leafstudio.assets.placement import parse_length
 from leafstudio.assets.writers import MESH_SUFFIXES
+from leafstudio.cli.options import first_run_said
 from leafstudio.core.pipeline import reconstruct
 from leafstudio.errors import LeafError
 from leafstudio.forms.make import SIDE_ON, Form, seen_on_edge
@@ -103,7 +104,9 @@ def run_form(args: argparse.Namespace) -> int:
     if mesh and seen_on_edge(leaf):
         raise LeafError(f"{SIDE_ON}; write the leaf (.leaf.json), or lower --fold or --curl")
     if mesh:
-        save_mesh(reconstruct(leaf, Params()), out, length=args.length)
+        with first_run_said():
+            result = reconstruct(leaf, Params())
+        save_mesh(result, out, length=args.length)
     else:
         save_leaf(leaf, out)
     print(

@@ -4,7 +4,9 @@ Params they give, and one pipeline run with its notes logged."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import logging
+from collections.abc import Iterator
 from typing import TYPE_CHECKING
 
 from leafstudio._shared.kernelcache import NOTICE, kernels_cached, mark_cached
@@ -89,18 +91,26 @@ def run_pipeline(args: argparse.Namespace, leaf: object):
     """The Params (see settings) and the pipeline's Result; the run's notes are printed as
     warnings, and the chosen K when K is auto."""
     params = settings(args)
-    compiling_notice()
     try:  # the frame stage refuses a crossing boundary and keeps the largest of several loops
-        result = Pipeline(leaf).run(params)
+        with first_run_said():
+            result = Pipeline(leaf).run(params)
     except LeafError as exc:
         raise LeafError(exc.problem, args.input) from None
-    mark_cached()
     args.warnings = [*leaf_warnings(leaf), *result.warnings]  # for --metrics
     for note in args.warnings:
         log.warning(f"{args.input}: {note}")
     if params.k == "auto":
         log.info(f"{args.input}: K = {result.chosen_k} (chosen by BIC)")
     return params, result
+
+
+@contextlib.contextmanager
+def first_run_said() -> Iterator[None]:
+    """Around a command's reconstruction (any: `form -o x.glb` and `compare` too): the compiling
+    line first when this run compiles the kernels, and the cache marked compiled once it ran."""
+    compiling_notice()
+    yield
+    mark_cached()
 
 
 def compiling_notice() -> None:
