@@ -3,7 +3,8 @@ real Dask scheduler and worker, and no progress bar when stderr is piped.
 
 In-process batches run on worker processes kept for the session (`warm_pools`,
 tests/batch/pools.py): a test here checks rows, tables and meshes, not a worker's start; the killed
-batch and the progress bar run `leafstudio` itself, in a new process with its own workers."""
+batch runs `leafstudio` itself, in a new process with its own workers. The progress bar's test runs
+the command in this process, its stderr a real pipe, then a real terminal (a pty)."""
 
 from __future__ import annotations
 
@@ -339,39 +340,46 @@ def test_dask_scheduler_and_worker_on_localhost_run_the_tasks(tmp_path, leaves):
             proc.wait(timeout=30)
 
 
-def _run_with_stderr(args: list[str], stderr) -> subprocess.CompletedProcess:
-    return subprocess.run([*LEAFSTUDIO, *args], stderr=stderr, stdout=subprocess.DEVNULL,
-                          timeout=300, check=False)  # fmt: skip
-
-
-def test_progress_bar_only_on_a_terminal(tmp_path, leaves):
-    args = ["batch", str(leaves / "a"), "--grid", GRID, "--jobs", "1", "-o"]
-    piped = _run_with_stderr([*args, str(tmp_path / "piped")], subprocess.PIPE)
-    lines = piped.stderr.decode().splitlines()
-    assert piped.returncode == 0
-    assert len(lines) == 1 and lines[0].startswith("leafstudio: batch: 3 inputs: 3 ok")
-    assert "\r" not in piped.stderr.decode() and "it/s" not in piped.stderr.decode()
-    # the same on a terminal shows the bar
-    leader, follower = pty.openpty()
-    fcntl.ioctl(follower, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 100, 0, 0))
+def _shown(argv: list[str], monkeypatch, terminal: bool) -> tuple[int, bytes]:
+    """Exit code and stderr of `leafstudio argv` run in this process (its rows on the kept
+    workers), with stderr a pipe or a 100-column terminal (a pty); read once the command is done
+    (a few hundred bytes: less than either buffer holds)."""
+    if terminal:
+        reader, writer = pty.openpty()
+        fcntl.ioctl(writer, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 100, 0, 0))
+    else:
+        reader, writer = os.pipe()
+    shown = b""
     try:
-        tty = _run_with_stderr([*args, str(tmp_path / "tty")], follower)
-        os.close(follower)
-        follower = -1
-        shown = b""
+        with open(writer, "w", encoding="utf-8") as stream, monkeypatch.context() as patch:
+            assert stream.isatty() == terminal
+            patch.setattr(sys, "stderr", stream)
+            code = main(argv)
+        os.set_blocking(reader, False)
         while True:
             try:
-                chunk = os.read(leader, 65536)
-            except OSError:
+                chunk = os.read(reader, 65536)
+            except OSError:  # nothing more (EAGAIN; a pty without a writer: EIO)
                 break
             if not chunk:
                 break
             shown += chunk
     finally:
-        os.close(leader)
-        if follower != -1:
-            os.close(follower)
-    assert tty.returncode == 0
+        os.close(reader)
+    return code, shown
+
+
+@pytest.mark.usefixtures("warm_pools")
+def test_progress_bar_only_on_a_terminal(tmp_path, leaves, monkeypatch):
+    args = ["batch", str(leaves / "a"), "--grid", GRID, "--jobs", "1", "-o"]
+    code, piped = _shown([*args, str(tmp_path / "piped")], monkeypatch, terminal=False)
+    lines = piped.decode().splitlines()
+    assert code == 0
+    assert len(lines) == 1 and lines[0].startswith("leafstudio: batch: 3 inputs: 3 ok")
+    assert "\r" not in piped.decode() and "it/s" not in piped.decode()
+    # the same on a terminal shows the bar
+    code, shown = _shown([*args, str(tmp_path / "tty")], monkeypatch, terminal=True)
+    assert code == 0
     assert b"leaf/s" in shown or b"s/leaf" in shown, shown
     assert b"3/3" in shown
 
