@@ -43,6 +43,7 @@ from tests.batch.pools import use_warm_pools
 REAL = Path(__file__).resolve().parents[3] / "shared" / "realleaves"
 LEAFSTUDIO = [sys.executable, "-m", "leafstudio"]
 GRID = "32"
+SCANS = 4  # real scans in a batch: two workers get two each, and a kill after two rows leaves two
 
 
 def _rotation(angle: float) -> np.ndarray:
@@ -66,12 +67,12 @@ def leaves(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="module")
 def scans(tmp_path_factory) -> Path:
-    """Six real scans (x y z only), each subsampled to 40%, moved and turned."""
+    """SCANS real scans (x y z only), each subsampled to 40%, moved and turned."""
     if not REAL.is_dir():
         pytest.skip(f"no real scans at {REAL}")
     root = tmp_path_factory.mktemp("scans")
     rng = np.random.default_rng(1)
-    for i, path in enumerate(sorted(REAL.glob("*.txt"))[1:7]):
+    for i, path in enumerate(sorted(REAL.glob("*.txt"))[1 : 1 + SCANS]):
         xyz = np.loadtxt(path, delimiter=",", usecols=(0, 1, 2))
         keep = rng.random(len(xyz)) < 0.4
         moved = xyz[keep] @ _rotation(0.3 * i).T + [10.0 * i, -5.0, 2.0]
@@ -212,7 +213,7 @@ def clean(tmp_path_factory, scans, kept_pools) -> Path:
     with pytest.MonkeyPatch.context() as monkeypatch:
         use_warm_pools(monkeypatch, kept_pools)
         rows = list(ls.batch([scans], ls.Params(grid=32), out, scans=True, jobs=1))
-    assert len(rows) == 6 and all(r["status"] == "ok" for r in rows), rows
+    assert len(rows) == SCANS and all(r["status"] == "ok" for r in rows), rows
     assert all(0 <= r["scan_mean"] < 0.05 * r["length"] for r in rows)
     return out
 
@@ -220,8 +221,8 @@ def clean(tmp_path_factory, scans, kept_pools) -> Path:
 @pytest.mark.usefixtures("warm_pools")
 def test_one_and_two_workers_give_the_same_meshes_and_table(tmp_path, scans, clean):
     rows = list(ls.batch([scans], ls.Params(grid=32), tmp_path, scans=True, jobs=2))
-    assert len(rows) == 6
-    assert _meshes(tmp_path) == _meshes(clean) and len(_meshes(clean)) == 6
+    assert len(rows) == SCANS
+    assert _meshes(tmp_path) == _meshes(clean) and len(_meshes(clean)) == SCANS
     assert _steady(tmp_path / "traits.csv") == _steady(clean / "traits.csv")
 
 
@@ -241,15 +242,17 @@ def test_killed_batch_resumed_is_the_same_as_a_clean_run(tmp_path, scans, clean)
     os.killpg(proc.pid, signal.SIGKILL)
     proc.wait()
     done_before = len(list(TraitTable(table, True).rows()))
-    if done_before == 6:
+    if done_before == SCANS:
         pytest.skip("the batch finished before it could be killed")
     # what a kill in the middle of a write leaves: a temporary mesh and half a row
-    (killed / ".scan5.ply.99999999-0badc0de.leafstudio-part.ply").write_bytes(b"ply\nhalf")
+    (killed / f".scan{SCANS - 1}.ply.99999999-0badc0de.leafstudio-part.ply").write_bytes(
+        b"ply\nhalf"
+    )
     with open(table, "a") as handle:
         handle.write("/half/a/row,ok,,scan")
     run = ls.batch([scans], ls.Params(grid=32), killed, scans=True, jobs=2, resume=True)
     rows = list(run)
-    assert run.resumed == done_before >= 1 and len(rows) == 6
+    assert run.resumed == done_before >= 1 and len(rows) == SCANS
     assert _meshes(killed) == _meshes(clean)
     assert _steady(table) == _steady(clean / "traits.csv")
     assert not [p for p in killed.rglob(".*")]  # no temporary file left
