@@ -8,7 +8,7 @@ import sys
 import time
 
 from leafstudio.batch import FORMATS, Batch, batch
-from leafstudio.cli.options import add_param_flags, params_for
+from leafstudio.cli.options import add_param_flags, compiling_notice, params_for
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -76,6 +76,8 @@ def run(args: argparse.Namespace) -> int:
         force=args.force,
         length=args.length,
     )
+    if args.scheduler is None and running.total:
+        compiling_notice()  # the local pool compiles the kernels before its first row
     start = time.perf_counter()
     bar = tqdm(
         total=running.total,
