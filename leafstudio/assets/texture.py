@@ -199,7 +199,7 @@ def _nearest(source: np.ndarray) -> np.ndarray:
     used_rows, used_cols = np.flatnonzero(source.any(axis=1)), np.flatnonzero(source.any(axis=0))
     r0, r1 = max(used_rows[0] - PAD_EXACT, 0), min(used_rows[-1] + PAD_EXACT + 1, h)
     c0, c1 = max(used_cols[0] - PAD_EXACT, 0), min(used_cols[-1] + PAD_EXACT + 1, w)
-    rows, cols = np.divmod(nearest_set_pixel(source[r0:r1, c0:c1]), c1 - c0)
+    rows, cols = nearest_set_pixel(source[r0:r1, c0:c1])
     nearest = (rows + r0) * w + (cols + c0)
     return np.pad(nearest, ((r0, h - r1), (c0, w - c1)), mode="edge")
 

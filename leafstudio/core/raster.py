@@ -24,9 +24,10 @@ from leafstudio.core.kernels import MEASURE, compiled
 _NONE = np.int64(-1)
 
 
-def nearest_set_pixel(mask: np.ndarray) -> np.ndarray:
-    """(h, w) int64: the flat index (row * w + column) of the set pixel of the 2D boolean
-    `mask` nearest each pixel (Euclidean distance); -1 everywhere when none is set.
+def nearest_set_pixel(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The row and the column ((h, w) int64 each) of the set pixel of the 2D boolean `mask`
+    nearest each pixel (Euclidean distance), as scipy's `return_indices` gives them; -1
+    everywhere when none is set.
 
     The kernel is compiled with measuring's (core/kernels.MEASURING); until they are (a first
     run, before anything was measured) scipy's transform answers, with the same pixels, rather
@@ -35,10 +36,10 @@ def nearest_set_pixel(mask: np.ndarray) -> np.ndarray:
     if mask.ndim != 2:
         raise ValueError(f"a 2D mask is needed, not {mask.ndim}D")
     if mask.size == 0 or not mask.any():
-        return np.full(mask.shape, _NONE)
+        return np.full(mask.shape, _NONE), np.full(mask.shape, _NONE)
     if not compiled(MEASURE):
         rows, cols = distance_transform_edt(~mask, return_distances=False, return_indices=True)
-        return rows.astype(np.int64) * mask.shape[1] + cols
+        return rows.astype(np.int64), cols.astype(np.int64)
     return _feature_transform(mask)
 
 
@@ -65,7 +66,8 @@ def _feature_transform(mask):
                 row[y, x] = last[x]
     # along each row: the column whose nearest pixel (from the first pass) is nearest overall,
     # from the lower envelope of the parabolas (x - q)^2 + height[q]
-    out = np.empty((h, w), np.int64)
+    out_rows = np.empty((h, w), np.int64)
+    out_columns = np.empty((h, w), np.int64)
     columns = np.empty(w, np.int64)  # the columns on the envelope
     starts = np.empty(w + 1)  # where each one's stretch of the envelope starts
     height = np.empty(w, np.int64)  # each column's squared distance down it
@@ -95,5 +97,6 @@ def _feature_transform(mask):
             while starts[j + 1] < x:
                 j += 1
             q = columns[j]
-            out[y, x] = row[y, q] * w + q
-    return out
+            out_rows[y, x] = row[y, q]
+            out_columns[y, x] = q
+    return out_rows, out_columns
