@@ -290,8 +290,8 @@ def ensure_compiled(tables: tuple[str, ...] = (MEASURE,)) -> None:
 
 
 def compiled(name: str) -> bool:
-    """Whether table `name` is compiled into the cache in use (remembered once it is): a set
-    look-up once it is."""
+    """Whether table `name` is compiled into the cache in use (remembered once it is: then a
+    set look-up)."""
     key = (name, str(kernelcache.cache_folder()))
     if key in _READY:
         return True
