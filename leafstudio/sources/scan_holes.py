@@ -78,9 +78,7 @@ def _near_gaps(region: Polygon, tree: cKDTree, radius: float) -> np.ndarray:
     step = radius / 2
     reach = step / np.sqrt(2)
     inradius = radius * np.cos(np.pi / (4 * ROUND))  # the disc polygons have 4 ROUND sides
-    lo, hi = np.asarray(region.bounds[:2]) - step, np.asarray(region.bounds[2:]) + step
-    u, v = (np.arange(lo[k], hi[k] + step, step) for k in (0, 1))
-    nodes = np.stack(np.meshgrid(u, v), -1).reshape(-1, 2)
+    nodes = _grid(region, step, pad=step)
     clear = tree.query(nodes, distance_upper_bound=inradius)[0]
     centres = nodes[clear >= inradius - reach]
     if not len(centres):
@@ -105,9 +103,14 @@ def _room(region: Polygon, tree: cKDTree, radius: float) -> bool:
     far at least from every point inside the disc. A quick no for a blade without a hole (the
     union of the points' discs cost 0.1 s a scan)."""
     step = radius / 2
-    lo, hi = np.asarray(region.bounds[:2]), np.asarray(region.bounds[2:])
-    u, v = (np.arange(lo[k], hi[k] + step, step) for k in (0, 1))
-    nodes = np.stack(np.meshgrid(u, v), -1).reshape(-1, 2)
+    nodes = _grid(region, step)
     nodes = nodes[shapely.contains_xy(region, nodes[:, 0], nodes[:, 1])]
     clear = tree.query(nodes, distance_upper_bound=radius)[0]
     return bool(np.any(clear >= radius - step / np.sqrt(2)))
+
+
+def _grid(region: Polygon, step: float, pad: float = 0.0) -> np.ndarray:
+    """(n, 2) nodes `step` apart over the region's box, widened by `pad` on every side."""
+    lo, hi = np.asarray(region.bounds[:2]) - pad, np.asarray(region.bounds[2:]) + pad
+    u, v = (np.arange(lo[k], hi[k] + step, step) for k in (0, 1))
+    return np.stack(np.meshgrid(u, v), -1).reshape(-1, 2)
