@@ -264,10 +264,13 @@ class ProfileView(ProfilePainting, QWidget):
 
     def to_view(self, t: float, h: float) -> QPointF:
         """Widget position of share `t` of the vein's length at height `h`."""
+        return QPointF(*self.view_xy(t, h))
+
+    def view_xy(self, t, h) -> tuple:
+        """Widget x and y of shares `t` of the vein's length at heights `h` (numbers, or arrays
+        for a whole line: ProfilePainting._path)."""
         plot, (lo, hi) = self._plot(), self._heights_range()
-        return QPointF(
-            plot.left() + t * plot.width(), plot.bottom() - (h - lo) / (hi - lo) * plot.height()
-        )
+        return plot.left() + t * plot.width(), plot.bottom() - (h - lo) / (hi - lo) * plot.height()
 
     def from_view(self, pos: QPointF) -> tuple[float, float]:
         """Share of the length and height at a widget position."""
