@@ -204,7 +204,8 @@ def batch(
         format ("ply", "glb", "obj", "vtp", "none"), jobs (worker processes, default the
         cores), scheduler (a Dask scheduler address, or "local"), resume, fail_fast, force
         (scans that do not look like one leaf are reconstructed anyway, with warnings), length
-        (each leaf's real length, '8cm': meshes at real size, see save_mesh).
+        (each leaf's real length, '8cm': meshes at real size, see save_mesh, and the traits
+        in millimetres: mm, mm², 1/mm, 1/mm²).
 
     Returns
     -------

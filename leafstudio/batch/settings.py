@@ -7,6 +7,7 @@ import hashlib
 import json
 from dataclasses import dataclass, field
 
+from leafstudio.assets.placement import SCALE_POWERS
 from leafstudio.model import Params
 from leafstudio.sources.extract import OUTLINE_POINTS
 
@@ -27,6 +28,17 @@ CURVATURE_COLUMNS = tuple(
     for name in ("mean_curvature", "gaussian_curvature")
     for stat in ("mean", "min", "max")
 )
+#: the power of a real length's scale each trait goes with (its unit: mm, mm², 1/mm, 1/mm²)
+TRAIT_POWERS = {
+    "area": 2,
+    "projected_area": 2,
+    "perimeter": 1,
+    "length": 1,
+    "width": 1,
+    "aspect_ratio": 0,
+    "height": 1,
+    **{name: SCALE_POWERS[name.rsplit("_", 1)[0]] for name in CURVATURE_COLUMNS},
+}
 SCAN_COLUMNS = ("scan_points", "scan_mean", "scan_p95", "scan_beyond_1pct", "scan_beyond_2pct")
 INT_COLUMNS = frozenset({"k", "grid", "scan_points"})
 FLOAT_COLUMNS = frozenset(
@@ -78,7 +90,8 @@ class Settings:
     scans: bool = False
     format: str = "ply"
     force: bool = False
-    length: float | None = None  # each leaf's real length in metres (save_mesh's length)
+    length: float | None = None  # each leaf's real length in metres (save_mesh's length); the
+    # traits are then in millimetres
 
     def key(self) -> str:
         """A short hash of the settings: rows made with other settings are not resumed."""

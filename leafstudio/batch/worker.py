@@ -15,7 +15,7 @@ from leafstudio import workflows
 from leafstudio.assets.export import save_mesh
 from leafstudio.assets.placement import result_placement, size_note
 from leafstudio.batch.plan import Job, file_hash
-from leafstudio.batch.settings import CURVATURE_COLUMNS, SHAPE_COLUMNS, columns
+from leafstudio.batch.settings import CURVATURE_COLUMNS, SHAPE_COLUMNS, TRAIT_POWERS, columns
 from leafstudio.core.evaluate import curvature_summary, shape_measurements
 from leafstudio.errors import LeafError, error_line
 from leafstudio.sources.files import load_leaf
@@ -69,8 +69,9 @@ def _number(x: Any) -> float | None:
     return None if x is None else float(x)
 
 
-def _traits(result: Any) -> dict[str, Any]:
-    """The shape and curvature columns of a Result (core/evaluate.py)."""
+def _traits(result: Any, scale: float | None = None) -> dict[str, Any]:
+    """The shape and curvature columns of a Result (core/evaluate.py), in the leaf's own units,
+    or `scale` times them (millimetres per leaf unit, when --length gives the real length)."""
     mesh = result.triangle_mesh
     shape = shape_measurements(mesh, result.frame, result.polygon)
     curvature = curvature_summary(mesh)
@@ -78,6 +79,8 @@ def _traits(result: Any) -> dict[str, Any]:
     for name in CURVATURE_COLUMNS:
         array, stat = name.rsplit("_", 1)
         row[name] = _number(curvature[array][stat]) if array in curvature else None
+    if scale is not None:
+        row = {k: None if v is None else v * scale ** TRAIT_POWERS[k] for k, v in row.items()}
     return row
 
 
@@ -94,7 +97,9 @@ def _reconstruct(job: Job) -> dict[str, Any]:
         done = workflows.reconstruct(opened, settings.params)
         result = done.result
         row: dict[str, Any] = {"k": result.chosen_k, "grid": settings.params.grid}
-        row.update(_traits(result))  # LeafError: a leaf at 1e160 is too large to measure
+        length, placement = settings.length, result_placement(result)
+        millimetres = None if length is None else 1000 * length / placement.length
+        row.update(_traits(result, millimetres))  # LeafError: a leaf at 1e160 is too large
     except LeafError as exc:
         raise LeafError(exc.problem, job.input) from None
     workflows.check_finite(row, job.input)
@@ -112,7 +117,6 @@ def _reconstruct(job: Job) -> dict[str, Any]:
         # the bare mesh: normals, UVs and the point arrays, without the texture image and the
         # closed-form normals a Result gets (a second per leaf; `reconstruct` writes those)
         mesh = Path(job.out_dir) / job.mesh
-        length, placement = settings.length, result_placement(result)
         save_mesh(result.triangle_mesh, mesh, length=length, placement=placement)
         row["mesh"] = job.mesh
         row["mesh_sha256"] = file_hash(Path(job.out_dir) / job.mesh)  # --resume checks it

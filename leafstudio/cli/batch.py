@@ -22,7 +22,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     bat.add_argument("--format", choices=FORMATS, default="ply")
     bat.add_argument(
-        "--length", metavar="L", help="each leaf's real length, base to apex (8cm, 0.08m, 80mm)"
+        "--length",
+        metavar="L",
+        help="each leaf's real length, base to apex (8cm, 0.08m, 80mm): the meshes at real size "
+        "and the traits in millimetres",
     )
     add_param_flags(bat)
     bat.add_argument("--jobs", type=int, default=None, help="worker processes (default: cores)")

@@ -38,6 +38,7 @@ from leafstudio.batch import (
 )
 from leafstudio.cli import main
 from leafstudio.errors import LeafError
+from leafstudio.forms import make_form
 from tests.batch.pools import use_warm_pools
 
 REAL = Path(__file__).resolve().parents[3] / "shared" / "realleaves"
@@ -492,3 +493,30 @@ def test_a_millimetre_leaf_written_to_gltf_without_a_length_is_noted_as_reconstr
     sized = Settings(params, format="glb", length=0.06)  # given its real length: nothing to say
     row = run_job(plan([path], tmp_path / "sized", sized)[0])
     assert row["status"] == "ok" and "--length" not in (row["warnings"] or "")
+
+
+def test_a_batch_given_the_real_length_measures_in_millimetres(tmp_path):
+    """`batch --length 8cm` wrote the meshes 80 mm long but kept the traits in the input's units
+    (a form 37 units long: length 37, not 80): they are in millimetres now, areas in mm² and
+    curvatures in 1/mm and 1/mm²."""
+    form = make_form("ovate")
+    path = tmp_path / "ovate.csv"
+    ls.save_leaf(ls.Leaf(form.boundary * 37, [vein * 37 for vein in form.veins]), path)
+    params = ls.Params(grid=int(GRID))
+    own, real = (
+        run_job(plan([path], tmp_path / name, Settings(params, format="none", length=length))[0])
+        for name, length in (("own", None), ("real", 0.08))
+    )
+    assert own["status"] == real["status"] == "ok"
+    assert own["length"] == pytest.approx(37, rel=0.01)
+    assert real["length"] == pytest.approx(80, rel=0.01)
+    scale = real["length"] / own["length"]
+    for name, power in [("area", 2), ("perimeter", 1), ("height", 1), ("aspect_ratio", 0)]:
+        assert real[name] == pytest.approx(own[name] * scale**power, rel=1e-9), name
+    for stat in ("mean", "min", "max"):
+        assert real[f"mean_curvature_{stat}"] == pytest.approx(
+            own[f"mean_curvature_{stat}"] / scale, rel=1e-9
+        )
+        assert real[f"gaussian_curvature_{stat}"] == pytest.approx(
+            own[f"gaussian_curvature_{stat}"] / scale**2, rel=1e-9
+        )
