@@ -119,6 +119,12 @@ def test_a_worker_that_dies_leaves_the_kernels_to_the_run(monkeypatch, tmp_path)
     assert not kernelcache.kernels_cached()  # not marked: the next run says it compiles
 
 
+# a cheap kernel, then one whose compile takes about a second (ten polls, POLL_S): a stop that
+# comes after the first kernel comes while the second compiles (the costliest kernel,
+# surface:_levenberg_marquardt, took 3.7 s of CPU to compile in full, the next run's)
+CHEAP, SLOWER = "prepare.outline:_ring_length", "mpu:_quotient_rule"
+
+
 def _cached_kernels(folder: Path) -> set[str]:
     """The kernels whose index numba wrote in `folder` ("_ring_length", ...)."""
     return {p.name.split(".")[1].split("-")[0] for p in folder.rglob("*.nbi")}
@@ -131,8 +137,7 @@ def test_a_stopped_compile_ends_its_workers_and_the_next_one_compiles_the_rest(
     once, not left to compile on; the kernel compiled stays cached and the next compile does
     the rest (issue 24, first hour)."""
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
-    # a cheap kernel, then one that takes seconds: the stop comes while it compiles
-    names = ["prepare.outline:_ring_length", "surface:_levenberg_marquardt"]
+    names = [CHEAP, SLOWER]  # the stop comes while the second compiles
     monkeypatch.setattr(kernels, "KERNELS", {n: kernels.KERNELS[n] for n in names})
     said: list[str] = []
     spent = kernels.compile_kernels(said.append, workers=1, should_stop=lambda: len(said) > 1)
@@ -143,7 +148,7 @@ def test_a_stopped_compile_ends_its_workers_and_the_next_one_compiles_the_rest(
     assert not kernelcache.kernels_cached()
     assert kernels.compile_kernels(said.append, workers=1)  # the next run: no broken cache
     assert said[-1] == f"{kernels.STAGE} 2/2"
-    assert {"_ring_length", "_levenberg_marquardt"} <= _cached_kernels(tmp_path)
+    assert {"_ring_length", "_quotient_rule"} <= _cached_kernels(tmp_path)
     assert kernelcache.kernels_cached()
 
 
@@ -151,7 +156,7 @@ def test_a_compile_whose_progress_callback_raises_ends_its_workers(monkeypatch, 
     """A progress callback that raises (a job cancelled through it) ends the workers at once
     too: the pool waited for every kernel before, and the crew stayed registered."""
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
-    names = ["prepare.outline:_ring_length", "surface:_levenberg_marquardt"]
+    names = [CHEAP, SLOWER]
     monkeypatch.setattr(kernels, "KERNELS", {n: kernels.KERNELS[n] for n in names})
 
     def stop_at_first_kernel(stage: str) -> None:
