@@ -26,8 +26,13 @@ import importlib.util
 import os
 import shutil
 import tempfile
+from collections.abc import Iterator
+from typing import TYPE_CHECKING
 
 import pytest
+
+if TYPE_CHECKING:
+    from concurrent.futures import ProcessPoolExecutor
 
 SHARED = "LEAFSTUDIO_TEST_SHARED"  # the run's shared folder (tests/leaves.extracted_scan)
 HAS_OPEN3D = importlib.util.find_spec("open3d") is not None  # found, not imported: seconds
@@ -92,3 +97,22 @@ def _internal_error_fails(request: pytest.FixtureRequest, monkeypatch: pytest.Mo
 
     monkeypatch.setattr(cli, "_internal_error", fail)
     yield
+
+
+@pytest.fixture(scope="session")
+def kept_pools() -> Iterator[dict[int, ProcessPoolExecutor]]:
+    """The kept worker pools (tests/batch/pools.py), shared by every test of a pytest process
+    that runs a batch, ended after its last test: each file started its own before (5-10 s of
+    spawned imports each), and a test outside tests/batch its own again."""
+    pools: dict[int, ProcessPoolExecutor] = {}
+    yield pools
+    for pool in pools.values():
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+@pytest.fixture
+def warm_pools(monkeypatch: pytest.MonkeyPatch, kept_pools) -> None:
+    """Batches in this test run on the session's kept worker processes (tests/batch/pools.py)."""
+    from tests.batch.pools import use_warm_pools
+
+    use_warm_pools(monkeypatch, kept_pools)

@@ -120,6 +120,7 @@ def test_cli_bad_length_is_one_line_exit_2(tmp_path: Path, capsys):
     assert not (tmp_path / "x.glb").exists()
 
 
+@pytest.mark.usefixtures("warm_pools")  # the session's batch workers (tests/batch/pools.py)
 def test_batch_length_places_every_mesh(tmp_path: Path):
     """`batch --length`: each glTF lies flat, base at the origin, at the length given."""
     from leafstudio.cli import main

@@ -1,4 +1,4 @@
-"""Worker processes kept for the batch tests (the `warm_pools` fixture, tests/batch/conftest.py):
+"""Worker processes kept for the batch tests (the `warm_pools` fixture, tests/conftest.py):
 each batch runs on workers started once per pytest process, not spawned and imported anew per
 batch or per file.
 
