@@ -59,9 +59,11 @@ def test_the_step_changes_only_for_narrow_blades():
 @pytest.mark.parametrize("aspect", [None, 8.0, 30.0])
 def test_the_blades_quick_radius_is_never_more_than_its_inscribed_circles(aspect):
     """growth_step skips the inscribed circle when Blade.radius_below already shows the blade
-    broad enough: that bound must never pass the circle's radius."""
+    broad enough: that bound must never pass the circle's radius. The circle found within 1e-4
+    of the largest is inscribed, so no larger: a bound below it is below the largest too (the
+    bounds stay about 1e-3 under it; 1e-6 took six times as long, 4.6 s for the three)."""
     for shape in SHAPES:
         outline = Form(shape, aspect=aspect).outline().xy
         blade = Blade(Polygon(outline))
-        exact = shapely.maximum_inscribed_circle(blade.poly, 1e-6).length
-        assert 0 < blade.radius_below() <= exact, shape
+        inscribed = shapely.maximum_inscribed_circle(blade.poly, 1e-4).length
+        assert 0 < blade.radius_below() <= inscribed, shape
