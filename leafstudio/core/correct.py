@@ -45,14 +45,11 @@ held tight beside a corner or a raised vein end bends the spline just where the 
 2.45°, a drawn leaf's 8.84°, its inside 9.15°; then 2.35°, 2.37°, 8.54°, 9.10°). Where the
 blade is bent, that wider tolerance is divided by the bend's stretch once more (fit_correction).
 bench_bent --veins, 99th-percentile dihedral against the paper's surface, margin band: linear
-7.01° (8.46°), deltoid 1.88° (2.27°), orbicular 0.85° (0.87°), a drawn leaf's 8.49° (8.32°);
-every gallery form's margin band and inside as smooth or smoother (orbicular's inside was
-1.30° against 1.08° while its dome was flattened at the base, forms/relief.py); every vein
-point within 8.1e-4 of the length. The points of the band already close to the surface are
-pinned too: the surface moves there as well. A mixture already within ALREADY of every vein
-point is left as it is: the narrow forms' (lanceolate, oblanceolate) pass within 5.8e-4 and
-8.1e-4, and no surface through every vein point is as smooth inside as theirs (a free surface
-with the least bending through them: 3.22° and 3.40° against 3.03° and 2.85°).
+7.05° (7.78°), deltoid 1.98° (2.19°), orbicular 1.09° (1.18°), a drawn leaf's 8.49° (8.32°);
+every gallery form's margin band and inside but oblanceolate's and orbicular's inside (2.94°
+against 2.85°, 1.30° against 1.08°: the dip of the form's base flattening) as smooth or
+smoother; every vein point within 8e-4 of the length. The points of the band already close to
+the surface are pinned too: the surface moves there as well.
 
 The spline's centres are the vein points thinned along each vein (CENTER_STEP), less those of
 a later vein within JUNCTION of an earlier one (where a side vein leaves the midrib, the two
@@ -100,7 +97,6 @@ OVERSHOOT = 6.0  # T·c beyond this many times the largest residual is no smooth
 TOLERANCE = 4e-4  # of the length: each vein point may stay this far off the surface when that
 # lets the surface bend less (bending.least_bending)
 BAND_TOLERANCE = 7e-4  # ... and this far in the margin band (T < BAND), see the module
-ALREADY = 8e-4  # of the length: a mixture this close to every vein point is kept (see the module)
 MOST_CENTERS = 800  # beyond this the veins are thinned further: the dense solve grows as its
 # cube (3000 centres took seconds a run; the app reruns this on every slider step)
 
@@ -292,8 +288,7 @@ def onto_veins(
     stretch: list[np.ndarray] | None = None,
 ) -> tuple[HeightSurface, np.ndarray | None]:
     """`surface` with a VeinCorrection that brings it onto the vein points, and c at the nodes
-    (on the lattice from its φ); `surface` itself and None when no correction holds or none is
-    needed (every vein point already within ALREADY of the length).
+    (on the lattice from its φ); `surface` itself and None when no correction holds.
 
     Parameters
     ----------
@@ -331,8 +326,6 @@ def onto_veins(
     )
     relief_on = mixture[bending.on]
     keep = reachable(taper, residual, relief)
-    if np.all(np.abs(residual[keep]) * grows[keep] <= ALREADY * length):
-        return surface, None  # already on the veins: the mixture's own surface is the smoothest
     for pins in (keep, keep & (taper >= BAND)):
         some = bending.pinned(pins)
         correction = fit_correction(

@@ -39,12 +39,10 @@ SINUS_CALM, wide enough that the correction need not bend the surface down into 
 wider flattening lowers the veins' top (cordate 0.089 -> 0.080 of the length, reniform
 0.125 -> 0.120, sagittate 0.049 -> 0.037); scaled back to its top, 0.27 still beats 0.15 on
 cordate (margin 2.02° -> 1.50°, inside 1.99° -> 1.60°) but not on sagittate's inside
-(2.93° -> 3.49°). Elsewhere (a round, truncate or cuneate base) the dome is left as it is:
-flattened within 0.15 of the length there too, orbicular's midrib bent about 2° a grid step
-near its base, and a surface through it was rougher inside than the paper's surface, which
-missed it by 6e-3 of the length (99th-percentile interior dihedral 1.29° against 1.08°); left
-as it is, 0.74° against 0.81° (bench_bent --veins), every other form as smooth through its
-veins as the paper's surface or smoother.
+(2.93° -> 3.49°). Elsewhere c is BASE_CALM: without
+it orbicular's dihedrals drop (margin 1.21° -> 0.88°, inside 1.33° -> 0.82°) but oblong's
+and hastate's margin rise by 0.01° (1.750° -> 1.759°, 3.980° -> 3.994°, before its lobes'
+notches were flattened), so it stays.
 
 A notch between the blade and a lobe (hastate's two, `notches`) is a corner of the outline
 turned inward, as a sinus's notch is, and ψ rises as steeply beside it: the side veins that
@@ -70,8 +68,9 @@ from shapely.geometry.polygon import orient
 
 from leafstudio.forms.blade import Blade
 
-SINUS_CALM = 0.27  # the dome is flattened within about this of a sinus's notch at the midrib's
-# base, where ψ rises as about the square root of the distance (see the module)
+BASE_CALM = 0.15  # the dome is flattened within about this of the midrib's base (see the module)
+SINUS_CALM = 0.27  # ... and within this of a sinus's notch, where ψ rises as about the square
+# root of the distance
 NOTCH_CALM = 0.22  # ... and within this of a notch between the blade and a lobe (hastate's), see
 # the module (hastate's margin band on the paper's surface / through the veins: 0.15, 1.58° /
 # 1.59°; 0.27, 1.14° / 1.15°)
@@ -93,8 +92,7 @@ STEPS = ((1, 0), (-1, 0), (0, 1), (0, -1))  # the four neighbours, in grid index
 def dome(blade: Blade, ratio: float, base: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
     """The dome over a blade of length about 1, its axis along x: (n, 2) points -> (n,) heights,
     `ratio` times the largest distance to the margin at its top and 0 on the margin, flattened
-    around the midrib's `base` when it is a sinus's notch and around the notches of lobes off
-    the axis (see the module)."""
+    around the midrib's `base` and the notches of lobes off the axis (see the module)."""
     poly = blade.poly
     x0, y0, x1, y1 = poly.bounds
     along = int(np.clip(np.sqrt(NODES * (x1 - x0) / (y1 - y0)), FEWEST, NODES // FEWEST))
@@ -121,17 +119,15 @@ def dome(blade: Blade, ratio: float, base: np.ndarray) -> Callable[[np.ndarray],
     if top <= 0:
         return lambda xy: np.zeros(len(np.atleast_2d(xy)))
     radius = _inradius(blade, nodes, inside, step)
+    reach = SINUS_CALM if base_angle(blade, base) > SINUS else BASE_CALM
     lobes = [p for p in notches(blade) if abs(p[1]) > NOTCH_CALM]  # off the axis y = 0
-    sinus = base_angle(blade, base) > SINUS
     coefficients = spline_filter(psi / top, order=3, mode="nearest")
 
     def heights(xy: np.ndarray) -> np.ndarray:
         xy = np.atleast_2d(np.asarray(xy, dtype=float))[:, :2]
         at = ((xy - lower) / step + pad).T
         read = map_coordinates(coefficients, at, order=3, mode="nearest", prefilter=False)
-        calm = np.ones(len(xy))
-        if sinus:
-            calm -= np.exp(-((xy - base) ** 2).sum(axis=1) / SINUS_CALM**2)
+        calm = 1 - np.exp(-((xy - base) ** 2).sum(axis=1) / reach**2)
         for notch in lobes:
             calm *= 1 - np.exp(-((xy - notch) ** 2).sum(axis=1) / NOTCH_CALM**2)
         share = np.clip(read, 0.0, 1.0)
