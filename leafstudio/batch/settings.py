@@ -102,7 +102,9 @@ class Settings:
                 "format": self.format,
                 "points": OUTLINE_POINTS,
                 "force": self.force,
-                **({"length": self.length} if self.length is not None else {}),
+                # with a length the traits are in millimetres: a table written when they stayed
+                # in the input's units is not resumed into one
+                **({"length": self.length, "traits": "mm"} if self.length is not None else {}),
             },
             sort_keys=True,
         )

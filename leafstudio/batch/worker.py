@@ -98,7 +98,7 @@ def _reconstruct(job: Job) -> dict[str, Any]:
         result = done.result
         row: dict[str, Any] = {"k": result.chosen_k, "grid": settings.params.grid}
         length, placement = settings.length, result_placement(result)
-        millimetres = None if length is None else 1000 * length / placement.length
+        millimetres = None if length is None else placement.scale(length, ".ply")  # mm a unit
         row.update(_traits(result, millimetres))  # LeafError: a leaf at 1e160 is too large
     except LeafError as exc:
         raise LeafError(exc.problem, job.input) from None

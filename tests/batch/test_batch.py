@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import fcntl
+import hashlib
 import json
 import os
 import pty
@@ -39,6 +40,7 @@ from leafstudio.batch import (
 from leafstudio.cli import main
 from leafstudio.errors import LeafError
 from leafstudio.forms import make_form
+from leafstudio.sources.extract import OUTLINE_POINTS
 from tests.batch.pools import use_warm_pools
 
 REAL = Path(__file__).resolve().parents[3] / "shared" / "realleaves"
@@ -520,3 +522,18 @@ def test_a_batch_given_the_real_length_measures_in_millimetres(tmp_path):
         assert real[f"gaussian_curvature_{stat}"] == pytest.approx(
             own[f"gaussian_curvature_{stat}"] / scale**2, rel=1e-9
         )
+
+
+def test_a_length_run_does_not_resume_rows_measured_in_the_inputs_units():
+    """A --length table written while its traits stayed in the input's units had the same
+    settings key: resumed, one table held a length of 37 beside one of 80 (mm)."""
+    before = {"format": "none", "force": False, "points": OUTLINE_POINTS, "scans": False}
+    for length in (None, 0.08):
+        settings = Settings(ls.Params(grid=64), format="none", length=length)
+        text = json.dumps(
+            {"params": settings.params.to_dict(), **before}
+            | ({"length": length} if length is not None else {}),
+            sort_keys=True,
+        )
+        old_key = hashlib.sha256(text.encode()).hexdigest()[:16]
+        assert (settings.key() == old_key) == (length is None)  # without a length: unchanged
