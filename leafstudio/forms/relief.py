@@ -81,11 +81,11 @@ from leafstudio.forms.blade import Blade
 BASE_CALM = 0.15  # the dome is flattened within about this of the midrib's base (see the module)
 SINUS_CALM = 0.27  # ... and within this of a sinus's notch, where ψ rises as about the square
 # root of the distance
-ROOF_CAP = 1.5  # a height is at most this times the roof's, ratio x distance to the margin (the
-# dome reaches 1.32 times it at most on a strip or a disc, see the module)
 NOTCH_CALM = 0.22  # ... and within this of a notch between the blade and a lobe (hastate's), see
 # the module (hastate's margin band on the paper's surface / through the veins: 0.15, 1.58° /
 # 1.59°; 0.27, 1.14° / 1.15°)
+ROOF_CAP = 1.5  # a height is at most this times the roof's, ratio x distance to the margin (the
+# dome reaches 1.32 times it at most on a strip or a disc, see the module)
 NOTCH_SMOOTH = 0.05  # of the length: the outline is smoothed this much along itself (σ) before
 # its notches are found, so that a toothed margin's teeth are none
 NOTCH_CHORD = 0.1  # of the length: a notch's angle is between the chords this far along each way
