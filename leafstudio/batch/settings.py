@@ -28,7 +28,7 @@ CURVATURE_COLUMNS = tuple(
     for name in ("mean_curvature", "gaussian_curvature")
     for stat in ("mean", "min", "max")
 )
-#: the power of a real length's scale each trait goes with (its unit: mm, mm², 1/mm, 1/mm²)
+#: the power of a real length's scale each column goes with (its unit: mm, mm², 1/mm, 1/mm²)
 TRAIT_POWERS = {
     "area": 2,
     "projected_area": 2,
@@ -38,6 +38,8 @@ TRAIT_POWERS = {
     "aspect_ratio": 0,
     "height": 1,
     **{name: SCALE_POWERS[name.rsplit("_", 1)[0]] for name in CURVATURE_COLUMNS},
+    "scan_mean": 1,  # distances from the scan's points to the surface
+    "scan_p95": 1,
 }
 SCAN_COLUMNS = ("scan_points", "scan_mean", "scan_p95", "scan_beyond_1pct", "scan_beyond_2pct")
 INT_COLUMNS = frozenset({"k", "grid", "scan_points"})

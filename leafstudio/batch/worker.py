@@ -69,9 +69,8 @@ def _number(x: Any) -> float | None:
     return None if x is None else float(x)
 
 
-def _traits(result: Any, scale: float | None = None) -> dict[str, Any]:
-    """The shape and curvature columns of a Result (core/evaluate.py), in the leaf's own units,
-    or `scale` times them (millimetres per leaf unit, when --length gives the real length)."""
+def _traits(result: Any) -> dict[str, Any]:
+    """The shape and curvature columns of a Result (core/evaluate.py), in the leaf's own units."""
     mesh = result.triangle_mesh
     shape = shape_measurements(mesh, result.frame, result.polygon)
     curvature = curvature_summary(mesh)
@@ -79,9 +78,17 @@ def _traits(result: Any, scale: float | None = None) -> dict[str, Any]:
     for name in CURVATURE_COLUMNS:
         array, stat = name.rsplit("_", 1)
         row[name] = _number(curvature[array][stat]) if array in curvature else None
-    if scale is not None:
-        row = {k: None if v is None else v * scale ** TRAIT_POWERS[k] for k, v in row.items()}
     return row
+
+
+def _scaled(row: dict[str, Any], scale: float) -> dict[str, Any]:
+    """The row's lengths, areas and curvatures in other units, `scale` of them a leaf unit
+    (millimetres, when --length gives the real length)."""
+    return {
+        k: None if v is None else v * scale ** TRAIT_POWERS[k]
+        for k, v in row.items()
+        if k in TRAIT_POWERS
+    }
 
 
 def _reconstruct(job: Job) -> dict[str, Any]:
@@ -97,22 +104,23 @@ def _reconstruct(job: Job) -> dict[str, Any]:
         done = workflows.reconstruct(opened, settings.params)
         result = done.result
         row: dict[str, Any] = {"k": result.chosen_k, "grid": settings.params.grid}
-        length, placement = settings.length, result_placement(result)
-        millimetres = None if length is None else placement.scale(length, ".ply")  # mm a unit
-        row.update(_traits(result, millimetres))  # LeafError: a leaf at 1e160 is too large
+        row.update(_traits(result))  # LeafError: a leaf at 1e160 is too large to measure
     except LeafError as exc:
         raise LeafError(exc.problem, job.input) from None
-    workflows.check_finite(row, job.input)
     notes = list(done.warnings)
     if done.scan_fit is not None:
         found = done.scan_fit
         row.update(
             scan_points=found["points"],
-            scan_mean=_number(found.get("mean")),
+            scan_mean=_number(found.get("mean")),  # in the scan's (the leaf's) units
             scan_p95=_number(found.get("p95")),
             scan_beyond_1pct=_number(found.get("beyond_1pct")),
             scan_beyond_2pct=_number(found.get("beyond_2pct")),
         )
+    length, placement = settings.length, result_placement(result)
+    if length is not None:
+        row.update(_scaled(row, placement.scale(length, ".ply")))  # Z-up formats: mm a unit
+    workflows.check_finite(row, job.input)
     if job.mesh:
         # the bare mesh: normals, UVs and the point arrays, without the texture image and the
         # closed-form normals a Result gets (a second per leaf; `reconstruct` writes those)

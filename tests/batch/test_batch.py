@@ -537,3 +537,21 @@ def test_a_length_run_does_not_resume_rows_measured_in_the_inputs_units():
         )
         old_key = hashlib.sha256(text.encode()).hexdigest()[:16]
         assert (settings.key() == old_key) == (length is None)  # without a length: unchanged
+
+
+def test_a_scan_batch_given_the_real_length_gives_its_distances_in_millimetres(scans, tmp_path):
+    """The scan columns scan_mean and scan_p95 are distances (the scan's units): in a --length
+    table in millimetres they stayed in the scan's own units beside the traits in mm."""
+    params = ls.Params(grid=int(GRID))
+    path = scans / "scan0.txt"
+    own, real = (
+        run_job(plan([path], tmp_path / name, Settings(params, True, "none", length=length))[0])
+        for name, length in (("own", None), ("real", 0.08))
+    )
+    assert own["status"] == real["status"] == "ok"
+    scale = real["length"] / own["length"]
+    assert scale > 1  # a soybean leaf of about 63 mm given 8 cm
+    for name in ("scan_mean", "scan_p95"):
+        assert real[name] == pytest.approx(own[name] * scale, rel=1e-9)
+    for name in ("scan_points", "scan_beyond_1pct", "scan_beyond_2pct"):
+        assert real[name] == own[name]  # counts and shares
