@@ -262,3 +262,24 @@ def test_the_api_refuses_a_crossing_boundary_and_keeps_the_largest_loop():
         result = ls.reconstruct(Leaf(np.vstack([outer, 0.2 * outer])), Params(grid=32))
     assert len(result.leaf.boundary) == 400  # the input as given; the outline is the outer loop
     assert abs(result.metrics["mesh"]["area"] - np.pi * 0.6) < 0.05
+
+
+def test_an_outline_given_closed_or_with_a_point_twice_opens_as_it_does_open(tmp_path):
+    """Many tools write a closed polyline (its first point again at the end); the app's open
+    (workflows.open_file) read the zero-length step as a crossing and refused the file."""
+    from leafstudio.workflows import open_file
+
+    t = np.linspace(0, 2 * np.pi, 60, endpoint=False)
+    outline = np.column_stack([2 * np.cos(t), np.sin(t), 0.05 * np.cos(t) ** 2])
+    midrib = np.column_stack([np.linspace(-1.6, 1.6, 9), np.zeros(9), np.zeros(9)])
+    rings = {
+        "open": outline,
+        "closed": np.vstack([outline, outline[:1]]),
+        "doubled": np.insert(outline, 20, outline[20], axis=0),
+    }
+    for name, ring in rings.items():
+        path = tmp_path / f"{name}.csv"
+        np.savetxt(path, np.vstack([np.c_[ring, np.zeros(len(ring))], np.c_[midrib, np.ones(9)]]),
+                   delimiter=",")  # fmt: skip
+        opened = open_file(path)
+        assert len(opened.leaf.boundary) == len(ring), name

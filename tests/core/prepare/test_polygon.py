@@ -10,8 +10,12 @@ from leafstudio.core.prepare.polygon import ring_crossings
 
 
 def _crosses_by_pairs(ring: np.ndarray) -> bool:
-    """Every pair of segments that are not neighbours along the ring, tested one by one."""
+    """Every pair of segments that are not neighbours along the ring (a point repeated in a row
+    taken once), tested one by one."""
+    ring = np.array([p for i, p in enumerate(ring) if not np.array_equal(p, ring[i - 1])])
     n = len(ring)
+    if n < 4:
+        return False
     segments = [shapely.LineString([ring[i], ring[(i + 1) % n]]) for i in range(n)]
     return any(
         segments[i].intersects(segments[j])
@@ -41,3 +45,16 @@ def _rings(seed: int) -> list[np.ndarray]:
 def test_a_ring_crosses_itself_exactly_when_two_of_its_segments_meet(seed):
     for ring in _rings(seed):
         assert (len(ring_crossings(ring)) > 0) == _crosses_by_pairs(ring), ring.tolist()
+
+
+def test_a_point_given_twice_in_a_row_is_no_crossing():
+    """A closed polyline repeats its first point at the end and a sketch or file may hold a point
+    twice: a step of length 0 meets its neighbours' neighbours at that point, which is no
+    crossing."""
+    t = np.linspace(0, 2 * np.pi, 40, endpoint=False)
+    ring = np.column_stack([2 * np.cos(t), np.sin(t)])
+    for given in (np.vstack([ring, ring[:1]]), np.insert(ring, 7, ring[7], axis=0),
+                  np.repeat(ring, 3, axis=0)):  # fmt: skip
+        assert len(ring_crossings(given)) == 0
+    eight = np.column_stack([np.sin(t), np.sin(t) * np.cos(t)])
+    assert len(ring_crossings(np.vstack([eight, eight[:1]]))) > 0
