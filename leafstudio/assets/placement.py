@@ -36,6 +36,7 @@ import numpy as np
 
 from leafstudio.assets.solid import boundary_edges
 from leafstudio.core.bend import flat_leaf
+from leafstudio.core.evaluate import blade_axis, blade_length_width
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.errors import LeafError
 
@@ -124,31 +125,15 @@ def leaf_placement(
 ) -> Placement:
     """The placement of a leaf from its plane frame, (b, 2) outline in that plane, the outline's
     (b,) heights (None: 0) and its (m_i, 3) veins in the leaf's coordinates (module docstring)."""
-    import shapely
-
     up = np.asarray(frame.normal, float)
     midrib = frame.to_plane(veins[0])[0] if veins and len(veins[0]) >= 2 else None
-    chord = None if midrib is None else midrib[-1] - midrib[0]
-    if chord is not None and np.linalg.norm(chord) > 0:
-        direction = chord / np.linalg.norm(chord)
-        start = midrib[0]
-        far = np.ptp(polygon, axis=0).sum() * 2  # a ray long enough to leave the leaf
-        ray = shapely.LineString([start, start - far * direction])
-        hits = shapely.intersection(shapely.LinearRing(polygon), ray)
-        points = shapely.get_coordinates(hits)
-        if len(points):
-            base_xy = points[np.argmin(np.linalg.norm(points - start, axis=1))]
-        else:  # the midrib starts outside the outline: its first point is the base
-            base_xy = start
-    else:
-        direction = np.array([1.0, 0.0])
-        base_xy = polygon[np.argmin(polygon[:, 0])]
+    base_xy, direction = blade_axis(polygon, midrib)
     nearest = np.argmin(np.linalg.norm(polygon - base_xy, axis=1))
     height = 0.0 if polygon_h is None else float(polygon_h[nearest])
     base = frame.to_world(base_xy[None], np.array([height]))[0]
     along = direction[0] * np.asarray(frame.u) + direction[1] * np.asarray(frame.v)
     across = np.cross(up, along)
-    length = float(((polygon - base_xy) @ direction).max())
+    length, _ = blade_length_width(polygon, base_xy, direction)
     return Placement(base=base, axes=np.stack([along, across, up]), length=max(length, 1e-12))
 
 

@@ -4,10 +4,14 @@
   and the mesh's facts (triangles, components, border loops, non-manifold edges, area);
 - the leaf's measurements: sizes, areas, height and curvature ranges (curvature.py).
 
-Lengths are in the input's units. The main axis is the frame's u axis (the boundary's direction of
-largest variance, see plane.py); width is measured across it, along v. Both meshers put the
-outline first among the mesh's vertices, in order, so the margin's 3D length (the perimeter) is
-that closed polyline's.
+Lengths are in the input's units. A leaf's length is its blade's, as a botanist measures it and
+as `--length` sets it (assets/placement.py): from the base, where the midrib (the first vein)
+meets the outline, to the apex, the outline's farthest point along the midrib's direction; a
+cordate leaf's lobes reaching back past the base are not counted. Its width is the outline's
+extent across that direction, so a reniform leaf is wider than long. Without veins the direction
+is the frame's u axis (the boundary's direction of largest variance, see plane.py). Both meshers
+put the outline first among the mesh's vertices, in order, so the margin's 3D length (the
+perimeter) is that closed polyline's.
 """
 
 from __future__ import annotations
@@ -18,6 +22,7 @@ from typing import Any, TypeVar
 import numpy as np
 from numba import njit
 
+from leafstudio.core.bend import flat_curve
 from leafstudio.core.buckets import kernel_array
 from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.distance import mesh_distances
@@ -240,8 +245,8 @@ FIELDS = (
     ("area", "surface area (3D)"),
     ("projected_area", "projected area"),
     ("perimeter", "perimeter"),
-    ("length", "length (main axis)"),
-    ("width", "greatest width"),
+    ("length", "length (base to apex)"),
+    ("width", "greatest width (across the midrib)"),
     ("aspect_ratio", "aspect ratio (length / width)"),
     ("height", "greatest height"),
 )
@@ -269,8 +274,48 @@ def curvature_summary(mesh: MeshLike) -> dict[str, dict[str, float]]:
     return summary
 
 
+def blade_axis(polygon: np.ndarray, midrib: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """The blade's base (2,) and unit direction (2,) in the plane of its (b, 2) outline: the
+    `midrib`'s ((m, 2) in that plane, or None) first-to-last direction, from where it meets the
+    outline going back from its first point (its first point if it starts outside); without a
+    midrib, +u from the outline's lowest u (module docstring)."""
+    import shapely
+
+    chord = None if midrib is None or len(midrib) < 2 else midrib[-1] - midrib[0]
+    if chord is None or not np.linalg.norm(chord) > 0:
+        return polygon[np.argmin(polygon[:, 0])], np.array([1.0, 0.0])
+    direction = chord / np.linalg.norm(chord)
+    start = midrib[0]
+    far = np.ptp(polygon, axis=0).sum() * 2  # a ray long enough to leave the leaf
+    ray = shapely.LineString([start, start - far * direction])
+    points = shapely.get_coordinates(shapely.intersection(shapely.LinearRing(polygon), ray))
+    if not len(points):  # the midrib starts outside the outline: its first point is the base
+        return start, direction
+    return points[np.argmin(np.linalg.norm(points - start, axis=1))], direction
+
+
+def blade_midrib(leaf: Leaf) -> np.ndarray | None:
+    """The leaf's midrib (its first vein) on its flat blade, (m, 3); None without one."""
+    if not leaf.veins or len(leaf.veins[0]) < 2:
+        return None
+    return leaf.veins[0] if leaf.bend is None else flat_curve(leaf.bend, leaf.veins[0])
+
+
+def blade_length_width(
+    polygon: np.ndarray, base: np.ndarray, direction: np.ndarray
+) -> tuple[float, float]:
+    """The blade's length from `base` to its apex along `direction` and its width across it."""
+    along = (polygon - base) @ direction
+    across = polygon @ np.array([-direction[1], direction[0]])
+    return float(along.max()), float(np.ptp(across))
+
+
 def shape_measurements(
-    mesh: MeshLike, frame: Frame, polygon: np.ndarray, area: float | None = None
+    mesh: MeshLike,
+    frame: Frame,
+    polygon: np.ndarray,
+    area: float | None = None,
+    midrib: np.ndarray | None = None,
 ) -> dict[str, float]:
     """The FIELDS measurements of a leaf mesh.
 
@@ -285,6 +330,9 @@ def shape_measurements(
         The outline in plane coordinates.
     area : float, optional
         The mesh's surface area, when it is known already (mesh_facts has it).
+    midrib : (m, 3) float array, optional
+        The midrib (the first vein) of the flat blade, in world coordinates: the length is along
+        it, base to apex (blade_axis); without it, along u.
 
     Returns
     -------
@@ -295,8 +343,8 @@ def shape_measurements(
     triangles = triangles_of(mesh)
     plane_xy, _ = frame.to_plane(points)
     outline = points[: len(polygon)]
-    length = float(np.ptp(polygon[:, 0]))
-    width = float(np.ptp(polygon[:, 1]))
+    base, direction = blade_axis(polygon, None if midrib is None else frame.to_plane(midrib)[0])
+    length, width = blade_length_width(polygon, base, direction)
     return {
         "area": surface_area(points, triangles) if area is None else area,
         "projected_area": surface_area(plane_xy, triangles),

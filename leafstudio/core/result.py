@@ -8,12 +8,13 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from leafstudio.core import evaluate
-from leafstudio.core.evaluate import curvature_summary, shape_measurements
+from leafstudio.core.evaluate import blade_midrib, curvature_summary, shape_measurements
 from leafstudio.core.gmm import Mixture
 from leafstudio.core.grid import Grid
 from leafstudio.core.plane import Frame
@@ -229,13 +230,18 @@ class Result:
     def new_measuring(self) -> Measuring:
         """The measuring of this Result's metrics (at unit size, on its unit-size Result)."""
         unit = self if self.unit is None else self.unit
-        return Measuring(unit._metric_steps, self.units)
+        # the flat blade's midrib, which the length runs along: found here, where the leaf has
+        # its bend (the unit-size run's leaf is the bent leaf without it, bend.bent_result)
+        midrib = blade_midrib(self.leaf)
+        if midrib is not None and self.units is not None and self.unit is not None:
+            midrib = self.units.to_unit(midrib)
+        return Measuring(partial(unit._metric_steps, midrib), self.units)
 
-    def _metric_steps(self) -> evaluate.Steps[dict[str, Any]]:
+    def _metric_steps(self, midrib: np.ndarray | None) -> evaluate.Steps[dict[str, Any]]:
         table = yield from evaluate.table_steps(self.triangle_mesh, self.leaf)
         yield
         area = table["mesh"]["area"]
-        shape = shape_measurements(self.triangle_mesh, self.frame, self.polygon, area)
+        shape = shape_measurements(self.triangle_mesh, self.frame, self.polygon, area, midrib)
         yield
         curvature = curvature_summary(self.triangle_mesh)
         return {**table, "leaf": {**shape, "k": self.chosen_k}, "curvature": curvature}

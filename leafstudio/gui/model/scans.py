@@ -80,7 +80,7 @@ def _fidelity_rows(f: dict[str, Any]) -> list[tuple[str, str]]:
         ("Max", f"{f['max']:.4g}"),
         (f"Beyond {NEAR:.0%} of length", f"{f['beyond_1pct']:.1%}"),
         (f"Beyond {FAR:.0%} of length", f"{f['beyond_2pct']:.1%}"),
-        ("Leaf length", f"{f['length']:.4g}"),
+        ("Main axis (the shares' length)", f"{f['length']:.4g}"),
     ]
 
 
