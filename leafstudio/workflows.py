@@ -350,11 +350,12 @@ def reconstruct(opened: Opened, params: Params, pipeline: Pipeline | None = None
     fit = None
     if opened.scan is not None and opened.extraction is not None:
         blade = opened.scan[opened.extraction.blade]
-        fit = scan_distances(result.triangle_mesh, blade, result.length)
-        if fit.get("mean", 0.0) > FAR_FROM_SCAN * result.length:
+        length = result.blade_length
+        fit = scan_distances(result.triangle_mesh, blade, length)
+        if fit.get("mean", 0.0) > FAR_FROM_SCAN * length:
             warnings.append(
-                f"the surface is {fit['mean'] / result.length:.1%} of the leaf's length from the "
-                f"scan on average (95% of points within {fit['p95'] / result.length:.1%}): it "
+                f"the surface is {fit['mean'] / length:.1%} of the leaf's length from the "
+                f"scan on average (95% of points within {fit['p95'] / length:.1%}): it "
                 "does not follow this scan well"
             )
     return Reconstruction(result, warnings, fit)

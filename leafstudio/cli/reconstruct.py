@@ -118,9 +118,10 @@ def run(args: argparse.Namespace) -> int:
     fidelity = None
     if against is not None:
         scan, blade = against.scan, against.extraction.blade
+        length = result.blade_length
         fidelity = {
-            "all": scan_distances(result.triangle_mesh, scan, result.length),
-            "blade": scan_distances(result.triangle_mesh, scan[blade], result.length),
+            "all": scan_distances(result.triangle_mesh, scan, length),
+            "blade": scan_distances(result.triangle_mesh, scan[blade], length),
         }
     metrics = None
     if args.metrics:
@@ -163,6 +164,6 @@ def run(args: argparse.Namespace) -> int:
                 f"{args.against}: {what}: {f['points']} points to the surface: mean "
                 f"{f['mean']:.4g}, median {f['median']:.4g}, 95% {f['p95']:.4g}, max "
                 f"{f['max']:.4g}; beyond 1% of the leaf length {f['beyond_1pct']:.1%}, beyond 2% "
-                f"{f['beyond_2pct']:.1%} (leaf length {result.length:.4g})"
+                f"{f['beyond_2pct']:.1%} (leaf length {f['length']:.4g})"
             )
     return EXIT_OK

@@ -191,6 +191,16 @@ class Result:
         return self.surface(np.atleast_2d(np.asarray(xy, dtype=float)))
 
     @property
+    def blade_length(self) -> float:
+        """The blade's length, base to apex along its midrib (evaluate.blade_axis): the metrics'
+        "length", what `--length` sets, and what the scan distances' shares are of. (`length`,
+        the outline's extent along u, is the stages' own scale.)"""
+        midrib = blade_midrib(self.leaf)  # the flat blade's: the bend is this Result's leaf's
+        in_plane = None if midrib is None else self.frame.to_plane(midrib)[0]
+        base, direction = evaluate.blade_axis(self.polygon, in_plane)
+        return evaluate.blade_length_width(self.polygon, base, direction)[0]
+
+    @property
     def chosen_k(self) -> int:
         """The K the surface uses: params.k, or the one chosen when params.k is "auto"."""
         return len(self.surface.mixture.weights)

@@ -78,3 +78,15 @@ def test_without_its_bend_the_rolled_scans_curves_are_unfolded(done):
     run = workflows.reconstruct(curves, Params(grid=64))
     assert isinstance(run.result.leaf.bend, PlacedPose) and run.result.leaf.bend.pose.roll != 0
     assert run.scan_fit["mean"] < 0.01 * run.scan_fit["length"]
+
+
+def test_a_scans_fit_is_a_share_of_the_length_its_metrics_and_placement_give(done):
+    """One leaf length: the scan distances' shares, the measured length and the length that
+    `--length` sets are all the flat blade's, base to apex (the shares were of the outline's
+    extent along its main axis, which differs for a leaf nearly as wide as long)."""
+    from leafstudio.assets.placement import result_placement
+
+    _, run = done
+    measured = run.result.metrics["leaf"]["length"]
+    assert run.scan_fit["length"] == pytest.approx(measured, rel=1e-9)
+    assert result_placement(run.result).length == pytest.approx(measured, rel=1e-9)

@@ -19,7 +19,7 @@ from leafstudio.analysis.compare import poisson_surface
 from leafstudio.analysis.fidelity import FAR, NEAR, distance_summary
 from leafstudio.core.evaluate import point_to_mesh_distance
 from leafstudio.core.pipeline import Result
-from leafstudio.core.trianglemesh import MeshLike, polydata, vertex_normals
+from leafstudio.core.trianglemesh import polydata, vertex_normals
 from leafstudio.gui.model.pieces import Piece, cloud, dots
 from leafstudio.gui.model.thinning import DISPLAY_POINTS, thinned
 from leafstudio.sources.extract import Extraction
@@ -56,12 +56,11 @@ def scan_data(opened: Opened) -> ScanData:
     return ScanData(opened.path, points, extraction, pieces)
 
 
-def fidelity_sections(
-    mesh: MeshLike, scan: ScanData, length: float
-) -> list[tuple[str, list[tuple[str, str]]]]:
+def fidelity_sections(result: Result, scan: ScanData) -> list[tuple[str, list[tuple[str, str]]]]:
     """Measurements-panel sections: distances from the scan's blade points (and from all its
-    points) to the mesh, as `leafstudio reconstruct --against` reports them."""
-    d = point_to_mesh_distance(mesh, scan.points)  # once: the blade's are among them
+    points) to the result's mesh, as `leafstudio reconstruct --against` reports them."""
+    d = point_to_mesh_distance(result.triangle_mesh, scan.points)  # the blade's are among them
+    length = result.blade_length
     parts = (
         ("Scan → mesh distance (blade points)", d[scan.extraction.blade]),
         ("Scan → mesh distance (all points)", d),
@@ -80,7 +79,7 @@ def _fidelity_rows(f: dict[str, Any]) -> list[tuple[str, str]]:
         ("Max", f"{f['max']:.4g}"),
         (f"Beyond {NEAR:.0%} of length", f"{f['beyond_1pct']:.1%}"),
         (f"Beyond {FAR:.0%} of length", f"{f['beyond_2pct']:.1%}"),
-        ("Main axis (the shares' length)", f"{f['length']:.4g}"),
+        ("Leaf length", f"{f['length']:.4g}"),
     ]
 
 

@@ -64,8 +64,7 @@ class SideJobs:
             from leafstudio.gui.model.scans import fidelity_sections  # pyvista: scans only
 
             request = outcome.request.id
-            mesh, length = result.triangle_mesh, result.length
-            job = session.run("fidelity", fidelity_sections, mesh, scan, length)
+            job = session.run("fidelity", fidelity_sections, result, scan)
             job.on_done(lambda sections: self._fidelity(request, sections))
             job.on_failed(self._fidelity_failed)
         self.update_poisson()
