@@ -51,6 +51,14 @@ def distance_summary(d: np.ndarray, length: float) -> dict[str, Any]:
     }
 
 
+DISTANCE_FIGURES = ("length", "mean", "median", "p95", "max")  # the rest: a count and shares
+
+
+def scaled_fit(fit: dict[str, Any], scale: float) -> dict[str, Any]:
+    """scan_distances' figures in units `scale` times smaller (millimetres, with --length)."""
+    return {k: v * scale if k in DISTANCE_FIGURES else v for k, v in fit.items()}
+
+
 def coverage(mesh: MeshLike, frame: Frame, outline: np.ndarray) -> dict[str, Any]:
     """How the mesh, seen from along the plane normal, covers the (b, 2) outline in the frame's
     plane: the share of the outline's area covered, the mesh area outside it (as a share of the

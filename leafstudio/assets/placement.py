@@ -38,13 +38,12 @@ from leafstudio.assets.solid import boundary_edges
 from leafstudio.core.bend import flat_leaf
 from leafstudio.core.evaluate import blade_axis, blade_length_width
 from leafstudio.core.plane import Frame, fit_frame
+from leafstudio.core.prepare.units import POINT_ARRAY_POWER
 from leafstudio.errors import LeafError
 
 METRES = {"mm": 1e-3, "cm": 1e-2, "m": 1.0}  # a length's units, in metres
 Y_UP_SUFFIXES = (".glb", ".gltf", ".obj", ".usda", ".usdc", ".usdz", ".usd")
 Y_UP_UNIT, Z_UP_UNIT = 1.0, 1e-3  # metres per unit written with a length: m, mm
-#: the power of the scale each point array goes with: heights as lengths, curvatures inversely
-SCALE_POWERS = {"height": 1, "mean_curvature": -1, "k1": -1, "k2": -1, "gaussian_curvature": -2}
 STEP = 1e-3  # carried: the bend's differences at the base, a share of the length
 LARGEST_LEAF_METRES = 5.0  # no leaf blade is longer (Victoria's pads reach 3 m): units, not metres
 
@@ -196,7 +195,7 @@ def place(asset: Any, placement: Placement, metres: float | None, suffix: str) -
     def turn(vectors: np.ndarray | None) -> np.ndarray | None:
         return None if vectors is None else np.asarray(vectors) @ rotation.T
 
-    data = {k: v * scale ** SCALE_POWERS.get(k, 0) for k, v in asset.point_data.items()}
+    data = {k: v * scale ** POINT_ARRAY_POWER.get(k, 0) for k, v in asset.point_data.items()}
     return asset.with_(
         points=asset.points @ matrix.T + offset,
         normals=turn(asset.normals),

@@ -7,7 +7,7 @@ import hashlib
 import json
 from dataclasses import dataclass, field
 
-from leafstudio.assets.placement import SCALE_POWERS
+from leafstudio.core.prepare.units import POINT_ARRAY_POWER
 from leafstudio.model import Params
 from leafstudio.sources.extract import OUTLINE_POINTS
 
@@ -37,7 +37,7 @@ TRAIT_POWERS = {
     "width": 1,
     "aspect_ratio": 0,
     "height": 1,
-    **{name: SCALE_POWERS[name.rsplit("_", 1)[0]] for name in CURVATURE_COLUMNS},
+    **{name: POINT_ARRAY_POWER[name.rsplit("_", 1)[0]] for name in CURVATURE_COLUMNS},
     "scan_mean": 1,  # distances from the scan's points to the surface
     "scan_p95": 1,
 }

@@ -8,7 +8,7 @@ import json
 from pathlib import Path
 
 from leafstudio._shared.safewrite import check_outputs, replace_atomically, staged, write_bytes
-from leafstudio.analysis.fidelity import scan_distances
+from leafstudio.analysis.fidelity import scaled_fit, scan_distances
 from leafstudio.assets.export import (
     TEXTURES,
     asset_options,
@@ -16,9 +16,10 @@ from leafstudio.assets.export import (
     leaf_placement_of,
     save_mesh,
 )
-from leafstudio.assets.placement import size_note
+from leafstudio.assets.placement import parse_length, size_note
 from leafstudio.assets.writers import MESH_SUFFIXES, written_paths
 from leafstudio.cli.options import EXIT_OK, add_run_options, log, run_pipeline
+from leafstudio.core.prepare.units import scaled_metrics
 from leafstudio.errors import LeafError
 from leafstudio.sources.files import load_leaf
 from leafstudio.workflows import check_finite, open_scan
@@ -47,7 +48,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="what the figure's colours show (default height)",
     )
     rec.add_argument(
-        "--metrics", metavar="JSON", help="write Table-1 distances and mesh facts here"
+        "--metrics",
+        metavar="JSON",
+        help="write Table-1 distances, mesh facts and measurements here (in mm with --length)",
     )
     rec.add_argument(
         "--against",
@@ -115,6 +118,8 @@ def run(args: argparse.Namespace) -> int:
     placement = leaf_placement_of(result)  # where the leaf's base and axes are, found once
     if args.length is None and (note := size_note(placement.length, out.suffix)):
         log.warning(f"{args.input}: {note}")
+    # with a real length, every figure out in millimetres, as the PLY and STL are (and batch's)
+    mm = None if args.length is None else placement.scale(parse_length(args.length), ".ply")
     fidelity = None
     if against is not None:
         scan, blade = against.scan, against.extraction.blade
@@ -123,6 +128,8 @@ def run(args: argparse.Namespace) -> int:
             "all": scan_distances(result.triangle_mesh, scan, length),
             "blade": scan_distances(result.triangle_mesh, scan[blade], length),
         }
+        if mm is not None:
+            fidelity = {part: scaled_fit(fit, mm) for part, fit in fidelity.items()}
     metrics = None
     if args.metrics:
         try:
@@ -133,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
             "input": args.input,
             "params": params.to_dict(),
             "k": result.chosen_k,
-            **measured,
+            **({"units": "mm", **scaled_metrics(measured, mm)} if mm is not None else measured),
             "warnings": args.warnings,
         }
         if fidelity is not None:
@@ -158,12 +165,13 @@ def run(args: argparse.Namespace) -> int:
             if steps is not None:
                 replace_atomically(steps, lambda tmp: render_steps(result, tmp))
     if fidelity is not None:
+        unit = "" if mm is None else " mm"
         for part, what in (("all", "all"), ("blade", "blade (no outliers, no petiole)")):
             f = fidelity[part]
             print(
                 f"{args.against}: {what}: {f['points']} points to the surface: mean "
                 f"{f['mean']:.4g}, median {f['median']:.4g}, 95% {f['p95']:.4g}, max "
                 f"{f['max']:.4g}; beyond 1% of the leaf length {f['beyond_1pct']:.1%}, beyond 2% "
-                f"{f['beyond_2pct']:.1%} (leaf length {f['length']:.4g})"
+                f"{f['beyond_2pct']:.1%} (leaf length {f['length']:.4g}{unit})"
             )
     return EXIT_OK

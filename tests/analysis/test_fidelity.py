@@ -80,6 +80,16 @@ def test_reconstruct_against_a_scan_reports_the_distances(tmp_path, capsys):
     fidelity = json.loads(metrics.read_text())["fidelity"]
     assert fidelity["all"]["points"] == len(scan)
     assert fidelity["all"]["mean"] < 3e-3
+    real = tmp_path / "real.json"  # given a real length: the distances in mm, the shares kept
+    assert (
+        main([*args, "--against", str(scan_file), "--metrics", str(real), "--length", "5cm"]) == 0
+    )
+    in_mm = json.loads(real.read_text())["fidelity"]["all"]
+    assert in_mm["length"] == pytest.approx(50, rel=1e-9)
+    s = 50 / fidelity["all"]["length"]
+    assert in_mm["mean"] == pytest.approx(fidelity["all"]["mean"] * s, rel=1e-9)
+    assert in_mm["beyond_1pct"] == fidelity["all"]["beyond_1pct"]
+    assert "(leaf length 50 mm)" in capsys.readouterr().out
     empty = tmp_path / "empty.xyz"
     empty.write_text("x y z\n")
     assert main([*args, "--against", str(empty)]) == 2

@@ -111,6 +111,38 @@ def test_cli_length_on_form_and_reconstruct(tmp_path: Path):
     assert solid.volume == pytest.approx(area * 0.5, rel=0.05)  # 0.5 mm thick, in millimetres
 
 
+def test_reconstruct_given_a_length_writes_its_metrics_in_millimetres(tmp_path: Path):
+    """`reconstruct --length 8cm --metrics m.json` wrote a mesh 80 mm long and metrics in the
+    input's units (an ovate form 37 units long: length 37); batch's table was in mm. Now both
+    are: lengths in mm, areas in mm², curvatures in 1/mm and 1/mm²."""
+    import json
+
+    from leafstudio.cli import main
+
+    form = make_form("ovate")
+    leaf = tmp_path / "ovate.csv"
+    ls.save_leaf(ls.Leaf(form.boundary * 37, [vein * 37 for vein in form.veins]), leaf)
+    figures = {}
+    for name, extra in (("own", []), ("real", ["--length", "8cm"])):
+        metrics = tmp_path / f"{name}.json"
+        run = ["reconstruct", str(leaf), "--grid", "40", "-o", str(tmp_path / f"{name}.ply")]
+        assert main([*run, "--metrics", str(metrics), *extra]) == 0
+        figures[name] = json.loads(metrics.read_text())
+    own, real = figures["own"], figures["real"]
+    assert "units" not in own and real["units"] == "mm"
+    assert own["leaf"]["length"] == pytest.approx(37, rel=1e-6)
+    assert real["leaf"]["length"] == pytest.approx(80, rel=1e-9)
+    s = 80 / own["leaf"]["length"]
+    assert real["leaf"]["area"] == pytest.approx(own["leaf"]["area"] * s**2, rel=1e-9)
+    assert real["mesh"]["area"] == pytest.approx(own["mesh"]["area"] * s**2, rel=1e-9)
+    assert real["veins"]["max"] == pytest.approx(own["veins"]["max"] * s, rel=1e-9)
+    k1, gauss = real["curvature"]["k1"]["max"], real["curvature"]["gaussian_curvature"]["max"]
+    assert k1 == pytest.approx(own["curvature"]["k1"]["max"] / s, rel=1e-9)
+    assert gauss == pytest.approx(own["curvature"]["gaussian_curvature"]["max"] / s**2, rel=1e-9)
+    ply = trimesh.load(tmp_path / "real.ply", force="mesh")  # the mesh: the same millimetres
+    assert ply.area == pytest.approx(real["mesh"]["area"], rel=1e-6)
+
+
 def test_cli_bad_length_is_one_line_exit_2(tmp_path: Path, capsys):
     from leafstudio.cli import main
 

@@ -104,22 +104,27 @@ class Units:
 
     def metrics(self, metrics: dict[str, Any]) -> dict[str, Any]:
         """Result.metrics computed at unit size, in the input's units."""
-        s = self.scale
-        out = dict(metrics)
-        for part in ("boundary", "veins"):
-            out[part] = {k: None if v is None else v * s for k, v in metrics[part].items()}
-        out["mesh"] = {**metrics["mesh"], "area": metrics["mesh"]["area"] * s * s}
-        leaf = dict(metrics["leaf"])
-        for key in LENGTH_FIGURES:
-            leaf[key] = leaf[key] * s
-        for key in AREA_FIGURES:
-            leaf[key] = leaf[key] * s * s
-        out["leaf"] = leaf
-        out["curvature"] = {
-            name: {k: v * s ** POINT_ARRAY_POWER[name] for k, v in stats.items()}
-            for name, stats in metrics["curvature"].items()
-        }
-        return out
+        return scaled_metrics(metrics, self.scale)
+
+
+def scaled_metrics(metrics: dict[str, Any], s: float) -> dict[str, Any]:
+    """Result.metrics in units `s` times smaller: lengths times s, areas times s², curvatures
+    over s (Gaussian over s²); counts and ratios as they are."""
+    out = dict(metrics)
+    for part in ("boundary", "veins"):
+        out[part] = {k: None if v is None else v * s for k, v in metrics[part].items()}
+    out["mesh"] = {**metrics["mesh"], "area": metrics["mesh"]["area"] * s * s}
+    leaf = dict(metrics["leaf"])
+    for key in LENGTH_FIGURES:
+        leaf[key] = leaf[key] * s
+    for key in AREA_FIGURES:
+        leaf[key] = leaf[key] * s * s
+    out["leaf"] = leaf
+    out["curvature"] = {
+        name: {k: v * s ** POINT_ARRAY_POWER[name] for k, v in stats.items()}
+        for name, stats in metrics["curvature"].items()
+    }
+    return out
 
 
 class ScaledField:
