@@ -313,6 +313,9 @@ def ply_numbers(ply: Any, name: str, path: str | os.PathLike) -> np.ndarray:
     return np.asarray(vertex[name], dtype=float)
 
 
+PHOTO_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp")  # read_image's
+
+
 def read_image(path: str | Path) -> np.ndarray:
     """An image file as an (h, w, 3 or 4) uint8 array; LeafError if it cannot be read (a FIFO,
     which Pillow would wait on for ever, is refused unopened: issue 24, finding 17)."""

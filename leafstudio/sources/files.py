@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from leafstudio._shared.inputs import (
+    PHOTO_SUFFIXES,
     block_rows,
     check_file_kind,
     line_blocks,
@@ -312,8 +313,12 @@ def load_leaf(path: str | os.PathLike, veins: Sequence[str | os.PathLike] = ()) 
     elif suffix in (".leaf.json", ".json"):
         leaf = load_project(path)[0]
     else:
+        photo = (
+            "; a photo? `leafstudio photo` finds the leaf in it" if suffix in PHOTO_SUFFIXES else ""
+        )
         raise LeafError(
-            f"unknown file type {suffix or '(none)'!r}; use one of {', '.join(LEAF_SUFFIXES)}",
+            f"unknown file type {suffix or '(none)'!r}; use one of {', '.join(LEAF_SUFFIXES)}"
+            + photo,
             str(path),
         )
     extra = [_read_vein(Path(v)) for v in veins]

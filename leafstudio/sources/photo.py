@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from leafstudio._shared.inputs import read_image
+from leafstudio._shared.inputs import PHOTO_SUFFIXES, read_image
 from leafstudio.errors import LeafError
 from leafstudio.forms import grow_veins
 from leafstudio.forms.veins import check_seed
@@ -368,9 +368,6 @@ def save_photo_leaf(found: PhotoLeaf, image_path: str | Path, path: str | Path) 
         save_leaf(found.leaf, path)
         return
     save_leaf(found.leaf, path, photo=LeafPhoto.of(found, image_path).entry(path))
-
-
-PHOTO_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp")
 
 
 def is_photo(path: str | Path) -> bool:

@@ -283,3 +283,17 @@ def test_an_outline_given_closed_or_with_a_point_twice_opens_as_it_does_open(tmp
                    delimiter=",")  # fmt: skip
         opened = open_file(path)
         assert len(opened.leaf.boundary) == len(ring), name
+
+
+def test_a_photo_given_where_a_leaf_file_goes_names_the_command_that_reads_it(tmp_path, capsys):
+    """`reconstruct photo.png` (the app opens photos) said only 'unknown file type'."""
+    from PIL import Image
+
+    photo = tmp_path / "leaf.jpg"
+    Image.new("RGB", (40, 30), "white").save(photo)
+    assert main(["reconstruct", str(photo), "-o", str(tmp_path / "o.ply")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "`leafstudio photo`" in err
+    with pytest.raises(LeafError, match="unknown file type '.stl'") as refused:
+        load_leaf(tmp_path / "leaf.stl")
+    assert "leafstudio photo" not in str(refused.value)
