@@ -294,6 +294,6 @@ def test_a_photo_given_where_a_leaf_file_goes_names_the_command_that_reads_it(tm
     assert main(["reconstruct", str(photo), "-o", str(tmp_path / "o.ply")]) == 2
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "`leafstudio photo`" in err
-    with pytest.raises(LeafError, match="unknown file type '.stl'") as refused:
+    with pytest.raises(LeafError, match=r"unknown file type '\.stl'") as refused:
         load_leaf(tmp_path / "leaf.stl")
     assert "leafstudio photo" not in str(refused.value)
