@@ -336,7 +336,7 @@ def asset_options(
     per_unit = None if metres is None else metres / placement.length
     solid = None
     if thickness is not None:
-        solid = thickness_in_mesh_units(thickness, result.length, per_unit)
+        solid = thickness_in_mesh_units(thickness, placement.length, per_unit)  # the blade's
     return {
         "texture": texture,
         "thickness": solid,

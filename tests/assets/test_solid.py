@@ -199,3 +199,18 @@ def test_a_ball_pivoting_sheet_makes_a_closed_solid():
     assert mesh.is_watertight and mesh.is_winding_consistent
     area = trimesh.Trimesh(asset.points, asset.faces, process=False).area
     assert mesh.volume == pytest.approx(area * thickness, rel=0.02)
+
+
+def test_a_thickness_fraction_is_of_the_blade_length_the_metrics_give():
+    """`--thickness 0.01` is a hundredth of the leaf length the metrics, `--length` and the scan
+    distances use (the blade's, base to apex): a reniform blade, 1 long and 1.39 wide, had it of
+    the outline's extent along its main axis (1.39), 1.39% of its length."""
+    from leafstudio.assets.export import asset_options
+
+    result = ls.reconstruct(make_form("reniform"), ls.Params(k=3, grid=32))
+    length = result.metrics["leaf"]["length"]
+    assert length == pytest.approx(1.0, rel=1e-3)
+    options = asset_options("none", "0.01", 0, "leaf.csv", result)
+    assert options["thickness"] == pytest.approx(0.01 * length, rel=1e-6)
+    with_size = asset_options("none", "0.01", 0, "leaf.csv", result, "8cm")
+    assert with_size["thickness"] == pytest.approx(0.01 * length, rel=1e-6)

@@ -234,8 +234,9 @@ class FileCommands(BackgroundExports):
             metres = parse_length(length) if length else None
             solid = None
             if thickness is not None:
-                per_unit = None if metres is None else metres / leaf_placement_of(result).length
-                solid = thickness_in_mesh_units(thickness, result.length, per_unit)
+                blade = leaf_placement_of(result).length  # the blade's length, base to apex
+                per_unit = None if metres is None else metres / blade
+                solid = thickness_in_mesh_units(thickness, blade, per_unit)
         except (LeafError, OSError) as exc:
             self.show_error("Cannot export the mesh", str(exc))
             return None
