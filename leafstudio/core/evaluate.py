@@ -28,6 +28,7 @@ from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.distance import mesh_distances
 from leafstudio.core.kernels import ensure_compiled
 from leafstudio.core.plane import Frame
+from leafstudio.core.prepare.vein_order import vein_order
 from leafstudio.core.trianglemesh import MeshLike
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
@@ -278,9 +279,13 @@ def blade_axis(polygon: np.ndarray, midrib: np.ndarray | None) -> tuple[np.ndarr
     """The blade's base (2,) and unit direction (2,) in the plane of its (b, 2) outline: the
     `midrib`'s ((m, 2) in that plane, or None) first-to-last direction, from where it meets the
     outline going back from its first point (its first point if it starts outside); without a
-    midrib, +u from the outline's lowest u (module docstring)."""
+    midrib, +u from the outline's lowest u (module docstring). A midrib given shuffled is put in
+    order first, as the stages put it (vein_order: a chord between two random points was not
+    its direction)."""
     import shapely
 
+    if midrib is not None:
+        midrib = midrib[vein_order(midrib)]
     chord = None if midrib is None or len(midrib) < 2 else midrib[-1] - midrib[0]
     if chord is None or not np.linalg.norm(chord) > 0:
         return polygon[np.argmin(polygon[:, 0])], np.array([1.0, 0.0])
