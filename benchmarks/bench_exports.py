@@ -90,7 +90,7 @@ def main() -> dict:
         after = measure(meter, lambda t=target, o=options: window.save_mesh(str(t), **o))
         t0 = time.perf_counter()
         thickness = options.get("thickness")
-        solid = None if thickness is None else float(thickness) * result.length
+        solid = None if thickness is None else float(thickness) * result.blade_length
         ls.save_mesh(result, folder / f"before_{file}", thickness=solid, lod=options.get("lod", 0))
         after["before_main_thread_s"] = round(time.perf_counter() - t0, 2)
         report["kinds"][name] = after

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from leafstudio.cli.options import EXIT_OK, log, whole
+from leafstudio.core.evaluate import leaf_blade_length
 from leafstudio.sources.extract import OUTLINE_POINTS
 from leafstudio.sources.files import check_leaf_output, save_leaf
 from leafstudio.workflows import open_scan
@@ -56,9 +57,11 @@ def run(args: argparse.Namespace) -> int:
             "found on (core/sheet.py); write a .leaf.json to reconstruct the blade unrolled"
         )
     other = len(scan) - found.blade.sum() - found.petiole.sum()
+    length = leaf_blade_length(found.leaf)  # base to apex; a reconstruction's outline is smoother
     print(
         f"{args.scan}: blade of {found.blade.sum()} of {len(scan)} points (dropped: petiole "
-        f"{found.petiole.sum()}, outliers and clutter {other}), length {found.length:.4g}; wrote "
+        f"{found.petiole.sum()}, outliers and clutter {other}), length about {length:.3g} (base "
+        f"to apex); wrote "
         f"{len(found.leaf.boundary)} boundary points and {len(found.leaf.veins)} veins to "
         f"{args.output}"
     )

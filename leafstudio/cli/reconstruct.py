@@ -123,7 +123,7 @@ def run(args: argparse.Namespace) -> int:
     fidelity = None
     if against is not None:
         scan, blade = against.scan, against.extraction.blade
-        length = result.blade_length
+        length = placement.length  # the blade's (Result.blade_length), found once
         fidelity = {
             "all": scan_distances(result.triangle_mesh, scan, length),
             "blade": scan_distances(result.triangle_mesh, scan[blade], length),

@@ -22,12 +22,12 @@ from typing import Any, TypeVar
 import numpy as np
 from numba import njit
 
-from leafstudio.core.bend import flat_curve
+from leafstudio.core.bend import flat_curve, flat_leaf
 from leafstudio.core.buckets import kernel_array
 from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.distance import mesh_distances
 from leafstudio.core.kernels import ensure_compiled
-from leafstudio.core.plane import Frame
+from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.prepare.vein_order import vein_order
 from leafstudio.core.trianglemesh import MeshLike
 from leafstudio.errors import LeafError
@@ -304,6 +304,18 @@ def blade_midrib(leaf: Leaf) -> np.ndarray | None:
     if not leaf.veins or len(leaf.veins[0]) < 2:
         return None
     return leaf.veins[0] if leaf.bend is None else flat_curve(leaf.bend, leaf.veins[0])
+
+
+def leaf_blade_length(leaf: Leaf) -> float:
+    """A leaf's blade length from its points alone, before any reconstruction (what `extract`
+    reports): blade_axis on its flat blade's outline in the outline's PCA plane (a result's
+    traced outline may differ from the points by their noise)."""
+    flat = flat_leaf(leaf)
+    frame = fit_frame(flat.boundary, flat.vein_points)
+    polygon = frame.to_plane(flat.boundary)[0]
+    midrib = blade_midrib(flat)
+    base, direction = blade_axis(polygon, None if midrib is None else frame.to_plane(midrib)[0])
+    return blade_length_width(polygon, base, direction)[0]
 
 
 def blade_length_width(
