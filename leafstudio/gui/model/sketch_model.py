@@ -27,6 +27,7 @@ from leafstudio.gui.model.curves import (
     outline_controls,
     plane_arc_lengths,
 )
+from leafstudio.gui.model.framing import along_midrib
 from leafstudio.gui.model.midrib import Midrib
 from leafstudio.gui.model.thinning import thinned
 from leafstudio.model import Leaf
@@ -430,23 +431,27 @@ class Sketch:
     @classmethod
     def from_result(cls, result: Any) -> Sketch:
         """A sketch approximating a reconstructed leaf: control points spread along its outline
-        and along each vein, on the leaf's own plane (the pipeline's frame), the boundary's
-        heights kept as its relief. A long outline (a 300,000-point boundary) is followed
-        through OUTLINE_POINTS of its points and its relief kept at RELIEF_POINTS: the editor
-        queries them on the main thread (thinning.py). Its curves are made with it."""
-        boundary = outline_controls(thinned(result.polygon, OUTLINE_POINTS, ordered=True))
+        and along each vein, on the leaf's own plane (the pipeline's frame, turned so that the
+        midrib runs along u: framing.along_midrib), the boundary's heights kept as its relief.
+        A long outline (a 300,000-point boundary) is followed through OUTLINE_POINTS of its
+        points and its relief kept at RELIEF_POINTS: the editor queries them on the main thread
+        (thinning.py). Its curves are made with it."""
         leaf = flat_leaf(result.leaf)  # a bent leaf's flat blade: the sketch draws the blade
+        frame = along_midrib(result.frame, leaf.veins[0] if leaf.veins else None)
+        outline = thinned(result.polygon, OUTLINE_POINTS, ordered=True)
+        outline = frame.to_plane(result.frame.to_world(outline, np.zeros(len(outline))))[0]
+        boundary = outline_controls(outline)
         relief = thinned(leaf.boundary, RELIEF_POINTS, ordered=True)
-        relief = np.column_stack(result.frame.to_plane(relief))
+        relief = np.column_stack(frame.to_plane(relief))
         veins = []
         for vein in leaf.veins:
-            xy, h = result.frame.to_plane(vein)
+            xy, h = frame.to_plane(vein)
             points = np.column_stack([xy, h])
             veins.append(even_by_length(points, min(DERIVED_VEIN_POINTS, len(points)), False))
         sketch = cls(
             boundary=boundary,
             veins=tuple(veins),
-            frame=result.frame,
+            frame=frame,
             relief=relief,
             bend=result.leaf.bend if isinstance(result.leaf.bend, Scaled) else None,
         )

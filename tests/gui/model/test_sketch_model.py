@@ -170,3 +170,21 @@ def test_a_scans_hole_shows_on_the_sketch_of_its_flat_blade(tmp_path):
     inside = shapely.contains_xy(hole.buffer(-0.1 * 40.0 * RADIUS), flat[:, 0], flat[:, 1])
     assert not inside.any()  # where the scan has no point
     assert Sketch(boundary=ring[:-1]).hole_curves() == []
+
+
+@pytest.mark.parametrize("shape", ["ovate", "obovate", "elliptic", "reniform"])
+def test_the_sketch_shows_every_form_base_left_apex_right(shape):
+    """An obovate, elliptic or spatulate form's sketch (and the 3D view, which takes the
+    sketch's frame) showed the apex on the left and the base on the right, an ovate one the
+    other way round, and a reniform one turned a quarter: the frame's u runs to the boundary's
+    farther extreme, not along the midrib. The sketch now turns its frame a quarter or half
+    turn so that the midrib runs from left to right, along u."""
+    result = ls.reconstruct(ls.forms.make_form(shape), ls.Params(grid=48))
+    sketch = Sketch.from_result(result)
+    midrib = sketch.vein_curve(0)
+    chord = midrib[-1, :2] - midrib[0, :2]
+    assert chord[0] > 0.9 * np.linalg.norm(chord)  # base on the left, apex on the right
+    np.testing.assert_allclose(sketch.frame.normal, result.frame.normal)
+    drawn = shapely.Polygon(result.frame.to_plane(sketch.to_leaf().boundary)[0])
+    outline = shapely.Polygon(result.polygon)
+    assert drawn.symmetric_difference(outline).area < 0.02 * outline.area  # the same place
