@@ -13,7 +13,9 @@ from typing import Any
 
 import numpy as np
 
+from leafstudio.core.bend import flat_leaf
 from leafstudio.core.curvature import CURVATURE_ARRAYS
+from leafstudio.core.plane import Frame, along_midrib
 from leafstudio.errors import LeafError
 
 FIGURE_SCALARS = ("height", *CURVATURE_ARRAYS)
@@ -54,9 +56,17 @@ def _colour_range(values: np.ndarray, scalars: str) -> tuple[float, float]:
     return lo, hi
 
 
+def view_frame(result: Any) -> Frame:
+    """The frame a picture shows the leaf on: the result's, turned so that its midrib (the
+    flat blade's first vein) runs along u, base to apex (plane.along_midrib; the app's sketch
+    and 3D view are the same way round)."""
+    veins = flat_leaf(result.leaf).veins
+    return along_midrib(result.frame, veins[0] if veins else None)
+
+
 def _top_scale(result: Any, window_size: tuple[int, int]) -> float:
     """Half the visible height of the top view that shows the whole leaf with a margin."""
-    xy, _ = result.frame.to_plane(result.triangle_mesh.points)
+    xy, _ = view_frame(result).to_plane(result.triangle_mesh.points)
     half_length, half_width = np.ptp(xy, axis=0) / 2
     aspect = (window_size[0] / 2) / window_size[1]  # one panel's width / height
     return float(MARGIN * max(half_length / aspect, half_width * 1.6))
@@ -64,7 +74,7 @@ def _top_scale(result: Any, window_size: tuple[int, int]) -> float:
 
 def _cameras(result: Any) -> dict[str, list[tuple[float, float, float]]]:
     """iso and top camera positions (position, focal point, view up) from the leaf's frame."""
-    frame = result.frame
+    frame = view_frame(result)
     mesh = result.mesh
     centre = np.asarray(mesh.center)
     size = float(np.linalg.norm(np.ptp(np.asarray(mesh.points), axis=0)))

@@ -61,8 +61,11 @@ def _mesh_view(plotter: Any, result: Any, clim: tuple[float, float]) -> None:
 
 
 def _iso_camera(result: Any, azimuth: float = 0.0):
-    """An oblique camera turned `azimuth` degrees about the leaf's normal."""
-    frame = result.frame
+    """An oblique camera turned `azimuth` degrees about the leaf's normal (from its base side at
+    0: figure.view_frame)."""
+    from leafstudio.render.figure import view_frame
+
+    frame = view_frame(result)
     pts = np.asarray(result.triangle_mesh.points)
     centre = (pts.min(axis=0) + pts.max(axis=0)) / 2
     size = float(np.linalg.norm(np.ptp(pts, axis=0)))

@@ -163,7 +163,19 @@ def step_picture(ax: Any, result: Any, index: int) -> None:
         pad = 0.06 * (hi - lo).max()
         ax.set_xlim(lo[0] - pad, hi[0] + pad)  # the leaf fills the picture (a wide Gaussian's
         ax.set_ylim(lo[1] - pad, hi[1] + pad)  # ellipse runs off it)
+        if _half_turned(unit):
+            ax.invert_xaxis()
+            ax.invert_yaxis()
     ax.set_axis_off()
+
+
+def _half_turned(unit: Any) -> bool:
+    """Whether the plane's pictures are drawn turned half a turn, so that they show the leaf
+    base left, apex right, as the mesh's picture and the app do (figure.view_frame; a quarter
+    turn, a leaf wider than long across its midrib, is not made)."""
+    from leafstudio.render.figure import view_frame
+
+    return float(np.dot(view_frame(unit).u, unit.frame.u)) < -0.5
 
 
 def _points(ax: Any, plane: dict[str, Any]) -> None:

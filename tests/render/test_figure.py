@@ -85,3 +85,18 @@ def test_reconstruct_auto_k_reports_the_chosen_k(tmp_path, capsys):
     assert data["params"]["k"] == "auto"
     assert 1 <= data["k"] <= 12
     assert f"K = {data['k']} (chosen by BIC)" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("shape", ["ovate", "obovate"])
+def test_the_iso_view_and_the_turntable_start_from_the_base(shape):
+    """The figure's iso view and the slides' mesh picture (the turntable's first frame) looked
+    at an obovate leaf from its apex, an ovate one from its base: both took the plane's u,
+    which runs to the outline's farther extreme. They now take the midrib's direction."""
+    from leafstudio.render.figure import _cameras
+    from leafstudio.render.slides import _iso_camera
+
+    result = ls.reconstruct(ls.forms.make_form(shape), ls.Params(grid=48))
+    midrib = result.leaf.veins[0]
+    along = midrib[-1] - midrib[0]  # base to apex
+    for eye, centre, _ in (_cameras(result)["iso"], _iso_camera(result)):
+        assert np.dot(np.subtract(eye, centre), along) < 0  # on the base's side

@@ -101,3 +101,16 @@ def test_each_field_has_a_readable_colour_bar(result):
         "p(x): the height guide",
         "z(x): height above the plane",
     ]
+
+
+@pytest.mark.parametrize("shape", ["ovate", "obovate"])
+def test_the_plane_pictures_show_the_base_left_and_the_apex_right(shape):
+    """An obovate leaf's plane pictures (steps 2 to 6) showed its apex on the left: the plane's
+    u runs to the outline's farther extreme, the base of an obovate leaf; they are now drawn
+    turned half a turn there, the base left as in the points' picture and the app."""
+    result = ls.reconstruct(ls.forms.make_form(shape), ls.Params(grid=48))
+    picture = step_slide(result, step_of("implicit")).axes[0]
+    midrib = result.unit.frame.to_plane(result.unit.leaf.veins[0])[0]
+    shown = midrib[-1, 0] - midrib[0, 0]  # base to apex along the picture's x
+    assert shown * (-1 if picture.xaxis_inverted() else 1) > 0
+    assert picture.xaxis_inverted() == picture.yaxis_inverted()  # turned, not mirrored

@@ -84,23 +84,6 @@ def blade_bounds(points: np.ndarray, frame: Frame) -> BladeBounds:
     return BladeBounds(frame, lo, hi, kept)
 
 
-def along_midrib(frame: Frame, midrib: np.ndarray | None) -> Frame:
-    """`frame` turned about its normal by the quarter or half turn that brings u nearest the
-    (m, 3) midrib's direction, base to tip: the sketch and the 3D view then show every leaf
-    base left, apex right (the frame's u runs to the boundary's farther extreme, the apex of an
-    ovate leaf but the base of an obovate one), its axes still the outline's principal ones."""
-    if midrib is None or len(midrib) < 2:
-        return frame
-    xy = frame.to_plane(np.asarray(midrib, dtype=float)[[0, -1]])[0]
-    chord = xy[1] - xy[0]
-    if not np.any(chord):
-        return frame
-    u, v = np.asarray(frame.u, float), np.asarray(frame.v, float)
-    turns = [(u, v), (v, -u), (-u, -v), (-v, u)]  # rotations about the normal
-    best = int(np.argmax([chord[0], chord[1], -chord[0], -chord[1]]))
-    return Frame(frame.origin, *turns[best], frame.normal)
-
-
 def view_direction(preset: str, frame: Frame) -> tuple[np.ndarray, np.ndarray]:
     """From the focus towards the camera, and the view-up, for a preset: "top" looks down the
     normal with u to the right and v up (as the sketch shows the plane); "side" along the width;

@@ -16,7 +16,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from leafstudio.core.bend import flat_leaf
-from leafstudio.core.plane import Frame
+from leafstudio.core.plane import Frame, along_midrib
 from leafstudio.core.sheet import Scaled
 from leafstudio.gui.model.curves import (
     SAMPLES_PER_SPAN,
@@ -27,7 +27,6 @@ from leafstudio.gui.model.curves import (
     outline_controls,
     plane_arc_lengths,
 )
-from leafstudio.gui.model.framing import along_midrib
 from leafstudio.gui.model.midrib import Midrib
 from leafstudio.gui.model.thinning import thinned
 from leafstudio.model import Leaf
@@ -432,7 +431,7 @@ class Sketch:
     def from_result(cls, result: Any) -> Sketch:
         """A sketch approximating a reconstructed leaf: control points spread along its outline
         and along each vein, on the leaf's own plane (the pipeline's frame, turned so that the
-        midrib runs along u: framing.along_midrib), the boundary's heights kept as its relief.
+        midrib runs along u: plane.along_midrib), the boundary's heights kept as its relief.
         A long outline (a 300,000-point boundary) is followed through OUTLINE_POINTS of its
         points and its relief kept at RELIEF_POINTS: the editor queries them on the main thread
         (thinning.py). Its curves are made with it."""

@@ -134,8 +134,9 @@ class LessonWindow(QWidget):
         result = outcome.result
         step = self.lesson.step
         self.viewport.visible.update({key: key in step.layers for key in self.viewport.visible})
-        bounds = blade_bounds(result.triangle_mesh.points, result.frame)
-        self.viewport.show_layers(outcome.layers, result.frame, bounds, "reset")
+        frame = self.window_.session.view_frame() or result.frame  # as the app shows it
+        bounds = blade_bounds(result.triangle_mesh.points, frame)
+        self.viewport.show_layers(outcome.layers, frame, bounds, "reset")
         self.show_step()
 
     def _stretch(self) -> None:

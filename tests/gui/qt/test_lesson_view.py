@@ -72,3 +72,26 @@ def test_gui_lesson_and_another_file_is_one_line_exit_2(tmp_path, capsys):
     assert main(["gui", "a.csv", "--lesson", "b.csv"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--lesson" in err[0]
+
+
+def test_the_lesson_shows_an_obovate_leaf_base_first_as_the_app_does(window, qtbot, tmp_path):
+    """The lesson's 3D view took the plane's u, which runs to an obovate leaf's base: it showed
+    the leaf from its apex while the window showed it from its base. It now takes the window's
+    view frame (the sketch's, u along the midrib)."""
+    import numpy as np
+
+    import leafstudio as ls
+    from tests.gui.qt.conftest import wait_result
+
+    path = tmp_path / "obovate.leaf.json"
+    ls.save_leaf(ls.forms.make_form("obovate"), path)
+    window.session.history.set_clean()
+    assert window.open_path(str(path))
+    qtbot.waitUntil(lambda: window.session.state.path == str(path), timeout=60_000)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
+    lesson = LessonWindow(window)
+    qtbot.addWidget(lesson)
+    lesson._on_result()
+    midrib = window.session.state.leaf.veins[0]
+    assert np.dot(lesson.viewport._frame.u, midrib[-1] - midrib[0]) > 0
+    lesson.close()
