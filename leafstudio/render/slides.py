@@ -151,10 +151,12 @@ def render_steps(result: Any, path: str | os.PathLike, size: tuple[int, int] = S
     """Write a PNG with the pipeline's six steps side by side (see the module docstring)."""
     import pyvista as pv
 
-    from leafstudio.render.figure import check_figure_path  # pyvista and VTK: only when asked for
+    from leafstudio.render.figure import check_figure_path, view_frame  # pyvista and VTK: only
 
     path = check_figure_path(path)
     frame = result.frame
+    view = view_frame(result)  # the plane's axes turned: its v on the plane is the views' up
+    up = (float(view.v @ frame.u), float(view.v @ frame.v), 0.0)
     boundary_xy, _ = frame.to_plane(result.leaf.boundary)
     vein_xy = frame.to_plane(result.leaf.vein_points)[0] if len(result.leaf.vein_points) else None
     flat = lambda xy: np.column_stack([xy, np.zeros(len(xy))])  # noqa: E731
@@ -217,6 +219,7 @@ def render_steps(result: Any, path: str | os.PathLike, size: tuple[int, int] = S
                 plotter.reset_camera()
             else:
                 plotter.view_xy()
+                plotter.set_viewup(up)  # the base left, apex right, as the mesh's view
                 plotter.enable_parallel_projection()
                 plotter.reset_camera()
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -45,3 +45,20 @@ def test_a_bad_turntable_name_is_one_line_and_writes_nothing(
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1
     assert not mesh.exists()
+
+
+def test_the_steps_figures_plane_panels_show_an_obovate_leaf_base_left(tmp_path):
+    """The steps figure's plane panels drew an obovate leaf apex left (the plane's u runs to
+    its base) beside its mesh seen from the base: g(x), deepest where the blade is widest, near
+    the apex, was in the panel's left half. They are now turned as the mesh's view."""
+    import numpy as np
+
+    from leafstudio.render.slides import render_steps
+
+    result = ls.reconstruct(ls.forms.make_form("obovate"), ls.Params(grid=48))
+    path = render_steps(result, tmp_path / "steps.png", size=(900, 500))
+    pixels = iio.imread(path)[:, :, :3].astype(int)
+    panel = pixels[40:250, 300:600]  # g(x): deep blue inside, red outside
+    blue = panel[:, :, 2] - panel[:, :, 0]
+    deepest = np.unravel_index(np.argmax(blue), blue.shape)[1]
+    assert deepest > 0.5 * panel.shape[1]  # the wide end, the apex, on the right
