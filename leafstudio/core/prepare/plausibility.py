@@ -23,6 +23,7 @@ LOCAL_NEIGHBOURS = 16
 SAMPLE = 6000  # points tested at most (the real scans hold 2,300-7,300)
 LINK = 4.0  # points closer than this many median neighbour spacings belong to one cluster
 LARGE_CLUSTER = 0.3  # a cluster with this share of the largest one's points is "large"
+LISTED = 4  # the sizes of the largest clusters a refusal names
 VEIN_REACH = 1.0  # veins farther than this many leaf lengths from the boundary's plane or extent
 
 
@@ -76,9 +77,10 @@ def leaf_like_problems(points: np.ndarray) -> list[str]:
     sizes = _clusters(unit, tree, nearest)
     large = int(np.sum(sizes >= LARGE_CLUSTER * sizes[0]))
     if large > 1:
+        listed = ", ".join(str(s) for s in sizes[: min(large, LISTED)])
+        more = ", ..." if large > LISTED else ""  # the line stays one line (252 sizes were listed)
         problems.append(
-            f"not one leaf: {large} large separate clusters of points "
-            f"({', '.join(str(s) for s in sizes[:large])} points)"
+            f"not one leaf: {large} large separate clusters of points ({listed}{more} points)"
         )
     spreads = principal_spreads(unit)
     if spreads[2] > THIN * spreads[0]:
