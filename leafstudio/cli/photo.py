@@ -33,8 +33,9 @@ def add_photo_parser(sub: argparse._SubParsersAction) -> None:
     )  # fmt: skip
     p.add_argument(
         "--base-end", choices=BASE_ENDS, default="auto",
-        help="where the base is when no petiole shows it (default auto: the end of the blade's "
-        "mirror axis with a basal notch, else the one the veins lean away from, else the wider)",
+        help="where the base is when no petiole shows it, or when a long narrow apex was taken "
+        "for one (default auto: the end of the blade's mirror axis with a basal notch, else "
+        "the one the veins lean away from, else the wider)",
     )  # fmt: skip
     p.add_argument(
         "--veins", choices=VEIN_CHOICES, default="auto",

@@ -178,18 +178,31 @@ def _outline(blade: np.ndarray, points: int | None) -> np.ndarray:
     return out
 
 
+BASE_DIRECTIONS = {"left": (-1, 0), "right": (1, 0), "top": (0, -1), "bottom": (0, 1)}  # pixels
+
+
+def _at_base_end(joint: np.ndarray | None, base_end: str, mask: np.ndarray) -> bool:
+    """Whether a petiole's joint lies on the half of the leaf (a boolean mask) that `base_end`
+    names (always, for "auto"): one at the other end is a drawn-out apex (acuminate), kept."""
+    if joint is None or base_end == "auto":
+        return True
+    rows, cols = np.nonzero(mask)
+    centre = np.array([cols.mean(), rows.mean()]) + 0.5
+    return float((np.asarray(joint) - centre) @ np.array(BASE_DIRECTIONS[base_end], float)) > 0
+
+
 def _cut_stalk(
-    outline: np.ndarray, image: np.ndarray, blade: np.ndarray
+    outline: np.ndarray, image: np.ndarray, blade: np.ndarray, base_end: str = "auto"
 ) -> tuple[np.ndarray, np.ndarray | None, VeinField, Midline]:
     """A petiole the openings missed, found along the blade's midline (leafends.find_stalk), cut
     off square at its joint: (blade, joint or None, veins, midline); the last two serve _ends
-    when there is no petiole."""
+    when there is no petiole. One away from `base_end` is not cut (_at_base_end)."""
     from skimage.measure import label
 
     veins = VeinField(image, blade)
     line = midline(outline, veins)
     stalk = find_stalk(outline, line)
-    if stalk is None:
+    if stalk is None or not _at_base_end(stalk.joint, base_end, blade):
         return blade, None, veins, line
     rows, cols = np.nonzero(blade)
     xy = np.column_stack([cols, rows]) + 0.5
@@ -240,8 +253,8 @@ def _ends(
     if base_end == "auto":
         first, cue = base_end_index(outline, line, veins)
     else:
-        direction = {"left": (-1, 0), "right": (1, 0), "top": (0, -1), "bottom": (0, 1)}[base_end]
-        first, cue = int(np.argmax(line.ends @ np.array(direction, float))), "given"
+        direction = np.array(BASE_DIRECTIONS[base_end], float)
+        first, cue = int(np.argmax(line.ends @ direction)), "given"
     ends = line.ends[[first, 1 - first]]  # base, apex
     tip = climb_to_tip(outline, int(np.argmin(np.linalg.norm(outline - ends[1], axis=1))), ends[0])
     ends[1] = outline[tip]
@@ -271,7 +284,8 @@ def leaf_from_photo(
     length : float, optional
         Base to apex in the output's units; default 1.
     base_end : {"auto", "left", "right", "top", "bottom"}, default: "auto"
-        Where the base is when no petiole shows it.
+        Where the base is when no petiole shows it; a stalk found at the other end is a
+        drawn-out apex, kept (_at_base_end).
     veins : {"auto", "trace", "grow", "none"}, default: "auto"
         "trace": the veins the photo shows (photo_veins.py: the midrib and the secondaries
         that stand out), or none if it shows none; "grow": veins grown inside the outline
@@ -297,10 +311,12 @@ def leaf_from_photo(
         raise LeafError("the image is too small (under 16 pixels a side)")
     leaf_mask = _leaf_component(foreground(image))
     blade, joint = cut_petiole(leaf_mask)
+    if not _at_base_end(joint, base_end, leaf_mask):  # the given base end wins over a stalk
+        blade, joint = leaf_mask, None
     outline = _outline(blade, points)
     field = line = ridge = ridges = None
     if joint is None:
-        blade, joint, field, line = _cut_stalk(outline, image, blade)
+        blade, joint, field, line = _cut_stalk(outline, image, blade, base_end)
         if joint is not None:
             outline = _outline(blade, points)
         elif veins in ("auto", "trace"):

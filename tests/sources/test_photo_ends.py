@@ -175,3 +175,15 @@ def test_the_veins_structure_tensor_is_scikit_images_to_the_last_bit():
     want = skimage_tensor(grey, sigma=TENSOR_SIGMA, order="rc")
     got = structure_tensor(grey, TENSOR_SIGMA)
     assert len(got) == 3 and all(np.array_equal(a, b) for a, b in zip(got, want, strict=True))
+
+
+@pytest.mark.parametrize(("angle", "base_end"), [(0.0, "left"), (180.0, "right")])
+def test_base_end_wins_over_a_drawn_out_apex_taken_for_a_petiole(angle, base_end):
+    """An acuminate leaf photographed without a petiole: its long narrow tip is taken for a
+    stalk, cut off, and the base put there (turned round: IoU 0.51). `--base-end` naming the
+    true base was ignored, as a petiole outranked it; a stalk away from the given end is now
+    kept as the apex (the tip's shortfall leaves the IoU at 0.92)."""
+    terms = {"shape": "ovate", "apex": "acuminate"}
+    match = leaf_frame_match(terms, angle, base_end=base_end)
+    assert match["base_cue"] == "given" and match["base_error"] < 0.02, match
+    assert match["iou_leaf_frame"] >= 0.9, match
