@@ -54,13 +54,46 @@ def _suffix(path: Path) -> str:
 def read_point_table(path: Path, columns: Sequence[int] = (3, 4)) -> np.ndarray:
     """Numbers from a point list, (n, c) with c one of `columns`; header and blank lines skipped.
     Read in blocks of lines (line_blocks: each reported as read), each by numpy's reader when it
-    holds only numbers, else line by line, which names the first faulty line."""
-    table = _PointTable(path, columns)
-    for first, block in line_blocks(read_text(path)):
+    holds only numbers, else line by line, which names the first faulty line. A header naming
+    x, y and z (and label) says which columns they are, in any order among others (an index)."""
+    text = read_text(path)
+    named = named_columns(text, columns)
+    table = _PointTable(path, columns if named is None else (named[0],))
+    for first, block in line_blocks(text):
         table.add(first, block)
     if not table.parts:
         raise LeafError("holds no points", str(path))
-    return np.vstack(table.parts)
+    rows = np.vstack(table.parts)
+    return rows if named is None else rows[:, named[1]]
+
+
+def named_columns(text: str, columns: Sequence[int] = (3, 4)) -> tuple[int, list[int]] | None:
+    r"""From a header line naming x, y and z (any case, a unit after them: `x [mm]`): its width
+    and the indices of x, y, z and, when 4 is one of `columns`, label; None for no such header.
+
+    Examples
+    --------
+    >>> named_columns(",x,y,z,label\n0,1.5,2,0,0\n")
+    (5, [1, 2, 3, 4])
+    >>> named_columns("1 2 3\n") is None
+    True
+    """
+
+    def split(line: str) -> list[str]:  # by the line's own separator, empty fields kept
+        return line.split(",") if "," in line else line.split(";") if ";" in line else line.split()
+
+    lines = (t for t in (raw.split("#", 1)[0].strip() for raw in text[:4096].splitlines()) if t)
+    fields, data = split(next(lines, "")), split(next(lines, ""))
+    if len(data) != len(fields):
+        return None  # the first row is not as wide as the header: its names are not the columns'
+    names = [re.split(r"[\s(\[]", f.strip().strip("\"'").lower(), maxsplit=1)[0] for f in fields]
+    if not {"x", "y", "z"} <= set(names) or len(set(names)) < len(names) - names.count(""):
+        return None
+    wanted = ["x", "y", "z", *(["label"] if 4 in columns and "label" in names else [])]
+    take = [names.index(name) for name in wanted]
+    if take == list(range(len(take))) and len(names) == len(take):
+        return None  # the columns in their usual order: read as before (`x y z` over labels too)
+    return len(names), take
 
 
 class _PointTable:

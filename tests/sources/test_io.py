@@ -46,6 +46,43 @@ def test_whitespace_and_header_and_unlabelled_boundary_with_vein_files(tmp_path:
     np.testing.assert_allclose(loaded.veins[0], leaf.veins[0])
 
 
+@pytest.mark.parametrize(
+    "header, row",
+    [
+        (",x,y,z,label", "{i},{x},{y},{z},{label}"),  # pandas' to_csv: its index first, unnamed
+        ("id;X;Y;Z;label", "{i};{x};{y};{z};{label}"),
+        ("label,x,y,z", "{label},{x},{y},{z}"),
+        ("y x z label", "{y} {x} {z} {label}"),
+        ("x [mm],y [mm],z [mm],label", "{x},{y},{z},{label}"),
+    ],
+    ids=["pandas index", "id column", "label first", "y before x", "units"],
+)
+def test_a_header_naming_the_columns_says_which_is_which(tmp_path: Path, header: str, row: str):
+    """A header was skipped unread and the columns taken in order: pandas' default to_csv (an
+    index column first) made every point (index, x, y) with label z, a leaf 800 times the area
+    with no veins and no error; 'label,x,y,z' was refused. Columns named x, y, z (and label)
+    are now taken by name, others ignored."""
+    leaf = ls.demo("nested")
+    points = [(p, 0) for p in leaf.boundary] + [
+        (p, k + 1) for k, vein in enumerate(leaf.veins) for p in vein
+    ]
+    lines = [
+        row.format(i=i, x=p[0], y=p[1], z=p[2], label=label) for i, (p, label) in enumerate(points)
+    ]
+    path = tmp_path / "leaf.csv"
+    path.write_text(header + "\n" + "\n".join(lines) + "\n")
+    _same(leaf, ls.load_leaf(path))
+
+
+def test_a_header_wider_than_its_rows_is_skipped_as_before(tmp_path: Path):
+    """Names that do not fit the rows (a scan's header over its x, y, z alone) are not taken."""
+    leaf = ls.demo("nested")
+    path = tmp_path / "b.csv"
+    rows = "\n".join(",".join(map(str, p)) for p in leaf.boundary)
+    path.write_text("x,y,z,nx,ny,nz\n" + rows + "\n")
+    np.testing.assert_allclose(ls.load_leaf(path).boundary, leaf.boundary)
+
+
 def test_ply_labels_survive(tmp_path: Path):
     """pyvista's PLY reader drops extra vertex properties; ours keeps the label."""
     path = tmp_path / "leaf.ply"
