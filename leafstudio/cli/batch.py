@@ -42,6 +42,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
 
 
+SCAN_HINT = "`leafstudio extract"  # in the refusal of a scan given as a leaf file
+
+
 def summary(run: Batch, seconds: float) -> str:
     """The one line printed at the end of a batch."""
     ok = run.ok + run.resumed
@@ -90,10 +93,12 @@ def run(args: argparse.Namespace) -> int:
         dynamic_ncols=True,
         desc="leafstudio batch",
     )
+    scans = 0  # rows refused as scans of whole leaves, whose hint is `leafstudio extract`
     try:
         with bar:
             for row in running.run():
                 if row["status"] != "ok":
+                    scans += SCAN_HINT in str(row["error"]) and not args.scans
                     internal = str(row["error"]).startswith("internal error:")
                     bar.write(
                         f"leafstudio: {'' if internal else 'error: '}{row['error']}", sys.stderr
@@ -105,4 +110,7 @@ def run(args: argparse.Namespace) -> int:
               file=sys.stderr)  # fmt: skip
         raise
     print(summary(running, time.perf_counter() - start), file=sys.stderr)
+    if scans:
+        print(f"leafstudio: batch: {scans} of the inputs look like scans of whole leaves: --scans "
+              "extracts and reconstructs them", file=sys.stderr)  # fmt: skip
     return 1 if running.failed else 0

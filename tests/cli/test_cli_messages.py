@@ -152,3 +152,25 @@ def test_a_local_batch_says_a_first_run_compiles(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(options, "kernels_cached", lambda: True)  # compiled: nothing said
     assert main(["batch", str(tmp_path), "-o", str(tmp_path / "out")]) == 0
     assert "ompiling" not in capsys.readouterr().err
+
+
+def test_a_batch_of_scans_without_scans_says_so_once(tmp_path, capsys, monkeypatch):
+    """`batch FOLDER` on a folder of scans (no --scans) failed every row with reconstruct's
+    hint, `leafstudio extract SCAN -o LEAF`, which a batch user cannot follow for hundreds of
+    files: the summary now names --scans."""
+    from types import SimpleNamespace
+
+    from leafstudio.cli import batch as batch_command
+
+    scan = "a.txt: ...: this looks like a scan of the whole leaf; `leafstudio extract SCAN -o LEAF`"
+    rows = [{"status": "failed", "error": scan}, {"status": "failed", "error": "b.csv: bad"}]
+    table = SimpleNamespace(path=tmp_path / "out")
+    ran = SimpleNamespace(
+        total=2, ok=0, failed=2, resumed=0, stopped=False, table=table, run=lambda: iter(rows)
+    )
+    monkeypatch.setattr(batch_command, "batch", lambda *args, **kwargs: ran)
+    assert main(["batch", str(tmp_path), "-o", str(tmp_path / "out")]) == 1
+    err = capsys.readouterr().err
+    assert "1 of the inputs look like scans of whole leaves: --scans" in err
+    assert main(["batch", str(tmp_path), "-o", str(tmp_path / "out"), "--scans"]) == 1
+    assert "--scans" not in capsys.readouterr().err
