@@ -13,8 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from leafstudio.core.bend import flat_leaf
 from leafstudio.core.curvature import CURVATURE_ARRAYS
+from leafstudio.core.evaluate import blade_midrib
 from leafstudio.core.plane import Frame, along_midrib
 from leafstudio.errors import LeafError
 
@@ -60,8 +60,7 @@ def view_frame(result: Any) -> Frame:
     """The frame a picture shows the leaf on: the result's, turned so that its midrib (the
     flat blade's first vein) runs along u, base to apex (plane.along_midrib; the app's sketch
     and 3D view are the same way round)."""
-    veins = flat_leaf(result.leaf).veins
-    return along_midrib(result.frame, veins[0] if veins else None)
+    return along_midrib(result.frame, blade_midrib(result.leaf))
 
 
 def _top_scale(result: Any, window_size: tuple[int, int]) -> float:

@@ -16,6 +16,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from leafstudio.core.bend import flat_leaf
+from leafstudio.core.evaluate import blade_midrib
 from leafstudio.core.plane import Frame, along_midrib
 from leafstudio.core.sheet import Scaled
 from leafstudio.gui.model.curves import (
@@ -436,7 +437,7 @@ class Sketch:
         points and its relief kept at RELIEF_POINTS: the editor queries them on the main thread
         (thinning.py). Its curves are made with it."""
         leaf = flat_leaf(result.leaf)  # a bent leaf's flat blade: the sketch draws the blade
-        frame = along_midrib(result.frame, leaf.veins[0] if leaf.veins else None)
+        frame = along_midrib(result.frame, blade_midrib(result.leaf))
         outline = thinned(result.polygon, OUTLINE_POINTS, ordered=True)
         outline = frame.to_plane(result.frame.to_world(outline, np.zeros(len(outline))))[0]
         boundary = outline_controls(outline)
