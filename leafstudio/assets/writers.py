@@ -24,6 +24,7 @@ first, so an .obj on disk never names a file that is not there.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -74,8 +75,11 @@ def write_ply(asset: MeshAsset, path: Path) -> None:
 
 
 def obj_companions(path: Path) -> tuple[Path, Path]:
-    """The material file and texture an .obj at `path` refers to."""
-    return path.with_suffix(".mtl"), path.with_name(f"{path.stem}{TEXTURE_SUFFIX}")
+    """The material file and texture an .obj at `path` refers to, named after it with `_` for
+    each space: OBJ separates file names by spaces (`mtllib` takes several), so strict readers
+    split `mtllib my leaf.mtl` into two files and find neither."""
+    stem = re.sub(r"\s", "_", path.stem)
+    return path.with_name(f"{stem}.mtl"), path.with_name(f"{stem}{TEXTURE_SUFFIX}")
 
 
 def write_obj(asset: MeshAsset, path: Path) -> None:

@@ -470,3 +470,22 @@ def test_an_obj_carries_its_translucency_to_blender(nested: ls.Result, tmp_path)
         assert f"Tf {TRANSMISSION} {TRANSMISSION} {TRANSMISSION}" in lines
     ls.save_mesh(nested, tmp_path / "solid.obj", thickness=0.01 * nested.length)
     assert "Tf" not in (tmp_path / "solid.mtl").read_text()
+
+
+def test_an_obj_named_with_spaces_refers_to_companions_without_them(nested, tmp_path: Path):
+    """`my leaf.obj` wrote `mtllib my leaf.mtl` and `map_Kd my leaf_texture.png`: the OBJ
+    format separates file names by spaces (mtllib takes several), so strict readers
+    (tinyobjloader, MeshLab, DirectXMesh) looked for `my` and `leaf.mtl` and drew the leaf
+    untextured. The companions' names now have underscores for the spaces."""
+    import trimesh
+
+    path = tmp_path / "my leaf (1).obj"
+    ls.save_mesh(nested, path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "my leaf (1).obj",
+        "my_leaf_(1).mtl",
+        "my_leaf_(1)_texture.png",
+    ]
+    assert "mtllib my_leaf_(1).mtl" in path.read_text().splitlines()
+    assert "map_Kd my_leaf_(1)_texture.png" in (tmp_path / "my_leaf_(1).mtl").read_text()
+    assert trimesh.load(path, force="mesh").visual.material.image.size == (1024, 1024)
