@@ -21,6 +21,8 @@ FIGURE_SIZE = (16.0, 9.0)  # inches: a 16:9 slide (1600 x 900 pixels at 100 dpi)
 TITLE_PT, TEXT_PT = 26, 17  # points: read from the back of a classroom
 CHAR_WIDTH = 0.58  # a character's mean width, in font sizes (DejaVu Sans)
 LINE = 1.25  # a line's height, in font sizes
+TEXT_SHARE = 0.8  # of a column's width its definition's lines fill at the mean character width
+# (0.9 left 'running' touching the next column's 'secondary' among four: wide letters)
 
 
 def _upright(xy: np.ndarray) -> np.ndarray:
@@ -95,7 +97,7 @@ def compare_figure(forms: tuple[Form, ...] | list[Form], title: str = "") -> Any
         2, len(forms), height_ratios=(2.0, 1.0), top=0.9 if title else 0.97, bottom=0.02
     )
     column_inches = FIGURE_SIZE[0] / len(forms)
-    chars = int(0.9 * column_inches * 72 / (CHAR_WIDTH * TEXT_PT))
+    chars = int(TEXT_SHARE * column_inches * 72 / (CHAR_WIDTH * TEXT_PT))
     for column, (leaf, terms) in enumerate(zip(leaves, texts, strict=True)):
         ax = figure.add_subplot(grid[0, column])
         xy = leaf.boundary[:, :2]

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 from leafstudio.forms.glossary import COMPARISONS
 from leafstudio.render.forms_figure import compare_figure
 
@@ -28,3 +30,24 @@ def test_the_forms_are_drawn_at_one_scale():
         (ax.get_xlim()[1] - ax.get_xlim()[0], ax.get_ylim()[1] - ax.get_ylim()[0]) for ax in leaves
     ]
     assert spans[0] == spans[1]
+
+
+def test_four_definitions_side_by_side_keep_apart():
+    """Four venations compared: 'five or more veins running' ended where 'secondary veins
+    curving up' began (the 26-character lines filled 0.9 of their column at a mean character
+    width, and these are wider than the mean). Each line keeps a gap to its neighbours'."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from leafstudio.forms import Form
+
+    forms = [Form("ovate", venation=v) for v in ("pinnate", "palmate", "parallel", "arcuate")]
+    figure = compare_figure(forms)
+    renderer = FigureCanvasAgg(figure).get_renderer()
+    columns = [
+        [t.get_window_extent(renderer) for t in ax.texts]
+        for ax in figure.axes
+        if ax.texts and not ax.patches
+    ]
+    gap = 0.02 * figure.bbox.width / len(columns)
+    for left, right in itertools.pairwise(columns):
+        assert max(b.x1 for b in left) + gap < min(b.x0 for b in right)
