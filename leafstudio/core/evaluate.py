@@ -27,7 +27,7 @@ from leafstudio.core.buckets import kernel_array
 from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.distance import mesh_distances
 from leafstudio.core.kernels import ensure_compiled
-from leafstudio.core.plane import Frame, fit_frame
+from leafstudio.core.plane import Frame, fit_frame, turned_along
 from leafstudio.core.prepare.vein_order import vein_order
 from leafstudio.core.trianglemesh import MeshLike
 from leafstudio.errors import LeafError
@@ -316,6 +316,18 @@ def leaf_blade_length(leaf: Leaf) -> float:
     midrib = blade_midrib(flat)
     base, direction = blade_axis(polygon, None if midrib is None else frame.to_plane(midrib)[0])
     return blade_length_width(polygon, base, direction)[0]
+
+
+def view_frame(result: Any) -> Frame:
+    """The frame a result is shown on: its plane's, turned a quarter or half turn so that u runs
+    nearest its midrib, base to apex (blade_axis): the app's sketch and 3D view, the figures and
+    the slides show every leaf base left, apex right (the plane's u runs to the outline's
+    farther extreme: an obovate leaf's base). Without a midrib, the plane's frame."""
+    midrib = blade_midrib(result.leaf)
+    if midrib is None:
+        return result.frame
+    direction = blade_axis(result.polygon, result.frame.to_plane(midrib)[0])[1]
+    return turned_along(result.frame, direction)
 
 
 def blade_length_width(

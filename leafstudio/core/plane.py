@@ -138,18 +138,11 @@ def fit_frame(boundary: np.ndarray, vein_points: np.ndarray) -> Frame:
     return Frame(origin=origin, u=u, v=v, normal=normal)
 
 
-def along_midrib(frame: Frame, midrib: np.ndarray | None) -> Frame:
+def turned_along(frame: Frame, direction: np.ndarray) -> Frame:
     """`frame` turned about its normal by the quarter or half turn that brings u nearest the
-    (m, 3) midrib's direction, base to tip: the sketch and the 3D view then show every leaf
-    base left, apex right (the frame's u runs to the boundary's farther extreme, the apex of an
-    ovate leaf but the base of an obovate one), its axes still the outline's principal ones."""
-    if midrib is None or len(midrib) < 2:
-        return frame
-    xy = frame.to_plane(np.asarray(midrib, dtype=float)[[0, -1]])[0]
-    chord = xy[1] - xy[0]
-    if not np.any(chord):
-        return frame
+    (2,) in-plane `direction` (a midrib's, base to apex: evaluate.view_frame), its axes still
+    the outline's principal ones; no mirror."""
     u, v = np.asarray(frame.u, float), np.asarray(frame.v, float)
     turns = [(u, v), (v, -u), (-u, -v), (-v, u)]  # rotations about the normal
-    best = int(np.argmax([chord[0], chord[1], -chord[0], -chord[1]]))
+    best = int(np.argmax([direction[0], direction[1], -direction[0], -direction[1]]))
     return Frame(frame.origin, *turns[best], frame.normal)

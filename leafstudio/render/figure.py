@@ -14,8 +14,7 @@ from typing import Any
 import numpy as np
 
 from leafstudio.core.curvature import CURVATURE_ARRAYS
-from leafstudio.core.evaluate import blade_midrib
-from leafstudio.core.plane import Frame, along_midrib
+from leafstudio.core.evaluate import view_frame
 from leafstudio.errors import LeafError
 
 FIGURE_SCALARS = ("height", *CURVATURE_ARRAYS)
@@ -54,13 +53,6 @@ def _colour_range(values: np.ndarray, scalars: str) -> tuple[float, float]:
     if hi - lo <= 1e-12 * max(abs(hi), 1.0):
         lo, hi = lo - 1.0, hi + 1.0  # a flat leaf: any range shows one colour
     return lo, hi
-
-
-def view_frame(result: Any) -> Frame:
-    """The frame a picture shows the leaf on: the result's, turned so that its midrib (the
-    flat blade's first vein) runs along u, base to apex (plane.along_midrib; the app's sketch
-    and 3D view are the same way round)."""
-    return along_midrib(result.frame, blade_midrib(result.leaf))
 
 
 def _top_scale(result: Any, window_size: tuple[int, int]) -> float:

@@ -62,8 +62,8 @@ def _mesh_view(plotter: Any, result: Any, clim: tuple[float, float]) -> None:
 
 def _iso_camera(result: Any, azimuth: float = 0.0):
     """An oblique camera turned `azimuth` degrees about the leaf's normal (from its base side at
-    0: figure.view_frame)."""
-    from leafstudio.render.figure import view_frame
+    0: evaluate.view_frame)."""
+    from leafstudio.core.evaluate import view_frame
 
     frame = view_frame(result)
     pts = np.asarray(result.triangle_mesh.points)
@@ -151,7 +151,8 @@ def render_steps(result: Any, path: str | os.PathLike, size: tuple[int, int] = S
     """Write a PNG with the pipeline's six steps side by side (see the module docstring)."""
     import pyvista as pv
 
-    from leafstudio.render.figure import check_figure_path, view_frame  # pyvista and VTK: only
+    from leafstudio.core.evaluate import view_frame
+    from leafstudio.render.figure import check_figure_path  # pyvista and VTK: only when asked for
 
     path = check_figure_path(path)
     frame = result.frame

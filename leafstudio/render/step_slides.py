@@ -171,9 +171,9 @@ def step_picture(ax: Any, result: Any, index: int) -> None:
 
 def _half_turned(unit: Any) -> bool:
     """Whether the plane's pictures are drawn turned half a turn, so that they show the leaf
-    base left, apex right, as the mesh's picture and the app do (figure.view_frame; a quarter
+    base left, apex right, as the mesh's picture and the app do (evaluate.view_frame; a quarter
     turn, a leaf wider than long across its midrib, is not made)."""
-    from leafstudio.render.figure import view_frame
+    from leafstudio.core.evaluate import view_frame
 
     return float(np.dot(view_frame(unit).u, unit.frame.u)) < -0.5
 

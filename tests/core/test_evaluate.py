@@ -228,3 +228,17 @@ def test_a_midrib_given_shuffled_is_measured_as_in_order():
         assert measured["length"] == pytest.approx(1.0, rel=1e-3)
         assert measured["width"] == pytest.approx(0.5, rel=1e-3)
         assert result.blade_length == result_placement(result).length == measured["length"]
+
+
+def test_the_view_frame_runs_along_the_midrib_base_to_apex():
+    """An obovate leaf's plane has u toward its base (its outline's farther extreme); the frame
+    it is shown on is turned half a turn, u from base to apex as the placement has it."""
+    from leafstudio.assets.placement import result_placement
+    from leafstudio.core.evaluate import view_frame
+
+    result = ls.reconstruct(ls.forms.make_form("obovate"), ls.Params(grid=32))
+    assert result.frame.u[0] < -0.99  # the plane's u: toward the base, -x
+    frame = view_frame(result)
+    np.testing.assert_allclose(frame.u, [1, 0, 0], atol=1e-9)  # base (origin) to apex (+x)
+    assert frame.u @ result_placement(result).axes[0] > 0.99  # the exports' along
+    np.testing.assert_allclose(frame.normal, result.frame.normal)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from leafstudio.core.plane import Frame, along_midrib, fit_frame
+from leafstudio.core.plane import Frame, fit_frame, turned_along
 from leafstudio.errors import LeafError
 
 
@@ -124,19 +124,17 @@ def test_a_mirror_symmetric_outline_starts_at_the_same_point_whatever_the_roundi
     assert starts[0] == starts[1] and starts[0][1] < 0  # the lower one by y, both times
 
 
-def test_along_midrib_turns_the_frame_so_u_runs_base_to_apex():
+def test_turned_along_brings_u_nearest_the_direction_by_quarter_turns():
     """A quarter or half turn about the normal (no mirror), whichever brings u nearest the
-    midrib's chord; no midrib leaves the frame as it is."""
+    direction given on the plane."""
     frame = Frame(np.zeros(3), np.eye(3)[0], np.eye(3)[1], np.eye(3)[2])
-    for chord, u in (
+    for direction, u in (
         ([1, 0.2], [1, 0]),
         ([-1, 0.2], [-1, 0]),
         ([0.1, 1], [0, 1]),
         ([0, -1], [0, -1]),
     ):
-        midrib = np.array([[0.0, 0.0, 0.0], [*chord, 0.3]])
-        turned = along_midrib(frame, midrib)
+        turned = turned_along(frame, np.array(direction, float))
         np.testing.assert_allclose(turned.u[:2], u)
         np.testing.assert_allclose(np.cross(turned.normal, turned.u), turned.v)  # not mirrored
         np.testing.assert_allclose(turned.normal, frame.normal)
-    assert along_midrib(frame, None) is frame

@@ -16,8 +16,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from leafstudio.core.bend import flat_leaf
-from leafstudio.core.evaluate import blade_midrib
-from leafstudio.core.plane import Frame, along_midrib
+from leafstudio.core.evaluate import view_frame
+from leafstudio.core.plane import Frame
 from leafstudio.core.sheet import Scaled
 from leafstudio.gui.model.curves import (
     SAMPLES_PER_SPAN,
@@ -432,12 +432,12 @@ class Sketch:
     def from_result(cls, result: Any) -> Sketch:
         """A sketch approximating a reconstructed leaf: control points spread along its outline
         and along each vein, on the leaf's own plane (the pipeline's frame, turned so that the
-        midrib runs along u: plane.along_midrib), the boundary's heights kept as its relief.
+        midrib runs along u: evaluate.view_frame), the boundary's heights kept as its relief.
         A long outline (a 300,000-point boundary) is followed through OUTLINE_POINTS of its
         points and its relief kept at RELIEF_POINTS: the editor queries them on the main thread
         (thinning.py). Its curves are made with it."""
         leaf = flat_leaf(result.leaf)  # a bent leaf's flat blade: the sketch draws the blade
-        frame = along_midrib(result.frame, blade_midrib(result.leaf))
+        frame = view_frame(result)
         outline = thinned(result.polygon, OUTLINE_POINTS, ordered=True)
         outline = frame.to_plane(result.frame.to_world(outline, np.zeros(len(outline))))[0]
         boundary = outline_controls(outline)
