@@ -25,7 +25,7 @@ TEXT_SHARE = 0.8  # of a column's width its definition's lines fill at the mean 
 # (0.9 left 'running' touching the next column's 'secondary' among four: wide letters)
 
 
-def _upright(xy: np.ndarray) -> np.ndarray:
+def upright(xy: np.ndarray) -> np.ndarray:
     """Plane points turned a quarter: the apex (+x) up, as a leaf is drawn in a textbook."""
     return np.column_stack([-xy[:, 1], xy[:, 0]])
 
@@ -33,10 +33,10 @@ def _upright(xy: np.ndarray) -> np.ndarray:
 def draw_outline(ax: Any, outline: np.ndarray, veins: tuple[np.ndarray, ...] | list) -> None:
     """A leaf seen from above on `ax`, apex up: (n, 2) `outline` filled, each (m, 2) vein a
     line (plane coordinates, the forms' convention)."""
-    up = _upright(outline)
+    up = upright(outline)
     ax.fill(up[:, 0], up[:, 1], facecolor=BLADE, edgecolor=EDGE, linewidth=1.5)
     for vein in veins:
-        v = _upright(vein)
+        v = upright(vein)
         ax.plot(v[:, 0], v[:, 1], color=VEIN, linewidth=1.2, solid_capstyle="round")
     ax.set_aspect("equal")
     ax.set_axis_off()

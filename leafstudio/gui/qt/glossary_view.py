@@ -9,6 +9,7 @@ draws them the first time it opens (about half a second for all), not at start-u
 
 from __future__ import annotations
 
+import numpy as np
 from PySide6.QtCore import Qt
 from PySide6.QtGui import QImage, QPixmap
 from PySide6.QtWidgets import (
@@ -24,6 +25,7 @@ from leafstudio.forms.glossary import PICTURED, term_picture
 from leafstudio.forms.terms import definition
 from leafstudio.gui.qt.actions import Action, show_once
 from leafstudio.gui.qt.leaf_picture import draw_plane
+from leafstudio.render.forms_figure import upright
 
 PICTURE = 96  # pixels
 KIND_TITLES = {
@@ -37,11 +39,15 @@ _images: dict[tuple[str, str, int], QImage] = {}
 
 
 def term_image(kind: str, term: str, size: int = PICTURE) -> QImage:
-    """The term's picture in a `size` square, drawn once per term and size, then cached."""
+    """The term's picture in a `size` square, drawn once per term and size, then cached; the
+    leaf stands apex up, as the definitions' 'lower' and 'above' and Compare forms have it."""
     key = (kind, term, size)
     if key not in _images:
         picture = term_picture(kind, term)
-        _images[key] = draw_plane(picture.outline, picture.veins, size, box=picture.box)
+        x0, y0, x1, y1 = picture.box
+        box = np.array([-y1, x0, -y0, x1])  # the plane's box turned as upright() turns it
+        veins = [upright(v) for v in picture.veins]
+        _images[key] = draw_plane(upright(picture.outline), veins, size, box=box)
     return _images[key]
 
 

@@ -57,3 +57,21 @@ def test_export_slides_writes_the_steps_and_the_forms_compared(window, qtbot, tm
     assert (folder / "lesson.pdf").read_bytes().startswith(b"%PDF")
     assert comparison_title(window.compared) == "serrate beside dentate"
     assert "file.export_slides" in window.actions
+
+
+def test_the_glossary_draws_shapes_upright_as_their_words_say(qapp):
+    """'ovate: widest in the lower two fifths, rounded below, narrower above' was drawn lying
+    on its side, apex right (while Compare forms and the slides draw it upright): the glossary's
+    pictures now stand apex up, the widest part of an ovate blade below its middle."""
+    import numpy as np
+
+    from leafstudio.gui.qt.glossary_view import term_image
+
+    for term in ("ovate", "lanceolate", "obovate"):
+        pixels = image_pixels(term_image("shape", term))
+        rows, cols = np.nonzero(pixels.sum(axis=-1) > 0)  # painted (transparent: black)
+        assert np.ptp(rows) > 1.2 * np.ptp(cols), term  # taller than wide: standing
+        widths = np.bincount(rows, minlength=pixels.shape[0])
+        widest = np.argmax(widths)
+        below = widest > (rows.min() + rows.max()) / 2  # rows count down
+        assert below == (term != "obovate"), term
