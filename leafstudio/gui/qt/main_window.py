@@ -28,7 +28,7 @@ from leafstudio.errors import LeafError
 from leafstudio.gui.model.layers import LAYERS
 from leafstudio.gui.model.measurements import measurement_rows
 from leafstudio.gui.model.session import Framing, Session, State
-from leafstudio.gui.model.textures import SHOWS_TEXTURE, coloring_for
+from leafstudio.gui.model.textures import LEAF, SHOWS_TEXTURE, coloring_for
 from leafstudio.gui.qt import bend_sliders, explain, forms_dock, lesson_view, projector
 from leafstudio.gui.qt.actions import MENU_TITLES, WINDOW_ACTIONS, Action
 from leafstudio.gui.qt.controls import ParamPanel
@@ -266,7 +266,8 @@ class MainWindow(FileCommands, QMainWindow):
         for key, on in self.viewport.visible.items():
             s.setValue(f"layers/{key}", on)
         s.setValue("view/edges", self.edges.isChecked())
-        s.setValue("view/coloring", self.coloring.currentData())
+        picked = LEAF if self._coloring_automatic else self.coloring.currentData()  # not a scan's
+        s.setValue("view/coloring", picked)
         s.sync()
 
     # --- documents -----------------------------------------------------------------------------

@@ -48,3 +48,16 @@ def test_a_colouring_the_user_picked_is_kept_for_the_next_leaf(window, qtbot):
         window.open_demo("parallel")
         wait_result(qtbot, window)
         assert window.coloring.currentData() == choice
+
+
+def test_a_scans_height_colouring_is_not_remembered_as_the_users_choice(window, qtbot, tmp_path):
+    """A scan opened last, the app closed: the next start opened every leaf coloured by height
+    (the scan's colouring was stored as if the user had picked it). The Leaf look is stored."""
+    assert window.open_path(write_points(tmp_path / "scan.txt", six_column_scan()))
+    wait_result(qtbot, window, lambda outcome: window.session.state.scan is not None)
+    assert window.coloring.currentData() == "height"
+    window._store_settings()
+    assert window.settings.value("view/coloring") == LEAF
+    window.coloring.setCurrentIndex(window.coloring.findData(TEXTURE))  # the user's choice
+    window._store_settings()
+    assert window.settings.value("view/coloring") == TEXTURE
