@@ -28,6 +28,7 @@ from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.distance import mesh_distances
 from leafstudio.core.kernels import ensure_compiled
 from leafstudio.core.plane import Frame, fit_frame, turned_along
+from leafstudio.core.prepare.units import Units
 from leafstudio.core.prepare.vein_order import vein_order
 from leafstudio.core.trianglemesh import MeshLike
 from leafstudio.errors import LeafError
@@ -310,12 +311,13 @@ def leaf_blade_length(leaf: Leaf) -> float:
     """A leaf's blade length from its points alone, before any reconstruction (what `extract`
     reports): blade_axis on its flat blade's outline in the outline's PCA plane (a result's
     traced outline may differ from the points by their noise)."""
-    flat = flat_leaf(leaf)
+    units = Units.of(flat_leaf(leaf))  # at unit size, as the pipeline (a scan at 1e200 overflows)
+    flat = units.leaf(flat_leaf(leaf))
     frame = fit_frame(flat.boundary, flat.vein_points)
     polygon = frame.to_plane(flat.boundary)[0]
     midrib = blade_midrib(flat)
     base, direction = blade_axis(polygon, None if midrib is None else frame.to_plane(midrib)[0])
-    return blade_length_width(polygon, base, direction)[0]
+    return units.scale * blade_length_width(polygon, base, direction)[0]
 
 
 def view_frame(result: Any) -> Frame:
