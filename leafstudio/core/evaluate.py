@@ -300,6 +300,13 @@ def blade_axis(polygon: np.ndarray, midrib: np.ndarray | None) -> tuple[np.ndarr
     return points[np.argmin(np.linalg.norm(points - start, axis=1))], direction
 
 
+def leaf_axis(leaf: Leaf, frame: Frame, polygon: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """blade_axis of a leaf whose flat blade's outline in `frame`'s plane is the (b, 2)
+    `polygon`: its midrib (blade_midrib: on the flat blade of a bent leaf) taken into that plane."""
+    midrib = blade_midrib(leaf)
+    return blade_axis(polygon, None if midrib is None else frame.to_plane(midrib)[0])
+
+
 def blade_midrib(leaf: Leaf) -> np.ndarray | None:
     """The leaf's midrib (its first vein) on its flat blade, (m, 3); None without one."""
     if not leaf.veins or len(leaf.veins[0]) < 2:
@@ -315,8 +322,7 @@ def leaf_blade_length(leaf: Leaf) -> float:
     flat = units.leaf(flat_leaf(leaf))
     frame = fit_frame(flat.boundary, flat.vein_points)
     polygon = frame.to_plane(flat.boundary)[0]
-    midrib = blade_midrib(flat)
-    base, direction = blade_axis(polygon, None if midrib is None else frame.to_plane(midrib)[0])
+    base, direction = leaf_axis(flat, frame, polygon)
     return units.scale * blade_length_width(polygon, base, direction)[0]
 
 
@@ -325,10 +331,7 @@ def view_frame(result: Any) -> Frame:
     nearest its midrib, base to apex (blade_axis): the app's sketch and 3D view, the figures and
     the slides show every leaf base left, apex right (the plane's u runs to the outline's
     farther extreme: an obovate leaf's base). Without a midrib, the plane's frame."""
-    midrib = blade_midrib(result.leaf)
-    if midrib is None:
-        return result.frame
-    direction = blade_axis(result.polygon, result.frame.to_plane(midrib)[0])[1]
+    direction = leaf_axis(result.leaf, result.frame, result.polygon)[1]  # +u without a midrib
     return turned_along(result.frame, direction)
 
 

@@ -195,9 +195,7 @@ class Result:
         """The blade's length, base to apex along its midrib (evaluate.blade_axis): the metrics'
         "length", what `--length` sets, and what the scan distances' shares are of. (`length`,
         the outline's extent along u, is the stages' own scale.)"""
-        midrib = blade_midrib(self.leaf)  # the flat blade's: the bend is this Result's leaf's
-        in_plane = None if midrib is None else self.frame.to_plane(midrib)[0]
-        base, direction = evaluate.blade_axis(self.polygon, in_plane)
+        base, direction = evaluate.leaf_axis(self.leaf, self.frame, self.polygon)  # its bend's
         return evaluate.blade_length_width(self.polygon, base, direction)[0]
 
     @property

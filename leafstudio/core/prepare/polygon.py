@@ -216,9 +216,9 @@ def ring_crossings(ring: np.ndarray) -> np.ndarray:
 
     Segments that are not neighbours along the ring and meet are crossings (an STRtree finds
     the candidate pairs, so a long ring costs little more than a short one). A ring that GEOS
-    finds simple has none: one call, 0.3 ms where the pairs took 25 ms
-    for 2,000 points (the app asks on every sketch edit). A point given twice in a row (a closed
-    polyline's first point again at its end) is a step of length 0, not a crossing: dropped.
+    finds simple has none: one call, 0.3 ms where the pairs took 25 ms for 2,000 points (the app
+    asks on every sketch edit). A point given twice in a row (a closed polyline's first point
+    again at its end) is a step of length 0, not a crossing: dropped.
     """
     ring = np.asarray(ring, dtype=float)
     ring = ring[np.any(ring != np.roll(ring, 1, axis=0), axis=1)]  # NaN != NaN: kept
