@@ -11,10 +11,11 @@ and maps them back. It is a `model.Bend`, so the pipeline flattens and bends it 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
-from leafstudio.core.bend import Pose
+from leafstudio.core.bend import SAG, Pose
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.model import Leaf
 
@@ -25,6 +26,7 @@ class PlacedPose:
 
     pose: Pose
     frame: Frame
+    sag: ClassVar[float] = SAG  # the bent mesh's chords are kept this close to it (Pose.sag)
 
     def _blade(self, points: np.ndarray) -> np.ndarray:
         xy, z = self.frame.to_plane(points)

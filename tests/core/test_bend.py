@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import leafstudio as ls
-from leafstudio.core.bend import Pose, carried, carried_data, cut_levels
+from leafstudio.core.bend import Pose, carried, carried_data, cut_levels, sag_splits
+from leafstudio.core.evaluate import mesh_facts
 from leafstudio.core.trianglemesh import TriangleMesh
 from leafstudio.forms.make import Form, seen_on_edge
 
@@ -91,6 +92,57 @@ def test_cuts_along_many_levels_leave_no_triangle_across_any_and_no_crack():
     # the outline's edges are cut into pieces, the inside ones all shared by two triangles
     assert (count <= 2).all() and (count == 1).sum() >= (count_before == 1).sum()
     assert np.unique(np.round(cut.points, 12), axis=0).shape[0] == len(cut.points)
+
+
+def _wrapped(points: np.ndarray, radius: float = 0.3) -> np.ndarray:
+    """(n, 3) flat points wrapped about the x axis on a cylinder of `radius`."""
+    angle = points[:, 1] / radius
+    return np.column_stack([points[:, 0], radius * np.sin(angle), radius * (1 - np.cos(angle))])
+
+
+def _gaps(points: np.ndarray, faces: np.ndarray, carry) -> np.ndarray:
+    """How far `carry` takes each edge's midpoint from its bent chord."""
+    edges = np.unique(np.sort(np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]),
+                              axis=1), axis=0)  # fmt: skip
+    a, b = points[edges[:, 0]], points[edges[:, 1]]
+    return np.linalg.norm(carry((a + b) / 2) - (carry(a) + carry(b)) / 2, axis=1)
+
+
+def test_edges_a_bend_sags_are_halved_until_their_chords_lie_on_it_and_the_mesh_stays_whole():
+    """A grid wrapped on a tight cylinder: its chords sag 5e-3 off it; halved three times they
+    lie within the tolerance, the flat area and the first points are kept, every edge inside
+    the sheet has two triangles (no hanging point, no crack), the winding is kept (no edge twice
+    the same way round) and the point arrays are carried."""
+    mesh = _grid_mesh(11, 0.5, jitter=0.01)
+    points, faces = mesh.points, mesh.regular_faces
+    assert _gaps(points, faces, _wrapped).max() > 4e-3
+    split, plan = sag_splits(points, faces, _wrapped, 1e-4)
+    cut = TriangleMesh(carried(points, plan), split, carried_data(mesh.point_data, plan))
+    assert _gaps(cut.points, split, _wrapped).max() <= 1e-4
+    assert len(cut.points) > 4 * len(points) and np.array_equal(cut.points[: len(points)], points)
+    assert _area(cut) == pytest.approx(_area(mesh))
+    facts = mesh_facts(cut)
+    assert facts["boundary_loops"] == 1 and facts["non_manifold_edges"] == 0
+    assert _border_length(cut.points, split) == pytest.approx(_border_length(points, faces))
+    directed = np.vstack([split[:, [0, 1]], split[:, [1, 2]], split[:, [2, 0]]])
+    assert len(np.unique(directed, axis=0)) == len(directed)
+    assert np.allclose(cut.point_data["height"], cut.points[:, 0])
+
+
+def test_a_bend_that_sags_no_edge_leaves_the_mesh_as_it_is():
+    mesh = _grid_mesh(6, 0.5)
+    sheared = lambda p: p + p[:, [1]] * [0.0, 0.0, 2.0]  # noqa: E731 (linear: no sag)
+    faces, plan = sag_splits(mesh.points, mesh.regular_faces, sheared, 1e-9)
+    assert np.array_equal(faces, mesh.regular_faces) and plan == []
+
+
+def _border_length(points: np.ndarray, faces: np.ndarray) -> float:
+    """The flat length of the edges that one triangle holds: a point hanging on an edge inside
+    the sheet would add its two halves to it."""
+    edges = np.sort(np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    edges, count = np.unique(edges, axis=0, return_counts=True)
+    lone = edges[count == 1]
+    return float(np.linalg.norm(points[lone[:, 0]] - points[lone[:, 1]], axis=1).sum())
 
 
 def _area(mesh: TriangleMesh) -> float:
