@@ -356,8 +356,9 @@ def sag_splits(
         n = len(points)
         after = faces[:, [1, 2, 0]]
         low, high = np.minimum(faces, after).astype(np.int64), np.maximum(faces, after)
-        codes, which = np.unique(low * n + high, return_inverse=True)
-        which = which.reshape(faces.shape)  # (f, 3): edge (a, b), (b, c), (c, a) of each face
+        every = (low * n + high).ravel()
+        codes = np.sort(every)  # np.unique took 6 ms (with its inverse) of a 25,000-face mesh
+        codes = codes[np.append(True, codes[1:] != codes[:-1])]
         keys = np.column_stack([codes // n, codes % n])
         middle = 0.5 * (points[keys[:, 0]] + points[keys[:, 1]])
         there = carry(middle)
@@ -367,6 +368,7 @@ def sag_splits(
         marked = np.einsum("ij,ij->i", off, off) > 4 * tolerance**2
         if not marked.any():
             break
+        which = np.searchsorted(codes, every).reshape(faces.shape)  # (a, b), (b, c), (c, a)
         number = np.full(len(codes), -1, dtype=np.int64)
         number[marked] = n + np.arange(np.count_nonzero(marked))
         whole = ~marked[which].any(axis=1)
