@@ -2,7 +2,7 @@
 beside ours.
 
     .venv/bin/python benchmarks/bench_bent.py [--poses N] [--no-scans] [--scans DIR] [--rolled]
-                                              [--veins] [--variants]
+                                              [--veins] [--variants] [--size]
 
 "today" runs each input as the code before issue 21 did: the posed form's points without its
 bend (`Leaf(boundary, veins)`, so the boundary's PCA plane is the leaf's) and the paper's pure
@@ -24,7 +24,10 @@ shares of the leaf's length.
   (--variants, not in the full run: about 30 s);
 - CPU time at grid 128: a bent form beside the same form flat, best of three;
 - rolled forms: the mesh's distance to the form's own surface rolled, and the blade's area;
-- curves in 3D unfolded: posed forms without their pose, against their own surface.
+- curves in 3D unfolded: posed forms without their pose, against their own surface;
+- size kept (--size): a posed ovate form's 3D area and midrib length over its flat blade's: a
+  fold and a curl are shears of the blade (z += |y| tan fold, z += curl x²), so they grow both;
+  a roll keeps the blade's sheet and carries the relief along its normal.
 """
 
 from __future__ import annotations
@@ -297,6 +300,26 @@ def timing() -> None:
         print(f"| {shape} {pose} | {' | '.join(row)} |")
 
 
+def size_kept() -> None:
+    """A posed ovate form's mesh area and midrib length in 3D, over its flat blade's."""
+    from leafstudio.core.evaluate import surface_area
+
+    print("\n## size kept (ovate, grid 128): posed over flat")
+    print("| pose | area | midrib length |")
+    print("|---|---|---|")
+    blade = Form("ovate").leaf()
+    flat = ls.reconstruct(blade, ls.Params(k=3, grid=128)).triangle_mesh
+    area = surface_area(flat.points, flat.regular_faces)
+    midrib = float(np.linalg.norm(np.diff(blade.veins[0], axis=0), axis=1).sum())
+    for pose in ({"fold": 30}, {"fold": 60}, {"fold": 75}, {"curl": 0.5}, {"curl": 1.0},
+                 {"roll": 0.3}, {"roll": 0.5}, {"twist": 0.5}):  # fmt: skip
+        leaf = Form("ovate", **pose).leaf(blade)
+        mesh = ls.reconstruct(leaf, ls.Params(k=3, grid=128)).triangle_mesh
+        along = float(np.linalg.norm(np.diff(leaf.veins[0], axis=0), axis=1).sum())
+        print(f"| {pose} | {surface_area(mesh.points, mesh.regular_faces) / area:.3f} | "
+              f"{along / midrib:.3f} |")  # fmt: skip
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--poses", type=int, default=7, help="every N-th form and pose")
@@ -309,6 +332,7 @@ def main() -> int:
     parser.add_argument(
         "--variants", action="store_true", help="only the apex and margin variants' vein table"
     )
+    parser.add_argument("--size", action="store_true", help="only the size kept table")
     args = parser.parse_args()
     _run(Form("ovate").leaf(), ls.Params(grid=32))  # compile the kernels before timing
     if args.veins:
@@ -317,7 +341,11 @@ def main() -> int:
     if args.variants:
         form_variants()
         return 0
+    if args.size:
+        size_kept()
+        return 0
     rolled_forms()
+    size_kept()
     unfolded_forms()
     if args.rolled:
         return 0
