@@ -34,8 +34,13 @@ def add_form_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--venation", choices=VENATION_KINDS, default="pinnate")
     p.add_argument("--secondaries", type=int, metavar="N", help="secondary veins per side")
     p.add_argument("--aspect", type=float, metavar="L/W", help="length over greatest width")
-    p.add_argument("--fold", type=float, default=0.0, metavar="DEG", help="halves raised by DEG")
-    p.add_argument("--curl", type=float, default=0.0, metavar="C", help="apex raised C lengths")
+    kept = " (the outline seen from above kept: README, Real size)"
+    p.add_argument(
+        "--fold", type=float, default=0.0, metavar="DEG", help="halves raised by DEG" + kept
+    )
+    p.add_argument(
+        "--curl", type=float, default=0.0, metavar="C", help="apex raised C lengths" + kept
+    )
     p.add_argument(
         "--roll", type=float, default=0.0, metavar="R", help="margins rolled up R half turns"
     )
