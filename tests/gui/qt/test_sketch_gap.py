@@ -20,9 +20,22 @@ from .conftest import wait_result
 from .test_sketch import click
 
 
-def never_done(window) -> None:
-    """Reconstructions are queued but never finish: the gap before the first result lasts."""
-    window.session.submit = lambda leaf, params, interrupt: 10**9
+def never_done(window, monkeypatch) -> None:
+    """Reconstructions are queued but never finish: the gap before the first result lasts.
+
+    Each takes the worker's next id, as a real request would, and runs nothing: the session
+    stays in step with the worker, so that after the test (`monkeypatch` gives the session its
+    way to the worker back) the lent window is reset, not built again (LentWindow.lend). An id
+    out of the worker's sequence (10**9) left the session ignoring every later answer (an open
+    ignores the requests up to the last one's id)."""
+    worker = window.worker
+
+    def queued(leaf, params, interrupt) -> int:
+        with worker._wake:  # the worker's own lock on its ids
+            worker._last_id += 1
+            return worker._last_id
+
+    monkeypatch.setattr(window.session, "submit", queued)
 
 
 def open_parallel(window, qtbot, tmp_path, how: str) -> None:
@@ -37,12 +50,12 @@ def open_parallel(window, qtbot, tmp_path, how: str) -> None:
 
 @pytest.mark.parametrize("how", ["demo", "file"])
 def test_a_click_before_the_new_leafs_sketch_arrives_leaves_the_new_document_alone(
-    window, qtbot, tmp_path, how
+    window, qtbot, tmp_path, monkeypatch, how
 ):
     session, view = window.session, window.editor.view
     old = view.sketch
     assert len(old.boundary) >= 3
-    never_done(window)
+    never_done(window, monkeypatch)
     open_parallel(window, qtbot, tmp_path, how)
     opened = session.state
     assert opened.sketch is None
@@ -68,7 +81,7 @@ def test_the_editor_takes_the_new_leafs_sketch_with_its_first_result(window, qtb
 
 
 def test_a_new_sketch_is_editable_at_once_and_a_failed_open_gives_back_the_old_sketch(
-    window, qtbot, tmp_path
+    window, qtbot, tmp_path, monkeypatch
 ):
     session, view = window.session, window.editor.view
     old = view.sketch
@@ -81,20 +94,22 @@ def test_a_new_sketch_is_editable_at_once_and_a_failed_open_gives_back_the_old_s
     qtbot.waitUntil(lambda: len(view.sketch.boundary) == len(old.boundary), timeout=5_000)
     np.testing.assert_array_equal(view.sketch.boundary, old.boundary)  # not an empty sketch
     assert window.editor.isEnabled() and not window.editor.waiting.isVisible()
-    never_done(window)
+    never_done(window, monkeypatch)
     window.new_sketch()
     assert window.editor.isEnabled() and not window.editor.waiting.isVisible()
     click(qtbot, view, (0.2, 0.1))
     assert session.history.count() == 1 and len(session.state.sketch.boundary) == 1
 
 
-def test_an_undo_back_to_a_loaded_leaf_of_another_document_waits_for_its_sketch(window, qtbot):
+def test_an_undo_back_to_a_loaded_leaf_of_another_document_waits_for_its_sketch(
+    window, qtbot, monkeypatch
+):
     session, view = window.session, window.editor.view
     nested = session.state
     session.new_document(demo("parallel"), title="parallel")  # as the Forms gallery does
     wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
     parallel = view.sketch
-    never_done(window)
+    never_done(window, monkeypatch)
     window.actions["edit.undo"].trigger()
     assert session.state is nested and view.sketch is not parallel
     assert not window.editor.isEnabled()
@@ -126,13 +141,14 @@ def test_the_session_says_when_a_documents_sketch_is_not_known_yet():
 
 
 def test_a_click_or_key_while_a_scans_first_reconstruction_runs_leaves_it_alone(
-    window, qtbot, tmp_path
+    window, qtbot, tmp_path, monkeypatch
 ):
     """A scan's first reconstruction takes seconds: the whole while, the editor showed the
     previous leaf's sketch and took edits of it."""
     session, view = window.session, window.editor.view
     old = view.sketch
-    never_done(window)  # the scan is read and extracted; its reconstruction never finishes
+    # the scan is read and extracted; its reconstruction never finishes
+    never_done(window, monkeypatch)
     assert window.open_path(write_points(tmp_path / "scan.txt", six_column_scan()))
     qtbot.waitUntil(lambda: session.state.scan is not None, timeout=30_000)
     opened = session.state
