@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 from leafstudio.forms import make_form
-from tests.gui.builders import FAST
-from tests.gui.qt.conftest import close_window, image_pixels, make_window, wait_result
+from tests.gui.qt.conftest import image_pixels, wait_result
 
 LEAVES = ("nested", "parallel", "ovate", "lobed palmate", "cordate serrate")
 FORMS = {
@@ -47,11 +46,12 @@ LAYERS = ("contour", "implicit", "probability", "em", "samples")
 _SHARES: dict[str, dict[str, float]] = {}  # layer -> leaf -> share, measured once per run
 
 
-def _measure_shares(qtbot, folder) -> dict[str, dict[str, float]]:
-    """Each layer's changed share on each leaf: one window, each leaf reconstructed once and every
-    layer ticked over it in turn (the plain view rendered again before each tick)."""
-    window = make_window(qtbot, folder / "settings.ini", FAST)
+def _measure_shares(qtbot, window) -> dict[str, dict[str, float]]:
+    """Each layer's changed share on each leaf: one window (the lent one, given back at its
+    size: LentWindow puts back its layers and resets its document), each leaf reconstructed once
+    and every layer ticked over it in turn (the plain view rendered again before each tick)."""
     shares: dict[str, dict[str, float]] = {layer: {} for layer in LAYERS}
+    size = window.size()
     try:
         window.resize(1024, 800)  # the 3D view about 600 px wide (docks as tabs: projector.py)
         for key in window.viewport.visible:
@@ -66,14 +66,14 @@ def _measure_shares(qtbot, folder) -> dict[str, dict[str, float]]:
                 window.layers.set_checked(layer, False)
                 shares[layer][name] = round(changed_share(plain, ticked), 4)
     finally:
-        close_window(window)
+        window.resize(size)
     return shares
 
 
 @pytest.mark.parametrize("layer", LAYERS)
-def test_a_ticked_layer_shows_over_the_mesh(qtbot, tmp_path, layer):
+def test_a_ticked_layer_shows_over_the_mesh(qtbot, lent_window, layer):
     if not _SHARES:
-        _SHARES.update(_measure_shares(qtbot, tmp_path))
+        _SHARES.update(_measure_shares(qtbot, lent_window.lend(qtbot)))
     shares = _SHARES[layer]
     assert set(shares) == set(LEAVES)
     assert min(shares.values()) >= CHANGED, shares
