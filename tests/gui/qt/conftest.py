@@ -163,7 +163,8 @@ class LentWindow:
 
     def lend(self, qtbot) -> MainWindow:
         win = self.window
-        # a test that replaced the session's way to the worker (test_sketch_gap.never_done)
+        # a test that replaced the session's way to the worker and did not give it back (a test
+        # that does through monkeypatch, as test_sketch_gap.never_done, keeps the window)
         wired = win is not None and win.session.submit == win.worker.submit_pipeline
         if wired and win.isVisible() and self.restore(win):
             session = win.session
