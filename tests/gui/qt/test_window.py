@@ -44,7 +44,11 @@ def test_the_demo_result_appears(window, qtbot):
     assert len(mesh_actor_points(window)) == result.mesh.n_points
     qtbot.waitUntil(lambda: window.measurements.topLevelItemCount() >= 3)
     assert "Leaf" in window.measurements.topLevelItem(0).text(0)
-    assert "mesh" in window.status_text.toolTip()  # per-stage timings, under the short line
+    # each stage's time under the short line: those that ran (none when an earlier test left
+    # every stage in the cache), the drawing, and a word on the others
+    tip = window.status_text.toolTip()
+    assert all(f"{stage} " in tip for stage in result.timings) and "draw " in tip, tip
+    assert "stages not listed came from the cache" in tip
     assert window.editor.view.sketch.boundary.shape[0] >= 3  # the leaf as an editable sketch
 
 
