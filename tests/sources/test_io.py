@@ -46,6 +46,22 @@ def test_whitespace_and_header_and_unlabelled_boundary_with_vein_files(tmp_path:
     np.testing.assert_allclose(loaded.veins[0], leaf.veins[0])
 
 
+@pytest.mark.parametrize("header", ["", "x,y\n", "X, Y\n"], ids=["bare", "x,y", "X, Y"])
+def test_an_xy_outline_reads_as_a_flat_boundary(tmp_path: Path, header: str):
+    """A two-column `x,y` outline (a spreadsheet's or a digitiser's, with or without a header
+    row) was refused ("expected 3 or 4 columns"): it is now a boundary at z = 0, and a vein file
+    of two columns a vein at z = 0."""
+    outline = ls.demo("parallel").boundary[:, :2]
+    path = tmp_path / "outline.csv"
+    path.write_text(header + "\n".join(f"{x},{y}" for x, y in outline) + "\n")
+    vein = tmp_path / "vein.txt"
+    vein.write_text("0.1 0.0\n0.5 0.01\n0.9 0.0\n")
+    leaf = ls.load_leaf(path, veins=[vein])
+    np.testing.assert_allclose(leaf.boundary, np.column_stack([outline, np.zeros(len(outline))]))
+    np.testing.assert_allclose(leaf.veins[0][:, 2], 0.0)
+    assert leaf.veins[0].shape == (3, 3)
+
+
 @pytest.mark.parametrize(
     "header, row",
     [
@@ -95,8 +111,10 @@ def test_ply_labels_survive(tmp_path: Path):
     [
         ("", "holds no points"),
         ("x,y,z\n", "holds no points"),
-        ("0 0 0\n1 0\n", "line 2: expected 3 or 4 columns"),
-        ("0 0 0 0 0\n", "line 1: expected 3 or 4 columns"),
+        ("0 0 0\n1 0\n", "line 2: 2 columns where earlier lines have 3"),
+        ("0 0\n1 0 0\n", "line 2: 3 columns where earlier lines have 2"),
+        ("0\n", "line 1: expected 2, 3 or 4 columns"),
+        ("0 0 0 0 0\n", "line 1: expected 2, 3 or 4 columns"),
         ("0 0 0\n1 0 nan\n0 1 0\n", "line 2: NaN or infinite"),
         ("0 0 0\n1 0 inf\n0 1 0\n", "line 2: NaN or infinite"),
         ("0 0 0\n1 0 zero\n", "line 2: not a number"),
