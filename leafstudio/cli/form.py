@@ -52,7 +52,9 @@ def add_form_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--wave", type=float, default=0.0, metavar="A", help="margin wave height")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="a variant (default 0)")
     p.add_argument(
-        "--length", metavar="L", help="a mesh's real length, base to apex (8cm, 0.08m, 80mm)"
+        "--length",
+        metavar="L",
+        help="a mesh's real length, base to apex (8cm, 80mm, 3in; units mm, cm, m, in, ft)",
     )
     p.add_argument(
         "-o",
