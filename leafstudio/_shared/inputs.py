@@ -117,6 +117,48 @@ def read_text(path: str | os.PathLike, limit: int = MAX_TEXT_BYTES) -> str:
         raise LeafError("is not a text file (not UTF-8)", str(path)) from None
 
 
+def read_numbers(path: str | os.PathLike, limit: int = MAX_TEXT_BYTES) -> str:
+    """A point list's text (read_text), its decimal commas made points (decimal_commas)."""
+    return decimal_commas(read_text(path, limit), str(path))
+
+
+_COMMENT = re.compile(r"#[^\n]*")
+_SEMICOLON_FIELDS = re.compile(r"\d\s*;\s*[-+.\d]")  # a number, `;`, and the next number
+_DECIMAL_COMMA = re.compile(r"\d,\d")
+_DECIMAL_POINT = re.compile(r"\d\.|\.\d")
+
+
+def decimal_commas(text: str, source: str) -> str:
+    r"""`text` with its decimal commas made points when its numbers are separated by `;` and
+    written with a comma for the decimal mark (`1,5;2,25;0`, a European spreadsheet's CSV); else
+    `text` as it is. A LeafError naming the first line with a decimal point when the file holds
+    those too (`1.000,5`: a thousands separator, or two conventions mixed): which is meant cannot
+    be told.
+
+    Examples
+    --------
+    >>> decimal_commas("x;y;z\n1,5;-2,25;0\n", "leaf.csv")
+    'x;y;z\n1.5;-2.25;0\n'
+    >>> decimal_commas("1,5,0\n", "leaf.csv")
+    '1,5,0\n'
+    """
+    if ";" not in text or "," not in text:
+        return text  # the usual files: two scans of the text in C
+    body = _COMMENT.sub("", text)
+    if not _SEMICOLON_FIELDS.search(body) or not _DECIMAL_COMMA.search(body):
+        return text
+    if _DECIMAL_POINT.search(body):
+        number, line = next(
+            (n, t) for n, t in enumerate(body.splitlines(), start=1) if _DECIMAL_POINT.search(t)
+        )
+        raise LeafError(
+            f"line {number}: numbers separated by ';' with both decimal commas and points "
+            f"({shorten(line.strip())!r}); write every number with one decimal mark",
+            source,
+        )
+    return text.replace(",", ".")
+
+
 def line_blocks(text: str, size: int | None = None) -> Iterator[tuple[int, str]]:
     r"""Blocks of whole lines of `text` (each about `size` characters, BLOCK_CHARS by default, cut
     after a newline), with the number of each block's first line (from 1, as `str.splitlines`

@@ -29,8 +29,8 @@ from leafstudio._shared.inputs import (
     parse_number,
     ply_numbers,
     ply_xyz,
+    read_numbers,
     read_ply,
-    read_text,
 )
 from leafstudio._shared.safewrite import check_outputs, write_bytes
 from leafstudio._shared.safewrite import staged as staged  # re-exported: outputs replaced together
@@ -58,7 +58,7 @@ def read_point_table(path: Path, columns: Sequence[int] = (2, 3, 4)) -> np.ndarr
     reported as read), each by numpy's reader when it holds only numbers, else line by line,
     which names the first faulty line. A header naming x, y and z (and label) says which columns
     they are, in any order among others (an index)."""
-    text = read_text(path)
+    text = read_numbers(path)  # decimal commas (`1,5;2,25;0`) made points
     named = named_columns(text, columns)
     table = _PointTable(path, columns if named is None else (named[0],))
     for first, block in line_blocks(text):
