@@ -11,6 +11,7 @@ huge allocation or a library's traceback.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -359,14 +360,19 @@ PHOTO_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp")  # 
 
 
 def read_image(path: str | Path) -> np.ndarray:
-    """An image file as an (h, w, 3 or 4) uint8 array; LeafError if it cannot be read (a FIFO,
-    which Pillow would wait on for ever, is refused unopened: issue 24, finding 17)."""
-    from PIL import Image, UnidentifiedImageError
+    """An image file as an (h, w, 3 or 4) uint8 array, upright as a viewer shows it (its EXIF
+    orientation applied: a phone stores a portrait photo's pixels sideways and says so); the
+    one reader of photos and textures, so the leaf found, its pixel map, the texture and the
+    app's photo dialog see the same pixels. LeafError if it cannot be read (a FIFO, which
+    Pillow would wait on for ever, is refused unopened: issue 24, finding 17)."""
+    from PIL import Image, ImageOps, UnidentifiedImageError
     from PIL.Image import DecompressionBombError
 
     check_input_file(path, None)  # Pillow's pixel limit bounds the size
     try:
         with Image.open(path) as image:
+            with contextlib.suppress(Exception):  # a damaged EXIF block: the pixels as stored
+                image = ImageOps.exif_transpose(image)
             image = image.convert("RGBA" if "A" in image.getbands() else "RGB")
             return np.asarray(image)
     except DecompressionBombError:

@@ -5,6 +5,7 @@ the photo, draws the ruler and passes clicks (in the photo's pixels) and text th
 
 from __future__ import annotations
 
+import numpy as np
 from PySide6.QtCore import QPointF, Qt
 from PySide6.QtGui import QColor, QImage, QMouseEvent, QPainter, QPen, QPixmap
 from PySide6.QtWidgets import (
@@ -17,11 +18,23 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from leafstudio._shared.inputs import read_image
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.photo_import import PhotoImport
 
 SHOWN = (720, 480)  # the photo is shown at most this big, in screen pixels
 RULER_COLOUR = QColor("#e0218a")
+
+
+def photo_image(path: str) -> QImage:
+    """The photo as the leaf is found in it (read_image: upright, its EXIF orientation applied,
+    so a click's pixel is the finder's); a null image when it cannot be read (OK then says why)."""
+    try:
+        rgb = np.ascontiguousarray(read_image(path)[..., :3])
+    except LeafError:
+        return QImage()
+    height, width = rgb.shape[:2]
+    return QImage(rgb.tobytes(), width, height, 3 * width, QImage.Format.Format_RGB888).copy()
 
 
 class PhotoPicture(QLabel):
@@ -31,7 +44,7 @@ class PhotoPicture(QLabel):
     def __init__(self, model: PhotoImport, on_change, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.model, self.on_change = model, on_change
-        image = QImage(model.path)
+        image = photo_image(model.path)
         self.photo = QPixmap.fromImage(image)
         if not self.photo.isNull():
             self.photo = self.photo.scaled(*SHOWN, Qt.AspectRatioMode.KeepAspectRatio,
