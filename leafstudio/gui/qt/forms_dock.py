@@ -10,7 +10,6 @@ cached for the process.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import replace
 from functools import partial
 from typing import Any
 
@@ -33,12 +32,15 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from leafstudio.core.bend import flat_leaf
-from leafstudio.core.prepare.polygon import ring_crossings
-from leafstudio.forms import SHAPES, VENATION_KINDS, Form, definition, grow_veins
+from leafstudio.forms import SHAPES, VENATION_KINDS, Form, definition
 from leafstudio.forms.glossary import COMPARISONS
 from leafstudio.forms.terms import APEXES, DEFAULT_LOBES, MARGINS, RELIEF, TOOTHED, USER_BASES
-from leafstudio.gui.model.curves import closed_curve
+from leafstudio.gui.model.form_sketch import (
+    BOUNDARY_CONTROL,
+    canonical_leaves,
+    grow_blade,
+    with_grown_veins,
+)
 from leafstudio.gui.model.jobs import Run, describe
 from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.gui.qt.compare_view import FIRST, compare_actions
@@ -49,9 +51,6 @@ from leafstudio.model import Leaf
 
 THUMBNAIL = 84  # pixels
 GALLERY_SPACING = 14  # pixels around each thumbnail and its name
-BOUNDARY_CONTROL = 48  # a form's sketch: about this many boundary control points, plus corners
-CORNER_TURN = 0.35  # radians: outline points turning this sharply (tooth tips, notches) are kept
-VEIN_CONTROL = 8
 DEBOUNCE_MS = 250
 THUMBNAILS = "thumbnails"  # the worker's job kind (and lane) growing the gallery's veins
 FORM = "form"  # the job kind growing a chosen form's blade (its own lane: never behind those)
@@ -75,68 +74,10 @@ def outline_thumbnail(shape: str, size: int = THUMBNAIL) -> QImage:
     return draw_plane(Form(shape).outline().xy, [], size, sit=True)
 
 
-def grow_blade(form: Form) -> tuple[Form, Leaf, str, Sketch]:
-    """`form` without its pose, its blade, side-on note (Form.blade_and_note) and the blade's
-    sketch, which every pose of it shows: run on the worker's lane, off the main thread."""
-    unposed = form.unposed()
-    blade, side_on = unposed.blade_and_note()
-    return unposed, blade, side_on, leaf_sketch(blade, unposed.teeth_count)
-
-
-def canonical_leaves(shapes: list[str]) -> dict[str, Leaf]:
-    """Each shape's canonical form with its veins (numpy and shapely only: a side job's work,
-    50 ms a shape, 0.7 s for the gallery, which the window's first start waited for)."""
-    return {shape: Form(shape).leaf() for shape in shapes}
-
-
 def draw_leaf(leaf: Leaf, size: int, sit: bool = False) -> QImage:
     """A leaf's outline and veins seen from above, fitted in a `size` square: centred, or with
     `sit` resting on the square's lower edge (a pixel or two below)."""
     return draw_plane(leaf.boundary[:, :2], [v[:, :2] for v in leaf.veins], size, sit=sit)
-
-
-def _turns(xy: np.ndarray) -> np.ndarray:
-    a, b = xy - np.roll(xy, 1, axis=0), np.roll(xy, -1, axis=0) - xy
-    return np.abs(np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], (a * b).sum(axis=1)))
-
-
-def leaf_sketch(leaf: Leaf, teeth: int = 0) -> Sketch:
-    """An editable sketch of a leaf that lies in the z = 0 plane apart from its relief (a form):
-    boundary control points spread along it with its corners (tooth tips and notches) kept, each
-    vein's control points spread along it with their heights, the boundary's heights as relief.
-    A posed form's sketch is its flat blade (the pose bends the 3D result only)."""
-    leaf = flat_leaf(leaf)
-    xy = leaf.boundary[:, :2]
-    corners = np.flatnonzero(_turns(xy) > CORNER_TURN)
-    count = max(BOUNDARY_CONTROL, 3 * teeth)
-    while True:  # more control points until the curve through them does not cross itself
-        even = np.unique(np.linspace(0, len(xy), count, endpoint=False).astype(int))
-        boundary = xy[np.union1d(even, corners)]
-        if count >= len(xy) or not len(ring_crossings(closed_curve(boundary))):
-            break
-        count *= 2
-    veins = []
-    for vein in leaf.veins:
-        pick = np.unique(np.linspace(0, len(vein) - 1, min(VEIN_CONTROL, len(vein))).astype(int))
-        veins.append(vein[pick])
-    relief = leaf.boundary if np.any(leaf.boundary[:, 2] != 0) else np.zeros((0, 3))
-    return Sketch(boundary=boundary, veins=tuple(veins), relief=relief)
-
-
-def with_grown_veins(
-    sketch: Sketch, venation: str, seed: int = 0, base: np.ndarray | None = None
-) -> Sketch:
-    """The sketch with its veins replaced by veins grown inside its boundary curve; the base is
-    `base` (plane point), else the start of the sketch's first vein, else found by grow_veins."""
-    outline = sketch.boundary_curve()
-    if base is None and sketch.veins and len(sketch.veins[0]):
-        base = sketch.veins[0][0, :2]
-    veins = grow_veins(outline, venation, base=base, seed=seed)
-    pick = [
-        np.unique(np.linspace(0, len(v) - 1, min(VEIN_CONTROL, len(v))).astype(int)) for v in veins
-    ]
-    # replace, not a new Sketch: the boundary, frame, relief and the saved Mirror flag are kept
-    return replace(sketch, veins=tuple(v[p] for v, p in zip(veins, pick, strict=True)))
 
 
 class FormsPanel(QWidget):

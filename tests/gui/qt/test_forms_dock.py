@@ -11,8 +11,9 @@ from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QDockWidget
 
 from leafstudio.forms import SHAPES, Form
+from leafstudio.gui.model.form_sketch import leaf_sketch, with_grown_veins
 from leafstudio.gui.qt import forms_dock
-from leafstudio.gui.qt.forms_dock import FormsPanel, leaf_sketch, thumbnail
+from leafstudio.gui.qt.forms_dock import FormsPanel, thumbnail
 from leafstudio.model import Leaf
 from leafstudio.sources.demos import demo
 from tests.gui.qt.conftest import WAIT_MS, close_window, image_pixels, make_window, wait_result
@@ -209,7 +210,7 @@ def test_with_grown_veins_keeps_the_sketchs_other_fields():
 
     leaf = Form("elliptic").leaf()
     sketch = replace(leaf_sketch(leaf, 0), symmetric=True)
-    grown = forms_dock.with_grown_veins(sketch, "pinnate")
+    grown = with_grown_veins(sketch, "pinnate")
     assert grown.symmetric and grown.frame is sketch.frame
     assert np.array_equal(grown.boundary, sketch.boundary) and len(grown.veins) >= 3
 
