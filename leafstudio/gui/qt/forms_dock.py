@@ -14,7 +14,7 @@ from functools import partial
 from typing import Any
 
 import numpy as np
-from PySide6.QtCore import QSize, Qt, QTimer, Signal
+from PySide6.QtCore import QSignalBlocker, QSize, Qt, QTimer, Signal
 from PySide6.QtGui import QIcon, QImage, QPixmap
 from PySide6.QtWidgets import (
     QComboBox,
@@ -190,10 +190,7 @@ class FormsPanel(QWidget):
         self._picked = False
         self.gallery.currentItemChanged.connect(lambda *_: self._changed(picked=True))
         self.gallery.itemClicked.connect(lambda *_: self._changed(picked=True))
-        self.gallery.setCurrentRow(list(SHAPES).index("ovate"))
-        self._timer.stop()  # the first shape is selected, not chosen
-        self._picked = False
-        self._describe()
+        self._describe()  # nothing highlighted until a form is open (show_shape)
 
     def missing_veins(self) -> list[str]:
         """The shapes whose thumbnails show their outline alone."""
@@ -257,6 +254,17 @@ class FormsPanel(QWidget):
         item = self.gallery.currentItem()
         return item.data(Qt.ItemDataRole.UserRole) if item is not None else "ovate"
 
+    def show_shape(self, shape: str | None) -> None:
+        """Highlight the open form's `shape`, or nothing (None: the leaf open is not a form),
+        choosing nothing: the gallery follows the document."""
+        row = list(SHAPES).index(shape) if shape in SHAPES else -1
+        if row != self.gallery.currentRow():
+            with QSignalBlocker(self.gallery):
+                self.gallery.setCurrentRow(row)
+            if row >= 0:
+                self.gallery.scrollToItem(self.gallery.item(row))
+            self._describe()
+
     def form(self) -> Form:
         """The form the choosers describe (terms that do not apply are left out)."""
         shape = self.shape()
@@ -281,7 +289,11 @@ class FormsPanel(QWidget):
 
     def _describe(self) -> None:
         form_ = self.form()
-        self.shape_text.setText(f"<b>{form_.shape}</b>: {definition(form_.shape)}")
+        self.shape_text.setText(
+            f"<b>{form_.shape}</b>: {definition(form_.shape)}"
+            if self.gallery.currentItem() is not None
+            else "The leaf open is not a form: pick a shape to make one."
+        )
         self.texts["Apex"].setText(f"{form_.apex_term}: {definition(form_.apex_term, 'apex')}")
         fixed = SHAPES[form_.shape].fixed_base
         self.base.setEnabled(not fixed)
@@ -324,7 +336,7 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
     for shown in (window.result_shown, window.failure_shown):
         shown.connect(lambda *_: panel.grow_veins(window.worker.start))
     session = window.session
-    made = {"serial": None}  # the document the gallery made last
+    shapes: dict[int, str] = {}  # the documents the gallery made (serials): their shapes
     # the last blade grown (its form without a pose, the blade, its side-on note), and the form
     # waiting for its blade: a blade grows on a lane (60-100 ms, the main thread's before), and
     # a pose slider's change only poses the last one (a few ms)
@@ -337,7 +349,13 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
         _unposed, blade, side_on, sketch = kept["blade"]
         panel.show_pose_note(side_on)
         session.new_document(form.leaf(blade), sketch, f"{form.shape} form")
-        made["serial"] = session.state.serial
+        shapes[session.state.serial] = form.shape
+        panel.show_shape(form.shape)
+
+    def follow(state, reason: str) -> None:
+        """The gallery highlights the open document's shape, if the gallery made it."""
+        if reason in ("document", "undo", "fallback"):
+            panel.show_shape(shapes.get(state.serial))
 
     def grown(blade: tuple[Form, Leaf, str, Sketch]) -> None:
         kept["blade"] = blade
@@ -351,12 +369,14 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
         form = waiting.get("form")
         if form is not None and form.unposed() == unposed:
             waiting.clear()
+            panel.show_shape(shapes.get(session.state.serial))  # the picked shape was not made
             window.show_error("Forms", describe(exc))
 
     def choose(form: Form, picked: bool) -> None:
         growing = waiting.get("form")
-        ours = waiting["serial"] if growing is not None else made["serial"]
-        if not picked and session.state.serial != ours:
+        serial = session.state.serial  # a form's document, or the one open when it was picked
+        ours = serial == waiting["serial"] if growing is not None else serial in shapes
+        if not picked and not ours:
             return  # a term changed while another document is open: only its definition shows
         unposed = form.unposed()
         if "blade" in kept and kept["blade"][0] == unposed:
@@ -394,6 +414,7 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
         session.commit_sketch(grown, f"Grow {venation} veins")
 
     panel.chosen.connect(choose)
+    session.state_changed.connect(follow)
     panel.grow.connect(grow)
     _add_grow_row(window.editor, grow)
     window.add_dock("Forms", panel, dock_area)  # stacked below the Sketch dock

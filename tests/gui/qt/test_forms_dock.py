@@ -105,6 +105,33 @@ def test_a_chosen_form_becomes_the_document_as_an_editable_sketch(window, panel,
     assert window.session.leaf is before
 
 
+def _highlighted(panel) -> str | None:
+    item = panel.gallery.currentItem()
+    return None if item is None else item.data(Qt.ItemDataRole.UserRole)
+
+
+def test_the_gallery_highlights_the_open_forms_shape_or_nothing(window, panel, qtbot):
+    """The gallery highlighted "ovate" whatever leaf was open (the demo, a scan, a cordate form
+    made from it): it highlights the open form's shape, and nothing for a leaf that is not a
+    form, through undo and redo; following the document chooses nothing itself."""
+    wait_result(qtbot, window)
+    assert _highlighted(panel) is None  # the nested demo: not a form
+    assert "pick a shape" in panel.shape_text.text()
+    panel.gallery.setCurrentRow(list(SHAPES).index("cordate"))
+    choose(qtbot, window, panel)
+    assert _highlighted(panel) == "cordate"
+    window.session.new_document(demo("parallel"), title="parallel")  # File > Open, say
+    assert _highlighted(panel) is None
+    qtbot.wait(3 * forms_dock.DEBOUNCE_MS)
+    assert window.session.state.title == "parallel"  # no form chosen by the change
+    window.session.undo()
+    assert _highlighted(panel) == "cordate"
+    window.session.undo()
+    assert _highlighted(panel) is None
+    window.session.redo()
+    assert _highlighted(panel) == "cordate"
+
+
 def test_grow_veins_fills_the_current_outline_as_one_step(window, panel, qtbot):
     wait_result(qtbot, window)
     veins_before = len(window.session.leaf.veins)
