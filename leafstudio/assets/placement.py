@@ -35,8 +35,7 @@ import numpy as np
 
 from leafstudio.assets.solid import boundary_edges
 from leafstudio.assets.units import split_length, unit_metres
-from leafstudio.core.bend import flat_leaf
-from leafstudio.core.evaluate import blade_axis, blade_length_width
+from leafstudio.core.evaluate import blade_axis, blade_length_width, blade_midrib
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.prepare.units import POINT_ARRAY_POWER
 from leafstudio.errors import LeafError
@@ -139,8 +138,9 @@ def result_placement(result: Any) -> Placement:
     its flat blade, where the frame and outline are, and carried by its bend (`carried`)."""
     polygon_h = getattr(result, "polygon_h", None)
     leaf = result.leaf
-    flat = flat_leaf(leaf)
-    placement = leaf_placement(result.frame, result.polygon, polygon_h, list(flat.veins))
+    midrib = blade_midrib(leaf)  # on the flat blade, base first
+    veins = [] if midrib is None else [midrib]
+    placement = leaf_placement(result.frame, result.polygon, polygon_h, veins)
     return placement if leaf.bend is None else carried(placement, leaf.bend)
 
 
