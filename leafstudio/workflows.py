@@ -167,7 +167,12 @@ def _scan_opened(
 
 
 def open_file(
-    path: str, *, force: bool = False, length: float | None = None, pixel_size: float | None = None
+    path: str,
+    *,
+    force: bool = False,
+    length: float | None = None,
+    pixel_size: float | None = None,
+    base_end: str = "auto",
 ) -> Opened:
     """Open any file a user may give: a photo, a project, a point list or PLY leaf, or a scan.
 
@@ -187,6 +192,9 @@ def open_file(
     pixel_size : float, optional
         For a photo without `length`: one pixel's length in the leaf's units (a ruler's);
         without either, the photo's own DPI when it records one (sources/photo_scale.py).
+    base_end : {"auto", "left", "right", "top", "bottom"}, default: "auto"
+        For a photo: the end of the leaf that is its base, as the photo shows it (`leafstudio
+        photo --base-end`); "auto" finds it (petiole, notch, veins, else the wider end).
 
     Returns
     -------
@@ -217,7 +225,7 @@ def open_file(
     path = str(path)
     check_file_kind(path)  # a pipe named leaf.csv is not opened (its sniffing would block)
     if is_photo(path):
-        found = read_photo_leaf(path, length=length, pixel_size=pixel_size)
+        found = read_photo_leaf(path, length=length, pixel_size=pixel_size, base_end=base_end)
         grown = found.veins_from == "grown"
         notes = ("the photo shows no midrib: its veins were grown",) if grown else ()
         return Opened(path, "photo", found.leaf, photo=found, notes=notes)

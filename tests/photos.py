@@ -197,3 +197,14 @@ def error_lines(stderr: str) -> int:
     """Lines of a command's stderr that report an error (notes such as the first run's kernel
     compilation may come before them)."""
     return sum("error:" in line for line in stderr.strip().splitlines())
+
+
+def exif_turned(image: np.ndarray, path: Path) -> Path:
+    """`image` saved as a phone saves a portrait photo: its pixels turned a quarter turn
+    counter-clockwise, with EXIF orientation 6 ("turn a quarter clockwise to show")."""
+    from PIL import Image
+
+    exif = Image.Exif()
+    exif[0x0112] = 6
+    Image.fromarray(np.ascontiguousarray(np.rot90(image))).save(path, exif=exif)
+    return path

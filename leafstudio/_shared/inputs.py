@@ -11,6 +11,7 @@ huge allocation or a library's traceback.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -115,6 +116,48 @@ def read_text(path: str | os.PathLike, limit: int = MAX_TEXT_BYTES) -> str:
         return data.decode("utf-8")
     except UnicodeDecodeError:
         raise LeafError("is not a text file (not UTF-8)", str(path)) from None
+
+
+def read_numbers(path: str | os.PathLike, limit: int = MAX_TEXT_BYTES) -> str:
+    """A point list's text (read_text), its decimal commas made points (decimal_commas)."""
+    return decimal_commas(read_text(path, limit), str(path))
+
+
+_COMMENT = re.compile(r"#[^\n]*")
+_SEMICOLON_FIELDS = re.compile(r"\d\s*;\s*[-+.\d]")  # a number, `;`, and the next number
+_DECIMAL_COMMA = re.compile(r"\d,\d")
+_DECIMAL_POINT = re.compile(r"\d\.|\.\d")
+
+
+def decimal_commas(text: str, source: str) -> str:
+    r"""`text` with its decimal commas made points when its numbers are separated by `;` and
+    written with a comma for the decimal mark (`1,5;2,25;0`, a European spreadsheet's CSV); else
+    `text` as it is. A LeafError naming the first line with a decimal point when the file holds
+    those too (`1.000,5`: a thousands separator, or two conventions mixed): which is meant cannot
+    be told.
+
+    Examples
+    --------
+    >>> decimal_commas("x;y;z\n1,5;-2,25;0\n", "leaf.csv")
+    'x;y;z\n1.5;-2.25;0\n'
+    >>> decimal_commas("1,5,0\n", "leaf.csv")
+    '1,5,0\n'
+    """
+    if ";" not in text or "," not in text:
+        return text  # the usual files: two scans of the text in C
+    body = _COMMENT.sub("", text)
+    if not _SEMICOLON_FIELDS.search(body) or not _DECIMAL_COMMA.search(body):
+        return text
+    if _DECIMAL_POINT.search(body):
+        number, line = next(
+            (n, t) for n, t in enumerate(body.splitlines(), start=1) if _DECIMAL_POINT.search(t)
+        )
+        raise LeafError(
+            f"line {number}: numbers separated by ';' with both decimal commas and points "
+            f"({shorten(line.strip())!r}); write every number with one decimal mark",
+            source,
+        )
+    return text.replace(",", ".")
 
 
 def line_blocks(text: str, size: int | None = None) -> Iterator[tuple[int, str]]:
@@ -317,14 +360,19 @@ PHOTO_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp")  # 
 
 
 def read_image(path: str | Path) -> np.ndarray:
-    """An image file as an (h, w, 3 or 4) uint8 array; LeafError if it cannot be read (a FIFO,
-    which Pillow would wait on for ever, is refused unopened: issue 24, finding 17)."""
-    from PIL import Image, UnidentifiedImageError
+    """An image file as an (h, w, 3 or 4) uint8 array, upright as a viewer shows it (its EXIF
+    orientation applied: a phone stores a portrait photo's pixels sideways and says so); the
+    one reader of photos and textures, so the leaf found, its pixel map, the texture and the
+    app's photo dialog see the same pixels. LeafError if it cannot be read (a FIFO, which
+    Pillow would wait on for ever, is refused unopened: issue 24, finding 17)."""
+    from PIL import Image, ImageOps, UnidentifiedImageError
     from PIL.Image import DecompressionBombError
 
     check_input_file(path, None)  # Pillow's pixel limit bounds the size
     try:
         with Image.open(path) as image:
+            with contextlib.suppress(Exception):  # a damaged EXIF block: the pixels as stored
+                image = ImageOps.exif_transpose(image)
             image = image.convert("RGBA" if "A" in image.getbands() else "RGB")
             return np.asarray(image)
     except DecompressionBombError:

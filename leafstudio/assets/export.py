@@ -212,9 +212,9 @@ def save_mesh(
         Coarser levels of detail to add (0 to 8): glTF and USD keep them in the file, the other
         formats write NAME_lod1.EXT, ...
     length : str or float, optional
-        The leaf's real length, base to apex: '8cm', '0.08m', '80mm', or metres. The leaf is
-        scaled to it and written in metres (glTF, OBJ, USD) or millimetres (PLY, STL, 3MF,
-        VTK).
+        The leaf's real length, base to apex: '8cm', '0.08m', '80mm', '3in' (units mm, cm, m,
+        in, ft), or metres. The leaf is scaled to it and written in metres (glTF, OBJ, USD) or
+        millimetres (PLY, STL, 3MF, VTK).
         Default: the coordinates keep their scale.
     placement : Placement, optional
         Where the leaf's base and axes are (placement.py); default: a Result's own (its midrib

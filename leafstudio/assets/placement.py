@@ -28,20 +28,18 @@ scale.
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from leafstudio.assets.solid import boundary_edges
-from leafstudio.core.bend import flat_leaf
-from leafstudio.core.evaluate import blade_axis, blade_length_width
+from leafstudio.assets.units import split_length, unit_metres
+from leafstudio.core.evaluate import blade_axis, blade_length_width, blade_midrib
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.prepare.units import POINT_ARRAY_POWER
 from leafstudio.errors import LeafError
 
-METRES = {"mm": 1e-3, "cm": 1e-2, "m": 1.0}  # a length's units, in metres
 Y_UP_SUFFIXES = (".glb", ".gltf", ".obj", ".usda", ".usdc", ".usdz", ".usd")
 Y_UP_UNIT, Z_UP_UNIT = 1.0, 1e-3  # metres per unit written with a length: m, mm
 STEP = 1e-3  # carried: the bend's differences at the base, a share of the length
@@ -59,27 +57,26 @@ def size_note(length: float, suffix: str) -> str | None:
 
 
 def parse_length(text: str | float) -> float:
-    """A leaf length in metres: '8cm', '0.08m', '80mm' (a bare number is metres).
+    """A leaf length in metres: '8cm', '0.08m', '80mm', '3in' (units.METRES; a bare number is
+    metres).
 
     Raises
     ------
     LeafError
-        If it is not a number with one of the units in METRES, or not above 0.
+        If it is not a number with one of the units in units.METRES, or not above 0.
     """
     if isinstance(text, int | float):
         value, unit = float(text), "m"
     else:
-        number = r"([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)"
-        match = re.fullmatch(rf"\s*{number}\s*([a-zA-Z]*)\s*", str(text))
-        if not match:
-            raise LeafError(f"--length must be a length with its unit (e.g. 8cm, 0.08m, 80mm), "
+        found = split_length(str(text))
+        if found is None:
+            raise LeafError(f"--length must be a length with its unit (e.g. 8cm, 80mm, 3in), "
                             f"got {text!r}")  # fmt: skip
-        value, unit = float(match.group(1)), match.group(2).lower() or "m"
-        if unit not in METRES:
-            raise LeafError(f"--length: unknown unit {unit!r}; use one of {', '.join(METRES)}")
+        value, unit = found[0], found[1] or "m"
+    metres = unit_metres(unit, "--length")
     if not np.isfinite(value) or value <= 0:
         raise LeafError(f"--length must be above 0, got {text!r}")
-    return value * METRES[unit]
+    return value * metres
 
 
 @dataclass(frozen=True)
@@ -141,8 +138,9 @@ def result_placement(result: Any) -> Placement:
     its flat blade, where the frame and outline are, and carried by its bend (`carried`)."""
     polygon_h = getattr(result, "polygon_h", None)
     leaf = result.leaf
-    flat = flat_leaf(leaf)
-    placement = leaf_placement(result.frame, result.polygon, polygon_h, list(flat.veins))
+    midrib = blade_midrib(leaf)  # on the flat blade, base first
+    veins = [] if midrib is None else [midrib]
+    placement = leaf_placement(result.frame, result.polygon, polygon_h, veins)
     return placement if leaf.bend is None else carried(placement, leaf.bend)
 
 

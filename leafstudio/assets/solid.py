@@ -26,11 +26,10 @@ would be thinner otherwise).
 
 from __future__ import annotations
 
-import re
-
 import numpy as np
 
 from leafstudio.assets.asset import MeshAsset, outline_distance
+from leafstudio.assets.units import METRES, split_length, unit_metres
 from leafstudio.core.trianglemesh import vertex_normals
 from leafstudio.errors import LeafError
 
@@ -40,20 +39,19 @@ FOLD_GRADIENT = 0.5  # the in-plane offset moves at most this much per unit of l
 # a solid's thickness in leaf lengths: thinner, 32-bit floats (STL, 3MF) cannot part its two
 # sheets (1e-9 wrote a solid that was not closed); thicker, it is no leaf (1e308mm wrote ±inf)
 MIN_THICKNESS, MAX_THICKNESS = 1e-5, 10.0
-UNITS = {"um": 1e-3, "mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4}  # in millimetres
 
 
 def parse_thickness(text: str) -> tuple[float, str | None]:
     """'0.01' -> (0.01, None): a fraction of the leaf length; '0.4mm' -> (0.4, 'mm')."""
-    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([a-zA-Z]*)\s*", text)
-    if not match:
+    found = split_length(text)
+    if found is None:
         raise LeafError(
             f"--thickness must be a number (a fraction of the leaf length) or a length with its "
-            f"unit ({', '.join(UNITS)}), got {text!r}"
+            f"unit ({', '.join(METRES)}), got {text!r}"
         )
-    value, unit = float(match.group(1)), match.group(2).lower() or None
-    if unit is not None and unit not in UNITS:
-        raise LeafError(f"--thickness: unknown unit {unit!r}; use one of {', '.join(UNITS)}")
+    value, unit = found[0], found[1] or None
+    if unit is not None:
+        unit_metres(unit, "--thickness")
     if not value > 0:
         raise LeafError(f"--thickness must be above 0, got {text!r}")
     if unit is None and value >= 1:
@@ -73,9 +71,9 @@ def thickness_in_mesh_units(
     if unit is None:
         thickness = value * length
     elif metres_per_unit is not None:
-        thickness = value * UNITS[unit] * 1e-3 / metres_per_unit
+        thickness = value * METRES[unit] / metres_per_unit
     else:
-        thickness = value * UNITS[unit]
+        thickness = value * METRES[unit] * 1e3
     if not MIN_THICKNESS <= thickness / length <= MAX_THICKNESS:  # also inf and NaN
         raise LeafError(
             f"--thickness {text.strip()} is {thickness / length:.3g} of the leaf's length; a "

@@ -24,8 +24,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     bat.add_argument(
         "--length",
         metavar="L",
-        help="each leaf's real length, base to apex (8cm, 0.08m, 80mm): the meshes at real size "
-        "and the traits in millimetres",
+        help="each leaf's real length, base to apex (8cm, 80mm, 3in; units mm, cm, m, in, ft): "
+        "the meshes at real size and the traits in millimetres",
     )
     add_param_flags(bat)
     bat.add_argument("--jobs", type=int, default=None, help="worker processes (default: cores)")

@@ -15,7 +15,7 @@ from leafstudio.cli.options import first_run_said
 from leafstudio.core.pipeline import reconstruct
 from leafstudio.errors import LeafError
 from leafstudio.forms.make import SIDE_ON, Form, seen_on_edge
-from leafstudio.forms.terms import APEXES, MARGINS, SHAPES, USER_BASES, format_terms
+from leafstudio.forms.terms import APEXES, MARGINS, SHAPES, USER_BASES, format_terms, term_key
 from leafstudio.forms.veins import VENATION_KINDS, grow_veins
 from leafstudio.model import Leaf, Params
 from leafstudio.sources.files import LEAF_SUFFIXES, check_leaf_output, load_leaf, save_leaf
@@ -24,14 +24,18 @@ from leafstudio.sources.files import LEAF_SUFFIXES, check_leaf_output, load_leaf
 def add_form_parser(sub: argparse._SubParsersAction) -> None:
     """The `form` subcommand."""
     p = sub.add_parser("form", help="write a leaf made from botanical terms (--list: every term)")
-    p.add_argument("shape", nargs="?", help=f"one of: {', '.join(SHAPES)}")
+    p.add_argument("shape", nargs="?", help=f"one of: {', '.join(SHAPES)} (any case)")
     p.add_argument("--list", action="store_true", help="print every term with its definition")
-    p.add_argument("--apex", choices=tuple(APEXES), help="default: the shape's usual apex")
-    p.add_argument("--base", choices=USER_BASES, help="default: the shape's usual base")
-    p.add_argument("--margin", choices=tuple(MARGINS), default="entire")
+    p.add_argument(
+        "--apex", type=term_key, choices=tuple(APEXES), help="default: the shape's usual apex"
+    )
+    p.add_argument(
+        "--base", type=term_key, choices=USER_BASES, help="default: the shape's usual base"
+    )
+    p.add_argument("--margin", type=term_key, choices=tuple(MARGINS), default="entire")
     p.add_argument("--teeth", type=int, metavar="N", help="N teeth in all (toothed margins)")
     p.add_argument("--lobes", type=int, metavar="N", help="N lobes in all (--margin lobed)")
-    p.add_argument("--venation", choices=VENATION_KINDS, default="pinnate")
+    p.add_argument("--venation", type=term_key, choices=VENATION_KINDS, default="pinnate")
     p.add_argument("--secondaries", type=int, metavar="N", help="secondary veins per side")
     p.add_argument("--aspect", type=float, metavar="L/W", help="length over greatest width")
     kept = " (the outline seen from above kept: README, Real size)"
@@ -48,7 +52,9 @@ def add_form_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--wave", type=float, default=0.0, metavar="A", help="margin wave height")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="a variant (default 0)")
     p.add_argument(
-        "--length", metavar="L", help="a mesh's real length, base to apex (8cm, 0.08m, 80mm)"
+        "--length",
+        metavar="L",
+        help="a mesh's real length, base to apex (8cm, 80mm, 3in; units mm, cm, m, in, ft)",
     )
     p.add_argument(
         "-o",
@@ -64,7 +70,7 @@ def add_veins_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("veins", help="grow veins inside a leaf's outline")
     p.add_argument("leaf", help="a leaf file: its boundary is kept, its veins replaced")
     p.add_argument("-o", "--output", required=True, metavar="OUT", help="the leaf with new veins")
-    p.add_argument("--venation", choices=VENATION_KINDS, default="pinnate")
+    p.add_argument("--venation", type=term_key, choices=VENATION_KINDS, default="pinnate")
     p.add_argument("--secondaries", type=int, metavar="N", help="secondary veins per side")
     p.add_argument("--seed", type=int, default=0, metavar="S")
     p.add_argument(

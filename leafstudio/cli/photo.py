@@ -27,7 +27,7 @@ def add_photo_parser(sub: argparse._SubParsersAction) -> None:
     )  # fmt: skip
     p.add_argument(
         "--length", type=photo_length, metavar="L",
-        help="base to apex: with a unit (6cm, 60mm) in millimetres, else in the leaf's own "
+        help="base to apex: with a unit (6cm, 60mm, 2.5in) in millimetres, else in the leaf's own "
         "units (default: the photo's own scale in millimetres when its file records a "
         "resolution, as a flatbed scan's DPI; else 1)",
     )  # fmt: skip

@@ -74,8 +74,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     rec.add_argument(
         "--length",
         metavar="L",
-        help="the leaf's real length, base to apex (8cm, 0.08m, 80mm): glTF, OBJ and USD in "
-        "metres, STL, 3MF, PLY in millimetres (default: the input's scale)",
+        help="the leaf's real length, base to apex (8cm, 80mm, 3in; units mm, cm, m, in, ft): "
+        "glTF, OBJ and USD in metres, STL, 3MF, PLY in millimetres (default: the input's scale)",
     )
     rec.add_argument(
         "--lod",

@@ -17,7 +17,15 @@ import numpy as np
 
 from leafstudio.errors import LeafError
 from leafstudio.forms.make import Form
-from leafstudio.forms.terms import APEXES, BASES, MARGINS, SHAPES, VENATIONS, definition
+from leafstudio.forms.terms import (
+    APEXES,
+    BASES,
+    MARGINS,
+    SHAPES,
+    VENATIONS,
+    definition,
+    term_key,
+)
 
 PICTURED: dict[str, tuple[str, ...]] = {  # the terms drawn, by kind
     "shape": tuple(SHAPES),
@@ -170,7 +178,8 @@ def form_of_term(term: str) -> Form:
     >>> form_of_term("serrate").margin, form_of_term("obovate").shape
     ('serrate', 'obovate')
     """
+    key = term_key(term)
     for kind, terms in PICTURED.items():
-        if term in terms:
-            return _form_for(kind, term)
+        if key in terms:
+            return _form_for(kind, key)
     raise LeafError(f"unknown term {term!r}; `leafstudio form --list` lists every term")

@@ -70,7 +70,8 @@ class Form:
     Parameters
     ----------
     shape : str, default: "elliptic"
-        One of `SHAPES` (linear, lanceolate, ..., ovate, cordate, ...).
+        One of `SHAPES` (linear, lanceolate, ..., ovate, cordate, ...); every term in any case,
+        spaces around it ignored ("Ovate").
     apex, base : str, optional
         Apex and base terms (acute, obtuse, rounded, ...; cuneate, rounded, truncate, ...);
         default the shape's usual. Shapes defined by their base (cordate, reniform, sagittate,
@@ -125,18 +126,15 @@ class Form:
     twist: float = 0.0
 
     def __post_init__(self) -> None:
-        check_term("shape", self.shape, SHAPES)
+        for name, allowed in (("shape", SHAPES), ("apex", APEXES), ("base", USER_BASES),
+                              ("margin", MARGINS), ("venation", VENATION_KINDS)):  # fmt: skip
+            if getattr(self, name) is not None:  # kept as the tables spell it ("Ovate": ovate)
+                object.__setattr__(self, name, check_term(name, getattr(self, name), allowed))
         spec = SHAPES[self.shape]
-        if self.apex is not None:
-            check_term("apex", self.apex, APEXES)
-        if self.base is not None:
-            check_term("base", self.base, USER_BASES)
-            if spec.fixed_base and self.base != spec.base:
-                raise LeafError(
-                    f"a {self.shape} leaf has a {spec.base} base by definition; leave out --base"
-                )
-        check_term("margin", self.margin, MARGINS)
-        check_term("venation", self.venation, VENATION_KINDS)
+        if self.base is not None and spec.fixed_base and self.base != spec.base:
+            raise LeafError(
+                f"a {self.shape} leaf has a {spec.base} base by definition; leave out --base"
+            )
         if self.teeth is not None and self.margin not in TOOTHED:
             raise LeafError(f"--teeth needs a toothed margin ({', '.join(TOOTHED)})")
         if self.lobes is not None and self.margin != "lobed":
@@ -310,7 +308,7 @@ def make_form(shape: str = "elliptic", **terms: Any) -> Leaf:
     Parameters
     ----------
     shape : str, default: "elliptic"
-        One of `SHAPES`.
+        One of `SHAPES`, in any case ("Ovate").
     **terms
         The other terms of `Form` (apex, base, margin, teeth, lobes, venation, secondaries,
         aspect, fold, curl, roll, wave, twist, seed).

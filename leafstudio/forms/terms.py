@@ -273,11 +273,25 @@ def definition(term: str, kind: str | None = None) -> str:
     raise LeafError(f"unknown {kind or 'term'} {term!r}")
 
 
+def term_key(value: str) -> str:
+    """A term as the tables spell it: any case, spaces around it dropped ("Ovate " -> "ovate");
+    the command line's type for a term's option. Anything but a string is left as it is."""
+    return value.strip().lower() if isinstance(value, str) else value
+
+
 def check_term(kind: str, value: str, allowed: dict[str, str] | tuple[str, ...]) -> str:
-    """`value` if it is one of `allowed`, else a LeafError listing the choices."""
-    if value not in allowed:
+    """`value` as the tables spell it (term_key) if it is one of `allowed`, else a LeafError
+    listing the choices.
+
+    Examples
+    --------
+    >>> check_term("shape", " Ovate", SHAPES)
+    'ovate'
+    """
+    key = term_key(value)
+    if key not in allowed:
         raise LeafError(f"unknown {kind} {value!r}; choose from {', '.join(allowed)}")
-    return value
+    return key
 
 
 def format_terms() -> str:

@@ -57,6 +57,7 @@ from leafstudio.forms.growth import (
     to_margin,
 )
 from leafstudio.forms.relief import dome
+from leafstudio.forms.terms import check_term
 from leafstudio.model import SEED_MAX
 
 VENATION_KINDS = ("pinnate", "palmate", "parallel", "arcuate")
@@ -170,8 +171,7 @@ def _grow_unit(
     relief: str,
 ) -> list[np.ndarray]:
     """grow_veins on an outline of unit size centred on the origin."""
-    if venation not in VENATION_KINDS:
-        raise LeafError(f"unknown venation {venation!r}; choose from {', '.join(VENATION_KINDS)}")
+    venation = check_term("venation", venation, VENATION_KINDS)  # any case: "Pinnate"
     if relief not in RELIEFS:
         raise LeafError(f"unknown relief {relief!r}; choose from {', '.join(RELIEFS)}")
     count = DEFAULT_SECONDARIES[venation] if secondaries is None else int(secondaries)

@@ -1,7 +1,8 @@
 """Leaf files in and out (.csv/.txt/.xyz, .ply with labels, .leaf.json) and mesh export.
 
 Point lists: one point per line, `x y z [label]`, comma or whitespace separated, an optional header
-line; label 0 is the boundary and 1..n are veins. A file without labels is a boundary.
+line; label 0 is the boundary and 1..n are veins. A file without labels is a boundary; one of two
+columns, `x y`, a flat one (z = 0: an outline traced in a spreadsheet or on a photo).
 """
 
 from __future__ import annotations
@@ -28,8 +29,8 @@ from leafstudio._shared.inputs import (
     parse_number,
     ply_numbers,
     ply_xyz,
+    read_numbers,
     read_ply,
-    read_text,
 )
 from leafstudio._shared.safewrite import check_outputs, write_bytes
 from leafstudio._shared.safewrite import staged as staged  # re-exported: outputs replaced together
@@ -51,12 +52,13 @@ def _suffix(path: Path) -> str:
     return ".leaf.json" if name.endswith(".leaf.json") else path.suffix.lower()
 
 
-def read_point_table(path: Path, columns: Sequence[int] = (3, 4)) -> np.ndarray:
-    """Numbers from a point list, (n, c) with c one of `columns`; header and blank lines skipped.
-    Read in blocks of lines (line_blocks: each reported as read), each by numpy's reader when it
-    holds only numbers, else line by line, which names the first faulty line. A header naming
-    x, y and z (and label) says which columns they are, in any order among others (an index)."""
-    text = read_text(path)
+def read_point_table(path: Path, columns: Sequence[int] = (2, 3, 4)) -> np.ndarray:
+    """Numbers from a point list, (n, c) with c one of `columns` (2: x y, returned with z = 0 as
+    a third column); header and blank lines skipped. Read in blocks of lines (line_blocks: each
+    reported as read), each by numpy's reader when it holds only numbers, else line by line,
+    which names the first faulty line. A header naming x, y and z (and label) says which columns
+    they are, in any order among others (an index)."""
+    text = read_numbers(path)  # decimal commas (`1,5;2,25;0`) made points
     named = named_columns(text, columns)
     table = _PointTable(path, columns if named is None else (named[0],))
     for first, block in line_blocks(text):
@@ -64,7 +66,9 @@ def read_point_table(path: Path, columns: Sequence[int] = (3, 4)) -> np.ndarray:
     if not table.parts:
         raise LeafError("holds no points", str(path))
     rows = np.vstack(table.parts)
-    return rows if named is None else rows[:, named[1]]
+    if named is not None:
+        return rows[:, named[1]]
+    return np.column_stack([rows, np.zeros(len(rows))]) if rows.shape[1] == 2 else rows
 
 
 def named_columns(text: str, columns: Sequence[int] = (3, 4)) -> tuple[int, list[int]] | None:
@@ -143,17 +147,20 @@ class _PointTable:
                 self.header = True
                 return None
             raise LeafError(f"line {number}: not a number in {shorten(text)!r}", path) from None
-        if len(values) not in self.columns:
-            expected = " or ".join(str(c) for c in self.columns)
-            scan = "; a scan (x y z with normals or colours)? `leafstudio extract` takes a leaf's"
-            raise LeafError(
-                f"line {number}: expected {expected} columns (x y z [label]), got {len(values)}"
-                + (f"{scan} boundary and veins from it" if len(values) > 4 else ""),
-                path,
-            )
         if self.width is not None and len(values) != self.width:
             raise LeafError(
                 f"line {number}: {len(values)} columns where earlier lines have {self.width}", path
+            )
+        if len(values) not in self.columns:
+            *most, last = [str(c) for c in self.columns]
+            expected = f"{', '.join(most)} or {last}" if most else last
+            names = "x y [z]" if 4 not in self.columns else "x y [z] [label]"
+            names = names if 2 in self.columns else "x y z [label]"  # a header's width
+            scan = "; a scan (x y z with normals or colours)? `leafstudio extract` takes a leaf's"
+            raise LeafError(
+                f"line {number}: expected {expected} columns ({names}), got {len(values)}"
+                + (f"{scan} boundary and veins from it" if len(values) > 4 else ""),
+                path,
             )
         if not all(math.isfinite(v) for v in values):
             raise LeafError(f"line {number}: NaN or infinite value", path)
@@ -303,10 +310,12 @@ def load_leaf(path: str | os.PathLike, veins: Sequence[str | os.PathLike] = ()) 
     ----------
     path : str or path-like
         A point list (.csv, .txt, .xyz: rows `x y z [label]`, label 0 the boundary, 1..n vein
-        n, comma or whitespace separated, an optional header line; without labels, a boundary),
+        n, comma or whitespace separated, an optional header line; without labels, a boundary;
+        rows `x y` a flat boundary, z = 0),
         a PLY with an integer vertex property `label`, or a project (.leaf.json).
     veins : sequence of paths, default: ()
-        Files of one vein each (a point list or PLY, labels ignored), added after the file's own.
+        Files of one vein each (a point list, `x y z` or `x y`, or a PLY, labels ignored), added
+        after the file's own.
 
     Returns
     -------
@@ -361,7 +370,7 @@ def load_leaf(path: str | os.PathLike, veins: Sequence[str | os.PathLike] = ()) 
 def _read_vein(path: Path) -> np.ndarray:
     if _suffix(path) == ".ply":
         return _read_ply(path).boundary
-    return read_point_table(path, columns=(3,))
+    return read_point_table(path, columns=(2, 3))
 
 
 def check_leaf_output(output: str, inputs: Sequence[str | os.PathLike]) -> None:

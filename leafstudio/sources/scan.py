@@ -20,8 +20,8 @@ from leafstudio._shared.inputs import (
     line_blocks,
     parse_number,
     ply_xyz,
+    read_numbers,
     read_ply,
-    read_text,
 )
 from leafstudio.core.prepare.plausibility import COVER_SPREAD, surface_spread
 from leafstudio.errors import LeafError, shorten
@@ -126,7 +126,7 @@ def read_scan(path: str | os.PathLike) -> np.ndarray:
     elif suffix == ".pcd":
         points = _pcd_rows(path)
     else:
-        points = _text_rows(path, read_text(path))
+        points = _text_rows(path, read_numbers(path))  # decimal commas made points
     if len(points) == 0:
         raise LeafError("holds no points", str(path))
     if not np.all(np.isfinite(points)):

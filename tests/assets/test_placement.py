@@ -92,6 +92,26 @@ def test_length_parsing():
             parse_length(bad)
 
 
+def test_lengths_in_inches_and_feet(tmp_path: Path, capsys):
+    """`--length 3in` was refused ("unknown unit 'in'; use one of mm, cm, m") where --thickness
+    took inches: a length now takes in and ft too (one table for both), in the commands, the
+    photo's length and the app's fields alike, and the error lists every unit."""
+    from leafstudio.assets.solid import thickness_in_mesh_units
+    from leafstudio.cli import main
+    from leafstudio.gui.model.opening import photo_length
+
+    assert parse_length("3in") == pytest.approx(0.0762)
+    assert parse_length("1 ft") == pytest.approx(0.3048)
+    assert parse_length("3IN") == pytest.approx(0.0762)
+    assert photo_length("3in") == pytest.approx(76.2)  # the photo's leaf in millimetres
+    assert thickness_in_mesh_units("0.01ft", 100.0) == pytest.approx(3.048)  # mm
+    with pytest.raises(LeafError, match="use one of um, mm, cm, m, in, ft"):
+        parse_length("3yd")
+    glb = tmp_path / "ovate.glb"
+    assert main(["form", "ovate", "-o", str(glb), "--length", "3in"]) == 0, capsys.readouterr()
+    assert np.ptp(read_points(glb)[:, 0]) == pytest.approx(0.0762, rel=0.02)
+
+
 def test_cli_length_on_form_and_reconstruct(tmp_path: Path):
     """`--length` on `form` and `reconstruct`; a thickness with a unit is then real size."""
     from leafstudio.cli import main

@@ -83,7 +83,8 @@ def _write(tmp_path: Path, name: str, content: str) -> Path:
     [
         (None, [], "no such file"),
         ("", [], "holds no points"),
-        ("0 0\n1 1\n", [], "expected 3 or 4 columns"),
+        ("0 0\n1 1\n", [], "at least 3 boundary points"),
+        ("0 0 0 0 0 0 0\n", [], "expected 2, 3 or 4 columns"),
         ("0 0 0\n1 nan 0\n1 1 0\n", [], "NaN or infinite"),
         ("0 0 0\n1 0 0\n", [], "at least 3 boundary points"),
         ("0 0 0\n1 1 1\n2 2 2\n3 3 3\n", [], "lie on one line"),
@@ -143,7 +144,7 @@ def test_console_script_never_shows_a_traceback(tmp_path: Path):
     assert "Traceback" not in run.stderr
     assert (
         run.stderr.strip()
-        == f"leafstudio: error: {bad}: line 2: expected 3 or 4 columns (x y z [label]), got 2"
+        == f"leafstudio: error: {bad}: line 2: 2 columns where earlier lines have 3"
     )
 
 

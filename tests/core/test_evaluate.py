@@ -242,3 +242,42 @@ def test_the_view_frame_runs_along_the_midrib_base_to_apex():
     np.testing.assert_allclose(frame.u, [1, 0, 0], atol=1e-9)  # base (origin) to apex (+x)
     assert frame.u @ result_placement(result).axes[0] > 0.99  # the exports' along
     np.testing.assert_allclose(frame.normal, result.frame.normal)
+
+
+@pytest.mark.parametrize(
+    ("shape", "venation"), [("ovate", "pinnate"), ("obovate", "arcuate"), ("cordate", "pinnate")]
+)
+def test_a_midrib_written_apex_first_is_taken_base_to_apex(shape, venation):
+    """A midrib (vein 1) written from the apex to the base put the exported glTF's apex at the
+    origin, and measured and showed the leaf from its apex. Side veins leave the midrib toward
+    the apex: when they clearly lean toward its first point, its last is the base (said as a
+    warning), and the length, the export's placement and the view are the base-first leaf's."""
+    from leafstudio.assets.placement import result_placement
+    from leafstudio.core.evaluate import view_frame
+    from leafstudio.core.prepare.plausibility import leaf_warnings
+    from leafstudio.forms import make_form
+
+    leaf = make_form(shape, venation=venation)
+    backward = ls.Leaf(leaf.boundary, [leaf.veins[0][::-1], *leaf.veins[1:]])
+    assert not any("apex to the base" in w for w in leaf_warnings(leaf))
+    assert any("vein 1, the midrib, seems written from the apex" in w
+               for w in leaf_warnings(backward))  # fmt: skip
+    params = ls.Params(k=3, grid=48)
+    want, got = ls.reconstruct(leaf, params), ls.reconstruct(backward, params)
+    a, b = result_placement(want), result_placement(got)
+    np.testing.assert_allclose(b.base, a.base, atol=1e-9)  # the base at the glTF's origin
+    np.testing.assert_allclose(b.axes, a.axes, atol=1e-9)  # the apex on +X
+    assert got.blade_length == pytest.approx(want.blade_length, rel=1e-9)
+    assert got.metrics["leaf"]["length"] == pytest.approx(1.0, rel=2e-3)
+    np.testing.assert_allclose(view_frame(got).u, view_frame(want).u, atol=1e-9)
+
+
+def test_parallel_veins_claim_no_end_of_the_midrib():
+    """Veins beside the midrib (parallel venation) say nothing of its ends: a midrib written
+    either way is taken as written, without a warning."""
+    from leafstudio.core.prepare.plausibility import leaf_warnings
+    from leafstudio.forms import make_form
+
+    leaf = make_form("sagittate", venation="parallel")
+    backward = ls.Leaf(leaf.boundary, [leaf.veins[0][::-1], *leaf.veins[1:]])
+    assert not any("apex to the base" in w for w in leaf_warnings(leaf) + leaf_warnings(backward))

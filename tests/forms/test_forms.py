@@ -379,6 +379,26 @@ def test_bad_terms_are_one_line_errors():
         Form("ovate", margin="lobed", lobes=40)
 
 
+def test_terms_are_read_whatever_their_case_and_surrounding_spaces(tmp_path, capsys):
+    """`leafstudio form Ovate` was refused ("unknown shape 'Ovate'; choose from ..., ovate, ...")
+    and so was `make_form("Ovate")`: a term is now the same word in any case, spaces around it
+    dropped, in the API, in `form` (its shape, --apex, --base, --margin, --venation) and in
+    `slides --compare`; the form keeps the term's own spelling."""
+    from leafstudio.cli.slides import comparisons
+    from leafstudio.forms import make_form
+
+    form = Form(" Ovate ", apex="Acute", base="ROUNDED", margin="Serrate", venation="Pinnate ")
+    assert (form.shape, form.apex, form.base, form.margin, form.venation) == (
+        "ovate", "acute", "rounded", "serrate", "pinnate",
+    )  # fmt: skip
+    np.testing.assert_array_equal(make_form("OVATE").boundary, make_form("ovate").boundary)
+    out = tmp_path / "o.leaf.json"
+    argv = ["form", "Ovate", "--margin", "Serrate", "--venation", "Arcuate", "-o", str(out)]
+    assert main(argv) == 0, capsys.readouterr().err
+    assert "ovate leaf" in capsys.readouterr().err
+    assert [f.shape for f in comparisons(["Ovate, OBOVATE"])[0][1]] == ["ovate", "obovate"]
+
+
 # --- every combination reconstructs -------------------------------------------------------------
 def _spill(result, leaf) -> float:
     """Mesh area outside the outline (triangles whose centre is outside), over the leaf's area."""

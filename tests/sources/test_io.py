@@ -46,6 +46,53 @@ def test_whitespace_and_header_and_unlabelled_boundary_with_vein_files(tmp_path:
     np.testing.assert_allclose(loaded.veins[0], leaf.veins[0])
 
 
+@pytest.mark.parametrize("header", ["", "x,y\n", "X, Y\n"], ids=["bare", "x,y", "X, Y"])
+def test_an_xy_outline_reads_as_a_flat_boundary(tmp_path: Path, header: str):
+    """A two-column `x,y` outline (a spreadsheet's or a digitiser's, with or without a header
+    row) was refused ("expected 3 or 4 columns"): it is now a boundary at z = 0, and a vein file
+    of two columns a vein at z = 0."""
+    outline = ls.demo("parallel").boundary[:, :2]
+    path = tmp_path / "outline.csv"
+    path.write_text(header + "\n".join(f"{x},{y}" for x, y in outline) + "\n")
+    vein = tmp_path / "vein.txt"
+    vein.write_text("0.1 0.0\n0.5 0.01\n0.9 0.0\n")
+    leaf = ls.load_leaf(path, veins=[vein])
+    np.testing.assert_allclose(leaf.boundary, np.column_stack([outline, np.zeros(len(outline))]))
+    np.testing.assert_allclose(leaf.veins[0][:, 2], 0.0)
+    assert leaf.veins[0].shape == (3, 3)
+
+
+@pytest.mark.parametrize("header", ["", "x;y;z\n"], ids=["bare", "header"])
+def test_a_european_spreadsheets_decimal_commas_read_as_numbers(tmp_path: Path, header: str):
+    """A CSV saved by a European Excel (`1,5;2,25;0`: `;` between fields, a comma for the
+    decimal mark) was refused as five columns, or opened as a scan; it now reads as the numbers
+    it holds, as a leaf and as a scan, and a file mixing both marks says so in one line."""
+    from leafstudio.sources.scan import read_scan
+    from leafstudio.workflows import open_file
+
+    leaf = ls.demo("parallel")
+    rows = [f"{x:.6f};{y:.6f};{z:.6f}".replace(".", ",") for x, y, z in leaf.boundary]
+    path = tmp_path / "outline.csv"
+    path.write_text(header + "\n".join(rows) + "\n")
+    np.testing.assert_allclose(ls.load_leaf(path).boundary, leaf.boundary, atol=1e-6)
+    opened = open_file(path)
+    assert opened.kind == "leaf"
+    np.testing.assert_allclose(opened.leaf.boundary, leaf.boundary, atol=1e-6)
+    np.testing.assert_allclose(read_scan(path), leaf.boundary, atol=1e-6)
+    mixed = tmp_path / "mixed.csv"
+    mixed.write_text("1,5;2,25;0\n1.000,5;2;0\n0;1;0\n")
+    for read in (ls.load_leaf, read_scan):
+        with pytest.raises(ls.LeafError, match=r"line 2: .*both decimal commas and points"):
+            read(mixed)
+
+
+def test_commas_between_fields_stay_separators_beside_a_semicolon_in_a_comment(tmp_path: Path):
+    """Only a file whose fields are `;`-separated has decimal commas."""
+    path = tmp_path / "b.csv"
+    path.write_text("# exported; by hand\n0,0,0\n1,0,0\n0,1,0\n")
+    np.testing.assert_allclose(ls.load_leaf(path).boundary, np.eye(3)[[2, 0, 1]] * [1, 1, 0])
+
+
 @pytest.mark.parametrize(
     "header, row",
     [
@@ -95,8 +142,10 @@ def test_ply_labels_survive(tmp_path: Path):
     [
         ("", "holds no points"),
         ("x,y,z\n", "holds no points"),
-        ("0 0 0\n1 0\n", "line 2: expected 3 or 4 columns"),
-        ("0 0 0 0 0\n", "line 1: expected 3 or 4 columns"),
+        ("0 0 0\n1 0\n", "line 2: 2 columns where earlier lines have 3"),
+        ("0 0\n1 0 0\n", "line 2: 3 columns where earlier lines have 2"),
+        ("0\n", "line 1: expected 2, 3 or 4 columns"),
+        ("0 0 0 0 0\n", "line 1: expected 2, 3 or 4 columns"),
         ("0 0 0\n1 0 nan\n0 1 0\n", "line 2: NaN or infinite"),
         ("0 0 0\n1 0 inf\n0 1 0\n", "line 2: NaN or infinite"),
         ("0 0 0\n1 0 zero\n", "line 2: not a number"),

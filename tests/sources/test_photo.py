@@ -14,7 +14,7 @@ from PIL import Image
 import leafstudio as ls
 from leafstudio.forms import make_form
 from leafstudio.sources.photo import leaf_from_photo
-from tests.photos import REALLEAVES, error_lines, form_photo, iou, scan_photo
+from tests.photos import REALLEAVES, error_lines, exif_turned, form_photo, iou, scan_photo
 
 FORMS = [
     ("ovate", {}, 0.25, 25.0),
@@ -75,6 +75,26 @@ def test_leaf_follows_the_forms_convention_and_maps_back_to_the_photo():
         .buffer(1e-6)
         .contains(shapely.MultiPoint(np.vstack(found.leaf.veins)[:, :2]))
     )
+
+
+def test_a_photos_exif_orientation_is_applied_where_it_is_read(tmp_path: Path):
+    """A phone's portrait photo stores its pixels sideways and says so in EXIF: it was read
+    sideways (the app's dialog showed it on its side, `--base-end left` named the wrong end). It
+    is now turned upright where every photo is read (_shared/inputs.read_image): the same leaf,
+    pixel map and texture as from the upright photo."""
+    from leafstudio._shared.inputs import read_image
+    from leafstudio.sources.photo import read_photo_leaf
+
+    form = make_form("obovate")
+    upright = form_photo(form.boundary, form.veins, angle=0, size=(760, 500))[0]
+    straight = tmp_path / "upright.png"
+    Image.fromarray(upright).save(straight)
+    turned = exif_turned(upright, tmp_path / "portrait.png")
+    np.testing.assert_array_equal(read_image(turned), upright)
+    a = read_photo_leaf(straight, base_end="left", veins="none")
+    b = read_photo_leaf(turned, base_end="left", veins="none")
+    np.testing.assert_allclose(b.leaf.boundary, a.leaf.boundary, atol=1e-9)
+    np.testing.assert_allclose(b.pixel_from_world, a.pixel_from_world, atol=1e-9)
 
 
 def _two_leaves() -> np.ndarray:

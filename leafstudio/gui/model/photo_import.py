@@ -36,6 +36,9 @@ class PhotoImport:
         The ruler's ends clicked on the photo, (column, row) pixels: none, one or two.
     distance : str
         The ruler's length as typed ("10 mm").
+    base_end : str
+        Where the leaf's base is in the photo, one of sources.photo.BASE_ENDS ("auto" finds it;
+        "left", ...: as `leafstudio photo --base-end`).
     """
 
     path: str
@@ -43,6 +46,7 @@ class PhotoImport:
     length: str = ""
     ruler: list[np.ndarray] = field(default_factory=list)
     distance: str = ""
+    base_end: str = "auto"
 
     @classmethod
     def of(cls, path: str, length: str = "") -> PhotoImport:
@@ -62,20 +66,21 @@ class PhotoImport:
             return None
         return float(np.linalg.norm(self.ruler[1] - self.ruler[0]))
 
-    def options(self) -> dict[str, float]:
+    def options(self) -> dict[str, float | str]:
         """read_document's options: {"length": ...}, {"pixel_size": ...} (the ruler's) or {}
-        (the DPI, or length 1).
+        (the DPI, or length 1), with {"base_end": ...} when an end is named.
 
         Raises
         ------
         LeafError
             A length or distance that is not one, or a ruler half given.
         """
+        ends = {"base_end": self.base_end} if self.base_end != "auto" else {}
         if self.length.strip():
-            return {"length": photo_length(self.length)}
+            return {"length": photo_length(self.length), **ends}
         pixels = self.ruler_pixels()
         if not self.distance.strip():
-            return {}
+            return ends
         if pixels is None or pixels < 1:
             raise LeafError("click the ruler's two ends on the photo, then type their distance")
         try:
@@ -83,7 +88,7 @@ class PhotoImport:
         except LeafError as exc:
             raise LeafError(f"the ruler's distance: {exc.problem}") from None
         assert distance is not None
-        return {"pixel_size": distance / pixels}
+        return {"pixel_size": distance / pixels, **ends}
 
     def from_what(self) -> str:
         """What sets the leaf's size: "length", "ruler", "dpi" or "" (nothing: length 1)."""
@@ -103,11 +108,21 @@ class PhotoImport:
         return how == "dpi"
 
     def summary(self) -> str:
-        """One line for the dialog: what the leaf's size will come from, or what is wrong."""
+        """One line for the dialog: what the leaf's size will come from and where its base is,
+        or what is wrong."""
         try:
             options = self.options()
         except LeafError as exc:
             return str(exc)
+        if self.base_end == "auto":
+            base = ("The base is found in the photo: its petiole, notch or veins, else the wider "
+                    "end.")  # fmt: skip
+        else:
+            base = f"The leaf's base at the {self.base_end} end of the photo."
+        return f"{self._size(options)} {base}"
+
+    def _size(self, options: dict[str, float | str]) -> str:
+        """What the leaf's size will come from (summary)."""
         how, real = self.from_what(), self.real_size()
         units = "at its real size, in millimetres" if real else "in the leaf's own units"
         if how == "length":

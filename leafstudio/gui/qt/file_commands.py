@@ -246,9 +246,9 @@ class FileCommands(BackgroundExports):
         )  # fmt: skip
 
     LENGTH_PROMPT = (
-        "The leaf's real length, base to apex (8cm, 0.08m, 80mm): the mesh is scaled to it and "
-        "written in metres (glTF, OBJ, USD) or millimetres (STL, 3MF, PLY, VTK). Empty: the "
-        "leaf's own units"
+        "The leaf's real length, base to apex (8cm, 80mm, 3in; units mm, cm, m, in, ft): the mesh "
+        "is scaled to it and written in metres (glTF, OBJ, USD) or millimetres (STL, 3MF, PLY, "
+        "VTK). Empty: the leaf's own units"
     )
 
     def _length_choice(self) -> str | None:

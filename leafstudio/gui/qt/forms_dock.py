@@ -10,12 +10,11 @@ cached for the process.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import replace
 from functools import partial
 from typing import Any
 
 import numpy as np
-from PySide6.QtCore import QSize, Qt, QTimer, Signal
+from PySide6.QtCore import QSignalBlocker, QSize, Qt, QTimer, Signal
 from PySide6.QtGui import QIcon, QImage, QPixmap
 from PySide6.QtWidgets import (
     QComboBox,
@@ -33,12 +32,15 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from leafstudio.core.bend import flat_leaf
-from leafstudio.core.prepare.polygon import ring_crossings
-from leafstudio.forms import SHAPES, VENATION_KINDS, Form, definition, grow_veins
+from leafstudio.forms import SHAPES, VENATION_KINDS, Form, definition
 from leafstudio.forms.glossary import COMPARISONS
 from leafstudio.forms.terms import APEXES, DEFAULT_LOBES, MARGINS, RELIEF, TOOTHED, USER_BASES
-from leafstudio.gui.model.curves import closed_curve
+from leafstudio.gui.model.form_sketch import (
+    BOUNDARY_CONTROL,
+    canonical_leaves,
+    grow_blade,
+    with_grown_veins,
+)
 from leafstudio.gui.model.jobs import Run, describe
 from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.gui.qt.compare_view import FIRST, compare_actions
@@ -49,9 +51,6 @@ from leafstudio.model import Leaf
 
 THUMBNAIL = 84  # pixels
 GALLERY_SPACING = 14  # pixels around each thumbnail and its name
-BOUNDARY_CONTROL = 48  # a form's sketch: about this many boundary control points, plus corners
-CORNER_TURN = 0.35  # radians: outline points turning this sharply (tooth tips, notches) are kept
-VEIN_CONTROL = 8
 DEBOUNCE_MS = 250
 THUMBNAILS = "thumbnails"  # the worker's job kind (and lane) growing the gallery's veins
 FORM = "form"  # the job kind growing a chosen form's blade (its own lane: never behind those)
@@ -75,68 +74,10 @@ def outline_thumbnail(shape: str, size: int = THUMBNAIL) -> QImage:
     return draw_plane(Form(shape).outline().xy, [], size, sit=True)
 
 
-def grow_blade(form: Form) -> tuple[Form, Leaf, str, Sketch]:
-    """`form` without its pose, its blade, side-on note (Form.blade_and_note) and the blade's
-    sketch, which every pose of it shows: run on the worker's lane, off the main thread."""
-    unposed = form.unposed()
-    blade, side_on = unposed.blade_and_note()
-    return unposed, blade, side_on, leaf_sketch(blade, unposed.teeth_count)
-
-
-def canonical_leaves(shapes: list[str]) -> dict[str, Leaf]:
-    """Each shape's canonical form with its veins (numpy and shapely only: a side job's work,
-    50 ms a shape, 0.7 s for the gallery, which the window's first start waited for)."""
-    return {shape: Form(shape).leaf() for shape in shapes}
-
-
 def draw_leaf(leaf: Leaf, size: int, sit: bool = False) -> QImage:
     """A leaf's outline and veins seen from above, fitted in a `size` square: centred, or with
     `sit` resting on the square's lower edge (a pixel or two below)."""
     return draw_plane(leaf.boundary[:, :2], [v[:, :2] for v in leaf.veins], size, sit=sit)
-
-
-def _turns(xy: np.ndarray) -> np.ndarray:
-    a, b = xy - np.roll(xy, 1, axis=0), np.roll(xy, -1, axis=0) - xy
-    return np.abs(np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], (a * b).sum(axis=1)))
-
-
-def leaf_sketch(leaf: Leaf, teeth: int = 0) -> Sketch:
-    """An editable sketch of a leaf that lies in the z = 0 plane apart from its relief (a form):
-    boundary control points spread along it with its corners (tooth tips and notches) kept, each
-    vein's control points spread along it with their heights, the boundary's heights as relief.
-    A posed form's sketch is its flat blade (the pose bends the 3D result only)."""
-    leaf = flat_leaf(leaf)
-    xy = leaf.boundary[:, :2]
-    corners = np.flatnonzero(_turns(xy) > CORNER_TURN)
-    count = max(BOUNDARY_CONTROL, 3 * teeth)
-    while True:  # more control points until the curve through them does not cross itself
-        even = np.unique(np.linspace(0, len(xy), count, endpoint=False).astype(int))
-        boundary = xy[np.union1d(even, corners)]
-        if count >= len(xy) or not len(ring_crossings(closed_curve(boundary))):
-            break
-        count *= 2
-    veins = []
-    for vein in leaf.veins:
-        pick = np.unique(np.linspace(0, len(vein) - 1, min(VEIN_CONTROL, len(vein))).astype(int))
-        veins.append(vein[pick])
-    relief = leaf.boundary if np.any(leaf.boundary[:, 2] != 0) else np.zeros((0, 3))
-    return Sketch(boundary=boundary, veins=tuple(veins), relief=relief)
-
-
-def with_grown_veins(
-    sketch: Sketch, venation: str, seed: int = 0, base: np.ndarray | None = None
-) -> Sketch:
-    """The sketch with its veins replaced by veins grown inside its boundary curve; the base is
-    `base` (plane point), else the start of the sketch's first vein, else found by grow_veins."""
-    outline = sketch.boundary_curve()
-    if base is None and sketch.veins and len(sketch.veins[0]):
-        base = sketch.veins[0][0, :2]
-    veins = grow_veins(outline, venation, base=base, seed=seed)
-    pick = [
-        np.unique(np.linspace(0, len(v) - 1, min(VEIN_CONTROL, len(v))).astype(int)) for v in veins
-    ]
-    # replace, not a new Sketch: the boundary, frame, relief and the saved Mirror flag are kept
-    return replace(sketch, veins=tuple(v[p] for v, p in zip(veins, pick, strict=True)))
 
 
 class FormsPanel(QWidget):
@@ -249,10 +190,7 @@ class FormsPanel(QWidget):
         self._picked = False
         self.gallery.currentItemChanged.connect(lambda *_: self._changed(picked=True))
         self.gallery.itemClicked.connect(lambda *_: self._changed(picked=True))
-        self.gallery.setCurrentRow(list(SHAPES).index("ovate"))
-        self._timer.stop()  # the first shape is selected, not chosen
-        self._picked = False
-        self._describe()
+        self._describe()  # nothing highlighted until a form is open (show_shape)
 
     def missing_veins(self) -> list[str]:
         """The shapes whose thumbnails show their outline alone."""
@@ -316,6 +254,17 @@ class FormsPanel(QWidget):
         item = self.gallery.currentItem()
         return item.data(Qt.ItemDataRole.UserRole) if item is not None else "ovate"
 
+    def show_shape(self, shape: str | None) -> None:
+        """Highlight the open form's `shape`, or nothing (None: the leaf open is not a form),
+        choosing nothing: the gallery follows the document."""
+        row = list(SHAPES).index(shape) if shape in SHAPES else -1
+        if row != self.gallery.currentRow():
+            with QSignalBlocker(self.gallery):
+                self.gallery.setCurrentRow(row)
+            if row >= 0:
+                self.gallery.scrollToItem(self.gallery.item(row))
+            self._describe()
+
     def form(self) -> Form:
         """The form the choosers describe (terms that do not apply are left out)."""
         shape = self.shape()
@@ -340,7 +289,11 @@ class FormsPanel(QWidget):
 
     def _describe(self) -> None:
         form_ = self.form()
-        self.shape_text.setText(f"<b>{form_.shape}</b>: {definition(form_.shape)}")
+        self.shape_text.setText(
+            f"<b>{form_.shape}</b>: {definition(form_.shape)}"
+            if self.gallery.currentItem() is not None
+            else "The leaf open is not a form: pick a shape to make one."
+        )
         self.texts["Apex"].setText(f"{form_.apex_term}: {definition(form_.apex_term, 'apex')}")
         fixed = SHAPES[form_.shape].fixed_base
         self.base.setEnabled(not fixed)
@@ -383,7 +336,7 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
     for shown in (window.result_shown, window.failure_shown):
         shown.connect(lambda *_: panel.grow_veins(window.worker.start))
     session = window.session
-    made = {"serial": None}  # the document the gallery made last
+    shapes: dict[int, str] = {}  # the documents the gallery made (serials): their shapes
     # the last blade grown (its form without a pose, the blade, its side-on note), and the form
     # waiting for its blade: a blade grows on a lane (60-100 ms, the main thread's before), and
     # a pose slider's change only poses the last one (a few ms)
@@ -396,7 +349,13 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
         _unposed, blade, side_on, sketch = kept["blade"]
         panel.show_pose_note(side_on)
         session.new_document(form.leaf(blade), sketch, f"{form.shape} form")
-        made["serial"] = session.state.serial
+        shapes[session.state.serial] = form.shape
+        panel.show_shape(form.shape)
+
+    def follow(state, reason: str) -> None:
+        """The gallery highlights the open document's shape, if the gallery made it."""
+        if reason in ("document", "undo", "fallback"):
+            panel.show_shape(shapes.get(state.serial))
 
     def grown(blade: tuple[Form, Leaf, str, Sketch]) -> None:
         kept["blade"] = blade
@@ -410,12 +369,14 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
         form = waiting.get("form")
         if form is not None and form.unposed() == unposed:
             waiting.clear()
+            panel.show_shape(shapes.get(session.state.serial))  # the picked shape was not made
             window.show_error("Forms", describe(exc))
 
     def choose(form: Form, picked: bool) -> None:
         growing = waiting.get("form")
-        ours = waiting["serial"] if growing is not None else made["serial"]
-        if not picked and session.state.serial != ours:
+        serial = session.state.serial  # a form's document, or the one open when it was picked
+        ours = serial == waiting["serial"] if growing is not None else serial in shapes
+        if not picked and not ours:
             return  # a term changed while another document is open: only its definition shows
         unposed = form.unposed()
         if "blade" in kept and kept["blade"][0] == unposed:
@@ -453,6 +414,7 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
         session.commit_sketch(grown, f"Grow {venation} veins")
 
     panel.chosen.connect(choose)
+    session.state_changed.connect(follow)
     panel.grow.connect(grow)
     _add_grow_row(window.editor, grow)
     window.add_dock("Forms", panel, dock_area)  # stacked below the Sketch dock

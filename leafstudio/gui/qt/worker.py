@@ -58,7 +58,7 @@ LANES = {
     "texture": "side",
     "export": "export",  # files written off the main thread (exports.py), never behind a scan
     "thumbnails": "gallery",  # the Forms gallery's veins after a first result, never behind a file
-    "form": "forms",  # a chosen form's blade (forms_dock.grow_blade), never behind the gallery
+    "form": "forms",  # a chosen form's blade (form_sketch.grow_blade), never behind the gallery
 }
 
 

@@ -69,3 +69,24 @@ def test_the_photos_dpi_is_its_scale_when_nothing_else_is_given(photo, tmp_path)
     assert "600 DPI" in model.summary()
     document = read_document(str(scan), **model.options())
     assert _length(document) == pytest.approx(PIXELS_PER_UNIT * 25.4 / 600, rel=0.02)
+
+
+def test_the_dialog_names_the_base_end_as_photo_base_end_does(tmp_path):
+    """`leafstudio photo --base-end left` had no counterpart in File > Open photo: an obovate
+    leaf whose veins do not show came out base at its wider end, its apex, with no way to say
+    otherwise. The dialog's model takes the end as the command does."""
+    form = make_form("obovate")
+    path = tmp_path / "obovate.png"
+    Image.fromarray(form_photo(form.boundary, angle=0.0)[0]).save(path)  # base left, no veins
+    model = PhotoImport.of(str(path))
+    assert model.base_end == "auto" and model.options() == {}
+
+    def widest(document) -> float:  # where along base to apex the blade is widest, 0 to 1
+        boundary = document.leaf.boundary
+        return boundary[np.argmax(np.abs(boundary[:, 1])), 0] / np.max(boundary[:, 0])
+
+    assert widest(read_document(str(path), **model.options())) < 0.5  # the wider end taken
+    model.base_end = "left"
+    assert model.options() == {"base_end": "left"}
+    assert "base at the left end" in model.summary()
+    assert widest(read_document(str(path), **model.options())) > 0.5  # obovate, as drawn

@@ -7,7 +7,7 @@ import numpy as np
 
 from leafstudio.core.bend import Pose
 from leafstudio.forms import Form
-from leafstudio.gui.qt.forms_dock import leaf_sketch
+from leafstudio.gui.model.form_sketch import leaf_sketch
 from tests.gui.qt.conftest import wait_result
 
 

@@ -128,6 +128,43 @@ def test_open_photo_takes_a_ruler_clicked_on_the_photo(window, qtbot, oak, monke
     assert float(window.settings.value("export/length")[:-2]) == pytest.approx(length, rel=1e-3)
 
 
+def test_the_photo_dialog_shows_a_portrait_photo_upright(qtbot, tmp_path):
+    """A phone's portrait photo (pixels stored sideways, EXIF orientation 6) showed on its side
+    in File > Open photo's dialog; it shows upright, as the leaf is found in it."""
+    from leafstudio.forms import make_form
+    from leafstudio.gui.model.photo_import import PhotoImport
+    from leafstudio.gui.qt.photo_dialog import PhotoDialog
+    from tests.photos import exif_turned, form_photo
+
+    form = make_form("ovate")
+    upright = form_photo(form.boundary, form.veins, angle=90, size=(500, 760))[0]  # portrait
+    dialog = PhotoDialog(PhotoImport.of(str(exif_turned(upright, tmp_path / "p.jpg"))))
+    qtbot.addWidget(dialog)
+    shown = dialog.picture.photo
+    assert shown.height() > shown.width()
+    assert dialog.picture.zoom == pytest.approx(shown.width() / 500, rel=1e-3)
+
+
+def test_open_photo_names_the_base_end(window, qtbot, tmp_path, monkeypatch):
+    """The dialog's Base choice reaches the leaf as `photo --base-end` does: an obovate leaf
+    without visible veins, base on the left, comes out obovate (widest toward its apex)."""
+    from leafstudio.forms import make_form
+    from leafstudio.sources.photo import BASE_ENDS
+    from tests.photos import form_photo
+
+    path = tmp_path / "obovate.png"
+    Image.fromarray(form_photo(make_form("obovate").boundary, angle=0.0)[0]).save(path)
+    monkeypatch.setattr(QFileDialog, "getOpenFileName", lambda *a, **k: (str(path), ""))
+    _answer_photo_dialog(
+        monkeypatch, lambda dialog: dialog.base_end.setCurrentIndex(BASE_ENDS.index("left"))
+    )
+    window.open_photo_dialog()
+    assert "left end" in window.photo_dialog.summary.text()
+    qtbot.waitUntil(lambda: window.session.state.path == str(path), timeout=WAIT_MS)
+    boundary = window.session.state.leaf.boundary
+    assert boundary[np.argmax(np.abs(boundary[:, 1])), 0] > 0.5 * np.max(boundary[:, 0])
+
+
 def test_photo_lengths():
     assert photo_length("8cm") == 80 and photo_length("0.08m") == 80 and photo_length("") is None
     assert photo_length("3") == 3 and has_unit("80mm") and not has_unit("2.5")

@@ -11,8 +11,9 @@ from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QDockWidget
 
 from leafstudio.forms import SHAPES, Form
+from leafstudio.gui.model.form_sketch import leaf_sketch, with_grown_veins
 from leafstudio.gui.qt import forms_dock
-from leafstudio.gui.qt.forms_dock import FormsPanel, leaf_sketch, thumbnail
+from leafstudio.gui.qt.forms_dock import FormsPanel, thumbnail
 from leafstudio.model import Leaf
 from leafstudio.sources.demos import demo
 from tests.gui.qt.conftest import WAIT_MS, close_window, image_pixels, make_window, wait_result
@@ -102,6 +103,33 @@ def test_a_chosen_form_becomes_the_document_as_an_editable_sketch(window, panel,
     assert "cordate" in state.title
     window.session.undo()  # one undo step brings the demo back
     assert window.session.leaf is before
+
+
+def _highlighted(panel) -> str | None:
+    item = panel.gallery.currentItem()
+    return None if item is None else item.data(Qt.ItemDataRole.UserRole)
+
+
+def test_the_gallery_highlights_the_open_forms_shape_or_nothing(window, panel, qtbot):
+    """The gallery highlighted "ovate" whatever leaf was open (the demo, a scan, a cordate form
+    made from it): it highlights the open form's shape, and nothing for a leaf that is not a
+    form, through undo and redo; following the document chooses nothing itself."""
+    wait_result(qtbot, window)
+    assert _highlighted(panel) is None  # the nested demo: not a form
+    assert "pick a shape" in panel.shape_text.text()
+    panel.gallery.setCurrentRow(list(SHAPES).index("cordate"))
+    choose(qtbot, window, panel)
+    assert _highlighted(panel) == "cordate"
+    window.session.new_document(demo("parallel"), title="parallel")  # File > Open, say
+    assert _highlighted(panel) is None
+    qtbot.wait(3 * forms_dock.DEBOUNCE_MS)
+    assert window.session.state.title == "parallel"  # no form chosen by the change
+    window.session.undo()
+    assert _highlighted(panel) == "cordate"
+    window.session.undo()
+    assert _highlighted(panel) is None
+    window.session.redo()
+    assert _highlighted(panel) == "cordate"
 
 
 def test_grow_veins_fills_the_current_outline_as_one_step(window, panel, qtbot):
@@ -209,7 +237,7 @@ def test_with_grown_veins_keeps_the_sketchs_other_fields():
 
     leaf = Form("elliptic").leaf()
     sketch = replace(leaf_sketch(leaf, 0), symmetric=True)
-    grown = forms_dock.with_grown_veins(sketch, "pinnate")
+    grown = with_grown_veins(sketch, "pinnate")
     assert grown.symmetric and grown.frame is sketch.frame
     assert np.array_equal(grown.boundary, sketch.boundary) and len(grown.veins) >= 3
 
