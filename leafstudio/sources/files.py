@@ -108,6 +108,7 @@ class _PointTable:
         self.parts: list[np.ndarray] = []
         self.width: int | None = None  # the columns of the rows read so far
         self.header = False  # a header line was skipped (only one, before any row)
+        self.names = 0  # ... and how many fields it has
 
     def add(self, first: int, block: str) -> None:
         """The rows of `block`, whose first line is line `first` of the file."""
@@ -144,9 +145,13 @@ class _PointTable:
             values = [parse_number(f) for f in fields]
         except ValueError:
             if self.width is None and not self.header:  # a header line
-                self.header = True
+                self.header, self.names = True, len(fields)
                 return None
             raise LeafError(f"line {number}: not a number in {shorten(text)!r}", path) from None
+        if len(values) == 2 and self.names > 2 and self.width is None:  # `x,y,z` over `1,2`
+            raise LeafError(
+                f"line {number}: 2 columns where the header line names {self.names}", path
+            )
         if self.width is not None and len(values) != self.width:
             raise LeafError(
                 f"line {number}: {len(values)} columns where earlier lines have {self.width}", path

@@ -152,6 +152,7 @@ def test_ply_labels_survive(tmp_path: Path):
         ("0 0 0 0\n1 0 0 0\n0 1 0 1.5\n", "labels must be whole numbers"),
         ("0 0 0 0\n1 0 0 0\n0 1 0 1\n", "at least 3 boundary points"),
         ("0 0 0\n1 0 0 0\n", "line 2: 4 columns where earlier lines have 3"),
+        ("x,y,z\n1,2\n", "line 2: 2 columns where the header line names 3"),  # not x, y
     ],
 )
 def test_bad_point_files_say_what_is_wrong(tmp_path: Path, content: str, message: str):
