@@ -12,6 +12,10 @@ import sys
 from PySide6.QtCore import QObject, Signal
 
 
+EMITS = 200
+DRIFT = 10  # a count may move this much by other threads' work; a lost reference per emit is 200
+
+
 class _Emitter(QObject):
     carried = Signal(str, int, object)
     bare = Signal()
@@ -23,9 +27,12 @@ def test_signal_emits_leave_the_singletons_reference_counts_alone(qapp) -> None:
     emitter.carried.connect(lambda name, number, value: received.append(value))
     emitter.bare.connect(lambda: received.append(None))
     before = [sys.getrefcount(v) for v in (True, False, None)]
-    for number in range(50):
+    for number in range(EMITS):
         emitter.carried.emit("result", number, None)
         emitter.bare.emit()
     received.clear()
     after = [sys.getrefcount(v) for v in (True, False, None)]
-    assert after == before
+    # the faulty binding loses a reference on every emit (EMITS or more); other threads of the
+    # test process (an earlier test's workers) may move a count by one or two meanwhile: a
+    # fresh clone's run read [52688, 70488] for [52687, 70489]
+    assert all(abs(a - b) <= DRIFT for a, b in zip(after, before, strict=True)), (before, after)
