@@ -11,7 +11,6 @@ import sys
 
 from PySide6.QtCore import QObject, Signal
 
-
 EMITS = 200
 DRIFT = 10  # a count may move this much by other threads' work; a lost reference per emit is 200
 
