@@ -22,7 +22,7 @@ shares of the leaf's length.
   99th-percentile dihedral angles in the margin band and inside;
 - the same for every shape with an acuminate or retuse apex or a toothed or lobed margin
   (--variants, not in the full run: about 30 s);
-- CPU time at grid 128: a bent form beside the same form flat, best of three;
+- CPU time at grid 128: a bent form beside the same form flat, best of five, interleaved;
 - rolled forms: the mesh's distance to the form's own surface rolled, and the blade's area;
 - curves in 3D unfolded: posed forms without their pose, against their own surface;
 - size kept (--size): a posed ovate form's 3D area and midrib length over its flat blade's: a
@@ -279,7 +279,7 @@ def unfolded_forms() -> None:
 
 
 def timing() -> None:
-    print("\n## CPU time at grid 128 (best of three, seconds; CPU: the machine may be shared)")
+    print("\n## CPU time at grid 128 (best of five, interleaved; seconds of CPU)")
     print("| form | flat, paper | flat, ours | bent, ours |")
     print("|---|---|---|---|")
     for shape, pose in (
@@ -289,15 +289,14 @@ def timing() -> None:
         ("ovate", dict(fold=45.0, curl=0.5, roll=0.5, twist=0.5)),
     ):
         flat, bent = Form(shape).leaf(), Form(shape, **pose).leaf()
-        row = []
-        for leaf, on in ((flat, False), (flat, True), (bent, True)):
-            best = np.inf
-            for _ in range(3):
+        runs = ((flat, False), (flat, True), (bent, True))
+        best = [np.inf] * len(runs)
+        for _ in range(5):  # the three interleaved: a shared host's load falls on each alike
+            for i, (leaf, on) in enumerate(runs):
                 start = time.process_time()
                 _run(leaf, ls.Params(k=3, grid=128, through_veins=on))
-                best = min(best, time.process_time() - start)
-            row.append(f"{best:.3f}")
-        print(f"| {shape} {pose} | {' | '.join(row)} |")
+                best[i] = min(best[i], time.process_time() - start)
+        print(f"| {shape} {pose} | {' | '.join(f'{b:.3f}' for b in best)} |")
 
 
 def size_kept() -> None:

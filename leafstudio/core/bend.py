@@ -368,12 +368,12 @@ def sag_splits(
         marked = np.einsum("ij,ij->i", off, off) > 4 * tolerance**2
         if not marked.any():
             break
-        which = np.searchsorted(codes, every).reshape(faces.shape)  # (a, b), (b, c), (c, a)
-        number = np.full(len(codes), -1, dtype=np.int64)
-        number[marked] = n + np.arange(np.count_nonzero(marked))
-        whole = ~marked[which].any(axis=1)
-        done.append(faces[whole])
-        faces = _halved(faces[~whole], number[which[~whole]])
+        halved = codes[marked]  # sorted: the new points are numbered in this order
+        hit = np.isin(every, halved).reshape(faces.shape)  # (a, b), (b, c), (c, a) halved
+        touched = hit.any(axis=1)  # few faces: the others are kept whole without a search
+        done.append(faces[~touched])
+        rank = np.searchsorted(halved, every.reshape(faces.shape)[touched])
+        faces = _halved(faces[touched], np.where(hit[touched], n + rank, -1))
         points, bent = np.vstack([points, middle[marked]]), np.vstack([bent, there[marked]])
         plan.append((keys[marked], np.full(np.count_nonzero(marked), 0.5)))
     return np.vstack([*done, faces]) if done else faces, plan
