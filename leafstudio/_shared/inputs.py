@@ -124,7 +124,7 @@ def read_numbers(path: str | os.PathLike, limit: int = MAX_TEXT_BYTES) -> str:
 
 
 _COMMENT = re.compile(r"#[^\n]*")
-_SEMICOLON_FIELDS = re.compile(r"\d\s*;\s*[-+.\d]")  # a number, `;`, and the next number
+_SEMICOLON_FIELDS = re.compile(r"\d[ \t]*;[ \t]*[-+.\d]")  # a number, `;`, the next on its line
 _DECIMAL_COMMA = re.compile(r"\d,\d")
 _DECIMAL_POINT = re.compile(r"\d\.|\.\d")
 

@@ -93,6 +93,18 @@ def test_commas_between_fields_stay_separators_beside_a_semicolon_in_a_comment(t
     np.testing.assert_allclose(ls.load_leaf(path).boundary, np.eye(3)[[2, 0, 1]] * [1, 1, 0])
 
 
+def test_commas_between_fields_stay_separators_before_a_semicolon_ending_each_row(
+    tmp_path: Path,
+):
+    """A comma-separated file whose rows end in `;` (a matrix copied from MATLAB, `1,2,0;`) was
+    read before decimal commas were; the `;` ending one row and the next row's number are not
+    `;`-separated fields, so its commas stay separators (it was refused, 'not a number in
+    '3.1.0;'')."""
+    path = tmp_path / "rows.csv"
+    path.write_text("0,0,0;\n1,0,0;\n0,1,0;\n")
+    np.testing.assert_allclose(ls.load_leaf(path).boundary, np.eye(3)[[2, 0, 1]] * [1, 1, 0])
+
+
 @pytest.mark.parametrize(
     "header, row",
     [
