@@ -29,7 +29,7 @@ from leafstudio.core.distance import mesh_distances
 from leafstudio.core.kernels import ensure_compiled
 from leafstudio.core.plane import Frame, fit_frame, turned_along
 from leafstudio.core.prepare.units import Units
-from leafstudio.core.prepare.vein_order import SIDE_VEINS, leans_back, midrib_lean, vein_order
+from leafstudio.core.prepare.vein_order import midrib_turned, vein_order
 from leafstudio.core.trianglemesh import MeshLike
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
@@ -315,17 +315,7 @@ def blade_midrib(leaf: Leaf) -> np.ndarray | None:
     if not leaf.veins or len(leaf.veins[0]) < 2:
         return None
     veins = leaf.veins if leaf.bend is None else [flat_curve(leaf.bend, v) for v in leaf.veins]
-    if len(veins) <= SIDE_VEINS:
-        return veins[0]
-    points = np.vstack(veins)
-    centre = points.mean(axis=0)
-    size = float(np.abs(points - centre).max())  # at unit size: a leaf at 1e200 squares to inf
-    if not (np.isfinite(size) and size > 0):
-        return veins[0]
-    unit = (points - centre) / size
-    axes = np.linalg.eigh(unit.T @ unit)[1][:, :0:-1]  # the veins' plane, widest first
-    plane = [(vein - centre) / size @ axes for vein in veins]
-    return veins[0][::-1] if leans_back(*midrib_lean(plane[0], plane[1:])) else veins[0]
+    return veins[0][::-1] if midrib_turned(veins) else veins[0]
 
 
 def leaf_blade_length(leaf: Leaf) -> float:

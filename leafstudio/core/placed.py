@@ -17,6 +17,7 @@ import numpy as np
 
 from leafstudio.core.bend import SAG, Pose
 from leafstudio.core.plane import Frame, fit_frame
+from leafstudio.core.prepare.vein_order import midrib_turned
 from leafstudio.model import Leaf
 
 
@@ -70,6 +71,8 @@ def blade_frame(leaf: Leaf, plane: Frame | None = None) -> Frame:
         plane = fit_frame(leaf.boundary, leaf.vein_points)
     xy = plane.to_plane(leaf.boundary)[0]
     midrib = leaf.veins[0] if leaf.veins else None
+    if midrib is not None and midrib_turned(list(leaf.veins)):
+        midrib = midrib[::-1]  # written apex first: its base is its last point (blade_midrib)
     if midrib is not None and len(midrib) > 1:
         ends = plane.to_plane(midrib[[0, -1]])[0]
         chord = ends[1] - ends[0]

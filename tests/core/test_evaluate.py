@@ -281,3 +281,17 @@ def test_parallel_veins_claim_no_end_of_the_midrib():
     leaf = make_form("sagittate", venation="parallel")
     backward = ls.Leaf(leaf.boundary, [leaf.veins[0][::-1], *leaf.veins[1:]])
     assert not any("apex to the base" in w for w in leaf_warnings(leaf) + leaf_warnings(backward))
+
+
+def test_the_apps_bending_frame_starts_at_the_base_of_a_midrib_written_apex_first():
+    """The app bends a leaf about placed.blade_frame, whose origin was vein 1's first point: a
+    midrib written apex first was folded and curled from its apex while the length, the export
+    and the view took it base first; the frame is now the base-first leaf's."""
+    from leafstudio.core.placed import blade_frame
+    from leafstudio.forms import make_form
+
+    leaf = make_form("ovate", venation="pinnate")
+    backward = ls.Leaf(leaf.boundary, [leaf.veins[0][::-1], *leaf.veins[1:]])
+    want, got = blade_frame(leaf), blade_frame(backward)
+    np.testing.assert_allclose(got.origin, want.origin, atol=1e-9)
+    np.testing.assert_allclose(got.u, want.u, atol=1e-9)

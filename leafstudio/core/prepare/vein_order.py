@@ -104,3 +104,20 @@ def leans_back(back: int, leaning: int) -> bool:
     (True, False, False)
     """
     return leaning >= SIDE_VEINS and back >= LEAN_SHARE * leaning
+
+
+def midrib_turned(veins: list[np.ndarray]) -> bool:
+    """Whether vein 1 of the (m_i, 3) flat `veins` runs from the apex to the base (leans_back,
+    its side veins seen on the veins' own plane): every reader of its base (the length, the
+    placement, the app's bending frame, veins grown from it) turns it round alike."""
+    if len(veins) <= SIDE_VEINS or len(veins[0]) < 2:
+        return False
+    points = np.vstack(veins)
+    centre = points.mean(axis=0)
+    size = float(np.abs(points - centre).max())  # at unit size: a leaf at 1e200 squares to inf
+    if not (np.isfinite(size) and size > 0):
+        return False
+    unit = (points - centre) / size
+    axes = np.linalg.eigh(unit.T @ unit)[1][:, :0:-1]  # the veins' plane, widest first
+    plane = [(vein - centre) / size @ axes for vein in veins]
+    return leans_back(*midrib_lean(plane[0], plane[1:]))
