@@ -13,6 +13,7 @@ from leafstudio.assets.placement import parse_length
 from leafstudio.assets.writers import MESH_SUFFIXES
 from leafstudio.cli.options import first_run_said
 from leafstudio.core.pipeline import reconstruct
+from leafstudio.core.prepare.vein_order import midrib_turned
 from leafstudio.errors import LeafError
 from leafstudio.forms.make import SIDE_ON, Form, seen_on_edge
 from leafstudio.forms.terms import APEXES, MARGINS, SHAPES, USER_BASES, format_terms, term_key
@@ -142,7 +143,9 @@ def _point(text: str) -> np.ndarray:
 def run_veins(args: argparse.Namespace) -> int:
     check_leaf_output(args.output, [args.leaf])
     leaf = load_leaf(args.leaf)
-    base = _point(args.base) if args.base else (leaf.veins[0][0] if leaf.veins else None)
+    base = _point(args.base) if args.base else None
+    if base is None and leaf.veins:  # the midrib's base: its last point when written apex first
+        base = leaf.veins[0][-1 if midrib_turned(list(leaf.veins)) else 0]
     try:
         veins = grow_veins(leaf.boundary, args.venation, args.secondaries, base, args.seed)
     except LeafError as exc:

@@ -173,3 +173,22 @@ def test_photo_bad_length_is_one_line_exit_2(tmp_path: Path, capsys):
                  "--length", "6 inches"])  # fmt: skip
     err = capsys.readouterr().err
     assert code == 2 and "--length" in err and err.count("\n") == 1
+
+
+def test_veins_grow_from_the_base_of_a_midrib_written_apex_first(tmp_path: Path):
+    """`leafstudio veins` without --base grew its veins from vein 1's first point: a midrib
+    written apex first (taken base first for the length, the export and the view) had the new
+    midrib grown from the apex; it now grows from the base, as for the midrib written base
+    first."""
+    import leafstudio as ls
+    from leafstudio.forms import make_form
+
+    leaf = make_form("ovate", venation="pinnate")
+    backward = ls.Leaf(leaf.boundary, [leaf.veins[0][::-1], *leaf.veins[1:]])
+    starts = []
+    for name, given in (("forward", leaf), ("backward", backward)):
+        ls.save_leaf(given, tmp_path / f"{name}.leaf.json")
+        out = tmp_path / f"{name}_grown.leaf.json"
+        assert main(["veins", str(tmp_path / f"{name}.leaf.json"), "-o", str(out)]) == 0
+        starts.append(ls.load_leaf(out).veins[0][0])
+    np.testing.assert_allclose(starts[1], starts[0], atol=1e-9)
