@@ -295,3 +295,23 @@ def test_the_apps_bending_frame_starts_at_the_base_of_a_midrib_written_apex_firs
     want, got = blade_frame(leaf), blade_frame(backward)
     np.testing.assert_allclose(got.origin, want.origin, atol=1e-9)
     np.testing.assert_allclose(got.u, want.u, atol=1e-9)
+
+
+@pytest.mark.parametrize("mirror", [1.0, -1.0], ids=["base_left", "base_right"])
+def test_a_dense_noisy_midribs_end_is_told_from_its_written_first_point(mirror):
+    """A dense, noisy midrib (a scan's labelled points) is put in a canonical order along its
+    axis before its side veins are read (vein_order), whose start is the base or the apex by the
+    axis' sign alone: a midrib written base first was turned round (and said to be written apex
+    first) when that order ran from the apex. Which end is its first is now the written one's."""
+    from leafstudio.core.prepare.vein_order import midrib_turned
+    from leafstudio.forms import make_form
+
+    leaf = make_form("ovate", venation="pinnate")
+    t = np.linspace(0, 1, 2000)
+    m = leaf.veins[0]
+    dense = np.column_stack([np.interp(t, np.linspace(0, 1, len(m)), m[:, i]) for i in range(3)])
+    dense[:, 1] += np.random.default_rng(0).normal(0, 0.005, len(t))
+    scale = np.array([mirror, 1.0, 1.0])
+    side = [v * scale for v in leaf.veins[1:]]
+    assert not midrib_turned([dense * scale, *side])
+    assert midrib_turned([dense[::-1] * scale, *side])

@@ -68,7 +68,10 @@ def midrib_lean(midrib: np.ndarray, side: list[np.ndarray]) -> tuple[int, int]:
     (palmate primaries) or do not touch it are not counted."""
     if len(midrib) < 2:
         return 0, 0
+    first = midrib[0]
     midrib = midrib[vein_order(midrib)]  # a shuffled midrib's first point means nothing
+    if np.linalg.norm(midrib[-1] - first) < np.linalg.norm(midrib[0] - first):
+        midrib = midrib[::-1]  # put in order, it starts at the written first point's end
     chord = midrib[-1] - midrib[0]
     length = float(np.linalg.norm(chord))
     if not length > 0:
