@@ -9,7 +9,9 @@ holds
 whole keeps working; an absolute path is read as it is), `pixel_from_world` the affine map from
 the leaf's coordinates to the photo's (column, row), pixel centres at integer + 0.5. Projects
 without the entry load as before; the entry is what lets `reconstruct --texture PHOTO` and the
-app's texture put each pixel back where it was in the photo.
+app's texture put each pixel back where it was in the photo. The map is into the photo as
+read_image shows it, upright (`"upright": true`); an entry without that key was saved when the
+photo's EXIF orientation was ignored, and its map is turned with the photo (upright_map).
 """
 
 from __future__ import annotations
@@ -79,6 +81,7 @@ class LeafPhoto:
         except ValueError:  # another drive (Windows): no relative path
             image = str(self.image)
         entry: dict[str, Any] = {"image": image, "pixel_from_world": self.pixel_from_world.tolist()}
+        entry["upright"] = True  # the map is into the photo as read_image shows it (upright)
         if self.petiole_cut is not None:
             entry["petiole_cut"] = bool(self.petiole_cut)
         return entry
@@ -106,7 +109,35 @@ def from_entry(entry: Any, project: str | os.PathLike) -> LeafPhoto:
         raise LeafError('bad "photo" entry: "image" must name the photo file', source)
     petiole = entry.get("petiole_cut")
     path = (Path(project).resolve().parent / image).resolve()  # an absolute one stays
+    if entry.get("upright") is not True:  # saved before read_image turned photos upright
+        affine = upright_map(affine, path)
     return LeafPhoto(path, affine, petiole if isinstance(petiole, bool) else None)
+
+
+def upright_map(affine: np.ndarray, image: Path) -> np.ndarray:
+    """A (2, 3) world-to-pixel map into the photo's stored pixels made one into its pixels as
+    read_image gives them, upright (its EXIF orientation applied); `affine` as it is for a photo
+    without one, or one that cannot be read. Projects saved before the orientation was applied
+    hold maps of the first kind."""
+    from PIL import Image
+
+    try:
+        with Image.open(image) as photo:
+            orientation, (w, h) = photo.getexif().get(0x0112, 1), photo.size
+    except Exception:  # missing or unreadable: read_image says so when the texture is made
+        return affine
+    turns = {  # stored (column, row, 1) -> upright (column, row), as ImageOps.exif_transpose
+        2: [[-1, 0, w], [0, 1, 0]],  # mirrored left to right
+        3: [[-1, 0, w], [0, -1, h]],  # a half turn
+        4: [[1, 0, 0], [0, -1, h]],  # mirrored top to bottom
+        5: [[0, 1, 0], [1, 0, 0]],  # transposed
+        6: [[0, -1, h], [1, 0, 0]],  # a quarter turn clockwise
+        7: [[0, -1, h], [-1, 0, w]],  # transversed
+        8: [[0, 1, 0], [-1, 0, w]],  # a quarter turn counter-clockwise
+    }
+    if orientation not in turns:
+        return affine
+    return np.asarray(turns[orientation], float) @ np.vstack([affine, [0.0, 0.0, 1.0]])
 
 
 def project_photo(project: str | os.PathLike) -> LeafPhoto | None:

@@ -4,6 +4,7 @@ maps back onto the mesh through the UVs."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -274,3 +275,45 @@ def test_the_leafs_holes_are_filled_as_in_the_whole_photo():
     at_edge = mask[:, 25:]  # the disc one pixel from the photo's left edge: its ring there
     assert at_edge[:, 1].any() and not at_edge[:, 0].any()  # is the photo's edge
     assert np.array_equal(_leaf_component(at_edge), binary_fill_holes(at_edge))
+
+
+@pytest.mark.parametrize("orientation", range(2, 9))
+def test_a_project_saved_before_photos_were_turned_upright_keeps_its_texture(
+    tmp_path: Path, orientation: int
+):
+    """A project saved from a phone's photo before read_image applied the EXIF orientation
+    kept a pixel map into the photo's stored (sideways) pixels; read upright, its texture took
+    other pixels (a leaf's texture from the photo's background). Its map is now turned with the
+    photo, so each leaf point finds the pixel it found before; a project saved now says its map
+    is upright and is read as it is."""
+    from leafstudio._shared.inputs import read_image
+    from leafstudio.sources.leafphoto import project_photo
+
+    stored = np.random.default_rng(orientation).integers(0, 255, (7, 5, 3), dtype=np.uint8)
+    exif = Image.Exif()
+    exif[0x0112] = orientation
+    photo = tmp_path / "phone.jpg"
+    Image.fromarray(stored).save(photo, format="PNG", exif=exif)
+    upright = read_image(photo)
+    old = np.array([[2.0, 0.5, 0.25], [-0.5, 3.0, 0.75]])  # world (x, y, 1) -> stored pixels
+    rows, columns = np.mgrid[0:7, 0:5]
+    centres = np.column_stack([columns.ravel() + 0.5, rows.ravel() + 0.5])
+    world = np.linalg.solve(old[:, :2], (centres - old[:, 2]).T).T
+    leaf = make_form("ovate")
+    ls.save_leaf(leaf, tmp_path / "old.leaf.json")
+    data = json.loads((tmp_path / "old.leaf.json").read_text())
+    data["photo"] = {"image": photo.name, "pixel_from_world": old.tolist()}
+    (tmp_path / "old.leaf.json").write_text(json.dumps(data))
+    found = project_photo(tmp_path / "old.leaf.json")
+    assert found is not None
+    now = np.floor(world @ found.pixel_from_world[:, :2].T + found.pixel_from_world[:, 2])
+    now = now.astype(int)
+    np.testing.assert_array_equal(
+        upright[now[:, 1], now[:, 0]], stored[rows.ravel(), columns.ravel()]
+    )
+    saved = found.entry(tmp_path / "new.leaf.json")
+    data["photo"] = saved
+    (tmp_path / "new.leaf.json").write_text(json.dumps(data))
+    again = project_photo(tmp_path / "new.leaf.json")
+    assert again is not None
+    np.testing.assert_allclose(again.pixel_from_world, found.pixel_from_world)
