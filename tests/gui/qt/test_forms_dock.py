@@ -345,3 +345,21 @@ def test_a_pose_change_keeps_the_sketch_drawn_and_another_form_draws_its_own(win
     panel.gallery.setCurrentRow(list(SHAPES).index("cordate"))
     choose(qtbot, window, panel)
     assert not any(shiboken6.isValid(item) for item in drawn)
+
+
+def test_grow_veins_starts_at_the_base_of_a_midrib_written_apex_first(window, panel, qtbot):
+    """Grow veins on a leaf without a sketch grew from vein 1's first point: a midrib written
+    apex first (taken base first for the length, the export and the view) had the grown midrib
+    start at its apex; it now starts at its base, as for the leaf written base first."""
+    from leafstudio.forms import make_form
+
+    leaf = make_form("ovate", venation="pinnate")
+    starts = []
+    for given in (leaf, Leaf(leaf.boundary, [leaf.veins[0][::-1], *leaf.veins[1:]])):
+        window.session.new_document(given)
+        wait_result(qtbot, window, lambda o: o.result.leaf is window.session.leaf)
+        panel.venation.setCurrentText("pinnate")
+        panel.grow_button.click()
+        wait_result(qtbot, window, lambda o: o.result.leaf is window.session.leaf)
+        starts.append(window.session.leaf.veins[0][0])
+    np.testing.assert_allclose(starts[1], starts[0], atol=1e-6)
