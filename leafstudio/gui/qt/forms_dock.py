@@ -32,6 +32,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from leafstudio.core.evaluate import blade_midrib
 from leafstudio.forms import SHAPES, VENATION_KINDS, Form, definition
 from leafstudio.forms.glossary import COMPARISONS
 from leafstudio.forms.terms import APEXES, DEFAULT_LOBES, MARGINS, RELIEF, TOOTHED, USER_BASES
@@ -404,8 +405,9 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
             return
         base = None
         leaf = session.leaf
-        if not (sketch.veins and len(sketch.veins[0])) and leaf is not None and leaf.veins:
-            base = sketch.frame.to_plane(leaf.veins[0][:1])[0][0]  # the midrib's start
+        midrib = blade_midrib(leaf) if leaf is not None else None  # base first, on the blade
+        if not (sketch.veins and len(sketch.veins[0])) and midrib is not None:
+            base = sketch.frame.to_plane(midrib[:1])[0][0]  # the midrib's base
         try:
             grown = with_grown_veins(sketch, venation, panel.seed.value(), base)
         except Exception as exc:
