@@ -11,7 +11,7 @@ import numpy as np
 
 from leafstudio.core.bend import flat_leaf
 from leafstudio.core.prepare.polygon import ring_crossings
-from leafstudio.core.prepare.vein_order import leans_back, midrib_lean
+from leafstudio.core.prepare.vein_order import midrib_turned
 from leafstudio.forms import Form, grow_veins
 from leafstudio.gui.model.curves import closed_curve
 from leafstudio.gui.model.sketch_model import Sketch
@@ -69,13 +69,12 @@ def with_grown_veins(
 ) -> Sketch:
     """The sketch with its veins replaced by veins grown inside its boundary curve; the base is
     `base` (plane point), else the base of the sketch's first vein (its start, or its end when
-    its side veins say it is written apex first: vein_order.leans_back), else found by
+    its side veins say it is written apex first: vein_order.midrib_turned), else found by
     grow_veins."""
     outline = sketch.boundary_curve()
     if base is None and sketch.veins and len(sketch.veins[0]):
-        plane = [np.asarray(v)[:, :2] for v in sketch.veins]
-        turned = leans_back(*midrib_lean(plane[0], plane[1:]))  # written apex first: its last
-        base = plane[0][-1 if turned else 0]
+        flat = [np.pad(np.asarray(v, dtype=float)[:, :2], ((0, 0), (0, 1))) for v in sketch.veins]
+        base = flat[0][-1 if midrib_turned(flat) else 0, :2]  # written apex first: its last
     veins = grow_veins(outline, venation, base=base, seed=seed)
     pick = [
         np.unique(np.linspace(0, len(v) - 1, min(VEIN_CONTROL, len(v))).astype(int)) for v in veins
