@@ -15,7 +15,7 @@ from scipy.spatial import cKDTree
 
 from leafstudio.core.plane import fixed_sample, principal_spreads
 from leafstudio.core.prepare.cover import COVER_SPREAD, surface_spread
-from leafstudio.core.prepare.vein_order import leans_back, midrib_lean
+from leafstudio.core.prepare.vein_order import leans_back, midrib_leaning
 from leafstudio.errors import LeafError
 
 THIN = 0.6  # thickness (smallest spread) over length (largest), at most (real scans: <= 0.41)
@@ -122,8 +122,7 @@ def leaf_warnings(leaf) -> list[str]:
     if not np.isfinite(length) or length <= 0:
         return []
     notes = []
-    plane = [(vein - centre) / length @ axes[:2].T for vein in leaf.veins]  # in leaf lengths
-    back, leaning = midrib_lean(plane[0], plane[1:])
+    back, leaning = midrib_leaning(list(leaf.veins))  # as blade_midrib decides it
     if leans_back(back, leaning):
         notes.append(
             f"vein 1, the midrib, seems written from the apex to the base ({back} of its "

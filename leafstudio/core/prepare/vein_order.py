@@ -109,18 +109,24 @@ def leans_back(back: int, leaning: int) -> bool:
     return leaning >= SIDE_VEINS and back >= LEAN_SHARE * leaning
 
 
-def midrib_turned(veins: list[np.ndarray]) -> bool:
-    """Whether vein 1 of the (m_i, 3) flat `veins` runs from the apex to the base (leans_back,
-    its side veins seen on the veins' own plane): every reader of its base (the length, the
-    placement, the app's bending frame, veins grown from it) turns it round alike."""
+def midrib_leaning(veins: list[np.ndarray]) -> tuple[int, int]:
+    """midrib_lean's counts for vein 1 of the (m_i, 3) `veins`, its side veins seen on the
+    veins' own plane (at unit size: a leaf at 1e200 squares to inf); (0, 0) for too few veins."""
     if len(veins) <= SIDE_VEINS or len(veins[0]) < 2:
-        return False
+        return 0, 0
     points = np.vstack(veins)
     centre = points.mean(axis=0)
-    size = float(np.abs(points - centre).max())  # at unit size: a leaf at 1e200 squares to inf
+    size = float(np.abs(points - centre).max())
     if not (np.isfinite(size) and size > 0):
-        return False
+        return 0, 0
     unit = (points - centre) / size
     axes = np.linalg.eigh(unit.T @ unit)[1][:, :0:-1]  # the veins' plane, widest first
     plane = [(vein - centre) / size @ axes for vein in veins]
-    return leans_back(*midrib_lean(plane[0], plane[1:]))
+    return midrib_lean(plane[0], plane[1:])
+
+
+def midrib_turned(veins: list[np.ndarray]) -> bool:
+    """Whether vein 1 of the (m_i, 3) flat `veins` runs from the apex to the base (leans_back of
+    midrib_leaning): every reader of its base (the length, the placement, the app's bending
+    frame, veins grown from it, the warning that says so) decides it alike."""
+    return leans_back(*midrib_leaning(veins))
