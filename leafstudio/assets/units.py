@@ -11,6 +11,7 @@ import re
 from leafstudio.errors import LeafError
 
 METRES = {"um": 1e-6, "mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}  # per unit
+UNITS_SAID = f"8cm, 80mm, 3in; units {', '.join(METRES)}"  # in every length's help and prompt
 _LENGTH = re.compile(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([a-zA-Z]*)\s*")
 
 

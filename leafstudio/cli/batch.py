@@ -7,6 +7,7 @@ import argparse
 import sys
 import time
 
+from leafstudio.assets.units import UNITS_SAID
 from leafstudio.batch import FORMATS, Batch, batch
 from leafstudio.cli.options import add_param_flags, compiling_notice, params_for
 
@@ -24,7 +25,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     bat.add_argument(
         "--length",
         metavar="L",
-        help="each leaf's real length, base to apex (8cm, 80mm, 3in; units mm, cm, m, in, ft): "
+        help=f"each leaf's real length, base to apex ({UNITS_SAID}): "
         "the meshes at real size and the traits in millimetres",
     )
     add_param_flags(bat)

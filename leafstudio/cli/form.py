@@ -10,6 +10,7 @@ import numpy as np
 
 from leafstudio.assets.export import save_mesh
 from leafstudio.assets.placement import parse_length
+from leafstudio.assets.units import UNITS_SAID
 from leafstudio.assets.writers import MESH_SUFFIXES
 from leafstudio.cli.options import first_run_said
 from leafstudio.core.pipeline import reconstruct
@@ -55,7 +56,7 @@ def add_form_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--length",
         metavar="L",
-        help="a mesh's real length, base to apex (8cm, 80mm, 3in; units mm, cm, m, in, ft)",
+        help=f"a mesh's real length, base to apex ({UNITS_SAID})",
     )
     p.add_argument(
         "-o",

@@ -17,6 +17,7 @@ from leafstudio.assets.export import (
     save_mesh,
 )
 from leafstudio.assets.placement import parse_length, size_note
+from leafstudio.assets.units import UNITS_SAID
 from leafstudio.assets.writers import MESH_SUFFIXES, written_paths
 from leafstudio.cli.options import EXIT_OK, add_run_options, log, run_pipeline
 from leafstudio.core.prepare.units import scaled_metrics
@@ -74,7 +75,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     rec.add_argument(
         "--length",
         metavar="L",
-        help="the leaf's real length, base to apex (8cm, 80mm, 3in; units mm, cm, m, in, ft): "
+        help=f"the leaf's real length, base to apex ({UNITS_SAID}): "
         "glTF, OBJ and USD in metres, STL, 3MF, PLY in millimetres (default: the input's scale)",
     )
     rec.add_argument(

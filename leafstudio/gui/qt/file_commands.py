@@ -11,6 +11,7 @@ from pathlib import Path
 from PySide6.QtWidgets import QFileDialog, QMenu, QMessageBox
 
 from leafstudio.assets.export import TEXTURED_SUFFIXES, save_mesh
+from leafstudio.assets.units import UNITS_SAID
 from leafstudio.assets.writers import MESH_SUFFIXES
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.jobs import Job
@@ -246,7 +247,7 @@ class FileCommands(BackgroundExports):
         )  # fmt: skip
 
     LENGTH_PROMPT = (
-        "The leaf's real length, base to apex (8cm, 80mm, 3in; units mm, cm, m, in, ft): the mesh "
+        f"The leaf's real length, base to apex ({UNITS_SAID}): the mesh "
         "is scaled to it and written in metres (glTF, OBJ, USD) or millimetres (STL, 3MF, PLY, "
         "VTK). Empty: the leaf's own units"
     )
