@@ -339,7 +339,7 @@ def _crease_cuts(mesh: TriangleMesh, crease, trim) -> tuple[np.ndarray, Plan, bo
 
 
 def sag_splits(
-    points: np.ndarray, faces: np.ndarray, carry, tolerance: float
+    points: np.ndarray, faces: np.ndarray, carry, tolerance: float, lift=None
 ) -> tuple[np.ndarray, Plan]:
     """(f', 3) faces with every edge halved whose midpoint the bend `carry` takes farther than
     `tolerance` from the bent chord, and the plan of the new points (`carried`), SAG_ROUNDS
@@ -349,7 +349,9 @@ def sag_splits(
     a fold of 75° on a rolled, twisted oblong blade bent the chords of a grid-128 mesh 1.4e-3
     of the length off the bent surface. A face is cut in as many pieces as it has edges halved,
     plus one (a conforming mesh, its winding kept). An edge of a face left whole passed: each
-    later round looks at the new faces' edges only."""
+    later round looks at the new faces' edges only. `lift` (`_onto_surface`) puts the new points
+    on the flat surface rather than on the flat chord, which the bend stretches (up to 3 times on
+    a folded tube: the last 1.03-1.05e-3 of the pose grid)."""
     points, faces = np.asarray(points, dtype=float), np.asarray(faces)
     bent, plan, done = carry(points), [], []
     for _ in range(SAG_ROUNDS):  # after the first, over the faces the last one made only
@@ -368,6 +370,9 @@ def sag_splits(
         marked = np.einsum("ij,ij->i", off, off) > 4 * tolerance**2
         if not marked.any():
             break
+        if lift is not None:  # the new points on the surface, not on the flat chord
+            middle[marked] = lift(middle[marked])[0]
+            there[marked] = carry(middle[marked])
         halved = codes[marked]  # sorted: the new points are numbered in this order
         hit = np.isin(every, halved).reshape(faces.shape)  # (a, b), (b, c), (c, a) halved
         touched = hit.any(axis=1)  # few faces: the others are kept whole without a search
@@ -406,31 +411,41 @@ def _halved(faces: np.ndarray, middle: np.ndarray) -> np.ndarray:
 
 
 def _cuts(
-    mesh: TriangleMesh, crease, trim, carry, sag: float | None
-) -> tuple[np.ndarray, Plan, bool]:
+    mesh: TriangleMesh, crease, trim, carry, sag: float | None, lift
+) -> tuple[np.ndarray, Plan, bool, int]:
     """`_crease_cuts`, then the edges the bend `carry` sags off their chord by more than `sag`
-    of the mesh's extent halved (`sag_splits`; None: none)."""
+    of the mesh's extent halved (`sag_splits`; None: none), and the first halving's point."""
     faces, plan, trimmed = _crease_cuts(mesh, crease, trim)
+    first = len(mesh.points) + sum(len(t) for _, t in plan)
     if sag is None or not len(mesh.points):
-        return faces, plan, trimmed
+        return faces, plan, trimmed, first
     tolerance = sag * float(np.ptp(mesh.points, axis=0).max())
-    faces, more = sag_splits(carried(mesh.points, plan), faces, carry, tolerance)
-    return faces, plan + more, trimmed
+    faces, more = sag_splits(carried(mesh.points, plan), faces, carry, tolerance, lift)
+    return faces, plan + more, trimmed, first
 
 
 def _bent_meshes(
-    meshes: list[TriangleMesh], carries: list, creases: list, trims: list, sag: float | None
+    meshes: list[TriangleMesh],
+    carries: list,
+    creases: list,
+    trims: list,
+    sag: float | None,
+    lifts: list,
 ) -> list[TriangleMesh]:
     """Each mesh cut along the bend's creases (`creases`, in its units), trimmed (`trims`, see
     _crease_cuts; the points no face keeps dropped), its edges halved where the bend sags them
     by more than `sag` (`_cuts`) and carried into 3D by its `carry`; a mesh with the first's
     faces (one mesh at another size) is cut as it was."""
-    cuts = _cuts(meshes[0], creases[0], trims[0], carries[0], sag)
+    cuts = _cuts(meshes[0], creases[0], trims[0], carries[0], sag, lifts[0])
     out = []
-    for mesh, carry, crease, trim in zip(meshes, carries, creases, trims, strict=True):
+    for mesh, carry, crease, trim, lift in zip(meshes, carries, creases, trims, lifts, strict=True):
         same = np.array_equal(mesh.regular_faces, meshes[0].regular_faces)
-        faces, plan, trimmed = cuts if same else _cuts(mesh, crease, trim, carry, sag)
+        faces, plan, trimmed, first = cuts if same else _cuts(mesh, crease, trim, carry, sag, lift)
         points, data = carried(mesh.points, plan), carried_data(mesh.point_data, plan)
+        if lift is not None and first < len(points):  # the halvings' points on the surface
+            points[first:], heights = lift(points[first:])
+            if "height" in data:
+                data["height"][first:] = heights
         if trimmed and len(used := np.unique(faces)) < len(points):
             index = np.zeros(len(points), dtype=faces.dtype)
             index[used] = np.arange(len(used))
@@ -438,6 +453,20 @@ def _bent_meshes(
             data = {name: values[used] for name, values in data.items()}
         out.append(TriangleMesh(carry(points), faces, data))
     return out
+
+
+def _onto_surface(result: Result):
+    """A function taking (n, 3) points of the flat run's mesh onto its surface along the
+    plane's normal: the points, and their heights (sag_splits' new points, on the surface, not
+    on the flat mesh's chord, which the bend stretches: up to 3 times on a folded tube)."""
+    frame, height = result.frame, result.height
+
+    def lift(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        xy = frame.to_plane(points)[0]
+        z = height(xy)
+        return frame.to_world(xy, z), z
+
+    return lift
 
 
 def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
@@ -451,17 +480,20 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
         return units.to_unit(bend.apply(units.to_world(points)))
 
     unit = result.unit
+    sag = getattr(bend, "sag", None)
     meshes, carries, creases = [result.triangle_mesh], [bend.apply], [bend.crease]
     trims = [bend.trim]  # a scan's holes (core/sheet.Scaled.trim)
+    lifts = [None if sag is None else _onto_surface(result)]
     if unit is not None:  # the same mesh at unit size: cut along the same lines
         meshes.append(unit.triangle_mesh)
         carries.append(in_units)
         creases.append(lambda points: bend.crease(units.to_world(points)))
         trims.append(lambda points: bend.trim(units.to_world(points)))
+        lifts.append(None if sag is None else _onto_surface(unit))
     # a pose's chords are kept on it (`sag`); a scan's sheet (core/sheet.py) has none: its fit is
     # at the scanner's noise (0.5% of the length), and halving the edges its spline's relief
     # curves gave soybean pot1_1 30 times the faces for 0.04% of the length
-    bent = _bent_meshes(meshes, carries, creases, trims, getattr(bend, "sag", None))
+    bent = _bent_meshes(meshes, carries, creases, trims, sag, lifts)
     if unit is not None:
         unit = replace(
             unit,
