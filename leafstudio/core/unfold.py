@@ -5,7 +5,7 @@ the bend that lays them flat, fitted to them.
 A leaf's margin and midrib lie on its flat blade (the relief rides on the side veins); a fold,
 curl or roll lifts them off any plane, and the boundary's PCA plane then sees a folded or curled
 blade side-on (a fold of 75°: the mesh 5% of the length off the form's own surface on average).
-`fit_pose` finds the blade's frame (the base at the midrib's first point, u along it) and the
+`fit_pose` finds the blade's frame (the base at the midrib's base end, u along it) and the
 `Pose` (fold, curl, roll) whose `flatten` brings the margin and the midrib nearest one plane, by
 least squares over the frame's rotation and the pose's three terms. The leaf is unfolded only
 when its margin is well off a plane and the pose lays it much flatter than the best quadratic
@@ -25,6 +25,7 @@ from scipy.spatial.transform import Rotation
 from leafstudio.core.bend import Pose
 from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame
+from leafstudio.core.prepare.vein_order import midrib_turned
 from leafstudio.model import Leaf
 
 OFF_PLANE = 0.2  # a margin this far off its PCA plane (RMS, share of its RMS width) may be bent
@@ -101,7 +102,8 @@ def fit_pose(leaf: Leaf) -> PlacedPose | None:
     Returns
     -------
     PlacedPose or None
-        The fitted fold, curl and roll in the blade's frame (base at the midrib's first point).
+        The fitted fold, curl and roll in the blade's frame (base at the midrib's base end:
+        vein_order.midrib_turned).
     """
     if leaf.bend is not None or not leaf.veins or len(leaf.veins[0]) < 3:
         return None
@@ -126,6 +128,8 @@ def fit_pose(leaf: Leaf) -> PlacedPose | None:
 def _fit(leaf: Leaf) -> PlacedPose | None:
     """fit_pose on the leaf at about unit size."""
     boundary, midrib = leaf.boundary, leaf.veins[0]
+    if midrib_turned(list(leaf.veins)):  # written apex first: the frame's origin is the base
+        midrib = midrib[::-1]
     length = float(np.linalg.norm(np.ptp(boundary, axis=0)))
     before, width = _off_plane(boundary)
     if not before > OFF_PLANE * width:
