@@ -57,7 +57,7 @@ def read_point_table(path: Path, columns: Sequence[int] = (2, 3, 4)) -> np.ndarr
     a third column); header and blank lines skipped. Read in blocks of lines (line_blocks: each
     reported as read), each by numpy's reader when it holds only numbers, else line by line,
     which names the first faulty line. A header naming x, y and z (and label) says which columns
-    they are, in any order among others (an index)."""
+    they are, in any order among others (an index); one naming x and y but no z, a flat list."""
     text = read_numbers(path)  # decimal commas (`1,5;2,25;0`) made points
     named = named_columns(text, columns)
     table = _PointTable(path, columns if named is None else (named[0],))
@@ -66,19 +66,23 @@ def read_point_table(path: Path, columns: Sequence[int] = (2, 3, 4)) -> np.ndarr
     if not table.parts:
         raise LeafError("holds no points", str(path))
     rows = np.vstack(table.parts)
-    if named is not None:
+    if named is not None:  # a column of zeros (index -1) where the header names no z
+        rows = np.column_stack([rows, np.zeros(len(rows))])
         return rows[:, named[1]]
     return np.column_stack([rows, np.zeros(len(rows))]) if rows.shape[1] == 2 else rows
 
 
 def named_columns(text: str, columns: Sequence[int] = (3, 4)) -> tuple[int, list[int]] | None:
-    r"""From a header line naming x, y and z (any case, a unit after them: `x [mm]`): its width
-    and the indices of x, y, z and, when 4 is one of `columns`, label; None for no such header.
+    r"""From a header line naming x and y, and z (any case, a unit after them: `x [mm]`): its
+    width and the indices of x, y, z (-1 when it names no z: the points are flat) and, when 4 is
+    one of `columns`, label; None for no such header.
 
     Examples
     --------
     >>> named_columns(",x,y,z,label\n0,1.5,2,0,0\n")
     (5, [1, 2, 3, 4])
+    >>> named_columns("id,x,y\n0,1.5,2\n")
+    (3, [1, 2, -1])
     >>> named_columns("1 2 3\n") is None
     True
     """
@@ -91,12 +95,14 @@ def named_columns(text: str, columns: Sequence[int] = (3, 4)) -> tuple[int, list
     if len(data) != len(fields):
         return None  # the first row is not as wide as the header: its names are not the columns'
     names = [re.split(r"[\s(\[]", f.strip().strip("\"'").lower(), maxsplit=1)[0] for f in fields]
-    if not {"x", "y", "z"} <= set(names) or len(set(names)) < len(names) - names.count(""):
+    if not {"x", "y"} <= set(names) or len(set(names)) < len(names) - names.count(""):
         return None
     wanted = ["x", "y", "z", *(["label"] if 4 in columns and "label" in names else [])]
-    take = [names.index(name) for name in wanted]
+    take = [names.index(name) if name in names else -1 for name in wanted]
     if take == list(range(len(take))) and len(names) == len(take):
         return None  # the columns in their usual order: read as before (`x y z` over labels too)
+    if take[:2] == [0, 1] and len(names) == 2:
+        return None  # `x,y`: a flat list, read as before
     return len(names), take
 
 

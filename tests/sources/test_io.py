@@ -236,3 +236,39 @@ def test_unknown_mesh_type(tmp_path: Path):
     result = ls.reconstruct(ls.demo("nested"), ls.Params(grid=32))
     with pytest.raises(ls.LeafError, match="unknown mesh type"):
         ls.save_mesh(result, tmp_path / "leaf.dae")
+
+
+@pytest.mark.parametrize(
+    "header, row",
+    [
+        ("id,x,y,label", "{i},{x},{y},{label}"),
+        ("x,y,label", "{x},{y},{label}"),
+        ("x;y;point;label", "{x};{y};{i};{label}"),
+        ("label x y", "{label} {x} {y}"),
+    ],
+    ids=["index first", "labels", "index between", "label first"],
+)
+def test_a_header_naming_x_and_y_but_no_z_reads_a_flat_leaf_by_name(
+    tmp_path: Path, header: str, row: str
+):
+    """A header naming x and y without z was skipped unread and the columns taken in order:
+    'id,x,y' made every point (index, x, y), a leaf 40 times as long, and 'x,y,label' took the
+    labels for heights (no veins): both without a word. Now read by name, z = 0."""
+    nested = ls.demo("nested")
+    leaf = ls.Leaf(nested.boundary * [1, 1, 0], [v * [1, 1, 0] for v in nested.veins])
+    points = [(p, 0) for p in leaf.boundary] + [
+        (p, k + 1) for k, vein in enumerate(leaf.veins) for p in vein
+    ]
+    lines = [row.format(i=i, x=p[0], y=p[1], label=label) for i, (p, label) in enumerate(points)]
+    path = tmp_path / "leaf.csv"
+    path.write_text(header + "\n" + "\n".join(lines) + "\n")
+    _same(leaf, ls.load_leaf(path))
+
+
+def test_a_vein_file_with_an_index_column_reads_by_name(tmp_path: Path):
+    path = tmp_path / "vein.csv"
+    path.write_text("n,x,y\n0,0.1,0.0\n1,0.5,0.05\n2,0.9,0.1\n")
+    boundary = tmp_path / "b.csv"
+    boundary.write_text("\n".join(",".join(map(str, p)) for p in ls.demo("nested").boundary))
+    vein = ls.load_leaf(boundary, veins=[path]).veins[0]
+    np.testing.assert_allclose(vein, [[0.1, 0, 0], [0.5, 0.05, 0], [0.9, 0.1, 0]])
