@@ -11,6 +11,7 @@ huge allocation or a library's traceback.
 
 from __future__ import annotations
 
+import codecs
 import contextlib
 import json
 import os
@@ -100,7 +101,8 @@ def check_input_file(path: str | os.PathLike, limit: int | None = MAX_TEXT_BYTES
 
 
 def read_text(path: str | os.PathLike, limit: int = MAX_TEXT_BYTES) -> str:
-    """A text file's contents (UTF-8), after `check_input_file`."""
+    """A text file's contents (UTF-8, or UTF-16 after its byte-order mark: Excel's "Unicode
+    Text"), after `check_input_file`."""
     path = Path(path)
     check_input_file(path, limit)
     try:
@@ -110,12 +112,27 @@ def read_text(path: str | os.PathLike, limit: int = MAX_TEXT_BYTES) -> str:
         raise LeafError(f"cannot be read ({exc.strerror or exc})", str(path)) from None
     if len(data) > limit:
         raise LeafError(f"is too large (more than {limit / 2**20:.0f} MiB)", str(path))
+    if data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE):  # a spreadsheet's "Unicode text"
+        return _utf16_numbers(data, str(path))
     if b"\0" in data:
         raise LeafError("is not a text file (it holds binary data)", str(path))
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError:
         raise LeafError("is not a text file (not UTF-8)", str(path)) from None
+
+
+def _utf16_numbers(data: bytes, source: str) -> str:
+    """UTF-16 `data` after its byte-order mark, decoded when it is mostly ASCII, as a point list
+    is (nine tenths of its characters' high bytes zero); else not a text file."""
+    body = data[2:]
+    high = body[1::2] if data[:2] == codecs.BOM_UTF16_LE else body[0::2]
+    if len(body) % 2 or high.count(0) < 0.9 * len(high):
+        raise LeafError("is not a text file (it holds binary data)", source)
+    try:
+        return data.decode("utf-16")
+    except UnicodeDecodeError:
+        raise LeafError("is not a text file (not UTF-16, as its first bytes say)", source) from None
 
 
 def read_numbers(path: str | os.PathLike, limit: int = MAX_TEXT_BYTES) -> str:

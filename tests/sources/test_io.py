@@ -303,3 +303,23 @@ def test_a_vein_file_with_an_index_column_reads_by_name(tmp_path: Path):
     boundary.write_text("\n".join(",".join(map(str, p)) for p in ls.demo("nested").boundary))
     vein = ls.load_leaf(boundary, veins=[path]).veins[0]
     np.testing.assert_allclose(vein, [[0.1, 0, 0], [0.5, 0.05, 0], [0.9, 0.1, 0]])
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-be"])
+def test_a_spreadsheets_unicode_text_reads_as_its_numbers(tmp_path: Path, encoding: str):
+    """Excel's "Unicode Text" (UTF-16 after a byte-order mark, tab-separated; decimal commas in
+    much of Europe) was refused as binary data; it reads as a leaf, a scan and an opened file."""
+    import codecs
+
+    from leafstudio.sources.scan import read_scan
+    from leafstudio.workflows import open_file
+
+    leaf = ls.demo("parallel")
+    rows = ["\t".join(f"{v:.6f}" for v in p).replace(".", ",") for p in leaf.boundary]
+    text = "x\ty\tz\r\n" + "\r\n".join(rows) + "\r\n"
+    bom = b"" if encoding == "utf-16" else codecs.BOM_UTF16_BE
+    path = tmp_path / "outline.txt"
+    path.write_bytes(bom + text.encode(encoding))
+    np.testing.assert_allclose(ls.load_leaf(path).boundary, leaf.boundary, atol=1e-6)
+    np.testing.assert_allclose(read_scan(path), leaf.boundary, atol=1e-6)
+    np.testing.assert_allclose(open_file(path).leaf.boundary, leaf.boundary, atol=1e-6)
