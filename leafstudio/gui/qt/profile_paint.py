@@ -17,6 +17,7 @@ from PySide6.QtGui import (
 )
 
 from leafstudio.gui.model.layers import BOUNDARY_COLOR, vein_color
+from leafstudio.gui.model.vein_profile import end_words
 from leafstudio.gui.qt.leaf_picture import polyline_path
 
 HANDLE_PIXELS = 9.0
@@ -40,7 +41,7 @@ class ProfilePainting:
         painter.drawRect(plot)
         painter.setPen(QPen(faint, 1))
         below = QRectF(plot.left(), plot.bottom(), plot.width(), MARGINS[3])
-        ends = ("point 1", "round to point 1") if self.has_boundary() else ("base", "tip")
+        ends = end_words(self.sketch, self.vein)
         sides = (Qt.AlignmentFlag.AlignLeft, Qt.AlignmentFlag.AlignRight)
         for align, text in zip(sides, ends, strict=True):
             painter.drawText(below, align | Qt.AlignmentFlag.AlignVCenter, text)

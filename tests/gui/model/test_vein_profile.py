@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from leafstudio.forms import make_form
 from leafstudio.gui.model.session import Session
-from leafstudio.gui.model.sketch_model import Sketch
-from leafstudio.gui.model.vein_profile import MIN_GAP, PROFILE_HANDLES, Profile
+from leafstudio.gui.model.sketch_model import BOUNDARY, Sketch
+from leafstudio.gui.model.vein_profile import MIN_GAP, PROFILE_HANDLES, Profile, end_words
 from leafstudio.sources.demos import demo
 from tests.leaves import sketch_clicks as ellipse
 
@@ -113,3 +114,15 @@ def test_undoing_the_first_edit_of_a_loaded_leaf_shows_its_own_sketch_again():
 
 
 # --- the side view in the window (Xvfb) --------------------------------------------------------
+
+
+def test_the_side_views_ends_say_which_is_the_base_of_a_midrib_written_apex_first():
+    """The side view said "base" under its left end, where a midrib written apex first starts
+    at its tip (the length, the placement and the 3D view take it base first)."""
+    leaf = make_form("ovate")
+    given = Sketch(boundary=leaf.boundary[:, :2], veins=tuple(leaf.veins))
+    turned = Sketch(boundary=leaf.boundary[:, :2], veins=(leaf.veins[0][::-1], *leaf.veins[1:]))
+    assert end_words(given, 0) == ("base", "tip")
+    assert end_words(turned, 0) == ("tip", "base")
+    assert end_words(turned, 1) == ("base", "tip")  # a side vein runs from the midrib
+    assert end_words(turned, BOUNDARY) == ("point 1", "round to point 1")
