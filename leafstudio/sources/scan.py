@@ -6,6 +6,7 @@ Leaf files with labelled boundary and veins are sources/files.py's business; thi
 
 from __future__ import annotations
 
+import codecs
 import os
 from pathlib import Path
 
@@ -148,7 +149,9 @@ def is_scan_file(path: str) -> bool:
     if suffix not in SCAN_SUFFIXES or suffix == ".ply":
         return False
     try:
-        with path_.open(encoding="utf-8") as handle:
+        with path_.open("rb") as raw:  # a spreadsheet's "Unicode Text" (inputs.read_text)
+            utf16 = raw.read(2) in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)
+        with path_.open(encoding="utf-16" if utf16 else "utf-8") as handle:
             for line in handle:
                 fields = line.split("#", 1)[0].replace(",", " ").replace(";", " ").split()
                 if fields:

@@ -323,3 +323,19 @@ def test_a_spreadsheets_unicode_text_reads_as_its_numbers(tmp_path: Path, encodi
     np.testing.assert_allclose(ls.load_leaf(path).boundary, leaf.boundary, atol=1e-6)
     np.testing.assert_allclose(read_scan(path), leaf.boundary, atol=1e-6)
     np.testing.assert_allclose(open_file(path).leaf.boundary, leaf.boundary, atol=1e-6)
+
+
+def test_a_scans_unicode_text_with_normals_opens_as_a_scan(tmp_path: Path):
+    """A scan with normals saved as "Unicode Text" was taken for a leaf (its six columns
+    refused) because the scan test read the file as UTF-8."""
+    from leafstudio.workflows import open_file
+
+    rng = np.random.default_rng(3)
+    xy = rng.uniform(-1, 1, (400, 2)) * [1.0, 0.5]
+    points = np.column_stack([xy, 0.05 * xy[:, 0] ** 2, np.tile([0.0, 0.0, 1.0], (400, 1))])
+    text = "\r\n".join("\t".join(f"{v:.6f}" for v in p) for p in points) + "\r\n"
+    path = tmp_path / "scan.txt"
+    path.write_bytes(text.encode("utf-16"))
+    opened = open_file(path, force=True)
+    assert opened.kind == "scan"
+    np.testing.assert_allclose(opened.scan, points[:, :3], atol=1e-6)
