@@ -4,17 +4,13 @@ from __future__ import annotations
 
 import argparse
 import sys
+from typing import TYPE_CHECKING
 
-from leafstudio.assets.placement import parse_length
 from leafstudio.errors import LeafError
-from leafstudio.sources.files import check_leaf_output
-from leafstudio.sources.photo import (
-    BASE_ENDS,
-    VEIN_CHOICES,
-    PhotoLeaf,
-    read_photo_leaf,
-    save_photo_leaf,
-)
+from leafstudio.sources.leafphoto import BASE_ENDS, VEIN_CHOICES
+
+if TYPE_CHECKING:
+    from leafstudio.sources.photo import PhotoLeaf
 
 
 def add_photo_parser(sub: argparse._SubParsersAction) -> None:
@@ -49,6 +45,8 @@ def add_photo_parser(sub: argparse._SubParsersAction) -> None:
 def photo_length(text: str) -> float:
     """`--length`: a bare number as it is, a length with its unit (6cm, as `form` and
     `reconstruct` take it) in millimetres, the unit a photo's own scale gives."""
+    from leafstudio.assets.placement import parse_length  # heavy (numba): not for --help
+
     try:
         return float(text)
     except ValueError:
@@ -61,6 +59,9 @@ def photo_length(text: str) -> float:
 
 def run_photo(args: argparse.Namespace) -> int:
     """Find the leaf in the photo and write it."""
+    from leafstudio.sources.files import check_leaf_output  # heavy (scipy, skimage, the forms'
+    from leafstudio.sources.photo import read_photo_leaf, save_photo_leaf  # veins): not for --help
+
     check_leaf_output(args.output, [args.image])
     found = read_photo_leaf(
         args.image, length=args.length, base_end=args.base_end, veins=args.veins,
