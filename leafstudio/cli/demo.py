@@ -19,7 +19,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Write the named demo leaf."""
     from leafstudio.sources.demos import demo
-    from leafstudio.sources.files import save_leaf  # heavy (bends: scipy, numba): not for --help
+    from leafstudio.sources.files import save_leaf  # heavy (bends: scipy): not for --help
 
     save_leaf(demo(args.name), args.output)
     return EXIT_OK

@@ -45,11 +45,11 @@ def add_photo_parser(sub: argparse._SubParsersAction) -> None:
 def photo_length(text: str) -> float:
     """`--length`: a bare number as it is, a length with its unit (6cm, as `form` and
     `reconstruct` take it) in millimetres, the unit a photo's own scale gives."""
-    from leafstudio.assets.placement import parse_length  # heavy (numba): not for --help
-
     try:
         return float(text)
     except ValueError:
+        from leafstudio.assets.placement import parse_length  # heavy (numba): not for --help
+
         try:
             return parse_length(text) * 1e3
         except LeafError as error:  # argparse names the option itself
@@ -59,8 +59,9 @@ def photo_length(text: str) -> float:
 
 def run_photo(args: argparse.Namespace) -> int:
     """Find the leaf in the photo and write it."""
-    from leafstudio.sources.files import check_leaf_output  # heavy (scipy, skimage, the forms'
-    from leafstudio.sources.photo import read_photo_leaf, save_photo_leaf  # veins): not for --help
+    # heavy (scipy, scikit-image, the forms' veins): not for --help
+    from leafstudio.sources.files import check_leaf_output
+    from leafstudio.sources.photo import read_photo_leaf, save_photo_leaf
 
     check_leaf_output(args.output, [args.image])
     found = read_photo_leaf(
