@@ -18,9 +18,12 @@ ROOT = Path(__file__).resolve().parents[1]
 HEAVY = ("numba", "scipy", "shapely", "matplotlib", "pyvista", "vtkmodules", "PIL", "trimesh")
 
 
-def _loaded_after(code: str) -> list[str]:
-    """The heavy packages in sys.modules after running `code` in a new interpreter."""
-    probe = f"{code}\nimport json, sys\nprint(json.dumps(sorted(sys.modules)))"
+def _loaded_after(code: str, since: str = "") -> list[str]:
+    """The heavy packages imported by `code` in a new interpreter (after `since` is run)."""
+    probe = (
+        f"import sys\n{since}\nbefore = set(sys.modules)\n{code}\n"
+        "import json\nprint(json.dumps(sorted(set(sys.modules) - before)))"
+    )
     out = subprocess.run(
         [sys.executable, "-c", probe], cwd=ROOT, capture_output=True, text=True, check=True
     ).stdout
@@ -59,3 +62,16 @@ def test_the_public_api_is_the_same_whatever_is_imported_first():
         "assert set(ls.__all__) <= set(dir(ls))\n"
     )
     assert _loaded_after(code)  # ran: check=True raises on a failed assertion
+
+
+def test_the_app_imports_its_heavy_modules_before_qt():
+    """PySide6 replaces `__import__` with a slower hook: run_app imports the window's modules
+    that do without Qt first (gui/qt/app.import_before_qt), so none of the heavy packages loads
+    after PySide6 but VTK's Qt widget."""
+    first = (
+        "from leafstudio.gui.qt.app import import_before_qt\n"
+        "import_before_qt()\n"
+        "assert 'PySide6' not in sys.modules, 'Qt imported before the rest'\n"  # check=True
+    )
+    late = _loaded_after("import leafstudio.gui.qt.main_window", since=first)
+    assert [name for name in late if name != "vtkmodules"] == []
