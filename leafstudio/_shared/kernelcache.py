@@ -4,7 +4,9 @@ numba caches beside the sources (core/__pycache__ and its subfolders) when they 
 written. In an installation whose package folder is read-only, the kernels go to the user's
 cache folder (XDG_CACHE_HOME, ~/.cache, ~/Library/Caches or LOCALAPPDATA), or to a private
 temporary folder as a last resort, instead of failing at import. `configure()` must run before
-numba is imported (leafstudio/__init__.py calls it first). A stamp in the cache folder for each
+numba is imported (leafstudio/__init__.py calls it first); it does not import numba itself
+(about 0.2 s), so `import leafstudio` stays light: `guard_cache_writes()` runs when the first
+kernel module imports numba's njit through core/jit.py. A stamp in the cache folder for each
 table of kernels (core/kernels.TABLES), written once the table is compiled (after a compile or a
 first run), lets the command line say "compiling" on a first run instead of 20 s of silence.
 """
@@ -45,17 +47,20 @@ def user_cache_folder() -> Path:
 
 def configure() -> Path | None:
     """Point numba's cache at a writable folder when the package's own cannot be written, and
-    make a failed cache write (a full disk) harmless; returns the folder chosen (None: numba's
-    default beside the sources, or the user's NUMBA_CACHE_DIR)."""
+    make a failed cache write (a full disk) harmless once numba is imported; returns the folder
+    chosen (None: numba's default beside the sources, or the user's NUMBA_CACHE_DIR)."""
     folder = _choose_folder()
-    _guard_cache_writes()
+    if (
+        "numba" in sys.modules
+    ):  # otherwise core/jit.py guards them when a kernel module imports numba
+        guard_cache_writes()
     return folder
 
 
-def _guard_cache_writes() -> None:
+def guard_cache_writes() -> None:
     """A kernel whose cache file cannot be written (disk full, quota) still runs: it is compiled
     in memory; numba would raise the OSError out of the user's run instead."""
-    from numba.core import caching
+    from numba.core import caching  # heavy (numba, 0.2 s): only where the kernels are
 
     save = caching.Cache.save_overload
     if getattr(save, "_leafstudio_guard", False):

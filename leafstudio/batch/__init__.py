@@ -20,56 +20,34 @@ format), executors (local processes, Dask), run (`Batch`, `batch`). The command 
 leafstudio/cli/batch.py.
 """
 
-from leafstudio.batch.executors import (
-    INSTALL_CLUSTER,
-    LOCAL_CLUSTER_CONFIG,
-    DaskCluster,
-    LocalPool,
-    check_scheduler,
-)
-from leafstudio.batch.plan import Job, file_hash, find_inputs, plan, resumable
-from leafstudio.batch.run import IN_FLIGHT_PER_WORKER, Batch, batch, remove_temporaries
-from leafstudio.batch.settings import (
-    CURVATURE_COLUMNS,
-    DEFAULT_TABLE,
-    FLOAT_COLUMNS,
-    FORMATS,
-    INT_COLUMNS,
-    SCAN_COLUMNS,
-    SHAPE_COLUMNS,
-    Settings,
-    columns,
-)
-from leafstudio.batch.table import TABLE_SUFFIXES, TraitTable
-from leafstudio.batch.worker import pin_threads, run_failed, run_job
+import lazy_loader
 
-__all__ = [
-    "CURVATURE_COLUMNS",
-    "DEFAULT_TABLE",
-    "FLOAT_COLUMNS",
-    "FORMATS",
-    "INSTALL_CLUSTER",
-    "INT_COLUMNS",
-    "IN_FLIGHT_PER_WORKER",
-    "LOCAL_CLUSTER_CONFIG",
-    "SCAN_COLUMNS",
-    "SHAPE_COLUMNS",
-    "TABLE_SUFFIXES",
-    "Batch",
-    "DaskCluster",
-    "Job",
-    "LocalPool",
-    "Settings",
-    "TraitTable",
-    "batch",
-    "check_scheduler",
-    "columns",
-    "file_hash",
-    "find_inputs",
-    "pin_threads",
-    "plan",
-    "remove_temporaries",
-    "resumable",
-    "run_failed",
-    "run_job",
-]
+# imported on first use: `leafstudio batch --help` reads the formats (settings) without the
+# workers, which load the whole pipeline
+__getattr__, __dir__, __all__ = lazy_loader.attach(
+    __name__,
+    submod_attrs={
+        "executors": [
+            "INSTALL_CLUSTER",
+            "LOCAL_CLUSTER_CONFIG",
+            "DaskCluster",
+            "LocalPool",
+            "check_scheduler",
+        ],
+        "plan": ["Job", "file_hash", "find_inputs", "plan", "resumable"],
+        "run": ["IN_FLIGHT_PER_WORKER", "Batch", "batch", "remove_temporaries"],
+        "settings": [
+            "CURVATURE_COLUMNS",
+            "DEFAULT_TABLE",
+            "FLOAT_COLUMNS",
+            "FORMATS",
+            "INT_COLUMNS",
+            "SCAN_COLUMNS",
+            "SHAPE_COLUMNS",
+            "Settings",
+            "columns",
+        ],
+        "table": ["TABLE_SUFFIXES", "TraitTable"],
+        "worker": ["pin_threads", "run_failed", "run_job"],
+    },
+)

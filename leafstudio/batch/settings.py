@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 from leafstudio.core.prepare.units import POINT_ARRAY_POWER
 from leafstudio.model import Params
-from leafstudio.sources.extract import OUTLINE_POINTS
+from leafstudio.sources.scan import OUTLINE_POINTS
 
 FORMATS = ("ply", "glb", "obj", "vtp", "none")  # mesh types save_mesh writes, or none
 DEFAULT_TABLE = "traits.csv"

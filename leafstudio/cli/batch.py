@@ -6,10 +6,14 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from typing import TYPE_CHECKING
 
 from leafstudio.assets.units import UNITS_SAID
-from leafstudio.batch import FORMATS, Batch, batch
+from leafstudio.batch.settings import FORMATS
 from leafstudio.cli.options import add_param_flags, compiling_notice, params_for
+
+if TYPE_CHECKING:
+    from leafstudio.batch.run import Batch
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -68,6 +72,8 @@ def run(args: argparse.Namespace) -> int:
     """`leafstudio batch`: run the batch with a progress bar on stderr (when it is a terminal),
     each failure's line as it happens and one summary line. Exit 0, or 1 if any input failed."""
     from tqdm import tqdm
+
+    from leafstudio.batch.run import batch  # heavy (the workers' pipeline): not for --help
 
     running = batch(
         args.inputs,

@@ -5,11 +5,8 @@ from __future__ import annotations
 import argparse
 import json
 
-from leafstudio.analysis.compare import compare, format_comparison
 from leafstudio.cli.options import EXIT_OK, add_run_options, first_run_said, settings
 from leafstudio.errors import LeafError
-from leafstudio.sources.files import load_leaf
-from leafstudio.workflows import check_finite
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -23,6 +20,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Print the comparison, as a table or JSON."""
+    from leafstudio.analysis.compare import compare, format_comparison  # heavy: not for --help
+    from leafstudio.sources.files import load_leaf
+    from leafstudio.workflows import check_finite
+
     leaf = load_leaf(args.input, veins=args.vein)
     params = settings(args)
     try:

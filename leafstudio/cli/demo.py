@@ -5,8 +5,6 @@ from __future__ import annotations
 import argparse
 
 from leafstudio.cli.options import EXIT_OK
-from leafstudio.sources.demos import demo
-from leafstudio.sources.files import save_leaf
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -20,5 +18,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Write the named demo leaf."""
+    from leafstudio.sources.demos import demo
+    from leafstudio.sources.files import save_leaf  # heavy (bends: scipy): not for --help
+
     save_leaf(demo(args.name), args.output)
     return EXIT_OK

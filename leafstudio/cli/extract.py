@@ -5,10 +5,7 @@ from __future__ import annotations
 import argparse
 
 from leafstudio.cli.options import EXIT_OK, log, whole
-from leafstudio.core.evaluate import leaf_blade_length
-from leafstudio.sources.extract import OUTLINE_POINTS
-from leafstudio.sources.files import check_leaf_output, save_leaf
-from leafstudio.workflows import open_scan
+from leafstudio.sources.scan import OUTLINE_POINTS
 
 
 def _points_value(text: str) -> int:
@@ -45,6 +42,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Extract the scan's leaf, write it and say what was kept."""
+    from leafstudio.core.evaluate import leaf_blade_length  # heavy (numba): not for --help
+    from leafstudio.sources.files import check_leaf_output, save_leaf
+    from leafstudio.workflows import open_scan
+
     check_leaf_output(args.output, [args.scan])
     opened = open_scan(args.scan, base_end=args.base_end, points=args.points, force=args.force)
     for note in opened.notes:

@@ -8,19 +8,19 @@ from pathlib import Path
 
 import numpy as np
 
-from leafstudio.assets.export import save_mesh
-from leafstudio.assets.placement import parse_length
 from leafstudio.assets.units import UNITS_SAID
-from leafstudio.assets.writers import MESH_SUFFIXES
 from leafstudio.cli.options import first_run_said
-from leafstudio.core.pipeline import reconstruct
-from leafstudio.core.prepare.vein_order import midrib_turned
 from leafstudio.errors import LeafError
-from leafstudio.forms.make import SIDE_ON, Form, seen_on_edge
-from leafstudio.forms.terms import APEXES, MARGINS, SHAPES, USER_BASES, format_terms, term_key
-from leafstudio.forms.veins import VENATION_KINDS, grow_veins
+from leafstudio.forms.terms import (
+    APEXES,
+    MARGINS,
+    SHAPES,
+    USER_BASES,
+    VENATION_KINDS,
+    format_terms,
+    term_key,
+)
 from leafstudio.model import Leaf, Params
-from leafstudio.sources.files import LEAF_SUFFIXES, check_leaf_output, load_leaf, save_leaf
 
 
 def add_form_parser(sub: argparse._SubParsersAction) -> None:
@@ -83,25 +83,30 @@ def add_veins_parser(sub: argparse._SubParsersAction) -> None:
     )
 
 
-def _is_leaf_file(name: str) -> bool:
-    return name.lower().endswith(LEAF_SUFFIXES)
-
-
 def run_form(args: argparse.Namespace) -> int:
     if args.list:
         print(format_terms())
         return 0
+    # heavy (the outlines' splines, the veins' growth: scipy, numba): not for --help nor --list
+    from leafstudio.forms.make import SIDE_ON, Form, seen_on_edge
+    from leafstudio.sources.files import LEAF_SUFFIXES, save_leaf
+
     if not args.shape:
         raise LeafError("a shape is needed (leafstudio form --list shows them)")
     if not args.output:
         raise LeafError("the output file is needed: -o FILE")
     out = args.output
-    mesh = not _is_leaf_file(out)
+    mesh = not out.lower().endswith(LEAF_SUFFIXES)
     if args.length is not None:
+        from leafstudio.assets.placement import parse_length  # heavy (numba): with --length only
+
         parse_length(args.length)
-    if mesh and not out.lower().endswith(MESH_SUFFIXES):
-        kinds = ", ".join(dict.fromkeys((*LEAF_SUFFIXES, *MESH_SUFFIXES)))
-        raise LeafError(f"unknown file type; use one of {kinds}", out)
+    if mesh:
+        from leafstudio.assets.writers import MESH_SUFFIXES  # heavy (the writers): a mesh only
+
+        if not out.lower().endswith(MESH_SUFFIXES):
+            kinds = ", ".join(dict.fromkeys((*LEAF_SUFFIXES, *MESH_SUFFIXES)))
+            raise LeafError(f"unknown file type; use one of {kinds}", out)
     names = ("apex", "base", "margin", "teeth", "lobes", "venation", "secondaries", "aspect")
     form = Form(
         args.shape,
@@ -117,6 +122,9 @@ def run_form(args: argparse.Namespace) -> int:
     if mesh and seen_on_edge(leaf):
         raise LeafError(f"{SIDE_ON}; write the leaf (.leaf.json), or lower --fold or --curl")
     if mesh:
+        from leafstudio.assets.export import save_mesh  # heavy (the pipeline): for a mesh only
+        from leafstudio.core.pipeline import reconstruct
+
         with first_run_said():
             result = reconstruct(leaf, Params())
         save_mesh(result, out, length=args.length)
@@ -142,6 +150,11 @@ def _point(text: str) -> np.ndarray:
 
 
 def run_veins(args: argparse.Namespace) -> int:
+    # heavy (the veins' growth: scipy, shapely, numba): not for --help
+    from leafstudio.core.prepare.vein_order import midrib_turned
+    from leafstudio.forms.veins import grow_veins
+    from leafstudio.sources.files import check_leaf_output, load_leaf, save_leaf
+
     check_leaf_output(args.output, [args.leaf])
     leaf = load_leaf(args.leaf)
     base = _point(args.base) if args.base else None

@@ -6,10 +6,7 @@ import argparse
 import json
 
 from leafstudio.cli.options import EXIT_OK, add_run_options, run_pipeline
-from leafstudio.core.evaluate import format_table, leaf_measurements
 from leafstudio.errors import LeafError
-from leafstudio.sources.files import load_leaf
-from leafstudio.workflows import check_finite
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -21,6 +18,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Print the reconstructed leaf's measurements, as a table or JSON."""
+    from leafstudio.core.evaluate import format_table, leaf_measurements  # heavy: not for --help
+    from leafstudio.sources.files import load_leaf
+    from leafstudio.workflows import check_finite
+
     _, result = run_pipeline(args, load_leaf(args.input, veins=args.vein))
     try:
         values = leaf_measurements(result)  # LeafError: a leaf too large to measure

@@ -10,12 +10,9 @@ from collections.abc import Iterator
 from typing import TYPE_CHECKING
 
 from leafstudio._shared.kernelcache import NOTICE, kernels_cached, mark_cached
-from leafstudio.core.pipeline import Pipeline
-from leafstudio.core.prepare.plausibility import leaf_warnings
 from leafstudio.errors import LeafError, shorten
 from leafstudio.model import PARAMS, Params
 from leafstudio.paramspec import Choice, Switch, read_whole
-from leafstudio.sources.files import load_project
 
 if TYPE_CHECKING:
     from leafstudio.paramspec import Param
@@ -80,6 +77,8 @@ def params_for(args: argparse.Namespace, base: object | None):
 
 def settings(args: argparse.Namespace):
     """Params from the command line, over a project's saved ones."""
+    from leafstudio.sources.files import load_project  # heavy (bends: scipy): not for --help
+
     saved = load_project(args.input)[1] if args.input.lower().endswith(".json") else None
     try:  # each flag is checked as it is read (_param_value): a bad one is the command line's
         return params_for(args, saved)
@@ -90,6 +89,9 @@ def settings(args: argparse.Namespace):
 def run_pipeline(args: argparse.Namespace, leaf: object):
     """The Params (see settings) and the pipeline's Result; the run's notes are printed as
     warnings, and the chosen K when K is auto."""
+    from leafstudio.core.pipeline import Pipeline  # heavy (numba, scipy): not for --help
+    from leafstudio.core.prepare.plausibility import leaf_warnings
+
     params = settings(args)
     try:  # the frame stage refuses a crossing boundary and keeps the largest of several loops
         with first_run_said():

@@ -4,17 +4,13 @@ from __future__ import annotations
 
 import argparse
 import sys
+from typing import TYPE_CHECKING
 
-from leafstudio.assets.placement import parse_length
 from leafstudio.errors import LeafError
-from leafstudio.sources.files import check_leaf_output
-from leafstudio.sources.photo import (
-    BASE_ENDS,
-    VEIN_CHOICES,
-    PhotoLeaf,
-    read_photo_leaf,
-    save_photo_leaf,
-)
+from leafstudio.sources.leafphoto import BASE_ENDS, VEIN_CHOICES
+
+if TYPE_CHECKING:
+    from leafstudio.sources.photo import PhotoLeaf
 
 
 def add_photo_parser(sub: argparse._SubParsersAction) -> None:
@@ -52,6 +48,8 @@ def photo_length(text: str) -> float:
     try:
         return float(text)
     except ValueError:
+        from leafstudio.assets.placement import parse_length  # heavy (numba): not for --help
+
         try:
             return parse_length(text) * 1e3
         except LeafError as error:  # argparse names the option itself
@@ -61,6 +59,10 @@ def photo_length(text: str) -> float:
 
 def run_photo(args: argparse.Namespace) -> int:
     """Find the leaf in the photo and write it."""
+    # heavy (scipy, scikit-image, the forms' veins): not for --help
+    from leafstudio.sources.files import check_leaf_output
+    from leafstudio.sources.photo import read_photo_leaf, save_photo_leaf
+
     check_leaf_output(args.output, [args.image])
     found = read_photo_leaf(
         args.image, length=args.length, base_end=args.base_end, veins=args.veins,

@@ -8,22 +8,9 @@ import json
 from pathlib import Path
 
 from leafstudio._shared.safewrite import check_outputs, replace_atomically, staged, write_bytes
-from leafstudio.analysis.fidelity import scaled_fit, scan_distances
-from leafstudio.assets.export import (
-    TEXTURES,
-    asset_options,
-    check_asset_options,
-    leaf_placement_of,
-    save_mesh,
-)
-from leafstudio.assets.placement import parse_length, size_note
 from leafstudio.assets.units import UNITS_SAID
-from leafstudio.assets.writers import MESH_SUFFIXES, written_paths
 from leafstudio.cli.options import EXIT_OK, add_run_options, log, run_pipeline
-from leafstudio.core.prepare.units import scaled_metrics
 from leafstudio.errors import LeafError
-from leafstudio.sources.files import load_leaf
-from leafstudio.workflows import check_finite, open_scan
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -96,7 +83,21 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Read, check, compute everything, then write every output together (safewrite.staged):
     a run that fails anywhere leaves all old outputs as they were."""
+    # heavy (the pipeline, the writers, the scans: numba, scipy, trimesh): not for --help
+    from leafstudio.analysis.fidelity import scaled_fit, scan_distances
+    from leafstudio.assets.export import (
+        TEXTURES,
+        asset_options,
+        check_asset_options,
+        leaf_placement_of,
+        save_mesh,
+    )
+    from leafstudio.assets.placement import parse_length, size_note
+    from leafstudio.assets.writers import MESH_SUFFIXES, written_paths
+    from leafstudio.core.prepare.units import scaled_metrics
     from leafstudio.render.figure import check_figure_path  # pyvista and VTK: only when asked for
+    from leafstudio.sources.files import load_leaf
+    from leafstudio.workflows import check_finite, open_scan
 
     out = Path(args.output)
     if not out.name.lower().endswith(MESH_SUFFIXES):

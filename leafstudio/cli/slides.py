@@ -8,9 +8,7 @@ import argparse
 from leafstudio._shared.safewrite import check_outputs
 from leafstudio.cli.options import EXIT_OK, add_run_options, run_pipeline
 from leafstudio.errors import LeafError
-from leafstudio.forms.glossary import form_of_term
 from leafstudio.render.lesson import LESSON_STEPS
-from leafstudio.sources.files import load_leaf
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -39,6 +37,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def comparisons(specs: list[str]) -> list[tuple[str, tuple]]:
     """Each --compare as (title, forms), checked before any work."""
+    from leafstudio.forms.glossary import form_of_term  # heavy (the forms): not for --help
+
     found = []
     for spec in specs:
         terms = [t.strip() for t in spec.split(",") if t.strip()]
@@ -51,6 +51,7 @@ def comparisons(specs: list[str]) -> list[tuple[str, tuple]]:
 def run(args: argparse.Namespace) -> int:
     """Reconstruct the leaf, then write every slide together (all or none)."""
     from leafstudio.render.step_slides import lesson_slides, slide_paths, write_slides
+    from leafstudio.sources.files import load_leaf  # heavy (bends: scipy, numba): not for --help
 
     compared = comparisons(args.compare)
     check_outputs(

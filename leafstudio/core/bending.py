@@ -34,9 +34,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse
-from numba import njit
 
 from leafstudio.core.grid import Grid
+from leafstudio.core.jit import njit
 
 LATTICE_NODES = 2500  # grid nodes, about, on the lattice whose bending is summed
 FINE = 0.97  # T below this: the margin band, where the lattice is finer (see lattice)

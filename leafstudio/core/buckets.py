@@ -16,7 +16,8 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+
+from leafstudio.core.jit import njit
 
 PER_BUCKET = 4  # points per bucket on average over the points' bounding box
 CROWDED_BUCKET = 64  # neighbour_distances hands a set with a bucket this full to a k-d tree

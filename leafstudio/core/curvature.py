@@ -25,12 +25,11 @@ from __future__ import annotations
 from typing import Protocol
 
 import numpy as np
-from numba import njit
 
 from leafstudio.core.buckets import frozen_array, kernel_array
+from leafstudio.core.jit import njit
 from leafstudio.core.mpu import MPUImplicit
-
-CURVATURE_ARRAYS = ("mean_curvature", "gaussian_curvature", "k1", "k2")
+from leafstudio.core.trianglemesh import CURVATURE_ARRAYS
 
 
 class Differentiable(Protocol):

@@ -16,10 +16,10 @@ the mesh's longest edge: 0.9-4 s for 20,000 scan points against a grid-512 mesh,
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 from scipy.spatial import cKDTree
 
 from leafstudio.core.buckets import kernel_array
+from leafstudio.core.jit import njit
 from leafstudio.core.kernels import ensure_compiled
 
 LEAF = 4  # triangles per leaf box at most

@@ -20,12 +20,12 @@ from collections.abc import Generator
 from typing import Any, TypeVar
 
 import numpy as np
-from numba import njit
 
 from leafstudio.core.bend import flat_curve, flat_leaf
 from leafstudio.core.buckets import kernel_array
 from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.distance import mesh_distances
+from leafstudio.core.jit import njit
 from leafstudio.core.kernels import ensure_compiled
 from leafstudio.core.plane import Frame, fit_frame, turned_along
 from leafstudio.core.prepare.units import Units

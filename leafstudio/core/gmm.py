@@ -13,9 +13,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from leafstudio.core.buckets import kernel_array
+from leafstudio.core.jit import njit
 from leafstudio.errors import LeafError
 
 REG_COVAR = 1e-6  # added to each covariance's diagonal, as scikit-learn does, so Σ stays invertible

@@ -20,10 +20,10 @@ boundary's plane pulls p below zero.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 from scipy.spatial import cKDTree
 
 from leafstudio.core.buckets import bounds, bucket_points, kernel_array
+from leafstudio.core.jit import njit
 from leafstudio.core.prepare.polygon import thin_curve
 
 TIE = 1e-9  # relative distance under which nearest points count as tied

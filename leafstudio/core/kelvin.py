@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.special
-from numba import njit
+
+from leafstudio.core.jit import njit
 
 KELVIN_STEP = 0.005  # of ℓ: the tables' step (a table 16 times finer read 1.5 times slower;
 # 0.01: ∇c, read from kei''s own table, stood 8e-6 off a finite difference of c on the nested demo

@@ -18,11 +18,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import triangle
-from numba import njit
 
 from leafstudio._shared.extras import require
 from leafstudio.core.buckets import kernel_array, near_edges
 from leafstudio.core.grid import Grid
+from leafstudio.core.jit import njit
 from leafstudio.errors import LeafError
 
 INNER_CLEARANCE = 0.4  # grid nodes nearer the margin than this many spacings are left out

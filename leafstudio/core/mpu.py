@@ -23,7 +23,6 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 from scipy.spatial import cKDTree
 
 from leafstudio.core.buckets import (
@@ -34,6 +33,7 @@ from leafstudio.core.buckets import (
     neighbour_distances,
 )
 from leafstudio.core.grid import Grid
+from leafstudio.core.jit import njit
 
 ALPHA = 0.75  # support radius = ALPHA * cell diagonal (Ohtake et al.)
 N_MIN = 6  # a ball grows until it holds this many points

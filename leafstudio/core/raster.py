@@ -16,9 +16,9 @@ picks the very pixels scipy picks (compared on random masks and textures).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 from scipy.ndimage import distance_transform_edt
 
+from leafstudio.core.jit import njit
 from leafstudio.core.kernels import MEASURE, compiled
 
 _NONE = np.int64(-1)

@@ -24,12 +24,12 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numba import njit
 
 from leafstudio.core.base import BaseSurface
 from leafstudio.core.buckets import kernel_array
 from leafstudio.core.curvature import implicit_derivatives, product_derivatives, taper_derivatives
 from leafstudio.core.gmm import Mixture
+from leafstudio.core.jit import njit
 from leafstudio.core.mpu import MPUImplicit
 
 if TYPE_CHECKING:

@@ -15,6 +15,10 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
+# the curvatures a mesh's vertices carry (core/curvature.py): here, with no kernels, for the
+# command line's `--colour-by` choices (render/figure.FIGURE_SCALARS)
+CURVATURE_ARRAYS = ("mean_curvature", "gaussian_curvature", "k1", "k2")
+
 if TYPE_CHECKING:
     import pyvista as pv
 

@@ -7,17 +7,15 @@
 - `terms`: every term with its definition in plain words.
 """
 
-from leafstudio.forms.make import Form, make_form
-from leafstudio.forms.terms import CATEGORIES, SHAPES, definition, format_terms
-from leafstudio.forms.veins import VENATION_KINDS, grow_veins
+import lazy_loader
 
-__all__ = [
-    "CATEGORIES",
-    "SHAPES",
-    "VENATION_KINDS",
-    "Form",
-    "definition",
-    "format_terms",
-    "grow_veins",
-    "make_form",
-]
+# imported on first use: the command line's parsers take the terms (forms.terms, plain data)
+# without the outlines' splines and the veins' growth (scipy, shapely, the kernels)
+__getattr__, __dir__, __all__ = lazy_loader.attach(
+    __name__,
+    submod_attrs={
+        "make": ["Form", "make_form"],
+        "terms": ["CATEGORIES", "SHAPES", "VENATION_KINDS", "definition", "format_terms"],
+        "veins": ["grow_veins"],
+    },
+)

@@ -193,6 +193,7 @@ BASES: dict[str, str] = {
     "sagittate": "two pointed lobes pointing back (the base of an arrow)",
     "hastate": "two pointed lobes flaring outward (the base of a halberd)",
 }
+VENATION_KINDS = ("pinnate", "palmate", "parallel", "arcuate")  # the veins forms/veins.py grows
 USER_BASES = ("cuneate", "rounded", "truncate", "cordate")  # what --base may choose
 
 MARGINS: dict[str, str] = {

@@ -57,10 +57,9 @@ from leafstudio.forms.growth import (
     to_margin,
 )
 from leafstudio.forms.relief import dome
-from leafstudio.forms.terms import check_term
+from leafstudio.forms.terms import VENATION_KINDS, check_term
 from leafstudio.model import SEED_MAX
 
-VENATION_KINDS = ("pinnate", "palmate", "parallel", "arcuate")
 RELIEFS = ("roof", "dome")
 BASE_REACH = 0.05  # a base farther outside the outline than this share of its size is refused
 HEIGHT_RATIO = 0.25  # vein height over its distance to the margin (sources/demos.py: h = 0.25 w)

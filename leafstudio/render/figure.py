@@ -13,8 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from leafstudio.core.curvature import CURVATURE_ARRAYS
-from leafstudio.core.evaluate import view_frame
+from leafstudio.core.trianglemesh import CURVATURE_ARRAYS
 from leafstudio.errors import LeafError
 
 FIGURE_SCALARS = ("height", *CURVATURE_ARRAYS)
@@ -57,6 +56,8 @@ def _colour_range(values: np.ndarray, scalars: str) -> tuple[float, float]:
 
 def _top_scale(result: Any, window_size: tuple[int, int]) -> float:
     """Half the visible height of the top view that shows the whole leaf with a margin."""
+    from leafstudio.core.evaluate import view_frame  # heavy (numba): not for the parser's choices
+
     xy, _ = view_frame(result).to_plane(result.triangle_mesh.points)
     half_length, half_width = np.ptp(xy, axis=0) / 2
     aspect = (window_size[0] / 2) / window_size[1]  # one panel's width / height
@@ -65,6 +66,8 @@ def _top_scale(result: Any, window_size: tuple[int, int]) -> float:
 
 def _cameras(result: Any) -> dict[str, list[tuple[float, float, float]]]:
     """iso and top camera positions (position, focal point, view up) from the leaf's frame."""
+    from leafstudio.core.evaluate import view_frame  # heavy (numba): not for the parser's choices
+
     frame = view_frame(result)
     mesh = result.mesh
     centre = np.asarray(mesh.center)

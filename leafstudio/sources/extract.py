@@ -39,6 +39,7 @@ from leafstudio.core.prepare.vein_order import veins_inside_outline
 from leafstudio.core.sheet import CELLS, Scaled, fit_sheet
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
+from leafstudio.sources.scan import OUTLINE_POINTS
 from leafstudio.sources.scan_holes import holes
 from leafstudio.sources.scan_outline import held_part, outline, resample
 from leafstudio.sources.scan_veins import PETIOLE_SHARE, base_point, midline, side_veins
@@ -53,7 +54,6 @@ CORE = 0.4  # core points have at least this share of the busiest balls' count
 EDGE = 0.3  # margin points, grown back near the core, at least this share (a strand has less)
 LIFT_NEIGHBOURS = 16
 RIM_KERNEL = np.array([1.0, 2.0, 3.0, 2.0, 1.0])  # smooths the margin's heights along it
-OUTLINE_POINTS = 200  # the outline's default count; its spacing sets the veins' and the rim's
 STRAND = 0.35  # a petiole's second spread is at most this share of its first (the real scans'
 # petioles: 0.06-0.23; the pieces of blade the ball test leaves: sheets 0.60-0.64, strips 0.12-0.34)
 STICK_OUT = 0.5  # ... and its far end this share of its length from the blade (petioles: 0.92-1.05;

@@ -26,6 +26,11 @@ import numpy as np
 from leafstudio._shared.inputs import load_json
 from leafstudio.errors import LeafError
 
+# what `leafstudio photo` and the app's photo dialog offer (sources/photo.py reads the photo);
+# here, with no scipy nor skimage, for the command line's parser
+BASE_ENDS = ("auto", "left", "right", "top", "bottom")  # where the base is in the photo
+VEIN_CHOICES = ("auto", "trace", "grow", "none")  # the veins: traced, grown, either, none
+
 
 @dataclass(frozen=True)
 class PhotoTexture:

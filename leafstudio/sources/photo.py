@@ -49,7 +49,7 @@ from leafstudio.sources.leafends import (
     midline,
     sharpen_end,
 )
-from leafstudio.sources.leafphoto import LeafPhoto
+from leafstudio.sources.leafphoto import BASE_ENDS, VEIN_CHOICES, LeafPhoto
 from leafstudio.sources.petiole import cut_petiole
 from leafstudio.sources.photo_midrib import along_midrib, ridge_midline
 from leafstudio.sources.photo_veins import Ridges, find_ridges, lifted, smoothed, trace_veins
@@ -57,8 +57,6 @@ from leafstudio.sources.photo_veins import Ridges, find_ridges, lifted, smoothed
 if TYPE_CHECKING:
     from leafstudio.sources.leafends import Midline, VeinField
 
-BASE_ENDS = ("auto", "left", "right", "top", "bottom")
-VEIN_CHOICES = ("auto", "trace", "grow", "none")
 SECOND_OBJECT = 0.25  # a second object this large (of the largest) means several leaves
 SMALLEST_LEAF = 0.002  # of the image's pixels: less is no leaf
 LARGEST_LEAF = 0.9  # of the image's pixels: more means no plain background

@@ -24,13 +24,14 @@ from leafstudio._shared.inputs import (
     read_numbers,
     read_ply,
 )
-from leafstudio.core.prepare.plausibility import COVER_SPREAD, surface_spread
 from leafstudio.errors import LeafError, shorten
 from leafstudio.model import Leaf
 
 SCAN_SUFFIXES = (".ply", ".pcd", ".xyz", ".csv", ".txt")
 MIN_SCAN_POINTS = 50
 LEAF_COLUMNS = 4  # x y z [label]: a point list with more columns is a scan
+OUTLINE_POINTS = 200  # an extracted outline's default count (sources/extract.py: its spacing
+# sets the veins' and the rim's); here, with no scipy, for `extract --points` and batch's key
 
 
 def _fast_rows(text: str) -> np.ndarray | None:
@@ -170,6 +171,9 @@ def looks_like_scan(leaf: Leaf) -> bool:
     by). Its 12 nearest neighbours spread in two directions within a dense noisy outline's
     band too: the app opened such a boundary (24,000 points, noise 0.1% of the length) as a
     scan and extracted a leaf from it."""
+    # heavy (scipy's k-d tree): not for the command line's parser, which reads OUTLINE_POINTS
+    from leafstudio.core.prepare.plausibility import COVER_SPREAD, surface_spread
+
     if leaf.veins or len(leaf.boundary) < MIN_SCAN_POINTS:
         return False
     return surface_spread(leaf.boundary) > COVER_SPREAD

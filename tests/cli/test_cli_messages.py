@@ -138,14 +138,14 @@ def test_a_local_batch_says_a_first_run_compiles(tmp_path, capsys, monkeypatch):
     from types import SimpleNamespace
 
     from leafstudio._shared.kernelcache import NOTICE
-    from leafstudio.cli import batch as batch_command
+    from leafstudio.batch import run as batch_run
     from leafstudio.cli import options
 
     table = SimpleNamespace(path=tmp_path / "out")
     ran = SimpleNamespace(
         total=1, ok=0, failed=0, resumed=0, stopped=False, table=table, run=lambda: iter(())
     )
-    monkeypatch.setattr(batch_command, "batch", lambda *args, **kwargs: ran)
+    monkeypatch.setattr(batch_run, "batch", lambda *args, **kwargs: ran)  # the command's own
     monkeypatch.setattr(options, "kernels_cached", lambda: False)
     assert main(["batch", str(tmp_path), "-o", str(tmp_path / "out")]) == 0
     assert NOTICE in capsys.readouterr().err
@@ -160,7 +160,7 @@ def test_a_batch_of_scans_without_scans_says_so_once(tmp_path, capsys, monkeypat
     files: the summary now names --scans."""
     from types import SimpleNamespace
 
-    from leafstudio.cli import batch as batch_command
+    from leafstudio.batch import run as batch_run
 
     scan = "a.txt: ...: this looks like a scan of the whole leaf; `leafstudio extract SCAN -o LEAF`"
     rows = [{"status": "failed", "error": scan}, {"status": "failed", "error": "b.csv: bad"}]
@@ -168,7 +168,7 @@ def test_a_batch_of_scans_without_scans_says_so_once(tmp_path, capsys, monkeypat
     ran = SimpleNamespace(
         total=2, ok=0, failed=2, resumed=0, stopped=False, table=table, run=lambda: iter(rows)
     )
-    monkeypatch.setattr(batch_command, "batch", lambda *args, **kwargs: ran)
+    monkeypatch.setattr(batch_run, "batch", lambda *args, **kwargs: ran)  # the command's own
     assert main(["batch", str(tmp_path), "-o", str(tmp_path / "out")]) == 1
     err = capsys.readouterr().err
     assert "1 of the inputs look like scans of whole leaves: --scans" in err

@@ -21,11 +21,11 @@ from dataclasses import dataclass
 
 import contourpy
 import numpy as np
-from numba import njit
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from leafstudio.core.buckets import bounds, kernel_array
+from leafstudio.core.jit import njit
 from leafstudio.core.kernels import ensure_compiled
 
 NOISE_SAMPLE = 20000  # points whose prediction misses estimate the noise, at most

@@ -15,11 +15,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import shapely
-from numba import njit
 from scipy.spatial import cKDTree
 from shapely.geometry import MultiPoint, Polygon
 
 from leafstudio.core.buckets import bounds, kernel_array, near_edges, neighbour_distances
+from leafstudio.core.jit import njit
 from leafstudio.core.prepare.cloud import (
     Cells,
     Noise,

@@ -9,9 +9,9 @@ from typing import NamedTuple
 
 import numpy as np
 import shapely
-from numba import njit
 
 from leafstudio.core.buckets import kernel_array
+from leafstudio.core.jit import njit
 
 MAX_OUTLINE_VERTICES = 3000  # a denser outline is thinned to about this many (thin_outline)
 
