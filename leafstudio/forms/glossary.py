@@ -1,8 +1,10 @@
 """Pictures of the terms, and forms side by side: what a class compares.
 
 - `term_picture(kind, term)`: the outline (and veins) that shows one term, with the part of the
-  leaf's plane to look at (an apex: the leaf's tip; a base: its foot; a margin: the blade's middle;
-  a shape or venation: the whole leaf). Made once per term from the forms themselves, then cached.
+  leaf's plane to look at (an apex: the leaf's tip; a base: its foot; a toothed or entire
+  margin: one side's middle, from the midrib out, where the teeth stand a few pixels deep at the
+  glossary's size; a sinuate or lobed one: the blade's whole middle; a shape or venation: the
+  whole leaf). Made once per term from the forms themselves, then cached.
 - `COMPARISONS`: forms a lesson sets side by side (ovate beside obovate, serrate beside
   dentate, ...), and `compared_terms(forms)`: each form's terms that differ from the others',
   with their definitions: what the class should look at.
@@ -34,6 +36,7 @@ PICTURED: dict[str, tuple[str, ...]] = {  # the terms drawn, by kind
     "margin": tuple(MARGINS),
     "venation": tuple(VENATIONS),
 }
+WHOLE_MARGINS = ("sinuate", "lobed")  # a few waves or lobes: the blade's whole middle shown
 COMPARED_KINDS = ("shape", "apex", "base", "margin", "venation")
 
 
@@ -112,8 +115,10 @@ def term_picture(kind: str, term: str) -> TermPicture:
         box = (0.55, -1.3 * half, 1.05, 1.3 * half)
     elif kind == "base":
         box = (lo[0] - 0.05, -1.3 * half, 0.45, 1.3 * half)
-    elif kind == "margin":
+    elif kind == "margin" and term in WHOLE_MARGINS:
         box = (0.15, -1.1 * half, 0.85, 1.1 * half)
+    elif kind == "margin":  # one side's middle, from the midrib out: teeth a few pixels deep
+        box = (0.36, -0.02 * half, 0.64, 1.08 * half)
     else:
         box = (*lo, *hi)
     return TermPicture(outline, veins, np.asarray(box, dtype=float))

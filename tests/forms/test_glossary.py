@@ -58,3 +58,23 @@ def test_two_to_four_forms_are_compared():
     assert all(2 <= len(forms) <= 4 for forms in COMPARISONS.values())
     with pytest.raises(LeafError, match="one to four forms"):
         compared_terms([Form("ovate")] * 5)
+
+
+@pytest.mark.parametrize("margin", ["serrate", "serrulate", "dentate", "crenate"])
+def test_a_toothed_margins_picture_shows_its_teeth_at_the_glossarys_size(margin):
+    """Help > Glossary draws each term in a PICTURE-pixel square: the teeth of a toothed margin
+    must stand at least 3 pixels off the entire margin's edge there, or a class on a projector
+    sees serrulate as entire (the blade's whole middle, 0.15-0.85 of its length, drew a
+    serrulate margin's teeth 1.4 pixels deep)."""
+    from leafstudio.gui.qt.glossary_view import PICTURE  # Qt: only for the picture's size
+
+    picture, entire = term_picture("margin", margin), term_picture("margin", "entire")
+    x0, y0, x1, y1 = picture.box
+    scale = 0.9 * PICTURE / max(x1 - x0, y1 - y0)  # draw_plane's pixels per leaf length
+    shown = _shown(picture)
+    side = shown[shown[:, 1] > 0.5 * y1]  # the margin's points shown (not the midrib)
+    edge = entire.outline[entire.outline[:, 1] > 0]
+    edge = edge[np.argsort(edge[:, 0])]
+    depth = np.ptp(side[:, 1] - np.interp(side[:, 0], edge[:, 0], edge[:, 1]))
+    assert len(side) > 10
+    assert depth * scale >= 3.0

@@ -2,7 +2,7 @@
 venation) with a small picture and its definition in plain words.
 
 The pictures come from the forms themselves (forms/glossary.term_picture: the leaf's tip for an
-apex, its foot for a base, the blade's middle for a margin, the whole leaf for a shape or a
+apex, its foot for a base, one side's middle for a margin, the whole leaf for a shape or a
 venation), drawn once per term and size with QPainter and cached for the process; the dialog
 draws them the first time it opens (about half a second for all), not at start-up.
 """
