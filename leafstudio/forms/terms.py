@@ -214,8 +214,8 @@ VENATIONS: dict[str, str] = {
     "palmate": "three or more main veins spreading from the base, like fingers of a hand "
     "(actinodromous)",
     "parallel": "five or more veins running side by side from base to apex, never crossing",
-    "arcuate": "secondary veins curving up toward the apex along the margin, each looping "
-    "toward the next (brochidodromous)",
+    "arcuate": "secondary veins bowing up toward the apex inside the margin, fading without "
+    "joining the next, as in dogwood (eucamptodromous)",
 }
 
 RELIEF: dict[str, str] = {  # plain words (the app shows them); FLAGS adds the CLI's syntax

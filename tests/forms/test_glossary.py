@@ -78,3 +78,23 @@ def test_a_toothed_margins_picture_shows_its_teeth_at_the_glossarys_size(margin)
     depth = np.ptp(side[:, 1] - np.interp(side[:, 0], edge[:, 0], edge[:, 1]))
     assert len(side) > 10
     assert depth * scale >= 3.0
+
+
+def test_arcuate_is_defined_as_the_veins_it_grows_curving_up_without_joining():
+    """Arcuate secondaries (a dogwood's) bow up toward the apex along inside the margin and fade
+    without joining the next: eucamptodromous, not brochidodromous (joined in loops). The forms
+    grow them so (each ends a few hundredths of the length from every other secondary), and
+    the definition a class reads says the same (it said 'each looping toward the next
+    (brochidodromous)')."""
+    from shapely.geometry import LineString, Point
+
+    from leafstudio.forms.terms import definition
+
+    for shape in ("ovate", "elliptic"):
+        veins = [v[:, :2] for v in Form(shape, venation="arcuate").leaf().veins]
+        for i, vein in enumerate(veins[1:], 1):
+            others = [LineString(w) for j, w in enumerate(veins) if j not in (0, i)]
+            assert min(o.distance(Point(vein[-1])) for o in others) > 0.01
+    words = definition("arcuate", "venation")
+    assert "loop" not in words and "brochidodromous" not in words
+    assert "eucamptodromous" in words
