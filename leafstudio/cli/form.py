@@ -56,7 +56,7 @@ def add_form_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--length",
         metavar="L",
-        help=f"a mesh's real length, base to apex ({UNITS_SAID})",
+        help=f"a mesh's real length, base to apex ({UNITS_SAID}); a mesh -o only",
     )
     p.add_argument(
         "-o",
@@ -101,6 +101,12 @@ def run_form(args: argparse.Namespace) -> int:
         from leafstudio.assets.placement import parse_length  # heavy (numba): with --length only
 
         parse_length(args.length)
+        if not mesh:  # a leaf file keeps the forms' convention, length 1: the length is a mesh's
+            raise LeafError(
+                f"--length sets a mesh's real size, not a leaf file's (length 1); write a mesh "
+                f"(.glb, .obj, .usdz, ...) or give it to reconstruct: leafstudio reconstruct "
+                f"{out} -o LEAF.glb --length {args.length}"
+            )
     if mesh:
         from leafstudio.assets.writers import MESH_SUFFIXES  # heavy (the writers): a mesh only
 

@@ -238,3 +238,17 @@ def test_a_leaf_in_millimetres_written_to_gltf_without_a_length_is_noted(tmp_pat
     assert len(notes["x.glb"]) == 1 and "60 m" in notes["x.glb"][0]
     assert "--length" in notes["x.glb"][0]
     assert notes["y.glb"] == [] and notes["z.ply"] == []
+
+
+def test_form_refuses_a_length_for_a_leaf_file(tmp_path: Path, capsys):
+    """`form ovate --length 8cm -o leaf.leaf.json` wrote the form 1 long and said nothing (the
+    length is a mesh's), so the designer's `reconstruct leaf.leaf.json -o leaf.glb` made a leaf
+    one metre long; the command now does what was asked or says why: one line, exit 2, no file."""
+    from leafstudio.cli import main
+
+    leaf = tmp_path / "ovate.leaf.json"
+    code = main(["form", "ovate", "-o", str(leaf), "--length", "8cm"])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1
+    assert "--length" in err and "reconstruct" in err
+    assert not leaf.exists()
