@@ -25,6 +25,8 @@ class LessonStep:
     picture : str
         What its picture draws (render/step_slides.step_picture): "points", "plane",
         "implicit", "guide", "em", "heights" or "mesh".
+    edges : bool, default: False
+        Whether the app's 3D view draws the mesh's triangle edges.
     """
 
     title: str
@@ -32,6 +34,7 @@ class LessonStep:
     equation: str
     layers: tuple[str, ...]
     picture: str
+    edges: bool = False
 
 
 LESSON_STEPS: tuple[LessonStep, ...] = (
@@ -85,7 +88,7 @@ LESSON_STEPS: tuple[LessonStep, ...] = (
         "the sum down to zero at the edge, so the surface meets the outline exactly.",
         r"$z(\mathbf{x}) = b(\mathbf{x}) + \tanh(g/\delta) \, \sum_k a_k \, "
         r"N(\mathbf{x} \mid \mu_k, \Sigma_k)$",
-        ("samples",),
+        ("mesh",),  # coloured by height (lesson_view.py); the samples layer: a pink mass
         "heights",
     ),
     LessonStep(
@@ -95,5 +98,6 @@ LESSON_STEPS: tuple[LessonStep, ...] = (
         "",
         ("mesh", "points"),
         "mesh",
+        edges=True,
     ),
 )

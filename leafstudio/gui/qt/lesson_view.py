@@ -56,6 +56,7 @@ class LessonWindow(QWidget):
         self.setStyleSheet("background: white; color: #202020;")
         self.viewport = Viewport(self)
         self.viewport.show_bars = False  # the plan view has the step's colour bar, readable
+        self.viewport.mesh_coloring = "height"  # as the plans of z(x) and of the mesh beside it
         self.title = QLabel()
         self.title.setFont(_font(TITLE_PT, bold=True))
         self.title.setWordWrap(True)
@@ -117,6 +118,8 @@ class LessonWindow(QWidget):
         pixmap.setDevicePixelRatio(ratio)
         self.equation.setPixmap(pixmap)
         self.equation.setVisible(not pixmap.isNull())
+        if self.viewport.show_edges != step.edges:  # the mesh's triangles, where it says so
+            self.viewport.set_edges(step.edges)
         for key in self.viewport.visible:  # the step's layers only
             on = key in step.layers
             if self.viewport.visible[key] != on:

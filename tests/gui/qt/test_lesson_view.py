@@ -95,3 +95,23 @@ def test_the_lesson_shows_an_obovate_leaf_base_first_as_the_app_does(window, qtb
     midrib = window.session.state.leaf.veins[0]
     assert np.dot(lesson.viewport._frame.u, midrib[-1] - midrib[0]) > 0
     lesson.close()
+
+
+def test_the_surface_steps_show_the_mesh_as_their_words_and_pictures_say(window, qtbot):
+    """Step 6 ('the hills make the surface') showed the GMM samples layer alone: some 8,000
+    pink spheres, each wider than the grid's step at a projector's size, one pink mass beside a
+    plan of z(x) in viridis; step 7 said 'the mesh, coloured by height' over the green leaf.
+    The lesson's 3D view now draws the mesh coloured by height, as both plans do, in both
+    steps, and in step 7 ('cut into small triangles') its triangles' edges."""
+    lesson = LessonWindow(window)
+    qtbot.addWidget(lesson)
+    lesson.resize(1280, 720)
+    lesson.show()
+    qtbot.waitExposed(lesson)
+    surface = next(i for i, s in enumerate(STEPS) if s.picture == "heights")
+    for index in (surface, surface + 1):
+        lesson.go(index)
+        assert "mesh" in _shown_layers(lesson) and "samples" not in _shown_layers(lesson)
+        assert lesson.viewport.mesh_coloring == "height"
+        assert lesson.viewport.show_edges == (STEPS[index].picture == "mesh")
+    lesson.close()
