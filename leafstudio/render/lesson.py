@@ -41,7 +41,7 @@ LESSON_STEPS: tuple[LessonStep, ...] = (
     LessonStep(
         "1. Points on the leaf",
         "We start from points measured on the leaf: along its edge (black) and along its veins "
-        "(red), as a scanner or a drawing gives them. Each point has its own x, y and z.",
+        "(in colour), as a scanner or a drawing gives them. Each point has its own x, y and z.",
         r"$\mathbf{p}_i = (x_i,\ y_i,\ z_i)$",
         ("points",),
         "points",
@@ -58,8 +58,8 @@ LESSON_STEPS: tuple[LessonStep, ...] = (
     LessonStep(
         "3. Inside or outside the leaf",
         "A smooth function g tells every point of the plane whether it lies on the leaf: "
-        "positive inside (blue), negative outside (red). Where g is zero, the line around it, is "
-        "the leaf's edge.",
+        "positive inside (blue), negative outside (red). The line where g is zero is the leaf's "
+        "edge.",
         r"$g(\mathbf{x}) > 0$ inside,   $g(\mathbf{x}) = 0$ on the edge",
         ("implicit", "contour", "points"),  # g over the surface (gui/model/fields.py)
         "implicit",

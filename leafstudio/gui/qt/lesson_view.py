@@ -34,7 +34,7 @@ MINIMUM = (960, 600)  # below this, the words of a step no longer fit beside the
 TEXT_SHARE = 0.44  # the text column's share of the width: the 3D view keeps the rest
 NEXT_KEYS = frozenset({Qt.Key.Key_Right, Qt.Key.Key_Space, Qt.Key.Key_PageDown, Qt.Key.Key_Down})
 BACK_KEYS = frozenset({Qt.Key.Key_Left, Qt.Key.Key_Backspace, Qt.Key.Key_PageUp, Qt.Key.Key_Up})
-FOOTER = "{progress}  ·  → or space: next  ·  ←: back  ·  Esc: leave"
+FOOTER = "{progress} · → next · ← back · Esc: leave"  # one line at 1024 wide (space: next too)
 
 
 def _font(points: float, bold: bool = False) -> QFont:

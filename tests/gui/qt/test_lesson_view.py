@@ -3,6 +3,7 @@ move between steps, fonts of at least 14 points, nothing over the leaf."""
 
 from __future__ import annotations
 
+import pytest
 from PySide6.QtCore import QPoint, QRect, Qt
 from PySide6.QtWidgets import QLabel
 
@@ -114,4 +115,19 @@ def test_the_surface_steps_show_the_mesh_as_their_words_and_pictures_say(window,
         assert "mesh" in _shown_layers(lesson) and "samples" not in _shown_layers(lesson)
         assert lesson.viewport.mesh_coloring == "height"
         assert lesson.viewport.show_edges == (STEPS[index].picture == "mesh")
+    lesson.close()
+
+
+@pytest.mark.parametrize("size", [(1280, 720), (1024, 768)])
+def test_the_footer_stays_on_one_line_at_a_projectors_size(window, qtbot, size):
+    """At 1280 x 720 the footer's last words, "Esc: leave", wrapped onto a second line."""
+    lesson = LessonWindow(window)
+    qtbot.addWidget(lesson)
+    lesson.resize(*size)
+    lesson.show()
+    qtbot.waitExposed(lesson)
+    qtbot.wait(300)  # the column is sized once the resize rests
+    footer = lesson.footer
+    line = footer.fontMetrics().lineSpacing()
+    assert footer.heightForWidth(footer.width()) < 1.5 * line, footer.text()
     lesson.close()
