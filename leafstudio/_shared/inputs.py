@@ -112,7 +112,7 @@ def read_text(path: str | os.PathLike, limit: int = MAX_TEXT_BYTES) -> str:
         raise LeafError(f"cannot be read ({exc.strerror or exc})", str(path)) from None
     if len(data) > limit:
         raise LeafError(f"is too large (more than {limit / 2**20:.0f} MiB)", str(path))
-    if data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE):  # a spreadsheet's "Unicode text"
+    if is_utf16(data):  # a spreadsheet's "Unicode text"
         return _utf16_numbers(data, str(path))
     if b"\0" in data:
         raise LeafError("is not a text file (it holds binary data)", str(path))
@@ -120,6 +120,14 @@ def read_text(path: str | os.PathLike, limit: int = MAX_TEXT_BYTES) -> str:
         return data.decode("utf-8")
     except UnicodeDecodeError:
         raise LeafError("is not a text file (not UTF-8)", str(path)) from None
+
+
+UTF16_MARKS = (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)
+
+
+def is_utf16(head: bytes) -> bool:
+    """Whether a file's first bytes are UTF-16's byte-order mark (Excel's "Unicode Text")."""
+    return head[:2] in UTF16_MARKS
 
 
 def _utf16_numbers(data: bytes, source: str) -> str:

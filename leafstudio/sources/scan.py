@@ -6,7 +6,6 @@ Leaf files with labelled boundary and veins are sources/files.py's business; thi
 
 from __future__ import annotations
 
-import codecs
 import os
 from pathlib import Path
 
@@ -18,6 +17,7 @@ from leafstudio._shared.inputs import (
     check_file_kind,
     check_input_file,
     check_pcd_header,
+    is_utf16,
     line_blocks,
     parse_number,
     ply_xyz,
@@ -151,7 +151,7 @@ def is_scan_file(path: str) -> bool:
         return False
     try:
         with path_.open("rb") as raw:  # a spreadsheet's "Unicode Text" (inputs.read_text)
-            utf16 = raw.read(2) in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)
+            utf16 = is_utf16(raw.read(2))
         with path_.open(encoding="utf-16" if utf16 else "utf-8") as handle:
             for line in handle:
                 fields = line.split("#", 1)[0].replace(",", " ").replace(";", " ").split()
