@@ -30,6 +30,7 @@ the mesh's points are bent.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, ClassVar
 
@@ -230,6 +231,7 @@ def unseamed(v: np.ndarray, roll: float, ring: bool = False) -> np.ndarray:
 
 
 Plan = list[tuple[np.ndarray, np.ndarray]]  # per cut: (k, 2) edges cut and (k,) where along them
+Lift = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]  # points onto a surface, and heights
 
 
 def cut_levels(faces: np.ndarray, q: np.ndarray, levels: np.ndarray) -> tuple[np.ndarray, Plan]:
@@ -339,7 +341,7 @@ def _crease_cuts(mesh: TriangleMesh, crease, trim) -> tuple[np.ndarray, Plan, bo
 
 
 def sag_splits(
-    points: np.ndarray, faces: np.ndarray, carry, tolerance: float, lift=None
+    points: np.ndarray, faces: np.ndarray, carry, tolerance: float, lift: Lift | None = None
 ) -> tuple[np.ndarray, Plan]:
     """(f', 3) faces with every edge halved whose midpoint the bend `carry` takes farther than
     `tolerance` from the bent chord, and the plan of the new points (`carried`), SAG_ROUNDS
@@ -430,7 +432,7 @@ def _bent_meshes(
     creases: list,
     trims: list,
     sag: float | None,
-    lifts: list,
+    lifts: list[Lift | None],
 ) -> list[TriangleMesh]:
     """Each mesh cut along the bend's creases (`creases`, in its units), trimmed (`trims`, see
     _crease_cuts; the points no face keeps dropped), its edges halved where the bend sags them
@@ -455,7 +457,7 @@ def _bent_meshes(
     return out
 
 
-def _onto_surface(result: Result):
+def _onto_surface(result: Result) -> Lift:
     """A function taking (n, 3) points of the flat run's mesh onto its surface along the
     plane's normal: the points, and their heights (sag_splits' new points, on the surface, not
     on the flat mesh's chord, which the bend stretches: up to 3 times on a folded tube)."""
