@@ -72,10 +72,14 @@ def read_point_table(path: Path, columns: Sequence[int] = (2, 3, 4)) -> np.ndarr
     return np.column_stack([rows, np.zeros(len(rows))]) if rows.shape[1] == 2 else rows
 
 
+NOT_HEIGHTS = {"", "id", "index", "idx", "n", "no", "num", "point", "pt", "label"}  # header names
+
+
 def named_columns(text: str, columns: Sequence[int] = (3, 4)) -> tuple[int, list[int]] | None:
     r"""From a header line naming x and y, and z (any case, a unit after them: `x [mm]`): its
-    width and the indices of x, y, z (-1 when it names no z: the points are flat) and, when 4 is
-    one of `columns`, label; None for no such header.
+    width and the indices of x, y, z (-1 when it names no z and its other columns are an index
+    or labels, NOT_HEIGHTS: the points are flat) and, when 4 is one of `columns`, label; None for
+    no such header.
 
     Examples
     --------
@@ -83,6 +87,8 @@ def named_columns(text: str, columns: Sequence[int] = (3, 4)) -> tuple[int, list
     (5, [1, 2, 3, 4])
     >>> named_columns("id,x,y\n0,1.5,2\n")
     (3, [1, 2, -1])
+    >>> named_columns("x,y,height\n1.5,2,0.1\n") is None  # read in order: x, y, z
+    True
     >>> named_columns("1 2 3\n") is None
     True
     """
@@ -97,6 +103,8 @@ def named_columns(text: str, columns: Sequence[int] = (3, 4)) -> tuple[int, list
     names = [re.split(r"[\s(\[]", f.strip().strip("\"'").lower(), maxsplit=1)[0] for f in fields]
     if not {"x", "y"} <= set(names) or len(set(names)) < len(names) - names.count(""):
         return None
+    if "z" not in names and not set(names) - {"x", "y"} <= NOT_HEIGHTS:
+        return None  # `x,y,height`: its third column may be the heights, read in order as before
     wanted = ["x", "y", "z", *(["label"] if 4 in columns and "label" in names else [])]
     take = [names.index(name) if name in names else -1 for name in wanted]
     if take == list(range(len(take))) and len(names) == len(take):

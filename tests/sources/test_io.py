@@ -339,3 +339,17 @@ def test_a_scans_unicode_text_with_normals_opens_as_a_scan(tmp_path: Path):
     opened = open_file(path, force=True)
     assert opened.kind == "scan"
     np.testing.assert_allclose(opened.scan, points[:, :3], atol=1e-6)
+
+
+def test_a_header_naming_x_y_and_another_word_keeps_reading_the_third_column_as_heights(
+    tmp_path: Path,
+):
+    """`x,y,height` (or `x,y,z_mm`) was read in order, x, y, z: naming x and y without z must
+    not make such a leaf flat; only an index or labels beside x and y do."""
+    boundary = ls.demo("nested").boundary * [1, 1, 0]
+    boundary[:, 2] = 0.1 * boundary[:, 0] ** 2  # heights: a curled margin
+    for header in ("x,y,height", "x,y,z_mm"):
+        path = tmp_path / "leaf.csv"
+        rows = "\n".join(",".join(map(str, p)) for p in boundary)
+        path.write_text(header + "\n" + rows + "\n")
+        np.testing.assert_allclose(ls.load_leaf(path).boundary, boundary)
