@@ -155,6 +155,9 @@ _DECIMAL_POINT = re.compile(r"\d\.|\.\d")
 DECIMAL_HEAD = 1 << 16  # characters from a file's start that tell tab- or space-separated
 _SPACED_FIELDS = re.compile(r"\d[ \t]+[-+.\d]")  # a number, spaces or tabs, the next
 _SEPARATING_COMMA = re.compile(r",[ \t]|[ \t],|,,|\d,\d+,|,$", re.MULTILINE)  # `1, 2`, `1,2,3`
+# a line of numbers and separators only: a title's or a header's words ('exported 2024 05 01')
+# say nothing of how the numbers are separated
+_NUMBERS_LINE = re.compile(r"^[-+.,;\deE \t\r]+$", re.MULTILINE)
 
 
 def decimal_commas(text: str, source: str) -> str:
@@ -179,7 +182,7 @@ def decimal_commas(text: str, source: str) -> str:
     if ";" in text and _SEMICOLON_FIELDS.search(body := _COMMENT.sub("", text)):
         separated = "';'"
     else:  # told from the file's start: a regex over a whole 1e6-line CSV took 0.8 s
-        head = _COMMENT.sub("", text[:DECIMAL_HEAD])
+        head = "\n".join(_NUMBERS_LINE.findall(_COMMENT.sub("", text[:DECIMAL_HEAD])))
         if not _SPACED_FIELDS.search(head) or _SEPARATING_COMMA.search(head):
             return text
         separated, body = "tabs or spaces", _COMMENT.sub("", text) if "#" in text else text

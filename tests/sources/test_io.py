@@ -353,3 +353,15 @@ def test_a_header_naming_x_y_and_another_word_keeps_reading_the_third_column_as_
         rows = "\n".join(",".join(map(str, p)) for p in boundary)
         path.write_text(header + "\n" + rows + "\n")
         np.testing.assert_allclose(ls.load_leaf(path).boundary, boundary)
+
+
+def test_a_csv_under_a_title_with_spaced_numbers_keeps_its_decimal_points(tmp_path: Path):
+    """A comma-separated file with decimal points under one title line whose words hold numbers
+    apart ('exported 2024 05 01') was read as written until the tab- or space-separated decimal
+    commas were told from the file's start: the title's '4 0' made its commas decimal marks, and
+    the file was refused for holding both marks. Only lines of numbers tell the separator."""
+    boundary = ls.demo("nested").boundary
+    path = tmp_path / "leaf.csv"
+    rows = "\n".join(",".join(f"{v:.6f}" for v in p) for p in boundary)
+    path.write_text("exported 2024 05 01\n" + rows + "\n")
+    np.testing.assert_allclose(ls.load_leaf(path).boundary, boundary, atol=1e-6)
