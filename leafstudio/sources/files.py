@@ -94,9 +94,9 @@ def named_columns(text: str, columns: Sequence[int] = (3, 4)) -> tuple[int, list
     """
 
     def split(line: str) -> list[str]:  # by the line's own separator, empty fields kept
-        return line.split(",") if "," in line else line.split(";") if ";" in line else line.split()
+        return line.split(next((s for s in ",;\t" if s in line), None))  # ` <tab>X<tab>Y`: 3
 
-    lines = (t for t in (raw.split("#", 1)[0].strip() for raw in text[:4096].splitlines()) if t)
+    lines = filter(None, (r.split("#")[0].rstrip().lstrip(" ") for r in text[:4096].splitlines()))
     fields, data = split(next(lines, "")), split(next(lines, ""))
     if len(data) != len(fields):
         return None  # the first row is not as wide as the header: its names are not the columns'

@@ -365,3 +365,16 @@ def test_a_csv_under_a_title_with_spaced_numbers_keeps_its_decimal_points(tmp_pa
     rows = "\n".join(",".join(f"{v:.6f}" for v in p) for p in boundary)
     path.write_text("exported 2024 05 01\n" + rows + "\n")
     np.testing.assert_allclose(ls.load_leaf(path).boundary, boundary, atol=1e-6)
+
+
+@pytest.mark.parametrize("header", [" \tX\tY", "\tx\ty"], ids=["ImageJ", "pandas"])
+def test_a_tab_separated_header_with_an_unnamed_index_reads_by_name(tmp_path: Path, header: str):
+    """ImageJ's Results table (` <tab>X<tab>Y`, a row number first) and pandas' to_csv with tabs
+    (`<tab>x<tab>y`) name their index column with nothing: the line's leading tab was stripped,
+    the header named fewer columns than the rows hold, and the row numbers were read as x (a
+    leaf 40 times as long, without a word), as 'id,x,y' was before the header was read by name."""
+    boundary = ls.demo("nested").boundary * [1, 1, 0]
+    rows = "\n".join(f"{i + 1}\t{x:.6f}\t{y:.6f}" for i, (x, y, _) in enumerate(boundary))
+    path = tmp_path / "Results.txt"
+    path.write_text(header + "\n" + rows + "\n")
+    np.testing.assert_allclose(ls.load_leaf(path).boundary, boundary, atol=1e-6)
