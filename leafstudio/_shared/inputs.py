@@ -117,7 +117,7 @@ def read_text(path: str | os.PathLike, limit: int = MAX_TEXT_BYTES) -> str:
     if b"\0" in data:
         raise LeafError("is not a text file (it holds binary data)", str(path))
     try:
-        return data.decode("utf-8")
+        return data.decode("utf-8-sig")  # Excel's "CSV UTF-8" starts with a byte-order mark
     except UnicodeDecodeError:
         raise LeafError("is not a text file (not UTF-8)", str(path)) from None
 

@@ -1,5 +1,6 @@
 """Leaf files in and out: every format round-trips, and every malformed file says what is wrong."""
 
+import codecs
 from pathlib import Path
 
 import numpy as np
@@ -377,4 +378,14 @@ def test_a_tab_separated_header_with_an_unnamed_index_reads_by_name(tmp_path: Pa
     rows = "\n".join(f"{i + 1}\t{x:.6f}\t{y:.6f}" for i, (x, y, _) in enumerate(boundary))
     path = tmp_path / "Results.txt"
     path.write_text(header + "\n" + rows + "\n")
+    np.testing.assert_allclose(ls.load_leaf(path).boundary, boundary, atol=1e-6)
+
+
+def test_a_utf8_byte_order_mark_is_not_read_as_a_header(tmp_path: Path):
+    """Excel's "CSV UTF-8" starts with a byte-order mark: glued to the first number, it made the
+    first row a header, and the leaf lost its first point without a word."""
+    boundary = ls.demo("nested").boundary
+    path = tmp_path / "leaf.csv"
+    rows = "\n".join(",".join(f"{v:.6f}" for v in p) for p in boundary)
+    path.write_bytes(codecs.BOM_UTF8 + rows.encode())
     np.testing.assert_allclose(ls.load_leaf(path).boundary, boundary, atol=1e-6)
