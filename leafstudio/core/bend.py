@@ -47,6 +47,7 @@ if TYPE_CHECKING:
 ROLL_STEP = 0.1  # radians of roll between cuts: a chord's sag 0.1% of the radius, its area 0.04%
 STRETCH_STEP = 1e-6  # normal_stretch's difference step, of the points' largest coordinate
 SAG = 1e-4  # sag_splits: a bent edge's midpoint may stand this share of the mesh's extent off
+SNAP = 0.1  # cut_levels: a corner this share of a typical edge from a level is cut through
 SAG_ROUNDS = 6  # ... its chord; each round halves the edges that do (a quarter of the sag)
 SEAM = 0.1  # flat_curve: points this share of a half turn from a tube's seam may lie either side
 
@@ -127,6 +128,11 @@ class Pose:
         entry = {"fold": self.fold, "curl": self.curl}
         entry |= {"roll": self.roll} if self.roll != 0 else {}
         return entry | ({"twist": self.twist} if self.twist != 0 else {})
+
+    def exact_creases(self) -> int:
+        """How many of `crease`'s lines, first, are true creases (the fold's midrib); the others
+        (a roll's, only keeping chords off the bend) may pass through a corner near them."""
+        return int(self.fold != 0)
 
     def crease(self, points: np.ndarray) -> np.ndarray | None:
         """(n,) or (m, n) signed distances of flat points from the lines the bend creases along
@@ -234,15 +240,21 @@ Plan = list[tuple[np.ndarray, np.ndarray]]  # per cut: (k, 2) edges cut and (k,)
 Lift = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]  # points onto a surface, and heights
 
 
-def cut_levels(faces: np.ndarray, q: np.ndarray, levels: np.ndarray) -> tuple[np.ndarray, Plan]:
+def cut_levels(
+    faces: np.ndarray, q: np.ndarray, levels: np.ndarray, loose: np.ndarray | None = None
+) -> tuple[np.ndarray, Plan]:
     """(f', 3) faces cut along every line where the (n,) values q, linear on each triangle, equal
-    one of the (m,) levels, and the plan of the new points (`carried`).
+    one of the (m,) levels, and the plan of the new points (`carried`). A level marked in the
+    (m,) bools `loose` may pass through a corner near it instead (`_snapped`).
 
     One level after another, each over the triangles across it only (pieces across a higher one
     wait for it): a roll's 30-odd lines cost about what one did when each cut went over the whole
     mesh (a roll took 3.8 times a flat run's time)."""
     faces = np.asarray(faces)
-    levels = np.sort(np.asarray(levels, dtype=float))
+    levels = np.asarray(levels, dtype=float)
+    if loose is not None and np.any(loose):
+        q = _snapped(faces, np.asarray(q, dtype=float), levels[np.asarray(loose, dtype=bool)])
+    levels = np.sort(levels)
     waiting: list[list[np.ndarray]] = [[] for _ in levels]
     done = [_sorted_out(faces, q, levels, waiting)]
     plan: Plan = []
@@ -258,6 +270,22 @@ def cut_levels(faces: np.ndarray, q: np.ndarray, levels: np.ndarray) -> tuple[np
         pieces = np.vstack([tri[~crossing], new.astype(faces.dtype)])
         done.append(_sorted_out(pieces, q, levels, waiting, j + 1))
     return np.vstack(done), plan
+
+
+def _snapped(faces: np.ndarray, q: np.ndarray, levels: np.ndarray) -> np.ndarray:
+    """`q` with each value within SNAP of a typical edge's span from one of `levels` set on it:
+    a cut through that corner, not a sliver beside it (a roll's cut passing 2e-4 of the length
+    from a corner left faces so thin that the bend folded them over)."""
+    if not len(levels) or not len(q):
+        return q
+    levels = np.sort(levels)
+    span = float(np.median(np.abs(q[faces] - q[np.roll(faces, 1, axis=1)])))
+    above = np.clip(np.searchsorted(levels, q), 0, len(levels) - 1)
+    below = np.maximum(above - 1, 0)
+    nearest = np.where(
+        np.abs(q - levels[below]) < np.abs(q - levels[above]), levels[below], levels[above]
+    )
+    return np.where(np.abs(q - nearest) < SNAP * span, nearest, q)
 
 
 def _sorted_out(
@@ -323,7 +351,7 @@ def carried_data(point_data: dict[str, np.ndarray], plan: Plan) -> dict[str, np.
     return {name: carried(v, plan) for name, v in point_data.items()}
 
 
-def _crease_cuts(mesh: TriangleMesh, crease, trim) -> tuple[np.ndarray, Plan, bool]:
+def _crease_cuts(mesh: TriangleMesh, crease, trim, exact: int) -> tuple[np.ndarray, Plan, bool]:
     """The mesh's faces cut along the bend's creases, the plan of the new points, and whether
     `trim` cut any. The creases are parallel lines: the first one's distances and the others'
     offsets from it say where each runs. `trim` (model.Bend.trim: a scan's holes): the faces
@@ -332,7 +360,8 @@ def _crease_cuts(mesh: TriangleMesh, crease, trim) -> tuple[np.ndarray, Plan, bo
     faces, plan = mesh.regular_faces, []
     if side is not None:
         side = np.atleast_2d(side)
-        faces, plan = cut_levels(faces, side[0], side[0, 0] - side[:, 0])
+        loose = np.arange(len(side)) >= exact  # the bend's own creases are cut exactly
+        faces, plan = cut_levels(faces, side[0], side[0, 0] - side[:, 0], loose)
     cut = trim(carried(mesh.points, plan))
     if cut is None:
         return faces, plan, False
@@ -341,7 +370,7 @@ def _crease_cuts(mesh: TriangleMesh, crease, trim) -> tuple[np.ndarray, Plan, bo
 
 
 def sag_splits(
-    points: np.ndarray, faces: np.ndarray, carry, tolerance: float, lift: Lift | None = None
+    points: np.ndarray, faces: np.ndarray, carry, tolerance: float
 ) -> tuple[np.ndarray, Plan]:
     """(f', 3) faces with every edge halved whose midpoint the bend `carry` takes farther than
     `tolerance` from the bent chord, and the plan of the new points (`carried`), SAG_ROUNDS
@@ -351,9 +380,9 @@ def sag_splits(
     a fold of 75° on a rolled, twisted oblong blade bent the chords of a grid-128 mesh 1.4e-3
     of the length off the bent surface. A face is cut in as many pieces as it has edges halved,
     plus one (a conforming mesh, its winding kept). An edge of a face left whole passed: each
-    later round looks at the new faces' edges only. `lift` (`_onto_surface`) puts the new points
-    on the flat surface rather than on the flat chord, which the bend stretches (up to 3 times on
-    a folded tube: the last 1.03-1.05e-3 of the pose grid)."""
+    later round looks at the new faces' edges only. _bent_meshes then puts the new points on the
+    flat surface (`_onto_surface`) rather than on the flat chord, which the bend stretches (up
+    to 3 times on a folded tube: the last 1.03-1.05e-3 of the pose grid)."""
     points, faces = np.asarray(points, dtype=float), np.asarray(faces)
     bent, plan, done = carry(points), [], []
     for _ in range(SAG_ROUNDS):  # after the first, over the faces the last one made only
@@ -372,9 +401,6 @@ def sag_splits(
         marked = np.einsum("ij,ij->i", off, off) > 4 * tolerance**2
         if not marked.any():
             break
-        if lift is not None:  # the new points on the surface, not on the flat chord
-            middle[marked] = lift(middle[marked])[0]
-            there[marked] = carry(middle[marked])
         halved = codes[marked]  # sorted: the new points are numbered in this order
         hit = np.isin(every, halved).reshape(faces.shape)  # (a, b), (b, c), (c, a) halved
         touched = hit.any(axis=1)  # few faces: the others are kept whole without a search
@@ -413,16 +439,16 @@ def _halved(faces: np.ndarray, middle: np.ndarray) -> np.ndarray:
 
 
 def _cuts(
-    mesh: TriangleMesh, crease, trim, carry, sag: float | None, lift
+    mesh: TriangleMesh, crease, trim, carry, sag: float | None, exact: int
 ) -> tuple[np.ndarray, Plan, bool, int]:
     """`_crease_cuts`, then the edges the bend `carry` sags off their chord by more than `sag`
     of the mesh's extent halved (`sag_splits`; None: none), and the first halving's point."""
-    faces, plan, trimmed = _crease_cuts(mesh, crease, trim)
+    faces, plan, trimmed = _crease_cuts(mesh, crease, trim, exact)
     first = len(mesh.points) + sum(len(t) for _, t in plan)
     if sag is None or not len(mesh.points):
         return faces, plan, trimmed, first
     tolerance = sag * float(np.ptp(mesh.points, axis=0).max())
-    faces, more = sag_splits(carried(mesh.points, plan), faces, carry, tolerance, lift)
+    faces, more = sag_splits(carried(mesh.points, plan), faces, carry, tolerance)
     return faces, plan + more, trimmed, first
 
 
@@ -433,16 +459,17 @@ def _bent_meshes(
     trims: list,
     sag: float | None,
     lifts: list[Lift | None],
+    exact: int,
 ) -> list[TriangleMesh]:
     """Each mesh cut along the bend's creases (`creases`, in its units), trimmed (`trims`, see
     _crease_cuts; the points no face keeps dropped), its edges halved where the bend sags them
     by more than `sag` (`_cuts`) and carried into 3D by its `carry`; a mesh with the first's
     faces (one mesh at another size) is cut as it was."""
-    cuts = _cuts(meshes[0], creases[0], trims[0], carries[0], sag, lifts[0])
+    cuts = _cuts(meshes[0], creases[0], trims[0], carries[0], sag, exact)
     out = []
     for mesh, carry, crease, trim, lift in zip(meshes, carries, creases, trims, lifts, strict=True):
         same = np.array_equal(mesh.regular_faces, meshes[0].regular_faces)
-        faces, plan, trimmed, first = cuts if same else _cuts(mesh, crease, trim, carry, sag, lift)
+        faces, plan, trimmed, first = cuts if same else _cuts(mesh, crease, trim, carry, sag, exact)
         points, data = carried(mesh.points, plan), carried_data(mesh.point_data, plan)
         if lift is not None and first < len(points):  # the halvings' points on the surface
             points[first:], heights = lift(points[first:])
@@ -495,7 +522,8 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
     # a pose's chords are kept on it (`sag`); a scan's sheet (core/sheet.py) has none: its fit is
     # at the scanner's noise (0.5% of the length), and halving the edges its spline's relief
     # curves gave soybean pot1_1 30 times the faces for 0.04% of the length
-    bent = _bent_meshes(meshes, carries, creases, trims, sag, lifts)
+    exact = getattr(bend, "exact_creases", lambda: 0)()  # a pose's fold; a scan's sheet: none
+    bent = _bent_meshes(meshes, carries, creases, trims, sag, lifts, exact)
     if unit is not None:
         unit = replace(
             unit,

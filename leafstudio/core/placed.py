@@ -62,6 +62,10 @@ class PlacedPose:
         """(n,) signed distances of flat points from the pose's crease (the midrib), or None."""
         return self.pose.crease(self._blade(points))
 
+    def exact_creases(self) -> int:
+        """The pose's (Pose.exact_creases)."""
+        return self.pose.exact_creases()
+
 
 def blade_frame(leaf: Leaf, plane: Frame | None = None) -> Frame:
     """The blade coordinates of a flat `leaf` on `plane` (default: its boundary's PCA plane): the

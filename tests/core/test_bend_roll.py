@@ -149,3 +149,29 @@ def test_a_folded_tubes_veins_lie_on_its_mesh(shape, terms):
         leaf = Form(shape, **terms).leaf()
     result = ls.reconstruct(leaf, ls.Params(k=3, grid=128))
     assert result.metrics["veins"]["max"] / result.length <= 1e-3
+
+
+@pytest.mark.parametrize("curl", [0.0, 1.0])
+def test_a_rolled_and_folded_mesh_has_no_face_folded_over_its_neighbour(curl):
+    """A roll's cut passing 2e-4 of the length from a corner left faces so thin that the bend
+    folded them over (6 and 12 edges between faces facing nearly opposite ways, off the fold's
+    crease; 18 and 26 once the halvings' points were put on the surface): such a cut now runs
+    through the corner (bend._snapped)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        leaf = Form("elliptic", fold=75, roll=1.0, wave=0.1, twist=0.5, curl=curl).leaf()
+    mesh = ls.reconstruct(leaf, ls.Params(k=3, grid=128)).triangle_mesh
+    points, faces = np.asarray(mesh.points), np.asarray(mesh.regular_faces)
+    normals = np.cross(
+        points[faces[:, 1]] - points[faces[:, 0]], points[faces[:, 2]] - points[faces[:, 0]]
+    )
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    owner = np.tile(np.arange(len(faces)), 3)
+    order = np.lexsort(edges.T[::-1])
+    edges, owner = edges[order], owner[order]
+    pair = np.all(edges[1:] == edges[:-1], axis=1)
+    facing = np.einsum("ij,ij->i", normals[owner[1:][pair]], normals[owner[:-1][pair]])
+    flat = leaf.bend.flatten(points)
+    crease = np.abs(flat[edges[1:][pair]][:, :, 1]).max(axis=1) < 1e-6  # the fold's own crease
+    assert int(np.sum((facing < -0.9) & ~crease)) == 0
