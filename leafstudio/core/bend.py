@@ -47,9 +47,9 @@ if TYPE_CHECKING:
 ROLL_STEP = 0.1  # radians of roll between cuts: a chord's sag 0.1% of the radius, its area 0.04%
 STRETCH_STEP = 1e-6  # normal_stretch's difference step, of the points' largest coordinate
 SAG = 1e-4  # sag_splits: a bent edge's midpoint may stand this share of the mesh's extent off
-SNAP = 0.1  # cut_levels: a corner this share of a typical edge from a level is cut through
 SAG_ROUNDS = 6  # ... its chord; each round halves the edges that do (a quarter of the sag)
 SEAM = 0.1  # flat_curve: points this share of a half turn from a tube's seam may lie either side
+SNAP = 0.1  # cut_levels: a corner this share of a typical edge's span from a loose level: on it
 
 
 @dataclass(frozen=True)
