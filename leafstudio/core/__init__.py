@@ -15,8 +15,9 @@ shapely, Triangle and open3d; never Qt.
 | the stages in order, one cache    | all               | pipeline, stages, steps, store      |
 | results (4, Table 1)              | Result.metrics    | result, evaluate, distance          |
 
-Support without a step of its own: buckets (the compiled neighbour searches) and raster (the
-nearest set pixel of a mask, for the textures' edge padding). The stage table itself, with what
+Support without a step of its own: buckets (the compiled neighbour searches), raster (the
+nearest set pixel of a mask, for the textures' edge padding) and cuts (a mesh cut along level
+lines, for bend.py's creases and a scan's holes). The stage table itself, with what
 each stage depends on, is in stages.py (each stage's function in steps.py); docs/architecture.md
 has the layers around core.
 """

@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
+from leafstudio.core.cuts import Plan, carried, carried_data, cut_levels
 from leafstudio.core.trianglemesh import TriangleMesh
 from leafstudio.model import Leaf
 
@@ -49,7 +50,6 @@ STRETCH_STEP = 1e-6  # normal_stretch's difference step, of the points' largest 
 SAG = 1e-4  # sag_splits: a bent edge's midpoint may stand this share of the mesh's extent off
 SAG_ROUNDS = 6  # ... its chord; each round halves the edges that do (a quarter of the sag)
 SEAM = 0.1  # flat_curve: points this share of a half turn from a tube's seam may lie either side
-SNAP = 0.1  # cut_levels: a corner this share of a typical edge's span from a loose level: on it
 
 
 @dataclass(frozen=True)
@@ -236,119 +236,7 @@ def unseamed(v: np.ndarray, roll: float, ring: bool = False) -> np.ndarray:
     return out
 
 
-Plan = list[tuple[np.ndarray, np.ndarray]]  # per cut: (k, 2) edges cut and (k,) where along them
 Lift = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]  # points onto a surface, and heights
-
-
-def cut_levels(
-    faces: np.ndarray, q: np.ndarray, levels: np.ndarray, loose: np.ndarray | None = None
-) -> tuple[np.ndarray, Plan]:
-    """(f', 3) faces cut along every line where the (n,) values q, linear on each triangle, equal
-    one of the (m,) levels, and the plan of the new points (`carried`). A level marked in the
-    (m,) bools `loose` may pass through a corner near it instead (`_snapped`).
-
-    One level after another, each over the triangles across it only (pieces across a higher one
-    wait for it): a roll's 30-odd lines cost about what one did when each cut went over the whole
-    mesh (a roll took 3.8 times a flat run's time)."""
-    faces = np.asarray(faces)
-    levels = np.asarray(levels, dtype=float)
-    if loose is not None and np.any(loose):
-        q = _snapped(faces, np.asarray(q, dtype=float), levels[np.asarray(loose, dtype=bool)])
-    levels = np.sort(levels)
-    waiting: list[list[np.ndarray]] = [[] for _ in levels]
-    done = [_sorted_out(faces, q, levels, waiting)]
-    plan: Plan = []
-    for j, level in enumerate(levels):
-        if not waiting[j]:
-            continue
-        tri = np.vstack(waiting[j])
-        signs = np.sign(q[tri] - level)
-        crossing = (signs.max(axis=1) > 0) & (signs.min(axis=1) < 0)
-        new, keys, t = _split(tri[crossing], signs[crossing], q - level, len(q))
-        q = np.concatenate([q, np.full(len(t), level)])  # the new points lie on the level
-        plan.append((keys, t))
-        pieces = np.vstack([tri[~crossing], new.astype(faces.dtype)])
-        done.append(_sorted_out(pieces, q, levels, waiting, j + 1))
-    return np.vstack(done), plan
-
-
-def _snapped(faces: np.ndarray, q: np.ndarray, levels: np.ndarray) -> np.ndarray:
-    """`q` with each value within SNAP of a typical edge's span from one of `levels` set on it:
-    a cut through that corner, not a sliver beside it (a roll's cut passing 2e-4 of the length
-    from a corner left faces so thin that the bend folded them over)."""
-    if not len(levels) or not len(q):
-        return q
-    levels = np.sort(levels)
-    span = float(np.median(np.abs(q[faces] - q[np.roll(faces, 1, axis=1)])))
-    above = np.clip(np.searchsorted(levels, q), 0, len(levels) - 1)
-    below = np.maximum(above - 1, 0)
-    nearest = np.where(
-        np.abs(q - levels[below]) < np.abs(q - levels[above]), levels[below], levels[above]
-    )
-    return np.where(np.abs(q - nearest) < SNAP * span, nearest, q)
-
-
-def _sorted_out(
-    faces: np.ndarray, q: np.ndarray, levels: np.ndarray, waiting: list, lowest: int = 0
-) -> np.ndarray:
-    """The faces across no level from the `lowest` on, returned; the others added to `waiting`
-    at the lowest such level they cross."""
-    corner = q[faces]
-    first = np.maximum(np.searchsorted(levels, corner.min(axis=1), "right"), lowest)
-    across = first < np.searchsorted(levels, corner.max(axis=1), "left")
-    if not across.any():
-        return faces
-    order = np.argsort(first[across], kind="stable")
-    at, start = np.unique(first[across][order], return_index=True)
-    for j, part in zip(at, np.split(faces[across][order], start[1:]), strict=True):
-        waiting[j].append(part)
-    return faces[~across]
-
-
-def _split(tri: np.ndarray, s: np.ndarray, side: np.ndarray, first: int) -> tuple:
-    """The (t, 3) triangles `tri` crossing 0 of `side` (their corners' signs `s`) cut in two or
-    three along it: (the new faces, the (k, 2) edges cut, where along them); the new points are
-    numbered from `first`."""
-    through = (s == 0).any(axis=1)  # through a vertex (the other two on either side)
-    # each triangle turned so that its first corner is the zero (through a vertex) or alone on
-    # its side (else): the cut runs through edges (b, c), or (a, b) and (c, a)
-    lone = np.where(through, np.argmax(s == 0, axis=1), np.argmax(s * s.sum(1)[:, None] < 0, 1))
-    turn = (lone[:, None] + np.arange(3)) % 3
-    a, b, c = np.take_along_axis(tri, turn, axis=1).T
-    ends = np.vstack([np.column_stack([b, c])[through], np.column_stack([a, b])[~through],
-                      np.column_stack([c, a])[~through]])  # fmt: skip
-    ends = np.sort(ends, axis=1).astype(np.int64)
-    n = int(ends.max()) + 1  # each edge one number: a 1-D unique is several times faster
-    codes, at = np.unique(ends[:, 0] * n + ends[:, 1], return_inverse=True)
-    keys = np.column_stack([codes // n, codes % n])
-    t = side[keys[:, 0]] / (side[keys[:, 0]] - side[keys[:, 1]])
-    index = first + at.ravel()
-    n_through = int(through.sum())
-    m, ab, ca = index[:n_through], index[n_through:][: len(a) - n_through], index[len(a) :]
-    a1, b1, c1 = a[through], b[through], c[through]
-    a2, b2, c2 = a[~through], b[~through], c[~through]
-    new = np.vstack([
-        np.column_stack([a1, b1, m]), np.column_stack([a1, m, c1]),
-        np.column_stack([a2, ab, ca]), np.column_stack([ab, b2, c2]), np.column_stack([ab, c2, ca]),
-    ])  # fmt: skip
-    return new, keys, t
-
-
-def carried(values: np.ndarray, plan: Plan) -> np.ndarray:
-    """(n + k, ...) `values` at the mesh's points followed by those at the cuts' new points,
-    interpolated linearly along the edges cut (filled in place: one copy for every cut)."""
-    n = len(values)
-    out = np.empty((n + sum(len(t) for _, t in plan), *values.shape[1:]), dtype=values.dtype)
-    out[:n] = values
-    for keys, t in plan:
-        lo, hi = out[keys[:, 0]], out[keys[:, 1]]
-        out[n : n + len(t)] = lo + t.reshape(-1, *([1] * (values.ndim - 1))) * (hi - lo)
-        n += len(t)
-    return out
-
-
-def carried_data(point_data: dict[str, np.ndarray], plan: Plan) -> dict[str, np.ndarray]:
-    return {name: carried(v, plan) for name, v in point_data.items()}
 
 
 def _crease_cuts(mesh: TriangleMesh, crease, trim, exact: int) -> tuple[np.ndarray, Plan, bool]:
