@@ -3,7 +3,6 @@ move between steps, fonts of at least 14 points, nothing over the leaf."""
 
 from __future__ import annotations
 
-import pytest
 from PySide6.QtCore import QPoint, QRect, Qt
 from PySide6.QtWidgets import QLabel
 
@@ -54,6 +53,12 @@ def test_the_leaf_is_large_uncovered_and_the_text_readable(window, qtbot):
                 assert label.font().pointSizeF() >= 14, label.text()
                 hint = label.heightForWidth(label.width()) if label.wordWrap() else 0
                 assert hint <= label.height() + 1, label.text()  # the words fit their box
+    # the footer on one line, at both projector sizes ("Esc: leave" wrapped onto a second line)
+    for size in ((1280, 720), (1024, 768)):
+        lesson.resize(*size)
+        qtbot.wait(300)  # the column is sized once the resize rests
+        footer = lesson.footer
+        assert footer.heightForWidth(footer.width()) < 1.5 * footer.fontMetrics().lineSpacing()
     lesson.close()
 
 
@@ -115,19 +120,4 @@ def test_the_surface_steps_show_the_mesh_as_their_words_and_pictures_say(window,
         assert "mesh" in _shown_layers(lesson) and "samples" not in _shown_layers(lesson)
         assert lesson.viewport.mesh_coloring == "height"
         assert lesson.viewport.show_edges == (STEPS[index].picture == "mesh")
-    lesson.close()
-
-
-@pytest.mark.parametrize("size", [(1280, 720), (1024, 768)])
-def test_the_footer_stays_on_one_line_at_a_projectors_size(window, qtbot, size):
-    """At 1280 x 720 the footer's last words, "Esc: leave", wrapped onto a second line."""
-    lesson = LessonWindow(window)
-    qtbot.addWidget(lesson)
-    lesson.resize(*size)
-    lesson.show()
-    qtbot.waitExposed(lesson)
-    qtbot.wait(300)  # the column is sized once the resize rests
-    footer = lesson.footer
-    line = footer.fontMetrics().lineSpacing()
-    assert footer.heightForWidth(footer.width()) < 1.5 * line, footer.text()
     lesson.close()
