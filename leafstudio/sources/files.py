@@ -92,12 +92,8 @@ def named_columns(text: str, columns: Sequence[int] = (3, 4)) -> tuple[int, list
     >>> named_columns("1 2 3\n") is None
     True
     """
-
-    def split(line: str) -> list[str]:  # by the line's own separator, empty fields kept
-        return line.split(next((s for s in ",;\t" if s in line), None))  # ` <tab>X<tab>Y`: 3
-
     lines = filter(None, (r.split("#")[0].rstrip().lstrip(" ") for r in text[:4096].splitlines()))
-    fields, data = split(next(lines, "")), split(next(lines, ""))
+    fields, data = header_fields(next(lines, "")), header_fields(next(lines, ""))
     if len(data) != len(fields):
         return None  # the first row is not as wide as the header: its names are not the columns'
     names = [re.split(r"[\s(\[]", f.strip().strip("\"'").lower(), maxsplit=1)[0] for f in fields]
@@ -112,6 +108,11 @@ def named_columns(text: str, columns: Sequence[int] = (3, 4)) -> tuple[int, list
     if take[:2] == [0, 1] and len(names) == 2:
         return None  # `x,y`: a flat list, read as before
     return len(names), take
+
+
+def header_fields(line: str) -> list[str]:
+    """A line's fields by its own separator, empty ones kept (`x [mm],y [mm]`: 2)."""
+    return line.split(next((s for s in ",;\t" if s in line), None))
 
 
 class _PointTable:
@@ -159,7 +160,7 @@ class _PointTable:
             values = [parse_number(f) for f in fields]
         except ValueError:
             if self.width is None and not self.header:  # a header line
-                self.header, self.names = True, len(fields)
+                self.header, self.names = True, len(header_fields(text))
                 return None
             raise LeafError(f"line {number}: not a number in {shorten(text)!r}", path) from None
         if len(values) == 2 and self.names > 2 and self.width is None:  # `x,y,z` over `1,2`

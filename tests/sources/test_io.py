@@ -389,3 +389,11 @@ def test_a_utf8_byte_order_mark_is_not_read_as_a_header(tmp_path: Path):
     rows = "\n".join(",".join(f"{v:.6f}" for v in p) for p in boundary)
     path.write_bytes(codecs.BOM_UTF8 + rows.encode())
     np.testing.assert_allclose(ls.load_leaf(path).boundary, boundary, atol=1e-6)
+
+
+def test_a_two_column_header_with_units_reads_as_a_flat_outline(tmp_path: Path):
+    """`x [mm],y [mm]` over rows of two numbers was refused, "2 columns where the header line
+    names 4": the header's names were counted at every space."""
+    path = tmp_path / "outline.csv"
+    path.write_text("x [mm],y [mm]\n0,0\n1,0\n0,1\n")
+    np.testing.assert_allclose(ls.load_leaf(path).boundary, [[0, 0, 0], [1, 0, 0], [0, 1, 0]])
