@@ -17,6 +17,7 @@ from leafstudio._shared.inputs import (
     check_file_kind,
     check_input_file,
     check_pcd_header,
+    decimal_commas,
     is_utf16,
     line_blocks,
     parse_number,
@@ -153,14 +154,15 @@ def is_scan_file(path: str) -> bool:
         with path_.open("rb") as raw:  # a spreadsheet's "Unicode Text" (inputs.read_text)
             utf16 = is_utf16(raw.read(2))
         with path_.open(encoding="utf-16" if utf16 else "utf-8") as handle:
-            for line in handle:
-                fields = line.split("#", 1)[0].replace(",", " ").replace(";", " ").split()
+            for line in handle:  # a European row's decimal commas are not separators
+                row = decimal_commas(line.split("#", 1)[0], path)
+                fields = row.replace(",", " ").replace(";", " ").split()
                 if fields:
                     try:
                         return len([float(f) for f in fields]) > LEAF_COLUMNS
                     except ValueError:
                         continue  # a header
-    except (OSError, UnicodeDecodeError):
+    except (OSError, UnicodeDecodeError, LeafError):  # LeafError: both decimal marks in a row
         return False
     return False
 

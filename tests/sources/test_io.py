@@ -397,3 +397,14 @@ def test_a_two_column_header_with_units_reads_as_a_flat_outline(tmp_path: Path):
     path = tmp_path / "outline.csv"
     path.write_text("x [mm],y [mm]\n0,0\n1,0\n0,1\n")
     np.testing.assert_allclose(ls.load_leaf(path).boundary, [[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+
+
+def test_the_scan_test_does_not_count_a_european_rows_decimal_commas_as_columns(tmp_path: Path):
+    """A `;`-separated row of a labelled leaf (`1,5;2,25;0;1`) counted 8 fields, so the app's
+    fallback after a failed leaf read took it for a scan with normals."""
+    from leafstudio.sources.scan import is_scan_file
+
+    leaf, scan = tmp_path / "leaf.csv", tmp_path / "scan.csv"
+    leaf.write_text("1,5;2,25;0;1\n2,5;1,25;0;0\n")
+    scan.write_text("1,5;2,25;0;0;0;1\n")
+    assert not is_scan_file(str(leaf)) and is_scan_file(str(scan))
