@@ -104,8 +104,8 @@ def run_form(args: argparse.Namespace) -> int:
         if not mesh:  # a leaf file keeps the forms' convention, length 1: the length is a mesh's
             raise LeafError(
                 f"--length sets a mesh's real size, not a leaf file's (length 1); write a mesh "
-                f"(.glb, .obj, .usdz, ...) or give it to reconstruct: leafstudio reconstruct "
-                f"{out} -o LEAF.glb --length {args.length}"
+                f"(-o LEAF.glb, .obj, .usdz, ...), or write {out} without --length and then "
+                f"leafstudio reconstruct {out} -o LEAF.glb --length {args.length}"
             )
     if mesh:
         from leafstudio.assets.writers import MESH_SUFFIXES  # heavy (the writers): a mesh only
