@@ -50,9 +50,8 @@ def configure() -> Path | None:
     make a failed cache write (a full disk) harmless once numba is imported; returns the folder
     chosen (None: numba's default beside the sources, or the user's NUMBA_CACHE_DIR)."""
     folder = _choose_folder()
-    if (
-        "numba" in sys.modules
-    ):  # otherwise core/jit.py guards them when a kernel module imports numba
+    # numba not imported yet: core/jit.py guards the writes when a kernel module imports it
+    if "numba" in sys.modules:
         guard_cache_writes()
     return folder
 
