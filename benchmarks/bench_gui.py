@@ -20,8 +20,8 @@ Big files (`--big` runs only these): a 300,000-point boundary and a 2,000,000-po
 to a temporary folder; each opens in a new window showing the nested demo (as the app starts: the
 first render's shader set-up is not the file's). For each, the longest main-thread stall while it
 opens (from the open call until the app is idle with its leaf on screen and measured), while a
-layer is switched off and on, while K changes, and while the window closes during a computation
-(with the close call's time).
+layer is switched off and on, while the camera goes through its presets, while K changes, and
+while the window closes during a computation (with the close call's time).
 `--forms` measures only the Forms dock: for a few shapes, the longest stall and main-thread CPU in
 one piece from choosing the form until its leaf is on screen and measured, then the same for a
 change of the fold slider (the blade kept, posed again).
@@ -46,6 +46,7 @@ from PySide6.QtWidgets import QApplication
 
 from leafstudio.forms import SHAPES
 from leafstudio.gui.qt.main_window import MainWindow
+from leafstudio.gui.qt.view_camera import CAMERAS
 from leafstudio.model import Params
 
 GRIDS = (128, 512)
@@ -290,8 +291,8 @@ def settle(window: MainWindow, meter: StallMeter, seconds: float = 0.3) -> None:
 
 
 def measure_big(window: MainWindow, path: Path, layer: str) -> dict:
-    """The longest main-thread stall while `path` opens, a layer toggles, K changes and the
-    window closes during the computation K's change started."""
+    """The longest main-thread stall while `path` opens, a layer toggles, the camera presets are
+    chosen in turn, K changes and the window closes during the computation K's change started."""
     meter, ms = StallMeter(), lambda seconds: round(1000 * seconds, 1)
     window.open_demo("nested")  # as the app starts: its first render (shaders) is not the file's
     wait_for(window.result_shown)
@@ -322,6 +323,12 @@ def measure_big(window: MainWindow, path: Path, layer: str) -> dict:
         settle(window, meter)
     report[f"toggle_{layer}_max_stall_ms"] = ms(meter.worst())
     report[f"toggle_{layer}_max_main_thread_cpu_in_one_piece_ms"] = ms(meter.busiest())
+    meter.reset()
+    for preset in (*CAMERAS, CAMERAS[0]):  # each preset, back to the first
+        window.viewport.camera(preset)
+        settle(window, meter)
+    report["camera_presets_max_stall_ms"] = ms(meter.worst())
+    report["camera_presets_max_main_thread_cpu_in_one_piece_ms"] = ms(meter.busiest())
     k = window.panel.k.value() + 1
     meter.reset()
     window.panel.k.setValue(k)
