@@ -9,12 +9,16 @@ in but a scan (coloring_for).
 The image is made on the worker's side lane (texture_image, a numpy array); the viewport wraps it
 into a pyvista Texture on the main thread. texture_key names what the image depends on (the
 texture option and the leaf plane: outline, veins, frame), so that a parameter change that keeps
-the plane keeps the image. No Qt here.
+the plane keeps the image, and the images last made are kept by it (KEPT_TEXTURES), as the
+worker's store keeps the pipeline's stages: a leaf shown again (an undo, a demo or form chosen
+again, another window) gets its image without it being made again. No Qt here.
 """
 
 from __future__ import annotations
 
 import hashlib
+import threading
+from collections import OrderedDict
 from pathlib import Path
 from typing import Any
 
@@ -29,6 +33,10 @@ LEAF = "leaf"  # the Leaf look: the same texture, lit as a leaf (the default but
 LEAF_LABEL = "Leaf (lit, veins, translucent)"
 SHOWS_TEXTURE = (LEAF, TEXTURE)  # the colourings that map the texture image
 SCAN_COLORING = "height"  # a scan's: its relief, judged against the scan
+# images kept by key: 4 MB each at 1024² RGBA; each made again costs the side lane 0.1-0.3 s
+KEPT_TEXTURES = 4
+_kept: OrderedDict[tuple, np.ndarray | None] = OrderedDict()
+_kept_lock = threading.Lock()  # the side lane makes them; any thread may ask
 
 
 def coloring_for(is_scan: bool, current: str, automatic: bool) -> tuple[str, bool]:
@@ -80,7 +88,26 @@ def texture_key(result: Any, texture: Any) -> tuple:
 
 
 def texture_image(result: Any, texture: Any) -> np.ndarray | None:
-    """The (h, w, 3 or 4) uint8 base-colour image an export writes (row 0 at t = 1), or None
-    for no texture; LeafError for an image that cannot be read. Runs off the main thread."""
+    """The (h, w, 3 or 4) uint8 base-colour image an export writes (row 0 at t = 1, read-only:
+    it may be shared), or None for no texture; LeafError for an image that cannot be read.
+    Runs off the main thread; an image made for the same key lately is given again."""
+    key = texture_key(result, texture)
+    with _kept_lock:
+        if key in _kept:
+            _kept.move_to_end(key)
+            return _kept[key]
     image = base_color(result, texture)
-    return None if image is None else np.asarray(image)
+    array = None if image is None else np.asarray(image)
+    if array is not None:
+        array.flags.writeable = False
+    with _kept_lock:
+        _kept[key] = array
+        while len(_kept) > KEPT_TEXTURES:
+            _kept.popitem(last=False)
+    return array
+
+
+def forget_textures() -> None:
+    """Drop the images kept (tests that count how many are made start from none)."""
+    with _kept_lock:
+        _kept.clear()
