@@ -1,4 +1,5 @@
-"""Reading leaf scans: point clouds of a leaf's whole surface (.ply, .pcd, .xyz, .csv, .txt).
+"""Reading leaf scans: point clouds of a leaf's whole surface (.ply, .pcd, .xyz, .csv, .txt), or
+the meshes scanners and photogrammetry write (.obj, .stl, .off), read as points on their surface.
 
 Only x, y, z are read; extra columns or properties (normals, colours, intensities) are ignored.
 Leaf files with labelled boundary and veins are sources/files.py's business; this reads raw scans.
@@ -28,7 +29,9 @@ from leafstudio._shared.inputs import (
 from leafstudio.errors import LeafError, shorten
 from leafstudio.model import Leaf
 
-SCAN_SUFFIXES = (".ply", ".pcd", ".xyz", ".csv", ".txt")
+MESH_SCAN_SUFFIXES = (".obj", ".stl", ".off")  # read through trimesh (_mesh_points)
+SCAN_SUFFIXES = (".ply", ".pcd", ".xyz", ".csv", ".txt", *MESH_SCAN_SUFFIXES)
+MESH_SCAN_POINTS = 20_000  # at least this many points on a mesh's surface (_mesh_points)
 MIN_SCAN_POINTS = 50
 LEAF_COLUMNS = 4  # x y z [label]: a point list with more columns is a scan
 OUTLINE_POINTS = 200  # an extracted outline's default count (sources/extract.py: its spacing
@@ -102,6 +105,38 @@ def _pcd_rows(path: Path) -> np.ndarray:
     return points
 
 
+def _mesh_points(path: Path) -> np.ndarray:
+    """Points spread evenly over a scanned mesh's surface, as a scanner's cloud is: area-weighted
+    samples (as many as its vertices, at least MESH_SCAN_POINTS; seeded, so a file always gives
+    the same points), since a mesh's vertices crowd where its triangles are small and a CAD-like
+    STL has a few large ones. A mesh without faces (an OBJ of vertices only) gives its vertices."""
+    import trimesh  # heavy: only a mesh scan needs it
+
+    try:
+        loaded = trimesh.load(str(path), process=False)
+        parts = loaded.dump() if isinstance(loaded, trimesh.Scene) else [loaded]
+    except Exception as exc:  # trimesh's loaders raise many kinds for a damaged file
+        raise LeafError(f"not a readable mesh ({shorten(str(exc))})", str(path)) from None
+    points, meshes = [], []
+    for part in parts:
+        faces = np.asarray(getattr(part, "faces", np.empty((0, 3))))
+        (meshes if len(faces) else points).append(part)
+    if meshes:
+        mesh = trimesh.util.concatenate(meshes) if len(meshes) > 1 else meshes[0]
+        if not np.isfinite(mesh.vertices).all():
+            raise LeafError("NaN or infinite coordinates", str(path))
+        if mesh.area > 0:
+            count = max(len(np.unique(mesh.vertices, axis=0)), MESH_SCAN_POINTS)
+            sampled, _faces = trimesh.sample.sample_surface(mesh, count, seed=0)
+            points.append(sampled)
+        else:
+            points.append(mesh.vertices)
+    rows = [np.asarray(getattr(p, "vertices", p), dtype=float).reshape(-1, 3) for p in points]
+    if not rows or not sum(map(len, rows)):
+        raise LeafError("not a readable mesh, or it holds no points", str(path))
+    return np.vstack(rows)
+
+
 def _ply_rows(path: Path) -> np.ndarray:
     return ply_xyz(read_ply(path), path)[0]  # header checked against the file's size first
 
@@ -128,6 +163,8 @@ def read_scan(path: str | os.PathLike) -> np.ndarray:
         points = _ply_rows(path)
     elif suffix == ".pcd":
         points = _pcd_rows(path)
+    elif suffix in MESH_SCAN_SUFFIXES:
+        points = _mesh_points(path)
     else:
         points = _text_rows(path, read_numbers(path))  # decimal commas made points
     if len(points) == 0:
@@ -142,11 +179,11 @@ def read_scan(path: str | os.PathLike) -> np.ndarray:
 
 
 def is_scan_file(path: str) -> bool:
-    """True for a file only a scan reader takes: a .pcd, or a point list whose first row of
-    numbers has more than x, y, z and a label (normals, colours)."""
+    """True for a file only a scan reader takes: a .pcd, a mesh (.obj, .stl, .off), or a point
+    list whose first row of numbers has more than x, y, z and a label (normals, colours)."""
     path_ = Path(path)
     suffix = path_.suffix.lower()
-    if suffix == ".pcd":
+    if suffix == ".pcd" or suffix in MESH_SCAN_SUFFIXES:
         return True
     if suffix not in SCAN_SUFFIXES or suffix == ".ply":
         return False

@@ -13,7 +13,12 @@ from leafstudio.errors import LeafError
 from leafstudio.sources.extract import extract_leaf, lift
 from leafstudio.sources.files import load_leaf
 from leafstudio.sources.scan import read_scan
-from tests.leaves import assert_outline_is_the_blades, scan_surface, synthetic_scan
+from tests.leaves import (
+    assert_outline_is_the_blades,
+    scan_blade_outline,
+    scan_surface,
+    synthetic_scan,
+)
 
 
 @pytest.fixture(scope="module")
@@ -124,7 +129,9 @@ def test_a_pcd_scan_without_open3d_says_which_extra_reads_it(tmp_path, monkeypat
         ("short.txt", "1 2\n", "needs x, y and z"),
         ("bad.ply", "not a ply", "not a readable PLY"),
         ("bad.pcd", "garbage", "not a readable PCD"),
-        ("scan.obj", "v 1 2 3", "unknown scan type"),
+        ("scan.obj", "v 1 2 3", "too few points"),
+        ("scan.stl", "garbage", "not a readable mesh"),
+        ("scan.dxf", "garbage", "unknown scan type"),
         ("nan.xyz", "\n".join(["nan 1 2"] * 60), "NaN"),
     ],
 )
@@ -134,6 +141,48 @@ def test_a_bad_scan_is_one_line_and_exit_2(tmp_path, capsys, name, content, mess
     assert main(["extract", str(path), "-o", str(tmp_path / "leaf.csv")]) == 2
     err = capsys.readouterr().err.strip()
     assert message in err and "\n" not in err and name in err
+
+
+def _scanners_mesh(path):
+    """A Delaunay mesh of the synthetic scan's blade with a few large triangles along its
+    middle, written to `path` (by its suffix); its points and faces."""
+    import trimesh
+    from scipy.spatial import Delaunay
+
+    blade = synthetic_scan(seed=2)["blade"]
+    coarse = blade[np.abs(blade[:, 1]) > 0.05]
+    faces = Delaunay(coarse[:, :2]).simplices
+    centres = coarse[faces].mean(axis=1)
+    outline = shapely.Polygon(scan_blade_outline(np.linspace(0, 2 * np.pi, 400, endpoint=False)))
+    faces = faces[shapely.contains_xy(outline.buffer(0.01), centres[:, 0], centres[:, 1])]
+    trimesh.Trimesh(coarse, faces, process=False).export(path)
+    return coarse, faces
+
+
+@pytest.mark.parametrize("suffix", [".stl", ".obj", ".off"])
+def test_a_scanners_mesh_is_read_as_points_spread_over_its_surface(tmp_path, suffix):
+    """Scanners and photogrammetry write meshes, of triangles of uneven size: read as points
+    spread evenly over the surface, as a scanner's cloud is. They were refused ("unknown scan
+    type")."""
+    coarse, faces = _scanners_mesh(tmp_path / f"scan{suffix}")
+    points = read_scan(tmp_path / f"scan{suffix}")
+    assert len(points) >= 20_000
+    heights = scan_surface(points[:, 0], points[:, 1])
+    assert np.abs(points[:, 2] - heights).max() < 0.01  # on the blade (its flat triangles)
+    meshed = shapely.union_all(shapely.polygons(coarse[faces][:, :, :2]))  # the mesh's outline
+    band = meshed.intersection(shapely.box(-1, -0.04, 1, 0.04)).area / meshed.area
+    middle = np.abs(points[:, 1]) < 0.04  # the large triangles' middle as dense as the rest
+    assert abs(middle.mean() - band) < 0.03
+
+
+def test_a_scanners_mesh_is_extracted_as_its_blade(tmp_path):
+    coarse, faces = _scanners_mesh(tmp_path / "scan.stl")
+    meshed = shapely.union_all(shapely.polygons(coarse[faces][:, :, :2]))
+    got = shapely.Polygon(extract_leaf(read_scan(tmp_path / "scan.stl")).leaf.boundary[:, :2])
+    assert meshed.symmetric_difference(got).area < 0.04 * meshed.area
+    assert shapely.hausdorff_distance(meshed.exterior, got.exterior) < 0.03
+    assert main(["extract", str(tmp_path / "scan.stl"), "-o", str(tmp_path / "l.leaf.json")]) == 0
+    assert len(load_leaf(tmp_path / "l.leaf.json").veins) >= 3
 
 
 def test_extract_writes_a_leaf_that_reconstructs(tmp_path, capsys):
