@@ -19,6 +19,7 @@ side, the texture is the leaf as it lies: a photo of it maps back onto itself.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
@@ -36,6 +37,7 @@ if TYPE_CHECKING:
 
 UV_PAD = 1 / 64  # the margin around the leaf in UV space, as a fraction of the square
 SCALARS = ("height", *CURVATURE_ARRAYS)  # the per-vertex scalars written where formats hold them
+LOD_NAME = re.compile(r"_LOD\d+$")  # a level of detail's name: its leaf's, then _LOD<k>
 
 
 @dataclass(frozen=True)
@@ -102,7 +104,8 @@ class MeshAsset:
     texture, normal_map : PIL images or None
         The base colour (RGBA, alpha 0 outside the leaf) and a tangent-space normal map.
     name : str
-        The mesh's name in formats that keep one (glTF).
+        The mesh's name in formats that keep one (glTF's node, mesh and material; OBJ's object
+        and material); a level of detail's ends in `_LOD<k>`.
     solid : bool
         A closed solid (solid.py) rather than an open sheet.
     plane_normal, plane_u : (3,) float arrays or None
@@ -129,6 +132,12 @@ class MeshAsset:
     texture: Image.Image | None = None
     normal_map: Image.Image | None = None
     name: str = "leaf"
+
+    @property
+    def material_name(self) -> str:
+        """The name of its material: one for every level of detail."""
+        return LOD_NAME.sub("", self.name) or "leaf"
+
     solid: bool = False  # a closed solid (see solid.py) rather than an open sheet
     plane_normal: np.ndarray | None = None  # (3,) the leaf plane's normal, on the normals' side
     plane_xy: np.ndarray | None = None  # (n, 2) the vertices in the leaf plane

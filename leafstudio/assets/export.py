@@ -13,6 +13,7 @@ detail chosen here, the bytes written by writers.py.
 from __future__ import annotations
 
 import os
+import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -118,6 +119,7 @@ def mesh_assets(
     lod: int = 0,
     gltf: bool = False,
     progress: Progress = _silent,
+    name: str = "leaf",
 ) -> list[MeshAsset]:
     """The asset (and `lod` coarser ones) of a Result or a bare mesh.
 
@@ -136,11 +138,13 @@ def mesh_assets(
     progress : callable, optional
         Called as progress(fraction, what) before each step (the mesh, each level of detail,
         the textures, each solid), fraction in [0, 0.8] (save_mesh reports the rest).
+    name : str, default: "leaf"
+        The mesh's name inside its file (save_mesh gives the file's: object_name).
 
     Returns
     -------
     list of MeshAsset
-        `lod` + 1 assets, finest first, named "leaf" (or "leaf_LOD0", "leaf_LOD1", ...).
+        `lod` + 1 assets, finest first, named `name` (or "leaf_LOD0", "leaf_LOD1", ...).
 
     Raises
     ------
@@ -177,8 +181,20 @@ def mesh_assets(
         if thickness is not None:
             progress(0.6 + 0.2 * level / len(levels), f"the solid ({level + 1}/{len(levels)})")
             asset = thicken(asset, thickness)
-        out.append(asset.with_(name=f"leaf_LOD{level}" if lod else "leaf", **images))
+        out.append(asset.with_(name=f"{name}_LOD{level}" if lod else name, **images))
     return out
+
+
+def object_name(path: str | os.PathLike) -> str:
+    """The name a mesh gets inside its file: the file's, without its suffixes, so that leaves
+    imported side by side (Blender, an engine) are told apart; letters, digits, '-' and '_'
+    only (an OBJ name ends at a space); "leaf" when none is left.
+
+    >>> object_name("out/Oak leaf 2.glb"), object_name("oak.leaf.obj"), object_name(".glb")
+    ('Oak_leaf_2', 'oak', 'leaf')
+    """
+    stem = Path(path).name.split(".")[0]
+    return re.sub(r"[^\w-]+", "_", stem).strip("_") or "leaf"
 
 
 def save_mesh(
@@ -254,7 +270,7 @@ def save_mesh(
     if suffix not in TEXTURED_SUFFIXES:  # the format holds UVs but no image: make none
         texture = "none"
     gltf = suffix in NORMAL_MAP_SUFFIXES
-    assets = mesh_assets(result_or_mesh, texture, thickness, lod, gltf, progress)
+    assets = mesh_assets(result_or_mesh, texture, thickness, lod, gltf, progress, object_name(path))
     progress(0.8, "placing")
     assets = placed(result_or_mesh, assets, metres, suffix, placement)
     progress(0.85, f"writing {path.name}")

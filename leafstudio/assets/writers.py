@@ -90,7 +90,7 @@ def write_obj(asset: MeshAsset, path: Path) -> None:
     which tilts every normal (the veins' relief was lost and the blade shaded darker)."""
     mtl, png = obj_companions(path)
     kd = " ".join(f"{c / 255:.4f}" for c in BLADE)
-    lines = ["newmtl leaf", "Ka 0 0 0", "Ks 0 0 0", "illum 1"]
+    lines = [f"newmtl {asset.material_name}", "Ka 0 0 0", "Ks 0 0 0", "illum 1"]
     if asset.texture is not None:
         write_bytes(png, png_bytes(asset.texture))
         lines += ["Kd 1 1 1", f"map_Kd {png.name}", f"map_d {png.name}"]
@@ -107,7 +107,7 @@ def write_obj(asset: MeshAsset, path: Path) -> None:
         _rows("v {:.9g} {:.9g} {:.9g}", asset.points),
         _rows("vt {:.7g} {:.7g}", asset.uv),
         _rows("vn {:.6g} {:.6g} {:.6g}", asset.normals),
-        "usemtl leaf",
+        f"usemtl {asset.material_name}",
         _rows("f {}/{}/{} {}/{}/{} {}/{}/{}", corners),
     ]
     write_bytes(path, ("\n".join(b for b in blocks if b) + "\n").encode())
@@ -126,7 +126,7 @@ def material_of(asset: MeshAsset, textured: bool = True):
 
     texture = asset.texture if textured else None
     return PBRMaterial(
-        name="leaf",  # one material for every level of detail
+        name=asset.material_name,  # one material for every level of detail
         baseColorFactor=[255, 255, 255, 255] if texture is not None else [*BLADE, 255],
         baseColorTexture=texture,
         normalTexture=asset.normal_map if textured else None,
