@@ -132,17 +132,16 @@ class MeshAsset:
     texture: Image.Image | None = None
     normal_map: Image.Image | None = None
     name: str = "leaf"
-
-    @property
-    def material_name(self) -> str:
-        """The name of its material: one for every level of detail."""
-        return LOD_NAME.sub("", self.name) or "leaf"
-
     solid: bool = False  # a closed solid (see solid.py) rather than an open sheet
     plane_normal: np.ndarray | None = None  # (3,) the leaf plane's normal, on the normals' side
     plane_xy: np.ndarray | None = None  # (n, 2) the vertices in the leaf plane
     outline: np.ndarray | None = None  # (b, 2) the leaf's outline in that plane, if known
     plane_u: np.ndarray | None = None  # (3,) the leaf plane's axis along s (the tangents' way)
+
+    @property
+    def material_name(self) -> str:
+        """The name of its material: one for every level of detail."""
+        return LOD_NAME.sub("", self.name) or "leaf"
 
     def tangents(self) -> np.ndarray | None:
         """(n, 4) glTF tangents: the plane's s axis in each vertex's tangent plane, and w such

@@ -144,7 +144,7 @@ def mesh_assets(
     Returns
     -------
     list of MeshAsset
-        `lod` + 1 assets, finest first, named `name` (or "leaf_LOD0", "leaf_LOD1", ...).
+        `lod` + 1 assets, finest first, named `name` (or `name`_LOD0, `name`_LOD1, ...).
 
     Raises
     ------
