@@ -203,7 +203,7 @@ MARGINS: dict[str, str] = {
     "dentate": "teeth pointing straight outward",
     "crenate": "rounded teeth, with sharp notches between them",
     "sinuate": "a few shallow waves in and out, in the blade's plane",
-    "lobed": "cut into lobes by sinuses deeper than a tenth of the width",
+    "lobed": "cut into lobes by sinuses reaching at least a quarter of the way to the midvein",
 }
 TOOTHED = ("serrate", "serrulate", "dentate", "crenate", "sinuate")
 DEFAULT_TEETH = {"serrate": 36, "serrulate": 80, "dentate": 24, "crenate": 24, "sinuate": 8}
