@@ -208,3 +208,21 @@ def test_a_leaf_too_large_to_measure_is_a_row_naming_it(tmp_path):
         rows.extend(ls.batch([folder], ls.Params(grid=32), tmp_path / "out", jobs=1))
     assert [r["status"] for r in rows] == ["failed"]
     assert rows[0]["error"].startswith(f"{folder / 'huge.leaf.json'}: the leaf is too large")
+
+
+@pytest.mark.usefixtures("warm_pools")
+def test_a_tiny_leaf_measure_takes_is_an_ok_row_with_its_figures(tmp_path):
+    """A leaf scaled by 1e-90, which `reconstruct` and `measure` take, was a batch row "internal
+    error: ZeroDivisionError: Weights sum to zero" (its facets' areas underflowed when batch
+    measured the mesh in the input's units); now the row holds measure's figures."""
+    leaf = ls.demo("nested")
+    tiny = ls.Leaf(leaf.boundary * 1e-90, [v * 1e-90 for v in leaf.veins])
+    path = tmp_path / "tiny.leaf.json"
+    ls.save_leaf(tiny, path)
+    params = ls.Params(grid=32)
+    rows = list(ls.batch([path], params, tmp_path / "out", jobs=1))
+    assert [r["status"] for r in rows] == ["ok"], rows[0]["error"]
+    measured = ls.reconstruct(tiny, params).metrics
+    assert rows[0]["area"] == pytest.approx(measured["leaf"]["area"], rel=1e-9)
+    curvature = measured["curvature"]["mean_curvature"]["mean"]
+    assert rows[0]["mean_curvature_mean"] == pytest.approx(curvature, rel=1e-9)
