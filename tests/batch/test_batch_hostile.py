@@ -31,13 +31,15 @@ def leaves(tmp_path_factory) -> Path:
     return root
 
 
-def _script(tmp_path: Path, inputs: str) -> subprocess.CompletedProcess:
+def _script(
+    tmp_path: Path, inputs: str, scheduler: str | None = None
+) -> subprocess.CompletedProcess:
     """The README's `ls.batch` example saved as a plain script (no __main__ guard), and run."""
     script = tmp_path / "plain.py"
     script.write_text(
         "import leafstudio as ls\n"
         f"for row in ls.batch([{inputs!r}], ls.Params(grid=32), {str(tmp_path / 'out')!r}, "
-        "jobs=1):\n"
+        f"jobs=1, scheduler={scheduler!r}):\n"
         "    print(row['input'], row['status'], row['error'])\n"
     )
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
@@ -51,6 +53,16 @@ def test_a_plain_script_without_a_main_guard_runs_its_batch(tmp_path, leaves):
     done = _script(tmp_path, str(leaves))
     assert done.returncode == 0, done.stderr
     assert "Traceback" not in done.stderr
+    lines = done.stdout.splitlines()
+    assert len(lines) == 2 and all(line.split()[1] == "ok" for line in lines), done.stdout
+
+
+def test_a_plain_script_runs_its_batch_on_a_local_dask_cluster(tmp_path, leaves):
+    """As finding 2, on `scheduler="local"`: each Dask worker, spawned, ran the script again
+    while importing it and started a cluster of its own ("Nanny failed to start")."""
+    pytest.importorskip("distributed")
+    done = _script(tmp_path, str(leaves), scheduler="local")
+    assert done.returncode == 0, done.stderr[-2000:]
     lines = done.stdout.splitlines()
     assert len(lines) == 2 and all(line.split()[1] == "ok" for line in lines), done.stdout
 
