@@ -56,6 +56,11 @@ def size_note(length: float, suffix: str) -> str | None:
             f"--length gives its real size (e.g. --length {length:.3g}mm)")  # fmt: skip
 
 
+# a real leaf length (metres) taken: 1e308 m wrote infinite coordinates, 1e150 m a glTF of them
+# (32-bit floats), 1e-303 m an internal error (curvatures scaled by 1e606)
+SHORTEST, LONGEST = 1e-6, 1e3
+
+
 def parse_length(text: str | float) -> float:
     """A leaf length in metres: '8cm', '0.08m', '80mm', '3in' (units.METRES; a bare number is
     metres).
@@ -76,6 +81,9 @@ def parse_length(text: str | float) -> float:
     metres = unit_metres(unit, "--length")
     if not np.isfinite(value) or value <= 0:
         raise LeafError(f"--length must be above 0, got {text!r}")
+    if not SHORTEST <= value * metres <= LONGEST:  # no leaf; its coordinates overflow
+        raise LeafError(f"--length {str(text).strip()} is {value * metres:.3g} m; a leaf's length "
+                        "is taken from 1 um to 1 km")  # fmt: skip
     return value * metres
 
 

@@ -16,6 +16,7 @@ from leafstudio.assets.placement import parse_length
 from leafstudio.errors import LeafError
 from leafstudio.forms import make_form
 from tests.leaves import moved
+from tests.photos import error_lines
 
 
 @pytest.fixture(scope="module")
@@ -90,6 +91,23 @@ def test_length_parsing():
     for bad in ("8 inches", "cm", "-3cm", "0mm"):
         with pytest.raises(LeafError, match="--length"):
             parse_length(bad)
+
+
+@pytest.mark.parametrize("length", ["1e308m", "1e150m", "1e-300mm", "1e-320mm"])
+def test_a_length_no_leaf_has_is_one_line_and_writes_nothing(tmp_path: Path, capsys, length):
+    """`--length 1e308m` wrote a PLY of infinite coordinates and `1e150m` a glTF of them (its
+    32-bit floats), exit 0; `1e-300mm` ended in "internal error: ZeroDivisionError" (the
+    curvatures' scale)."""
+    from leafstudio.cli import main
+
+    leaf = tmp_path / "leaf.csv"
+    ls.save_leaf(ls.demo("nested"), leaf)
+    out = tmp_path / "leaf.glb"
+    capsys.readouterr()
+    assert main(["reconstruct", str(leaf), "-o", str(out), "--length", length, "--grid", "16"]) == 2
+    assert error_lines(capsys.readouterr().err) == 1 and not out.exists()
+    with pytest.raises(LeafError, match="--length"):
+        parse_length(length)
 
 
 def test_lengths_in_inches_and_feet(tmp_path: Path, capsys):
