@@ -110,6 +110,25 @@ def test_a_length_no_leaf_has_is_one_line_and_writes_nothing(tmp_path: Path, cap
         parse_length(length)
 
 
+@pytest.mark.parametrize("scale", [1e-90, 1e150])
+def test_a_leaf_at_any_scale_is_written_at_the_length_given(tmp_path: Path, scale):
+    """A leaf at 1e-90 given --length 8cm was written with every point at 0 (its length was
+    taken as at least 1e-12), and one at 1.4e150 ended in "internal error: ZeroDivisionError"
+    (the scale found as the cube root of a determinant that underflowed)."""
+    leaf = ls.demo("nested")
+    result = ls.reconstruct(ls.Leaf(leaf.boundary * scale, [v * scale for v in leaf.veins]),
+                            ls.Params(grid=32))  # fmt: skip
+    for suffix, length in ((".ply", 80.0), (".glb", 0.08)):  # mm Z-up, m Y-up
+        path = tmp_path / f"leaf{suffix}"
+        ls.save_mesh(result, path, length=0.08)
+        mesh = trimesh.load(path, force="mesh")
+        assert np.isfinite(mesh.vertices).all()
+        assert np.ptp(mesh.vertices, axis=0).max() == pytest.approx(length, rel=0.02)
+        if suffix == ".ply":
+            curvature = mesh.metadata["_ply_raw"]["vertex"]["data"]["gaussian_curvature"]
+            assert np.isfinite(curvature).all()
+
+
 def test_lengths_in_inches_and_feet(tmp_path: Path, capsys):
     """`--length 3in` was refused ("unknown unit 'in'; use one of mm, cm, m") where --thickness
     took inches: a length now takes in and ft too (one table for both), in the commands, the
