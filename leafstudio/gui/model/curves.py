@@ -26,8 +26,10 @@ def _drop_repeats(points: np.ndarray, closed: bool) -> np.ndarray:
     if len(points) < 2:
         return points
     ahead = np.roll(points, -1, axis=0) if closed else points[1:]
-    # np.isclose(rtol=0) for finite points, a fifth of its cost (10 vs 45 µs a curve)
-    same = np.all(np.abs(points[: len(ahead)] - ahead) <= 1e-12, axis=1)
+    # within 1e-12 of the points' extent: an absolute 1e-12 took every point of a leaf at 1e-90
+    # for a repeat, and the app's sketch of it failed ("zero-size array")
+    tolerance = 1e-12 * float(np.max(points.max(axis=0) - points.min(axis=0)))
+    same = np.all(np.abs(points[: len(ahead)] - ahead) <= tolerance, axis=1)
     keep = np.ones(len(points), dtype=bool)
     keep[: len(ahead)] &= ~same
     return points[keep]
