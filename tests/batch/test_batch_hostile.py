@@ -134,6 +134,26 @@ def test_resume_over_a_table_with_a_damaged_field_is_one_line(tmp_path, leaves, 
 
 
 @pytest.mark.usefixtures("warm_pools")
+def test_resume_over_a_json_table_with_a_damaged_field_is_one_line_too(tmp_path, leaves, capsys):
+    """As the CSV table's: a JSON lines row whose `k` was "three" was resumed as done and
+    written back as it was."""
+    import json
+
+    out = tmp_path / "out"
+    table = out / "traits.json"
+    argv = ["batch", str(leaves / "leaf0.csv"), "-o", str(out), "--grid", "32", "--jobs", "1",
+            "--traits", str(table)]  # fmt: skip
+    assert main(argv) == 0
+    row = json.loads(table.read_text())
+    row["k"] = "three"
+    damaged = json.dumps(row) + "\n"
+    table.write_text(damaged)
+    line = _line([*argv, "--resume"], capsys)
+    assert line.startswith(f"leafstudio: error: {table}: ") and "'three'" in line
+    assert table.read_text() == damaged  # left as it was
+
+
+@pytest.mark.usefixtures("warm_pools")
 def test_pipes_and_endless_devices_are_refused_in_one_line(tmp_path, capsys):
     """Finding 17: batch hashed each input before checking what it was: a FIFO blocked for ever,
     a link to /dev/zero read for ever, named outright or inside a folder. Run in this process,
