@@ -201,3 +201,12 @@ def test_a_leaf_at_1e_90_gets_a_sketch_of_its_outline():
     assert len(sketch.boundary) >= 12
     curve = closed_curve(sketch.boundary[:, :2])
     assert len(curve) > len(sketch.boundary) and np.ptp(curve[:, 0]) > 0.5e-90
+
+
+def test_curves_through_points_at_1e300_are_finite():
+    """The app's sketch of a leaf at 1e300 failed with "`x` must contain only finite values":
+    the centripetal parameter's chord lengths overflowed (their squares)."""
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    control = 1e300 * np.column_stack([np.cos(t), 0.4 * np.sin(t)])
+    for curve in (closed_curve(control), open_curve(control[:6])):
+        assert np.isfinite(curve).all() and np.ptp(curve[:, 0]) > 1e299
