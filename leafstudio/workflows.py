@@ -38,7 +38,8 @@ from leafstudio.core.pipeline import Pipeline, Result
 from leafstudio.core.plane import fit_frame
 from leafstudio.core.prepare.outline import ORDERED_STEP_RATIO
 from leafstudio.core.prepare.plausibility import leaf_warnings
-from leafstudio.core.prepare.polygon import ring_crossings
+from leafstudio.core.prepare.polygon import distinct_indices, ring_crossings
+from leafstudio.core.prepare.units import Units
 from leafstudio.core.unfold import unfolded
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf, Params
@@ -280,14 +281,20 @@ def boundary_crossing(leaf: Leaf) -> np.ndarray | None:
     >>> boundary_crossing(bow_tie).tolist()
     [0.5, 0.5, 0.0]
     """
-    points = leaf.boundary
-    if len(points) < 4:
+    if len(leaf.boundary) < 4:
         return None
+    # at unit size, as the pipeline runs: in the world's units a leaf 1e9 away was found to
+    # cross itself, and one at 1e300 overflowed ("data must be finite")
+    units = Units.of(leaf)
+    unit = units.leaf(leaf)
+    points = unit.boundary
     try:
-        frame = fit_frame(points, leaf.vein_points)
+        frame = fit_frame(points, unit.vein_points)
     except LeafError:
         return None
     xy, _ = frame.to_plane(points)
+    xy = xy[distinct_indices(xy, 1.0)]  # repeats dropped, as the outline drops them (at 1e9 from
+    # the origin, the nested demo's two tip points 6e-8 apart are one, a "crossing")
     steps = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1)
     spacing = float(np.median(cKDTree(xy).query(xy, k=2)[0][:, 1]))  # as prepare/outline.py
     if spacing <= 0 or steps.max() > ORDERED_STEP_RATIO * spacing:
@@ -295,7 +302,7 @@ def boundary_crossing(leaf: Leaf) -> np.ndarray | None:
     found = ring_crossings(xy)
     if not len(found):
         return None
-    return frame.to_world(found[:1], np.zeros(1))[0]
+    return units.to_world(frame.to_world(found[:1], np.zeros(1)))[0]
 
 
 @dataclass(frozen=True)

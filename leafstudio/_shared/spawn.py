@@ -1,11 +1,13 @@
 """Worker processes started by spawn that do not import the parent's `__main__` (for the batch's
-pool)."""
+pool and its local Dask cluster)."""
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import sys
 import types
+from collections.abc import Iterator
 from typing import Any
 
 
@@ -17,15 +19,22 @@ class WorkerProcess(multiprocessing.context.SpawnProcess):
 
     @staticmethod
     def _Popen(process_obj: Any) -> Any:  # multiprocessing's name
-        # spawn's preparation data names the main module (its path or name) when it has one;
-        # an empty stand-in, as in an interactive session, names none. Swapped only while the
-        # process is launched, in the thread that submits.
-        main = sys.modules["__main__"]
-        sys.modules["__main__"] = types.ModuleType("__main__")
-        try:
+        with main_hidden():  # only while the process is launched, in the thread that submits
             return multiprocessing.context.SpawnProcess._Popen(process_obj)
-        finally:
-            sys.modules["__main__"] = main
+
+
+@contextlib.contextmanager
+def main_hidden() -> Iterator[None]:
+    """Processes spawned meanwhile do not import the parent's `__main__`: spawn's preparation
+    data names the main module (its path or name) when it has one; an empty stand-in, as in an
+    interactive session, names none. The batch's pool launches each worker so; a local Dask
+    cluster's workers are launched while it starts (the caller waits for it meanwhile)."""
+    main = sys.modules["__main__"]
+    sys.modules["__main__"] = types.ModuleType("__main__")
+    try:
+        yield
+    finally:
+        sys.modules["__main__"] = main
 
 
 class WorkerContext(multiprocessing.context.SpawnContext):

@@ -56,6 +56,11 @@ def size_note(length: float, suffix: str) -> str | None:
             f"--length gives its real size (e.g. --length {length:.3g}mm)")  # fmt: skip
 
 
+# a real leaf length (metres) taken: 1e308 m wrote infinite coordinates, 1e150 m a glTF of them
+# (32-bit floats), 1e-303 m an internal error (curvatures scaled by 1e606)
+SHORTEST, LONGEST = 1e-6, 1e3
+
+
 def parse_length(text: str | float) -> float:
     """A leaf length in metres: '8cm', '0.08m', '80mm', '3in' (units.METRES; a bare number is
     metres).
@@ -76,6 +81,9 @@ def parse_length(text: str | float) -> float:
     metres = unit_metres(unit, "--length")
     if not np.isfinite(value) or value <= 0:
         raise LeafError(f"--length must be above 0, got {text!r}")
+    if not SHORTEST <= value * metres <= LONGEST:  # no leaf; its coordinates overflow
+        raise LeafError(f"--length {str(text).strip()} is {value * metres:.3g} m; a leaf's length "
+                        "is taken from 1 um to 1 km")  # fmt: skip
     return value * metres
 
 
@@ -130,7 +138,10 @@ def leaf_placement(
     along = direction[0] * np.asarray(frame.u) + direction[1] * np.asarray(frame.v)
     across = np.cross(up, along)
     length, _ = blade_length_width(polygon, base_xy, direction)
-    return Placement(base=base, axes=np.stack([along, across, up]), length=max(length, 1e-12))
+    # no blade length (a degenerate outline): its size; an absolute floor (1e-12) took a leaf
+    # at 1e-90 as 1e78 times longer, and --length wrote it with every point at 0
+    length = length if length > 0 else float(np.ptp(polygon, axis=0).max()) or 1.0
+    return Placement(base=base, axes=np.stack([along, across, up]), length=length)
 
 
 def result_placement(result: Any) -> Placement:
@@ -185,7 +196,9 @@ def place(asset: Any, placement: Placement, metres: float | None, suffix: str) -
     """The MeshAsset moved, turned and scaled for the format `suffix` (module docstring); its
     height scales with it and its curvatures inversely."""
     matrix, offset = placement.transform(metres, suffix)
-    scale = float(np.cbrt(np.linalg.det(matrix)))
+    # the placement's own scale: the cube root of the matrix's determinant underflowed for a
+    # leaf at 1e150 given a length (1e-152 cubed), "ZeroDivisionError"
+    scale = placement.scale(metres, suffix)
     if np.allclose(matrix, np.eye(3)) and not offset.any():
         return asset
     rotation = matrix / scale
@@ -193,7 +206,12 @@ def place(asset: Any, placement: Placement, metres: float | None, suffix: str) -
     def turn(vectors: np.ndarray | None) -> np.ndarray | None:
         return None if vectors is None else np.asarray(vectors) @ rotation.T
 
-    data = {k: v * scale ** POINT_ARRAY_POWER.get(k, 0) for k, v in asset.point_data.items()}
+    def scaled(values: np.ndarray, power: int) -> np.ndarray:
+        for _ in range(abs(power)):  # a factor at a time: scale**-2 overflows at 1e-155
+            values = values * scale if power > 0 else values / scale
+        return values
+
+    data = {k: scaled(v, POINT_ARRAY_POWER.get(k, 0)) for k, v in asset.point_data.items()}
     return asset.with_(
         points=asset.points @ matrix.T + offset,
         normals=turn(asset.normals),

@@ -10,7 +10,7 @@ from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wai
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
-from leafstudio._shared.spawn import WorkerContext
+from leafstudio._shared.spawn import WorkerContext, main_hidden
 from leafstudio.batch.plan import Job
 from leafstudio.batch.worker import run_failed, run_job, worker_start
 from leafstudio.core.kernels import TABLES, compile_kernels
@@ -139,7 +139,9 @@ class DaskCluster:
             if address == "local":
                 import dask
 
-                with dask.config.set(LOCAL_CLUSTER_CONFIG):
+                # its workers are spawned: without main_hidden a plain script (no __main__
+                # guard) ran again in each, and started a cluster of its own ("Nanny failed")
+                with dask.config.set(LOCAL_CLUSTER_CONFIG), main_hidden():
                     self._cluster = LocalCluster(
                         n_workers=jobs,
                         threads_per_worker=1,

@@ -113,6 +113,10 @@ def plan(
     out = Path(out_dir).resolve()
     found = find_inputs(inputs, settings.scans, [out, *exclude])
     if not found:
+        for item in inputs:  # a file named outright in the output folder (its own meshes?)
+            if Path(item).is_file() and _inside(Path(item).resolve(), out):
+                raise LeafError(f"lies in the output folder {os.fspath(out_dir)}, whose files "
+                                "batch leaves out; choose another -o", os.fspath(item))  # fmt: skip
         raise LeafError(f"no input files found in {' '.join(map(os.fspath, inputs))}")
     roots = {os.path.abspath(root) for _, root in found}  # links are not followed: a linked
     common = Path(os.path.commonpath(sorted(roots)))  # file stays where it was listed

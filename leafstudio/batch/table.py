@@ -28,9 +28,26 @@ def _parse(name: str, text: str) -> Any:
         if name in FLOAT_COLUMNS:
             return float(text)
     except ValueError:
-        kind = "a whole number" if name in INT_COLUMNS else "a number"
-        raise LeafError(f"{name} is {shorten(text, 40)!r}, not {kind}") from None
+        raise _not_a_number(name, text) from None
     return text
+
+
+def _not_a_number(name: str, value: Any) -> LeafError:
+    """The error for a number column holding something else."""
+    kind = "a whole number" if name in INT_COLUMNS else "a number"
+    return LeafError(f"{name} is {shorten(str(value), 40)!r}, not {kind}")
+
+
+def _checked(row: dict[str, Any]) -> dict[str, Any]:
+    """A JSON row whose number columns hold numbers (or null); LeafError otherwise, as a CSV
+    cell's (_parse): a row whose k was "three" was resumed as done and written back so."""
+    for name, value in row.items():
+        if value is None or (name not in INT_COLUMNS and name not in FLOAT_COLUMNS):
+            continue
+        whole = isinstance(value, int) and not isinstance(value, bool)
+        if not (whole or (name in FLOAT_COLUMNS and isinstance(value, float))):
+            raise _not_a_number(name, value)
+    return row
 
 
 def _cell(value: Any) -> str:
@@ -146,13 +163,16 @@ class JsonLinesFormat(_LineFormat):
         return str(json.loads(line)["input"])
 
     def read(self, lines: Iterator[str]) -> Iterator[dict[str, Any]]:
-        for line in lines:
+        for number, line in enumerate(lines, 1):
             try:
                 row = json.loads(line)
             except json.JSONDecodeError:
                 continue
             if isinstance(row, dict):
-                yield row
+                try:
+                    yield _checked(row)
+                except LeafError as exc:
+                    raise LeafError(f"row {number}: {exc.problem}") from None
 
     def is_first_line(self, first: str) -> bool:
         try:

@@ -16,7 +16,6 @@ from leafstudio.assets.export import save_mesh
 from leafstudio.assets.placement import result_placement, size_note
 from leafstudio.batch.plan import Job, file_hash
 from leafstudio.batch.settings import CURVATURE_COLUMNS, SHAPE_COLUMNS, TRAIT_POWERS, columns
-from leafstudio.core.evaluate import blade_midrib, curvature_summary, shape_measurements
 from leafstudio.errors import LeafError, error_line
 from leafstudio.sources.files import load_leaf
 
@@ -70,10 +69,11 @@ def _number(x: Any) -> float | None:
 
 
 def _traits(result: Any) -> dict[str, Any]:
-    """The shape and curvature columns of a Result (core/evaluate.py), in the leaf's own units."""
-    mesh = result.triangle_mesh
-    shape = shape_measurements(mesh, result.frame, result.polygon, midrib=blade_midrib(result.leaf))
-    curvature = curvature_summary(mesh)
+    """The shape and curvature columns of a Result, in the leaf's own units: its metrics, as
+    `measure` prints them (measured at unit size: a leaf at 1e-90 measured in its own units had
+    facet areas that underflowed to 0, "Weights sum to zero"). LeafError past about 1e150."""
+    metrics = result.metrics
+    shape, curvature = metrics["leaf"], metrics["curvature"]
     row = {name: _number(shape[name]) for name in SHAPE_COLUMNS}
     for name in CURVATURE_COLUMNS:
         array, stat = name.rsplit("_", 1)

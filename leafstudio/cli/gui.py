@@ -7,6 +7,7 @@ import argparse
 from leafstudio._shared.inputs import check_file_kind
 from leafstudio._shared.safewrite import refuse_overlap
 from leafstudio.errors import LeafError
+from leafstudio.sources.leafphoto import photo_path
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -37,5 +38,5 @@ def run(args: argparse.Namespace) -> int:
     path = lesson if lesson is not None else path
     if path is not None:
         check_file_kind(path)
-    refuse_overlap([path], [screenshot])
+    refuse_overlap([path, photo_path(path)], [screenshot])
     return run_app(path, screenshot, lesson=lesson is not None)

@@ -11,6 +11,7 @@ from leafstudio._shared.safewrite import check_outputs, replace_atomically, stag
 from leafstudio.assets.units import UNITS_SAID
 from leafstudio.cli.options import EXIT_OK, add_run_options, log, run_pipeline
 from leafstudio.errors import LeafError
+from leafstudio.sources.leafphoto import photo_path
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -111,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
     image = None if args.texture in TEXTURES else args.texture  # an input too
     meshes = written_paths(out, args.lod + 1, textured=True)  # with the levels and companions
     outputs = [*meshes, args.metrics, figure, turntable, steps]  # every file this command writes
-    check_outputs([args.input, *args.vein, args.against, image], outputs)
+    check_outputs([args.input, photo_path(args.input), *args.vein, args.against, image], outputs)
     leaf = load_leaf(args.input, veins=args.vein)
     against = None
     if args.against:  # read (and its blade found, as extract finds it) before the run

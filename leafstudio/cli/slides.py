@@ -9,6 +9,7 @@ from leafstudio._shared.safewrite import check_outputs
 from leafstudio.cli.options import EXIT_OK, add_run_options, run_pipeline
 from leafstudio.errors import LeafError
 from leafstudio.render.lesson import LESSON_STEPS
+from leafstudio.sources.leafphoto import photo_path
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -55,7 +56,8 @@ def run(args: argparse.Namespace) -> int:
 
     compared = comparisons(args.compare)
     check_outputs(
-        [args.input, *args.vein], slide_paths(args.output, len(LESSON_STEPS) + len(compared))
+        [args.input, photo_path(args.input), *args.vein],
+        slide_paths(args.output, len(LESSON_STEPS) + len(compared)),
     )
     _, result = run_pipeline(args, load_leaf(args.input, veins=args.vein))
     shown = lesson_slides(result, compared)

@@ -362,8 +362,9 @@ class Scaled:
         if not self.holes:
             return None
         uv = (np.asarray(points, dtype=float)[:, :2] - self.centre[:2]) / self.scale
-        rings = shapely.polygons(list(self.holes))
-        cut = shapely.union_all(rings)
+        # one polygon per ring: shapely.polygons(list) stacks them, so rings of different
+        # lengths failed ("inhomogeneous shape")
+        cut = shapely.union_all([shapely.Polygon(r) for r in self.holes])
         distance = shapely.distance(shapely.boundary(cut), shapely.points(uv))
         inside = shapely.contains_xy(cut, uv[:, 0], uv[:, 1])
         return self.scale * np.where(inside, -distance, distance)

@@ -130,11 +130,18 @@ def frame_stage(leaf: Leaf, margin: str = "auto", units: Units | None = None) ->
         if outside.any():
             from shapely import LinearRing, distance, points
 
-            gap = distance(LinearRing(polygon), points(v_xy[outside])).max()
+            # measured at a scale that keeps a far point's squared distance finite (a point
+            # at 1e200 was "up to inf% of the leaf length")
+            scale = max(float(np.abs(v_xy[outside]).max()), float(np.abs(polygon).max()))
+            gap = scale * distance(LinearRing(polygon / scale), points(v_xy[outside] / scale)).max()
             if gap > VEIN_OUTSIDE_TOLERANCE * length:
+                share = gap / length
+                far = (
+                    f"{share:.1%} of the leaf length" if share < 1 else f"{share:.3g} leaf lengths"
+                )
                 raise LeafError(
                     f"vein {i + 1}: {outside.sum()} of {len(v_xy)} points lie outside the "
-                    f"boundary (up to {gap / length:.1%} of the leaf length)"
+                    f"boundary (up to {far})"
                 )
         veins.append(v_xy)
         heights.append(v_h[keep] - (base(v_xy) if base is not None else 0.0))

@@ -153,3 +153,17 @@ def project_photo(project: str | os.PathLike) -> LeafPhoto | None:
     data = load_json(project)
     entry = data.get("photo") if isinstance(data, dict) else None
     return None if entry is None else from_entry(entry, project)
+
+
+def photo_path(project: str | os.PathLike | None) -> Path | None:
+    """The image a .leaf.json project was traced from (project_photo's), or None: another file,
+    no entry, or one that cannot be read (the command says so where it uses it). An input of a
+    command that opens the project (its texture, the app's backdrop), which no output may
+    replace: `reconstruct p.leaf.json -o x.glb --figure PHOTO` replaced it."""
+    if project is None:
+        return None
+    try:
+        found = project_photo(project)
+    except LeafError:
+        return None
+    return None if found is None else found.image

@@ -16,6 +16,7 @@ from leafstudio.assets.placement import parse_length
 from leafstudio.errors import LeafError
 from leafstudio.forms import make_form
 from tests.leaves import moved
+from tests.photos import error_lines
 
 
 @pytest.fixture(scope="module")
@@ -90,6 +91,42 @@ def test_length_parsing():
     for bad in ("8 inches", "cm", "-3cm", "0mm"):
         with pytest.raises(LeafError, match="--length"):
             parse_length(bad)
+
+
+@pytest.mark.parametrize("length", ["1e308m", "1e150m", "1e-300mm", "1e-320mm"])
+def test_a_length_no_leaf_has_is_one_line_and_writes_nothing(tmp_path: Path, capsys, length):
+    """`--length 1e308m` wrote a PLY of infinite coordinates and `1e150m` a glTF of them (its
+    32-bit floats), exit 0; `1e-300mm` ended in "internal error: ZeroDivisionError" (the
+    curvatures' scale)."""
+    from leafstudio.cli import main
+
+    leaf = tmp_path / "leaf.csv"
+    ls.save_leaf(ls.demo("nested"), leaf)
+    out = tmp_path / "leaf.glb"
+    capsys.readouterr()
+    assert main(["reconstruct", str(leaf), "-o", str(out), "--length", length, "--grid", "16"]) == 2
+    assert error_lines(capsys.readouterr().err) == 1 and not out.exists()
+    with pytest.raises(LeafError, match="--length"):
+        parse_length(length)
+
+
+@pytest.mark.parametrize("scale", [1e-90, 1e150])
+def test_a_leaf_at_any_scale_is_written_at_the_length_given(tmp_path: Path, scale):
+    """A leaf at 1e-90 given --length 8cm was written with every point at 0 (its length was
+    taken as at least 1e-12), and one at 1.4e150 ended in "internal error: ZeroDivisionError"
+    (the scale found as the cube root of a determinant that underflowed)."""
+    leaf = ls.demo("nested")
+    result = ls.reconstruct(ls.Leaf(leaf.boundary * scale, [v * scale for v in leaf.veins]),
+                            ls.Params(grid=32))  # fmt: skip
+    for suffix, length in ((".ply", 80.0), (".glb", 0.08)):  # mm Z-up, m Y-up
+        path = tmp_path / f"leaf{suffix}"
+        ls.save_mesh(result, path, length=0.08)
+        mesh = trimesh.load(path, force="mesh")
+        assert np.isfinite(mesh.vertices).all()
+        assert np.ptp(mesh.vertices, axis=0).max() == pytest.approx(length, rel=0.02)
+        if suffix == ".ply":
+            curvature = mesh.metadata["_ply_raw"]["vertex"]["data"]["gaussian_curvature"]
+            assert np.isfinite(curvature).all()
 
 
 def test_lengths_in_inches_and_feet(tmp_path: Path, capsys):

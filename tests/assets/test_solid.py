@@ -104,6 +104,24 @@ def test_every_solid_format_reads_back_watertight(tmp_path: Path, suffix: str):
     assert loaded.volume == pytest.approx(reference.volume, rel=1e-4)
 
 
+@pytest.mark.parametrize("thickness", [None, 1e-3])
+def test_an_stl_whose_32_bit_floats_would_merge_its_points_is_refused(tmp_path, thickness):
+    """A leaf of length 1 lying 1e5 from the origin: STL's 32-bit floats are 8e-3 apart there,
+    so a solid of thickness 1e-3 of its length (in range) read back not closed, and even the
+    bare sheet had 100 faces of no area (its area 9% off), both written with exit 0."""
+    leaf = ls.demo("nested")
+    far = ls.Leaf(leaf.boundary + 1e5, [v + 1e5 for v in leaf.veins])
+    result = ls.reconstruct(far, ls.Params(grid=32))
+    path = tmp_path / "far.stl"
+    with pytest.raises(LeafError, match="32-bit"):
+        ls.save_mesh(result, path, thickness=thickness)
+    assert not path.exists()
+    ls.save_mesh(result, tmp_path / "far.3mf", thickness=thickness)  # 3MF keeps their digits
+    near = ls.reconstruct(leaf, ls.Params(grid=32))
+    ls.save_mesh(near, tmp_path / "near.stl", thickness=thickness)  # at the origin: kept apart
+    assert (tmp_path / "near.stl").stat().st_size > 0
+
+
 def test_thickness_with_units_and_as_a_fraction():
     assert parse_thickness("0.01") == (0.01, None)
     assert parse_thickness("0.4mm") == (0.4, "mm")

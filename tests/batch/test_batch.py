@@ -150,6 +150,13 @@ def test_bad_files_become_failed_rows_and_the_rest_go_on(tmp_path, leaves, capsy
 
 def test_usage_errors_exit_2(tmp_path, leaves, capsys):
     out = str(tmp_path / "out")
+    made = tmp_path / "made"
+    inside = made / "a.csv"  # named outright, but in the output folder: left out
+    made.mkdir()
+    inside.write_text("0 0 0\n")
+    assert f"{inside}: lies in the output folder {made}" in _message(
+        ["batch", str(inside), "-o", str(made)], capsys
+    )  # it said "no input files found in" the file it named
     assert "no input files found" in _message(["batch", str(tmp_path / "*.csv"), "-o", out],
                                               capsys)  # fmt: skip
     assert "--jobs must be 1 or more" in _message(["batch", str(leaves), "-o", out, "--jobs",

@@ -31,13 +31,15 @@ def leaves(tmp_path_factory) -> Path:
     return root
 
 
-def _script(tmp_path: Path, inputs: str) -> subprocess.CompletedProcess:
+def _script(
+    tmp_path: Path, inputs: str, scheduler: str | None = None
+) -> subprocess.CompletedProcess:
     """The README's `ls.batch` example saved as a plain script (no __main__ guard), and run."""
     script = tmp_path / "plain.py"
     script.write_text(
         "import leafstudio as ls\n"
         f"for row in ls.batch([{inputs!r}], ls.Params(grid=32), {str(tmp_path / 'out')!r}, "
-        "jobs=1):\n"
+        f"jobs=1, scheduler={scheduler!r}):\n"
         "    print(row['input'], row['status'], row['error'])\n"
     )
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
@@ -51,6 +53,16 @@ def test_a_plain_script_without_a_main_guard_runs_its_batch(tmp_path, leaves):
     done = _script(tmp_path, str(leaves))
     assert done.returncode == 0, done.stderr
     assert "Traceback" not in done.stderr
+    lines = done.stdout.splitlines()
+    assert len(lines) == 2 and all(line.split()[1] == "ok" for line in lines), done.stdout
+
+
+def test_a_plain_script_runs_its_batch_on_a_local_dask_cluster(tmp_path, leaves):
+    """As finding 2, on `scheduler="local"`: each Dask worker, spawned, ran the script again
+    while importing it and started a cluster of its own ("Nanny failed to start")."""
+    pytest.importorskip("distributed")
+    done = _script(tmp_path, str(leaves), scheduler="local")
+    assert done.returncode == 0, done.stderr[-2000:]
     lines = done.stdout.splitlines()
     assert len(lines) == 2 and all(line.split()[1] == "ok" for line in lines), done.stdout
 
@@ -115,6 +127,26 @@ def test_resume_over_a_table_with_a_damaged_field_is_one_line(tmp_path, leaves, 
     cells = row.split(",")
     cells[names.index("k")] = "three"
     damaged = f"{header}\n{','.join(cells)}\n"
+    table.write_text(damaged)
+    line = _line([*argv, "--resume"], capsys)
+    assert line.startswith(f"leafstudio: error: {table}: ") and "'three'" in line
+    assert table.read_text() == damaged  # left as it was
+
+
+@pytest.mark.usefixtures("warm_pools")
+def test_resume_over_a_json_table_with_a_damaged_field_is_one_line_too(tmp_path, leaves, capsys):
+    """As the CSV table's: a JSON lines row whose `k` was "three" was resumed as done and
+    written back as it was."""
+    import json
+
+    out = tmp_path / "out"
+    table = out / "traits.json"
+    argv = ["batch", str(leaves / "leaf0.csv"), "-o", str(out), "--grid", "32", "--jobs", "1",
+            "--traits", str(table)]  # fmt: skip
+    assert main(argv) == 0
+    row = json.loads(table.read_text())
+    row["k"] = "three"
+    damaged = json.dumps(row) + "\n"
     table.write_text(damaged)
     line = _line([*argv, "--resume"], capsys)
     assert line.startswith(f"leafstudio: error: {table}: ") and "'three'" in line
@@ -208,3 +240,21 @@ def test_a_leaf_too_large_to_measure_is_a_row_naming_it(tmp_path):
         rows.extend(ls.batch([folder], ls.Params(grid=32), tmp_path / "out", jobs=1))
     assert [r["status"] for r in rows] == ["failed"]
     assert rows[0]["error"].startswith(f"{folder / 'huge.leaf.json'}: the leaf is too large")
+
+
+@pytest.mark.usefixtures("warm_pools")
+def test_a_tiny_leaf_measure_takes_is_an_ok_row_with_its_figures(tmp_path):
+    """A leaf scaled by 1e-90, which `reconstruct` and `measure` take, was a batch row "internal
+    error: ZeroDivisionError: Weights sum to zero" (its facets' areas underflowed when batch
+    measured the mesh in the input's units); now the row holds measure's figures."""
+    leaf = ls.demo("nested")
+    tiny = ls.Leaf(leaf.boundary * 1e-90, [v * 1e-90 for v in leaf.veins])
+    path = tmp_path / "tiny.leaf.json"
+    ls.save_leaf(tiny, path)
+    params = ls.Params(grid=32)
+    rows = list(ls.batch([path], params, tmp_path / "out", jobs=1))
+    assert [r["status"] for r in rows] == ["ok"], rows[0]["error"]
+    measured = ls.reconstruct(tiny, params).metrics
+    assert rows[0]["area"] == pytest.approx(measured["leaf"]["area"], rel=1e-9)
+    curvature = measured["curvature"]["mean_curvature"]["mean"]
+    assert rows[0]["mean_curvature_mean"] == pytest.approx(curvature, rel=1e-9)

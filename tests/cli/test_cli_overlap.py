@@ -88,3 +88,38 @@ def test_a_screenshot_over_the_file_opened_is_refused(tmp_path, capsys):
     err = _refused(["gui", str(photo), "--screenshot", str(photo)], capsys)
     assert f"{photo}: is also an input" in err
     assert photo.read_bytes() == before
+
+
+def _photo_project(tmp_path: Path) -> tuple[Path, Path, bytes]:
+    """A project traced from photo.png beside it (its "photo" entry, as `leafstudio photo`
+    writes it), and the photo's bytes."""
+    import json
+
+    photo = tmp_path / "photo.png"
+    before = _image(photo)
+    project = tmp_path / "leaf.leaf.json"
+    ls.save_leaf(ls.demo("nested"), project)
+    data = json.loads(project.read_text())
+    data["photo"] = {"image": "photo.png", "pixel_from_world": [[10, 0, 8], [0, -10, 8]],
+                     "upright": True}  # fmt: skip
+    project.write_text(json.dumps(data))
+    return project, photo, before
+
+
+@pytest.mark.parametrize("flag", ["--figure", "--steps-figure"])
+def test_an_output_over_the_photo_a_project_was_traced_from_is_refused(tmp_path, capsys, flag):
+    """The photo a project names is its texture (--texture auto) and the app's backdrop: an
+    input, which `reconstruct p.leaf.json -o x.glb --figure photo.png` replaced (exit 0)."""
+    project, photo, before = _photo_project(tmp_path)
+    out = tmp_path / "out.glb"
+    err = _refused(["reconstruct", str(project), "-o", str(out), flag, str(photo), "--grid",
+                    "32"], capsys)  # fmt: skip
+    assert f"{photo}: is also an input" in err
+    assert photo.read_bytes() == before and not out.exists()
+
+
+def test_a_screenshot_over_the_photo_of_the_project_opened_is_refused(tmp_path, capsys):
+    project, photo, before = _photo_project(tmp_path)
+    err = _refused(["gui", str(project), "--screenshot", str(photo)], capsys)
+    assert f"{photo}: is also an input" in err
+    assert photo.read_bytes() == before

@@ -181,6 +181,17 @@ def test_veins_outside_the_boundary_are_an_error():
         ls.reconstruct(ls.Leaf(boundary=leaf.boundary, veins=[far]))
 
 
+def test_a_vein_point_far_outside_says_how_far_in_numbers():
+    """A vein point at 1e200 beside a leaf of length 1: its distance overflowed, and the line
+    said "up to inf% of the leaf length"; a gap beyond the leaf's length is said in lengths."""
+    leaf = ls.demo("nested")
+    for point, words in (([1e200, 1e200, 0.0], "1.41e+200 leaf lengths"), ([3.0, 0, 0], "2 leaf")):
+        vein = np.vstack([leaf.veins[0], point])
+        with pytest.raises(ls.LeafError) as caught:
+            ls.reconstruct(ls.Leaf(boundary=leaf.boundary, veins=[vein]))
+        assert "inf" not in str(caught.value) and words in str(caught.value), caught.value
+
+
 def test_a_run_and_its_metrics_need_no_vtk_and_the_polydata_holds_the_same_mesh():
     code = (
         "import sys, leafstudio as ls\n"

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from leafstudio.core.sheet import fit_sheet, unroll
+from leafstudio.core.sheet import Scaled, fit_sheet, unroll
 
 
 def rolled(uv: np.ndarray, radius: float = 0.08) -> np.ndarray:
@@ -85,3 +85,18 @@ def test_the_spline_on_a_grid_is_scipys_up_to_rounding():
     np.testing.assert_allclose(  # an epsilon scales the kernel's input: scipy's own (review)
         spline_on_grid(scaled, us, vs), scaled(grid).reshape(len(us), len(vs), 3), atol=1e-12
     )
+
+
+def test_holes_of_different_sizes_are_cut():
+    """A blade with holes of 4 and 5 corners (the nested demo extracted as a scan has four):
+    `trim` stacked the rings in one array ("inhomogeneous shape"), so batch --scans and
+    `reconstruct` of the extracted leaf ended in an internal error."""
+    sheet = fit_sheet(rolled(_blade(2000)), np.array([0.0, 0.0, 1.0]), 1.0)
+    square = np.array([[0.0, 0.0], [0.1, 0.0], [0.1, 0.1], [0.0, 0.1]])
+    turn = np.arange(5) * 2 * np.pi / 5
+    pentagon = 0.05 * np.column_stack([np.cos(turn), np.sin(turn)])
+    bend = Scaled(sheet, np.zeros(3), 2.0, holes=(square, pentagon + [0.3, 0.0]))
+    points = np.array([[0.1, 0.1, 0.0], [0.6, 0.0, 0.0], [1.0, 1.0, 0.0]])  # world = 2 unit
+    distance = bend.trim(points)
+    assert distance[0] < 0 and distance[1] < 0  # inside the square, inside the pentagon
+    assert distance[2] > 0

@@ -9,6 +9,9 @@ from typing import NamedTuple
 
 import numpy as np
 import shapely
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 from leafstudio.core.buckets import kernel_array
 from leafstudio.core.jit import njit
@@ -17,29 +20,23 @@ MAX_OUTLINE_VERTICES = 3000  # a denser outline is thinned to about this many (t
 
 
 def distinct_indices(points: np.ndarray, scale: float) -> np.ndarray:
-    """Indices of the (n, 2) points left once repeats (within 1e-9 of `scale`) are dropped, in
-    order. Column by column: numpy's reductions along axis 0 of an (n, 2) array are slow."""
-    if len(points) == 0:
+    """Indices of the (n, 2) points left once repeats are dropped, in order: of points within
+    1e-9 of `scale` of one another (in chains), the first. By distance, not by rounding to a
+    grid of 1e-9: copies 5e-12 apart that fell either side of a rounding boundary were both
+    kept, and a noisy outline moved by 0.75% of its length (issue 24, finding 19). scipy's
+    cKDTree finds the pairs (measured once, on a busy 2-core machine, on a ring of 2.4M points
+    with 20% copies: 1.5 s, as the sort by grid keys it replaced; 0.28 s against 0.14 s on 360k)."""
+    n = len(points)
+    if n == 0:
         return np.arange(0)
-    columns = [np.round(points[:, i] / (scale * 1e-9)).astype(np.int64) for i in range(2)]
-    columns = [c - c.min() for c in columns]
-    span_y = int(columns[1].max()) + 1
-    if (float(columns[0].max()) + 1) * span_y >= 2.0**62:  # rare: no one integer each
-        return np.sort(np.unique(np.column_stack(columns), axis=0, return_index=True)[1])
-    keys = columns[0] * span_y + columns[1]
-    ordered = np.sort(keys)  # a plain sort: many times faster than a unique with indices
-    same = ordered[1:] == ordered[:-1]
-    if not same.any():
-        return np.arange(len(keys))
-    # only the points whose key repeats are sorted again (a dense scan has a few such pairs)
-    involved = np.flatnonzero(np.isin(keys, np.unique(ordered[1:][same])))
-    order = np.argsort(keys[involved], kind="stable")
-    grouped = keys[involved][order]
-    first = involved[order[np.r_[True, grouped[1:] != grouped[:-1]]]]  # each repeat's first
-    keep = np.ones(len(keys), dtype=bool)
-    keep[involved] = False
-    keep[first] = True
-    return np.flatnonzero(keep)
+    # scaled by a power of two (exact) to at most 1: a vein point at 1e200 overflowed the tree
+    unit = 2.0 ** -float(np.frexp(max(float(np.abs(points).max()), 1e-300))[1])
+    pairs = cKDTree(points * unit).query_pairs(1e-9 * scale * unit, output_type="ndarray")
+    if not len(pairs):
+        return np.arange(n)
+    links = coo_matrix((np.ones(len(pairs), dtype=bool), (pairs[:, 0], pairs[:, 1])), (n, n))
+    _, group = connected_components(links, directed=False)
+    return np.sort(np.unique(group, return_index=True)[1])
 
 
 def thin_ring(points: np.ndarray, sequence: np.ndarray, step: float) -> np.ndarray:

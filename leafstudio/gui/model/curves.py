@@ -26,8 +26,10 @@ def _drop_repeats(points: np.ndarray, closed: bool) -> np.ndarray:
     if len(points) < 2:
         return points
     ahead = np.roll(points, -1, axis=0) if closed else points[1:]
-    # np.isclose(rtol=0) for finite points, a fifth of its cost (10 vs 45 µs a curve)
-    same = np.all(np.abs(points[: len(ahead)] - ahead) <= 1e-12, axis=1)
+    # within 1e-12 of the points' extent: an absolute 1e-12 took every point of a leaf at 1e-90
+    # for a repeat, and the app's sketch of it failed ("zero-size array")
+    tolerance = 1e-12 * float(np.max(points.max(axis=0) - points.min(axis=0)))
+    same = np.all(np.abs(points[: len(ahead)] - ahead) <= tolerance, axis=1)
     keep = np.ones(len(points), dtype=bool)
     keep[: len(ahead)] &= ~same
     return points[keep]
@@ -37,6 +39,16 @@ def _span_samples(t: np.ndarray, per_span: int) -> np.ndarray:
     """Parameters spaced evenly within each span [t_i, t_i+1], every t_i included."""
     inner = np.linspace(0.0, 1.0, per_span, endpoint=False)
     return np.append((t[:-1, None] + np.diff(t)[:, None] * inner).ravel(), t[-1])
+
+
+def _unit_factor(points: np.ndarray) -> float:
+    """A power of two (exact) that brings the points' coordinates near 1 when they are beyond
+    1e100 or under 1e-100, else 1: a spline through points at 1e300 overflowed (its chords'
+    squares) and the app's sketch of such a leaf failed ("must contain only finite values")."""
+    top = float(np.abs(points).max()) if points.size else 0.0
+    if top == 0.0 or 1e-100 < top < 1e100:
+        return 1.0
+    return float(2.0 ** -np.frexp(top)[1])
 
 
 def closed_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.ndarray:
@@ -50,6 +62,9 @@ def closed_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.nd
     control = _drop_repeats(np.asarray(control, dtype=float), closed=True)
     if len(control) < 3:
         return control
+    unit = _unit_factor(control)
+    if unit != 1.0:
+        return closed_curve(control * unit, per_span) / unit
     loop = np.vstack([control, control[:1]])
     t = _centripetal(loop)
     # CubicSpline, not make_interp_spline: for a periodic spline the latter solves by a
@@ -64,6 +79,9 @@ def open_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.ndar
     control = _drop_repeats(np.asarray(control, dtype=float), closed=False)
     if len(control) < 2:
         return control
+    unit = _unit_factor(control)
+    if unit != 1.0:
+        return open_curve(control * unit, per_span) / unit
     t = _centripetal(control)
     s = _span_samples(t, per_span)
     if len(control) == 2:

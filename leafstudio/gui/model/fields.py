@@ -206,9 +206,13 @@ def em_pieces(result: Result) -> list[Piece]:
         world = result.frame.to_world(mine, result.height(mine) + lift) if len(mine) else mine
         style = dots(gaussian_color(k), EM_POINT_SIZE, len(xy))
         pieces.append(Piece(f"em:{k}", partial(cloud, world), style))
+    # the ellipses at unit size, scaled (plane coordinates scale by the factor alone): the
+    # mixture in the leaf's units has infinite covariances past about 1e154 (gmm.scaled)
+    unit, factor = (result.unit, result.units.scale) if result.unit is not None else (result, 1.0)
     for sigmas, width in zip(SIGMAS, (4.0, 2.0), strict=True):
         for k in range(len(mixture.weights)):
-            runs = _within(result, ellipse(mixture.means[k], mixture.covariances[k], sigmas))
+            gaussian = unit.em_mixture.means[k], unit.em_mixture.covariances[k]
+            runs = _within(result, factor * ellipse(*gaussian, sigmas))
             world = [result.frame.to_world(run, result.height(run) + lift) for run in runs]
             style = {"color": gaussian_color(k), "line_width": width}
             pieces.append(Piece(f"em:ellipse{sigmas:g}:{k}", partial(polylines, world), style))

@@ -76,6 +76,22 @@ def test_order_does_not_matter_for_a_noisy_boundary():
     np.testing.assert_allclose(a.triangle_mesh.points, b.triangle_mesh.points, atol=1e-9)
 
 
+def test_repeated_points_5e_12_apart_trace_the_outline_they_trace_together():
+    """Issue 24, finding 19: at unit size two inputs 5e-12 apart traced outlines of different
+    vertex counts. A cloud's repeated points were dropped by rounding them to a grid of 1e-9:
+    the few copies 5e-12 apart that fell either side of a rounding boundary were kept, their
+    neighbour 5e-12 away shrank the spacing the cells are sized by, and the outline moved by up
+    to 0.75% of the length. Repeats are now points within 1e-9 of the size, wherever they lie."""
+    cloud = _ellipse(3000, 0.01)[:, :2]  # length 4
+    for seed in range(6):  # a few copies of 600 fall either side of a rounding boundary
+        rng = np.random.default_rng(seed)
+        copies = cloud[rng.choice(len(cloud), 600, replace=False)]
+        together = trace_outline(np.vstack([cloud, copies]))
+        apart = trace_outline(np.vstack([cloud, copies + rng.normal(0, 5e-12, copies.shape)]))
+        assert len(apart.polygon) == len(together.polygon)
+        np.testing.assert_allclose(apart.polygon, together.polygon, atol=1e-9)
+
+
 def _ovate(n: int, sigma: float, seed: int = 3) -> ls.Leaf:
     """An ovate leaf (length 1) with a midrib and two veins, boundary noise σ in x, y and z."""
     rng = np.random.default_rng(seed)

@@ -107,6 +107,18 @@ def test_ems_mixture_is_in_the_leafs_own_units():
     np.testing.assert_allclose(world.em_mixture.weights, unit.em_mixture.weights)
 
 
+def test_the_ellipses_of_a_leaf_at_1e300_are_drawn_finite():
+    """A leaf at 1e300, which `reconstruct` takes, failed in the app with "ValueError: 'x' must
+    be finite" (once a segmentation fault): EM's ellipses were made from the mixture in the
+    leaf's units, whose covariances (1e600) are infinite. They are made at unit size and
+    scaled, as the pipeline runs."""
+    leaf = demo("nested")
+    huge = Leaf(boundary=1e300 * leaf.boundary, veins=[1e300 * v for v in leaf.veins])
+    pieces = [p for p in fields.em_pieces(Pipeline(huge).run(FAST)) if "ellipse" in p.name]
+    points = [p.data.points for p in pieces if p.data.n_points]
+    assert points and all(np.isfinite(x).all() for x in points)
+
+
 @pytest.mark.parametrize(
     ("low", "high", "expected"),
     [

@@ -199,6 +199,21 @@ def test_a_loaded_boundary_that_crosses_itself_is_found():
     assert len(ring_crossings(ellipse(40))) == 0
 
 
+@pytest.mark.parametrize(("scale", "offset"), [(1.0, 1e9), (1.0, 1e12), (1e300, 0.0), (1e-90, 0.0)])
+def test_a_boundary_far_away_or_at_any_scale_is_no_crossing(scale, offset):
+    """The app opens a leaf through workflows.open_file, which checks the boundary for crossings
+    in the world's units: the nested demo moved 1e9 away was refused ("crosses itself near
+    (1e+09, ...)", where `reconstruct` takes it), and at 1e300 ended in "ValueError: data must
+    be finite"; the check runs at unit size, as the pipeline does."""
+    leaf = demo("nested")
+    moved = Leaf(leaf.boundary * scale + offset, [v * scale + offset for v in leaf.veins])
+    assert boundary_crossing(moved) is None
+    t = np.linspace(0, 2 * np.pi, 60, endpoint=False)  # a figure of eight, crossing at (0, 0)
+    eight = np.column_stack([np.cos(t), 0.3 * np.sin(2 * t), np.zeros(60)]) * scale + offset
+    where = boundary_crossing(Leaf(eight))
+    assert where is not None and np.linalg.norm((where - offset) / scale) < 0.05
+
+
 # --- finding 5: the same way round, the same colours --------------------------------------------
 def test_the_top_view_shows_the_plane_as_the_sketch_does(session, runner):
     session.open_document(None, Sketch(boundary=ellipse()), "drawn")

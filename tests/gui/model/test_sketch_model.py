@@ -188,3 +188,25 @@ def test_the_sketch_shows_every_form_base_left_apex_right(shape):
     drawn = shapely.Polygon(result.frame.to_plane(sketch.to_leaf().boundary)[0])
     outline = shapely.Polygon(result.polygon)
     assert drawn.symmetric_difference(outline).area < 0.02 * outline.area  # the same place
+
+
+def test_a_leaf_at_1e_90_gets_a_sketch_of_its_outline():
+    """The app's sketch of a leaf at 1e-90 (which `reconstruct` takes) failed with "zero-size
+    array to reduction operation minimum": its curves dropped control points within an absolute
+    1e-12 of the next as repeats, which was every one; repeats are now within 1e-12 of their
+    extent."""
+    leaf = ls.demo("nested")
+    tiny = ls.Leaf(leaf.boundary * 1e-90, [v * 1e-90 for v in leaf.veins])
+    sketch = Sketch.from_result(ls.reconstruct(tiny, ls.Params(grid=32)))
+    assert len(sketch.boundary) >= 12
+    curve = closed_curve(sketch.boundary[:, :2])
+    assert len(curve) > len(sketch.boundary) and np.ptp(curve[:, 0]) > 0.5e-90
+
+
+def test_curves_through_points_at_1e300_are_finite():
+    """The app's sketch of a leaf at 1e300 failed with "`x` must contain only finite values":
+    the centripetal parameter's chord lengths overflowed (their squares)."""
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    control = 1e300 * np.column_stack([np.cos(t), 0.4 * np.sin(t)])
+    for curve in (closed_curve(control), open_curve(control[:6])):
+        assert np.isfinite(curve).all() and np.ptp(curve[:, 0]) > 1e299
