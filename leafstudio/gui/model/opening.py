@@ -17,6 +17,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from leafstudio.core.evaluate import MEASURABLE
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.jobs import Job, cancel_point, describe
 from leafstudio.gui.model.reading import is_big, read_apart
@@ -103,6 +106,7 @@ def _read_document(
     except OSError as exc:
         raise LeafError(exc.strerror or str(exc), path) from None
     cancel_point()  # Cancel while the file was read: no layers, no document
+    check_drawable(opened.leaf, path)
     if opened.kind == "scan":
         from leafstudio.gui.model.scans import scan_data  # pyvista (layers): not for every session
 
@@ -117,6 +121,22 @@ def _read_document(
             raise LeafError(f"bad sketch ({exc})", path) from None
         photo, notice = _project_photo(path)
     return Document(opened.path, opened.leaf, sketch, opened.params, None, photo, notice)
+
+
+def check_drawable(leaf: Any, path: str) -> None:
+    """LeafError when the leaf lies beyond what the app draws and measures: coordinates past
+    MEASURABLE (about 1e150, where its areas overflow; a leaf under 1e-100 across is refused
+    by Leaf itself). The command line's reconstruct takes such a leaf (its mesh alone); the
+    window's sketch, texture and camera failed on it with tracebacks (issue 24's audit: a leaf
+    at 1e300)."""
+    reach = float(max(np.abs(points).max() for points in (leaf.boundary, *leaf.veins)))
+    if reach > MEASURABLE:
+        raise LeafError(
+            f"the leaf's coordinates reach {reach:.3g}: the app draws and measures leaves up to "
+            f"about {MEASURABLE:g}; rescale it, or write its mesh alone with `leafstudio "
+            "reconstruct`",
+            path,
+        )
 
 
 def _project_photo(path: str) -> tuple[LeafPhoto | None, str]:

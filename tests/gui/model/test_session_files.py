@@ -211,3 +211,22 @@ def test_a_texture_made_once_is_not_made_again_for_the_same_leaf(monkeypatch):
         assert not image.flags.writeable  # shared: nobody may paint on it
         np.testing.assert_array_equal(by_key.setdefault(key, image), image)
     assert len(by_key) == 2
+
+
+@pytest.mark.parametrize("scale", [1e300, 1e160])
+def test_a_leaf_beyond_what_the_app_draws_and_measures_is_refused_in_one_line(tmp_path, scale):
+    """The command line takes a leaf at 1e300 (reconstruct writes its mesh; measure refuses in
+    one line), but the app's sketch, texture and camera failed on it with tracebacks in the
+    log (issue 24 audit): the app refuses it when it opens, in one line, and keeps its leaf."""
+    session, _runner, got = opened_session()
+    session.open_demo("nested")
+    before = session.state
+    nested = demo("nested")
+    path = tmp_path / "huge.csv"
+    save_leaf(type(nested)(nested.boundary * scale, [v * scale for v in nested.veins]), path)
+    session.open_path(str(path))
+    assert got["opened"] == [] and len(got["failed"]) == 1
+    what, message = got["failed"][0]
+    assert what == "file" and "huge.csv" in message and "\n" not in message
+    assert "leafstudio reconstruct" in message and "1e+150" in message
+    assert session.state is before
