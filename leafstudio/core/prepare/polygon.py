@@ -19,6 +19,13 @@ from leafstudio.core.jit import njit
 MAX_OUTLINE_VERTICES = 3000  # a denser outline is thinned to about this many (thin_outline)
 
 
+def unit_power(points: np.ndarray) -> float:
+    """The power of two that brings the points' largest coordinate into [0.5, 1): a scale
+    that loses no digit, for work whose squares overflow or underflow far from 1."""
+    top = float(np.abs(points).max()) if np.size(points) else 0.0
+    return float(2.0 ** -np.frexp(max(top, 1e-300))[1])
+
+
 def distinct_indices(points: np.ndarray, scale: float) -> np.ndarray:
     """Indices of the (n, 2) points left once repeats are dropped, in order: of points within
     1e-9 of `scale` of one another (in chains), the first. By distance, not by rounding to a
@@ -30,7 +37,7 @@ def distinct_indices(points: np.ndarray, scale: float) -> np.ndarray:
     if n == 0:
         return np.arange(0)
     # scaled by a power of two (exact) to at most 1: a vein point at 1e200 overflowed the tree
-    unit = 2.0 ** -float(np.frexp(max(float(np.abs(points).max()), 1e-300))[1])
+    unit = unit_power(points)
     pairs = cKDTree(points * unit).query_pairs(1e-9 * scale * unit, output_type="ndarray")
     if not len(pairs):
         return np.arange(n)

@@ -10,6 +10,8 @@ import numpy as np
 import shapely
 from scipy.interpolate import CubicSpline, make_interp_spline
 
+from leafstudio.core.prepare.polygon import unit_power
+
 SAMPLES_PER_SPAN = 16  # curve points per span between two control points
 MIN_BOUNDARY_SAMPLES = 120
 DERIVED_BOUNDARY_POINTS = 24  # control points when a loaded leaf becomes a sketch
@@ -46,9 +48,7 @@ def _unit_factor(points: np.ndarray) -> float:
     1e100 or under 1e-100, else 1: a spline through points at 1e300 overflowed (its chords'
     squares) and the app's sketch of such a leaf failed ("must contain only finite values")."""
     top = float(np.abs(points).max()) if points.size else 0.0
-    if top == 0.0 or 1e-100 < top < 1e100:
-        return 1.0
-    return float(2.0 ** -np.frexp(top)[1])
+    return 1.0 if top == 0.0 or 1e-100 < top < 1e100 else unit_power(points)
 
 
 def closed_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.ndarray:
