@@ -244,8 +244,11 @@ def block_rows(block: str, usecols: tuple[int, ...] | None = None) -> np.ndarray
 
 
 def parse_number(field: str) -> float:
-    """A float from a plain decimal field ("1.5", "-2e3", "nan"); ValueError otherwise (Python's
-    float() also reads "1_0" as 10 and "١" as 1)."""
+    """A float from a plain decimal field ("1.5", "-2e3", "nan"), or one in double quotes (as
+    Python's csv.QUOTE_ALL and a spreadsheet's cells stored as text write them); ValueError
+    otherwise (Python's float() also reads "1_0" as 10 and "١" as 1)."""
+    if len(field) > 2 and field[0] == field[-1] == '"':
+        field = field[1:-1]
     if not _NUMBER.fullmatch(field):
         raise ValueError(field)
     return float(field)

@@ -196,7 +196,7 @@ def is_scan_file(path: str) -> bool:
                 fields = row.replace(",", " ").replace(";", " ").split()
                 if fields:
                     try:
-                        return len([float(f) for f in fields]) > LEAF_COLUMNS
+                        return len([parse_number(f) for f in fields]) > LEAF_COLUMNS
                     except ValueError:
                         continue  # a header
     except (OSError, UnicodeDecodeError, LeafError):  # LeafError: both decimal marks in a row

@@ -408,3 +408,29 @@ def test_the_scan_test_does_not_count_a_european_rows_decimal_commas_as_columns(
     leaf.write_text("1,5;2,25;0;1\n2,5;1,25;0;0\n")
     scan.write_text("1,5;2,25;0;0;0;1\n")
     assert not is_scan_file(str(leaf)) and is_scan_file(str(scan))
+
+
+@pytest.mark.parametrize("names", [("x", "y", "z", "label"), ("id", "x", "y", "z", "label")])
+def test_numbers_in_quotes_read_as_numbers(tmp_path: Path, names: tuple[str, ...]):
+    """Python's csv.QUOTE_ALL, and a spreadsheet's cells stored as text, quote every field:
+    "not a number in '"0.1","0.2",...'" refused such a leaf (and the app took its scans for
+    leaves). Quoted numbers read as numbers; the quoted header names the columns."""
+    import csv
+
+    nested = ls.demo("nested")
+    path = tmp_path / "quoted.csv"
+    with path.open("w", newline="") as handle:
+        table = csv.writer(handle, quoting=csv.QUOTE_ALL)
+        table.writerow(names)
+        rows = [(*p, 0) for p in nested.boundary]
+        rows += [(*p, k + 1) for k, vein in enumerate(nested.veins) for p in vein]
+        table.writerows([(i, *row) if "id" in names else row for i, row in enumerate(rows)])
+    _same(nested, ls.load_leaf(path))
+    scan = tmp_path / "scan.csv"
+    with scan.open("w", newline="") as handle:
+        points = np.random.default_rng(0).uniform(size=(80, 6))
+        csv.writer(handle, quoting=csv.QUOTE_ALL).writerows(points.tolist())
+    from leafstudio.sources.scan import is_scan_file, read_scan
+
+    assert is_scan_file(str(scan))  # six columns: normals beside x, y, z
+    np.testing.assert_allclose(read_scan(scan), points[:, :3])
