@@ -241,6 +241,7 @@ class Form:
             seed=self.seed,
             apex=xy[outline.apex_index],
             relief="dome",
+            round_base=self.base_term == "rounded",
         )
         wave = self._wave(outline)
         base = fit_base(xy, wave, 1.0)  # the wave's surface (the pipeline's b): veins ride on it

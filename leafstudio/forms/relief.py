@@ -39,10 +39,18 @@ SINUS_CALM, wide enough that the correction need not bend the surface down into 
 wider flattening lowers the veins' top (cordate 0.089 -> 0.080 of the length, reniform
 0.125 -> 0.120, sagittate 0.049 -> 0.037); scaled back to its top, 0.27 still beats 0.15 on
 cordate (margin 2.02° -> 1.50°, inside 1.99° -> 1.60°) but not on sagittate's inside
-(2.93° -> 3.49°). Elsewhere c is BASE_CALM: without
-it orbicular's dihedrals drop (margin 1.21° -> 0.88°, inside 1.33° -> 0.82°) but oblong's
-and hastate's margin rise by 0.01° (1.750° -> 1.759°, 3.980° -> 3.994°, before its lobes'
-notches were flattened), so it stays.
+(2.93° -> 3.49°). At a truncate or cuneate base c is BASE_CALM: without it the corners
+beside a truncate base creased (elliptic truncate's margin band through the veins 1.16° ->
+2.30°, ovate truncate's 1.19° -> 1.82°). A rounded base (a smooth arc: the form's base term,
+`round_base`) is not flattened: there ψ rises smoothly from the margin, and the flattening
+was itself the bend a surface through the midrib had to follow (orbicular's midrib, flat for
+0.04 of the length and then turning up, creased its inside 1.29° through the veins against
+1.08° on the paper's surface). bench_bent --veins and every shape with each base, K 3, grid
+128, through the veins / the paper's surface, p99 margin and inside: orbicular 1.09 / 1.18 and
+1.29 / 1.08 -> 0.85 / 0.87 and 0.74 / 0.81; ovate 1.04 / 1.36 and 1.34 / 1.42 -> 1.00 / 1.32
+and 1.17 / 1.29; obovate rounded inside 1.21 / 1.15 -> 1.07 / 1.05; spatulate rounded
+2.18 / 2.30 -> 2.86 / 3.73 (the dome itself rougher at a narrow base, both surfaces still
+under the paper's surface's); no other rounded base rougher than the paper's surface.
 
 A notch between the blade and a lobe (hastate's two, `notches`) is a corner of the outline
 turned inward, as a sinus's notch is, and ψ rises as steeply beside it: the side veins that
@@ -78,7 +86,8 @@ from shapely.geometry.polygon import orient
 
 from leafstudio.forms.blade import Blade
 
-BASE_CALM = 0.15  # the dome is flattened within about this of the midrib's base (see the module)
+BASE_CALM = 0.15  # the dome is flattened within about this of a truncate or cuneate base (see
+# the module)
 SINUS_CALM = 0.27  # ... and within this of a sinus's notch, where ψ rises as about the square
 # root of the distance
 NOTCH_CALM = 0.22  # ... and within this of a notch between the blade and a lobe (hastate's), see
@@ -101,10 +110,13 @@ NEAREST = 1e-3  # of a grid step: an arm to the margin is at least this long
 STEPS = ((1, 0), (-1, 0), (0, 1), (0, -1))  # the four neighbours, in grid index steps
 
 
-def dome(blade: Blade, ratio: float, base: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+def dome(
+    blade: Blade, ratio: float, base: np.ndarray, round_base: bool = False
+) -> Callable[[np.ndarray], np.ndarray]:
     """The dome over a blade of length about 1, its axis along x: (n, 2) points -> (n,) heights,
     `ratio` times the largest distance to the margin at its top and 0 on the margin, flattened
-    around the midrib's `base` and the notches of lobes off the axis (see the module)."""
+    around the midrib's `base` (unless `round_base`: a smooth arc, and no sinus) and the notches
+    of lobes off the axis (see the module)."""
     poly = blade.poly
     x0, y0, x1, y1 = poly.bounds
     along = int(np.clip(np.sqrt(NODES * (x1 - x0) / (y1 - y0)), FEWEST, NODES // FEWEST))
@@ -131,7 +143,8 @@ def dome(blade: Blade, ratio: float, base: np.ndarray) -> Callable[[np.ndarray],
     if top <= 0:
         return lambda xy: np.zeros(len(np.atleast_2d(xy)))
     radius = _inradius(blade, nodes, inside, step)
-    reach = SINUS_CALM if base_angle(blade, base) > SINUS else BASE_CALM
+    sinus = base_angle(blade, base) > SINUS
+    reach = SINUS_CALM if sinus else None if round_base else BASE_CALM
     lobes = [p for p in notches(blade) if abs(p[1]) > NOTCH_CALM]  # off the axis y = 0
     coefficients = spline_filter(psi / top, order=3, mode="nearest")
 
@@ -139,7 +152,9 @@ def dome(blade: Blade, ratio: float, base: np.ndarray) -> Callable[[np.ndarray],
         xy = np.atleast_2d(np.asarray(xy, dtype=float))[:, :2]
         at = ((xy - lower) / step + pad).T
         read = map_coordinates(coefficients, at, order=3, mode="nearest", prefilter=False)
-        calm = 1 - np.exp(-((xy - base) ** 2).sum(axis=1) / reach**2)
+        calm = np.ones(len(xy))
+        if reach is not None:
+            calm -= np.exp(-((xy - base) ** 2).sum(axis=1) / reach**2)
         for notch in lobes:
             calm *= 1 - np.exp(-((xy - notch) ** 2).sum(axis=1) / NOTCH_CALM**2)
         share = np.clip(read, 0.0, 1.0)

@@ -77,6 +77,7 @@ def grow_veins(
     *,
     apex: np.ndarray | None = None,
     relief: str = "roof",
+    round_base: bool = False,
 ) -> list[np.ndarray]:
     """Veins of the chosen kind grown inside any outline (see the module docstring for the method).
 
@@ -98,6 +99,9 @@ def grow_veins(
     relief : {"roof", "dome"}, default: "roof"
         The veins' heights: HEIGHT_RATIO times their distance to the margin (a roof, creased
         along the midrib), or a smooth dome as high at its top (relief.py: the forms' own).
+    round_base : bool, default: False
+        The base is a smooth arc (a form's rounded base): the dome is not flattened there
+        (relief.dome).
 
     Returns
     -------
@@ -147,6 +151,7 @@ def grow_veins(
         seed,
         apex=unit(apex),
         relief=relief,
+        round_base=round_base,
     )
     offset = np.r_[units.offset, 0.0][:3]  # a 2D outline: (x, y, 0), z is the height above 0
     return [offset + units.scale * v for v in veins]
@@ -168,6 +173,7 @@ def _grow_unit(
     *,
     apex: np.ndarray | None,
     relief: str,
+    round_base: bool,
 ) -> list[np.ndarray]:
     """grow_veins on an outline of unit size centred on the origin."""
     venation = check_term("venation", venation, VENATION_KINDS)  # any case: "Pinnate"
@@ -265,6 +271,6 @@ def _grow_unit(
                 veins.append(path)
     lift = lifter(xy, heights, frame, poly)
     if relief == "dome":
-        rise = dome(blade, HEIGHT_RATIO, np.zeros(2))
+        rise = dome(blade, HEIGHT_RATIO, np.zeros(2), round_base)
         return [lift(world(vein), length * rise(vein)) for vein in veins]
     return [lift(world(vein), HEIGHT_RATIO * length * blade.gap(vein)) for vein in veins]

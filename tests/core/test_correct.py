@@ -209,10 +209,12 @@ def test_a_wavy_form_keeps_its_margin_on_the_boundary():
 
 
 def test_the_papers_surface_stays_available():
-    leaf = make_form("ovate")
+    """through_veins=False: the paper's pure GMM surface, no correction, off the veins (deltoid:
+    3.1e-3 of the length)."""
+    leaf = make_form("deltoid")
     paper = _run(leaf, k=3, through_veins=False)
     assert paper.unit.surface.correction is None
-    assert paper.metrics["veins"]["max"] > 3 * VEIN_TOLERANCE * paper.length
+    assert paper.metrics["veins"]["max"] > 2 * VEIN_TOLERANCE * paper.length
 
 
 def test_the_correction_has_closed_form_derivatives():
@@ -257,6 +259,18 @@ def test_the_correction_fades_away_from_the_veins():
     assert np.allclose(fitted.value(vein), residual, atol=correct.TOLERANCE + 1e-9)
     far = np.array([[0.0, 0.5], [0.55, 0.0], [-0.4, -0.4]])  # 0.4-0.5 off the vein
     assert np.all(np.abs(fitted.value(far)) <= 0.05 * np.abs(residual).max())
+
+
+def test_a_round_based_forms_inside_is_no_rougher_through_its_veins_than_the_papers():
+    """Issue 21: orbicular's inside (the 99th-percentile dihedral farther in than three grid
+    steps of the margin) was rougher through its veins than on the paper's surface, 1.29°
+    against 1.08° at grid 128: its midrib followed the dome's flattening at its rounded base
+    (forms/relief.py), flat and then turning up. A rounded base is no longer flattened."""
+    leaf = make_form("orbicular")
+    through = _run(leaf, k=3)
+    paper = _run(leaf, k=3, through_veins=False)
+    assert through.metrics["veins"]["max"] <= VEIN_TOLERANCE * through.length
+    assert margin_creases(through)["interior_p99"] <= margin_creases(paper)["interior_p99"]
 
 
 @pytest.mark.parametrize("shape", ["reniform", "oblong", "hastate"])

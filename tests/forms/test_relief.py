@@ -79,9 +79,9 @@ def test_a_base_is_a_sinus_where_the_outline_turns_inward(shape, sinus, monkeypa
     sinus's notch (the lobes reach back past the base) more than SINUS degrees of it."""
     seen = []
 
-    def spy(blade, ratio, base):
+    def spy(blade, ratio, base, round_base=False):
         seen.append(base_angle(blade, base))
-        return dome(blade, ratio, base)
+        return dome(blade, ratio, base, round_base)
 
     monkeypatch.setattr(veins_module, "dome", spy)
     Form(shape).leaf()
@@ -96,9 +96,9 @@ def test_hastate_lobes_notches_are_found_under_any_margin(margin, monkeypatch):
     teeth; an ovate form with teeth has none."""
     seen = []
 
-    def spy(blade, ratio, base):
+    def spy(blade, ratio, base, round_base=False):
         seen.append(notches(blade))
-        return dome(blade, ratio, base)
+        return dome(blade, ratio, base, round_base)
 
     monkeypatch.setattr(veins_module, "dome", spy)
     Form("hastate", margin=margin).leaf()
@@ -116,8 +116,8 @@ def test_the_dome_is_flat_at_a_lobes_notch(monkeypatch):
     went with them)."""
     domes = []
 
-    def spy(blade, ratio, base):
-        domes.append((blade, dome(blade, ratio, base)))
+    def spy(blade, ratio, base, round_base=False):
+        domes.append((blade, dome(blade, ratio, base, round_base)))
         return domes[-1][1]
 
     monkeypatch.setattr(veins_module, "dome", spy)
@@ -131,3 +131,17 @@ def test_the_dome_is_flat_at_a_lobes_notch(monkeypatch):
         assert heights(inward[None])[0] < 1e-4  # 0.0033 before: 0.02 in from the margin
     assert len(notches(lobed)) == 4
     assert lobed_heights(np.array([[0.5, 0.0]]))[0] > 0.03  # 0.042; 0.009 flattened
+
+
+@pytest.mark.parametrize(
+    ("base", "flat"), [("rounded", False), ("truncate", True), ("cuneate", True)]
+)
+def test_the_dome_is_flattened_at_a_truncate_or_cuneate_base_only(base, flat):
+    """A rounded base is a smooth arc: the dome rises from it as from any margin, and flattened
+    there the midrib was flat for 0.04 of the length and then turned up, a bend a surface
+    through it had to follow (orbicular). A truncate or a cuneate base, whose corners crease
+    without it, is flattened within BASE_CALM."""
+    midrib = Form("ovate", base=base).leaf().veins[0]
+    near = np.asarray(midrib)[:, 0] < 0.06  # the base at x = 0, the length 1
+    rise = np.asarray(midrib)[near, 2] / np.maximum(np.asarray(midrib)[near, 0], 1e-9)
+    assert (rise[1:].min() < 0.05) == flat  # the slope from the base: ~0 flattened, ~0.2 not
