@@ -39,6 +39,7 @@ class LayersPanel(QWidget):
     def __init__(self, camera: Callable[[str], object], parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.list, self.edges = QListWidget(), QCheckBox("Show mesh edges")
+        self._missing: set[str] = set()  # layers whose extra is not installed
         for key, label, on in LAYERS:
             item = QListWidgetItem(label)
             item.setData(Qt.ItemDataRole.UserRole, key)
@@ -48,7 +49,9 @@ class LayersPanel(QWidget):
                 item.setFlags(item.flags() & ~Qt.ItemFlag.ItemIsEnabled)
                 item.setCheckState(Qt.CheckState.Unchecked)
                 item.setToolTip(why)
+                self._missing.add(key)
             self.list.addItem(item)
+        self.set_available("scan", False)  # until a scan is open
         self.list.setMaximumHeight(self.list.sizeHintForRow(0) * len(LAYERS) + 8)
         self.edges.setToolTip("Draw the triangles' edges on the mesh.")
         self.coloring = QComboBox()
@@ -75,13 +78,25 @@ class LayersPanel(QWidget):
         layout = self.layout()
         layout.insertWidget(max(layout.count() - 1, 0), widget)
 
+    def _item(self, key: str) -> QListWidgetItem:
+        return next(
+            item
+            for item in map(self.list.item, range(self.list.count()))
+            if item.data(Qt.ItemDataRole.UserRole) == key
+        )
+
     def set_checked(self, key: str, on: bool) -> None:
-        """Check or uncheck layer `key`'s item (its view follows through itemChanged); a
-        disabled one (its extra is missing) stays unchecked."""
-        for row in range(self.list.count()):
-            item = self.list.item(row)
-            if (
-                item.data(Qt.ItemDataRole.UserRole) == key
-                and item.flags() & Qt.ItemFlag.ItemIsEnabled
-            ):
-                item.setCheckState(Qt.CheckState.Checked if on else Qt.CheckState.Unchecked)
+        """Check or uncheck layer `key`'s item (its view follows through itemChanged); one whose
+        extra is missing stays unchecked."""
+        if key not in self._missing:
+            state = Qt.CheckState.Checked if on else Qt.CheckState.Unchecked
+            self._item(key).setCheckState(state)
+
+    def set_available(self, key: str, available: bool) -> None:
+        """Grey out layer `key`'s item while it has nothing to show (the scan's points while no
+        scan is open: ticked, it looked shown), its tick kept for when it has; one whose extra
+        is missing stays greyed out."""
+        item = self._item(key)
+        enabled = available and key not in self._missing
+        flags = item.flags() & ~Qt.ItemFlag.ItemIsEnabled
+        item.setFlags(flags | Qt.ItemFlag.ItemIsEnabled if enabled else flags)

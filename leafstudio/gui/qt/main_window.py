@@ -344,6 +344,7 @@ class MainWindow(FileCommands, QMainWindow):
         if state.scan is not self._scan_shown:  # after the recolouring above: its new actor's
             self._scan_shown = state.scan  # render sets up its shaders, then the points' (turns.py)
             pieces = state.scan.pieces if state.scan is not None else []
+            self.layers.set_available("scan", state.scan is not None)
             later(self, partial(self.viewport.set_layer, "scan", pieces))
         self._update_title()
 

@@ -82,7 +82,9 @@ def scan_window(qtbot, tmp_path, monkeypatch):
     close_window(win)
 
 
-def test_a_scan_opens_as_an_editable_leaf_with_its_points_and_distances(scan_window, qtbot):
+def test_a_scan_opens_as_an_editable_leaf_with_its_points_and_distances(
+    scan_window, qtbot, tmp_path
+):
     window = scan_window
     extracted = window.session.state.scan.extraction.leaf
     assert window.session.state.leaf is extracted and window.session.state.path.endswith("scan.txt")
@@ -101,6 +103,7 @@ def test_a_scan_opens_as_an_editable_leaf_with_its_points_and_distances(scan_win
 
     actors = window.viewport.plotter.actors
     assert actors["scan:blade"].GetVisibility()
+    assert layer_item(window, "scan").flags() & Qt.ItemFlag.ItemIsEnabled
     assert (
         actors["scan:blade"].mapper.dataset.n_points
         == window.session.state.scan.extraction.blade.sum()
@@ -119,6 +122,25 @@ def test_a_scan_opens_as_an_editable_leaf_with_its_points_and_distances(scan_win
     window.session.history.undo()
     assert window.session.state.leaf is extracted
     wait_fidelity(qtbot, window)
+
+    turn = np.linspace(0, 2 * np.pi, 40, endpoint=False)  # a leaf with no scan: greyed out again
+    outline = np.column_stack([np.cos(turn), 0.4 * np.sin(turn)])
+    path = write_points(tmp_path / "leaf.csv", outline)
+    window.session.history.set_clean()
+    assert window.open_path(path)
+    qtbot.waitUntil(lambda: window.session.state.scan is None, timeout=WAIT_MS)
+    assert not layer_item(window, "scan").flags() & Qt.ItemFlag.ItemIsEnabled
+    assert layer_item(window, "scan").checkState() == Qt.CheckState.Checked  # the tick kept
+
+
+def test_the_scan_layer_is_greyed_out_while_no_scan_is_open(window):
+    """Ticked by default, "Scan points" looked shown for a leaf with no scan (the demo); it is
+    greyed out, its tick kept for the next scan."""
+    item = layer_item(window, "scan")
+    assert window.session.state.scan is None
+    assert not item.flags() & Qt.ItemFlag.ItemIsEnabled
+    assert item.checkState() == Qt.CheckState.Checked
+    assert layer_item(window, "mesh").flags() & Qt.ItemFlag.ItemIsEnabled
 
 
 def test_a_bad_scan_shows_a_dialog_and_keeps_the_mesh(window, qtbot, tmp_path):
