@@ -33,23 +33,26 @@ def polyline_path(xy: np.ndarray, closed: bool = False) -> QPainterPath:
 def draw_plane(
     outline: np.ndarray,
     veins: list[np.ndarray] | tuple[np.ndarray, ...],
-    size: int,
+    size: int | tuple[int, int],
     box: np.ndarray | None = None,
     sit: bool = False,
 ) -> QImage:
-    """An (n, 2) outline filled and (m, 2) veins drawn over it, in a `size` square showing
-    `box` (x0, y0, x1, y1 of the plane; default the outline's bounds), what lies outside cut
-    off; `sit`: resting on the square's lower edge rather than centred."""
-    image = QImage(size, size, QImage.Format.Format_ARGB32_Premultiplied)
+    """An (n, 2) outline filled and (m, 2) veins drawn over it, in a `size` square (or a
+    (width, height) frame) showing `box` (x0, y0, x1, y1 of the plane; default the outline's
+    bounds), what lies outside cut off; `sit`: resting on the frame's lower edge rather than
+    centred."""
+    width, height = (size, size) if isinstance(size, int) else size
+    image = QImage(width, height, QImage.Format.Format_ARGB32_Premultiplied)
     image.fill(Qt.GlobalColor.transparent)
     lo, hi = (outline.min(axis=0), outline.max(axis=0)) if box is None else (box[:2], box[2:])
-    scale = 0.9 * size / max(float((hi - lo).max()), 1e-12)
+    span = np.maximum(hi - lo, 1e-12)
+    scale = 0.9 * min(width / span[0], height / span[1])
     centre = (lo + hi) / 2
-    middle = 0.98 * size - (hi - lo)[1] * scale / 2 if sit else size / 2  # the centre's row
+    middle = 0.98 * height - span[1] * scale / 2 if sit else height / 2  # the centre's row
 
     def picture(points: np.ndarray) -> np.ndarray:
         q = (np.asarray(points, dtype=float)[:, :2] - centre) * scale
-        return np.column_stack([size / 2 + q[:, 0], middle - q[:, 1]])
+        return np.column_stack([width / 2 + q[:, 0], middle - q[:, 1]])
 
     painter = QPainter(image)
     painter.setRenderHint(QPainter.RenderHint.Antialiasing)
