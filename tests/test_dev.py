@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 import shutil
 import subprocess
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -62,3 +63,16 @@ def test_without_a_display_the_app_saves_its_picture_and_exits(tmp_path, args):
 )
 def test_without_a_display_other_commands_run_as_given(tmp_path, args):
     assert _dev_app(tmp_path, *args) == list(args)
+
+
+def test_the_packages_metadata_is_whole():
+    """Issue 24, finding 7: three generic classifiers and no project URLs. The licence is an
+    SPDX string, the classifiers name the audiences and topics, and a URL leads to the method's
+    paper (the project has no public home of its own yet)."""
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    assert project["license"] == "MIT"
+    assert len(project["classifiers"]) >= 10
+    assert any(c.startswith("Intended Audience :: Education") for c in project["classifiers"])
+    urls = project["urls"]
+    assert urls["Paper"] == "https://doi.org/10.20965/ijat.2024.p0287"
+    assert "10.20965/ijat.2024.p0287" in (ROOT / "README.md").read_text()
