@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import re
 
-from PySide6.QtWidgets import QApplication
+import pytest
+from PySide6.QtWidgets import QApplication, QLabel
 
 from leafstudio.forms.glossary import COMPARISONS, PICTURED
 from leafstudio.gui.qt.compare_view import CompareDialog, comparison_title, export_slides
@@ -45,6 +46,28 @@ def test_the_glossary_draws_every_term(window):
         for term in ("acute", "emarginate")
     )
     assert (acute != 0).any() and (acute != emarginate).any()
+    assert acute.shape[:2] == (96, 96)
+    dialog.close()
+
+
+def test_the_glossarys_pictures_grow_with_the_dialog(window, qtbot):
+    """On a projector a class read 96-pixel pictures on a maximised dialog: they grow with it
+    (a fifth of its width, a quarter of its height, at most 256 pixels), the words with them,
+    and shrink back."""
+    dialog = _open(window, "help.glossary", GlossaryDialog)
+    size = lambda: dialog.pictures["base", "cuneate"].pixmap().width()  # noqa: E731
+    name = next(label for label in dialog.findChildren(QLabel) if label.text() == "<b>cuneate</b>")
+    words = name.font().pointSizeF()
+    assert size() == 96
+    dialog.resize(1400, 1100)
+    qtbot.waitUntil(lambda: size() == 256, timeout=5000)
+    assert name.font().pointSizeF() == pytest.approx(1.5 * words)
+    dialog.resize(1400, 720)  # a projector's height
+    qtbot.waitUntil(lambda: size() == 144, timeout=5000)
+    drawn = image_pixels(dialog.pictures["base", "cuneate"].pixmap().toImage())
+    assert (drawn != 0).mean() > 0.05  # a picture, not an empty square
+    dialog.resize(620, 640)  # as it opens (the window, and this dialog, serve other tests)
+    qtbot.waitUntil(lambda: size() == 96, timeout=5000)
     dialog.close()
 
 
