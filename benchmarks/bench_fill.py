@@ -27,16 +27,17 @@ from leafstudio.core.prepare.cover import FILL_FROM, FILL_SHARE, filled_share  #
 from leafstudio.forms import SHAPES, make_form  # noqa: E402
 from leafstudio.forms.terms import MARGINS  # noqa: E402
 from leafstudio.sources.scan import read_scan  # noqa: E402
-from tests.core.prepare.test_filled_boundary import blob, cap, disc, filled_form  # noqa: E402
-from tests.core.prepare.test_scan_as_boundary import SCANS, _boundaries  # noqa: E402
-from tests.leaves import extracted_scan  # noqa: E402
+from tests import leaves  # noqa: E402  (the tests' builders: outlines and areas)
+
+REAL = ROOT.parent / "shared" / "realleaves"
+SCANS = sorted(REAL.glob("*.txt")) if REAL.is_dir() else []
 
 NOISES = (0.0025, 0.005, 0.01)
 
 
 def outlines():
     """(class, case, points) of outlines that must pass."""
-    for name, points in _boundaries():
+    for name, points in leaves.true_boundaries():
         yield "true boundaries", name, points
     rng = np.random.default_rng(5)
     for shape in SHAPES:
@@ -56,19 +57,20 @@ def outlines():
                         rng.permutation(kept) + jitter,
                     )
     for path in SCANS:
-        yield "real scans' extracted boundaries", path.stem, extracted_scan(path)[1].leaf.boundary
+        boundary = leaves.extracted_scan(path)[1].leaf.boundary
+        yield "real scans' extracted boundaries", path.stem, boundary
 
 
 def areas():
     """(class, case, points) of clouds that fill an area."""
     for n in (150, 200, 300, 400, 700):
-        yield "discs", f"{n}", disc(n, n)
+        yield "discs", f"{n}", leaves.disc(n, n)
         for height in (1.0, 0.5, 0.3):
-            yield "hemispheres and caps", f"height {height} {n}", cap(n, height, n)
+            yield "hemispheres and caps", f"height {height} {n}", leaves.cap(n, height, n)
         for flat in (0.05, 0.2, 0.3, 0.5):
-            yield "flattened blobs", f"flat {flat} {n}", blob(n, flat, n)
+            yield "flattened blobs", f"flat {flat} {n}", leaves.blob(n, flat, n)
         for shape in ("elliptic", "linear", "cordate", "lanceolate"):
-            yield "points inside a form", f"{shape} {n}", filled_form(shape, n, n)
+            yield "points inside a form", f"{shape} {n}", leaves.filled_form(shape, n, n)
     rng = np.random.default_rng(11)
     for path in SCANS:
         scan = read_scan(path)

@@ -59,9 +59,9 @@ FILL_FROM = 150  # fewer distinct points are not judged: at 100, points inside a
 FILL_SHARE = 0.2  # more of the points surrounded: they fill an area. benchmarks/bench_fill.py,
 # from 150 points: outlines at most 0.13 (every form's shape and margin subsampled to 150-300
 # points, in order, shuffled, noise up to 0.5% of the length; the scans' extracted boundaries
-# 0.07), areas at least 0.29 (points inside a narrow form; discs, hemispheres, caps, flattened
-# blobs 0.35-0.54; real scans thinned 0.31); with noise of 1% of the length, 4 outlines of 294
-# pass it (up to 0.31): such a sparse cloud is a band as wide as its spacing
+# 0.07), areas at least 0.28 (a real scan thinned to 150 points; points inside a narrow form
+# 0.29; discs, hemispheres, caps, flattened blobs 0.35-0.54); with noise of 1% of the length, 4
+# outlines of 294 pass it (up to 0.31): such a sparse cloud is a band as wide as its spacing
 
 
 @dataclass(frozen=True)

@@ -6,9 +6,10 @@ them, the real scans' extracted boundaries) still passes."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
-import shapely
 
 import leafstudio as ls
 from leafstudio.cli import main
@@ -17,40 +18,12 @@ from leafstudio.core.prepare.plausibility import check_not_a_surface
 from leafstudio.errors import LeafError
 from leafstudio.forms import SHAPES, make_form
 from leafstudio.forms.terms import MARGINS
-from tests.core.prepare.test_scan_as_boundary import SCANS, _boundaries, needs_scans
-from tests.leaves import extracted_scan
+from tests.leaves import blob, cap, disc, extracted_scan, filled_form, true_boundaries
+
+REAL = Path(__file__).resolve().parents[4] / "shared" / "realleaves"
+SCANS = sorted(REAL.glob("*.txt")) if REAL.is_dir() else []
 
 FILLS = "fill an area rather than trace an outline"
-
-
-def disc(n: int, seed: int = 0) -> np.ndarray:
-    """n points spread evenly at random over the unit disc, in z = 0."""
-    rng = np.random.default_rng(seed)
-    radius, angle = np.sqrt(rng.uniform(size=n)), rng.uniform(0, 2 * np.pi, n)
-    return np.column_stack([radius * np.cos(angle), radius * np.sin(angle), np.zeros(n)])
-
-
-def cap(n: int, height: float = 1.0, seed: int = 0) -> np.ndarray:
-    """n points at random on the unit sphere's cap of `height` (1: a hemisphere)."""
-    rng = np.random.default_rng(seed)
-    points = rng.normal(size=(50 * n, 3))
-    points /= np.linalg.norm(points, axis=1)[:, None]
-    return points[points[:, 2] >= 1 - height][:n]
-
-
-def blob(n: int, flat: float = 0.3, seed: int = 0) -> np.ndarray:
-    """n points of a Gaussian blob flattened to `flat` of its length."""
-    return np.random.default_rng(seed).normal(size=(n, 3)) * [1.0, 0.7, flat]
-
-
-def filled_form(shape: str, n: int, seed: int = 0) -> np.ndarray:
-    """n points at random inside a gallery form's outline, on a gentle curve: a sparse scan."""
-    rng = np.random.default_rng(seed)
-    outline = shapely.Polygon(make_form(shape).boundary[:, :2])
-    x0, y0, x1, y1 = outline.bounds
-    points = np.column_stack([rng.uniform(x0, x1, 40 * n), rng.uniform(y0, y1, 40 * n)])
-    points = points[shapely.contains_xy(outline, points[:, 0], points[:, 1])][:n]
-    return np.column_stack([points, 0.05 * points[:, 0] ** 2])
 
 
 AREAS = {
@@ -84,7 +57,7 @@ def test_the_command_line_refuses_a_blob_as_a_boundary_in_one_line(tmp_path, cap
 
 def _outlines():
     """Outlines that must pass: the scan test's, every form's, and sparse subsamples of forms."""
-    yield from _boundaries()
+    yield from true_boundaries()
     rng = np.random.default_rng(5)
     for shape in SHAPES:
         for margin in MARGINS:
@@ -99,15 +72,15 @@ def _outlines():
 
 def test_no_outline_is_taken_for_an_area():
     """Of 400 outlines, sparse, shuffled and noisy, none near FILL_SHARE (0.2; the worst 0.13,
-    the least area 0.29: benchmarks/bench_fill.py)."""
+    the least area 0.28: benchmarks/bench_fill.py)."""
     shares = {name: filled_share(points) for name, points in _outlines()}
     worst = max(shares, key=shares.get)
     assert shares[worst] < 0.75 * FILL_SHARE, (worst, shares[worst])
-    for _, points in _boundaries():
+    for _, points in true_boundaries():
         check_not_a_surface(points)  # no error
 
 
-@needs_scans
+@pytest.mark.skipif(not SCANS, reason=f"no real scans at {REAL}")
 @pytest.mark.parametrize("path", SCANS, ids=lambda p: p.stem[-20:])
 def test_a_real_scans_extracted_boundary_is_an_outline(path):
     """A curled soybean leaf's boundary, seen flat, crosses itself; in 3D it is a curve."""
