@@ -33,12 +33,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from leafstudio.core import cover  # noqa: E402
+from leafstudio.core.prepare import cover  # noqa: E402
 from leafstudio.forms import make_form  # noqa: E402
 from leafstudio.sources.scan import read_scan  # noqa: E402
 from tests.core.prepare.test_scan_as_boundary import (  # noqa: E402
     SCANS,
-    _boundaries,
     _dense_noisy,
     _strap,
     bent_filled_strip,
@@ -47,6 +46,7 @@ from tests.core.prepare.test_scan_as_boundary import (  # noqa: E402
     random_narrow_outline,
     striped_scan,
 )
+from tests.leaves import true_boundaries  # noqa: E402
 
 
 def _turn(seed: int) -> np.ndarray:
@@ -115,7 +115,7 @@ def classes():
             for a in (True, False)
         },
     )
-    yield "true boundaries", "boundary", dict(_boundaries())
+    yield "true boundaries", "boundary", dict(true_boundaries())
     yield (
         "narrow forms",
         "boundary",

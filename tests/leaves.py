@@ -4,6 +4,9 @@
   `lobed`, `narrow`, `coverage`), and every number of a Result's metrics (`metric_numbers`);
 - ellipses: as points (`ellipse`), as a scanner's noisy shuffled cloud (`ellipse_cloud`), as a
   sketch's clicks (`sketch_ellipse`, `sketch_clicks`); random star-shaped leaves (`random_leaf`);
+  the boundaries no check may refuse (`true_boundaries`);
+- points that fill an area: a disc, a sphere's cap, a flattened blob, a form filled (`disc`,
+  `cap`, `blob`, `filled_form`);
 - narrow bent blades: outlines and filled strips (`bend`, `bent_strap`, `bent_filled_strip`);
 - a synthetic scan with a blade of known outline, a petiole and outliers (`synthetic_scan`,
   `scan_blade_outline`, `scan_surface`, `assert_outline_is_the_blades`).
@@ -194,6 +197,62 @@ def random_leaf(seed: int, n: int, noise: float, size: float) -> tuple[Leaf, flo
     rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
     points = rng.permutation(points) @ rotation.T * scale + rng.uniform(-5, 5, 3) * size
     return Leaf(boundary=points, veins=[]), exact.area * scale**2
+
+
+def true_boundaries():
+    """(name, points) of boundaries no test of a scan or an area may refuse: the demos, the
+    gallery's shapes and margins, a folded form, noisy shuffled ellipses (noise up to 2% of the
+    length) and random leaves of 20,000 noisy points."""
+    from leafstudio.forms import SHAPES, make_form
+    from leafstudio.forms.terms import MARGINS
+
+    yield "demo nested", demo("nested").boundary
+    yield "demo parallel", demo("parallel").boundary
+    for shape in SHAPES:
+        yield f"form {shape}", make_form(shape).boundary
+    for margin in MARGINS:
+        yield f"form {margin}", make_form("elliptic", margin=margin).boundary
+    yield "linear serrate", make_form("linear", margin="dentate").boundary
+    yield "relief", make_form("ovate", fold=40, curl=0.3, wave=0.05).boundary
+    for n, sigma in [(3000, 0.002), (2000, 0.04), (20000, 0.04), (20000, 0.08)]:
+        yield f"ellipse {n} σ={sigma}", ellipse_cloud(n, sigma)  # σ 0.08: 2% of the length
+    for seed in range(2):
+        yield f"random leaf {seed}", random_leaf(seed, 20000, 1e-2, 1e3)[0].boundary
+
+
+# --- points that fill an area (given as a boundary, they are refused) ----------------------------
+
+
+def disc(n: int, seed: int = 0) -> np.ndarray:
+    """n points spread evenly at random over the unit disc, in z = 0."""
+    rng = np.random.default_rng(seed)
+    radius, angle = np.sqrt(rng.uniform(size=n)), rng.uniform(0, 2 * np.pi, n)
+    return np.column_stack([radius * np.cos(angle), radius * np.sin(angle), np.zeros(n)])
+
+
+def cap(n: int, height: float = 1.0, seed: int = 0) -> np.ndarray:
+    """n points at random on the unit sphere's cap of `height` (1: a hemisphere)."""
+    rng = np.random.default_rng(seed)
+    points = rng.normal(size=(50 * n, 3))
+    points /= np.linalg.norm(points, axis=1)[:, None]
+    return points[points[:, 2] >= 1 - height][:n]
+
+
+def blob(n: int, flat: float = 0.3, seed: int = 0) -> np.ndarray:
+    """n points of a Gaussian blob flattened to `flat` of its length."""
+    return np.random.default_rng(seed).normal(size=(n, 3)) * [1.0, 0.7, flat]
+
+
+def filled_form(shape: str, n: int, seed: int = 0) -> np.ndarray:
+    """n points at random inside a gallery form's outline, on a gentle curve: a sparse scan."""
+    from leafstudio.forms import make_form
+
+    rng = np.random.default_rng(seed)
+    outline = shapely.Polygon(make_form(shape).boundary[:, :2])
+    x0, y0, x1, y1 = outline.bounds
+    points = np.column_stack([rng.uniform(x0, x1, 40 * n), rng.uniform(y0, y1, 40 * n)])
+    points = points[shapely.contains_xy(outline, points[:, 0], points[:, 1])][:n]
+    return np.column_stack([points, 0.05 * points[:, 0] ** 2])
 
 
 # --- narrow bent blades --------------------------------------------------------------------------

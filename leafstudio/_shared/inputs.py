@@ -149,15 +149,18 @@ def read_numbers(path: str | os.PathLike, limit: int = MAX_TEXT_BYTES) -> str:
 
 
 _COMMENT = re.compile(r"#[^\n]*")
-_SEMICOLON_FIELDS = re.compile(r"\d[ \t]*;[ \t]*[-+.\d]")  # a number, `;`, the next on its line
+# a number, `;`, the next on its line; each may be in double quotes (`"1,5";"0"`: a spreadsheet's
+# cells stored as text)
+_SEMICOLON_FIELDS = re.compile(r'\d"?[ \t]*;[ \t]*"?[-+.\d]')
 _DECIMAL_COMMA = re.compile(r"\d,\d")
 _DECIMAL_POINT = re.compile(r"\d\.|\.\d")
 DECIMAL_HEAD = 1 << 16  # characters from a file's start that tell tab- or space-separated
-_SPACED_FIELDS = re.compile(r"\d[ \t]+[-+.\d]")  # a number, spaces or tabs, the next
-_SEPARATING_COMMA = re.compile(r",[ \t]|[ \t],|,,|\d,\d+,|,$", re.MULTILINE)  # `1, 2`, `1,2,3`
+_SPACED_FIELDS = re.compile(r'\d"?[ \t]+"?[-+.\d]')  # a number, spaces or tabs, the next
+# `1, 2`, `1,2,3`, `"1.5","0"`: commas between fields (one beside a quote ends or starts a field)
+_SEPARATING_COMMA = re.compile(r',[ \t]|[ \t],|,,|\d,\d+,|,$|",|,"', re.MULTILINE)
 # a line of numbers and separators only: a title's or a header's words ('exported 2024 05 01')
 # say nothing of how the numbers are separated
-_NUMBERS_LINE = re.compile(r"^[-+.,;\deE \t\r]+$", re.MULTILINE)
+_NUMBERS_LINE = re.compile(r'^[-+.,;\deE \t\r"]+$', re.MULTILINE)
 
 
 def decimal_commas(text: str, source: str) -> str:
@@ -184,7 +187,7 @@ def decimal_commas(text: str, source: str) -> str:
     else:  # told from the file's start: a regex over a whole 1e6-line CSV took 0.8 s
         head = "\n".join(_NUMBERS_LINE.findall(_COMMENT.sub("", text[:DECIMAL_HEAD])))
         if not _SPACED_FIELDS.search(head) or _SEPARATING_COMMA.search(head):
-            return text
+            return _no_quoted_commas(text, source)  # commas separate the fields
         separated, body = "tabs or spaces", _COMMENT.sub("", text) if "#" in text else text
     if not _DECIMAL_COMMA.search(body):
         return text
@@ -198,6 +201,29 @@ def decimal_commas(text: str, source: str) -> str:
             source,
         )
     return text.replace(",", ".")
+
+
+_QUOTED_COMMA = re.compile(r'"[-+]?\d*,\d+(?:[eE][-+]?\d+)?"')  # `"1,5"`: a quoted comma
+
+
+def _no_quoted_commas(text: str, source: str) -> str:
+    """`text`, whose fields commas separate, unless a number in double quotes holds a comma:
+    `"1,5","0"` may be 1.5 or, from a spreadsheet with a thousands separator (`"1,000"`), 1000.
+    A LeafError naming its line (it was refused as 'not a number', or skipped as a header when
+    on the first line)."""
+    if '"' not in text:
+        return text
+    body = _COMMENT.sub("", text) if "#" in text else text  # its lines kept: comments cut
+    found = _QUOTED_COMMA.search(body)
+    if found is None:
+        return text
+    line = body.count("\n", 0, found.start()) + 1
+    raise LeafError(
+        f"line {line}: a quoted number with a comma "
+        f"({found.group()}) in fields separated by commas: a decimal comma or a thousands "
+        "separator? Save it with ';' between the fields, or with decimal points",
+        source,
+    )
 
 
 def line_blocks(text: str, size: int | None = None) -> Iterator[tuple[int, str]]:

@@ -155,7 +155,12 @@ class Sheet:
         lo, hi = self.centers.min(axis=0), self.centers.max(axis=0)
         step = float(np.max(hi - lo)) / SAMPLES
         pad = PAD * float(np.max(hi - lo))
-        us, vs = (np.arange(lo[k] - pad, hi[k] + pad + step, step) for k in (0, 1))
+        # as many steps as cover the blade and its pad, counted with a tolerance: the longest
+        # side spans exactly 2 PAD * SAMPLES + SAMPLES steps, and np.arange(lo, hi + step, step)
+        # gave one more or one fewer by the last bit of the centres, moving every sample (a
+        # soybean scan scaled by 3 was flattened otherwise: 6 of its points changed sides)
+        count = np.floor((hi - lo + 2 * pad) / step + 1e-6).astype(int) + 2
+        us, vs = (lo[k] - pad + step * np.arange(count[k]) for k in (0, 1))
         grid = np.stack(np.meshgrid(us, vs, indexing="ij"), -1).reshape(-1, 2)
         parts = []  # in parts: most of a scan's sheet's time, and a Cancel may stop it between
         for k, rows in enumerate(np.array_split(np.arange(len(us)), CHUNKS), start=1):

@@ -4,13 +4,19 @@ point, and degenerate or huge scans end in a LeafError, not a crash."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from leafstudio.errors import LeafError
 from leafstudio.sources import extract
 from leafstudio.sources.extract import extract_leaf, voxel_thinning
+from leafstudio.sources.scan import read_scan
 from tests.leaves import assert_outline_is_the_blades, scan_surface, synthetic_scan
+
+REAL = Path(__file__).resolve().parents[3] / "shared" / "realleaves"
+CURLED = REAL / "soybean_11_20190508T043118_pot1_1.txt"  # curled: its sheet folds over
 
 
 def _big_scan(n: int, seed: int = 3) -> tuple[np.ndarray, int]:
@@ -133,3 +139,22 @@ def test_a_scan_in_any_units_gives_the_same_leaf_scaled(factor, unit_scale):
     assert scaled.length == pytest.approx(base.length * factor, rel=1e-9)
     np.testing.assert_allclose(scaled.leaf.boundary / factor, base.leaf.boundary, atol=1e-9)
     np.testing.assert_array_equal(scaled.blade, base.blade)
+
+
+@pytest.mark.skipif(not CURLED.exists(), reason=f"no real scan at {CURLED}")
+def test_a_curled_scans_blade_and_petiole_do_not_depend_on_its_size_or_place():
+    """Soybean pot1_1 scaled by 3 split 3103 blade and 180 petiole points, unscaled 3109 and
+    174: at unit size the two differ in their last bits, and the sheet its curled blade is
+    unrolled onto was sampled on another grid (core/sheet.py), flattening a few points onto
+    another layer of the curl."""
+    from leafstudio._shared.blas import one_blas_thread
+
+    points = read_scan(CURLED)
+    with one_blas_thread():  # as the app and the command line extract
+        base = extract_leaf(points)
+        for factor, shift in [(1e-3, 0.0), (3.0, 0.0), (1e3, 0.0), (1.0, 1e4), (0.7, -55.5)]:
+            moved = extract_leaf(points * factor + shift)
+            what = f"x {factor} + {shift}"
+            np.testing.assert_array_equal(moved.blade, base.blade, err_msg=what)
+            np.testing.assert_array_equal(moved.petiole, base.petiole, err_msg=what)
+            assert moved.length == pytest.approx(base.length * factor, rel=1e-5), what

@@ -15,6 +15,10 @@ neighbourhood take the blade's own width instead:
   striped scan's lines part into many groups, not two);
 - a narrow band: points that fill a band narrower than their neighbourhood evenly (flat across
   it, where a noisy curve's spread is bell-shaped) are measured again at the band's scale.
+
+Points too sparse for a neighbourhood of that reach to hold a few (a 400-point blob, a
+hemisphere's points) are judged point by point instead (`filled_share`): inside an area a point's
+nearest neighbours surround it; on an outline they lie ahead and behind.
 """
 
 from __future__ import annotations
@@ -47,6 +51,17 @@ BAND_WIDTH = (0.2, 0.7)  # the band's width, a share of the neighbourhood's diam
 BAND_FLAT = 2.1  # kurtosis across it at most (filled evenly: 1.8, a noisy curve: 3)
 BAND_CLOSER = 0.35  # measured again within this share of the band's width round the centre
 BAND_LEAST = 32  # points a neighbourhood needs for that (a kurtosis of fewer is unsure)
+# too sparse for that (filled_share): points with neighbours on every side
+FILL_NEAREST = 8  # a point's nearest neighbours looked at
+FILL_GAP = np.radians(120)  # surrounded: no wider gap between its neighbours' directions
+FILL_FROM = 150  # fewer distinct points are not judged: at 100, points inside a narrow form
+# (0.20) and a noisy toothed outline (0.19) overlap
+FILL_SHARE = 0.2  # more of the points surrounded: they fill an area. benchmarks/bench_fill.py,
+# from 150 points: outlines at most 0.13 (every form's shape and margin subsampled to 150-300
+# points, in order, shuffled, noise up to 0.5% of the length; the scans' extracted boundaries
+# 0.07), areas at least 0.28 (a real scan thinned to 150 points; points inside a narrow form
+# 0.29; discs, hemispheres, caps, flattened blobs 0.35-0.54); with noise of 1% of the length, 4
+# outlines of 294 pass it (up to 0.31): such a sparse cloud is a band as wide as its spacing
 
 
 @dataclass(frozen=True)
@@ -189,31 +204,45 @@ def _narrow_band(near: _Neighbourhoods, chosen: np.ndarray) -> np.ndarray:
     return np.where(band & (count >= COVER_LEAST), _ratio(np.linalg.eigvalsh(covariance)), 0.0)
 
 
+def _unit_cloud(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, float] | None:
+    """At most COVER_POINTS of the (n, 3) points, centred and scaled to unit size (finite sums
+    at 1e200 or 1e-200), the neighbourhoods' centres among them and their reach (COVER_REACH of
+    the length, COVER_WIDTH of the width if less); None for no points, a non-finite one, or
+    points on one line."""
+    points = fixed_sample(np.asarray(points, dtype=float), COVER_POINTS)
+    if len(points) == 0 or not np.isfinite(points).all():
+        return None
+    low, high = points.min(axis=0), points.max(axis=0)
+    points = points - (low / 2 + high / 2)
+    points /= max(float(np.abs(points).max()), 1e-300)
+    length, width = (float(extent) for extent in principal_extents(points)[:2])
+    if not np.isfinite(length) or length <= 0:
+        return None
+    reach = min(COVER_REACH * length, COVER_WIDTH * width)
+    return None if reach <= 0 else (points, points[:: max(1, len(points) // COVER_CENTRES)], reach)
+
+
+def _too_sparse(sizes: np.ndarray) -> bool:
+    """Whether most neighbourhoods (`sizes`: the points each holds) hold too few to measure."""
+    return int(np.sum(sizes >= COVER_LEAST)) < len(sizes) / 2
+
+
 def surface_spread(points: np.ndarray) -> float:
     """How much the (n, 3) points cover a surface rather than trace a curve: the median, over
     neighbourhoods of COVER_REACH of the length (COVER_WIDTH of the width if less), of their
     second spread over their largest (0 on a curve, 1 on a surface); 0 when most neighbourhoods
-    hold too few points to tell. A neighbourhood holding two line-like strands with one clear gap
-    between them (a bent narrow blade's two margins) counts at its strands' spread instead; one
-    whose points fill a narrower band evenly (a bent narrow scan) at the band's own scale.
-    Scale-free and independent of the points' order and of any outline traced through them."""
-    points = fixed_sample(np.asarray(points, dtype=float), COVER_POINTS)
-    if len(points) == 0 or not np.isfinite(points).all():
+    hold too few points to tell (filled_share looks at those). A neighbourhood holding two
+    line-like strands with one clear gap between them (a bent narrow blade's two margins) counts
+    at its strands' spread instead; one whose points fill a narrower band evenly (a bent narrow
+    scan) at the band's own scale. Scale-free and independent of the points' order and of any
+    outline traced through them."""
+    unit = _unit_cloud(points)
+    if unit is None:
         return 0.0
-    low, high = points.min(axis=0), points.max(axis=0)
-    points = points - (low / 2 + high / 2)
-    points /= max(float(np.abs(points).max()), 1e-300)  # finite sums at 1e200 or 1e-200
-    length, width = (float(extent) for extent in principal_extents(points)[:2])
-    if not np.isfinite(length) or length <= 0:
+    near = _neighbourhoods(*unit)
+    if _too_sparse(near.sizes):
         return 0.0
-    centres = points[:: max(1, len(points) // COVER_CENTRES)]
-    reach = min(COVER_REACH * length, COVER_WIDTH * width)
-    if reach <= 0:
-        return 0.0  # points on one line
-    near = _neighbourhoods(points, centres, reach)
     measured = near.sizes >= COVER_LEAST
-    if measured.sum() < len(centres) / 2:
-        return 0.0
     ratios = _ratio(near.spread)
     chosen = np.flatnonzero(measured & (ratios > STRAND_LINE))
     strands = np.full(len(ratios), np.inf)
@@ -222,3 +251,35 @@ def surface_spread(points: np.ndarray) -> float:
     ratios = np.where(np.isfinite(strands), strands, ratios)
     ratios = np.maximum(ratios, _narrow_band(near, measured & ~np.isfinite(strands)))
     return float(np.median(ratios[measured]))
+
+
+def filled_share(points: np.ndarray) -> float:
+    """For points too sparse for surface_spread (a 400-point blob, a hemisphere's points: issue
+    24, finding 15), the share of them that their FILL_NEAREST nearest neighbours surround: no
+    gap between the neighbours' directions, in their own plane, is wider than FILL_GAP. Points
+    in an area are surrounded but for its rim; a point on an outline has its neighbours ahead
+    and behind, the gaps between them near half a turn. 0 for a cloud dense enough for
+    surface_spread, or of fewer than FILL_FROM distinct points. Scale-free, order-free, and
+    local in 3D (a curled leaf's outline is a curve at every point, whatever its shadow)."""
+    unit = _unit_cloud(points)
+    if unit is None:
+        return 0.0
+    cloud, centres, reach = unit
+    if not _too_sparse(cKDTree(cloud).query_ball_point(centres, reach, return_length=True)):
+        return 0.0
+    cloud = np.unique(cloud, axis=0)  # a point given twice is not its own neighbour
+    if len(cloud) < FILL_FROM:
+        return 0.0
+    nearest = cKDTree(cloud).query(cloud, k=FILL_NEAREST + 1)[1]
+    around = cloud[nearest[:, 1:]] - cloud[:, None, :]
+    local = cloud[nearest] - cloud[nearest].mean(axis=1, keepdims=True)
+    axes = np.linalg.eigh(local.transpose(0, 2, 1) @ local)[1]  # ascending: the plane's last
+    angles = np.sort(
+        np.arctan2(
+            np.einsum("nkd,nd->nk", around, axes[:, :, 1]),
+            np.einsum("nkd,nd->nk", around, axes[:, :, 2]),
+        ),
+        axis=1,
+    )
+    gaps = np.diff(np.concatenate([angles, angles[:, :1] + 2 * np.pi], axis=1), axis=1)
+    return float(np.mean(gaps.max(axis=1) < FILL_GAP))

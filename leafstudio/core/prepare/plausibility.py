@@ -14,7 +14,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from leafstudio.core.plane import fixed_sample, principal_spreads
-from leafstudio.core.prepare.cover import COVER_SPREAD, surface_spread
+from leafstudio.core.prepare.cover import COVER_SPREAD, FILL_SHARE, filled_share, surface_spread
 from leafstudio.core.prepare.vein_order import leans_back, midrib_leaning
 from leafstudio.errors import LeafError
 
@@ -154,7 +154,8 @@ def check_not_a_surface(boundary: np.ndarray) -> None:
     COVER_SPREAD): a scan of the whole leaf given where its boundary belongs, whose outline and
     area would be meaningless and whose surface would be lost; or fill a volume (a 3D blob or a
     sphere's points, too sparse to cover a surface: issue 24, finding 15), by the thinness a
-    scan is held to (check_leaf_like)."""
+    scan is held to (check_leaf_like); or, too sparse for either, fill an area (a disc of
+    points, a hemisphere, a flattened blob: cover.filled_share)."""
     spreads = principal_spreads(fixed_sample(boundary, SAMPLE))
     if spreads[2] > THIN * spreads[0]:
         raise LeafError(
@@ -167,6 +168,14 @@ def check_not_a_surface(boundary: np.ndarray) -> None:
             f"the boundary points cover a surface, not a line round the leaf (local spread "
             f"{spread:.2f}; an outline's is under {COVER_SPREAD}): this looks like a scan of the "
             "whole leaf; `leafstudio extract SCAN -o LEAF` takes its boundary and veins"
+        )
+    share = filled_share(boundary)  # too sparse for the spread: a 400-point blob, a hemisphere
+    if share > FILL_SHARE:
+        raise LeafError(
+            f"the boundary's points fill an area rather than trace an outline ({share:.0%} of "
+            f"them have neighbours on every side; an outline's, under {FILL_SHARE:.0%}): is this "
+            "a scan? A boundary is the points round the leaf's edge; `leafstudio extract SCAN "
+            "-o LEAF` takes a scan's"
         )
 
 

@@ -18,15 +18,11 @@ from leafstudio.core.plane import fit_frame
 from leafstudio.core.prepare.cover import COVER_SPREAD, surface_spread
 from leafstudio.core.prepare.outline import trace_outline
 from leafstudio.errors import LeafError
-from leafstudio.forms import SHAPES, make_form
+from leafstudio.forms import make_form
 from leafstudio.forms.make import seen_on_edge
-from leafstudio.forms.terms import MARGINS
-from leafstudio.sources.demos import demo
 from leafstudio.sources.scan import read_scan
 from tests.leaves import bend as _bend
-from tests.leaves import bent_filled_strip, bent_strap
-from tests.leaves import ellipse_cloud as _ellipse
-from tests.leaves import random_leaf as _random_leaf
+from tests.leaves import bent_filled_strip, bent_strap, true_boundaries
 
 REAL = Path(__file__).resolve().parents[4] / "shared" / "realleaves"
 SCANS = sorted(REAL.glob("*.txt")) if REAL.is_dir() else []
@@ -62,23 +58,8 @@ def test_a_scans_outline_is_the_region_not_a_path_through_its_points(path):
     assert outline.length < 2 * shapely.MultiPoint(xy).convex_hull.length
 
 
-def _boundaries():
-    yield "demo nested", demo("nested").boundary
-    yield "demo parallel", demo("parallel").boundary
-    for shape in SHAPES:
-        yield f"form {shape}", make_form(shape).boundary
-    for margin in MARGINS:
-        yield f"form {margin}", make_form("elliptic", margin=margin).boundary
-    yield "linear serrate", make_form("linear", margin="dentate").boundary
-    yield "relief", make_form("ovate", fold=40, curl=0.3, wave=0.05).boundary
-    for n, sigma in [(3000, 0.002), (2000, 0.04), (20000, 0.04), (20000, 0.08)]:
-        yield f"ellipse {n} σ={sigma}", _ellipse(n, sigma)  # σ 0.08: 2% of the length
-    for seed in range(2):
-        yield f"random leaf {seed}", _random_leaf(seed, 20000, 1e-2, 1e3)[0].boundary
-
-
 def test_true_boundaries_are_never_taken_for_a_surface():
-    spreads = {name: surface_spread(points) for name, points in _boundaries()}
+    spreads = {name: surface_spread(points) for name, points in true_boundaries()}
     assert max(spreads.values()) < 0.8 * COVER_SPREAD, spreads
 
 
