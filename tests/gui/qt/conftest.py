@@ -30,13 +30,14 @@ from PySide6.QtWidgets import (
 )
 
 from leafstudio.gui.model.textures import LEAF, TEXTURE, texture_key
-from leafstudio.gui.qt import turns
+from leafstudio.gui.qt import turns, worker
 from leafstudio.gui.qt.main_window import MainWindow
 from leafstudio.gui.qt.photo_dialog import PhotoDialog
 from leafstudio.model import Params
 from tests.gui.builders import FAST
 
 WAIT_MS = 60_000
+APP_LANE_NICENESS = worker.LANE_NICENESS  # the app's, before lanes_at_the_tests_priority
 
 
 def make_window(qtbot, settings_path, params: Params | None = None) -> MainWindow:
@@ -135,6 +136,27 @@ def coloured_share(pixels: np.ndarray) -> float:
 def close_window(window: MainWindow) -> None:
     window.session.history.set_clean()
     window.close()
+
+
+@pytest.fixture(scope="session", autouse=True)
+def lanes_at_the_tests_priority():
+    """The worker's lanes run at the test process's priority, not LANE_NICENESS nicer. The app
+    nices them so that its renders keep the cores while a user waits (issue 24); a test waits
+    on the lanes themselves, and beside the other pytest-xdist worker and the host's other load
+    a lane 10 nicer got a tenth of a core: test_texture, test_exports, test_compare_glossary and
+    test_explain beside one busy process took 129 and 125 s niced, 52 and 44 s not (interleaved,
+    load 4.7-5.4), which made the Qt tests' share of the suite follow the host's load (issue 20).
+    test_worker checks the app's niceness on a worker of its own (app_niceness)."""
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(worker, "LANE_NICENESS", 0)
+        yield
+
+
+@pytest.fixture
+def app_niceness(monkeypatch) -> int:
+    """The app's lane niceness for the workers this test builds (lanes_at_the_tests_priority)."""
+    monkeypatch.setattr(worker, "LANE_NICENESS", APP_LANE_NICENESS)
+    return APP_LANE_NICENESS
 
 
 @pytest.fixture(autouse=True)
