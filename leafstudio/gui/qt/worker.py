@@ -48,8 +48,12 @@ SHUTDOWN_WAIT_MS = 100  # the longest closing waits for a running job to stop (s
 # each lane's thread runs this much nicer than the window's main thread (issue 24): on a 2-core
 # host a reconstruction or a scan's distances took the cores a render needs (the main thread and
 # software OpenGL's threads), stretching a 45 ms render to 100-150 ms while K changed on a
-# 2M-point scan; the processes a lane starts inherit it (the reading child, compile workers)
-LANE_NICENESS = 10
+# 2M-point scan; the processes a lane starts inherit it (the reading child, compile workers).
+# 5, not 10: beside a user's other work a lane 10 nicer got a tenth of a core (the demo's window
+# and first mesh beside two busy processes: 8.9-11.3 s at 10, 5.9-6.4 s at 5, 4.6-4.9 s at 0,
+# 3.0 s on a quiet host), while the window's stalls stay as short (bench_gui --big, quiet host,
+# longest stall of two runs: 31 ms at 10, 27 ms at 5, 44 ms at 0)
+LANE_NICENESS = 5
 LANES = {
     PIPELINE: "pipeline",
     "open": "side",
