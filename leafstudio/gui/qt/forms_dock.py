@@ -57,7 +57,7 @@ GALLERY_SPACING = 14  # pixels around each thumbnail and its name
 DEBOUNCE_MS = 250
 THUMBNAILS = "thumbnails"  # the worker's job kind (and lane) growing the gallery's veins
 FORM = "form"  # the job kind growing a chosen form's blade (its own lane: never behind those)
-_thumbnails: dict[tuple[str, int], QImage] = {}
+_thumbnails: dict[tuple[str, tuple[int, int]], QImage] = {}
 
 
 def thumbnail(shape: str, size: tuple[int, int] = THUMBNAIL, leaf: Leaf | None = None) -> QImage:
