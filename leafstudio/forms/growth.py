@@ -247,6 +247,11 @@ def arch(
     vein (`veins` holds all veins' points, `owners` which vein each belongs to)."""
     if ring is None or len(path) < 2:
         return path
+    # the path up to where it first reaches the ring: run on past it toward the margin, the arch
+    # walked back from the ring's nearest point, a Z at the start of every arch
+    reached = np.flatnonzero(cKDTree(ring).query(path[1:])[0] < 0.5 * step)
+    if len(reached):
+        path = path[: reached[0] + 2]
     n = len(ring)
     i = int(np.argmin(np.linalg.norm(ring - path[-1], axis=1)))
     sign = 1 if ring[(i + 2) % n, 0] > ring[(i - 2) % n, 0] else -1
@@ -258,7 +263,7 @@ def arch(
     dist, index = veins.query(walk, k=min(8, len(owners)))
     near = np.any((dist < 1.5 * h) & (owners[index] != owner), axis=1)
     walk = walk[: np.argmax(near) if near.any() else len(walk)]
-    return np.vstack([path, walk]) if len(walk) else path
+    return _smooth(np.vstack([path, walk])) if len(walk) else path  # the turn onto the ring eased
 
 
 def cut_crossings(vein: np.ndarray, laid: list[np.ndarray], step: float = STEP) -> np.ndarray:

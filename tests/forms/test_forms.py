@@ -330,6 +330,21 @@ def test_arcuate_secondaries_curve_toward_the_apex_along_the_margin(shape):
     assert _inside(leaf) and _no_crossings(leaf.veins)
 
 
+@pytest.mark.parametrize("shape", list(SHAPES))
+def test_an_arcuate_secondary_bends_smoothly_into_its_arch(shape):
+    """The colonized path ran on past the arches' ring toward the margin and the arch was walked
+    from the ring's nearest point, back inward: a Z at the start of every arch (a turn of 56-179
+    degrees between two steps, on every shape). It now turns onto the ring where it reaches it."""
+    leaf = leaf_of(shape=shape, venation="arcuate")
+    for vein in leaf.veins[1:]:
+        step = np.diff(vein[:, :2], axis=0)
+        step = step[np.linalg.norm(step, axis=1) > 1e-9]
+        heading = np.arctan2(step[:, 1], step[:, 0])
+        turns = np.degrees(np.abs(np.angle(np.exp(1j * np.diff(heading)))))
+        assert turns.max(initial=0.0) < 75.0
+    assert _inside(leaf) and _no_crossings(leaf.veins)
+
+
 def test_vein_heights_give_relief():
     leaf = leaf_of(shape="ovate")
     for vein in leaf.veins:
