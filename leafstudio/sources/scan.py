@@ -206,12 +206,12 @@ def is_scan_file(path: str) -> bool:
 
 def looks_like_scan(leaf: Leaf) -> bool:
     """True when an unlabelled point list covers a surface (a scan) rather than tracing an
-    outline (plausibility.surface_spread, the test the pipeline refuses a scan as a boundary
+    outline (cover.surface_spread, the test the pipeline refuses a scan as a boundary
     by). Its 12 nearest neighbours spread in two directions within a dense noisy outline's
     band too: the app opened such a boundary (24,000 points, noise 0.1% of the length) as a
     scan and extracted a leaf from it."""
     # heavy (scipy's k-d tree): not for the command line's parser, which reads OUTLINE_POINTS
-    from leafstudio.core.prepare.plausibility import COVER_SPREAD, surface_spread
+    from leafstudio.core.prepare.cover import COVER_SPREAD, surface_spread
 
     if leaf.veins or len(leaf.boundary) < MIN_SCAN_POINTS:
         return False

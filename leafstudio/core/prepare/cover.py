@@ -227,6 +227,19 @@ def _too_sparse(sizes: np.ndarray) -> bool:
     return int(np.sum(sizes >= COVER_LEAST)) < len(sizes) / 2
 
 
+def surface_cover(points: np.ndarray) -> tuple[float, float]:
+    """(surface_spread, filled_share) of the (n, 3) points, their unit cloud and neighbourhoods
+    found once: the pipeline asks both of every boundary (plausibility.check_not_a_surface), and
+    at most one is not 0 (the share is looked at only where the spread cannot tell)."""
+    unit = _unit_cloud(points)
+    if unit is None:
+        return 0.0, 0.0
+    near = _neighbourhoods(*unit)
+    if _too_sparse(near.sizes):
+        return 0.0, _filled(unit[0])
+    return _spread(near), 0.0
+
+
 def surface_spread(points: np.ndarray) -> float:
     """How much the (n, 3) points cover a surface rather than trace a curve: the median, over
     neighbourhoods of COVER_REACH of the length (COVER_WIDTH of the width if less), of their
@@ -236,12 +249,11 @@ def surface_spread(points: np.ndarray) -> float:
     at its strands' spread instead; one whose points fill a narrower band evenly (a bent narrow
     scan) at the band's own scale. Scale-free and independent of the points' order and of any
     outline traced through them."""
-    unit = _unit_cloud(points)
-    if unit is None:
-        return 0.0
-    near = _neighbourhoods(*unit)
-    if _too_sparse(near.sizes):
-        return 0.0
+    return surface_cover(points)[0]
+
+
+def _spread(near: _Neighbourhoods) -> float:
+    """surface_spread over neighbourhoods most of which hold enough points."""
     measured = near.sizes >= COVER_LEAST
     ratios = _ratio(near.spread)
     chosen = np.flatnonzero(measured & (ratios > STRAND_LINE))
@@ -261,12 +273,11 @@ def filled_share(points: np.ndarray) -> float:
     and behind, the gaps between them near half a turn. 0 for a cloud dense enough for
     surface_spread, or of fewer than FILL_FROM distinct points. Scale-free, order-free, and
     local in 3D (a curled leaf's outline is a curve at every point, whatever its shadow)."""
-    unit = _unit_cloud(points)
-    if unit is None:
-        return 0.0
-    cloud, centres, reach = unit
-    if not _too_sparse(cKDTree(cloud).query_ball_point(centres, reach, return_length=True)):
-        return 0.0
+    return surface_cover(points)[1]
+
+
+def _filled(cloud: np.ndarray) -> float:
+    """filled_share of a unit cloud too sparse for surface_spread."""
     cloud = np.unique(cloud, axis=0)  # a point given twice is not its own neighbour
     if len(cloud) < FILL_FROM:
         return 0.0

@@ -14,7 +14,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from leafstudio.core.plane import fixed_sample, principal_spreads
-from leafstudio.core.prepare.cover import COVER_SPREAD, FILL_SHARE, filled_share, surface_spread
+from leafstudio.core.prepare.cover import COVER_SPREAD, FILL_SHARE, surface_cover
 from leafstudio.core.prepare.vein_order import leans_back, midrib_leaning
 from leafstudio.errors import LeafError
 
@@ -162,15 +162,14 @@ def check_not_a_surface(boundary: np.ndarray) -> None:
             f"the boundary points fill a volume, not a line round a leaf (their thickness is "
             f"{spreads[2] / spreads[0]:.2f} of their length; a leaf's is under {THIN})"
         )
-    spread = surface_spread(boundary)
+    spread, share = surface_cover(boundary)  # the share: where too sparse for the spread
     if spread > COVER_SPREAD:
         raise LeafError(
             f"the boundary points cover a surface, not a line round the leaf (local spread "
             f"{spread:.2f}; an outline's is under {COVER_SPREAD}): this looks like a scan of the "
             "whole leaf; `leafstudio extract SCAN -o LEAF` takes its boundary and veins"
         )
-    share = filled_share(boundary)  # too sparse for the spread: a 400-point blob, a hemisphere
-    if share > FILL_SHARE:
+    if share > FILL_SHARE:  # too sparse for the spread: a 400-point blob, a hemisphere
         raise LeafError(
             f"the boundary's points fill an area rather than trace an outline ({share:.0%} of "
             f"them have neighbours on every side; an outline's, under {FILL_SHARE:.0%}): is this "
