@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from leafstudio.core.bend import carried_normals
 from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.evaluate import triangles_of
 from leafstudio.core.plane import Frame, fit_frame
@@ -184,6 +185,19 @@ def surface_normals(result: Result, xy: np.ndarray, margin: np.ndarray) -> np.nd
     return normals / np.linalg.norm(normals, axis=1, keepdims=True)
 
 
+def mesh_normals(
+    result: Result, xy: np.ndarray, height: np.ndarray, margin: np.ndarray
+) -> np.ndarray:
+    """(n, 3) unit normals of the result's mesh at its points on the flat blade, (n, 2) `xy` and
+    (n,) `height` (Result.on_blade): the surface's (`surface_normals`), carried by the leaf's
+    bend when it has one (bend.carried_normals: the flat ones were off by a fold's angle)."""
+    normals = surface_normals(result, xy, margin)
+    bend = result.leaf.bend
+    if bend is not None:
+        normals = carried_normals(bend, result.frame.to_world(xy, height), normals)
+    return normals
+
+
 def oriented(faces: np.ndarray, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
     """The faces wound consistently (each edge walked once each way) and, as a whole, toward the
     side their vertex normals point to.
@@ -214,7 +228,7 @@ def consistent(faces: np.ndarray, points: np.ndarray) -> np.ndarray:
 
 def leaf_plane(result: Result) -> LeafPlane:
     """The result's frame, UV map, outline and veins in the plane."""
-    veins = [result.frame.to_plane(v)[0] for v in result.leaf.veins]
+    veins = [result.on_blade(v)[0] for v in result.leaf.veins]
     return LeafPlane(
         frame=result.frame,
         uvmap=UVMap.around(result.polygon),
@@ -228,7 +242,7 @@ def leaf_uvs(result: Result, xy: np.ndarray | None = None) -> np.ndarray:
     """(n, 2) UVs of the result's mesh vertices (or of (n, 2) plane points `xy`): the map every
     export writes (module docstring), also the app's."""
     if xy is None:
-        xy = result.frame.to_plane(np.asarray(result.triangle_mesh.points, dtype=float))[0]
+        xy = result.on_blade(result.triangle_mesh.points)[0]
     return UVMap.around(result.polygon)(xy)
 
 
@@ -257,12 +271,15 @@ def leaf_asset(result: Result) -> MeshAsset:
     """
     mesh = result.triangle_mesh
     points = np.asarray(mesh.points, dtype=float)
-    xy = result.frame.to_plane(points)[0]
     margin = np.arange(len(points)) < len(result.polygon)  # both meshers put the outline first
-    normals = surface_normals(result, xy, margin)
+    xy, height = result.on_blade(points)
+    normals = mesh_normals(result, xy, height, margin)
     faces = oriented(triangles_of(mesh).astype(np.int64), points, normals)
     data = {k: np.asarray(mesh.point_data[k], float) for k in SCALARS if k in mesh.point_data}
     uv = leaf_uvs(result, xy)
+    if result.leaf.bend is not None:  # no one plane: tangents the client's (glTF: MikkTSpace;
+        # the plane's u did not follow a curl), a solid's offsets carried (solid.bent_offsets)
+        return MeshAsset(points, faces, normals, uv, data, plane_xy=xy, outline=result.polygon)
     return MeshAsset(points, faces, normals, uv, data, plane_normal=result.frame.normal,
                      plane_xy=xy, outline=result.polygon, plane_u=result.frame.u)  # fmt: skip
 

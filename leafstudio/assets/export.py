@@ -15,6 +15,7 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -27,7 +28,7 @@ from leafstudio.assets import texture as tex
 from leafstudio.assets.asset import MeshAsset, leaf_asset, leaf_plane, mesh_asset
 from leafstudio.assets.lod import coarser_levels
 from leafstudio.assets.placement import mesh_placement, parse_length, place, result_placement
-from leafstudio.assets.solid import parse_thickness, thicken, thickness_in_mesh_units
+from leafstudio.assets.solid import bent_offsets, parse_thickness, thicken, thickness_in_mesh_units
 from leafstudio.assets.writers import MESH_SUFFIXES, write_assets, written_paths
 from leafstudio.errors import LeafError
 from leafstudio.sources.leafphoto import PhotoTexture, pixel_map, project_photo
@@ -180,7 +181,8 @@ def mesh_assets(
     for level, asset in enumerate(levels):
         if thickness is not None:
             progress(0.6 + 0.2 * level / len(levels), f"the solid ({level + 1}/{len(levels)})")
-            asset = thicken(asset, thickness)
+            bent = result is not None and result.leaf.bend is not None
+            asset = thicken(asset, thickness, partial(bent_offsets, result) if bent else None)
         out.append(asset.with_(name=f"{name}_LOD{level}" if lod else name, **images))
     return out
 

@@ -21,8 +21,8 @@ from leafstudio.assets.asset import (
     MeshAsset,
     UVMap,
     mesh_asset,
+    mesh_normals,
     oriented,
-    surface_normals,
 )
 from leafstudio.assets.solid import boundary_edges
 from leafstudio.core.curvature import surface_curvatures
@@ -51,10 +51,10 @@ def _level(asset: MeshAsset, result: Result | None, points: np.ndarray, faces: n
     if result is None:
         level = mesh_asset(TriangleMesh(points, faces))
         return level.with_(faces=oriented(level.faces, level.points, level.normals))
-    xy, z = result.frame.to_plane(points)
+    xy, z = result.on_blade(points)
     margin = np.zeros(len(points), bool)
     margin[np.unique(boundary_edges(faces))] = True
-    normals = surface_normals(result, xy, margin)
+    normals = mesh_normals(result, xy, z, margin)
     data = {"height": z, **surface_curvatures(result.surface, xy, margin)}
     return asset.with_(
         points=points,

@@ -8,21 +8,27 @@ samples and the leaf the metrics are measured against. A leaf without a bend is 
 bend and runs exactly as before.
 
 `Pose` is the bend a form knows (forms/make.py): in the blade's coordinates (the base at the
-origin, the midrib along +x, the relief on +z), a fold raises each half from the midrib,
-z += |y| tan(fold), and a curl bends the midrib, z += curl · x², a shear along z, after a roll
-has bent each cross-section into a circular arc of curvature `roll` (an isometry: widths are kept,
-as a grass blade or a young leaf rolls), and a twist turns each
-cross-section about the midrib by twist · x radians (a helicoid: the blade as a twisted grass
-blade or a propeller; after the fold, before the curl). All are undone exactly, and
-the blade is what the form drew before posing: a fold of 75° or a rolled grass blade is
-reconstructed as well as the flat leaf, where the boundary's PCA plane saw it side-on and the
-mesh broke (issue 21, finding 1).
+origin, the midrib along +x, the relief on +z), a roll bends each cross-section into a circular
+arc of curvature `roll` (as a grass blade or a young leaf rolls), a fold turns each half up about
+the midrib by `fold` degrees (y -> y cos(fold), z += |y| sin(fold)), a twist turns each
+cross-section about the midrib by twist · x radians (a helicoid: a twisted grass blade or a
+propeller), and a curl lays the midrib on a circle of curvature 2 · curl (z = curl · x² at the
+base), in that order. Each keeps the blade's sheet (z = 0, the margin's) isometric: a leaf
+folded or curled keeps its size (fold and curl were shears, z += |y| tan(fold) + curl · x²: an
+ovate form folded 60° had 1.78 times its flat area, folded 75° 3.56 times, and a curl of 1
+lengthened its midrib 1.42 times; `bench_bent.py --size`). The fold lifts the relief straight
+up and the roll and curl carry it along their normals, so a raised relief is drawn in a little
+(folded 60°, the form's roof of veins 14° each side of the midrib, 0.82 of the flat area; curled
+1, the midrib 0.92 of its length). All are undone exactly, and the blade is what the form drew
+before posing: a fold of 75° or a rolled grass blade is reconstructed as well as the flat leaf,
+where the boundary's PCA plane saw it side-on and the mesh broke (issue 21, finding 1).
 
-The roll carries a relief h (a margin's wave, raised veins) along the rolled normal: the
-cross-section's point (v, h) goes to the angle v / R about the axis (R = 1 / roll) at radius
-R - h outward, R exp(-h / R) inward (the same slope where h = 0). A relief as high as the
-radius, which R - h took through the axis (a wave of 0.1 on a tube: 15 of the pose grid's 101
-poses were refused), is drawn in toward it and never through, so every relief is undone exactly.
+The roll (and the curl, along the midrib) carries a relief h (a margin's wave, raised veins)
+along the rolled normal: the cross-section's point (v, h) goes to the angle v / R about the axis
+(R = 1 / roll) at radius R - h outward, R exp(-h / R) inward (the same slope where h = 0). A
+relief as high as the radius, which R - h took through the axis (a wave of 0.1 on a tube: 15 of
+the pose grid's 101 poses were refused), is drawn in toward it and never through, so every
+relief is undone exactly.
 
 The heights, curvatures and `Result.height` stay those of the flat blade's surface (its relief);
 the mesh's points are bent.
@@ -54,9 +60,10 @@ SEAM = 0.1  # flat_curve: points this share of a half turn from a tube's seam ma
 
 @dataclass(frozen=True)
 class Pose:
-    """A form's fold (degrees, each half rising from the midrib), curl (the midrib's bend,
-    z = curl · x²) and roll (the cross-section's curvature, 1 / its radius; positive rolls
-    the margins up), in the blade's coordinates."""
+    """A form's fold (degrees, each half turned up about the midrib), curl (the midrib laid on
+    a circle of curvature 2 · curl: z = curl · x² at the base; positive curls the apex up) and
+    roll (the cross-section's curvature, 1 / its radius; positive rolls the margins up), in the
+    blade's coordinates (module docstring)."""
 
     fold: float = 0.0
     curl: float = 0.0
@@ -64,45 +71,36 @@ class Pose:
     twist: float = 0.0  # radians the cross-section turns about the midrib per unit of length
     sag: ClassVar[float] = SAG  # the bent mesh's chords are kept this close to it (sag_splits)
 
-    def lift(self, xy: np.ndarray) -> np.ndarray:
-        """(n,) heights the pose adds at (n, 2) blade points."""
-        xy = np.asarray(xy, dtype=float)
-        return np.abs(xy[:, 1]) * np.tan(np.deg2rad(self.fold)) + self.curl * xy[:, 0] ** 2
-
     def apply(self, points: np.ndarray) -> np.ndarray:
-        """(n, 3) flat blade points, bent: rolled, lifted by the fold, twisted about the midrib,
-        then lifted by the curl (no twist: the fold's and curl's lifts at once, as before)."""
+        """(n, 3) flat blade points, bent: rolled, folded, twisted about the midrib, then
+        curled."""
         points = np.array(points, dtype=float)
-        if self.roll != 0:
-            r = 1.0 / self.roll  # the axis: y = 0, z = r; the height scales the radius
-            # a half turn at most: a tube's margins at exactly ±π stay on their side
-            angle = np.clip(points[:, 1] * self.roll, -np.pi, np.pi)
-            radius = r * _rolled_radius(points[:, 2] * self.roll)
-            points[:, 1], points[:, 2] = np.sin(angle) * radius, r - np.cos(angle) * radius
-        if self.twist == 0:
-            points[:, 2] += self.lift(points[:, :2])
-            return points
-        points[:, 2] += Pose(self.fold).lift(points[:, :2])
-        points[:, 1:] = _turned(points, self.twist)
-        points[:, 2] += Pose(curl=self.curl).lift(points[:, :2])
+        if self.roll != 0:  # the axis: y = 0, z = 1 / roll
+            points[:, 1], points[:, 2] = _wrapped(points[:, 1], points[:, 2], self.roll)
+        if self.fold != 0:  # z from the turned y, as `flatten` takes it back: a margin's 0 exact
+            fold = np.deg2rad(self.fold)
+            points[:, 1] *= np.cos(fold)
+            points[:, 2] += np.abs(points[:, 1]) * np.tan(fold)
+        if self.twist != 0:
+            points[:, 1:] = _turned(points, self.twist)
+        if self.curl != 0:  # the axis: x = 0, z = 1 / (2 curl)
+            points[:, 0], points[:, 2] = _wrapped(points[:, 0], points[:, 2], 2 * self.curl)
         return points
 
     def flatten(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) bent points back on the flat blade (the inverse of `apply`, for less than half
         a turn of roll each side)."""
         points = np.array(points, dtype=float)
-        if self.twist == 0:
-            points[:, 2] -= self.lift(points[:, :2])
-        else:  # x is kept by every step: each is undone at the x it was done at
-            points[:, 2] -= Pose(curl=self.curl).lift(points[:, :2])
+        if self.curl != 0:
+            points[:, 0], points[:, 2] = _unwrapped(points[:, 0], points[:, 2], 2 * self.curl)
+        if self.twist != 0:  # x is kept by the twist and the fold
             points[:, 1:] = _turned(points, -self.twist)
-            points[:, 2] -= Pose(self.fold).lift(points[:, :2])
+        if self.fold != 0:
+            fold = np.deg2rad(self.fold)
+            points[:, 2] -= np.abs(points[:, 1]) * np.tan(fold)
+            points[:, 1] /= np.cos(fold)
         if self.roll != 0:
-            r = 1.0 / self.roll
-            sign = np.sign(r)
-            y, z = sign * points[:, 1], sign * (r - points[:, 2])
-            points[:, 1] = np.arctan2(y, z) * r
-            points[:, 2] = r * _unrolled_height(np.hypot(y, z) * abs(self.roll))
+            points[:, 1], points[:, 2] = _unwrapped(points[:, 1], points[:, 2], self.roll)
         return points
 
     def flat_curve(self, points: np.ndarray, ring: bool = False) -> np.ndarray:
@@ -147,25 +145,52 @@ class Pose:
         return None if not lines else y[None, :] - np.array(lines)[:, None]
 
 
+def carried_vectors(bend, points: np.ndarray, vectors: np.ndarray) -> np.ndarray:
+    """(n, 3) each of the (n, 3) `vectors` at (n, 3) flat points carried by `bend`'s Jacobian
+    (a model.Bend), by central differences (STRETCH_STEP of the points' extent)."""
+    step = STRETCH_STEP * max(float(np.abs(points).max()), 1e-12)
+    return (bend.apply(points + step * vectors) - bend.apply(points - step * vectors)) / (2 * step)
+
+
+def _carried_frames(bend, points: np.ndarray, directions: np.ndarray) -> list[np.ndarray]:
+    """Each of the (n, 3, 3) `directions` (three per point) carried (`carried_vectors`)."""
+    return [carried_vectors(bend, points, e) for e in np.moveaxis(directions, 1, 0)]
+
+
 def normal_stretch(bend, points: np.ndarray, directions: np.ndarray) -> np.ndarray:
     """(n,) how many times `bend` (a model.Bend) lengthens a short distance off a surface at
     (n, 3) flat points: `directions` (n, 3, 3) holds two tangents and the unit normal of the
     surface at each. A point δ off the surface stands δ · stretch off it bent: the bent normal's
-    share along the bent surface's normal, |(J t₁ × J t₂) · J n| / |J t₁ × J t₂|, J by central
-    differences (STRETCH_STEP of the points' extent). A fold on a rolled tube shears the rolled
-    section (z += |y| tan fold): where the section leans against the shear it reaches
-    sqrt(1 + tan² fold), 3.9 at 75°; a fold alone or a roll alone keeps it 1 or less."""
+    share along the bent surface's normal, |(J t₁ × J t₂) · J n| / |J t₁ × J t₂|. A fold on a
+    rolled tube turns the rolled section's halves about the midrib as if they were flat: where
+    the section leans against the fold it reaches 1.4 at 75° (3.9 when the fold was a shear,
+    z += |y| tan fold); a fold alone, which lifts the relief straight up, or a roll alone keeps
+    it 1 or less."""
     points = np.asarray(points, dtype=float)
     if not len(points):
         return np.ones(0)
-    step = STRETCH_STEP * max(float(np.abs(points).max()), 1e-12)
-    j = [
-        (bend.apply(points + step * e) - bend.apply(points - step * e)) / (2 * step)
-        for e in np.moveaxis(directions, 1, 0)
-    ]
+    j = _carried_frames(bend, points, directions)
     across = np.cross(j[0], j[1])
     area = np.linalg.norm(across, axis=1)
     return np.abs((across * j[2]).sum(axis=1)) / np.maximum(area, 1e-300)
+
+
+def carried_normals(bend, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """(n, 3) unit normals of the bent surface at (n, 3) flat points whose flat surface has the
+    unit `normals` there: the bent tangents' cross product, on the side `bend` carries the
+    normal to (an export's shading and a solid's offsets; the flat normals were off by the
+    fold's angle)."""
+    points, normals = np.asarray(points, dtype=float), np.asarray(normals, dtype=float)
+    if not len(points):
+        return normals.copy()
+    helper = np.where(np.abs(normals[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    first = np.cross(normals, helper)
+    first /= np.linalg.norm(first, axis=1, keepdims=True)
+    second = np.cross(normals, first)
+    j = _carried_frames(bend, points, np.stack([first, second, normals], axis=1))
+    bent = np.cross(j[0], j[1])
+    bent *= np.sign((bent * j[2]).sum(axis=1))[:, None]
+    return bent / np.maximum(np.linalg.norm(bent, axis=1, keepdims=True), 1e-300)
 
 
 def _rolled_radius(u: np.ndarray) -> np.ndarray:
@@ -179,6 +204,25 @@ def _unrolled_height(k: np.ndarray) -> np.ndarray:
     """The inverse of `_rolled_radius`: heights in radii toward the axis, for radii k over the
     roll's."""
     return np.where(k >= 1, 1 - k, -np.log(np.minimum(k, 1)))
+
+
+def _wrapped(u: np.ndarray, h: np.ndarray, k: float) -> tuple[np.ndarray, np.ndarray]:
+    """A sheet's coordinate u and height h with the sheet wrapped on a circle of curvature k
+    (the axis at height 1 / k; u its arclength, h along its normal): the roll across the midrib
+    and the curl along it. Half a turn at most each way (a tube's margins at exactly ±π stay on
+    their side); a height toward the axis is drawn in (`_rolled_radius`), never through it."""
+    r = 1.0 / k
+    angle = np.clip(u * k, -np.pi, np.pi)
+    radius = r * _rolled_radius(h * k)
+    return np.sin(angle) * radius, r - np.cos(angle) * radius
+
+
+def _unwrapped(u: np.ndarray, h: np.ndarray, k: float) -> tuple[np.ndarray, np.ndarray]:
+    """The inverse of `_wrapped`, for less than half a turn each way."""
+    r = 1.0 / k
+    sign = np.sign(r)
+    across, toward = sign * u, sign * (r - h)
+    return np.arctan2(across, toward) * r, r * _unrolled_height(np.hypot(across, toward) * abs(k))
 
 
 def _turned(points: np.ndarray, twist: float) -> np.ndarray:
@@ -426,3 +470,18 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
         triangle_mesh=bent[0],
         unit=unit,
     )
+
+
+def sheared_flatten(pose: Pose, points: np.ndarray) -> np.ndarray:
+    """(n, 3) blade points bent by `pose` as version 1 of the project format bent them (a fold
+    and a curl were shears: z += |y| tan(fold) after the roll, then the twist, then
+    z += curl · x²), back on the flat blade: projects saved then are bent again (sources/
+    bend_entry.py)."""
+    points = np.array(points, dtype=float)
+    points[:, 2] -= pose.curl * points[:, 0] ** 2
+    if pose.twist != 0:
+        points[:, 1:] = _turned(points, -pose.twist)
+    points[:, 2] -= np.abs(points[:, 1]) * np.tan(np.deg2rad(pose.fold))
+    if pose.roll != 0:
+        points[:, 1], points[:, 2] = _unwrapped(points[:, 1], points[:, 2], pose.roll)
+    return points

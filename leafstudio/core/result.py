@@ -190,6 +190,16 @@ class Result:
         """
         return self.surface(np.atleast_2d(np.asarray(xy, dtype=float)))
 
+    def on_blade(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(n, 2) plane coordinates and (n,) heights, in `frame`, of (n, 3) points of this
+        result's mesh on the flat blade: a bent leaf's (`leaf.bend`) are laid flat first, as its
+        surface, grid and outline are the flat blade's (its mesh seen in `frame` as it is bent
+        put a fold's UVs, normals and texture across a blade half as wide)."""
+        points = np.asarray(points, dtype=float)
+        if self.leaf.bend is not None:
+            points = self.leaf.bend.flatten(points)
+        return self.frame.to_plane(points)
+
     @property
     def blade_length(self) -> float:
         """The blade's length, base to apex along its midrib (evaluate.blade_axis): the metrics'

@@ -7,13 +7,11 @@ columns, `x y`, a flat one (z = 0: an outline traced in a spreadsheet or on a ph
 
 from __future__ import annotations
 
-import contextlib
 import json
 import math
 import os
 import re
 from collections.abc import Sequence
-from dataclasses import replace
 from io import BytesIO
 from pathlib import Path
 from typing import Any
@@ -36,14 +34,14 @@ from leafstudio._shared.safewrite import check_outputs, write_bytes
 from leafstudio._shared.safewrite import staged as staged  # re-exported: outputs replaced together
 from leafstudio.core.bend import Pose
 from leafstudio.core.placed import PlacedPose
-from leafstudio.core.plane import Frame
 from leafstudio.core.sheet import Scaled
 from leafstudio.errors import LeafError, shorten
 from leafstudio.model import Leaf, Params
+from leafstudio.sources.bend_entry import FRAME_KEYS, project_bend
 
 POINT_SUFFIXES = (".csv", ".txt", ".xyz")
 LEAF_SUFFIXES = (*POINT_SUFFIXES, ".ply", ".leaf.json", ".json")
-FORMAT_NAME, FORMAT_VERSION = "leafstudio", 1
+FORMAT_NAME, FORMAT_VERSION = "leafstudio", 2  # 2: fold and curl keep the size (bend_entry.py)
 MAX_LABEL = 100_000  # vein labels 1..MAX_LABEL
 
 
@@ -281,46 +279,12 @@ def load_project(path: str | os.PathLike) -> tuple[Leaf, Params | None, dict[str
     veins = [_project_points(v, f"vein {i + 1}", source) for i, v in enumerate(veins_data)]
     leaf = _checked_leaf(boundary, veins, source)
     if data.get("bend"):
-        leaf = replace(leaf, bend=_project_bend(data["bend"], source, leaf))
+        leaf = project_bend(data["bend"], source, leaf, data.get("version", FORMAT_VERSION))
     try:
         params = Params.from_dict(data["params"]) if data.get("params") else None
     except (TypeError, LeafError) as exc:
         raise LeafError(f"bad params: {exc}", source) from None
     return leaf, params, dict(data.get("sketch") or {})
-
-
-FRAME_KEYS = ("origin", "u", "v", "normal")  # a bend's frame in a project (core/placed.py)
-
-
-def _project_bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
-    """A project's "bend": {"fold": degrees, "curl": c, "roll": curvature, "twist": radians per
-    length}, the pose a form was made in, with the "frame" {"origin", "u", "v", "normal"} of a
-    leaf bent in the app (core/placed.py), or {"sheet": ...}, a scan's bend (core/sheet.py)."""
-    if isinstance(value, dict) and "sheet" in value:
-        try:
-            return Scaled.from_entry(value, np.vstack([leaf.boundary, leaf.vein_points]))
-        except (TypeError, ValueError, KeyError, np.linalg.LinAlgError):
-            raise LeafError('"bend": its "sheet" does not read whole', source) from None
-    fold = curl = roll = twist = math.nan  # stays nan, and is refused below, unless it reads whole
-    frame = None
-    if isinstance(value, dict) and not set(value) - {"fold", "curl", "roll", "twist", "frame"}:
-        with contextlib.suppress(TypeError, ValueError, KeyError, AttributeError, OverflowError):
-            if "frame" in value:  # read first: a bad frame leaves the fold nan
-                axes = [np.asarray(value["frame"][k], float) for k in FRAME_KEYS]
-                good = all(a.shape == (3,) and np.isfinite(a).all() for a in axes)
-                if not (good and np.allclose(np.array(axes[1:]) @ np.array(axes[1:]).T, np.eye(3))):
-                    raise ValueError
-                frame = Frame(*axes)
-            fold, curl = float(value.get("fold", 0.0)), float(value.get("curl", 0.0))
-            roll, twist = float(value.get("roll", 0.0)), float(value.get("twist", 0.0))
-    if not (abs(fold) < 90 and all(math.isfinite(t) for t in (curl, roll, twist))):
-        raise LeafError(
-            f'"bend" must be {{"fold": degrees under 90, "curl", "roll", "twist": numbers}} (a '
-            f'"frame": {{"origin", "u", "v", "normal"}}, orthonormal axes), got {shorten(value)}',
-            source,
-        )
-    pose = Pose(fold, curl, roll, twist)
-    return pose if frame is None else PlacedPose(pose, frame)
 
 
 def load_leaf(path: str | os.PathLike, veins: Sequence[str | os.PathLike] = ()) -> Leaf:

@@ -12,6 +12,7 @@ import trimesh
 
 import leafstudio as ls
 from leafstudio.assets import leaf_asset
+from leafstudio.assets.export import mesh_assets
 from leafstudio.assets.solid import parse_thickness, thicken, thickness_in_mesh_units
 from leafstudio.errors import LeafError
 from leafstudio.forms import make_form
@@ -199,7 +200,7 @@ def test_every_gallery_leaf_makes_a_sound_solid(name: str):
     sheet = trimesh.Trimesh(asset.points, asset.faces, process=False)
     assert sheet.is_winding_consistent
     thickness = 0.01 * result.length
-    solid = thicken(asset, thickness)
+    solid = mesh_assets(result, texture="none", thickness=thickness)[0]  # a fold's: bent_offsets
     mesh = trimesh.Trimesh(solid.points, solid.faces, process=False)
     assert mesh.is_watertight and mesh.is_winding_consistent
     assert mesh.volume == pytest.approx(sheet.area * thickness, rel=0.02)  # > 0: outward

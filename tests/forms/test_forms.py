@@ -353,17 +353,46 @@ def test_vein_heights_give_relief():
 
 
 # --- relief and variants ------------------------------------------------------------------------
-def test_fold_curl_and_wave_are_heights():
+def test_a_fold_turns_each_half_up_about_the_midrib_keeping_its_width():
     flat = leaf_of(shape="ovate")
     folded = leaf_of(shape="ovate", fold=30.0)
-    assert np.allclose(folded.boundary[:, :2], flat.boundary[:, :2])
+    y = flat.boundary[:, 1]
+    np.testing.assert_allclose(folded.boundary[:, 0], flat.boundary[:, 0], atol=1e-12)
+    np.testing.assert_allclose(folded.boundary[:, 1], y * np.cos(np.radians(30)), atol=1e-12)
     np.testing.assert_allclose(
-        folded.boundary[:, 2], np.abs(flat.boundary[:, 1]) * np.tan(np.radians(30)), atol=1e-12
+        folded.boundary[:, 2] - flat.boundary[:, 2], np.abs(y) * np.sin(np.radians(30)), atol=1e-12
     )
+    # the margin (no relief) as far from the midrib along the folded half as on the flat blade:
+    # a shear z += |y| tan(fold) made it 1 / cos(fold) as far (a fold of 60: twice)
+    on_margin = np.abs(flat.boundary[:, 2]) < 1e-12
+    assert on_margin.sum() > 10
+    across = np.hypot(folded.boundary[on_margin, 1], folded.boundary[on_margin, 2])
+    np.testing.assert_allclose(across, np.abs(y[on_margin]), atol=1e-12)
+
+
+def test_a_curl_lays_the_midrib_on_a_circle_by_its_length():
+    flat = leaf_of(shape="ovate")
     curled = leaf_of(shape="ovate", curl=0.2)
-    apex = apex_index(curled.boundary[:, :2])
-    assert curled.boundary[apex, 2] == pytest.approx(0.2)
     assert curled.veins[0][-1, 2] > flat.veins[0][-1, 2] + 0.15
+    # a margin point (no relief) lies on the circle of radius 1 / (2 curl) over the base (the
+    # parabola z = curl x² at the base), as far along it from the base as it was on the blade
+    on_margin = np.abs(flat.boundary[:, 2]) < 1e-12
+    assert on_margin.sum() > 10
+    radius = 1 / 0.4
+    x, z = curled.boundary[on_margin, 0], curled.boundary[on_margin, 2]
+    np.testing.assert_allclose(np.hypot(x, z - radius), radius, atol=1e-12)
+    along = radius * np.arctan2(x, radius - z)
+    np.testing.assert_allclose(along, flat.boundary[on_margin, 0], atol=1e-12)
+
+    def length(curve: np.ndarray) -> float:
+        return float(np.linalg.norm(np.diff(curve, axis=0), axis=1).sum())
+
+    # the midrib keeps its length (its relief, carried along the circle's normal, a little
+    # less): a shear z += curl x² lengthened a curl of 1's midrib 1.42 times
+    assert length(curled.veins[0]) == pytest.approx(length(flat.veins[0]), rel=0.02)
+
+
+def test_a_wave_is_a_height():
     waved = leaf_of(shape="ovate", wave=0.03)
     assert np.ptp(waved.boundary[:, 2]) == pytest.approx(0.06, rel=0.05)
     assert waved.boundary[0, 2] == 0  # none at the base

@@ -19,6 +19,8 @@ from leafstudio.model import Leaf
 
 BOUNDARY_CONTROL = 48  # a form's sketch: about this many boundary control points, plus corners
 CORNER_TURN = 0.35  # radians: outline points turning this sharply (tooth tips, notches) are kept
+FLAT = 1e-12  # heights under this share of the outline's extent are none: a posed form's flat
+# blade, laid flat again by its curl's circle, has margin heights of 1e-17
 VEIN_CONTROL = 8
 
 
@@ -60,7 +62,9 @@ def leaf_sketch(leaf: Leaf, teeth: int = 0) -> Sketch:
     for vein in leaf.veins:
         pick = np.unique(np.linspace(0, len(vein) - 1, min(VEIN_CONTROL, len(vein))).astype(int))
         veins.append(vein[pick])
-    relief = leaf.boundary if np.any(leaf.boundary[:, 2] != 0) else np.zeros((0, 3))
+    extent = float(np.ptp(leaf.boundary[:, :2], axis=0).max())
+    raised = np.abs(leaf.boundary[:, 2]).max() > FLAT * extent
+    relief = leaf.boundary if raised else np.zeros((0, 3))
     return Sketch(boundary=boundary, veins=tuple(veins), relief=relief)
 
 

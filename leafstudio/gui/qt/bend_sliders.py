@@ -3,11 +3,13 @@ build item 6): they bend the document's leaf live through `Session.set_bend`
 (gui/model/bending.py), one undo step per drag; undo, a new document or an opened project
 shows its pose on them.
 
-Fold is the angle each half rises from the midrib (as a form's); curl bends the midrib, z =
-curl · x² along it from the base (a leaf of length 1 lifts its apex by curl); roll bends each
-cross-section into an arc of radius 1 / roll, widths kept; twist turns each cross-section about
-the midrib by twist · x radians. The range is the Forms dock's: a fold of ±75°, a curl of ±1; a
-roll of ±20 closes a blade 0.16 wide into a tube; a twist of ±3.1 turns the apex half a turn.
+Fold is the angle each half turns up about the midrib (as a form's), widths kept; curl bends
+the midrib on a circle of radius 1 / (2 curl) from the base, its length kept (z = curl · x²
+near the base: a leaf of length 1 curled 0.5 lifts its apex 0.46, curled 1 turns it 115°);
+roll bends each cross-section into an arc of radius 1 / roll, widths kept; twist turns each
+cross-section about the midrib by twist · x radians. The range is the Forms dock's: a fold of
+±75°, a curl of ±1; a roll of ±20 closes a blade 0.16 wide into a tube; a twist of ±3.1 turns
+the apex half a turn.
 """
 
 from __future__ import annotations
@@ -32,8 +34,9 @@ RANGES = {  # least, most, decimals
 }
 TIPS = {
     "fold": f"Fold: {RELIEF['fold']}. The sketch keeps the flat blade; the 3D leaf is bent.",
-    "curl": "Curl: the midrib bends up along its length, z = curl · x² from the base (a leaf of "
-    "length 1 lifts its apex by curl; negative droops). The sketch keeps the flat blade.",
+    "curl": "Curl: the midrib bends up on a circle of radius 1 / (2 curl) from the base, its "
+    "length kept (a leaf of length 1 curled 0.5 lifts its apex 0.46 of its length; curled 1 "
+    "turns the apex 115°; negative droops). The sketch keeps the flat blade.",
     "roll": "Roll: the blade rolls across its midrib into arcs of radius 1 / roll (in the leaf's "
     "lengths; negative rolls down), widths kept. The sketch keeps the flat blade.",
     "twist": "Twist: each cross-section turns about the midrib by twist · x radians from the "

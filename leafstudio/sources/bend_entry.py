@@ -1,0 +1,83 @@
+"""A project's "bend" entry read (sources/files.py), and projects of format version 1 read as
+they were meant.
+
+Version 1 saved a posed leaf's boundary and veins bent by a fold and a curl that were shears
+of the blade (z += |y| tan(fold), z += curl · x²: a fold of 60° doubled the blade's width in 3D).
+Version 2's are turns that keep the blade's size (core/bend.py). A version 1 project's curves
+are laid flat by the shear they were bent with and bent again by the same fold and curl, so
+the blade the user drew is the one they get back.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from leafstudio.core.bend import Pose, sheared_flatten
+from leafstudio.core.placed import PlacedPose
+from leafstudio.core.plane import Frame
+from leafstudio.core.sheet import Scaled
+from leafstudio.errors import LeafError, shorten
+from leafstudio.model import Leaf
+
+
+def project_bend(value: Any, source: str, leaf: Leaf, version: int) -> Leaf:
+    """`leaf` with the bend of a project's "bend" entry `value` (a format `version` 1 project's
+    curves bent again: `rebent`)."""
+    leaf = replace(leaf, bend=_bend(value, source, leaf))
+    return rebent(leaf) if version == 1 else leaf
+
+
+FRAME_KEYS = ("origin", "u", "v", "normal")  # a bend's frame in a project (core/placed.py)
+
+
+def _bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
+    """A project's "bend": {"fold": degrees, "curl": c, "roll": curvature, "twist": radians per
+    length}, the pose a form was made in, with the "frame" {"origin", "u", "v", "normal"} of a
+    leaf bent in the app (core/placed.py), or {"sheet": ...}, a scan's bend (core/sheet.py)."""
+    if isinstance(value, dict) and "sheet" in value:
+        try:
+            return Scaled.from_entry(value, np.vstack([leaf.boundary, leaf.vein_points]))
+        except (TypeError, ValueError, KeyError, np.linalg.LinAlgError):
+            raise LeafError('"bend": its "sheet" does not read whole', source) from None
+    fold = curl = roll = twist = math.nan  # stays nan, and is refused below, unless it reads whole
+    frame = None
+    if isinstance(value, dict) and not set(value) - {"fold", "curl", "roll", "twist", "frame"}:
+        with contextlib.suppress(TypeError, ValueError, KeyError, AttributeError, OverflowError):
+            if "frame" in value:  # read first: a bad frame leaves the fold nan
+                axes = [np.asarray(value["frame"][k], float) for k in FRAME_KEYS]
+                good = all(a.shape == (3,) and np.isfinite(a).all() for a in axes)
+                if not (good and np.allclose(np.array(axes[1:]) @ np.array(axes[1:]).T, np.eye(3))):
+                    raise ValueError
+                frame = Frame(*axes)
+            fold, curl = float(value.get("fold", 0.0)), float(value.get("curl", 0.0))
+            roll, twist = float(value.get("roll", 0.0)), float(value.get("twist", 0.0))
+    if not (abs(fold) < 90 and all(math.isfinite(t) for t in (curl, roll, twist))):
+        raise LeafError(
+            f'"bend" must be {{"fold": degrees under 90, "curl", "roll", "twist": numbers}} (a '
+            f'"frame": {{"origin", "u", "v", "normal"}}, orthonormal axes), got {shorten(value)}',
+            source,
+        )
+    pose = Pose(fold, curl, roll, twist)
+    return pose if frame is None else PlacedPose(pose, frame)
+
+
+def rebent(leaf: Leaf) -> Leaf:
+    """`leaf`, read from a version 1 project, with its curves bent by today's pose."""
+    bend = leaf.bend
+    pose = bend.pose if isinstance(bend, PlacedPose) else bend
+    if not isinstance(pose, Pose) or (pose.fold == 0 and pose.curl == 0):
+        return leaf  # a roll and a twist are as they were; a sheet is no pose
+
+    def again(points: np.ndarray) -> np.ndarray:
+        if isinstance(bend, PlacedPose):
+            xy, z = bend.frame.to_plane(points)
+            blade = pose.apply(sheared_flatten(pose, np.column_stack([xy, z])))
+            return bend.frame.to_world(blade[:, :2], blade[:, 2])
+        return pose.apply(sheared_flatten(pose, points))
+
+    return Leaf(again(leaf.boundary), [again(v) for v in leaf.veins], bend=bend)

@@ -1,0 +1,67 @@
+"""A bent leaf's exports (issue 21): the normals of the bent surface, the flat blade's UVs and
+texture, and a solid whose two sheets do not cross. The asset was made from the bent mesh seen
+in the flat blade's frame: its normals were the flat blade's (a fold of 60° shaded 60° off), its
+UVs the bent mesh's shadow (a roll squeezed the texture across the blade), and a solid of a
+twisted, curled blade came out inside out."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+import leafstudio as ls
+from leafstudio.assets import leaf_asset
+from leafstudio.assets.export import mesh_assets
+from leafstudio.core.trianglemesh import vertex_normals
+from leafstudio.forms.make import Form
+from tests.assets.test_solid import self_intersecting
+
+POSES = [{"fold": 60.0}, {"roll": 0.5}, {"curl": 1.0}, {"fold": -60.0, "curl": -0.5, "twist": 0.5}]
+
+
+def _result(shape: str, grid: int = 64, **pose: float) -> ls.Result:
+    return ls.reconstruct(Form(shape, **pose).leaf(), ls.Params(k=3, grid=grid))
+
+
+@pytest.mark.parametrize("pose", POSES, ids=str)
+def test_a_bent_leafs_normals_are_its_bent_surfaces(pose):
+    asset = leaf_asset(_result("ovate", **pose))
+    facets = vertex_normals(asset.points, asset.faces)
+    angle = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", asset.normals, facets), -1, 1)))
+    assert np.median(angle) < 1.0  # the flat blade's normals: 36-60 degrees off
+    assert asset.tangents() is None  # the client's (glTF: MikkTSpace), as the plane's u bends
+
+
+@pytest.mark.parametrize("pose", POSES, ids=str)
+def test_a_bent_leafs_uvs_and_texture_are_its_flat_blades(pose):
+    flat, bent = _result("ovate"), _result("ovate", **pose)
+    assert len(flat.triangle_mesh.points) <= len(bent.triangle_mesh.points)  # cuts add points
+    on_flat = leaf_asset(flat).uv
+    # the flat blade's vertices come first and keep their places on the blade
+    np.testing.assert_allclose(leaf_asset(bent).uv[: len(on_flat)], on_flat, atol=1e-9)
+    image = np.asarray(mesh_assets(bent, texture="auto")[0].texture)
+    differ = np.any(image != np.asarray(mesh_assets(flat)[0].texture), axis=-1)
+    assert differ.mean() < 1e-3  # the veins laid flat again, to a hair of a stroke's edge
+
+
+@pytest.mark.parametrize(
+    ("shape", "pose"),
+    [
+        ("cordate", {"fold": 60.0}),
+        ("hastate", {"fold": 75.0}),
+        ("ovate", {"roll": 0.5}),
+        ("deltoid", {"fold": -60.0, "curl": -0.5, "twist": 0.5}),
+    ],
+    ids=str,
+)
+def test_a_bent_leafs_solid_is_sound(shape, pose):
+    result = _result(shape, grid=128, **pose)
+    sheet = leaf_asset(result)
+    area = trimesh.Trimesh(sheet.points, sheet.faces, process=False).area
+    thickness = 0.01 * result.length
+    solid = mesh_assets(result, texture="none", thickness=thickness)[0]
+    mesh = trimesh.Trimesh(solid.points, solid.faces, process=False)
+    assert mesh.is_watertight and mesh.is_winding_consistent
+    assert mesh.volume == pytest.approx(area * thickness, rel=0.02)  # was 0.23 times, twisted
+    assert not self_intersecting(solid.points, solid.faces)
