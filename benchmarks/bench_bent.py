@@ -26,8 +26,10 @@ shares of the leaf's length.
 - rolled forms: the mesh's distance to the form's own surface rolled, and the blade's area;
 - curves in 3D unfolded: posed forms without their pose, against their own surface;
 - size kept (--size): a posed ovate form's 3D area and midrib length over its flat blade's: a
-  fold and a curl are shears of the blade (z += |y| tan fold, z += curl x²), so they grow both;
-  a roll keeps the blade's sheet and carries the relief along its normal.
+  fold turns each half about the midrib, a curl lays the midrib on a circle and a roll each
+  cross-section, each keeping the blade's sheet (the relief drawn in a little where it bends);
+  the fold and curl were shears that grew both (fold 60: 1.78 times the area; curl 1: the
+  midrib 1.42 times as long).
 """
 
 from __future__ import annotations

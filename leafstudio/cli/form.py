@@ -40,12 +40,16 @@ def add_form_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--venation", type=term_key, choices=VENATION_KINDS, default="pinnate")
     p.add_argument("--secondaries", type=int, metavar="N", help="secondary veins per side")
     p.add_argument("--aspect", type=float, metavar="L/W", help="length over greatest width")
-    kept = " (the outline seen from above kept: README, Real size)"
+    kept = " (the blade's size kept: README, Real size)"
     p.add_argument(
-        "--fold", type=float, default=0.0, metavar="DEG", help="halves raised by DEG" + kept
+        "--fold", type=float, default=0.0, metavar="DEG", help="halves turned up DEG" + kept
     )
     p.add_argument(
-        "--curl", type=float, default=0.0, metavar="C", help="apex raised C lengths" + kept
+        "--curl",
+        type=float,
+        default=0.0,
+        metavar="C",
+        help="midrib bent on a circle, the apex raised about C lengths" + kept,
     )
     p.add_argument(
         "--roll", type=float, default=0.0, metavar="R", help="margins rolled up R half turns"
