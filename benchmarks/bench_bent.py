@@ -45,7 +45,7 @@ import numpy as np
 
 import leafstudio as ls
 from leafstudio.analysis.fidelity import fin_share
-from leafstudio.core.bend import Pose
+from leafstudio.core.bend import Pose, flat_leaf
 from leafstudio.core.evaluate import margin_creases
 from leafstudio.errors import LeafError
 from leafstudio.forms.make import Form
@@ -111,7 +111,7 @@ def forms_over_poses(every: int) -> None:
             boundary.append(result.metrics["boundary"]["max"] / result.length)
             if name == "ours" and leaf.bend is not None:
                 pose = leaf.bend
-                blade = ls.Leaf(pose.flatten(leaf.boundary), [pose.flatten(v) for v in leaf.veins])
+                blade = flat_leaf(leaf)  # as the pipeline lays it flat (a tube's seam kept)
                 flat = ls.reconstruct(blade, params).triangle_mesh
                 off = off_surface(result.triangle_mesh, flat, pose) / result.length
                 own.append((off.mean(), np.percentile(off, 95)))
@@ -228,7 +228,7 @@ def rolled_forms() -> None:
         leaf = Form(shape, **terms).leaf()
         pose = leaf.bend
         mesh = ls.reconstruct(leaf, ls.Params(k=3, grid=128)).triangle_mesh
-        blade = ls.Leaf(pose.flatten(leaf.boundary), [pose.flatten(v) for v in leaf.veins])
+        blade = flat_leaf(leaf)  # as the pipeline lays it flat (a tube's seam kept)
         flat = ls.reconstruct(blade, ls.Params(k=3, grid=128))
         off = off_surface(mesh, flat.triangle_mesh, pose) / flat.length
         sheet = pose.flatten(mesh.points) * [1, 1, 0]
