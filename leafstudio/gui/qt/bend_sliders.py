@@ -76,10 +76,15 @@ class BendSliders(QObject):
         return any(s.isSliderDown() for s in self.sliders.values())
 
     def show_pose(self, pose: Pose) -> None:
-        """Show `pose` without emitting (undo, another document)."""
+        """Show `pose` without emitting (undo, another document). A term beyond a slider's
+        range (a form's grass blade rolled 188 times its length) widens that slider's range to
+        hold it, so that moving another slider keeps it (clamped to 20, it was lost)."""
         for name, slider in self.sliders.items():
+            value = getattr(pose, name)
+            low, high = RANGES[name][:2]
             slider.blockSignals(True)
-            slider.setValue(getattr(pose, name))
+            slider.setRange(min(low, value), max(high, value))
+            slider.setValue(value)
             slider.blockSignals(False)
 
     def set_enabled(self, on: bool, why_not: str = "") -> None:

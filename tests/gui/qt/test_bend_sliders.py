@@ -30,6 +30,21 @@ def test_the_fold_slider_folds_the_3d_leaf_as_one_undo_step(window, qtbot):
     assert fold.value() == 0.0 and session.leaf.bend is None
 
 
+def test_a_roll_beyond_the_sliders_range_is_kept_when_another_slider_moves(qtbot):
+    from leafstudio.gui.qt.bend_sliders import BendSliders
+
+    sliders = BendSliders()
+    grass = Form("lanceolate", aspect=30, roll=1.0).leaf().bend  # about 188 turns per length
+    assert grass.roll > 100
+    sliders.show_pose(grass)
+    assert sliders.pose() == grass  # was clamped to a roll of 20
+    with qtbot.waitSignal(sliders.changed) as moved:
+        sliders.sliders["fold"].setValue(30.0)
+    assert moved.args[0] == Pose(fold=30.0, roll=grass.roll)
+    sliders.show_pose(Pose())  # back within the range: the range is the usual one again
+    assert sliders.sliders["roll"].maximum() == 20.0
+
+
 def test_a_posed_forms_sketch_is_its_flat_blade():
     sketch = leaf_sketch(Form("ovate", fold=60, curl=0.5).leaf())
     assert len(sketch.relief) == 0  # the pose bends the 3D result, not the drawing
