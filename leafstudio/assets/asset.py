@@ -147,8 +147,8 @@ class MeshAsset:
     def tangents(self) -> np.ndarray | None:
         """(n, 4) glTF tangents: the plane's s axis in each vertex's tangent plane, and w such
         that the bitangent cross(n, t)·w runs along t (+y of the normal map), or None."""
-        if self.plane_u is None or self.plane_normal is None:
-            return None
+        if self.plane_u is None or self.plane_normal is None:  # a bent leaf: from its UVs
+            return uv_tangents(self.points, self.faces, self.uv, self.normals)
         u, n = self.plane_u, self.normals
         tangent = u - (n @ u)[:, None] * n
         tangent /= np.maximum(np.linalg.norm(tangent, axis=1, keepdims=True), 1e-300)
@@ -173,6 +173,31 @@ class LeafPlane:
     polygon: np.ndarray  # (b, 2) counter-clockwise outline
     veins: list[np.ndarray]  # (m_i, 2) per vein
     length: float
+
+
+def uv_tangents(
+    points: np.ndarray, faces: np.ndarray, uv: np.ndarray, normals: np.ndarray
+) -> np.ndarray:
+    """(n, 4) glTF tangents from the UVs (Lengyel's per-face ∂p/∂s and ∂p/∂t, summed at the
+    vertices, made perpendicular to the normal; w as `MeshAsset.tangents`): a bent leaf's, whose
+    s axis turns with its curl, so no one plane's u is it (without them the Khronos validator
+    warns that the normal map's tangent space is left to each viewer)."""
+    corners = [points[faces[:, i]] for i in range(3)]
+    st = [uv[faces[:, i]] for i in range(3)]
+    e1, e2 = corners[1] - corners[0], corners[2] - corners[0]
+    d1, d2 = st[1] - st[0], st[2] - st[0]
+    det = d1[:, 0] * d2[:, 1] - d2[:, 0] * d1[:, 1]
+    inverse = np.divide(1.0, det, out=np.zeros_like(det), where=np.abs(det) > 1e-300)[:, None]
+    along_s = (e1 * d2[:, 1:] - e2 * d1[:, 1:]) * inverse
+    along_t = (e2 * d1[:, :1] - e1 * d2[:, :1]) * inverse
+    s_sum, t_sum = np.zeros_like(points), np.zeros_like(points)
+    for i in range(3):
+        np.add.at(s_sum, faces[:, i], along_s)
+        np.add.at(t_sum, faces[:, i], along_t)
+    tangent = s_sum - np.einsum("ij,ij->i", s_sum, normals)[:, None] * normals
+    tangent /= np.maximum(np.linalg.norm(tangent, axis=1, keepdims=True), 1e-300)
+    w = np.where(np.einsum("ij,ij->i", np.cross(normals, tangent), t_sum) >= 0, 1.0, -1.0)
+    return np.column_stack([tangent, w])
 
 
 def surface_normals(result: Result, xy: np.ndarray, margin: np.ndarray) -> np.ndarray:
@@ -277,8 +302,8 @@ def leaf_asset(result: Result) -> MeshAsset:
     faces = oriented(triangles_of(mesh).astype(np.int64), points, normals)
     data = {k: np.asarray(mesh.point_data[k], float) for k in SCALARS if k in mesh.point_data}
     uv = leaf_uvs(result, xy)
-    if result.leaf.bend is not None:  # no one plane: tangents the client's (glTF: MikkTSpace;
-        # the plane's u did not follow a curl), a solid's offsets carried (solid.bent_offsets)
+    if result.leaf.bend is not None:  # no one plane: tangents from the UVs (the plane's u did
+        # not follow a curl), a solid's offsets carried (solid.bent_offsets)
         return MeshAsset(points, faces, normals, uv, data, plane_xy=xy, outline=result.polygon)
     return MeshAsset(points, faces, normals, uv, data, plane_normal=result.frame.normal,
                      plane_xy=xy, outline=result.polygon, plane_u=result.frame.u)  # fmt: skip

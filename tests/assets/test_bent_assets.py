@@ -13,6 +13,7 @@ import trimesh
 import leafstudio as ls
 from leafstudio.assets import leaf_asset
 from leafstudio.assets.export import mesh_assets
+from leafstudio.core.bend import carried_vectors
 from leafstudio.core.trianglemesh import vertex_normals
 from leafstudio.forms.make import Form
 from tests.assets.test_solid import self_intersecting
@@ -30,7 +31,22 @@ def test_a_bent_leafs_normals_are_its_bent_surfaces(pose):
     facets = vertex_normals(asset.points, asset.faces)
     angle = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", asset.normals, facets), -1, 1)))
     assert np.median(angle) < 1.0  # the flat blade's normals: 36-60 degrees off
-    assert asset.tangents() is None  # the client's (glTF: MikkTSpace), as the plane's u bends
+
+
+@pytest.mark.parametrize("pose", POSES, ids=str)
+def test_a_bent_leafs_tangents_follow_its_uvs_s_axis_as_bent(pose):
+    result = _result("ovate", **pose)
+    asset = leaf_asset(result)
+    tangents = asset.tangents()
+    assert np.allclose(np.einsum("ij,ij->i", tangents[:, :3], asset.normals), 0, atol=1e-9)
+    xy, height = result.on_blade(asset.points)
+    flat = result.frame.to_world(xy, height)
+    margin = np.zeros(len(flat), dtype=bool)
+    slope = result.surface.derivatives(xy, margin)[1][:, :1]  # ∂z/∂u: the flat surface along s
+    along_s = carried_vectors(result.leaf.bend, flat, result.frame.u + slope * result.frame.normal)
+    along_s /= np.linalg.norm(along_s, axis=1, keepdims=True)
+    # a curl of 1 turns the apex 115 degrees: the plane's u, projected, pointed backwards there
+    assert np.median(np.einsum("ij,ij->i", tangents[:, :3], along_s)) > 0.999
 
 
 @pytest.mark.parametrize("pose", POSES, ids=str)
@@ -65,3 +81,11 @@ def test_a_bent_leafs_solid_is_sound(shape, pose):
     assert mesh.is_watertight and mesh.is_winding_consistent
     assert mesh.volume == pytest.approx(area * thickness, rel=0.02)  # was 0.23 times, twisted
     assert not self_intersecting(solid.points, solid.faces)
+
+
+def test_a_bent_leafs_gltf_is_valid_with_its_tangents(tmp_path):
+    from tests.assets.test_assets import assert_valid_gltf
+
+    path = tmp_path / "bent.glb"
+    ls.save_mesh(_result("ovate", fold=45.0, curl=0.8, roll=0.3), path)
+    assert_valid_gltf(path)  # without tangents: "the mesh primitive does not provide" them
