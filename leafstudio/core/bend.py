@@ -13,8 +13,10 @@ arc of curvature `roll` (as a grass blade or a young leaf rolls), a fold turns e
 the midrib by `fold` degrees (y -> y cos(fold), z += |y| sin(fold)), a twist turns each
 cross-section about the midrib by twist · x radians (a helicoid: a twisted grass blade or a
 propeller), and a curl lays the midrib on a circle of curvature 2 · curl (z = curl · x² at the
-base), in that order. Each keeps the blade's sheet (z = 0, the margin's) isometric: a leaf
-folded or curled keeps its size (fold and curl were shears, z += |y| tan(fold) + curl · x²: an
+base), in that order. A fold, a curl and a roll each keep the blade's sheet (z = 0, the
+margin's) isometric (a twist, a helicoid, stretches it: 1.1 times at 1; a fold on a rolled tube
+turns its section as if it were flat: 1.2 times for roll 0.5 and fold 45): a leaf folded or
+curled keeps its size (fold and curl were shears, z += |y| tan(fold) + curl · x²: an
 ovate form folded 60° had 1.78 times its flat area, folded 75° 3.56 times, and a curl of 1
 lengthened its midrib 1.42 times; `bench_bent.py --size`). The fold lifts the relief straight
 up and the roll and curl carry it along their normals, so a raised relief is drawn in a little

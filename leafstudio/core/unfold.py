@@ -35,7 +35,8 @@ EXPLAINED = 0.25  # ... and is unfolded when the fitted pose leaves at most this
 # the best quadratic height field over that plane leaves (the paper's base takes such a margin)
 FOLD_LIMIT = 85.0  # degrees: the fold's search range, each way
 FOLDS = (0.0, 60.0, -60.0)  # the fold's first guesses
-CURL_LIMIT = 10.0  # the curl's search range, each way, over the length
+CURL_LIMIT = 1.5  # the curl's search range, each way, over the length: the midrib turns at most
+# 3 radians on its circle (bend.Pose: past half a turn a curl is not undone)
 # fold, curl, roll (0, 1, 2): all three first (a leaf no pose explains is left after one fit),
 # then the fewer that may do as well
 TERMS = ((0, 1, 2), (0,), (1,), (2,), (0, 1))

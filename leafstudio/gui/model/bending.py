@@ -4,7 +4,8 @@
 The document keeps the flat blade's sketch (the editor draws the blade); its leaf is the
 sketch's leaf bent by the pose about its midrib (`core.placed.PlacedPose`), so the pipeline
 reconstructs the flat blade and bends the mesh, and Save writes the pose (sources/files.py). A
-form keeps its own `Pose` (its blade coordinates are the world's). A sketch edit bends the new
+form keeps its own `Pose` (its blade coordinates are the world's, the form 1 long). The sliders'
+curl, roll and twist are per the blade's length (`in_lengths`). A sketch edit bends the new
 leaf by the same pose, about the midrib as it is now.
 """
 
@@ -12,6 +13,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 from typing import Any
+
+import numpy as np
 
 from leafstudio.core.bend import Pose, flat_leaf
 from leafstudio.core.placed import PlacedPose, blade_frame
@@ -22,11 +25,30 @@ FLAT = Pose()
 
 
 def pose_of(leaf: Leaf | None) -> Pose:
-    """The pose the leaf is bent by (a flat Pose for none, or a bend the sliders cannot show)."""
+    """The pose the leaf is bent by, as the sliders show it (a flat Pose for none, or a bend the
+    sliders cannot show): a leaf bent about its midrib has its curl, roll and twist per its
+    blade's length (`in_lengths`)."""
     bend = None if leaf is None else leaf.bend
     if isinstance(bend, PlacedPose):
-        return bend.pose
+        return in_lengths(bend.pose, blade_extent(flat_leaf(leaf), bend.frame))
     return bend if isinstance(bend, Pose) else FLAT
+
+
+def blade_extent(flat: Leaf, frame: Any) -> float:
+    """The flat blade's extent along its midrib (`frame.u`, core/placed.blade_frame)."""
+    along = (flat.boundary - frame.origin) @ frame.u
+    return float(np.ptp(along)) if len(along) else 1.0
+
+
+def in_lengths(pose: Pose, length: float) -> Pose:
+    """`pose` (per unit of the leaf's coordinates) per `length` instead: the sliders' curl, roll
+    and twist are per the blade's length (a curl of 1 turns the apex 2 radians, whatever the
+    units: a drawn leaf 80 mm long, curled 1 per mm, wrapped round 160 radians)."""
+
+    def scaled(value: float) -> float:  # 12 digits: a slider's 0.3 reads back as 0.3
+        return float(f"{value * length:.12g}")
+
+    return replace(pose, curl=scaled(pose.curl), roll=scaled(pose.roll), twist=scaled(pose.twist))
 
 
 def can_pose(leaf: Leaf | None) -> bool:
@@ -43,7 +65,11 @@ def posed(
     plane). The flat pose gives `flat` itself, without a bend."""
     if flat is None or pose == FLAT:
         return flat
-    bend: Bend = pose if isinstance(like, Pose) else PlacedPose(pose, blade_frame(flat, plane))
+    if isinstance(like, Pose):
+        bend: Bend = pose
+    else:
+        frame = blade_frame(flat, plane)
+        bend = PlacedPose(in_lengths(pose, 1.0 / blade_extent(flat, frame)), frame)
     return Leaf(bend.apply(flat.boundary), [bend.apply(v) for v in flat.veins], bend=bend)
 
 

@@ -76,7 +76,7 @@ def node_heights(result: Result) -> np.ndarray:
     base = result.surface.base
     if base is not None:
         heights[:] = base(result.grid.points)
-    heights[result.inside] = result.frame.to_plane(result.surface_points)[1]
+    heights[result.inside] = result.on_blade(result.surface_points)[1]  # a bent leaf's: flat
     return heights
 
 

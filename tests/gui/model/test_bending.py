@@ -15,7 +15,7 @@ from leafstudio.core.sheet import fit_sheet
 from leafstudio.errors import LeafError
 from leafstudio.forms import SHAPES, Form
 from leafstudio.forms.make import SIDE_ON
-from leafstudio.gui.model.bending import can_pose
+from leafstudio.gui.model.bending import blade_extent, can_pose
 from leafstudio.gui.model.session import Session
 from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.model import Leaf, Params
@@ -86,7 +86,10 @@ def test_save_and_open_keep_a_drawn_leafs_bend(tmp_path):
     path = tmp_path / "bent.leaf.json"
     save_leaf(session.leaf, path, session.params, sketch.to_dict())
     leaf, _, _ = load_project(path)
-    assert isinstance(leaf.bend, PlacedPose) and leaf.bend.pose == Pose(fold=-40, curl=0.3)
+    assert isinstance(leaf.bend, PlacedPose) and leaf.bend.pose == session.leaf.bend.pose
+    # the file holds the curl per unit of the leaf's coordinates, the sliders per its length
+    length = blade_extent(sketch.to_leaf(), leaf.bend.frame)
+    assert leaf.bend.pose.curl == pytest.approx(0.3 / length)
     np.testing.assert_allclose(leaf.boundary, session.leaf.boundary)
     opened = Session(Runner(), FAST)
     opened.open_path(str(path))
@@ -157,6 +160,25 @@ def test_a_projects_bad_bend_frame_is_one_leaf_error(tmp_path, frame):
         load_project(path)
 
 
+def test_the_sliders_curl_is_per_the_blades_length_whatever_its_units():
+    """A drawn leaf 80 units long curled 1 per unit wrapped round 160 radians, past the half turn
+    a curl can be undone from (its mesh broke); the sliders' curl is per the blade's length."""
+    session, runner, sketch = drawn()
+    big = Sketch(boundary=sketch.boundary * 80, veins=tuple(v * 80 for v in sketch.veins))
+    session.commit_sketch(big, "Grow")
+    runner.finish(session)
+    session.set_bend(Pose(curl=1.0))
+    assert session.pose == Pose(curl=1.0)
+    runner.finish(session)
+    bend = session.leaf.bend
+    length = blade_extent(big.to_leaf(), bend.frame)
+    assert length > 60 and bend.pose.curl == pytest.approx(1.0 / length)
+    # laid flat again, the bent outline is the drawn one: no point past the half turn
+    np.testing.assert_allclose(bend.flatten(session.leaf.boundary), big.to_leaf().boundary,
+                               atol=1e-9 * length)  # fmt: skip
+    assert session.result is not None and session.result.leaf is session.leaf
+
+
 def test_a_drawn_leaf_rolls_and_its_project_keeps_the_roll(tmp_path):
     """Roll (issue 21): the blade rolled across its slanted midrib; the sketch stays flat."""
     session, runner, sketch = drawn()
@@ -168,6 +190,7 @@ def test_a_drawn_leaf_rolls_and_its_project_keeps_the_roll(tmp_path):
     assert relief(session.result) > flat + 0.05  # the margins rise towards the roll's axis
     path = tmp_path / "rolled.leaf.json"
     save_leaf(session.leaf, path, session.params, sketch.to_dict())
-    assert json.loads(path.read_text())["bend"]["roll"] == 6.0
+    saved = session.leaf.bend.pose.roll  # per unit of the leaf's coordinates
+    assert json.loads(path.read_text())["bend"]["roll"] == saved
     leaf, _, _ = load_project(path)
-    assert isinstance(leaf.bend, PlacedPose) and leaf.bend.pose == Pose(roll=6.0)
+    assert isinstance(leaf.bend, PlacedPose) and leaf.bend.pose == Pose(roll=saved)
