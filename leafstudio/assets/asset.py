@@ -267,7 +267,7 @@ def leaf_uvs(result: Result, xy: np.ndarray | None = None) -> np.ndarray:
     """(n, 2) UVs of the result's mesh vertices (or of (n, 2) plane points `xy`): the map every
     export writes (module docstring), also the app's."""
     if xy is None:
-        xy = result.on_blade(result.triangle_mesh.points)[0]
+        xy = result.mesh_on_blade()[0]
     return UVMap.around(result.polygon)(xy)
 
 
@@ -297,7 +297,7 @@ def leaf_asset(result: Result) -> MeshAsset:
     mesh = result.triangle_mesh
     points = np.asarray(mesh.points, dtype=float)
     margin = np.arange(len(points)) < len(result.polygon)  # both meshers put the outline first
-    xy, height = result.on_blade(points)
+    xy, height = result.mesh_on_blade()
     normals = mesh_normals(result, xy, height, margin)
     faces = oriented(triangles_of(mesh).astype(np.int64), points, normals)
     data = {k: np.asarray(mesh.point_data[k], float) for k in SCALARS if k in mesh.point_data}

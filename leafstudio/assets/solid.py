@@ -240,7 +240,10 @@ def bent_offsets(result: Result, asset: MeshAsset) -> np.ndarray:
     cordate blade's basal lobes, folded 60°, through each other (469 crossing faces); the
     fold carries the flat blade's upright offsets upright, as a height field's solid."""
     bend = result.leaf.bend
-    xy, height = result.on_blade(asset.points)
+    if asset.plane_xy is not None and "height" in asset.point_data:  # leaf_asset's: kept flat
+        xy, height = asset.plane_xy, asset.point_data["height"]
+    else:
+        xy, height = result.on_blade(asset.points)
     flat_points = result.frame.to_world(xy, height)
     margin = np.zeros(asset.n_points, dtype=bool)
     margin[np.unique(boundary_edges(asset.faces))] = True

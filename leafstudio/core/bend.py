@@ -394,10 +394,12 @@ def _bent_meshes(
     sag: float | None,
     lifts: list[Lift | None],
     exact: int,
-) -> list[TriangleMesh]:
+) -> list[tuple[TriangleMesh, np.ndarray]]:
     """Each mesh cut along the bend's creases (`creases`, in its units), trimmed (`trims`, see
     _crease_cuts; the points no face keeps dropped), its edges halved where the bend sags them
-    by more than `sag` (`_cuts`) and carried into 3D by its `carry`; a mesh with the first's
+    by more than `sag` (`_cuts`) and carried into 3D by its `carry`, with its points before they
+    were carried (Result.blade_xy: laid flat again, a tube's seam is ambiguous); a mesh with the
+    first's
     faces (one mesh at another size) is cut as it was."""
     cuts = _cuts(meshes[0], creases[0], trims[0], carries[0], sag, exact)
     out = []
@@ -414,7 +416,7 @@ def _bent_meshes(
             index[used] = np.arange(len(used))
             points, faces = points[used], index[faces]
             data = {name: values[used] for name, values in data.items()}
-        out.append(TriangleMesh(carry(points), faces, data))
+        out.append((TriangleMesh(carry(points), faces, data), points))
     return out
 
 
@@ -463,14 +465,16 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
             unit,
             leaf=units.leaf(leaf),
             surface_points=in_units(unit.surface_points),
-            triangle_mesh=bent[1],
+            triangle_mesh=bent[1][0],
+            blade_xy=unit.frame.to_plane(bent[1][1])[0],
         )
     return replace(
         result,
         leaf=leaf,
         surface_points=bend.apply(result.surface_points),
-        triangle_mesh=bent[0],
+        triangle_mesh=bent[0][0],
         unit=unit,
+        blade_xy=result.frame.to_plane(bent[0][1])[0],
     )
 
 

@@ -231,7 +231,7 @@ def margin_creases(result: Any, band_cells: float = 3.0) -> dict[str, float]:
 
     points = np.asarray(result.triangle_mesh.points)
     angles, edges = dihedral_angles(points, triangles_of(result.triangle_mesh))
-    xy = result.on_blade(points)[0]  # where the outline is (a bent leaf's: on its flat blade)
+    xy = result.mesh_on_blade()[0]  # where the outline is (a bent leaf's: on its flat blade)
     margin = shapely.LinearRing(result.polygon)
     shapely.prepare(margin)  # its edges indexed: within the band or not, not each distance
     near = shapely.dwithin(margin, shapely.points(xy), band_cells * result.grid.spacing)

@@ -161,6 +161,9 @@ class Result:
     warnings: list[str] = field(default_factory=list)
     unit: Result | None = None  # the same run at unit size (units.py); None: this is it
     units: Units | None = None  # how `unit` maps to this one
+    # a bent leaf's mesh points on its flat blade, in `frame`'s plane (core/bend.bent_result:
+    # laid flat again, a twisted tube's points by its seam fell on the other margin)
+    blade_xy: np.ndarray | None = field(default=None, repr=False, compare=False)
     # the metrics and the VTK mesh, entries of the pipeline's cache (Pipeline.run sets them);
     # not init fields, so a Result copied with other arrays (dataclasses.replace) measures its own
     measuring: Measuring | None = field(default=None, init=False, repr=False, compare=False)
@@ -189,6 +192,14 @@ class Result:
         [0.02, 0.03, 0.04]
         """
         return self.surface(np.atleast_2d(np.asarray(xy, dtype=float)))
+
+    def mesh_on_blade(self) -> tuple[np.ndarray, np.ndarray]:
+        """`on_blade` of this result's mesh points: (n, 2) plane coordinates and (n,) heights,
+        a bent leaf's kept from before it was bent."""
+        mesh = self.triangle_mesh
+        if self.blade_xy is not None and len(self.blade_xy) == len(mesh.points):
+            return self.blade_xy, np.asarray(mesh.point_data["height"], dtype=float)
+        return self.on_blade(mesh.points)
 
     def on_blade(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(n, 2) plane coordinates and (n,) heights, in `frame`, of (n, 3) points of this

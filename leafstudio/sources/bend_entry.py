@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import warnings
 from dataclasses import replace
 from typing import Any
 
@@ -23,6 +24,8 @@ from leafstudio.core.plane import Frame
 from leafstudio.core.sheet import Scaled
 from leafstudio.errors import LeafError, shorten
 from leafstudio.model import Leaf
+
+MOST_TURN = 0.95 * np.pi  # radians a version 1 curl may turn the midrib through (rebent)
 
 
 def project_bend(value: Any, source: str, leaf: Leaf, version: int) -> Leaf:
@@ -67,17 +70,36 @@ def _bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
 
 
 def rebent(leaf: Leaf) -> Leaf:
-    """`leaf`, read from a version 1 project, with its curves bent by today's pose."""
+    """`leaf`, read from a version 1 project, with its curves bent by today's pose. A curl its
+    blade cannot take (today's wraps the midrib on a circle, undone up to half a turn; a shear's
+    raised it whatever its length) is eased to the most it can, and a warning says so."""
     bend = leaf.bend
     pose = bend.pose if isinstance(bend, PlacedPose) else bend
     if not isinstance(pose, Pose) or (pose.fold == 0 and pose.curl == 0):
         return leaf  # a roll and a twist are as they were; a sheet is no pose
 
-    def again(points: np.ndarray) -> np.ndarray:
+    def blade(points: np.ndarray) -> np.ndarray:  # the flat blade's points, in its coordinates
         if isinstance(bend, PlacedPose):
-            xy, z = bend.frame.to_plane(points)
-            blade = pose.apply(sheared_flatten(pose, np.column_stack([xy, z])))
-            return bend.frame.to_world(blade[:, :2], blade[:, 2])
-        return pose.apply(sheared_flatten(pose, points))
+            points = np.column_stack(bend.frame.to_plane(points))
+        return sheared_flatten(pose, points)
 
-    return Leaf(again(leaf.boundary), [again(v) for v in leaf.veins], bend=bend)
+    flat = [blade(c) for c in (leaf.boundary, *leaf.veins)]
+    reach = max(float(np.abs(c[:, 0]).max()) for c in flat if len(c))
+    most = MOST_TURN / (2 * reach) if reach > 0 else math.inf
+    turned = pose
+    if abs(pose.curl) > most:
+        turned = replace(pose, curl=math.copysign(most, pose.curl))
+        warnings.warn(
+            f"the project's curl of {pose.curl:g} is read as {turned.curl:.3g}: a curl now bends "
+            "the midrib on a circle, and this blade would wrap past half a turn",
+            stacklevel=2,
+        )
+
+    def again(points: np.ndarray) -> np.ndarray:
+        bent = turned.apply(points)
+        if isinstance(bend, PlacedPose):
+            return bend.frame.to_world(bent[:, :2], bent[:, 2])
+        return bent
+
+    new = turned if not isinstance(bend, PlacedPose) else PlacedPose(turned, bend.frame)
+    return Leaf(again(flat[0]), [again(v) for v in flat[1:]], bend=new)

@@ -89,3 +89,14 @@ def test_a_bent_leafs_gltf_is_valid_with_its_tangents(tmp_path):
     path = tmp_path / "bent.glb"
     ls.save_mesh(_result("ovate", fold=45.0, curl=0.8, roll=0.3), path)
     assert_valid_gltf(path)  # without tangents: "the mesh primitive does not provide" them
+
+
+def test_a_twisted_tubes_uvs_keep_each_face_on_its_side_of_the_seam():
+    """A tube's seam (roll 1) is one line on the bent mesh and two margins on the flat blade: a
+    mesh point laid flat again by its twist's rounding fell on the other margin, a face then
+    spanning the blade in the UVs and the texture (Result.blade_xy keeps where each was)."""
+    result = _result("linear", grid=128, roll=1.0, twist=0.5)
+    asset = leaf_asset(result)
+    xy = asset.plane_xy
+    edges = np.concatenate([xy[asset.faces[:, i]] - xy[asset.faces[:, i - 1]] for i in range(3)])
+    assert np.linalg.norm(edges, axis=1).max() < 2 * result.grid.spacing  # flattened: 9 cells

@@ -102,7 +102,7 @@ def _mesh_piece(result: Result) -> Piece:
     """The mesh, drawn through a subset of its vertices when large (display_mesh.py); with the
     arrays the view colours by (height, curvatures), its shading normals and UVs."""
     mesh = result.triangle_mesh
-    xy = result.on_blade(mesh.points)[0]  # where the flat blade's grid and outline are
+    xy = result.mesh_on_blade()[0]  # where the flat blade's grid and outline are
     uv = leaf_uvs(result, xy)  # the exports' UVs: the Texture colouring maps their image
     colourings = {k: v for k, v in mesh.point_data.items() if k in MESH_COLORINGS}
     style = {
