@@ -121,7 +121,7 @@ def offsets(asset: MeshAsset, thickness: float) -> np.ndarray:
     near the outline and where the surface bends tightly (module docstring)."""
     half = np.full(asset.n_points, float(thickness) / 2)
     if asset.plane_normal is None or asset.plane_xy is None:
-        return (half * _mitre(asset))[:, None] * asset.normals
+        return half[:, None] * asset.normals
     plane = asset.plane_normal
     up = asset.normals @ plane
     across = asset.normals - up[:, None] * plane
@@ -144,21 +144,6 @@ def offsets(asset: MeshAsset, thickness: float) -> np.ndarray:
     reach = half - np.einsum("ij,ij->i", in_plane, facets)
     gain = np.clip(reach / lift, 1.0, 1 / MIN_COSINE)
     return in_plane + (vertical * gain)[:, None] * plane
-
-
-def _mitre(asset: MeshAsset) -> np.ndarray:
-    """(n,) how much longer than t/2 each offset is so that it reaches t/2 along every face
-    around its vertex, at most 1 / MIN_COSINE: where the sheet creases (a bent leaf's fold, the
-    vertex normal halfway between its two halves) the offsets meet in a mitre, and the inner
-    sheet does not fold over itself (469 crossing faces on a cordate blade folded 60°)."""
-    a, b, c = (asset.points[asset.faces[:, i]] for i in range(3))
-    facets = np.cross(b - a, c - a)
-    facets /= np.maximum(np.linalg.norm(facets, axis=1, keepdims=True), 1e-300)
-    least = np.ones(asset.n_points)
-    for corner in range(3):
-        ids = asset.faces[:, corner]
-        np.minimum.at(least, ids, np.abs(np.einsum("ij,ij->i", facets, asset.normals[ids])))
-    return 1.0 / np.maximum(least, MIN_COSINE)
 
 
 def _outward(
@@ -237,7 +222,7 @@ def bent_offsets(result: Result, asset: MeshAsset) -> np.ndarray:
     height field over its plane and the rules above hold, carried by the bend (its Jacobian)
     and lengthened to reach as far along the bent surface's normal as along the flat one's.
     Offsets along the bent normals crossed each other inside a fold's crease and brought a
-    cordate blade's basal lobes, folded 60°, through each other (469 crossing faces); the
+    cordate blade's basal lobes, folded 60°, through each other (507 crossing faces); the
     fold carries the flat blade's upright offsets upright, as a height field's solid."""
     bend = result.leaf.bend
     if asset.plane_xy is not None and "height" in asset.point_data:  # leaf_asset's: kept flat

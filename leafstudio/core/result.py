@@ -197,7 +197,8 @@ class Result:
         """`on_blade` of this result's mesh points: (n, 2) plane coordinates and (n,) heights,
         a bent leaf's kept from before it was bent."""
         mesh = self.triangle_mesh
-        if self.blade_xy is not None and len(self.blade_xy) == len(mesh.points):
+        kept = self.blade_xy is not None and len(self.blade_xy) == len(mesh.points)
+        if kept and "height" in mesh.point_data:
             return self.blade_xy, np.asarray(mesh.point_data["height"], dtype=float)
         return self.on_blade(mesh.points)
 
