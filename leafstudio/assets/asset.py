@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from leafstudio.core.bend import carried_normals
+from leafstudio.core.bend import carried_normals, flat_leaf
 from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.evaluate import triangles_of
 from leafstudio.core.plane import Frame, fit_frame
@@ -253,7 +253,7 @@ def consistent(faces: np.ndarray, points: np.ndarray) -> np.ndarray:
 
 def leaf_plane(result: Result) -> LeafPlane:
     """The result's frame, UV map, outline and veins in the plane."""
-    veins = [result.on_blade(v)[0] for v in result.leaf.veins]
+    veins = [result.frame.to_plane(v)[0] for v in flat_leaf(result.leaf).veins]  # seams kept
     return LeafPlane(
         frame=result.frame,
         uvmap=UVMap.around(result.polygon),

@@ -30,13 +30,14 @@ def pose_of(leaf: Leaf | None) -> Pose:
     blade's length (`in_lengths`)."""
     bend = None if leaf is None else leaf.bend
     if isinstance(bend, PlacedPose):
-        return in_lengths(bend.pose, blade_extent(flat_leaf(leaf), bend.frame))
+        return in_lengths(bend.pose, blade_extent(bend.flat_curve(leaf.boundary, True), bend.frame))
     return bend if isinstance(bend, Pose) else FLAT
 
 
-def blade_extent(flat: Leaf, frame: Any) -> float:
-    """The flat blade's extent along its midrib (`frame.u`, core/placed.blade_frame)."""
-    along = (flat.boundary - frame.origin) @ frame.u
+def blade_extent(boundary: np.ndarray, frame: Any) -> float:
+    """The flat blade's extent along its midrib (`frame.u`, core/placed.blade_frame), from its
+    (n, 3) flat `boundary`."""
+    along = (boundary - frame.origin) @ frame.u
     return float(np.ptp(along)) if len(along) else 1.0
 
 
@@ -69,7 +70,7 @@ def posed(
         bend: Bend = pose
     else:
         frame = blade_frame(flat, plane)
-        bend = PlacedPose(in_lengths(pose, 1.0 / blade_extent(flat, frame)), frame)
+        bend = PlacedPose(in_lengths(pose, 1.0 / blade_extent(flat.boundary, frame)), frame)
     return Leaf(bend.apply(flat.boundary), [bend.apply(v) for v in flat.veins], bend=bend)
 
 

@@ -88,7 +88,7 @@ def test_save_and_open_keep_a_drawn_leafs_bend(tmp_path):
     leaf, _, _ = load_project(path)
     assert isinstance(leaf.bend, PlacedPose) and leaf.bend.pose == session.leaf.bend.pose
     # the file holds the curl per unit of the leaf's coordinates, the sliders per its length
-    length = blade_extent(sketch.to_leaf(), leaf.bend.frame)
+    length = blade_extent(sketch.to_leaf().boundary, leaf.bend.frame)
     assert leaf.bend.pose.curl == pytest.approx(0.3 / length)
     np.testing.assert_allclose(leaf.boundary, session.leaf.boundary)
     opened = Session(Runner(), FAST)
@@ -171,7 +171,7 @@ def test_the_sliders_curl_is_per_the_blades_length_whatever_its_units():
     assert session.pose == Pose(curl=1.0)
     runner.finish(session)
     bend = session.leaf.bend
-    length = blade_extent(big.to_leaf(), bend.frame)
+    length = blade_extent(big.to_leaf().boundary, bend.frame)
     assert length > 60 and bend.pose.curl == pytest.approx(1.0 / length)
     # laid flat again, the bent outline is the drawn one: no point past the half turn
     np.testing.assert_allclose(bend.flatten(session.leaf.boundary), big.to_leaf().boundary,
