@@ -27,6 +27,9 @@ class LessonStep:
         "implicit", "guide", "em", "heights" or "mesh".
     edges : bool, default: False
         Whether the app's 3D view draws the mesh's triangle edges.
+    bent_caption : str, default: ""
+        The caption for a bent leaf (folded, curled, rolled or twisted), where the step differs
+        ("": the same).
     """
 
     title: str
@@ -35,6 +38,11 @@ class LessonStep:
     layers: tuple[str, ...]
     picture: str
     edges: bool = False
+    bent_caption: str = ""
+
+    def words(self, bent: bool = False) -> str:
+        """The caption, for a bent leaf if `bent` (its steps run on the blade laid flat)."""
+        return self.bent_caption if bent and self.bent_caption else self.caption
 
 
 LESSON_STEPS: tuple[LessonStep, ...] = (
@@ -54,6 +62,10 @@ LESSON_STEPS: tuple[LessonStep, ...] = (
         r"$\mathrm{height} = (\mathbf{p} - \mathbf{o}) \cdot \mathbf{n}$",
         ("points", "curves"),
         "plane",
+        bent_caption="This leaf is bent. We first unbend it, undoing its fold, curl or roll, "
+        "and lay the blade flat, like pressing the leaf onto a table; the edge's points are "
+        "joined into an outline. Every height is then measured above that flat blade: the "
+        "veins' heights are in colour.",
     ),
     LessonStep(
         "3. Inside or outside the leaf",
@@ -99,5 +111,8 @@ LESSON_STEPS: tuple[LessonStep, ...] = (
         ("mesh", "points"),
         "mesh",
         edges=True,
+        bent_caption="The surface is cut into small triangles and trimmed at the edge, then "
+        "bent back into the leaf's own fold, curl or roll: this is the mesh, coloured by "
+        "height. With more hills (a larger K) it can follow more veins.",
     ),
 )

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from leafstudio.core.bend import flat_leaf
 from leafstudio.errors import LeafError
 
 TURNTABLE_SUFFIXES = (".gif", ".mp4")
@@ -158,8 +159,9 @@ def render_steps(result: Any, path: str | os.PathLike, size: tuple[int, int] = S
     frame = result.frame
     view = view_frame(result)  # the plane's axes turned: its v on the plane is the views' up
     up = (float(view.v @ frame.u), float(view.v @ frame.v), 0.0)
-    boundary_xy, _ = frame.to_plane(result.leaf.boundary)
-    vein_xy = frame.to_plane(result.leaf.vein_points)[0] if len(result.leaf.vein_points) else None
+    flat = flat_leaf(result.leaf)  # the flat blade its steps ran on (step_slides.blade_leaf)
+    boundary_xy, _ = frame.to_plane(flat.boundary)
+    vein_xy = frame.to_plane(flat.vein_points)[0] if len(flat.vein_points) else None
     flat = lambda xy: np.column_stack([xy, np.zeros(len(xy))])  # noqa: E731
     outline = pv.PolyData(flat(boundary_xy))
     g = np.asarray(result.g_grid, dtype=float)

@@ -20,7 +20,9 @@ from typing import Any
 
 import numpy as np
 
+from leafstudio.core.bend import flat_leaf
 from leafstudio.errors import LeafError
+from leafstudio.model import Leaf
 from leafstudio.render.lesson import LESSON_STEPS, LessonStep
 
 SLIDE_SIZE = (16.0, 9.0)  # inches
@@ -32,6 +34,15 @@ OWNER_COLOURS = "tab10"
 BOUNDARY, VEINS = "#202020", "#d62728"
 
 
+def blade_leaf(result: Any) -> Leaf:
+    """The leaf on the flat blade its steps ran on, at unit size: a bent leaf's curves laid
+    flat by its bend (core/bend.flat_leaf), or a plan view drew them where the bend projects
+    them (a fold's veins squeezed to half the blade's width, at the fold's heights) over g, p
+    and a mixture made on the flat blade."""
+    flat = flat_leaf(result.leaf)
+    return flat if result.units is None else result.units.leaf(flat)
+
+
 def _plane(result: Any) -> dict[str, Any]:
     """The arrays a plan view draws, at unit size (every array in one frame)."""
     unit = result.unit if result.unit is not None else result
@@ -39,8 +50,9 @@ def _plane(result: Any) -> dict[str, Any]:
     ny, nx = grid.shape
     x0, y0 = grid.origin
     extent = (x0, x0 + grid.spacing * (nx - 1), y0, y0 + grid.spacing * (ny - 1))
-    veins = unit.frame.to_plane(unit.leaf.vein_points)[0] if len(unit.leaf.vein_points) else None
-    return {"unit": unit, "shape": (ny, nx), "extent": extent, "veins": veins}
+    points = blade_leaf(result).vein_points
+    veins, heights = unit.frame.to_plane(points) if len(points) else (None, None)
+    return {"unit": unit, "shape": (ny, nx), "extent": extent, "veins": veins, "heights": heights}
 
 
 def _outline(ax: Any, plane: dict[str, Any], veins: bool = False) -> None:
@@ -200,10 +212,9 @@ def _heights_on_plane(ax: Any, plane: dict[str, Any]) -> None:
     polygon = np.vstack([unit.polygon, unit.polygon[:1]])
     ax.fill(*polygon.T, color="#e8f3e0", zorder=1)
     ax.plot(*polygon.T, color=BOUNDARY, linewidth=1.5, zorder=2)
-    if not len(unit.leaf.vein_points):
+    if plane["veins"] is None:
         return
-    xy, height = unit.frame.to_plane(unit.leaf.vein_points)
-    dots = ax.scatter(*xy.T, s=14, c=height, cmap="viridis", zorder=3)
+    dots = ax.scatter(*plane["veins"].T, s=14, c=plane["heights"], cmap="viridis", zorder=3)
     bar = ax.figure.colorbar(dots, ax=ax, orientation="horizontal", fraction=0.06, pad=0.04)
     bar.set_label("height above the plane", fontsize=TEXT_PT)
     bar.ax.tick_params(labelsize=TEXT_PT - 4)
@@ -227,7 +238,7 @@ def step_slide(result: Any, index: int, step: LessonStep | None = None) -> Any:
     words.set_axis_off()
     title = textwrap.fill(step.title, TITLE_CHARS)
     words.text(0, 0.95, title, fontsize=TITLE_PT, weight="bold", va="top")
-    caption = textwrap.fill(step.caption, CAPTION_CHARS)
+    caption = textwrap.fill(step.words(bent=result.leaf.bend is not None), CAPTION_CHARS)
     words.text(
         0,
         0.95 - 0.09 * (title.count("\n") + 1),

@@ -9,6 +9,7 @@ import pytest
 
 import leafstudio as ls
 from leafstudio.cli import main
+from leafstudio.forms.make import Form
 from leafstudio.render.lesson import LESSON_STEPS
 from leafstudio.render.step_slides import step_slide
 
@@ -114,3 +115,64 @@ def test_the_plane_pictures_show_the_base_left_and_the_apex_right(shape):
     shown = midrib[-1, 0] - midrib[0, 0]  # base to apex along the picture's x
     assert shown * (-1 if picture.xaxis_inverted() else 1) > 0
     assert picture.xaxis_inverted() == picture.yaxis_inverted()  # turned, not mirrored
+
+
+@pytest.fixture(scope="module")
+def folded():
+    """An ovate form folded 60° and curled, beside its flat blade (the same flat steps)."""
+    blade = Form("ovate").leaf()
+    leaf = Form("ovate", fold=60.0, curl=0.3).leaf(blade)
+    params = ls.Params(grid=48)
+    return ls.reconstruct(leaf, params), ls.reconstruct(blade, params)
+
+
+def _dots(axes) -> tuple[np.ndarray, np.ndarray]:
+    """The vein dots a plan picture draws, and their colours' values (the plane's heights)."""
+    dots = axes.collections[-1]
+    return np.asarray(dots.get_offsets()), np.asarray(dots.get_array())
+
+
+@pytest.mark.parametrize("picture", ["plane", "guide"])
+def test_a_bent_leafs_plan_pictures_show_its_veins_on_the_flat_blade(folded, picture):
+    """The plan views are of the flat blade the steps ran on (its g, p and mixture): a folded
+    form's veins were drawn where the fold projects them, squeezed to half the blade's width,
+    over a p(x) made on the flat blade, and coloured by their heights above the plane of the
+    fold's rim (0.05-0.27 for a blade whose relief is 0.08)."""
+    bent, flat = folded
+    shown, heights = _dots(step_slide(bent, step_of(picture)).axes[0])
+    expected, expected_heights = _dots(step_slide(flat, step_of(picture)).axes[0])
+    np.testing.assert_allclose(shown, expected, atol=1e-9)
+    if picture == "plane":
+        np.testing.assert_allclose(heights, expected_heights, atol=1e-9)
+
+
+def test_the_steps_picture_shows_a_bent_leafs_veins_on_its_flat_blade(
+    folded, tmp_path, monkeypatch
+):
+    """render_steps (reconstruct --steps) drew a folded leaf's outline and veins where the fold
+    projects them, over the flat blade's g, p and mixture."""
+    from leafstudio.render import slides
+
+    drawn = []
+    monkeypatch.setattr(
+        "pyvista.Plotter.add_points",
+        lambda self, points, **kw: drawn.append(np.asarray(points)[:, :2]),
+    )
+    for result in folded:  # bent, then flat
+        slides.render_steps(result, tmp_path / "steps.png", size=(300, 200))
+    half = len(drawn) // 2
+    assert half and len(drawn) == 2 * half
+    for bent, flat in zip(drawn[:half], drawn[half:], strict=True):
+        np.testing.assert_allclose(bent, flat, atol=1e-9)
+
+
+def test_a_bent_leafs_lesson_says_it_is_laid_flat_first(folded):
+    """Step 2 says the points are pressed onto a plane; a bent leaf is first unbent."""
+    bent, flat = folded
+    plane = step_of("plane")
+    assert "bent" not in LESSON_STEPS[plane].words(bent=False)
+    assert "fold" in LESSON_STEPS[plane].words(bent=True)
+    for result, said in ((bent, True), (flat, False)):
+        figure = step_slide(result, plane)
+        words = " ".join(t.get_text() for axes in figure.axes for t in axes.texts)
+        assert ("unbend" in words) == said

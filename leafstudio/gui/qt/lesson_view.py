@@ -107,7 +107,8 @@ class LessonWindow(QWidget):
         """The current step: its layers in the 3D view, its words, equation and plan."""
         step = self.lesson.step
         self.title.setText(step.title)
-        self.caption.setText(step.caption)
+        result = self.window_.session.result  # a bent leaf's steps run on its blade laid flat
+        self.caption.setText(step.words(bent=result is not None and result.leaf.bend is not None))
         self.footer.setText(FOOTER.format(progress=self.lesson.progress()))
         ratio = self.devicePixelRatioF()
         pixmap = QPixmap()  # empty for a step without one

@@ -121,3 +121,25 @@ def test_the_surface_steps_show_the_mesh_as_their_words_and_pictures_say(window,
         assert lesson.viewport.mesh_coloring == "height"
         assert lesson.viewport.show_edges == (STEPS[index].picture == "mesh")
     lesson.close()
+
+
+def test_a_bent_leafs_lesson_says_it_is_unbent_first(window, qtbot, tmp_path):
+    """Step 2 said a folded leaf's points are pressed onto the plane that fits its edge; its
+    steps run on the blade unbent and laid flat, and the words now say so."""
+    import leafstudio as ls
+    from leafstudio.forms.make import Form
+    from tests.gui.qt.conftest import wait_result
+
+    plane = next(i for i, s in enumerate(STEPS) if s.picture == "plane")
+    lesson = LessonWindow(window)
+    qtbot.addWidget(lesson)
+    lesson.go(plane)
+    assert lesson.caption.text() == STEPS[plane].caption  # the demo: flat
+    path = tmp_path / "folded.leaf.json"
+    ls.save_leaf(Form("ovate", fold=60.0).leaf(), path)
+    window.session.history.set_clean()
+    assert window.open_path(str(path))
+    wait_result(qtbot, window, lambda o: o.result.leaf.bend is not None)
+    lesson._on_result()
+    assert lesson.caption.text() == STEPS[plane].bent_caption
+    lesson.close()
