@@ -10,6 +10,7 @@ leaf region.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -18,7 +19,6 @@ import shapely
 from leafstudio._shared.extras import LazyModule
 from leafstudio.core.evaluate import table_metrics, triangles_of
 from leafstudio.core.pipeline import Pipeline
-from leafstudio.core.plane import Frame
 from leafstudio.core.prepare.units import Units
 from leafstudio.core.trianglemesh import MeshLike, TriangleMesh
 from leafstudio.errors import LeafError
@@ -26,6 +26,7 @@ from leafstudio.model import Leaf, Params
 
 o3d = LazyModule("open3d", "the screened Poisson comparison")  # an extra: leafstudio[open3d]
 
+ToPlane = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 POISSON_DEPTH = 8
 NORMAL_NEIGHBOURS = 16
 
@@ -63,12 +64,13 @@ def poisson_surface(leaf: Leaf, normal: np.ndarray, depth: int = POISSON_DEPTH) 
     return TriangleMesh(points=units.to_world(np.asarray(mesh.vertices)), regular_faces=triangles)
 
 
-def spill_area(mesh: MeshLike, frame: Frame, polygon: np.ndarray) -> float:
+def spill_area(mesh: MeshLike, to_plane: ToPlane, polygon: np.ndarray) -> float:
     """Area of the mesh outside the leaf region.
 
-    Each triangle counts with the fraction of its projection onto the plane that lies outside
-    the (b, 2) polygon (plane coordinates); triangles standing edge-on to the plane (no projected
-    area) count whole when their centroid is outside.
+    Each triangle counts with the fraction of its projection onto the plane (`to_plane`: (n, 3)
+    points -> (n, 2) plane coordinates and heights, a Frame's; a bent leaf's lays them flat by
+    its bend first) that lies outside the (b, 2) polygon (plane coordinates); triangles standing
+    edge-on to the plane (no projected area) count whole when their centroid is outside.
     """
     triangles = triangles_of(mesh)
     if len(triangles) == 0:
@@ -76,7 +78,7 @@ def spill_area(mesh: MeshLike, frame: Frame, polygon: np.ndarray) -> float:
     points = np.asarray(mesh.points)
     a, b, c = (points[triangles[:, i]] for i in range(3))
     area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
-    xy, _ = frame.to_plane(points)
+    xy, _ = to_plane(points)
     corners = xy[triangles]
     region = shapely.Polygon(polygon)
     shapes = shapely.polygons(np.concatenate([corners, corners[:, :1]], axis=1))
@@ -102,17 +104,27 @@ def compare(leaf: Leaf, params: Params | None = None) -> dict[str, Any]:
         "ours" also has "k", the K used; "meshes" holds both (TriangleMesh).
     """
     params = params or Params()
-    # at about unit size (an exact map): distances and areas of a leaf at 1e150 overflow
-    # float64 squares, so both meshes are measured there and the figures mapped back
-    units = Units.exact(leaf.boundary)
-    leaf = units.leaf(leaf)
     Pipeline(leaf).run(params)  # a process's first run loads the compiled kernels: time the next
     start = time.perf_counter()
-    result = Pipeline(leaf).run(params)
+    pipeline = Pipeline(leaf)  # a bent leaf (a posed form) with its own bend, as reconstruct
+    world = pipeline.run(params)
     ours_seconds = time.perf_counter() - start
+    # at about unit size, the pipeline's own (an exact map): distances and areas of a leaf at
+    # 1e150 overflow float64 squares, so both meshes are measured there and the figures mapped
+    # back. (The leaf was mapped there without its bend, Units.leaf: a posed form's curves were
+    # unfolded by a fit, or refused: ovate fold 45 twist 0.5 roll 0.5.)
+    units, result = pipeline.units, world.unit if world.unit is not None else world
+    leaf = units.leaf(pipeline.leaf)
     start = time.perf_counter()
     poisson = poisson_surface(leaf, result.frame.normal)
     poisson_seconds = time.perf_counter() - start
+
+    def to_plane(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Unit-size points on the flat blade's plane: a bent leaf's laid flat by its bend."""
+        if world.leaf.bend is None:
+            return result.frame.to_plane(points)
+        xy, height = world.on_blade(units.to_world(points))
+        return xy / units.scale, height / units.scale
 
     def report(mesh: MeshLike, seconds: float) -> dict[str, Any]:
         table = table_metrics(mesh, leaf)
@@ -121,7 +133,7 @@ def compare(leaf: Leaf, params: Params | None = None) -> dict[str, Any]:
             table[part] = {k: None if v is None else v * scale for k, v in table[part].items()}
         area = scale * scale  # not scale**2, which raises past 1e154 (inf: said by the caller)
         table["mesh"]["area"] *= area
-        spill = spill_area(mesh, result.frame, result.polygon) * area
+        spill = spill_area(mesh, to_plane, result.polygon) * area
         return {**table, "spill": spill, "seconds": seconds}
 
     def in_world(mesh: TriangleMesh) -> TriangleMesh:
