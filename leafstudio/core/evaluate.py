@@ -224,12 +224,15 @@ def dihedral_angles(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarr
     return np.degrees(np.arccos(cos)), edges[pair]
 
 
-def margin_creases(result: Any, band_cells: float = 3.0) -> dict[str, float]:
+def margin_creases(
+    result: Any, band_cells: float = 3.0, points: np.ndarray | None = None
+) -> dict[str, float]:
     """The 99th percentile of the dihedral angles (degrees) within `band_cells` grid steps of
-    the margin and farther in, for a pipeline Result: a noisy margin shows as creases."""
+    the margin and farther in, for a pipeline Result: a noisy margin shows as creases. `points`:
+    the mesh's vertices moved (another surface on the same triangles, a form's own)."""
     import shapely
 
-    points = np.asarray(result.triangle_mesh.points)
+    points = np.asarray(result.triangle_mesh.points if points is None else points)
     angles, edges = dihedral_angles(points, triangles_of(result.triangle_mesh))
     xy = result.mesh_on_blade()[0]  # where the outline is (a bent leaf's: on its flat blade)
     margin = shapely.LinearRing(result.polygon)
