@@ -11,15 +11,17 @@ shares of the leaf's length.
 
 - forms over poses: every gallery shape at every N-th pose of fold −75..75, curl 0..1, roll 0..1,
   wave 0..0.1 and twist 0..0.5 (N = 1: all 179), K = 3, grid 128: largest and mean vein distance,
-  largest boundary distance, refused and warned; ours also the mesh's distance to the form's own
-  surface (its flat blade's mesh bent: tests/core/test_bend_roll.off_surface), the mean and 95th
-  percentile of every case's mean and 95th percentile (target 2e-3);
+  largest boundary distance, refused and warned; the mesh's distance to the form's own surface
+  (its dome on its wave's base, posed: `own_relief`, `off_own`), the largest of every case's mean
+  and 95th percentile (target 2e-3); ours also to its flat blade's mesh bent (the bend alone:
+  tests/core/test_bend_roll.off_surface);
 - the eight scans: open_scan then reconstruct with the defaults (the blade unrolled onto a sheet,
   core/sheet.py); the mean and 95th-percentile distance from the blade's points to the surface,
   beside the figures before the sheet (measured at baf1042), and the mesh's area standing out of
   the scan as a fin (analysis/fidelity.fin_share);
 - vein distances: every gallery form (flat) and a drawn leaf with hand-raised veins, with the
-  99th-percentile dihedral angles in the margin band and inside;
+  99th-percentile dihedral angles in the margin band and inside, and a form's own surface's on
+  the same triangles (the veins lie on it);
 - the same for every shape with an acuminate or retuse apex or a toothed or lobed margin
   (--variants, not in the full run: about 30 s);
 - CPU time at grid 128: a bent form beside the same form flat, best of five, interleaved;
