@@ -20,6 +20,7 @@ from leafstudio.core.gmm import Mixture, fit_mixture, fit_signed_mixture, sample
 from leafstudio.core.grid import Grid, make_grid
 from leafstudio.core.height import height_guide
 from leafstudio.core.mpu import MPUImplicit, build_mpu
+from leafstudio.core.node_derivatives import node_derivatives
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.prepare.outline import trace_outline
 from leafstudio.core.prepare.plausibility import (
@@ -94,6 +95,7 @@ class SurfaceStage:
 
     surface: HeightSurface
     z: np.ndarray
+    correction: np.ndarray | None = None  # c at the nodes inside the leaf (correct.onto_veins)
 
 
 def frame_stage(leaf: Leaf, margin: str = "auto", units: Units | None = None) -> FrameStage:
@@ -290,6 +292,7 @@ def compute_surface(run: StageRun) -> SurfaceStage:
         )
         if correction is not None:
             relief = relief + correction
+            return SurfaceStage(surface, surface(nodes, g_in, relief), correction)
     return SurfaceStage(surface=surface, z=surface(nodes, g_in, relief))
 
 
@@ -335,6 +338,24 @@ def compute_layout(run: StageRun) -> Layout:
     return Layout(xy, triangles, kept, implicit_at)
 
 
+def _correction_at(
+    surf: SurfaceStage, grid: Grid, inside: np.ndarray, xy: np.ndarray, kept: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """c, ∇c and ∇²c at the conforming mesh's vertices: by differences of c at its kept grid
+    nodes (the last of them, core/node_derivatives.py: the closed form at every vertex took
+    more than the rest of a run at grid 512), in closed form at the outline's and the band's
+    points before them; None when the nodes' differences cannot be taken."""
+    correction = surf.surface.correction
+    if correction is None or surf.correction is None:
+        return None
+    nodes = np.flatnonzero(kept)
+    on_nodes = node_derivatives(correction.value, grid, inside, surf.correction, nodes)
+    if on_nodes is None:
+        return None
+    rest = correction.derivatives(xy[: len(xy) - len(nodes)])
+    return tuple(np.concatenate([a, b]) for a, b in zip(rest, on_nodes, strict=True))
+
+
 def compute_mesh(run: StageRun) -> TriangleMesh:
     fs: FrameStage = run["frame"]
     grid: Grid = run["grid"]
@@ -361,7 +382,10 @@ def compute_mesh(run: StageRun) -> TriangleMesh:
         normals /= np.linalg.norm(normals, axis=1, keepdims=True)
         triangles = mesher.ball_pivoting(world, normals, grid.spacing, params.radius_factor)
     on_margin = np.arange(len(xy)) < n_outline  # both meshers put the outline first
-    _, grad, hess = surf.surface.derivatives(xy, on_margin, implicit_at)
+    correction_at = None
+    if params.mesher == "conforming":
+        correction_at = _correction_at(surf, grid, guide.inside, xy, kept)
+    _, grad, hess = surf.surface.derivatives(xy, on_margin, implicit_at, correction_at)
     return TriangleMesh(
         points=world,
         regular_faces=triangles,

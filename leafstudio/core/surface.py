@@ -35,6 +35,7 @@ from leafstudio.core.mpu import MPUImplicit
 if TYPE_CHECKING:
     from leafstudio.core.correct import VeinCorrection
 
+Derivatives = tuple[np.ndarray, np.ndarray, np.ndarray]  # f (n,), ∇f (n, 2), ∇²f (n, 2, 2)
 VEIN_WEIGHT = 10.0  # the vein rows together weigh this much relative to all grid rows
 RIDGE = 1e-10
 RELIEF_CAP = 3.0  # a fit target needs Σ a_k N_k at most this many times the veins' relief
@@ -70,11 +71,13 @@ class HeightSurface:
         m = self.mixture.value(xy)
         return m if self.correction is None else m + self.correction.value(xy)
 
-    def _relief_derivatives(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _relief_derivatives(
+        self, xy: np.ndarray, correction_at: Derivatives | None = None
+    ) -> Derivatives:
         m = self.mixture.derivatives(xy)
         if self.correction is None:
             return m
-        c = self.correction.derivatives(xy)
+        c = self.correction.derivatives(xy) if correction_at is None else correction_at
         return m[0] + c[0], m[1] + c[1], m[2] + c[2]
 
     def taper(self, g: np.ndarray) -> np.ndarray:
@@ -104,17 +107,19 @@ class HeightSurface:
         self,
         xy: np.ndarray,
         margin: np.ndarray | None = None,
-        implicit_at: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        implicit_at: Derivatives | None = None,
+        correction_at: Derivatives | None = None,
+    ) -> Derivatives:
         """z (n,), ∇z (n, 2) and ∇²z (n, 2, 2) in closed form (for curvature; see curvature.py).
         Where the (n,) bool `margin` is set, the limits from inside the leaf. `implicit_at`: g,
         ∇g and ∇²g at `xy` when they are known already (the pipeline's layout stage has them at
-        the mesh's vertices: they do not change with K)."""
+        the mesh's vertices: they do not change with K); `correction_at`: c, ∇c and ∇²c there
+        (the mesh stage's, by differences at its grid nodes: core/node_derivatives.py)."""
         xy = np.atleast_2d(np.asarray(xy, dtype=float))
         if implicit_at is None:
             implicit_at = implicit_derivatives(self.implicit, xy)
         taper = taper_derivatives(*implicit_at, self.delta, margin)
-        z, grad, hess = product_derivatives(taper, self._relief_derivatives(xy))
+        z, grad, hess = product_derivatives(taper, self._relief_derivatives(xy, correction_at))
         if self.base is None:
             return z, grad, hess
         b, grad_b, hess_b = self.base.derivatives(xy)

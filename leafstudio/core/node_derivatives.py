@@ -1,0 +1,86 @@
+"""The vein correction's derivatives at the mesh's grid nodes, by finite differences of its
+values there (correct.py: c at every node inside the leaf is known already, from its lattice).
+
+The mesh's curvature arrays need ∇c and ∇²c at every vertex. In closed form (kelvin.
+spline_derivatives) that is every vertex against every spline centre: at grid 512 (111,687
+nodes, 200 centres) 232 ms, more than the rest of the run (the pipeline without the correction
+took 143 ms; bench_bent --timing, grid 128: 14.5 of the run's 51 ms). Most vertices are grid
+nodes, where c is known, so the second-order central differences there cost only array
+arithmetic; the outline's points and the few added in the margin band keep the closed form.
+
+c is smooth on the grid's scale except at its centres, where its Hessian has a log r spike
+(−kei(r/ℓ) ~ r² log r: the closed form reads it no nearer than correct.HESSIAN_CUT of the length,
+so a node a hair from a vein point took a curvature ten times the mixture's largest, a dark dot on
+every vein point in the curvature map). The differences read c over one grid step, as the mesh's
+own triangles do: away from the centres they agree with the closed form to a few parts in 1e4
+of its largest Hessian at grid 128 (1.6e-5 at grid 512, the median), and beside a centre they
+give the curvature the mesh can show rather than the spike.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from scipy.ndimage import binary_dilation
+
+from leafstudio.core.grid import Grid
+
+STENCIL_BLOCK = np.ones((3, 3), dtype=bool)  # the differences read the 3 x 3 nodes around one
+
+
+def node_derivatives(
+    value: Callable[[np.ndarray], np.ndarray],
+    grid: Grid,
+    known: np.ndarray,
+    known_values: np.ndarray,
+    nodes: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """c (n,), ∇c (n, 2) and ∇²c (n, 2, 2) at the grid's `nodes` ((n,) flat indices), by
+    central differences of c over one grid step.
+
+    Parameters
+    ----------
+    value : callable
+        c at (k, 2) plane points: asked for the stencil's nodes where c is not known (outside
+        the leaf, one step past the margin).
+    grid : Grid
+    known : (ny * nx,) bool array
+        The nodes where c is known (inside the leaf).
+    known_values : (count of known,) float array
+        c there, in grid order.
+    nodes : (n,) int array
+        Flat indices of the nodes asked for.
+
+    Returns
+    -------
+    The three arrays, or None when a node's stencil runs off the grid (a leaf filling it to its
+    edge: the caller takes the closed form).
+    """
+    ny, nx = grid.shape
+    row, col = np.divmod(np.asarray(nodes, dtype=np.int64), nx)
+    if len(nodes) and (row.min() < 1 or col.min() < 1 or row.max() > ny - 2 or col.max() > nx - 2):
+        return None
+    c = np.full(ny * nx, np.nan)
+    c[known] = known_values
+    asked = np.zeros((ny, nx), dtype=bool)
+    asked[row, col] = True  # its stencil's nodes: the 3 x 3 block around each (np.unique of
+    # their indices took 60 ms at grid 512)
+    missing = np.flatnonzero(binary_dilation(asked, STENCIL_BLOCK).ravel() & ~known)
+    if len(missing):
+        c[missing] = value(grid.points[missing])
+    c = c.reshape(ny, nx)
+    h = grid.spacing
+
+    def at(dr: int, dc: int) -> np.ndarray:
+        return c[row + dr, col + dc]
+
+    middle = at(0, 0)
+    gradient = np.column_stack([at(0, 1) - at(0, -1), at(1, 0) - at(-1, 0)]) / (2 * h)
+    hessian = np.empty((len(row), 2, 2))
+    hessian[:, 0, 0] = (at(0, 1) - 2 * middle + at(0, -1)) / h**2
+    hessian[:, 1, 1] = (at(1, 0) - 2 * middle + at(-1, 0)) / h**2
+    hessian[:, 0, 1] = hessian[:, 1, 0] = (at(1, 1) - at(1, -1) - at(-1, 1) + at(-1, -1)) / (
+        4 * h * h
+    )
+    return middle, gradient, hessian
