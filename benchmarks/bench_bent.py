@@ -91,29 +91,45 @@ def _run(leaf: ls.Leaf, params: ls.Params) -> tuple[ls.Result | None, bool]:
 
 def own_relief(form: Form) -> Callable[[np.ndarray], np.ndarray]:
     """The form's own surface over its flat blade, (n, 2) -> (n,) heights: its dome
-    (forms/relief.py) on its wave's base, as its veins were lifted (forms/make.py), checked on
-    them to 1e-9 of the length."""
+    (forms/relief.py) on its wave's base, as its veins were lifted (forms/veins.grow_veins: the
+    dome made in the blade's own frame, base at the origin and apex at (1, 0), and scaled back
+    by the base-to-apex distance; forms/make.py: the wave's base under it), checked on the
+    veins to 1e-9 of the length."""
     outline = form.outline()
     xy = outline.xy
-    rise = dome(Blade(Polygon(xy)), HEIGHT_RATIO, np.zeros(2), form.base_term == "rounded")
+    apex = xy[outline.apex_index]  # the base is at the origin
+    length = float(np.linalg.norm(apex))
+    u = apex / length
+    v = np.array([-u[1], u[0]])
+
+    def local(at: np.ndarray) -> np.ndarray:
+        return np.column_stack([at @ u, at @ v]) / length
+
+    blade = Blade(Polygon(local(xy)))
+    rise = dome(blade, HEIGHT_RATIO, np.zeros(2), form.base_term == "rounded")
     base = fit_base(xy, form._wave(outline), 1.0)
 
     def heights(at: np.ndarray) -> np.ndarray:
-        return rise(at) + (0.0 if base is None else base(at))
+        at = np.asarray(at, dtype=float)[:, :2]
+        return length * rise(local(at)) + (0.0 if base is None else base(at))
 
     veins = np.vstack(form.unposed().leaf().veins)
     off = np.abs(heights(veins[:, :2]) - veins[:, 2]).max()
-    if off > 1e-9:  # the forms' unit outline (base at the origin, apex at (1, 0)) changed
+    if off > 1e-9:  # the forms' outline or their veins' lift changed
         raise RuntimeError(f"{form}: the dome misses its own veins by {off:.1e}")
     return heights
 
 
 def off_own(result: ls.Result, pose: Pose | None, own: Callable[[np.ndarray], np.ndarray]):
     """Distances, shares of the length, from the mesh's vertices to the form's own surface:
-    each laid flat by the form's pose (distances along the bent normal kept) and compared with
-    its own height there."""
+    each laid flat by the form's pose (distances along the bent normal kept; ours by the points
+    it kept on its flat blade, Result.mesh_on_blade: laid flat again, a twisted tube's points by
+    its seam fall on the other margin) and compared with its own height there."""
     points = np.asarray(result.triangle_mesh.points)
-    flat = points if pose is None else pose.flatten(points)
+    if result.blade_xy is not None:
+        flat = result.frame.to_world(*result.mesh_on_blade())
+    else:
+        flat = points if pose is None else pose.flatten(points)
     return np.abs(flat[:, 2] - own(flat[:, :2])) / result.length
 
 

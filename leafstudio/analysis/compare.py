@@ -70,7 +70,9 @@ def spill_area(mesh: MeshLike, to_plane: ToPlane, polygon: np.ndarray) -> float:
     Each triangle counts with the fraction of its projection onto the plane (`to_plane`: (n, 3)
     points -> (n, 2) plane coordinates and heights, a Frame's; a bent leaf's lays them flat by
     its bend first) that lies outside the (b, 2) polygon (plane coordinates); triangles standing
-    edge-on to the plane (no projected area) count whole when their centroid is outside.
+    edge-on to the plane (no projected area) count whole when their centroid is outside. What
+    Poisson closes over or under the blade (its underside; inside a rolled tube) projects inside
+    the outline and is not counted.
     """
     triangles = triangles_of(mesh)
     if len(triangles) == 0:

@@ -332,7 +332,8 @@ def sag_splits(
         off = there - bent[keys[:, 0]]
         off -= bent[keys[:, 1]]
         off += there  # twice the midpoint's offset from the chord's
-        marked = np.einsum("ij,ij->i", off, off) > 4 * tolerance**2
+        off /= tolerance  # in tolerances: squared in the leaf's units, a leaf at 1e300 overflowed
+        marked = np.einsum("ij,ij->i", off, off) > 4.0
         if not marked.any():
             break
         halved = codes[marked]  # sorted: the new points are numbered in this order

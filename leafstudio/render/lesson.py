@@ -62,9 +62,9 @@ LESSON_STEPS: tuple[LessonStep, ...] = (
         r"$\mathrm{height} = (\mathbf{p} - \mathbf{o}) \cdot \mathbf{n}$",
         ("points", "curves"),
         "plane",
-        bent_caption="This leaf is bent. We first unbend it, undoing its fold, curl or roll, "
-        "and lay the blade flat, like pressing the leaf onto a table; the edge's points are "
-        "joined into an outline. Every height is then measured above that flat blade: the "
+        bent_caption="This leaf is bent. We first unbend it, undoing its fold, curl, roll or "
+        "twist, and lay the blade flat, like pressing the leaf onto a table; the edge's points "
+        "are joined into an outline. Every height is then measured above that flat blade: the "
         "veins' heights are in colour.",
     ),
     LessonStep(
@@ -112,7 +112,7 @@ LESSON_STEPS: tuple[LessonStep, ...] = (
         "mesh",
         edges=True,
         bent_caption="The surface is cut into small triangles and trimmed at the edge, then "
-        "bent back into the leaf's own fold, curl or roll: this is the mesh, coloured by "
+        "bent back into the leaf's own fold, curl, roll or twist: this is the mesh, coloured by "
         "height. With more hills (a larger K) it can follow more veins.",
     ),
 )

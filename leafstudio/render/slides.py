@@ -23,6 +23,7 @@ TURNTABLE_SUFFIXES = (".gif", ".mp4")
 TURNTABLE_FRAMES = 36
 TURNTABLE_SIZE = (640, 480)
 STEPS_SIZE = (1800, 1000)
+BENT_FIRST_TITLE = "1. boundary and veins, unbent, on the blade's plane"  # a bent leaf's
 STEP_TITLES = (
     "1. boundary and veins on the PCA plane",
     "2. g(x): the implicit of the outline, 0 on it",
@@ -172,7 +173,10 @@ def render_steps(result: Any, path: str | os.PathLike, size: tuple[int, int] = S
     with pv.vtk_verbosity("off"):
         plotter = pv.Plotter(off_screen=True, shape=(2, 3), window_size=list(size))
         plotter.set_background("white")
-        for k, title in enumerate(STEP_TITLES):
+        titles = list(STEP_TITLES)
+        if result.leaf.bend is not None:
+            titles[0] = BENT_FIRST_TITLE
+        for k, title in enumerate(titles):
             plotter.subplot(k // 3, k % 3)
             plotter.add_text(title, position="upper_left", font_size=10, color="black")
             if k == 0:

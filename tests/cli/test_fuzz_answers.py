@@ -77,6 +77,26 @@ def test_compare_at_extreme_scales_answers(tmp_path, scale, capsys):
         assert numbers and np.all(np.isfinite(numbers))
 
 
+@pytest.mark.parametrize("scale", [1e-90, 1e300])
+@pytest.mark.parametrize("command", ["reconstruct", "compare"])
+def test_a_bent_leaf_at_extreme_scales_answers(tmp_path, scale, command, capsys):
+    """A posed form's curves at 1e300 (unfolded: Pipeline fits their bend) were an internal
+    error (OverflowError: the bent chords' sag squared in the leaf's units, bend.sag_splits),
+    in `reconstruct` and `compare`."""
+    if command == "compare":
+        pytest.importorskip("open3d")
+    from leafstudio.forms.make import Form
+
+    bent = Form("ovate", fold=60.0, curl=0.3).leaf()
+    path = tmp_path / "b.leaf.json"
+    ls.save_leaf(ls.Leaf(bent.boundary * scale, [v * scale for v in bent.veins]), path)
+    out = ["-o", str(tmp_path / "o.ply")] if command == "reconstruct" else []
+    code = main([command, str(path), "--grid", "32", *out])
+    assert code in (0, 2)
+    if code == 2:
+        _error_line(capsys)
+
+
 @pytest.mark.parametrize("command", [["measure"], ["reconstruct", "-o", "o.ply", "--metrics"]])
 def test_a_leaf_whose_area_overflows_is_one_line_not_infinity(tmp_path, command, capsys):
     leaf = ls.demo("nested")

@@ -153,13 +153,15 @@ def test_the_steps_picture_shows_a_bent_leafs_veins_on_its_flat_blade(
     projects them, over the flat blade's g, p and mixture."""
     from leafstudio.render import slides
 
-    drawn = []
+    drawn, titles = [], []
     monkeypatch.setattr(
         "pyvista.Plotter.add_points",
         lambda self, points, **kw: drawn.append(np.asarray(points)[:, :2]),
     )
+    monkeypatch.setattr("pyvista.Plotter.add_text", lambda self, text, **kw: titles.append(text))
     for result in folded:  # bent, then flat
         slides.render_steps(result, tmp_path / "steps.png", size=(300, 200))
+    assert titles[0] == slides.BENT_FIRST_TITLE and titles[6] == slides.STEP_TITLES[0]
     half = len(drawn) // 2
     assert half and len(drawn) == 2 * half
     for bent, flat in zip(drawn[:half], drawn[half:], strict=True):

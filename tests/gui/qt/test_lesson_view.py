@@ -140,6 +140,5 @@ def test_a_bent_leafs_lesson_says_it_is_unbent_first(window, qtbot, tmp_path):
     window.session.history.set_clean()
     assert window.open_path(str(path))
     wait_result(qtbot, window, lambda o: o.result.leaf.bend is not None)
-    lesson._on_result()
-    assert lesson.caption.text() == STEPS[plane].bent_caption
+    qtbot.waitUntil(lambda: lesson.caption.text() == STEPS[plane].bent_caption, timeout=10_000)
     lesson.close()
