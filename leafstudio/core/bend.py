@@ -305,10 +305,10 @@ def _crease_cuts(mesh: TriangleMesh, crease, trim, exact: int) -> tuple[np.ndarr
 
 def sag_splits(
     points: np.ndarray, faces: np.ndarray, carry, tolerance: float
-) -> tuple[np.ndarray, Plan]:
+) -> tuple[np.ndarray, Plan, np.ndarray]:
     """(f', 3) faces with every edge halved whose midpoint the bend `carry` takes farther than
-    `tolerance` from the bent chord, and the plan of the new points (`carried`), SAG_ROUNDS
-    times at most.
+    `tolerance` from the bent chord, the plan of the new points (`carried`), SAG_ROUNDS
+    times at most, and every point carried (the new ones from their flat chord).
 
     The flat mesh is fine for the flat surface, but a strong bend curves each of its triangles:
     a fold of 75° on a rolled, twisted oblong blade bent the chords of a grid-128 mesh 1.4e-3
@@ -344,7 +344,7 @@ def sag_splits(
         faces = _halved(faces[touched], np.where(hit[touched], n + rank, -1))
         points, bent = np.vstack([points, middle[marked]]), np.vstack([bent, there[marked]])
         plan.append((keys[marked], np.full(np.count_nonzero(marked), 0.5)))
-    return np.vstack([*done, faces]) if done else faces, plan
+    return np.vstack([*done, faces]) if done else faces, plan, bent
 
 
 def _halved(faces: np.ndarray, middle: np.ndarray) -> np.ndarray:
@@ -375,50 +375,40 @@ def _halved(faces: np.ndarray, middle: np.ndarray) -> np.ndarray:
 
 def _cuts(
     mesh: TriangleMesh, crease, trim, carry, sag: float | None, exact: int
-) -> tuple[np.ndarray, Plan, bool, int]:
+) -> tuple[np.ndarray, Plan, bool, int, np.ndarray | None]:
     """`_crease_cuts`, then the edges the bend `carry` sags off their chord by more than `sag`
-    of the mesh's extent halved (`sag_splits`; None: none), and the first halving's point."""
+    of the mesh's extent halved (`sag_splits`; None: none), the first halving's point, and the
+    points before it carried (None when no halving ran)."""
     faces, plan, trimmed = _crease_cuts(mesh, crease, trim, exact)
     first = len(mesh.points) + sum(len(t) for _, t in plan)
     if sag is None or not len(mesh.points):
-        return faces, plan, trimmed, first
+        return faces, plan, trimmed, first, None
     tolerance = sag * float(np.ptp(mesh.points, axis=0).max())
-    faces, more = sag_splits(carried(mesh.points, plan), faces, carry, tolerance)
-    return faces, plan + more, trimmed, first
+    faces, more, bent = sag_splits(carried(mesh.points, plan), faces, carry, tolerance)
+    return faces, plan + more, trimmed, first, bent[:first]
 
 
-def _bent_meshes(
-    meshes: list[TriangleMesh],
-    carries: list,
-    creases: list,
-    trims: list,
-    sag: float | None,
-    lifts: list[Lift | None],
-    exact: int,
-) -> list[tuple[TriangleMesh, np.ndarray]]:
-    """Each mesh cut along the bend's creases (`creases`, in its units), trimmed (`trims`, see
+def _bent_mesh(
+    mesh: TriangleMesh, carry, crease, trim, sag: float | None, lift: Lift | None, exact: int
+) -> tuple[TriangleMesh, np.ndarray]:
+    """The mesh cut along the bend's creases (`crease`, in its units), trimmed (`trim`, see
     _crease_cuts; the points no face keeps dropped), its edges halved where the bend sags them
-    by more than `sag` (`_cuts`) and carried into 3D by its `carry`, with its points before they
-    were carried (Result.blade_xy: laid flat again, a tube's seam is ambiguous); a mesh with the
-    first's
-    faces (one mesh at another size) is cut as it was."""
-    cuts = _cuts(meshes[0], creases[0], trims[0], carries[0], sag, exact)
-    out = []
-    for mesh, carry, crease, trim, lift in zip(meshes, carries, creases, trims, lifts, strict=True):
-        same = np.array_equal(mesh.regular_faces, meshes[0].regular_faces)
-        faces, plan, trimmed, first = cuts if same else _cuts(mesh, crease, trim, carry, sag, exact)
-        points, data = carried(mesh.points, plan), carried_data(mesh.point_data, plan)
-        if lift is not None and first < len(points):  # the halvings' points on the surface
-            points[first:], heights = lift(points[first:])
-            if "height" in data:
-                data["height"][first:] = heights
-        if trimmed and len(used := np.unique(faces)) < len(points):
-            index = np.zeros(len(points), dtype=faces.dtype)
-            index[used] = np.arange(len(used))
-            points, faces = points[used], index[faces]
-            data = {name: values[used] for name, values in data.items()}
-        out.append((TriangleMesh(carry(points), faces, data), points))
-    return out
+    by more than `sag` (`_cuts`) and carried into 3D by `carry`, with its points before they
+    were carried (Result.blade_xy: laid flat again, a tube's seam is ambiguous)."""
+    faces, plan, trimmed, first, bent = _cuts(mesh, crease, trim, carry, sag, exact)
+    points, data = carried(mesh.points, plan), carried_data(mesh.point_data, plan)
+    if lift is not None and first < len(points):  # the halvings' points on the surface
+        points[first:], heights = lift(points[first:])
+        if "height" in data:
+            data["height"][first:] = heights
+    # the points before the halvings were carried by sag_splits already
+    carried_points = carry(points) if bent is None else np.vstack([bent, carry(points[first:])])
+    if trimmed and len(used := np.unique(faces)) < len(points):
+        index = np.zeros(len(points), dtype=faces.dtype)
+        index[used] = np.arange(len(used))
+        points, carried_points, faces = points[used], carried_points[used], index[faces]
+        data = {name: values[used] for name, values in data.items()}
+    return TriangleMesh(carried_points, faces, data), points
 
 
 def _onto_surface(result: Result) -> Lift:
@@ -437,45 +427,59 @@ def _onto_surface(result: Result) -> Lift:
 
 def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
     """The flat blade's `result` carried into 3D by `leaf.bend`, measured against `leaf` (its
-    unit-size run as well, through `units`); `result` itself when the leaf has no bend."""
+    unit-size run as well, through `units`); `result` itself when the leaf has no bend. The
+    mesh is bent once, at unit size, and put in the input's units as in_world puts every run's
+    (bent at both sizes, the cuts, the carry and the halvings' lift ran twice: a quarter of a
+    bent run's time over the flat one's)."""
     bend = leaf.bend
     if bend is None:
         return result
-
-    def in_units(points: np.ndarray) -> np.ndarray:
-        return units.to_unit(bend.apply(units.to_world(points)))
-
-    unit = result.unit
     sag = getattr(bend, "sag", None)
-    meshes, carries, creases = [result.triangle_mesh], [bend.apply], [bend.crease]
-    trims = [bend.trim]  # a scan's holes (core/sheet.Scaled.trim)
-    lifts = [None if sag is None else _onto_surface(result)]
-    if unit is not None:  # the same mesh at unit size: cut along the same lines
-        meshes.append(unit.triangle_mesh)
-        carries.append(in_units)
-        creases.append(lambda points: bend.crease(units.to_world(points)))
-        trims.append(lambda points: bend.trim(units.to_world(points)))
-        lifts.append(None if sag is None else _onto_surface(unit))
     # a pose's chords are kept on it (`sag`); a scan's sheet (core/sheet.py) has none: its fit is
     # at the scanner's noise (0.5% of the length), and halving the edges its spline's relief
     # curves gave soybean pot1_1 30 times the faces for 0.04% of the length
     exact = getattr(bend, "exact_creases", lambda: 0)()  # a pose's fold; a scan's sheet: none
-    bent = _bent_meshes(meshes, carries, creases, trims, sag, lifts, exact)
-    if unit is not None:
-        unit = replace(
-            unit,
-            leaf=units.leaf(leaf),
-            surface_points=in_units(unit.surface_points),
-            triangle_mesh=bent[1][0],
-            blade_xy=unit.frame.to_plane(bent[1][1])[0],
+    unit = result.unit
+    if unit is None:  # a run at its own size
+        lift = None if sag is None else _onto_surface(result)
+        mesh, flat = _bent_mesh(
+            result.triangle_mesh, bend.apply, bend.crease, bend.trim, sag, lift, exact
         )
+        return replace(
+            result,
+            leaf=leaf,
+            surface_points=bend.apply(result.surface_points),
+            triangle_mesh=mesh,
+            blade_xy=result.frame.to_plane(flat)[0],
+        )
+
+    def in_units(points: np.ndarray) -> np.ndarray:
+        return units.to_unit(bend.apply(units.to_world(points)))
+
+    mesh, flat = _bent_mesh(
+        unit.triangle_mesh,
+        in_units,
+        lambda points: bend.crease(units.to_world(points)),
+        lambda points: bend.trim(units.to_world(points)),
+        sag,
+        None if sag is None else _onto_surface(unit),
+        exact,
+    )
+    surface_points = in_units(unit.surface_points)
+    unit = replace(
+        unit,
+        leaf=units.leaf(leaf),
+        surface_points=surface_points,
+        triangle_mesh=mesh,
+        blade_xy=unit.frame.to_plane(flat)[0],
+    )
     return replace(
         result,
         leaf=leaf,
-        surface_points=bend.apply(result.surface_points),
-        triangle_mesh=bent[0][0],
+        surface_points=units.to_world(surface_points),
+        triangle_mesh=units.mesh(mesh),
         unit=unit,
-        blade_xy=result.frame.to_plane(bent[0][1])[0],
+        blade_xy=result.frame.to_plane(units.to_world(flat))[0],
     )
 
 

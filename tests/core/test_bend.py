@@ -117,7 +117,7 @@ def test_edges_a_bend_sags_are_halved_until_their_chords_lie_on_it_and_the_mesh_
     mesh = _grid_mesh(11, 0.5, jitter=0.01)
     points, faces = mesh.points, mesh.regular_faces
     assert _gaps(points, faces, _wrapped).max() > 4e-3
-    split, plan = sag_splits(points, faces, _wrapped, 1e-4)
+    split, plan, _ = sag_splits(points, faces, _wrapped, 1e-4)
     cut = TriangleMesh(carried(points, plan), split, carried_data(mesh.point_data, plan))
     assert _gaps(cut.points, split, _wrapped).max() <= 1e-4
     assert len(cut.points) > 4 * len(points) and np.array_equal(cut.points[: len(points)], points)
@@ -133,7 +133,7 @@ def test_edges_a_bend_sags_are_halved_until_their_chords_lie_on_it_and_the_mesh_
 def test_a_bend_that_sags_no_edge_leaves_the_mesh_as_it_is():
     mesh = _grid_mesh(6, 0.5)
     sheared = lambda p: p + p[:, [1]] * [0.0, 0.0, 2.0]  # noqa: E731 (linear: no sag)
-    faces, plan = sag_splits(mesh.points, mesh.regular_faces, sheared, 1e-9)
+    faces, plan, _ = sag_splits(mesh.points, mesh.regular_faces, sheared, 1e-9)
     assert np.array_equal(faces, mesh.regular_faces) and plan == []
 
 
