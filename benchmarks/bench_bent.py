@@ -126,7 +126,7 @@ def off_own(result: ls.Result, pose: Pose | None, own: Callable[[np.ndarray], np
     it kept on its flat blade, Result.mesh_on_blade: laid flat again, a twisted tube's points by
     its seam fall on the other margin) and compared with its own height there."""
     points = np.asarray(result.triangle_mesh.points)
-    if result.blade_xy is not None:
+    if pose is not None and result.leaf.bend is pose:  # today's run may have fitted a bend
         flat = result.frame.to_world(*result.mesh_on_blade())
     else:
         flat = points if pose is None else pose.flatten(points)
