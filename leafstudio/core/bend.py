@@ -40,7 +40,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -53,7 +53,8 @@ if TYPE_CHECKING:
     from leafstudio.core.prepare.units import Units
 
 
-ROLL_STEP = 0.1  # radians of roll between cuts: a chord's sag 0.1% of the radius, its area 0.04%
+ROLL_SAG = 1.25e-3  # of a roll's radius: a bent chord stands no farther off (sag_splits); what
+# cuts every 0.1 radians of roll kept it to, r (1 − cos 0.05), and 8.7 of a bent run's 61 ms
 STRETCH_STEP = 1e-6  # normal_stretch's difference step, of the points' largest coordinate
 SAG = 1e-4  # sag_splits: a bent edge's midpoint may stand this share of the mesh's extent off
 SAG_ROUNDS = 6  # ... its chord; each round halves the edges that do (a quarter of the sag)
@@ -71,7 +72,6 @@ class Pose:
     curl: float = 0.0
     roll: float = 0.0
     twist: float = 0.0  # radians the cross-section turns about the midrib per unit of length
-    sag: ClassVar[float] = SAG  # the bent mesh's chords are kept this close to it (sag_splits)
 
     def apply(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) flat blade points, bent: rolled, folded, twisted about the midrib, then
@@ -135,16 +135,15 @@ class Pose:
         return int(self.fold != 0)
 
     def crease(self, points: np.ndarray) -> np.ndarray | None:
-        """(n,) or (m, n) signed distances of flat points from the lines the bend creases along
-        (the midrib, y = 0, for a fold; lines along the midrib ROLL_STEP radians of roll apart,
-        so no chord cuts across a roll), or None when it has none: the mesh is cut there first."""
-        y = np.asarray(points, dtype=float)[:, 1]
-        lines = [0.0] if self.fold != 0 else []
-        if self.roll != 0 and len(y):
-            step = ROLL_STEP / abs(self.roll)
-            ends = np.ceil(np.abs([y.min(), y.max()]) / step)
-            lines += [j * step for j in range(-int(ends[0]), int(ends[1]) + 1) if j != 0]
-        return None if not lines else y[None, :] - np.array(lines)[:, None]
+        """(n,) signed distances of flat points from the line the bend creases along (the
+        midrib, y = 0, for a fold), or None when it has none: the mesh is cut there first."""
+        return np.asarray(points, dtype=float)[:, 1] if self.fold != 0 else None
+
+    def sag_tolerance(self, extent: float) -> float:
+        """How far a bent chord of a mesh `extent` across may stand off the bent surface
+        (sag_splits): SAG of the extent, and ROLL_SAG of a roll's radius (a grass blade's tube,
+        a hundredth of its length across)."""
+        return min(SAG * extent, ROLL_SAG / abs(self.roll)) if self.roll else SAG * extent
 
 
 def carried_vectors(bend, points: np.ndarray, vectors: np.ndarray) -> np.ndarray:
@@ -373,23 +372,26 @@ def _halved(faces: np.ndarray, middle: np.ndarray) -> np.ndarray:
     return np.vstack(pieces).astype(faces.dtype)
 
 
+Tolerance = Callable[[float], float]  # a mesh's extent -> how far its bent chords may sag
+
+
 def _cuts(
-    mesh: TriangleMesh, crease, trim, carry, sag: float | None, exact: int
+    mesh: TriangleMesh, crease, trim, carry, sag: Tolerance | None, exact: int
 ) -> tuple[np.ndarray, Plan, bool, int, np.ndarray | None]:
     """`_crease_cuts`, then the edges the bend `carry` sags off their chord by more than `sag`
-    of the mesh's extent halved (`sag_splits`; None: none), the first halving's point, and the
-    points before it carried (None when no halving ran)."""
+    of the mesh's extent gives halved (`sag_splits`; None: none), the first halving's point,
+    and the points before it carried (None when no halving ran)."""
     faces, plan, trimmed = _crease_cuts(mesh, crease, trim, exact)
     first = len(mesh.points) + sum(len(t) for _, t in plan)
     if sag is None or not len(mesh.points):
         return faces, plan, trimmed, first, None
-    tolerance = sag * float(np.ptp(mesh.points, axis=0).max())
+    tolerance = sag(float(np.ptp(mesh.points, axis=0).max()))
     faces, more, bent = sag_splits(carried(mesh.points, plan), faces, carry, tolerance)
     return faces, plan + more, trimmed, first, bent[:first]
 
 
 def _bent_mesh(
-    mesh: TriangleMesh, carry, crease, trim, sag: float | None, lift: Lift | None, exact: int
+    mesh: TriangleMesh, carry, crease, trim, sag: Tolerance | None, lift: Lift | None, exact: int
 ) -> tuple[TriangleMesh, np.ndarray]:
     """The mesh cut along the bend's creases (`crease`, in its units), trimmed (`trim`, see
     _crease_cuts; the points no face keeps dropped), its edges halved where the bend sags them
@@ -434,7 +436,7 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
     bend = leaf.bend
     if bend is None:
         return result
-    sag = getattr(bend, "sag", None)
+    sag = getattr(bend, "sag_tolerance", None)
     # a pose's chords are kept on it (`sag`); a scan's sheet (core/sheet.py) has none: its fit is
     # at the scanner's noise (0.5% of the length), and halving the edges its spline's relief
     # curves gave soybean pot1_1 30 times the faces for 0.04% of the length
@@ -461,7 +463,7 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
         in_units,
         lambda points: bend.crease(units.to_world(points)),
         lambda points: bend.trim(units.to_world(points)),
-        sag,
+        None if sag is None else lambda extent: sag(extent * units.scale) / units.scale,
         None if sag is None else _onto_surface(unit),
         exact,
     )

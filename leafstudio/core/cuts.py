@@ -24,8 +24,8 @@ def cut_levels(
     (m,) bools `loose` may pass through a corner near it instead (`_snapped`).
 
     One level after another, each over the triangles across it only (pieces across a higher one
-    wait for it): a roll's 30-odd lines cost about what one did when each cut went over the whole
-    mesh (a roll took 3.8 times a flat run's time)."""
+    wait for it): a roll's 30-odd lines (when a roll was cut every 0.1 radians) cost about what
+    one did when each cut went over the whole mesh (a roll took 3.8 times a flat run's time)."""
     faces = np.asarray(faces)
     levels = np.asarray(levels, dtype=float)
     if loose is not None and np.any(loose):

@@ -11,11 +11,10 @@ and maps them back. It is a `model.Bend`, so the pipeline flattens and bends it 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar
 
 import numpy as np
 
-from leafstudio.core.bend import SAG, Pose
+from leafstudio.core.bend import Pose
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.prepare.vein_order import midrib_turned
 from leafstudio.model import Leaf
@@ -27,7 +26,6 @@ class PlacedPose:
 
     pose: Pose
     frame: Frame
-    sag: ClassVar[float] = SAG  # the bent mesh's chords are kept this close to it (Pose.sag)
 
     def _blade(self, points: np.ndarray) -> np.ndarray:
         xy, z = self.frame.to_plane(points)
@@ -65,6 +63,10 @@ class PlacedPose:
     def exact_creases(self) -> int:
         """The pose's (Pose.exact_creases)."""
         return self.pose.exact_creases()
+
+    def sag_tolerance(self, extent: float) -> float:
+        """The pose's (Pose.sag_tolerance): its frame keeps lengths."""
+        return self.pose.sag_tolerance(extent)
 
 
 def blade_frame(leaf: Leaf, plane: Frame | None = None) -> Frame:
