@@ -129,11 +129,6 @@ class Pose:
         entry |= {"roll": self.roll} if self.roll != 0 else {}
         return entry | ({"twist": self.twist} if self.twist != 0 else {})
 
-    def exact_creases(self) -> int:
-        """How many of `crease`'s lines, first, are true creases (the fold's midrib); the others
-        (a roll's, only keeping chords off the bend) may pass through a corner near them."""
-        return int(self.fold != 0)
-
     def crease(self, points: np.ndarray) -> np.ndarray | None:
         """(n,) signed distances of flat points from the line the bend creases along (the
         midrib, y = 0, for a fold), or None when it has none: the mesh is cut there first."""
@@ -284,17 +279,14 @@ def unseamed(v: np.ndarray, roll: float, ring: bool = False) -> np.ndarray:
 Lift = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]  # points onto a surface, and heights
 
 
-def _crease_cuts(mesh: TriangleMesh, crease, trim, exact: int) -> tuple[np.ndarray, Plan, bool]:
-    """The mesh's faces cut along the bend's creases, the plan of the new points, and whether
-    `trim` cut any. The creases are parallel lines: the first one's distances and the others'
-    offsets from it say where each runs. `trim` (model.Bend.trim: a scan's holes): the faces
-    also cut where it is zero, and those where it is negative dropped."""
+def _crease_cuts(mesh: TriangleMesh, crease, trim) -> tuple[np.ndarray, Plan, bool]:
+    """The mesh's faces cut along the bend's crease (where `crease` is zero: a fold's midrib),
+    the plan of the new points, and whether `trim` cut any. `trim` (model.Bend.trim: a scan's
+    holes): the faces also cut where it is zero, and those where it is negative dropped."""
     side = crease(mesh.points)
     faces, plan = mesh.regular_faces, []
     if side is not None:
-        side = np.atleast_2d(side)
-        loose = np.arange(len(side)) >= exact  # the bend's own creases are cut exactly
-        faces, plan = cut_levels(faces, side[0], side[0, 0] - side[:, 0], loose)
+        faces, plan = cut_levels(faces, side, np.zeros(1))
     cut = trim(carried(mesh.points, plan))
     if cut is None:
         return faces, plan, False
@@ -376,12 +368,12 @@ Tolerance = Callable[[float], float]  # a mesh's extent -> how far its bent chor
 
 
 def _cuts(
-    mesh: TriangleMesh, crease, trim, carry, sag: Tolerance | None, exact: int
+    mesh: TriangleMesh, crease, trim, carry, sag: Tolerance | None
 ) -> tuple[np.ndarray, Plan, bool, int, np.ndarray | None]:
     """`_crease_cuts`, then the edges the bend `carry` sags off their chord by more than `sag`
     of the mesh's extent gives halved (`sag_splits`; None: none), the first halving's point,
     and the points before it carried (None when no halving ran)."""
-    faces, plan, trimmed = _crease_cuts(mesh, crease, trim, exact)
+    faces, plan, trimmed = _crease_cuts(mesh, crease, trim)
     first = len(mesh.points) + sum(len(t) for _, t in plan)
     if sag is None or not len(mesh.points):
         return faces, plan, trimmed, first, None
@@ -391,13 +383,13 @@ def _cuts(
 
 
 def _bent_mesh(
-    mesh: TriangleMesh, carry, crease, trim, sag: Tolerance | None, lift: Lift | None, exact: int
+    mesh: TriangleMesh, carry, crease, trim, sag: Tolerance | None, lift: Lift | None
 ) -> tuple[TriangleMesh, np.ndarray]:
     """The mesh cut along the bend's creases (`crease`, in its units), trimmed (`trim`, see
     _crease_cuts; the points no face keeps dropped), its edges halved where the bend sags them
     by more than `sag` (`_cuts`) and carried into 3D by `carry`, with its points before they
     were carried (Result.blade_xy: laid flat again, a tube's seam is ambiguous)."""
-    faces, plan, trimmed, first, bent = _cuts(mesh, crease, trim, carry, sag, exact)
+    faces, plan, trimmed, first, bent = _cuts(mesh, crease, trim, carry, sag)
     points, data = carried(mesh.points, plan), carried_data(mesh.point_data, plan)
     if lift is not None and first < len(points):  # the halvings' points on the surface
         points[first:], heights = lift(points[first:])
@@ -440,13 +432,10 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
     # a pose's chords are kept on it (`sag`); a scan's sheet (core/sheet.py) has none: its fit is
     # at the scanner's noise (0.5% of the length), and halving the edges its spline's relief
     # curves gave soybean pot1_1 30 times the faces for 0.04% of the length
-    exact = getattr(bend, "exact_creases", lambda: 0)()  # a pose's fold; a scan's sheet: none
     unit = result.unit
     if unit is None:  # a run at its own size
         lift = None if sag is None else _onto_surface(result)
-        mesh, flat = _bent_mesh(
-            result.triangle_mesh, bend.apply, bend.crease, bend.trim, sag, lift, exact
-        )
+        mesh, flat = _bent_mesh(result.triangle_mesh, bend.apply, bend.crease, bend.trim, sag, lift)
         return replace(
             result,
             leaf=leaf,
@@ -465,7 +454,6 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
         lambda points: bend.trim(units.to_world(points)),
         None if sag is None else lambda extent: sag(extent * units.scale) / units.scale,
         None if sag is None else _onto_surface(unit),
-        exact,
     )
     surface_points = in_units(unit.surface_points)
     unit = replace(

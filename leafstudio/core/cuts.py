@@ -11,26 +11,18 @@ from __future__ import annotations
 
 import numpy as np
 
-SNAP = 0.1  # cut_levels: a corner this share of a typical edge's span from a loose level: on it
-
 Plan = list[tuple[np.ndarray, np.ndarray]]  # per cut: (k, 2) edges cut and (k,) where along them
 
 
-def cut_levels(
-    faces: np.ndarray, q: np.ndarray, levels: np.ndarray, loose: np.ndarray | None = None
-) -> tuple[np.ndarray, Plan]:
+def cut_levels(faces: np.ndarray, q: np.ndarray, levels: np.ndarray) -> tuple[np.ndarray, Plan]:
     """(f', 3) faces cut along every line where the (n,) values q, linear on each triangle, equal
-    one of the (m,) levels, and the plan of the new points (`carried`). A level marked in the
-    (m,) bools `loose` may pass through a corner near it instead (`_snapped`).
+    one of the (m,) levels, and the plan of the new points (`carried`).
 
     One level after another, each over the triangles across it only (pieces across a higher one
     wait for it): a roll's 30-odd lines (when a roll was cut every 0.1 radians) cost about what
     one did when each cut went over the whole mesh (a roll took 3.8 times a flat run's time)."""
     faces = np.asarray(faces)
-    levels = np.asarray(levels, dtype=float)
-    if loose is not None and np.any(loose):
-        q = _snapped(faces, np.asarray(q, dtype=float), levels[np.asarray(loose, dtype=bool)])
-    levels = np.sort(levels)
+    levels = np.sort(np.asarray(levels, dtype=float))
     waiting: list[list[np.ndarray]] = [[] for _ in levels]
     done = [_sorted_out(faces, q, levels, waiting)]
     plan: Plan = []
@@ -46,22 +38,6 @@ def cut_levels(
         pieces = np.vstack([tri[~crossing], new.astype(faces.dtype)])
         done.append(_sorted_out(pieces, q, levels, waiting, j + 1))
     return np.vstack(done), plan
-
-
-def _snapped(faces: np.ndarray, q: np.ndarray, levels: np.ndarray) -> np.ndarray:
-    """`q` with each value within SNAP of a typical edge's span from one of `levels` set on it:
-    a cut through that corner, not a sliver beside it (a roll's cut passing 2e-4 of the length
-    from a corner left faces so thin that the bend folded them over)."""
-    if not len(levels) or not len(q):
-        return q
-    levels = np.sort(levels)
-    span = float(np.median(np.abs(q[faces] - q[np.roll(faces, 1, axis=1)])))
-    above = np.clip(np.searchsorted(levels, q), 0, len(levels) - 1)
-    below = np.maximum(above - 1, 0)
-    nearest = np.where(
-        np.abs(q - levels[below]) < np.abs(q - levels[above]), levels[below], levels[above]
-    )
-    return np.where(np.abs(q - nearest) < SNAP * span, nearest, q)
 
 
 def _sorted_out(

@@ -60,10 +60,6 @@ class PlacedPose:
         """(n,) signed distances of flat points from the pose's crease (the midrib), or None."""
         return self.pose.crease(self._blade(points))
 
-    def exact_creases(self) -> int:
-        """The pose's (Pose.exact_creases)."""
-        return self.pose.exact_creases()
-
     def sag_tolerance(self, extent: float) -> float:
         """The pose's (Pose.sag_tolerance): its frame keeps lengths."""
         return self.pose.sag_tolerance(extent)

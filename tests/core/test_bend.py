@@ -168,22 +168,3 @@ def _grid_mesh(n: int, top: float, jitter: float = 0.0) -> TriangleMesh:
         [np.column_stack([a, a + 1, a + n + 1]), np.column_stack([a, a + n + 1, a + n])]
     )
     return TriangleMesh(points, faces, {"height": points[:, 0].copy()})
-
-
-def test_a_loose_level_near_a_corner_runs_through_it_and_an_exact_one_does_not():
-    """A cut 1% of an edge's span from a row of corners leaves slivers; a loose level (a roll's
-    line, only keeping chords off the bend) is moved through the corners instead, an exact one
-    (the fold's crease) is cut where it is."""
-    mesh = _grid_mesh(5, 0.45)
-    near = np.unique(mesh.points[:, 1])[3:4] + 0.002  # a row of corners, spaced 0.24 apart
-
-    def thinnest(loose: bool) -> float:
-        faces, plan = cut_levels(mesh.regular_faces, mesh.points[:, 1], near, np.array([loose]))
-        corners = carried(mesh.points, plan)[faces]
-        return float(
-            np.linalg.norm(
-                np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
-            ).min()
-        )
-
-    assert thinnest(loose=False) < 1e-2 * thinnest(loose=True)

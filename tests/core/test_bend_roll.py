@@ -155,8 +155,8 @@ def test_a_folded_tubes_veins_lie_on_its_mesh(shape, terms):
 def test_a_rolled_and_folded_mesh_has_no_face_folded_over_its_neighbour(curl):
     """A roll's cut passing 2e-4 of the length from a corner left faces so thin that the bend
     folded them over (6 and 12 edges between faces facing nearly opposite ways, off the fold's
-    crease; 18 and 26 once the halvings' points were put on the surface): such a cut now runs
-    through the corner (bend._snapped)."""
+    crease; 18 and 26 once the halvings' points were put on the surface): such a cut ran
+    through the corner, and a roll is no longer cut at all (its chords are halved instead)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         leaf = Form("elliptic", fold=75, roll=1.0, wave=0.1, twist=0.5, curl=curl).leaf()
