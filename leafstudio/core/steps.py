@@ -286,14 +286,14 @@ def compute_surface(run: StageRun) -> SurfaceStage:
         base=fs.base,
     )
     relief = surface.mixture.value(nodes)  # M, once: the correction takes it on its lattice
+    correction = None
     if run.params.through_veins and fs.veins:  # onto every vein point (correct.py)
         surface, correction = onto_veins(
             surface, fs.heights, fs.length, run["bending"], nodes, relief, _stretch(run, surface)
         )
         if correction is not None:
             relief = relief + correction
-            return SurfaceStage(surface, surface(nodes, g_in, relief), correction)
-    return SurfaceStage(surface=surface, z=surface(nodes, g_in, relief))
+    return SurfaceStage(surface, surface(nodes, g_in, relief), correction)
 
 
 def _stretch(run: StageRun, surface: HeightSurface) -> list[np.ndarray] | None:

@@ -160,9 +160,9 @@ def render_steps(result: Any, path: str | os.PathLike, size: tuple[int, int] = S
     frame = result.frame
     view = view_frame(result)  # the plane's axes turned: its v on the plane is the views' up
     up = (float(view.v @ frame.u), float(view.v @ frame.v), 0.0)
-    flat = flat_leaf(result.leaf)  # the flat blade its steps ran on (step_slides.blade_leaf)
-    boundary_xy, _ = frame.to_plane(flat.boundary)
-    vein_xy = frame.to_plane(flat.vein_points)[0] if len(flat.vein_points) else None
+    blade = flat_leaf(result.leaf)  # the flat blade its steps ran on (step_slides.blade_leaf)
+    boundary_xy, _ = frame.to_plane(blade.boundary)
+    vein_xy = frame.to_plane(blade.vein_points)[0] if len(blade.vein_points) else None
     flat = lambda xy: np.column_stack([xy, np.zeros(len(xy))])  # noqa: E731
     outline = pv.PolyData(flat(boundary_xy))
     g = np.asarray(result.g_grid, dtype=float)
