@@ -16,6 +16,7 @@ from PySide6.QtGui import (
     QPen,
 )
 
+from leafstudio.gui.model.form_sketch import FLAT
 from leafstudio.gui.model.layers import BOUNDARY_COLOR, vein_color
 from leafstudio.gui.model.vein_profile import end_words
 from leafstudio.gui.qt.leaf_picture import polyline_path
@@ -105,6 +106,9 @@ class ProfilePainting:
             return "boundary: on the plane (a drawn leaf's boundary has no heights)"
         heights = self._outline[1]
         peak = float(heights[np.argmax(np.abs(heights))]) if len(heights) else 0.0
+        extent = float(np.ptp(self.sketch.boundary, axis=0).max()) if len(heights) else 0.0
+        if abs(peak) <= FLAT * extent:  # a posed form's blade laid flat: 4.8e-17, round-off
+            peak = 0.0
         return f"boundary, as loaded: peak {peak:.3g} (not editable)"
 
     def _draw_handles(self, painter: QPainter, palette: QPalette) -> None:

@@ -89,3 +89,22 @@ def test_a_demos_boundary_side_view_does_not_call_it_a_scan(window):
     assert side.vein == BOUNDARY and len(side.sketch.relief)
     caption = side.boundary_caption()
     assert "scan" not in caption and caption.startswith("boundary, as loaded: peak")
+
+
+def test_a_posed_forms_flat_boundary_says_its_peak_is_0(window, qtbot, tmp_path):
+    """A rolled and folded form opened from its file: the side view's boundary caption said
+    "peak 4.8e-17", the round-off of laying its blade flat."""
+    import leafstudio as ls
+    from leafstudio.forms.make import Form
+    from tests.gui.qt.conftest import wait_result
+
+    path = tmp_path / "rolled.leaf.json"
+    ls.save_leaf(Form("ovate", roll=0.5, fold=30.0).leaf(), path)
+    window.session.history.set_clean()
+    assert window.open_path(str(path))
+    qtbot.waitUntil(lambda: window.session.state.path == str(path), timeout=60_000)
+    wait_result(qtbot, window, lambda o: o.result.leaf.bend is not None)
+    side = window.editor.profile_view
+    window.editor.view.set_sketch(window.editor.view.sketch, fit=True)  # the boundary chosen
+    qtbot.waitUntil(lambda: side.vein == BOUNDARY and len(side.sketch.relief) > 0, timeout=10_000)
+    assert side.boundary_caption() == "boundary, as loaded: peak 0 (not editable)"
