@@ -3,6 +3,7 @@ beside ours.
 
     .venv/bin/python benchmarks/bench_bent.py [--poses N] [--no-scans] [--scans DIR] [--rolled]
                                               [--veins] [--variants] [--size] [--timing]
+                                              [--own]
 
 "today" runs each input as the code before issue 21 did: the posed form's points without its
 bend (`Leaf(boundary, veins)`, so the boundary's PCA plane is the leaf's) and the paper's pure
@@ -27,6 +28,8 @@ shares of the leaf's length.
 - CPU time at grid 128: a bent form beside the same form flat, best of five, interleaved;
 - rolled forms: the mesh's distance to the form's own surface rolled, and the blade's area;
 - curves in 3D unfolded: posed forms without their pose, against their own surface;
+- own surface by shape (--own, every --poses-th pose): each shape's 95th percentile flat and
+  at its worst pose, and the poses beyond 2e-3;
 - size kept (--size): a posed ovate form's 3D area and midrib length over its flat blade's: a
   fold turns each half about the midrib, a curl lays the midrib on a circle and a roll each
   cross-section, each keeping the blade's sheet (the relief drawn in a little where it bends);
@@ -179,6 +182,32 @@ def forms_over_poses(every: int) -> None:
             + ("-" if name == "today" else f"{flat_worst[0]:.1e} / {flat_worst[1]:.1e}")
             + " |"
         )
+
+
+def own_by_shape(every: int) -> None:
+    """Per shape, the 95th percentile of the mesh's distance to the form's own surface: flat,
+    and at the worst of every N-th pose, with the poses beyond the target (2e-3)."""
+    print(f"\n## own surface by shape (every {every}th pose, grid 128, K 3; target 2e-3)")
+    print("| shape | flat p95 | worst posed p95 | its pose (fold, curl, wave, roll, twist) | "
+          "poses beyond |")  # fmt: skip
+    print("|---|---|---|---|---|")
+    params = ls.Params(k=3, grid=128)
+    for shape in SHAPES:
+        flat_form = Form(shape)
+        flat = off_own(ls.reconstruct(flat_form.leaf(), params), None, own_relief(flat_form))
+        rows = []
+        for fold, curl, wave, roll, twist in POSES[::every]:
+            form = Form(shape, fold=fold, curl=curl, wave=wave, roll=roll, twist=twist)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                leaf = form.leaf()
+                result = ls.reconstruct(leaf, params)
+            p95 = np.percentile(off_own(result, leaf.bend, own_relief(form)), 95)
+            rows.append((p95, (fold, curl, wave, roll, twist)))
+        worst = max(rows)
+        beyond = sum(p > 2e-3 for p, _ in rows)
+        print(f"| {shape} | {np.percentile(flat, 95):.1e} | {worst[0]:.1e} | {worst[1]} | "
+              f"{beyond} of {len(rows)} |")  # fmt: skip
 
 
 # open_scan then reconstruct with the defaults at baf1042 (before core/sheet.py): the mean and
@@ -406,6 +435,9 @@ def main() -> int:
     )
     parser.add_argument("--size", action="store_true", help="only the size kept table")
     parser.add_argument("--timing", action="store_true", help="only the CPU time table")
+    parser.add_argument(
+        "--own", action="store_true", help="only the own surface by shape (every --poses)"
+    )
     args = parser.parse_args()
     _run(Form("ovate").leaf(), ls.Params(grid=32))  # compile the kernels before timing
     if args.veins:
@@ -419,6 +451,9 @@ def main() -> int:
         return 0
     if args.timing:
         timing()
+        return 0
+    if args.own:
+        own_by_shape(args.poses)
         return 0
     rolled_forms()
     size_kept()
