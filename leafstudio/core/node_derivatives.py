@@ -4,14 +4,14 @@ values there (correct.py: c at every node inside the leaf is known already, from
 The mesh's curvature arrays need ∇c and ∇²c at every vertex. In closed form (kelvin.
 spline_derivatives) that is every vertex against every spline centre: at grid 512 (111,687
 nodes, 200 centres) 232 ms, more than the rest of the run (the pipeline without the correction
-took 143 ms; bench_bent --timing, grid 128: 14.5 of the run's 51 ms). Most vertices are grid
+took 143 ms; at grid 128, 14.5 of a flat ovate's 51 ms). Most vertices are grid
 nodes, where c is known, so the second-order central differences there cost only array
 arithmetic; the outline's points and the few added in the margin band keep the closed form.
 
 c is smooth on the grid's scale except at its centres, where its Hessian has a log r spike
 (−kei(r/ℓ) ~ r² log r: the closed form reads it no nearer than correct.HESSIAN_CUT of the length,
-so a node a hair from a vein point took a curvature ten times the mixture's largest, a dark dot on
-every vein point in the curvature map). The differences read c over one grid step, as the mesh's
+so ∇²c reached 21 on a gallery ovate, ten times the mixture's largest Hessian, at nodes a hair
+from a vein point). The differences read c over one grid step, as the mesh's
 own triangles do: away from the centres they agree with the closed form to a few parts in 1e4
 of its largest Hessian at grid 128 (1.6e-5 at grid 512, the median), and beside a centre they
 give the curvature the mesh can show rather than the spike.
