@@ -3,7 +3,7 @@ beside ours.
 
     .venv/bin/python benchmarks/bench_bent.py [--poses N] [--no-scans] [--scans DIR] [--rolled]
                                               [--veins] [--variants] [--size] [--timing]
-                                              [--own]
+                                              [--own] [--scan-table]
 
 "today" runs each input as the code before issue 21 did: the posed form's points without its
 bend (`Leaf(boundary, veins)`, so the boundary's PCA plane is the leaf's) and the paper's pure
@@ -226,7 +226,10 @@ BEFORE_SHEET = {
 
 def scans(folder: Path) -> None:
     """open_scan then reconstruct with the defaults (as `extract` then `reconstruct`, batch and
-    the app): the scan fit (mean, 95th percentile) over the length, and the flat blade's length."""
+    the app): the scan fit (mean, 95th percentile) over the length, the flat blade's length, and
+    the mesh's smoothness: its 99th-percentile dihedral angles in the margin band and inside
+    (evaluate.margin_creases) and the spread of its mean curvature times the length (the middle
+    half's width: the bent surface's, core/bent_curvature.py)."""
     from leafstudio import workflows
 
     paths = sorted(folder.glob("*.txt"))
@@ -234,8 +237,11 @@ def scans(folder: Path) -> None:
         print(f"\n(no scans in {folder})")
         return
     print("\n## the eight scans (open_scan, reconstruct with the defaults): distance / length")
-    print("| scan | mean before | p95 before | mean | p95 | fin | length | CPU s |")
-    print("|---|---|---|---|---|---|---|---|")
+    print(
+        "| scan | mean before | p95 before | mean | p95 | fin | p99 margin / inside | H IQR "
+        "| length | CPU s |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|")
     means, before = [], []
     for path in paths:
         start = time.process_time()
@@ -246,14 +252,18 @@ def scans(folder: Path) -> None:
         blade = opened.scan[opened.extraction.blade]
         fin = fin_share(done.result.triangle_mesh, blade, fit["length"])
         mean, p95 = fit["mean"] / fit["length"], fit["p95"] / fit["length"]
+        creases = margin_creases(done.result)
+        curvature = done.result.triangle_mesh.point_data["mean_curvature"] * fit["length"]
+        spread = float(np.subtract(*np.percentile(curvature, [75, 25])))
         was = BEFORE_SHEET.get(path.stem, (float("nan"), float("nan")))
         means.append(mean)
         before.append(was[0])
         print(
             f"| {path.stem} | {was[0]:.2f}% | {was[1]:.2f}% | {mean:.2%} | {p95:.2%} | {fin:.2%} | "
+            f"{creases['margin_p99']:.1f} / {creases['interior_p99']:.1f} | {spread:.1f} | "
             f"{fit['length']:.1f} | {cpu:.1f} |"
         )
-    print(f"| mean | {np.nanmean(before):.2f}% | | {np.mean(means):.2%} | | | | |")
+    print(f"| mean | {np.nanmean(before):.2f}% | | {np.mean(means):.2%} | | | | | | |")
 
 
 def vein_distances() -> None:
@@ -426,6 +436,7 @@ def main() -> int:
     parser.add_argument("--poses", type=int, default=7, help="every N-th form and pose")
     parser.add_argument("--no-scans", action="store_true")
     parser.add_argument("--scans", type=Path, default=SCANS)
+    parser.add_argument("--scan-table", action="store_true", help="only the eight scans' table")
     parser.add_argument("--rolled", action="store_true", help="only the rolled forms' table")
     parser.add_argument(
         "--veins", action="store_true", help="only the vein distances and smoothness table"
@@ -442,6 +453,9 @@ def main() -> int:
     _run(Form("ovate").leaf(), ls.Params(grid=32))  # compile the kernels before timing
     if args.veins:
         vein_distances()
+        return 0
+    if args.scan_table:
+        scans(args.scans)
         return 0
     if args.variants:
         form_variants()

@@ -32,20 +32,20 @@ relief as high as the radius, which R - h took through the axis (a wave of 0.1 o
 the pose grid's 101 poses were refused), is drawn in toward it and never through, so every
 relief is undone exactly.
 
-The heights, curvatures and `Result.height` stay those of the flat blade's surface (its relief);
-the mesh's points are bent.
+The heights and `Result.height` stay those of the flat blade's surface (its relief); the mesh's
+points are bent (bent_mesh.py), and its curvature arrays are the bent surface's
+(bent_curvature.py: `carry_jet` takes a point's derivatives through the pose in closed form).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from leafstudio.core.cuts import Plan, carried, carried_data, cut_levels
-from leafstudio.core.trianglemesh import TriangleMesh
+from leafstudio.core.bent_curvature import Jet, affine_jet, pushed
+from leafstudio.core.bent_mesh import BentBy, Lift, bent_mesh
 from leafstudio.model import Leaf
 
 if TYPE_CHECKING:
@@ -56,8 +56,8 @@ if TYPE_CHECKING:
 ROLL_SAG = 1.25e-3  # of a roll's radius: a bent chord stands no farther off (sag_splits); what
 # cuts every 0.1 radians of roll kept it to, r (1 − cos 0.05), and 8.7 of a bent run's 61 ms
 STRETCH_STEP = 1e-6  # normal_stretch's difference step, of the points' largest coordinate
-SAG = 1e-4  # sag_splits: a bent edge's midpoint may stand this share of the mesh's extent off
-SAG_ROUNDS = 6  # ... its chord; each round halves the edges that do (a quarter of the sag)
+SAG = 1e-4  # bent_mesh.sag_splits: a bent edge's midpoint may stand this share of the mesh's
+# extent off its chord
 SEAM = 0.1  # flat_curve: points this share of a half turn from a tube's seam may lie either side
 
 
@@ -88,6 +88,19 @@ class Pose:
         if self.curl != 0:  # the axis: x = 0, z = 1 / (2 curl)
             points[:, 0], points[:, 2] = _wrapped(points[:, 0], points[:, 2], 2 * self.curl)
         return points
+
+    def carry_jet(self, jet: Jet) -> Jet:
+        """A jet of flat blade points (bent_curvature.py) bent as `apply` bends the points, in
+        closed form; on a fold's crease (y = 0) from its + side."""
+        if self.roll != 0:
+            jet = _wrap_jet(jet, 1, self.roll)
+        if self.fold != 0:
+            jet = _fold_jet(jet, np.deg2rad(self.fold))
+        if self.twist != 0:
+            jet = _twist_jet(jet, self.twist)
+        if self.curl != 0:
+            jet = _wrap_jet(jet, 0, 2 * self.curl)
+        return jet
 
     def flatten(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) bent points back on the flat blade (the inverse of `apply`, for less than half
@@ -221,6 +234,64 @@ def _unwrapped(u: np.ndarray, h: np.ndarray, k: float) -> tuple[np.ndarray, np.n
     return np.arctan2(across, toward) * r, r * _unrolled_height(np.hypot(across, toward) * abs(k))
 
 
+def _wrap_jet(jet: Jet, a: int, k: float) -> Jet:
+    """`_wrapped` of coordinate `a` (0 or 1) and the height (2), on a jet: its Jacobian and
+    second derivatives in closed form (the radius ρ = R(h k) / k, ρ' = R'(h k), ρ'' = k R''(h k),
+    R `_rolled_radius`, C¹ at h = 0; the angle's clip at half a turn taken from inside)."""
+    points, d = jet
+    b, t = 2, points[:, 2] * k
+    angle = np.clip(points[:, a] * k, -np.pi, np.pi)
+    s, c = np.sin(angle), np.cos(angle)
+    outward = t < 0  # at 0 (a margin at height 0) from the side a relief rises to
+    inward = np.exp(-np.maximum(t, 0))
+    rho = np.where(outward, 1 - t, inward) / k
+    rho1, rho2 = np.where(outward, -1.0, -inward), np.where(outward, 0.0, k * inward)
+    value = points.copy()
+    value[:, a], value[:, b] = s * rho, 1.0 / k - c * rho
+    j = np.broadcast_to(np.eye(3), (len(points), 3, 3)).copy()
+    j[:, a, a], j[:, a, b], j[:, b, a], j[:, b, b] = k * c * rho, s * rho1, k * s * rho, -c * rho1
+    hess = np.zeros((len(points), 3, 3, 3))
+    hess[:, a, a, a], hess[:, b, a, a] = -k * k * s * rho, k * k * c * rho
+    hess[:, a, a, b] = hess[:, a, b, a] = k * c * rho1
+    hess[:, b, a, b] = hess[:, b, b, a] = k * s * rho1
+    hess[:, a, b, b], hess[:, b, b, b] = s * rho2, -c * rho2
+    return pushed(value, d, j, hess)
+
+
+def _fold_jet(jet: Jet, fold: float) -> Jet:
+    """The fold on a jet (y -> y cos, z += |y| sin: linear each side of the crease, y = 0,
+    which takes its + side)."""
+    points, d = jet
+    side = np.where(points[:, 1] < 0, -1.0, 1.0)
+    value = points.copy()
+    value[:, 1] *= np.cos(fold)
+    value[:, 2] += np.abs(value[:, 1]) * np.tan(fold)
+    j = np.broadcast_to(np.eye(3), (len(points), 3, 3)).copy()
+    j[:, 1, 1], j[:, 2, 1] = np.cos(fold), side * np.sin(fold)
+    return pushed(value, d, j, None)
+
+
+def _twist_jet(jet: Jet, twist: float) -> Jet:
+    """`_turned` on a jet: y and z turned about x by twist · x."""
+    points, d = jet
+    angle = twist * points[:, 0]
+    c, s = np.cos(angle), np.sin(angle)
+    value = points.copy()
+    value[:, 1:] = _turned(points, twist)
+    y, z = value[:, 1], value[:, 2]
+    j = np.zeros((len(points), 3, 3))
+    j[:, 0, 0] = 1.0
+    j[:, 1, 0], j[:, 1, 1], j[:, 1, 2] = -twist * z, c, -s
+    j[:, 2, 0], j[:, 2, 1], j[:, 2, 2] = twist * y, s, c
+    hess = np.zeros((len(points), 3, 3, 3))
+    hess[:, 1, 0, 0], hess[:, 2, 0, 0] = -twist * twist * y, -twist * twist * z
+    hess[:, 1, 0, 1] = hess[:, 1, 1, 0] = -twist * s
+    hess[:, 1, 0, 2] = hess[:, 1, 2, 0] = -twist * c
+    hess[:, 2, 0, 1] = hess[:, 2, 1, 0] = twist * c
+    hess[:, 2, 0, 2] = hess[:, 2, 2, 0] = -twist * s
+    return pushed(value, d, j, hess)
+
+
 def _turned(points: np.ndarray, twist: float) -> np.ndarray:
     """(n, 2) y and z of (n, 3) points turned about the x axis by twist · x radians."""
     angle = twist * points[:, 0]
@@ -276,135 +347,6 @@ def unseamed(v: np.ndarray, roll: float, ring: bool = False) -> np.ndarray:
     return out
 
 
-Lift = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]  # points onto a surface, and heights
-
-
-def _crease_cuts(mesh: TriangleMesh, crease, trim) -> tuple[np.ndarray, Plan, bool]:
-    """The mesh's faces cut along the bend's crease (where `crease` is zero: a fold's midrib),
-    the plan of the new points, and whether `trim` cut any. `trim` (model.Bend.trim: a scan's
-    holes): the faces also cut where it is zero, and those where it is negative dropped."""
-    side = crease(mesh.points)
-    faces, plan = mesh.regular_faces, []
-    if side is not None:
-        faces, plan = cut_levels(faces, side, np.zeros(1))
-    cut = trim(carried(mesh.points, plan))
-    if cut is None:
-        return faces, plan, False
-    faces, more = cut_levels(faces, cut, np.zeros(1))
-    return faces[carried(cut, more)[faces].mean(axis=1) >= 0], plan + more, True
-
-
-def sag_splits(
-    points: np.ndarray, faces: np.ndarray, carry, tolerance: float
-) -> tuple[np.ndarray, Plan, np.ndarray]:
-    """(f', 3) faces with every edge halved whose midpoint the bend `carry` takes farther than
-    `tolerance` from the bent chord, the plan of the new points (`carried`), SAG_ROUNDS
-    times at most, and every point carried (the new ones from their flat chord).
-
-    The flat mesh is fine for the flat surface, but a strong bend curves each of its triangles:
-    a fold of 75° on a rolled, twisted oblong blade bent the chords of a grid-128 mesh 1.4e-3
-    of the length off the bent surface. A face is cut in as many pieces as it has edges halved,
-    plus one (a conforming mesh, its winding kept). An edge of a face left whole passed: each
-    later round looks at the new faces' edges only. _bent_meshes then puts the new points on the
-    flat surface (`_onto_surface`) rather than on the flat chord, which the bend stretches (up
-    to 3 times on a folded tube: the last 1.03-1.05e-3 of the pose grid)."""
-    points, faces = np.asarray(points, dtype=float), np.asarray(faces)
-    bent, plan, done = carry(points), [], []
-    for _ in range(SAG_ROUNDS):  # after the first, over the faces the last one made only
-        n = len(points)
-        after = faces[:, [1, 2, 0]]
-        low, high = np.minimum(faces, after).astype(np.int64), np.maximum(faces, after)
-        every = (low * n + high).ravel()
-        codes = np.sort(every)  # np.unique took 6 ms (with its inverse) of a 25,000-face mesh
-        codes = codes[np.append(True, codes[1:] != codes[:-1])]
-        keys = np.column_stack([codes // n, codes % n])
-        middle = 0.5 * (points[keys[:, 0]] + points[keys[:, 1]])
-        there = carry(middle)
-        off = there - bent[keys[:, 0]]
-        off -= bent[keys[:, 1]]
-        off += there  # twice the midpoint's offset from the chord's
-        off /= tolerance  # in tolerances: squared in the leaf's units, a leaf at 1e300 overflowed
-        marked = np.einsum("ij,ij->i", off, off) > 4.0
-        if not marked.any():
-            break
-        halved = codes[marked]  # sorted: the new points are numbered in this order
-        hit = np.isin(every, halved).reshape(faces.shape)  # (a, b), (b, c), (c, a) halved
-        touched = hit.any(axis=1)  # few faces: the others are kept whole without a search
-        done.append(faces[~touched])
-        rank = np.searchsorted(halved, every.reshape(faces.shape)[touched])
-        faces = _halved(faces[touched], np.where(hit[touched], n + rank, -1))
-        points, bent = np.vstack([points, middle[marked]]), np.vstack([bent, there[marked]])
-        plan.append((keys[marked], np.full(np.count_nonzero(marked), 0.5)))
-    return np.vstack([*done, faces]) if done else faces, plan, bent
-
-
-def _halved(faces: np.ndarray, middle: np.ndarray) -> np.ndarray:
-    """(f', 3) faces with the (f, 3) `middle` points of their edges (a, b), (b, c), (c, a)
-    (-1: not halved) put in: one edge halved cuts a face in two, two in three, three in four,
-    each piece wound as the face."""
-    count = (middle >= 0).sum(axis=1)
-    pieces = [faces[count == 0]]
-    for halved in (1, 2):  # turned so the halved edges are (a, b), then (b, c)
-        these = count == halved
-        first = np.argmax(middle[these] >= 0, axis=1)
-        if halved == 2:  # the edge after the whole one comes first
-            first = (np.argmax(middle[these] < 0, axis=1) + 1) % 3
-        turn = (first[:, None] + np.arange(3)) % 3
-        a, b, c = np.take_along_axis(faces[these], turn, axis=1).T
-        ab, bc, _ = np.take_along_axis(middle[these], turn, axis=1).T
-        if halved == 1:
-            pieces += [np.column_stack([a, ab, c]), np.column_stack([ab, b, c])]
-        else:
-            pieces += [np.column_stack([ab, b, bc]), np.column_stack([a, ab, bc]),
-                       np.column_stack([a, bc, c])]  # fmt: skip
-    a, b, c = faces[count == 3].T
-    ab, bc, ca = middle[count == 3].T
-    pieces += [np.column_stack([a, ab, ca]), np.column_stack([ab, b, bc]),
-               np.column_stack([ca, bc, c]), np.column_stack([ab, bc, ca])]  # fmt: skip
-    return np.vstack(pieces).astype(faces.dtype)
-
-
-Tolerance = Callable[[float], float]  # a mesh's extent -> how far its bent chords may sag
-
-
-def _cuts(
-    mesh: TriangleMesh, crease, trim, carry, sag: Tolerance | None
-) -> tuple[np.ndarray, Plan, bool, int, np.ndarray | None]:
-    """`_crease_cuts`, then the edges the bend `carry` sags off their chord by more than `sag`
-    of the mesh's extent gives halved (`sag_splits`; None: none), the first halving's point,
-    and the points before it carried (None when no halving ran)."""
-    faces, plan, trimmed = _crease_cuts(mesh, crease, trim)
-    first = len(mesh.points) + sum(len(t) for _, t in plan)
-    if sag is None or not len(mesh.points):
-        return faces, plan, trimmed, first, None
-    tolerance = sag(float(np.ptp(mesh.points, axis=0).max()))
-    faces, more, bent = sag_splits(carried(mesh.points, plan), faces, carry, tolerance)
-    return faces, plan + more, trimmed, first, bent[:first]
-
-
-def _bent_mesh(
-    mesh: TriangleMesh, carry, crease, trim, sag: Tolerance | None, lift: Lift | None
-) -> tuple[TriangleMesh, np.ndarray]:
-    """The mesh cut along the bend's creases (`crease`, in its units), trimmed (`trim`, see
-    _crease_cuts; the points no face keeps dropped), its edges halved where the bend sags them
-    by more than `sag` (`_cuts`) and carried into 3D by `carry`, with its points before they
-    were carried (Result.blade_xy: laid flat again, a tube's seam is ambiguous)."""
-    faces, plan, trimmed, first, bent = _cuts(mesh, crease, trim, carry, sag)
-    points, data = carried(mesh.points, plan), carried_data(mesh.point_data, plan)
-    if lift is not None and first < len(points):  # the halvings' points on the surface
-        points[first:], heights = lift(points[first:])
-        if "height" in data:
-            data["height"][first:] = heights
-    # the points before the halvings were carried by sag_splits already
-    carried_points = carry(points) if bent is None else np.vstack([bent, carry(points[first:])])
-    if trimmed and len(used := np.unique(faces)) < len(points):
-        index = np.zeros(len(points), dtype=faces.dtype)
-        index[used] = np.arange(len(used))
-        points, carried_points, faces = points[used], carried_points[used], index[faces]
-        data = {name: values[used] for name, values in data.items()}
-    return TriangleMesh(carried_points, faces, data), points
-
-
 def _onto_surface(result: Result) -> Lift:
     """A function taking (n, 3) points of the flat run's mesh onto its surface along the
     plane's normal: the points, and their heights (sag_splits' new points, on the surface, not
@@ -435,7 +377,9 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
     unit = result.unit
     if unit is None:  # a run at its own size
         lift = None if sag is None else _onto_surface(result)
-        mesh, flat = _bent_mesh(result.triangle_mesh, bend.apply, bend.crease, bend.trim, sag, lift)
+        carry_jet = getattr(bend, "carry_jet", None)
+        by = BentBy(bend.apply, bend.crease, bend.trim, result.frame, carry_jet)
+        mesh, flat = bent_mesh(result.triangle_mesh, by, sag, lift)
         return replace(
             result,
             leaf=leaf,
@@ -447,11 +391,21 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
     def in_units(points: np.ndarray) -> np.ndarray:
         return units.to_unit(bend.apply(units.to_world(points)))
 
-    mesh, flat = _bent_mesh(
+    def crease(points: np.ndarray) -> np.ndarray | None:
+        off = bend.crease(units.to_world(points))
+        return None if off is None else off / units.scale
+
+    def trim(points: np.ndarray) -> np.ndarray | None:
+        return bend.trim(units.to_world(points))
+
+    has_jet = hasattr(bend, "carry_jet")  # a pose's; a scan's sheet is differenced
+
+    def jet_in_units(jet: Jet) -> Jet:
+        return affine_jet(units.to_unit, bend.carry_jet(affine_jet(units.to_world, jet)))
+
+    mesh, flat = bent_mesh(
         unit.triangle_mesh,
-        in_units,
-        lambda points: bend.crease(units.to_world(points)),
-        lambda points: bend.trim(units.to_world(points)),
+        BentBy(in_units, crease, trim, unit.frame, jet_in_units if has_jet else None),
         None if sag is None else lambda extent: sag(extent * units.scale) / units.scale,
         None if sag is None else _onto_surface(unit),
     )

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from leafstudio.core.bend import Pose
+from leafstudio.core.bent_curvature import Jet, affine_jet
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.prepare.vein_order import midrib_turned
 from leafstudio.model import Leaf
@@ -37,6 +38,10 @@ class PlacedPose:
     def apply(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) flat blade points, bent."""
         return self._world(self.pose.apply(self._blade(points)))
+
+    def carry_jet(self, jet: Jet) -> Jet:
+        """A jet of flat points, bent (Pose.carry_jet, in the pose's frame)."""
+        return affine_jet(self._world, self.pose.carry_jet(affine_jet(self._blade, jet)))
 
     def flatten(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) bent points back on the flat blade (the inverse of `apply`)."""

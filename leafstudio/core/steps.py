@@ -14,6 +14,7 @@ from leafstudio.core import mesher
 from leafstudio.core.autok import choose_mixture
 from leafstudio.core.base import PLANAR, BaseSurface, fit_base
 from leafstudio.core.bend import normal_stretch
+from leafstudio.core.bent_curvature import jet_of
 from leafstudio.core.correct import Pinning, onto_veins, pinning
 from leafstudio.core.curvature import graph_curvatures
 from leafstudio.core.gmm import Mixture, fit_mixture, fit_signed_mixture, sample_guide
@@ -390,4 +391,5 @@ def compute_mesh(run: StageRun) -> TriangleMesh:
         points=world,
         regular_faces=triangles,
         point_data={"height": z, **graph_curvatures(grad, hess)},
+        jet=jet_of(grad, hess),
     )

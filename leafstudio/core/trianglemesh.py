@@ -42,11 +42,15 @@ class MeshLike(Protocol):
 
 @dataclass(frozen=True, eq=False)
 class TriangleMesh:
-    """(n, 3) points, (m, 3) triangles and named (n,) point arrays."""
+    """(n, 3) points, (m, 3) triangles and named (n,) point arrays; a run's mesh also has its
+    surface's jet, (n, 5) ∇z and ∇²z at each point in the run's plane (zx, zy, zxx, zxy, zyy):
+    what a bend takes the bent surface's curvatures from (core/bent_curvature.py), never
+    exported."""
 
     points: np.ndarray
     regular_faces: np.ndarray
     point_data: dict[str, np.ndarray] = field(default_factory=dict)
+    jet: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def n_points(self) -> int:

@@ -81,7 +81,7 @@ def test_compare_at_extreme_scales_answers(tmp_path, scale, capsys):
 @pytest.mark.parametrize("command", ["reconstruct", "compare"])
 def test_a_bent_leaf_at_extreme_scales_answers(tmp_path, scale, command, capsys):
     """A posed form's curves at 1e300 (unfolded: Pipeline fits their bend) were an internal
-    error (OverflowError: the bent chords' sag squared in the leaf's units, bend.sag_splits),
+    error (OverflowError: the bent chords' sag squared in the leaf's units, bent_mesh.sag_splits),
     in `reconstruct` and `compare`."""
     if command == "compare":
         pytest.importorskip("open3d")

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import leafstudio as ls
-from leafstudio.core.bend import Pose, sag_splits
+from leafstudio.core.bend import Pose
+from leafstudio.core.bent_mesh import sag_splits
 from leafstudio.core.cuts import carried, carried_data, cut_levels
 from leafstudio.core.evaluate import mesh_facts
 from leafstudio.core.trianglemesh import TriangleMesh

@@ -141,7 +141,7 @@ def test_a_folded_tubes_veins_lie_on_its_mesh(shape, terms):
     """A fold on a roll shears the rolled section: a vein point the flat run left 4e-4 of the
     length off its surface stood up to 3.9 times that off the bent mesh (1.4e-3 before), and
     the bend curves the flat mesh's chords (the oblong's 1.39e-3 and the oblanceolate's 1.19e-3
-    of the length before the sagging edges were halved, bend.sag_splits); the elliptic tubes'
+    of the length before the sagging edges were halved, bent_mesh.sag_splits); the elliptic tubes'
     1.05e-3 and 1.03e-3 were the flat mesh's own chords, stretched 3 times by the bend, until
     the halvings' points were put on the surface."""
     with warnings.catch_warnings():
@@ -181,7 +181,7 @@ def test_a_roll_keeps_its_chords_within_a_share_of_its_radius():
     """A rolled mesh was cut along the midrib every 0.1 radians of roll, so that no chord cut
     across the roll (r (1 − cos 0.05) = 1.25e-3 of the radius): 33 cut lines on a rolled ovate,
     8.7 of its run's 61 ms. Its chords are now halved where they sag by more than that share of
-    the radius (Pose.sag_tolerance, bend.sag_splits): a grass blade's tube, a hundredth of its
+    the radius (Pose.sag_tolerance, bent_mesh.sag_splits): a grass blade's tube, a hundredth of its
     length across, is as round as the cuts kept it."""
     assert Pose(roll=40.0).sag_tolerance(1.0) == pytest.approx(ROLL_SAG / 40.0)  # a tight roll
     assert Pose(roll=0.01).sag_tolerance(1.0) == pytest.approx(SAG)  # a gentle roll: the extent's

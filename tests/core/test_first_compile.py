@@ -62,10 +62,12 @@ def test_each_kernel_of_the_tables_is_the_one_a_run_or_measuring_calls():
     from PIL import Image
 
     from leafstudio.assets.texture import bleed
+    from leafstudio.forms.make import Form
     from tests.leaves import noisy
 
     assert ls.Pipeline(ls.demo("nested")).run(ls.Params()).metrics
     ls.Pipeline(noisy("nested")).run(ls.Params(grid=32))  # a cloud: its projection
+    ls.Pipeline(Form("ovate", roll=0.3).leaf()).run(ls.Params(grid=32))  # a bent one's curvatures
     rgba = np.zeros((8, 8, 4), np.uint8)
     rgba[2:5, 3:6] = 200
     bleed(Image.fromarray(rgba, "RGBA"))  # a texture's edge padding

@@ -1,0 +1,168 @@
+"""A flat run's mesh carried into 3D by a bend (bend.py): cut along its crease, trimmed, its
+chords halved where the bend sags them, and its curvatures the bent surface's
+(bent_curvature.py)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numpy as np
+
+from leafstudio.core.bent_curvature import Jet, bent_curvatures
+from leafstudio.core.cuts import Plan, carried, carried_data, cut_levels
+from leafstudio.core.plane import Frame
+from leafstudio.core.trianglemesh import TriangleMesh
+
+SAG_ROUNDS = 6  # sag_splits halves the edges that sag too far this many rounds at most (each
+# round a quarter of the sag)
+
+Lift = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]  # points onto a surface, and heights
+
+
+def _crease_cuts(mesh: TriangleMesh, crease, trim) -> tuple[np.ndarray, Plan, bool]:
+    """The mesh's faces cut along the bend's crease (where `crease` is zero: a fold's midrib),
+    the plan of the new points, and whether `trim` cut any. `trim` (model.Bend.trim: a scan's
+    holes): the faces also cut where it is zero, and those where it is negative dropped."""
+    side = crease(mesh.points)
+    faces, plan = mesh.regular_faces, []
+    if side is not None:
+        faces, plan = cut_levels(faces, side, np.zeros(1))
+    cut = trim(carried(mesh.points, plan))
+    if cut is None:
+        return faces, plan, False
+    faces, more = cut_levels(faces, cut, np.zeros(1))
+    return faces[carried(cut, more)[faces].mean(axis=1) >= 0], plan + more, True
+
+
+def sag_splits(
+    points: np.ndarray, faces: np.ndarray, carry, tolerance: float
+) -> tuple[np.ndarray, Plan, np.ndarray]:
+    """(f', 3) faces with every edge halved whose midpoint the bend `carry` takes farther than
+    `tolerance` from the bent chord, the plan of the new points (`carried`), SAG_ROUNDS
+    times at most, and every point carried (the new ones from their flat chord).
+
+    The flat mesh is fine for the flat surface, but a strong bend curves each of its triangles:
+    a fold of 75° on a rolled, twisted oblong blade bent the chords of a grid-128 mesh 1.4e-3
+    of the length off the bent surface. A face is cut in as many pieces as it has edges halved,
+    plus one (a conforming mesh, its winding kept). An edge of a face left whole passed: each
+    later round looks at the new faces' edges only. bent_mesh then puts the new points on the
+    flat surface (`bend._onto_surface`) rather than on the flat chord, which the bend stretches (up
+    to 3 times on a folded tube: the last 1.03-1.05e-3 of the pose grid)."""
+    points, faces = np.asarray(points, dtype=float), np.asarray(faces)
+    bent, plan, done = carry(points), [], []
+    for _ in range(SAG_ROUNDS):  # after the first, over the faces the last one made only
+        n = len(points)
+        after = faces[:, [1, 2, 0]]
+        low, high = np.minimum(faces, after).astype(np.int64), np.maximum(faces, after)
+        every = (low * n + high).ravel()
+        codes = np.sort(every)  # np.unique took 6 ms (with its inverse) of a 25,000-face mesh
+        codes = codes[np.append(True, codes[1:] != codes[:-1])]
+        keys = np.column_stack([codes // n, codes % n])
+        middle = 0.5 * (points[keys[:, 0]] + points[keys[:, 1]])
+        there = carry(middle)
+        off = there - bent[keys[:, 0]]
+        off -= bent[keys[:, 1]]
+        off += there  # twice the midpoint's offset from the chord's
+        off /= tolerance  # in tolerances: squared in the leaf's units, a leaf at 1e300 overflowed
+        marked = np.einsum("ij,ij->i", off, off) > 4.0
+        if not marked.any():
+            break
+        halved = codes[marked]  # sorted: the new points are numbered in this order
+        hit = np.isin(every, halved).reshape(faces.shape)  # (a, b), (b, c), (c, a) halved
+        touched = hit.any(axis=1)  # few faces: the others are kept whole without a search
+        done.append(faces[~touched])
+        rank = np.searchsorted(halved, every.reshape(faces.shape)[touched])
+        faces = _halved(faces[touched], np.where(hit[touched], n + rank, -1))
+        points, bent = np.vstack([points, middle[marked]]), np.vstack([bent, there[marked]])
+        plan.append((keys[marked], np.full(np.count_nonzero(marked), 0.5)))
+    return np.vstack([*done, faces]) if done else faces, plan, bent
+
+
+def _halved(faces: np.ndarray, middle: np.ndarray) -> np.ndarray:
+    """(f', 3) faces with the (f, 3) `middle` points of their edges (a, b), (b, c), (c, a)
+    (-1: not halved) put in: one edge halved cuts a face in two, two in three, three in four,
+    each piece wound as the face."""
+    count = (middle >= 0).sum(axis=1)
+    pieces = [faces[count == 0]]
+    for halved in (1, 2):  # turned so the halved edges are (a, b), then (b, c)
+        these = count == halved
+        first = np.argmax(middle[these] >= 0, axis=1)
+        if halved == 2:  # the edge after the whole one comes first
+            first = (np.argmax(middle[these] < 0, axis=1) + 1) % 3
+        turn = (first[:, None] + np.arange(3)) % 3
+        a, b, c = np.take_along_axis(faces[these], turn, axis=1).T
+        ab, bc, _ = np.take_along_axis(middle[these], turn, axis=1).T
+        if halved == 1:
+            pieces += [np.column_stack([a, ab, c]), np.column_stack([ab, b, c])]
+        else:
+            pieces += [np.column_stack([ab, b, bc]), np.column_stack([a, ab, bc]),
+                       np.column_stack([a, bc, c])]  # fmt: skip
+    a, b, c = faces[count == 3].T
+    ab, bc, ca = middle[count == 3].T
+    pieces += [np.column_stack([a, ab, ca]), np.column_stack([ab, b, bc]),
+               np.column_stack([ca, bc, c]), np.column_stack([ab, bc, ca])]  # fmt: skip
+    return np.vstack(pieces).astype(faces.dtype)
+
+
+Tolerance = Callable[[float], float]  # a mesh's extent -> how far its bent chords may sag
+JET = "_jet"  # the mesh's jet, carried through the cuts as a point array
+
+
+class BentBy(NamedTuple):
+    """A bend as bent_mesh takes it, in the mesh's units: flat points to bent (`carry`), the
+    crease's signed distance and the trim (model.Bend's), the flat run's plane, and a jet to the
+    bent one (bent_curvature.py; None: differenced)."""
+
+    carry: Callable[[np.ndarray], np.ndarray]
+    crease: Callable[[np.ndarray], np.ndarray | None]
+    trim: Callable[[np.ndarray], np.ndarray | None]
+    frame: Frame
+    carry_jet: Callable[[Jet], Jet] | None
+
+
+def _cuts(
+    mesh: TriangleMesh, crease, trim, carry, sag: Tolerance | None
+) -> tuple[np.ndarray, Plan, bool, int, np.ndarray | None]:
+    """`_crease_cuts`, then the edges the bend `carry` sags off their chord by more than `sag`
+    of the mesh's extent gives halved (`sag_splits`; None: none), the first halving's point,
+    and the points before it carried (None when no halving ran)."""
+    faces, plan, trimmed = _crease_cuts(mesh, crease, trim)
+    first = len(mesh.points) + sum(len(t) for _, t in plan)
+    if sag is None or not len(mesh.points):
+        return faces, plan, trimmed, first, None
+    tolerance = sag(float(np.ptp(mesh.points, axis=0).max()))
+    faces, more, bent = sag_splits(carried(mesh.points, plan), faces, carry, tolerance)
+    return faces, plan + more, trimmed, first, bent[:first]
+
+
+def bent_mesh(
+    mesh: TriangleMesh, bend: BentBy, sag: Tolerance | None, lift: Lift | None
+) -> tuple[TriangleMesh, np.ndarray]:
+    """The mesh cut along the bend's creases (`crease`, in its units), trimmed (`trim`, see
+    _crease_cuts; the points no face keeps dropped), its edges halved where the bend sags them
+    by more than `sag` (`_cuts`) and carried into 3D by `carry`, with its points before they
+    were carried (Result.blade_xy: laid flat again, a tube's seam is ambiguous), and the bent
+    surface's curvatures (bent_curvature.py) where the mesh has its surface's jet."""
+    faces, plan, trimmed, first, bent = _cuts(mesh, bend.crease, bend.trim, bend.carry, sag)
+    extra = {} if mesh.jet is None else {JET: mesh.jet}
+    points, data = carried(mesh.points, plan), carried_data(mesh.point_data | extra, plan)
+    if lift is not None and first < len(points):  # the halvings' points on the surface
+        points[first:], heights = lift(points[first:])
+        if "height" in data:
+            data["height"][first:] = heights
+    # the points before the halvings were carried by sag_splits already
+    carried_points = (
+        bend.carry(points) if bent is None else np.vstack([bent, bend.carry(points[first:])])
+    )
+    if trimmed and len(used := np.unique(faces)) < len(points):
+        index = np.zeros(len(points), dtype=faces.dtype)
+        index[used] = np.arange(len(used))
+        points, carried_points, faces = points[used], carried_points[used], index[faces]
+        data = {name: values[used] for name, values in data.items()}
+    if extra:
+        taylor = data.pop(JET)
+        data |= bent_curvatures(
+            bend.carry, bend.carry_jet, bend.frame, points, carried_points, taylor
+        )
+    return TriangleMesh(carried_points, faces, data), points

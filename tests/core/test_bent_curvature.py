@@ -1,0 +1,120 @@
+"""A bent leaf's curvature arrays are the bent surface's (core/bent_curvature.py, issue 21): they
+were the flat blade's, so a rolled grass blade was coloured as if flat and a curled scan's
+curvature summary ignored its curl."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import leafstudio as ls
+from leafstudio.core.bend import Pose
+from leafstudio.core.bent_curvature import bent_curvatures
+from leafstudio.core.placed import PlacedPose
+from leafstudio.core.plane import Frame
+from leafstudio.core.trianglemesh import CURVATURE_ARRAYS, TriangleMesh
+from leafstudio.forms.make import Form
+
+WORLD = Frame(np.zeros(3), np.eye(3)[0], np.eye(3)[1], np.eye(3)[2])
+
+
+@pytest.fixture(scope="module")
+def flat_mesh():
+    """The flat ovate's unit-size mesh (with its surface's jet) and its plane."""
+    result = ls.reconstruct(Form("ovate").leaf(), ls.Params(k=3, grid=64))
+    unit = result.unit or result
+    return unit.triangle_mesh, unit.frame
+
+
+def _curvatures(bend, mesh: TriangleMesh, frame: Frame, analytic: bool) -> dict:
+    flat, jet = mesh.points, mesh.jet
+    carry_jet = bend.carry_jet if analytic else None
+    return bent_curvatures(bend.apply, carry_jet, frame, flat, bend.apply(flat), jet)
+
+
+class Identity:
+    def apply(self, points):
+        return np.array(points, dtype=float)
+
+    def carry_jet(self, jet):
+        return jet
+
+
+@pytest.mark.parametrize("analytic", [True, False])
+def test_no_bend_gives_the_flat_surfaces_curvatures(flat_mesh, analytic):
+    mesh, frame = flat_mesh
+    got = _curvatures(Identity(), mesh, frame, analytic)
+    for name in CURVATURE_ARRAYS:
+        want = mesh.point_data[name]
+        assert np.abs(got[name] - want).max() < 1e-6 * np.abs(want).max(), name
+
+
+@pytest.mark.parametrize(
+    "pose",
+    [
+        Pose(fold=60.0),
+        Pose(roll=4.0),
+        Pose(twist=1.5),
+        Pose(curl=0.6),
+        Pose(fold=-45.0, curl=0.5, roll=3.0, twist=0.8),
+    ],
+)
+def test_a_pose_carries_a_jet_as_its_stencils_differences_do(flat_mesh, pose):
+    """The closed form (Pose.carry_jet) against central differences of the carried points, away
+    from a fold's crease and from height 0, where a roll's radius is C¹ only (_rolled_radius):
+    the stencil would straddle them."""
+    mesh, frame = flat_mesh
+    placed = PlacedPose(pose, frame)  # the blade's frame is the run's plane here
+    exact = _curvatures(placed, mesh, frame, analytic=True)
+    differenced = _curvatures(placed, mesh, frame, analytic=False)
+    xy, z = frame.to_plane(mesh.points)
+    clear = (np.abs(xy[:, 1]) > 1e-3) & (np.abs(z) > 1e-3)
+    assert np.count_nonzero(clear) > 0.7 * len(z)
+    for name in CURVATURE_ARRAYS:
+        scale = np.abs(exact[name]).max()
+        assert np.abs(exact[name] - differenced[name])[clear].max() < 1e-4 * scale, name
+
+
+def _plane_points(n: int = 50) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(3)
+    points = np.column_stack([rng.uniform(0.05, 0.6, n), rng.uniform(-0.1, 0.1, n), np.zeros(n)])
+    return points, np.zeros((n, 5))
+
+
+def test_a_roll_a_curl_and_a_twist_have_a_cylinders_and_a_helicoids_curvatures():
+    points, jet = _plane_points()
+    mesh = TriangleMesh(points, np.zeros((0, 3), int), jet=jet)
+    for analytic in (True, False):
+        rolled = _curvatures(Pose(roll=4.0), mesh, WORLD, analytic)
+        # a cylinder of radius 1/4, the margins up: concave toward +z
+        np.testing.assert_allclose(rolled["k1"], 4.0, rtol=1e-5)
+        np.testing.assert_allclose(rolled["mean_curvature"], 2.0, rtol=1e-5)
+        assert np.abs(rolled["gaussian_curvature"]).max() < 1e-4
+        curled = _curvatures(Pose(curl=0.3), mesh, WORLD, analytic)  # the midrib's circle: 0.6
+        np.testing.assert_allclose(curled["k1"], 0.6, rtol=1e-5)
+        twisted = _curvatures(Pose(twist=1.5), mesh, WORLD, analytic)
+        y = points[:, 1]
+        helicoid = -(1.5**2) / (1 + (1.5 * y) ** 2) ** 2
+        np.testing.assert_allclose(twisted["gaussian_curvature"], helicoid, rtol=1e-4)
+        assert np.abs(twisted["mean_curvature"]).max() < 1e-4  # a minimal surface
+
+
+def test_a_rolled_forms_mesh_is_coloured_by_its_roll():
+    """Form("ovate", roll=0.5) rolls its blade to a radius of about 0.2 of its length: the
+    mesh's mean curvature rose by about half the roll's curvature over the flat form's."""
+    leaf = Form("ovate", roll=0.5).leaf()
+    params = ls.Params(k=3, grid=64)
+    rolled = ls.reconstruct(leaf, params).metrics["curvature"]["mean_curvature"]["mean"]
+    flat = ls.reconstruct(Form("ovate").leaf(), params).metrics["curvature"]
+    rise = rolled - flat["mean_curvature"]["mean"]
+    assert abs(rise - leaf.bend.roll / 2) < 0.15 * leaf.bend.roll
+
+
+def test_a_folds_crease_has_the_curvature_of_its_sides():
+    """A fold's crease (its vertices on the midrib) takes its + side's curvature: no spike where
+    both sides' triangles meet."""
+    params = ls.Params(k=3, grid=64)
+    folded = ls.reconstruct(Form("ovate", fold=60.0).leaf(), params).triangle_mesh
+    flat = ls.reconstruct(Form("ovate").leaf(), params).triangle_mesh
+    for name in CURVATURE_ARRAYS:
+        assert np.abs(folded.point_data[name]).max() <= np.abs(flat.point_data[name]).max()
