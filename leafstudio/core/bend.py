@@ -58,6 +58,7 @@ ROLL_SAG = 1.25e-3  # of a roll's radius: a bent chord stands no farther off (sa
 STRETCH_STEP = 1e-6  # normal_stretch's difference step, of the points' largest coordinate
 SAG = 1e-4  # bent_mesh.sag_splits: a bent edge's midpoint may stand this share of the mesh's
 # extent off its chord
+ROUND_OFF = 1e-12  # of the points' largest coordinate: a height or a y within it is 0 (carry_jet)
 SEAM = 0.1  # flat_curve: points this share of a half turn from a tube's seam may lie either side
 
 
@@ -91,7 +92,8 @@ class Pose:
 
     def carry_jet(self, jet: Jet) -> Jet:
         """A jet of flat blade points (bent_curvature.py) bent as `apply` bends the points, in
-        closed form; on a fold's crease (y = 0) from its + side."""
+        closed form; on a fold's crease (y = 0) from its + side, on a roll's or curl's sheet
+        (height 0) from the relief's (`_wrap_jet`)."""
         if self.roll != 0:
             jet = _wrap_jet(jet, 1, self.roll)
         if self.fold != 0:
@@ -237,21 +239,25 @@ def _unwrapped(u: np.ndarray, h: np.ndarray, k: float) -> tuple[np.ndarray, np.n
 def _wrap_jet(jet: Jet, a: int, k: float) -> Jet:
     """`_wrapped` of coordinate `a` (0 or 1) and the height (2), on a jet: its Jacobian and
     second derivatives in closed form (the radius ρ = R(h k) / k, ρ' = R'(h k), ρ'' = k R''(h k),
-    R `_rolled_radius`, C¹ at h = 0; the angle's clip at half a turn taken from inside)."""
+    R `_rolled_radius`, C¹ only at h = 0; the angle's clip at half a turn taken from inside).
+    A height within round-off of 0 (a margin's) is taken as just above it, on the relief's side,
+    whatever the leaf's size and the sign of k: the branch was round-off's, and a margin's
+    curvature changed by a tenth with the leaf's size (and the sign of a roll)."""
     points, d = jet
     b, t = 2, points[:, 2] * k
     angle = np.clip(points[:, a] * k, -np.pi, np.pi)
     s, c = np.sin(angle), np.cos(angle)
-    outward = t < 0  # at 0 (a margin at height 0) from the side a relief rises to
+    level = np.abs(points[:, 2]) <= ROUND_OFF * np.abs(points).max(initial=0.0)
+    outward = np.where(level, k < 0, t < 0)
     inward = np.exp(-np.maximum(t, 0))
-    rho = np.where(outward, 1 - t, inward) / k
+    ratio = np.where(outward, 1 - t, inward)  # ρ k: k² ρ as k (ρ k) keeps a leaf at 1e300
     rho1, rho2 = np.where(outward, -1.0, -inward), np.where(outward, 0.0, k * inward)
     value = points.copy()
-    value[:, a], value[:, b] = s * rho, 1.0 / k - c * rho
+    value[:, a], value[:, b] = s * ratio / k, 1.0 / k - c * ratio / k
     j = np.broadcast_to(np.eye(3), (len(points), 3, 3)).copy()
-    j[:, a, a], j[:, a, b], j[:, b, a], j[:, b, b] = k * c * rho, s * rho1, k * s * rho, -c * rho1
+    j[:, a, a], j[:, a, b], j[:, b, a], j[:, b, b] = c * ratio, s * rho1, s * ratio, -c * rho1
     hess = np.zeros((len(points), 3, 3, 3))
-    hess[:, a, a, a], hess[:, b, a, a] = -k * k * s * rho, k * k * c * rho
+    hess[:, a, a, a], hess[:, b, a, a] = -k * (s * ratio), k * (c * ratio)
     hess[:, a, a, b] = hess[:, a, b, a] = k * c * rho1
     hess[:, b, a, b] = hess[:, b, b, a] = k * s * rho1
     hess[:, a, b, b], hess[:, b, b, b] = s * rho2, -c * rho2
@@ -259,10 +265,10 @@ def _wrap_jet(jet: Jet, a: int, k: float) -> Jet:
 
 
 def _fold_jet(jet: Jet, fold: float) -> Jet:
-    """The fold on a jet (y -> y cos, z += |y| sin: linear each side of the crease, y = 0,
-    which takes its + side)."""
+    """The fold on a jet (y -> y cos, z += |y| sin: linear each side of the crease, y = 0;
+    a point on it, within round-off, takes the + side's)."""
     points, d = jet
-    side = np.where(points[:, 1] < 0, -1.0, 1.0)
+    side = np.where(points[:, 1] < -ROUND_OFF * np.abs(points).max(initial=0.0), -1.0, 1.0)
     value = points.copy()
     value[:, 1] *= np.cos(fold)
     value[:, 2] += np.abs(value[:, 1]) * np.tan(fold)
@@ -284,7 +290,7 @@ def _twist_jet(jet: Jet, twist: float) -> Jet:
     j[:, 1, 0], j[:, 1, 1], j[:, 1, 2] = -twist * z, c, -s
     j[:, 2, 0], j[:, 2, 1], j[:, 2, 2] = twist * y, s, c
     hess = np.zeros((len(points), 3, 3, 3))
-    hess[:, 1, 0, 0], hess[:, 2, 0, 0] = -twist * twist * y, -twist * twist * z
+    hess[:, 1, 0, 0], hess[:, 2, 0, 0] = -twist * (twist * y), -twist * (twist * z)
     hess[:, 1, 0, 1] = hess[:, 1, 1, 0] = -twist * s
     hess[:, 1, 0, 2] = hess[:, 1, 2, 0] = -twist * c
     hess[:, 2, 0, 1] = hess[:, 2, 1, 0] = twist * c
@@ -374,10 +380,10 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
     # a pose's chords are kept on it (`sag`); a scan's sheet (core/sheet.py) has none: its fit is
     # at the scanner's noise (0.5% of the length), and halving the edges its spline's relief
     # curves gave soybean pot1_1 30 times the faces for 0.04% of the length
+    carry_jet = getattr(bend, "carry_jet", None)  # a pose's; a scan's sheet is differenced
     unit = result.unit
     if unit is None:  # a run at its own size
         lift = None if sag is None else _onto_surface(result)
-        carry_jet = getattr(bend, "carry_jet", None)
         by = BentBy(bend.apply, bend.crease, bend.trim, result.frame, carry_jet)
         mesh, flat = bent_mesh(result.triangle_mesh, by, sag, lift)
         return replace(
@@ -398,14 +404,12 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
     def trim(points: np.ndarray) -> np.ndarray | None:
         return bend.trim(units.to_world(points))
 
-    has_jet = hasattr(bend, "carry_jet")  # a pose's; a scan's sheet is differenced
-
     def jet_in_units(jet: Jet) -> Jet:
         return affine_jet(units.to_unit, bend.carry_jet(affine_jet(units.to_world, jet)))
 
     mesh, flat = bent_mesh(
         unit.triangle_mesh,
-        BentBy(in_units, crease, trim, unit.frame, jet_in_units if has_jet else None),
+        BentBy(in_units, crease, trim, unit.frame, None if carry_jet is None else jet_in_units),
         None if sag is None else lambda extent: sag(extent * units.scale) / units.scale,
         None if sag is None else _onto_surface(unit),
     )

@@ -10,8 +10,10 @@ along the flat run's plane axes, starts from the flat surface's height, ∇z and
 A pose carries a jet in closed form (Pose.carry_jet: the chain rule through its roll, fold,
 twist and curl; exact, and a fold's crease taken from its + side). Any other bend (a scan's
 sheet) is differenced: the flat surface's second-order expansion at the vertex is sampled STEP
-apart on a stencil, carried, and differenced (for no bend that is the graph's curvature to
-round-off: the differences of a quadratic).
+apart on a stencil, carried, and differenced (central differences, and a one-sided one for
+∂uv; for no bend that is the graph's curvature to round-off: the differences of a quadratic).
+The points a bend's sag halvings add (bent_mesh.sag_splits) take their jet interpolated along
+the edge they halve, as their other point arrays.
 """
 
 from __future__ import annotations
@@ -40,8 +42,9 @@ def jet_of(grad: np.ndarray, hess: np.ndarray) -> np.ndarray:
 
 
 def affine_jet(move: Callable[[np.ndarray], np.ndarray], jet: Jet) -> Jet:
-    """`jet` carried by the affine map `move` ((n, 3) points to (n, 3)): its linear part moves
-    the derivatives."""
+    """`jet` carried by the affine map `move` ((n, 3) points to (n, 3)): its linear part,
+    move(v) − move(0), moves the derivatives (to round-off of move(0): 1e-16 of the offset
+    over the size, nothing below a leaf 1e11 of its size from the origin)."""
     points, d = jet
     zero = move(np.zeros((1, 3)))
     return move(points), (move(d.reshape(-1, 3)) - zero).reshape(d.shape)
@@ -160,6 +163,8 @@ def bent_curvatures(
     taylor : (n, 5) float array
         Their flat surface's ∇z and ∇²z there (jet_of).
     """
+    if not len(flat):  # a mesh trimmed to nothing
+        return {name: np.zeros(0) for name in CURVATURE_ARRAYS}
     xy, z = frame.to_plane(flat)
     if carry_jet is not None:
         d = carry_jet(_flat_jet(frame, xy, z, taylor))[1]

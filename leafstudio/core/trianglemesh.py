@@ -42,10 +42,10 @@ class MeshLike(Protocol):
 
 @dataclass(frozen=True, eq=False)
 class TriangleMesh:
-    """(n, 3) points, (m, 3) triangles and named (n,) point arrays; a run's mesh also has its
-    surface's jet, (n, 5) ∇z and ∇²z at each point in the run's plane (zx, zy, zxx, zxy, zyy):
-    what a bend takes the bent surface's curvatures from (core/bent_curvature.py), never
-    exported."""
+    """(n, 3) points, (m, 3) triangles and named (n,) point arrays; the mesh stage's (a run at
+    unit size, steps.compute_mesh) also has its surface's jet, (n, 5) ∇z and ∇²z at each point
+    in the run's plane (zx, zy, zxx, zxy, zyy): what a bend takes the bent surface's curvatures
+    from (core/bent_curvature.py); never exported, and None on every mesh made from it."""
 
     points: np.ndarray
     regular_faces: np.ndarray

@@ -9,9 +9,10 @@ import pytest
 
 import leafstudio as ls
 from leafstudio.core.bend import Pose
-from leafstudio.core.bent_curvature import bent_curvatures
+from leafstudio.core.bent_curvature import affine_jet, bent_curvatures
 from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame
+from leafstudio.core.prepare.units import Units
 from leafstudio.core.trianglemesh import CURVATURE_ARRAYS, TriangleMesh
 from leafstudio.forms.make import Form
 
@@ -118,3 +119,36 @@ def test_a_folds_crease_has_the_curvature_of_its_sides():
     flat = ls.reconstruct(Form("ovate").leaf(), params).triangle_mesh
     for name in CURVATURE_ARRAYS:
         assert np.abs(folded.point_data[name]).max() <= np.abs(flat.point_data[name]).max()
+
+
+@pytest.mark.parametrize("roll", [4.0, -4.0])
+def test_a_margin_at_height_0_takes_the_reliefs_side_of_a_roll(flat_mesh, roll):
+    """The rolled radius is C¹ only at height 0, where every margin vertex lies: its curvature
+    is the limit from the relief's side (heights just above 0) for either sign of roll; the
+    branch was round-off's (a margin's curvature changed by a tenth with the leaf's size)."""
+    mesh, frame = flat_mesh
+    placed = PlacedPose(Pose(roll=roll), frame)
+    on = frame.to_plane(mesh.points)[1] == 0
+    assert on.sum() > 100
+    at = _curvatures(placed, mesh, frame, analytic=True)["mean_curvature"]
+    lifted = TriangleMesh(mesh.points + 1e-9 * frame.normal, mesh.regular_faces, jet=mesh.jet)
+    above = _curvatures(placed, lifted, frame, analytic=True)["mean_curvature"]
+    assert np.abs(at - above)[on].max() < 1e-6 * np.abs(at).max()
+
+
+def test_a_pose_at_1e300_has_its_unit_sizes_curvatures():
+    """A leaf 1e300 across bends in its own units: k² of a roll of 1e-300 underflowed to 0."""
+    points, jet = _plane_points(5)
+    points[:, 2] = 0.01
+    mesh = TriangleMesh(points, np.zeros((0, 3), int), jet=jet)
+    units = Units(np.zeros(3), 1e300)
+    for pose, k1 in ((Pose(roll=2.0), 2.0), (Pose(curl=0.3), 0.6)):
+        unit = _curvatures(pose, mesh, WORLD, analytic=True)["k1"]
+        huge = Pose(roll=pose.roll / 1e300, curl=pose.curl / 1e300)
+
+        def carry_jet(flat_jet, huge=huge):
+            return affine_jet(units.to_unit, huge.carry_jet(affine_jet(units.to_world, flat_jet)))
+
+        got = bent_curvatures(pose.apply, carry_jet, WORLD, points, pose.apply(points), jet)["k1"]
+        np.testing.assert_allclose(got, unit, rtol=1e-9)
+        assert np.abs(unit - k1).max() < 0.05 * k1  # the relief 0.01 up: a little off the sheet's
