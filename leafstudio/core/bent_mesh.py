@@ -17,7 +17,8 @@ from leafstudio.core.trianglemesh import TriangleMesh
 SAG_ROUNDS = 6  # sag_splits halves the edges that sag too far this many rounds at most (each
 # round a quarter of the sag)
 
-Lift = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]  # points onto a surface, and heights
+# points onto a surface, with their heights and jets there (bent_curvature.jet_of)
+Lift = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
 def _crease_cuts(mesh: TriangleMesh, crease, trim) -> tuple[np.ndarray, Plan, bool]:
@@ -148,9 +149,11 @@ def bent_mesh(
     extra = {} if mesh.jet is None else {JET: mesh.jet}
     points, data = carried(mesh.points, plan), carried_data(mesh.point_data | extra, plan)
     if lift is not None and first < len(points):  # the halvings' points on the surface
-        points[first:], heights = lift(points[first:])
+        points[first:], heights, taylor = lift(points[first:])
         if "height" in data:
             data["height"][first:] = heights
+        if JET in data:  # the surface's own, not the halved edge's ends' mean
+            data[JET][first:] = taylor
     # the points before the halvings were carried by sag_splits already
     carried_points = (
         bend.carry(points) if bent is None else np.vstack([bent, bend.carry(points[first:])])
