@@ -399,19 +399,18 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
     def in_units(points: np.ndarray) -> np.ndarray:
         return units.to_unit(bend.apply(units.to_world(points)))
 
-    def crease(points: np.ndarray) -> np.ndarray | None:
-        off = bend.crease(units.to_world(points))
-        return None if off is None else off / units.scale
-
-    def trim(points: np.ndarray) -> np.ndarray | None:
-        return bend.trim(units.to_world(points))
-
     def jet_in_units(jet: Jet) -> Jet:
         return affine_jet(units.to_unit, bend.carry_jet(affine_jet(units.to_world, jet)))
 
     mesh, flat = bent_mesh(
         unit.triangle_mesh,
-        BentBy(in_units, crease, trim, unit.frame, None if carry_jet is None else jet_in_units),
+        BentBy(
+            in_units,
+            lambda points: bend.crease(units.to_world(points)),
+            lambda points: bend.trim(units.to_world(points)),
+            unit.frame,
+            None if carry_jet is None else jet_in_units,
+        ),
         None if sag is None else lambda extent: sag(extent * units.scale) / units.scale,
         None if sag is None else _onto_surface(unit),
     )
