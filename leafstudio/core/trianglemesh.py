@@ -18,6 +18,35 @@ import numpy as np
 # the curvatures a mesh's vertices carry (core/curvature.py): here, with no kernels, for the
 # command line's `--colour-by` choices (render/figure.FIGURE_SCALARS)
 CURVATURE_ARRAYS = ("mean_curvature", "gaussian_curvature", "k1", "k2")
+CURVATURE_PERCENTILE = 95  # a curvature's colours span ± this percentile of |value| (the
+# margins and a narrow tip, where the taper is steep, spike)
+
+
+def colour_range(name: str, values: np.ndarray) -> tuple[float, float]:
+    """The range a point array's colours span (the app's mesh and `--figure`): height its
+    finite values' full range, a curvature symmetric about 0 (its middle colour) to ±
+    CURVATURE_PERCENTILE of |value|; an array of one value, that value ± 1.
+
+    Examples
+    --------
+    >>> colour_range("mean_curvature", np.array([-1.0, 0.5, 2.0, np.nan]))
+    (-1.9, 1.9)
+    >>> colour_range("height", np.zeros(3))
+    (-1.0, 1.0)
+    """
+    values = np.asarray(values, dtype=float)
+    values = values[np.isfinite(values)]
+    if len(values) == 0:
+        return -1.0, 1.0
+    if name in CURVATURE_ARRAYS:
+        hi = float(np.percentile(np.abs(values), CURVATURE_PERCENTILE))
+        lo = -hi
+    else:
+        lo, hi = float(values.min()), float(values.max())
+    if hi - lo <= 1e-12 * max(abs(hi), 1.0):
+        lo, hi = lo - 1.0, hi + 1.0  # one value: any range shows one colour
+    return lo, hi
+
 
 if TYPE_CHECKING:
     import pyvista as pv

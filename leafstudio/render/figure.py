@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from leafstudio.core.trianglemesh import CURVATURE_ARRAYS
+from leafstudio.core.trianglemesh import CURVATURE_ARRAYS, colour_range
 from leafstudio.errors import LeafError
 
 FIGURE_SCALARS = ("height", *CURVATURE_ARRAYS)
@@ -23,7 +23,6 @@ POINT_SIZE = 7  # pixels
 ISO_ZOOM = 1.25  # beyond the view that fits the leaf's bounding sphere
 MARGIN = 1.12  # room around the leaf in the top view
 BOUNDARY_COLOUR, VEIN_COLOUR = "#202020", "#d62728"
-CURVATURE_PERCENTILE = 95  # colour range of a curvature: ± this percentile of |value|
 TITLES = {
     "height": "height",
     "mean_curvature": "mean curvature",
@@ -39,19 +38,6 @@ def check_figure_path(path: str | os.PathLike) -> Path:
     if path.suffix.lower() != FIGURE_SUFFIX:
         raise LeafError("a figure must be a .png file", str(path))
     return path
-
-
-def _colour_range(values: np.ndarray, scalars: str) -> tuple[float, float]:
-    """Height: its full range. Curvature: symmetric about 0 and robust to the spikes at a narrow
-    tip (where the taper is steep), so the leaf's blade shows its pattern."""
-    if scalars == "height":
-        lo, hi = float(values.min()), float(values.max())
-    else:
-        hi = float(np.percentile(np.abs(values), CURVATURE_PERCENTILE))
-        lo = -hi
-    if hi - lo <= 1e-12 * max(abs(hi), 1.0):
-        lo, hi = lo - 1.0, hi + 1.0  # a flat leaf: any range shows one colour
-    return lo, hi
 
 
 def _top_scale(result: Any, window_size: tuple[int, int]) -> float:
@@ -111,7 +97,7 @@ def render_figure(
         raise LeafError(f"cannot colour by {scalars!r}; use one of {', '.join(FIGURE_SCALARS)}")
     mesh = result.mesh.copy()
     values = np.asarray(mesh.point_data[scalars])
-    clim = _colour_range(values, scalars)
+    clim = colour_range(scalars, values)
     cmap = "viridis" if scalars == "height" else "coolwarm"
     clouds = [(result.leaf.boundary, BOUNDARY_COLOUR, "boundary")]
     if len(result.leaf.vein_points):

@@ -16,7 +16,7 @@ import pyvista as pv
 from leafstudio._shared.extras import missing
 from leafstudio.assets.asset import leaf_uvs
 from leafstudio.core.pipeline import Result
-from leafstudio.core.trianglemesh import polydata, vertex_normals
+from leafstudio.core.trianglemesh import colour_range, polydata, vertex_normals
 from leafstudio.gui.model.display_mesh import display_subset
 from leafstudio.gui.model.fields import field_layers
 from leafstudio.gui.model.pieces import (
@@ -60,7 +60,6 @@ MESH_COLORINGS = {
     "mean_curvature": ("mean curvature", "coolwarm"),
     "gaussian_curvature": ("Gaussian curvature", "coolwarm"),
 }
-CURVATURE_PERCENTILE = 95  # curvature colours span ± this percentile of |value| (margins spike)
 
 
 def vein_color(index: int) -> str:
@@ -73,22 +72,13 @@ def vein_color(index: int) -> str:
 
 
 def _color_ranges(point_data: Mapping[str, np.ndarray]) -> dict[str, tuple[float, float]]:
-    """Colour range of each array in MESH_COLORINGS the mesh has: height from its least to its
-    greatest value, curvature symmetric about 0 (so that 0 is the middle colour)."""
-    ranges = {}
-    for name in MESH_COLORINGS:
-        if name not in point_data:
-            continue
-        values = np.asarray(point_data[name], dtype=float)
-        values = values[np.isfinite(values)]
-        if len(values) == 0:
-            continue
-        if name == "height":
-            ranges[name] = (float(values.min()), float(values.max()))
-        else:
-            bound = float(np.percentile(np.abs(values), CURVATURE_PERCENTILE)) or 1.0
-            ranges[name] = (-bound, bound)
-    return ranges
+    """Colour range of each array in MESH_COLORINGS the mesh has (trianglemesh.colour_range:
+    height its full range, a curvature symmetric about 0, so that 0 is the middle colour)."""
+    return {
+        name: colour_range(name, point_data[name])
+        for name in MESH_COLORINGS
+        if name in point_data and np.isfinite(np.asarray(point_data[name], dtype=float)).any()
+    }
 
 
 def textured(uv: np.ndarray, make: Callable[[], pv.PolyData]) -> pv.PolyData:
