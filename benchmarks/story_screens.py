@@ -132,7 +132,7 @@ def click(window: MainWindow, xy) -> dict:
 
 def framing(window: MainWindow) -> dict:
     """The shown leaf's framing in the 3D view."""
-    result = window.result
+    result = window.session.result
     if result is None:
         return {"leaf": None}
     renderer = window.viewport.plotter.renderer
@@ -177,7 +177,7 @@ def vein_colours_match(window: MainWindow) -> bool:
     """True when each vein's points in the 3D view have the sketch's colour for that vein."""
     plotter = window.viewport.plotter
     sketch_veins = len(window.editor.view.sketch.veins)
-    count = len(window.result.leaf.veins)
+    count = len(window.session.result.leaf.veins)
     if sketch_veins and sketch_veins != count:
         return False
     for i in range(count):
@@ -197,8 +197,8 @@ def iso_turn(window: MainWindow) -> float:
     plotter = window.viewport.plotter
     camera = plotter.camera
     now = np.asarray(camera.position) - np.asarray(camera.focal_point)
-    frame = window.session.view_frame() or window.result.frame
-    bounds = blade_bounds(np.asarray(window.result.triangle_mesh.points), frame)
+    frame = window.session.view_frame() or window.session.result.frame
+    bounds = blade_bounds(np.asarray(window.session.result.triangle_mesh.points), frame)
     width, height = plotter.renderer.GetSize()
     fresh, _ = best_iso(bounds, camera.view_angle, width / max(height, 1))
     cos = now @ fresh / (np.linalg.norm(now) * np.linalg.norm(fresh))
@@ -287,7 +287,7 @@ def story_draw(window: MainWindow, shot: Shooter) -> None:
         "boundary_points": len(sketch.boundary),
         "vein_points": [len(v) for v in sketch.veins],
         "sketch_view_moved": any(moves) or view.transform() != start,
-        "undo_steps": window.undo_stack.count(),
+        "undo_steps": window.session.history.index,
     }
     shot("draw", "1c-drawn-leaf-iso", iso_turned_from_fresh_deg=iso_turn(window), **drawn)
     window.viewport.camera("top")
@@ -309,8 +309,8 @@ def story_demos(window: MainWindow, shot: Shooter) -> None:
     panel = getattr(window, "forms_panel", None)
     if panel is None:
         return
-    window.forms_dock.show()
-    window.forms_dock.raise_()
+    window.docks["Forms"].show()
+    window.docks["Forms"].raise_()
     process(300)
     gallery = panel.gallery
     names = [gallery.item(i).data(Qt.ItemDataRole.UserRole) for i in range(gallery.count())]
@@ -323,7 +323,7 @@ def story_demos(window: MainWindow, shot: Shooter) -> None:
     wait_until(lambda: names[row] in window.windowTitle(), what="the chosen form")
     settle(window)
     shot("demos", f"2c-form-{names[row]}", form=names[row])
-    window.sketch_dock.raise_()
+    window.docks["Sketch"].raise_()
     process(300)
     shot("demos", f"2d-form-{names[row]}-sketch", form=names[row])
 
@@ -335,7 +335,7 @@ def story_scans(window: MainWindow, shot: Shooter) -> None:
         window.session.history.set_clean()
         if not window.open_path(path):
             raise RuntimeError(f"{path}: not opened")
-        wait_until(lambda p=path: window.path == p, what=f"the scan {name}")
+        wait_until(lambda p=path: window.session.state.path == p, what=f"the scan {name}")
         settle(window)
         kind = name.split("_")[0]
         shot("scans", f"3{'ab'[i]}-scan-{kind}", scan=name)

@@ -13,12 +13,14 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
+import shapely
 from scipy.spatial import cKDTree
 
 from leafstudio.core.bend import flat_leaf
 from leafstudio.core.evaluate import view_frame
 from leafstudio.core.plane import Frame
 from leafstudio.core.sheet import Scaled
+from leafstudio.forms.veins import HEIGHT_RATIO
 from leafstudio.gui.model.curves import (
     SAMPLES_PER_SPAN,
     closed_curve,
@@ -369,11 +371,35 @@ class Sketch:
 
     def default_height(self, vein: int, xy: np.ndarray) -> float:
         """Height for a new point of a vein: that of its nearest control point, else (a new
-        vein: any index past the last) 5% of the sketch's size."""
+        vein: any index past the last, or a nearest point held down by the margin) 5% of the
+        sketch's size; but no farther from the margin's own height than HEIGHT_RATIO times the
+        point's distance inside the outline, as a form's veins stand (forms/veins.py). The
+        surface comes down to the margin, so a vein point clicked beside it at the veins'
+        height hung in the air: the app's drawn leaf (12 outline points, a midrib and four side
+        veins out to near the margin) had vein points 0.019 of its length off the surface."""
+        xy = np.asarray(xy, dtype=float)
+        height = 0.05 * self.extent()
         control = self.veins[vein] if 0 <= vein < len(self.veins) else np.zeros((0, 3))
-        if len(control) == 0:
-            return 0.05 * self.extent()
-        return float(control[np.argmin(np.linalg.norm(control[:, :2] - xy, axis=1)), 2])
+        if len(control):
+            nearest = control[np.argmin(np.linalg.norm(control[:, :2] - xy, axis=1))]
+            margin, reach = self._margin_reach(nearest[:2])
+            if abs(abs(nearest[2] - margin) - reach) > 1e-9 * max(reach, 1e-300):
+                height = float(nearest[2])  # its own height, not one the margin held down
+        margin, reach = self._margin_reach(xy)
+        return float(np.clip(height, margin - reach, margin + reach))
+
+    def _margin_reach(self, xy: np.ndarray) -> tuple[float, float]:
+        """The margin's height nearest plane point `xy` and how far from it a vein point there
+        may stand by default (HEIGHT_RATIO times its distance inside the outline; unbounded
+        without an outline)."""
+        outline = self.boundary_curve()
+        if len(outline) < 3:
+            return 0.0, np.inf
+        point = shapely.Point(xy)
+        inside = shapely.Polygon(outline).buffer(0).contains(point)
+        reach = HEIGHT_RATIO * shapely.LinearRing(outline).distance(point) if inside else 0.0
+        nearest = outline[[np.argmin(np.linalg.norm(outline - xy, axis=1))]]
+        return float(self.boundary_heights(nearest)[0]), float(reach)
 
     # --- files ---------------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 import shapely
 
 import leafstudio as ls
+from leafstudio.core.evaluate import point_to_mesh_distance
 from leafstudio.core.plane import Frame
 from leafstudio.gui.model.curves import closed_curve, insert_index, open_curve
 from leafstudio.gui.model.sketch_model import BOUNDARY, Sketch
@@ -68,9 +71,9 @@ def test_edits_return_new_sketches_and_leave_the_old_one_alone():
     sketch = Sketch(boundary=SQUARE)
     moved = sketch.moved(BOUNDARY, 0, np.array([-1.0, -1.0]))
     assert sketch.boundary[0, 0] == 0.0 and moved.boundary[0, 0] == -1.0
-    with_vein = sketch.with_vein(np.array([[0.5, 0.5, 0.2]]))
-    assert sketch.veins == () and with_vein.veins[0].tolist() == [[0.5, 0.5, 0.2]]
-    assert with_vein.default_height(0, np.array([0.6, 0.5])) == 0.2
+    with_vein = sketch.with_vein(np.array([[0.5, 0.5, 0.1]]))
+    assert sketch.veins == () and with_vein.veins[0].tolist() == [[0.5, 0.5, 0.1]]
+    assert with_vein.default_height(0, np.array([0.6, 0.5])) == 0.1
     assert len(with_vein.deleted(BOUNDARY, 1).boundary) == 3
     assert with_vein.deleted(0, 0).veins == ()  # a vein without points goes
 
@@ -210,3 +213,38 @@ def test_curves_through_points_at_1e300_are_finite():
     control = 1e300 * np.column_stack([np.cos(t), 0.4 * np.sin(t)])
     for curve in (closed_curve(control), open_curve(control[:6])):
         assert np.isfinite(curve).all() and np.ptp(curve[:, 0]) > 1e299
+
+
+def test_a_vein_clicked_out_to_the_margin_lies_on_the_leaf():
+    """The app's drawn leaf (benchmarks/story_screens.py: 12 outline points, a midrib and four
+    side veins clicked out to near the margin, at the heights the editor gives new points):
+    every point took the first one's height, 5% of the size, so the side veins' ends stood
+    that high beside the margin, where the surface comes down to it, and hung in the air
+    (0.019 of the length off the mesh). New points stand no higher over the margin than a
+    form's veins, a quarter of their distance inside it: every vein point on the surface."""
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    outline = np.column_stack([0.5 + 0.45 * np.cos(t), 0.22 * np.sin(t) * (1.0 - 0.25 * np.cos(t))])
+    sketch = Sketch()
+    for xy in outline:
+        sketch, _ = sketch.inserted(BOUNDARY, xy)
+    midrib = [(0.08, 0.0), (0.35, 0.0), (0.62, 0.0), (0.9, 0.0)]
+    sketch = sketch.with_vein(np.array([[*midrib[0], sketch.default_height(-1, midrib[0])]]))
+    for xy in midrib[1:]:
+        sketch, _ = sketch.inserted(0, np.array(xy), sketch.default_height(0, np.array(xy)))
+    for x0, x1, y1, x2, y2 in ((0.35, 0.45, 0.1, 0.54, 0.17), (0.62, 0.71, 0.09, 0.79, 0.13)):
+        for side in (1, -1):
+            start = sketch.snap_to_vein(np.array([x0, 0.0]), 0.01)
+            sketch = sketch.with_vein(start[None, :])
+            vein = len(sketch.veins) - 1
+            for xy in (np.array([x1, side * y1]), np.array([x2, side * y2])):
+                sketch, _ = sketch.inserted(vein, xy, sketch.default_height(vein, xy))
+    heights = np.concatenate([v[:, 2] for v in sketch.veins])
+    assert heights.max() == pytest.approx(0.05 * sketch.extent())  # the middle keeps its relief
+    ends = np.array([v[-1] for v in sketch.veins[1:]])
+    assert np.all(ends[:, 2] < 0.3 * heights.max())  # the side veins come down to the margin
+    leaf = sketch.to_leaf()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = ls.reconstruct(leaf, ls.Params(k=3, grid=128))
+    off = point_to_mesh_distance(result.triangle_mesh, leaf.vein_points) / result.length
+    assert off.max() <= 1e-3
