@@ -65,6 +65,7 @@ from leafstudio.forms.veins import HEIGHT_RATIO
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 from tests.core.test_correct import drawn_leaf  # noqa: E402
+from tests.leaves import clicked_sketch  # noqa: E402
 
 SCANS = ROOT.parent / "shared" / "realleaves"
 FOLDS = (-75.0, -45.0, 0.0, 45.0, 75.0)
@@ -270,6 +271,7 @@ def vein_distances() -> None:
     print("\n## vein distances (flat forms K 3, drawn leaf K 7, grid 128; target 1e-3)")
     print("(own: the form's own surface, its dome, on our mesh's triangles: the veins lie on it)")
     leaves = [(shape, Form(shape), 3) for shape in SHAPES] + [("drawn", drawn_leaf(), 7)]
+    leaves.append(("clicked (story_screens, default heights)", clicked_sketch().to_leaf(), 3))
     _vein_rows(leaves)
 
 

@@ -27,6 +27,7 @@ from scipy.spatial.transform import Rotation
 
 from leafstudio.analysis import fidelity
 from leafstudio.core.plane import Frame
+from leafstudio.gui.model.sketch_model import BOUNDARY, Sketch
 from leafstudio.model import Leaf
 from leafstudio.sources.demos import HALFWIDTH, demo
 from tests.conftest import SHARED
@@ -174,6 +175,29 @@ def sketch_ellipse(n: int = 12, a: float = 0.5, b: float = 0.2) -> np.ndarray:
 def sketch_clicks(n: int = 12) -> np.ndarray:
     """(n, 2) sketch clicks round an ellipse from x = 0.05 to 0.95, 0.4 wide."""
     return sketch_ellipse(n, 0.45, 0.2)
+
+
+def clicked_sketch() -> Sketch:
+    """The leaf benchmarks/story_screens.py draws in the app, as its clicks make it: 12 outline
+    points, a midrib and four side veins started on it and clicked out to near the margin, each
+    new point at the height the editor gives it (Sketch.default_height)."""
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    outline = np.column_stack([0.5 + 0.45 * np.cos(t), 0.22 * np.sin(t) * (1.0 - 0.25 * np.cos(t))])
+    sketch = Sketch()
+    for xy in outline:
+        sketch, _ = sketch.inserted(BOUNDARY, xy)
+    midrib = [(0.08, 0.0), (0.35, 0.0), (0.62, 0.0), (0.9, 0.0)]
+    sketch = sketch.with_vein(np.array([[*midrib[0], sketch.default_height(-1, midrib[0])]]))
+    for xy in midrib[1:]:
+        sketch, _ = sketch.inserted(0, np.array(xy), sketch.default_height(0, np.array(xy)))
+    for x0, x1, y1, x2, y2 in ((0.35, 0.45, 0.1, 0.54, 0.17), (0.62, 0.71, 0.09, 0.79, 0.13)):
+        for side in (1, -1):
+            start = sketch.snap_to_vein(np.array([x0, 0.0]), 0.01)
+            sketch = sketch.with_vein(start[None, :])
+            vein = len(sketch.veins) - 1
+            for xy in (np.array([x1, side * y1]), np.array([x2, side * y2])):
+                sketch, _ = sketch.inserted(vein, xy, sketch.default_height(vein, xy))
+    return sketch
 
 
 def random_leaf(seed: int, n: int, noise: float, size: float) -> tuple[Leaf, float]:

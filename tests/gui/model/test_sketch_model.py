@@ -13,6 +13,7 @@ from leafstudio.core.evaluate import point_to_mesh_distance
 from leafstudio.core.plane import Frame
 from leafstudio.gui.model.curves import closed_curve, insert_index, open_curve
 from leafstudio.gui.model.sketch_model import BOUNDARY, Sketch
+from tests.leaves import clicked_sketch
 
 SQUARE = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
 
@@ -216,28 +217,13 @@ def test_curves_through_points_at_1e300_are_finite():
 
 
 def test_a_vein_clicked_out_to_the_margin_lies_on_the_leaf():
-    """The app's drawn leaf (benchmarks/story_screens.py: 12 outline points, a midrib and four
+    """The app's drawn leaf (tests/leaves.clicked_sketch: 12 outline points, a midrib and four
     side veins clicked out to near the margin, at the heights the editor gives new points):
     every point took the first one's height, 5% of the size, so the side veins' ends stood
     that high beside the margin, where the surface comes down to it, and hung in the air
     (0.019 of the length off the mesh). New points stand no higher over the margin than a
     form's veins, a quarter of their distance inside it: every vein point on the surface."""
-    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
-    outline = np.column_stack([0.5 + 0.45 * np.cos(t), 0.22 * np.sin(t) * (1.0 - 0.25 * np.cos(t))])
-    sketch = Sketch()
-    for xy in outline:
-        sketch, _ = sketch.inserted(BOUNDARY, xy)
-    midrib = [(0.08, 0.0), (0.35, 0.0), (0.62, 0.0), (0.9, 0.0)]
-    sketch = sketch.with_vein(np.array([[*midrib[0], sketch.default_height(-1, midrib[0])]]))
-    for xy in midrib[1:]:
-        sketch, _ = sketch.inserted(0, np.array(xy), sketch.default_height(0, np.array(xy)))
-    for x0, x1, y1, x2, y2 in ((0.35, 0.45, 0.1, 0.54, 0.17), (0.62, 0.71, 0.09, 0.79, 0.13)):
-        for side in (1, -1):
-            start = sketch.snap_to_vein(np.array([x0, 0.0]), 0.01)
-            sketch = sketch.with_vein(start[None, :])
-            vein = len(sketch.veins) - 1
-            for xy in (np.array([x1, side * y1]), np.array([x2, side * y2])):
-                sketch, _ = sketch.inserted(vein, xy, sketch.default_height(vein, xy))
+    sketch = clicked_sketch()
     heights = np.concatenate([v[:, 2] for v in sketch.veins])
     assert heights.max() == pytest.approx(0.05 * sketch.extent())  # the middle keeps its relief
     ends = np.array([v[-1] for v in sketch.veins[1:]])
