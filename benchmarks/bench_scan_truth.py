@@ -73,7 +73,7 @@ def noisy_scan(truth: trimesh.Trimesh, model: str, sigma: float, count: int) -> 
 
 
 def measure(shape: str, pose: dict, model: str, sigma: float, count: int) -> tuple:
-    """The case's figures (module docstring), or None when the scan is refused."""
+    """The case's figures (module docstring)."""
     true_mesh = ls.reconstruct(Form(shape, **pose).leaf(), ls.Params(grid=128)).triangle_mesh
     truth = trimesh.Trimesh(true_mesh.points * SIZE, true_mesh.regular_faces, process=False)
     extent = float(np.ptp(truth.vertices, axis=0).max())

@@ -371,35 +371,44 @@ class Sketch:
 
     def default_height(self, vein: int, xy: np.ndarray) -> float:
         """Height for a new point of a vein: that of its nearest control point, else (a new
-        vein: any index past the last, or a nearest point held down by the margin) 5% of the
-        sketch's size; but no farther from the margin's own height than HEIGHT_RATIO times the
-        point's distance inside the outline, as a form's veins stand (forms/veins.py). The
-        surface comes down to the margin, so a vein point clicked beside it at the veins'
-        height hung in the air: the app's drawn leaf (12 outline points, a midrib and four side
-        veins out to near the margin) had vein points 0.019 of its length off the surface."""
+        vein: any index past the last) 5% of the sketch's size. On a drawn leaf (its margin on
+        the plane) a point stands no higher or lower than HEIGHT_RATIO times its distance
+        inside the outline (forms/veins.py: the roof relief's slope, 14°): the surface comes
+        down to the margin, and the app's drawn leaf (12 outline points, a midrib and four side
+        veins clicked out to near the margin, every point at 5%) had vein points 0.019 of its
+        length off the surface. A vein's only point held down so (a midrib started by the base)
+        passes on the 5%, not its own height (the whole midrib stood 0.007 high)."""
         xy = np.asarray(xy, dtype=float)
-        height = 0.05 * self.extent()
+        level = 0.05 * self.extent()
+        height = level
         control = self.veins[vein] if 0 <= vein < len(self.veins) else np.zeros((0, 3))
         if len(control):
             nearest = control[np.argmin(np.linalg.norm(control[:, :2] - xy, axis=1))]
-            margin, reach = self._margin_reach(nearest[:2])
-            if abs(abs(nearest[2] - margin) - reach) > 1e-9 * max(reach, 1e-300):
-                height = float(nearest[2])  # its own height, not one the margin held down
-        margin, reach = self._margin_reach(xy)
-        return float(np.clip(height, margin - reach, margin + reach))
+            height = float(nearest[2])
+            cap = self._margin_cap(nearest[:2])
+            held = cap is not None and abs(abs(height) - cap) <= 1e-9 * self.extent()
+            if len(control) == 1 and held and abs(height) < level:
+                height = level if height >= 0 else -level
+        cap = self._margin_cap(xy)
+        return height if cap is None else float(np.sign(height) * min(abs(height), cap))
 
-    def _margin_reach(self, xy: np.ndarray) -> tuple[float, float]:
-        """The margin's height nearest plane point `xy` and how far from it a vein point there
-        may stand by default (HEIGHT_RATIO times its distance inside the outline; unbounded
-        without an outline)."""
+    def _margin_cap(self, xy: np.ndarray) -> float | None:
+        """How high (or low) a new vein point at plane point `xy` may stand on a drawn leaf:
+        HEIGHT_RATIO times its distance inside the outline, 0 outside; None for a sketch with a
+        relief (a loaded leaf whose margin has heights of its own: its veins keep theirs) or
+        without an outline."""
         outline = self.boundary_curve()
-        if len(outline) < 3:
-            return 0.0, np.inf
+        if len(outline) < 3 or len(self.relief):
+            return None
+        made = self.__dict__.setdefault("_curves", {})  # the outline's shapes, once a sketch
+        if "margin" not in made:
+            made["margin"] = (
+                shapely.make_valid(shapely.Polygon(outline)),
+                shapely.LinearRing(outline),
+            )
+        region, ring = made["margin"]
         point = shapely.Point(xy)
-        inside = shapely.Polygon(outline).buffer(0).contains(point)
-        reach = HEIGHT_RATIO * shapely.LinearRing(outline).distance(point) if inside else 0.0
-        nearest = outline[[np.argmin(np.linalg.norm(outline - xy, axis=1))]]
-        return float(self.boundary_heights(nearest)[0]), float(reach)
+        return HEIGHT_RATIO * ring.distance(point) if region.covers(point) else 0.0
 
     # --- files ---------------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:

@@ -234,3 +234,27 @@ def test_a_vein_clicked_out_to_the_margin_lies_on_the_leaf():
         result = ls.reconstruct(leaf, ls.Params(k=3, grid=128))
     off = point_to_mesh_distance(result.triangle_mesh, leaf.vein_points) / result.length
     assert off.max() <= 1e-3
+
+
+def test_a_new_vein_points_default_height_comes_down_to_a_drawn_margin_only():
+    """The margin's rule (Sketch.default_height) on a drawn leaf: a point near the outline (the
+    curve through the unit square's corners bulges 0.19 past them) stands at most a quarter of
+    its distance inside, either sign, and nothing outside; a vein's later points keep
+    their own height; a leaf whose margin has heights of its own (a relief), or a sketch with
+    no outline, keeps the nearest point's height wherever (the review: a rolled leaf's midrib
+    dipped 7% of its length where clicks between its points were pulled to the margin's)."""
+    square = Sketch(boundary=SQUARE)
+    edge = np.array([-0.15, 0.5])  # 0.04 inside the outline
+    cap = 0.25 * shapely.LinearRing(square.boundary_curve()).distance(shapely.Point(edge))
+    assert 0 < cap < 0.04 and square.default_height(-1, edge) == pytest.approx(cap)
+    below = square.with_vein(np.array([[0.5, 0.5, -0.04], [0.6, 0.5, -0.04]]))
+    assert below.default_height(0, edge) == pytest.approx(-cap)
+    assert below.default_height(0, np.array([0.55, 0.5])) == -0.04  # its own, inside
+    outside = np.array([1.25, 0.5])
+    assert square.default_height(-1, outside) == 0.0
+    relief = Sketch(
+        boundary=SQUARE, veins=below.veins, relief=np.array([[0.0, 0.0, 0.2], [1.0, 1.0, 0.2]])
+    )
+    assert relief.default_height(0, edge) == -0.04
+    no_outline = Sketch(veins=(np.array([[0.2, 0.0, 0.2], [0.5, 0.0, 0.2]]),))
+    assert no_outline.default_height(0, np.array([0.6, 0.0])) == 0.2
