@@ -39,12 +39,12 @@ class BladeBounds:
         return float(np.max(self.hi - self.lo))
 
     def contains(self, other: BladeBounds) -> bool:
-        """True when `other` lies inside this box (with some slack) along the plane."""
+        """True when `other` lies inside this box (with some slack) along the plane and its
+        normal: a curl lifts the apex along the normal and turns it back over the blade, and
+        a box held across the plane alone kept the flat blade's framing (6.4% of a drawn leaf
+        folded 45° and curled 0.4 out of the view)."""
         slack = CONTAIN_SLACK * self.size
-        return bool(
-            np.all(other.lo[:2] >= self.lo[:2] - slack)
-            and np.all(other.hi[:2] <= self.hi[:2] + slack)
-        )
+        return bool(np.all(other.lo >= self.lo - slack) and np.all(other.hi <= self.hi + slack))
 
     def union(self, other: BladeBounds) -> BladeBounds:
         points = [b.points for b in (self, other) if b.points is not None]
