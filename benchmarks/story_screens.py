@@ -47,6 +47,11 @@ from leafstudio.gui.qt.main_window import MainWindow
 from leafstudio.gui.qt.view_camera import BAR_BAND
 from leafstudio.gui.qt.viewport import grab_window
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from tests.leaves import CLICKED_MIDRIB as MIDRIB  # the clicks, shared with the tests
+from tests.leaves import CLICKED_SIDE_VEINS as SIDE_VEINS
+from tests.leaves import clicked_outline as boundary_clicks
+
 REAL = Path(__file__).resolve().parents[2] / "shared" / "realleaves"
 SCANS = (
     "soybean_11_20190508T043118_pot1_1.txt",
@@ -64,27 +69,6 @@ DARK = {
     QPalette.ColorRole.ButtonText: "#e8e8e8",
     QPalette.ColorRole.PlaceholderText: "#9a9a9a",
 }
-
-
-def boundary_clicks() -> np.ndarray:
-    """12 plane points around an ovate leaf (base at x = 0.05, tip at x = 0.95), in drawing
-    order (counter-clockwise from the tip)."""
-    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
-    x = 0.5 + 0.45 * np.cos(t)
-    y = 0.22 * np.sin(t) * (1.0 - 0.25 * np.cos(t))  # wider towards the base
-    return np.column_stack([x, y])
-
-
-MIDRIB = np.array([[0.08, 0.0], [0.35, 0.0], [0.62, 0.0], [0.9, 0.0]])
-# side veins, two from each of two midrib points: the first click lands on the midrib's own
-# control point (issue 12, finding 3: it selected that point and added to the midrib; and two
-# veins from one spot merged), then two points outwards
-SIDE_VEINS = (
-    ((0.35, 0.0), (0.45, 0.1), (0.54, 0.17)),
-    ((0.35, 0.0), (0.45, -0.1), (0.54, -0.17)),
-    ((0.62, 0.0), (0.71, 0.09), (0.79, 0.13)),
-    ((0.62, 0.0), (0.71, -0.09), (0.79, -0.13)),
-)
 
 
 def process(ms: int) -> None:

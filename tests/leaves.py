@@ -177,26 +177,45 @@ def sketch_clicks(n: int = 12) -> np.ndarray:
     return sketch_ellipse(n, 0.45, 0.2)
 
 
-def clicked_sketch() -> Sketch:
-    """The leaf benchmarks/story_screens.py draws in the app, as its clicks make it: 12 outline
-    points, a midrib and four side veins started on it and clicked out to near the margin, each
-    new point at the height the editor gives it (Sketch.default_height)."""
+def clicked_outline() -> np.ndarray:
+    """The app's drawn leaf's outline, as benchmarks/story_screens.py clicks it: 12 plane points
+    around an ovate leaf (base at x = 0.05, tip at x = 0.95), in drawing order
+    (counter-clockwise from the tip)."""
     t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
-    outline = np.column_stack([0.5 + 0.45 * np.cos(t), 0.22 * np.sin(t) * (1.0 - 0.25 * np.cos(t))])
+    x = 0.5 + 0.45 * np.cos(t)
+    y = 0.22 * np.sin(t) * (1.0 - 0.25 * np.cos(t))  # wider towards the base
+    return np.column_stack([x, y])
+
+
+CLICKED_MIDRIB = np.array([[0.08, 0.0], [0.35, 0.0], [0.62, 0.0], [0.9, 0.0]])
+# side veins, two from each of two midrib points: the first click lands on the midrib's own
+# control point (issue 12, finding 3: it selected that point and added to the midrib; and two
+# veins from one spot merged), then two points outwards
+CLICKED_SIDE_VEINS = (
+    ((0.35, 0.0), (0.45, 0.1), (0.54, 0.17)),
+    ((0.35, 0.0), (0.45, -0.1), (0.54, -0.17)),
+    ((0.62, 0.0), (0.71, 0.09), (0.79, 0.13)),
+    ((0.62, 0.0), (0.71, -0.09), (0.79, -0.13)),
+)
+
+
+def clicked_sketch() -> Sketch:
+    """The leaf benchmarks/story_screens.py draws in the app, as its clicks make it: its outline,
+    a midrib and four side veins started on it and clicked out to near the margin, each new
+    point at the height the editor gives it (Sketch.default_height)."""
     sketch = Sketch()
-    for xy in outline:
+    for xy in clicked_outline():
         sketch, _ = sketch.inserted(BOUNDARY, xy)
-    midrib = [(0.08, 0.0), (0.35, 0.0), (0.62, 0.0), (0.9, 0.0)]
-    sketch = sketch.with_vein(np.array([[*midrib[0], sketch.default_height(-1, midrib[0])]]))
-    for xy in midrib[1:]:
-        sketch, _ = sketch.inserted(0, np.array(xy), sketch.default_height(0, np.array(xy)))
-    for x0, x1, y1, x2, y2 in ((0.35, 0.45, 0.1, 0.54, 0.17), (0.62, 0.71, 0.09, 0.79, 0.13)):
-        for side in (1, -1):
-            start = sketch.snap_to_vein(np.array([x0, 0.0]), 0.01)
-            sketch = sketch.with_vein(start[None, :])
-            vein = len(sketch.veins) - 1
-            for xy in (np.array([x1, side * y1]), np.array([x2, side * y2])):
-                sketch, _ = sketch.inserted(vein, xy, sketch.default_height(vein, xy))
+    sketch = sketch.with_vein(
+        np.array([[*CLICKED_MIDRIB[0], sketch.default_height(-1, CLICKED_MIDRIB[0])]])
+    )
+    for xy in CLICKED_MIDRIB[1:]:
+        sketch, _ = sketch.inserted(0, xy, sketch.default_height(0, xy))
+    for start, *rest in CLICKED_SIDE_VEINS:
+        sketch = sketch.with_vein(sketch.snap_to_vein(np.array(start), 0.01)[None, :])
+        vein = len(sketch.veins) - 1
+        for xy in map(np.array, rest):
+            sketch, _ = sketch.inserted(vein, xy, sketch.default_height(vein, xy))
     return sketch
 
 
