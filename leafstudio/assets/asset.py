@@ -25,7 +25,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from leafstudio.core.bend import carried_normals, flat_leaf
+from leafstudio.core.bend import flat_leaf
+from leafstudio.core.carried import carried_normals
 from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.evaluate import triangles_of
 from leafstudio.core.plane import Frame, fit_frame
@@ -215,7 +216,7 @@ def mesh_normals(
 ) -> np.ndarray:
     """(n, 3) unit normals of the result's mesh at its points on the flat blade, (n, 2) `xy` and
     (n,) `height` (Result.on_blade): the surface's (`surface_normals`), carried by the leaf's
-    bend when it has one (bend.carried_normals: the flat ones were off by a fold's angle)."""
+    bend when it has one (carried.carried_normals: the flat ones were off by a fold's angle)."""
     normals = surface_normals(result, xy, margin)
     bend = result.leaf.bend
     if bend is not None:

@@ -33,7 +33,7 @@ import numpy as np
 
 from leafstudio.assets.asset import MeshAsset, outline_distance, surface_normals
 from leafstudio.assets.units import METRES, split_length, unit_metres
-from leafstudio.core.bend import carried_normals, carried_vectors
+from leafstudio.core.carried import carried_normals, carried_vectors
 from leafstudio.core.trianglemesh import vertex_normals
 from leafstudio.errors import LeafError
 

@@ -39,13 +39,15 @@ points are bent (bent_mesh.py), and its curvature arrays are the bent surface's
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from leafstudio.core.bent_curvature import Jet, affine_jet, jet_of, pushed
 from leafstudio.core.bent_mesh import BentBy, Lift, bent_mesh
+from leafstudio.core.hinge_fold import BAND, HingeFold, fold_share
+from leafstudio.core.pose_relief import Profile, Relief, negated, shifted
 from leafstudio.model import Leaf
 
 if TYPE_CHECKING:
@@ -55,7 +57,6 @@ if TYPE_CHECKING:
 
 ROLL_SAG = 1.25e-3  # of a roll's radius: a bent chord stands no farther off (sag_splits); what
 # cuts every 0.1 radians of roll kept it to, r (1 − cos 0.05), and 8.7 of a bent run's 61 ms
-STRETCH_STEP = 1e-6  # normal_stretch's difference step, of the points' largest coordinate
 SAG = 1e-4  # bent_mesh.sag_splits: a bent edge's midpoint may stand this share of the mesh's
 # extent off its chord
 ROUND_OFF = 1e-12  # of the points' largest coordinate: a height or a y within it is 0 (carry_jet)
@@ -73,35 +74,46 @@ class Pose:
     curl: float = 0.0
     roll: float = 0.0
     twist: float = 0.0  # radians the cross-section turns about the midrib per unit of length
+    # the flat blade's relief, which the fold turns about and the roll and curl bend without
+    # stretching (pose_relief.py); None: the sheet z = 0 (a pose fitted to 3D curves, an older
+    # project). Not compared: the sliders' pose is the same pose on any blade
+    relief: Relief | None = field(default=None, compare=False)
 
     def apply(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) flat blade points, bent: rolled, folded, twisted about the midrib, then
         curled."""
         points = np.array(points, dtype=float)
-        if self.roll != 0:  # the axis: y = 0, z = 1 / roll
-            points[:, 1], points[:, 2] = _wrapped(points[:, 1], points[:, 2], self.roll)
-        if self.fold != 0:  # z from the turned y, as `flatten` takes it back: a margin's 0 exact
-            fold = np.deg2rad(self.fold)
-            points[:, 1] *= np.cos(fold)
-            points[:, 2] += np.abs(points[:, 1]) * np.tan(fold)
+        if self.roll != 0:  # the axis: y = 0, z = the sheet + 1 / roll
+            sheet = self._sheet(points[:, 0])[0]
+            points[:, 1], rolled = _wrapped(points[:, 1], points[:, 2] - sheet, self.roll)
+            points[:, 2] = rolled + sheet
+        if self.fold != 0:
+            points[:, 1], points[:, 2] = self._folded(points)
         if self.twist != 0:
             points[:, 1:] = _turned(points, self.twist)
-        if self.curl != 0:  # the axis: x = 0, z = 1 / (2 curl)
-            points[:, 0], points[:, 2] = _wrapped(points[:, 0], points[:, 2], 2 * self.curl)
+        if self.curl != 0:  # the axis: x = 0, z = the level + 1 / (2 curl)
+            level = self._level()
+            points[:, 0], curled = _wrapped(points[:, 0], points[:, 2] - level, 2 * self.curl)
+            points[:, 2] = curled + level
         return points
 
     def carry_jet(self, jet: Jet) -> Jet:
         """A jet of flat blade points (bent_curvature.py) bent as `apply` bends the points, in
         closed form; on a fold's crease (y = 0) from its + side, on a roll's or curl's sheet
         (height 0) from the relief's (`_wrap_jet`)."""
-        if self.roll != 0:
+        if self.roll != 0 and self.relief is None:
             jet = _wrap_jet(jet, 1, self.roll)
+        elif self.roll != 0:
+            sheet = self.relief.sheet(jet[0][:, 0])
+            jet = shifted(_wrap_jet(shifted(jet, negated(sheet)), 1, self.roll), sheet)
         if self.fold != 0:
-            jet = _fold_jet(jet, np.deg2rad(self.fold))
+            jet = self._fold_jet(jet)
         if self.twist != 0:
             jet = _twist_jet(jet, self.twist)
         if self.curl != 0:
-            jet = _wrap_jet(jet, 0, 2 * self.curl)
+            level = np.array([0.0, 0.0, self._level()])
+            points, d = _wrap_jet((jet[0] - level, jet[1]), 0, 2 * self.curl)
+            jet = points + level, d
         return jet
 
     def flatten(self, points: np.ndarray) -> np.ndarray:
@@ -109,16 +121,94 @@ class Pose:
         a turn of roll each side)."""
         points = np.array(points, dtype=float)
         if self.curl != 0:
-            points[:, 0], points[:, 2] = _unwrapped(points[:, 0], points[:, 2], 2 * self.curl)
+            level = self._level()
+            points[:, 0], flat = _unwrapped(points[:, 0], points[:, 2] - level, 2 * self.curl)
+            points[:, 2] = flat + level
         if self.twist != 0:  # x is kept by the twist and the fold
             points[:, 1:] = _turned(points, -self.twist)
         if self.fold != 0:
-            fold = np.deg2rad(self.fold)
-            points[:, 2] -= np.abs(points[:, 1]) * np.tan(fold)
-            points[:, 1] /= np.cos(fold)
+            points[:, 1], points[:, 2] = self._unfolded(points)
         if self.roll != 0:
-            points[:, 1], points[:, 2] = _unwrapped(points[:, 1], points[:, 2], self.roll)
+            sheet = self._sheet(points[:, 0])[0]
+            points[:, 1], flat = _unwrapped(points[:, 1], points[:, 2] - sheet, self.roll)
+            points[:, 2] = flat + sheet
         return points
+
+    def _level(self) -> float:
+        """The height the curl bends the blade about: its relief's mean, or the sheet's 0."""
+        return 0.0 if self.relief is None else self.relief.level
+
+    def _sheet(self, x: np.ndarray) -> Profile:
+        """The height the roll bends each cross-section about (its relief's mean, or 0), with
+        its first and second derivatives along x."""
+        if self.relief is None:
+            zero = np.zeros(len(x))
+            return zero, zero, zero
+        return self.relief.sheet(x)
+
+    def _hinge(self, x: np.ndarray) -> Profile:
+        """The midrib's height once rolled (the fold turns each half about it), with its first
+        and second derivatives along x: the roll carries the midrib's height h over the sheet s
+        to s + g(h − s), g(u) = R (1 − ρ(u / R)) (`_rolled_radius` ρ: g = u below the sheet)."""
+        midrib = self.relief.hinge(x)
+        if self.roll == 0:
+            return midrib
+        sheet = self._sheet(x)
+        u, du, ddu = (m - s for m, s in zip(midrib, sheet, strict=True))
+        t = u * self.roll
+        inward = np.exp(-np.maximum(t, 0))
+        g = np.where(t <= 0, u, (1 - inward) / self.roll)
+        g1 = np.where(t <= 0, 1.0, inward)
+        g2 = np.where(t <= 0, 0.0, -self.roll * inward)
+        return sheet[0] + g, sheet[1] + g1 * du, sheet[2] + g2 * du**2 + g1 * ddu
+
+    def _hinge_fold(self) -> HingeFold:
+        """The fold about the hinge (hinge_fold.py), the relief's turn eased as it leaves
+        room."""
+        fold = np.deg2rad(self.fold)
+        share = fold_share(self.fold, self.relief.fold_room(self.fold, self.roll))
+        return HingeFold(np.cos(fold), np.sin(fold), share, BAND * self.relief.half_width)
+
+    def _folded(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """y and z of (n, 3) points folded: each half turned up by the fold about the midrib,
+        about its hinge with a relief (hinge_fold.py); else y -> y cos, z += |y| sin, the
+        relief lifted straight up."""
+        fold = np.deg2rad(self.fold)
+        y, z = points[:, 1], points[:, 2]
+        if self.relief is None:  # z from the turned y, as `flatten` takes it back: 0 exact
+            return y * np.cos(fold), z + np.abs(y * np.cos(fold)) * np.tan(fold)
+        hinge = self._hinge(points[:, 0])[0]
+        y, off = self._hinge_fold().folded(y, z - hinge)
+        return y, off + hinge
+
+    def _unfolded(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The inverse of `_folded`."""
+        fold = np.deg2rad(self.fold)
+        y, z = points[:, 1], points[:, 2]
+        if self.relief is None:
+            return y / np.cos(fold), z - np.abs(y) * np.tan(fold)
+        hinge = self._hinge(points[:, 0])[0]
+        y, off = self._hinge_fold().unfolded(y, z - hinge)
+        return y, off + hinge
+
+    def _fold_jet(self, jet: Jet) -> Jet:
+        """The fold on a jet: `_fold_jet` without a relief, else about the hinge (a point on
+        the crease, within round-off, takes the + side's)."""
+        if self.relief is None:
+            return _fold_jet(jet, np.deg2rad(self.fold))
+        hinge = self._hinge(jet[0][:, 0])
+        points, d = shifted(jet, negated(hinge))
+        y = points[:, 1].copy()
+        y[np.abs(y) <= ROUND_OFF * np.abs(points).max(initial=0.0)] = 0.0
+        fold = self._hinge_fold()
+        value = points.copy()
+        value[:, 1], value[:, 2] = fold.folded(y, points[:, 2])
+        plane, curved = fold.jacobian(y, points[:, 2])
+        j = np.broadcast_to(np.eye(3), (len(points), 3, 3)).copy()
+        j[:, 1:, 1:] = plane
+        hess = np.zeros((len(points), 3, 3, 3))
+        hess[:, 1:, 1:, 1:] = curved
+        return shifted(pushed(value, d, j, hess), hinge)
 
     def flat_curve(self, points: np.ndarray, ring: bool = False) -> np.ndarray:
         """`flatten` for a curve's (n, 3) points in order along it (`ring`: closed): a rolled
@@ -135,14 +225,15 @@ class Pose:
         """Bytes that change with the bend (Leaf.fingerprint); no roll or twist keeps today's."""
         terms = [self.fold, self.curl] + ([self.roll] if self.roll != 0 else [])
         terms += [np.inf, self.twist] if self.twist != 0 else []  # inf: no roll's key alike
-        return np.array(terms).tobytes()
+        return np.array(terms).tobytes() + (b"" if self.relief is None else self.relief.key())
 
     def entry(self) -> dict[str, float]:
         """The project's "bend" entry (sources/files.py): "roll" and "twist" only when there
         are."""
         entry = {"fold": self.fold, "curl": self.curl}
         entry |= {"roll": self.roll} if self.roll != 0 else {}
-        return entry | ({"twist": self.twist} if self.twist != 0 else {})
+        entry |= {"twist": self.twist} if self.twist != 0 else {}
+        return entry | ({"relief": self.relief.entry()} if self.relief is not None else {})
 
     def crease(self, points: np.ndarray) -> np.ndarray | None:
         """(n,) signed distances of flat points from the line the bend creases along (the
@@ -154,54 +245,6 @@ class Pose:
         (sag_splits): SAG of the extent, and ROLL_SAG of a roll's radius (a grass blade's tube,
         a hundredth of its length across)."""
         return min(SAG * extent, ROLL_SAG / abs(self.roll)) if self.roll else SAG * extent
-
-
-def carried_vectors(bend, points: np.ndarray, vectors: np.ndarray) -> np.ndarray:
-    """(n, 3) each of the (n, 3) `vectors` at (n, 3) flat points carried by `bend`'s Jacobian
-    (a model.Bend), by central differences (STRETCH_STEP of the points' extent)."""
-    step = STRETCH_STEP * max(float(np.abs(points).max()), 1e-12)
-    return (bend.apply(points + step * vectors) - bend.apply(points - step * vectors)) / (2 * step)
-
-
-def _carried_frames(bend, points: np.ndarray, directions: np.ndarray) -> list[np.ndarray]:
-    """Each of the (n, 3, 3) `directions` (three per point) carried (`carried_vectors`)."""
-    return [carried_vectors(bend, points, e) for e in np.moveaxis(directions, 1, 0)]
-
-
-def normal_stretch(bend, points: np.ndarray, directions: np.ndarray) -> np.ndarray:
-    """(n,) how many times `bend` (a model.Bend) lengthens a short distance off a surface at
-    (n, 3) flat points: `directions` (n, 3, 3) holds two tangents and the unit normal of the
-    surface at each. A point δ off the surface stands δ · stretch off it bent: the bent normal's
-    share along the bent surface's normal, |(J t₁ × J t₂) · J n| / |J t₁ × J t₂|. A fold on a
-    rolled tube turns the rolled section's halves about the midrib as if they were flat: where
-    the section leans against the fold it reaches 1.4 at 75° (3.9 when the fold was a shear,
-    z += |y| tan fold); a fold alone, which lifts the relief straight up, or a roll alone keeps
-    it 1 or less."""
-    points = np.asarray(points, dtype=float)
-    if not len(points):
-        return np.ones(0)
-    j = _carried_frames(bend, points, directions)
-    across = np.cross(j[0], j[1])
-    area = np.linalg.norm(across, axis=1)
-    return np.abs((across * j[2]).sum(axis=1)) / np.maximum(area, 1e-300)
-
-
-def carried_normals(bend, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
-    """(n, 3) unit normals of the bent surface at (n, 3) flat points whose flat surface has the
-    unit `normals` there: the bent tangents' cross product, on the side `bend` carries the
-    normal to (an export's shading and a solid's offsets; the flat normals were off by the
-    fold's angle)."""
-    points, normals = np.asarray(points, dtype=float), np.asarray(normals, dtype=float)
-    if not len(points):
-        return normals.copy()
-    helper = np.where(np.abs(normals[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
-    first = np.cross(normals, helper)
-    first /= np.linalg.norm(first, axis=1, keepdims=True)
-    second = np.cross(normals, first)
-    j = _carried_frames(bend, points, np.stack([first, second, normals], axis=1))
-    bent = np.cross(j[0], j[1])
-    bent *= np.sign((bent * j[2]).sum(axis=1))[:, None]
-    return bent / np.maximum(np.linalg.norm(bent, axis=1, keepdims=True), 1e-300)
 
 
 def _rolled_radius(u: np.ndarray) -> np.ndarray:

@@ -311,7 +311,7 @@ def onto_veins(
         M, the mixture alone, at the nodes (the surface stage has it: z there takes it too).
     stretch : list of (m_i,) float arrays, optional
         How many times the leaf's bend lengthens a distance off the blade at each vein point
-        (bend.normal_stretch, at least 1): a fold on a rolled tube turns its rolled section
+        (carried.normal_stretch, at least 1): a fold on a rolled tube turns its rolled section
         about the midrib as if it were flat, and a vein point TOLERANCE off the flat surface
         stands up to 1.4 times that off the bent mesh (3.9 when the fold was a shear). Each
         point's tolerance is divided by it.

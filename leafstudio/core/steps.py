@@ -13,8 +13,8 @@ import numpy as np
 from leafstudio.core import mesher
 from leafstudio.core.autok import choose_mixture
 from leafstudio.core.base import PLANAR, BaseSurface, fit_base
-from leafstudio.core.bend import normal_stretch
 from leafstudio.core.bent_curvature import jet_of
+from leafstudio.core.carried import normal_stretch
 from leafstudio.core.correct import Pinning, onto_veins, pinning
 from leafstudio.core.curvature import graph_curvatures
 from leafstudio.core.gmm import Mixture, fit_mixture, fit_signed_mixture, sample_guide
@@ -299,7 +299,7 @@ def compute_surface(run: StageRun) -> SurfaceStage:
 
 def _stretch(run: StageRun, surface: HeightSurface) -> list[np.ndarray] | None:
     """Per vein, how many times the leaf's bend lengthens a distance off `surface` at each
-    point, at least 1 (bend.normal_stretch); None for a leaf without a bend."""
+    point, at least 1 (carried.normal_stretch); None for a leaf without a bend."""
     bend = run.pipeline.leaf.bend
     fs: FrameStage = run["frame"]
     if bend is None or not fs.veins:

@@ -18,6 +18,7 @@ import shapely
 
 from leafstudio.core.base import fit_base
 from leafstudio.core.bend import Pose
+from leafstudio.core.pose_relief import relief_of
 from leafstudio.core.prepare.vein_order import veins_inside_outline
 from leafstudio.errors import LeafError
 from leafstudio.forms.outline import FormOutline, form_outline
@@ -212,7 +213,12 @@ class Form:
         # the leaf knows its pose: reconstruction runs on the flat blade and bends the mesh
         # (core/bend.py), so no fold or curl stands it on edge; the veins are kept on the blade
         half_width = float(np.abs(blade.boundary[:, 1]).max())  # the roll's share of a turn
-        pose = Pose(self.fold, self.curl, self.roll * np.pi / half_width, self.twist * np.pi)
+        # bent about its own relief: a fold turns each half about the midrib as it stands, and
+        # a roll or a curl keeps each section's length (core/pose_relief.py)
+        relief = relief_of(blade.boundary, blade.veins)
+        pose = Pose(
+            self.fold, self.curl, self.roll * np.pi / half_width, self.twist * np.pi, relief
+        )
         return Leaf(pose.apply(blade.boundary), [pose.apply(v) for v in blade.veins], bend=pose)
 
     def unposed(self) -> Form:

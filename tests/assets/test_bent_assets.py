@@ -13,7 +13,7 @@ import trimesh
 import leafstudio as ls
 from leafstudio.assets import leaf_asset
 from leafstudio.assets.export import mesh_assets
-from leafstudio.core.bend import carried_vectors
+from leafstudio.core.carried import carried_vectors
 from leafstudio.core.trianglemesh import vertex_normals
 from leafstudio.forms.make import Form
 from tests.assets.test_solid import self_intersecting

@@ -1,0 +1,233 @@
+"""A pose's relief: the heights a fold turns each half about and a roll and a curl bend without
+stretching (issue 21: a designer's leaf "at its real size").
+
+`bend.Pose` bends the blade's sheet, the plane z = 0 its margin lies on, and carries the relief
+(a form's dome, a drawn leaf's raised veins) on it. A domed blade's relief all stands on one
+side of that sheet, so it was drawn in wherever the blade bent: a fold lifted each half's relief
+straight up instead of turning it with the half, and a roll or a curl offset it toward the axis,
+each arc shortened by 1 − zκ. An ovate form kept 0.90 of its flat area folded 30°, 0.82 folded
+60°, 0.86 rolled 0.5 and 0.94 curled 1 (`bench_bent.py --size`).
+
+A pose that knows the blade's relief bends about it instead: the fold turns each half rigidly
+about the midrib as it stands (its height over x, the hinge), and the roll bends each
+cross-section about its own mean height (the sheet), the curl the blade about its mean height
+(the level), so the relief's first-order stretch averages out over each section. The profiles
+are read from the flat blade's curves (`relief_of`) at KNOTS places along it and are cubic
+splines in x (C², linear past the ends): a fold's hinge with a kink would crease the blade
+across at each knot. A pose without a relief (a project saved before it, a pose fitted to 3D
+curves, core/unfold.py) bends as it did.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import shapely
+from scipy.interpolate import CubicSpline, LinearNDInterpolator
+from shapely.geometry import Polygon
+
+from leafstudio.core.bent_curvature import Jet, pushed
+
+KNOTS = 24  # places along the blade the profiles are read at (24 and 48: areas 1e-3 apart)
+ROOM_SLACK = np.deg2rad(5.0)  # Relief.fold_room: kept clear of the midrib's plane
+CREASE = 0.05  # of the half width: points nearer the midrib than this have no angle off it
+MIDRIB_POINTS = 128  # the most midrib points the hinge passes through (a project saves them)
+SAMPLES = 2048  # grid points over the blade's bounding box the sections' means are taken over
+
+Profile = tuple[np.ndarray, np.ndarray, np.ndarray]  # a height over x, its first and second x
+
+
+@dataclass(frozen=True)
+class Relief:
+    """The flat blade's heights a pose bends about, in the blade's coordinates (the midrib along
+    +x, the relief on +z)."""
+
+    along: tuple[float, ...]  # x of the midrib's points, increasing
+    midrib: tuple[float, ...]  # their heights: a fold's hinge passes through them
+    knots: tuple[float, ...]  # x, increasing, evenly over the blade
+    mean: tuple[float, ...]  # each cross-section's mean height there: a roll's sheet
+    level: float  # the blade's mean height: a curl's sheet
+    half_width: float  # the blade's widest reach across the midrib (how far a roll turns it)
+    rise: float = 0.0  # radians: the steepest the relief rises from the hinge across (its
+    fall: float = 0.0  # points' angle atan2(±(z − hinge), |y|)), and falls (`fold_room`)
+    _splines: dict = field(default_factory=dict, compare=False, repr=False)
+
+    def _spline(self, name: str) -> CubicSpline:
+        if name not in self._splines:  # made once: a pose bends the mesh's points, then its jets
+            x = self.along if name == "midrib" else self.knots
+            self._splines[name] = CubicSpline(x, getattr(self, name), bc_type="natural")
+        return self._splines[name]
+
+    def _profile(self, name: str, x: np.ndarray) -> Profile:
+        spline = self._spline(name)
+        return spline(x), spline(x, 1), spline(x, 2)
+
+    def hinge(self, x: np.ndarray) -> Profile:
+        """The midrib's height at (n,) x, with its first and second derivatives."""
+        return self._profile("midrib", x)
+
+    def sheet(self, x: np.ndarray) -> Profile:
+        """The cross-section's mean height at (n,) x, with its first and second derivatives."""
+        return self._profile("mean", x)
+
+    def key(self) -> bytes:
+        """Bytes that change with the relief (Pose.key)."""
+        numbers = [*self.along, *self.midrib, *self.knots, *self.mean]
+        numbers += [self.level, self.half_width, self.rise, self.fall]
+        return np.array(numbers).tobytes()
+
+    def entry(self) -> dict[str, Any]:
+        """The project's "relief" entry of a "bend" (sources/bend_entry.py)."""
+        return {
+            "along": list(self.along),
+            "knots": list(self.knots),
+            "midrib": list(self.midrib),
+            "mean": list(self.mean),
+            "level": self.level,
+            "half_width": self.half_width,
+            "rise": self.rise,
+            "fall": self.fall,
+        }
+
+    @classmethod
+    def from_entry(cls, value: Any) -> Relief:
+        """A Relief from its `entry`; ValueError unless it reads whole (increasing x, as many
+        heights, all finite)."""
+        along, midrib, knots, mean = (
+            tuple(float(t) for t in value[k]) for k in ("along", "midrib", "knots", "mean")
+        )
+        scalars = [float(value[k]) for k in ("level", "half_width", "rise", "fall")]
+        if not (_profile_reads(along, midrib) and _profile_reads(knots, mean)):
+            raise ValueError("a relief's x and heights do not read whole")
+        if not (np.isfinite(scalars).all() and min(scalars[1:]) >= 0):
+            raise ValueError("a relief's level, half width, rise and fall must be numbers")
+        return cls(along, midrib, knots, mean, *scalars)
+
+    def fold_room(self, fold: float, roll: float) -> float:
+        """Radians a half may turn about the hinge before a point of it crosses the midrib's
+        plane: a right angle less the relief's steepest rise or fall the fold's way (a dome
+        folded down, a wavy margin folded up), half the roll's turn at the widest when it
+        lifts the margins the fold's way, and ROOM_SLACK."""
+        relief = self.rise if fold > 0 else self.fall
+        chord = 0.5 * min(abs(roll) * self.half_width, np.pi) if roll * fold > 0 else 0.0
+        return np.pi / 2 - relief - chord - ROOM_SLACK
+
+
+def _profile_reads(x: tuple[float, ...], z: tuple[float, ...]) -> bool:
+    """Whether a profile's x and heights make a spline: two or more, as many, finite, x
+    increasing."""
+    numbers = np.array([*x, *z])
+    return (
+        len(x) >= 2
+        and len(x) == len(z)
+        and bool(np.isfinite(numbers).all())
+        and bool(np.all(np.diff(x) > 0))
+    )
+
+
+def relief_of(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | None:
+    """The relief of a flat blade whose (n, 3) `boundary` and (m_i, 3) `veins` (midrib first)
+    are in the blade's coordinates; None for a blade with no extent along x or no area.
+
+    The hinge passes through the midrib's points (`_midrib`; a blade without one turns about
+    its sections' means). The sections' means are those of the heights
+    interpolated linearly between all the curves' points (a Delaunay triangulation) at grid
+    points inside the outline, in a band of x around each knot."""
+    boundary = np.asarray(boundary, dtype=float)
+    x0, x1 = float(boundary[:, 0].min()), float(boundary[:, 0].max())
+    if not x1 > x0 or len(boundary) < 3:
+        return None
+    knots = np.linspace(x0, x1, KNOTS)
+    polygon = Polygon(boundary[:, :2])
+    if not polygon.is_valid:
+        polygon = polygon.buffer(0)
+    y0, y1 = float(boundary[:, 1].min()), float(boundary[:, 1].max())
+    if polygon.is_empty or not y1 > y0:
+        return None
+    across = max(int(np.sqrt(SAMPLES * (y1 - y0) / (x1 - x0))), 4)
+    along = max(SAMPLES // across, 2 * KNOTS)
+    gx, gy = np.meshgrid(np.linspace(x0, x1, along), np.linspace(y0, y1, across))
+    inside = shapely.contains_xy(polygon, gx.ravel(), gy.ravel())
+    points = np.vstack([boundary, *[np.asarray(v, dtype=float) for v in veins if len(v)]])
+    xy = np.column_stack([gx.ravel()[inside], gy.ravel()[inside]])
+    if len(xy) == 0:
+        return None
+    heights = LinearNDInterpolator(points[:, :2], points[:, 2])(xy)
+    held = np.isfinite(heights)
+    xy, heights = xy[held], heights[held]
+    if len(xy) == 0:
+        return None
+    bin_of = np.clip(np.rint((xy[:, 0] - x0) / (x1 - x0) * (KNOTS - 1)).astype(int), 0, KNOTS - 1)
+    count = np.bincount(bin_of, minlength=KNOTS)
+    sums = np.bincount(bin_of, weights=heights, minlength=KNOTS)
+    filled = count > 0
+    mean = np.interp(knots, knots[filled], sums[filled] / count[filled])
+    midrib = _midrib(np.asarray(veins[0], dtype=float), boundary) if veins else None
+    if midrib is None:  # no midrib to turn about: the sections' means
+        midrib = knots, mean
+    half_width = max(-y0, y1)
+    hinge = CubicSpline(*midrib, bc_type="natural")(points[:, 0])
+    clear = np.abs(points[:, 1]) > CREASE * half_width
+    angle = np.arctan2(points[clear, 2] - hinge[clear], np.abs(points[clear, 1]))
+    return Relief(
+        tuple(midrib[0].tolist()),
+        tuple(midrib[1].tolist()),
+        tuple(knots.tolist()),
+        tuple(mean.tolist()),
+        float(heights.mean()),
+        half_width,
+        max(float(angle.max(initial=0.0)), 0.0),
+        max(float(-angle.min(initial=0.0)), 0.0),
+    )
+
+
+def _midrib(vein: np.ndarray, boundary: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """The hinge's points: a midrib's (m, 3) points' x, increasing, and heights, with the
+    outline's points on the crease (y = 0: a form's base, tip or notch) past the midrib's ends,
+    at most MIDRIB_POINTS of them (every k-th, its ends kept), none within
+    1e-6 of the extent of the one before; None when fewer than two are left. The hinge passes
+    through each: a spline through 24 even knots missed an ovate form's midrib by 1.7e-3 of the
+    length beside its base, and the fold's inverse took those points to the other half; a tip
+    or a notch off the hinge is turned about it, and came back up to 9e-4 of the length away
+    (cordate's notch, 7e-4 under the hinge's line)."""
+    if len(vein) < 2:
+        return None
+    extent = float(np.ptp(boundary[:, 0]))
+    order = np.argsort(vein[:, 0], kind="stable")
+    x, z = vein[order, 0], vein[order, 2]
+    keep = np.concatenate([[True], np.diff(x) > 1e-6 * extent])
+    x, z = x[keep], z[keep]
+    if len(x) > MIDRIB_POINTS:
+        step = int(np.ceil(len(x) / MIDRIB_POINTS))
+        index = np.unique(np.append(np.arange(0, len(x), step), len(x) - 1))
+        x, z = x[index], z[index]
+    crease = boundary[np.abs(boundary[:, 1]) <= 1e-6 * extent]
+    past = (crease[:, 0] < x[0] - 1e-6 * extent) | (crease[:, 0] > x[-1] + 1e-6 * extent)
+    if past.any():
+        x, z = np.concatenate([x, crease[past, 0]]), np.concatenate([z, crease[past, 2]])
+        order = np.argsort(x, kind="stable")
+        x, z = x[order], z[order]
+        keep = np.concatenate([[True], np.diff(x) > 1e-6 * extent])
+        x, z = x[keep], z[keep]
+    return (x, z) if len(x) >= 2 else None
+
+
+def shifted(jet: Jet, profile: Profile) -> Jet:
+    """`jet` with its height raised by a profile of x (a height, its first and second
+    derivatives at the jet's points): the chain rule through (x, y, z) -> (x, y, z + p(x))."""
+    points, d = jet
+    p, slope, bend = profile
+    value = points.copy()
+    value[:, 2] += p
+    j = np.broadcast_to(np.eye(3), (len(points), 3, 3)).copy()
+    j[:, 2, 0] = slope
+    hess = np.zeros((len(points), 3, 3, 3))
+    hess[:, 2, 0, 0] = bend
+    return pushed(value, d, j, hess)
+
+
+def negated(profile: Profile) -> Profile:
+    """The profile −p."""
+    return (-profile[0], -profile[1], -profile[2])
