@@ -65,19 +65,31 @@ def read(table, i, column, u):
     )
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _columns(points):
+    """The (m, 2) points' x and y as two contiguous arrays: the kernels' inner loops over the
+    centres then load them in vector lanes (from the interleaved pairs they did not)."""
+    x, y = np.empty(len(points)), np.empty(len(points))
+    for j in range(len(points)):
+        x[j], y[j] = points[j, 0], points[j, 1]
+    return x, y
+
+
 @njit(cache=True, nogil=True, fastmath=True)
 def spline_value(xy, centers, weights, reach, table, step):
     """Σ_j w_j φ(|x_i − v_j|) at each of the (n, 2) points; t clamped to the table's last row
     (zeros) rather than branched on, and fastmath: the loop runs in vector lanes (8.4 -> 6.2 ms
-    for 5292 nodes and 200 centres)."""
+    for 5292 nodes and 200 centres), the centres' x and y read from arrays of their own (3.0 ->
+    2.2 ms for those nodes on a flat ovate at grid 128, best of 60)."""
+    cx, cy = _columns(centers)
     value = np.empty(len(xy))
     scale = 1.0 / (reach * step)  # r -> ρ / KELVIN_STEP
     end = float(len(table) - 1)
     for i in range(len(xy)):
         x, y = xy[i, 0], xy[i, 1]
         v = 0.0
-        for j in range(len(centers)):
-            dx, dy = x - centers[j, 0], y - centers[j, 1]
+        for j in range(len(cx)):
+            dx, dy = x - cx[j], y - cy[j]
             t = min(np.sqrt(dx * dx + dy * dy) * scale, end)
             k = int(t)
             v -= weights[j] * read(table, k, 0, t - k)
