@@ -192,19 +192,51 @@ def least_bending(
     tapered = np.ascontiguousarray((taper * relief).astype(np.float32)[:, None])
     bends = _bend_twice(d.indptr, d.indices, d.data, tapered)[:, 0]
     shift = spline.T @ (bending.phi.T @ (taper * bends))
-    probe = np.ones(len(normal))
-    for _ in range(POWER_STEPS):  # the largest eigenvalue (normal is positive semi-definite)
-        probe = normal @ probe
-        largest = float(np.linalg.norm(probe))
+    return _projected_steps(normal, shift, start, lo, hi)
+
+
+@njit(cache=True, nogil=True, fastmath=True)
+def _matvec(matrix, x, out):
+    """out = A x for the (m, m) `matrix` A, each row's sum in vector lanes (fastmath: 0.32 ->
+    0.23 ms for _projected_steps' 70 products at 200 centres)."""
+    for i in range(len(out)):
+        total = 0.0
+        for j in range(len(x)):
+            total += matrix[i, j] * x[j]
+        out[i] = total
+
+
+@njit(cache=True, nogil=True)
+def _projected_steps(normal, shift, start, lo, hi):
+    """The box-constrained minimum of ½ vᵀAv + shiftᵀv from `start` (A = `normal`): the largest
+    eigenvalue by POWER_STEPS power steps, then STEPS projected gradient steps with Nesterov's
+    momentum (FISTA); `start` itself when A has no finite positive eigenvalue. Compiled whole:
+    the loop's numpy calls took 0.7 of least_bending's 1.35 ms on a flat ovate at grid 128
+    (200 centres, best of 60); compiled, least_bending takes 1.07 ms."""
+    m = len(start)
+    probe, moved = np.ones(m), np.empty(m)
+    largest = 0.0
+    for _ in range(POWER_STEPS):  # the largest eigenvalue (A is positive semi-definite)
+        _matvec(normal, probe, moved)
+        total = 0.0
+        for i in range(m):
+            total += moved[i] * moved[i]
+        largest = np.sqrt(total)
         if not np.isfinite(largest) or largest <= 0:
-            return start
-        probe /= largest
+            return start.copy()
+        for i in range(m):
+            probe[i] = moved[i] / largest
     largest *= 1.1  # the power steps come from below
-    values = previous = ahead = start
+    values, previous, ahead = start.copy(), start.copy(), start.copy()
     momentum = 1.0
-    for _ in range(STEPS):  # np.minimum and np.maximum: np.clip's wrapper took a third of this
-        values = np.minimum(np.maximum(ahead - (normal @ ahead + shift) / largest, lo), hi)
+    for _ in range(STEPS):
+        _matvec(normal, ahead, moved)
         following = 0.5 * (1 + np.sqrt(1 + 4 * momentum**2))
-        ahead = values + (momentum - 1) / following * (values - previous)
-        previous, momentum = values, following
+        pull = (momentum - 1) / following
+        for i in range(m):
+            values[i] = min(max(ahead[i] - (moved[i] + shift[i]) / largest, lo[i]), hi[i])
+        for i in range(m):
+            ahead[i] = values[i] + pull * (values[i] - previous[i])
+            previous[i] = values[i]
+        momentum = following
     return values

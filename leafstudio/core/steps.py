@@ -83,11 +83,14 @@ class FrameStage:
 
 @dataclass(frozen=True)
 class GuideStage:
-    """g and p on the grid; `inside` marks the nodes kept (g >= 0)."""
+    """g and p on the grid; `inside` marks the nodes kept (g >= 0), at `nodes`."""
 
     g: np.ndarray
     p: np.ndarray
     inside: np.ndarray
+    nodes: np.ndarray  # (n, 2) grid.points[inside], made once: the samples, the surface and
+    # the result read them (numpy's boolean index of an (n, 2) array took
+    # 0.084 ms at grid 128 (6,895 of 10,790 nodes), np.compress 0.010)
 
 
 @dataclass(frozen=True)
@@ -203,14 +206,14 @@ def compute_grid(run: StageRun) -> Grid:
 def compute_guide(run: StageRun) -> GuideStage:
     fs: FrameStage = run["frame"]
     grid: Grid = run["grid"]
-    nodes = grid.points
     g = run["implicit"].on_grid(grid)
     inside = g >= 0
-    p = np.zeros(len(nodes))
+    nodes = grid.points.compress(inside, axis=0)
+    p = np.zeros(len(grid.points))
     p[inside] = height_guide(
-        nodes[inside], fs.polygon, fs.veins, fs.heights, step=GUIDE_STEP * grid.spacing
+        nodes, fs.polygon, fs.veins, fs.heights, step=GUIDE_STEP * grid.spacing
     )
-    return GuideStage(g=g, p=p, inside=inside)
+    return GuideStage(g=g, p=p, inside=inside, nodes=nodes)
 
 
 def compute_samples(run: StageRun) -> np.ndarray:
@@ -219,7 +222,7 @@ def compute_samples(run: StageRun) -> np.ndarray:
     grid: Grid = run["grid"]
     inside = guide.inside
     drawn = sample_guide(
-        grid.points[inside], guide.p[inside], run.params.samples, grid.spacing, run.params.seed
+        guide.nodes, guide.p[inside], run.params.samples, grid.spacing, run.params.seed
     )
     _frozen(drawn)
     return drawn
@@ -271,7 +274,7 @@ def compute_bending(run: StageRun) -> Pinning:
 def compute_surface(run: StageRun) -> SurfaceStage:
     fs: FrameStage = run["frame"]
     guide: GuideStage = run["guide"]
-    nodes = run["grid"].points[guide.inside]
+    nodes = guide.nodes
     g_in = guide.g[guide.inside]
     surface = fit_surface(
         run["gmm"][1],
@@ -375,7 +378,7 @@ def compute_mesh(run: StageRun) -> TriangleMesh:
         z = np.concatenate([rim, surf.surface(added), surf.z[kept[guide.inside]]])
         world = fs.frame.to_world(xy, z)
     else:
-        xy = np.vstack([fs.polygon, grid.points[guide.inside]])
+        xy = np.vstack([fs.polygon, guide.nodes])
         z = np.concatenate([rim, surf.z])
         world = fs.frame.to_world(xy, z)
         grad = surf.surface.gradient(xy)

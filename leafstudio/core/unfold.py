@@ -130,12 +130,12 @@ def fit_pose(leaf: Leaf) -> PlacedPose | None:
 def _fit(leaf: Leaf) -> PlacedPose | None:
     """fit_pose on the leaf at about unit size."""
     boundary, midrib = leaf.boundary, leaf.veins[0]
-    if midrib_turned(list(leaf.veins)):  # written apex first: the frame's origin is the base
-        midrib = midrib[::-1]
     length = float(np.linalg.norm(np.ptp(boundary, axis=0)))
     before, width = _off_plane(boundary)
-    if not before > OFF_PLANE * width:
+    if not before > OFF_PLANE * width:  # flat: its midrib's direction is not asked
         return None
+    if midrib_turned(list(leaf.veins)):  # written apex first: the frame's origin is the base
+        midrib = midrib[::-1]
     before = _off_quadric(boundary)  # the pose must do much better than a height field
     boundary = boundary[:: max(1, len(boundary) // FIT_POINTS)]  # enough to fit six numbers
     midrib = np.vstack([midrib[:: max(1, len(midrib) // FIT_POINTS)], midrib[-1:]])

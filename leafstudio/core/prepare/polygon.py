@@ -38,12 +38,25 @@ def distinct_indices(points: np.ndarray, scale: float) -> np.ndarray:
         return np.arange(0)
     # scaled by a power of two (exact) to at most 1: a vein point at 1e200 overflowed the tree
     unit = unit_power(points)
-    pairs = cKDTree(points * unit).query_pairs(1e-9 * scale * unit, output_type="ndarray")
+    reach = 1e-9 * scale * unit
+    if _apart_along_an_axis(points * unit, reach):
+        return np.arange(n)
+    pairs = cKDTree(points * unit).query_pairs(reach, output_type="ndarray")
     if not len(pairs):
         return np.arange(n)
     links = coo_matrix((np.ones(len(pairs), dtype=bool), (pairs[:, 0], pairs[:, 1])), (n, n))
     _, group = connected_components(links, directed=False)
     return np.sort(np.unique(group, return_index=True)[1])
+
+
+def _apart_along_an_axis(points: np.ndarray, reach: float) -> bool:
+    """Whether the (n, 2) points, sorted along x or along y, are each more than `reach` (with a
+    margin of 1e-6 of it) from the next: then no two lie within `reach` of one another, and no
+    k-d tree need look (a flat ovate's 13 veins: 0.215 -> 0.124 ms, best of 60)."""
+    for axis in (0, 1):
+        if len(points) < 2 or np.diff(np.sort(points[:, axis])).min() > reach * (1 + 1e-6):
+            return True
+    return False
 
 
 def thin_ring(points: np.ndarray, sequence: np.ndarray, step: float) -> np.ndarray:

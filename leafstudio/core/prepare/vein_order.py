@@ -78,11 +78,13 @@ def midrib_lean(midrib: np.ndarray, side: list[np.ndarray]) -> tuple[int, int]:
         return 0, 0
     along = chord / length
     line = shapely.LineString(midrib)
+    side = [vein for vein in side if len(vein) >= 2]
+    # every side vein's two ends measured in one call: midrib_turned on a gallery ovate (13
+    # veins) 0.29 -> 0.25 ms, best of 60
+    ends = np.array([vein[[0, -1]] for vein in side]).reshape(-1, 2)
+    all_gaps = shapely.distance(line, shapely.points(ends)).reshape(-1, 2)
     leans = []
-    for vein in side:
-        if len(vein) < 2:
-            continue
-        gaps = shapely.distance(line, shapely.points(vein[[0, -1]]))
+    for vein, gaps in zip(side, all_gaps, strict=True):
         near, far = (vein[0], vein[-1]) if gaps[0] <= gaps[1] else (vein[-1], vein[0])
         if gaps.min() > ATTACHED * length or gaps.max() < max(LEAVES * length, 3 * gaps.min()):
             continue
