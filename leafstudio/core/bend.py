@@ -46,6 +46,7 @@ import numpy as np
 
 from leafstudio.core.bent_curvature import Jet, affine_jet, jet_of, pushed
 from leafstudio.core.bent_mesh import BentBy, Lift, bent_mesh
+from leafstudio.core.carried import carried_vectors
 from leafstudio.core.hinge_fold import BAND, HingeFold, fold_share
 from leafstudio.core.pose_relief import Profile, Relief, negated, shifted
 from leafstudio.model import Leaf
@@ -167,7 +168,8 @@ class Pose:
         room."""
         fold = np.deg2rad(self.fold)
         share = fold_share(self.fold, self.relief.fold_room(self.fold, self.roll))
-        return HingeFold(np.cos(fold), np.sin(fold), share, BAND * self.relief.half_width)
+        length = self.relief.knots[-1] - self.relief.knots[0]
+        return HingeFold(np.cos(fold), np.sin(fold), share, BAND * length)
 
     def _folded(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """y and z of (n, 3) points folded: each half turned up by the fold about the midrib,
@@ -239,6 +241,19 @@ class Pose:
         """(n,) signed distances of flat points from the line the bend creases along (the
         midrib, y = 0, for a fold), or None when it has none: the mesh is cut there first."""
         return np.asarray(points, dtype=float)[:, 1] if self.fold != 0 else None
+
+    def crease_side(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """At (n, 3) flat points: their bent points' signed distances from the plane the fold
+        parts the halves by (y = 0 once rolled and folded: the twist turns it and the curl
+        bends it with the halves, keeping distances from it), and (n, 3) the unit vector
+        across it there; None without a fold. A solid's offsets keep off it (solid.py)."""
+        if self.fold == 0:
+            return None
+        points = np.asarray(points, dtype=float)
+        folded = replace(self, twist=0.0, curl=0.0).apply(points)
+        rest = replace(self, fold=0.0, roll=0.0)
+        across = carried_vectors(rest, folded, np.broadcast_to([0.0, 1.0, 0.0], points.shape))
+        return folded[:, 1], across / np.linalg.norm(across, axis=1, keepdims=True)
 
     def sag_tolerance(self, extent: float) -> float:
         """How far a bent chord of a mesh `extent` across may stand off the bent surface

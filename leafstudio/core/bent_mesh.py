@@ -14,6 +14,7 @@ from leafstudio.core.cuts import Plan, carried, carried_data, cut_levels
 from leafstudio.core.plane import Frame
 from leafstudio.core.trianglemesh import TriangleMesh
 
+ROUND_OFF = 1e-12  # of the mesh's extent: a point this near a crease lies on it
 SAG_ROUNDS = 6  # sag_splits halves the edges that sag too far this many rounds at most (each
 # round a quarter of the sag)
 
@@ -27,7 +28,10 @@ def _crease_cuts(mesh: TriangleMesh, crease, trim) -> tuple[np.ndarray, Plan, bo
     holes): the faces also cut where it is zero, and those where it is negative dropped."""
     side = crease(mesh.points)
     faces, plan = mesh.regular_faces, []
-    if side is not None:
+    if side is not None:  # a point within round-off of the crease is on it: cut beside it, a
+        # form's tip 3e-20 off left a face of no area (its UVs none, no tangent in a glTF)
+        extent = float(np.ptp(mesh.points, axis=0).max()) if len(mesh.points) else 0.0
+        side = np.where(np.abs(side) <= ROUND_OFF * extent, 0.0, side)
         faces, plan = cut_levels(faces, side, np.zeros(1))
     cut = trim(carried(mesh.points, plan))
     if cut is None:

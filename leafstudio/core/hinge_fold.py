@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-BAND = 0.03  # of the blade's half-width: the crease's band where σ turns over
+BAND = 0.03  # of the blade's length: the crease's band where σ turns over
 BISECTIONS = 60  # steps of the band's inverse: the band halved 60 times
 
 
@@ -81,14 +81,16 @@ class HingeFold:
         return flat, (off - np.abs(flat) * s) / e
 
     def _in_band(self, y: np.ndarray, off: np.ndarray) -> np.ndarray:
-        """y in the band whose fold is (y, off) (bisection on the band)."""
+        """y in the band whose fold is (y, off) (bisection on the band); 0 exactly for a point
+        on the crease's plane (y' = 0 is the crease's own, σ(0) = 0: the bisection's 1e-20 put
+        a form's tip beside the crease, and cutting the mesh there left a face of no area)."""
         low, high = np.full(len(y), -self.band), np.full(len(y), self.band)
         for _ in range(BISECTIONS):
             middle = 0.5 * (low + high)
             relief = (off - np.abs(middle) * self.s) / self.lift
             above = self.folded(middle, relief)[0] > y
             high, low = np.where(above, middle, high), np.where(above, low, middle)
-        return 0.5 * (low + high)
+        return np.where(y == 0, 0.0, 0.5 * (low + high))
 
     def jacobian(self, y: np.ndarray, off: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(n, 2, 2) ∂(y', o') / ∂(y, o) and (n, 2, 2, 2) the second derivatives, at (n,) y

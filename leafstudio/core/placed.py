@@ -65,6 +65,14 @@ class PlacedPose:
         """(n,) signed distances of flat points from the pose's crease (the midrib), or None."""
         return self.pose.crease(self._blade(points))
 
+    def crease_side(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """The pose's (Pose.crease_side), its vectors in the world."""
+        side = self.pose.crease_side(self._blade(points))
+        if side is None:
+            return None
+        f = self.frame
+        return side[0], side[1] @ np.array([f.u, f.v, f.normal])
+
     def sag_tolerance(self, extent: float) -> float:
         """The pose's (Pose.sag_tolerance): its frame keeps lengths."""
         return self.pose.sag_tolerance(extent)

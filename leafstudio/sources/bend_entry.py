@@ -21,6 +21,7 @@ import numpy as np
 from leafstudio.core.bend import Pose, sheared_flatten
 from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame
+from leafstudio.core.pose_relief import Relief
 from leafstudio.core.sheet import Scaled
 from leafstudio.errors import LeafError, shorten
 from leafstudio.model import Leaf
@@ -48,8 +49,9 @@ def _bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
         except (TypeError, ValueError, KeyError, np.linalg.LinAlgError):
             raise LeafError('"bend": its "sheet" does not read whole', source) from None
     fold = curl = roll = twist = math.nan  # stays nan, and is refused below, unless it reads whole
-    frame = None
-    if isinstance(value, dict) and not set(value) - {"fold", "curl", "roll", "twist", "frame"}:
+    frame = relief = None
+    keys = {"fold", "curl", "roll", "twist", "frame", "relief"}
+    if isinstance(value, dict) and not set(value) - keys:
         with contextlib.suppress(TypeError, ValueError, KeyError, AttributeError, OverflowError):
             if "frame" in value:  # read first: a bad frame leaves the fold nan
                 axes = [np.asarray(value["frame"][k], float) for k in FRAME_KEYS]
@@ -57,15 +59,19 @@ def _bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
                 if not (good and np.allclose(np.array(axes[1:]) @ np.array(axes[1:]).T, np.eye(3))):
                     raise ValueError
                 frame = Frame(*axes)
+            if "relief" in value:  # read first as well: a bad relief leaves the fold nan
+                relief = Relief.from_entry(value["relief"])
             fold, curl = float(value.get("fold", 0.0)), float(value.get("curl", 0.0))
             roll, twist = float(value.get("roll", 0.0)), float(value.get("twist", 0.0))
     if not (abs(fold) < 90 and all(math.isfinite(t) for t in (curl, roll, twist))):
         raise LeafError(
             f'"bend" must be {{"fold": degrees under 90, "curl", "roll", "twist": numbers}} (a '
-            f'"frame": {{"origin", "u", "v", "normal"}}, orthonormal axes), got {shorten(value)}',
+            f'"frame": {{"origin", "u", "v", "normal"}}, orthonormal axes; a "relief": '
+            f'{{"along", "midrib", "knots", "mean": lists, "level", "half_width", "rise", '
+            f'"fall": numbers}}), got {shorten(value)}',
             source,
         )
-    pose = Pose(fold, curl, roll, twist)
+    pose = Pose(fold, curl, roll, twist, relief)
     return pose if frame is None else PlacedPose(pose, frame)
 
 
