@@ -12,6 +12,7 @@ from leafstudio.core.bend import Pose
 from leafstudio.core.bent_mesh import sag_splits
 from leafstudio.core.cuts import carried, carried_data, cut_levels
 from leafstudio.core.evaluate import mesh_facts
+from leafstudio.core.hinge_fold import BAND
 from leafstudio.core.trianglemesh import TriangleMesh
 from leafstudio.forms.make import Form, seen_on_edge
 
@@ -48,7 +49,8 @@ def test_a_flat_form_has_no_bend_and_runs_as_before():
 def test_the_bent_mesh_is_the_flat_blades_mesh_bent():
     """Reconstructing the posed form is reconstructing its flat blade and posing the mesh, with
     the fold's crease cut into it: the flat run's vertices come first, then those of the cut,
-    which lie on the midrib."""
+    which lie on the midrib, and the halvings of edges the bend sags (beside the crease, in the
+    band where the halves' turn sets in, core/hinge_fold.py)."""
     leaf = Form("elliptic", fold=40, curl=0.3).leaf()
     pose = leaf.bend
     assert isinstance(pose, Pose)
@@ -57,7 +59,8 @@ def test_the_bent_mesh_is_the_flat_blades_mesh_bent():
     flat = ls.reconstruct(blade, ls.Params(grid=64)).triangle_mesh
     n = len(flat.points)
     assert np.allclose(pose.flatten(bent.points[:n]), flat.points, atol=1e-12)
-    assert len(bent.points) > n and np.allclose(bent.points[n:, 1], 0, atol=1e-12)
+    added = np.abs(pose.flatten(bent.points[n:])[:, 1])
+    assert len(added) and (added < 1e-12).sum() > 20 and added.max() <= BAND
     assert len(bent.regular_faces) > len(flat.regular_faces)
 
 

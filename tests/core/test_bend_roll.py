@@ -71,7 +71,10 @@ def posed_form_on_its_surface(shape: str, terms: dict) -> tuple[Pose, TriangleMe
     # 1e-6: a wave as high as a tube's radius lifts vertices next to the roll's axis, where
     # the inverse (an arctan2 about it) keeps fewer digits (1.8e-7 there, core/bending.py)
     np.testing.assert_allclose(unposed[:, :2], flat.points[:, :2], atol=1e-6)
-    assert np.abs(unposed[:, 2] - flat.points[:, 2]).max() <= BAND_TOLERANCE * result.length
+    # each run's correction holds its veins within its tolerances (the bent run's shrunk where
+    # the bend stretches a distance off the blade), so the two surfaces within twice that: a
+    # tube with a wave as high as its radius, rolled about its sections' mean heights, 7.3e-4
+    assert np.abs(unposed[:, 2] - flat.points[:, 2]).max() <= 2 * BAND_TOLERANCE * result.length
     off = off_surface(mesh, flat, pose) / result.length
     assert off.mean() <= 2e-3 and np.percentile(off, 95) <= 2e-3
     # the pose moves the veins no farther off than 2e-3 of the length beyond the flat blade's
@@ -87,16 +90,14 @@ def test_a_rolled_forms_mesh_lies_on_its_rolled_surface_and_keeps_its_area(shape
     """The form's own surface is its flat blade's (the veins' relief) rolled: the mesh is that
     flat mesh rolled, its chords within 2e-3 of the length (mean and 95th percentile), the
     veins and boundary as close as a fold's or curl's, and a roll alone keeps the blade's area
-    (the mesh's sheet, its relief taken off: the relief is carried along the rolled normal, so
-    on a tube as tight as the veins are high it is drawn in, see core/bend.py)."""
+    to 2% (each cross-section rolled about its mean height, core/pose_relief.py; rolled about
+    the margin's plane, the relief was drawn in: ovate rolled 0.5 kept 0.86 of its area)."""
     pose, mesh = posed_form_on_its_surface(shape, terms)
     assert pose.roll > 0
-    if pose.fold == 0:  # a roll alone is an isometry
-        sheet = pose.flatten(mesh.points) * [1, 1, 0]
-        rolled = type(mesh)(pose.apply(sheet), mesh.regular_faces)
-        assert _area(rolled) == pytest.approx(
-            _area(type(mesh)(sheet, mesh.regular_faces)), rel=0.01
-        )
+    if pose.fold == 0:  # a wave as high as a closed tube's radius is drawn in toward its axis
+        flat = type(mesh)(pose.flatten(mesh.points), mesh.regular_faces)  # (ovate: 0.95)
+        kept = 0.06 if "wave" in terms else 0.02
+        assert _area(mesh) == pytest.approx(_area(flat), rel=kept)
 
 
 def test_a_roll_is_undone_exactly():
@@ -122,7 +123,9 @@ def test_no_roll_is_todays_pose_and_project(tmp_path):
     assert np.array_equal(plain.boundary, rolled0.boundary) and plain.bend == rolled0.bend
     path = tmp_path / "x.leaf.json"
     ls.save_leaf(rolled0, path)
-    assert json.loads(path.read_text())["bend"] == {"fold": 40.0, "curl": 0.0}
+    bend = json.loads(path.read_text())["bend"]
+    assert bend.keys() == {"fold", "curl", "relief"}  # the relief it folds about, no roll
+    assert (bend["fold"], bend["curl"]) == (40.0, 0.0)
 
 
 @pytest.mark.parametrize(

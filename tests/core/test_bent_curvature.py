@@ -113,12 +113,19 @@ def test_a_rolled_forms_mesh_is_coloured_by_its_roll():
 
 def test_a_folds_crease_has_the_curvature_of_its_sides():
     """A fold's crease (its vertices on the midrib) takes its + side's curvature: no spike where
-    both sides' triangles meet."""
+    both sides' triangles meet, nor in the band beside it where the halves' turn sets in
+    (core/hinge_fold.py): both within 1.1 times the largest of the rest of the blade. (A
+    domed blade folded about its arched midrib is itself a little more curved than flat:
+    ovate folded 60°, k1 4.1 at the margin against 3.4.)"""
     params = ls.Params(k=3, grid=64)
-    folded = ls.reconstruct(Form("ovate", fold=60.0).leaf(), params).triangle_mesh
-    flat = ls.reconstruct(Form("ovate").leaf(), params).triangle_mesh
+    leaf = Form("ovate", fold=60.0).leaf()
+    folded = ls.reconstruct(leaf, params).triangle_mesh
+    across = np.abs(leaf.bend.flatten(np.asarray(folded.points))[:, 1])
+    near = across < 0.05  # the crease and its band (hinge_fold.BAND of the length, 1)
+    assert (across < 1e-9).sum() > 50 and (~near).sum() > 1000
     for name in CURVATURE_ARRAYS:
-        assert np.abs(folded.point_data[name]).max() <= np.abs(flat.point_data[name]).max()
+        values = np.abs(folded.point_data[name])
+        assert values[near].max() <= 1.1 * values[~near].max()
 
 
 @pytest.mark.parametrize("roll", [4.0, -4.0])
