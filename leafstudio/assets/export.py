@@ -182,7 +182,11 @@ def mesh_assets(
         if thickness is not None:
             progress(0.6 + 0.2 * level / len(levels), f"the solid ({level + 1}/{len(levels)})")
             bent = result is not None and result.leaf.bend is not None
-            asset = thicken(asset, thickness, partial(bent_offsets, result) if bent else None)
+            asset = thicken(
+                asset,
+                thickness,
+                partial(bent_offsets, result, thickness=thickness) if bent else None,
+            )
         out.append(asset.with_(name=f"{name}_LOD{level}" if lod else name, **images))
     return out
 

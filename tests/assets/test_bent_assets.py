@@ -79,7 +79,10 @@ def test_a_bent_leafs_solid_is_sound(shape, pose):
     solid = mesh_assets(result, texture="none", thickness=thickness)[0]
     mesh = trimesh.Trimesh(solid.points, solid.faces, process=False)
     assert mesh.is_watertight and mesh.is_winding_consistent
-    assert mesh.volume == pytest.approx(area * thickness, rel=0.02)  # was 0.23 times, twisted
+    # was 0.23 times, twisted; a steep fold's inner corner is mitred (solid._crease: T² over
+    # 2 tan(opening / 2) of the crease's length, 3% of hastate folded 75°)
+    kept = 0.04 if abs(pose.get("fold", 0.0)) >= 60 else 0.02
+    assert mesh.volume == pytest.approx(area * thickness, rel=kept)
     assert not self_intersecting(solid.points, solid.faces)
 
 

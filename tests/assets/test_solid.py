@@ -203,7 +203,10 @@ def test_every_gallery_leaf_makes_a_sound_solid(name: str):
     solid = mesh_assets(result, texture="none", thickness=thickness)[0]  # a fold's: bent_offsets
     mesh = trimesh.Trimesh(solid.points, solid.faces, process=False)
     assert mesh.is_watertight and mesh.is_winding_consistent
-    assert mesh.volume == pytest.approx(sheet.area * thickness, rel=0.02)  # > 0: outward
+    # > 0: outward; a steep fold's inner corner is mitred (solid._crease: T² over
+    # 2 tan(opening / 2) of the crease's length, 3% of hastate folded 75°)
+    kept = 0.04 if "fold" in name else 0.02
+    assert mesh.volume == pytest.approx(sheet.area * thickness, rel=kept)
     assert not self_intersecting(solid.points, solid.faces)
 
 
