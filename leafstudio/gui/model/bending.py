@@ -18,6 +18,7 @@ import numpy as np
 
 from leafstudio.core.bend import Pose, flat_leaf
 from leafstudio.core.placed import PlacedPose, blade_frame
+from leafstudio.core.pose_relief import relief_of
 from leafstudio.gui.model.history import State, Step
 from leafstudio.model import Bend, Leaf
 
@@ -63,14 +64,21 @@ def posed(
 ) -> Leaf | None:
     """The flat blade `flat` bent by `pose`: as a form is when `like` (the bend it had) is a
     plain Pose, else about its midrib on `plane` (a sketch's Frame; default the boundary's PCA
-    plane). The flat pose gives `flat` itself, without a bend."""
+    plane); either way about the blade's own relief (core/pose_relief.py: a fold turns each
+    half about the midrib as it stands). The flat pose gives `flat` itself, without a bend."""
     if flat is None or pose == FLAT:
         return flat
-    if isinstance(like, Pose):
-        bend: Bend = pose
-    else:
+    if isinstance(like, Pose):  # a form's blade is in its own coordinates
+        bend: Bend = replace(pose, relief=relief_of(flat.boundary, flat.veins))
+    else:  # bent about the blade's own relief, read in its frame (core/pose_relief.py)
         frame = blade_frame(flat, plane)
-        bend = PlacedPose(in_lengths(pose, 1.0 / blade_extent(flat.boundary, frame)), frame)
+        own = in_lengths(pose, 1.0 / blade_extent(flat.boundary, frame))
+
+        def blade(points: np.ndarray) -> np.ndarray:
+            return np.column_stack(frame.to_plane(points))
+
+        relief = relief_of(blade(flat.boundary), [blade(v) for v in flat.veins])
+        bend = PlacedPose(replace(own, relief=relief), frame)
     return Leaf(bend.apply(flat.boundary), [bend.apply(v) for v in flat.veins], bend=bend)
 
 

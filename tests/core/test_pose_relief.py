@@ -1,0 +1,146 @@
+"""A posed leaf keeps its size (core/pose_relief.py, core/hinge_fold.py): a pose bent the blade's
+sheet, the margin's plane, and carried the relief on it, so a domed blade was drawn in wherever
+it bent. bench_bent.py --size, an ovate form's mesh area posed over flat: fold 30° 0.90, 60°
+0.82, 75° 0.79; curl 0.5 0.97, 1 0.94; roll 0.3 0.91, 0.5 0.86. The app's drawn leaf folded
+45° and curled 0.4 measured 0.248 against 0.319 flat."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import leafstudio as ls
+from leafstudio.core.bent_curvature import bent_curvatures
+from leafstudio.core.evaluate import surface_area
+from leafstudio.core.hinge_fold import BAND, HingeFold
+from leafstudio.core.placed import PlacedPose
+from leafstudio.core.pose_relief import Relief, relief_of
+from leafstudio.core.trianglemesh import CURVATURE_ARRAYS
+from leafstudio.errors import LeafError
+from leafstudio.forms.make import Form
+from tests.core.test_bent_curvature import WORLD
+
+
+def _area(result: ls.Result) -> float:
+    mesh = result.triangle_mesh
+    return float(surface_area(np.asarray(mesh.points), mesh.regular_faces))
+
+
+@pytest.fixture(scope="module")
+def flat_ovate() -> tuple[ls.Leaf, float]:
+    blade = Form("ovate").leaf()
+    return blade, _area(ls.reconstruct(blade, ls.Params(k=3, grid=128)))
+
+
+@pytest.mark.parametrize(
+    "pose",
+    [{"fold": 30}, {"fold": 60}, {"fold": 75}, {"fold": -60}]
+    + [{"curl": 0.5}, {"curl": 1.0}, {"roll": 0.3}, {"roll": 0.5}],
+    ids=str,
+)
+def test_a_posed_form_keeps_its_flat_blades_area(flat_ovate, pose):
+    blade, flat = flat_ovate
+    leaf = Form("ovate", **pose).leaf(blade)
+    posed = _area(ls.reconstruct(leaf, ls.Params(k=3, grid=128)))
+    assert posed == pytest.approx(flat, rel=0.012)
+
+
+def test_a_fold_turns_each_half_rigidly_about_the_midrib_as_it_stands():
+    """Past the crease's band a point keeps its distance from the hinge, and the blade comes
+    back exactly; the midrib's own points stay where they stood (they are the hinge)."""
+    blade = Form("elliptic").leaf()
+    leaf = Form("elliptic", fold=50.0).leaf(blade)
+    pose = leaf.bend
+    midrib = blade.veins[0]
+    np.testing.assert_allclose(pose.apply(midrib), midrib, atol=1e-12)
+    for flat, bent in zip(blade.veins, leaf.veins, strict=True):
+        np.testing.assert_allclose(pose.flatten(bent), flat, atol=1e-12)
+
+
+def test_the_hinge_fold_is_undone_in_its_band_and_past_it():
+    fold = HingeFold(np.cos(1.1), np.sin(1.1), 0.8, 0.03)
+    rng = np.random.default_rng(5)
+    y = np.concatenate([rng.uniform(-0.03, 0.03, 200), rng.uniform(-0.5, 0.5, 200), [0.0]])
+    off = np.concatenate([rng.uniform(-1e-3, 1e-3, 200), rng.uniform(-0.1, 0.02, 200), [4e-4]])
+    back = fold.unfolded(*fold.folded(y, off))
+    np.testing.assert_allclose(back[0], y, atol=1e-12)
+    np.testing.assert_allclose(back[1], off, atol=1e-12)
+    assert back[0][-1] == 0.0  # a point on the crease comes back on it, not 1e-20 beside it
+
+
+@pytest.mark.parametrize(
+    "terms",
+    [{"fold": 60.0}, {"roll": 0.5}, {"curl": 0.6}, {"fold": -45.0, "curl": 0.5, "roll": 0.3}],
+    ids=str,
+)
+def test_a_pose_about_its_relief_carries_a_jet_as_its_differences_do(terms):
+    """Pose.carry_jet in closed form (the hinge's and the sheet's derivatives along x) against
+    central differences of the carried points, off the crease's band (its mixed second
+    derivative, 42 at a fold of 60°, leaves the stencil's one-sided ∂uv a few 1e-4 off; the
+    band's own derivatives are checked in the next test) and off the margin's height 0 and the
+    roll's sheet (its radius is C¹ there)."""
+    blade = Form("ovate").leaf()
+    pose = Form("ovate", **terms).leaf(blade).bend
+    assert pose.relief is not None
+    result = ls.reconstruct(blade, ls.Params(k=3, grid=64))
+    mesh, frame = result.unit.triangle_mesh, result.frame  # the jet is the unit run's
+    assert result.units.scale == 1.0  # only moved: the jet is the same in the form's frame
+    placed = PlacedPose(pose, WORLD)
+    flat = result.units.to_world(np.asarray(mesh.points))
+
+    def curvatures(analytic: bool) -> dict:
+        carry_jet = placed.carry_jet if analytic else None
+        return bent_curvatures(placed.apply, carry_jet, frame, flat, placed.apply(flat), mesh.jet)
+
+    exact, differenced = curvatures(True), curvatures(False)
+    sheet = pose.relief.sheet(flat[:, 0])[0] if pose.roll else 0.0
+    clear = (np.abs(flat[:, 1]) > BAND) & (np.abs(flat[:, 2]) > 1e-3)
+    clear &= np.abs(flat[:, 2] - sheet) > 1e-3
+    assert np.count_nonzero(clear) > 0.5 * len(flat)
+    for name in CURVATURE_ARRAYS:
+        scale = np.abs(exact[name]).max()
+        assert np.abs(exact[name] - differenced[name])[clear].max() < 1e-4 * scale, name
+
+
+def test_the_hinge_folds_derivatives_in_its_band_are_its_differences():
+    fold = HingeFold(np.cos(1.047), np.sin(1.047), 0.9, 0.03)
+    y = np.array([-0.029, -0.01, 0.002, 0.005, 0.02, 0.1])
+    off = np.array([2e-4, -1e-3, 5e-4, 1e-3, -3e-3, -0.05])
+    j, hess = fold.jacobian(y, off)
+    e = 1e-6
+
+    def at(dy: float, do: float) -> np.ndarray:
+        return np.array(fold.folded(y + dy, off + do)).T  # (n, 2)
+
+    np.testing.assert_allclose(j[:, :, 0], (at(e, 0) - at(-e, 0)) / (2 * e), atol=1e-7)
+    np.testing.assert_allclose(j[:, :, 1], (at(0, e) - at(0, -e)) / (2 * e), atol=1e-7)
+    yy = (at(e, 0) - 2 * at(0, 0) + at(-e, 0)) / e**2
+    yo = (at(e, e) - at(e, -e) - at(-e, e) + at(-e, -e)) / (4 * e * e)
+    np.testing.assert_allclose(hess[:, :, 0, 0], yy, atol=1e-3)
+    np.testing.assert_allclose(hess[:, :, 0, 1], yo, atol=1e-3)
+
+
+def test_a_relief_reads_back_from_its_project_entry_and_a_bad_one_is_one_error(tmp_path):
+    leaf = Form("ovate", fold=40.0, roll=0.2).leaf()
+    relief = leaf.bend.relief
+    again = Relief.from_entry(json.loads(json.dumps(relief.entry())))
+    assert again.key() == relief.key()
+    path = tmp_path / "posed.leaf.json"
+    ls.save_leaf(leaf, path)
+    assert ls.load_leaf(path).bend.key() == leaf.bend.key()
+    data = json.loads(path.read_text())
+    data["bend"]["relief"]["knots"] = data["bend"]["relief"]["knots"][::-1]  # not increasing
+    path.write_text(json.dumps(data))
+    with pytest.raises(LeafError, match='"relief"'):
+        ls.load_leaf(path)
+
+
+def test_a_blade_without_veins_turns_about_its_sections_means():
+    t = np.linspace(0, 2 * np.pi, 200, endpoint=False)
+    boundary = np.column_stack([0.5 + 0.5 * np.cos(t), 0.2 * np.sin(t), np.zeros_like(t)])
+    relief = relief_of(boundary, [])
+    assert relief is not None and relief.along == relief.knots
+    assert relief.level == 0.0 and relief.half_width == pytest.approx(0.2, rel=1e-3)
+    assert relief_of(boundary[:, :][[0, 0, 0]], []) is None  # no extent: none
