@@ -10,20 +10,24 @@ bend and runs exactly as before.
 `Pose` is the bend a form knows (forms/make.py): in the blade's coordinates (the base at the
 origin, the midrib along +x, the relief on +z), a roll bends each cross-section into a circular
 arc of curvature `roll` (as a grass blade or a young leaf rolls), a fold turns each half up about
-the midrib by `fold` degrees (y -> y cos(fold), z += |y| sin(fold)), a twist turns each
-cross-section about the midrib by twist · x radians (a helicoid: a twisted grass blade or a
-propeller), and a curl lays the midrib on a circle of curvature 2 · curl (z = curl · x² at the
-base), in that order. A fold, a curl and a roll each keep the blade's sheet (z = 0, the
-margin's) isometric (a twist, a helicoid, stretches it: 1.1 times at 1; a fold on a rolled tube
-turns its section as if it were flat: 1.2 times for roll 0.5 and fold 45): a leaf folded or
-curled keeps its size (fold and curl were shears, z += |y| tan(fold) + curl · x²: an
-ovate form folded 60° had 1.78 times its flat area, folded 75° 3.56 times, and a curl of 1
-lengthened its midrib 1.42 times; `bench_bent.py --size`). The fold lifts the relief straight
-up and the roll and curl carry it along their normals, so a raised relief is drawn in a little
-(folded 60°, the form's roof of veins 14° each side of the midrib, 0.82 of the flat area; curled
-1, the midrib 0.92 of its length). All are undone exactly, and the blade is what the form drew
-before posing: a fold of 75° or a rolled grass blade is reconstructed as well as the flat leaf,
-where the boundary's PCA plane saw it side-on and the mesh broke (issue 21, finding 1).
+the midrib by `fold` degrees, a twist turns each cross-section about the midrib by twist · x
+radians (a helicoid: a twisted grass blade or a propeller), and a curl lays the midrib on a
+circle of curvature 2 · curl (z = curl · x² at the base), in that order. All are undone exactly,
+and the blade is what the form drew before posing: a fold of 75° or a rolled grass blade is
+reconstructed as well as the flat leaf, where the boundary's PCA plane saw it side-on and the
+mesh broke (issue 21, finding 1).
+
+A pose bends about the blade's own relief (`Pose.relief`, pose_relief.py, read from the flat
+blade's curves by a form, the app's bend sliders and a project): the fold turns each half
+rigidly about the midrib as it stands (hinge_fold.py), the roll bends each cross-section about
+its mean height and the curl the blade about its mean height as the roll and fold leave it, so
+a domed blade keeps its size (bench_bent.py --size, an ovate form's area posed over flat: fold
+30° 0.999, 60° 0.993, 75° 0.990, curl 1 0.999, roll 0.5 0.998; about the margin's plane, the
+relief lifted straight up by the fold and carried toward the roll's and curl's axes: 0.90,
+0.82, 0.79, 0.94, 0.86). A pose without a relief (a project saved before it, a pose fitted to
+curves in 3D, core/unfold.py) bends the sheet z = 0 as before: the fold y -> y cos(fold),
+z += |y| sin(fold) (fold and curl were once shears, z += |y| tan(fold) + curl · x²: an ovate
+form folded 60° had 1.78 times its flat area).
 
 The roll (and the curl, along the midrib) carries a relief h (a margin's wave, raised veins)
 along the rolled normal: the cross-section's point (v, h) goes to the angle v / R about the axis
@@ -44,16 +48,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from leafstudio.core.bent_curvature import Jet, affine_jet, jet_of, pushed
-from leafstudio.core.bent_mesh import BentBy, Lift, bent_mesh
+from leafstudio.core.bent_curvature import Jet, pushed
 from leafstudio.core.carried import carried_vectors
 from leafstudio.core.hinge_fold import BAND, HingeFold, fold_share
 from leafstudio.core.pose_relief import Profile, Relief, negated, shifted
 from leafstudio.model import Leaf
 
 if TYPE_CHECKING:
-    from leafstudio.core.pipeline import Result
-    from leafstudio.core.prepare.units import Units
+    pass
 
 
 ROLL_SAG = 1.25e-3  # of a roll's radius: a bent chord stands no farther off (sag_splits); what
@@ -85,7 +87,7 @@ class Pose:
         curled."""
         points = np.array(points, dtype=float)
         if self.roll != 0:  # the axis: y = 0, z = the sheet + 1 / roll
-            sheet = self._sheet(points[:, 0])[0]
+            sheet = self._sheet_height(points[:, 0])
             points[:, 1], rolled = _wrapped(points[:, 1], points[:, 2] - sheet, self.roll)
             points[:, 2] = rolled + sheet
         if self.fold != 0:
@@ -130,14 +132,17 @@ class Pose:
         if self.fold != 0:
             points[:, 1], points[:, 2] = self._unfolded(points)
         if self.roll != 0:
-            sheet = self._sheet(points[:, 0])[0]
+            sheet = self._sheet_height(points[:, 0])
             points[:, 1], flat = _unwrapped(points[:, 1], points[:, 2] - sheet, self.roll)
             points[:, 2] = flat + sheet
         return points
 
     def _level(self) -> float:
-        """The height the curl bends the blade about: its relief's mean, or the sheet's 0."""
-        return 0.0 if self.relief is None else self.relief.level
+        """The height the curl bends the blade about: its relief's mean as the roll, fold and
+        twist leave it (Relief.posed_level), or the sheet's 0."""
+        if self.relief is None:
+            return 0.0
+        return self.relief.posed_level(replace(self, curl=0.0))
 
     def _sheet(self, x: np.ndarray) -> Profile:
         """The height the roll bends each cross-section about (its relief's mean, or 0), with
@@ -146,6 +151,20 @@ class Pose:
             zero = np.zeros(len(x))
             return zero, zero, zero
         return self.relief.sheet(x)
+
+    def _sheet_height(self, x: np.ndarray) -> np.ndarray:
+        """`_sheet`'s height alone."""
+        return np.zeros(len(x)) if self.relief is None else self.relief.sheet_height(x)
+
+    def _hinge_height(self, x: np.ndarray) -> np.ndarray:
+        """`_hinge`'s height alone (rolled as `_hinge` rolls it)."""
+        midrib = self.relief.hinge_height(x)
+        if self.roll == 0:
+            return midrib
+        sheet = self.relief.sheet_height(x)
+        t = (midrib - sheet) * self.roll
+        rolled = np.where(t <= 0, midrib - sheet, (1 - np.exp(-np.maximum(t, 0))) / self.roll)
+        return sheet + rolled
 
     def _hinge(self, x: np.ndarray) -> Profile:
         """The midrib's height once rolled (the fold turns each half about it), with its first
@@ -179,7 +198,7 @@ class Pose:
         y, z = points[:, 1], points[:, 2]
         if self.relief is None:  # z from the turned y, as `flatten` takes it back: 0 exact
             return y * np.cos(fold), z + np.abs(y * np.cos(fold)) * np.tan(fold)
-        hinge = self._hinge(points[:, 0])[0]
+        hinge = self._hinge_height(points[:, 0])
         y, off = self._hinge_fold().folded(y, z - hinge)
         return y, off + hinge
 
@@ -189,7 +208,7 @@ class Pose:
         y, z = points[:, 1], points[:, 2]
         if self.relief is None:
             return y / np.cos(fold), z - np.abs(y) * np.tan(fold)
-        hinge = self._hinge(points[:, 0])[0]
+        hinge = self._hinge_height(points[:, 0])
         y, off = self._hinge_fold().unfolded(y, z - hinge)
         return y, off + hinge
 
@@ -215,7 +234,12 @@ class Pose:
     def flat_curve(self, points: np.ndarray, ring: bool = False) -> np.ndarray:
         """`flatten` for a curve's (n, 3) points in order along it (`ring`: closed): a rolled
         tube's points near its seam kept on their side (`unseamed`)."""
-        flat = self.flatten(points)
+        return self.unseam(self.flatten(points), ring)
+
+    def unseam(self, flat: np.ndarray, ring: bool = False) -> np.ndarray:
+        """A curve's (n, 3) flattened points with those near a rolled tube's seam on their side
+        (`unseamed`)."""
+        flat = np.array(flat, dtype=float)
         flat[:, 1] = unseamed(flat[:, 1], self.roll, ring)
         return flat
 
@@ -368,11 +392,23 @@ def flat_leaf(leaf: Leaf) -> Leaf:
     """The leaf on its flat blade: `leaf` itself when it has no bend."""
     if leaf.bend is None:
         return leaf
-    bend = leaf.bend
-    return Leaf(
-        boundary=flat_curve(bend, leaf.boundary, ring=True),
-        veins=[flat_curve(bend, v) for v in leaf.veins],
-    )
+    curves = flat_curves(leaf.bend, [leaf.boundary, *leaf.veins], [True])
+    return Leaf(boundary=curves[0], veins=curves[1:])
+
+
+def flat_curves(bend, curves: list[np.ndarray], rings: list[bool]) -> list[np.ndarray]:
+    """`flat_curve` of each of the (n_i, 3) `curves` (`rings[i]`: closed; False past the
+    list), their points flattened in one call: a fold about its hinge pays its per-call cost
+    once (a folded form's 27 curves, one at a time, took 10 ms of a 60 ms run)."""
+    own = getattr(bend, "flat_curve", None)  # Pose, PlacedPose
+    if own is None or not curves:
+        return [bend.flatten(c) for c in curves]
+    points = np.vstack([np.asarray(c, dtype=float).reshape(-1, 3) for c in curves])
+    flat = np.split(bend.flatten(points), np.cumsum([len(c) for c in curves])[:-1])
+    seam = getattr(bend, "unseam", None)
+    if seam is None:
+        return flat
+    return [seam(f, i < len(rings) and rings[i]) for i, f in enumerate(flat)]
 
 
 def flat_curve(bend, points: np.ndarray, ring: bool = False) -> np.ndarray:
@@ -409,85 +445,6 @@ def unseamed(v: np.ndarray, roll: float, ring: bool = False) -> np.ndarray:
     out = np.array(v, dtype=float)
     out[order] = along
     return out
-
-
-def _onto_surface(result: Result) -> Lift:
-    """A function taking (n, 3) points of the flat run's mesh onto its surface along the
-    plane's normal: the points, their heights and their jets (sag_splits' new points, on the
-    surface, not on the flat mesh's chord, which the bend stretches: up to 3 times on a folded
-    tube; their jets interpolated along the edge moved a crease's curvatures 5% with the leaf's
-    size, where the halvings differ)."""
-    frame, surface = result.frame, result.surface
-
-    def lift(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        xy = frame.to_plane(points)[0]
-        z, grad, hess = surface.derivatives(xy)
-        return frame.to_world(xy, z), z, jet_of(grad, hess)
-
-    return lift
-
-
-def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
-    """The flat blade's `result` carried into 3D by `leaf.bend`, measured against `leaf` (its
-    unit-size run as well, through `units`); `result` itself when the leaf has no bend. The
-    mesh is bent once, at unit size, and put in the input's units as in_world puts every run's
-    (bent at both sizes, the cuts, the carry and the halvings' lift ran twice: a quarter of a
-    bent run's time over the flat one's)."""
-    bend = leaf.bend
-    if bend is None:
-        return result
-    sag = getattr(bend, "sag_tolerance", None)
-    # a pose's chords are kept on it (`sag`); a scan's sheet (core/sheet.py) has none: its fit is
-    # at the scanner's noise (0.5% of the length), and halving the edges its spline's relief
-    # curves gave soybean pot1_1 30 times the faces for 0.04% of the length
-    carry_jet = getattr(bend, "carry_jet", None)  # a pose's; a scan's sheet is differenced
-    unit = result.unit
-    if unit is None:  # a run at its own size
-        lift = None if sag is None else _onto_surface(result)
-        by = BentBy(bend.apply, bend.crease, bend.trim, result.frame, carry_jet)
-        mesh, flat = bent_mesh(result.triangle_mesh, by, sag, lift)
-        return replace(
-            result,
-            leaf=leaf,
-            surface_points=bend.apply(result.surface_points),
-            triangle_mesh=mesh,
-            blade_xy=result.frame.to_plane(flat)[0],
-        )
-
-    def in_units(points: np.ndarray) -> np.ndarray:
-        return units.to_unit(bend.apply(units.to_world(points)))
-
-    def jet_in_units(jet: Jet) -> Jet:
-        return affine_jet(units.to_unit, bend.carry_jet(affine_jet(units.to_world, jet)))
-
-    mesh, flat = bent_mesh(
-        unit.triangle_mesh,
-        BentBy(
-            in_units,
-            lambda points: bend.crease(units.to_world(points)),
-            lambda points: bend.trim(units.to_world(points)),
-            unit.frame,
-            None if carry_jet is None else jet_in_units,
-        ),
-        None if sag is None else lambda extent: sag(extent * units.scale) / units.scale,
-        None if sag is None else _onto_surface(unit),
-    )
-    surface_points = in_units(unit.surface_points)
-    unit = replace(
-        unit,
-        leaf=units.leaf(leaf),
-        surface_points=surface_points,
-        triangle_mesh=mesh,
-        blade_xy=unit.frame.to_plane(flat)[0],
-    )
-    return replace(
-        result,
-        leaf=leaf,
-        surface_points=units.to_world(surface_points),
-        triangle_mesh=units.mesh(mesh),
-        unit=unit,
-        blade_xy=result.frame.to_plane(units.to_world(flat))[0],
-    )
 
 
 def sheared_flatten(pose: Pose, points: np.ndarray) -> np.ndarray:

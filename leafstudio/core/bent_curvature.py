@@ -13,7 +13,8 @@ sheet) is differenced: the flat surface's second-order expansion at the vertex i
 apart on a stencil, carried, and differenced (central differences, and a one-sided one for
 ∂uv; for no bend that is the graph's curvature to round-off: the differences of a quadratic).
 The points a bend's sag halvings add (bent_mesh.sag_splits) take the surface's own jet there
-(bend._onto_surface); those of its crease and trim cuts, theirs interpolated along the edge cut.
+(bent_result._onto_surface); those of its crease and trim cuts, theirs interpolated along the
+edge cut.
 """
 
 from __future__ import annotations

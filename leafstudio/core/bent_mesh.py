@@ -52,8 +52,8 @@ def sag_splits(
     of the length off the bent surface. A face is cut in as many pieces as it has edges halved,
     plus one (a conforming mesh, its winding kept). An edge of a face left whole passed: each
     later round looks at the new faces' edges only. bent_mesh then puts the new points on the
-    flat surface (`bend._onto_surface`) rather than on the flat chord, which the bend stretches (up
-    to 3 times on a folded tube: the last 1.03-1.05e-3 of the pose grid)."""
+    flat surface (`bent_result._onto_surface`) rather than on the flat chord, which the bend
+    stretches (up to 3 times on a folded tube: the last 1.03-1.05e-3 of the pose grid)."""
     points, faces = np.asarray(points, dtype=float), np.asarray(faces)
     bent, plan, done = carry(points), [], []
     for _ in range(SAG_ROUNDS):  # after the first, over the faces the last one made only

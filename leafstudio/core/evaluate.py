@@ -21,7 +21,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from leafstudio.core.bend import flat_curve, flat_leaf
+from leafstudio.core.bend import flat_curves, flat_leaf
 from leafstudio.core.buckets import kernel_array
 from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.distance import mesh_distances
@@ -317,7 +317,7 @@ def blade_midrib(leaf: Leaf) -> np.ndarray | None:
     which leaf_warnings says; None without one."""
     if not leaf.veins or len(leaf.veins[0]) < 2:
         return None
-    veins = leaf.veins if leaf.bend is None else [flat_curve(leaf.bend, v) for v in leaf.veins]
+    veins = leaf.veins if leaf.bend is None else flat_curves(leaf.bend, list(leaf.veins), [])
     return veins[0][::-1] if midrib_turned(veins) else veins[0]
 
 

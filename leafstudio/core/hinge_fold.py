@@ -29,7 +29,10 @@ from dataclasses import dataclass
 import numpy as np
 
 BAND = 0.03  # of the blade's length: the crease's band where σ turns over
-BISECTIONS = 60  # steps of the band's inverse: the band halved 60 times
+NEWTON_STEPS = 6  # Newton's steps of the band's inverse (ovate folded 60°, grid 128: all
+# 1266 of its mesh's points in the band within ROOT_TOLERANCE after 4, 327 left after 3)
+ROOT_TOLERANCE = 1e-13  # of the band: a Newton root farther off is bisected
+BISECTIONS = 60  # steps of the band's inverse by bisection: the band halved 60 times
 
 
 @dataclass(frozen=True)
@@ -81,16 +84,36 @@ class HingeFold:
         return flat, (off - np.abs(flat) * s) / e
 
     def _in_band(self, y: np.ndarray, off: np.ndarray) -> np.ndarray:
-        """y in the band whose fold is (y, off) (bisection on the band); 0 exactly for a point
-        on the crease's plane (y' = 0 is the crease's own, σ(0) = 0: the bisection's 1e-20 put
-        a form's tip beside the crease, and cutting the mesh there left a face of no area)."""
+        """y in the band whose fold is (y, off): Newton's steps on y' (y) = y from the middle of
+        the band, kept in it, then bisection for any left more than ROOT_TOLERANCE off (60
+        bisections for every point near the crease took 46% of a folded form's run, cProfile
+        of ovate folded 60° at grid 128); 0
+        exactly for a point on the crease's plane (y' = 0 is the crease's own, σ(0) = 0: an
+        inexact root put a form's tip 1e-20 beside the crease, and cutting the mesh there
+        left a face of no area)."""
+        s, ws, e = self.s, self.share * self.s, self.lift
+        guess = np.clip(y / self.c, -self.band, self.band)
+        for _ in range(NEWTON_STEPS):
+            sigma, slope, _ = self.side(guess)
+            relief = (off - np.abs(guess) * s) / e
+            miss = guess * self.c - sigma * ws * relief - y
+            rate = self.c - slope * ws * relief + sigma * ws * np.sign(guess) * s / e
+            guess = np.clip(guess - miss / np.where(rate > 0, rate, np.inf), -self.band, self.band)
+        relief = (off - np.abs(guess) * s) / e
+        left = np.abs(self.folded(guess, relief)[0] - y) > ROOT_TOLERANCE * self.band
+        if left.any():
+            guess[left] = self._bisected(y[left], off[left])
+        return np.where(y == 0, 0.0, guess)
+
+    def _bisected(self, y: np.ndarray, off: np.ndarray) -> np.ndarray:
+        """`_in_band` by bisection on the band."""
         low, high = np.full(len(y), -self.band), np.full(len(y), self.band)
         for _ in range(BISECTIONS):
             middle = 0.5 * (low + high)
             relief = (off - np.abs(middle) * self.s) / self.lift
             above = self.folded(middle, relief)[0] > y
             high, low = np.where(above, middle, high), np.where(above, low, middle)
-        return np.where(y == 0, 0.0, 0.5 * (low + high))
+        return 0.5 * (low + high)
 
     def jacobian(self, y: np.ndarray, off: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(n, 2, 2) ∂(y', o') / ∂(y, o) and (n, 2, 2, 2) the second derivatives, at (n,) y

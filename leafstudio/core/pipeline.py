@@ -11,7 +11,8 @@ import warnings
 from collections.abc import Callable
 
 from leafstudio._shared.blas import one_blas_thread
-from leafstudio.core.bend import bent_result, flat_leaf
+from leafstudio.core.bend import flat_leaf
+from leafstudio.core.bent_result import bent_result
 from leafstudio.core.grid import Grid
 from leafstudio.core.kernels import compile_kernels
 from leafstudio.core.prepare.units import Units

@@ -52,6 +52,11 @@ class PlacedPose:
         tube's points near its seam kept on their side (`Pose.flat_curve`)."""
         return self._world(self.pose.flat_curve(self._blade(points), ring))
 
+    def unseam(self, flat: np.ndarray, ring: bool = False) -> np.ndarray:
+        """A curve's (n, 3) flattened points with those near a rolled tube's seam on their side
+        (`Pose.unseam`, in the pose's frame)."""
+        return self._world(self.pose.unseam(self._blade(flat), ring))
+
     def trim(self, points: np.ndarray) -> None:
         """A pose cuts nothing out of the blade (model.Bend.trim)."""
         return None

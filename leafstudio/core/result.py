@@ -161,7 +161,7 @@ class Result:
     warnings: list[str] = field(default_factory=list)
     unit: Result | None = None  # the same run at unit size (units.py); None: this is it
     units: Units | None = None  # how `unit` maps to this one
-    # a bent leaf's mesh points on its flat blade, in `frame`'s plane (core/bend.bent_result:
+    # a bent leaf's mesh points on its flat blade, in `frame`'s plane (core/bent_result.bent_result:
     # laid flat again, a twisted tube's points by its seam fell on the other margin)
     blade_xy: np.ndarray | None = field(default=None, repr=False, compare=False)
     # the metrics and the VTK mesh, entries of the pipeline's cache (Pipeline.run sets them);
@@ -261,7 +261,7 @@ class Result:
         """The measuring of this Result's metrics (at unit size, on its unit-size Result)."""
         unit = self if self.unit is None else self.unit
         # the flat blade's midrib, which the length runs along: found here, where the leaf has
-        # its bend (the unit-size run's leaf is the bent leaf without it, bend.bent_result)
+        # its bend (the unit-size run's leaf is the bent leaf without it, bent_result.bent_result)
         midrib = blade_midrib(self.leaf)
         if midrib is not None and self.units is not None and self.unit is not None:
             midrib = self.units.to_unit(midrib)

@@ -10,6 +10,7 @@ import pytest
 import leafstudio as ls
 from leafstudio.core.bend import Pose
 from leafstudio.core.bent_mesh import sag_splits
+from leafstudio.core.correct import BAND_TOLERANCE
 from leafstudio.core.cuts import carried, carried_data, cut_levels
 from leafstudio.core.evaluate import mesh_facts
 from leafstudio.core.hinge_fold import BAND
@@ -58,7 +59,11 @@ def test_the_bent_mesh_is_the_flat_blades_mesh_bent():
     blade = ls.Leaf(pose.flatten(leaf.boundary), [pose.flatten(v) for v in leaf.veins])
     flat = ls.reconstruct(blade, ls.Params(grid=64)).triangle_mesh
     n = len(flat.points)
-    assert np.allclose(pose.flatten(bent.points[:n]), flat.points, atol=1e-12)
+    back = pose.flatten(bent.points[:n])
+    assert np.allclose(back[:, :2], flat.points[:, :2], atol=1e-12)
+    # the heights within the veins' tolerance: where the bend stretches a distance off the
+    # blade the bent run pins its veins closer (correct.py; 2e-9 here)
+    assert np.abs(back[:, 2] - flat.points[:, 2]).max() <= 2 * BAND_TOLERANCE
     added = np.abs(pose.flatten(bent.points[n:])[:, 1])
     assert len(added) and (added < 1e-12).sum() > 20 and added.max() <= BAND
     assert len(bent.regular_faces) > len(flat.regular_faces)

@@ -1,0 +1,97 @@
+"""A bent leaf's result: the flat blade's run carried into 3D by its bend (issue 21, build
+item 1; core/bend.py has the bends): the mesh bent once, at unit size, its sag halvings put on
+the flat surface, and the result measured against the bent leaf."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from leafstudio.core.bent_curvature import Jet, affine_jet, jet_of
+from leafstudio.core.bent_mesh import BentBy, Lift, bent_mesh
+from leafstudio.model import Leaf
+
+if TYPE_CHECKING:
+    from leafstudio.core.pipeline import Result
+    from leafstudio.core.prepare.units import Units
+
+
+def _onto_surface(result: Result) -> Lift:
+    """A function taking (n, 3) points of the flat run's mesh onto its surface along the
+    plane's normal: the points, their heights and their jets (sag_splits' new points, on the
+    surface, not on the flat mesh's chord, which the bend stretches: up to 3 times on a folded
+    tube; their jets interpolated along the edge moved a crease's curvatures 5% with the leaf's
+    size, where the halvings differ)."""
+    frame, surface = result.frame, result.surface
+
+    def lift(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        xy = frame.to_plane(points)[0]
+        z, grad, hess = surface.derivatives(xy)
+        return frame.to_world(xy, z), z, jet_of(grad, hess)
+
+    return lift
+
+
+def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
+    """The flat blade's `result` carried into 3D by `leaf.bend`, measured against `leaf` (its
+    unit-size run as well, through `units`); `result` itself when the leaf has no bend. The
+    mesh is bent once, at unit size, and put in the input's units as in_world puts every run's
+    (bent at both sizes, the cuts, the carry and the halvings' lift ran twice: a quarter of a
+    bent run's time over the flat one's)."""
+    bend = leaf.bend
+    if bend is None:
+        return result
+    sag = getattr(bend, "sag_tolerance", None)
+    # a pose's chords are kept on it (`sag`); a scan's sheet (core/sheet.py) has none: its fit is
+    # at the scanner's noise (0.5% of the length), and halving the edges its spline's relief
+    # curves gave soybean pot1_1 30 times the faces for 0.04% of the length
+    carry_jet = getattr(bend, "carry_jet", None)  # a pose's; a scan's sheet is differenced
+    unit = result.unit
+    if unit is None:  # a run at its own size
+        lift = None if sag is None else _onto_surface(result)
+        by = BentBy(bend.apply, bend.crease, bend.trim, result.frame, carry_jet)
+        mesh, flat = bent_mesh(result.triangle_mesh, by, sag, lift)
+        return replace(
+            result,
+            leaf=leaf,
+            surface_points=bend.apply(result.surface_points),
+            triangle_mesh=mesh,
+            blade_xy=result.frame.to_plane(flat)[0],
+        )
+
+    def in_units(points: np.ndarray) -> np.ndarray:
+        return units.to_unit(bend.apply(units.to_world(points)))
+
+    def jet_in_units(jet: Jet) -> Jet:
+        return affine_jet(units.to_unit, bend.carry_jet(affine_jet(units.to_world, jet)))
+
+    mesh, flat = bent_mesh(
+        unit.triangle_mesh,
+        BentBy(
+            in_units,
+            lambda points: bend.crease(units.to_world(points)),
+            lambda points: bend.trim(units.to_world(points)),
+            unit.frame,
+            None if carry_jet is None else jet_in_units,
+        ),
+        None if sag is None else lambda extent: sag(extent * units.scale) / units.scale,
+        None if sag is None else _onto_surface(unit),
+    )
+    surface_points = in_units(unit.surface_points)
+    unit = replace(
+        unit,
+        leaf=units.leaf(leaf),
+        surface_points=surface_points,
+        triangle_mesh=mesh,
+        blade_xy=unit.frame.to_plane(flat)[0],
+    )
+    return replace(
+        result,
+        leaf=leaf,
+        surface_points=units.to_world(surface_points),
+        triangle_mesh=units.mesh(mesh),
+        unit=unit,
+        blade_xy=result.frame.to_plane(units.to_world(flat))[0],
+    )
