@@ -41,6 +41,8 @@ from PySide6.QtGui import QColor, QPalette
 from PySide6.QtTest import QTest
 from PySide6.QtWidgets import QApplication, QMessageBox
 
+from leafstudio.core.bend import Pose
+from leafstudio.core.evaluate import surface_area
 from leafstudio.gui.model.framing import best_iso, blade_bounds
 from leafstudio.gui.model.layers import vein_color
 from leafstudio.gui.qt.main_window import MainWindow
@@ -280,6 +282,18 @@ def story_draw(window: MainWindow, shot: Shooter) -> None:
     window.viewport.camera("iso")  # the Iso button: the iso view chosen for the whole leaf
     process(300)
     shot("draw", "1e-drawn-leaf-iso-button", iso_turned_from_fresh_deg=iso_turn(window), **drawn)
+    flat = mesh_area(window)
+    window.session.set_bend(Pose(fold=45.0, curl=0.4))  # as the bend sliders set it
+    settle(window)
+    window.viewport.camera("iso")
+    process(300)
+    shot("draw", "1f-drawn-leaf-folded-curled", area_over_flat=round(mesh_area(window) / flat, 4))
+
+
+def mesh_area(window: MainWindow) -> float:
+    """The shown result's mesh area."""
+    mesh = window.session.result.triangle_mesh
+    return float(surface_area(np.asarray(mesh.points), mesh.regular_faces))
 
 
 def story_demos(window: MainWindow, shot: Shooter) -> None:
