@@ -31,10 +31,11 @@ shares of the leaf's length.
 - own surface by shape (--own, every --poses-th pose): each shape's 95th percentile flat and
   at its worst pose, and the poses beyond 2e-3;
 - size kept (--size): a posed ovate form's 3D area and midrib length over its flat blade's: a
-  fold turns each half about the midrib, a curl lays the midrib on a circle and a roll each
-  cross-section, each keeping the blade's sheet (the relief drawn in a little where it bends);
-  the fold and curl were shears that grew both (fold 60: 1.78 times the area; curl 1: the
-  midrib 1.42 times as long).
+  fold turns each half about the midrib as it stands, a curl lays the blade on a circle about
+  its mean height and a roll each cross-section about its own (core/pose_relief.py); about the
+  margin's plane the relief was drawn in (fold 60: 0.82 of the area), and before that the fold
+  and curl were shears that grew both (fold 60: 1.78 times the area; curl 1: the midrib 1.42
+  times as long).
 """
 
 from __future__ import annotations
@@ -425,7 +426,9 @@ def size_kept() -> None:
     area = surface_area(flat.points, flat.regular_faces)
     midrib = float(np.linalg.norm(np.diff(blade.veins[0], axis=0), axis=1).sum())
     for pose in ({"fold": 30}, {"fold": 60}, {"fold": 75}, {"curl": 0.5}, {"curl": 1.0},
-                 {"roll": 0.3}, {"roll": 0.5}, {"twist": 0.5}):  # fmt: skip
+                 {"roll": 0.3}, {"roll": 0.5}, {"twist": 0.5}, {"fold": 45, "curl": 0.5},
+                 {"fold": 75, "curl": 1.0}, {"fold": -60, "curl": -0.8},
+                 {"fold": 60, "roll": 0.5, "curl": 0.5}):  # fmt: skip
         leaf = Form("ovate", **pose).leaf(blade)
         mesh = ls.reconstruct(leaf, ls.Params(k=3, grid=128)).triangle_mesh
         along = float(np.linalg.norm(np.diff(leaf.veins[0], axis=0), axis=1).sum())

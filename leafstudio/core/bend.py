@@ -18,16 +18,18 @@ reconstructed as well as the flat leaf, where the boundary's PCA plane saw it si
 mesh broke (issue 21, finding 1).
 
 A pose bends about the blade's own relief (`Pose.relief`, pose_relief.py, read from the flat
-blade's curves by a form, the app's bend sliders and a project): the fold turns each half
-rigidly about the midrib as it stands (hinge_fold.py), the roll bends each cross-section about
-its mean height and the curl the blade about its mean height as the roll and fold leave it, so
-a domed blade keeps its size (bench_bent.py --size, an ovate form's area posed over flat: fold
-30° 0.999, 60° 0.993, 75° 0.990, curl 1 0.999, roll 0.5 0.998; about the margin's plane, the
-relief lifted straight up by the fold and carried toward the roll's and curl's axes: 0.90,
-0.82, 0.79, 0.94, 0.86). A pose without a relief (a project saved before it, a pose fitted to
-curves in 3D, core/unfold.py) bends the sheet z = 0 as before: the fold y -> y cos(fold),
-z += |y| sin(fold) (fold and curl were once shears, z += |y| tan(fold) + curl · x²: an ovate
-form folded 60° had 1.78 times its flat area).
+blade's curves by a form, the app's bend sliders and a project): the fold turns each half rigidly
+about the midrib as it stands (hinge_fold.py), the roll bends each cross-section about its mean
+height and the curl the blade about its midrib's mean height as the roll and fold leave it, so a
+domed blade keeps its size (bench_bent.py --size, an ovate form's area posed over flat; about the
+margin's plane, the relief lifted straight up by the fold and carried toward the roll's and curl's
+axes, before: fold 30° 0.999 (0.90), 60° 0.993 (0.82), 75° 0.990 (0.79), roll 0.5 0.998 (0.86);
+curled 1, its midrib 0.997 as long (0.92) and its area 1.017 (0.94)). A fold and a curl together
+bend a channel along its length: its halves shorten (folded 75° and curled 1, 0.66 of the area,
+against 0.48). A pose without a relief (a project saved before it, a pose fitted to curves in 3D,
+core/unfold.py) bends the sheet z = 0 as before: the fold y -> y cos(fold), z += |y| sin(fold)
+(fold and curl were once shears, z += |y| tan(fold) + curl · x²: an ovate form folded 60° had 1.78
+times its flat area).
 
 The roll (and the curl, along the midrib) carries a relief h (a margin's wave, raised veins)
 along the rolled normal: the cross-section's point (v, h) goes to the angle v / R about the axis
@@ -138,7 +140,7 @@ class Pose:
         return points
 
     def _level(self) -> float:
-        """The height the curl bends the blade about: its relief's mean as the roll, fold and
+        """The height the curl bends the blade about: its midrib's mean as the roll, fold and
         twist leave it (Relief.posed_level), or the sheet's 0."""
         if self.relief is None:
             return 0.0

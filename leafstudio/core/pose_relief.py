@@ -8,15 +8,14 @@ straight up instead of turning it with the half, and a roll or a curl offset it 
 each arc shortened by 1 − zκ. An ovate form kept 0.90 of its flat area folded 30°, 0.82 folded
 60°, 0.86 rolled 0.5 and 0.94 curled 1 (`bench_bent.py --size`).
 
-A pose that knows the blade's relief bends about it instead: the fold turns each half rigidly
-about the midrib as it stands (its height over x, the hinge), and the roll bends each
-cross-section about its own mean height (the sheet), the curl the blade about its mean height
-(the level), so the relief's first-order stretch averages out over each section. The profiles
-are read from the flat blade's curves (`relief_of`) at KNOTS places along it and are cubic
-splines in x (C², linear past the ends): a fold's hinge with a kink would crease the blade
-across at each knot. A pose without a relief (a project saved before it, a pose fitted to 3D
-curves, core/unfold.py) bends as it did.
-"""
+A pose that knows the blade's relief bends about it instead: the fold turns each half rigidly about
+the midrib as it stands (its height over x, the hinge), the roll bends each cross-section about its
+own mean height (the sheet), so the relief's first-order stretch averages out over each section,
+and the curl lays the midrib on its circle by its length (`posed_level`). The profiles are read
+from the flat blade's curves (`relief_of`): the hinge through the midrib's points, the sheet at
+KNOTS places along the blade; both are cubic splines in x (C², linear past the ends): a fold's
+hinge with a kink would crease the blade across at each knot. A pose without a relief (a project
+saved before it, a pose fitted to 3D curves, core/unfold.py) bends as it did."""
 
 from __future__ import annotations
 
@@ -33,7 +32,7 @@ from leafstudio.core.bent_curvature import Jet
 KNOTS = 24  # places along the blade the profiles are read at (24 and 48: areas 1e-3 apart)
 ROOM_SLACK = np.deg2rad(5.0)  # Relief.fold_room: kept clear of the midrib's plane
 CREASE = 0.05  # of the half width: points nearer the midrib than this have no angle off it
-LEVEL_SAMPLES = 96  # points of the blade a pose's curl finds its level from (posed_level)
+LEVEL_SAMPLES = 64  # points along the midrib a pose's curl finds its level from (posed_level)
 MIDRIB_POINTS = 128  # the most midrib points the hinge passes through (a project saves them)
 SAMPLES = 2048  # grid points over the blade's bounding box the sections' means are taken over
 
@@ -49,11 +48,9 @@ class Relief:
     midrib: tuple[float, ...]  # their heights: a fold's hinge passes through them
     knots: tuple[float, ...]  # x, increasing, evenly over the blade
     mean: tuple[float, ...]  # each cross-section's mean height there: a roll's sheet
-    level: float  # the blade's mean height: a curl's sheet
     half_width: float  # the blade's widest reach across the midrib (how far a roll turns it)
     rise: float = 0.0  # radians: the steepest the relief rises from the hinge across (its
     fall: float = 0.0  # points' angle atan2(±(z − hinge), |y|)), and falls (`fold_room`)
-    samples: tuple[float, ...] = ()  # x, y, z of points evenly over the blade (`posed_level`)
     _splines: dict = field(default_factory=dict, compare=False, repr=False)  # and levels
 
     def _spline(self, name: str) -> CubicSpline:
@@ -85,7 +82,7 @@ class Relief:
     def key(self) -> bytes:
         """Bytes that change with the relief (Pose.key)."""
         numbers = [*self.along, *self.midrib, *self.knots, *self.mean]
-        numbers += [self.level, self.half_width, self.rise, self.fall, *self.samples]
+        numbers += [self.half_width, self.rise, self.fall]
         return np.array(numbers).tobytes()
 
     def entry(self) -> dict[str, Any]:
@@ -95,11 +92,9 @@ class Relief:
             "knots": list(self.knots),
             "midrib": list(self.midrib),
             "mean": list(self.mean),
-            "level": self.level,
             "half_width": self.half_width,
             "rise": self.rise,
             "fall": self.fall,
-            "samples": list(self.samples),
         }
 
     @classmethod
@@ -107,30 +102,28 @@ class Relief:
         """A Relief from its `entry`; ValueError unless it reads whole (increasing x, as many
         heights, all finite)."""
         along, midrib, knots, mean = (
-            tuple(float(t) for t in value[k]) for k in ("along", "midrib", "knots", "mean")
+            _numbers(value[k]) for k in ("along", "midrib", "knots", "mean")
         )
-        scalars = [float(value[k]) for k in ("level", "half_width", "rise", "fall")]
-        samples = tuple(float(t) for t in value.get("samples", ()))
+        scalars = [float(value[k]) for k in ("half_width", "rise", "fall")]
         if not (_profile_reads(along, midrib) and _profile_reads(knots, mean)):
             raise ValueError("a relief's x and heights do not read whole")
-        if not (np.isfinite(scalars).all() and min(scalars[1:]) >= 0):
-            raise ValueError("a relief's level, half width, rise and fall must be numbers")
-        if len(samples) % 3 or not np.isfinite(samples).all():
-            raise ValueError("a relief's samples must be x, y, z numbers")
-        return cls(along, midrib, knots, mean, *scalars, samples)
+        if not (np.isfinite(scalars).all() and min(scalars) >= 0):
+            raise ValueError("a relief's half width, rise and fall must be numbers of 0 or more")
+        return cls(along, midrib, knots, mean, *scalars)
 
     def posed_level(self, pose: Any) -> float:
-        """The mean height of the blade as `pose` leaves it before its curl (a `bend.Pose`
-        without its curl): what the curl bends about. The flat blade's mean height stood under
-        a folded blade's raised halves, and a drawn leaf folded 45° and curled 0.4 kept 0.92
-        of its area."""
-        if not self.samples:
-            return self.level
+        """The midrib's mean height as `pose` leaves it before its curl (a `bend.Pose` without
+        its curl): what the curl bends the blade about, so the midrib keeps its length. About
+        the blade's mean height, the area was kept but a folded blade's midrib, far under its
+        raised halves, was stretched (ovate folded 75° and curled 1: 1.25 times as long); about
+        the margin's plane, the midrib shrank (0.92) and the halves with it (0.48 of the area).
+        A blade folded and curled is a channel bent along its length: its halves shorten
+        (bench_bent.py --size)."""
         key = ("level", pose.fold, pose.roll, pose.twist)
         if key not in self._splines:  # once a pose: every call of its apply asks
-            flat = np.reshape(self.samples, (-1, 3))  # the pose's rise, added to the mean
-            rise = float(pose.apply(flat)[:, 2].mean() - flat[:, 2].mean())
-            self._splines[key] = self.level + rise
+            x = np.linspace(self.along[0], self.along[-1], LEVEL_SAMPLES)
+            midrib = np.column_stack([x, np.zeros_like(x), self.hinge_height(x)])
+            self._splines[key] = float(pose.apply(midrib)[:, 2].mean())
         return self._splines[key]
 
     def fold_room(self, fold: float, roll: float) -> float:
@@ -141,6 +134,14 @@ class Relief:
         relief = self.rise if fold > 0 else self.fall
         chord = 0.5 * min(abs(roll) * self.half_width, np.pi) if roll * fold > 0 else 0.0
         return np.pi / 2 - relief - chord - ROOM_SLACK
+
+
+def _numbers(value: Any) -> tuple[float, ...]:
+    """A list of numbers from a project; ValueError for anything else (a string's characters
+    read as digits)."""
+    if not isinstance(value, (list, tuple)):
+        raise ValueError("a relief's profiles must be lists of numbers")
+    return tuple(float(t) for t in value)
 
 
 def _profile_reads(x: tuple[float, ...], z: tuple[float, ...]) -> bool:
@@ -204,19 +205,10 @@ def relief_of(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | None:
         tuple(midrib[1].tolist()),
         tuple(knots.tolist()),
         tuple(mean.tolist()),
-        float(heights.mean()),
         half_width,
         max(float(angle.max(initial=0.0)), 0.0),
         max(float(-angle.min(initial=0.0)), 0.0),
-        _spread(xy, heights),
     )
-
-
-def _spread(xy: np.ndarray, heights: np.ndarray) -> tuple[float, ...]:
-    """At most LEVEL_SAMPLES of the (n, 2) grid points inside the blade and their heights,
-    every k-th (evenly over the blade), as x, y, z in a row."""
-    step = max(1, int(np.ceil(len(xy) / LEVEL_SAMPLES)))
-    return tuple(np.column_stack([xy[::step], heights[::step]]).ravel().tolist())
 
 
 def _midrib(vein: np.ndarray, boundary: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:

@@ -67,8 +67,8 @@ def _bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
         raise LeafError(
             f'"bend" must be {{"fold": degrees under 90, "curl", "roll", "twist": numbers}} (a '
             f'"frame": {{"origin", "u", "v", "normal"}}, orthonormal axes; a "relief": '
-            f'{{"along", "midrib", "knots", "mean", "samples": lists, "level", "half_width", '
-            f'"rise", "fall": numbers}}), got {shorten(value)}',
+            f'{{"along", "midrib", "knots", "mean": lists, "half_width", "rise", "fall": '
+            f"numbers}}), got {shorten(value)}",
             source,
         )
     pose = Pose(fold, curl, roll, twist, relief)

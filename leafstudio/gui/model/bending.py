@@ -68,8 +68,13 @@ def posed(
     half about the midrib as it stands). The flat pose gives `flat` itself, without a bend."""
     if flat is None or pose == FLAT:
         return flat
+    # a pose without a relief (curves in 3D unfolded, core/unfold.py; a project saved before
+    # reliefs) keeps bending about the margin's plane: a slider's nudge of 1e-6° moved an
+    # unfolded ovate's outline 0.157 of its length when it took a relief
+    about_relief = getattr(getattr(like, "pose", like), "relief", 0) is not None
     if isinstance(like, Pose):  # a form's blade is in its own coordinates
-        bend: Bend = replace(pose, relief=relief_of(flat.boundary, flat.veins))
+        relief = relief_of(flat.boundary, flat.veins) if about_relief else None
+        bend: Bend = replace(pose, relief=relief)
     else:  # bent about the blade's own relief, read in its frame (core/pose_relief.py)
         frame = blade_frame(flat, plane)
         own = in_lengths(pose, 1.0 / blade_extent(flat.boundary, frame))
@@ -77,7 +82,9 @@ def posed(
         def blade(points: np.ndarray) -> np.ndarray:
             return np.column_stack(frame.to_plane(points))
 
-        relief = relief_of(blade(flat.boundary), [blade(v) for v in flat.veins])
+        relief = None
+        if about_relief:
+            relief = relief_of(blade(flat.boundary), [blade(v) for v in flat.veins])
         bend = PlacedPose(replace(own, relief=relief), frame)
     return Leaf(bend.apply(flat.boundary), [bend.apply(v) for v in flat.veins], bend=bend)
 
