@@ -146,16 +146,8 @@ class Pose:
             return 0.0
         return self.relief.posed_level(replace(self, curl=0.0))
 
-    def _sheet(self, x: np.ndarray) -> Profile:
-        """The height the roll bends each cross-section about (its relief's mean, or 0), with
-        its first and second derivatives along x."""
-        if self.relief is None:
-            zero = np.zeros(len(x))
-            return zero, zero, zero
-        return self.relief.sheet(x)
-
     def _sheet_height(self, x: np.ndarray) -> np.ndarray:
-        """`_sheet`'s height alone."""
+        """The height the roll bends each cross-section about: its relief's mean, or 0."""
         return np.zeros(len(x)) if self.relief is None else self.relief.sheet_height(x)
 
     def _hinge_height(self, x: np.ndarray) -> np.ndarray:
@@ -164,24 +156,18 @@ class Pose:
         if self.roll == 0:
             return midrib
         sheet = self.relief.sheet_height(x)
-        t = (midrib - sheet) * self.roll
-        rolled = np.where(t <= 0, midrib - sheet, (1 - np.exp(-np.maximum(t, 0))) / self.roll)
-        return sheet + rolled
+        return sheet + _rolled_rise(midrib - sheet, self.roll)[0]
 
     def _hinge(self, x: np.ndarray) -> Profile:
         """The midrib's height once rolled (the fold turns each half about it), with its first
         and second derivatives along x: the roll carries the midrib's height h over the sheet s
-        to s + g(h − s), g(u) = R (1 − ρ(u / R)) (`_rolled_radius` ρ: g = u below the sheet)."""
+        to s + g(h − s) (`_rolled_rise`)."""
         midrib = self.relief.hinge(x)
         if self.roll == 0:
             return midrib
-        sheet = self._sheet(x)
+        sheet = self.relief.sheet(x)
         u, du, ddu = (m - s for m, s in zip(midrib, sheet, strict=True))
-        t = u * self.roll
-        inward = np.exp(-np.maximum(t, 0))
-        g = np.where(t <= 0, u, (1 - inward) / self.roll)
-        g1 = np.where(t <= 0, 1.0, inward)
-        g2 = np.where(t <= 0, 0.0, -self.roll * inward)
+        g, g1, g2 = _rolled_rise(u, self.roll)
         return sheet[0] + g, sheet[1] + g1 * du, sheet[2] + g2 * du**2 + g1 * ddu
 
     def _hinge_fold(self) -> HingeFold:
@@ -286,6 +272,16 @@ class Pose:
         (sag_splits): SAG of the extent, and ROLL_SAG of a roll's radius (a grass blade's tube,
         a hundredth of its length across)."""
         return min(SAG * extent, ROLL_SAG / abs(self.roll)) if self.roll else SAG * extent
+
+
+def _rolled_rise(u: np.ndarray, k: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """How far a height u over a roll's sheet stands over it once rolled at the midrib (y = 0),
+    with its first and second derivatives: g(u) = R (1 − ρ(u / R)), ρ `_rolled_radius`
+    (R = 1 / k): u itself below the sheet, drawn in above it."""
+    t = u * k
+    inward = np.exp(-np.maximum(t, 0))
+    g = np.where(t <= 0, u, (1 - inward) / k)
+    return g, np.where(t <= 0, 1.0, inward), np.where(t <= 0, 0.0, -k * inward)
 
 
 def _rolled_radius(u: np.ndarray) -> np.ndarray:

@@ -15,7 +15,7 @@ keep that from working everywhere, and this fold is
   132 of test_forms_posed's 168 poses flattened a point onto the wrong half). With
   w tan |fold| ≤ cot γ each half stays on its side; a blade folded without a roll turns
   rigidly (w = 1), a tube folded as without a relief (w = 0).
-- σ(y), the half, goes from −1 to 1 across a band BAND of the half-width wide, smoothly
+- σ(y), the half, goes from −1 to 1 across a band 2 BAND of the blade's length wide, smoothly
   (t (3 − t²) / 2, t = y / band): a point on the crease a little off the hinge (the surface
   passes within the vein tolerance of the midrib, not through it) was turned one way or the
   other, the two halves parted there, and a folded cordate blade's solid crossed itself.
@@ -68,7 +68,7 @@ class HingeFold:
         """The inverse of `folded`. Past the band each half is linear; a point either half's
         fold reaches (inside the fold, where a relief falls from the hinge into it: a dome
         folded down) or neither does is taken on the side of the midrib's plane it lies, and
-        one in the band is found by bisection (y c − σ(y) w s o(y) rises across it while o is
+        one in the band is found by `_in_band` (y c − σ(y) w s o(y) rises across it while o is
         under band c / (1.5 w s): 1e-3 of the length on an ovate blade folded 75°, whose
         surface passes within 4e-4 of the midrib)."""
         c, s, w, e = self.c, self.s, self.share, self.lift

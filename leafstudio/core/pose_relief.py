@@ -29,7 +29,7 @@ from shapely.geometry import Polygon
 
 from leafstudio.core.bent_curvature import Jet
 
-KNOTS = 24  # places along the blade the profiles are read at (24 and 48: areas 1e-3 apart)
+KNOTS = 24  # places along the blade the sections' mean heights are read at
 ROOM_SLACK = np.deg2rad(5.0)  # Relief.fold_room: kept clear of the midrib's plane
 CREASE = 0.05  # of the half width: points nearer the midrib than this have no angle off it
 LEVEL_SAMPLES = 64  # points along the midrib a pose's curl finds its level from (posed_level)
