@@ -227,7 +227,7 @@ def bent_offsets(result: Result, asset: MeshAsset, thickness: float = 0.0) -> np
     cordate blade's basal lobes, folded 60°, through each other (507 crossing faces); the
     fold carries the flat blade's upright offsets upright, as a height field's solid. A fold
     about the midrib's hinge turns them, and they keep off its midplane for a solid
-    `thickness` thick (`_clear_of_crease`)."""
+    `thickness` thick (`_crease`)."""
     bend = result.leaf.bend
     if asset.plane_xy is not None and "height" in asset.point_data:  # leaf_asset's: kept flat
         xy, height = asset.plane_xy, asset.point_data["height"]
@@ -243,19 +243,14 @@ def bent_offsets(result: Result, asset: MeshAsset, thickness: float = 0.0) -> np
     bent = carried_vectors(bend, flat_points, offset)
     bent_normals = carried_normals(bend, flat_points, normals)
     wanted = np.einsum("ij,ij->i", offset, normals)
-    bent = bent * _gain(bent, bent_normals, wanted)[:, None]
+    reach = np.einsum("ij,ij->i", bent, bent_normals)
+    gain = np.clip(wanted / np.where(reach > 0, reach, np.inf), 1.0, 1 / MIN_COSINE)
+    bent = bent * gain[:, None]
     crease = _crease(bend, flat_points, bent, thickness)
     if crease is None:
         return bent
     across, part = crease  # the part across the midplane held (`_crease`)
     return bent - ((np.einsum("ij,ij->i", bent, across) - part) * across.T).T
-
-
-def _gain(offsets_: np.ndarray, normals: np.ndarray, wanted: np.ndarray) -> np.ndarray:
-    """(n,) how many times each offset is lengthened to reach `wanted` along the normal, 1 to
-    1 / MIN_COSINE."""
-    reach = np.einsum("ij,ij->i", offsets_, normals)
-    return np.clip(wanted / np.where(reach > 0, reach, np.inf), 1.0, 1 / MIN_COSINE)
 
 
 def _crease(

@@ -46,7 +46,6 @@ points are bent (bent_mesh.py), and its curvature arrays are the bent surface's
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -55,10 +54,6 @@ from leafstudio.core.carried import carried_vectors
 from leafstudio.core.hinge_fold import BAND, HingeFold, fold_share
 from leafstudio.core.pose_relief import Profile, Relief, negated, shifted
 from leafstudio.model import Leaf
-
-if TYPE_CHECKING:
-    pass
-
 
 ROLL_SAG = 1.25e-3  # of a roll's radius: a bent chord stands no farther off (sag_splits); what
 # cuts every 0.1 radians of roll kept it to, r (1 − cos 0.05), and 8.7 of a bent run's 61 ms

@@ -50,18 +50,23 @@ class HingeFold:
         """1 − w + w c: the relief's own factor."""
         return 1 - self.share + self.share * self.c
 
+    def sigma(self, y: np.ndarray) -> np.ndarray:
+        """σ(y) (module docstring): `folded` needs no more of it."""
+        t = np.clip(y / self.band, -1.0, 1.0)
+        return np.where(np.abs(y) < self.band, 0.5 * t * (3 - t**2), np.where(y < 0, -1.0, 1.0))
+
     def side(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """σ(y), σ' and σ'' (module docstring)."""
         t = np.clip(y / self.band, -1.0, 1.0)
         inside = np.abs(y) < self.band
-        sigma = np.where(inside, 0.5 * t * (3 - t**2), np.where(y < 0, -1.0, 1.0))
+        sigma = self.sigma(y)
         slope = np.where(inside, 1.5 * (1 - t**2) / self.band, 0.0)
         bend = np.where(inside, -3 * t / self.band**2, 0.0)
         return sigma, slope, bend
 
     def folded(self, y: np.ndarray, off: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(y, o) folded (module docstring)."""
-        sigma = self.side(y)[0]
+        sigma = self.sigma(y)
         return y * self.c - sigma * self.share * self.s * off, np.abs(y) * self.s + self.lift * off
 
     def unfolded(self, y: np.ndarray, off: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -87,10 +92,9 @@ class HingeFold:
         """y in the band whose fold is (y, off): Newton's steps on y' (y) = y from the middle of
         the band, kept in it, then bisection for any left more than ROOT_TOLERANCE off (60
         bisections for every point near the crease took 46% of a folded form's run, cProfile
-        of ovate folded 60° at grid 128); 0
-        exactly for a point on the crease's plane (y' = 0 is the crease's own, σ(0) = 0: an
-        inexact root put a form's tip 1e-20 beside the crease, and cutting the mesh there
-        left a face of no area)."""
+        of ovate folded 60° at grid 128); 0 exactly for a point on the crease's plane (y' = 0
+        is the crease's own, σ(0) = 0: an inexact root put a form's tip 1e-20 beside the
+        crease, and cutting the mesh there left a face of no area)."""
         s, ws, e = self.s, self.share * self.s, self.lift
         guess = np.clip(y / self.c, -self.band, self.band)
         for _ in range(NEWTON_STEPS):

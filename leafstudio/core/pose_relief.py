@@ -51,13 +51,13 @@ class Relief:
     half_width: float  # the blade's widest reach across the midrib (how far a roll turns it)
     rise: float = 0.0  # radians: the steepest the relief rises from the hinge across (its
     fall: float = 0.0  # points' angle atan2(±(z − hinge), |y|)), and falls (`fold_room`)
-    _splines: dict = field(default_factory=dict, compare=False, repr=False)  # and levels
+    _cache: dict = field(default_factory=dict, compare=False, repr=False)  # splines, levels
 
     def _spline(self, name: str) -> CubicSpline:
-        if name not in self._splines:  # made once: a pose bends the mesh's points, then its jets
+        if name not in self._cache:  # made once: a pose bends the mesh's points, then its jets
             x = self.along if name == "midrib" else self.knots
-            self._splines[name] = CubicSpline(x, getattr(self, name), bc_type="natural")
-        return self._splines[name]
+            self._cache[name] = CubicSpline(x, getattr(self, name), bc_type="natural")
+        return self._cache[name]
 
     def _profile(self, name: str, x: np.ndarray) -> Profile:
         spline = self._spline(name)
@@ -120,11 +120,11 @@ class Relief:
         A blade folded and curled is a channel bent along its length: its halves shorten
         (bench_bent.py --size)."""
         key = ("level", pose.fold, pose.roll, pose.twist)
-        if key not in self._splines:  # once a pose: every call of its apply asks
+        if key not in self._cache:  # once a pose: every call of its apply asks
             x = np.linspace(self.along[0], self.along[-1], LEVEL_SAMPLES)
             midrib = np.column_stack([x, np.zeros_like(x), self.hinge_height(x)])
-            self._splines[key] = float(pose.apply(midrib)[:, 2].mean())
-        return self._splines[key]
+            self._cache[key] = float(pose.apply(midrib)[:, 2].mean())
+        return self._cache[key]
 
     def fold_room(self, fold: float, roll: float) -> float:
         """Radians a half may turn about the hinge before a point of it crosses the midrib's
@@ -223,10 +223,7 @@ def _midrib(vein: np.ndarray, boundary: np.ndarray) -> tuple[np.ndarray, np.ndar
     if len(vein) < 2:
         return None
     extent = float(np.ptp(boundary[:, 0]))
-    order = np.argsort(vein[:, 0], kind="stable")
-    x, z = vein[order, 0], vein[order, 2]
-    keep = np.concatenate([[True], np.diff(x) > 1e-6 * extent])
-    x, z = x[keep], z[keep]
+    x, z = _increasing(vein[:, 0], vein[:, 2], 1e-6 * extent)
     if len(x) > MIDRIB_POINTS:
         step = int(np.ceil(len(x) / MIDRIB_POINTS))
         index = np.unique(np.append(np.arange(0, len(x), step), len(x) - 1))
@@ -234,12 +231,20 @@ def _midrib(vein: np.ndarray, boundary: np.ndarray) -> tuple[np.ndarray, np.ndar
     crease = boundary[np.abs(boundary[:, 1]) <= 1e-6 * extent]
     past = (crease[:, 0] < x[0] - 1e-6 * extent) | (crease[:, 0] > x[-1] + 1e-6 * extent)
     if past.any():
-        x, z = np.concatenate([x, crease[past, 0]]), np.concatenate([z, crease[past, 2]])
-        order = np.argsort(x, kind="stable")
-        x, z = x[order], z[order]
-        keep = np.concatenate([[True], np.diff(x) > 1e-6 * extent])
-        x, z = x[keep], z[keep]
+        x, z = _increasing(
+            np.concatenate([x, crease[past, 0]]),
+            np.concatenate([z, crease[past, 2]]),
+            1e-6 * extent,
+        )
     return (x, z) if len(x) >= 2 else None
+
+
+def _increasing(x: np.ndarray, z: np.ndarray, gap: float) -> tuple[np.ndarray, np.ndarray]:
+    """Points' x and heights in x's order, none within `gap` of the one before."""
+    order = np.argsort(x, kind="stable")
+    x, z = x[order], z[order]
+    keep = np.concatenate([[True], np.diff(x) > gap])
+    return x[keep], z[keep]
 
 
 def shifted(jet: Jet, profile: Profile) -> Jet:

@@ -213,8 +213,8 @@ class Form:
         # the leaf knows its pose: reconstruction runs on the flat blade and bends the mesh
         # (core/bend.py), so no fold or curl stands it on edge; the veins are kept on the blade
         half_width = float(np.abs(blade.boundary[:, 1]).max())  # the roll's share of a turn
-        # bent about its own relief: a fold turns each half about the midrib as it stands, and
-        # a roll or a curl keeps each section's length (core/pose_relief.py)
+        # bent about its own relief: a fold turns each half about the midrib as it stands, a
+        # roll keeps each section's length and a curl the midrib's (core/pose_relief.py)
         relief = relief_of(blade.boundary, blade.veins)
         pose = Pose(
             self.fold, self.curl, self.roll * np.pi / half_width, self.twist * np.pi, relief
