@@ -49,19 +49,15 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
-from shapely.geometry import Polygon
 
 import leafstudio as ls
 from leafstudio.analysis.fidelity import fin_share
-from leafstudio.core.base import fit_base
 from leafstudio.core.bend import Pose, flat_leaf
 from leafstudio.core.evaluate import margin_creases
 from leafstudio.errors import LeafError
-from leafstudio.forms.blade import Blade
 from leafstudio.forms.make import Form
-from leafstudio.forms.relief import dome
+from leafstudio.forms.own_surface import own_heights
 from leafstudio.forms.terms import SHAPES
-from leafstudio.forms.veins import HEIGHT_RATIO
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -95,29 +91,9 @@ def _run(leaf: ls.Leaf, params: ls.Params) -> tuple[ls.Result | None, bool]:
 
 
 def own_relief(form: Form) -> Callable[[np.ndarray], np.ndarray]:
-    """The form's own surface over its flat blade, (n, 2) -> (n,) heights: its dome
-    (forms/relief.py) on its wave's base, as its veins were lifted (forms/veins.grow_veins: the
-    dome made in the blade's own frame, base at the origin and apex at (1, 0), and scaled back
-    by the base-to-apex distance; forms/make.py: the wave's base under it), checked on the
-    veins to 1e-9 of the length."""
-    outline = form.outline()
-    xy = outline.xy
-    apex = xy[outline.apex_index]  # the base is at the origin
-    length = float(np.linalg.norm(apex))
-    u = apex / length
-    v = np.array([-u[1], u[0]])
-
-    def local(at: np.ndarray) -> np.ndarray:
-        return np.column_stack([at @ u, at @ v]) / length
-
-    blade = Blade(Polygon(local(xy)))
-    rise = dome(blade, HEIGHT_RATIO, np.zeros(2), form.base_term == "rounded")
-    base = fit_base(xy, form._wave(outline), 1.0)
-
-    def heights(at: np.ndarray) -> np.ndarray:
-        at = np.asarray(at, dtype=float)[:, :2]
-        return length * rise(local(at)) + (0.0 if base is None else base(at))
-
+    """The form's own surface over its flat blade, (n, 2) -> (n,) heights (forms/own_surface.py),
+    checked on its veins to 1e-9 of the length."""
+    heights = own_heights(form)
     veins = np.vstack(form.unposed().leaf().veins)
     off = np.abs(heights(veins[:, :2]) - veins[:, 2]).max()
     if off > 1e-9:  # the forms' outline or their veins' lift changed

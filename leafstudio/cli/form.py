@@ -37,7 +37,12 @@ def add_form_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--margin", type=term_key, choices=tuple(MARGINS), default="entire")
     p.add_argument("--teeth", type=int, metavar="N", help="N teeth in all (toothed margins)")
     p.add_argument("--lobes", type=int, metavar="N", help="N lobes in all (--margin lobed)")
-    p.add_argument("--venation", type=term_key, choices=VENATION_KINDS, default="pinnate")
+    p.add_argument(
+        "--venation",
+        type=term_key,
+        choices=VENATION_KINDS,
+        help="default: the shape's usual venation (palmate for reniform, else pinnate)",
+    )
     p.add_argument("--secondaries", type=int, metavar="N", help="secondary veins per side")
     p.add_argument("--aspect", type=float, metavar="L/W", help="length over greatest width")
     kept = " (the blade's size kept: README, Real size)"
@@ -142,7 +147,7 @@ def run_form(args: argparse.Namespace) -> int:
         save_leaf(leaf, out)
     print(
         f"{out}: {form.shape} leaf ({form.apex_term} apex, {form.base_term} base, {form.margin} "
-        f"margin, {form.venation} venation): {len(leaf.boundary)} boundary points, "
+        f"margin, {form.venation_term} venation): {len(leaf.boundary)} boundary points, "
         f"{len(leaf.veins)} veins",
         file=sys.stderr,
     )

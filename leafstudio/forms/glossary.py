@@ -143,13 +143,13 @@ COMPARISONS: dict[str, tuple[Form, ...]] = {
 
 
 def form_terms(form: Form) -> dict[str, str]:
-    """A form's terms by kind (its shape's usual apex and base when it names none)."""
+    """A form's terms by kind (its shape's usual apex, base and venation when it names none)."""
     return {
         "shape": form.shape,
         "apex": form.apex_term,
         "base": form.base_term,
         "margin": form.margin,
-        "venation": form.venation,
+        "venation": form.venation_term,
     }
 
 

@@ -81,7 +81,8 @@ class Form:
         entire, serrate, serrulate, dentate, crenate, sinuate or lobed.
     teeth, lobes : int, optional
         Teeth along a toothed margin, lobes of a lobed one; default the margin's usual.
-    venation : {"pinnate", "palmate", "parallel", "arcuate"}, default: "pinnate"
+    venation : {"pinnate", "palmate", "parallel", "arcuate"}, optional
+        Default the shape's usual: palmate for reniform, else pinnate.
     secondaries : int, optional
         Secondary veins on each side (see `grow_veins`).
     aspect : float, optional
@@ -116,7 +117,7 @@ class Form:
     margin: str = "entire"
     teeth: int | None = None
     lobes: int | None = None
-    venation: str = "pinnate"
+    venation: str | None = None
     secondaries: int | None = None
     aspect: float | None = None
     fold: float = 0.0
@@ -157,6 +158,10 @@ class Form:
         return self.base or SHAPES[self.shape].base
 
     @property
+    def venation_term(self) -> str:
+        return self.venation or SHAPES[self.shape].venation
+
+    @property
     def teeth_count(self) -> int:
         return self.teeth or DEFAULT_TEETH.get(self.margin, 0)
 
@@ -184,7 +189,7 @@ class Form:
             self.teeth_count,
             self.lobe_count,
             aspect,
-            self.venation == "palmate",
+            self.venation_term == "palmate",
             rng,  # type: ignore[arg-type]
         )
 
@@ -241,7 +246,7 @@ class Form:
         xy = outline.xy
         veins = grow_veins(
             xy,
-            self.venation,
+            self.venation_term,
             self.secondaries,
             base=np.zeros(2),
             seed=self.seed,

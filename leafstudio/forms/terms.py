@@ -30,6 +30,10 @@ class ShapeSpec:
         The share of the length each end term shapes (Ellis: the distal and proximal quarter).
     fixed_base : bool
         The base is part of the shape's definition (basal lobes); --base cannot change it.
+    venation : str
+        The usual venation of leaves of the shape: palmate for a reniform one (Asarum, Caltha,
+        Pelargonium: the main veins spread from the stalk into both lobes), pinnate for the
+        rest.
     """
 
     definition: str
@@ -40,6 +44,7 @@ class ShapeSpec:
     apex_zone: float = 0.25
     base_zone: float = 0.25
     fixed_base: bool = False
+    venation: str = "pinnate"
 
 
 SHAPES: dict[str, ShapeSpec] = {
@@ -134,6 +139,7 @@ SHAPES: dict[str, ShapeSpec] = {
         0.5,
         0.5,
         True,
+        venation="palmate",
     ),
     "deltoid": ShapeSpec(
         "triangular: widest near the base, straight sides running to the apex",

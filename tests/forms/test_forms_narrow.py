@@ -21,7 +21,7 @@ from leafstudio.forms.terms import SHAPES
 @pytest.mark.parametrize("shape", ["linear", "elliptic", "lanceolate"])
 @pytest.mark.parametrize("aspect", [20, 25, 30])
 def test_a_narrow_pinnate_leaf_has_secondaries_reaching_its_margin(shape, aspect):
-    leaf = Form(shape=shape, aspect=aspect).leaf()
+    leaf = Form(shape=shape, aspect=aspect, venation="pinnate").leaf()
     blade = Polygon(leaf.boundary[:, :2])
     others = leaf.veins[1:]  # after the midrib
     assert len(others) >= 8  # 6 a side asked; before: none

@@ -115,7 +115,7 @@ class FormsPanel(QWidget):
         self.apex = self._combo(("(usual)", *APEXES), "apex")
         self.base = self._combo(("(usual)", *USER_BASES), "base")
         self.margin = self._combo(tuple(MARGINS), "margin")
-        self.venation = self._combo(VENATION_KINDS, "venation")
+        self.venation = self._combo(("(usual)", *VENATION_KINDS), "venation")
         self.teeth = self._spin(QSpinBox(), 2, 300, 30, RELIEF["teeth"])
         self.lobes = self._spin(QSpinBox(), 2, 15, DEFAULT_LOBES, RELIEF["lobes"])
         self.fold = self._spin(QDoubleSpinBox(), -75, 75, 0, RELIEF["fold"], " °", 5)
@@ -132,7 +132,7 @@ class FormsPanel(QWidget):
             "Replace the current leaf's veins by veins of the chosen venation grown inside its "
             "outline (space colonization, Runions et al. 2005). One undo step."
         )
-        self.grow_button.clicked.connect(lambda: self.grow.emit(self.venation.currentText()))
+        self.grow_button.clicked.connect(lambda: self.grow.emit(self.form().venation_term))
 
         self.texts: dict[str, QLabel] = {}
         form = QFormLayout()
@@ -281,7 +281,7 @@ class FormsPanel(QWidget):
             margin=margin,
             teeth=self.teeth.value() if margin in TOOTHED else None,
             lobes=self.lobes.value() if margin == "lobed" else None,
-            venation=self.venation.currentText(),
+            venation=None if self.venation.currentIndex() == 0 else self.venation.currentText(),
             fold=self.fold.value(),
             curl=self.curl.value(),
             roll=self.roll.value(),
@@ -307,7 +307,8 @@ class FormsPanel(QWidget):
         self.lobes.setEnabled(form_.margin == "lobed")
         self.texts["Teeth"].setText(RELIEF["teeth"])
         self.texts["Lobes"].setText(RELIEF["lobes"])
-        self.texts["Venation"].setText(definition(form_.venation))
+        venation = form_.venation_term
+        self.texts["Venation"].setText(f"{venation}: {definition(venation, 'venation')}")
         for name in ("Fold", "Curl", "Roll", "Wave"):
             self.texts[name].setText(RELIEF[name.lower()])
 
