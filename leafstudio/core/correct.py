@@ -68,7 +68,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-import scipy.linalg
+import scipy.linalg.lapack
 
 from leafstudio.core.bending import Bending, bending_gram, lattice, least_bending
 from leafstudio.core.buckets import kernel_array
@@ -212,22 +212,28 @@ def fit_correction(
     if np.count_nonzero(inside) < 3:
         return None
     m = len(centers)
-    t2 = taper**2
-    system = t2[:, None] * bending.among
-    system[np.diag_indices(m)] += VEIN_SMOOTHING
-    try:
-        factors = scipy.linalg.lu_factor(system, check_finite=False)
-    except (np.linalg.LinAlgError, ValueError):
+    # the rows T_i² (Φ w)_i + λ w_i = T_i² values_i give w_i = 0 where T_i = 0 and elsewhere
+    # w = S values, S = P⁻¹ with P = Φ + λ T⁻² symmetric positive definite: S from P's
+    # Cholesky factor (an LU factor's solve of diag(T²) and the two products took 1.41 ms at
+    # 200 centres, a flat ovate at grid 128; this 1.14 ms, best of 80)
+    some = bending.pinned(inside)
+    system = some.among.copy()
+    system[np.diag_indices_from(system)] += VEIN_SMOOTHING / taper[inside] ** 2
+    factor, info = scipy.linalg.lapack.dpotrf(system, lower=1, overwrite_a=1)
+    if info == 0:
+        inverse, info = scipy.linalg.lapack.dpotri(factor, lower=1, overwrite_c=1)
+    if info != 0:
         return None
-    target = np.divide(residual, taper, out=np.zeros(m), where=taper > 0)
+    spline = np.tril(inverse) + np.tril(inverse, -1).T
+    target = np.divide(residual, taper, out=np.zeros(m), where=inside)
     # the band's wider tolerance is a flat blade's: where a bend stretches a distance off it,
     # that is shrunk once more (a rolled and folded deltoid's veins 1.04e-3 of the length off)
     tolerance = np.where(taper < BAND, BAND_TOLERANCE / stretch, TOLERANCE)
-    slack = tolerance * length / (np.maximum(taper, 1e-3) * stretch)
-    # the spline's weights per unit value: S⁻¹ diag(T²) (w with T_i c(v_i) = T_i values_i)
-    spline = scipy.linalg.lu_solve(factors, np.diag(t2), check_finite=False)
-    values = least_bending(bending, relief, target, target - slack, target + slack, spline)
-    weights = scipy.linalg.lu_solve(factors, t2 * values)
+    slack = (tolerance * length / (np.maximum(taper, 1e-3) * stretch))[inside]
+    start = target[inside]
+    values = least_bending(some, relief, start, start - slack, start + slack, spline)
+    weights = np.zeros(m)
+    weights[inside] = spline @ values
     if not np.all(np.isfinite(weights)):
         return None
     return VeinCorrection(
