@@ -75,6 +75,7 @@ from leafstudio.core.bending import Bending, bending_gram, lattice, least_bendin
 from leafstudio.core.buckets import kernel_array
 from leafstudio.core.grid import Grid
 from leafstudio.core.kelvin import (
+    KEI,
     KELVIN,
     KELVIN_STEP,
     phi_matrix,
@@ -114,7 +115,7 @@ class VeinCorrection:
     def value(self, xy: np.ndarray) -> np.ndarray:
         """c at (n, 2) plane points."""
         xy = kernel_array(np.atleast_2d(np.asarray(xy, dtype=float)))
-        return spline_value(xy, self.centers, self.weights, self.reach, KELVIN, KELVIN_STEP)
+        return spline_value(xy, self.centers, self.weights, self.reach, KEI, KELVIN_STEP)
 
     def derivatives(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """c (n,), ∇c (n, 2) and ∇²c (n, 2, 2) in closed form: with d = x − v, r = |d| and
@@ -272,9 +273,9 @@ def lattice_bending(
     reach = REACH * length
     taper = kernel_array(node_taper[on])
     xy = kernel_array(grid.points.take(index[on], axis=0))  # [index[on]]: 8 times as long
-    phi, tapered = phi_matrix(xy, centers, reach, KELVIN, KELVIN_STEP, taper)
+    phi, tapered = phi_matrix(xy, centers, reach, KEI, KELVIN_STEP, taper)
     gram = bending_gram(tapered, differences)
-    among = phi_matrix(centers, centers, reach, KELVIN, KELVIN_STEP, np.ones(len(centers)))[0]
+    among = phi_matrix(centers, centers, reach, KEI, KELVIN_STEP, np.ones(len(centers)))[0]
     return Bending(on, taper, differences, phi, gram, among)
 
 
