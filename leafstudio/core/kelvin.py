@@ -43,6 +43,9 @@ def _kelvin_tables() -> np.ndarray:
 
 
 KELVIN = _kelvin_tables()
+KEI = np.ascontiguousarray(KELVIN[:, :4])  # kei's polynomials alone, for the kernels that read
+# only φ (spline_value, phi_matrix): a row is 32 bytes, not 96 (3.42 ->
+# 3.32 ms for 5292 + 1603 points against 200 centres, as a flat ovate at grid 128, best of 60)
 
 
 def phi_at(rho: np.ndarray) -> np.ndarray:

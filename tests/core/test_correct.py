@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -192,6 +193,26 @@ def test_a_vein_point_in_the_margin_band_has_more_slack():
         off = np.abs(taper * fitted.value(centers) - taper * target)
         assert off.max() <= most + 1e-9
         assert off[10] > 0.9 * most
+
+
+def test_a_system_not_positive_definite_is_solved_as_before():
+    """φ is cut at KELVIN_END, so P = Φ + λT⁻² need not be positive definite in floating point:
+    then the weights come from P's LU inverse, and still solve the rows T_i² (Φ w)_i + λ w_i =
+    T_i² values_i (a centre with T = 0 keeps weight 0), as before the Cholesky factor."""
+    centers = np.column_stack([np.linspace(0, 1, 21), np.zeros(21)])
+    centers[::2, 1] = 0.05
+    bending = _lattice(centers)
+    indefinite = replace(bending, among=bending.among - 0.2 * np.eye(21))
+    assert np.linalg.eigvalsh(indefinite.among).min() < 0
+    taper = np.where(np.arange(21) == 20, 0.0, 1.0)
+    target = 0.003 * np.sin(np.linspace(0, 3, 21)) * taper
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(correct, "TOLERANCE", 0.0)  # the values are the targets
+        fitted = _fit(centers, taper, target, indefinite)
+    assert fitted is not None
+    assert fitted.weights[20] == 0.0
+    rows = taper[:, None] ** 2 * indefinite.among + correct.VEIN_SMOOTHING * np.eye(21)
+    assert np.allclose(rows @ fitted.weights, taper**2 * target, rtol=0, atol=1e-9)
 
 
 def test_a_wavy_form_keeps_its_margin_on_the_boundary():
