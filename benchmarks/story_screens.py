@@ -60,7 +60,7 @@ SCANS = (
     "sugarbeet_f00012_20170829T010129_pot1_1.txt",
 )
 WAIT_S = 300.0
-STORIES = ("draw", "demos", "scans", "dark")
+STORIES = ("draw", "demos", "scans", "dark", "bent")
 DARK = {
     QPalette.ColorRole.Window: "#202124",
     QPalette.ColorRole.Base: "#17181a",
@@ -304,15 +304,30 @@ def story_demos(window: MainWindow, shot: Shooter) -> None:
     trigger(window, "Demos", "Parallel")
     settle(window)
     shot("demos", "2b-demo-parallel-after-nested")
+    name = pick_form(window, "lanceolate")
+    if name is None:
+        return
+    shot("demos", f"2c-form-{name}", form=name)
+    window.docks["Sketch"].raise_()
+    process(300)
+    shot("demos", f"2d-form-{name}-sketch", form=name)
+
+
+def pick_form(window: MainWindow, shape: str, **pose: float) -> str | None:
+    """Click `shape` (the first shape if it is not there) in the Forms dock's gallery, its pose
+    sliders set to `pose` first (the rest at 0), and wait for it; the shape picked, or None
+    without a Forms dock."""
     panel = getattr(window, "forms_panel", None)
     if panel is None:
-        return
+        return None
     window.docks["Forms"].show()
     window.docks["Forms"].raise_()
     process(300)
+    for term in ("fold", "curl", "roll", "twist", "wave"):
+        getattr(panel, term).setValue(pose.get(term, 0.0))
     gallery = panel.gallery
     names = [gallery.item(i).data(Qt.ItemDataRole.UserRole) for i in range(gallery.count())]
-    row = names.index("lanceolate") if "lanceolate" in names else 0
+    row = names.index(shape) if shape in names else 0
     item = gallery.item(row)
     gallery.scrollToItem(item)
     process(100)
@@ -320,10 +335,28 @@ def story_demos(window: MainWindow, shot: Shooter) -> None:
     QTest.mouseClick(gallery.viewport(), Qt.MouseButton.LeftButton, pos=rect.center())
     wait_until(lambda: names[row] in window.windowTitle(), what="the chosen form")
     settle(window)
-    shot("demos", f"2c-form-{names[row]}", form=names[row])
-    window.docks["Sketch"].raise_()
-    process(300)
-    shot("demos", f"2d-form-{names[row]}-sketch", form=names[row])
+    return names[row]
+
+
+def story_bent(window: MainWindow, shot: Shooter) -> None:
+    """Issue 21's three: a grass blade rolled and an ovate leaf half folded (the Forms dock's
+    pose sliders), and the curled soybean scan as File > Open opens it."""
+    for shape, pose, name in (
+        ("linear", {"roll": 0.8}, "4a-grass-blade-rolled"),
+        ("ovate", {"fold": 45.0}, "4b-ovate-half-folded"),
+    ):
+        if pick_form(window, shape, **pose) is None:
+            break
+        window.viewport.camera("iso")
+        process(300)
+        shot("bent", name, form=shape, **pose)
+    path = str(REAL / SCANS[0])
+    window.session.history.set_clean()
+    if not window.open_path(path):
+        raise RuntimeError(f"{path}: not opened")
+    wait_until(lambda: window.session.state.path == path, what="the soybean scan")
+    settle(window)
+    shot("bent", "4c-soybean-scan-curled", scan=SCANS[0])
 
 
 def story_scans(window: MainWindow, shot: Shooter) -> None:
@@ -394,6 +427,7 @@ def run(stories: list[str], out: Path, suffix: str) -> list[dict]:
                     "demos": story_demos,
                     "scans": story_scans,
                     "dark": story_dark,
+                    "bent": story_bent,
                 }[name](window, shot)
         finally:
             window.session.history.set_clean()

@@ -19,6 +19,7 @@ import numpy as np
 from leafstudio.core.bend import Pose, flat_leaf
 from leafstudio.core.placed import PlacedPose, blade_frame
 from leafstudio.core.pose_relief import relief_of
+from leafstudio.errors import LeafError
 from leafstudio.gui.model.history import State, Step
 from leafstudio.model import Bend, Leaf
 
@@ -40,6 +41,29 @@ def blade_extent(boundary: np.ndarray, frame: Any) -> float:
     (n, 3) flat `boundary`."""
     along = (boundary - frame.origin) @ frame.u
     return float(np.ptp(along)) if len(along) else 1.0
+
+
+def blade_half_width(leaf: Leaf | None, plane: Any = None) -> float:
+    """The flat blade's widest reach across its midrib, per its length (the sliders' units,
+    `pose_of`): a roll of π over it closes the blade into a tube, as a form's roll of 1 does
+    (forms/make.Form.leaf). A form bent by its own Pose is in its blade's coordinates, 1 long;
+    any other leaf is read in its blade frame on `plane` (a sketch's Frame), as `posed` bends
+    it. 1 without a leaf or a width."""
+    if leaf is None:
+        return 1.0
+    flat = flat_leaf(leaf)
+    if isinstance(leaf.bend, Pose):
+        half = float(np.abs(flat.boundary[:, 1]).max())
+    elif isinstance(leaf.bend, PlacedPose) or plane is not None:
+        frame = leaf.bend.frame if isinstance(leaf.bend, PlacedPose) else blade_frame(flat, plane)
+        across = (flat.boundary - frame.origin) @ frame.v
+        half = float(np.abs(across).max()) / blade_extent(flat.boundary, frame)
+    else:  # no plane given: the boundary's own, which a leaf on one line has not
+        try:
+            return blade_half_width(leaf, blade_frame(flat))
+        except LeafError:
+            return 1.0
+    return half if np.isfinite(half) and half > 0 else 1.0
 
 
 def in_lengths(pose: Pose, length: float) -> Pose:

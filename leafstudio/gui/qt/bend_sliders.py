@@ -3,19 +3,22 @@ build item 6): they bend the document's leaf live through `Session.set_bend`
 (gui/model/bending.py), one undo step per drag; undo, a new document or an opened project
 shows its pose on them.
 
-Fold is the angle each half turns up about the midrib (as a form's), widths kept; curl bends
-the midrib on a circle of radius 1 / (2 curl) from the base, its length kept (z = curl · x²
-near the base: a leaf of length 1 curled 0.5 lifts its apex 0.46, curled 1 turns it 115°);
-roll bends each cross-section into an arc of radius 1 / roll, widths kept; twist turns each
-cross-section about the midrib by twist · x radians. The range is the Forms dock's: a fold of
-±75°, a curl of ±1; a roll of ±20 closes a blade 0.16 wide into a tube; a twist of ±3.1 turns
-the apex half a turn.
+Each reads as the Forms dock's term of the same name (forms/terms.RELIEF), over the same
+range: fold is the angle each half turns up about the midrib, widths kept; curl bends the
+midrib on a circle of radius 1 / (2 curl) from the base, its length kept (a leaf curled 0.5
+lifts its apex 0.46 of its length, curled 1 turns it 115°); roll is the share of a half turn
+the widest margins roll through, widths kept (1 closes the blade into a tube); twist is the
+half turns the apex makes against the base. The pose they set is `core.bend.Pose`'s, per the
+blade's length (gui/model/bending.py): roll a curvature, roll share · π over the blade's half
+width (`half_width`), twist twist · π radians. The panel's roll was that curvature and its twist
+in radians: the dock's grass blade rolled 1 showed a roll of 188, and its twist of 1 read 3.14.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 from PySide6.QtCore import QObject, Qt, Signal
 from PySide6.QtWidgets import QFormLayout
 from superqt import QLabeledDoubleSlider
@@ -23,25 +26,19 @@ from superqt.utils import qthrottled
 
 from leafstudio.core.bend import Pose
 from leafstudio.forms.terms import RELIEF
-from leafstudio.gui.model.bending import can_pose
+from leafstudio.gui.model.bending import blade_half_width, can_pose
 
 THROTTLE_MS = 80  # as the parameter sliders (controls.py)
-RANGES = {  # least, most, decimals
+RANGES = {  # least, most, decimals: the Forms dock's (forms/make.LIMITS)
     "fold": (-75.0, 75.0, 1),
     "curl": (-1.0, 1.0, 2),
-    "roll": (-20.0, 20.0, 1),
-    "twist": (-3.1, 3.1, 2),
+    "roll": (-1.0, 1.0, 2),
+    "twist": (-1.0, 1.0, 2),
 }
 TIPS = {
-    "fold": f"Fold: {RELIEF['fold']}. The sketch keeps the flat blade; the 3D leaf is bent.",
-    "curl": "Curl: the midrib bends up on a circle of radius 1 / (2 curl) from the base, its "
-    "length kept (a leaf of length 1 curled 0.5 lifts its apex 0.46 of its length; curled 1 "
-    "turns the apex 115°; negative droops). The sketch keeps the flat blade.",
-    "roll": "Roll: the blade rolls across its midrib into arcs of radius 1 / roll (in the leaf's "
-    "lengths; negative rolls down), widths kept. The sketch keeps the flat blade.",
-    "twist": "Twist: each cross-section turns about the midrib by twist · x radians from the "
-    "base (a leaf of length 1 turns its apex by twist; 3.1 is half a turn). The sketch keeps "
-    "the flat blade.",
+    name: f"{name.capitalize()}: {RELIEF[name]}. The sketch keeps the flat blade; the 3D leaf "
+    "is bent."
+    for name in RANGES
 }
 SHEET_TIP = (
     "This scan is bent by the smooth sheet fitted to all its points; a fold or curl would "
@@ -56,6 +53,8 @@ class BendSliders(QObject):
 
     def __init__(self, parent: QObject | None = None) -> None:
         super().__init__(parent)
+        self.half_width = 1.0  # the blade's, per its length (bending.blade_half_width)
+        self._shown = (Pose(), {})  # the pose show_pose showed, and the values it set
         self.sliders: dict[str, QLabeledDoubleSlider] = {}
         for name, (low, high, decimals) in RANGES.items():
             slider = QLabeledDoubleSlider(Qt.Orientation.Horizontal)
@@ -69,23 +68,41 @@ class BendSliders(QObject):
         self._throttled = qthrottled(self._emit, timeout=THROTTLE_MS, leading=True)
 
     def pose(self) -> Pose:
-        """The pose the sliders show."""
-        return Pose(**{name: float(s.value()) for name, s in self.sliders.items()})
+        """The pose the sliders show (a term its slider still shows as `show_pose` set it keeps
+        that pose's value to the bit, not its value through the units and back)."""
+        shown, values = self._shown
+        terms = {}
+        for name, slider in self.sliders.items():
+            value = float(slider.value())
+            if values.get(name) == value:
+                terms[name] = getattr(shown, name)
+            else:
+                terms[name] = value * self._unit(name)
+        return Pose(**terms)
+
+    def _unit(self, name: str) -> float:
+        """A slider's value times this is the Pose's term: a roll's half turn over the blade's
+        half width, a twist's half turn."""
+        return {"roll": np.pi / self.half_width, "twist": np.pi}.get(name, 1.0)
 
     def is_dragging(self) -> bool:
         return any(s.isSliderDown() for s in self.sliders.values())
 
     def show_pose(self, pose: Pose) -> None:
         """Show `pose` without emitting (undo, another document). A term beyond a slider's
-        range (a form's grass blade rolled 188 times its length) widens that slider's range to
-        hold it, so that moving another slider keeps it (clamped to 20, it was lost)."""
+        range (a leaf rolled past a tube, or a grass blade rolled 188 times its length shown
+        at the sliders' own half width of 1) widens that slider's range to hold it, so that
+        moving another slider keeps it (clamped, it was lost)."""
+        values = {}
         for name, slider in self.sliders.items():
-            value = getattr(pose, name)
+            value = getattr(pose, name) / self._unit(name)
             low, high = RANGES[name][:2]
             slider.blockSignals(True)
             slider.setRange(min(low, value), max(high, value))
             slider.setValue(value)
             slider.blockSignals(False)
+            values[name] = float(slider.value())
+        self._shown = (pose, values)
 
     def set_enabled(self, on: bool, why_not: str = "") -> None:
         """Enable the sliders, or disable them with `why_not` as their tooltip."""
@@ -125,6 +142,8 @@ def install(window: Any) -> BendSliders:
         leaf = session.leaf
         bend.set_enabled(can_pose(leaf), SHEET_TIP if leaf is not None else "")
         if not bend.is_dragging():
+            sketch = session.state.sketch
+            bend.half_width = blade_half_width(leaf, None if sketch is None else sketch.frame)
             bend.show_pose(session.pose)
 
     session.state_changed.connect(shown)

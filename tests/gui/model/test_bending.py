@@ -16,7 +16,7 @@ from leafstudio.core.sheet import fit_sheet
 from leafstudio.errors import LeafError
 from leafstudio.forms import SHAPES, Form
 from leafstudio.forms.make import SIDE_ON
-from leafstudio.gui.model.bending import blade_extent, can_pose
+from leafstudio.gui.model.bending import blade_extent, blade_half_width, can_pose
 from leafstudio.gui.model.session import Session
 from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.model import Leaf, Params
@@ -195,6 +195,23 @@ def test_a_drawn_leaf_rolls_and_its_project_keeps_the_roll(tmp_path):
     assert json.loads(path.read_text())["bend"]["roll"] == saved
     leaf, _, _ = load_project(path)
     assert isinstance(leaf.bend, PlacedPose) and leaf.bend.pose == Pose(roll=saved)
+
+
+def test_a_drawn_leafs_half_width_is_its_blades_across_its_midrib_per_its_length():
+    """The sliders' roll is the share of a half turn at the blade's widest (as a form's): a
+    drawn ellipse 1 long and 0.4 wide across its slanted midrib has a half width of 0.2 of
+    its length, flat or bent (read on its flat blade), and a form its own |y| at length 1."""
+    session, runner, sketch = drawn()
+    half = blade_half_width(session.leaf, sketch.frame)
+    session.set_bend(Pose(roll=6.0, fold=20.0))
+    runner.finish(session)
+    assert blade_half_width(session.leaf, sketch.frame) == pytest.approx(half, rel=1e-9)
+    boundary = sketch_ellipse(12)
+    assert half == pytest.approx(np.ptp(boundary[:, 1]) / 2 / np.ptp(boundary[:, 0]), rel=0.02)
+    form = Form("ovate", roll=0.5).leaf()
+    assert blade_half_width(form) == pytest.approx(
+        np.abs(form.bend.flatten(form.boundary)[:, 1]).max()
+    )
 
 
 def test_a_bend_that_lifts_the_leaf_out_of_its_framed_box_frames_it_again():

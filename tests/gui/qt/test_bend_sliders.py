@@ -4,6 +4,7 @@ build item 6): one undo step, the sketch unchanged, undo moves the sliders back.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from leafstudio.core.bend import Pose
 from leafstudio.forms import Form
@@ -36,13 +37,34 @@ def test_a_roll_beyond_the_sliders_range_is_kept_when_another_slider_moves(qtbot
     sliders = BendSliders()
     grass = Form("lanceolate", aspect=30, roll=1.0).leaf().bend  # about 188 turns per length
     assert grass.roll > 100
-    sliders.show_pose(grass)
+    sliders.show_pose(grass)  # a half width of 1 (the sliders' own): a roll of 60 tubes
     assert sliders.pose() == grass  # was clamped to a roll of 20
     with qtbot.waitSignal(sliders.changed) as moved:
         sliders.sliders["fold"].setValue(30.0)
     assert moved.args[0] == Pose(fold=30.0, roll=grass.roll)
     sliders.show_pose(Pose())  # back within the range: the range is the usual one again
-    assert sliders.sliders["roll"].maximum() == 20.0
+    assert sliders.sliders["roll"].maximum() == 1.0
+
+
+def test_the_panels_roll_and_twist_read_as_the_forms_docks(qtbot):
+    """A form rolled 0.8 and twisted 0.5 in the Forms dock showed a roll of 70.4 (a curvature)
+    and a twist of 1.57 (radians) on the panel's sliders; they read 0.8 and 0.5 now, and a roll
+    of 1 set there closes the blade into a tube at its widest, as the dock's does."""
+    from leafstudio.gui.model.bending import blade_half_width
+    from leafstudio.gui.qt.bend_sliders import BendSliders
+
+    sliders = BendSliders()
+    leaf = Form("linear", roll=0.8, twist=0.5).leaf()
+    sliders.half_width = blade_half_width(leaf)
+    sliders.show_pose(leaf.bend)
+    assert sliders.sliders["roll"].value() == pytest.approx(0.8)
+    assert sliders.sliders["twist"].value() == pytest.approx(0.5)
+    assert sliders.pose() == leaf.bend
+    with qtbot.waitSignal(sliders.changed) as moved:
+        sliders.sliders["roll"].setValue(1.0)
+    tube = Form("linear", roll=1.0, twist=0.5).leaf().bend
+    assert moved.args[0].roll == pytest.approx(tube.roll, rel=1e-9)
+    assert moved.args[0].twist == tube.twist
 
 
 def test_a_posed_forms_sketch_is_its_flat_blade():
