@@ -40,6 +40,16 @@ def test_a_reniform_forms_veins_reach_both_lobes(venation, into_lobes):
     assert both == into_lobes
 
 
+@pytest.mark.parametrize("shape", ["reniform", "ovate", "hastate"])
+def test_a_forms_own_surface_holds_its_veins(shape):
+    """own_heights is the surface the form's veins were lifted onto (forms/veins.grow_veins):
+    every vein point within 1e-9 of the length of it, so a mesh measured against it is
+    measured against the form."""
+    form = Form(shape)
+    veins = np.vstack(form.leaf().veins)
+    assert np.abs(own_heights(form)(veins) - veins[:, 2]).max() <= 1e-9
+
+
 def test_a_reniform_forms_mesh_lies_on_its_own_surface():
     """95th-percentile distance from the mesh to the form's own surface within 2e-3 of the
     length (issue 21); pinnate, 3.6e-3."""

@@ -4,9 +4,10 @@
 The document keeps the flat blade's sketch (the editor draws the blade); its leaf is the
 sketch's leaf bent by the pose about its midrib (`core.placed.PlacedPose`), so the pipeline
 reconstructs the flat blade and bends the mesh, and Save writes the pose (sources/files.py). A
-form keeps its own `Pose` (its blade coordinates are the world's, the form 1 long). The sliders'
-curl, roll and twist are per the blade's length (`in_lengths`). A sketch edit bends the new
-leaf by the same pose, about the midrib as it is now.
+form keeps its own `Pose` (its blade coordinates are the world's, the form 1 long). The session's
+curl, roll and twist are per the blade's length (`in_lengths`); the sliders show the roll and
+twist in the Forms dock's terms (gui/qt/bend_sliders.py, `blade_half_width`). A sketch edit bends
+the new leaf by the same pose, about the midrib as it is now.
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ FLAT = Pose()
 
 
 def pose_of(leaf: Leaf | None) -> Pose:
-    """The pose the leaf is bent by, as the sliders show it (a flat Pose for none, or a bend the
+    """The pose the leaf is bent by, as the sliders set it (a flat Pose for none, or a bend the
     sliders cannot show): a leaf bent about its midrib has its curl, roll and twist per its
     blade's length (`in_lengths`)."""
     bend = None if leaf is None else leaf.bend
@@ -66,12 +67,33 @@ def blade_half_width(leaf: Leaf | None, plane: Any = None) -> float:
     return half if np.isfinite(half) and half > 0 else 1.0
 
 
+def _same_pose(a: Pose, b: Pose) -> bool:
+    """The same fold, curl, roll and twist to round-off: a slider's roll, its share times π
+    over the half width, came back from the leaf 12 digits long (`in_lengths`), and a release
+    at the same place reconstructed the leaf once more."""
+    terms = ("fold", "curl", "roll", "twist")
+    return bool(
+        np.allclose([getattr(a, t) for t in terms], [getattr(b, t) for t in terms], rtol=1e-9)
+    )
+
+
+def bend_text(pose: Pose, half_width: float) -> str:
+    """A bend's undo text in the sliders' terms (the Forms dock's): the roll as the share of a
+    half turn at the widest, the twist in half turns."""
+    roll, twist = pose.roll * half_width / np.pi, pose.twist / np.pi
+    return (
+        f"Bend: fold {pose.fold:g}°, curl {pose.curl:g}"
+        + (f", roll {roll:.3g}" if pose.roll else "")
+        + (f", twist {twist:.3g}" if pose.twist else "")
+    )
+
+
 def in_lengths(pose: Pose, length: float) -> Pose:
-    """`pose` (per unit of the leaf's coordinates) per `length` instead: the sliders' curl, roll
+    """`pose` (per unit of the leaf's coordinates) per `length` instead: the session's curl, roll
     and twist are per the blade's length (a curl of 1 turns the apex 2 radians, whatever the
     units: a drawn leaf 80 mm long, curled 1 per mm, wrapped round 160 radians)."""
 
-    def scaled(value: float) -> float:  # 12 digits: a slider's 0.3 reads back as 0.3
+    def scaled(value: float) -> float:  # 12 digits: a curl of 0.3 reads back as 0.3
         return float(f"{value * length:.12g}")
 
     return replace(pose, curl=scaled(pose.curl), roll=scaled(pose.roll), twist=scaled(pose.twist))
@@ -140,7 +162,7 @@ class Bending:
         if self._bend_base is None:
             self._bend_base = self.state
         base = self._bend_base
-        if leaf is not None and pose != self.pose:
+        if leaf is not None and not _same_pose(pose, self.pose):
             sketch = self.state.sketch
             plane = sketch.frame if sketch is not None else None
             bent = posed(flat_leaf(leaf), pose, leaf.bend, plane)
@@ -150,10 +172,7 @@ class Bending:
         if final:
             self._bend_base = None
             if base.leaf is not self.state.leaf:
-                p = self.pose
-                text = (
-                    f"Bend: fold {p.fold:g}°, curl {p.curl:g}"
-                    + (f", roll {p.roll:g}" if p.roll else "")
-                    + (f", twist {p.twist:g}" if p.twist else "")
-                )
+                sketch = self.state.sketch
+                plane = sketch.frame if sketch is not None else None
+                text = bend_text(self.pose, blade_half_width(self.state.leaf, plane))
                 self.history.push(Step(text, base, self.state))

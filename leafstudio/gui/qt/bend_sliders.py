@@ -47,7 +47,7 @@ SHEET_TIP = (
 
 
 class BendSliders(QObject):
-    """Three superqt sliders; `changed(pose, final)` on every move, final on release."""
+    """Four superqt sliders; `changed(pose, final)` on every move, final on release."""
 
     changed = Signal(object, bool)  # Pose, final
 
@@ -143,7 +143,8 @@ def install(window: Any) -> BendSliders:
         bend.set_enabled(can_pose(leaf), SHEET_TIP if leaf is not None else "")
         if not bend.is_dragging():
             sketch = session.state.sketch
-            bend.half_width = blade_half_width(leaf, None if sketch is None else sketch.frame)
+            if can_pose(leaf):  # a sheet-bent scan's sliders are off: no width to read
+                bend.half_width = blade_half_width(leaf, None if sketch is None else sketch.frame)
             bend.show_pose(session.pose)
 
     session.state_changed.connect(shown)

@@ -37,7 +37,12 @@ from leafstudio.forms.glossary import COMPARISONS, compared_terms
 from leafstudio.forms.terms import MARGINS
 from leafstudio.gui.qt.actions import Action, show_once
 
-CHOOSERS = (("shape", tuple(SHAPES)), ("margin", tuple(MARGINS)), ("venation", VENATION_KINDS))
+USUAL = "(usual)"  # a venation chooser's entry for the shape's usual one (Form.venation None)
+CHOOSERS = (
+    ("shape", tuple(SHAPES)),
+    ("margin", tuple(MARGINS)),
+    ("venation", (USUAL, *VENATION_KINDS)),
+)
 FIRST = "ovate beside obovate"
 PDF_FILTER, FOLDER_FILTER = "PDF (*.pdf)", "A folder: a PNG per slide and lesson.pdf (*)"
 
@@ -76,6 +81,7 @@ class CompareDialog(QDialog):
         forms = []
         for form, boxes in zip(self.window_.compared, self.boxes, strict=True):
             terms = {kind: boxes[kind].currentText() for kind, _ in CHOOSERS}
+            terms["venation"] = None if terms["venation"] == USUAL else terms["venation"]
             if terms["margin"] != form.margin:  # the count of teeth or lobes: the new margin's
                 terms.update(teeth=None, lobes=None)
             forms.append(form.with_(**terms))
@@ -96,7 +102,7 @@ class CompareDialog(QDialog):
             for row, (kind, terms) in enumerate(CHOOSERS):
                 box = QComboBox()
                 box.addItems(list(terms))
-                box.setCurrentText(getattr(form, kind))
+                box.setCurrentText(getattr(form, kind) or USUAL)
                 box.setToolTip(f"The {kind} of form {column}")
                 box.currentTextChanged.connect(lambda _t: self.redraw(self.forms()))
                 self.choosers.addWidget(box, row, column)

@@ -214,6 +214,20 @@ def test_a_drawn_leafs_half_width_is_its_blades_across_its_midrib_per_its_length
     )
 
 
+def test_a_roll_released_where_it_was_held_reconstructs_nothing_more_and_reads_as_the_slider():
+    """The sliders' roll is its share times π over the half width: it came back from the leaf
+    12 digits long (in_lengths), so a release at the same place reconstructed the leaf again,
+    and the undo text said "roll 7.85398" (a curvature) for a slider at 0.5."""
+    session, runner, sketch = drawn()
+    half = blade_half_width(session.leaf, sketch.frame)
+    held = Pose(roll=0.5 * np.pi / half, twist=0.3 * np.pi)
+    session.set_bend(held, final=False)
+    requests = len(runner.requests)
+    session.set_bend(held, final=True)
+    assert len(runner.requests) == requests
+    assert session.history.undo_text() == "Bend: fold 0°, curl 0, roll 0.5, twist 0.3"
+
+
 def test_a_bend_that_lifts_the_leaf_out_of_its_framed_box_frames_it_again():
     """The view framed the flat blade and kept that box while the leaf was bent, as long as
     the bent leaf stayed within it across the plane: a curl lifts the apex along the normal

@@ -38,6 +38,20 @@ def test_compare_shows_two_or_four_forms_side_by_side_with_their_terms(window, q
     dialog.close()
 
 
+def test_a_compared_form_takes_its_shapes_usual_venation_unless_one_is_chosen(window):
+    """The venation chooser's "(usual)" is the shape's own (Form.venation None): a form turned
+    reniform there was drawn pinnate, the chooser showing its first entry."""
+    window.forms_panel.compare_button.click()
+    QApplication.processEvents()
+    dialog = next(d for d in window.findChildren(CompareDialog) if d.isVisible())
+    assert [b["venation"].currentText() for b in dialog.boxes] == ["(usual)", "(usual)"]
+    dialog.boxes[1]["shape"].setCurrentText("reniform")
+    assert window.compared[1].venation_term == "palmate"
+    dialog.boxes[1]["venation"].setCurrentText("pinnate")
+    assert window.compared[1].venation_term == "pinnate"
+    dialog.close()
+
+
 def test_the_glossary_draws_every_term(window):
     dialog = _open(window, "help.glossary", GlossaryDialog)
     assert set(dialog.pictures) == {(k, t) for k, terms in PICTURED.items() for t in terms}
