@@ -19,7 +19,8 @@ the length and a hastate form's lobe tips raised 0.01, an orbicular form's margi
 plane, and the margin band's 99th-percentile dihedral rose over the paper's surface (reniform
 1.36° -> 1.77°, hastate 3.66° -> 4.41°, orbicular 1.18° -> 1.36°; then 1.22°, 3.98°, 1.20°; now
 1.08°, 1.28° against 1.30° (the dome flattened at hastate's lobes' notches, forms/relief.py) and
-1.21°).
+1.21°; the reniform form pinnate, as it then was: palmate, its usual venation, 1.04° against
+1.23°).
 A cubic kernel r³ creased a drawn leaf's margin band 50% more. T(0) = 0 keeps z = b exactly on
 the margin. The coefficients solve
 
