@@ -83,12 +83,13 @@ class Pose:
         """(n, 3) flat blade points, bent: rolled, folded, twisted about the midrib, then
         curled."""
         points = np.array(points, dtype=float)
+        sheet = None  # the roll's, at x, which the roll and the fold keep: the fold's hinge
         if self.roll != 0:  # the axis: y = 0, z = the sheet + 1 / roll
             sheet = self._sheet_height(points[:, 0])
             points[:, 1], rolled = _wrapped(points[:, 1], points[:, 2] - sheet, self.roll)
             points[:, 2] = rolled + sheet
         if self.fold != 0:
-            points[:, 1], points[:, 2] = self._folded(points)
+            points[:, 1], points[:, 2] = self._folded(points, sheet)
         if self.twist != 0:
             points[:, 1:] = _turned(points, self.twist)
         if self.curl != 0:  # the axis: x = 0, z = the level + 1 / (2 curl)
@@ -101,13 +102,14 @@ class Pose:
         """A jet of flat blade points (bent_curvature.py) bent as `apply` bends the points, in
         closed form; on a fold's crease (y = 0) from its + side, on a roll's or curl's sheet
         (height 0) from the relief's (`_wrap_jet`)."""
+        sheet = None  # the roll's profile, at x, which the roll and the fold keep
         if self.roll != 0 and self.relief is None:
             jet = _wrap_jet(jet, 1, self.roll)
         elif self.roll != 0:
             sheet = self.relief.sheet(jet[0][:, 0])
             jet = shifted(_wrap_jet(shifted(jet, negated(sheet)), 1, self.roll), sheet)
         if self.fold != 0:
-            jet = self._fold_jet(jet)
+            jet = self._fold_jet(jet, sheet)
         if self.twist != 0:
             jet = _twist_jet(jet, self.twist)
         if self.curl != 0:
@@ -126,10 +128,10 @@ class Pose:
             points[:, 2] = flat + level
         if self.twist != 0:  # x is kept by the twist and the fold
             points[:, 1:] = _turned(points, -self.twist)
+        sheet = None if self.roll == 0 else self._sheet_height(points[:, 0])  # x is kept
         if self.fold != 0:
-            points[:, 1], points[:, 2] = self._unfolded(points)
+            points[:, 1], points[:, 2] = self._unfolded(points, sheet)
         if self.roll != 0:
-            sheet = self._sheet_height(points[:, 0])
             points[:, 1], flat = _unwrapped(points[:, 1], points[:, 2] - sheet, self.roll)
             points[:, 2] = flat + sheet
         return points
@@ -145,22 +147,23 @@ class Pose:
         """The height the roll bends each cross-section about: its relief's mean, or 0."""
         return np.zeros(len(x)) if self.relief is None else self.relief.sheet_height(x)
 
-    def _hinge_height(self, x: np.ndarray) -> np.ndarray:
-        """`_hinge`'s height alone (rolled as `_hinge` rolls it)."""
+    def _hinge_height(self, x: np.ndarray, sheet: np.ndarray | None) -> np.ndarray:
+        """`_hinge`'s height alone (rolled as `_hinge` rolls it), the roll's `sheet` height at x
+        given (None: found)."""
         midrib = self.relief.hinge_height(x)
         if self.roll == 0:
             return midrib
-        sheet = self.relief.sheet_height(x)
+        sheet = self.relief.sheet_height(x) if sheet is None else sheet
         return sheet + _rolled_rise(midrib - sheet, self.roll)[0]
 
-    def _hinge(self, x: np.ndarray) -> Profile:
+    def _hinge(self, x: np.ndarray, sheet: Profile | None) -> Profile:
         """The midrib's height once rolled (the fold turns each half about it), with its first
         and second derivatives along x: the roll carries the midrib's height h over the sheet s
-        to s + g(h − s) (`_rolled_rise`)."""
+        to s + g(h − s) (`_rolled_rise`); the roll's `sheet` profile at x given (None: found)."""
         midrib = self.relief.hinge(x)
         if self.roll == 0:
             return midrib
-        sheet = self.relief.sheet(x)
+        sheet = self.relief.sheet(x) if sheet is None else sheet
         u, du, ddu = (m - s for m, s in zip(midrib, sheet, strict=True))
         g, g1, g2 = _rolled_rise(u, self.roll)
         return sheet[0] + g, sheet[1] + g1 * du, sheet[2] + g2 * du**2 + g1 * ddu
@@ -173,34 +176,38 @@ class Pose:
         length = self.relief.knots[-1] - self.relief.knots[0]
         return HingeFold(np.cos(fold), np.sin(fold), share, BAND * length)
 
-    def _folded(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _folded(
+        self, points: np.ndarray, sheet: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """y and z of (n, 3) points folded: each half turned up by the fold about the midrib,
         about its hinge with a relief (hinge_fold.py); else y -> y cos, z += |y| sin, the
-        relief lifted straight up."""
+        relief lifted straight up. `sheet`: the roll's height at x (`_hinge_height`)."""
         fold = np.deg2rad(self.fold)
         y, z = points[:, 1], points[:, 2]
         if self.relief is None:  # z from the turned y, as `flatten` takes it back: 0 exact
             return y * np.cos(fold), z + np.abs(y * np.cos(fold)) * np.tan(fold)
-        hinge = self._hinge_height(points[:, 0])
+        hinge = self._hinge_height(points[:, 0], sheet)
         y, off = self._hinge_fold().folded(y, z - hinge)
         return y, off + hinge
 
-    def _unfolded(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _unfolded(
+        self, points: np.ndarray, sheet: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """The inverse of `_folded`."""
         fold = np.deg2rad(self.fold)
         y, z = points[:, 1], points[:, 2]
         if self.relief is None:
             return y / np.cos(fold), z - np.abs(y) * np.tan(fold)
-        hinge = self._hinge_height(points[:, 0])
+        hinge = self._hinge_height(points[:, 0], sheet)
         y, off = self._hinge_fold().unfolded(y, z - hinge)
         return y, off + hinge
 
-    def _fold_jet(self, jet: Jet) -> Jet:
+    def _fold_jet(self, jet: Jet, sheet: Profile | None) -> Jet:
         """The fold on a jet: `_fold_jet` without a relief, else about the hinge (a point on
-        the crease, within round-off, takes the + side's)."""
+        the crease, within round-off, takes the + side's; `sheet`: `_hinge`'s)."""
         if self.relief is None:
             return _fold_jet(jet, np.deg2rad(self.fold))
-        hinge = self._hinge(jet[0][:, 0])
+        hinge = self._hinge(jet[0][:, 0], sheet)
         points, d = shifted(jet, negated(hinge))
         y = points[:, 1].copy()
         y[np.abs(y) <= ROUND_OFF * np.abs(points).max(initial=0.0)] = 0.0
