@@ -49,10 +49,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from leafstudio.core.bent_curvature import Jet, pushed
+from leafstudio.core.bent_curvature import Jet
+from leafstudio.core.buckets import kernel_array
 from leafstudio.core.carried import carried_vectors
 from leafstudio.core.hinge_fold import BAND, HingeFold, fold_share
-from leafstudio.core.pose_relief import Profile, Relief, negated, shifted
+from leafstudio.core.pose_jet import HINGE, PLAIN, _posed_jet
+from leafstudio.core.pose_relief import Profile, Relief
 from leafstudio.model import Leaf
 
 ROLL_SAG = 1.25e-3  # of a roll's radius: a bent chord stands no farther off (sag_splits); what
@@ -100,23 +102,26 @@ class Pose:
 
     def carry_jet(self, jet: Jet) -> Jet:
         """A jet of flat blade points (bent_curvature.py) bent as `apply` bends the points, in
-        closed form; on a fold's crease (y = 0) from its + side, on a roll's or curl's sheet
-        (height 0) from the relief's (`_wrap_jet`)."""
-        sheet = None  # the roll's profile, at x, which the roll and the fold keep
-        if self.roll != 0 and self.relief is None:
-            jet = _wrap_jet(jet, 1, self.roll)
-        elif self.roll != 0:
-            sheet = self.relief.sheet(jet[0][:, 0])
-            jet = shifted(_wrap_jet(shifted(jet, negated(sheet)), 1, self.roll), sheet)
-        if self.fold != 0:
-            jet = self._fold_jet(jet, sheet)
-        if self.twist != 0:
-            jet = _twist_jet(jet, self.twist)
-        if self.curl != 0:
-            level = np.array([0.0, 0.0, self._level()])
-            points, d = _wrap_jet((jet[0] - level, jet[1]), 0, 2 * self.curl)
-            jet = points + level, d
-        return jet
+        closed form (pose_jet.py); on a fold's crease (y = 0) from its + side, on a roll's or
+        curl's sheet (height 0) from the relief's."""
+        points, d = kernel_array(jet[0]), kernel_array(jet[1])
+        x = points[:, 0]  # kept by the roll and the fold: their profiles are taken here
+        none = np.zeros((3, len(points)))
+        sheet = none if self.roll == 0 or self.relief is None else np.array(self.relief.sheet(x))
+        fold, c, s, tan, share, band, hinge = 0, 1.0, 0.0, 0.0, 0.0, 1.0, none
+        if self.fold != 0 and self.relief is None:
+            angle = np.deg2rad(self.fold)
+            fold, c, s, tan = PLAIN, np.cos(angle), np.sin(angle), np.tan(angle)
+        elif self.fold != 0:
+            turn = self._hinge_fold()
+            fold, c, s, share, band = HINGE, turn.c, turn.s, turn.share, turn.band
+            hinge = np.array(self._hinge(x, None if self.roll == 0 else tuple(sheet)))
+        level = self._level() if self.curl != 0 else 0.0
+        return _posed_jet(
+            points, d, float(self.roll), sheet, fold, float(c), float(s), float(tan),
+            float(share), float(band), hinge, float(self.twist), float(self.curl), level,
+            ROUND_OFF,
+        )  # fmt: skip
 
     def flatten(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) bent points back on the flat blade (the inverse of `apply`, for less than half
@@ -201,25 +206,6 @@ class Pose:
         hinge = self._hinge_height(points[:, 0], sheet)
         y, off = self._hinge_fold().unfolded(y, z - hinge)
         return y, off + hinge
-
-    def _fold_jet(self, jet: Jet, sheet: Profile | None) -> Jet:
-        """The fold on a jet: `_fold_jet` without a relief, else about the hinge (a point on
-        the crease, within round-off, takes the + side's; `sheet`: `_hinge`'s)."""
-        if self.relief is None:
-            return _fold_jet(jet, np.deg2rad(self.fold))
-        hinge = self._hinge(jet[0][:, 0], sheet)
-        points, d = shifted(jet, negated(hinge))
-        y = points[:, 1].copy()
-        y[np.abs(y) <= ROUND_OFF * np.abs(points).max(initial=0.0)] = 0.0
-        fold = self._hinge_fold()
-        value = points.copy()
-        value[:, 1], value[:, 2] = fold.folded(y, points[:, 2])
-        plane, curved = fold.jacobian(y, points[:, 2])
-        j = np.broadcast_to(np.eye(3), (len(points), 3, 3)).copy()
-        j[:, 1:, 1:] = plane
-        hess = np.zeros((len(points), 3, 3, 3))
-        hess[:, 1:, 1:, 1:] = curved
-        return shifted(pushed(value, d, j, hess), hinge)
 
     def flat_curve(self, points: np.ndarray, ring: bool = False) -> np.ndarray:
         """`flatten` for a curve's (n, 3) points in order along it (`ring`: closed): a rolled
@@ -316,68 +302,6 @@ def _unwrapped(u: np.ndarray, h: np.ndarray, k: float) -> tuple[np.ndarray, np.n
     sign = np.sign(r)
     across, toward = sign * u, sign * (r - h)
     return np.arctan2(across, toward) * r, r * _unrolled_height(np.hypot(across, toward) * abs(k))
-
-
-def _wrap_jet(jet: Jet, a: int, k: float) -> Jet:
-    """`_wrapped` of coordinate `a` (0 or 1) and the height (2), on a jet: its Jacobian and
-    second derivatives in closed form (the radius ρ = R(h k) / k, ρ' = R'(h k), ρ'' = k R''(h k),
-    R `_rolled_radius`, C¹ only at h = 0; the angle's clip at half a turn taken from inside).
-    A height within round-off of 0 (a margin's) is taken as just above it, on the relief's side,
-    whatever the leaf's size and the sign of k: the branch was round-off's, and a margin's
-    curvature changed by a tenth with the leaf's size (and the sign of a roll)."""
-    points, d = jet
-    b, t = 2, points[:, 2] * k
-    angle = np.clip(points[:, a] * k, -np.pi, np.pi)
-    s, c = np.sin(angle), np.cos(angle)
-    level = np.abs(points[:, 2]) <= ROUND_OFF * np.abs(points).max(initial=0.0)
-    outward = np.where(level, k < 0, t < 0)
-    inward = np.exp(-np.maximum(t, 0))
-    ratio = np.where(outward, 1 - t, inward)  # ρ k: k² ρ as k (ρ k) keeps a leaf at 1e300
-    rho1, rho2 = np.where(outward, -1.0, -inward), np.where(outward, 0.0, k * inward)
-    value = points.copy()
-    value[:, a], value[:, b] = s * ratio / k, 1.0 / k - c * ratio / k
-    j = np.broadcast_to(np.eye(3), (len(points), 3, 3)).copy()
-    j[:, a, a], j[:, a, b], j[:, b, a], j[:, b, b] = c * ratio, s * rho1, s * ratio, -c * rho1
-    hess = np.zeros((len(points), 3, 3, 3))
-    hess[:, a, a, a], hess[:, b, a, a] = -k * (s * ratio), k * (c * ratio)
-    hess[:, a, a, b] = hess[:, a, b, a] = k * c * rho1
-    hess[:, b, a, b] = hess[:, b, b, a] = k * s * rho1
-    hess[:, a, b, b], hess[:, b, b, b] = s * rho2, -c * rho2
-    return pushed(value, d, j, hess)
-
-
-def _fold_jet(jet: Jet, fold: float) -> Jet:
-    """The fold on a jet (y -> y cos, z += |y| sin: linear each side of the crease, y = 0;
-    a point on it, within round-off, takes the + side's)."""
-    points, d = jet
-    side = np.where(points[:, 1] < -ROUND_OFF * np.abs(points).max(initial=0.0), -1.0, 1.0)
-    value = points.copy()
-    value[:, 1] *= np.cos(fold)
-    value[:, 2] += np.abs(value[:, 1]) * np.tan(fold)
-    j = np.broadcast_to(np.eye(3), (len(points), 3, 3)).copy()
-    j[:, 1, 1], j[:, 2, 1] = np.cos(fold), side * np.sin(fold)
-    return pushed(value, d, j, None)
-
-
-def _twist_jet(jet: Jet, twist: float) -> Jet:
-    """`_turned` on a jet: y and z turned about x by twist · x."""
-    points, d = jet
-    angle = twist * points[:, 0]
-    c, s = np.cos(angle), np.sin(angle)
-    value = points.copy()
-    value[:, 1:] = _turned(points, twist)
-    y, z = value[:, 1], value[:, 2]
-    j = np.zeros((len(points), 3, 3))
-    j[:, 0, 0] = 1.0
-    j[:, 1, 0], j[:, 1, 1], j[:, 1, 2] = -twist * z, c, -s
-    j[:, 2, 0], j[:, 2, 1], j[:, 2, 2] = twist * y, s, c
-    hess = np.zeros((len(points), 3, 3, 3))
-    hess[:, 1, 0, 0], hess[:, 2, 0, 0] = -twist * (twist * y), -twist * (twist * z)
-    hess[:, 1, 0, 1] = hess[:, 1, 1, 0] = -twist * s
-    hess[:, 1, 0, 2] = hess[:, 1, 2, 0] = -twist * c
-    hess[:, 2, 0, 1] = hess[:, 2, 1, 0] = twist * c
-    hess[:, 2, 0, 2] = hess[:, 2, 2, 0] = -twist * s
-    return pushed(value, d, j, hess)
 
 
 def _turned(points: np.ndarray, twist: float) -> np.ndarray:
