@@ -81,7 +81,8 @@ def sag_splits(
             break
         # the new points are numbered in the codes' order
         hit = marked[edge].reshape(faces.shape)  # (a, b), (b, c), (c, a) halved
-        touched = hit.any(axis=1)  # few faces: the others are kept whole
+        touched = hit[:, 0] | hit[:, 1] | hit[:, 2]  # few faces: the others kept whole (any
+        # over 3 columns took 0.19 ms of 14,500 faces, this 0.015)
         done.append(faces[~touched])
         rank = (np.cumsum(marked) - 1)[edge].reshape(faces.shape)[touched]
         faces = _halved(faces[touched], np.where(hit[touched], n + rank, -1))

