@@ -100,14 +100,28 @@ class Pose:
             points[:, 2] = curled + level
         return points
 
+    def carry(self, points: np.ndarray) -> np.ndarray:
+        """`apply` in one compiled kernel (pose_jet.py), to its round-off: a bent run's mesh is
+        carried so (bent_result.py; apply took 4.2 ms of a four-term pose's grid-128 run, its
+        37,000 points, this 2.8). A form's curves stay bent by `apply` (numpy's exp is not
+        the kernel's: the flat run of a blade an ulp off can make another mesh)."""
+        return self._posed(kernel_array(points), np.zeros((0, 5, 3)))[0]
+
     def carry_jet(self, jet: Jet) -> Jet:
         """A jet of flat blade points (bent_curvature.py) bent as `apply` bends the points, in
         closed form (pose_jet.py); on a fold's crease (y = 0) from its + side, on a roll's or
         curl's sheet (height 0) from the relief's."""
-        points, d = kernel_array(jet[0]), kernel_array(jet[1])
+        return self._posed(kernel_array(jet[0]), kernel_array(jet[1]))
+
+    def _posed(self, points: np.ndarray, d: np.ndarray) -> Jet:
+        """`pose_jet._posed_jet` of (n, 3) points and their (n, 5, 3) derivatives, or (0, 5, 3)
+        for the points alone (the profiles' heights alone then)."""
         x = points[:, 0]  # kept by the roll and the fold: their profiles are taken here
-        none = np.zeros((3, len(points)))
-        sheet = none if self.roll == 0 or self.relief is None else np.array(self.relief.sheet(x))
+        jets = len(d) > 0
+        none = np.zeros((3 if jets else 1, len(points)))
+        sheet = none
+        if self.roll != 0 and self.relief is not None:
+            sheet = np.array(self.relief.sheet(x) if jets else [self.relief.sheet_height(x)])
         fold, c, s, tan, share, band, hinge = 0, 1.0, 0.0, 0.0, 0.0, 1.0, none
         if self.fold != 0 and self.relief is None:
             angle = np.deg2rad(self.fold)
@@ -115,7 +129,11 @@ class Pose:
         elif self.fold != 0:
             turn = self._hinge_fold()
             fold, c, s, share, band = HINGE, turn.c, turn.s, turn.share, turn.band
-            hinge = np.array(self._hinge(x, None if self.roll == 0 else tuple(sheet)))
+            rolled = None if self.roll == 0 else sheet
+            if jets:
+                hinge = np.array(self._hinge(x, None if rolled is None else tuple(rolled)))
+            else:
+                hinge = self._hinge_height(x, None if rolled is None else rolled[0])[None]
         level = self._level() if self.curl != 0 else 0.0
         return _posed_jet(
             points, d, float(self.roll), sheet, fold, float(c), float(s), float(tan),

@@ -66,10 +66,13 @@ def _plane(
 @njit(cache=True, nogil=True)
 def _shift(points: np.ndarray, d: np.ndarray, profile: np.ndarray, sign: float) -> None:
     """The points' heights raised by sign · a profile of x (its height, first and second
-    derivatives at each point: (3, n)), with their derivatives, in place."""
+    derivatives at each point: (3, n); the height alone, (1, n), for points without their
+    derivatives, `d` empty), with their derivatives, in place."""
     for i in range(points.shape[0]):
-        p, slope, bend = sign * profile[0, i], sign * profile[1, i], sign * profile[2, i]
-        points[i, 2] += p
+        points[i, 2] += sign * profile[0, i]
+        if not d.shape[0]:
+            continue
+        slope, bend = sign * profile[1, i], sign * profile[2, i]
         xu, xv = d[i, 0, 0], d[i, 1, 0]
         for k in range(5):
             d[i, k, 2] += slope * d[i, k, 0]
@@ -83,8 +86,9 @@ def _wrap(points: np.ndarray, d: np.ndarray, a: int, k: float, round_off: float)
     """bend._wrapped of coordinate a and the height on the points, with their derivatives, in
     place: the radius ρ = R(h k) / k (R bend._rolled_radius, C¹ only at h = 0; the angle's clip
     at half a turn taken from inside). A height within round-off of 0 (a margin's) is taken as
-    just above it, on the relief's side, whatever the leaf's size and the sign of k."""
-    level = round_off * _largest(points)
+    just above it, on the relief's side, whatever the leaf's size and the sign of k (of a jet;
+    points alone, `d` empty, are bent as bend._wrapped bends them)."""
+    level = round_off * _largest(points) if d.shape[0] else -1.0
     for i in range(points.shape[0]):
         t = points[i, 2] * k
         angle = min(max(points[i, a] * k, -np.pi), np.pi)
@@ -93,6 +97,8 @@ def _wrap(points: np.ndarray, d: np.ndarray, a: int, k: float, round_off: float)
         inward = np.exp(-max(t, 0.0))
         ratio, rho1, rho2 = (1 - t, -1.0, 0.0) if outward else (inward, -inward, k * inward)
         points[i, a], points[i, 2] = s * ratio / k, 1.0 / k - c * ratio / k
+        if not d.shape[0]:
+            continue
         _plane(
             d[i], a, 2, c * ratio, s * rho1, s * ratio, -c * rho1,
             -k * (s * ratio), k * c * rho1, s * rho2, k * (c * ratio), k * s * rho1, -c * rho2,
@@ -105,12 +111,13 @@ def _fold_plain(
 ) -> None:
     """The fold without a relief (y -> y c, z += |y c| tan: linear each side of the crease;
     a point on it, within round-off, takes the + side's), in place."""
-    crease = round_off * _largest(points)
+    crease = round_off * _largest(points) if d.shape[0] else 0.0
     for i in range(points.shape[0]):
         side = -1.0 if points[i, 1] < -crease else 1.0
         points[i, 1] *= c
         points[i, 2] += abs(points[i, 1]) * tan
-        _plane(d[i], 1, 2, c, 0.0, side * s, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        if d.shape[0]:
+            _plane(d[i], 1, 2, c, 0.0, side * s, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
 @njit(cache=True, nogil=True)
@@ -121,7 +128,7 @@ def _fold_hinge(
     """HingeFold.folded on the points (their heights over the hinge), with their derivatives
     (σ, σ' and σ'' as HingeFold.side has them), in place; a y within round-off of the crease is
     0."""
-    crease = round_off * _largest(points)
+    crease = round_off * _largest(points) if d.shape[0] else -1.0  # points alone: as given
     ws, lift = share * s, 1 - share + share * c
     for i in range(points.shape[0]):
         y, off = points[i, 1], points[i, 2]
@@ -133,6 +140,8 @@ def _fold_hinge(
             sigma, slope, bend = -1.0 if y < 0 else 1.0, 0.0, 0.0
         points[i, 1] = y * c - sigma * share * s * off
         points[i, 2] = abs(y) * s + lift * off
+        if not d.shape[0]:
+            continue
         across = -s if y < 0 else s
         _plane(
             d[i], 1, 2, c - slope * ws * off, -sigma * ws, across, lift,
@@ -150,6 +159,8 @@ def _twist(points: np.ndarray, d: np.ndarray, twist: float) -> None:
         y = c * points[i, 1] - s * points[i, 2]
         z = s * points[i, 1] + c * points[i, 2]
         points[i, 1], points[i, 2] = y, z
+        if not d.shape[0]:
+            continue
         jy, jz = -twist * z, twist * y  # ∂/∂x of y and z
         hyy, hzz = -twist * (twist * y), -twist * (twist * z)  # ∂²/∂x²
         ux, uy, uz = d[i, 0, 0], d[i, 0, 1], d[i, 0, 2]
@@ -178,7 +189,8 @@ def _posed_jet(
     """(n, 3) points and (n, 5, 3) derivatives carried as bend.Pose.carry_jet says: rolled
     (`roll`, about the (3, n) `sheet` profile), folded (`fold`: 0 none, PLAIN, HINGE about the
     (3, n) `hinge` profile; c, s, tan the fold's, share and band HingeFold's), twisted, and
-    curled (`curl`, about the height `level`)."""
+    curled (`curl`, about the height `level`). With `d` empty, (0, 5, 3), the points alone as
+    bend.Pose.apply bends them (to its round-off), the profiles their heights alone, (1, n)."""
     points, d = points.copy(), d.copy()
     if roll != 0:
         _shift(points, d, sheet, -1.0)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -177,3 +178,32 @@ def _grid_mesh(n: int, top: float, jitter: float = 0.0) -> TriangleMesh:
         [np.column_stack([a, a + 1, a + n + 1]), np.column_stack([a, a + n + 1, a + n])]
     )
     return TriangleMesh(points, faces, {"height": points[:, 0].copy()})
+
+
+@pytest.mark.parametrize(
+    "terms",
+    [
+        {"fold": 60.0},
+        {"roll": 0.5},
+        {"curl": -0.6},
+        {"twist": 0.5},
+        {"fold": -75.0, "roll": 1.0},
+        {"fold": 45.0, "curl": 0.5, "roll": 0.5, "twist": 0.5},
+    ],
+    ids=str,
+)
+@pytest.mark.parametrize("relief", [True, False], ids=["relief", "sheet"])
+def test_a_poses_compiled_carry_bends_points_as_its_apply(terms, relief):
+    """Pose.carry (pose_jet.py's kernel, how a bent run carries its mesh) is `apply` to
+    round-off: points over the blade, on and beside the crease's band and at the sheet's height,
+    for a pose about a relief and one about the sheet z = 0."""
+    blade = Form("ovate").leaf()
+    pose = Form("ovate", **terms).leaf(blade).bend
+    pose = pose if relief else replace(pose, relief=None)
+    rng = np.random.default_rng(5)
+    x = rng.uniform(0.0, 1.0, 4000) * np.ptp(blade.boundary[:, 0]) + blade.boundary[:, 0].min()
+    y = np.concatenate([rng.uniform(-0.3, 0.3, 3000), rng.uniform(-BAND, BAND, 990), np.zeros(10)])
+    z = np.where(rng.random(4000) < 0.2, 0.0, rng.uniform(-0.05, 0.05, 4000))
+    points = np.column_stack([x, y, z])
+    expected = pose.apply(points)
+    assert np.abs(pose.carry(points) - expected).max() <= 1e-14 * np.abs(expected).max()
