@@ -10,6 +10,7 @@ from typing import NamedTuple
 import numpy as np
 
 from leafstudio.core.bent_curvature import Jet, bent_curvatures
+from leafstudio.core.buckets import bounds
 from leafstudio.core.cuts import Plan, carried, carried_data, cut_levels
 from leafstudio.core.plane import Frame
 from leafstudio.core.trianglemesh import TriangleMesh
@@ -22,6 +23,12 @@ SAG_ROUNDS = 6  # sag_splits halves the edges that sag too far this many rounds 
 Lift = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
+def _extent(points: np.ndarray) -> float:
+    """The (n, 3) points' largest side (buckets.bounds: np.ptp over axis 0 is slow)."""
+    lo, hi = bounds(points)
+    return float((hi - lo).max())
+
+
 def _crease_cuts(mesh: TriangleMesh, crease, trim) -> tuple[np.ndarray, Plan, bool]:
     """The mesh's faces cut along the bend's crease (where `crease` is zero: a fold's midrib),
     the plan of the new points, and whether `trim` cut any. `trim` (model.Bend.trim: a scan's
@@ -30,7 +37,7 @@ def _crease_cuts(mesh: TriangleMesh, crease, trim) -> tuple[np.ndarray, Plan, bo
     faces, plan = mesh.regular_faces, []
     if side is not None:  # a point within round-off of the crease is on it: cut beside it, a
         # form's tip 3e-20 off left a face of no area (its UVs none, no tangent in a glTF)
-        extent = float(np.ptp(mesh.points, axis=0).max()) if len(mesh.points) else 0.0
+        extent = _extent(mesh.points) if len(mesh.points) else 0.0
         side = np.where(np.abs(side) <= ROUND_OFF * extent, 0.0, side)
         faces, plan = cut_levels(faces, side, np.zeros(1))
     cut = trim(carried(mesh.points, plan))
@@ -144,7 +151,7 @@ def _cuts(
     first = len(mesh.points) + sum(len(t) for _, t in plan)
     if sag is None or not len(mesh.points):
         return faces, plan, trimmed, first, None
-    tolerance = sag(float(np.ptp(mesh.points, axis=0).max()))
+    tolerance = sag(_extent(mesh.points))
     faces, more, bent = sag_splits(carried(mesh.points, plan), faces, carry, tolerance)
     return faces, plan + more, trimmed, first, bent[:first]
 
