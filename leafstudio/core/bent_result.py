@@ -35,11 +35,11 @@ def _onto_surface(result: Result) -> Lift:
 
 
 def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
-    """The flat blade's `result` carried into 3D by `leaf.bend`, measured against `leaf` (its
-    unit-size run as well, through `units`); `result` itself when the leaf has no bend. The
-    mesh is bent once, at unit size, and put in the input's units as in_world puts every run's
-    (bent at both sizes, the cuts, the carry and the halvings' lift ran twice: a quarter of a
-    bent run's time over the flat one's)."""
+    """The flat blade's `result` (its leaf the flat blade, kept as `Result.blade`) carried into
+    3D by `leaf.bend`, measured against `leaf` (its unit-size run as well, through `units`);
+    `result` itself when the leaf has no bend. The mesh is bent once, at unit size, and put in
+    the input's units as in_world puts every run's (bent at both sizes, the cuts, the carry and
+    the halvings' lift ran twice: a quarter of a bent run's time over the flat one's)."""
     bend = leaf.bend
     if bend is None:
         return result
@@ -57,6 +57,7 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
         return replace(
             result,
             leaf=leaf,
+            blade=result.leaf,
             surface_points=carry(result.surface_points),
             triangle_mesh=mesh,
             blade_xy=result.frame.to_plane(flat)[0],
@@ -95,6 +96,7 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
     return replace(
         result,
         leaf=leaf,
+        blade=result.leaf,
         surface_points=units.to_world(surface_points),
         triangle_mesh=units.mesh(mesh),
         unit=unit,

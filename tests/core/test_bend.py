@@ -207,3 +207,15 @@ def test_a_poses_compiled_carry_bends_points_as_its_apply(terms, relief):
     points = np.column_stack([x, y, z])
     expected = pose.apply(points)
     assert np.abs(pose.carry(points) - expected).max() <= 1e-14 * np.abs(expected).max()
+
+
+def test_a_bent_result_keeps_its_flat_blade_for_its_metrics():
+    """Result.blade: the flat blade a bent run measures its midrib on (blade_midrib flattened
+    the bent leaf's veins again for the metrics), the same midrib; a flat run has none."""
+    from leafstudio.core.evaluate import blade_midrib
+
+    leaf = Form("ovate", fold=45.0, curl=0.5, roll=0.5, twist=0.5).leaf()
+    result = ls.reconstruct(leaf, ls.Params(k=3, grid=32))
+    assert result.blade is not None and result.blade.bend is None
+    np.testing.assert_array_equal(blade_midrib(result.blade), blade_midrib(leaf))
+    assert ls.reconstruct(Form("ovate").leaf(), ls.Params(k=3, grid=32)).blade is None
