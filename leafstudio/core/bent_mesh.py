@@ -91,11 +91,13 @@ def sag_splits(
         hit = marked[edge].reshape(faces.shape)  # (a, b), (b, c), (c, a) halved
         touched = hit[:, 0] | hit[:, 1] | hit[:, 2]  # few faces: the others kept whole (any
         # over 3 columns took 0.19 ms of 14,500 faces, this 0.015)
-        done.append(faces[~touched])
-        rank = (np.cumsum(marked) - 1)[edge].reshape(faces.shape)[touched]
-        faces = _halved(faces[touched], np.where(hit[touched], n + rank, -1))
-        points, bent = np.vstack([points, middle[marked]]), np.vstack([bent, there[marked]])
-        plan.append((keys[marked], np.full(np.count_nonzero(marked), 0.5)))
+        done.append(faces.compress(~touched, axis=0))  # [~touched]: 4 times as long
+        rank = (np.cumsum(marked) - 1)[edge].reshape(faces.shape).compress(touched, axis=0)
+        halved = np.where(hit.compress(touched, axis=0), n + rank, -1)
+        faces = _halved(faces.compress(touched, axis=0), halved)
+        points = np.vstack([points, middle.compress(marked, axis=0)])
+        bent = np.vstack([bent, there.compress(marked, axis=0)])
+        plan.append((keys.compress(marked, axis=0), np.full(np.count_nonzero(marked), 0.5)))
     return np.vstack([*done, faces]) if done else faces, plan, bent
 
 
