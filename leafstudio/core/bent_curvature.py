@@ -108,6 +108,15 @@ def _curvatures(d: np.ndarray) -> np.ndarray:
     return out
 
 
+def carried_jets(
+    carry_jet: Callable[[Jet], Jet], frame: Frame, flat: np.ndarray, taylor: np.ndarray
+) -> Jet:
+    """The flat surface's jets at (n, 3) points on it, with its ∇z and ∇²z there (`taylor`,
+    jet_of), carried by `carry_jet`: the bent points and their (n, 5, 3) derivatives."""
+    xy, z = frame.to_plane(flat)
+    return carry_jet(_flat_jet(frame, xy, z, taylor))
+
+
 def bent_curvatures(
     carry: Callable[[np.ndarray], np.ndarray],
     carry_jet: Callable[[Jet], Jet] | None,
@@ -115,6 +124,7 @@ def bent_curvatures(
     flat: np.ndarray,
     bent: np.ndarray,
     taylor: np.ndarray,
+    known: np.ndarray | None = None,
 ) -> dict[str, np.ndarray]:
     """The curvature arrays (CURVATURE_ARRAYS) of the bent surface at a bent mesh's vertices.
 
@@ -129,13 +139,18 @@ def bent_curvatures(
         The vertices on the flat surface, and carried.
     taylor : (n, 5) float array
         Their flat surface's ∇z and ∇²z there (jet_of).
+    known : (m, 5, 3) float array, optional
+        The first m vertices' carried derivatives (carried_jets), when carry_jet gave them
+        already.
     """
     if not len(flat):  # a mesh trimmed to nothing
         return {name: np.zeros(0) for name in CURVATURE_ARRAYS}
-    xy, z = frame.to_plane(flat)
     if carry_jet is not None:
-        d = carry_jet(_flat_jet(frame, xy, z, taylor))[1]
+        m = 0 if known is None else len(known)
+        d = carried_jets(carry_jet, frame, flat[m:], taylor[m:])[1]
+        d = d if known is None else np.concatenate([known, d])
     else:
+        xy, z = frame.to_plane(flat)
         h = STEP * max(float(np.ptp(flat, axis=0).max()), 1e-300)
         d = _differenced(carry, frame, xy, z, taylor, bent, h)
     return dict(zip(CURVATURE_ARRAYS, _curvatures(kernel_array(d)), strict=True))

@@ -9,7 +9,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from leafstudio.core.bent_curvature import Jet, bent_curvatures
+from leafstudio.core.bent_curvature import Jet, bent_curvatures, carried_jets
 from leafstudio.core.buckets import bounds
 from leafstudio.core.cuts import Plan, carried, carried_data, cut_levels
 from leafstudio.core.plane import Frame
@@ -48,11 +48,12 @@ def _crease_cuts(mesh: TriangleMesh, crease, trim) -> tuple[np.ndarray, Plan, bo
 
 
 def sag_splits(
-    points: np.ndarray, faces: np.ndarray, carry, tolerance: float
+    points: np.ndarray, faces: np.ndarray, carry, tolerance: float, bent: np.ndarray | None = None
 ) -> tuple[np.ndarray, Plan, np.ndarray]:
     """(f', 3) faces with every edge halved whose midpoint the bend `carry` takes farther than
     `tolerance` from the bent chord, the plan of the new points (`carried`), SAG_ROUNDS
-    times at most, and every point carried (the new ones from their flat chord).
+    times at most, and every point carried (the new ones from their flat chord; `bent`: the
+    points carried already, else carried here).
 
     The flat mesh is fine for the flat surface, but a strong bend curves each of its triangles:
     a fold of 75° on a rolled, twisted oblong blade bent the chords of a grid-128 mesh 1.4e-3
@@ -62,7 +63,7 @@ def sag_splits(
     flat surface (`bent_result._onto_surface`) rather than on the flat chord, which the bend
     stretches (up to 3 times on a folded tube: the last 1.03-1.05e-3 of the pose grid)."""
     points, faces = np.asarray(points, dtype=float), np.asarray(faces)
-    bent, plan, done = carry(points), [], []
+    bent, plan, done = carry(points) if bent is None else bent, [], []
     for _ in range(SAG_ROUNDS):  # after the first, over the faces the last one made only
         n = len(points)
         after = faces[:, [1, 2, 0]]
@@ -143,32 +144,28 @@ class BentBy(NamedTuple):
     carry_jet: Callable[[Jet], Jet] | None
 
 
-def _cuts(
-    mesh: TriangleMesh, crease, trim, carry, sag: Tolerance | None
-) -> tuple[np.ndarray, Plan, bool, int, np.ndarray | None]:
-    """`_crease_cuts`, then the edges the bend `carry` sags off their chord by more than `sag`
-    of the mesh's extent gives halved (`sag_splits`; None: none), the first halving's point,
-    and the points before it carried (None when no halving ran)."""
-    faces, plan, trimmed = _crease_cuts(mesh, crease, trim)
-    first = len(mesh.points) + sum(len(t) for _, t in plan)
-    if sag is None or not len(mesh.points):
-        return faces, plan, trimmed, first, None
-    tolerance = sag(_extent(mesh.points))
-    faces, more, bent = sag_splits(carried(mesh.points, plan), faces, carry, tolerance)
-    return faces, plan + more, trimmed, first, bent[:first]
-
-
 def bent_mesh(
     mesh: TriangleMesh, bend: BentBy, sag: Tolerance | None, lift: Lift | None
 ) -> tuple[TriangleMesh, np.ndarray]:
     """The mesh cut along the bend's creases (`crease`, in its units), trimmed (`trim`, see
     _crease_cuts; the points no face keeps dropped), its edges halved where the bend sags them
-    by more than `sag` (`_cuts`) and carried into 3D by `carry`, with its points before they
-    were carried (Result.blade_xy: laid flat again, a tube's seam is ambiguous), and the bent
-    surface's curvatures (bent_curvature.py) where the mesh has its surface's jet."""
-    faces, plan, trimmed, first, bent = _cuts(mesh, bend.crease, bend.trim, bend.carry, sag)
+    by more than `sag` of its extent (`sag_splits`) and carried into 3D by `carry`, with its
+    points before they were carried (Result.blade_xy: laid flat again, a tube's seam is
+    ambiguous), and the bent surface's curvatures (bent_curvature.py) where the mesh has its
+    surface's jet."""
+    faces, plan, trimmed = _crease_cuts(mesh, bend.crease, bend.trim)
     extra = {} if mesh.jet is None else {JET: mesh.jet}
     points, data = carried(mesh.points, plan), carried_data(mesh.point_data | extra, plan)
+    first, jets, bent = len(points), None, None
+    if extra and bend.carry_jet is not None and not trimmed:  # the points' jets first: their
+        # bent points are those sag_splits' chords end at (carried again: 0.7 ms of a four-term
+        # pose's grid-128 run)
+        jets = carried_jets(bend.carry_jet, bend.frame, points, data[JET])
+    if sag is not None and len(points):
+        tolerance = sag(_extent(mesh.points))
+        known = None if jets is None else jets[0]
+        faces, more, bent = sag_splits(points, faces, bend.carry, tolerance, known)
+        points, data, bent = carried(points, more), carried_data(data, more), bent[:first]
     if lift is not None and first < len(points):  # the halvings' points on the surface
         points[first:], heights, taylor = lift(points[first:])
         if "height" in data:
@@ -186,7 +183,8 @@ def bent_mesh(
         data = {name: values[used] for name, values in data.items()}
     if extra:
         taylor = data.pop(JET)
+        known = None if jets is None else jets[1]
         data |= bent_curvatures(
-            bend.carry, bend.carry_jet, bend.frame, points, carried_points, taylor
+            bend.carry, bend.carry_jet, bend.frame, points, carried_points, taylor, known
         )
     return TriangleMesh(carried_points, faces, data), points
