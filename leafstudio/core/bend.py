@@ -54,7 +54,7 @@ from leafstudio.core.buckets import kernel_array
 from leafstudio.core.carried import carried_vectors
 from leafstudio.core.hinge_fold import BAND, HingeFold, fold_share
 from leafstudio.core.pose_jet import HINGE, PLAIN, _posed_jet
-from leafstudio.core.pose_relief import Profile, Relief
+from leafstudio.core.pose_relief import Relief
 from leafstudio.model import Leaf
 
 ROLL_SAG = 1.25e-3  # of a roll's radius: a bent chord stands no farther off (sag_splits); what
@@ -63,6 +63,7 @@ SAG = 1e-4  # bent_mesh.sag_splits: a bent edge's midpoint may stand this share 
 # extent off its chord
 ROUND_OFF = 1e-12  # of the points' largest coordinate: a height or a y within it is 0 (carry_jet)
 SEAM = 0.1  # flat_curve: points this share of a half turn from a tube's seam may lie either side
+FLAT = (np.array([0.0, 1.0]), np.zeros((4, 1)))  # the sheet z = 0 as a spline's pieces (pose_jet)
 
 
 @dataclass(frozen=True)
@@ -102,9 +103,9 @@ class Pose:
 
     def carry(self, points: np.ndarray) -> np.ndarray:
         """`apply` in one compiled kernel (pose_jet.py), to its round-off: a bent run's mesh is
-        carried so (bent_result.py; apply took 4.2 ms of a four-term pose's grid-128 run, its
-        37,000 points, this 2.8). A form's curves stay bent by `apply` (numpy's exp is not
-        the kernel's: the flat run of a blade an ulp off can make another mesh)."""
+        carried so (bent_result.py; apply took 3.5 ms for the 29,000 points a four-term pose's
+        grid-128 run carries, this 1.7). A form's curves stay bent by `apply` (numpy's exp is
+        not the kernel's: the flat run of a blade an ulp off can make another mesh)."""
         return self._posed(kernel_array(points), np.zeros((0, 5, 3)))[0]
 
     def carry_jet(self, jet: Jet) -> Jet:
@@ -115,29 +116,21 @@ class Pose:
 
     def _posed(self, points: np.ndarray, d: np.ndarray) -> Jet:
         """`pose_jet._posed_jet` of (n, 3) points and their (n, 5, 3) derivatives, or (0, 5, 3)
-        for the points alone (the profiles' heights alone then)."""
-        x = points[:, 0]  # kept by the roll and the fold: their profiles are taken here
-        jets = len(d) > 0
-        none = np.zeros((3 if jets else 1, len(points)))
-        sheet = none
-        if self.roll != 0 and self.relief is not None:
-            sheet = np.array(self.relief.sheet(x) if jets else [self.relief.sheet_height(x)])
-        fold, c, s, tan, share, band, hinge = 0, 1.0, 0.0, 0.0, 0.0, 1.0, none
+        for the points alone."""
+        sheet = midrib = FLAT
+        if self.relief is not None:
+            sheet, midrib = self.relief.pieces("mean"), self.relief.pieces("midrib")
+        fold, c, s, tan, share, band = 0, 1.0, 0.0, 0.0, 0.0, 1.0
         if self.fold != 0 and self.relief is None:
             angle = np.deg2rad(self.fold)
             fold, c, s, tan = PLAIN, np.cos(angle), np.sin(angle), np.tan(angle)
         elif self.fold != 0:
             turn = self._hinge_fold()
             fold, c, s, share, band = HINGE, turn.c, turn.s, turn.share, turn.band
-            rolled = None if self.roll == 0 else sheet
-            if jets:
-                hinge = np.array(self._hinge(x, None if rolled is None else tuple(rolled)))
-            else:
-                hinge = self._hinge_height(x, None if rolled is None else rolled[0])[None]
         level = self._level() if self.curl != 0 else 0.0
         return _posed_jet(
-            points, d, float(self.roll), sheet, fold, float(c), float(s), float(tan),
-            float(share), float(band), hinge, float(self.twist), float(self.curl), level,
+            points, d, float(self.roll), *sheet, fold, float(c), float(s), float(tan),
+            float(share), float(band), *midrib, float(self.twist), float(self.curl), level,
             ROUND_OFF,
         )  # fmt: skip
 
@@ -171,25 +164,14 @@ class Pose:
         return np.zeros(len(x)) if self.relief is None else self.relief.sheet_height(x)
 
     def _hinge_height(self, x: np.ndarray, sheet: np.ndarray | None) -> np.ndarray:
-        """`_hinge`'s height alone (rolled as `_hinge` rolls it), the roll's `sheet` height at x
-        given (None: found)."""
+        """The midrib's height once rolled (the fold turns each half about it): the roll carries
+        the midrib's height h over the sheet s to s + g(h − s) (`_rolled_rise`; pose_jet._rolled
+        for a jet); the roll's `sheet` height at x given (None: found)."""
         midrib = self.relief.hinge_height(x)
         if self.roll == 0:
             return midrib
         sheet = self.relief.sheet_height(x) if sheet is None else sheet
         return sheet + _rolled_rise(midrib - sheet, self.roll)[0]
-
-    def _hinge(self, x: np.ndarray, sheet: Profile | None) -> Profile:
-        """The midrib's height once rolled (the fold turns each half about it), with its first
-        and second derivatives along x: the roll carries the midrib's height h over the sheet s
-        to s + g(h − s) (`_rolled_rise`); the roll's `sheet` profile at x given (None: found)."""
-        midrib = self.relief.hinge(x)
-        if self.roll == 0:
-            return midrib
-        sheet = self.relief.sheet(x) if sheet is None else sheet
-        u, du, ddu = (m - s for m, s in zip(midrib, sheet, strict=True))
-        g, g1, g2 = _rolled_rise(u, self.roll)
-        return sheet[0] + g, sheet[1] + g1 * du, sheet[2] + g2 * du**2 + g1 * ddu
 
     def _hinge_fold(self) -> HingeFold:
         """The fold about the hinge (hinge_fold.py), the relief's turn eased as it leaves

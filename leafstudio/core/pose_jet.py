@@ -5,8 +5,8 @@ written out for each point in one compiled kernel.
 Each stage was a numpy map over the points with its (n, 3, 3) Jacobian and (n, 3, 3, 3) second
 derivatives built whole and pushed by a kernel (bent_curvature's `_chain`, gone with it): 4.7 ms
 for the 7,500 vertices of an ovate form's grid-128 mesh posed with all four terms, 1.7 ms of it
-the fold about its hinge; 1.4 ms here (the kernel 1.0, the hinge's and the sheet's profiles the
-rest). The maps are those of bend.py's `_wrapped` (a roll's cross-section or a curl's midrib
+the fold about its hinge; 1.1 ms here, the hinge's and the sheet's splines evaluated in the
+kernel too. The maps are those of bend.py's `_wrapped` (a roll's cross-section or a curl's midrib
 laid on its circle), hinge_fold.HingeFold's `folded` (about a relief's hinge) or the fold
 without a relief (y -> y cos, z += |y| tan), and bend.py's `_turned`; each stage's round-off
 test (a height or a y within ROUND_OFF of the points' largest coordinate is 0) looks at every
@@ -181,17 +181,65 @@ def _twist(points: np.ndarray, d: np.ndarray, twist: float) -> None:
 
 
 @njit(cache=True, nogil=True)
+def _spline(x: np.ndarray, breaks: np.ndarray, c: np.ndarray, rows: int) -> np.ndarray:
+    """(rows, n): a cubic spline's height at (n,) x, with its first and second derivatives for
+    `rows` 3, from its pieces (scipy's PPoly: breaks and (4, m) coefficients; past the ends the
+    end pieces), each point's piece looked for from the last one's first (a mesh's points come
+    nearly in order; CubicSpline's calls took 0.5 ms of 22,000 edges' midpoints, a third of
+    their carry)."""
+    last = breaks.shape[0] - 2
+    out = np.empty((rows, x.shape[0]))
+    piece = 0
+    for i in range(x.shape[0]):
+        t = x[i]
+        if not (breaks[piece] <= t < breaks[piece + 1]):  # else by bisection
+            low, high = 0, last
+            while low < high:  # the last piece whose break is at or below t (0 below them)
+                middle = (low + high + 1) // 2
+                low, high = (middle, high) if breaks[middle] <= t else (low, middle - 1)
+            piece = low
+        t -= breaks[piece]
+        c0, c1, c2, c3 = c[0, piece], c[1, piece], c[2, piece], c[3, piece]
+        out[0, i] = ((c0 * t + c1) * t + c2) * t + c3
+        if rows == 3:
+            out[1, i] = (3 * c0 * t + 2 * c1) * t + c2
+            out[2, i] = 6 * c0 * t + 2 * c1
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _rolled(hinge: np.ndarray, sheet: np.ndarray, k: float) -> None:
+    """The midrib's height h over the roll's sheet s carried to s + g(h − s) once rolled, with
+    its derivatives along x (bend._rolled_rise: g(u) = u below the sheet, (1 − exp(−u k)) / k
+    above it), in place."""
+    for i in range(hinge.shape[1]):
+        u = hinge[0, i] - sheet[0, i]
+        t = u * k
+        inward = np.exp(-t) if t > 0 else 1.0
+        g, g1, g2 = (u, 1.0, 0.0) if t <= 0 else ((1 - inward) / k, inward, -k * inward)
+        hinge[0, i] = sheet[0, i] + g
+        if hinge.shape[0] == 3:
+            du, ddu = hinge[1, i] - sheet[1, i], hinge[2, i] - sheet[2, i]
+            hinge[1, i] = sheet[1, i] + g1 * du
+            hinge[2, i] = sheet[2, i] + g2 * du * du + g1 * ddu
+
+
+@njit(cache=True, nogil=True)
 def _posed_jet(
-    points: np.ndarray, d: np.ndarray, roll: float, sheet: np.ndarray, fold: int,
-    c: float, s: float, tan: float, share: float, band: float, hinge: np.ndarray,
-    twist: float, curl: float, level: float, round_off: float,
+    points: np.ndarray, d: np.ndarray, roll: float, sheet_x: np.ndarray, sheet_c: np.ndarray,
+    fold: int, c: float, s: float, tan: float, share: float, band: float,
+    midrib_x: np.ndarray, midrib_c: np.ndarray, twist: float, curl: float, level: float,
+    round_off: float,
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """(n, 3) points and (n, 5, 3) derivatives carried as bend.Pose.carry_jet says: rolled
-    (`roll`, about the (3, n) `sheet` profile), folded (`fold`: 0 none, PLAIN, HINGE about the
-    (3, n) `hinge` profile; c, s, tan the fold's, share and band HingeFold's), twisted, and
-    curled (`curl`, about the height `level`). With `d` empty, (0, 5, 3), the points alone as
-    bend.Pose.apply bends them (to its round-off), the profiles their heights alone, (1, n)."""
+    (`roll`, about the sheet: the spline of pieces sheet_x, sheet_c over x), folded (`fold`: 0
+    none, PLAIN, HINGE about the midrib's spline, rolled; c, s, tan the fold's, share and band
+    HingeFold's), twisted, and curled (`curl`, about the height `level`). With `d` empty,
+    (0, 5, 3), the points alone as bend.Pose.apply bends them (to its round-off)."""
     points, d = points.copy(), d.copy()
+    rows = 3 if d.shape[0] else 1  # the profiles' derivatives for a jet
+    x = points[:, 0].copy()  # kept by the roll and the fold: their profiles are taken here
+    sheet = _spline(x, sheet_x, sheet_c, rows) if roll != 0 else np.zeros((rows, 0))
     if roll != 0:
         _shift(points, d, sheet, -1.0)
         _wrap(points, d, 1, roll, round_off)
@@ -199,6 +247,9 @@ def _posed_jet(
     if fold == PLAIN:
         _fold_plain(points, d, c, s, tan, round_off)
     elif fold == HINGE:
+        hinge = _spline(x, midrib_x, midrib_c, rows)
+        if roll != 0:
+            _rolled(hinge, sheet, roll)
         _shift(points, d, hinge, -1.0)
         _fold_hinge(points, d, c, s, share, band, round_off)
         _shift(points, d, hinge, 1.0)

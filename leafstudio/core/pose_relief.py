@@ -58,22 +58,14 @@ class Relief:
         return self._cache[name]
 
     def _profile(self, name: str, x: np.ndarray) -> Profile:
-        """The spline's height and first and second derivatives at (n,) x, its pieces found
-        once for the three (CubicSpline's three calls took 0.20 ms at the 7,500 vertices of a
-        grid-128 mesh, this 0.12) and each summed as scipy's PPoly sums it: the same to the
-        bit."""
         spline = self._spline(name)
-        breaks = spline.x
-        x = np.asarray(x, dtype=float)
-        piece = np.clip(np.searchsorted(breaks, x, side="right") - 1, 0, len(breaks) - 2)
-        s = x - breaks[piece]
-        c0, c1, c2, c3 = np.take(spline.c, piece, axis=1)  # 4 times faster than c[:, piece]
-        square = s * s
-        return (
-            c3 + c2 * s + c1 * square + c0 * (square * s),
-            c2 + c1 * s * 2.0 + c0 * square * 3.0,
-            c1 * 2.0 + c0 * s * 6.0,
-        )
+        return spline(x), spline(x, 1), spline(x, 2)
+
+    def pieces(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+        """The "midrib" or "mean" profile's spline as its breaks and (4, m) coefficients
+        (pose_jet.py's kernel evaluates it)."""
+        spline = self._spline(name)
+        return np.ascontiguousarray(spline.x), np.ascontiguousarray(spline.c)
 
     def hinge(self, x: np.ndarray) -> Profile:
         """The midrib's height at (n,) x, with its first and second derivatives."""

@@ -131,10 +131,10 @@ def test_the_hinge_folds_derivatives_in_its_band_are_its_differences():
     n = len(y)
     d = np.zeros((n, 5, 3))
     d[:, 0, 1] = d[:, 1, 2] = 1.0  # ∂u along y, ∂v along o
-    none = np.zeros((3, n))
+    flat = (np.array([-1.0, 1.0]), np.zeros((4, 1)))  # the hinge at height 0
     points, jet = _posed_jet(
-        np.column_stack([np.zeros(n), y, off]), d, 0.0, none, HINGE, fold.c, fold.s, 0.0,
-        fold.share, fold.band, none, 0.0, 0.0, 0.0, 1e-12,
+        np.column_stack([np.zeros(n), y, off]), d, 0.0, *flat, HINGE, fold.c, fold.s, 0.0,
+        fold.share, fold.band, *flat, 0.0, 0.0, 0.0, 1e-12,
     )  # fmt: skip
     e = 1e-6
 
