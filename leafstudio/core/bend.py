@@ -49,10 +49,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from leafstudio.core.bent_curvature import Jet, pushed
+from leafstudio.core.bent_curvature import Jet
+from leafstudio.core.buckets import kernel_array
 from leafstudio.core.carried import carried_vectors
 from leafstudio.core.hinge_fold import BAND, HingeFold, fold_share
-from leafstudio.core.pose_relief import Profile, Relief, negated, shifted
+from leafstudio.core.pose_jet import HINGE, PLAIN, _posed_jet
+from leafstudio.core.pose_relief import Relief
 from leafstudio.model import Leaf
 
 ROLL_SAG = 1.25e-3  # of a roll's radius: a bent chord stands no farther off (sag_splits); what
@@ -61,6 +63,7 @@ SAG = 1e-4  # bent_mesh.sag_splits: a bent edge's midpoint may stand this share 
 # extent off its chord
 ROUND_OFF = 1e-12  # of the points' largest coordinate: a height or a y within it is 0 (carry_jet)
 SEAM = 0.1  # flat_curve: points this share of a half turn from a tube's seam may lie either side
+FLAT = (np.array([0.0, 1.0]), np.zeros((4, 1)))  # the sheet z = 0 as a spline's pieces (pose_jet)
 
 
 @dataclass(frozen=True)
@@ -83,12 +86,13 @@ class Pose:
         """(n, 3) flat blade points, bent: rolled, folded, twisted about the midrib, then
         curled."""
         points = np.array(points, dtype=float)
+        sheet = None  # the roll's, at x, which the roll and the fold keep: the fold's hinge
         if self.roll != 0:  # the axis: y = 0, z = the sheet + 1 / roll
             sheet = self._sheet_height(points[:, 0])
             points[:, 1], rolled = _wrapped(points[:, 1], points[:, 2] - sheet, self.roll)
             points[:, 2] = rolled + sheet
         if self.fold != 0:
-            points[:, 1], points[:, 2] = self._folded(points)
+            points[:, 1], points[:, 2] = self._folded(points, sheet)
         if self.twist != 0:
             points[:, 1:] = _turned(points, self.twist)
         if self.curl != 0:  # the axis: x = 0, z = the level + 1 / (2 curl)
@@ -97,24 +101,38 @@ class Pose:
             points[:, 2] = curled + level
         return points
 
+    def carry(self, points: np.ndarray) -> np.ndarray:
+        """`apply` in one compiled kernel (pose_jet.py), to its round-off: a bent run's mesh is
+        carried so (bent_result.py; apply took 3.5 ms for the 29,000 points a four-term pose's
+        grid-128 run carries, this 1.7). A form's curves stay bent by `apply` (numpy's exp is
+        not the kernel's: the flat run of a blade an ulp off can make another mesh)."""
+        return self._posed(kernel_array(points), np.zeros((0, 5, 3)))[0]
+
     def carry_jet(self, jet: Jet) -> Jet:
         """A jet of flat blade points (bent_curvature.py) bent as `apply` bends the points, in
-        closed form; on a fold's crease (y = 0) from its + side, on a roll's or curl's sheet
-        (height 0) from the relief's (`_wrap_jet`)."""
-        if self.roll != 0 and self.relief is None:
-            jet = _wrap_jet(jet, 1, self.roll)
-        elif self.roll != 0:
-            sheet = self.relief.sheet(jet[0][:, 0])
-            jet = shifted(_wrap_jet(shifted(jet, negated(sheet)), 1, self.roll), sheet)
-        if self.fold != 0:
-            jet = self._fold_jet(jet)
-        if self.twist != 0:
-            jet = _twist_jet(jet, self.twist)
-        if self.curl != 0:
-            level = np.array([0.0, 0.0, self._level()])
-            points, d = _wrap_jet((jet[0] - level, jet[1]), 0, 2 * self.curl)
-            jet = points + level, d
-        return jet
+        closed form (pose_jet.py); on a fold's crease (y = 0) from its + side, on a roll's or
+        curl's sheet (height 0) from the relief's."""
+        return self._posed(kernel_array(jet[0]), kernel_array(jet[1]))
+
+    def _posed(self, points: np.ndarray, d: np.ndarray) -> Jet:
+        """`pose_jet._posed_jet` of (n, 3) points and their (n, 5, 3) derivatives, or (0, 5, 3)
+        for the points alone."""
+        sheet = midrib = FLAT
+        if self.relief is not None:
+            sheet, midrib = self.relief.pieces("mean"), self.relief.pieces("midrib")
+        fold, c, s, tan, share, band = 0, 1.0, 0.0, 0.0, 0.0, 1.0
+        if self.fold != 0 and self.relief is None:
+            angle = np.deg2rad(self.fold)
+            fold, c, s, tan = PLAIN, np.cos(angle), np.sin(angle), np.tan(angle)
+        elif self.fold != 0:
+            turn = self._hinge_fold()
+            fold, c, s, share, band = HINGE, turn.c, turn.s, turn.share, turn.band
+        level = self._level() if self.curl != 0 else 0.0
+        return _posed_jet(
+            points, d, float(self.roll), *sheet, fold, float(c), float(s), float(tan),
+            float(share), float(band), *midrib, float(self.twist), float(self.curl), level,
+            ROUND_OFF,
+        )  # fmt: skip
 
     def flatten(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) bent points back on the flat blade (the inverse of `apply`, for less than half
@@ -126,10 +144,10 @@ class Pose:
             points[:, 2] = flat + level
         if self.twist != 0:  # x is kept by the twist and the fold
             points[:, 1:] = _turned(points, -self.twist)
+        sheet = None if self.roll == 0 else self._sheet_height(points[:, 0])  # x is kept
         if self.fold != 0:
-            points[:, 1], points[:, 2] = self._unfolded(points)
+            points[:, 1], points[:, 2] = self._unfolded(points, sheet)
         if self.roll != 0:
-            sheet = self._sheet_height(points[:, 0])
             points[:, 1], flat = _unwrapped(points[:, 1], points[:, 2] - sheet, self.roll)
             points[:, 2] = flat + sheet
         return points
@@ -145,25 +163,15 @@ class Pose:
         """The height the roll bends each cross-section about: its relief's mean, or 0."""
         return np.zeros(len(x)) if self.relief is None else self.relief.sheet_height(x)
 
-    def _hinge_height(self, x: np.ndarray) -> np.ndarray:
-        """`_hinge`'s height alone (rolled as `_hinge` rolls it)."""
+    def _hinge_height(self, x: np.ndarray, sheet: np.ndarray | None) -> np.ndarray:
+        """The midrib's height once rolled (the fold turns each half about it): the roll carries
+        the midrib's height h over the sheet s to s + g(h − s) (`_rolled_rise`; pose_jet._rolled
+        for a jet); the roll's `sheet` height at x given (None: found)."""
         midrib = self.relief.hinge_height(x)
         if self.roll == 0:
             return midrib
-        sheet = self.relief.sheet_height(x)
+        sheet = self.relief.sheet_height(x) if sheet is None else sheet
         return sheet + _rolled_rise(midrib - sheet, self.roll)[0]
-
-    def _hinge(self, x: np.ndarray) -> Profile:
-        """The midrib's height once rolled (the fold turns each half about it), with its first
-        and second derivatives along x: the roll carries the midrib's height h over the sheet s
-        to s + g(h − s) (`_rolled_rise`)."""
-        midrib = self.relief.hinge(x)
-        if self.roll == 0:
-            return midrib
-        sheet = self.relief.sheet(x)
-        u, du, ddu = (m - s for m, s in zip(midrib, sheet, strict=True))
-        g, g1, g2 = _rolled_rise(u, self.roll)
-        return sheet[0] + g, sheet[1] + g1 * du, sheet[2] + g2 * du**2 + g1 * ddu
 
     def _hinge_fold(self) -> HingeFold:
         """The fold about the hinge (hinge_fold.py), the relief's turn eased as it leaves
@@ -173,46 +181,31 @@ class Pose:
         length = self.relief.knots[-1] - self.relief.knots[0]
         return HingeFold(np.cos(fold), np.sin(fold), share, BAND * length)
 
-    def _folded(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _folded(
+        self, points: np.ndarray, sheet: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """y and z of (n, 3) points folded: each half turned up by the fold about the midrib,
         about its hinge with a relief (hinge_fold.py); else y -> y cos, z += |y| sin, the
-        relief lifted straight up."""
+        relief lifted straight up. `sheet`: the roll's height at x (`_hinge_height`)."""
         fold = np.deg2rad(self.fold)
         y, z = points[:, 1], points[:, 2]
         if self.relief is None:  # z from the turned y, as `flatten` takes it back: 0 exact
             return y * np.cos(fold), z + np.abs(y * np.cos(fold)) * np.tan(fold)
-        hinge = self._hinge_height(points[:, 0])
+        hinge = self._hinge_height(points[:, 0], sheet)
         y, off = self._hinge_fold().folded(y, z - hinge)
         return y, off + hinge
 
-    def _unfolded(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _unfolded(
+        self, points: np.ndarray, sheet: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """The inverse of `_folded`."""
         fold = np.deg2rad(self.fold)
         y, z = points[:, 1], points[:, 2]
         if self.relief is None:
             return y / np.cos(fold), z - np.abs(y) * np.tan(fold)
-        hinge = self._hinge_height(points[:, 0])
+        hinge = self._hinge_height(points[:, 0], sheet)
         y, off = self._hinge_fold().unfolded(y, z - hinge)
         return y, off + hinge
-
-    def _fold_jet(self, jet: Jet) -> Jet:
-        """The fold on a jet: `_fold_jet` without a relief, else about the hinge (a point on
-        the crease, within round-off, takes the + side's)."""
-        if self.relief is None:
-            return _fold_jet(jet, np.deg2rad(self.fold))
-        hinge = self._hinge(jet[0][:, 0])
-        points, d = shifted(jet, negated(hinge))
-        y = points[:, 1].copy()
-        y[np.abs(y) <= ROUND_OFF * np.abs(points).max(initial=0.0)] = 0.0
-        fold = self._hinge_fold()
-        value = points.copy()
-        value[:, 1], value[:, 2] = fold.folded(y, points[:, 2])
-        plane, curved = fold.jacobian(y, points[:, 2])
-        j = np.broadcast_to(np.eye(3), (len(points), 3, 3)).copy()
-        j[:, 1:, 1:] = plane
-        hess = np.zeros((len(points), 3, 3, 3))
-        hess[:, 1:, 1:, 1:] = curved
-        return shifted(pushed(value, d, j, hess), hinge)
 
     def flat_curve(self, points: np.ndarray, ring: bool = False) -> np.ndarray:
         """`flatten` for a curve's (n, 3) points in order along it (`ring`: closed): a rolled
@@ -309,68 +302,6 @@ def _unwrapped(u: np.ndarray, h: np.ndarray, k: float) -> tuple[np.ndarray, np.n
     sign = np.sign(r)
     across, toward = sign * u, sign * (r - h)
     return np.arctan2(across, toward) * r, r * _unrolled_height(np.hypot(across, toward) * abs(k))
-
-
-def _wrap_jet(jet: Jet, a: int, k: float) -> Jet:
-    """`_wrapped` of coordinate `a` (0 or 1) and the height (2), on a jet: its Jacobian and
-    second derivatives in closed form (the radius ρ = R(h k) / k, ρ' = R'(h k), ρ'' = k R''(h k),
-    R `_rolled_radius`, C¹ only at h = 0; the angle's clip at half a turn taken from inside).
-    A height within round-off of 0 (a margin's) is taken as just above it, on the relief's side,
-    whatever the leaf's size and the sign of k: the branch was round-off's, and a margin's
-    curvature changed by a tenth with the leaf's size (and the sign of a roll)."""
-    points, d = jet
-    b, t = 2, points[:, 2] * k
-    angle = np.clip(points[:, a] * k, -np.pi, np.pi)
-    s, c = np.sin(angle), np.cos(angle)
-    level = np.abs(points[:, 2]) <= ROUND_OFF * np.abs(points).max(initial=0.0)
-    outward = np.where(level, k < 0, t < 0)
-    inward = np.exp(-np.maximum(t, 0))
-    ratio = np.where(outward, 1 - t, inward)  # ρ k: k² ρ as k (ρ k) keeps a leaf at 1e300
-    rho1, rho2 = np.where(outward, -1.0, -inward), np.where(outward, 0.0, k * inward)
-    value = points.copy()
-    value[:, a], value[:, b] = s * ratio / k, 1.0 / k - c * ratio / k
-    j = np.broadcast_to(np.eye(3), (len(points), 3, 3)).copy()
-    j[:, a, a], j[:, a, b], j[:, b, a], j[:, b, b] = c * ratio, s * rho1, s * ratio, -c * rho1
-    hess = np.zeros((len(points), 3, 3, 3))
-    hess[:, a, a, a], hess[:, b, a, a] = -k * (s * ratio), k * (c * ratio)
-    hess[:, a, a, b] = hess[:, a, b, a] = k * c * rho1
-    hess[:, b, a, b] = hess[:, b, b, a] = k * s * rho1
-    hess[:, a, b, b], hess[:, b, b, b] = s * rho2, -c * rho2
-    return pushed(value, d, j, hess)
-
-
-def _fold_jet(jet: Jet, fold: float) -> Jet:
-    """The fold on a jet (y -> y cos, z += |y| sin: linear each side of the crease, y = 0;
-    a point on it, within round-off, takes the + side's)."""
-    points, d = jet
-    side = np.where(points[:, 1] < -ROUND_OFF * np.abs(points).max(initial=0.0), -1.0, 1.0)
-    value = points.copy()
-    value[:, 1] *= np.cos(fold)
-    value[:, 2] += np.abs(value[:, 1]) * np.tan(fold)
-    j = np.broadcast_to(np.eye(3), (len(points), 3, 3)).copy()
-    j[:, 1, 1], j[:, 2, 1] = np.cos(fold), side * np.sin(fold)
-    return pushed(value, d, j, None)
-
-
-def _twist_jet(jet: Jet, twist: float) -> Jet:
-    """`_turned` on a jet: y and z turned about x by twist · x."""
-    points, d = jet
-    angle = twist * points[:, 0]
-    c, s = np.cos(angle), np.sin(angle)
-    value = points.copy()
-    value[:, 1:] = _turned(points, twist)
-    y, z = value[:, 1], value[:, 2]
-    j = np.zeros((len(points), 3, 3))
-    j[:, 0, 0] = 1.0
-    j[:, 1, 0], j[:, 1, 1], j[:, 1, 2] = -twist * z, c, -s
-    j[:, 2, 0], j[:, 2, 1], j[:, 2, 2] = twist * y, s, c
-    hess = np.zeros((len(points), 3, 3, 3))
-    hess[:, 1, 0, 0], hess[:, 2, 0, 0] = -twist * (twist * y), -twist * (twist * z)
-    hess[:, 1, 0, 1] = hess[:, 1, 1, 0] = -twist * s
-    hess[:, 1, 0, 2] = hess[:, 1, 2, 0] = -twist * c
-    hess[:, 2, 0, 1] = hess[:, 2, 1, 0] = twist * c
-    hess[:, 2, 0, 2] = hess[:, 2, 2, 0] = -twist * s
-    return pushed(value, d, j, hess)
 
 
 def _turned(points: np.ndarray, twist: float) -> np.ndarray:

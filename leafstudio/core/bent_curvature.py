@@ -51,41 +51,6 @@ def affine_jet(move: Callable[[np.ndarray], np.ndarray], jet: Jet) -> Jet:
     return move(points), (move(d.reshape(-1, 3)) - zero).reshape(d.shape)
 
 
-def pushed(value: np.ndarray, d: np.ndarray, j: np.ndarray, hess: np.ndarray | None) -> Jet:
-    """The jet of a map's `value` (n, 3) at a jet's points with derivatives `d`, from the
-    map's Jacobian `j` (n, 3, 3) and second derivatives `hess` (n, 3, 3, 3: [i, a, b, c] is
-    ∂²f_a / ∂x_b ∂x_c; None: none, an affine map each side) there: the chain rule."""
-    d, j = kernel_array(d), kernel_array(j)
-    curved = hess is not None
-    return value, _chain(d, j, kernel_array(hess) if curved else np.zeros((1, 3, 3, 3)), curved)
-
-
-@njit(cache=True, nogil=True)
-def _chain(d: np.ndarray, j: np.ndarray, hess: np.ndarray, curved: bool) -> np.ndarray:
-    """pushed's derivatives: J ∂ for each, and + H[∂p, ∂q] for the second ones when `curved`
-    (else `hess` is unread) (numpy's einsum over the (n, 3, 3, 3) second derivatives took 20 ms
-    for a bent ovate's 7,600 vertices)."""
-    n = d.shape[0]
-    out = np.zeros_like(d)
-    for i in range(n):
-        for k in range(5):
-            for a in range(3):
-                out[i, k, a] = (
-                    j[i, a, 0] * d[i, k, 0] + j[i, a, 1] * d[i, k, 1] + j[i, a, 2] * d[i, k, 2]
-                )
-        if not curved:
-            continue
-        for k in range(3):
-            p, q = (0, 0, 1)[k], (0, 1, 1)[k]
-            for a in range(3):
-                total = 0.0
-                for b in range(3):
-                    for c in range(3):
-                        total += hess[i, a, b, c] * d[i, p, b] * d[i, q, c]
-                out[i, k + 2, a] += total
-    return out
-
-
 def _flat_jet(frame: Frame, xy: np.ndarray, z: np.ndarray, taylor: np.ndarray) -> Jet:
     """The flat surface's jet at (n, 2) plane points with heights `z` and a jet `taylor`."""
     zx, zy, zxx, zxy, zyy = taylor.T
@@ -143,6 +108,15 @@ def _curvatures(d: np.ndarray) -> np.ndarray:
     return out
 
 
+def carried_jets(
+    carry_jet: Callable[[Jet], Jet], frame: Frame, flat: np.ndarray, taylor: np.ndarray
+) -> Jet:
+    """The flat surface's jets at (n, 3) points on it, with its ∇z and ∇²z there (`taylor`,
+    jet_of), carried by `carry_jet`: the bent points and their (n, 5, 3) derivatives."""
+    xy, z = frame.to_plane(flat)
+    return carry_jet(_flat_jet(frame, xy, z, taylor))
+
+
 def bent_curvatures(
     carry: Callable[[np.ndarray], np.ndarray],
     carry_jet: Callable[[Jet], Jet] | None,
@@ -150,6 +124,7 @@ def bent_curvatures(
     flat: np.ndarray,
     bent: np.ndarray,
     taylor: np.ndarray,
+    known: np.ndarray | None = None,
 ) -> dict[str, np.ndarray]:
     """The curvature arrays (CURVATURE_ARRAYS) of the bent surface at a bent mesh's vertices.
 
@@ -164,13 +139,18 @@ def bent_curvatures(
         The vertices on the flat surface, and carried.
     taylor : (n, 5) float array
         Their flat surface's ∇z and ∇²z there (jet_of).
+    known : (m, 5, 3) float array, optional
+        The first m vertices' carried derivatives (carried_jets), when carry_jet gave them
+        already.
     """
     if not len(flat):  # a mesh trimmed to nothing
         return {name: np.zeros(0) for name in CURVATURE_ARRAYS}
-    xy, z = frame.to_plane(flat)
     if carry_jet is not None:
-        d = carry_jet(_flat_jet(frame, xy, z, taylor))[1]
+        m = 0 if known is None else len(known)
+        d = carried_jets(carry_jet, frame, flat[m:], taylor[m:])[1]
+        d = d if known is None else np.concatenate([known, d])
     else:
+        xy, z = frame.to_plane(flat)
         h = STEP * max(float(np.ptp(flat, axis=0).max()), 1e-300)
         d = _differenced(carry, frame, xy, z, taylor, bent, h)
     return dict(zip(CURVATURE_ARRAYS, _curvatures(kernel_array(d)), strict=True))

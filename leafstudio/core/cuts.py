@@ -45,16 +45,19 @@ def _sorted_out(
 ) -> np.ndarray:
     """The faces across no level from the `lowest` on, returned; the others added to `waiting`
     at the lowest such level they cross."""
-    corner = q[faces]
-    first = np.maximum(np.searchsorted(levels, corner.min(axis=1), "right"), lowest)
-    across = first < np.searchsorted(levels, corner.max(axis=1), "left")
+    a, b, c = q[faces.T]  # each corner's: min and max over 3 columns took 0.97 ms of a
+    # 14,000-face mesh's crease, over the three corners 0.05
+    first = np.searchsorted(levels, np.minimum(np.minimum(a, b), c), "right")
+    first = np.maximum(first, lowest)
+    across = first < np.searchsorted(levels, np.maximum(np.maximum(a, b), c), "left")
     if not across.any():
         return faces
-    order = np.argsort(first[across], kind="stable")
-    at, start = np.unique(first[across][order], return_index=True)
-    for j, part in zip(at, np.split(faces[across][order], start[1:]), strict=True):
+    first, crossing = first.compress(across), faces.compress(across, axis=0)
+    order = np.argsort(first, kind="stable")
+    at, start = np.unique(first[order], return_index=True)
+    for j, part in zip(at, np.split(crossing[order], start[1:]), strict=True):
         waiting[j].append(part)
-    return faces[~across]
+    return faces.compress(~across, axis=0)  # [~across]: 4 times as long
 
 
 def _split(tri: np.ndarray, s: np.ndarray, side: np.ndarray, first: int) -> tuple:

@@ -119,19 +119,6 @@ class HingeFold:
             high, low = np.where(above, middle, high), np.where(above, low, middle)
         return 0.5 * (low + high)
 
-    def jacobian(self, y: np.ndarray, off: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(n, 2, 2) ∂(y', o') / ∂(y, o) and (n, 2, 2, 2) the second derivatives, at (n,) y
-        and o (|y|'s kink at 0 taken from its + side)."""
-        sigma, slope, bend = self.side(y)
-        ws = self.share * self.s
-        j = np.zeros((len(y), 2, 2))
-        j[:, 0, 0], j[:, 0, 1] = self.c - slope * ws * off, -sigma * ws
-        j[:, 1, 0], j[:, 1, 1] = np.where(y < 0, -self.s, self.s), self.lift
-        hess = np.zeros((len(y), 2, 2, 2))
-        hess[:, 0, 0, 0] = -bend * ws * off
-        hess[:, 0, 0, 1] = hess[:, 0, 1, 0] = -slope * ws
-        return j, hess
-
 
 def fold_share(fold: float, room: float) -> float:
     """w, the share of the relief's turn a fold of `fold` degrees may take when a point of the

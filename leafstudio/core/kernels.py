@@ -54,7 +54,7 @@ POLL_S = 0.1  # how often the compile looks whether it should stop
 STAGE = "kernels"  # the name on_stage is called with while compiling ("kernels 3/28" after each)
 
 f8, i8 = types.float64, types.int64
-F1, F2, F3, F4 = f8[::1], f8[:, ::1], f8[:, :, ::1], f8[:, :, :, ::1]
+F1, F2, F3 = f8[::1], f8[:, ::1], f8[:, :, ::1]
 I1, I2, B1, B2 = i8[::1], i8[:, ::1], types.boolean[::1], types.boolean[:, ::1]
 J1, S1, S2 = types.int32[::1], types.float32[::1], types.float32[:, ::1]  # scipy's sparse D
 RF1, RF2, RF3 = (types.Array(f8, n, "C", readonly=True) for n in (1, 2, 3))
@@ -65,6 +65,7 @@ LATTICE = types.NamedTuple([f8, f8, f8, i8, i8], Lattice)
 # "module:function" -> its argument types; costliest first (compile CPU seconds on the development
 # machine, callees included), so that the workers, each taking the next when free, end together
 KERNELS: dict[str, tuple[types.Type, ...]] = {
+    "pose_jet:_posed_jet": (F2, F3, f8, F1, F2, i8, f8, f8, f8, f8, f8, F1, F2, f8, f8, f8, f8),
     "surface:_levenberg_marquardt": (F2, F1, F1, F1, i8, f8),
     "height:_nearest_groups": (F2, F2, I1, F1, i8, BUCKETS, F1, F2, F1, F1),
     "gmm:_em": (F2, I1, i8, f8, f8, i8),
@@ -92,7 +93,6 @@ KERNELS: dict[str, tuple[types.Type, ...]] = {
     "bending:_bend_twice": (J1, J1, S1, S2),
     "bending:_projected_steps": (F2, F1, F1, F1, F1),
     "prepare.polygon:_thin_ring": (F2, I1, f8),
-    "bent_curvature:_chain": (F3, F3, F4, types.boolean),
     "bent_curvature:_curvatures": (F3,),
     "prepare.outline:_orientation": (F2, I1),
     "prepare.outline:_ring_length": (F2, I1),

@@ -27,8 +27,6 @@ import shapely
 from scipy.interpolate import CubicSpline, LinearNDInterpolator
 from shapely.geometry import Polygon
 
-from leafstudio.core.bent_curvature import Jet
-
 KNOTS = 24  # places along the blade the sections' mean heights are read at
 ROOM_SLACK = np.deg2rad(5.0)  # Relief.fold_room: kept clear of the midrib's plane
 CREASE = 0.05  # of the half width: points nearer the midrib than this have no angle off it
@@ -62,6 +60,12 @@ class Relief:
     def _profile(self, name: str, x: np.ndarray) -> Profile:
         spline = self._spline(name)
         return spline(x), spline(x, 1), spline(x, 2)
+
+    def pieces(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+        """The "midrib" or "mean" profile's spline as its breaks and (4, m) coefficients
+        (pose_jet.py's kernel evaluates it)."""
+        spline = self._spline(name)
+        return np.ascontiguousarray(spline.x), np.ascontiguousarray(spline.c)
 
     def hinge(self, x: np.ndarray) -> Profile:
         """The midrib's height at (n,) x, with its first and second derivatives."""
@@ -245,26 +249,3 @@ def _increasing(x: np.ndarray, z: np.ndarray, gap: float) -> tuple[np.ndarray, n
     x, z = x[order], z[order]
     keep = np.concatenate([[True], np.diff(x) > gap])
     return x[keep], z[keep]
-
-
-def shifted(jet: Jet, profile: Profile) -> Jet:
-    """`jet` with its height raised by a profile of x (a height, its first and second
-    derivatives at the jet's points): the chain rule through (x, y, z) -> (x, y, z + p(x)),
-    written out (the general `bent_curvature.pushed` with its (n, 3, 3, 3) second derivatives
-    took 1.8 ms of a folded form's run for each of its two shifts)."""
-    points, d = jet
-    p, slope, bend = profile
-    value = points.copy()
-    value[:, 2] += p
-    out = d.copy()  # (n, 5, 3): ∂u, ∂v, ∂uu, ∂uv, ∂vv of x, y, z
-    xu, xv = d[:, 0, 0], d[:, 1, 0]
-    out[:, :, 2] += slope[:, None] * d[:, :, 0]
-    out[:, 2, 2] += bend * xu * xu
-    out[:, 3, 2] += bend * xu * xv
-    out[:, 4, 2] += bend * xv * xv
-    return value, out
-
-
-def negated(profile: Profile) -> Profile:
-    """The profile −p."""
-    return (-profile[0], -profile[1], -profile[2])

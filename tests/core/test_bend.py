@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -177,3 +178,44 @@ def _grid_mesh(n: int, top: float, jitter: float = 0.0) -> TriangleMesh:
         [np.column_stack([a, a + 1, a + n + 1]), np.column_stack([a, a + n + 1, a + n])]
     )
     return TriangleMesh(points, faces, {"height": points[:, 0].copy()})
+
+
+@pytest.mark.parametrize(
+    "terms",
+    [
+        {"fold": 60.0},
+        {"roll": 0.5},
+        {"curl": -0.6},
+        {"twist": 0.5},
+        {"fold": -75.0, "roll": 1.0},
+        {"fold": 45.0, "curl": 0.5, "roll": 0.5, "twist": 0.5},
+    ],
+    ids=str,
+)
+@pytest.mark.parametrize("relief", [True, False], ids=["relief", "sheet"])
+def test_a_poses_compiled_carry_bends_points_as_its_apply(terms, relief):
+    """Pose.carry (pose_jet.py's kernel, how a bent run carries its mesh) is `apply` to
+    round-off: points over the blade, on and beside the crease's band and at the sheet's height,
+    for a pose about a relief and one about the sheet z = 0."""
+    blade = Form("ovate").leaf()
+    pose = Form("ovate", **terms).leaf(blade).bend
+    pose = pose if relief else replace(pose, relief=None)
+    rng = np.random.default_rng(5)
+    x = rng.uniform(0.0, 1.0, 4000) * np.ptp(blade.boundary[:, 0]) + blade.boundary[:, 0].min()
+    y = np.concatenate([rng.uniform(-0.3, 0.3, 3000), rng.uniform(-BAND, BAND, 990), np.zeros(10)])
+    z = np.where(rng.random(4000) < 0.2, 0.0, rng.uniform(-0.05, 0.05, 4000))
+    points = np.column_stack([x, y, z])
+    expected = pose.apply(points)
+    assert np.abs(pose.carry(points) - expected).max() <= 1e-14 * np.abs(expected).max()
+
+
+def test_a_bent_result_keeps_its_flat_blade_for_its_metrics():
+    """Result.blade: the flat blade a bent run measures its midrib on (blade_midrib flattened
+    the bent leaf's veins again for the metrics), the same midrib; a flat run has none."""
+    from leafstudio.core.evaluate import blade_midrib
+
+    leaf = Form("ovate", fold=45.0, curl=0.5, roll=0.5, twist=0.5).leaf()
+    result = ls.reconstruct(leaf, ls.Params(k=3, grid=32))
+    assert result.blade is not None and result.blade.bend is None
+    np.testing.assert_array_equal(blade_midrib(result.blade), blade_midrib(leaf))
+    assert ls.reconstruct(Form("ovate").leaf(), ls.Params(k=3, grid=32)).blade is None

@@ -16,6 +16,7 @@ from leafstudio.core.bent_curvature import bent_curvatures
 from leafstudio.core.evaluate import surface_area
 from leafstudio.core.hinge_fold import BAND, HingeFold
 from leafstudio.core.placed import PlacedPose
+from leafstudio.core.pose_jet import HINGE, _posed_jet
 from leafstudio.core.pose_relief import Relief, relief_of
 from leafstudio.core.trianglemesh import CURVATURE_ARRAYS
 from leafstudio.errors import LeafError
@@ -122,21 +123,31 @@ def test_a_pose_about_its_relief_carries_a_jet_as_its_differences_do(terms):
 
 
 def test_the_hinge_folds_derivatives_in_its_band_are_its_differences():
+    """pose_jet's fold about the hinge (a jet along y and o, the height over the hinge, as it
+    carries a pose's) against HingeFold.folded's differences, in the band and past it."""
     fold = HingeFold(np.cos(1.047), np.sin(1.047), 0.9, 0.03)
     y = np.array([-0.029, -0.01, 0.002, 0.005, 0.02, 0.1])
     off = np.array([2e-4, -1e-3, 5e-4, 1e-3, -3e-3, -0.05])
-    j, hess = fold.jacobian(y, off)
+    n = len(y)
+    d = np.zeros((n, 5, 3))
+    d[:, 0, 1] = d[:, 1, 2] = 1.0  # ∂u along y, ∂v along o
+    flat = (np.array([-1.0, 1.0]), np.zeros((4, 1)))  # the hinge at height 0
+    points, jet = _posed_jet(
+        np.column_stack([np.zeros(n), y, off]), d, 0.0, *flat, HINGE, fold.c, fold.s, 0.0,
+        fold.share, fold.band, *flat, 0.0, 0.0, 0.0, 1e-12,
+    )  # fmt: skip
     e = 1e-6
 
     def at(dy: float, do: float) -> np.ndarray:
         return np.array(fold.folded(y + dy, off + do)).T  # (n, 2)
 
-    np.testing.assert_allclose(j[:, :, 0], (at(e, 0) - at(-e, 0)) / (2 * e), atol=1e-7)
-    np.testing.assert_allclose(j[:, :, 1], (at(0, e) - at(0, -e)) / (2 * e), atol=1e-7)
+    np.testing.assert_allclose(points[:, 1:], at(0, 0), rtol=1e-15)
+    np.testing.assert_allclose(jet[:, 0, 1:], (at(e, 0) - at(-e, 0)) / (2 * e), atol=1e-7)
+    np.testing.assert_allclose(jet[:, 1, 1:], (at(0, e) - at(0, -e)) / (2 * e), atol=1e-7)
     yy = (at(e, 0) - 2 * at(0, 0) + at(-e, 0)) / e**2
     yo = (at(e, e) - at(e, -e) - at(-e, e) + at(-e, -e)) / (4 * e * e)
-    np.testing.assert_allclose(hess[:, :, 0, 0], yy, atol=1e-3)
-    np.testing.assert_allclose(hess[:, :, 0, 1], yo, atol=1e-3)
+    np.testing.assert_allclose(jet[:, 2, 1:], yy, atol=1e-3)
+    np.testing.assert_allclose(jet[:, 3, 1:], yo, atol=1e-3)
 
 
 def test_a_relief_reads_back_from_its_project_entry_and_a_bad_one_is_one_error(tmp_path):
