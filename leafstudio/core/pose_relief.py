@@ -19,6 +19,8 @@ saved before it, a pose fitted to 3D curves, core/unfold.py) bends as it did."""
 
 from __future__ import annotations
 
+import hashlib
+import threading
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -36,6 +38,10 @@ SAMPLES = 2048  # grid points over the blade's bounding box the sections' means 
 
 Profile = tuple[np.ndarray, np.ndarray, np.ndarray]  # a height over x, its first and second x
 
+RECENT = 8  # blades whose reliefs relief_of keeps
+_RECENT: dict[bytes, Relief | None] = {}  # relief_of's last RECENT, oldest first
+_RECENT_LOCK = threading.Lock()  # a form's blade is grown on a worker thread
+
 
 @dataclass(frozen=True)
 class Relief:
@@ -49,7 +55,7 @@ class Relief:
     half_width: float  # the blade's widest reach across the midrib (how far a roll turns it)
     rise: float = 0.0  # radians: the steepest the relief rises from the hinge across (its
     fall: float = 0.0  # points' angle atan2(±(z − hinge), |y|)), and falls (`fold_room`)
-    _cache: dict = field(default_factory=dict, compare=False, repr=False)  # splines, levels
+    _cache: dict = field(default_factory=dict, init=False, compare=False, repr=False)  # splines
 
     def _spline(self, name: str) -> CubicSpline:
         if name not in self._cache:  # made once: a pose bends the mesh's points, then its jets
@@ -167,8 +173,28 @@ def relief_of(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | None:
     The hinge passes through the midrib's points (`_midrib`; a blade without one turns about
     its sections' means). The sections' means are those of the heights
     interpolated linearly between all the curves' points (a Delaunay triangulation) at grid
-    points inside the outline, in a band of x around each knot."""
+    points inside the outline, in a band of x around each knot. The last RECENT blades' reliefs
+    are kept: a drawn leaf's bend sliders ask for the same one at every step (4 ms an ovate
+    form's)."""
     boundary = np.asarray(boundary, dtype=float)
+    veins = [np.asarray(v, dtype=float) for v in veins]
+    digest = hashlib.blake2b(digest_size=16)
+    for curve in (boundary, *veins):
+        digest.update(np.ascontiguousarray(curve).tobytes() + str(curve.shape).encode())
+    key = digest.digest()
+    with _RECENT_LOCK:
+        if key in _RECENT:
+            return _RECENT[key]
+    relief = _relief_of(boundary, veins)
+    with _RECENT_LOCK:
+        _RECENT[key] = relief
+        while len(_RECENT) > RECENT:
+            _RECENT.pop(next(iter(_RECENT)))
+    return relief
+
+
+def _relief_of(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | None:
+    """`relief_of`, made."""
     x0, x1 = float(boundary[:, 0].min()), float(boundary[:, 0].max())
     if not x1 > x0 or len(boundary) < 3:
         return None

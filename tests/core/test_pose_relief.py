@@ -182,3 +182,20 @@ def test_a_relief_whose_numbers_are_a_string_is_refused(key):
     entry["midrib" if key == "along" else "mean"] = "0123456789"
     with pytest.raises(ValueError):
         Relief.from_entry(entry)
+
+
+def test_a_blades_relief_is_made_once_and_a_changed_one_anew():
+    """relief_of keeps the last blades' reliefs (the bend sliders ask at every step); a relief
+    copied with other means bends about them, not about the first one's cached splines."""
+    from dataclasses import replace
+
+    blade = Form("ovate").blade()
+    first = relief_of(blade.boundary, blade.veins)
+    assert relief_of(blade.boundary.copy(), [v.copy() for v in blade.veins]) is first
+    raised = blade.veins[0].copy()
+    raised[:, 2] += 0.01
+    assert relief_of(blade.boundary, [raised, *blade.veins[1:]]) is not first
+    x = np.array([0.5])
+    first.sheet_height(x)  # its spline made and kept
+    lifted = replace(first, mean=tuple(m + 0.01 for m in first.mean))
+    assert lifted.sheet_height(x)[0] == pytest.approx(first.sheet_height(x)[0] + 0.01)
