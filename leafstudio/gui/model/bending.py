@@ -55,15 +55,14 @@ def blade_half_width(leaf: Leaf | None, plane: Any = None) -> float:
     flat = flat_leaf(leaf)
     if isinstance(leaf.bend, Pose):
         half = float(np.abs(flat.boundary[:, 1]).max())
-    elif isinstance(leaf.bend, PlacedPose) or plane is not None:
-        frame = leaf.bend.frame if isinstance(leaf.bend, PlacedPose) else blade_frame(flat, plane)
+    else:
+        try:
+            bend = leaf.bend
+            frame = bend.frame if isinstance(bend, PlacedPose) else blade_frame(flat, plane)
+        except LeafError:  # no plane given, and a leaf on one line has none of its own
+            return 1.0
         across = (flat.boundary - frame.origin) @ frame.v
         half = float(np.abs(across).max()) / blade_extent(flat.boundary, frame)
-    else:  # no plane given: the boundary's own, which a leaf on one line has not
-        try:
-            return blade_half_width(leaf, blade_frame(flat))
-        except LeafError:
-            return 1.0
     return half if np.isfinite(half) and half > 0 else 1.0
 
 
