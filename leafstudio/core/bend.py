@@ -53,7 +53,7 @@ from leafstudio.core.bent_curvature import Jet
 from leafstudio.core.buckets import kernel_array
 from leafstudio.core.carried import carried_vectors
 from leafstudio.core.hinge_fold import BAND, HingeFold, fold_share
-from leafstudio.core.pose_jet import HINGE, PLAIN, _posed_jet
+from leafstudio.core.pose_jet import HINGE, PLAIN, posed_jet
 from leafstudio.core.pose_relief import Relief
 from leafstudio.model import Leaf
 
@@ -115,7 +115,7 @@ class Pose:
         return self._posed(kernel_array(jet[0]), kernel_array(jet[1]))
 
     def _posed(self, points: np.ndarray, d: np.ndarray) -> Jet:
-        """`pose_jet._posed_jet` of (n, 3) points and their (n, 5, 3) derivatives, or (0, 5, 3)
+        """`pose_jet.posed_jet` of (n, 3) points and their (n, 5, 3) derivatives, or (0, 5, 3)
         for the points alone."""
         sheet = midrib = FLAT
         if self.relief is not None:
@@ -128,7 +128,7 @@ class Pose:
             turn = self._hinge_fold()
             fold, c, s, share, band = HINGE, turn.c, turn.s, turn.share, turn.band
         level = self._level() if self.curl != 0 else 0.0
-        return _posed_jet(
+        return posed_jet(
             points, d, float(self.roll), *sheet, fold, float(c), float(s), float(tan),
             float(share), float(band), *midrib, float(self.twist), float(self.curl), level,
             ROUND_OFF,

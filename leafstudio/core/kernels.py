@@ -65,7 +65,7 @@ LATTICE = types.NamedTuple([f8, f8, f8, i8, i8], Lattice)
 # "module:function" -> its argument types; costliest first (compile CPU seconds on the development
 # machine, callees included), so that the workers, each taking the next when free, end together
 KERNELS: dict[str, tuple[types.Type, ...]] = {
-    "pose_jet:_posed_jet": (F2, F3, f8, F1, F2, i8, f8, f8, f8, f8, f8, F1, F2, f8, f8, f8, f8),
+    "pose_jet:posed_jet": (F2, F3, f8, F1, F2, i8, f8, f8, f8, f8, f8, F1, F2, f8, f8, f8, f8),
     "surface:_levenberg_marquardt": (F2, F1, F1, F1, i8, f8),
     "height:_nearest_groups": (F2, F2, I1, F1, i8, BUCKETS, F1, F2, F1, F1),
     "gmm:_em": (F2, I1, i8, f8, f8, i8),

@@ -225,7 +225,7 @@ def _rolled(hinge: np.ndarray, sheet: np.ndarray, k: float) -> None:
 
 
 @njit(cache=True, nogil=True)
-def _posed_jet(
+def posed_jet(
     points: np.ndarray, d: np.ndarray, roll: float, sheet_x: np.ndarray, sheet_c: np.ndarray,
     fold: int, c: float, s: float, tan: float, share: float, band: float,
     midrib_x: np.ndarray, midrib_c: np.ndarray, twist: float, curl: float, level: float,

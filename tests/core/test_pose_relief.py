@@ -16,7 +16,7 @@ from leafstudio.core.bent_curvature import bent_curvatures
 from leafstudio.core.evaluate import surface_area
 from leafstudio.core.hinge_fold import BAND, HingeFold
 from leafstudio.core.placed import PlacedPose
-from leafstudio.core.pose_jet import HINGE, _posed_jet
+from leafstudio.core.pose_jet import HINGE, posed_jet
 from leafstudio.core.pose_relief import Relief, relief_of
 from leafstudio.core.trianglemesh import CURVATURE_ARRAYS
 from leafstudio.errors import LeafError
@@ -132,7 +132,7 @@ def test_the_hinge_folds_derivatives_in_its_band_are_its_differences():
     d = np.zeros((n, 5, 3))
     d[:, 0, 1] = d[:, 1, 2] = 1.0  # ∂u along y, ∂v along o
     flat = (np.array([-1.0, 1.0]), np.zeros((4, 1)))  # the hinge at height 0
-    points, jet = _posed_jet(
+    points, jet = posed_jet(
         np.column_stack([np.zeros(n), y, off]), d, 0.0, *flat, HINGE, fold.c, fold.s, 0.0,
         fold.share, fold.band, *flat, 0.0, 0.0, 0.0, 1e-12,
     )  # fmt: skip
