@@ -43,7 +43,13 @@ def add_form_parser(sub: argparse._SubParsersAction) -> None:
         choices=VENATION_KINDS,
         help="default: the shape's usual venation (palmate for reniform, else pinnate)",
     )
-    p.add_argument("--secondaries", type=int, metavar="N", help="secondary veins per side")
+    p.add_argument(
+        "--secondaries",
+        type=int,
+        metavar="N",
+        help="secondary veins per side (default: the shape's usual: 10 deltoid, 8 spatulate, "
+        "else the venation's, 6 pinnate)",
+    )
     p.add_argument("--aspect", type=float, metavar="L/W", help="length over greatest width")
     kept = " (the blade's size kept: README, Real size)"
     p.add_argument(

@@ -84,7 +84,8 @@ class Form:
     venation : {"pinnate", "palmate", "parallel", "arcuate"}, optional
         Default the shape's usual: palmate for reniform, else pinnate.
     secondaries : int, optional
-        Secondary veins on each side (see `grow_veins`).
+        Secondary veins on each side (see `grow_veins`); default the shape's usual (8 for
+        deltoid and spatulate, else the venation's: 6 pinnate).
     aspect : float, optional
         Length over width; default the shape's usual.
     fold, curl, roll, wave, twist : float, default: 0.0
@@ -160,6 +161,15 @@ class Form:
     @property
     def venation_term(self) -> str:
         return self.venation or SHAPES[self.shape].venation
+
+    @property
+    def secondaries_count(self) -> int | None:
+        """Secondaries on each side: the given count, else the shape's usual with its usual
+        venation (ShapeSpec.secondaries), else None (the venation's default)."""
+        if self.secondaries is not None:
+            return self.secondaries
+        spec = SHAPES[self.shape]
+        return spec.secondaries if self.venation_term == spec.venation else None
 
     @property
     def teeth_count(self) -> int:
@@ -247,7 +257,7 @@ class Form:
         veins = grow_veins(
             xy,
             self.venation_term,
-            self.secondaries,
+            self.secondaries_count,
             base=np.zeros(2),
             seed=self.seed,
             apex=xy[outline.apex_index],

@@ -34,6 +34,12 @@ class ShapeSpec:
         The usual venation of leaves of the shape: palmate for a reniform one (Asarum, Caltha,
         Pelargonium: the main veins spread from the stalk into both lobes), pinnate for the
         rest.
+    secondaries : int or None
+        The usual secondary veins on each side with the usual venation; None: the venation's
+        default (veins.DEFAULT_SECONDARIES, 6 pinnate). Shapes widest at one end carry more,
+        so a secondary reaches the wide end's corners: deltoid birches have 6 to 12 pairs
+        (Betula nigra and B. papyrifera 6-8, B. ermanii 10-12), and a spoon-shaped blade's
+        broad apex takes as many.
     """
 
     definition: str
@@ -45,6 +51,7 @@ class ShapeSpec:
     base_zone: float = 0.25
     fixed_base: bool = False
     venation: str = "pinnate"
+    secondaries: int | None = None
 
 
 SHAPES: dict[str, ShapeSpec] = {
@@ -149,6 +156,7 @@ SHAPES: dict[str, ShapeSpec] = {
         "truncate",
         0.12,
         0.1,
+        secondaries=10,
     ),
     "spatulate": ShapeSpec(
         "spoon-shaped: widest near the apex, tapering to a long narrow base",
@@ -158,6 +166,7 @@ SHAPES: dict[str, ShapeSpec] = {
         "cuneate",
         0.2,
         0.15,
+        secondaries=8,
     ),
     "sagittate": ShapeSpec(
         "arrow-shaped: two pointed basal lobes pointing back, past the base",
