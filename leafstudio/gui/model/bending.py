@@ -16,6 +16,7 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
+import shapely
 
 from leafstudio.core.bend import Pose, flat_leaf
 from leafstudio.core.placed import PlacedPose, blade_frame
@@ -38,10 +39,25 @@ def pose_of(leaf: Leaf | None) -> Pose:
 
 
 def blade_extent(boundary: np.ndarray, frame: Any) -> float:
-    """The flat blade's extent along its midrib (`frame.u`, core/placed.blade_frame), from its
-    (n, 3) flat `boundary`."""
-    along = (boundary - frame.origin) @ frame.u
-    return float(np.ptp(along)) if len(along) else 1.0
+    """The flat blade's length from base to apex, from its (n, 3) flat `boundary`: the piece of
+    the midrib's line (`frame.u` through `frame.origin`, core/placed.blade_frame) inside the
+    outline nearest the midrib's base, as a form's length is (forms/make.Form: lobes behind
+    the base, a cordate or sagittate blade's, do not count; its curl and twist are per base to
+    apex). The outline's whole extent along u when the line misses it."""
+    if not len(boundary):
+        return 1.0
+    offset = np.asarray(boundary, dtype=float) - frame.origin
+    along, across = offset @ frame.u, offset @ frame.v
+    extent = float(np.ptp(along))
+    outline = shapely.Polygon(np.column_stack([along, across]))
+    outline = outline if outline.is_valid else outline.buffer(0)
+    line = shapely.LineString([(along.min() - 1.0, 0.0), (along.max() + 1.0, 0.0)])
+    cut = line.intersection(outline)
+    pieces = [piece for piece in getattr(cut, "geoms", [cut]) if piece.length > 0]
+    if not pieces:
+        return extent if extent > 0 else 1.0
+    base = shapely.Point(0.0, 0.0)
+    return float(min(pieces, key=lambda piece: piece.distance(base)).length)
 
 
 def blade_half_width(leaf: Leaf | None, plane: Any = None) -> float:

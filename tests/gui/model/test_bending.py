@@ -297,3 +297,19 @@ def test_a_pose_without_a_relief_keeps_bending_about_the_margins_plane():
     assert nudged.bend.pose.relief is None
     # 1e-4: the blade's frame is found again from the flat leaf (blade_frame), not the fit's
     assert np.abs(nudged.boundary - leaf.boundary).max() < 1e-3
+
+
+@pytest.mark.parametrize("shape", ["ovate", "cordate", "sagittate", "reniform"])
+def test_a_drawn_leafs_bend_is_per_its_length_base_to_apex_as_a_forms(shape):
+    """A form's curl and twist are per its length from base to apex (1); a drawn leaf's were per
+    its whole extent along the midrib, lobes behind the base included: the same cordate blade,
+    drawn, turned its apex 0.45 of a half turn at twist 0.5, and a sagittate one 0.39
+    (reviewer, session 24). The blade's own frame puts the midrib's base 0.01 in from the notch,
+    so the form's length 1 reads 0.99 to 1.0 here."""
+    from leafstudio.gui.model.bending import posed
+
+    flat = Form(shape).blade()  # the form's blade, as if drawn: base at the origin, 1 long
+    leaf = posed(flat, Pose(twist=0.5, curl=0.3))
+    assert isinstance(leaf.bend, PlacedPose)
+    assert leaf.bend.pose.twist == pytest.approx(0.5, rel=0.011)
+    assert leaf.bend.pose.curl == pytest.approx(0.3, rel=0.011)
