@@ -162,6 +162,8 @@ def check_not_a_surface(boundary: np.ndarray) -> None:
             f"the boundary points fill a volume, not a line round a leaf (their thickness is "
             f"{spreads[2] / spreads[0]:.2f} of their length; a leaf's is under {THIN})"
         )
+    if is_outline(boundary):  # a traced outline covers no surface: the cover's search skipped
+        return
     spread, share = surface_cover(boundary)  # the share: where too sparse for the spread
     if spread > COVER_SPREAD:
         raise LeafError(
@@ -182,6 +184,10 @@ CHECKED_POINTS = 4000  # a longer ordered boundary is checked on every k-th poin
 CROSSING_SHARE = 0.05  # each side of a crossing encloses at least this share of the area
 LOOPS_FROM = 16  # fewer boundary points are taken as one loop
 JUMP = 8.0  # a step this many median steps long ends one loop of an ordered boundary
+OUTLINE_FROM = 64  # is_outline: a loop of fewer points is looked at as a cloud
+OUTLINE_RATIO = 1.75  # ... at most this many times its hull's perimeter long (the gallery's
+# forms, teeth and lobes included: 1.52 at most, a lobed reniform; four rows of points traced
+# back and forth, the narrowest cloud a closed path can cover, 2)
 ZIGZAG = 4.0  # a path this many times its points' hull perimeter zigzags through a cloud: a
 # leaf's outline, teeth and lobes included, is under 1.3 of it (gallery forms); a scan's points in
 # the scanner's order are 11 to 47 (the real scans)
@@ -206,6 +212,32 @@ def hull_perimeter(xy: np.ndarray) -> float:
         return 0.0
 
 
+def _loop_ratio(xy: np.ndarray) -> float | None:
+    """The length of the closed path through the (n, 2) points in their order over their convex
+    hull's perimeter; None unless they are one closed ordered loop (no step longer than JUMP
+    median steps: unordered, several loops or an open arc are not)."""
+    steps = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1)
+    typical = float(np.median(steps))
+    perimeter = hull_perimeter(xy)
+    if typical <= 0 or perimeter <= 0 or np.any(steps > JUMP * typical):
+        return None
+    return float(steps.sum() / perimeter)
+
+
+def is_outline(boundary: np.ndarray) -> bool:
+    """Whether the (n, 3) boundary is traced as an outline: at least OUTLINE_FROM points in one
+    closed ordered loop at most OUTLINE_RATIO times its hull's perimeter long. Such points cover
+    no surface: a closed path through n points spread over an area is about sqrt(n) / 4 times
+    its hull's perimeter long, 2 from 64 points (a strip's, its rows over 2: a closed path
+    covers an even number of rows, and two are an outline). Checking a form's boundary for a
+    surface (surface_cover) was half the frame stage's time (2.3 of 4.9 ms, an ovate)."""
+    points = np.asarray(boundary, dtype=float)
+    if len(points) < OUTLINE_FROM:
+        return False
+    ratio = _loop_ratio(_plane_coordinates(points[:: max(1, len(points) // CHECKED_POINTS)])[0])
+    return ratio is not None and ratio <= OUTLINE_RATIO
+
+
 def boundary_crossing(boundary: np.ndarray) -> np.ndarray | None:
     """Where an ordered boundary crosses itself into two or more lobes (a figure eight), as a 3D
     point; None for a simple outline, an unordered cloud, or the small loops of a noisy edge.
@@ -220,13 +252,9 @@ def boundary_crossing(boundary: np.ndarray) -> np.ndarray | None:
         return None
     points = points[:: max(1, len(points) // CHECKED_POINTS)]  # a lobe survives; noise thins
     xy, centre, axes = _plane_coordinates(points)
-    steps = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1)
-    typical = float(np.median(steps))
-    perimeter = hull_perimeter(xy)
-    if typical <= 0 or perimeter <= 0 or np.any(steps > JUMP * typical):
-        return None  # unordered, or several loops, or an open arc: not one closed ordered loop
-    if steps.sum() > ZIGZAG * perimeter:
-        return None  # a zigzag through a cloud, not an outline
+    ratio = _loop_ratio(xy)
+    if ratio is None or ratio > ZIGZAG:
+        return None  # not one closed ordered loop, or a zigzag through a cloud: not an outline
     ring = shapely.LineString(np.vstack([xy, xy[:1]]))
     if ring.is_simple:
         return None
