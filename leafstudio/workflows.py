@@ -31,7 +31,7 @@ from scipy.spatial import cKDTree
 from leafstudio._shared import progress
 from leafstudio._shared.blas import one_blas_thread
 from leafstudio._shared.inputs import check_file_kind
-from leafstudio.analysis.fidelity import scan_distances
+from leafstudio.analysis.fidelity import folded_share, scan_distances, scan_warnings
 from leafstudio.core import evaluate
 from leafstudio.core.bend import flat_leaf
 from leafstudio.core.pipeline import Pipeline, Result
@@ -56,7 +56,6 @@ from leafstudio.sources.photo import PhotoLeaf, is_photo, read_photo_leaf
 from leafstudio.sources.scan import is_scan_file, looks_like_scan, read_scan
 
 Kind = Literal["leaf", "project", "scan", "photo"]
-FAR_FROM_SCAN = 0.01  # of the length: a scan's surface farther on average is warned of
 
 
 @dataclass(frozen=True)
@@ -317,8 +316,10 @@ class Reconstruction:
         The input's notes, the leaf's plausibility warnings, the run's own, in that order.
     scan_fit : dict or None
         For a scan, the distances from its blade points to the surface: points, mean, median,
-        p95, max and the shares beyond 1% and 2% of the leaf length (`length`); a mean beyond
-        FAR_FROM_SCAN of the length adds a warning.
+        p95, max and the shares beyond 1% and 2% of the leaf length (`length`), and the share
+        of the mesh's edges folded back ("folded": analysis.fidelity.folded_share); a mean
+        beyond FAR_FROM_SCAN of the length, or folds at more than FOLDED of the edges, add a
+        warning (fidelity.scan_warnings).
     """
 
     result: Result
@@ -367,12 +368,9 @@ def reconstruct(opened: Opened, params: Params, pipeline: Pipeline | None = None
         blade = opened.scan[opened.extraction.blade]
         length = result.blade_length
         fit = scan_distances(result.triangle_mesh, blade, length)
-        if fit.get("mean", 0.0) > FAR_FROM_SCAN * length:
-            warnings.append(
-                f"the surface is {fit['mean'] / length:.1%} of the leaf's length from the "
-                f"scan on average (95% of points within {fit['p95'] / length:.1%}): it "
-                "does not follow this scan well"
-            )
+        if fit.get("points"):
+            fit["folded"] = folded_share(result.triangle_mesh)
+        warnings += scan_warnings(fit)
     return Reconstruction(result, warnings, fit)
 
 

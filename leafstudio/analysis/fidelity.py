@@ -14,6 +14,10 @@ from leafstudio.core.plane import Frame
 from leafstudio.core.trianglemesh import MeshLike
 
 NEAR, FAR = 0.01, 0.02  # shares of the leaf length for the "beyond" figures
+FAR_FROM_SCAN = 0.01  # of the length: a scan's surface farther on average is warned of
+FOLD_ANGLE = 90.0  # degrees: an edge whose two triangles meet more sharply folds the mesh back
+FOLDED = 0.01  # a scan's mesh with more of its edges folded back is warned of (the eight shared
+# scans: soybean pot1_1, whose cloud is doubled and V-folded, 3.1%; the other seven 0.16% at most)
 FIN_NEIGHBOURS = 16  # a fin's side: the mean direction to this many nearest scan points ...
 ONE_SIDE = 0.85  # ... at least this long (points all round a triangle: a hole it spans)
 
@@ -49,6 +53,42 @@ def distance_summary(d: np.ndarray, length: float) -> dict[str, Any]:
         "beyond_1pct": float(np.mean(d > NEAR * length)),
         "beyond_2pct": float(np.mean(d > FAR * length)),
     }
+
+
+def folded_share(mesh: MeshLike) -> float:
+    """The share of the mesh's inner edges whose two triangles meet at more than FOLD_ANGLE: where
+    the surface folds back on itself (a scan's doubled or curled-under blade), which the
+    distances from the scan's points to it do not show (they pass through its cloud).
+
+    Examples
+    --------
+    >>> import numpy as np, pyvista as pv
+    >>> plane = pv.Plane(i_resolution=4, j_resolution=4).triangulate()
+    >>> folded_share(plane)
+    0.0
+    """
+    angles, _ = evaluate.dihedral_angles(np.asarray(mesh.points), evaluate.triangles_of(mesh))
+    return float(np.mean(angles > FOLD_ANGLE)) if len(angles) else 0.0
+
+
+def scan_warnings(fit: dict[str, Any]) -> list[str]:
+    """What a scan's fit (scan_distances, with "folded": folded_share) says is wrong: a surface
+    far from the scan on average, or folding back on itself; [] for neither."""
+    notes = []
+    length = fit.get("length", 0.0)
+    if fit.get("mean", 0.0) > FAR_FROM_SCAN * length:
+        notes.append(
+            f"the surface is {fit['mean'] / length:.1%} of the leaf's length from the scan on "
+            f"average (95% of points within {fit['p95'] / length:.1%}): it does not follow this "
+            "scan well"
+        )
+    if fit.get("folded", 0.0) > FOLDED:
+        notes.append(
+            f"the surface folds back on itself at {fit['folded']:.1%} of its edges (creases "
+            f"past {FOLD_ANGLE:.0f}°), where the scan is doubled or its blade curls under: "
+            "compare it with the scan's points before trusting its shape"
+        )
+    return notes
 
 
 DISTANCE_FIGURES = ("length", "mean", "median", "p95", "max")  # the rest: a count and shares

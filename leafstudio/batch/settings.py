@@ -41,7 +41,14 @@ TRAIT_POWERS = {
     "scan_mean": 1,  # distances from the scan's points to the surface
     "scan_p95": 1,
 }
-SCAN_COLUMNS = ("scan_points", "scan_mean", "scan_p95", "scan_beyond_1pct", "scan_beyond_2pct")
+SCAN_COLUMNS = (
+    "scan_points",
+    "scan_mean",
+    "scan_p95",
+    "scan_beyond_1pct",
+    "scan_beyond_2pct",
+    "scan_folded",
+)
 INT_COLUMNS = frozenset({"k", "grid", "scan_points"})
 FLOAT_COLUMNS = frozenset(
     {*SHAPE_COLUMNS, *CURVATURE_COLUMNS, *SCAN_COLUMNS, "seconds"} - INT_COLUMNS

@@ -85,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
     """Read, check, compute everything, then write every output together (safewrite.staged):
     a run that fails anywhere leaves all old outputs as they were."""
     # heavy (the pipeline, the writers, the scans: numba, scipy, trimesh): not for --help
-    from leafstudio.analysis.fidelity import scaled_fit, scan_distances
+    from leafstudio.analysis.fidelity import folded_share, scaled_fit, scan_distances, scan_warnings
     from leafstudio.assets.export import (
         TEXTURES,
         asset_options,
@@ -131,6 +131,10 @@ def run(args: argparse.Namespace) -> int:
             "all": scan_distances(result.triangle_mesh, scan, length),
             "blade": scan_distances(result.triangle_mesh, scan[blade], length),
         }
+        fidelity["blade"]["folded"] = folded_share(result.triangle_mesh)
+        for note in scan_warnings(fidelity["blade"]):  # as the app and batch warn
+            log.warning(f"{args.against}: {note}")
+            args.warnings.append(note)  # for --metrics
         if mm is not None:
             fidelity = {part: scaled_fit(fit, mm) for part, fit in fidelity.items()}
     metrics = None

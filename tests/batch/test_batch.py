@@ -579,5 +579,6 @@ def test_a_scan_batch_given_the_real_length_gives_its_distances_in_millimetres(s
     assert scale > 1  # a soybean leaf of about 63 mm given 8 cm
     for name in ("scan_mean", "scan_p95"):
         assert real[name] == pytest.approx(own[name] * scale, rel=1e-9)
-    for name in ("scan_points", "scan_beyond_1pct", "scan_beyond_2pct"):
+    for name in ("scan_points", "scan_beyond_1pct", "scan_beyond_2pct", "scan_folded"):
         assert real[name] == own[name]  # counts and shares
+    assert 0 <= own["scan_folded"] < 0.01  # the share of the mesh's edges folded back

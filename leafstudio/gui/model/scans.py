@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from leafstudio.analysis.compare import poisson_surface
-from leafstudio.analysis.fidelity import FAR, NEAR, distance_summary
+from leafstudio.analysis.fidelity import FAR, NEAR, distance_summary, folded_share, scan_warnings
 from leafstudio.core.evaluate import point_to_mesh_distance
 from leafstudio.core.pipeline import Result
 from leafstudio.core.trianglemesh import polydata, vertex_normals
@@ -56,16 +56,23 @@ def scan_data(opened: Opened) -> ScanData:
     return ScanData(opened.path, points, extraction, pieces)
 
 
-def fidelity_sections(result: Result, scan: ScanData) -> list[tuple[str, list[tuple[str, str]]]]:
+def fidelity_sections(
+    result: Result, scan: ScanData
+) -> tuple[list[tuple[str, list[tuple[str, str]]]], list[str]]:
     """Measurements-panel sections: distances from the scan's blade points (and from all its
-    points) to the result's mesh, as `leafstudio reconstruct --against` reports them."""
+    points) to the result's mesh, as `leafstudio reconstruct --against` reports them, with the
+    share of the mesh's edges folded back; and what they warn of (fidelity.scan_warnings), for
+    the window to say as the CLI and batch do."""
     d = point_to_mesh_distance(result.triangle_mesh, scan.points)  # the blade's are among them
     length = result.blade_length
-    parts = (
-        ("Scan → mesh distance (blade points)", d[scan.extraction.blade]),
-        ("Scan → mesh distance (all points)", d),
-    )
-    return [(title, _fidelity_rows(distance_summary(part, length))) for title, part in parts]
+    blade = distance_summary(d[scan.extraction.blade], length)
+    if blade.get("points"):
+        blade["folded"] = folded_share(result.triangle_mesh)
+    sections = [
+        ("Scan → mesh distance (blade points)", _fidelity_rows(blade)),
+        ("Scan → mesh distance (all points)", _fidelity_rows(distance_summary(d, length))),
+    ]
+    return sections, scan_warnings(blade)
 
 
 def _fidelity_rows(f: dict[str, Any]) -> list[tuple[str, str]]:
@@ -80,6 +87,7 @@ def _fidelity_rows(f: dict[str, Any]) -> list[tuple[str, str]]:
         (f"Beyond {NEAR:.0%} of length", f"{f['beyond_1pct']:.1%}"),
         (f"Beyond {FAR:.0%} of length", f"{f['beyond_2pct']:.1%}"),
         ("Leaf length", f"{f['length']:.4g}"),
+        *([("Mesh edges folded back", f"{f['folded']:.1%}")] if "folded" in f else []),
     ]
 
 

@@ -38,7 +38,8 @@ class SideJobs:
     texture_shown(ndarray, tuple)
         The texture image, (h, w, 3 or 4) uint8, and its key (textures.texture_key).
     note(str)
-        A side job failed without harm: a few words the status line appends.
+        A side job failed without harm, or the scan's distances warn: a few words the status
+        line appends.
     """
 
     def __init__(self, session: Session) -> None:
@@ -65,14 +66,16 @@ class SideJobs:
 
             request = outcome.request.id
             job = session.run("fidelity", fidelity_sections, result, scan)
-            job.on_done(lambda sections: self._fidelity(request, sections))
+            job.on_done(lambda answer: self._fidelity(request, *answer))
             job.on_failed(self._fidelity_failed)
         self.update_poisson()
         self.update_texture()
 
-    def _fidelity(self, request: int, sections: list) -> None:
+    def _fidelity(self, request: int, sections: list, warnings: list[str]) -> None:
         if self.session.accept_fidelity(request, sections):
             self.fidelity_shown.emit()
+            for warning in warnings:  # the surface far from the scan, or folded back on itself
+                self.note.emit(f"note: {warning}")
 
     def _fidelity_failed(self, exc: BaseException) -> None:
         session = self.session

@@ -314,7 +314,8 @@ class MainWindow(FileCommands, QMainWindow):
         self._coloring_automatic = automatic
 
     def _on_side_note(self, note: str) -> None:
-        """A side job failed without harm (the Poisson surface, the generated texture)."""
+        """A side job's note: it failed without harm (the Poisson surface, the texture), or the
+        scan's distances warn of the surface (scans.fidelity_sections)."""
         self.status_text.setText(f"{self.status_text.text()} — {note}")
 
     def _on_texture(self, image: object, key: tuple) -> None:

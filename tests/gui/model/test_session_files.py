@@ -230,3 +230,26 @@ def test_a_leaf_beyond_what_the_app_draws_and_measures_is_refused_in_one_line(tm
     assert what == "file" and "huge.csv" in message and "\n" not in message
     assert "leafstudio reconstruct" in message and "1e+150" in message
     assert session.state is before
+
+
+def test_a_scan_whose_surface_folds_back_is_warned_of_in_the_window():
+    """As the command line and batch warn (analysis/fidelity.scan_warnings): soybean pot1_1's
+    doubled cloud folds its mesh back on itself, which its distances to the scan hide. The
+    window's status line hears it as a side job's note, and the panel shows the share."""
+    from pathlib import Path
+
+    from leafstudio.model import Params
+
+    scan = Path(__file__).resolve().parents[3].parent / "shared" / "realleaves"
+    path = scan / "soybean_11_20190508T043118_pot1_1.txt"
+    if not path.exists():
+        pytest.skip("the shared scans are not beside us")
+    runner = Runner()
+    session = Session(runner, Params())
+    notes: list[str] = []
+    session.side.note.connect(notes.append)
+    session.open_path(str(path))
+    runner.finish(session)
+    rows = dict(session.shown.fidelity[1][0][1])
+    assert float(rows["Mesh edges folded back"].rstrip("%")) > 1.0
+    assert any("folds back on itself" in note for note in notes)
