@@ -48,9 +48,7 @@ def test_scan_warnings_name_a_far_or_folded_surface():
 
 
 @needs_scan
-def test_a_doubled_scans_folded_surface_is_warned_of_by_the_workflow_and_the_cli(
-    tmp_path, capsys
-):
+def test_a_doubled_scans_folded_surface_is_warned_of_by_the_workflow_and_the_cli(tmp_path, capsys):
     opened = workflows.open_scan(str(POT1_1))
     done = workflows.reconstruct(opened, ls.Params())
     assert done.scan_fit["folded"] > FOLDED
