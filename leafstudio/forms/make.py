@@ -84,8 +84,8 @@ class Form:
     venation : {"pinnate", "palmate", "parallel", "arcuate"}, optional
         Default the shape's usual: palmate for reniform, else pinnate.
     secondaries : int, optional
-        Secondary veins on each side (see `grow_veins`); default the shape's usual (8 for
-        deltoid and spatulate, else the venation's: 6 pinnate).
+        Secondary veins on each side (see `grow_veins`); default the shape's usual (10 for
+        deltoid, 8 for spatulate, else the venation's: 6 pinnate).
     aspect : float, optional
         Length over width; default the shape's usual.
     fold, curl, roll, wave, twist : float, default: 0.0
