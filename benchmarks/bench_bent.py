@@ -18,8 +18,9 @@ shares of the leaf's length.
   tests/core/test_bend_roll.off_surface);
 - the eight scans: open_scan then reconstruct with the defaults (the blade unrolled onto a sheet,
   core/sheet.py); the mean and 95th-percentile distance from the blade's points to the surface,
-  beside the figures before the sheet (measured at baf1042), and the mesh's area standing out of
-  the scan as a fin (analysis/fidelity.fin_share);
+  beside the figures before the sheet (measured at baf1042), the mesh's area standing out of
+  the scan as a fin (analysis/fidelity.fin_share) and its edges folded back past 90°
+  (fidelity.folded_share, warned of over 1%);
 - vein distances: every gallery form (flat) and a drawn leaf with hand-raised veins, with the
   99th-percentile dihedral angles in the margin band and inside, and a form's own surface's on
   the same triangles (the veins lie on it);
@@ -216,10 +217,10 @@ def scans(folder: Path) -> None:
         return
     print("\n## the eight scans (open_scan, reconstruct with the defaults): distance / length")
     print(
-        "| scan | mean before | p95 before | mean | p95 | fin | p99 margin / inside | H IQR "
-        "| length | CPU s |"
+        "| scan | mean before | p95 before | mean | p95 | fin | folded | p99 margin / inside "
+        "| H IQR | length | CPU s |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     means, before = [], []
     for path in paths:
         start = time.process_time()
@@ -238,10 +239,11 @@ def scans(folder: Path) -> None:
         before.append(was[0])
         print(
             f"| {path.stem} | {was[0]:.2f}% | {was[1]:.2f}% | {mean:.2%} | {p95:.2%} | {fin:.2%} | "
+            f"{fit['folded']:.2%} | "
             f"{creases['margin_p99']:.1f} / {creases['interior_p99']:.1f} | {spread:.1f} | "
             f"{fit['length']:.1f} | {cpu:.1f} |"
         )
-    print(f"| mean | {np.nanmean(before):.2f}% | | {np.mean(means):.2%} | | | | | | |")
+    print(f"| mean | {np.nanmean(before):.2f}% | | {np.mean(means):.2%} | | | | | | | |")
 
 
 def vein_distances() -> None:
