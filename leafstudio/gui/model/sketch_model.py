@@ -13,14 +13,12 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
-import shapely
 from scipy.spatial import cKDTree
 
 from leafstudio.core.bend import flat_leaf
 from leafstudio.core.evaluate import view_frame
 from leafstudio.core.plane import Frame
 from leafstudio.core.sheet import Scaled
-from leafstudio.forms.veins import HEIGHT_RATIO
 from leafstudio.gui.model.curves import (
     SAMPLES_PER_SPAN,
     closed_curve,
@@ -31,6 +29,7 @@ from leafstudio.gui.model.curves import (
     plane_arc_lengths,
 )
 from leafstudio.gui.model.midrib import Midrib
+from leafstudio.gui.model.sketch_dome import default_height, on_dome, sketch_dome
 from leafstudio.gui.model.thinning import thinned
 from leafstudio.model import Leaf
 
@@ -91,6 +90,10 @@ class Sketch:
     symmetric : bool
         Mirror editing is on: each edit is reflected across the midrib (`mirrored`). A property
         of the drawing, saved with it (a project's "sketch" without it: off).
+    auto : tuple of bool
+        Per vein, its heights follow the dome over a drawn leaf's outline along its whole curve
+        (gui/model/sketch_dome.py; its control points show the dome's heights); off once a
+        height is set by hand, and always on a loaded leaf (a relief). Missing flags: off.
     bend : Bend or None
         A scan's sheet (core/sheet.Scaled) the sketch's leaf was derived from, kept by the leaves
         it draws (not saved with the sketch: the project keeps the leaf's). A pose is the
@@ -102,14 +105,18 @@ class Sketch:
     frame: Frame = field(default_factory=_identity_frame)
     relief: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     symmetric: bool = False
+    auto: tuple[bool, ...] = ()
     bend: Any = None
 
     def __post_init__(self) -> None:
         boundary = np.asarray(self.boundary, dtype=float).reshape(-1, 2)
         veins = tuple(np.asarray(v, dtype=float).reshape(-1, 3) for v in self.veins)
         object.__setattr__(self, "boundary", boundary)
-        object.__setattr__(self, "veins", veins)
         object.__setattr__(self, "relief", np.asarray(self.relief, dtype=float).reshape(-1, 3))
+        auto = [bool(a) and not len(self.relief) for a in self.auto[: len(veins)]]
+        object.__setattr__(self, "auto", (*auto, *[False] * (len(veins) - len(auto))))
+        object.__setattr__(self, "veins", veins)
+        object.__setattr__(self, "veins", on_dome(self, veins))
 
     # --- reading -------------------------------------------------------------------------------
     def control(self, curve: int) -> np.ndarray:
@@ -132,6 +139,9 @@ class Sketch:
         if curve not in made:
             if curve != BOUNDARY:
                 points = np.array(open_curve(self.veins[curve]))  # a copy: never a vein's own
+                heights = sketch_dome(self) if self.auto[curve] else None
+                if heights is not None:  # on the dome between its control points too
+                    points[:, 2] = heights(points[:, :2])
             elif len(self.boundary) >= 3:
                 points = np.array(closed_curve(self.boundary))
             else:
@@ -173,12 +183,14 @@ class Sketch:
         return size if size > 0 else 1.0
 
     # --- editing: each returns a new sketch ---------------------------------------------------
-    def _with_curve(self, curve: int, control: np.ndarray) -> Sketch:
+    def _with_curve(self, curve: int, control: np.ndarray, by_hand: bool = False) -> Sketch:
+        """`by_hand`: the vein's heights were set by hand (its auto flag goes off)."""
         if curve == BOUNDARY:
             return replace(self, boundary=control)
-        veins = list(self.veins)
+        veins, auto = list(self.veins), list(self.auto)
         veins[curve] = control
-        return replace(self, veins=tuple(veins))
+        auto[curve] = auto[curve] and not by_hand
+        return replace(self, veins=tuple(veins), auto=tuple(auto))
 
     def moved(self, curve: int, index: int, xy: np.ndarray) -> Sketch:
         """The sketch with one control point moved to plane point `xy`."""
@@ -198,24 +210,39 @@ class Sketch:
         their numbers and colours only if no empty one is kept)."""
         control = np.delete(self.control(curve), index, axis=0)
         if curve != BOUNDARY and len(control) == 0:
-            return replace(self, veins=self.veins[:curve] + self.veins[curve + 1 :])
+            veins, auto = self.veins[:curve] + self.veins[curve + 1 :], list(self.auto)
+            return replace(self, veins=veins, auto=(*auto[:curve], *auto[curve + 1 :]))
         return self._with_curve(curve, control)
 
     def with_height(self, vein: int, index: int, height: float) -> Sketch:
-        """The sketch with a vein control point's height set."""
+        """The sketch with a vein control point's height set by hand (the vein's others keep
+        theirs: an auto vein's the dome's, and it is auto no more)."""
         control = self.veins[vein].copy()
         control[index, 2] = height
-        return self._with_curve(vein, control)
+        return self._with_curve(vein, control, by_hand=True)
 
-    def with_vein(self, points: np.ndarray) -> Sketch:
-        """The sketch with a vein of (m, 3) control points appended (index len(veins) - 1)."""
-        return replace(self, veins=(*self.veins, np.asarray(points, dtype=float).reshape(-1, 3)))
+    def with_vein(self, points: np.ndarray, auto: bool = False) -> Sketch:
+        """The sketch with a vein of (m, 3) control points appended (index len(veins) - 1);
+        `auto`: its heights follow the dome over a drawn leaf's outline (see `auto`)."""
+        vein = np.asarray(points, dtype=float).reshape(-1, 3)
+        return replace(self, veins=(*self.veins, vein), auto=(*self.auto, auto))
+
+    def started_vein(self, xy: np.ndarray, tolerance: float) -> Sketch:
+        """The sketch with a new vein started at plane point `xy`, as a click makes it: snapped
+        onto a vein within `tolerance` (it branches there, at that vein's height) or at the
+        default height. On a drawn leaf it is auto (follows the dome) unless it branches from a
+        vein whose heights were set by hand: it would leave that vein off its height."""
+        xy = np.asarray(xy, dtype=float)
+        snapped = self._snap(xy, tolerance)
+        if snapped is None:
+            return self.with_vein(np.array([[*xy, self.default_height(-1, xy)]]), auto=True)
+        return self.with_vein(snapped[0][None, :], auto=self.auto[snapped[1]])
 
     def with_heights(self, vein: int, heights: np.ndarray) -> Sketch:
-        """The sketch with all of a vein's control point heights set ((m,) array)."""
+        """The sketch with all of a vein's control point heights set by hand ((m,) array)."""
         control = self.veins[vein].copy()
         control[:, 2] = np.asarray(heights, dtype=float).reshape(len(control))
-        return self._with_curve(vein, control)
+        return self._with_curve(vein, control, by_hand=True)
 
     def vein_fractions(self, vein: int) -> np.ndarray:
         """(m,) shares of vein `vein`'s length (along its curve, in the plane) at its control
@@ -239,7 +266,12 @@ class Sketch:
     def snap_to_vein(self, xy: np.ndarray, tolerance: float) -> np.ndarray | None:
         """The point (x, y, height) on the nearest vein curve within `tolerance` of plane point
         `xy`, or None: a new vein started there branches from that vein."""
-        best, best_d = None, tolerance
+        snapped = self._snap(xy, tolerance)
+        return None if snapped is None else snapped[0]
+
+    def _snap(self, xy: np.ndarray, tolerance: float) -> tuple[np.ndarray, int] | None:
+        """`snap_to_vein`'s point and the vein it lies on."""
+        best, best_d, vein = None, tolerance, -1
         for i in range(len(self.veins)):
             curve = self.vein_curve(i)
             if len(curve) == 0:
@@ -257,9 +289,9 @@ class Sketch:
                 candidates = a + t[:, None] * (b - a)
             d = np.linalg.norm(candidates[:, :2] - xy, axis=1)
             j = int(np.argmin(d))
-            if d[j] <= best_d:
-                best, best_d = candidates[j], float(d[j])
-        return None if best is None else np.asarray(best, dtype=float)
+            if d[j] < best_d or (best is None and d[j] <= best_d):  # a tie: the earlier vein's
+                best, best_d, vein = candidates[j], float(d[j]), i
+        return None if best is None else (np.asarray(best, dtype=float), vein)
 
     def midrib(self) -> Midrib | None:
         """The midrib (vein 1) as mirror editing follows it, or None below two points (made
@@ -350,7 +382,7 @@ class Sketch:
                 before = before[:0]
             boundary = np.vstack([arc, after, reflect(arc)[::-1], before])
             boundary = boundary.reshape(-1, 2)
-        veins = list(self.veins)
+        veins, auto = list(self.veins), list(self.auto)
         sides = [float(np.mean(side(v))) for v in veins]
         targets = [i for i in range(1, len(veins)) if sides[i] < -eps]
         for i in range(1, len(self.veins)):
@@ -362,53 +394,18 @@ class Sketch:
                     targets, key=lambda t: float(np.linalg.norm(veins[t][0, :2] - mirror[0, :2]))
                 )
                 targets.remove(j)
-                veins[j] = mirror
+                veins[j], auto[j] = mirror, self.auto[i]
             else:
                 veins.append(mirror)
+                auto.append(self.auto[i])
         for j in sorted(targets, reverse=True):
-            del veins[j]
-        return replace(self, boundary=boundary, veins=tuple(veins))
+            del veins[j], auto[j]
+        return replace(self, boundary=boundary, veins=tuple(veins), auto=tuple(auto))
 
     def default_height(self, vein: int, xy: np.ndarray) -> float:
-        """Height for a new point of a vein: that of its nearest control point, else (a new
-        vein: any index past the last) 5% of the sketch's size. On a drawn leaf (its margin on
-        the plane) a point stands no higher or lower than HEIGHT_RATIO times its distance
-        inside the outline (forms/veins.py: the roof relief's slope, 14°): the surface comes
-        down to the margin, and the app's drawn leaf (12 outline points, a midrib and four side
-        veins clicked out to near the margin, every point at 5%) had vein points 0.019 of its
-        length off the surface. A vein's only point held down so (a midrib started by the base)
-        passes on the 5%, not its own height (the whole midrib stood 0.007 high)."""
-        xy = np.asarray(xy, dtype=float)
-        level = 0.05 * self.extent()
-        height = level
-        control = self.veins[vein] if 0 <= vein < len(self.veins) else np.zeros((0, 3))
-        if len(control):
-            nearest = control[np.argmin(np.linalg.norm(control[:, :2] - xy, axis=1))]
-            height = float(nearest[2])
-            cap = self._margin_cap(nearest[:2])
-            held = cap is not None and abs(abs(height) - cap) <= 1e-9 * self.extent()
-            if len(control) == 1 and held and abs(height) < level:
-                height = level if height >= 0 else -level
-        cap = self._margin_cap(xy)
-        return height if cap is None else float(np.sign(height) * min(abs(height), cap))
-
-    def _margin_cap(self, xy: np.ndarray) -> float | None:
-        """How high (or low) a new vein point at plane point `xy` may stand on a drawn leaf:
-        HEIGHT_RATIO times its distance inside the outline, 0 outside; None for a sketch with a
-        relief (a loaded leaf whose margin has heights of its own: its veins keep theirs) or
-        without an outline."""
-        outline = self.boundary_curve()
-        if len(outline) < 3 or len(self.relief):
-            return None
-        made = self.__dict__.setdefault("_curves", {})  # the outline's shapes, once a sketch
-        if "margin" not in made:
-            made["margin"] = (
-                shapely.make_valid(shapely.Polygon(outline)),
-                shapely.LinearRing(outline),
-            )
-        region, ring = made["margin"]
-        point = shapely.Point(xy)
-        return HEIGHT_RATIO * ring.distance(point) if region.covers(point) else 0.0
+        """Height for a new point of vein `vein` (past the last: a new vein) at plane point
+        `xy`: the dome's on an auto vein, else by its nearest point (sketch_dome.py)."""
+        return default_height(self, vein, xy)
 
     # --- files ---------------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
@@ -424,6 +421,7 @@ class Sketch:
             "veins": [v.tolist() for v in self.veins],
             "relief": self.relief.tolist(),
             "symmetric": self.symmetric,
+            "auto": list(self.auto),
         }
 
     @classmethod
@@ -434,11 +432,14 @@ class Sketch:
         ------
         ValueError
             If the stored arrays have the wrong shape, or "symmetric" is not true or false
-            (absent, as in projects written before it: false).
+            (absent, as in projects written before it: false), or "auto" not a list of them
+            (absent, or short: a vein's heights are kept).
         """
-        symmetric = data.get("symmetric", False)
+        symmetric, auto = data.get("symmetric", False), data.get("auto", [])
         if not isinstance(symmetric, bool):
             raise ValueError(f'"symmetric" must be true or false, got {symmetric!r:.40}')
+        if not isinstance(auto, list) or not all(isinstance(a, bool) for a in auto):
+            raise ValueError(f'"auto" must be a list of true or false, got {auto!r:.40}')
         plane = data.get("plane") or {}
         frame = (
             Frame(
@@ -447,14 +448,15 @@ class Sketch:
             if plane
             else _identity_frame()
         )
+        veins = data.get("veins", [])
+        kept = [i for i, v in enumerate(veins) if len(v)]
         return cls(
             boundary=np.asarray(data.get("boundary", []), dtype=float).reshape(-1, 2),
-            veins=tuple(
-                np.asarray(v, dtype=float).reshape(-1, 3) for v in data.get("veins", []) if len(v)
-            ),
+            veins=tuple(np.asarray(veins[i], dtype=float).reshape(-1, 3) for i in kept),
             frame=frame,
             relief=np.asarray(data.get("relief", []), dtype=float).reshape(-1, 3),
             symmetric=symmetric,
+            auto=tuple(i < len(auto) and auto[i] for i in kept),
         )
 
     def hole_curves(self) -> list[np.ndarray]:
