@@ -83,5 +83,7 @@ def with_grown_veins(
     pick = [
         np.unique(np.linspace(0, len(v) - 1, min(VEIN_CONTROL, len(v))).astype(int)) for v in veins
     ]
-    # replace, not a new Sketch: the boundary, frame, relief and the saved Mirror flag are kept
-    return replace(sketch, veins=tuple(v[p] for v, p in zip(veins, pick, strict=True)))
+    # replace, not a new Sketch: the boundary, frame, relief and the saved Mirror flag are kept;
+    # the grown veins keep grow_veins' heights (not the replaced veins' auto flags)
+    grown = tuple(v[p] for v, p in zip(veins, pick, strict=True))
+    return replace(sketch, veins=grown, auto=())

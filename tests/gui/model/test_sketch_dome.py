@@ -6,12 +6,14 @@ from __future__ import annotations
 
 import json
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 import leafstudio as ls
 from leafstudio.core.evaluate import margin_creases, point_to_mesh_distance
+from leafstudio.gui.model.form_sketch import with_grown_veins
 from leafstudio.gui.model.session import Session
 from leafstudio.gui.model.sketch_dome import sketch_dome
 from leafstudio.gui.model.sketch_model import BOUNDARY, Sketch
@@ -148,3 +150,14 @@ def test_loaded_and_hand_raised_leaves_keep_their_veins_heights():
     assert raised.auto == (False, False)
     np.testing.assert_array_equal(raised.veins[0], midrib)
     np.testing.assert_allclose(raised.vein_curve(0)[::16], midrib)  # its curve through them
+
+
+def test_grown_veins_keep_their_own_heights_not_the_replaced_veins_flags():
+    """Grow veins replaces a clicked leaf's five auto veins: the grown ones keep the heights
+    grow_veins gave them (the first five took the old flags, and the dome's heights, 0.017 off)."""
+    sketch = clicked_sketch()
+    grown = with_grown_veins(sketch, "pinnate")
+    assert len(grown.veins) > len(sketch.veins) and not any(grown.auto)
+    again = with_grown_veins(replace(sketch, auto=()), "pinnate")
+    for a, b in zip(grown.veins, again.veins, strict=True):
+        np.testing.assert_array_equal(a, b)
