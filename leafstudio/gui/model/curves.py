@@ -91,6 +91,23 @@ def open_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.ndar
     return make_interp_spline(t, control, k=3, bc_type="natural")(s)
 
 
+def nearest_on_polyline(curve: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray | None, float]:
+    """The point of the (s, d) polyline `curve` nearest plane point `xy` (in x, y; its other
+    columns interpolated) and its distance: (None, inf) for an empty curve."""
+    if len(curve) == 0:
+        return None, np.inf
+    if len(curve) == 1:
+        candidates = curve
+    else:  # the nearest point on each segment
+        a, b = curve[:-1], curve[1:]
+        ab = b[:, :2] - a[:, :2]
+        along = np.einsum("ij,ij->i", xy - a[:, :2], ab) / np.maximum((ab**2).sum(1), 1e-300)
+        candidates = a + np.clip(along, 0, 1)[:, None] * (b - a)
+    d = np.linalg.norm(candidates[:, :2] - xy, axis=1)
+    j = int(np.argmin(d))
+    return np.asarray(candidates[j], dtype=float), float(d[j])
+
+
 def plane_arc_lengths(points: np.ndarray) -> np.ndarray:
     """(n,) length along the (n, d) points' polyline, in the plane (x, y), from the first."""
     steps = np.linalg.norm(np.diff(points[:, :2], axis=0), axis=1)

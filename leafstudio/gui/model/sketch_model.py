@@ -24,6 +24,7 @@ from leafstudio.gui.model.curves import (
     closed_curve,
     even_by_length,
     insert_index,
+    nearest_on_polyline,
     open_curve,
     outline_controls,
     plane_arc_lengths,
@@ -273,24 +274,9 @@ class Sketch:
         """`snap_to_vein`'s point and the vein it lies on."""
         best, best_d, vein = None, tolerance, -1
         for i in range(len(self.veins)):
-            curve = self.vein_curve(i)
-            if len(curve) == 0:
-                continue
-            if len(curve) == 1:
-                candidates = curve
-            else:  # the nearest point on each segment of the sampled curve
-                a, b = curve[:-1], curve[1:]
-                ab = b[:, :2] - a[:, :2]
-                t = np.clip(
-                    np.einsum("ij,ij->i", xy - a[:, :2], ab) / np.maximum((ab**2).sum(1), 1e-300),
-                    0,
-                    1,
-                )
-                candidates = a + t[:, None] * (b - a)
-            d = np.linalg.norm(candidates[:, :2] - xy, axis=1)
-            j = int(np.argmin(d))
-            if d[j] < best_d or (best is None and d[j] <= best_d):  # a tie: the earlier vein's
-                best, best_d, vein = candidates[j], float(d[j]), i
+            point, d = nearest_on_polyline(self.vein_curve(i), xy)
+            if d < best_d or (best is None and d <= best_d):  # a tie: the earlier vein's
+                best, best_d, vein = point, d, i
         return None if best is None else (np.asarray(best, dtype=float), vein)
 
     def midrib(self) -> Midrib | None:
