@@ -2,8 +2,9 @@
 
 A sketch is an immutable snapshot, so undo and redo simply swap snapshots. The boundary is a closed
 curve (a periodic cubic spline through its control points); each vein is an open curve through its
-control points, each carrying a height above the plane; the splines are curves.py's. No Qt here:
-the editor in gui/qt/sketch.py draws it.
+control points, each carrying a height above the plane; the splines are curves.py's. A vein
+clicked out on a drawn leaf is auto until a height is set by hand: its whole curve stands on the
+dome over the outline (sketch_dome.py). No Qt here: the editor in gui/qt/sketch.py draws it.
 """
 
 from __future__ import annotations
