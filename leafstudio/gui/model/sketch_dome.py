@@ -22,6 +22,7 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon
 
+from leafstudio.core.prepare.vein_order import midrib_turned
 from leafstudio.forms.blade import Blade
 from leafstudio.forms.relief import dome
 from leafstudio.forms.veins import HEIGHT_RATIO
@@ -34,14 +35,29 @@ Heights = Callable[[np.ndarray], np.ndarray]
 
 def sketch_dome(sketch: Sketch) -> Heights | None:
     """(n, 2) plane points -> (n,) heights of the dome over a drawn sketch's outline, based
-    where its midrib starts (`outline_dome`); None for a loaded leaf (its margin has heights of
-    its own: a relief) or a sketch without an outline."""
+    where its midrib starts (`midrib_base`, `outline_dome`); None for a loaded leaf (its margin
+    has heights of its own: a relief) or a sketch without an outline. Made once a sketch."""
+    made = sketch.__dict__.setdefault("_curves", {})  # frozen: its one cache, as sketch_model's
+    if "dome" in made:
+        return made["dome"]
     outline = sketch.boundary_curve()
-    if len(outline) < 3 or len(sketch.relief):
+    heights = None
+    if len(outline) >= 3 and not len(sketch.relief):
+        base = midrib_base(sketch)
+        key = None if base is None else (float(base[0]), float(base[1]))
+        heights = _cached_dome(np.ascontiguousarray(outline, dtype=float).tobytes(), key)
+    made["dome"] = heights
+    return heights
+
+
+def midrib_base(sketch: Sketch) -> np.ndarray | None:
+    """(2,) plane point where the sketch's midrib (its first vein) meets the blade: its start,
+    or its end when its side veins say it is written apex first (vein_order.midrib_turned, as
+    every reader of a leaf's base decides it); None without a midrib."""
+    if not sketch.veins or not len(sketch.veins[0]):
         return None
-    base = sketch.veins[0][0, :2] if sketch.veins and len(sketch.veins[0]) else None
-    key = None if base is None else (float(base[0]), float(base[1]))
-    return _cached_dome(np.ascontiguousarray(outline, dtype=float).tobytes(), key)
+    flat = [np.pad(np.asarray(v, dtype=float)[:, :2], ((0, 0), (0, 1))) for v in sketch.veins]
+    return flat[0][-1 if midrib_turned(flat) else 0, :2]
 
 
 @functools.lru_cache(maxsize=8)

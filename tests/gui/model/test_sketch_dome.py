@@ -161,3 +161,12 @@ def test_grown_veins_keep_their_own_heights_not_the_replaced_veins_flags():
     again = with_grown_veins(replace(sketch, auto=()), "pinnate")
     for a, b in zip(grown.veins, again.veins, strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+def test_a_midrib_drawn_apex_first_bases_the_dome_at_its_end():
+    """As every reader of a leaf's base decides it (vein_order.midrib_turned, Grow veins): the
+    dome is flattened where the midrib meets the blade, not at the apex it was started from."""
+    sketch = clicked_sketch()
+    turned = replace(sketch, veins=(sketch.veins[0][::-1], *sketch.veins[1:]))
+    assert all(turned.auto)
+    np.testing.assert_allclose(turned.veins[0][::-1], sketch.veins[0], rtol=0, atol=1e-12)
