@@ -117,7 +117,7 @@ class Sketch:
         object.__setattr__(self, "relief", np.asarray(self.relief, dtype=float).reshape(-1, 3))
         auto = [bool(a) and not len(self.relief) for a in self.auto[: len(veins)]]
         object.__setattr__(self, "auto", (*auto, *[False] * (len(veins) - len(auto))))
-        object.__setattr__(self, "veins", veins)
+        object.__setattr__(self, "veins", veins)  # on_dome reads the outline and midrib's base
         object.__setattr__(self, "veins", on_dome(self, veins))
 
     # --- reading -------------------------------------------------------------------------------
