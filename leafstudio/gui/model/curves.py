@@ -25,16 +25,22 @@ def _centripetal(points: np.ndarray) -> np.ndarray:
 
 def _drop_repeats(points: np.ndarray, closed: bool) -> np.ndarray:
     """Control points without consecutive duplicates (a spline cannot pass twice in no time)."""
+    return points[distinct(points, closed)]
+
+
+def distinct(points: np.ndarray, closed: bool) -> np.ndarray:
+    """(n,) mask of the (n, d) points a curve through them keeps: each not a repeat of the next
+    (within 1e-12 of the points' extent), the last of a closed curve compared with the first."""
+    keep = np.ones(len(points), dtype=bool)
     if len(points) < 2:
-        return points
+        return keep
     ahead = np.roll(points, -1, axis=0) if closed else points[1:]
     # within 1e-12 of the points' extent: an absolute 1e-12 took every point of a leaf at 1e-90
     # for a repeat, and the app's sketch of it failed ("zero-size array")
     tolerance = 1e-12 * float(np.max(points.max(axis=0) - points.min(axis=0)))
     same = np.all(np.abs(points[: len(ahead)] - ahead) <= tolerance, axis=1)
-    keep = np.ones(len(points), dtype=bool)
     keep[: len(ahead)] &= ~same
-    return points[keep]
+    return keep
 
 
 def _span_samples(t: np.ndarray, per_span: int) -> np.ndarray:

@@ -85,4 +85,4 @@ def with_grown_veins(
     # replace, not a new Sketch: the boundary, frame, relief and the saved Mirror flag are kept;
     # the grown veins keep grow_veins' heights (not the replaced veins' auto flags)
     grown = tuple(v[p] for v, p in zip(veins, pick, strict=True))
-    return replace(sketch, veins=grown, auto=())
+    return replace(sketch, veins=grown, offsets=())

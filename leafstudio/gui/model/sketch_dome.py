@@ -10,13 +10,22 @@ on the paper's surface). The forms left the roof for a membrane's dome for the s
 control point on the dome was not enough (branch experiment/sketch-dome: inside 2.07°, margin
 band 1.34° -> 1.68°: a spline through three control points does not follow the dome between
 them), so an auto vein's whole sampled curve takes the dome's heights (Sketch.vein_curve).
+
+A height set by hand then turned the vein into the spline through its control points' heights,
+and its whole curve jumped off the dome (up to 0.0091 of the length on the clicked midrib, 16% of
+its peak, as a user started dragging one point). So a drawn vein's heights are offsets from the
+dome (Sketch.offsets): at each sample, the dome's height plus its control points' offsets joined
+span by span with a smoothstep (`blended`), which is local: a point's offset moves the curve only
+between its neighbouring control points, and joins them with no crease (zero slope there). An auto
+vein is one with no offset yet. Loaded leaves, grown veins and projects written before keep their
+heights as they are (no offsets: the spline through the control points' heights).
 """
 
 from __future__ import annotations
 
 import functools
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import shapely
@@ -26,6 +35,7 @@ from leafstudio.core.prepare.vein_order import midrib_turned
 from leafstudio.forms.blade import Blade
 from leafstudio.forms.relief import dome
 from leafstudio.forms.veins import HEIGHT_RATIO
+from leafstudio.gui.model.curves import SAMPLES_PER_SPAN, distinct, open_curve
 
 if TYPE_CHECKING:  # for the hints only: sketch_model imports this module
     from leafstudio.gui.model.sketch_model import Sketch
@@ -106,38 +116,124 @@ def outline_dome(region: shapely.Geometry, base: np.ndarray | None) -> Heights:
     return heights
 
 
-def on_dome(sketch: Sketch, veins: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
-    """`veins` (the sketch's control points) with each auto vein's heights the dome's at its
-    points: what the editor shows and keeps when the vein's heights are then set by hand. As
-    they are without a dome (no outline yet, or a loaded leaf)."""
-    heights = sketch_dome(sketch) if any(sketch.auto) else None
-    if heights is None:
-        return veins
-    out = list(veins)
-    for i, auto in enumerate(sketch.auto):
-        if auto and len(out[i]):
-            out[i] = out[i].copy()
-            out[i][:, 2] = heights(out[i][:, :2])
-    return tuple(out)
+def dome_at(sketch: Sketch, xy: np.ndarray) -> np.ndarray:
+    """(n,) heights of the sketch's dome at (n, 2) plane points: 0 without one (no outline yet,
+    where a drawn vein stands at its offsets; or a loaded leaf, whose veins have none)."""
+    xy = np.asarray(xy, dtype=float).reshape(len(xy), -1)[:, :2]
+    heights = sketch_dome(sketch)
+    return np.zeros(len(xy)) if heights is None else heights(xy)
+
+
+def offsets_of(sketch: Sketch, points: np.ndarray) -> np.ndarray:
+    """(n,) offsets from the sketch's dome of (n, 3) points' heights."""
+    return points[:, 2] - dome_at(sketch, points)
+
+
+def on_dome(
+    sketch: Sketch, veins: tuple[np.ndarray, ...], offsets: tuple[np.ndarray | None, ...]
+) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray | None, ...]]:
+    """`veins` (the sketch's control points) with each drawn vein's heights the dome's plus its
+    `offsets` (what the editor shows: absolute heights), and the offsets read-only, one a
+    point: none (None) past the given ones and on a loaded leaf. A vein whose points were added
+    or dropped without their offsets takes them from the heights given."""
+    out_veins, out_offsets = list(veins), []
+    for i, vein in enumerate(veins):
+        given = offsets[i] if i < len(offsets) and not len(sketch.relief) else None
+        if given is None:
+            out_offsets.append(None)
+            continue
+        under = dome_at(sketch, vein)
+        given = np.asarray(given, dtype=float).reshape(-1)
+        if len(given) != len(vein):
+            given = vein[:, 2] - under
+        if given.flags.writeable:
+            given = given.copy()
+            given.setflags(write=False)
+        out_veins[i] = np.column_stack([vein[:, :2], under + given])
+        out_offsets.append(given)
+    return tuple(out_veins), tuple(out_offsets)
+
+
+def vein_curve(sketch: Sketch, vein: int) -> np.ndarray:
+    """(s, 3) points along vein `vein`, a new array. A vein with heights of its own: the spline
+    through its control points. A drawn vein: the spline through its control points in the
+    plane (its heights not part of it: an offset moves no point sideways), at the dome's heights
+    plus its offsets `blended`."""
+    control, offsets = sketch.veins[vein], sketch.offsets[vein]
+    if offsets is None:
+        return np.array(open_curve(control))
+    keep = distinct(control[:, :2], closed=False)
+    xy = np.asarray(open_curve(control[keep, :2]), dtype=float).reshape(-1, 2)
+    return np.column_stack([xy, dome_at(sketch, xy) + blended(offsets[keep], SAMPLES_PER_SPAN)])
+
+
+def blended(offsets: np.ndarray, per_span: int) -> np.ndarray:
+    """(s,) offsets along a curve of `per_span` samples a span: between two control points,
+    their (m,) offsets joined by a smoothstep, 3u^2 - 2u^3 of the span's parameter u. Local, as a
+    nudge should be (a natural spline through them moved every span, the next ones by about a
+    quarter), and C1: no crease at a control point, where its slope is 0."""
+    if len(offsets) < 2:
+        return np.array(offsets, dtype=float)
+    u = np.arange(per_span) / per_span
+    rise = u * u * (3.0 - 2.0 * u)
+    steps = offsets[:-1, None] + np.diff(offsets)[:, None] * rise
+    return np.append(steps.ravel(), offsets[-1])
+
+
+def stored_offsets(data: dict[str, Any]) -> list[np.ndarray | None]:
+    """Per vein of a project's "sketch" (Sketch.to_dict), its offsets: "offsets", a list (or
+    null) a vein, as written (JSON keeps floats exactly, so a project opens to the heights it
+    was saved with); else "auto" (before offsets: on, a vein on the dome, offsets 0; off, its
+    heights its own); else none (older projects: every vein keeps its heights). Tolerant as
+    from_dict is: a vein past the list keeps its heights, and a list of offsets not one a point
+    is taken from the vein's stored heights (Sketch: `on_dome`).
+
+    Raises
+    ------
+    ValueError
+        If "offsets" is not a list of lists of numbers (or nulls), or "auto" not a list of true
+        or false.
+    """
+    veins = data.get("veins", [])
+    if "offsets" not in data:
+        auto = data.get("auto", [])
+        if not isinstance(auto, list) or not all(isinstance(a, bool) for a in auto):
+            raise ValueError(f'"auto" must be a list of true or false, got {auto!r:.40}')
+        flags = [i < len(auto) and auto[i] for i in range(len(veins))]
+        return [np.zeros(len(v)) if on else None for v, on in zip(veins, flags, strict=True)]
+    stored = data["offsets"]
+    number = lambda o: isinstance(o, int | float) and not isinstance(o, bool)  # noqa: E731
+    if not isinstance(stored, list) or not all(
+        o is None or (isinstance(o, list) and all(map(number, o))) for o in stored
+    ):
+        raise ValueError(f'"offsets" must be a list of lists of numbers, got {stored!r:.40}')
+    stored = stored[: len(veins)] + [None] * (len(veins) - len(stored))
+    return [None if o is None else np.asarray(o, dtype=float) for o in stored]
 
 
 def default_height(sketch: Sketch, vein: int, xy: np.ndarray) -> float:
     """Height for a new point of vein `vein` (any index past the last: a new vein) at plane
-    point `xy`. An auto vein's: the dome's there. Else that of the vein's nearest control point,
-    else (a new vein) 5% of the sketch's size. On a drawn leaf (its margin on the plane) a
+    point `xy`. A drawn vein's: the dome's there plus its nearest control point's offset, held
+    as below (an auto vein's: the dome's). Else that of the vein's nearest control point, else
+    (a new vein) 5% of the sketch's size. On a drawn leaf (its margin on the plane) a
     point stands no higher or lower than HEIGHT_RATIO times its distance inside the outline
     (forms/veins.py: the roof relief's slope, 14°): the surface comes down to the margin, and
     the app's drawn leaf (every point at 5%) had vein points 0.019 of its length off the
     surface. A vein's only point held down so (a midrib started by the base) passes on the
     5%, not its own height (the whole midrib stood 0.007 high)."""
     xy = np.asarray(xy, dtype=float)
-    auto = 0 <= vein < len(sketch.veins) and sketch.auto[vein]
-    heights = sketch_dome(sketch) if auto else None
-    if heights is not None:
-        return float(heights(xy[None, :2])[0])
+    ours = 0 <= vein < len(sketch.veins)
+    control = sketch.veins[vein] if ours else np.zeros((0, 3))
+    offsets = sketch.offsets[vein] if ours else None
+    if offsets is not None:
+        offset = 0.0
+        if len(control):
+            offset = float(offsets[np.argmin(np.linalg.norm(control[:, :2] - xy, axis=1))])
+            cap = _margin_cap(sketch, xy)
+            offset = offset if cap is None else float(np.sign(offset) * min(abs(offset), cap))
+        return float(dome_at(sketch, xy[None, :2])[0]) + offset
     level = 0.05 * sketch.extent()
     height = level
-    control = sketch.veins[vein] if 0 <= vein < len(sketch.veins) else np.zeros((0, 3))
     if len(control):
         nearest = control[np.argmin(np.linalg.norm(control[:, :2] - xy, axis=1))]
         height = float(nearest[2])

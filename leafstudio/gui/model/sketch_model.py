@@ -3,8 +3,8 @@
 A sketch is an immutable snapshot, so undo and redo simply swap snapshots. The boundary is a closed
 curve (a periodic cubic spline through its control points); each vein is an open curve through its
 control points, each carrying a height above the plane; the splines are curves.py's. A vein
-clicked out on a drawn leaf is auto until a height is set by hand: its whole curve stands on the
-dome over the outline (sketch_dome.py). No Qt here: the editor in gui/qt/sketch.py draws it.
+drawn on a drawn leaf stands on the dome over the outline, raised or lowered by offsets its
+heights set by hand give it (sketch_dome.py). No Qt here: the editor in gui/qt/sketch.py draws it.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from leafstudio.core.bend import flat_leaf
 from leafstudio.core.evaluate import view_frame
 from leafstudio.core.plane import Frame
 from leafstudio.core.sheet import Scaled
+from leafstudio.gui.model import sketch_dome as dome
 from leafstudio.gui.model.curves import (
     SAMPLES_PER_SPAN,
     closed_curve,
@@ -31,7 +32,6 @@ from leafstudio.gui.model.curves import (
     plane_arc_lengths,
 )
 from leafstudio.gui.model.midrib import Midrib
-from leafstudio.gui.model.sketch_dome import default_height, on_dome, sketch_dome
 from leafstudio.gui.model.thinning import thinned
 from leafstudio.model import Leaf
 
@@ -92,10 +92,10 @@ class Sketch:
     symmetric : bool
         Mirror editing is on: each edit is reflected across the midrib (`mirrored`). A property
         of the drawing, saved with it (a project's "sketch" without it: off).
-    auto : tuple of bool
-        Per vein, its heights follow the dome over a drawn leaf's outline along its whole curve
-        (gui/model/sketch_dome.py; its control points show the dome's heights); off once a
-        height is set by hand, and always on a loaded leaf (a relief). Missing flags: off.
+    offsets : tuple of (m_i,) float arrays or None
+        Per vein drawn on a drawn leaf, its control points' heights above the dome over the
+        outline (sketch_dome.py), which make its curve and `veins`' heights. None (and missing):
+        heights of its own (a loaded leaf's, always; grown veins; projects written before).
     bend : Bend or None
         A scan's sheet (core/sheet.Scaled) the sketch's leaf was derived from, kept by the leaves
         it draws (not saved with the sketch: the project keeps the leaf's). A pose is the
@@ -107,7 +107,7 @@ class Sketch:
     frame: Frame = field(default_factory=_identity_frame)
     relief: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     symmetric: bool = False
-    auto: tuple[bool, ...] = ()
+    offsets: tuple[np.ndarray | None, ...] = ()
     bend: Any = None
 
     def __post_init__(self) -> None:
@@ -115,10 +115,15 @@ class Sketch:
         veins = tuple(np.asarray(v, dtype=float).reshape(-1, 3) for v in self.veins)
         object.__setattr__(self, "boundary", boundary)
         object.__setattr__(self, "relief", np.asarray(self.relief, dtype=float).reshape(-1, 3))
-        auto = [bool(a) and not len(self.relief) for a in self.auto[: len(veins)]]
-        object.__setattr__(self, "auto", (*auto, *[False] * (len(veins) - len(auto))))
         object.__setattr__(self, "veins", veins)  # on_dome reads the outline and midrib's base
-        object.__setattr__(self, "veins", on_dome(self, veins))
+        veins, offsets = dome.on_dome(self, veins, self.offsets)
+        object.__setattr__(self, "veins", veins)
+        object.__setattr__(self, "offsets", offsets)
+
+    @property
+    def auto(self) -> tuple[bool, ...]:
+        """Per vein, on the dome over a drawn leaf's outline (offsets, all 0)."""
+        return tuple(o is not None and not np.any(o) for o in self.offsets)
 
     # --- reading -------------------------------------------------------------------------------
     def control(self, curve: int) -> np.ndarray:
@@ -140,10 +145,7 @@ class Sketch:
         made = self.__dict__.setdefault("_curves", {})  # frozen: no attribute set but this
         if curve not in made:
             if curve != BOUNDARY:
-                points = np.array(open_curve(self.veins[curve]))  # a copy: never a vein's own
-                heights = sketch_dome(self) if self.auto[curve] else None
-                if heights is not None:  # on the dome between its control points too
-                    points[:, 2] = heights(points[:, :2])
+                points = dome.vein_curve(self, curve)  # a copy: never a vein's own
             elif len(self.boundary) >= 3:
                 points = np.array(closed_curve(self.boundary))
             else:
@@ -185,66 +187,81 @@ class Sketch:
         return size if size > 0 else 1.0
 
     # --- editing: each returns a new sketch ---------------------------------------------------
-    def _with_curve(self, curve: int, control: np.ndarray, by_hand: bool = False) -> Sketch:
-        """`by_hand`: the vein's heights were set by hand (its auto flag goes off)."""
+    def _with_curve(
+        self, curve: int, control: np.ndarray, offsets: np.ndarray | None = None
+    ) -> Sketch:
+        """A drawn vein's `offsets` for its new `control` points: by default from their heights
+        (over this sketch's dome: a point whose height is as it was keeps its offset)."""
         if curve == BOUNDARY:
             return replace(self, boundary=control)
-        veins, auto = list(self.veins), list(self.auto)
+        veins, kept = list(self.veins), list(self.offsets)
         veins[curve] = control
-        auto[curve] = auto[curve] and not by_hand
-        return replace(self, veins=tuple(veins), auto=tuple(auto))
+        if kept[curve] is not None:
+            kept[curve] = dome.offsets_of(self, control) if offsets is None else offsets
+        return replace(self, veins=tuple(veins), offsets=tuple(kept))
 
     def moved(self, curve: int, index: int, xy: np.ndarray) -> Sketch:
         """The sketch with one control point moved to plane point `xy`."""
         control = self.control(curve).copy()
         control[index, :2] = xy
-        return self._with_curve(curve, control)
+        return self._with_curve(curve, control, self._offsets(curve))
+
+    def _offsets(self, curve: int) -> np.ndarray | None:
+        return None if curve == BOUNDARY else self.offsets[curve]  # a drawn vein's, else None
 
     def inserted(self, curve: int, xy: np.ndarray, height: float = 0.0) -> tuple[Sketch, int]:
         """The sketch with a control point added where it fits best, and the point's index."""
         control = self.control(curve)
         index = insert_index(control, np.asarray(xy, dtype=float), closed=curve == BOUNDARY)
         row = np.asarray(xy, dtype=float) if curve == BOUNDARY else np.array([*xy, height])
-        return self._with_curve(curve, np.insert(control, index, row, axis=0)), index
+        offsets = self._offsets(curve)
+        if offsets is not None:  # the new point's offset; the others keep theirs
+            offsets = np.insert(offsets, index, dome.offsets_of(self, row[None, :]))
+        return self._with_curve(curve, np.insert(control, index, row, axis=0), offsets), index
 
     def deleted(self, curve: int, index: int) -> Sketch:
         """The sketch without one control point; a vein left without points goes (veins keep
         their numbers and colours only if no empty one is kept)."""
-        control = np.delete(self.control(curve), index, axis=0)
+        control, offsets = np.delete(self.control(curve), index, axis=0), self._offsets(curve)
         if curve != BOUNDARY and len(control) == 0:
-            veins, auto = self.veins[:curve] + self.veins[curve + 1 :], list(self.auto)
-            return replace(self, veins=veins, auto=(*auto[:curve], *auto[curve + 1 :]))
-        return self._with_curve(curve, control)
+            veins, kept = self.veins[:curve] + self.veins[curve + 1 :], self.offsets
+            return replace(self, veins=veins, offsets=(*kept[:curve], *kept[curve + 1 :]))
+        kept = None if offsets is None else np.delete(offsets, index)
+        return self._with_curve(curve, control, kept)
 
     def with_height(self, vein: int, index: int, height: float) -> Sketch:
-        """The sketch with a vein control point's height set by hand (the vein's others keep
-        theirs: an auto vein's the dome's, and it is auto no more)."""
-        control = self.veins[vein].copy()
+        """The sketch with a vein control point's height set by hand: a drawn vein's offset
+        there (its others, and its curve beyond its neighbouring points, stay as they were)."""
+        control, offsets = self.veins[vein].copy(), self.offsets[vein]
         control[index, 2] = height
-        return self._with_curve(vein, control, by_hand=True)
+        if offsets is not None:
+            offsets = offsets.copy()
+            offsets[index] = dome.offsets_of(self, control[index : index + 1])[0]
+        return self._with_curve(vein, control, offsets)
 
-    def with_vein(self, points: np.ndarray, auto: bool = False) -> Sketch:
+    def with_vein(self, points: np.ndarray, offsets: np.ndarray | None = None) -> Sketch:
         """The sketch with a vein of (m, 3) control points appended (index len(veins) - 1);
-        `auto`: its heights follow the dome over a drawn leaf's outline (see `auto`)."""
+        with (m,) `offsets`, a drawn vein, its heights the dome's plus them (see `offsets`)."""
         vein = np.asarray(points, dtype=float).reshape(-1, 3)
-        return replace(self, veins=(*self.veins, vein), auto=(*self.auto, auto))
+        return replace(self, veins=(*self.veins, vein), offsets=(*self.offsets, offsets))
 
     def started_vein(self, xy: np.ndarray, tolerance: float) -> Sketch:
         """The sketch with a new vein started at plane point `xy`, as a click makes it: snapped
         onto a vein within `tolerance` (it branches there, at that vein's height) or at the
-        default height. On a drawn leaf it is auto (follows the dome) unless it branches from a
-        vein whose heights were set by hand: it would leave that vein off its height."""
+        default height. On a drawn leaf it is drawn (on the dome, at the offset there of a
+        drawn vein it branches from), unless it branches from a vein with heights of its own."""
         xy = np.asarray(xy, dtype=float)
         snapped = self._snap(xy, tolerance)
         if snapped is None:
-            return self.with_vein(np.array([[*xy, self.default_height(-1, xy)]]), auto=True)
-        return self.with_vein(snapped[0][None, :], auto=self.auto[snapped[1]])
+            return self.with_vein(np.array([[*xy, self.default_height(-1, xy)]]), np.zeros(1))
+        point, drawn = snapped[0][None, :], self.offsets[snapped[1]] is not None
+        return self.with_vein(point, dome.offsets_of(self, point) if drawn else None)
 
     def with_heights(self, vein: int, heights: np.ndarray) -> Sketch:
-        """The sketch with all of a vein's control point heights set by hand ((m,) array)."""
+        """The sketch with a vein's control point heights set by hand ((m,); offsets if drawn)."""
         control = self.veins[vein].copy()
         control[:, 2] = np.asarray(heights, dtype=float).reshape(len(control))
-        return self._with_curve(vein, control, by_hand=True)
+        return self._with_curve(vein, control)
 
     def vein_fractions(self, vein: int) -> np.ndarray:
         """(m,) shares of vein `vein`'s length (along its curve, in the plane) at its control
@@ -369,7 +386,7 @@ class Sketch:
                 before = before[:0]
             boundary = np.vstack([arc, after, reflect(arc)[::-1], before])
             boundary = boundary.reshape(-1, 2)
-        veins, auto = list(self.veins), list(self.auto)
+        veins, offsets = list(self.veins), list(self.offsets)
         sides = [float(np.mean(side(v))) for v in veins]
         targets = [i for i in range(1, len(veins)) if sides[i] < -eps]
         for i in range(1, len(self.veins)):
@@ -381,18 +398,18 @@ class Sketch:
                     targets, key=lambda t: float(np.linalg.norm(veins[t][0, :2] - mirror[0, :2]))
                 )
                 targets.remove(j)
-                veins[j], auto[j] = mirror, self.auto[i]
+                veins[j], offsets[j] = mirror, self.offsets[i]
             else:
                 veins.append(mirror)
-                auto.append(self.auto[i])
+                offsets.append(self.offsets[i])
         for j in sorted(targets, reverse=True):
-            del veins[j], auto[j]
-        return replace(self, boundary=boundary, veins=tuple(veins), auto=tuple(auto))
+            del veins[j], offsets[j]
+        return replace(self, boundary=boundary, veins=tuple(veins), offsets=tuple(offsets))
 
     def default_height(self, vein: int, xy: np.ndarray) -> float:
         """Height for a new point of vein `vein` (past the last: a new vein) at plane point
-        `xy`: the dome's on an auto vein, else by its nearest point (sketch_dome.py)."""
-        return default_height(self, vein, xy)
+        `xy`: the dome's and its nearest point's offset, or by its nearest point (sketch_dome)."""
+        return dome.default_height(self, vein, xy)
 
     # --- files ---------------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
@@ -408,7 +425,7 @@ class Sketch:
             "veins": [v.tolist() for v in self.veins],
             "relief": self.relief.tolist(),
             "symmetric": self.symmetric,
-            "auto": list(self.auto),
+            "offsets": [None if o is None else o.tolist() for o in self.offsets],
         }
 
     @classmethod
@@ -419,14 +436,12 @@ class Sketch:
         ------
         ValueError
             If the stored arrays have the wrong shape, or "symmetric" is not true or false
-            (absent, as in projects written before it: false), or "auto" not a list of them
-            (absent, or short: a vein's heights are kept).
+            (absent, as in projects written before it: false), or "offsets" (or "auto") not
+            as sketch_dome.stored_offsets reads them.
         """
-        symmetric, auto = data.get("symmetric", False), data.get("auto", [])
+        symmetric = data.get("symmetric", False)
         if not isinstance(symmetric, bool):
             raise ValueError(f'"symmetric" must be true or false, got {symmetric!r:.40}')
-        if not isinstance(auto, list) or not all(isinstance(a, bool) for a in auto):
-            raise ValueError(f'"auto" must be a list of true or false, got {auto!r:.40}')
         plane = data.get("plane") or {}
         frame = (
             Frame(
@@ -436,14 +451,14 @@ class Sketch:
             else _identity_frame()
         )
         veins = data.get("veins", [])
-        kept = [i for i, v in enumerate(veins) if len(v)]
+        kept, offsets = [i for i, v in enumerate(veins) if len(v)], dome.stored_offsets(data)
         return cls(
             boundary=np.asarray(data.get("boundary", []), dtype=float).reshape(-1, 2),
             veins=tuple(np.asarray(veins[i], dtype=float).reshape(-1, 3) for i in kept),
             frame=frame,
             relief=np.asarray(data.get("relief", []), dtype=float).reshape(-1, 3),
             symmetric=symmetric,
-            auto=tuple(i < len(auto) and auto[i] for i in kept),
+            offsets=tuple(offsets[i] for i in kept),
         )
 
     def hole_curves(self) -> list[np.ndarray]:

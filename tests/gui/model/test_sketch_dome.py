@@ -1,6 +1,7 @@
-"""A drawn leaf's auto veins (gui/model/sketch_dome.py, issue 21): clicked out in the editor, a
-vein follows the dome over the outline along its whole curve until a height is set by hand, and
-the flag is kept by edits, files and undo; loaded leaves keep their veins' heights."""
+"""A drawn leaf's veins on the dome (gui/model/sketch_dome.py, issue 21): clicked out in the
+editor, a vein follows the dome over the outline along its whole curve; a height set by hand is
+an offset from it, moving the vein only between that point's neighbours, kept by edits, files and
+undo; loaded leaves and grown veins keep their veins' heights."""
 
 from __future__ import annotations
 
@@ -13,9 +14,10 @@ import pytest
 
 import leafstudio as ls
 from leafstudio.core.evaluate import margin_creases, point_to_mesh_distance
+from leafstudio.gui.model.curves import SAMPLES_PER_SPAN
 from leafstudio.gui.model.form_sketch import with_grown_veins
 from leafstudio.gui.model.session import Session
-from leafstudio.gui.model.sketch_dome import sketch_dome
+from leafstudio.gui.model.sketch_dome import dome_at, sketch_dome
 from leafstudio.gui.model.sketch_model import BOUNDARY, Sketch
 from leafstudio.sources.files import load_project
 from tests.gui.builders import Runner
@@ -69,67 +71,91 @@ def test_auto_veins_follow_the_outline_as_it_is_edited():
     assert max(changed) > 1e-3  # the dome under them rose with the outline
 
 
-def test_a_height_set_by_hand_turns_the_vein_off_and_keeps_the_heights_it_showed():
+def test_a_height_set_by_hand_is_an_offset_from_the_dome_kept_as_the_outline_is_edited():
     sketch = clicked_sketch()
     shown = sketch.veins[1].copy()
     by_hand = sketch.with_height(1, 2, 0.01)
     assert by_hand.auto == (True, False, True, True, True)
     np.testing.assert_array_equal(by_hand.veins[1][:2], shown[:2])
-    assert by_hand.veins[1][2, 2] == 0.01
-    moved = by_hand.moved(BOUNDARY, 3, sketch.boundary[3] * 1.2)  # its heights stay put now
-    np.testing.assert_array_equal(moved.veins[1][:, 2], by_hand.veins[1][:, 2])
+    np.testing.assert_array_equal(by_hand.offsets[1][:2], [0, 0])
+    assert by_hand.veins[1][2, 2] == pytest.approx(0.01, rel=0, abs=1e-15)
+    moved = by_hand.moved(BOUNDARY, 3, sketch.boundary[3] * 1.2)  # over the new dome
+    np.testing.assert_array_equal(moved.offsets[1], by_hand.offsets[1])
+    under = dome_at(moved, moved.veins[1])
+    np.testing.assert_allclose(moved.veins[1][:, 2] - under, moved.offsets[1], atol=1e-15)
+    assert np.abs(moved.veins[1][:, 2] - by_hand.veins[1][:, 2]).max() > 1e-4
+    slid = by_hand.moved(1, 2, by_hand.veins[1][2, :2] - [0.02, 0.0])  # and along the plane
+    np.testing.assert_array_equal(slid.offsets[1], by_hand.offsets[1])
     profiled = sketch.with_profile(0, 0.02, 0.01)
     assert profiled.auto == (False, True, True, True, True)
-    np.testing.assert_allclose(profiled.veins[0][[0, -1], 2], [0.02, 0.01])
-    # a new vein branching from a hand-set one starts at its height, and so keeps its own
+    np.testing.assert_allclose(profiled.veins[0][[0, -1], 2], [0.02, 0.01], rtol=0, atol=1e-15)
+    # a new vein branching from a hand-set one starts at its height: its offset there
     start = np.array([0.5, 0.001])  # no other vein near
     branch = profiled.started_vein(start, 0.01)
-    assert branch.auto[-1] is False
+    assert branch.offsets[-1] is not None and branch.auto[-1] is False
     at_junction = profiled.started_vein(profiled.veins[0][1, :2], 0.01)  # veins 0, 1, 2 meet
-    assert at_junction.auto[-1] is False  # the earliest, the midrib, is the one branched from
-    np.testing.assert_array_equal(at_junction.veins[-1][0], profiled.veins[0][1])
+    assert not at_junction.auto[-1]  # the earliest, the midrib, is the one branched from
+    np.testing.assert_allclose(at_junction.veins[-1][0], profiled.veins[0][1], atol=1e-15)
     midrib = profiled.vein_curve(0)  # along y = 0
     assert branch.veins[-1][0, 2] == pytest.approx(np.interp(0.5, midrib[:, 0], midrib[:, 2]))
+    own = replace(profiled, offsets=(None, *profiled.offsets[1:]))  # heights of its own
+    assert own.started_vein(start, 0.01).offsets[-1] is None
 
 
-def test_mirror_carries_each_veins_flag_to_its_counterpart():
+def test_mirror_carries_each_veins_offsets_to_its_counterpart():
     sketch = clicked_sketch().with_heights(1, [0.03, 0.02, 0.01])  # vein 1: y > 0, by hand
     mirrored = sketch.mirrored(1.0)
     assert mirrored.auto == (True, False, False, True, True)  # vein 2 is vein 1's mirror now
     np.testing.assert_allclose(mirrored.veins[2][:, 2], [0.03, 0.02, 0.01])
+    np.testing.assert_array_equal(mirrored.offsets[2], sketch.offsets[1])  # its offsets
     again = sketch.mirrored(-1.0)  # the other way, vein 1 (by hand) takes vein 2's (auto)
     assert again.auto == (True, True, True, True, True)
     assert _on_dome(again, 1) <= 1e-9
 
 
-def test_deleting_a_vein_drops_its_flag():
+def test_deleting_a_vein_drops_its_offsets():
     sketch = clicked_sketch().with_height(2, 1, 0.01)
     for _ in range(len(sketch.veins[1])):
         sketch = sketch.deleted(1, 0)
     assert len(sketch.veins) == 4 and sketch.auto == (True, False, True, True)
 
 
-def test_the_flag_is_saved_opened_and_undone(tmp_path):
+def test_the_offsets_are_saved_opened_and_undone(tmp_path):
     session = Session(Runner(), FAST)
     session.new_sketch()
     session.commit_sketch(clicked_sketch(), "Draw")
     session.commit_sketch(session.state.sketch.with_height(3, 1, 0.01), "Set height")
     path = tmp_path / "clicked.leaf.json"
     save_session(session, path)
-    assert json.loads(path.read_text())["sketch"]["auto"] == [True, True, True, False, True]
+    saved = json.loads(path.read_text())["sketch"]["offsets"]
+    assert [bool(np.any(o)) for o in saved] == [False, False, False, True, False]
     _, _, stored = load_project(path)
     opened = Sketch.from_dict(stored)
     assert opened.auto == session.state.sketch.auto
     for a, b in zip(opened.veins, session.state.sketch.veins, strict=True):
         np.testing.assert_array_equal(a, b)
+    for a, b in zip(opened.offsets, session.state.sketch.offsets, strict=True):
+        np.testing.assert_array_equal(a, b)
     session.undo()
     assert all(session.state.sketch.auto)
     session.redo()
     assert session.state.sketch.auto == (True, True, True, False, True)
-    del stored["auto"]  # a project written before the flag: every vein keeps its heights
-    assert not any(Sketch.from_dict(stored).auto)
+    del stored["offsets"]  # a project written before offsets: every vein keeps its heights
+    assert all(o is None for o in Sketch.from_dict(stored).offsets)
+    for a, b in zip(Sketch.from_dict(stored).veins, stored["veins"], strict=True):
+        np.testing.assert_array_equal(a, b)
+    flagged = Sketch.from_dict({**stored, "auto": [True, True, True, False, True]})  # autoh25's
+    assert flagged.auto == (True, True, True, False, True) and flagged.offsets[3] is None
+    np.testing.assert_array_equal(flagged.veins[3], stored["veins"][3])  # its heights its own
+    for vein in (0, 1, 2, 4):
+        assert _on_dome(flagged, vein) <= 1e-9
     with pytest.raises(ValueError, match="auto"):
         Sketch.from_dict({**stored, "auto": "yes"})
+    with pytest.raises(ValueError, match="offsets"):
+        Sketch.from_dict({**stored, "offsets": [["high"]] * 5})
+    short = Sketch.from_dict({**stored, "offsets": [[0.0]] * 5})  # not one a point: from heights
+    for a, b in zip(short.veins, stored["veins"], strict=True):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-15)
 
 
 def test_loaded_and_hand_raised_leaves_keep_their_veins_heights():
@@ -141,8 +167,8 @@ def test_loaded_and_hand_raised_leaves_keep_their_veins_heights():
         result = ls.reconstruct(leaf, ls.Params(k=3, grid=64))
     derived = Sketch.from_result(result)
     assert derived.veins and not any(derived.auto)
-    asked = derived.with_vein(derived.veins[0], auto=True)
-    assert asked.auto[-1] is False
+    asked = derived.with_vein(derived.veins[0], np.zeros(len(derived.veins[0])))
+    assert asked.auto[-1] is False and asked.offsets[-1] is None
     np.testing.assert_array_equal(asked.veins[-1], derived.veins[0])
     midrib = np.array([[0.05, 0.0, 0.03], [0.5, 0.0, 0.09], [0.95, 0.0, 0.02]])
     raised = Sketch(boundary=clicked_sketch().boundary, veins=(midrib,))
@@ -157,8 +183,9 @@ def test_grown_veins_keep_their_own_heights_not_the_replaced_veins_flags():
     grow_veins gave them (the first five took the old flags, and the dome's heights, 0.017 off)."""
     sketch = clicked_sketch()
     grown = with_grown_veins(sketch, "pinnate")
-    assert len(grown.veins) > len(sketch.veins) and not any(grown.auto)
-    again = with_grown_veins(replace(sketch, auto=()), "pinnate")
+    assert len(grown.veins) > len(sketch.veins)
+    assert all(o is None for o in grown.offsets)
+    again = with_grown_veins(replace(sketch, offsets=()), "pinnate")
     for a, b in zip(grown.veins, again.veins, strict=True):
         np.testing.assert_array_equal(a, b)
 
@@ -170,3 +197,26 @@ def test_a_midrib_drawn_apex_first_bases_the_dome_at_its_end():
     turned = replace(sketch, veins=(sketch.veins[0][::-1], *sketch.veins[1:]))
     assert all(turned.auto)
     np.testing.assert_allclose(turned.veins[0][::-1], sketch.veins[0], rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("vein, index", [(0, 1), (0, 2), (1, 1)])
+def test_setting_one_points_height_moves_the_vein_only_between_its_neighbours(vein, index):
+    """A user nudging one point expects only its neighbourhood to move: the first hand edit
+    of an auto vein turned it into the spline through its control heights, moving the clicked
+    midrib's whole curve by up to 0.0091 of the length. Now the point takes the typed height,
+    and the vein's curve outside the spans to its neighbouring control points (x, y and
+    height) stays where it was."""
+    sketch = clicked_sketch()
+    before = sketch.vein_curve(vein)
+    typed = float(sketch.veins[vein][index, 2]) + 0.02 * sketch.extent()
+    after = sketch.with_height(vein, index, typed)
+    assert after.veins[vein][index, 2] == pytest.approx(typed, rel=0, abs=1e-15)
+    curve = after.vein_curve(vein)
+    assert curve.shape == before.shape
+    near = np.arange(len(curve))
+    near = (near > (index - 1) * SAMPLES_PER_SPAN) & (near < (index + 1) * SAMPLES_PER_SPAN)
+    np.testing.assert_allclose(curve[~near], before[~near], rtol=0, atol=1e-9)
+    assert np.abs(curve[near, 2] - before[near, 2]).max() > 0.01 * sketch.extent()
+    others = np.arange(len(sketch.veins)) != vein
+    for i in np.flatnonzero(others):
+        np.testing.assert_array_equal(after.vein_curve(i), sketch.vein_curve(i))
