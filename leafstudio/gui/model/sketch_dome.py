@@ -35,7 +35,7 @@ from leafstudio.core.prepare.vein_order import midrib_turned
 from leafstudio.forms.blade import Blade
 from leafstudio.forms.relief import dome
 from leafstudio.forms.veins import HEIGHT_RATIO
-from leafstudio.gui.model.curves import SAMPLES_PER_SPAN, distinct, open_curve
+from leafstudio.gui.model.curves import SAMPLES_PER_SPAN, distinct, nearest_on_polyline, open_curve
 
 if TYPE_CHECKING:  # for the hints only: sketch_model imports this module
     from leafstudio.gui.model.sketch_model import Sketch
@@ -156,15 +156,34 @@ def on_dome(
 
 def vein_curve(sketch: Sketch, vein: int) -> np.ndarray:
     """(s, 3) points along vein `vein`, a new array. A vein with heights of its own: the spline
-    through its control points. A drawn vein: the spline through its control points in the
-    plane (its heights not part of it: an offset moves no point sideways), at the dome's heights
-    plus its offsets `blended`."""
+    through its control points. A drawn vein: at the dome's heights plus its offsets
+    (`_drawn`)."""
+    if sketch.offsets[vein] is None:
+        return np.array(open_curve(sketch.veins[vein]))
+    xy, offsets = _drawn(sketch, vein)
+    return np.column_stack([xy, dome_at(sketch, xy) + offsets])
+
+
+def _drawn(sketch: Sketch, vein: int) -> tuple[np.ndarray, np.ndarray]:
+    """(s, 2) plane points along drawn vein `vein` and (s,) its offsets there. In the plane, the
+    spline through its control points as they stand on the dome (an auto vein's own; its
+    offsets not part of it: a nudge moves no point sideways); its offsets `blended`."""
     control, offsets = sketch.veins[vein], sketch.offsets[vein]
-    if offsets is None:
-        return np.array(open_curve(control))
-    keep = distinct(control[:, :2], closed=False)
-    xy = np.asarray(open_curve(control[keep, :2]), dtype=float).reshape(-1, 2)
-    return np.column_stack([xy, dome_at(sketch, xy) + blended(offsets[keep], SAMPLES_PER_SPAN)])
+    on = np.column_stack([control[:, :2], dome_at(sketch, control)])
+    keep = distinct(on, closed=False)
+    xy = np.asarray(open_curve(on[keep]), dtype=float).reshape(-1, 3)[:, :2]
+    return xy, blended(offsets[keep], SAMPLES_PER_SPAN)
+
+
+def branch_offset(sketch: Sketch, vein: int, xy: np.ndarray) -> np.ndarray | None:
+    """(1,) offsets of a vein branching from vein `vein` at plane point `xy`: a drawn vein's
+    where its curve passes nearest (0 on an auto vein, exactly: not its height less the
+    dome's); None from a vein with heights of its own (the branch keeps its height)."""
+    if sketch.offsets[vein] is None:
+        return None
+    along, offsets = _drawn(sketch, vein)
+    point, _ = nearest_on_polyline(np.column_stack([along, offsets]), np.asarray(xy)[:2])
+    return np.array([0.0 if point is None else point[2]])
 
 
 def blended(offsets: np.ndarray, per_span: int) -> np.ndarray:

@@ -254,8 +254,8 @@ class Sketch:
         snapped = self._snap(xy, tolerance)
         if snapped is None:
             return self.with_vein(np.array([[*xy, self.default_height(-1, xy)]]), np.zeros(1))
-        point, drawn = snapped[0][None, :], self.offsets[snapped[1]] is not None
-        return self.with_vein(point, dome.offsets_of(self, point) if drawn else None)
+        point, vein = snapped
+        return self.with_vein(point[None], dome.branch_offset(self, vein, point))
 
     def with_heights(self, vein: int, heights: np.ndarray) -> Sketch:
         """The sketch with a vein's control point heights set by hand ((m,); offsets if drawn)."""
