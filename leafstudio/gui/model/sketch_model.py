@@ -237,7 +237,7 @@ class Sketch:
         if offsets is not None:
             offsets = offsets.copy()
             offsets[index] = dome.offsets_of(self, control[index : index + 1])[0]
-        return self._with_curve(vein, control, offsets)
+        return dome.carried(self, self._with_curve(vein, control, offsets), vein)
 
     def with_vein(self, points: np.ndarray, offsets: np.ndarray | None = None) -> Sketch:
         """The sketch with a vein of (m, 3) control points appended (index len(veins) - 1);
@@ -261,7 +261,7 @@ class Sketch:
         """The sketch with a vein's control point heights set by hand ((m,); offsets if drawn)."""
         control = self.veins[vein].copy()
         control[:, 2] = np.asarray(heights, dtype=float).reshape(len(control))
-        return self._with_curve(vein, control)
+        return dome.carried(self, self._with_curve(vein, control), vein)
 
     def vein_fractions(self, vein: int) -> np.ndarray:
         """(m,) shares of vein `vein`'s length (along its curve, in the plane) at its control
