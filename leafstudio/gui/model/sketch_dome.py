@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable
-from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -138,12 +137,13 @@ def on_dome(
     point: none (None) past the given ones and on a loaded leaf. A vein whose points were added
     or dropped without their offsets takes them from the heights given."""
     out_veins, out_offsets = list(veins), []
+    made = sketch.__dict__.setdefault("_curves", {})  # the dome under each, for `_drawn`
     for i, vein in enumerate(veins):
         given = offsets[i] if i < len(offsets) and not len(sketch.relief) else None
         if given is None:
             out_offsets.append(None)
             continue
-        under = dome_at(sketch, vein)
+        under = made["under", i] = dome_at(sketch, vein)
         given = np.asarray(given, dtype=float).reshape(-1)
         if len(given) != len(vein):
             given = vein[:, 2] - under
@@ -158,55 +158,64 @@ def on_dome(
 def vein_curve(sketch: Sketch, vein: int) -> np.ndarray:
     """(s, 3) points along vein `vein`, a new array. A vein with heights of its own: the spline
     through its control points. A drawn vein: at the dome's heights plus its offsets
-    (`_drawn`)."""
-    if sketch.offsets[vein] is None:
+    `blended` (`_drawn`)."""
+    offsets = sketch.offsets[vein]
+    if offsets is None:
         return np.array(open_curve(sketch.veins[vein]))
-    xy, offsets = _drawn(sketch, vein)
-    return np.column_stack([xy, dome_at(sketch, xy) + offsets])
+    xy, keep = _drawn(sketch, vein)
+    return np.column_stack([xy, dome_at(sketch, xy) + blended(offsets[keep], SAMPLES_PER_SPAN)])
 
 
 def _drawn(sketch: Sketch, vein: int) -> tuple[np.ndarray, np.ndarray]:
-    """(s, 2) plane points along drawn vein `vein` and (s,) its offsets there. In the plane, the
-    spline through its control points as they stand on the dome (an auto vein's own; its
-    offsets not part of it: a nudge moves no point sideways); its offsets `blended`."""
-    control, offsets = sketch.veins[vein], sketch.offsets[vein]
-    on = np.column_stack([control[:, :2], dome_at(sketch, control)])
+    """(s, 2) plane points along drawn vein `vein` and the (m,) mask of the control points its
+    curve keeps (`distinct`): the spline through them as they stand on the dome (an auto
+    vein's own; its offsets not part of it: a nudge moves no point sideways)."""
+    control = sketch.veins[vein]
+    under = sketch.__dict__.get("_curves", {}).get(("under", vein))  # made with the sketch
+    on = np.column_stack([control[:, :2], dome_at(sketch, control) if under is None else under])
     keep = distinct(on, closed=False)
-    xy = np.asarray(open_curve(on[keep]), dtype=float).reshape(-1, 3)[:, :2]
-    return xy, blended(offsets[keep], SAMPLES_PER_SPAN)
+    return np.asarray(open_curve(on[keep]), dtype=float).reshape(-1, 3)[:, :2], keep
 
 
 def branch_offset(sketch: Sketch, vein: int, xy: np.ndarray) -> np.ndarray | None:
     """(1,) offsets of a vein branching from vein `vein` at plane point `xy`: a drawn vein's
     where its curve passes nearest (0 on an auto vein, exactly: not its height less the
     dome's); None from a vein with heights of its own (the branch keeps its height)."""
-    if sketch.offsets[vein] is None:
+    offsets = sketch.offsets[vein]
+    if offsets is None:
         return None
-    along, offsets = _drawn(sketch, vein)
-    point, _ = nearest_on_polyline(np.column_stack([along, offsets]), np.asarray(xy)[:2])
+    along, keep = _drawn(sketch, vein)
+    curve = np.column_stack([along, blended(offsets[keep], SAMPLES_PER_SPAN)])
+    point, _ = nearest_on_polyline(curve, np.asarray(xy, dtype=float)[:2])
     return np.array([0.0 if point is None else point[2]])
 
 
-def carried(before: Sketch, after: Sketch, vein: int) -> Sketch:
-    """`after` (`before` with drawn vein `vein`'s heights set by hand) with each drawn vein that
-    branches from it (started on its curve: `Sketch.started_vein`; not where `vein` starts: a
-    vein started with it from a third) raised or lowered at its first point as `vein` was
-    there, so the two still meet: the clicked midrib's point raised by
-    2% of the size left the side veins started there under it, and the surface through them
-    creased at the junction (K 3, grid 128: p99 interior dihedral 7.2°; carried, 3.1°)."""
-    if before.offsets[vein] is None:
-        return after
-    offsets, curve = list(after.offsets), before.vein_curve(vein)
-    for other, (control, given) in enumerate(zip(after.veins, after.offsets, strict=True)):
-        if other == vein or given is None or not len(control):
+def carried(
+    sketch: Sketch, vein: int, control: np.ndarray, offsets: np.ndarray | None
+) -> tuple[np.ndarray | None, ...]:
+    """The sketch's offsets with drawn vein `vein`'s new (m,) `offsets` for its (m, 3) `control`
+    points (None: from their heights, over the sketch's dome: a point whose height is as it was
+    keeps its offset). When only its heights changed, each drawn vein that branches from it
+    (started on its curve: `Sketch.started_vein`; not where `vein` starts: one started with it
+    from a third) is raised or lowered at its first point as `vein` was there, so the two
+    still meet: the clicked midrib's point raised by 2% of the size left the side veins
+    started there under it, and the surface through them creased at the junction (K 3, grid
+    128: p99 interior dihedral 7.2°; carried, 3.1°)."""
+    kept, before = list(sketch.offsets), sketch.offsets[vein]
+    offsets = kept[vein] = offsets_of(sketch, control) if offsets is None else offsets
+    same = before is not None and np.array_equal(control[:, :2], sketch.veins[vein][:, :2])
+    if not same or np.array_equal(offsets, before):
+        return tuple(kept)
+    along, keep = _drawn(sketch, vein)  # the same curve in the plane before and after
+    change = np.column_stack([along, blended((offsets - before)[keep], SAMPLES_PER_SPAN)])
+    tolerance = 1e-9 * sketch.extent()
+    for other, (start, given) in enumerate(zip(sketch.veins, sketch.offsets, strict=True)):
+        if other == vein or given is None or not len(start):
             continue
-        _, gap = nearest_on_polyline(curve, control[0, :2])
-        sibling = np.linalg.norm(control[0, :2] - curve[0, :2]) <= 1e-9 * before.extent()
-        if gap > 1e-9 * before.extent() or sibling:
-            continue
-        moved = branch_offset(after, vein, control[0]) - branch_offset(before, vein, control[0])
-        offsets[other] = np.concatenate([given[:1] + moved, given[1:]])
-    return replace(after, offsets=tuple(offsets))
+        moved, gap = nearest_on_polyline(change, start[0, :2])
+        if gap <= tolerance and np.linalg.norm(start[0, :2] - along[0]) > tolerance:
+            kept[other] = np.concatenate([given[:1] + moved[2], given[1:]])
+    return tuple(kept)
 
 
 def blended(offsets: np.ndarray, per_span: int) -> np.ndarray:

@@ -194,11 +194,11 @@ class Sketch:
         (over this sketch's dome: a point whose height is as it was keeps its offset)."""
         if curve == BOUNDARY:
             return replace(self, boundary=control)
-        veins, kept = list(self.veins), list(self.offsets)
+        veins, kept = list(self.veins), self.offsets
         veins[curve] = control
-        if kept[curve] is not None:
-            kept[curve] = dome.offsets_of(self, control) if offsets is None else offsets
-        return replace(self, veins=tuple(veins), offsets=tuple(kept))
+        if kept[curve] is not None:  # a drawn vein's, and those of the veins started on it
+            kept = dome.carried(self, curve, control, offsets)
+        return replace(self, veins=tuple(veins), offsets=kept)
 
     def moved(self, curve: int, index: int, xy: np.ndarray) -> Sketch:
         """The sketch with one control point moved to plane point `xy`."""
@@ -237,7 +237,7 @@ class Sketch:
         if offsets is not None:
             offsets = offsets.copy()
             offsets[index] = dome.offsets_of(self, control[index : index + 1])[0]
-        return dome.carried(self, self._with_curve(vein, control, offsets), vein)
+        return self._with_curve(vein, control, offsets)
 
     def with_vein(self, points: np.ndarray, offsets: np.ndarray | None = None) -> Sketch:
         """The sketch with a vein of (m, 3) control points appended (index len(veins) - 1);
@@ -261,7 +261,7 @@ class Sketch:
         """The sketch with a vein's control point heights set by hand ((m,); offsets if drawn)."""
         control = self.veins[vein].copy()
         control[:, 2] = np.asarray(heights, dtype=float).reshape(len(control))
-        return dome.carried(self, self._with_curve(vein, control), vein)
+        return self._with_curve(vein, control)
 
     def vein_fractions(self, vein: int) -> np.ndarray:
         """(m,) shares of vein `vein`'s length (along its curve, in the plane) at its control
