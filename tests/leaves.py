@@ -202,17 +202,16 @@ CLICKED_SIDE_VEINS = (
 def clicked_sketch() -> Sketch:
     """The leaf benchmarks/story_screens.py draws in the app, as its clicks make it: its outline,
     a midrib and four side veins started on it and clicked out to near the margin, each new
-    point at the height the editor gives it (Sketch.default_height)."""
+    vein and point as the editor makes them (Sketch.started_vein, default_height): auto veins,
+    on the dome over the outline."""
     sketch = Sketch()
     for xy in clicked_outline():
         sketch, _ = sketch.inserted(BOUNDARY, xy)
-    sketch = sketch.with_vein(
-        np.array([[*CLICKED_MIDRIB[0], sketch.default_height(-1, CLICKED_MIDRIB[0])]])
-    )
+    sketch = sketch.started_vein(CLICKED_MIDRIB[0], 0.01)
     for xy in CLICKED_MIDRIB[1:]:
         sketch, _ = sketch.inserted(0, xy, sketch.default_height(0, xy))
     for start, *rest in CLICKED_SIDE_VEINS:
-        sketch = sketch.with_vein(sketch.snap_to_vein(np.array(start), 0.01)[None, :])
+        sketch = sketch.started_vein(np.array(start), 0.01)
         vein = len(sketch.veins) - 1
         for xy in map(np.array, rest):
             sketch, _ = sketch.inserted(vein, xy, sketch.default_height(vein, xy))

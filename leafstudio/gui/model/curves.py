@@ -25,16 +25,22 @@ def _centripetal(points: np.ndarray) -> np.ndarray:
 
 def _drop_repeats(points: np.ndarray, closed: bool) -> np.ndarray:
     """Control points without consecutive duplicates (a spline cannot pass twice in no time)."""
+    return points[distinct(points, closed)]
+
+
+def distinct(points: np.ndarray, closed: bool) -> np.ndarray:
+    """(n,) mask of the (n, d) points a curve through them keeps: each not a repeat of the next
+    (within 1e-12 of the points' extent), the last of a closed curve compared with the first."""
+    keep = np.ones(len(points), dtype=bool)
     if len(points) < 2:
-        return points
+        return keep
     ahead = np.roll(points, -1, axis=0) if closed else points[1:]
     # within 1e-12 of the points' extent: an absolute 1e-12 took every point of a leaf at 1e-90
     # for a repeat, and the app's sketch of it failed ("zero-size array")
     tolerance = 1e-12 * float(np.max(points.max(axis=0) - points.min(axis=0)))
     same = np.all(np.abs(points[: len(ahead)] - ahead) <= tolerance, axis=1)
-    keep = np.ones(len(points), dtype=bool)
     keep[: len(ahead)] &= ~same
-    return points[keep]
+    return keep
 
 
 def _span_samples(t: np.ndarray, per_span: int) -> np.ndarray:
@@ -89,6 +95,23 @@ def open_curve(control: np.ndarray, per_span: int = SAMPLES_PER_SPAN) -> np.ndar
     # the same spline as CubicSpline's to rounding, made in half its time (13 veins of a new
     # document's sketch: 12 -> 6 ms on the main thread)
     return make_interp_spline(t, control, k=3, bc_type="natural")(s)
+
+
+def nearest_on_polyline(curve: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray | None, float]:
+    """The point of the (s, d) polyline `curve` nearest plane point `xy` (in x, y; its other
+    columns interpolated) and its distance: (None, inf) for an empty curve."""
+    if len(curve) == 0:
+        return None, np.inf
+    if len(curve) == 1:
+        candidates = curve
+    else:  # the nearest point on each segment
+        a, b = curve[:-1], curve[1:]
+        ab = b[:, :2] - a[:, :2]
+        along = np.einsum("ij,ij->i", xy - a[:, :2], ab) / np.maximum((ab**2).sum(1), 1e-300)
+        candidates = a + np.clip(along, 0, 1)[:, None] * (b - a)
+    d = np.linalg.norm(candidates[:, :2] - xy, axis=1)
+    j = int(np.argmin(d))
+    return np.asarray(candidates[j], dtype=float), float(d[j])
 
 
 def plane_arc_lengths(points: np.ndarray) -> np.ndarray:

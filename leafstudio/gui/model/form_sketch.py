@@ -11,9 +11,9 @@ import numpy as np
 
 from leafstudio.core.bend import flat_leaf
 from leafstudio.core.prepare.polygon import ring_crossings
-from leafstudio.core.prepare.vein_order import midrib_turned
 from leafstudio.forms import Form, grow_veins
 from leafstudio.gui.model.curves import closed_curve
+from leafstudio.gui.model.sketch_dome import midrib_base
 from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.model import Leaf
 
@@ -76,12 +76,13 @@ def with_grown_veins(
     its side veins say it is written apex first: vein_order.midrib_turned), else found by
     grow_veins."""
     outline = sketch.boundary_curve()
-    if base is None and sketch.veins and len(sketch.veins[0]):
-        flat = [np.pad(np.asarray(v, dtype=float)[:, :2], ((0, 0), (0, 1))) for v in sketch.veins]
-        base = flat[0][-1 if midrib_turned(flat) else 0, :2]  # written apex first: its last
+    if base is None:
+        base = midrib_base(sketch)
     veins = grow_veins(outline, venation, base=base, seed=seed)
     pick = [
         np.unique(np.linspace(0, len(v) - 1, min(VEIN_CONTROL, len(v))).astype(int)) for v in veins
     ]
-    # replace, not a new Sketch: the boundary, frame, relief and the saved Mirror flag are kept
-    return replace(sketch, veins=tuple(v[p] for v, p in zip(veins, pick, strict=True)))
+    # replace, not a new Sketch: the boundary, frame, relief and the saved Mirror flag are kept;
+    # the grown veins keep grow_veins' heights (not the replaced veins' auto flags)
+    grown = tuple(v[p] for v, p in zip(veins, pick, strict=True))
+    return replace(sketch, veins=grown, offsets=())

@@ -2,8 +2,9 @@
 
 A sketch is an immutable snapshot, so undo and redo simply swap snapshots. The boundary is a closed
 curve (a periodic cubic spline through its control points); each vein is an open curve through its
-control points, each carrying a height above the plane; the splines are curves.py's. No Qt here:
-the editor in gui/qt/sketch.py draws it.
+control points, each carrying a height above the plane; the splines are curves.py's. A vein
+drawn on a drawn leaf stands on the dome over the outline, raised or lowered by offsets its
+heights set by hand give it (sketch_dome.py). No Qt here: the editor in gui/qt/sketch.py draws it.
 """
 
 from __future__ import annotations
@@ -13,19 +14,19 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
-import shapely
 from scipy.spatial import cKDTree
 
 from leafstudio.core.bend import flat_leaf
 from leafstudio.core.evaluate import view_frame
 from leafstudio.core.plane import Frame
 from leafstudio.core.sheet import Scaled
-from leafstudio.forms.veins import HEIGHT_RATIO
+from leafstudio.gui.model import sketch_dome as dome
 from leafstudio.gui.model.curves import (
     SAMPLES_PER_SPAN,
     closed_curve,
     even_by_length,
     insert_index,
+    nearest_on_polyline,
     open_curve,
     outline_controls,
     plane_arc_lengths,
@@ -91,6 +92,10 @@ class Sketch:
     symmetric : bool
         Mirror editing is on: each edit is reflected across the midrib (`mirrored`). A property
         of the drawing, saved with it (a project's "sketch" without it: off).
+    offsets : tuple of (m_i,) float arrays or None
+        Per vein drawn on a drawn leaf, its control points' heights above the dome over the
+        outline (sketch_dome.py), which make its curve and `veins`' heights. None (and missing):
+        heights of its own (a loaded leaf's, always; grown veins; projects written before).
     bend : Bend or None
         A scan's sheet (core/sheet.Scaled) the sketch's leaf was derived from, kept by the leaves
         it draws (not saved with the sketch: the project keeps the leaf's). A pose is the
@@ -102,14 +107,23 @@ class Sketch:
     frame: Frame = field(default_factory=_identity_frame)
     relief: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     symmetric: bool = False
+    offsets: tuple[np.ndarray | None, ...] = ()
     bend: Any = None
 
     def __post_init__(self) -> None:
         boundary = np.asarray(self.boundary, dtype=float).reshape(-1, 2)
         veins = tuple(np.asarray(v, dtype=float).reshape(-1, 3) for v in self.veins)
         object.__setattr__(self, "boundary", boundary)
-        object.__setattr__(self, "veins", veins)
         object.__setattr__(self, "relief", np.asarray(self.relief, dtype=float).reshape(-1, 3))
+        object.__setattr__(self, "veins", veins)  # on_dome reads the outline and midrib's base
+        veins, offsets = dome.on_dome(self, veins, self.offsets)
+        object.__setattr__(self, "veins", veins)
+        object.__setattr__(self, "offsets", offsets)
+
+    @property
+    def auto(self) -> tuple[bool, ...]:
+        """Per vein, on the dome over a drawn leaf's outline (offsets, all 0)."""
+        return tuple(o is not None and not np.any(o) for o in self.offsets)
 
     # --- reading -------------------------------------------------------------------------------
     def control(self, curve: int) -> np.ndarray:
@@ -131,7 +145,7 @@ class Sketch:
         made = self.__dict__.setdefault("_curves", {})  # frozen: no attribute set but this
         if curve not in made:
             if curve != BOUNDARY:
-                points = np.array(open_curve(self.veins[curve]))  # a copy: never a vein's own
+                points = dome.vein_curve(self, curve)  # a copy: never a vein's own
             elif len(self.boundary) >= 3:
                 points = np.array(closed_curve(self.boundary))
             else:
@@ -173,46 +187,78 @@ class Sketch:
         return size if size > 0 else 1.0
 
     # --- editing: each returns a new sketch ---------------------------------------------------
-    def _with_curve(self, curve: int, control: np.ndarray) -> Sketch:
+    def _with_curve(
+        self, curve: int, control: np.ndarray, offsets: np.ndarray | None = None
+    ) -> Sketch:
+        """A drawn vein's `offsets` for its new `control` points: by default from their heights
+        (over this sketch's dome: a point whose height is as it was keeps its offset)."""
         if curve == BOUNDARY:
             return replace(self, boundary=control)
-        veins = list(self.veins)
+        veins, kept = list(self.veins), self.offsets
         veins[curve] = control
-        return replace(self, veins=tuple(veins))
+        if kept[curve] is not None:  # a drawn vein's, and those of the veins started on it
+            kept = dome.carried(self, curve, control, offsets)
+        return replace(self, veins=tuple(veins), offsets=kept)
 
     def moved(self, curve: int, index: int, xy: np.ndarray) -> Sketch:
         """The sketch with one control point moved to plane point `xy`."""
         control = self.control(curve).copy()
         control[index, :2] = xy
-        return self._with_curve(curve, control)
+        return self._with_curve(curve, control, self._offsets(curve))
+
+    def _offsets(self, curve: int) -> np.ndarray | None:
+        return None if curve == BOUNDARY else self.offsets[curve]  # a drawn vein's, else None
 
     def inserted(self, curve: int, xy: np.ndarray, height: float = 0.0) -> tuple[Sketch, int]:
         """The sketch with a control point added where it fits best, and the point's index."""
         control = self.control(curve)
         index = insert_index(control, np.asarray(xy, dtype=float), closed=curve == BOUNDARY)
         row = np.asarray(xy, dtype=float) if curve == BOUNDARY else np.array([*xy, height])
-        return self._with_curve(curve, np.insert(control, index, row, axis=0)), index
+        offsets = self._offsets(curve)
+        if offsets is not None:  # the new point's offset; the others keep theirs
+            offsets = np.insert(offsets, index, dome.offsets_of(self, row[None, :]))
+        return self._with_curve(curve, np.insert(control, index, row, axis=0), offsets), index
 
     def deleted(self, curve: int, index: int) -> Sketch:
         """The sketch without one control point; a vein left without points goes (veins keep
         their numbers and colours only if no empty one is kept)."""
-        control = np.delete(self.control(curve), index, axis=0)
+        control, offsets = np.delete(self.control(curve), index, axis=0), self._offsets(curve)
         if curve != BOUNDARY and len(control) == 0:
-            return replace(self, veins=self.veins[:curve] + self.veins[curve + 1 :])
-        return self._with_curve(curve, control)
+            veins, kept = self.veins[:curve] + self.veins[curve + 1 :], self.offsets
+            return replace(self, veins=veins, offsets=(*kept[:curve], *kept[curve + 1 :]))
+        kept = None if offsets is None else np.delete(offsets, index)
+        return self._with_curve(curve, control, kept)
 
     def with_height(self, vein: int, index: int, height: float) -> Sketch:
-        """The sketch with a vein control point's height set."""
-        control = self.veins[vein].copy()
+        """The sketch with a vein control point's height set by hand: a drawn vein's offset
+        there (its others, and its curve beyond its neighbouring points, stay as they were)."""
+        control, offsets = self.veins[vein].copy(), self.offsets[vein]
         control[index, 2] = height
-        return self._with_curve(vein, control)
+        if offsets is not None:
+            offsets = offsets.copy()
+            offsets[index] = dome.offsets_of(self, control[index : index + 1])[0]
+        return self._with_curve(vein, control, offsets)
 
-    def with_vein(self, points: np.ndarray) -> Sketch:
-        """The sketch with a vein of (m, 3) control points appended (index len(veins) - 1)."""
-        return replace(self, veins=(*self.veins, np.asarray(points, dtype=float).reshape(-1, 3)))
+    def with_vein(self, points: np.ndarray, offsets: np.ndarray | None = None) -> Sketch:
+        """The sketch with a vein of (m, 3) control points appended (index len(veins) - 1);
+        with (m,) `offsets`, a drawn vein, its heights the dome's plus them (see `offsets`)."""
+        vein = np.asarray(points, dtype=float).reshape(-1, 3)
+        return replace(self, veins=(*self.veins, vein), offsets=(*self.offsets, offsets))
+
+    def started_vein(self, xy: np.ndarray, tolerance: float) -> Sketch:
+        """The sketch with a new vein started at plane point `xy`, as a click makes it: snapped
+        onto a vein within `tolerance` (it branches there, at that vein's height) or at the
+        default height. On a drawn leaf it is drawn (on the dome, at the offset there of a
+        drawn vein it branches from), unless it branches from a vein with heights of its own."""
+        xy = np.asarray(xy, dtype=float)
+        snapped = self._snap(xy, tolerance)
+        if snapped is None:
+            return self.with_vein(np.array([[*xy, self.default_height(-1, xy)]]), np.zeros(1))
+        point, vein = snapped
+        return self.with_vein(point[None], dome.branch_offset(self, vein, point))
 
     def with_heights(self, vein: int, heights: np.ndarray) -> Sketch:
-        """The sketch with all of a vein's control point heights set ((m,) array)."""
+        """The sketch with a vein's control point heights set by hand ((m,); offsets if drawn)."""
         control = self.veins[vein].copy()
         control[:, 2] = np.asarray(heights, dtype=float).reshape(len(control))
         return self._with_curve(vein, control)
@@ -239,27 +285,17 @@ class Sketch:
     def snap_to_vein(self, xy: np.ndarray, tolerance: float) -> np.ndarray | None:
         """The point (x, y, height) on the nearest vein curve within `tolerance` of plane point
         `xy`, or None: a new vein started there branches from that vein."""
-        best, best_d = None, tolerance
+        snapped = self._snap(xy, tolerance)
+        return None if snapped is None else snapped[0]
+
+    def _snap(self, xy: np.ndarray, tolerance: float) -> tuple[np.ndarray, int] | None:
+        """`snap_to_vein`'s point and the vein it lies on."""
+        best, best_d, vein = None, tolerance, -1
         for i in range(len(self.veins)):
-            curve = self.vein_curve(i)
-            if len(curve) == 0:
-                continue
-            if len(curve) == 1:
-                candidates = curve
-            else:  # the nearest point on each segment of the sampled curve
-                a, b = curve[:-1], curve[1:]
-                ab = b[:, :2] - a[:, :2]
-                t = np.clip(
-                    np.einsum("ij,ij->i", xy - a[:, :2], ab) / np.maximum((ab**2).sum(1), 1e-300),
-                    0,
-                    1,
-                )
-                candidates = a + t[:, None] * (b - a)
-            d = np.linalg.norm(candidates[:, :2] - xy, axis=1)
-            j = int(np.argmin(d))
-            if d[j] <= best_d:
-                best, best_d = candidates[j], float(d[j])
-        return None if best is None else np.asarray(best, dtype=float)
+            point, d = nearest_on_polyline(self.vein_curve(i), xy)
+            if d < best_d or (best is None and d <= best_d):  # a tie: the earlier vein's
+                best, best_d, vein = point, d, i
+        return None if best is None else (np.asarray(best, dtype=float), vein)
 
     def midrib(self) -> Midrib | None:
         """The midrib (vein 1) as mirror editing follows it, or None below two points (made
@@ -350,7 +386,7 @@ class Sketch:
                 before = before[:0]
             boundary = np.vstack([arc, after, reflect(arc)[::-1], before])
             boundary = boundary.reshape(-1, 2)
-        veins = list(self.veins)
+        veins, offsets = list(self.veins), list(self.offsets)
         sides = [float(np.mean(side(v))) for v in veins]
         targets = [i for i in range(1, len(veins)) if sides[i] < -eps]
         for i in range(1, len(self.veins)):
@@ -362,53 +398,18 @@ class Sketch:
                     targets, key=lambda t: float(np.linalg.norm(veins[t][0, :2] - mirror[0, :2]))
                 )
                 targets.remove(j)
-                veins[j] = mirror
+                veins[j], offsets[j] = mirror, self.offsets[i]
             else:
                 veins.append(mirror)
+                offsets.append(self.offsets[i])
         for j in sorted(targets, reverse=True):
-            del veins[j]
-        return replace(self, boundary=boundary, veins=tuple(veins))
+            del veins[j], offsets[j]
+        return replace(self, boundary=boundary, veins=tuple(veins), offsets=tuple(offsets))
 
     def default_height(self, vein: int, xy: np.ndarray) -> float:
-        """Height for a new point of a vein: that of its nearest control point, else (a new
-        vein: any index past the last) 5% of the sketch's size. On a drawn leaf (its margin on
-        the plane) a point stands no higher or lower than HEIGHT_RATIO times its distance
-        inside the outline (forms/veins.py: the roof relief's slope, 14°): the surface comes
-        down to the margin, and the app's drawn leaf (12 outline points, a midrib and four side
-        veins clicked out to near the margin, every point at 5%) had vein points 0.019 of its
-        length off the surface. A vein's only point held down so (a midrib started by the base)
-        passes on the 5%, not its own height (the whole midrib stood 0.007 high)."""
-        xy = np.asarray(xy, dtype=float)
-        level = 0.05 * self.extent()
-        height = level
-        control = self.veins[vein] if 0 <= vein < len(self.veins) else np.zeros((0, 3))
-        if len(control):
-            nearest = control[np.argmin(np.linalg.norm(control[:, :2] - xy, axis=1))]
-            height = float(nearest[2])
-            cap = self._margin_cap(nearest[:2])
-            held = cap is not None and abs(abs(height) - cap) <= 1e-9 * self.extent()
-            if len(control) == 1 and held and abs(height) < level:
-                height = level if height >= 0 else -level
-        cap = self._margin_cap(xy)
-        return height if cap is None else float(np.sign(height) * min(abs(height), cap))
-
-    def _margin_cap(self, xy: np.ndarray) -> float | None:
-        """How high (or low) a new vein point at plane point `xy` may stand on a drawn leaf:
-        HEIGHT_RATIO times its distance inside the outline, 0 outside; None for a sketch with a
-        relief (a loaded leaf whose margin has heights of its own: its veins keep theirs) or
-        without an outline."""
-        outline = self.boundary_curve()
-        if len(outline) < 3 or len(self.relief):
-            return None
-        made = self.__dict__.setdefault("_curves", {})  # the outline's shapes, once a sketch
-        if "margin" not in made:
-            made["margin"] = (
-                shapely.make_valid(shapely.Polygon(outline)),
-                shapely.LinearRing(outline),
-            )
-        region, ring = made["margin"]
-        point = shapely.Point(xy)
-        return HEIGHT_RATIO * ring.distance(point) if region.covers(point) else 0.0
+        """Height for a new point of vein `vein` (past the last: a new vein) at plane point
+        `xy`: the dome's and its nearest point's offset, or by its nearest point (sketch_dome)."""
+        return dome.default_height(self, vein, xy)
 
     # --- files ---------------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
@@ -424,6 +425,7 @@ class Sketch:
             "veins": [v.tolist() for v in self.veins],
             "relief": self.relief.tolist(),
             "symmetric": self.symmetric,
+            "offsets": [None if o is None else o.tolist() for o in self.offsets],
         }
 
     @classmethod
@@ -434,7 +436,8 @@ class Sketch:
         ------
         ValueError
             If the stored arrays have the wrong shape, or "symmetric" is not true or false
-            (absent, as in projects written before it: false).
+            (absent, as in projects written before it: false), or "offsets" (or "auto") not
+            as sketch_dome.stored_offsets reads them.
         """
         symmetric = data.get("symmetric", False)
         if not isinstance(symmetric, bool):
@@ -447,14 +450,15 @@ class Sketch:
             if plane
             else _identity_frame()
         )
+        veins = data.get("veins", [])
+        kept, offsets = [i for i, v in enumerate(veins) if len(v)], dome.stored_offsets(data)
         return cls(
             boundary=np.asarray(data.get("boundary", []), dtype=float).reshape(-1, 2),
-            veins=tuple(
-                np.asarray(v, dtype=float).reshape(-1, 3) for v in data.get("veins", []) if len(v)
-            ),
+            veins=tuple(np.asarray(veins[i], dtype=float).reshape(-1, 3) for i in kept),
             frame=frame,
             relief=np.asarray(data.get("relief", []), dtype=float).reshape(-1, 3),
             symmetric=symmetric,
+            offsets=tuple(offsets[i] for i in kept),
         )
 
     def hole_curves(self) -> list[np.ndarray]:

@@ -299,11 +299,7 @@ class SketchView(QGraphicsView):
         if self.active == BOUNDARY:
             after, index = sketch.inserted(BOUNDARY, xy)
         elif self.active >= len(sketch.veins):
-            snapped = sketch.snap_to_vein(xy, self._plane_tolerance(SNAP_PIXELS))
-            first = (
-                snapped if snapped is not None else np.array([*xy, sketch.default_height(-1, xy)])
-            )
-            after, index = sketch.with_vein(first[None, :]), 0
+            after, index = sketch.started_vein(xy, self._plane_tolerance(SNAP_PIXELS)), 0
             self.active = len(after.veins) - 1
             self.selected = (self.active, index)
             self._commit(before, after, "New vein", xy)

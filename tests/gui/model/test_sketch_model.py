@@ -221,11 +221,12 @@ def test_a_vein_clicked_out_to_the_margin_lies_on_the_leaf():
     side veins clicked out to near the margin, at the heights the editor gives new points):
     every point took the first one's height, 5% of the size, so the side veins' ends stood
     that high beside the margin, where the surface comes down to it, and hung in the air
-    (0.019 of the length off the mesh). New points stand no higher over the margin than a
-    form's veins, a quarter of their distance inside it: every vein point on the surface."""
+    (0.019 of the length off the mesh). New points stood no higher over the margin than a
+    form's veins, a quarter of their distance inside it; now the veins follow the dome over the
+    outline (sketch_dome.py): every vein point on the surface."""
     sketch = clicked_sketch()
     heights = np.concatenate([v[:, 2] for v in sketch.veins])
-    assert heights.max() == pytest.approx(0.05 * sketch.extent())  # the middle keeps its relief
+    assert heights.max() > 0.04 * sketch.extent()  # the middle keeps a relief (the dome's)
     ends = np.array([v[-1] for v in sketch.veins[1:]])
     assert np.all(ends[:, 2] < 0.3 * heights.max())  # the side veins come down to the margin
     leaf = sketch.to_leaf()
