@@ -7,7 +7,8 @@ is first unrolled. The blade's points are flattened near-isometrically (`unroll`
 distances along a neighbour graph of the points, from a few landmarks, placed in the plane by
 landmark MDS, de Silva & Tenenbaum 2003), then a smooth map from the flat blade into 3D is
 fitted to them (`Sheet`: a thin-plate spline S(u, v) through the points averaged in cells of
-the flat blade, CELLS across the length). A flat point (u, v, w) goes to S(u, v) + w n(u, v),
+the flat blade, CELLS across the length; first through the unrolled cube means, then refitted
+on the flat blade that sheet gives: `refit`). A flat point (u, v, w) goes to S(u, v) + w n(u, v),
 n the sheet's unit normal, and a 3D point back to its nearest sheet point (u, v) and its offset
 w along n (Gauss-Newton from the nearest point of a dense sample of the sheet).
 
@@ -183,7 +184,7 @@ class Sheet:
         return float(np.ptp(self.centers, axis=0).max())
 
     def centres_flat(self) -> np.ndarray:
-        """(m, 3) the flat points (u, v, 0) of the cube means the sheet was fitted to: where the
+        """(m, 3) the flat points (u, v, 0) of the cell means the sheet was fitted to: where the
         flat blade is known (sources/extract.py keeps the outline near them)."""
         return np.column_stack([self.centers, np.zeros(len(self.centers))])
 
