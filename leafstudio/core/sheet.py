@@ -7,7 +7,8 @@ is first unrolled. The blade's points are flattened near-isometrically (`unroll`
 distances along a neighbour graph of the points, from a few landmarks, placed in the plane by
 landmark MDS, de Silva & Tenenbaum 2003), then a smooth map from the flat blade into 3D is
 fitted to them (`Sheet`: a thin-plate spline S(u, v) through the points averaged in cells of
-the flat blade, CELLS across the length). A flat point (u, v, w) goes to S(u, v) + w n(u, v),
+the flat blade, CELLS across the length; first through the unrolled cube means, then refitted
+on the flat blade that sheet gives: `refit`). A flat point (u, v, w) goes to S(u, v) + w n(u, v),
 n the sheet's unit normal, and a 3D point back to its nearest sheet point (u, v) and its offset
 w along n (Gauss-Newton from the nearest point of a dense sample of the sheet).
 
@@ -37,6 +38,7 @@ CELLS = 28  # the blade's length is cut in this many cubes; each cube's mean is 
 # Gaussian blob of 15,000 points: 8,946 cubes, and the spline through them took 17 s)
 MOST_CELLS = 3 * CELLS**2
 SMOOTHING = 1e-4  # the thin-plate spline's smoothing, at unit length
+FIRST = 1e-3  # the smoothing of the sheet through the cube means, at unit length (`refit`)
 NEWTON = 10  # Gauss-Newton steps of `Sheet.flatten`, at most
 SETTLED = 1e-9  # ... a point whose step is shorter than this share of the sheet's size settled
 HALVINGS = 4  # a step that goes farther is halved at most this many times
@@ -182,7 +184,7 @@ class Sheet:
         return float(np.ptp(self.centers, axis=0).max())
 
     def centres_flat(self) -> np.ndarray:
-        """(m, 3) the flat points (u, v, 0) of the cube means the sheet was fitted to: where the
+        """(m, 3) the flat points (u, v, 0) of the cell means the sheet was fitted to: where the
         flat blade is known (sources/extract.py keeps the outline near them)."""
         return np.column_stack([self.centers, np.zeros(len(self.centers))])
 
@@ -211,9 +213,10 @@ class Sheet:
         p, _, _, normal = self.frame(points[:, :2])
         return p + points[:, 2:3] * normal
 
-    def flatten(self, points: np.ndarray) -> np.ndarray:
+    def flatten(self, points: np.ndarray, start: np.ndarray | None = None) -> np.ndarray:
         """(n, 3) bent points back on the flat blade: the nearest sheet point's (u, v) and the
-        offset along the normal there.
+        offset along the normal there (from (n, 2) flat points `start`, if given: the sheet point
+        Gauss-Newton comes to from there, which need not be the nearest).
 
         Gauss-Newton from the nearest point of the sampled sheet, each step halved until it
         comes nearer; a point leaves the iteration once its step is below SETTLED of the
@@ -221,8 +224,11 @@ class Sheet:
         settle in two or three steps, and each step is spent on the points still moving only
         (ten fixed steps over every point of a 2-million-point scan took 100 s)."""
         points = np.asarray(points, dtype=float)
-        tree, grid = self._guess
-        uv = grid[tree.query(points)[1]]
+        if start is None:
+            tree, grid = self._guess
+            uv = grid[tree.query(points)[1]]
+        else:
+            uv = np.array(start, dtype=float)
         near = self(uv)
         miss = np.linalg.norm(near - points, axis=1)
         moving = np.arange(len(points))
@@ -268,6 +274,34 @@ class Sheet:
         return None
 
 
+def refit(
+    sheet: Sheet, points: np.ndarray, start: np.ndarray, cell: float, smoothing: float
+) -> Sheet:
+    """The sheet through (n, 3) points averaged in square cells of side `cell` of the flat
+    blade `sheet` puts them on (from their (n, 2) flat places `start`, their cubes' on the
+    first sheet): each cell's mean flat point (u, v) to its mean point.
+
+    The first sheet goes through cube means, each at the flat place the neighbour graph gave
+    it: a cube of the 3D cloud splits a doubled layer or a scanner's stripe (soybean pot1_1:
+    two views 2-3 mm apart), the graph's places are a little off, and the near-interpolating
+    spline zigzags between such cubes, crinkling the mesh along the stripes. A cell of the flat
+    blade spans the blade's thickness, and each centre is the mean of its points' own (u, v).
+    Every cell counts, one point or many: dropping cells of fewer than three points broke the
+    thin bridge of blade beside sugar beet pot1_7's hole, which then opened onto the margin.
+    Each point is flattened from its cube's place, not from the nearest sheet point: between
+    two layers of a curl that one changed with the scan's last bits (soybean pot1_1 scaled by
+    0.7 and moved split 34 of its points otherwise between blade and petiole)."""
+    uv = sheet.flatten(points, start)[:, :2]
+    keys = np.floor((uv - uv.min(axis=0)) / cell).astype(np.int64)
+    _, which, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    which = which.ravel()
+    centres, values = np.zeros((len(counts), 2)), np.zeros((len(counts), 3))
+    np.add.at(centres, which, uv)
+    np.add.at(values, which, points)
+    counts = counts[:, None]
+    return Sheet(centres / counts, values / counts, smoothing, sheet.up)
+
+
 def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None:
     """The sheet through (n, 3) blade points, or None when they cannot be unrolled (`unroll`).
 
@@ -285,14 +319,28 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     Sheet or None
         The sheet; `Sheet.flatten` puts the points on their flat blade. None also for points
         that fill a volume (more than MOST_CELLS cubes).
+
+    Notes
+    -----
+    The sheet through the unrolled cube means (smoothing FIRST) is refitted once, through the
+    points averaged on its flat blade (`refit`, smoothing SMOOTHING). On the eight shared scans
+    that took the 99th percentile of the meshes' interior dihedral angles from 19-138 degrees
+    to 9-79 (soybean pot1_1's walls and crumples 138 -> 79; the stripes' crinkles on soybean
+    pot1_15, 17, 36 and sugar beet pot1_7 45-62 -> 20-29) and their mean distance to the scan
+    from 0.45% to 0.54% of the length, none above 0.82% (pot1_1's, from 0.52%: its surface
+    passes between its doubled layers). Refitting through the cube means' own sheet
+    (FIRST = SMOOTHING) left pot1_1 at 108 degrees; a stiffer start refitted four times (1e-2
+    down to 1e-4) gave much the same as this, at three times the cost
+    (benchmarks/bench_bent.py --scan-table).
     """
     points = np.asarray(points, dtype=float)
     progress.report(0.0, UNROLLING)
     cell = length / CELLS
     keys = np.floor((points - points.min(axis=0)) / cell).astype(np.int64)
-    _, which, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    _, cube, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    cube = cube.ravel()
     sums = np.zeros((len(counts), 3))
-    np.add.at(sums, which.ravel(), points)
+    np.add.at(sums, cube, points)
     means = sums / counts[:, None]
     if len(means) > MOST_CELLS:  # a volume of points, not a sheet
         return None
@@ -303,7 +351,7 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     centre = flat.mean(axis=0)
     axes = np.linalg.svd(flat - centre, full_matrices=False)[2]
     flat = (flat - centre) @ axes.T  # u along the longest spread
-    smoothing = SMOOTHING * length**2
+    smoothing = FIRST * length**2
     # the graph's paths zigzag, so its distances run a few percent long: the flat blade is
     # scaled to keep the sheet's area (its median area factor |S_u x S_v| made 1, by central
     # differences of the spline at the centres: a Sheet sampled for it cost as much as the last)
@@ -311,8 +359,11 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     h = STEP * float(np.ptp(flat, axis=0).max())
     du, dv = ((spline(flat + d) - spline(flat - d)) / (2 * h) for d in ([h, 0.0], [0.0, h]))
     stretch = float(np.sqrt(np.median(np.linalg.norm(np.cross(du, dv), axis=1))))
-    with progress.share(0.2, 1.0):  # sampling the sheet: the rest of the time
-        return Sheet(flat * stretch, means, smoothing, np.asarray(up, dtype=float))
+    with progress.share(0.2, 0.6):  # sampling each sheet: the rest of the time
+        sheet = Sheet(flat * stretch, means, smoothing, np.asarray(up, dtype=float))
+    with progress.share(0.6, 1.0):
+        sheet = refit(sheet, points, flat[cube] * stretch, length / CELLS, SMOOTHING * length**2)
+    return sheet
 
 
 @dataclass(frozen=True, eq=False)

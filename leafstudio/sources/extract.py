@@ -62,7 +62,7 @@ BUDGET = 40_000  # larger scans are thinned to at most this many voxel centroids
 THINNING_PASSES = 8
 PROBES = 10_000  # blade_points counts a ball's points among this many at most
 SAMPLE = 50_000  # the voxel size is first sought on this many of the points
-HELD = 1.0  # a flattened blade's outline keeps within this many sheet cells of a cube mean
+HELD = 1.0  # a flattened blade's outline keeps within this many sheet cells of a sheet centre
 FINDING = "finding the leaf in the scan"  # what extract_leaf's progress reports say it does
 ENDS = 4.0  # a big scan's blade ends are sought in cubes this many diagonals from the outermost
 
@@ -405,7 +405,8 @@ def _extract(
     finds the rest (the first pass's are not needed once the blade is unrolled). `split`: the
     blade and petiole masks and the base's blade point found before (on the unflattened scan,
     where a petiole and a world axis mean what they say; None for the wider end); `held`: on a
-    flattened blade, the sheet's cube means (m, 3) and how far from them the sheet is known."""
+    flattened blade, the sheet's centres (m, 3: its cell means) and how far from them the sheet
+    is known."""
     blade, petiole = split_scan(points) if split is None else (split[0].copy(), split[1].copy())
     if blade.sum() < MIN_POINTS:
         raise LeafError(f"found only {blade.sum()} blade points in the scan (need {MIN_POINTS})")

@@ -16,6 +16,7 @@ import pytest
 import leafstudio as ls
 from leafstudio import workflows
 from leafstudio.analysis.fidelity import fin_share
+from leafstudio.core.evaluate import margin_creases
 from tests.leaves import extracted_scan
 from tests.sources.test_scan_holes import far_share
 
@@ -25,9 +26,10 @@ pytestmark = pytest.mark.skipif(not SCANS, reason=f"no real scans at {REAL}")
 
 
 @pytest.fixture(scope="module")
-def scans() -> dict[str, tuple[float, float, float, int]]:
+def scans() -> dict[str, tuple[float, float, float, int, float]]:
     """Each scan's fin share, mean distance over the length, share of the mesh's area farther
-    than 3% of the length from every blade point, and number of holes."""
+    than 3% of the length from every blade point, number of holes, and the 99th percentile of
+    the mesh's interior dihedral angles (degrees)."""
     found = {}
     for path in SCANS:
         # the run's shared extraction (tests/leaves.py): open_scan's own, as the test below shows
@@ -39,7 +41,10 @@ def scans() -> dict[str, tuple[float, float, float, int]]:
         fit = done.scan_fit
         fin = fin_share(done.result.triangle_mesh, blade, fit["length"])
         far = far_share(done.result.triangle_mesh, blade, fit["length"])
-        found[path.stem] = (fin, fit["mean"] / fit["length"], far, len(opened.leaf.bend.holes))
+        crumple = margin_creases(done.result)["interior_p99"]
+        found[path.stem] = (
+            fin, fit["mean"] / fit["length"], far, len(opened.leaf.bend.holes), crumple
+        )  # fmt: skip
     return found
 
 
@@ -72,9 +77,23 @@ def test_the_scans_stay_close_to_their_surfaces(scans):
 
 def test_a_real_hole_stays_open_and_no_other_scan_gains_one(scans):
     """pot1_7: 1.97% of the mesh's area spanned its hole, now none; the other seven have no hole
-    and keep at most 0.1% of their area that far (triangles along the margin: 0.02% on soybean
-    pot1_1 with the BLAS threads of this machine, 0.098% with one BLAS thread)."""
-    holes = {name[-12:]: count for name, (*_, count) in scans.items()}
-    spans = {name[-12:]: far for name, (_, _, far, _) in scans.items()}
+    and keep at most 0.1% of their area that far (triangles along the margin), but soybean
+    pot1_1 0.75%: its surface, refitted on the flat blade (core/sheet.py), passes between its
+    doubled layers and under its curl, 3.2% of the length from the nearest scan point (4.1%
+    at most) but spanning no hole: on the flat blade each such triangle lies within 2.3 point
+    gaps of a blade point (a hole is 4: sources/scan_holes.py)."""
+    holes = {name[-12:]: count for name, (_, _, _, count, _) in scans.items()}
+    spans = {name[-12:]: far for name, (_, _, far, _, _) in scans.items()}
     assert holes == {name: int(name.endswith("pot1_7")) for name in holes}, holes
-    assert spans["15033_pot1_7"] <= 5e-4 and max(spans.values()) <= 2e-3, spans
+    assert spans["15033_pot1_7"] <= 5e-4 and spans["43118_pot1_1"] <= 1e-2, spans
+    assert max(far for name, far in spans.items() if name != "43118_pot1_1") <= 2e-3, spans
+
+
+def test_no_scan_crumples_or_crinkles_along_its_stripes(scans):
+    """The 99th percentile of the interior dihedral angles: soybean pot1_1's mesh walled and
+    crumpled (138 degrees), pot1_15, 17, 36 and sugar beet pot1_7 crinkled along the scanner's
+    stripes (45-62), from a sheet through the cube means (core/sheet.py); refitted on the flat
+    blade, 79 and 20-29."""
+    crumples = {name[-12:]: crumple for name, (*_, crumple) in scans.items()}
+    assert crumples["43118_pot1_1"] <= 100.0, crumples
+    assert max(c for name, c in crumples.items() if name != "43118_pot1_1") <= 40.0, crumples
