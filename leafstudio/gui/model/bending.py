@@ -39,11 +39,13 @@ def pose_of(leaf: Leaf | None) -> Pose:
 
 
 def blade_extent(boundary: np.ndarray, frame: Any) -> float:
-    """The flat blade's length from base to apex, from its (n, 3) flat `boundary`: the piece of
-    the midrib's line (`frame.u` through `frame.origin`, core/placed.blade_frame) inside the
-    outline nearest the midrib's base, as a form's length is (forms/make.Form: lobes behind
-    the base, a cordate or sagittate blade's, do not count; its curl and twist are per base to
-    apex). The outline's whole extent along u when the line misses it."""
+    """The flat blade's length from base to apex, from its (n, 3) flat `boundary`, as a form's
+    is (forms/make.Form: its curl and twist are per base to apex, lobes behind the base, a
+    cordate or sagittate blade's, not counted): from where the midrib's line (`frame.u` through
+    `frame.origin`, core/placed.blade_frame) enters the outline at the base to the outline's
+    farthest reach along u. Its reach, not the line's piece inside the outline: a curved
+    (falcate) blade's chord leaves it (a 60° bow kept a third of its length, and bent it three
+    times too hard; review). The outline's whole extent along u when the line misses it."""
     if not len(boundary):
         return 1.0
     offset = np.asarray(boundary, dtype=float) - frame.origin
@@ -56,8 +58,9 @@ def blade_extent(boundary: np.ndarray, frame: Any) -> float:
     pieces = [piece for piece in getattr(cut, "geoms", [cut]) if piece.length > 0]
     if not pieces:
         return extent if extent > 0 else 1.0
-    base = shapely.Point(0.0, 0.0)
-    return float(min(pieces, key=lambda piece: piece.distance(base)).length)
+    base = min(pieces, key=lambda piece: piece.distance(shapely.Point(0.0, 0.0)))
+    length = float(along.max()) - min(base.bounds[0], 0.0)
+    return length if length > 0 else (extent if extent > 0 else 1.0)
 
 
 def blade_half_width(leaf: Leaf | None, plane: Any = None) -> float:

@@ -313,3 +313,23 @@ def test_a_drawn_leafs_bend_is_per_its_length_base_to_apex_as_a_forms(shape):
     assert isinstance(leaf.bend, PlacedPose)
     assert leaf.bend.pose.twist == pytest.approx(0.5, rel=0.011)
     assert leaf.bend.pose.curl == pytest.approx(0.3, rel=0.011)
+
+
+@pytest.mark.parametrize("bow", [20, 45, 60, 90])
+def test_a_curved_drawn_blade_bends_per_its_whole_length(bow):
+    """A falcate blade, its midrib an arc of `bow` degrees: its length for the sliders is its
+    chord, base to apex, not the piece of the chord inside the outline (at 60° a third of it,
+    and the blade bent three times too hard; review)."""
+    from leafstudio.core.placed import blade_frame
+    from leafstudio.core.plane import Frame
+
+    angle = np.radians(bow) * np.linspace(0, 1, 200)
+    width = 0.15 * np.sqrt(1 - np.linspace(0, 1, 200)) + 1e-3
+    outer = np.column_stack([(1 + width) * np.cos(angle), (1 + width) * np.sin(angle)])
+    inner = np.column_stack([(1 - width) * np.cos(angle), (1 - width) * np.sin(angle)])[::-1]
+    boundary = np.pad(np.vstack([outer, inner]), ((0, 0), (0, 1)))
+    midrib = np.pad(np.column_stack([np.cos(angle), np.sin(angle)]), ((0, 0), (0, 1)))
+    plane = Frame(origin=np.zeros(3), u=np.eye(3)[0], v=np.eye(3)[1], normal=np.eye(3)[2])
+    frame = blade_frame(Leaf(boundary=boundary, veins=[midrib]), plane)
+    chord = 2 * np.sin(np.radians(bow) / 2)
+    assert chord <= blade_extent(boundary, frame) <= 1.01 * chord
