@@ -41,6 +41,10 @@ if TYPE_CHECKING:  # for the hints only: sketch_model imports this module
     from leafstudio.gui.model.sketch_model import Sketch
 
 Heights = Callable[[np.ndarray], np.ndarray]
+BRANCH_REACH = 2e-3  # of the sketch's size: a vein starting this near a drawn vein's curve
+# branches from it (`carried`). Its curve in the plane moves a little when the dome under its
+# control points does or a point is added: an outline edited moved it 3e-6 to 6e-5, a point
+# added at the midrib's end up to 9e-4, and its side veins were no longer carried (review)
 
 
 def sketch_dome(sketch: Sketch) -> Heights | None:
@@ -208,7 +212,7 @@ def carried(
         return tuple(kept)
     along, keep = _drawn(sketch, vein)  # the same curve in the plane before and after
     change = np.column_stack([along, blended((offsets - before)[keep], SAMPLES_PER_SPAN)])
-    tolerance = 1e-9 * sketch.extent()
+    tolerance = BRANCH_REACH * sketch.extent()
     for other, (start, given) in enumerate(zip(sketch.veins, sketch.offsets, strict=True)):
         if other == vein or given is None or not len(start):
             continue
