@@ -180,5 +180,6 @@ def run(args: argparse.Namespace) -> int:
                 f"{f['mean']:.4g}, median {f['median']:.4g}, 95% {f['p95']:.4g}, max "
                 f"{f['max']:.4g}; beyond 1% of the leaf length {f['beyond_1pct']:.1%}, beyond 2% "
                 f"{f['beyond_2pct']:.1%} (leaf length {f['length']:.4g}{unit})"
+                + (f"; the mesh's edges folded back {f['folded']:.2%}" if "folded" in f else "")
             )
     return EXIT_OK

@@ -59,4 +59,6 @@ def test_a_doubled_scans_folded_surface_is_warned_of_by_the_workflow_and_the_cli
     assert main(["extract", str(POT1_1), "-o", str(leaf), "-q"]) == 0
     code = main(["reconstruct", str(leaf), "-o", str(tmp_path / "m.ply"), "--texture", "none",
                  "--against", str(POT1_1)])  # fmt: skip
-    assert code == 0 and "folds back on itself" in capsys.readouterr().err
+    said = capsys.readouterr()
+    assert code == 0 and "folds back on itself" in said.err
+    assert "the mesh's edges folded back" in said.out  # beside its distances

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -52,16 +53,15 @@ def sketch_dome(sketch: Sketch) -> Heights | None:
     where its midrib starts (`midrib_base`, `outline_dome`); None for a loaded leaf (its margin
     has heights of its own: a relief) or a sketch without an outline. Made once a sketch."""
     made = sketch.__dict__.setdefault("_curves", {})  # frozen: its one cache, as sketch_model's
-    if "dome" in made:
-        return made["dome"]
-    outline = sketch.boundary_curve()
-    heights = None
-    if len(outline) >= 3 and not len(sketch.relief):
-        base = midrib_base(sketch)
-        key = None if base is None else (float(base[0]), float(base[1]))
-        heights = _cached_dome(np.ascontiguousarray(outline, dtype=float).tobytes(), key)
-    made["dome"] = heights
-    return heights
+    if "dome" not in made:  # its key, not the dome: a sketch pickles (a big project is read
+        # in another process, sources/reading.py), and a dome's functions do not (review)
+        outline = sketch.boundary_curve()
+        made["dome"] = None
+        if len(outline) >= 3 and not len(sketch.relief):
+            base = midrib_base(sketch)
+            key = None if base is None else (float(base[0]), float(base[1]))
+            made["dome"] = (np.ascontiguousarray(outline, dtype=float).tobytes(), key)
+    return None if made["dome"] is None else _cached_dome(*made["dome"])
 
 
 def midrib_base(sketch: Sketch) -> np.ndarray | None:
@@ -93,7 +93,12 @@ def outline_dome(region: shapely.Geometry, base: np.ndarray | None) -> Heights:
     The dome is made in the blade's own frame, base at the origin and the outline's farthest
     point from it at (1, 0), as a form's is (forms/veins.grow_veins), and scaled back.
     """
-    if not isinstance(region, Polygon) or region.area <= 0:  # a crossed outline: no one blade
+    if not isinstance(region, Polygon):  # a crossed outline: the dome over its largest piece
+        # (none at all hid the dome while a point was dragged past its neighbour, and a height
+        # typed meanwhile was an offset from 0: 0.05 typed became 0.0938; review)
+        parts = [part for part in shapely.get_parts(region) if isinstance(part, Polygon)]
+        region = max(parts, key=lambda part: part.area) if parts else Polygon()
+    if region.area <= 0:
         return lambda xy: np.zeros(len(np.atleast_2d(xy)))
     ring = region.exterior
     coords = np.asarray(ring.coords)
@@ -220,6 +225,29 @@ def carried(
         if gap <= tolerance and np.linalg.norm(start[0, :2] - along[0]) > tolerance:
             kept[other] = np.concatenate([given[:1] + moved[2], given[1:]])
     return tuple(kept)
+
+
+def own(sketch: Sketch, vein: int, heights: np.ndarray) -> Sketch:
+    """The sketch with vein `vein`'s control points at (m,) `heights`, its own (no offsets: the
+    spline through them, off the dome). A vein profile is so: linear along the vein, where as
+    offsets it ran over the dome between its points (set 0 to 0, the clicked midrib stood up to
+    0.0077 high; review)."""
+    veins, offsets = list(sketch.veins), list(sketch.offsets)
+    veins[vein] = np.column_stack([veins[vein][:, :2], np.asarray(heights, dtype=float)])
+    offsets[vein] = None
+    after = replace(sketch, veins=tuple(veins), offsets=tuple(offsets))
+    before, now = sketch.vein_curve(vein), after.vein_curve(vein)
+    reach = BRANCH_REACH * sketch.extent()
+    for other, start in enumerate(sketch.veins):  # drawn veins started on it rise with it
+        if other == vein or offsets[other] is None or not len(start):
+            continue
+        was, gap = nearest_on_polyline(before, start[0, :2])
+        if gap <= reach and np.linalg.norm(start[0, :2] - before[0, :2]) > reach:
+            offsets[other] = np.concatenate(
+                [offsets[other][:1] + nearest_on_polyline(now, start[0, :2])[0][2] - was[2],
+                 offsets[other][1:]]
+            )  # fmt: skip
+    return replace(after, offsets=tuple(offsets))
 
 
 def blended(offsets: np.ndarray, per_span: int) -> np.ndarray:

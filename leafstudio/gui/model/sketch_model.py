@@ -279,8 +279,8 @@ class Sketch:
 
     def with_profile(self, vein: int, start: float, end: float) -> Sketch:
         """The sketch with a whole vein's heights set at once: linear from `start` at its first
-        point to `end` at its last, by length along the vein."""
-        return self.with_heights(vein, start + self.vein_fractions(vein) * (end - start))
+        point to `end` at its last, by length along the vein, its own (sketch_dome.own)."""
+        return dome.own(self, vein, start + self.vein_fractions(vein) * (end - start))
 
     def snap_to_vein(self, xy: np.ndarray, tolerance: float) -> np.ndarray | None:
         """The point (x, y, height) on the nearest vein curve within `tolerance` of plane point

@@ -87,12 +87,13 @@ def test_a_height_set_by_hand_is_an_offset_from_the_dome_kept_as_the_outline_is_
     slid = by_hand.moved(1, 2, by_hand.veins[1][2, :2] - [0.02, 0.0])  # and along the plane
     np.testing.assert_array_equal(slid.offsets[1], by_hand.offsets[1])
     profiled = sketch.with_profile(0, 0.02, 0.01)  # the side veins started on it follow it
-    assert profiled.auto == (False,) * 5
+    assert profiled.auto == (False,) * 5 and profiled.offsets[0] is None  # its own heights
     for i, at in ((1, 1), (2, 1), (3, 2), (4, 2)):
         np.testing.assert_allclose(profiled.veins[i][0], profiled.veins[0][at], atol=1e-15)
     np.testing.assert_allclose(profiled.veins[0][[0, -1], 2], [0.02, 0.01], rtol=0, atol=1e-15)
     # a new vein branching from a hand-set one starts at its height: its offset there
     start = np.array([0.5, 0.001])  # no other vein near
+    profiled = sketch.with_heights(0, profiled.veins[0][:, 2])  # the same heights, as offsets
     branch = profiled.started_vein(start, 0.01)
     assert branch.offsets[-1] is not None and branch.auto[-1] is False
     at_junction = profiled.started_vein(profiled.veins[0][1, :2], 0.01)  # veins 0, 1, 2 meet
@@ -269,3 +270,35 @@ def test_side_veins_rise_with_a_raised_midrib_after_the_outline_is_edited():
     for vein in raised.veins[1:]:
         on, _ = nearest_on_polyline(raised.vein_curve(0), vein[0, :2])
         assert abs(vein[0, 2] - on[2]) < 1e-4 * raised.extent()
+
+
+def test_a_vein_profile_runs_straight_along_the_vein_not_over_the_dome():
+    """A profile sets a vein's heights linear from start to end along it: as offsets from the
+    dome it ran over the dome between its points (0 to 0 left the clicked midrib up to 0.0077
+    high; review). The vein keeps them as its own."""
+    sketch = clicked_sketch()
+    flat = sketch.with_profile(0, 0.0, 0.0)
+    assert flat.offsets[0] is None and np.abs(flat.vein_curve(0)[:, 2]).max() < 1e-12
+    ramp = sketch.with_profile(1, 0.04, 0.01)
+    curve = ramp.vein_curve(1)
+    along = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(curve[:, :2], axis=0), axis=1))])
+    np.testing.assert_allclose(curve[:, 2], 0.04 - 0.03 * along / along[-1], atol=2e-3)
+
+
+def test_a_crossed_outline_keeps_a_dome_and_a_drawn_sketch_pickles():
+    """An outline point dragged past its neighbour (a crossed outline for a moment) kept no
+    dome: the midrib fell to 0, and a height typed then was an offset from 0 (0.05 typed came
+    back 0.0938 once the outline was uncrossed; review). A drawn sketch pickles (a big project
+    is read in another process); its dome's functions did not."""
+    import pickle
+
+    from leafstudio.gui.model.sketch_model import BOUNDARY
+
+    sketch = clicked_sketch()
+    near = sketch.boundary[4] - sketch.boundary[3]
+    crossed = sketch.moved(BOUNDARY, 3, sketch.boundary[3] + 1.05 * near)
+    assert crossed.veins[0][2, 2] > 0.5 * sketch.veins[0][2, 2]
+    back = crossed.with_height(0, 2, 0.05).moved(BOUNDARY, 3, sketch.boundary[3])
+    assert back.veins[0][2, 2] == pytest.approx(0.05, abs=0.005)
+    again = pickle.loads(pickle.dumps(sketch))
+    np.testing.assert_array_equal(again.vein_curve(0), sketch.vein_curve(0))
