@@ -227,7 +227,8 @@ class Sketch:
             veins, kept = self.veins[:curve] + self.veins[curve + 1 :], self.offsets
             return replace(self, veins=veins, offsets=(*kept[:curve], *kept[curve + 1 :]))
         kept = None if offsets is None else np.delete(offsets, index)
-        return self._with_curve(curve, control, kept)
+        after = self._with_curve(curve, control, kept)  # veins started on a drawn one follow it
+        return after if kept is None else dome.rebranched(self, after, curve)
 
     def with_height(self, vein: int, index: int, height: float) -> Sketch:
         """The sketch with a vein control point's height set by hand: a drawn vein's offset

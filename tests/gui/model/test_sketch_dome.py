@@ -302,3 +302,16 @@ def test_a_crossed_outline_keeps_a_dome_and_a_drawn_sketch_pickles():
     assert back.veins[0][2, 2] == pytest.approx(0.05, abs=0.005)
     again = pickle.loads(pickle.dumps(sketch))
     np.testing.assert_array_equal(again.vein_curve(0), sketch.vein_curve(0))
+
+
+def test_side_veins_follow_their_midrib_when_a_raised_point_is_deleted():
+    """Raising clicked midrib point 2 raises the side veins started there; deleting that point
+    left them 0.018 of the size above the midrib (review)."""
+    from leafstudio.gui.model.curves import nearest_on_polyline
+
+    sketch = clicked_sketch()
+    raised = sketch.with_height(0, 2, sketch.veins[0][2, 2] + 0.02 * sketch.extent())
+    gone = raised.deleted(0, 2)
+    for vein in gone.veins[1:]:
+        on, _ = nearest_on_polyline(gone.vein_curve(0), vein[0, :2])
+        assert abs(vein[0, 2] - on[2]) < 1e-9
