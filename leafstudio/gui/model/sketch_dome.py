@@ -217,14 +217,28 @@ def carried(
         return tuple(kept)
     along, keep = _drawn(sketch, vein)  # the same curve in the plane before and after
     change = np.column_stack([along, blended((offsets - before)[keep], SAMPLES_PER_SPAN)])
-    tolerance = BRANCH_REACH * sketch.extent()
-    for other, (start, given) in enumerate(zip(sketch.veins, sketch.offsets, strict=True)):
+    _lift_branches(sketch, vein, change, lambda on, _start: on[2], kept)
+    return tuple(kept)
+
+
+def _lift_branches(
+    sketch: Sketch,
+    vein: int,
+    path: np.ndarray,
+    rise: Callable[[np.ndarray, np.ndarray], float],
+    offsets: list[np.ndarray | None],
+) -> None:
+    """Raise, in `offsets` (the sketch's, one a vein), the first offset of each drawn vein that
+    starts on vein `vein`'s (s, 3) `path` (within BRANCH_REACH of the size; not where the path
+    starts: a vein started with it from a third) by `rise(its nearest path point, its start)`."""
+    reach = BRANCH_REACH * sketch.extent()
+    for other, start in enumerate(sketch.veins):
+        given = offsets[other] if other < len(offsets) else None
         if other == vein or given is None or not len(start):
             continue
-        moved, gap = nearest_on_polyline(change, start[0, :2])
-        if gap <= tolerance and np.linalg.norm(start[0, :2] - along[0]) > tolerance:
-            kept[other] = np.concatenate([given[:1] + moved[2], given[1:]])
-    return tuple(kept)
+        on, gap = nearest_on_polyline(path, start[0, :2])
+        if gap <= reach and np.linalg.norm(start[0, :2] - path[0, :2]) > reach:
+            offsets[other] = np.concatenate([given[:1] + rise(on, start[0, :2]), given[1:]])
 
 
 def own(sketch: Sketch, vein: int, heights: np.ndarray) -> Sketch:
@@ -244,16 +258,12 @@ def rebranched(before: Sketch, after: Sketch, vein: int) -> Sketch:
     first point as the curve was there, so the two still meet (`carried` does so for a change
     of heights alone): a raised midrib point deleted left the side veins started there 0.018
     of the size above it (review)."""
-    offsets = list(after.offsets)
-    was_curve, now_curve = before.vein_curve(vein), after.vein_curve(vein)
-    reach = BRANCH_REACH * before.extent()
-    for other, start in enumerate(before.veins):
-        if other == vein or other >= len(offsets) or offsets[other] is None or not len(start):
-            continue
-        was, gap = nearest_on_polyline(was_curve, start[0, :2])
-        if gap <= reach and np.linalg.norm(start[0, :2] - was_curve[0, :2]) > reach:
-            rise = nearest_on_polyline(now_curve, start[0, :2])[0][2] - was[2]
-            offsets[other] = np.concatenate([offsets[other][:1] + rise, offsets[other][1:]])
+    offsets, now = list(after.offsets), after.vein_curve(vein)
+
+    def rise(was: np.ndarray, start: np.ndarray) -> float:
+        return float(nearest_on_polyline(now, start)[0][2] - was[2])
+
+    _lift_branches(before, vein, before.vein_curve(vein), rise, offsets)
     return replace(after, offsets=tuple(offsets))
 
 
