@@ -51,6 +51,7 @@ class SideJobs:
         self._texture_due: tuple[Job, tuple] | None = None  # the texture being made, its key
         self.fidelity_shown, self.poisson_shown = Event(), Event()
         self.texture_shown, self.note = Event(), Event()
+        self._warnings: tuple[int, list[str]] = (-1, [])  # the scan's, for a result (request id)
         session.state_changed.connect(self._on_state)
 
     def _on_state(self, _state: object, reason: str) -> None:
@@ -73,9 +74,17 @@ class SideJobs:
 
     def _fidelity(self, request: int, sections: list, warnings: list[str]) -> None:
         if self.session.accept_fidelity(request, sections):
+            self._warnings = (request, list(warnings))
             self.fidelity_shown.emit()
             for warning in warnings:  # the surface far from the scan, or folded back on itself
                 self.note.emit(f"note: {warning}")
+
+    def warnings_of(self, request: int) -> list[str]:
+        """The scan's warnings about result `request` once its distances are in, [] before: the
+        window says them with the result's own (its status line, set when the result is drawn,
+        replaced a note that came in first; a `note` says those that come in later)."""
+        shown, warnings = self._warnings
+        return warnings if shown == request else []
 
     def _fidelity_failed(self, exc: BaseException) -> None:
         session = self.session

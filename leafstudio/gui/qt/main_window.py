@@ -452,7 +452,7 @@ class MainWindow(FileCommands, QMainWindow):
             f"K={params.k}, grid {params.grid}: shown in {1000 * total:.0f} ms",
             tip=" · ".join(ms) + " (stages not listed came from the cache)",
         )
-        for note in outcome.result.warnings:
+        for note in (*outcome.result.warnings, *self.session.side.warnings_of(outcome.request.id)):
             self.status_text.setText(self.status_text.text() + f" — note: {note}")
 
     def _show_measurements(self) -> None:

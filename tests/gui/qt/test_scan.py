@@ -208,3 +208,34 @@ def test_a_scan_still_being_read_is_superseded_by_a_later_open(window, qtbot, tm
         and window.session.state.scan is None
         and window.session.state.path is None
     )
+
+
+def test_a_scans_warning_stays_on_the_status_line_whenever_its_distances_come_in(
+    qtbot, tmp_path, monkeypatch
+):
+    """The scan's distances are measured on the side lane as soon as a result is in; when they
+    came in before the result was drawn, their warning ("the surface folds back on itself")
+    was appended to the status line and then replaced by the result's own text (soybean
+    pot1_1's screenshot showed none). The window now says the scan's warnings with the
+    result's."""
+    real = scans.fidelity_sections
+
+    def warning(result, scan):
+        sections, _ = real(result, scan)
+        return sections, ["the surface folds back on itself at 0.8% of its edges"]
+
+    monkeypatch.setattr(scans, "fidelity_sections", warning)
+    drawn = MainWindow._show_result
+
+    def after_the_distances(self):  # the order that lost the warning, made certain
+        qtbot.waitUntil(lambda: self.session.shown.fidelity is not None, timeout=WAIT_MS)
+        drawn(self)
+
+    monkeypatch.setattr(MainWindow, "_show_result", after_the_distances)
+    window = make_window(qtbot, tmp_path / "settings.ini", FAST)
+    assert window.open_path(write_points(tmp_path / "scan.txt", six_column_scan()))
+    wait_fidelity(qtbot, window)
+    qtbot.waitUntil(lambda: "shown in" in window.status_text.text(), timeout=WAIT_MS)
+    qtbot.wait(200)  # anything else due on the status line
+    assert "folds back on itself" in window.status_text.text()
+    close_window(window)
