@@ -26,6 +26,13 @@ experiment/scan-sheet-gcv) came a third nearer the truth (0.084% / 0.107% / 0.17
 p99 dihedral 6-8°, fit 0.242% / 0.318% / 0.475% / 0.483%, area −2.3% to −3.0%; on the shared
 scans it moved two extractions (sugar beet pot1_7's apex: tests/sources/test_scan_veins.py and
 test_photo_veins.py) and was left out (session 22's note).
+
+At c3c7c08 (the two-pass sheet): to truth 0.089% / 0.116% / 0.178% / 0.164%, the truth to it
+0.125% / 0.145% / 0.198% / 0.185%, area −3.0% / −2.8% / −2.5% / −2.7%: the outline, a hull
+through the outermost points, ran inside the blade's edge. Closed by 2 and grown by 0.3 of the
+points' spacing (sources/scan_outline.py): 0.106% / 0.133% / 0.196% / 0.183%, 0.102% / 0.123% /
+0.175% / 0.167%, area −0.8% / −0.5% / −0.2% / −0.4%; p99 dihedral 6.7° / 8.0° / 9.3° / 9.7°
+(6.6° / 8.5° / 10.6° / 9.3°), the fit the same to 0.002%.
 """
 
 from __future__ import annotations
