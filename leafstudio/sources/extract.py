@@ -42,7 +42,13 @@ from leafstudio.model import Leaf
 from leafstudio.sources.scan import OUTLINE_POINTS
 from leafstudio.sources.scan_holes import holes
 from leafstudio.sources.scan_outline import held_part, outline, resample
-from leafstudio.sources.scan_veins import PETIOLE_SHARE, base_point, midline, side_veins
+from leafstudio.sources.scan_veins import (
+    PETIOLE_SHARE,
+    SIDE_POINTS,
+    base_point,
+    midline,
+    side_veins,
+)
 
 MIN_POINTS = 50
 OUTLIER_FACTOR = 3.0  # a point whose mean neighbour distance exceeds this many medians is noise
@@ -487,5 +493,7 @@ def _veins(found: _Found, count: int, held: tuple[np.ndarray, float] | None) -> 
     rim = np.convolve(np.tile(lift(boundary_xy, xy, h), 3), kernel / kernel.sum(), "same")
     boundary = world(boundary_xy, rim[count : 2 * count])
     veins = veins_inside_outline(boundary, [world(v) for v in veins_xy], spacing)
+    # a side vein cut by the outline to a stub is dropped, as side_veins drops a short one (pot1_7)
+    veins = veins[:1] + [v for v in veins[1:] if len(v) >= SIDE_POINTS]
     rings = holes(found.region, gaps, gap) if held is not None else []
     return found._replace(leaf=Leaf(boundary=boundary, veins=veins), holes=tuple(rings))

@@ -20,6 +20,7 @@ SIDE_REACH = 0.85  # side veins stop at this share of the way to the margin
 MIDRIB_REACH = (0.02, 0.98)  # the midrib's span along base -> tip
 PETIOLE_SHARE = 0.02  # fewer points than this share of the blade's do not mark the base
 AXES = {"+x": 0, "-x": 0, "+y": 1, "-y": 1, "+z": 2, "-z": 2}
+SIDE_POINTS = 4  # a side vein shorter than this many points (of the outline's spacing) is dropped
 MIDRIB_SMOOTH = 0.08  # the middles are smoothed over this share of the span (a Gaussian's sigma)
 
 
@@ -106,14 +107,14 @@ def side_veins(polygon: Polygon, midrib: np.ndarray, covered, spacing: float) ->
                 continue
             distance = min(Point(midrib[i]).distance(p) for p in getattr(hit, "geoms", [hit]))
             count = int(SIDE_REACH * distance / spacing)
-            if count < 4:
+            if count < SIDE_POINTS:
                 continue
             t = np.linspace(0, SIDE_REACH * distance, count + 1)[1:]
             path = midrib[i] + t[:, None] * direction
             ok = covered(path)
             stop = int(np.argmin(ok)) if not ok.all() else len(path)
             stop = min(stop, _before_crossing(path, veins, spacing))
-            if stop >= 4:
+            if stop >= SIDE_POINTS:
                 veins.append(path[:stop])
     return veins
 
