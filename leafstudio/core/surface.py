@@ -198,7 +198,10 @@ def _refine(mixture: Mixture, xy: np.ndarray, row_scale: np.ndarray, target: np.
         xy, kernel_array(row_scale), kernel_array(target),
         _pack(mixture), REFINE_STEPS, REFINE_GAIN,
     )  # fmt: skip
-    refined = _unpack(theta, mixture.weights)
+    try:
+        refined = _unpack(theta, mixture.weights)
+    except np.linalg.LinAlgError:  # a precision factor's diagonal, exp(t), underflowed to 0: a
+        return mixture  # singular matrix, raised out of reconstruct as a traceback (a noisy scan)
     if not np.all(np.isfinite(refined.covariances)):
         return mixture
     return refined
