@@ -17,7 +17,7 @@ NEAR, FAR = 0.01, 0.02  # shares of the leaf length for the "beyond" figures
 FAR_FROM_SCAN = 0.01  # of the length: a scan's surface farther on average is warned of
 FOLD_ANGLE = 90.0  # degrees: an edge whose two triangles meet more sharply folds the mesh back
 FOLDED = 0.0025  # a scan's mesh with more of its edges folded back is warned of (the eight shared
-# scans: soybean pot1_1, whose cloud is doubled and V-folded, 0.81%; the other seven 0.01% at
+# scans: soybean pot1_1, whose cloud is doubled and V-folded, 0.65%; the other seven 0.05% at
 # most; before the sheet's second fit, core/sheet.py, 3.1% and 0.16%)
 FIN_NEIGHBOURS = 16  # a fin's side: the mean direction to this many nearest scan points ...
 ONE_SIDE = 0.85  # ... at least this long (points all round a triangle: a hole it spans)
