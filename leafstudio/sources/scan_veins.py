@@ -113,7 +113,7 @@ def side_veins(polygon: Polygon, midrib: np.ndarray, covered, spacing: float) ->
             path = midrib[i] + t[:, None] * direction
             ok = covered(path)
             stop = int(np.argmin(ok)) if not ok.all() else len(path)
-            stop = min(stop, _before_crossing(path, veins, spacing))
+            stop = min(stop, _before_crossing(path, [midrib, *veins], spacing))
             if stop >= SIDE_POINTS:
                 veins.append(path[:stop])
     return veins
@@ -121,8 +121,10 @@ def side_veins(polygon: Polygon, midrib: np.ndarray, covered, spacing: float) ->
 
 def _before_crossing(path: np.ndarray, veins: list[np.ndarray], spacing: float) -> int:
     """How many of the (m, 2) `path`'s leading points lie `spacing` or more before it first
-    crosses one of the side veins kept so far: straight side veins off a bending midrib
-    crossed each other (soybean pot1_17: 5 pairs), and a side vein stops at the next one."""
+    crosses one of `veins` (the midrib and the side veins kept so far): straight side veins off
+    a bending midrib crossed each other (soybean pot1_17: 5 pairs), and one on the inside of a
+    strongly bending midrib crossed the midrib itself (a helper's outline setting, soybean
+    pot1_1); a side vein stops at the next vein."""
     if not veins:
         return len(path)
     line = shapely.LineString(path)

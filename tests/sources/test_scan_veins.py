@@ -54,3 +54,20 @@ def test_a_scans_veins_lie_on_its_blade_and_the_midrib_runs_straight_on(scan):
     near = cKDTree(points[found.blade])
     for vein in found.leaf.veins:
         assert np.median(near.query(vein)[0]) <= 0.02 * found.length
+
+
+def test_a_side_vein_stops_at_the_midrib_it_would_cross():
+    """A straight side vein on the inside of a strongly bending midrib (a half-ring blade) ran
+    across the midrib itself: side veins stopped at other side veins, not at the midrib (a
+    helper's outline setting made one on soybean pot1_1)."""
+    from shapely.geometry import Polygon
+
+    from leafstudio.sources.scan_veins import side_veins
+
+    turn = np.linspace(np.pi, 0, 200)
+    ring = [r * np.column_stack([np.cos(turn), np.sin(turn)]) for r in (1.4, 1.0, 0.6)]
+    blade = Polygon(np.vstack([ring[0], ring[2][::-1]]))
+    veins = side_veins(blade, ring[1], lambda p: np.ones(len(p), dtype=bool), 0.01)
+    midrib = shapely.LineString(ring[1])
+    assert len(veins) >= 8
+    assert not any(shapely.LineString(v).intersects(midrib) for v in veins)
