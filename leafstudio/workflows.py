@@ -31,7 +31,7 @@ from scipy.spatial import cKDTree
 from leafstudio._shared import progress
 from leafstudio._shared.blas import one_blas_thread
 from leafstudio._shared.inputs import check_file_kind
-from leafstudio.analysis.fidelity import folded_share, scan_distances, scan_warnings
+from leafstudio.analysis.fidelity import scan_distances, scan_warnings, with_folds
 from leafstudio.core import evaluate
 from leafstudio.core.bend import flat_leaf
 from leafstudio.core.pipeline import Pipeline, Result
@@ -367,9 +367,7 @@ def reconstruct(opened: Opened, params: Params, pipeline: Pipeline | None = None
     if opened.scan is not None and opened.extraction is not None:
         blade = opened.scan[opened.extraction.blade]
         length = result.blade_length
-        fit = scan_distances(result.triangle_mesh, blade, length)
-        if fit.get("points"):
-            fit["folded"] = folded_share(result.triangle_mesh)
+        fit = with_folds(scan_distances(result.triangle_mesh, blade, length), result.triangle_mesh)
         warnings += scan_warnings(fit)
     return Reconstruction(result, warnings, fit)
 

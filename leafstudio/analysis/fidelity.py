@@ -72,6 +72,12 @@ def folded_share(mesh: MeshLike) -> float:
     return float(np.mean(angles > FOLD_ANGLE)) if len(angles) else 0.0
 
 
+def with_folds(fit: dict[str, Any], mesh: MeshLike) -> dict[str, Any]:
+    """A scan's fit (distance_summary's figures) with the mesh's `folded_share` as "folded",
+    when it has points (the figures scan_warnings reads)."""
+    return {**fit, "folded": folded_share(mesh)} if fit.get("points") else fit
+
+
 def scan_warnings(fit: dict[str, Any]) -> list[str]:
     """What a scan's fit (scan_distances, with "folded": folded_share) says is wrong: a surface
     far from the scan on average, or folding back on itself; [] for neither."""

@@ -85,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
     """Read, check, compute everything, then write every output together (safewrite.staged):
     a run that fails anywhere leaves all old outputs as they were."""
     # heavy (the pipeline, the writers, the scans: numba, scipy, trimesh): not for --help
-    from leafstudio.analysis.fidelity import folded_share, scaled_fit, scan_distances, scan_warnings
+    from leafstudio.analysis.fidelity import distance_summary, scaled_fit, scan_warnings, with_folds
     from leafstudio.assets.export import (
         TEXTURES,
         asset_options,
@@ -95,6 +95,7 @@ def run(args: argparse.Namespace) -> int:
     )
     from leafstudio.assets.placement import parse_length, size_note
     from leafstudio.assets.writers import MESH_SUFFIXES, written_paths
+    from leafstudio.core.evaluate import point_to_mesh_distance
     from leafstudio.core.prepare.units import scaled_metrics
     from leafstudio.render.figure import check_figure_path  # pyvista and VTK: only when asked for
     from leafstudio.sources.files import load_leaf
@@ -127,11 +128,11 @@ def run(args: argparse.Namespace) -> int:
     if against is not None:
         scan, blade = against.scan, against.extraction.blade
         length = placement.length  # the blade's (Result.blade_length), found once
+        d = point_to_mesh_distance(result.triangle_mesh, scan)  # the blade's are among them
         fidelity = {
-            "all": scan_distances(result.triangle_mesh, scan, length),
-            "blade": scan_distances(result.triangle_mesh, scan[blade], length),
+            "all": distance_summary(d, length),
+            "blade": with_folds(distance_summary(d[blade], length), result.triangle_mesh),
         }
-        fidelity["blade"]["folded"] = folded_share(result.triangle_mesh)
         for note in scan_warnings(fidelity["blade"]):  # as the app and batch warn
             log.warning(f"{args.against}: {note}")
             args.warnings.append(note)  # for --metrics

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from leafstudio.analysis.compare import poisson_surface
-from leafstudio.analysis.fidelity import FAR, NEAR, distance_summary, folded_share, scan_warnings
+from leafstudio.analysis.fidelity import FAR, NEAR, distance_summary, scan_warnings, with_folds
 from leafstudio.core.evaluate import point_to_mesh_distance
 from leafstudio.core.pipeline import Result
 from leafstudio.core.trianglemesh import polydata, vertex_normals
@@ -65,9 +65,7 @@ def fidelity_sections(
     the window to say as the CLI and batch do."""
     d = point_to_mesh_distance(result.triangle_mesh, scan.points)  # the blade's are among them
     length = result.blade_length
-    blade = distance_summary(d[scan.extraction.blade], length)
-    if blade.get("points"):
-        blade["folded"] = folded_share(result.triangle_mesh)
+    blade = with_folds(distance_summary(d[scan.extraction.blade], length), result.triangle_mesh)
     sections = [
         ("Scan → mesh distance (blade points)", _fidelity_rows(blade)),
         ("Scan → mesh distance (all points)", _fidelity_rows(distance_summary(d, length))),
