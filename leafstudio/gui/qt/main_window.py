@@ -7,46 +7,42 @@ failure leaves the last good result on screen and says why; a file that cannot b
 reconstructed leaves the current document.
 
 Its menus are built from a table of actions (actions.py; features add rows with
-`add_actions`), its docks are added with `add_dock`, and the file commands live in
-file_commands.py.
+`add_actions`), its docks are added with `add_dock`, the file commands live in
+file_commands.py and its answers to the session's and the worker's reports (results drawn,
+failures, the status line, measurements) in reports.py.
 """
 
 from __future__ import annotations
 
 import json
-import time
 from collections.abc import Iterable
-from functools import partial
 from pathlib import Path
 
-from PySide6.QtCore import QSettings, Qt, QTimer, Signal
+from PySide6.QtCore import QSettings, Qt, Signal
 from PySide6.QtGui import QAction, QCloseEvent, QDragEnterEvent, QDropEvent
 from PySide6.QtWidgets import QDockWidget, QListWidgetItem, QMainWindow, QMenu, QMessageBox, QWidget
 
-from leafstudio.core.kernels import compiling_notice
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.layers import LAYERS
-from leafstudio.gui.model.measurements import measurement_rows
-from leafstudio.gui.model.session import Framing, Session, State
-from leafstudio.gui.model.textures import LEAF, SHOWS_TEXTURE, coloring_for
+from leafstudio.gui.model.session import Session
+from leafstudio.gui.model.textures import LEAF, SHOWS_TEXTURE
 from leafstudio.gui.qt import bend_sliders, explain, forms_dock, lesson_view, projector
 from leafstudio.gui.qt.actions import MENU_TITLES, WINDOW_ACTIONS, Action
 from leafstudio.gui.qt.controls import ParamPanel
 from leafstudio.gui.qt.file_commands import ABOUT, APP_NAME, FileCommands
 from leafstudio.gui.qt.layers_panel import LayersPanel
 from leafstudio.gui.qt.measurements_panel import MeasurementsPanel
+from leafstudio.gui.qt.reports import Reports
 from leafstudio.gui.qt.sketch import SketchEditor
 from leafstudio.gui.qt.status import Busy, StatusText
-from leafstudio.gui.qt.turns import later
 from leafstudio.gui.qt.viewport import Viewport
-from leafstudio.gui.qt.worker import PIPELINE, Outcome, Worker
+from leafstudio.gui.qt.worker import Worker
 from leafstudio.model import Params
 
-STAGE_LABEL_MS = 250  # the running stage is shown at most this often (each repaint costs time)
 LEFT, RIGHT = Qt.DockWidgetArea.LeftDockWidgetArea, Qt.DockWidgetArea.RightDockWidgetArea
 
 
-class MainWindow(FileCommands, QMainWindow):
+class MainWindow(FileCommands, Reports, QMainWindow):
     """The app's window. `settings` holds layout, last params and recent files."""
 
     result_shown = Signal(object)  # Outcome, after it is on screen
@@ -98,16 +94,7 @@ class MainWindow(FileCommands, QMainWindow):
         self.busy.cancelled.connect(self.session.cancel_open)
         self._progress_bar()  # the exports' (exports.py), hidden until one runs
 
-        self.worker.stage_started.connect(self._on_stage)
-        self.worker.yielded.connect(self._on_yielded)
-        self.worker.done.connect(self._on_measured)
-        self.worker.failed.connect(self._on_pipeline_failed)
-        self._result_due: tuple[Outcome, Framing | None] | None = None  # drawn next turn
-        self._stage_timer = QTimer(self)
-        self._stage_timer.setSingleShot(True)
-        self._stage_timer.setInterval(STAGE_LABEL_MS)
-        self._stage_timer.timeout.connect(self._show_stage)
-        self._stage = ""
+        self.connect_reports()
         self.worker.derives = self.session.derives  # a loaded leaf's sketch, off this thread
         self._connect_session()
         self.panel.changed.connect(self._on_params)
@@ -328,155 +315,6 @@ class MainWindow(FileCommands, QMainWindow):
         self.status_text.setText(message)
         self.show_error("Note", message)
         self.notice_shown.emit(message)
-
-    # --- session reports -----------------------------------------------------------------------
-    def _on_state(self, state: State, reason: str) -> None:
-        if reason in ("document", "undo", "fallback"):
-            self.editor.drop_edit()  # a drag or key run under way: its step would mix documents
-            self.panel.set_params(state.params)
-        if reason == "document":  # the Leaf look, but colour by height for a scan
-            is_scan = state.scan is not None
-            current = self.viewport.mesh_coloring
-            coloring, automatic = coloring_for(is_scan, current, self._coloring_automatic)
-            if coloring != current:  # the old mesh's new actor: a turn of its own (turns.py)
-                later(self, partial(self._set_coloring, coloring, automatic))
-            else:
-                self._coloring_automatic = automatic
-        if state.scan is not self._scan_shown:  # after the recolouring above: its new actor's
-            self._scan_shown = state.scan  # render sets up its shaders, then the points' (turns.py)
-            pieces = state.scan.pieces if state.scan is not None else []
-            self.layers.set_available("scan", state.scan is not None)
-            later(self, partial(self.viewport.set_layer, "scan", pieces))
-        self._update_title()
-
-    def _on_cleared(self) -> None:
-        self._result_due = None
-        self.viewport.clear()
-        if (scan := self.session.state.scan) is not None:
-            self.viewport.set_layer("scan", scan.pieces)
-        self.measurements_panel.clear()
-        self.status_text.setStyleSheet("")
-        self.status_text.setText(self.session.message)
-
-    def _on_result(self, outcome: Outcome, framing: Framing | None) -> None:
-        """Drawn a turn after the session's work on it (a new leaf's derived sketch): two short
-        pauses, not one of 32 ms (a 2M-point scan); a newer result then keeps a reset framing."""
-        due = self._result_due
-        if due is None:
-            later(self, self._show_result)
-        elif due[1] is not None:  # not drawn yet: a new document's reset, or a refit
-            reset = due[1].reset or (framing is not None and framing.reset)
-            framing = Framing((framing or due[1]).bounds, reset)
-        self._result_due = (outcome, framing)
-
-    def _show_result(self) -> None:
-        if self._result_due is None:  # cleared meanwhile (a new sketch)
-            return
-        (outcome, framing), self._result_due = self._result_due, None
-        start, side = time.perf_counter(), self.session.side
-        frame = self.session.view_frame() or outcome.result.frame
-        how = None if framing is None else ("reset" if framing.reset else "refit")
-        bounds = framing.bounds if framing is not None else None
-        if how == "reset" and self.viewport.texture_key not in (None, side.texture_key):
-            self.viewport.set_texture(None, None, draw=False)  # another leaf's image
-        self.viewport.show_layers(outcome.layers, frame, bounds, how)
-        outcome.timings["draw"] = time.perf_counter() - start
-        self._stage_timer.stop()
-        self._show_timings(outcome)
-        self.editor.view.set_crossings(self.session.crossings)
-        self.result_shown.emit(outcome)
-
-    def _on_session_failed(self, message: str, fell_back: bool) -> None:
-        """A failed reconstruction: said in the status, and over the view while the leaf it
-        concerns is the document; a refused file (fell_back) in a box instead, the good leaf
-        back on screen without another file's message over it."""
-        self.status_text.setStyleSheet("color: #b00020")
-        refused = f"{self.opened_name}: " if fell_back and self.opened_name else ""
-        kept = " (the previous leaf is kept)" if fell_back else ""
-        self.status_text.setText(f"Failed: {refused}{message}{kept}")
-        self.viewport.set_message("" if fell_back else message)
-        self.editor.view.set_crossings(self.session.crossings)
-        if fell_back:
-            self.show_error("Cannot reconstruct this leaf", message)
-        self.failure_shown.emit(message)
-
-    # --- worker reports ------------------------------------------------------------------------
-    def _on_stage(self, kind: str, request_id: int, stage: str) -> None:
-        if kind == PIPELINE and request_id == self.session.last_id:
-            self._stage = stage
-            if not self._stage_timer.isActive():
-                self._stage_timer.start()
-
-    def _show_stage(self) -> None:
-        if not self.worker.is_idle(PIPELINE):
-            self.status_text.setStyleSheet("")
-            notice = compiling_notice(self._stage)  # the first run, in worker processes
-            self.status_text.setText(notice or f"Running: {self._stage}…")
-
-    def _on_yielded(self, kind: str, job_id: int, value: object) -> None:
-        if kind == PIPELINE and not self.session.accept_drawable(value):
-            self._on_rendered()  # not shown: no render to wait for
-
-    def _on_rendered(self) -> None:
-        """The shown result is on screen: the worker may measure it (Worker.measure_after_drawn);
-        while a slider is held, not before it is let go (measuring takes the pipeline's lane
-        for ~0.1 s at grid 512, which the drag's next value would wait for)."""
-        if not self.panel.is_dragging():
-            self.session.drawn()
-
-    def _on_measured(self, kind: str, job_id: int, seconds: object) -> None:
-        """The pipeline measured a result (side jobs answer through their handles)."""
-        if kind != PIPELINE or not self.session.accept_measured(job_id):
-            return
-        self._stage_timer.stop()
-        if compiling_notice(self._stage) is not None and self.session.result is not None:
-            self._stage = ""  # measuring compiled its kernels first: the result's line again
-            self._show_timings(self.session.shown.outcome)
-        if self.session.result is not None:
-            if not self.session.message:  # not after a failure's message (Worker._failed)
-                self.status_text.setText(
-                    self.status_text.text() + f" · measurements {1000 * seconds:.0f} ms"
-                )
-            self._show_measurements()
-
-    def _on_pipeline_failed(self, kind: str, job_id: int, exc: BaseException) -> None:
-        if kind == PIPELINE:
-            self.session.accept_failure(job_id, exc)
-
-    def _show_timings(self, outcome: Outcome) -> None:
-        ms = [f"{name} {1000 * t:.0f} ms" for name, t in outcome.timings.items()]
-        total = sum(outcome.timings.values())
-        params = outcome.result.params
-        self.status_text.setStyleSheet("")
-        self.status_text.setText(  # short enough for a projector; each stage's time in the tip
-            f"K={params.k}, grid {params.grid}: shown in {1000 * total:.0f} ms",
-            tip=" · ".join(ms) + " (stages not listed came from the cache)",
-        )
-        for note in (*outcome.result.warnings, *self.session.side.warnings_of(outcome.request.id)):
-            self.status_text.setText(self.status_text.text() + f" — note: {note}")
-
-    def _show_measurements(self) -> None:
-        """Fill the panel once the shown result is measured; with a scan open, its distances
-        follow (measurements_shown fires when they are in)."""
-        result, shown = self.session.result, self.session.shown
-        if result is None or shown.measured_id != self.session.shown_id:
-            return
-        if not self.docks["Measurements"].isVisible():  # filled when shown: no cost while hidden
-            self._measurements_due = True
-            self.measurements_shown.emit()  # nothing on screen waits for it
-            return
-        self._measurements_due = False
-        sections = measurement_rows(result)
-        fidelity = shown.fidelity
-        scan = self.session.state.scan
-        waiting = scan is not None and (fidelity is None or fidelity[0] != shown.measured_id)
-        if waiting:  # the scan's sections first: with a scan open, they are what matters
-            sections.insert(0, ("Scan → mesh distance", [("Computing…", "")]))
-        elif fidelity is not None:
-            sections[:0] = fidelity[1]
-        self.measurements_panel.show_sections(sections)
-        if not waiting:
-            self.measurements_shown.emit()
 
     # --- window events -------------------------------------------------------------------------
     def dragEnterEvent(self, event: QDragEnterEvent) -> None:
