@@ -4,7 +4,8 @@ A sketch is an immutable snapshot, so undo and redo simply swap snapshots. The b
 curve (a periodic cubic spline through its control points); each vein is an open curve through its
 control points, each carrying a height above the plane; the splines are curves.py's. A vein
 drawn on a drawn leaf stands on the dome over the outline, raised or lowered by offsets its
-heights set by hand give it (sketch_dome.py). No Qt here: the editor in gui/qt/sketch.py draws it.
+heights set by hand give it (sketch_dome.py); mirror editing is sketch_mirror.py's. No Qt
+here: the editor in gui/qt/sketch.py draws it.
 """
 
 from __future__ import annotations
@@ -21,17 +22,18 @@ from leafstudio.core.evaluate import view_frame
 from leafstudio.core.plane import Frame
 from leafstudio.core.sheet import Scaled
 from leafstudio.gui.model import sketch_dome as dome
+from leafstudio.gui.model import sketch_mirror as mirror
 from leafstudio.gui.model.curves import (
     SAMPLES_PER_SPAN,
     closed_curve,
     even_by_length,
     insert_index,
     nearest_on_polyline,
-    open_curve,
     outline_controls,
     plane_arc_lengths,
 )
 from leafstudio.gui.model.midrib import Midrib
+from leafstudio.gui.model.sketch_mirror import MirrorFold
 from leafstudio.gui.model.thinning import thinned
 from leafstudio.model import Leaf
 
@@ -40,37 +42,12 @@ DERIVED_VEIN_POINTS = 8
 RELIEF_POINTS = 4000  # a derived sketch keeps at most this many boundary points as its relief
 OUTLINE_POINTS = 4000  # and follows at most this many of the outline's
 RELIEF_NEIGHBOURS = 4  # a boundary point's height: inverse-distance mean of this many relief points
-FOLD_REACH = 1.0  # a mirror image this far into a bend (in radii of curvature) is folded over
-FOLD_SAMPLES = 4  # curve points per span where a fold is looked for (it runs on every drag move)
 
 
 def _identity_frame() -> Frame:
     return Frame(
         origin=np.zeros(3), u=np.array([1.0, 0, 0]), v=np.array([0, 1.0, 0]), normal=np.eye(3)[2]
     )
-
-
-@dataclass(frozen=True)
-class MirrorFold:
-    """Where a mirror image would fold: the midrib bends more tightly than the leaf is wide.
-
-    where : (2,) plane point on the midrib; radius : its radius of curvature there; reach : how
-    far from the midrib the half being mirrored reaches there (more than `radius`).
-    """
-
-    where: tuple[float, float]
-    radius: float
-    reach: float
-
-    def message(self) -> str:
-        """What the editor tells the user (the edit itself is kept, not mirrored)."""
-        x, y = self.where
-        return (
-            f"Not mirrored: the midrib bends with a radius of {self.radius:.3g} near "
-            f"({x:.3g}, {y:.3g}), less than the {self.reach:.3g} the leaf reaches from it there, "
-            "so the mirror half would fold over itself. Bend the midrib less or narrow the leaf "
-            "there; Mirror resumes with the next edit that fits."
-        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -319,37 +296,8 @@ class Sketch:
         return 0.0 if midrib is None else float(midrib.offset(np.reshape(xy, (1, -1))[:, :2])[0])
 
     def mirror_fold(self, source_side: float) -> MirrorFold | None:
-        """Where mirroring from `source_side` would fold (see MirrorFold), or None. Checked on
-        the curves that `mirrored` reflects (the boundary curve on that side and the side
-        veins there, as spline samples, so a bend between two control points is seen): a
-        point whose image would reach the centre of the midrib's curvature (1 - d kappa <= 0
-        on the inside of the bend, gui/model/midrib.py) folds. One pass over all the points."""
-        midrib = self.midrib()
-        if midrib is None:
-            return None
-        outline = closed_curve(self.boundary, FOLD_SAMPLES) if len(self.boundary) >= 3 else []
-        outline = np.asarray(outline, dtype=float).reshape(-1, 2)
-        side_veins = range(1, len(self.veins))
-        controls = [self.veins[i][:, :2] for i in side_veins]
-        curves = [open_curve(self.veins[i], FOLD_SAMPLES)[:, :2] for i in side_veins]
-        points = np.vstack([outline.reshape(-1, 2), *controls, *curves])
-        if not len(points):
-            return None
-        reach, offset, feet = midrib.mirror_reach(points)
-        eps = 1e-9 * self.extent()
-        mirrored = np.zeros(len(points), dtype=bool)
-        mirrored[: len(outline)] = offset[: len(outline)] * source_side > eps
-        starts = np.cumsum([len(outline), *map(len, controls), *map(len, curves)])
-        for k in range(len(controls)):  # a side vein goes over whole, by its points' mean side
-            if float(np.mean(offset[starts[k] : starts[k + 1]])) * source_side > eps:
-                at = len(controls) + k
-                mirrored[starts[at] : starts[at + 1]] = True
-        reach = np.where(mirrored, reach, -np.inf)
-        worst = int(np.argmax(reach))
-        if reach[worst] < FOLD_REACH:
-            return None
-        radius = float(-offset[worst] / reach[worst])
-        return MirrorFold(tuple(map(float, feet[worst])), radius, abs(float(offset[worst])))
+        """Where mirroring from `source_side` would fold, or None (sketch_mirror.mirror_fold)."""
+        return mirror.mirror_fold(self, source_side)
 
     def mirror_edit(self, xy: np.ndarray) -> tuple[Sketch, MirrorFold | None]:
         """An edit at plane point `xy` with Mirror on: the sketch made symmetric from that side
@@ -359,53 +307,9 @@ class Sketch:
         return (self, fold) if fold is not None else (self.mirrored(side), None)
 
     def mirrored(self, source_side: float) -> Sketch:
-        """The sketch made symmetric about the midrib (vein 1, followed along its curve, see
-        gui/model/midrib.py): the half of the boundary on `source_side` (+1: left of the midrib,
-        -1: right) is kept and reflected onto the other, and each side vein there replaces its
-        nearest counterpart on the other side (or gains one). Unchanged without a midrib of
-        two points or more."""
-        midrib = self.midrib()
-        if midrib is None:
-            return self
-        side = lambda points: midrib.offset(points) * source_side  # noqa: E731
-        reflect = midrib.reflect
-
-        boundary = self.boundary
-        eps = 1e-9 * self.extent()
-        keep = side(boundary) > eps
-        if 0 < keep.sum() < len(boundary):
-            start = int(np.flatnonzero(keep & ~np.roll(keep, 1))[0])  # where the kept arc begins
-            order = np.roll(np.arange(len(boundary)), -start)
-            loop, kept = boundary[order], keep[order]
-            arc = loop[kept]
-            axis_at = np.flatnonzero(np.abs(side(loop)) <= eps)
-            last_kept = int(np.flatnonzero(kept)[-1])
-            after = loop[[i for i in axis_at if i > last_kept][:1]]  # where the arc meets the axis
-            before = loop[[i for i in axis_at if i > last_kept][-1:]] if len(axis_at) > 1 else []
-            before = np.asarray(before).reshape(-1, 2)
-            if len(before) and len(after) and np.allclose(before, after):
-                before = before[:0]
-            boundary = np.vstack([arc, after, reflect(arc)[::-1], before])
-            boundary = boundary.reshape(-1, 2)
-        veins, offsets = list(self.veins), list(self.offsets)
-        sides = [float(np.mean(side(v))) for v in veins]
-        targets = [i for i in range(1, len(veins)) if sides[i] < -eps]
-        for i in range(1, len(self.veins)):
-            if sides[i] <= eps:
-                continue
-            mirror = reflect(self.veins[i])
-            if targets:
-                j = min(
-                    targets, key=lambda t: float(np.linalg.norm(veins[t][0, :2] - mirror[0, :2]))
-                )
-                targets.remove(j)
-                veins[j], offsets[j] = mirror, self.offsets[i]
-            else:
-                veins.append(mirror)
-                offsets.append(self.offsets[i])
-        for j in sorted(targets, reverse=True):
-            del veins[j], offsets[j]
-        return replace(self, boundary=boundary, veins=tuple(veins), offsets=tuple(offsets))
+        """The sketch made symmetric about the midrib from `source_side` (+1: left of it, -1:
+        right; sketch_mirror.mirrored)."""
+        return mirror.mirrored(self, source_side)
 
     def default_height(self, vein: int, xy: np.ndarray) -> float:
         """Height for a new point of vein `vein` (past the last: a new vein) at plane point
