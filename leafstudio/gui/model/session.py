@@ -9,7 +9,7 @@ title=...)` replaces the document as ONE undo step (Ctrl+Z brings the previous o
 Files open here too (`open_path`: read on the worker's side lane through workflows.open_file,
 the path the command line and batch take), as do demos and new sketches; the side jobs of the
 shown result (the scan's distances, the Poisson surface, the texture) live in `session.side`
-(side.py).
+(side.py); how the worker's reports are taken is reports.py's.
 
 Every user story can be played on a Session in plain pytest: give it a `submit` callable that
 records or runs requests, then hand it `accept_result` / `accept_failure` as the worker would;
@@ -21,7 +21,7 @@ from __future__ import annotations
 import logging
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -29,10 +29,11 @@ import numpy as np
 from leafstudio.core.plane import Frame
 from leafstudio.core.prepare.polygon import ring_crossings
 from leafstudio.gui.model.bending import Bending
-from leafstudio.gui.model.framing import BladeBounds, Framing, blade_bounds
+from leafstudio.gui.model.framing import BladeBounds, Framing
 from leafstudio.gui.model.history import Event, History, State, Step
 from leafstudio.gui.model.jobs import Job, Run, describe, run_now
 from leafstudio.gui.model.opening import FileOpening, missing_photo_message
+from leafstudio.gui.model.reports import Fallback, Shown, WorkerReports
 from leafstudio.gui.model.side import SideJobs
 from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.model import PARAMS, Leaf, Params
@@ -49,27 +50,7 @@ def _param_text(before: Params, after: Params) -> str:
     return "Change " + ", ".join(changed)
 
 
-@dataclass
-class Shown:
-    """What the session last accepted from the worker."""
-
-    outcome: Any = None  # worker.Outcome
-    measured_id: int = 0
-    fidelity: tuple[int, list] | None = None  # request id, the panel's scan sections
-
-
-@dataclass
-class _Fallback:
-    state: State
-    steps: list[Step] = field(default_factory=list)
-    index: int = 0
-    clean: int | None = 0
-    request: int = 0
-    derived: Sketch | None = None  # the state's sketch derived from its result, if any
-    derived_leaf: Leaf | None = None
-
-
-class Session(FileOpening, Bending):
+class Session(FileOpening, Bending, WorkerReports):
     """The document, parameters, results, pending request and history.
 
     Parameters
@@ -155,7 +136,7 @@ class Session(FileOpening, Bending):
         self._framed: tuple[int, BladeBounds] | None = None
         self._edit_base: State | None = None
         self._param_base: State | None = None
-        self._fallback: _Fallback | None = None
+        self._fallback: Fallback | None = None
         self.side = SideJobs(self)
 
     # --- reading -------------------------------------------------------------------------------
@@ -228,7 +209,7 @@ class Session(FileOpening, Bending):
         self._fallback = None
         if not undoable and leaf is not None and self.result is not None:
             h, derived = self.history, (self.derived, self._derived_leaf)
-            self._fallback = _Fallback(before, list(h.steps), h.index, h.clean_index, 0, *derived)
+            self._fallback = Fallback(before, list(h.steps), h.index, h.clean_index, 0, *derived)
         self.derived = None
         self._apply(state, "document")
         if undoable:
@@ -403,94 +384,3 @@ class Session(FileOpening, Bending):
         for old in [i for i in self._requested if i < self.last_id - 64]:
             del self._requested[old]
         return self.last_id
-
-    # --- worker reports ------------------------------------------------------------------------
-    def accept_drawable(self, outcome: Any) -> bool:
-        """The worker's outcome to draw (accept_result); the worker measures it once it is on
-        screen (Outcome.drawn, set by `drawn`), an older one at once: it will never be."""
-        if self._drawn_due is not None:
-            self._drawn_due.set()  # a newer result replaces it before its render
-        self._drawn_due = outcome.drawn
-        return self.accept_result(outcome)
-
-    def drawn(self) -> None:
-        """The shown result is on screen (or will not be): it may be measured."""
-        if self._drawn_due is not None:
-            self._drawn_due.set()
-            self._drawn_due = None
-
-    def accept_result(self, outcome: Any) -> bool:
-        """A finished reconstruction: shown unless a newer one was shown already."""
-        request_id = outcome.request.id
-        if request_id < self.shown_id or request_id <= self._ignored_upto:
-            return False
-        self.shown = Shown(outcome, 0, None)
-        if self._fallback is not None and request_id >= self._fallback.request:
-            self._fallback = None
-        result = outcome.result
-        serial, reason = self._requested.get(request_id, (self.state.serial, "document"))
-        if self.derives(result.leaf):  # derived by the worker, if it knew (Worker.derives)
-            self.derived = getattr(outcome, "sketch", None) or Sketch.from_result(result)
-            self._derived_leaf = result.leaf
-            self.sketch_shown.emit(self.derived, True)
-        frame = self.view_frame() or result.frame
-        bounds = blade_bounds(result.triangle_mesh.points, frame)
-        framing = None
-        if self._framed is None or self._framed[0] != serial:
-            framing = Framing(bounds, reset=True)
-        elif reason in ("edit", "undo") and not self._framed[1].contains(bounds):
-            framing = Framing(bounds.union(self._framed[1]), reset=False)
-        if framing is not None:
-            self._framed = (serial, framing.bounds)
-        self.message = ""
-        if framing is not None and framing.reset:
-            self.side.new_leaf(result)  # another leaf's image: the view drops it
-        self.result_shown.emit(outcome, framing)
-        self.side.result_shown(outcome)
-        self.open_settled(request_id)
-        return True
-
-    def accept_measured(self, request_id: int) -> bool:
-        """The shown result's metrics are computed (on the worker)."""
-        if request_id != self.shown_id:
-            return False
-        self.shown.measured_id = request_id
-        return True
-
-    def accept_fidelity(self, request_id: int, sections: list) -> bool:
-        """The scan's distances to result `request_id`."""
-        if request_id != self.shown_id or self.state.scan is None:
-            return False
-        self.shown.fidelity = (request_id, sections)
-        return True
-
-    def accept_failure(self, request_id: int, exc: BaseException) -> bool:
-        """A failed reconstruction: the last good result stays; a newly opened document that
-        fails brings the previous one back. True when the failure concerns what is shown."""
-        if request_id < self.shown_id or request_id < self.last_id:
-            return False
-        if request_id <= self._ignored_upto:
-            return False
-        self.message = describe(exc)
-        fallback = self._fallback
-        fell_back = fallback is not None and request_id >= fallback.request
-        self.failed.emit(self.message, fell_back and self._restore_fallback())
-        self.open_settled(request_id)
-        return True
-
-    def _restore_fallback(self) -> bool:
-        """Bring back the document from before a newly opened one (its first run failed or was
-        cancelled), with its history; False when there is none to bring back."""
-        fallback = self._fallback
-        if fallback is None or self.result is None:
-            return False
-        self._fallback = None
-        self._drop_edit()  # an edit begun on the failed document
-        self.state = fallback.state
-        self.derived, self._derived_leaf = fallback.derived, fallback.derived_leaf
-        h = self.history
-        h.steps, h.index, h.clean_index = fallback.steps, fallback.index, fallback.clean
-        h.changed.emit()
-        self.state_changed.emit(self.state, "fallback")
-        self.sketch_shown.emit(self.editable_sketch() or Sketch(), True)
-        return True
