@@ -28,6 +28,7 @@ from leafstudio.core.prepare.plausibility import (
     check_boundary,
     check_not_a_surface,
     keep_outer_loop,
+    read_loop,
 )
 from leafstudio.core.prepare.polygon import (
     EdgeBands,
@@ -104,8 +105,9 @@ class SurfaceStage:
 
 def frame_stage(leaf: Leaf, margin: str = "auto", units: Units | None = None) -> FrameStage:
     scale, offset = (units.scale, units.offset) if units is not None else (1.0, None)
-    check_not_a_surface(leaf.boundary)  # a whole scan given as the boundary: an error
-    check_boundary(leaf.boundary, scale, offset)  # a figure eight would lose a lobe: an error
+    loop = read_loop(leaf.boundary)  # the boundary as one ordered loop, read once for both
+    check_not_a_surface(leaf.boundary, loop)  # a whole scan given as the boundary: an error
+    check_boundary(leaf.boundary, scale, offset, loop)  # a figure eight would lose a lobe
     boundary, notes = keep_outer_loop(leaf.boundary)  # holes, separate loops: dropped, and said
     if notes:
         leaf = Leaf(boundary, leaf.veins)

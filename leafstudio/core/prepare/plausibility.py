@@ -8,6 +8,8 @@ plane or outside its extent make a surface of whatever height they say, so that 
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
@@ -149,20 +151,21 @@ def leaf_warnings(leaf) -> list[str]:
     return notes
 
 
-def check_not_a_surface(boundary: np.ndarray) -> None:
+def check_not_a_surface(boundary: np.ndarray, loop: Loop | None = None) -> None:
     """Raise LeafError when the boundary points cover a surface (surface_spread over
     COVER_SPREAD): a scan of the whole leaf given where its boundary belongs, whose outline and
     area would be meaningless and whose surface would be lost; or fill a volume (a 3D blob or a
     sphere's points, too sparse to cover a surface: issue 24, finding 15), by the thinness a
     scan is held to (check_leaf_like); or, too sparse for either, fill an area (a disc of
-    points, a hemisphere, a flattened blob: cover.filled_share)."""
+    points, a hemisphere, a flattened blob: cover.filled_share). `loop`: the boundary's
+    read_loop, when the caller has it."""
     spreads = principal_spreads(fixed_sample(boundary, SAMPLE))
     if spreads[2] > THIN * spreads[0]:
         raise LeafError(
             f"the boundary points fill a volume, not a line round a leaf (their thickness is "
             f"{spreads[2] / spreads[0]:.2f} of their length; a leaf's is under {THIN})"
         )
-    if is_outline(boundary):  # a traced outline covers no surface: the cover's search skipped
+    if is_outline(boundary, loop):  # a traced outline covers no surface: no cover search
         return
     spread, share = surface_cover(boundary)  # the share: where too sparse for the spread
     if spread > COVER_SPREAD:
@@ -224,35 +227,52 @@ def _loop_ratio(xy: np.ndarray) -> float | None:
     return float(steps.sum() / perimeter)
 
 
-def is_outline(boundary: np.ndarray) -> bool:
+class Loop(NamedTuple):
+    """A boundary read as one ordered loop: every k-th point (CHECKED_POINTS at most: a lobe
+    survives, noise thins) in their best-fit plane, and the closed path's length over its hull's
+    perimeter (None: not one closed ordered loop, _loop_ratio). is_outline and
+    boundary_crossing both read it; the pipeline reads it once for both (0.4 ms each)."""
+
+    xy: np.ndarray  # (k, 2)
+    centre: np.ndarray  # (3,)
+    axes: np.ndarray  # (2, 3)
+    ratio: float | None
+
+
+def read_loop(boundary: np.ndarray) -> Loop:
+    """The (n, 3) boundary read as one ordered loop (Loop)."""
+    points = np.asarray(boundary, dtype=float)
+    xy, centre, axes = _plane_coordinates(points[:: max(1, len(points) // CHECKED_POINTS)])
+    return Loop(xy, centre, axes, _loop_ratio(xy) if len(xy) >= 3 else None)
+
+
+def is_outline(boundary: np.ndarray, loop: Loop | None = None) -> bool:
     """Whether the (n, 3) boundary is traced as an outline: at least OUTLINE_FROM points in one
     closed ordered loop at most OUTLINE_RATIO times its hull's perimeter long. Such points cover
     no surface: a closed path through n points spread over an area is about sqrt(n) / 4 times
     its hull's perimeter long, 2 from 64 points (a strip's, its rows over 2: a closed path
     covers an even number of rows, and two are an outline). Checking a form's boundary for a
-    surface (surface_cover) was half the frame stage's time (2.3 of 4.9 ms, an ovate)."""
-    points = np.asarray(boundary, dtype=float)
-    if len(points) < OUTLINE_FROM:
+    surface (surface_cover) was half the frame stage's time (2.3 of 4.9 ms, an ovate). `loop`:
+    the boundary's read_loop, when the caller has it."""
+    if len(boundary) < OUTLINE_FROM:
         return False
-    ratio = _loop_ratio(_plane_coordinates(points[:: max(1, len(points) // CHECKED_POINTS)])[0])
+    ratio = (loop or read_loop(boundary)).ratio
     return ratio is not None and ratio <= OUTLINE_RATIO
 
 
-def boundary_crossing(boundary: np.ndarray) -> np.ndarray | None:
+def boundary_crossing(boundary: np.ndarray, loop: Loop | None = None) -> np.ndarray | None:
     """Where an ordered boundary crosses itself into two or more lobes (a figure eight), as a 3D
     point; None for a simple outline, an unordered cloud, or the small loops of a noisy edge.
 
     Only a boundary given in order (consecutive points close together, one closed loop) can
-    cross itself; an unordered cloud has no crossing to speak of.
+    cross itself; an unordered cloud has no crossing to speak of. `loop`: the boundary's
+    read_loop, when the caller has it.
     """
     import shapely
 
-    points = np.asarray(boundary, dtype=float)
-    if len(points) < 8:
+    if len(boundary) < 8:
         return None
-    points = points[:: max(1, len(points) // CHECKED_POINTS)]  # a lobe survives; noise thins
-    xy, centre, axes = _plane_coordinates(points)
-    ratio = _loop_ratio(xy)
+    xy, centre, axes, ratio = loop or read_loop(boundary)
     if ratio is None or ratio > ZIGZAG:
         return None  # not one closed ordered loop, or a zigzag through a cloud: not an outline
     ring = shapely.LineString(np.vstack([xy, xy[:1]]))
@@ -275,11 +295,14 @@ def boundary_crossing(boundary: np.ndarray) -> np.ndarray | None:
 
 
 def check_boundary(
-    boundary: np.ndarray, scale: float = 1.0, shift: np.ndarray | None = None
+    boundary: np.ndarray,
+    scale: float = 1.0,
+    shift: np.ndarray | None = None,
+    loop: Loop | None = None,
 ) -> None:
     """Raise LeafError naming where an ordered boundary crosses itself (see boundary_crossing), in
     the user's coordinates `point * scale + shift` (the pipeline runs at unit size)."""
-    where = boundary_crossing(boundary)
+    where = boundary_crossing(boundary, loop)
     if where is not None:
         nearest = int(np.argmin(np.linalg.norm(np.asarray(boundary) - where, axis=1)))
         shown = where * scale + (0.0 if shift is None else shift)
