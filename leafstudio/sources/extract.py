@@ -42,6 +42,7 @@ from leafstudio.model import Leaf
 from leafstudio.sources.scan import OUTLINE_POINTS
 from leafstudio.sources.scan_holes import holes
 from leafstudio.sources.scan_outline import held_part, outline, resample
+from leafstudio.sources.scan_thinning import voxel_thinning
 from leafstudio.sources.scan_veins import (
     PETIOLE_SHARE,
     SIDE_POINTS,
@@ -65,9 +66,7 @@ STRAND = 0.35  # a petiole's second spread is at most this share of its first (t
 STICK_OUT = 0.5  # ... and its far end this share of its length from the blade (petioles: 0.92-1.05;
 # strips along the margin: 0.09-0.18)
 BUDGET = 40_000  # larger scans are thinned to at most this many voxel centroids
-THINNING_PASSES = 8
 PROBES = 10_000  # blade_points counts a ball's points among this many at most
-SAMPLE = 50_000  # the voxel size is first sought on this many of the points
 HELD = 1.0  # a flattened blade's outline keeps within this many sheet cells of a sheet centre
 FINDING = "finding the leaf in the scan"  # what extract_leaf's progress reports say it does
 ENDS = 4.0  # a big scan's blade ends are sought in cubes this many diagonals from the outermost
@@ -359,45 +358,6 @@ def check_scan(
     if at_unit is None:
         at_unit = unit_scan(points)
     return check_leaf_like(at_unit.thinned, force=force)
-
-
-def voxel_thinning(points: np.ndarray, budget: int) -> tuple[np.ndarray, np.ndarray | None, float]:
-    """Between budget / 2 and `budget` points standing for (n, 3) `points`: the centroids of the
-    occupied cubes of a size tried until their count falls in that range, each point's cube
-    (n,), and the cubes' side; the points themselves, None and 0 when there are no more than
-    `budget`. A few O(n log n) passes: the first size assumes a surface (on a sample of the
-    points, then on all of them), each next one scales by the miss."""
-    if len(points) <= budget:
-        return points, None, 0.0
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    size = float(np.max(hi - lo)) / np.sqrt(budget)
-
-    def cells_of(at: np.ndarray, size: float) -> tuple[np.ndarray, np.ndarray]:
-        cells = np.floor((at - lo) / size).astype(np.int64)
-        dims = np.floor((hi - lo) / size).astype(np.int64) + 1
-        keys = (cells[:, 0] * dims[1] + cells[:, 1]) * dims[2] + cells[:, 2]
-        _, cell, counts = np.unique(keys, return_inverse=True, return_counts=True)
-        return cell, counts
-
-    def adjust(size: float, count: int) -> float:
-        return size * float(np.clip(np.sqrt(count / (0.75 * budget)), 0.5, 4.0))
-
-    if len(points) > 2 * SAMPLE:  # a cheap first guess from a sample (it finds fewer cubes)
-        sample = fixed_sample(points, SAMPLE)
-        for _ in range(THINNING_PASSES):
-            count = len(cells_of(sample, size)[1])
-            if budget // 2 <= count <= budget:
-                break
-            size = adjust(size, count)
-    for _ in range(THINNING_PASSES):
-        cell, counts = cells_of(points, size)
-        if budget // 2 <= len(counts) <= budget:
-            break
-        size = adjust(size, len(counts))
-    if len(counts) > budget:  # not settled: a coarser size surely keeps fewer
-        return voxel_thinning(points, budget // 2) if budget > 1 else (points[:1], None, 0.0)
-    sums = [np.bincount(cell, weights=points[:, k], minlength=len(counts)) for k in range(3)]
-    return np.column_stack(sums) / counts[:, None], cell.ravel(), size
 
 
 def _extract(

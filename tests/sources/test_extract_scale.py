@@ -11,8 +11,9 @@ import pytest
 
 from leafstudio.errors import LeafError
 from leafstudio.sources import extract
-from leafstudio.sources.extract import extract_leaf, voxel_thinning
+from leafstudio.sources.extract import extract_leaf
 from leafstudio.sources.scan import read_scan
+from leafstudio.sources.scan_thinning import voxel_thinning
 from tests.leaves import assert_outline_is_the_blades, scan_surface, synthetic_scan
 
 REAL = Path(__file__).resolve().parents[3] / "shared" / "realleaves"
