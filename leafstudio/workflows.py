@@ -44,6 +44,7 @@ from leafstudio.core.unfold import unfolded
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf, Params
 from leafstudio.sources.extract import (
+    BUDGET,
     FINDING,
     OUTLINE_POINTS,
     Extraction,
@@ -157,6 +158,7 @@ def _scan_opened(
     progress.report(0.0, FINDING)
     try:
         with one_blas_thread():  # small solves: a second thread only waits (_shared/blas.py)
+            scan = _once(scan)
             at_unit = unit_scan(scan)  # thinned once, for the check and the extraction
             notes = check_scan(scan, force=force, at_unit=at_unit)
             with progress.share(0.1, 1.0):  # check_scan: a tenth of a big scan's time
@@ -164,6 +166,20 @@ def _scan_opened(
     except LeafError as exc:
         raise LeafError(exc.problem, path) from None
     return Opened(path, "scan", found.leaf, scan=scan, extraction=found, notes=tuple(notes))
+
+
+def _once(scan: np.ndarray) -> np.ndarray:
+    """The (n, 3) scan with its repeated points dropped (the first of each kept), when it is used
+    whole: a scan of up to BUDGET points is checked and extracted point by point, and a point
+    written three times (two scanner passes merged) linked with nothing in the check's clusters
+    (the median gap to the nearest other point was 0) nor in the blade's. A larger scan is
+    thinned to its cubes' centroids (extract.voxel_thinning), where repeats merge."""
+    scan = np.asarray(scan, dtype=float)
+    if len(scan) > BUDGET or not np.isfinite(scan).all():  # unit_scan names a NaN
+        return scan
+    size = float(np.ptp(scan, axis=0).max()) if len(scan) else 0.0
+    keep = distinct_indices(scan, size)
+    return scan if len(keep) == len(scan) else scan[keep]
 
 
 def open_file(

@@ -229,3 +229,22 @@ def test_a_base_end_with_a_minus_sign_is_taken_as_written(tmp_path, capsys):
     assert code == 0, capsys.readouterr().err
     midrib = load_leaf(out).veins[0]
     assert midrib[0, 0] < -0.45 and midrib[-1, 0] > 0.45
+
+
+def test_a_scan_that_repeats_its_points_is_extracted_as_the_same_scan_once(tmp_path, capsys):
+    """Fuzzing finding (hunt26): a scan whose every point was written three times (two passes of
+    a scanner merged, an export that repeats vertices) was refused as "not one leaf: 3190 large
+    separate clusters of points (3, 3, 3, ...)" (the median distance to the nearest other point
+    was 0, so no two repeats linked), and with --force no blade was found. Repeated points now
+    count once: the same leaf as the scan written once."""
+    parts = synthetic_scan(seed=2)
+    points = np.vstack([parts["blade"], parts["petiole"], parts["outliers"]])
+    once, thrice = tmp_path / "once.xyz", tmp_path / "thrice.xyz"
+    np.savetxt(once, points)
+    np.savetxt(thrice, np.repeat(points, 3, axis=0))
+    for scan in (once, thrice):
+        out = tmp_path / f"{scan.stem}.leaf.json"
+        assert main(["extract", str(scan), "-o", str(out)]) == 0, capsys.readouterr().err
+    a, b = load_leaf(tmp_path / "once.leaf.json"), load_leaf(tmp_path / "thrice.leaf.json")
+    np.testing.assert_allclose(b.boundary, a.boundary, atol=1e-9)
+    assert len(b.veins) == len(a.veins)

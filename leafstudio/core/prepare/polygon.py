@@ -27,8 +27,8 @@ def unit_power(points: np.ndarray) -> float:
 
 
 def distinct_indices(points: np.ndarray, scale: float) -> np.ndarray:
-    """Indices of the (n, 2) points left once repeats are dropped, in order: of points within
-    1e-9 of `scale` of one another (in chains), the first. By distance, not by rounding to a
+    """Indices of the (n, 2) or (n, 3) points left once repeats are dropped, in order: of points
+    within 1e-9 of `scale` of one another (in chains), the first. By distance, not by rounding to a
     grid of 1e-9: copies 5e-12 apart that fell either side of a rounding boundary were both
     kept, and a noisy outline moved by 0.75% of its length (issue 24, finding 19). scipy's
     cKDTree finds the pairs (measured once, on a busy 2-core machine, on a ring of 2.4M points
