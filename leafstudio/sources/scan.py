@@ -206,13 +206,17 @@ def is_scan_file(path: str) -> bool:
 
 def looks_like_scan(leaf: Leaf) -> bool:
     """True when an unlabelled point list covers a surface (a scan) rather than tracing an
-    outline (cover.surface_spread, the test the pipeline refuses a scan as a boundary
-    by). Its 12 nearest neighbours spread in two directions within a dense noisy outline's
-    band too: the app opened such a boundary (24,000 points, noise 0.1% of the length) as a
-    scan and extracted a leaf from it."""
+    outline, by the tests the pipeline refuses a scan as a boundary by
+    (plausibility.boundary_cover): the surface's spread, or, where too sparse for it (a scan of
+    300 points), the share of points surrounded (the app opened those as a boundary, and showed
+    the pipeline's refusal). Its 12 nearest neighbours spread in two directions within a dense
+    noisy outline's band too: the app opened such a boundary (24,000 points, noise 0.1% of the
+    length) as a scan and extracted a leaf from it."""
     # heavy (scipy's k-d tree): not for the command line's parser, which reads OUTLINE_POINTS
-    from leafstudio.core.prepare.cover import COVER_SPREAD, surface_spread
+    from leafstudio.core.prepare.cover import COVER_SPREAD, FILL_SHARE
+    from leafstudio.core.prepare.plausibility import boundary_cover
 
     if leaf.veins or len(leaf.boundary) < MIN_SCAN_POINTS:
         return False
-    return surface_spread(leaf.boundary) > COVER_SPREAD
+    spread, share = boundary_cover(leaf.boundary)
+    return spread > COVER_SPREAD or share > FILL_SHARE

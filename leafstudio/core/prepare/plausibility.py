@@ -151,6 +151,17 @@ def leaf_warnings(leaf) -> list[str]:
     return notes
 
 
+def boundary_cover(boundary: np.ndarray, loop: Loop | None = None) -> tuple[float, float]:
+    """cover.surface_cover of (n, 3) boundary points: how much they cover a surface, and, where
+    too sparse for that, the share of them surrounded; (0, 0) for a traced outline (is_outline,
+    `loop` its read_loop when the caller has it: the cover's search skipped). Over COVER_SPREAD
+    or FILL_SHARE the points are a scan's (the app opens such a point list as one:
+    sources/scan.looks_like_scan)."""
+    if is_outline(boundary, loop):
+        return 0.0, 0.0
+    return surface_cover(boundary)
+
+
 def check_not_a_surface(boundary: np.ndarray, loop: Loop | None = None) -> None:
     """Raise LeafError when the boundary points cover a surface (surface_spread over
     COVER_SPREAD): a scan of the whole leaf given where its boundary belongs, whose outline and
@@ -165,9 +176,7 @@ def check_not_a_surface(boundary: np.ndarray, loop: Loop | None = None) -> None:
             f"the boundary points fill a volume, not a line round a leaf (their thickness is "
             f"{spreads[2] / spreads[0]:.2f} of their length; a leaf's is under {THIN})"
         )
-    if is_outline(boundary, loop):  # a traced outline covers no surface: no cover search
-        return
-    spread, share = surface_cover(boundary)  # the share: where too sparse for the spread
+    spread, share = boundary_cover(boundary, loop)
     if spread > COVER_SPREAD:
         raise LeafError(
             f"the boundary points cover a surface, not a line round the leaf (local spread "

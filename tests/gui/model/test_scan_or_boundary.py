@@ -35,3 +35,21 @@ def test_a_bent_narrow_outline_opens_as_a_boundary_and_a_bent_strip_scan_as_a_sc
 
     assert not looks_like_scan(Leaf(bent_strap(5000, 30, 1.0, 0.002), []))
     assert looks_like_scan(Leaf(bent_filled_strip(5000, 25, 2.0), []))
+
+
+def test_a_sparse_scan_opens_as_a_scan(tmp_path):
+    """Fuzzing finding (hunt26): a scan of a few hundred points (a real one subsampled to 300)
+    is too sparse for the surface's spread, and the pipeline refuses it as a boundary by the
+    share of its points surrounded ("fill an area ... is this a scan?"); the app asked only the
+    spread, opened it as a boundary and showed that refusal. It now asks both, as the pipeline."""
+    import numpy as np
+
+    from leafstudio.workflows import open_file
+    from tests.leaves import synthetic_scan
+
+    blade = synthetic_scan(seed=0, blade_points=150)["blade"]
+    assert looks_like_scan(Leaf(blade, []))
+    path = tmp_path / "sparse.xyz"
+    np.savetxt(path, blade)
+    opened = open_file(path)
+    assert opened.kind == "scan" and len(opened.leaf.veins) >= 3
