@@ -9,8 +9,10 @@ blade side-on (a fold of 75°: the mesh 5% of the length off the form's own surf
 `Pose` (fold, curl, roll) whose `flatten` brings the margin and the midrib nearest one plane, by
 least squares over the frame's rotation and the pose's three terms. The leaf is unfolded only
 when its margin is well off a plane and the pose lays it much flatter than the best quadratic
-height field over that plane would: a flat, cupped or gently bent leaf runs as before (its
-margin's heights go to the paper's base b(x)).
+height field over that plane would, or, when that plane sees it side-on (a whole vein outside
+the outline there: the pipeline would refuse it or mesh a side view), whenever a pose lays it
+flat: a flat, cupped or
+gently bent leaf runs as before (its margin's heights go to the paper's base b(x)).
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ from scipy.spatial.transform import Rotation
 from leafstudio.core.bend import Pose
 from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame
-from leafstudio.core.prepare.vein_order import midrib_turned
+from leafstudio.core.prepare.vein_order import midrib_turned, veins_inside_outline
 from leafstudio.model import Leaf
 
 OFF_PLANE = 0.12  # a margin this far off its PCA plane (RMS, share of its RMS width) may be bent
@@ -43,6 +45,8 @@ TERMS = ((0, 1, 2), (0,), (1,), (2,), (0, 1))
 SIMPLER = 1.5  # fewer terms are taken when they leave at most this much more than all three
 CLOSE = 2e-4  # ... plus this share of the length
 VEINS_OUT = 0.02  # an unfolding that leaves more of the veins' points outside the outline is wrong
+SIDE_ON = 0.01  # a whole vein this share of the length outside the outline on the boundary's
+# plane (the pipeline refuses it past 0.01: steps.VEIN_OUTSIDE_TOLERANCE): the plane is side-on
 
 
 def _off_plane(points: np.ndarray) -> tuple[float, float]:
@@ -92,6 +96,13 @@ def _lies_flat(bend: PlacedPose, leaf: Leaf) -> bool:
     return bool(np.mean(~shapely.contains_xy(region, veins[:, 0], veins[:, 1])) <= VEINS_OUT)
 
 
+def _side_on(leaf: Leaf, length: float) -> bool:
+    """Whether the boundary's PCA plane sees `leaf` side-on: a whole vein (all but a point)
+    lies outside the outline there, by more than SIDE_ON of `length` (forms/make.seen_on_edge)."""
+    inside = veins_inside_outline(leaf.boundary, list(leaf.veins), -SIDE_ON * length)
+    return len(inside) < len(leaf.veins)
+
+
 def fit_pose(leaf: Leaf) -> PlacedPose | None:
     """The bend that lays `leaf`'s margin and midrib flat, or None when the leaf is flat enough
     as it is or no pose explains its bend (module docstring).
@@ -137,6 +148,10 @@ def _fit(leaf: Leaf) -> PlacedPose | None:
     if midrib_turned(list(leaf.veins)):  # written apex first: the frame's origin is the base
         midrib = midrib[::-1]
     before = _off_quadric(boundary)  # the pose must do much better than a height field
+    if _side_on(leaf, length):  # ... unless the leaf as given is refused: any pose that lays
+        # it flat does better (folded down 70°, the halves nearly closed: fitted 0.0107 against
+        # the quadric's 0.0259, and the pipeline refused its midrib as outside the outline)
+        before = np.inf
     boundary = boundary[:: max(1, len(boundary) // FIT_POINTS)]  # enough to fit six numbers
     midrib = np.vstack([midrib[:: max(1, len(midrib) // FIT_POINTS)], midrib[-1:]])
     origin = midrib[0]
