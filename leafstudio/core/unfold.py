@@ -11,8 +11,8 @@ least squares over the frame's rotation and the pose's three terms. The leaf is 
 when its margin is well off a plane and the pose lays it much flatter than the best quadratic
 height field over that plane would, or, when that plane sees it side-on (a whole vein outside
 the outline there: the pipeline would refuse it or mesh a side view), whenever a pose lays it
-flat: a flat, cupped or
-gently bent leaf runs as before (its margin's heights go to the paper's base b(x)).
+flat: a flat, cupped or gently bent leaf runs as before (its margin's heights go to the paper's
+base b(x)).
 """
 
 from __future__ import annotations
