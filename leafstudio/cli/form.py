@@ -170,22 +170,43 @@ def _point(text: str) -> np.ndarray:
     return np.array(values)
 
 
+def _on_curves(leaf: Leaf, point: np.ndarray) -> np.ndarray:
+    """`point` (X,Y or X,Y,Z) of a bent leaf as a (3,) point: X,Y at the height of the leaf's
+    curves' nearest point there (above, a bent blade has one height where it is seen)."""
+    if len(point) == 3:
+        return point
+    curves = np.vstack([leaf.boundary, *leaf.veins])
+    nearest = curves[np.argmin(np.linalg.norm(curves[:, :2] - point, axis=1))]
+    return np.array([point[0], point[1], nearest[2]])
+
+
 def run_veins(args: argparse.Namespace) -> int:
     # heavy (the veins' growth: scipy, shapely, numba): not for --help
+    from leafstudio.core.bend import flat_curve, flat_leaf
     from leafstudio.core.prepare.vein_order import midrib_turned
+    from leafstudio.core.unfold import unfolded
     from leafstudio.forms.veins import grow_veins
     from leafstudio.sources.files import check_leaf_output, load_leaf, save_leaf
 
     check_leaf_output(args.output, [args.leaf])
-    leaf = load_leaf(args.leaf)
+    # a bent leaf's veins are grown on its flat blade and bent as it is: grown in its outline as
+    # seen from above, a form folded 75° got veins across its side view, the bend was dropped,
+    # and its mesh had half the blade's area (curves in 3D without a bend are unfolded first)
+    leaf = unfolded(load_leaf(args.leaf))
+    flat = flat_leaf(leaf)
     base = _point(args.base) if args.base else None
+    if base is not None and leaf.bend is not None:
+        base = flat_curve(leaf.bend, _on_curves(leaf, base)[None])[0]
     if base is None and leaf.veins:  # the midrib's base: its last point when written apex first
-        base = leaf.veins[0][-1 if midrib_turned(list(leaf.veins)) else 0]
+        base = flat.veins[0][-1 if midrib_turned(list(flat.veins)) else 0]
     try:
-        veins = grow_veins(leaf.boundary, args.venation, args.secondaries, base, args.seed)
+        veins = grow_veins(flat.boundary, args.venation, args.secondaries, base, args.seed)
     except LeafError as exc:
         raise LeafError(exc.problem, args.leaf) from None
-    save_leaf(Leaf(boundary=leaf.boundary, veins=veins), args.output)
+    if leaf.bend is not None:  # a scan's sheet remembers the points it bent (sheet.Scaled)
+        bent = getattr(leaf.bend, "bent", leaf.bend.apply)
+        veins = [bent(v) for v in veins]
+    save_leaf(Leaf(boundary=leaf.boundary, veins=veins, bend=leaf.bend), args.output)
     print(
         f"{args.output}: {len(veins)} {args.venation} veins grown inside the outline of "
         f"{Path(args.leaf).name}",
