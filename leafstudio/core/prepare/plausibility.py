@@ -30,15 +30,17 @@ LISTED = 4  # the sizes of the largest clusters a refusal names
 VEIN_REACH = 1.0  # veins farther than this many leaf lengths from the boundary's plane or extent
 
 
-def _clusters(points: np.ndarray, tree: cKDTree, nearest: np.ndarray) -> np.ndarray:
+def _clusters(points: np.ndarray, tree: cKDTree, nearest: np.ndarray) -> tuple[np.ndarray, ...]:
     """Sizes of the connected groups (largest first), linking points within LINK spacings (the
-    median of `nearest`, each point's distance to its nearest other)."""
+    median of `nearest`, each point's distance to its nearest other), and (n,) bool: the points
+    of the largest."""
     spacing = float(np.median(nearest))
     pairs = tree.query_pairs(LINK * max(spacing, 1e-300), output_type="ndarray")
     n = len(points)
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
     labels = connected_components(graph, directed=False)[1]
-    return np.sort(np.bincount(labels))[::-1]
+    counts = np.bincount(labels)
+    return np.sort(counts)[::-1], labels == np.argmax(counts)
 
 
 def _surface_variation(points: np.ndarray, index: np.ndarray) -> float:
@@ -77,7 +79,7 @@ def leaf_like_problems(points: np.ndarray) -> list[str]:
     unit = centred / scale  # the tests are scale-free; this keeps them finite at 1e200
     problems = []
     tree, nearest, index = _neighbours(unit)
-    sizes = _clusters(unit, tree, nearest)
+    sizes, largest = _clusters(unit, tree, nearest)
     large = int(np.sum(sizes >= LARGE_CLUSTER * sizes[0]))
     if large > 1:
         listed = ", ".join(str(s) for s in sizes[: min(large, LISTED)])
@@ -85,7 +87,9 @@ def leaf_like_problems(points: np.ndarray) -> list[str]:
         problems.append(
             f"not one leaf: {large} large separate clusters of points ({listed}{more} points)"
         )
-    spreads = principal_spreads(unit)
+    # the leaf's thickness, not its strays': 5% of a scan's points thrown up to two lengths off
+    # (which the extraction drops) made it "0.67 of its length"
+    spreads = principal_spreads(unit[largest])
     if spreads[2] > THIN * spreads[0]:
         problems.append(
             f"not thin: its thickness is {spreads[2] / spreads[0]:.2f} of its length "
