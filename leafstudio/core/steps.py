@@ -239,11 +239,13 @@ def compute_gmm(run: StageRun) -> tuple[np.ndarray, Mixture]:
         return np.zeros((0, 2)), _flat_mixture(fs.polygon.mean(axis=0))
     p_in = guide.p[guide.inside]
     support = int(np.count_nonzero(p_in))  # grid nodes the samples can come from
-    if params.k != K_AUTO and params.k > support // MIN_NODES_PER_COMPONENT:
+    # auto tries from 1: a guide between the grid's nodes said "zero everywhere: nothing to fit"
+    least = 1 if params.k == K_AUTO else params.k
+    if least > support // MIN_NODES_PER_COMPONENT:
         raise LeafError(
-            f"K = {params.k} is more than the data supports: the height guide covers only "
+            f"K = {least} is more than the data supports: the height guide covers only "
             f"{support} grid nodes (at least {MIN_NODES_PER_COMPONENT} per component needed); "
-            f"lower K or raise the grid resolution"
+            f"{'' if params.k == K_AUTO else 'lower K or '}raise the grid resolution"
         )
     samples = run["samples"]
     # the sign of p at each sample's node: veins above and below the plane are fitted apart
