@@ -29,6 +29,8 @@ import shapely
 from scipy.interpolate import CubicSpline, LinearNDInterpolator
 from shapely.geometry import Polygon
 
+from leafstudio.core.prepare.polygon import unit_power
+
 KNOTS = 24  # places along the blade the sections' mean heights are read at
 ROOM_SLACK = np.deg2rad(5.0)  # Relief.fold_room: kept clear of the midrib's plane
 CREASE = 0.05  # of the half width: points nearer the midrib than this have no angle off it
@@ -213,7 +215,10 @@ def _relief_of(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | None:
     xy = np.column_stack([gx.ravel()[inside], gy.ravel()[inside]])
     if len(xy) == 0:
         return None
-    heights = LinearNDInterpolator(points[:, :2], points[:, 2])(xy)
+    # triangulated at about unit size, by a power of two (exact): Qhull's Delaunay overflowed
+    # past 1e77 (a leaf at 1e90 opened in the app, and its bend slider raised QhullError)
+    unit = unit_power(points[:, :2])
+    heights = LinearNDInterpolator(points[:, :2] * unit, points[:, 2])(xy * unit)
     held = np.isfinite(heights)
     xy, heights = xy[held], heights[held]
     if len(xy) == 0:

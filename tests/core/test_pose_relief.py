@@ -199,3 +199,15 @@ def test_a_blades_relief_is_made_once_and_a_changed_one_anew():
     first.sheet_height(x)  # its spline made and kept
     lifted = replace(first, mean=tuple(m + 0.01 for m in first.mean))
     assert lifted.sheet_height(x)[0] == pytest.approx(first.sheet_height(x)[0] + 0.01)
+
+
+def test_a_blade_far_from_unit_size_has_its_relief_scaled():
+    """Fuzzing finding (hunt26): a leaf 1e90 across (the app draws and measures up to 1e150)
+    opened, and its bend slider raised a QhullError out of relief_of (Qhull's Delaunay of the
+    curves overflowed past 1e77). The relief is now the unit blade's, scaled."""
+    blade = Form("ovate", wave=0.1).blade()
+    unit = relief_of(blade.boundary, blade.veins)
+    for scale in (1e90, 1e-90):
+        far = relief_of(blade.boundary * scale, [v * scale for v in blade.veins])
+        np.testing.assert_allclose(np.array(far.mean) / scale, unit.mean, rtol=1e-9, atol=1e-15)
+        assert far.rise == pytest.approx(unit.rise) and far.fall == pytest.approx(unit.fall)
