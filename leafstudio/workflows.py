@@ -43,8 +43,8 @@ from leafstudio.core.prepare.units import Units
 from leafstudio.core.unfold import unfolded
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf, Params
+from leafstudio.sources import extract
 from leafstudio.sources.extract import (
-    BUDGET,
     FINDING,
     OUTLINE_POINTS,
     Extraction,
@@ -158,7 +158,13 @@ def _scan_opened(
     progress.report(0.0, FINDING)
     try:
         with one_blas_thread():  # small solves: a second thread only waits (_shared/blas.py)
-            scan = _once(scan)
+            once = _once(scan)
+            if len(once) < extract.MIN_POINTS <= len(scan):  # said as what the file holds
+                raise LeafError(
+                    f"too few distinct points for a leaf scan: {len(once)} of its {len(scan)} "
+                    f"are different (need {extract.MIN_POINTS})"
+                )
+            scan = once
             at_unit = unit_scan(scan)  # thinned once, for the check and the extraction
             notes = check_scan(scan, force=force, at_unit=at_unit)
             with progress.share(0.1, 1.0):  # check_scan: a tenth of a big scan's time
@@ -169,17 +175,18 @@ def _scan_opened(
 
 
 def _once(scan: np.ndarray) -> np.ndarray:
-    """The (n, 3) scan with its repeated points dropped (the first of each kept), when it is used
-    whole: a scan of up to BUDGET points is checked and extracted point by point, and a point
-    written three times (two scanner passes merged) linked with nothing in the check's clusters
-    (the median gap to the nearest other point was 0) nor in the blade's. A larger scan is
-    thinned to its cubes' centroids (extract.voxel_thinning), where repeats merge."""
+    """The (n, 3) scan with its exact repeats dropped (the first of each kept, in order), when
+    it is used whole: a scan of up to extract.BUDGET points is checked and extracted point by
+    point, and a point written three times (two scanner passes merged) linked with nothing in the
+    check's clusters (the median gap to the nearest other point was 0) nor in the blade's. Exact
+    repeats only: points merged within a share of the scan's size merged a whole leaf into two
+    points when one stray return lay 1e6 of its lengths off. A larger scan is thinned to its
+    cubes' centroids (scan_thinning.voxel_thinning), where repeats merge."""
     scan = np.asarray(scan, dtype=float)
-    if len(scan) > BUDGET or not np.isfinite(scan).all():  # unit_scan names a NaN
+    if len(scan) > extract.BUDGET or not np.isfinite(scan).all():  # unit_scan names a NaN
         return scan
-    size = float(np.ptp(scan, axis=0).max()) if len(scan) else 0.0
-    keep = distinct_indices(scan, size)
-    return scan if len(keep) == len(scan) else scan[keep]
+    first = np.unique(scan, axis=0, return_index=True)[1]
+    return scan if len(first) == len(scan) else scan[np.sort(first)]
 
 
 def open_file(

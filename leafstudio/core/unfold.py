@@ -98,9 +98,11 @@ def _lies_flat(bend: PlacedPose, leaf: Leaf) -> bool:
 
 def _side_on(leaf: Leaf, length: float) -> bool:
     """Whether the boundary's PCA plane sees `leaf` side-on: a whole vein (all but a point)
-    lies outside the outline there, by more than SIDE_ON of `length` (forms/make.seen_on_edge)."""
-    inside = veins_inside_outline(leaf.boundary, list(leaf.veins), -SIDE_ON * length)
-    return len(inside) < len(leaf.veins)
+    lies outside the outline there, by more than SIDE_ON of `length` (forms/make.seen_on_edge).
+    Veins of fewer than three points are not asked: one of a single point has no second point
+    inside, and made a cupped leaf "side-on" (a pose fitted to a leaf that needs none)."""
+    veins = [v for v in leaf.veins if len(v) >= 3]
+    return len(veins_inside_outline(leaf.boundary, veins, -SIDE_ON * length)) < len(veins)
 
 
 def fit_pose(leaf: Leaf) -> PlacedPose | None:

@@ -204,6 +204,11 @@ def is_scan_file(path: str) -> bool:
     return False
 
 
+SCAN_SHARE = 0.33  # looks_like_scan: a point list this much surrounded is a sparse scan (the
+# eight shared scans cut to 150 or 300 points: 0.35-0.51), not a sparse noisy outline (shuffled,
+# noise 1% of the length: up to 0.31, cover.FILL_SHARE's note), which the pipeline refuses
+
+
 def looks_like_scan(leaf: Leaf) -> bool:
     """True when an unlabelled point list covers a surface (a scan) rather than tracing an
     outline, by the tests the pipeline refuses a scan as a boundary by
@@ -211,12 +216,13 @@ def looks_like_scan(leaf: Leaf) -> bool:
     300 points), the share of points surrounded (the app opened those as a boundary, and showed
     the pipeline's refusal). Its 12 nearest neighbours spread in two directions within a dense
     noisy outline's band too: the app opened such a boundary (24,000 points, noise 0.1% of the
-    length) as a scan and extracted a leaf from it."""
+    length) as a scan and extracted a leaf from it. The share asked is SCAN_SHARE, above a
+    sparse noisy outline's: such a file stays a boundary, which the pipeline refuses by name."""
     # heavy (scipy's k-d tree): not for the command line's parser, which reads OUTLINE_POINTS
-    from leafstudio.core.prepare.cover import COVER_SPREAD, FILL_SHARE
+    from leafstudio.core.prepare.cover import COVER_SPREAD
     from leafstudio.core.prepare.plausibility import boundary_cover
 
     if leaf.veins or len(leaf.boundary) < MIN_SCAN_POINTS:
         return False
     spread, share = boundary_cover(leaf.boundary)
-    return spread > COVER_SPREAD or share > FILL_SHARE
+    return spread > COVER_SPREAD or share > SCAN_SHARE

@@ -248,3 +248,26 @@ def test_a_scan_that_repeats_its_points_is_extracted_as_the_same_scan_once(tmp_p
     a, b = load_leaf(tmp_path / "once.leaf.json"), load_leaf(tmp_path / "thrice.leaf.json")
     np.testing.assert_allclose(b.boundary, a.boundary, atol=1e-9)
     assert len(b.veins) == len(a.veins)
+
+
+def test_one_stray_return_far_off_merges_no_points_of_the_leaf():
+    """Review finding: repeats were points within 1e-9 of the scan's size, strays included, so
+    one return a million lengths off made the leaf's own spacing "a repeat": the scan merged to
+    2 points and was refused as too few even with force. Only exact repeats are dropped now."""
+    from leafstudio.workflows import _scan_opened
+
+    parts = synthetic_scan(seed=2)
+    points = np.vstack([parts["blade"], parts["petiole"], parts["outliers"]])
+    stray = points[:1] + [1e8 * float(np.ptp(points, axis=0).max()), 0.0, 0.0]
+    opened = _scan_opened("stray.xyz", np.vstack([points, stray]), force=True)
+    assert len(opened.scan) == len(points) + 1
+    assert opened.extraction.blade.sum() >= 0.5 * len(parts["blade"])
+
+
+def test_a_scan_of_one_point_repeated_says_so():
+    """Review finding: a file of 60 lines of one point, its repeats dropped, was refused as
+    "too few points for a leaf scan: 1", which reads as if the file held one line."""
+    from leafstudio.workflows import _scan_opened
+
+    with pytest.raises(LeafError, match="too few distinct points for a leaf scan: 1 of its 60"):
+        _scan_opened("same.xyz", np.tile([[1.0, 2.0, 3.0]], (60, 1)))

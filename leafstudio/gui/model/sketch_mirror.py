@@ -1,6 +1,7 @@
 """Mirror editing of a drawn leaf: the sketch made symmetric about its midrib, followed along
 its curve (gui/model/midrib.py), and where a mirror image would fold over itself instead. The
-Sketch's `mirrored`, `mirror_fold` and `mirror_edit` (sketch_model.py) are these. No Qt.
+Sketch's `mirrored` and `mirror_fold` (sketch_model.py) call these, and its `mirror_edit`
+chooses between them. No Qt.
 """
 
 from __future__ import annotations
