@@ -7,10 +7,11 @@ is first unrolled. The blade's points are flattened near-isometrically (`unroll`
 distances along a neighbour graph of the points, from a few landmarks, placed in the plane by
 landmark MDS, de Silva & Tenenbaum 2003), then a smooth map from the flat blade into 3D is
 fitted to them (`Sheet`: a thin-plate spline S(u, v) through the points averaged in cells of
-the flat blade, CELLS across the length; first through the unrolled cube means, then refitted
-on the flat blade that sheet gives: `refit`). A flat point (u, v, w) goes to S(u, v) + w n(u, v),
-n the sheet's unit normal, and a 3D point back to its nearest sheet point (u, v) and its offset
-w along n (Gauss-Newton from the nearest point of a dense sample of the sheet).
+the flat blade, sheet_cells.CELLS across the length, fewer on a sparse scan; first through the
+unrolled cube means, then refitted on the flat blade that sheet gives: `refit`). A flat point
+(u, v, w) goes to S(u, v) + w n(u, v), n the sheet's unit normal, and a 3D point back to its
+nearest sheet point (u, v) and its offset w along n (Gauss-Newton from the nearest point of a
+dense sample of the sheet).
 
 The pipeline then runs the paper's steps on the flat blade (core/bend.py), where the relief w
 left over by the sheet is the scanner's noise and the veins' own.
@@ -27,16 +28,12 @@ from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
 
 from leafstudio._shared import progress
+from leafstudio.core.sheet_cells import VOLUME, cells_across, cubes
 
 REACH = 1.8  # cells: cell means closer than this are neighbours in the graph
 MIN_CELLS = 30
 LANDMARKS = 120  # geodesic sources for the landmark MDS
 MOST_KEPT = 0.8  # the graph's largest piece must hold this share of the points
-CELLS = 28  # the blade's length is cut in this many cubes; each cube's mean is a centre
-# a sheet of length L crosses at most about 2 CELLS**2 of the cubes of side L / CELLS (the eight
-# shared scans: 283 to 1,119 cubes); points that fill many more fill a volume, not a sheet (a
-# Gaussian blob of 15,000 points: 8,946 cubes, and the spline through them took 17 s)
-MOST_CELLS = 3 * CELLS**2
 SMOOTHING = 1e-4  # the thin-plate spline's smoothing, at unit length
 FIRST = 1e-3  # the smoothing of the sheet through the cube means, at unit length (`refit`)
 NEWTON = 10  # Gauss-Newton steps of `Sheet.flatten`, at most
@@ -147,6 +144,8 @@ class Sheet:
     values: np.ndarray
     smoothing: float
     up: np.ndarray  # (3,) the side the normal is turned to
+    cell: float = 0.0  # the flat blade's cells' side its centres were averaged in (`refit`; 0:
+    # not known, a sheet read from a project)
     _pieces: tuple = field(init=False, repr=False)
     _guess: tuple = field(init=False, repr=False)
 
@@ -292,14 +291,12 @@ def refit(
     two layers of a curl that one changed with the scan's last bits (soybean pot1_1 scaled by
     0.7 and moved split 34 of its points otherwise between blade and petiole)."""
     uv = sheet.flatten(points, start)[:, :2]
-    keys = np.floor((uv - uv.min(axis=0)) / cell).astype(np.int64)
-    _, which, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
-    which = which.ravel()
+    which, counts = cubes(uv, cell)
     centres, values = np.zeros((len(counts), 2)), np.zeros((len(counts), 3))
     np.add.at(centres, which, uv)
     np.add.at(values, which, points)
     counts = counts[:, None]
-    return Sheet(centres / counts, values / counts, smoothing, sheet.up)
+    return Sheet(centres / counts, values / counts, smoothing, sheet.up, cell)
 
 
 def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None:
@@ -318,7 +315,7 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     -------
     Sheet or None
         The sheet; `Sheet.flatten` puts the points on their flat blade. None also for points
-        that fill a volume (more than MOST_CELLS cubes).
+        that fill a volume (more than sheet_cells.VOLUME times the cells across, squared, cubes).
 
     Notes
     -----
@@ -335,14 +332,13 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     """
     points = np.asarray(points, dtype=float)
     progress.report(0.0, UNROLLING)
-    cell = length / CELLS
-    keys = np.floor((points - points.min(axis=0)) / cell).astype(np.int64)
-    _, cube, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
-    cube = cube.ravel()
+    cells = cells_across(points, length)  # CELLS, fewer on a sparse scan (sheet_cells.py)
+    cell = length / cells
+    cube, counts = cubes(points, cell)
     sums = np.zeros((len(counts), 3))
     np.add.at(sums, cube, points)
     means = sums / counts[:, None]
-    if len(means) > MOST_CELLS:  # a volume of points, not a sheet
+    if len(means) > VOLUME * cells**2:  # a volume of points, not a sheet
         return None
     flat = unroll(means, REACH * cell)
     if flat is None:
@@ -362,7 +358,7 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     with progress.share(0.2, 0.6):  # sampling each sheet: the rest of the time
         sheet = Sheet(flat * stretch, means, smoothing, np.asarray(up, dtype=float))
     with progress.share(0.6, 1.0):
-        sheet = refit(sheet, points, flat[cube] * stretch, length / CELLS, SMOOTHING * length**2)
+        sheet = refit(sheet, points, flat[cube] * stretch, cell, SMOOTHING * length**2)
     return sheet
 
 

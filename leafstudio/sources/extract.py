@@ -36,7 +36,7 @@ from leafstudio._shared import progress
 from leafstudio.core.plane import fixed_sample, principal_extents, principal_spreads
 from leafstudio.core.prepare.plausibility import check_leaf_like
 from leafstudio.core.prepare.vein_order import veins_inside_outline
-from leafstudio.core.sheet import CELLS, Scaled, fit_sheet
+from leafstudio.core.sheet import Scaled, fit_sheet
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
 from leafstudio.sources.scan import OUTLINE_POINTS
@@ -276,7 +276,7 @@ def extract_leaf(
     flat = thinned if sheet is None else sheet.flatten(thinned)
     progress.report(0.8, FINDING)
     if sheet is not None:  # the blade unrolled (core/sheet.py), its outline and veins found there
-        held = (sheet.centres_flat(), HELD * span / CELLS)
+        held = (sheet.centres_flat(), HELD * sheet.cell)
         found = _extract(flat, base_end, count, (found.blade, found.petiole, found.base), held)
     found = _veins(found, count, None if sheet is None else held)
     progress.report(0.9, FINDING)
