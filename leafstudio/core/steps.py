@@ -242,10 +242,15 @@ def compute_gmm(run: StageRun) -> tuple[np.ndarray, Mixture]:
     # auto tries from 1: a guide between the grid's nodes said "zero everywhere: nothing to fit"
     least = 1 if params.k == K_AUTO else params.k
     if least > support // MIN_NODES_PER_COMPONENT:
+        if params.k == K_AUTO:
+            raise LeafError(
+                f"the height guide covers only {support} grid nodes, too few for even one "
+                f"component (at least {MIN_NODES_PER_COMPONENT} needed); raise the grid resolution"
+            )
         raise LeafError(
-            f"K = {least} is more than the data supports: the height guide covers only "
+            f"K = {params.k} is more than the data supports: the height guide covers only "
             f"{support} grid nodes (at least {MIN_NODES_PER_COMPONENT} per component needed); "
-            f"{'' if params.k == K_AUTO else 'lower K or '}raise the grid resolution"
+            f"lower K or raise the grid resolution"
         )
     samples = run["samples"]
     # the sign of p at each sample's node: veins above and below the plane are fitted apart
