@@ -114,6 +114,6 @@ def test_auto_k_on_a_guide_between_the_grids_nodes_says_to_raise_the_grid():
     from leafstudio.forms import Form
 
     leaf = Form("orbicular", aspect=26.5, margin="serrulate").leaf()
-    with pytest.raises(ls.LeafError, match="too few for even one component.*raise the grid"):
+    with pytest.raises(ls.LeafError, match=r"too few for even one component.*raise the grid"):
         ls.reconstruct(leaf, ls.Params(grid=16, k="auto"))
     assert ls.reconstruct(leaf, ls.Params(grid=24, k="auto")).chosen_k >= 1
