@@ -28,7 +28,7 @@ from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
 
 from leafstudio._shared import progress
-from leafstudio.core.sheet_cells import VOLUME, cells_across, cubes
+from leafstudio.core.sheet_cells import VOLUME, cubes, cut
 
 REACH = 1.8  # cells: cell means closer than this are neighbours in the graph
 MIN_CELLS = 30
@@ -332,9 +332,8 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     """
     points = np.asarray(points, dtype=float)
     progress.report(0.0, UNROLLING)
-    cells = cells_across(points, length)  # CELLS, fewer on a sparse scan (sheet_cells.py)
+    cells, cube, counts = cut(points, length)  # CELLS, fewer on a sparse scan (sheet_cells.py)
     cell = length / cells
-    cube, counts = cubes(points, cell)
     sums = np.zeros((len(counts), 3))
     np.add.at(sums, cube, points)
     means = sums / counts[:, None]

@@ -30,13 +30,13 @@ def cubes(points: np.ndarray, side: float) -> tuple[np.ndarray, np.ndarray]:
     return which.ravel(), counts
 
 
-def cells_across(points: np.ndarray, length: float) -> int:
+def cut(points: np.ndarray, length: float) -> tuple[int, np.ndarray, np.ndarray]:
     """How many cubes the (n, 3) blade points' `length` is cut in: CELLS, or fewer until they
-    hold PER_CUBE points each on average (FEWEST_CELLS at least)."""
+    hold PER_CUBE points each on average (FEWEST_CELLS at least); with each point's cube and
+    the cubes' counts at that cut (`cubes`)."""
     cells = CELLS
-    while cells > FEWEST_CELLS:
-        occupied = len(cubes(points, length / cells)[1])
-        if len(points) >= PER_CUBE * occupied:
-            break
-        cells = max(FEWEST_CELLS, int(cells * np.sqrt(len(points) / (PER_CUBE * occupied))))
-    return cells
+    while True:
+        cube, counts = cubes(points, length / cells)
+        if cells <= FEWEST_CELLS or len(points) >= PER_CUBE * len(counts):
+            return cells, cube, counts
+        cells = max(FEWEST_CELLS, int(cells * np.sqrt(len(points) / (PER_CUBE * len(counts)))))

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from leafstudio.core.sheet_cells import CELLS, FEWEST_CELLS, cells_across
+from leafstudio.core.sheet_cells import CELLS, FEWEST_CELLS, cut
 from leafstudio.sources.scan import read_scan
 from leafstudio.workflows import _scan_opened
 
@@ -35,12 +35,13 @@ def test_a_sparse_scan_is_about_as_long_as_the_whole(name):
 def test_a_dense_blade_keeps_every_cube_and_a_sparse_one_fewer():
     """A blade dense enough keeps CELLS; one of 300 points is cut until its cubes hold PER_CUBE
     points each on average."""
-    from leafstudio.core.sheet_cells import PER_CUBE, cubes
+    from leafstudio.core.sheet_cells import PER_CUBE
 
     rng = np.random.default_rng(1)
     blade = np.column_stack([rng.uniform(0, 1, (20_000, 2)), np.zeros(20_000)])
-    assert cells_across(blade, 1.0) == CELLS
+    assert cut(blade, 1.0)[0] == CELLS
     sparse = blade[:300]
-    few = cells_across(sparse, 1.0)
+    few, cube, counts = cut(sparse, 1.0)
     assert FEWEST_CELLS <= few < CELLS
-    assert len(sparse) >= PER_CUBE * len(cubes(sparse, 1.0 / few)[1])
+    assert len(sparse) >= PER_CUBE * len(counts) and counts.sum() == len(sparse)
+    assert cube.max() == len(counts) - 1
