@@ -5,7 +5,7 @@ A blade's length is cut in CELLS, or fewer on a sparse scan: at about one point 
 cube means are the points themselves, the neighbour graph's paths zigzag between the scanner's
 rows, and the unrolled blade comes out long (soybean pot1_15 at 300 of its points: 67.3 mm
 against 43.4 scanned whole; sugar beet pot2_3 at 300: 57.7 against 44.6). At least PER_CUBE
-points a cube keep it near its whole scan's (43.2 and 45.8 mm); the eight shared scans, whole,
+points a cube keep it near its whole scan's (42.4 and 45.5 mm); the eight shared scans, whole,
 hold 2.9 to 13 and are cut as before.
 """
 
