@@ -22,11 +22,21 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from scipy.ndimage import binary_dilation
 
 from leafstudio.core.grid import Grid
 
-STENCIL_BLOCK = np.ones((3, 3), dtype=bool)  # the differences read the 3 x 3 nodes around one
+
+def _around(asked: np.ndarray) -> np.ndarray:
+    """The (ny, nx) bool `asked` grown by one node each way, diagonals too: the 3 x 3 blocks the
+    differences read, as two passes of shifted ors (scipy.ndimage.binary_dilation with a 3 x 3
+    block, the same nodes: 0.083 -> 0.011 ms on a 131 x 100 grid, best of 200)."""
+    rows = asked.copy()
+    rows[1:] |= asked[:-1]
+    rows[:-1] |= asked[1:]
+    out = rows.copy()
+    out[:, 1:] |= rows[:, :-1]
+    out[:, :-1] |= rows[:, 1:]
+    return out
 
 
 def node_derivatives(
@@ -67,7 +77,7 @@ def node_derivatives(
     asked = np.zeros((ny, nx), dtype=bool)
     asked[row, col] = True  # its stencil's nodes: the 3 x 3 block around each (np.unique of
     # their indices took 60 ms at grid 512)
-    missing = np.flatnonzero(binary_dilation(asked, STENCIL_BLOCK).ravel() & ~known)
+    missing = np.flatnonzero(_around(asked).ravel() & ~known)
     if len(missing):
         c[missing] = value(grid.points[missing])
     h = grid.spacing

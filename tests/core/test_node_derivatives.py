@@ -10,13 +10,26 @@ from scipy.spatial import cKDTree
 import leafstudio as ls
 from leafstudio.core.curvature import graph_curvatures
 from leafstudio.core.grid import Grid
-from leafstudio.core.node_derivatives import node_derivatives
+from leafstudio.core.node_derivatives import _around, node_derivatives
 from leafstudio.forms.make import Form
 
 
 def _quadratic(xy: np.ndarray) -> np.ndarray:
     x, y = xy.T
     return 0.3 - 0.7 * x + 1.1 * y + 2.0 * x * x - 1.5 * x * y + 0.8 * y * y
+
+
+def test_the_stencil_nodes_are_a_3_by_3_dilation_of_the_asked_ones():
+    """_around grows the asked nodes as scipy's binary dilation with a 3 x 3 block does, edges
+    of the grid included."""
+    from scipy.ndimage import binary_dilation
+
+    rng = np.random.default_rng(3)
+    for shape, share in (((17, 23), 0.05), ((9, 6), 0.3), ((1, 5), 0.5), ((40, 31), 0.9)):
+        asked = rng.random(shape) < share
+        asked[0, -1] = True  # a corner
+        expected = binary_dilation(asked, np.ones((3, 3), dtype=bool))
+        np.testing.assert_array_equal(_around(asked), expected)
 
 
 def test_differences_are_exact_on_a_quadratic_and_ask_only_for_the_unknown_nodes():
