@@ -81,6 +81,7 @@ from leafstudio.core.kelvin import (
     KELVIN_STEP,
     phi_matrix,
     spline_derivatives,
+    spline_gradient,
     spline_value,
 )
 from leafstudio.core.mpu import MPUImplicit
@@ -117,6 +118,13 @@ class VeinCorrection:
         """c at (n, 2) plane points."""
         xy = kernel_array(np.atleast_2d(np.asarray(xy, dtype=float)))
         return spline_value(xy, self.centers, self.weights, self.reach, KEI, KELVIN_STEP)
+
+    def gradient(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """c (n,) and ∇c (n, 2) at (n, 2) plane points, as `derivatives` gives them, without
+        ∇²c (the margin's points, where the taper's T = 0 multiplies it: kelvin.spline_gradient,
+        0.62 -> 0.36 ms at a flat ovate's 502 outline points at grid 128)."""
+        xy = kernel_array(np.atleast_2d(np.asarray(xy, dtype=float)))
+        return spline_gradient(xy, self.centers, self.weights, self.reach, KELVIN, KELVIN_STEP)
 
     def derivatives(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """c (n,), ∇c (n, 2) and ∇²c (n, 2, 2) in closed form: with d = x − v, r = |d| and

@@ -153,6 +153,41 @@ def phi_matrix(xy, centers, reach, table, step, taper):
     return out, tapered
 
 
+@njit(cache=True, nogil=True)
+def spline_gradient(xy, centers, weights, reach, table, step):
+    """c and ∇c at each of the (n, 2) points, without ∇²c (VeinCorrection.gradient: the
+    margin's points, where T = 0 multiplies ∇²c). In two loops a point as spline_value, the
+    second reading kei and kei' alone (spline_derivatives at the outline's 502 points against
+    200 centres on a flat ovate at grid 128: 0.62 ms; this 0.36, best of 60; c and ∇c 2e-15
+    and 1e-15 of their largest apart)."""
+    cx, cy = _columns(centers)
+    n = len(xy)
+    value = np.empty(n)
+    grad = np.empty((n, 2))
+    scale = 1.0 / (reach * step)
+    end = float(len(table) - 1)
+    inv_reach = 1.0 / reach
+    rows = np.empty(len(cx), dtype=np.int64)
+    at = np.empty(len(cx))
+    inv_r = np.empty(len(cx))  # 1/(r ℓ): on a centre finite, and ∇φ's d = 0 there
+    for i in range(n):
+        x, y = xy[i, 0], xy[i, 1]
+        _intervals(x, y, cx, cy, scale, end, rows, at)
+        for j in range(len(cx)):
+            dx, dy = x - cx[j], y - cy[j]
+            inv_r[j] = inv_reach / max(np.sqrt(dx * dx + dy * dy), 1e-100)
+        v, gx, gy = 0.0, 0.0, 0.0
+        for j in range(len(cx)):
+            k, u, w = rows[j], at[j], weights[j]
+            v -= w * read(table, k, 0, u)
+            across = -w * read(table, k, 4, u) * inv_r[j]  # w φ'(r)/r, kei'(ρ) read
+            gx += across * (x - cx[j])
+            gy += across * (y - cy[j])
+        value[i] = v
+        grad[i, 0], grad[i, 1] = gx, gy
+    return value, grad
+
+
 @njit(cache=True, nogil=True, fastmath=True)
 def spline_derivatives(xy, centers, weights, reach, cut, table, step):
     """c, ∇c and ∇²c at each of the (n, 2) points (VeinCorrection.derivatives). The centres

@@ -352,12 +352,19 @@ def compute_layout(run: StageRun) -> Layout:
 
 
 def _correction_at(
-    surf: SurfaceStage, grid: Grid, inside: np.ndarray, xy: np.ndarray, kept: np.ndarray
+    surf: SurfaceStage,
+    grid: Grid,
+    inside: np.ndarray,
+    xy: np.ndarray,
+    kept: np.ndarray,
+    margin: int,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """c, ∇c and ∇²c at the conforming mesh's vertices: by differences of c at its kept grid
     nodes (the last of them, core/node_derivatives.py: the closed form at every vertex took
     more than the rest of a run at grid 512), in closed form at the outline's and the band's
-    points before them; None when the nodes' differences cannot be taken."""
+    points before them; None when the nodes' differences cannot be taken. The outline's, the
+    first `margin` points, get ∇²c = 0: the taper's T = 0 there multiplies it
+    (HeightSurface.derivatives), and c and ∇c alone cost less (VeinCorrection.gradient)."""
     correction = surf.surface.correction
     if correction is None or surf.correction is None:
         return None
@@ -365,8 +372,10 @@ def _correction_at(
     on_nodes = node_derivatives(correction.value, grid, inside, surf.correction, nodes)
     if on_nodes is None:
         return None
-    rest = correction.derivatives(xy[: len(xy) - len(nodes)])
-    return tuple(np.concatenate([a, b]) for a, b in zip(rest, on_nodes, strict=True))
+    value, grad = correction.gradient(xy[:margin])
+    rim = value, grad, np.zeros((margin, 2, 2))
+    band = correction.derivatives(xy[margin : len(xy) - len(nodes)])
+    return tuple(np.concatenate(parts) for parts in zip(rim, band, on_nodes, strict=True))
 
 
 def compute_mesh(run: StageRun) -> TriangleMesh:
@@ -397,7 +406,7 @@ def compute_mesh(run: StageRun) -> TriangleMesh:
     on_margin = np.arange(len(xy)) < n_outline  # both meshers put the outline first
     correction_at = None
     if params.mesher == "conforming":
-        correction_at = _correction_at(surf, grid, guide.inside, xy, kept)
+        correction_at = _correction_at(surf, grid, guide.inside, xy, kept, n_outline)
     _, grad, hess = surf.surface.derivatives(xy, on_margin, implicit_at, correction_at)
     return TriangleMesh(
         points=world,

@@ -255,6 +255,29 @@ def test_the_correction_has_closed_form_derivatives():
         assert np.allclose(hess[:, axis], numeric_h, rtol=1e-4, atol=1e-5)
 
 
+def test_the_corrections_gradient_alone_is_its_derivatives_first_two():
+    """VeinCorrection.gradient gives c and ∇c as `derivatives` does, a centre itself included
+    (∇c = 0 there), and the mesh's curvatures at the margin, where ∇²c is left out (T = 0
+    multiplies it), are those of the closed form with it."""
+    result = _run(make_form("ovate"), k=3)
+    surface = result.unit.surface
+    c = surface.correction
+    xy = np.vstack([result.unit.polygon[::7], c.centers[:3], [[0.3, 0.07]]])
+    value, grad = c.gradient(xy)
+    full = c.derivatives(xy)
+    np.testing.assert_allclose(value, full[0], rtol=0, atol=1e-13 * np.abs(full[0]).max())
+    np.testing.assert_allclose(grad, full[1], rtol=0, atol=1e-13 * np.abs(full[1]).max())
+    rim = result.unit.polygon
+    margin = np.ones(len(rim), dtype=bool)
+    value, grad = c.gradient(rim)
+    left_out = surface.derivatives(
+        rim, margin, correction_at=(value, grad, np.zeros((len(rim), 2, 2)))
+    )
+    closed = surface.derivatives(rim, margin)
+    for ours, theirs in zip(left_out[1:], closed[1:], strict=True):
+        np.testing.assert_allclose(ours, theirs, rtol=1e-12, atol=1e-12 * np.abs(theirs).max())
+
+
 def test_a_straight_midrib_alone_gives_a_calm_correction():
     """Centres on one line leave a slope across it undetermined: it must not blow up (it reached
     1e14 on a curled leaf's midrib before the linear part was restricted to the line)."""
