@@ -255,6 +255,20 @@ def test_the_correction_has_closed_form_derivatives():
         assert np.allclose(hess[:, axis], numeric_h, rtol=1e-4, atol=1e-5)
 
 
+def test_a_later_veins_centres_near_an_earlier_veins_kept_ones_are_left_to_it():
+    """A side vein leaving the midrib loses its points within JUNCTION of the midrib's centres;
+    a third vein near only the side vein's dropped points keeps its own."""
+    near = 0.5 * correct.JUNCTION
+    midrib = np.column_stack([np.linspace(0, 1, 126), np.zeros(126)])
+    side = np.column_stack([np.full(10, 0.5), near + np.linspace(0, 0.2, 10)])
+    third = np.array([[0.508, 0.012], [0.9, 0.3]])  # 0.010 from the side vein's first point
+    kept = correct.spline_centers([midrib, side, third], 1.0)
+    side_kept = side[kept[1]]
+    assert np.all(side_kept[:, 1] >= correct.JUNCTION)  # none beside the midrib's centres
+    assert len(side_kept) >= 2
+    assert len(kept[2]) == 2
+
+
 def test_the_corrections_gradient_alone_is_its_derivatives_first_two():
     """VeinCorrection.gradient gives c and ∇c as `derivatives` does, a centre itself included
     (∇c = 0 there), and the mesh's curvatures at the margin, where ∇²c is left out (T = 0
