@@ -24,6 +24,7 @@ from collections.abc import Callable
 import numpy as np
 
 from leafstudio.core.grid import Grid
+from leafstudio.core.jit import njit
 
 
 def _around(asked: np.ndarray) -> np.ndarray:
@@ -81,18 +82,30 @@ def node_derivatives(
     if len(missing):
         c[missing] = value(grid.points[missing])
     h = grid.spacing
+    return _differences(c, flat, nx, 2 * h, h**2, 4 * h * h)
 
-    # c[row + dr, col + dc] read by flat index: this function 0.67 -> 0.42 ms on a flat ovate at
-    # grid 128, 6,900 nodes (best of 60)
-    def at(dr: int, dc: int) -> np.ndarray:
-        return c.take(flat + (dr * nx + dc))
 
-    middle = at(0, 0)
-    gradient = np.column_stack([at(0, 1) - at(0, -1), at(1, 0) - at(-1, 0)]) / (2 * h)
-    hessian = np.empty((len(row), 2, 2))
-    hessian[:, 0, 0] = (at(0, 1) - 2 * middle + at(0, -1)) / h**2
-    hessian[:, 1, 1] = (at(1, 0) - 2 * middle + at(-1, 0)) / h**2
-    hessian[:, 0, 1] = hessian[:, 1, 0] = (at(1, 1) - at(1, -1) - at(-1, 1) + at(-1, -1)) / (
-        4 * h * h
-    )
+@njit(cache=True, nogil=True)
+def _differences(c, flat, nx, two_h, h2, four_h2):
+    """c, its central first differences over `two_h` and second over `h2` (the cross one over
+    `four_h2`) at the (n,) flat indices `flat` of the grid's (ny * nx,) values `c`, a node at a
+    time (numpy's nine reads of every node's neighbours by flat index and its arithmetic over
+    whole arrays: node_derivatives 0.31 -> 0.22 ms on a flat ovate at grid 128, 6,900 nodes,
+    this kernel 0.044, best of 60, two pairs; the same expressions in the same order, the mesh's
+    curvatures the same to the bit)."""
+    n = len(flat)
+    middle = np.empty(n)
+    gradient = np.empty((n, 2))
+    hessian = np.empty((n, 2, 2))
+    for i in range(n):
+        f = flat[i]
+        mid = c[f]
+        east, west, north, south = c[f + 1], c[f - 1], c[f + nx], c[f - nx]
+        middle[i] = mid
+        gradient[i, 0] = (east - west) / two_h
+        gradient[i, 1] = (north - south) / two_h
+        hessian[i, 0, 0] = (east - 2 * mid + west) / h2
+        hessian[i, 1, 1] = (north - 2 * mid + south) / h2
+        cross = c[f + nx + 1] - c[f + nx - 1] - c[f - nx + 1] + c[f - nx - 1]
+        hessian[i, 0, 1] = hessian[i, 1, 0] = cross / four_h2
     return middle, gradient, hessian
