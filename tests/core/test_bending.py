@@ -1,0 +1,36 @@
+"""The lattice whose bending the vein correction's values are chosen for (core/bending.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from leafstudio.core.bending import FINE, lattice
+from leafstudio.core.grid import make_grid
+
+
+@pytest.mark.parametrize("resolution", [40, 128])
+def test_the_lattices_rows_are_second_differences_of_its_nodes(resolution):
+    """Each row of D is a second difference of the lattice's nodes (stride 1 at grid 40, coarser
+    at 128; finer in the margin band): it takes a plane to 0, x² and y² to a positive constant
+    on its straight rows and xy to one on its cross rows, and every node it reaches is kept."""
+    grid = make_grid(np.array([[-1.0, -0.7], [1.0, 0.7]]), resolution)
+    x, y = grid.points.T
+    g = 1 - (x / 0.9) ** 2 - (y / 0.6) ** 2  # an ellipse, T = tanh(g / 0.1)
+    index = np.flatnonzero(g > 0)
+    taper = np.tanh(g[index] / 0.1)
+    assert np.any(taper < FINE) and np.any(taper >= FINE)
+    on, d = lattice(grid, index, taper)
+    xy = grid.points[index[on]]
+    assert d.shape == (d.shape[0], len(on)) and d.shape[0] > len(on) // 2
+    sizes = np.diff(d.indptr)
+    assert set(sizes) <= {3, 4}
+    np.testing.assert_allclose(d @ (0.3 + 2.0 * xy[:, 0] - 1.5 * xy[:, 1]), 0, atol=1e-5)
+    straight, cross = sizes == 3, sizes == 4
+    for values, rows in (
+        (xy[:, 0] ** 2 + xy[:, 1] ** 2, straight),
+        (xy[:, 0] * xy[:, 1], cross),
+    ):
+        bent = d @ values
+        assert np.all(bent[rows] > 0)
+    np.testing.assert_allclose((d @ (xy[:, 0] * xy[:, 1]))[straight], 0, atol=1e-5)
