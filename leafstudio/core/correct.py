@@ -120,7 +120,7 @@ class VeinCorrection:
         xy = kernel_array(np.atleast_2d(np.asarray(xy, dtype=float)))
         return spline_value(xy, self.centers, self.weights, self.reach, KEI, KELVIN_STEP)
 
-    def gradient(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def value_and_gradient(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """c (n,) and ∇c (n, 2) at (n, 2) plane points, as `derivatives` gives them, without
         ∇²c (the margin's points, where the taper's T = 0 multiplies it: kelvin.spline_gradient,
         0.62 -> 0.36 ms at a flat ovate's 502 outline points at grid 128)."""

@@ -38,7 +38,8 @@ def _kelvin_tables() -> np.ndarray:
         columns += [f0, s0, 3 * (f1 - f0) - 2 * s0 - s1, 2 * (f0 - f1) + s0 + s1]
     table = np.ascontiguousarray(np.column_stack(columns))
     table[-1] = 0.0  # never an interval read (t < its index): φ = 0 past KELVIN_END, for
-    # the kernels that clamp t to it instead of branching (spline_value, phi_matrix)
+    # the kernels that clamp t to it instead of branching (spline_value, phi_matrix,
+    # spline_gradient)
     return table
 
 
@@ -155,7 +156,7 @@ def phi_matrix(xy, centers, reach, table, step, taper):
 
 @njit(cache=True, nogil=True)
 def spline_gradient(xy, centers, weights, reach, table, step):
-    """c and ∇c at each of the (n, 2) points, without ∇²c (VeinCorrection.gradient: the
+    """c and ∇c at each of the (n, 2) points, without ∇²c (VeinCorrection.value_and_gradient: the
     margin's points, where T = 0 multiplies ∇²c). In two loops a point as spline_value, the
     second reading kei and kei' alone (spline_derivatives at the outline's 502 points against
     200 centres on a flat ovate at grid 128: 0.62 ms; this 0.36, best of 60; c and ∇c 2e-15

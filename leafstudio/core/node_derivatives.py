@@ -5,8 +5,8 @@ The mesh's curvature arrays need ∇c and ∇²c at every vertex. In closed form
 spline_derivatives) that is every vertex against every spline centre: at grid 512 (111,687
 nodes, 200 centres) 232 ms, more than the rest of the run (the pipeline without the correction
 took 143 ms; at grid 128, 14.5 of a flat ovate's 51 ms). Most vertices are grid
-nodes, where c is known, so the second-order central differences there cost only array
-arithmetic; the outline's points and the few added in the margin band keep the closed form.
+nodes, where c is known, so the second-order central differences there cost only one compiled
+loop of arithmetic; the outline's points and the few added in the margin band keep the closed form.
 
 c is smooth on the grid's scale except at its centres, where its Hessian has a log r spike
 (−kei(r/ℓ) ~ r² log r: the closed form reads it no nearer than correct.HESSIAN_CUT of the length,

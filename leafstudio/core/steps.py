@@ -364,7 +364,8 @@ def _correction_at(
     more than the rest of a run at grid 512), in closed form at the outline's and the band's
     points before them; None when the nodes' differences cannot be taken. The outline's, the
     first `margin` points, get ∇²c = 0: the taper's T = 0 there multiplies it
-    (HeightSurface.derivatives), and c and ∇c alone cost less (VeinCorrection.gradient)."""
+    (HeightSurface.derivatives), and c and ∇c alone cost less
+    (VeinCorrection.value_and_gradient)."""
     correction = surf.surface.correction
     if correction is None or surf.correction is None:
         return None
@@ -372,7 +373,7 @@ def _correction_at(
     on_nodes = node_derivatives(correction.value, grid, inside, surf.correction, nodes)
     if on_nodes is None:
         return None
-    value, grad = correction.gradient(xy[:margin])
+    value, grad = correction.value_and_gradient(xy[:margin])
     rim = value, grad, np.zeros((margin, 2, 2))
     band = correction.derivatives(xy[margin : len(xy) - len(nodes)])
     return tuple(np.concatenate(parts) for parts in zip(rim, band, on_nodes, strict=True))

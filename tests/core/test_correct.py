@@ -270,20 +270,20 @@ def test_a_later_veins_centres_near_an_earlier_veins_kept_ones_are_left_to_it():
 
 
 def test_the_corrections_gradient_alone_is_its_derivatives_first_two():
-    """VeinCorrection.gradient gives c and ∇c as `derivatives` does, a centre itself included
-    (∇c = 0 there), and the mesh's curvatures at the margin, where ∇²c is left out (T = 0
+    """VeinCorrection.value_and_gradient gives c and ∇c as `derivatives` does, a centre itself
+    included (∇c = 0 there), and the mesh's curvatures at the margin, where ∇²c is left out (T = 0
     multiplies it), are those of the closed form with it."""
     result = _run(make_form("ovate"), k=3)
     surface = result.unit.surface
     c = surface.correction
     xy = np.vstack([result.unit.polygon[::7], c.centers[:3], [[0.3, 0.07]]])
-    value, grad = c.gradient(xy)
+    value, grad = c.value_and_gradient(xy)
     full = c.derivatives(xy)
     np.testing.assert_allclose(value, full[0], rtol=0, atol=1e-13 * np.abs(full[0]).max())
     np.testing.assert_allclose(grad, full[1], rtol=0, atol=1e-13 * np.abs(full[1]).max())
     rim = result.unit.polygon
     margin = np.ones(len(rim), dtype=bool)
-    value, grad = c.gradient(rim)
+    value, grad = c.value_and_gradient(rim)
     left_out = surface.derivatives(
         rim, margin, correction_at=(value, grad, np.zeros((len(rim), 2, 2)))
     )
