@@ -5,10 +5,10 @@ surface_spread, and the margin between the worst outline and the least area. Pri
     .venv/bin/python benchmarks/bench_fill.py [--cases]
 
 Outlines: the scan test's true boundaries, every gallery form (shape x margin), each subsampled to
-150-300 points (in order, shuffled, with noise of 0.25%, 0.5% and 1% of its length), and the real
+100-300 points (in order, shuffled, with noise of 0.25%, 0.5% and 1% of its length), and the real
 scans' extracted boundaries (when ../shared/realleaves is there). Areas: discs, hemispheres, caps,
-flattened blobs and points inside forms' outlines, 150-700 points, and real scans thinned to
-150-400 points. A cloud dense enough for surface_spread scores 0 and is left out.
+flattened blobs and points inside forms' outlines, 100-700 points, and real scans thinned to
+100-400 points. A cloud dense enough for surface_spread scores 0 and is left out.
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ def outlines():
             outline = make_form(shape, margin=margin).boundary
             yield "forms", f"{shape} {margin}", outline
             length = np.ptp(outline[:, 0])
-            for n in (150, 200, 300):
+            for n in (100, 120, 150, 200, 300):
                 kept = outline[np.sort(rng.choice(len(outline), n, replace=False))]
                 yield "forms subsampled", f"{shape} {margin} {n}", kept
                 yield "forms subsampled", f"{shape} {margin} {n} shuffled", rng.permutation(kept)
@@ -63,7 +63,7 @@ def outlines():
 
 def areas():
     """(class, case, points) of clouds that fill an area."""
-    for n in (150, 200, 300, 400, 700):
+    for n in (100, 120, 150, 200, 300, 400, 700):
         yield "discs", f"{n}", leaves.disc(n, n)
         for height in (1.0, 0.5, 0.3):
             yield "hemispheres and caps", f"height {height} {n}", leaves.cap(n, height, n)
@@ -74,7 +74,7 @@ def areas():
     rng = np.random.default_rng(11)
     for path in SCANS:
         scan = read_scan(path)
-        for n in (150, 200, 400):
+        for n in (100, 120, 150, 200, 400):
             yield "real scans thinned", f"{path.stem} {n}", scan[rng.choice(len(scan), n, False)]
 
 

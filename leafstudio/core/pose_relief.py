@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 import shapely
-from scipy.interpolate import CubicSpline, LinearNDInterpolator
+from scipy.interpolate import CubicSpline, LinearNDInterpolator, PPoly
 from shapely.geometry import Polygon
 
 from leafstudio.core.prepare.polygon import unit_power
@@ -57,12 +57,15 @@ class Relief:
     half_width: float  # the blade's widest reach across the midrib (how far a roll turns it)
     rise: float = 0.0  # radians: the steepest the relief rises from the hinge across (its
     fall: float = 0.0  # points' angle atan2(±(z − hinge), |y|)), and falls (`fold_room`)
+    # the profiles linear past their ends (`profile_spline`); False: a project's relief saved
+    # before, whose curves were bent with the end pieces' cubics carried on, flattened so
+    linear_ends: bool = True
     _cache: dict = field(default_factory=dict, init=False, compare=False, repr=False)  # splines
 
-    def _spline(self, name: str) -> CubicSpline:
+    def _spline(self, name: str) -> PPoly:
         if name not in self._cache:  # made once: a pose bends the mesh's points, then its jets
             x = self.along if name == "midrib" else self.knots
-            self._cache[name] = CubicSpline(x, getattr(self, name), bc_type="natural")
+            self._cache[name] = profile_spline(x, getattr(self, name), self.linear_ends)
         return self._cache[name]
 
     def _profile(self, name: str, x: np.ndarray) -> Profile:
@@ -95,7 +98,7 @@ class Relief:
         """Bytes that change with the relief (Pose.key)."""
         numbers = [*self.along, *self.midrib, *self.knots, *self.mean]
         numbers += [self.half_width, self.rise, self.fall]
-        return np.array(numbers).tobytes()
+        return np.array(numbers).tobytes() + (b"" if self.linear_ends else b"cubic ends")
 
     def entry(self) -> dict[str, Any]:
         """The project's "relief" entry of a "bend" (sources/bend_entry.py)."""
@@ -107,7 +110,7 @@ class Relief:
             "half_width": self.half_width,
             "rise": self.rise,
             "fall": self.fall,
-        }
+        } | ({"ends": "linear"} if self.linear_ends else {})
 
     @classmethod
     def from_entry(cls, value: Any) -> Relief:
@@ -121,7 +124,7 @@ class Relief:
             raise ValueError("a relief's x and heights do not read whole")
         if not (np.isfinite(scalars).all() and min(scalars) >= 0):
             raise ValueError("a relief's half width, rise and fall must be numbers of 0 or more")
-        return cls(along, midrib, knots, mean, *scalars)
+        return cls(along, midrib, knots, mean, *scalars, linear_ends=value.get("ends") == "linear")
 
     def posed_level(self, pose: Any) -> float:
         """The midrib's mean height as `pose` leaves it before its curl (a `bend.Pose` without
@@ -146,6 +149,26 @@ class Relief:
         relief = self.rise if fold > 0 else self.fall
         chord = 0.5 * min(abs(roll) * self.half_width, np.pi) if roll * fold > 0 else 0.0
         return np.pi / 2 - relief - chord - ROOM_SLACK
+
+
+def profile_spline(x: Any, z: Any, linear_ends: bool = True) -> PPoly:
+    """The natural cubic spline through heights `z` at increasing `x`, linear past its ends
+    (its second derivative is 0 there: C² still), as pieces one span long each side (the
+    kernel's spline, pose_jet._spline, takes its end pieces past them). CubicSpline carried
+    its end pieces' cubics on: a sagittate form's hinge fell to 0.28 of the length under its
+    lobes' tips, behind the base where no midrib runs, and folded 60° it kept 0.92 of its area
+    (the fold's turn eased for the steep rise that made). `linear_ends` False: that spline, for
+    a relief saved before (Relief.linear_ends)."""
+    x, z = np.asarray(x, dtype=float), np.asarray(z, dtype=float)
+    spline = CubicSpline(x, z, bc_type="natural")
+    if not linear_ends:
+        return spline
+    span = x[-1] - x[0]
+    slopes = spline(x[[0, -1]], 1)
+    left = [0.0, 0.0, slopes[0], z[0] - slopes[0] * span]  # on [x0 - span, x0]
+    right = [0.0, 0.0, slopes[1], z[-1]]
+    pieces = np.column_stack([left, spline.c, right])
+    return PPoly(pieces, np.concatenate([[x[0] - span], x, [x[-1] + span]]))
 
 
 def _numbers(value: Any) -> tuple[float, ...]:
@@ -232,7 +255,7 @@ def _relief_of(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | None:
     if midrib is None:  # no midrib to turn about: the sections' means
         midrib = knots, mean
     half_width = max(-y0, y1)
-    hinge = CubicSpline(*midrib, bc_type="natural")(points[:, 0])
+    hinge = profile_spline(*midrib)(points[:, 0])
     clear = np.abs(points[:, 1]) > CREASE * half_width
     angle = np.arctan2(points[clear, 2] - hinge[clear], np.abs(points[clear, 1]))
     return Relief(

@@ -175,9 +175,20 @@ def _fit(leaf: Leaf) -> PlacedPose | None:
         x[[3 + t for t in terms]] = y[4:]
         return x
 
-    fits = []  # (rms, terms, x, axes) per subset of the pose's terms
+    def flat_fit(tried: list, terms: tuple[int, ...]) -> tuple | None:
+        """(rms, terms, bend) of the first of the `tried` (fit, axes) that lies flat, or None."""
+        for fit, axes in tried:
+            x = full(fit.x, terms)
+            u, v, n = Rotation.from_rotvec(x[:3]).apply(axes)
+            frame = Frame(origin=origin + x[6] * length * n, u=u, v=v, normal=n)
+            bend = PlacedPose(pose_of(x), frame)
+            if _lies_flat(bend, leaf):
+                return float(np.sqrt(2 * fit.cost)) * length, terms, bend
+        return None
+
+    starts = []  # (terms, [(fit, axes) per start, best first]) per subset of the pose's terms
     for terms in TERMS:
-        best = None
+        tried = []  # (fit, axes) per start
         folds = FOLDS if 0 in terms else (0.0,)
         rolls = (0.0, most / 2, -most / 2) if 2 in terms else (0.0,)
         for axes, fold, roll in itertools.product(_starts(boundary, midrib), folds, rolls):
@@ -191,17 +202,20 @@ def _fit(leaf: Leaf) -> PlacedPose | None:
             y0[4:] = [(fold, 0.0, roll)[t] for t in terms]
             hi = [np.pi] * 3 + [1.0] + [(FOLD_LIMIT, CURL_LIMIT, most)[t] for t in terms]
             lo = [-h for h in hi]
-            fit = least_squares(residual, y0, bounds=(lo, hi))
-            if best is None or fit.cost < best[0].cost:
-                best = (fit, axes)
-        x = full(best[0].x, terms)
-        u, v, n = Rotation.from_rotvec(x[:3]).apply(best[1])
-        bend = PlacedPose(pose_of(x), Frame(origin=origin + x[6] * length * n, u=u, v=v, normal=n))
-        rms = float(np.sqrt(2 * best[0].cost)) * length
-        if len(terms) == 3 and rms > EXPLAINED * before:
+            tried.append((least_squares(residual, y0, bounds=(lo, hi)), axes))
+        tried.sort(key=lambda t: t[0].cost)
+        if len(terms) == 3 and np.sqrt(2 * tried[0][0].cost) * length > EXPLAINED * before:
             return None
-        if _lies_flat(bend, leaf):
-            fits.append((rms, terms, bend))
+        starts.append((terms, tried))
+    # each subset's best start, if it lies flat; when none does, the best start of each that
+    # does: which start was best turns on round-off (an ovate folded -75, written to a CSV of 9
+    # digits, 5e-10 off, was refused; orbicular and reniform folded -75 were refused always).
+    # Not the best that lies flat always: rolled tubes then took three terms where a roll alone
+    # lies flat nearer their own surface (linear roll 1: 7.6e-4 off it on average, not 1.8e-4)
+    for tries in (1, None):
+        fits = [f for terms, tried in starts if (f := flat_fit(tried[:tries], terms))]
+        if fits:
+            break
     if not fits:
         return None
     least = min(f[0] for f in fits)

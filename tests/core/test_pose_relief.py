@@ -211,3 +211,39 @@ def test_a_blade_far_from_unit_size_has_its_relief_scaled():
         far = relief_of(blade.boundary * scale, [v * scale for v in blade.veins])
         np.testing.assert_allclose(np.array(far.mean) / scale, unit.mean, rtol=1e-9, atol=1e-15)
         assert far.rise == pytest.approx(unit.rise) and far.fall == pytest.approx(unit.fall)
+
+
+@pytest.mark.parametrize("fold", [30.0, 60.0, 75.0])
+def test_a_blade_with_lobes_behind_its_base_keeps_its_area_folded(fold):
+    """hunt27: the hinge's spline carried its end pieces' cubics on past the midrib, so under a
+    sagittate form's lobes (behind the base) it fell to 0.28 of the length below the blade, the
+    fold's turn was eased for the steep rise that made, and the folded blade kept 0.97, 0.92
+    and 0.90 of its area. The profiles are linear past their ends."""
+    blade = Form("sagittate").leaf()
+    flat = _area(ls.reconstruct(blade, ls.Params(k=3, grid=128)))
+    posed = _area(
+        ls.reconstruct(Form("sagittate", fold=fold).leaf(blade), ls.Params(k=3, grid=128))
+    )
+    assert posed == pytest.approx(flat, rel=0.005)
+    relief = relief_of(blade.boundary, blade.veins)
+    x = np.linspace(blade.boundary[:, 0].min(), relief.along[0], 5)
+    _, slope, bend = relief.hinge(x)
+    np.testing.assert_allclose(bend, 0.0, atol=1e-12)
+    np.testing.assert_allclose(slope, slope[-1], atol=1e-12)
+
+
+def test_a_relief_saved_before_its_ends_were_linear_bends_as_it_did(tmp_path):
+    """A project's relief without "ends" had its curves bent with the cubic ends: it is read
+    with them, so they flatten back as they were bent; a new one is saved with "ends":
+    "linear"."""
+    from scipy.interpolate import CubicSpline
+
+    relief = Form("sagittate", fold=60.0).leaf().bend.relief
+    entry = relief.entry()
+    assert entry["ends"] == "linear"
+    del entry["ends"]
+    old = Relief.from_entry(entry)
+    x = np.linspace(-0.3, 1.0, 50)
+    cubic = CubicSpline(old.along, old.midrib, bc_type="natural")(x)
+    np.testing.assert_array_equal(old.hinge_height(x), cubic)
+    assert old.key() != relief.key()

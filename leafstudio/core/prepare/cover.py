@@ -54,14 +54,23 @@ BAND_LEAST = 32  # points a neighbourhood needs for that (a kurtosis of fewer is
 # too sparse for that (filled_share): points with neighbours on every side
 FILL_NEAREST = 8  # a point's nearest neighbours looked at
 FILL_GAP = np.radians(120)  # surrounded: no wider gap between its neighbours' directions
-FILL_FROM = 150  # fewer distinct points are not judged: at 100, points inside a narrow form
-# (0.20) and a noisy toothed outline (0.19) overlap
+FILL_FROM = 100  # fewer distinct points are not judged: at 60, real scans thinned (0.20) and
+# noisy outlines (0.20) meet. From 150 before: a real scan thinned to 100 points was read as a
+# boundary (soybean pot1_15: a mesh of 0.37 of the blade's area, perimeter 2.2 times its own)
+SPREAD_FROM = 150  # a cloud of fewer points is asked its filled share too, whatever its spread:
+# a real scan thinned to 100 points can hold enough in its neighbourhoods for a spread, and
+# sugar beet pot1_1's was 0.40-0.47 (a curve's, under COVER_SPREAD), its share 0.30-0.42;
+# outlines of 100-300 points with noise up to 0.5% of the length: shares at most 0.15
 FILL_SHARE = 0.2  # more of the points surrounded: they fill an area. benchmarks/bench_fill.py,
 # from 150 points: outlines at most 0.13 (every form's shape and margin subsampled to 150-300
 # points, in order, shuffled, noise up to 0.5% of the length; the scans' extracted boundaries
 # 0.07), areas at least 0.28 (a real scan thinned to 150 points; points inside a narrow form
 # 0.29; discs, hemispheres, caps, flattened blobs 0.35-0.54); with noise of 1% of the length, 4
-# outlines of 294 pass it (up to 0.31): such a sparse cloud is a band as wide as its spacing
+# outlines of 294 pass it (up to 0.31): such a sparse cloud is a band as wide as its spacing.
+# From 100 points (bench_fill.py, 100-300): outlines at most 0.15 with noise up to 0.5% (a
+# linear lobed form at 120), 13 of 490 refused with noise of 1% (up to 0.27; 6 of 98 at 100,
+# 4 of 98 at 150); real scans thinned at least 0.22; points inside a linear form 0.20, let
+# through
 
 
 @dataclass(frozen=True)
@@ -230,15 +239,19 @@ def _too_sparse(sizes: np.ndarray) -> bool:
 
 def surface_cover(points: np.ndarray) -> tuple[float, float]:
     """(surface_spread, filled_share) of the (n, 3) points, their unit cloud and neighbourhoods
-    found once: the pipeline asks both of every boundary (plausibility.check_not_a_surface), and
-    at most one is not 0 (the share is looked at only where the spread cannot tell)."""
+    found once: the pipeline asks both of every boundary (plausibility.check_not_a_surface). The
+    share is looked at only where the spread cannot tell: most neighbourhoods too sparse, or a
+    cloud of fewer than SPREAD_FROM points that the spread does not take for a surface."""
     unit = _unit_cloud(points)
     if unit is None:
         return 0.0, 0.0
     near = _neighbourhoods(*unit)
     if _too_sparse(near.sizes):
         return 0.0, _filled(unit[0])
-    return _spread(near), 0.0
+    spread = _spread(near)
+    if spread <= COVER_SPREAD and len(unit[0]) < SPREAD_FROM:
+        return spread, _filled(unit[0])
+    return spread, 0.0
 
 
 def surface_spread(points: np.ndarray) -> float:
@@ -272,7 +285,8 @@ def filled_share(points: np.ndarray) -> float:
     gap between the neighbours' directions, in their own plane, is wider than FILL_GAP. Points
     in an area are surrounded but for its rim; a point on an outline has its neighbours ahead
     and behind, the gaps between them near half a turn. 0 for a cloud dense enough for
-    surface_spread, or of fewer than FILL_FROM distinct points. Scale-free, order-free, and
+    surface_spread (and of SPREAD_FROM points or more, or covering a surface by it), or of
+    fewer than FILL_FROM distinct points. Scale-free, order-free, and
     local in 3D (a curled leaf's outline is a curve at every point, whatever its shadow)."""
     return surface_cover(points)[1]
 
