@@ -461,4 +461,9 @@ def save_leaf(
         PlyData([PlyElement.describe(data, "vertex")], text=False).write(buffer)
         write_bytes(path, buffer.getvalue())
     else:
-        raise LeafError(f"cannot write a leaf as {suffix or '(none)'!r}", str(path))
+        kinds = ", ".join([".leaf.json", *POINT_SUFFIXES, ".ply"])
+        raise LeafError(
+            f"cannot write a leaf as {suffix or '(none)'!r}: its curves go to {kinds}"
+            " (a mesh: `leafstudio reconstruct LEAF -o MESH`)",
+            str(path),
+        )

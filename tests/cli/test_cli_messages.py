@@ -174,3 +174,12 @@ def test_a_batch_of_scans_without_scans_says_so_once(tmp_path, capsys, monkeypat
     assert "1 of the inputs look like scans of whole leaves: --scans" in err
     assert main(["batch", str(tmp_path), "-o", str(tmp_path / "out"), "--scans"]) == 1
     assert "--scans" not in capsys.readouterr().err
+
+
+def test_a_demo_written_as_a_mesh_says_which_files_take_a_leaf_and_how_to_mesh_it(tmp_path, capsys):
+    """`demo nested -o x.glb` said only "cannot write a leaf as '.glb'", where `form` writes a
+    mesh (bug hunt, session 27): the message names a leaf's files and `reconstruct`."""
+    assert main(["demo", "nested", "-o", str(tmp_path / "x.glb")]) == 2
+    line = _error(capsys)
+    assert ".leaf.json" in line and ".csv" in line and "leafstudio reconstruct" in line
+    assert not (tmp_path / "x.glb").exists()
