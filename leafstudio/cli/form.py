@@ -154,7 +154,7 @@ def run_form(args: argparse.Namespace) -> int:
     print(
         f"{out}: {form.shape} leaf ({form.apex_term} apex, {form.base_term} base, {form.margin} "
         f"margin, {form.venation_term} venation): {len(leaf.boundary)} boundary points, "
-        f"{len(leaf.veins)} veins",
+        f"{len(leaf.veins)} vein{'' if len(leaf.veins) == 1 else 's'}",
         file=sys.stderr,
     )
     return 0

@@ -183,3 +183,9 @@ def test_a_demo_written_as_a_mesh_says_which_files_take_a_leaf_and_how_to_mesh_i
     line = _error(capsys)
     assert ".leaf.json" in line and ".csv" in line and "leafstudio reconstruct" in line
     assert not (tmp_path / "x.glb").exists()
+
+
+def test_a_form_with_its_midrib_alone_says_one_vein(tmp_path, capsys):
+    """`form ovate --secondaries 0` said "1 veins" (bug hunt, session 27)."""
+    assert main(["form", "ovate", "--secondaries", "0", "-o", str(tmp_path / "x.csv")]) == 0
+    assert capsys.readouterr().err.rstrip().endswith("502 boundary points, 1 vein")
