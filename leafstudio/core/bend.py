@@ -26,10 +26,10 @@ margin's plane, the relief lifted straight up by the fold and carried toward the
 axes, before: fold 30° 0.999 (0.90), 60° 0.993 (0.82), 75° 0.990 (0.79), roll 0.5 0.998 (0.86);
 curled 1, its midrib 0.997 as long (0.92) and its area 1.017 (0.94)). A fold and a curl together
 bend a channel along its length: its halves shorten (folded 75° and curled 1, 0.66 of the area,
-against 0.48). A pose without a relief (a project saved before it, a pose fitted to curves in 3D,
-core/unfold.py) bends the sheet z = 0 as before: the fold y -> y cos(fold), z += |y| sin(fold)
-(fold and curl were once shears, z += |y| tan(fold) + curl · x²: an ovate form folded 60° had 1.78
-times its flat area).
+against 0.48). A pose without a relief (a project saved before it, a pose fitted to curves in 3D
+too large for a relief, core/unfold.py) bends the sheet z = 0 as before: the fold y -> y cos(fold),
+z += |y| sin(fold) (fold and curl were once shears, z += |y| tan(fold) + curl · x²: an ovate form
+folded 60° had 1.78 times its flat area).
 
 The roll (and the curl, along the midrib) carries a relief h (a margin's wave, raised veins)
 along the rolled normal: the cross-section's point (v, h) goes to the angle v / R about the axis
@@ -78,8 +78,9 @@ class Pose:
     roll: float = 0.0
     twist: float = 0.0  # radians the cross-section turns about the midrib per unit of length
     # the flat blade's relief, which the fold turns about and the roll and curl bend without
-    # stretching (pose_relief.py); None: the sheet z = 0 (a pose fitted to 3D curves, an older
-    # project). Not compared: the sliders' pose is the same pose on any blade
+    # stretching (pose_relief.py); None: the sheet z = 0 (an older project, a pose fitted to
+    # curves too large for one: core/unfold.py). Not compared: the sliders' pose is the same
+    # pose on any blade
     relief: Relief | None = field(default=None, compare=False)
 
     def apply(self, points: np.ndarray) -> np.ndarray:

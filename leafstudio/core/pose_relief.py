@@ -14,14 +14,16 @@ own mean height (the sheet), so the relief's first-order stretch averages out ov
 and the curl lays the midrib on its circle by its length (`posed_level`). The profiles are read
 from the flat blade's curves (`relief_of`): the hinge through the midrib's points, the sheet at
 KNOTS places along the blade; both are cubic splines in x (C², linear past the ends): a fold's
-hinge with a kink would crease the blade across at each knot. A pose without a relief (a project
-saved before it, a pose fitted to 3D curves, core/unfold.py) bends as it did."""
+hinge with a kink would crease the blade across at each knot. A pose fitted to curves in 3D
+(core/unfold.py) has a relief of its own (`margin_relief`): the flat midrib's heights for the
+hinge and the margin's plane for the sheet. A pose without a relief (a project saved before it,
+a pose fitted to curves past unfold.HINGE_SIZES) bends as it did."""
 
 from __future__ import annotations
 
 import hashlib
 import threading
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -32,6 +34,7 @@ from shapely.geometry import Polygon
 from leafstudio.core.prepare.polygon import unit_power
 
 KNOTS = 24  # places along the blade the sections' mean heights are read at
+MARGIN_KNOTS = 8  # margin_relief's: its sheet is 0 at each
 ROOM_SLACK = np.deg2rad(5.0)  # Relief.fold_room: kept clear of the midrib's plane
 CREASE = 0.05  # of the half width: points nearer the midrib than this have no angle off it
 LEVEL_SAMPLES = 64  # points along the midrib a pose's curl finds its level from (posed_level)
@@ -77,6 +80,23 @@ class Relief:
         (pose_jet.py's kernel evaluates it)."""
         spline = self._spline(name)
         return np.ascontiguousarray(spline.x), np.ascontiguousarray(spline.c)
+
+    def scaled(self, factor: float) -> Relief:
+        """The same relief on a blade `factor` times as large (its angles and ends kept)."""
+        along, midrib, knots, mean = (
+            tuple(float(v) * factor for v in values)
+            for values in (self.along, self.midrib, self.knots, self.mean)
+        )
+        half_width = self.half_width * factor  # a fresh cache: its splines are in the old units
+        return replace(
+            self, along=along, midrib=midrib, knots=knots, mean=mean, half_width=half_width
+        )
+
+    @property
+    def on_margin(self) -> bool:
+        """Whether the sheet is the margin's plane, as a pose fitted to curves in 3D has it
+        (`margin_relief`): no section's mean height, no rise and no fall."""
+        return not any(self.mean) and self.rise == 0 and self.fall == 0
 
     def hinge(self, x: np.ndarray) -> Profile:
         """The midrib's height at (n,) x, with its first and second derivatives."""
@@ -269,6 +289,27 @@ def _relief_of(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | None:
     )
 
 
+def margin_relief(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | None:
+    """A relief whose hinge passes through the flat midrib's points (the first of the (m_i, 3)
+    `veins`) and whose sheet is the margin's plane (z = 0), the blade's x and half width read
+    from the (n, 3) `boundary`, in the blade's coordinates as for `relief_of`: a pose fitted to
+    curves in 3D (core/unfold.py) folds about it, and the app's sliders bend such a leaf about
+    it again (`Relief.on_margin`). None without a midrib, or when it doubles back."""
+    if not veins:
+        return None
+    midrib = np.asarray(veins[0], dtype=float)
+    if len(midrib) < 2 or np.any(np.diff(midrib[:, 0]) < 0):
+        return None
+    x0, x1 = float(boundary[:, 0].min()), float(boundary[:, 0].max())
+    along, heights = _thinned(*_increasing(midrib[:, 0], midrib[:, 2], 1e-6 * (x1 - x0)))
+    if len(along) < 2:
+        return None
+    knots = np.linspace(x0, x1, MARGIN_KNOTS)
+    half_width = float(np.abs(boundary[:, 1]).max())
+    zeros = (0.0,) * MARGIN_KNOTS
+    return Relief(tuple(along), tuple(heights), tuple(knots), zeros, half_width)
+
+
 def _midrib(vein: np.ndarray, boundary: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     """The hinge's points: a midrib's (m, 3) points' x, increasing, and heights, with the
     outline's points on the crease (y = 0: a form's base, tip or notch) past the midrib's ends,
@@ -281,11 +322,7 @@ def _midrib(vein: np.ndarray, boundary: np.ndarray) -> tuple[np.ndarray, np.ndar
     if len(vein) < 2:
         return None
     extent = float(np.ptp(boundary[:, 0]))
-    x, z = _increasing(vein[:, 0], vein[:, 2], 1e-6 * extent)
-    if len(x) > MIDRIB_POINTS:
-        step = int(np.ceil(len(x) / MIDRIB_POINTS))
-        index = np.unique(np.append(np.arange(0, len(x), step), len(x) - 1))
-        x, z = x[index], z[index]
+    x, z = _thinned(*_increasing(vein[:, 0], vein[:, 2], 1e-6 * extent))
     crease = boundary[np.abs(boundary[:, 1]) <= 1e-6 * extent]
     past = (crease[:, 0] < x[0] - 1e-6 * extent) | (crease[:, 0] > x[-1] + 1e-6 * extent)
     if past.any():
@@ -295,6 +332,15 @@ def _midrib(vein: np.ndarray, boundary: np.ndarray) -> tuple[np.ndarray, np.ndar
             1e-6 * extent,
         )
     return (x, z) if len(x) >= 2 else None
+
+
+def _thinned(x: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """At most MIDRIB_POINTS of a hinge's points: every k-th, its ends kept."""
+    if len(x) <= MIDRIB_POINTS:
+        return x, z
+    step = int(np.ceil(len(x) / MIDRIB_POINTS))
+    index = np.unique(np.append(np.arange(0, len(x), step), len(x) - 1))
+    return x[index], z[index]
 
 
 def _increasing(x: np.ndarray, z: np.ndarray, gap: float) -> tuple[np.ndarray, np.ndarray]:

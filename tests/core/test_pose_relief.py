@@ -17,7 +17,7 @@ from leafstudio.core.evaluate import surface_area
 from leafstudio.core.hinge_fold import BAND, HingeFold
 from leafstudio.core.placed import PlacedPose
 from leafstudio.core.pose_jet import HINGE, posed_jet
-from leafstudio.core.pose_relief import Relief, relief_of
+from leafstudio.core.pose_relief import Relief, margin_relief, relief_of
 from leafstudio.core.trianglemesh import CURVATURE_ARRAYS
 from leafstudio.errors import LeafError
 from leafstudio.forms.make import Form
@@ -247,3 +247,20 @@ def test_a_relief_saved_before_its_ends_were_linear_bends_as_it_did(tmp_path):
     cubic = CubicSpline(old.along, old.midrib, bc_type="natural")(x)
     np.testing.assert_array_equal(old.hinge_height(x), cubic)
     assert old.key() != relief.key()
+
+
+def test_a_margin_relief_hinges_on_the_midrib_over_the_margins_plane():
+    """A pose fitted to curves in 3D (core/unfold.py) folds about the flat midrib's heights,
+    its sheet the margin's plane; it says so (`on_margin`, the app's sliders keep it), a
+    blade's own relief does not, and a midrib that doubles back has none. Scaled (the fit is at
+    unit size), its hinge is the same at the same place."""
+    blade = Form("ovate").blade()
+    relief = margin_relief(blade.boundary, blade.veins)
+    assert relief is not None and relief.on_margin
+    midrib = blade.veins[0]
+    np.testing.assert_allclose(relief.hinge_height(midrib[:, 0]), midrib[:, 2], atol=1e-12)
+    assert not any(relief.sheet_height(np.linspace(0.1, 0.9, 5)))
+    assert not relief_of(blade.boundary, blade.veins).on_margin
+    assert margin_relief(blade.boundary, [midrib[[0, 5, 3]]]) is None
+    big = relief.scaled(8.0)
+    np.testing.assert_allclose(big.hinge_height(8 * midrib[:, 0]), 8 * midrib[:, 2], atol=1e-11)

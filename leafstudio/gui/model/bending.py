@@ -20,7 +20,7 @@ import shapely
 
 from leafstudio.core.bend import Pose, flat_leaf
 from leafstudio.core.placed import PlacedPose, blade_frame
-from leafstudio.core.pose_relief import relief_of
+from leafstudio.core.pose_relief import margin_relief, relief_of
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.history import State, Step
 from leafstudio.model import Bend, Leaf
@@ -132,12 +132,16 @@ def posed(
     half about the midrib as it stands). The flat pose gives `flat` itself, without a bend."""
     if flat is None or pose == FLAT:
         return flat
-    # a pose without a relief (curves in 3D unfolded, core/unfold.py; a project saved before
-    # reliefs) keeps bending about the margin's plane: a slider's nudge of 1e-6° moved an
-    # unfolded ovate's outline 0.157 of its length when it took a relief
-    about_relief = getattr(getattr(like, "pose", like), "relief", 0) is not None
+    # a pose without a relief (a project saved before reliefs; curves in 3D unfolded at over
+    # 1e100, core/unfold.py) keeps bending about the margin's plane: a slider's nudge of 1e-6°
+    # moved an unfolded ovate's outline 0.157 of its length when it took the blade's relief
+    like_relief = getattr(getattr(like, "pose", like), "relief", 0)
+    about_relief = like_relief is not None
+    # a pose fitted to curves in 3D folds about the flat midrib over the margin's plane: about
+    # the blade's relief instead, a nudge of the roll moved a rolled ovate's outline 5e-2
+    own_relief = margin_relief if getattr(like_relief, "on_margin", False) else relief_of
     if isinstance(like, Pose):  # a form's blade is in its own coordinates
-        relief = relief_of(flat.boundary, flat.veins) if about_relief else None
+        relief = own_relief(flat.boundary, flat.veins) if about_relief else None
         bend: Bend = replace(pose, relief=relief)
     else:  # bent about the blade's own relief, read in its frame (core/pose_relief.py)
         frame = blade_frame(flat, plane)
@@ -148,7 +152,7 @@ def posed(
 
         relief = None
         if about_relief:
-            relief = relief_of(blade(flat.boundary), [blade(v) for v in flat.veins])
+            relief = own_relief(blade(flat.boundary), [blade(v) for v in flat.veins])
         bend = PlacedPose(replace(own, relief=relief), frame)
     return Leaf(bend.apply(flat.boundary), [bend.apply(v) for v in flat.veins], bend=bend)
 
