@@ -114,13 +114,14 @@ def test_a_form_folded_down_hard_without_its_pose_is_unfolded_not_refused(shape,
     boundary's plane sees the blade side-on, and the best quadratic height field over it
     explains nothing (its rms is the margin's spread), so no fit did well enough against it
     (the best 0.0107 against 0.25 of 0.0259). A leaf its plane sees side-on is refused as it
-    is: any pose that lays it flat now does better. The fold about the margin's plane is not
-    the form's about its midrib's hinge: off its own surface by 4-6e-3 of the length on
-    average, where +75° is 3.5e-3."""
+    is: any pose that lays it flat now does better. Folded about the margin's plane (sheared),
+    these came out 6e-4 to 1.6e-3 of the length off their own surface on average, 5.8e-3 at
+    p95; folded about the midrib's flat heights as the form is (unfold._hinge), 2.9e-6 to
+    2.6e-4, and at most 8.2e-4 at p95."""
     leaf = Form(shape, fold=fold).leaf()
     assert fit_pose(ls.Leaf(leaf.boundary, leaf.veins)) is not None
     off = off_own_surface(leaf)
-    assert off.mean() <= 8e-3 and np.percentile(off, 95) <= 2e-2, (
+    assert off.mean() <= 5e-4 and np.percentile(off, 95) <= 2e-3, (
         off.mean(),
         np.percentile(off, 95),
     )
