@@ -20,6 +20,7 @@ left over by the sheet is the scanner's noise and the veins' own.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 import shapely
@@ -377,6 +378,9 @@ class Scaled:
     scale: float
     made: dict = field(default_factory=dict, repr=False)
     holes: tuple[np.ndarray, ...] = ()
+    # the flat blade lies on the world's x-y plane, however the scan was turned, not on the
+    # leaf's own (a pose's blade frame): its projected area is taken face-on (evaluate.facing_area)
+    own_plane: ClassVar[bool] = False
 
     def bent(self, points: np.ndarray) -> np.ndarray:
         """`apply`, remembering each bent point's flat one for `flatten`."""
