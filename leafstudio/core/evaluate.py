@@ -154,6 +154,19 @@ def surface_area(points: np.ndarray, triangles: np.ndarray) -> float:
     return float(0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1).sum())
 
 
+def facing_area(points: np.ndarray, triangles: np.ndarray) -> float:
+    """The area of the triangles over (n, 3) points projected on the plane across their
+    area-weighted mean normal: the mesh seen face-on as a whole, whichever way it is turned (for
+    a height field over a plane, the largest projected area over all directions)."""
+    a, b, c = (points[triangles[:, i]] for i in range(3))
+    cross = np.cross(b - a, c - a)
+    facing = cross.sum(axis=0)
+    size = float(np.linalg.norm(facing))
+    if size == 0.0:
+        return 0.0
+    return float(0.5 * np.abs(cross @ (facing / size)).sum())
+
+
 T = TypeVar("T")
 Steps = Generator[None, None, T]  # a computation that yields between its steps, then returns
 
@@ -357,6 +370,7 @@ def shape_measurements(
     polygon: np.ndarray,
     area: float | None = None,
     midrib: np.ndarray | None = None,
+    face_on: bool = False,
 ) -> dict[str, float]:
     """The FIELDS measurements of a leaf mesh.
 
@@ -374,6 +388,12 @@ def shape_measurements(
     midrib : (m, 3) float array, optional
         The midrib (the first vein) of the flat blade, in world coordinates: the length is along
         it, base to apex (blade_axis); without it, along u.
+    face_on : bool, default: False
+        The projected area is the mesh seen along its own mean normal (`facing_area`), not on
+        `frame`'s plane: for a bent blade whose flat blade's plane is not the leaf's own (a
+        scan's sheet lays it on the world's x-y plane, core/sheet.Scaled.own_plane: its
+        projected area was its shadow on the scanner's x-y plane, 137 to 376 for sugar beet
+        pot1_1 as it was turned).
 
     Returns
     -------
@@ -388,7 +408,9 @@ def shape_measurements(
     length, width = blade_length_width(polygon, base, direction)
     return {
         "area": surface_area(points, triangles) if area is None else area,
-        "projected_area": surface_area(plane_xy, triangles),
+        "projected_area": facing_area(points, triangles)
+        if face_on
+        else surface_area(plane_xy, triangles),
         "perimeter": float(np.linalg.norm(outline - np.roll(outline, 1, axis=0), axis=1).sum()),
         "length": length,
         "width": width,

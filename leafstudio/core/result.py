@@ -268,13 +268,20 @@ class Result:
         midrib = blade_midrib(self.leaf if self.blade is None else self.blade)
         if midrib is not None and self.units is not None and self.unit is not None:
             midrib = self.units.to_unit(midrib)
-        return Measuring(partial(unit._metric_steps, midrib), self.units)
+        # seen face-on when its flat blade does not lie on the leaf's own plane (a scan's sheet:
+        # sheet.Scaled.own_plane); asked here: the unit-size run's leaf has no bend
+        face_on = getattr(self.leaf.bend, "own_plane", True) is False
+        return Measuring(partial(unit._metric_steps, midrib, face_on), self.units)
 
-    def _metric_steps(self, midrib: np.ndarray | None) -> evaluate.Steps[dict[str, Any]]:
+    def _metric_steps(
+        self, midrib: np.ndarray | None, face_on: bool = False
+    ) -> evaluate.Steps[dict[str, Any]]:
         table = yield from evaluate.table_steps(self.triangle_mesh, self.leaf)
         yield
         area = table["mesh"]["area"]
-        shape = shape_measurements(self.triangle_mesh, self.frame, self.polygon, area, midrib)
+        shape = shape_measurements(
+            self.triangle_mesh, self.frame, self.polygon, area, midrib, face_on
+        )
         yield
         curvature = curvature_summary(self.triangle_mesh)
         return {**table, "leaf": {**shape, "k": self.chosen_k}, "curvature": curvature}

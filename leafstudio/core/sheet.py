@@ -20,6 +20,7 @@ left over by the sheet is the scanner's noise and the veins' own.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 import shapely
@@ -28,7 +29,7 @@ from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
 
 from leafstudio._shared import progress
-from leafstudio.core.sheet_cells import VOLUME, cubes, cut
+from leafstudio.core.sheet_cells import VOLUME, cubes, cut, own_axes
 
 REACH = 1.8  # cells: cell means closer than this are neighbours in the graph
 MIN_CELLS = 30
@@ -343,9 +344,9 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     if flat is None:
         return None
     progress.report(0.1, UNROLLING)
-    centre = flat.mean(axis=0)
-    axes = np.linalg.svd(flat - centre, full_matrices=False)[2]
-    flat = (flat - centre) @ axes.T  # u along the longest spread
+    # u along the longest spread, each axis's sign fixed (an SVD's is arbitrary, and a mirrored
+    # flat blade is cut in other cells by `refit`: 463 or 464 of them as pot2_3 was turned)
+    flat = own_axes(flat)
     smoothing = FIRST * length**2
     # the graph's paths zigzag, so its distances run a few percent long: the flat blade is
     # scaled to keep the sheet's area (its median area factor |S_u x S_v| made 1, by central
@@ -377,6 +378,9 @@ class Scaled:
     scale: float
     made: dict = field(default_factory=dict, repr=False)
     holes: tuple[np.ndarray, ...] = ()
+    # the flat blade lies on the world's x-y plane, however the scan was turned, not on the
+    # leaf's own (a pose's blade frame): its projected area is taken face-on (evaluate.facing_area)
+    own_plane: ClassVar[bool] = False
 
     def bent(self, points: np.ndarray) -> np.ndarray:
         """`apply`, remembering each bent point's flat one for `flatten`."""
