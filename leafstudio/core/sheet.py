@@ -29,7 +29,7 @@ from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
 
 from leafstudio._shared import progress
-from leafstudio.core.sheet_cells import VOLUME, cubes, cut, own_axes
+from leafstudio.core.sheet_cells import VOLUME, cubes, cut
 
 REACH = 1.8  # cells: cell means closer than this are neighbours in the graph
 MIN_CELLS = 30
@@ -344,9 +344,9 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     if flat is None:
         return None
     progress.report(0.1, UNROLLING)
-    # u along the longest spread, each axis's sign fixed (an SVD's is arbitrary, and a mirrored
-    # flat blade is cut in other cells by `refit`: 463 or 464 of them as pot2_3 was turned)
-    flat = own_axes(flat)
+    centre = flat.mean(axis=0)
+    axes = np.linalg.svd(flat - centre, full_matrices=False)[2]
+    flat = (flat - centre) @ axes.T  # u along the longest spread
     smoothing = FIRST * length**2
     # the graph's paths zigzag, so its distances run a few percent long: the flat blade is
     # scaled to keep the sheet's area (its median area factor |S_u x S_v| made 1, by central

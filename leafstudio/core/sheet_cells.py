@@ -22,37 +22,21 @@ PER_CUBE = 2.5  # a sparser blade is cut in fewer cubes (module docstring)
 FEWEST_CELLS = 8
 
 
-def cubes(points: np.ndarray, side: float, shift: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+def cubes(points: np.ndarray, side: float) -> tuple[np.ndarray, np.ndarray]:
     """Each of the (n, k) points' cube of `side` (n,) and the cubes' counts of points, in the
-    order of their first corner (numpy's unique rows); the cubes' corners `shift` sides below
-    the points' least coordinates."""
-    keys = np.floor((points - points.min(axis=0)) / side + shift).astype(np.int64)
+    order of their first corner (numpy's unique rows)."""
+    keys = np.floor((points - points.min(axis=0)) / side).astype(np.int64)
     _, which, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
     return which.ravel(), counts
-
-
-def own_axes(points: np.ndarray) -> np.ndarray:
-    """The (n, k) points about their mean in their principal axes, the longest spread first,
-    each turned toward the points' farther extreme: cubes cut along them do not turn with the
-    scanner (cut along the world's axes, a rolled blade turned rigidly came out 2.6% longer,
-    tests/sources/test_scan_turned.py)."""
-    centred = points - points.mean(axis=0)
-    axes = np.linalg.eigh(centred.T @ centred)[1][:, ::-1]
-    along = centred @ axes
-    return along * np.where(along.max(axis=0) + along.min(axis=0) < 0, -1.0, 1.0)
 
 
 def cut(points: np.ndarray, length: float) -> tuple[int, np.ndarray, np.ndarray]:
     """How many cubes the (n, 3) blade points' `length` is cut in: CELLS, or fewer until they
     hold PER_CUBE points each on average (FEWEST_CELLS at least); with each point's cube and
-    the cubes' counts at that cut (`cubes`, along the points' own axes: `own_axes`)."""
-    points = own_axes(points)
+    the cubes' counts at that cut (`cubes`)."""
     cells = CELLS
     while True:
-        # half a cube's shift: the blade's `length` is its extent along the first axis, a whole
-        # number of cubes, and its far end sat on a corner, alone in a cube or not as the
-        # scanner had it turned (pot2_3: 697 cubes or 696, by 5e-16)
-        cube, counts = cubes(points, length / cells, 0.5)
+        cube, counts = cubes(points, length / cells)
         if cells <= FEWEST_CELLS or len(points) >= PER_CUBE * len(counts):
             return cells, cube, counts
         cells = max(FEWEST_CELLS, int(cells * np.sqrt(len(points) / (PER_CUBE * len(counts)))))

@@ -45,18 +45,3 @@ def test_a_dense_blade_keeps_every_cube_and_a_sparse_one_fewer():
     assert FEWEST_CELLS <= few < CELLS
     assert len(sparse) >= PER_CUBE * len(counts) and counts.sum() == len(sparse)
     assert cube.max() == len(counts) - 1
-
-
-def test_a_turned_blade_is_cut_in_the_same_cubes():
-    """Cubes along the world's axes turned with the scanner (pot2_3's points: a different cut
-    for each turn); along the points' own axes, half a cube off their least corner (its length
-    is its extent, a whole number of cubes: its far end sat on a corner), they do not."""
-    from scipy.spatial.transform import Rotation
-
-    blade = _scan("pot2_3")
-    length = float(np.ptp(blade @ np.linalg.svd(blade - blade.mean(0))[2][0]))
-    _, cube, counts = cut(blade, length)
-    for turn in Rotation.random(3, random_state=27):
-        _, turned, turned_counts = cut(turn.apply(blade) + [5.0, -3.0, 1.0], length)
-        np.testing.assert_array_equal(turned, cube)
-        np.testing.assert_array_equal(turned_counts, counts)
