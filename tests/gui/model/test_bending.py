@@ -387,3 +387,27 @@ def test_a_nudge_of_a_fitted_leafs_slider_moves_it_little_and_back_gives_it_agai
         assert np.abs(nudged.boundary - leaf.boundary).max() < 1e-5 * length, term
         back = posed(flat_leaf(nudged), slider, nudged.bend)
         assert np.abs(back.boundary - leaf.boundary).max() < 1e-9 * length, term
+
+
+@pytest.mark.parametrize("terms", [{"fold": 45.0, "curl": 0.5}, {"fold": -30.0}])
+def test_a_fitted_leafs_first_sketch_edit_does_not_turn_it_over(terms):
+    """The sketch derived from a fitted leaf's result has the flat blade's frame (fit_frame's
+    normal, toward the veins); the fit's normal was the other way up for these, and a point
+    moved 1e-9 turned the leaf over (0.82 and 0.32 of its length off where it stood). Now the
+    fit is read the way up the blade takes (unfold._upright): 3.4e-3 (the sketch's own outline,
+    and the relief read again from its midrib)."""
+    from scipy.spatial import cKDTree
+
+    from leafstudio.core.unfold import unfolded
+
+    form = Form("ovate", **terms).leaf()
+    leaf = unfolded(Leaf(form.boundary, form.veins))
+    runner = Runner()
+    session = Session(runner, FAST)
+    session.open_document(leaf, None, "posed")
+    runner.finish(session)
+    sketch = session.editable_sketch()
+    assert sketch is not None
+    session.commit_sketch(sketch.moved(-1, 0, sketch.boundary[0] * (1 + 1e-9)), "Move point")
+    length = float(np.linalg.norm(np.ptp(leaf.boundary, axis=0)))
+    assert cKDTree(leaf.boundary).query(session.leaf.boundary)[0].max() < 0.01 * length
