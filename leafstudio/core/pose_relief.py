@@ -92,6 +92,12 @@ class Relief:
             self, along=along, midrib=midrib, knots=knots, mean=mean, half_width=half_width
         )
 
+    def mirrored(self) -> Relief:
+        """The same relief seen from the blade's other side (its frame turned half about the
+        midrib, y and z negated): the heights negated, the rise and the fall swapped."""
+        midrib, mean = (tuple(0.0 - v for v in values) for values in (self.midrib, self.mean))
+        return replace(self, midrib=midrib, mean=mean, rise=self.fall, fall=self.rise)
+
     @property
     def on_margin(self) -> bool:
         """Whether the sheet is the margin's plane, as a pose fitted to curves in 3D has it

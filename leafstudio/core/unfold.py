@@ -34,9 +34,9 @@ import shapely
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from leafstudio.core.bend import Pose
+from leafstudio.core.bend import Pose, flat_leaf
 from leafstudio.core.placed import PlacedPose
-from leafstudio.core.plane import Frame
+from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.pose_relief import Relief, margin_relief
 from leafstudio.core.prepare.vein_order import midrib_turned, veins_inside_outline
 from leafstudio.model import Leaf
@@ -175,10 +175,33 @@ def fit_pose(leaf: Leaf) -> PlacedPose | None:
         return None
     pose, frame = bend.pose, bend.frame
     relief = None if pose.relief is None else pose.relief.scaled(2 * half)
-    return PlacedPose(
-        Pose(pose.fold, pose.curl / (2 * half), pose.roll / (2 * half), relief=relief),
-        Frame(origin=centre + 2 * half * frame.origin, u=frame.u, v=frame.v, normal=frame.normal),
+    return _upright(
+        PlacedPose(
+            Pose(pose.fold, pose.curl / (2 * half), pose.roll / (2 * half), relief=relief),
+            Frame(
+                origin=centre + 2 * half * frame.origin, u=frame.u, v=frame.v, normal=frame.normal
+            ),
+        ),
+        leaf,
     )
+
+
+def _upright(bend: PlacedPose, leaf: Leaf) -> PlacedPose:
+    """`bend`, the same bend of `leaf`, in the frame whose normal is the one the flat blade's
+    own plane takes (plane.fit_frame: toward its veins), as the app finds it again (a sketch's
+    frame, placed.blade_frame): turned half about the midrib when the fit's normal, whichever
+    way its start pointed, is the other (fold, curl, roll and relief negated; the same points
+    to the last bit). An ovate folded 45 and curled 0.5 was fitted fold -45 and curl -0.5 about
+    a normal down, and its sketch's first edit flipped the leaf over (0.82 of its length)."""
+    flat = flat_leaf(Leaf(leaf.boundary, leaf.veins, bend=bend))
+    if fit_frame(flat.boundary, flat.vein_points).normal @ bend.frame.normal >= 0:
+        return bend
+    pose, frame = bend.pose, bend.frame
+    relief = None if pose.relief is None else pose.relief.mirrored()
+    turned = replace(  # 0.0 - t: no -0.0 for a term the fit left out
+        pose, fold=0.0 - pose.fold, curl=0.0 - pose.curl, roll=0.0 - pose.roll, relief=relief
+    )
+    return PlacedPose(turned, Frame(frame.origin, frame.u, -frame.v, -frame.normal))
 
 
 def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:

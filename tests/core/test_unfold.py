@@ -182,3 +182,22 @@ def test_a_folded_leaf_too_large_for_a_relief_is_fitted_about_the_margins_plane(
     assert fit_pose(ls.Leaf(posed.boundary, posed.veins)).pose.relief is not None
     result = ls.reconstruct(huge, ls.Params(k=3, grid=32))
     assert np.isfinite(np.asarray(result.triangle_mesh.points)).all()
+
+
+@pytest.mark.parametrize("terms", [{"fold": 45.0, "curl": 0.5}, {"fold": -30.0}, {"curl": -0.5}])
+def test_a_fitted_pose_is_read_the_way_up_the_flat_blade_takes(terms):
+    """The fit's normal was whichever way its start pointed: ovate folded 45 and curled 0.5 came
+    back fold -45 and curl -0.5 about a normal down, which the app's sketch (its frame found on
+    the flat blade, plane.fit_frame: toward the veins) turned over on its first edit (0.82 of
+    the length). The fit is now in the flat blade's own frame: the form's own fold and curl."""
+    from leafstudio.core.bend import flat_leaf
+    from leafstudio.core.placed import blade_frame
+
+    form = Form("ovate", **terms).leaf()
+    bend = fit_pose(ls.Leaf(form.boundary, form.veins))
+    assert bend is not None
+    flat = flat_leaf(ls.Leaf(form.boundary, form.veins, bend=bend))
+    assert blade_frame(flat).normal @ bend.frame.normal > 0.99
+    assert bend.pose.fold == pytest.approx(terms.get("fold", 0.0), abs=0.1)
+    assert bend.pose.curl == pytest.approx(terms.get("curl", 0.0), abs=0.03)  # -0.52 alone
+    np.testing.assert_allclose(bend.apply(flat.boundary), form.boundary, atol=1e-3)

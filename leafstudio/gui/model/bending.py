@@ -127,8 +127,9 @@ def posed(
     flat: Leaf | None, pose: Pose, like: Bend | None = None, plane: Any = None
 ) -> Leaf | None:
     """The flat blade `flat` bent by `pose`: as a form is when `like` (the bend it had) is a
-    plain Pose, else about its midrib on `plane` (a sketch's Frame; default the boundary's PCA
-    plane); either way about the blade's own relief (core/pose_relief.py: a fold turns each
+    plain Pose, else about its midrib on `plane` (a sketch's Frame; without one, `like`'s own
+    frame and relief when it is a PlacedPose, `flat` being its flat blade, else the boundary's
+    PCA plane); either way about the blade's own relief (core/pose_relief.py: a fold turns each
     half about the midrib as it stands). The flat pose gives `flat` itself, without a bend."""
     if flat is None or pose == FLAT:
         return flat
@@ -144,14 +145,24 @@ def posed(
         relief = own_relief(flat.boundary, flat.veins) if about_relief else None
         bend: Bend = replace(pose, relief=relief)
     else:  # bent about the blade's own relief, read in its frame (core/pose_relief.py)
-        frame = blade_frame(flat, plane)
+        # `flat` re-posed (no sketch's plane: set_bend on `like`'s flat blade) keeps its bend's
+        # frame and relief. Found again, a fitted pose's frame (core/unfold.py: its normal the
+        # fit's) came back with fit_frame's normal, toward the veins: ovate folded 45 and curled
+        # 0.5, fitted -45 about a normal down, flipped over for a nudge of 1e-6 (its outline
+        # moved 0.90 of its length); and its relief, read again from the flat midrib, is not the
+        # fit's (whose hinge is the midrib flattened about the round before's: unfold._hinge),
+        # 7e-4 to 1.1e-3 off: ovate folded 60 and rolled 0.4 moved 0.015, 45 and 0.5 8e-4
+        kept = like if plane is None and isinstance(like, PlacedPose) else None
+        frame = blade_frame(flat, plane) if kept is None else kept.frame
         own = in_lengths(pose, 1.0 / blade_extent(flat.boundary, frame))
 
         def blade(points: np.ndarray) -> np.ndarray:
             return np.column_stack(frame.to_plane(points))
 
         relief = None
-        if about_relief:
+        if kept is not None:
+            relief = kept.pose.relief
+        elif about_relief:
             relief = own_relief(blade(flat.boundary), [blade(v) for v in flat.veins])
         bend = PlacedPose(replace(own, relief=relief), frame)
     return Leaf(bend.apply(flat.boundary), [bend.apply(v) for v in flat.veins], bend=bend)

@@ -286,8 +286,9 @@ def test_a_fitted_pose_keeps_bending_about_its_own_relief(terms):
     the margin's plane (pose_relief.margin_relief). Its premise once was a fitted pose without
     a relief, which a slider's nudge switched to the blade's relief (the outline moved 0.157 of
     the length for 1e-6° more fold); the fit's relief, taken for the blade's, moved a rolled
-    ovate's 5e-2. A nudge bends about the fit's kind of relief again: 6e-6 and 6e-5, where the
-    pose without a relief moved 1.0e-4 and 2.2e-4 (the frame found again, blade_frame)."""
+    ovate's 5e-2. A nudge bends about the fit's kind of relief again: 6e-6 and 6e-5 with the
+    frame found again (blade_frame) and the relief read again from the flat midrib; in the
+    bend's own frame and relief, 4e-9 (test_a_nudge_of_a_fitted_leafs_slider_...)."""
     from leafstudio.core.bend import flat_leaf
     from leafstudio.core.unfold import fit_pose
     from leafstudio.gui.model.bending import pose_of, posed
@@ -300,7 +301,7 @@ def test_a_fitted_pose_keeps_bending_about_its_own_relief(terms):
     slider = pose_of(leaf)
     nudged = posed(flat_leaf(leaf), replace(slider, fold=slider.fold + 1e-6), fitted)
     assert nudged.bend.pose.relief is not None and nudged.bend.pose.relief.on_margin
-    assert np.abs(nudged.boundary - leaf.boundary).max() < 1e-4
+    assert np.abs(nudged.boundary - leaf.boundary).max() < 1e-6
 
 
 def test_a_pose_without_a_relief_keeps_bending_about_the_margins_plane():
@@ -349,3 +350,64 @@ def test_a_curved_drawn_blade_bends_per_its_whole_length(bow):
     frame = blade_frame(Leaf(boundary=boundary, veins=[midrib]), plane)
     chord = 2 * np.sin(np.radians(bow) / 2)
     assert chord <= blade_extent(boundary, frame) <= 1.01 * chord
+
+
+@pytest.mark.parametrize(
+    "terms",
+    [
+        {"fold": 45.0, "curl": 0.5},  # fitted fold -45 about a normal down: flipped over (0.90)
+        {"fold": -30.0, "curl": 0.5},  # 0.90
+        {"fold": 60.0, "roll": 0.4},  # the relief read again from the flat midrib: 0.015
+        {"curl": -0.5},  # 0.87
+    ],
+)
+def test_a_nudge_of_a_fitted_leafs_slider_moves_it_little_and_back_gives_it_again(tmp_path, terms):
+    """A form saved as CSV without its pose, opened (unfolded: core/unfold.py), then each slider
+    nudged by 1e-6 as set_bend does: `posed` found the blade's frame again by fit_frame's rule
+    (the normal toward the veins), whose normal was the fit's the other way up for a fold down
+    or a curl, and the whole leaf jumped or flipped (0.87-0.90 of its length); its relief read
+    again from the flat midrib is not the fit's, and moved it 0.015. Re-posed in its
+    bend's own frame and relief, a nudge moves the outline 4e-9 to 8e-7 of the length, and the
+    pose set back gives the leaf again."""
+    from leafstudio.core.bend import flat_leaf
+    from leafstudio.core.unfold import unfolded
+    from leafstudio.gui.model.bending import pose_of, posed
+    from leafstudio.sources.files import load_leaf
+
+    form = Form("ovate", **terms).leaf()
+    path = tmp_path / "posed.csv"
+    save_leaf(Leaf(form.boundary, form.veins), path)
+    leaf = unfolded(load_leaf(path))
+    assert isinstance(leaf.bend, PlacedPose)
+    length = float(np.linalg.norm(np.ptp(leaf.boundary, axis=0)))
+    slider = pose_of(leaf)
+    for term in ("fold", "curl", "roll", "twist"):
+        nudged = posed(flat_leaf(leaf), replace(slider, **{term: getattr(slider, term) + 1e-6}),
+                       leaf.bend)  # fmt: skip
+        assert np.abs(nudged.boundary - leaf.boundary).max() < 1e-5 * length, term
+        back = posed(flat_leaf(nudged), slider, nudged.bend)
+        assert np.abs(back.boundary - leaf.boundary).max() < 1e-9 * length, term
+
+
+@pytest.mark.parametrize("terms", [{"fold": 45.0, "curl": 0.5}, {"fold": -30.0}])
+def test_a_fitted_leafs_first_sketch_edit_does_not_turn_it_over(terms):
+    """The sketch derived from a fitted leaf's result has the flat blade's frame (fit_frame's
+    normal, toward the veins); the fit's normal was the other way up for these, and a point
+    moved 1e-9 turned the leaf over (0.82 and 0.32 of its length off where it stood). Now the
+    fit is read the way up the blade takes (unfold._upright): 3.4e-3 (the sketch's own outline,
+    and the relief read again from its midrib)."""
+    from scipy.spatial import cKDTree
+
+    from leafstudio.core.unfold import unfolded
+
+    form = Form("ovate", **terms).leaf()
+    leaf = unfolded(Leaf(form.boundary, form.veins))
+    runner = Runner()
+    session = Session(runner, FAST)
+    session.open_document(leaf, None, "posed")
+    runner.finish(session)
+    sketch = session.editable_sketch()
+    assert sketch is not None
+    session.commit_sketch(sketch.moved(-1, 0, sketch.boundary[0] * (1 + 1e-9)), "Move point")
+    length = float(np.linalg.norm(np.ptp(leaf.boundary, axis=0)))
+    assert cKDTree(leaf.boundary).query(session.leaf.boundary)[0].max() < 0.01 * length
