@@ -160,7 +160,8 @@ def spline_gradient(xy, centers, weights, reach, table, step):
     margin's points, where T = 0 multiplies ∇²c). In two loops a point as spline_value, the
     second reading kei and kei' alone (spline_derivatives at the outline's 502 points against
     200 centres on a flat ovate at grid 128: 0.62 ms; this 0.36, best of 60; c and ∇c 2e-15
-    and 1e-15 of their largest apart)."""
+    and 1e-15 of their largest apart). The first loop takes each root once for both t and 1/r
+    (taken again after _intervals: 0.53 -> 0.44 ms, best of 200, the same values to the bit)."""
     cx, cy = _columns(centers)
     n = len(xy)
     value = np.empty(n)
@@ -173,10 +174,14 @@ def spline_gradient(xy, centers, weights, reach, table, step):
     inv_r = np.empty(len(cx))  # 1/(r ℓ): on a centre finite, and ∇φ's d = 0 there
     for i in range(n):
         x, y = xy[i, 0], xy[i, 1]
-        _intervals(x, y, cx, cy, scale, end, rows, at)
-        for j in range(len(cx)):
+        for j in range(len(cx)):  # _intervals' loop, with 1/r from the same root
             dx, dy = x - cx[j], y - cy[j]
-            inv_r[j] = inv_reach / max(np.sqrt(dx * dx + dy * dy), 1e-100)
+            r = np.sqrt(dx * dx + dy * dy)
+            t = min(r * scale, end)
+            k = int(t)
+            rows[j] = k
+            at[j] = t - k
+            inv_r[j] = inv_reach / max(r, 1e-100)
         v, gx, gy = 0.0, 0.0, 0.0
         for j in range(len(cx)):
             k, u, w = rows[j], at[j], weights[j]

@@ -287,11 +287,12 @@ def _crossed_cells(polygon: np.ndarray, grid: Grid) -> np.ndarray:
     points = polygon[edge] + t[:, None] * (ends - polygon)[edge]
     cell = np.floor((points - grid.origin) / grid.spacing).astype(np.int64)
     crossed = np.zeros((ny + 1, nx + 1), dtype=bool)  # one cell of padding all round
-    for dy in (-1, 0, 1):
-        for dx in (-1, 0, 1):
-            cy = np.clip(cell[:, 1] + dy + 1, 0, ny)
-            cx = np.clip(cell[:, 0] + dx + 1, 0, nx)
-            crossed[cy, cx] = True
+    # the 3 x 3 cells round each in one assignment, rows and columns broadcast (nine, one
+    # shift at a time: 0.22 -> 0.11 ms on a flat ovate at grid 128, best of 100; the same cells)
+    shift = np.arange(3)[:, None]  # -1, 0, 1, and the padding's 1
+    cy = np.clip(cell[:, 1] + shift, 0, ny)
+    cx = np.clip(cell[:, 0] + shift, 0, nx)
+    crossed[cy[:, None], cx[None, :]] = True
     return crossed[1:-1, 1:-1]
 
 

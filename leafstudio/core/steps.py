@@ -285,7 +285,7 @@ def compute_surface(run: StageRun) -> SurfaceStage:
     guide: GuideStage = run["guide"]
     nodes = guide.nodes
     g_in = guide.g[guide.inside]
-    surface = fit_surface(
+    surface, relief = fit_surface(  # relief: M at the nodes, once (the correction takes it)
         run["gmm"][1],
         run["implicit"],
         nodes,
@@ -298,7 +298,6 @@ def compute_surface(run: StageRun) -> SurfaceStage:
         run.params.seed,
         base=fs.base,
     )
-    relief = surface.mixture.value(nodes)  # M, once: the correction takes it on its lattice
     correction = None
     if run.params.through_veins and fs.veins:  # onto every vein point (correct.py)
         surface, correction = onto_veins(

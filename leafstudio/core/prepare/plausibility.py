@@ -17,6 +17,7 @@ from scipy.spatial import cKDTree
 
 from leafstudio.core.plane import fixed_sample, principal_spreads
 from leafstudio.core.prepare.cover import COVER_SPREAD, FILL_SHARE, surface_cover
+from leafstudio.core.prepare.polygon import hull_perimeter
 from leafstudio.core.prepare.vein_order import leans_back, midrib_leaning
 from leafstudio.errors import LeafError
 
@@ -216,16 +217,6 @@ def _plane_coordinates(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.n
     _, _, axes = np.linalg.svd(sample - centre, full_matrices=False)
     # a contiguous (3, 2) matrix: numpy's matmul with the transposed view is 9 times slower
     return (points - centre) @ np.ascontiguousarray(axes[:2].T), centre, axes[:2]
-
-
-def hull_perimeter(xy: np.ndarray) -> float:
-    """The perimeter of the (n, 2) points' convex hull (0 for collinear points)."""
-    from scipy.spatial import ConvexHull, QhullError
-
-    try:
-        return float(ConvexHull(xy).area)  # in 2D, "area" is the perimeter
-    except (QhullError, ValueError):
-        return 0.0
 
 
 def _loop_ratio(xy: np.ndarray) -> float | None:

@@ -13,7 +13,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from leafstudio.core.buckets import kernel_array
+from leafstudio.core.buckets import bounds, kernel_array
 from leafstudio.core.jit import njit
 
 MAX_OUTLINE_VERTICES = 3000  # a denser outline is thinned to about this many (thin_outline)
@@ -81,6 +81,68 @@ def _thin_ring(points, sequence, step):
             keep[i] = True
             last = p
     return keep
+
+
+FLAT_HULL = 1e-6  # a hull this thin (twice its area over its box's larger side squared) is
+# left to Qhull, which decides whether the points are collinear (hull_perimeter)
+
+
+def hull_perimeter(xy: np.ndarray) -> float:
+    """The perimeter of the (n, 2) points' convex hull (0 for collinear points).
+
+    Andrew's monotone chain, compiled: scipy's Qhull took 0.27 ms for a flat ovate's 502-point
+    outline (a leaf's outline lies nearly all on its hull), this 0.02 ms, the same perimeter to
+    1e-15 of it. Qhull still takes fewer than three points, points that are not finite, and a
+    hull all but flat (FLAT_HULL), whose collinear points it finds (0, as before)."""
+    xy = kernel_array(xy)
+    if len(xy) >= 3 and np.isfinite(xy).all():
+        order = np.lexsort((xy[:, 1], xy[:, 0]))
+        perimeter, twice_area = _hull(xy, order)
+        lo, hi = bounds(xy)
+        side = float((hi - lo).max())
+        if twice_area > FLAT_HULL * side * side:
+            return perimeter
+    return _qhull_perimeter(xy)
+
+
+def _qhull_perimeter(xy: np.ndarray) -> float:
+    """hull_perimeter by scipy's Qhull (0 where it finds the points collinear)."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        return float(ConvexHull(xy).area)  # in 2D, "area" is the perimeter
+    except (QhullError, ValueError):
+        return 0.0
+
+
+@njit(cache=True, nogil=True)
+def _hull(xy, order):
+    """The perimeter and twice the area of the convex hull of the (n, 2) points `xy` sorted by
+    `order` (x, then y): Andrew's monotone chain, the lower then the upper half."""
+    n = len(order)
+    hull = np.empty(2 * n, np.int64)
+    size = 0
+    for sweep in range(2):
+        start = size
+        for s in range(n):
+            i = order[s] if sweep == 0 else order[n - 1 - s]
+            while size >= start + 2:
+                a, b = hull[size - 2], hull[size - 1]
+                cross = (xy[b, 0] - xy[a, 0]) * (xy[i, 1] - xy[a, 1]) - (xy[b, 1] - xy[a, 1]) * (
+                    xy[i, 0] - xy[a, 0]
+                )
+                if cross > 0:
+                    break
+                size -= 1
+            hull[size] = i
+            size += 1
+        size -= 1  # each half's last point is the other's first
+    perimeter, twice_area = 0.0, 0.0
+    for s in range(size):
+        a, b = hull[s], hull[(s + 1) % size]
+        perimeter += np.sqrt((xy[b, 0] - xy[a, 0]) ** 2 + (xy[b, 1] - xy[a, 1]) ** 2)
+        twice_area += xy[a, 0] * xy[b, 1] - xy[b, 0] * xy[a, 1]
+    return perimeter, twice_area
 
 
 def thin_outline(polygon: np.ndarray, most: int = MAX_OUTLINE_VERTICES) -> np.ndarray:
