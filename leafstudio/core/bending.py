@@ -8,14 +8,30 @@ margin band 2.35° against 2.19°, a drawn leaf's 8.54° against 8.32°, linear'
 7.78°): c bent least where the mixture bent most. Here the values are chosen within the same
 tolerances so that the surface itself, z = T · (M + c) over the grid's nodes inside the leaf,
 bends least: the sum of its squared second differences (xx, yy and the cross difference) on a
-lattice of the nodes (`lattice`: finer in the margin band). c is linear in its values (the
-spline's weights are one solve of them), so this is a small quadratic program in the values,
-box-constrained, solved by projected gradient steps (FISTA) from the residuals themselves
-(starting from c's own least-bending values changed nothing). The margin band's
-99th-percentile dihedral falls below the paper's surface on every gallery form (lanceolate
-3.17° -> 1.66°, deltoid 2.19° -> 1.98°), and its inside on all but two (oblanceolate 2.94°
-against 2.85°; orbicular, whose midrib follows the dip of its base's flattening,
-forms/relief.py, 1.30° against 1.08°).
+lattice of the nodes (`lattice`: finer in the margin band), with c's own bending added at
+OWN_BENDING of the lattice's measure of it (the bends between the lattice's nodes). c is
+linear in its values (the spline's weights are one solve of them), so this is a small quadratic
+program in the values, box-constrained, solved by projected gradient steps (FISTA) from the
+residuals themselves (starting from c's own least-bending values changed nothing). The margin
+band's 99th-percentile dihedral falls below the paper's surface on every gallery form
+(lanceolate 3.17° -> 1.73°, deltoid 1.90° -> 1.82°), and its inside on all but oblanceolate's
+(2.94° against 2.85°: correct.py).
+
+Farther in than the margin band the lattice takes every second of its nodes, its differences over
+two of its steps (four grid steps on the sketch the app's story clicks, tests/leaves.
+clicked_sketch, 0.031 of its length): a bend narrower than that goes unseen, and the values,
+CENTER_STEP apart along the veins (0.008 there), were free to make one. Where a side vein leaves
+the midrib they did: the largest dihedral within 0.03 of the length of a side vein's start was
+4.38° against the paper's 1.63°, and the sketch's 99th-percentile interior dihedral 1.58° against
+1.49°; on ovate folded 60° (grid 64) the same crease beside the midrib at a side vein's start, k2
+5.12, where the paper's bends at most 3.45 off its midrib. c's own energy, ∫ (Δc)² + c²/ℓ⁴
+over the plane, sees every bend of c: with it 1.73°, 1.485° and 3.34. (The lattice at one step
+everywhere, without it, left 1.74° but 1.496° inside, a vein's end creasing between its nodes, and
+grew a rolled grass blade's area: a lanceolate of aspect 30 is four grid steps wide, its relief
+0.004 of the length against the tube's radius 0.005, and its rolled area over its flat went 0.999
+-> 1.031, the paper's surface 0.992, the form's own 0.980.) c's own energy also charges the
+counter-bend by which c took out the mixture's own near the midrib's apex end: there, on ovate flat
+at grid 64, k2 5.58 -> 5.86 (the paper's surface 8.55).
 
 What K does not change, the lattice, φ at its nodes and the gram (Bending), is the pipeline's
 bending stage (correct.pinning), kept when only K moves; the surface stage solves the program
@@ -41,6 +57,14 @@ from leafstudio.core.jit import njit
 LATTICE_NODES = 2500  # grid nodes, about, on the lattice whose bending is summed
 FINE = 0.97  # T below this: the margin band, where the lattice is finer (see lattice)
 POWER_STEPS = 20  # power steps for the largest eigenvalue of the normal matrix
+# c's own bending, ∫ (Δc)² + c²/ℓ⁴ = (2π/ℓ²) wᵀΦw, is added at this share of the lattice's measure
+# of it (the lattice's sum over a step h stands for h² ∫ c_xx² + c_yy² + 4 c_xy², own_weight).
+# bench_bent --veins (16 rows) and --variants (84), rows rougher than the paper's surface, and
+# the clicked sketch's interior against its 1.488°: 0: 4 and 29 (1.582°); 0.1: 1.491°; 0.15:
+# 2 and 20 (1.485°); 0.2: 1.480°; 0.25: 2 and 25 (1.483°), a serrate orbicular's margin band
+# 13.79° -> 14.99° against the paper's 14.92° (0.2: 14.90°; tests/core/test_correct.py); 0.5: 2
+# and 34, 1: 3 and 41 (c's own bending alone, as it first was, made margin bands rougher)
+OWN_BENDING = 0.15
 STEPS = 50  # projected gradient steps (100: the same bench_bent --veins rows, 0.01° apart)
 
 
@@ -55,6 +79,7 @@ class Bending:
     phi: np.ndarray  # (n, m) φ(|x − v_j| / ℓ) there for each spline centre v_j
     gram: np.ndarray  # (m, m) (TΦ)ᵀ DᵀD (TΦ), from single precision
     among: np.ndarray  # (m, m) φ(|v_i − v_j| / ℓ) between the centres
+    own: float  # the weight of c's own energy wᵀΦw beside the gram: own_weight
 
     def pinned(self, pins: np.ndarray) -> Bending:
         """The same for the centres where the (m,) bool `pins` is set (no copy when all are)."""
@@ -66,23 +91,25 @@ class Bending:
 
 def lattice(
     grid: Grid, index: np.ndarray, taper: np.ndarray
-) -> tuple[np.ndarray, scipy.sparse.csr_matrix]:
+) -> tuple[np.ndarray, scipy.sparse.csr_matrix, float]:
     """Which of the grid's nodes at the (n,) flat indices `index` (row-major, grid.points's
-    order) are kept on the lattice, as positions in `index`, and the second differences between
+    order) are kept on the lattice, as positions in `index`, the second differences between
     them, (rows, kept) sparse, one row per direction (x, y, and the cross difference) wherever
-    all its nodes are kept. In the margin band (T < FINE) the lattice takes every stride-th row
-    and column from the nodes' lowest (stride so that about LATTICE_NODES would be kept over the
-    whole blade), farther in every second of those: the surface bends most where the taper
-    brings it down (a stride of 3 left margin bands rougher than the paper's surface), and the
-    solve's cost grows with the nodes. The rows are laid out straight in compressed form (a
+    all its nodes are kept, and the lattice's step h in the plane. In the margin band (T < FINE)
+    the lattice takes every stride-th row and column from the nodes' lowest (stride so that
+    about LATTICE_NODES would be kept over the whole blade), farther in every second of those:
+    the surface bends most where the taper brings it down (a stride of 3 left margin bands
+    rougher than the paper's surface), and the solve's cost grows with the nodes (the bends
+    between the nodes farther in: OWN_BENDING). The rows are laid out straight in compressed form (a
     fixed count of entries per row: building D through scipy's coordinate form took 3 of the
     nested demo's 3.7 ms at grid 128)."""
     stride = max(1, round(float(np.sqrt(len(index) / LATTICE_NODES))))
+    step = stride * grid.spacing
     row, column = np.divmod(index, grid.shape[1])
     cell = np.column_stack([column - column.min(), row - row.min()])
     on = np.flatnonzero((cell[:, 0] % stride == 0) & (cell[:, 1] % stride == 0) & (taper > 0))
     if len(on) == 0:
-        return on, scipy.sparse.csr_matrix((0, 0), dtype=np.float32)
+        return on, scipy.sparse.csr_matrix((0, 0), dtype=np.float32), step
     at = cell[on] // stride
     band = taper[on] < FINE
     even = (at[:, 0] | at[:, 1]) % 2 == 0
@@ -109,7 +136,15 @@ def lattice(
         ),
         shape=(len(row_sizes), int(used.sum())),
     )
-    return on[used], differences
+    return on[used], differences, step
+
+
+def own_weight(step: float, reach: float) -> float:
+    """μ, the weight of c's own energy wᵀΦw beside the lattice's bending (least_bending):
+    ∫ (Δc)² + c²/ℓ⁴ = (2π/ℓ²) wᵀΦw (φ = −kei(r/ℓ) is 2π/ℓ² times the Green's function of
+    Δ² + ℓ⁻⁴), and the lattice's sum over a `step` h stands for h² times its integral, so
+    μ = OWN_BENDING · 2π h² / ℓ² for the reach ℓ."""
+    return OWN_BENDING * 2 * np.pi * (step / reach) ** 2
 
 
 STENCILS = (  # (offsets in rows and columns, coefficients) of each second difference
@@ -242,10 +277,14 @@ def least_bending(
     spline : (m, m) float array
         The spline's weights per unit value at each vein point (c on the lattice: phi @ spline).
 
-    The normal matrix is Sᵀ G S with G the bending gram (Bending.gram).
+    The normal matrix is Sᵀ G S with G the bending gram (Bending.gram), and μ S for c's own
+    energy: with S = Φ⁻¹ (the spline's λ aside), wᵀΦw = vᵀ S v.
     """
     d, taper = bending.differences, bending.taper
     normal = spline.T @ bending.gram @ spline
+    # in place: the steps read A by rows, and S, from LAPACK, is in column order (A + μS came out
+    # in column order: _projected_steps 0.36 -> 2.1 ms at ovate's 200 centres)
+    normal += bending.own * spline
     tapered = np.ascontiguousarray((taper * relief).astype(np.float32)[:, None])
     bends = _bend_twice(d.indptr, d.indices, d.data, tapered)[:, 0]
     shift = spline.T @ (bending.phi.T @ (taper * bends))

@@ -5,7 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from leafstudio.core.bending import FINE, lattice
+from leafstudio.core import correct
+from leafstudio.core.bending import FINE, OWN_BENDING, lattice
+from leafstudio.core.buckets import kernel_array
 from leafstudio.core.grid import make_grid
 
 
@@ -20,7 +22,7 @@ def test_the_lattices_rows_are_second_differences_of_its_nodes(resolution):
     index = np.flatnonzero(g > 0)
     taper = np.tanh(g[index] / 0.1)
     assert np.any(taper < FINE) and np.any(taper >= FINE)
-    on, d = lattice(grid, index, taper)
+    on, d, _ = lattice(grid, index, taper)
     xy = grid.points[index[on]]
     assert d.shape == (d.shape[0], len(on)) and d.shape[0] > len(on) // 2
     sizes = np.diff(d.indptr)
@@ -34,3 +36,23 @@ def test_the_lattices_rows_are_second_differences_of_its_nodes(resolution):
         bent = d @ values
         assert np.all(bent[rows] > 0)
     np.testing.assert_allclose((d @ (xy[:, 0] * xy[:, 1]))[straight], 0, atol=1e-5)
+
+
+def test_cs_own_energy_is_weighed_as_the_lattice_measures_c():
+    """bending.own_weight: c's own energy (2π/ℓ²) wᵀΦw in the lattice's units, h² ∫ (Δc)² +
+    c²/ℓ⁴, against the lattice's sum |D c|² for the same c (three centres, all inside): the same
+    share of it at two grids (the lattice's h² taken right: 0.50 at grid 128, 0.54 at 256), a
+    share near 1 (the lattice weighs the cross difference twice as the thin plate does, and
+    under-reads the log-singular bend at each centre)."""
+    centers = kernel_array(np.array([[0.0, 0.0], [0.05, 0.02], [-0.04, 0.03]]))
+    weights = np.array([1.0, -0.5, 0.7])
+    shares = []
+    for resolution in (128, 256):
+        grid = make_grid(np.array([[-0.6, -0.6], [0.6, 0.6]]), resolution)
+        inside = np.ones(len(grid.points), dtype=bool)
+        bending = correct.lattice_bending(centers, 1.0, grid, inside, np.ones(len(inside)))
+        c = (bending.phi @ weights).astype(np.float32)
+        measured = float(np.sum((bending.differences @ c) ** 2))
+        shares.append(measured / (bending.own / OWN_BENDING * (weights @ bending.among @ weights)))
+    assert abs(shares[0] - shares[1]) <= 0.1 * shares[0]
+    assert 0.3 <= shares[0] <= 1.5

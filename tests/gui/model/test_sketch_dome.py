@@ -39,9 +39,10 @@ def test_a_clicked_leafs_veins_lie_on_the_dome_and_the_surface_through_them_does
     nearest point's height: each side vein left the rising midrib falling, and the surface
     through the veins creased along the midrib, 99th-percentile interior dihedral 2.65° against
     2.03° on the paper's surface (K 3, grid 128). Its veins now follow the dome along their
-    whole curves: inside 1.58° against the paper's 1.49° on the same leaf (within 10%: the
-    correction still adds a little along the midrib, where the dome's own is 1.33°), its
-    margin band 1.55° against 1.70°, and every vein point within 1e-3 of the length."""
+    whole curves: inside 1.58° against the paper's 1.49° on the same leaf, the correction
+    creasing where each side vein leaves the midrib, unseen by its lattice, and with c's own
+    bending (core/bending.py) 1.485° against 1.488°; its margin band 1.57° against 1.70°, and
+    every vein point within 1e-3 of the length."""
     sketch = clicked_sketch()
     assert all(sketch.auto)
     for vein in range(len(sketch.veins)):
@@ -53,7 +54,7 @@ def test_a_clicked_leafs_veins_lie_on_the_dome_and_the_surface_through_them_does
             ls.reconstruct(leaf, ls.Params(k=3, grid=128, through_veins=on)) for on in (False, True)
         )
     paper_creases, our_creases = margin_creases(paper), margin_creases(ours)
-    assert our_creases["interior_p99"] <= 1.1 * paper_creases["interior_p99"]
+    assert our_creases["interior_p99"] <= paper_creases["interior_p99"]
     assert our_creases["margin_p99"] <= paper_creases["margin_p99"]
     off = point_to_mesh_distance(ours.triangle_mesh, leaf.vein_points) / ours.length
     assert off.max() <= 1e-3
