@@ -119,3 +119,19 @@ def test_the_sampled_sheet_does_not_depend_on_the_centres_last_bits():
             sheet = Sheet(centres, rolled(uv), 1e-4, np.array([0.0, 0.0, 1.0]))
             grids.add(sheet._guess[1].shape)
         assert len(grids) == 1, grids
+
+
+def test_a_saved_sheet_loads_with_its_own_smoothing():
+    """A project keeps its sheet's smoothing (Scaled.entry): one saved before SMOOTHING went from
+    1e-4 to 1e-3 loads as it was fitted, the same sheet and the same flat points."""
+    from leafstudio.core import sheet as sheets
+
+    fitted = fit_sheet(rolled(_blade(2000)), np.array([0.0, 0.0, 1.0]), 1.0)
+    old = sheets.Sheet(fitted.centers, fitted.values, 1e-4, fitted.up)
+    assert old.smoothing != sheets.SMOOTHING
+    points = old.apply(np.array([[0.1, 0.05, 0.0], [-0.2, 0.0, 0.01]]))
+    bend = Scaled(old, np.zeros(3), 1.0)
+    again = Scaled.from_entry(bend.entry(points), points)
+    assert again.sheet.smoothing == 1e-4
+    assert again.key() == bend.key()
+    np.testing.assert_array_equal(again.sheet(fitted.centers), old(fitted.centers))

@@ -71,3 +71,21 @@ def test_a_side_vein_stops_at_the_midrib_it_would_cross():
     midrib = shapely.LineString(ring[1])
     assert len(veins) >= 8
     assert not any(shapely.LineString(v).intersects(midrib) for v in veins)
+
+
+def test_a_midrib_reaches_a_tip_past_a_bay_on_the_blade():
+    """A blade whose tip lies on a thin strip past a bay (sugar beet pot1_7's on its sheet at
+    SMOOTHING 1e-3, core/sheet.py): the middles were taken on the bay's dead end, nearest the
+    middle before, and smoothed they cut the bay's corner, 7% of the midrib's length (4.5 of its
+    61 units) off the blade."""
+    from leafstudio.sources.scan_outline import resample
+    from leafstudio.sources.scan_veins import midline
+
+    body = shapely.box(0.0, -0.2, 0.8, 0.1)
+    lobe, strip = shapely.box(0.79, -0.2, 0.85, -0.1), shapely.box(0.79, 0.04, 1.0, 0.1)
+    blade = shapely.geometry.polygon.orient(shapely.union_all([body, lobe, strip]))
+    outline = resample(blade, 400)
+    spacing = blade.length / 200
+    midrib = shapely.LineString(midline(outline, np.array([0.0, -0.05]), spacing))
+    assert midrib.difference(blade).length == 0.0
+    assert midrib.distance(shapely.Point(1.0, 0.07)) <= 0.05  # it still reaches the tip
