@@ -36,8 +36,8 @@ MIN_CELLS = 30
 LANDMARKS = 120  # geodesic sources for the landmark MDS
 MOST_KEPT = 0.8  # the graph's largest piece must hold this share of the points
 SMOOTHING = 1e-3  # the thin-plate spline's smoothing, at unit length: at 1e-4 the sheet missed
-# its cell means by 0.07-0.13 of their noise (a local quadratic's residual through them), 0.32-0.50
-# at 1e-3: it followed the scanner's noise and the mesh crinkled (fit_sheet's Notes)
+# its cell means by 0.07-0.13 of their noise (a local quadratic's residual through them): it
+# followed the scanner's noise and the mesh crinkled; at 1e-3 by 0.32-0.50 (fit_sheet's Notes)
 FIRST = 1e-3  # the smoothing of the sheet through the cube means, at unit length (`refit`)
 NEWTON = 10  # Gauss-Newton steps of `Sheet.flatten`, at most
 SETTLED = 1e-9  # ... a point whose step is shorter than this share of the sheet's size settled
@@ -332,10 +332,10 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     means by only 0.07-0.13 of their noise, the residual of a local quadratic through the 24
     nearest (0.11-0.50 cells): it followed the scanner's noise, and the mesh crinkled. At
     SMOOTHING 1e-3 it misses them by 0.32-0.50 of it, the 99th percentiles are 8-60 degrees
-    (pot1_1 60; pot1_15, 17, 36, pot1_7 and pot2_3 12-21, from 17-29) and the mean distance
+    (pot1_1 60; pot1_15, 17, 36, pot1_7 and pot2_3 12-21, from 17-29 at 1e-4) and the mean distance
     0.56%, none above 0.96% (pot1_1); 3e-3 gave 0.58% (0.97%), 1e-2 0.63% (1.12%): a stiffer
-    sheet pulls off the scan. Refitting through the cube means' own sheet (FIRST = SMOOTHING)
-    left pot1_1 at 108 degrees; a stiffer start refitted four times (1e-2 down to 1e-4) gave
+    sheet pulls off the scan. Refitting through the cube means' own sheet (FIRST = SMOOTHING, at
+    1e-4) left pot1_1 at 108 degrees; a stiffer start refitted four times (1e-2 down to 1e-4) gave
     much the same as one refit, at three times the cost
     (benchmarks/bench_bent.py --scan-table).
     """

