@@ -73,12 +73,17 @@ HINGE_EXPLAINED = 0.05  # a leaf the fits about the margin's plane leave unexpla
 # linear, lanceolate, cordate; wave 0.1-0.2)
 HINGE_CALLS = 30  # ... each of those fits stops after this many evaluations: a fold the hinge
 # explains took 4-15 from its start (sagittate folded 60, ovate folded -60, sagittate folded 45
-# and curled 0.3), elliptic waved 0.2 wandered for 386 (12.5 s of CPU)
+# and curled 0.3), elliptic waved 0.2 wandered for 386 (12.5 s of CPU); and so does every fit
+# about the hinge (_fit's `eased`): spatulate folded -75 took 30 s of CPU uncapped, 2.8 capped,
+# to the same fold (-74.96)
 HINGE_ROUNDS = 3  # rounds that find a curled midrib's flat heights (_hinge)
 HINGE_GAIN = 0.9  # a fit about the hinge is kept when its rms is at most this share of the
 # fit's about the margin's plane: 0.001-0.30 on the folded test forms, 0.80 on ovate rolled 0.5
 # (its own surface 3.2e-4 -> 2.8e-4 off on average); 0.999 on a rolled grass blade, whose fold of
 # -11° went to -13° (3.3e-4 -> 3.6e-4), and 0.985-0.994 for a curl alone: no sign of a fold
+EASED_FROM = 60.0  # degrees: a fit folded harder than this about the margin's plane is tried
+# about the hinge from its fold alone too (_fit; a form's dome turns rigidly up to 60°): the
+# retry on every fit that gained nothing took a rolled grass blade's fit 1.3 -> 3.6 s of CPU
 FALL_ROUNDS = 6  # rounds that find the flat margin's rise and fall off the hinge (_fallen): on
 # ovate folded -75 at its own pose the fall read 13.36, 13.94, 14.04 and 14.05° (the form's 14.06)
 SHARE_CLOSE = 1e-4  # ... until the fold's share of the turn moves less than this (0.002° of fall
@@ -355,7 +360,7 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
         rigidly, then again in up to FALL_FITS rounds with the relief's rise and fall as the
         margin lies flat (`_fallen`), while the share of the fold's turn they give moves: its
         rms, (7,) x, axes and the rise and fall."""
-        again, x, axes, y = fits_of(terms, [start], hinged=True)[0]
+        again, x, axes, y = fits_of(terms, [start], True, HINGE_CALLS)[0]
         slopes = (0.0, 0.0)
         for _ in range(FALL_FITS):
             bend, blade = placed(x, axes, True, slopes)
@@ -366,7 +371,7 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
             if abs(_share(bend.pose, given) - _share(bend.pose, bend.pose.relief)) <= SHARE_CLOSE:
                 break
             slopes = fallen
-            again, x, axes, y = fits_of(terms, [(axes, y)], True, None, slopes)[0]
+            again, x, axes, y = fits_of(terms, [(axes, y)], True, HINGE_CALLS, slopes)[0]
         return again, x, axes, slopes
 
     tried = []  # (terms, its fits_of, best first) per subset of the pose's terms
@@ -408,7 +413,8 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
         if terms == (2,):  # a roll alone bends about the sheet, z = 0 with a relief or without
             continue
         again, x, axes, slopes = eased((axes, y), terms)
-        if again > HINGE_GAIN * rms and 0 in terms and len(terms) > 1:  # from its fold alone:
+        hard = 0 in terms and abs(y[4]) > EASED_FROM  # y[4]: the fold, terms in order
+        if again > HINGE_GAIN * rms and hard and len(terms) > 1:  # from its fold alone:
             # a roll made up for the shear, and obovate folded -75 fitted about the hinge from
             # its fold 66.8 and roll went to 62.3 (0.0204 off); from its fold alone 75.0, 0.6251
             # wide (its flat 0.6250)
