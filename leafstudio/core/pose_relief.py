@@ -16,8 +16,9 @@ from the flat blade's curves (`relief_of`): the hinge through the midrib's point
 KNOTS places along the blade; both are cubic splines in x (C², linear past the ends): a fold's
 hinge with a kink would crease the blade across at each knot. A pose fitted to curves in 3D
 (core/unfold.py) has a relief of its own (`margin_relief`): the flat midrib's heights for the
-hinge and the margin's plane for the sheet. A pose without a relief (a project saved before it,
-a pose fitted to curves past unfold.HINGE_SIZES) bends as it did."""
+hinge, the margin's plane for the sheet, and the margin's rise and fall off the hinge. A pose
+without a relief (a project saved before it, a pose fitted to curves past unfold.HINGE_SIZES)
+bends as it did."""
 
 from __future__ import annotations
 
@@ -101,8 +102,9 @@ class Relief:
     @property
     def on_margin(self) -> bool:
         """Whether the sheet is the margin's plane, as a pose fitted to curves in 3D has it
-        (`margin_relief`): no section's mean height, no rise and no fall."""
-        return not any(self.mean) and self.rise == 0 and self.fall == 0
+        (`margin_relief`): no section's mean height (its rise and fall are the margin's off the
+        hinge)."""
+        return not any(self.mean)
 
     def hinge(self, x: np.ndarray) -> Profile:
         """The midrib's height at (n,) x, with its first and second derivatives."""
@@ -297,8 +299,9 @@ def _relief_of(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | None:
 
 def margin_relief(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | None:
     """A relief whose hinge passes through the flat midrib's points (the first of the (m_i, 3)
-    `veins`) and whose sheet is the margin's plane (z = 0), the blade's x and half width read
-    from the (n, 3) `boundary`, in the blade's coordinates as for `relief_of`: a pose fitted to
+    `veins`) and whose sheet is the margin's plane (z = 0), the blade's x and half width, and
+    the margin's rise and fall off the hinge (`margin_slopes`), read from the (n, 3) `boundary`
+    as it lies flat, in the blade's coordinates as for `relief_of`: a pose fitted to
     curves in 3D (core/unfold.py) folds about it, and the app's sliders bend such a leaf about
     it again (`Relief.on_margin`). None without a midrib, or when it doubles back."""
     if not veins:
@@ -313,7 +316,22 @@ def margin_relief(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | Non
     knots = np.linspace(x0, x1, MARGIN_KNOTS)
     half_width = float(np.abs(boundary[:, 1]).max())
     zeros = (0.0,) * MARGIN_KNOTS
-    return Relief(tuple(along), tuple(heights), tuple(knots), zeros, half_width)
+    relief = Relief(tuple(along), tuple(heights), tuple(knots), zeros, half_width)
+    rise, fall = margin_slopes(relief, boundary)
+    return replace(relief, rise=rise, fall=fall)
+
+
+def margin_slopes(relief: Relief, boundary: np.ndarray) -> tuple[float, float]:
+    """The rise and the fall (Relief.rise, .fall) of the flat (n, 3) `boundary` on the margin's
+    plane (z = 0, whatever its heights) off `relief`'s hinge, as `relief_of` reads a form's
+    from its curves: a fold then eases the relief's turn as a form's does (bend.Pose's
+    `fold_share`). Turned rigidly, a domed blade folded -75 (its margin 12-14° under the
+    hinge) was fitted to -72.2 and 1.043 times its flat width (ovate), lanceolate 1.067."""
+    clear = np.abs(boundary[:, 1]) > CREASE * np.abs(boundary[:, 1]).max()  # its own: a fitted
+    # relief's half width is the margin's as posed (unfold._hinge), 0.26 of it folded 75°
+    hinge = relief.hinge_height(boundary[clear, 0])
+    angle = np.arctan2(-hinge, np.abs(boundary[clear, 1]))
+    return max(float(angle.max(initial=0.0)), 0.0), max(float(-angle.min(initial=0.0)), 0.0)
 
 
 def _midrib(vein: np.ndarray, boundary: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:

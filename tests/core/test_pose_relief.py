@@ -261,6 +261,10 @@ def test_a_margin_relief_hinges_on_the_midrib_over_the_margins_plane():
     np.testing.assert_allclose(relief.hinge_height(midrib[:, 0]), midrib[:, 2], atol=1e-12)
     assert not any(relief.sheet_height(np.linspace(0.1, 0.9, 5)))
     assert not relief_of(blade.boundary, blade.veins).on_margin
+    # its rise and fall are its margin's off the hinge, as the form's own relief reads them: a
+    # fold eases its turn alike (they were 0, and ovate folded -75 was fitted -72.2)
+    own = relief_of(blade.boundary, blade.veins)
+    assert relief.fall == pytest.approx(own.fall, abs=1e-3) and relief.fall > np.deg2rad(10)
     assert margin_relief(blade.boundary, [midrib[[0, 5, 3]]]) is None
     big = relief.scaled(8.0)
     np.testing.assert_allclose(big.hinge_height(8 * midrib[:, 0]), 8 * midrib[:, 2], atol=1e-11)
