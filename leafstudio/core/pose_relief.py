@@ -285,16 +285,23 @@ def _relief_of(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | None:
     half_width = max(-y0, y1)
     hinge = profile_spline(*midrib)(points[:, 0])
     clear = np.abs(points[:, 1]) > CREASE * half_width
-    angle = np.arctan2(points[clear, 2] - hinge[clear], np.abs(points[clear, 1]))
+    rise, fall = _rise_fall(points[clear, 2] - hinge[clear], points[clear, 1])
     return Relief(
         tuple(midrib[0].tolist()),
         tuple(midrib[1].tolist()),
         tuple(knots.tolist()),
         tuple(mean.tolist()),
         half_width,
-        max(float(angle.max(initial=0.0)), 0.0),
-        max(float(-angle.min(initial=0.0)), 0.0),
+        rise,
+        fall,
     )
+
+
+def _rise_fall(above: np.ndarray, across: np.ndarray) -> tuple[float, float]:
+    """The steepest rise and fall (radians, 0 or more) of points (n,) `above` the hinge at (n,)
+    `across` from it: a relief's Relief.rise and .fall."""
+    angle = np.arctan2(above, np.abs(across))
+    return max(float(angle.max(initial=0.0)), 0.0), max(float(-angle.min(initial=0.0)), 0.0)
 
 
 def margin_relief(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | None:
@@ -329,9 +336,7 @@ def margin_slopes(relief: Relief, boundary: np.ndarray) -> tuple[float, float]:
     hinge) was fitted to -72.2 and 1.043 times its flat width (ovate), lanceolate 1.067."""
     clear = np.abs(boundary[:, 1]) > CREASE * np.abs(boundary[:, 1]).max()  # its own: a fitted
     # relief's half width is the margin's as posed (unfold._hinge), 0.26 of it folded 75°
-    hinge = relief.hinge_height(boundary[clear, 0])
-    angle = np.arctan2(-hinge, np.abs(boundary[clear, 1]))
-    return max(float(angle.max(initial=0.0)), 0.0), max(float(-angle.min(initial=0.0)), 0.0)
+    return _rise_fall(-relief.hinge_height(boundary[clear, 0]), boundary[clear, 1])
 
 
 def _midrib(vein: np.ndarray, boundary: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
