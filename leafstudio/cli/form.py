@@ -203,7 +203,7 @@ def run_veins(args: argparse.Namespace) -> int:
         veins = grow_veins(flat.boundary, args.venation, args.secondaries, base, args.seed)
     except LeafError as exc:
         raise LeafError(exc.problem, args.leaf) from None
-    if leaf.bend is not None:  # a scan's sheet remembers the points it bent (sheet.Scaled)
+    if leaf.bend is not None:  # a scan's sheet remembers the points it bent (sheet_bend.Scaled)
         bent = getattr(leaf.bend, "bent", leaf.bend.apply)
         veins = [bent(v) for v in veins]
     save_leaf(Leaf(boundary=leaf.boundary, veins=veins, bend=leaf.bend), args.output)

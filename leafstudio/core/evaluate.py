@@ -391,7 +391,7 @@ def shape_measurements(
     face_on : bool, default: False
         The projected area is the mesh seen along its own mean normal (`facing_area`), not on
         `frame`'s plane: for a bent blade whose flat blade's plane is not the leaf's own (a
-        scan's sheet lays it on the world's x-y plane, core/sheet.Scaled.own_plane: its
+        scan's sheet lays it on the world's x-y plane, core/sheet_bend.Scaled.own_plane: its
         projected area was its shadow on the scanner's x-y plane, 137 to 376 for sugar beet
         pot1_1 as it was turned).
 

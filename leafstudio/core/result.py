@@ -264,7 +264,7 @@ class Result:
         """The measuring of this Result's metrics (at unit size, on its unit-size Result)."""
         unit = self if self.unit is None else self.unit
         # seen face-on when its flat blade does not lie on the leaf's own plane (a scan's sheet:
-        # sheet.Scaled.own_plane); asked here: the unit-size run's leaf has no bend
+        # sheet_bend.Scaled.own_plane); asked here: the unit-size run's leaf has no bend
         face_on = getattr(self.leaf.bend, "own_plane", True) is False
         # the flat blade's midrib, which the length runs along: found on this Result's leaf, which
         # has its bend (the unit-size run's leaf is the bent leaf without it, bent_result.

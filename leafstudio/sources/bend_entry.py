@@ -22,7 +22,7 @@ from leafstudio.core.bend import Pose, sheared_flatten
 from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame
 from leafstudio.core.pose_relief import Relief
-from leafstudio.core.sheet import Scaled
+from leafstudio.core.sheet_bend import Scaled
 from leafstudio.errors import LeafError, shorten
 from leafstudio.model import Leaf
 

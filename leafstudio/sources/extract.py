@@ -36,7 +36,8 @@ from leafstudio._shared import progress
 from leafstudio.core.plane import fixed_sample, principal_extents, principal_spreads
 from leafstudio.core.prepare.plausibility import check_leaf_like
 from leafstudio.core.prepare.vein_order import veins_inside_outline
-from leafstudio.core.sheet import Scaled, fit_sheet
+from leafstudio.core.sheet import fit_sheet
+from leafstudio.core.sheet_bend import Scaled
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
 from leafstudio.sources.scan import OUTLINE_POINTS

@@ -34,7 +34,7 @@ from leafstudio._shared.safewrite import check_outputs, write_bytes
 from leafstudio._shared.safewrite import staged as staged  # re-exported: outputs replaced together
 from leafstudio.core.bend import Pose
 from leafstudio.core.placed import PlacedPose
-from leafstudio.core.sheet import Scaled
+from leafstudio.core.sheet_bend import Scaled
 from leafstudio.errors import LeafError, shorten
 from leafstudio.model import Leaf, Params
 from leafstudio.sources.bend_entry import FRAME_KEYS, project_bend
@@ -390,7 +390,7 @@ def project_dict(
         frame = dict(zip(FRAME_KEYS, (f.origin, f.u, f.v, f.normal), strict=True))
         data["bend"] = pose.entry()
         data["bend"]["frame"] = {k: [float(x) for x in a] for k, a in frame.items()}
-    elif isinstance(leaf.bend, Scaled):  # a scan's blade, unrolled (core/sheet.py)
+    elif isinstance(leaf.bend, Scaled):  # a scan's blade, unrolled (core/sheet_bend.py)
         data["bend"] = leaf.bend.entry(np.vstack([leaf.boundary, leaf.vein_points]))
     return data
 

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from leafstudio.core.sheet import Scaled, fit_sheet, unroll
+from leafstudio.core.sheet import fit_sheet, unroll
+from leafstudio.core.sheet_bend import Scaled
 
 
 def rolled(uv: np.ndarray, radius: float = 0.08) -> np.ndarray:

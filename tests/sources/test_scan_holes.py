@@ -1,7 +1,7 @@
 """A real hole in a scanned blade stays open (issue 21): the outline is one ring, so the mesh
 spanned sugar beet pot1_7's torn hole (1.97% of its area farther than 3% of the length from every
 scan point). A hole clearly larger than the points' spacing is cut out of the mesh
-(sources/scan_holes.py, core/sheet.Scaled.trim); scanner stripes and a hole-free blade keep a
+(sources/scan_holes.py, core/sheet_bend.Scaled.trim); scanner stripes and a hole-free blade keep a
 whole mesh."""
 
 from __future__ import annotations

@@ -20,7 +20,7 @@ from scipy.spatial import cKDTree
 from leafstudio.core.bend import flat_leaf
 from leafstudio.core.evaluate import view_frame
 from leafstudio.core.plane import Frame
-from leafstudio.core.sheet import Scaled
+from leafstudio.core.sheet_bend import Scaled
 from leafstudio.gui.model import sketch_dome as dome
 from leafstudio.gui.model import sketch_mirror as mirror
 from leafstudio.gui.model.curves import (
@@ -74,8 +74,8 @@ class Sketch:
         outline (sketch_dome.py), which make its curve and `veins`' heights. None (and missing):
         heights of its own (a loaded leaf's, always; grown veins; projects written before).
     bend : Bend or None
-        A scan's sheet (core/sheet.Scaled) the sketch's leaf was derived from, kept by the leaves
-        it draws (not saved with the sketch: the project keeps the leaf's). A pose is the
+        A scan's sheet (core/sheet_bend.Scaled) the sketch's leaf was derived from, kept by the
+        leaves it draws (not saved with the sketch: the project keeps the leaf's). A pose is the
         session's (gui/model/bending.py).
     """
 
@@ -368,7 +368,8 @@ class Sketch:
 
     def hole_curves(self) -> list[np.ndarray]:
         """(k, 2) rings, on the sketch's plane, of the real holes of the scan its leaf came from
-        (core/sheet.Scaled.flat_holes): the mesh leaves them open, so the flat blade shows them."""
+        (core/sheet_bend.Scaled.flat_holes): the mesh leaves them open, so the flat blade shows
+        them."""
         rings = self.bend.flat_holes() if hasattr(self.bend, "flat_holes") else []
         return [self.frame.to_plane(r)[0] for r in rings]
 
