@@ -93,10 +93,17 @@ def midline(outline: np.ndarray, base: np.ndarray, spacing: float) -> np.ndarray
     # blade; no other shared scan's left its parts)
     step = float(np.median(np.diff(line[:, 0])))  # the stations' spacing
     line[:, 1] = gaussian_filter1d(line[:, 1], MIDRIB_SMOOTH * span / step, mode="nearest")
-    inset = np.minimum(MIDRIB_INSET * spacing, (part[:, 1] - part[:, 0]) / 2)
-    off = (line[:, 1] < part[:, 0]) | (line[:, 1] > part[:, 1])
-    line[off, 1] = np.clip(line[off, 1], part[off, 0] + inset[off], part[off, 1] - inset[off])
+    line[:, 1] = put_back(line[:, 1], part, MIDRIB_INSET * spacing)
     return base + line @ rotation.T
+
+
+def put_back(middles: np.ndarray, parts: np.ndarray, inset: float) -> np.ndarray:
+    """The (m,) `middles` across, each one outside its (m, 2) part's ends moved back onto it,
+    `inset` in from the nearer end or at the part's middle when it is narrower than twice that."""
+    inset_each = np.minimum(inset, (parts[:, 1] - parts[:, 0]) / 2)
+    off = (middles < parts[:, 0]) | (middles > parts[:, 1])
+    back = np.clip(middles, parts[:, 0] + inset_each, parts[:, 1] - inset_each)
+    return np.where(off, back, middles)
 
 
 def through(sections: list[tuple[float, np.ndarray]]) -> list[np.ndarray]:

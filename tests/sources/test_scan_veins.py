@@ -89,3 +89,31 @@ def test_a_midrib_reaches_a_tip_past_a_bay_on_the_blade():
     midrib = shapely.LineString(midline(outline, np.array([0.0, -0.05]), spacing))
     assert midrib.difference(blade).length == 0.0
     assert midrib.distance(shapely.Point(1.0, 0.07)) <= 0.05  # it still reaches the tip
+
+
+def test_the_way_through_leaves_a_bays_dead_end_and_keeps_all_parts_where_none_goes_through():
+    """scan_veins.through: of a station's chord parts, those on a way from the base's station to
+    the tip's (a part in a bay's dead end is dropped), and every part where no way goes through
+    (nothing to choose by: the middles are then taken nearest the middle before)."""
+    from leafstudio.sources.scan_veins import through
+
+    one, two, dead_end = np.array([[-1.0, 1.0]]), np.array([[0.2, 1.0]]), np.array([-1.0, -0.2])
+    ways = through([(0.0, one), (1.0, np.vstack([dead_end, two[0]])), (2.0, np.array([[0.3, 1]]))])
+    assert np.array_equal(ways[1], two)
+    assert np.array_equal(ways[0], one)
+
+    apart = [(0.0, np.array([[-1.0, -0.4]])), (1.0, np.array([[0.5, 1.0], [1.2, 1.5]])),
+             (2.0, np.array([[0.6, 1.0]]))]  # fmt: skip
+    for (_, parts), kept in zip(apart, through(apart), strict=True):
+        assert np.array_equal(kept, parts)
+
+
+def test_a_smoothed_middle_off_its_part_is_put_back_inset_and_one_on_it_stays():
+    """scan_veins.put_back: a middle smoothed off its chord part (MIDRIB_SMOOTH cuts a step's
+    corner) goes back `inset` in from the nearer end, or to the middle of a part narrower than
+    twice that; a middle on its part is left where it is."""
+    from leafstudio.sources.scan_veins import put_back
+
+    parts = np.array([[0.0, 1.0], [0.0, 1.0], [0.0, 1.0], [2.0, 2.3], [2.0, 2.3]])
+    middles = np.array([-0.5, 1.7, 0.99, 2.6, 2.05])
+    assert np.allclose(put_back(middles, parts, 0.2), [0.2, 0.8, 0.99, 2.15, 2.05])
