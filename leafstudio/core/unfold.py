@@ -10,9 +10,9 @@ blade side-on (a fold of 75°: the mesh 5% of the length off the form's own surf
 least squares over the frame's rotation and the pose's three terms. The leaf is unfolded only
 when its margin is well off a plane and the pose lays it much flatter than the best quadratic
 height field over that plane would, or, when that plane sees it side-on (a whole vein outside
-the outline there: the pipeline would refuse it or mesh a side view), whenever a pose lays it
-flat: a flat, cupped or gently bent leaf runs as before (its margin's heights go to the paper's
-base b(x)).
+the outline there: the pipeline would refuse it or mesh a side view) or its outline crossing
+itself (the app and the commands refuse it), whenever a pose lays it flat: a flat, cupped or
+gently bent leaf runs as before (its margin's heights go to the paper's base b(x)).
 
 Those fits fold about the margin's plane, which shears each half, and a roll made up for it: an
 ovate folded 60° and saved without its pose was fitted fold 61, curl 0.10 and roll -0.54, whose
@@ -201,6 +201,13 @@ def _side_on(leaf: Leaf, length: float) -> bool:
     return len(veins_inside_outline(leaf.boundary, veins, -SIDE_ON * length)) < len(veins)
 
 
+def _crosses(leaf: Leaf) -> bool:
+    """Whether `leaf`'s boundary, in its order, crosses itself on the boundary's PCA plane: the
+    app and the commands refuse it as given (workflows.boundary_crossing)."""
+    frame = fit_frame(leaf.boundary, leaf.vein_points)
+    return not shapely.LinearRing(frame.to_plane(leaf.boundary)[0]).is_simple
+
+
 def fit_pose(leaf: Leaf) -> PlacedPose | None:
     """The bend that lays `leaf`'s margin and midrib flat, or None when the leaf is flat enough
     as it is or no pose explains its bend (module docstring).
@@ -272,9 +279,11 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
     if midrib_turned(list(leaf.veins)):  # written apex first: the frame's origin is the base
         midrib = midrib[::-1]
     before = _off_quadric(boundary)  # the pose must do much better than a height field
-    if _side_on(leaf, length):  # ... unless the leaf as given is refused: any pose that lays
-        # it flat does better (folded down 70°, the halves nearly closed: fitted 0.0107 against
-        # the quadric's 0.0259, and the pipeline refused its midrib as outside the outline)
+    if _side_on(leaf, length) or _crosses(leaf):  # ... unless the leaf as given is refused:
+        # any pose that lays it flat does better (folded down 70°, the halves nearly closed:
+        # fitted 0.0107 against the quadric's 0.0259, and the pipeline refused its midrib as
+        # outside the outline; deltoid folded 30 and rolled 0.4, its outline crossing itself on
+        # its plane: 0.41 of the quadric's rms about the margin's plane, 0.070 about the hinge)
         before = np.inf
     boundary = boundary[:: max(1, len(boundary) // FIT_POINTS)]  # enough to fit six numbers
     midrib = np.vstack([midrib[:: max(1, len(midrib) // FIT_POINTS)], midrib[-1:]])
@@ -422,6 +431,18 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
             again, x, axes, slopes = min(
                 (again, x, axes, slopes), eased((axes, alone), terms), key=lambda f: f[0]
             )
+            if again > HINGE_GAIN * rms:  # from the frame the margin stands on, untilted
+                # (_starts: its normal the margin's side of the midrib, a fold up in it); from
+                # the plane's fit's frame, elliptic folded -75 (fitted 72.4 and rolled -15, its
+                # frame tilted 37°) went to -46.5 and rolled 2.3 about the hinge (0.0044 off),
+                # from its fold alone there to -24.3 (1.9 times the plane's fit's rms)
+                start = np.zeros(len(y))
+                start[4] = abs(y[4])
+                again, x, axes, slopes = min(
+                    (again, x, axes, slopes),
+                    eased((_starts(boundary, midrib)[-1], start), terms),
+                    key=lambda f: f[0],
+                )
         bend = placed(x, axes, True, slopes)[0]
         if again <= HINGE_GAIN * rms and _lies_flat(bend, leaf):
             fits[i] = (again, terms, bend, axes, y)

@@ -226,15 +226,52 @@ def test_a_lobed_or_domed_form_folded_without_its_pose_is_unfolded_to_its_flat_w
     _unfolds_to_its_flat_width(shape, fold)
 
 
-@pytest.mark.parametrize("shape", ["ovate", "lanceolate", "sagittate", "obovate"])
+@pytest.mark.parametrize("shape", ["ovate", "lanceolate", "sagittate", "obovate", "elliptic"])
 def test_a_domed_form_folded_down_hard_without_its_pose_is_unfolded_to_its_flat_width(shape):
     """Finding (issue 21, fall28): folded -75 and saved without its pose, ovate was fitted fold
     -72.2 and laid out 1.043 times its flat width, lanceolate -78.1 and 1.067, sagittate 1.014,
     obovate -33.6 and 0.76. A form's dome falls 12-14° from its hinge, and folded that far down
     the form eases its turn (hinge_fold.fold_share, 0.776 on ovate); the fitted relief had no
     fall and turned rigidly. Its fall is now read off the margin as the pose lays it flat
-    (pose_relief.margin_slopes, unfold._fallen): fitted -75.0 and 1.000 wide."""
+    (pose_relief.margin_slopes, unfold._fallen): fitted -75.0 and 1.000 wide. Elliptic stayed
+    +72.4 and rolled -15, 0.492 of its flat width: the fit about the margin's plane tilted its
+    frame 37°, and the fits about the hinge from there went astray; from the frame the margin
+    stands on (unfold._starts), -75.05 and 1.000."""
     _unfolds_to_its_flat_width(shape, -75.0)
+
+
+@pytest.mark.parametrize(
+    ("shape", "terms"),
+    [
+        ("deltoid", {"fold": 30.0, "roll": 0.4}),
+        ("deltoid", {"fold": 30.0, "curl": -0.5, "roll": 0.4}),  # 36.7, 2.44, 1.022 wide
+        ("hastate", {"fold": 30.0, "curl": -0.5, "roll": 0.4}),  # opened already: 1.011 wide
+    ],
+)
+def test_a_form_whose_outline_crosses_itself_as_given_opens_unfolded(tmp_path, shape, terms):
+    """Finding (issue 21, closing note of session 28): deltoid folded 30 and rolled 0.4, saved
+    as a CSV, would not open ("the boundary crosses itself"): no pose was fitted (about the
+    margin's plane 0.41 of the quadric height field's rms, past unfold.EXPLAINED; about the
+    hinge 0.070, past HINGE_EXPLAINED), so its curves stayed as given, and on their plane the
+    rolled outline crosses itself. A leaf refused as given is unfolded by any pose that lays it
+    flat, as a side-on one is (unfold._crosses): fitted fold 36.8 and roll 2.42 per length (a
+    roll about the margin's plane where the form rolls about its sections' mean height), 1.036
+    times its flat width."""
+    from leafstudio.sources.files import save_leaf
+    from leafstudio.workflows import open_file
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a strong roll warns of the side view
+        posed = Form(shape, **terms).leaf()
+    path = tmp_path / "posed.csv"
+    save_leaf(ls.Leaf(posed.boundary, posed.veins), path)
+    leaf = open_file(path).leaf
+    bend = leaf.bend
+    assert bend is not None
+    flat = bend.frame.to_plane(bend.flat_curve(leaf.boundary, ring=True))[0]
+    form = Form(shape).leaf().boundary
+    assert float(np.ptp(flat[:, 1])) == pytest.approx(float(np.ptp(form[:, 1])), rel=0.05)
+    assert float(np.ptp(flat[:, 0])) == pytest.approx(float(np.ptp(form[:, 0])), rel=0.01)
 
 
 def _unfolds_to_its_flat_width(shape: str, fold: float) -> None:

@@ -7,7 +7,8 @@ reconstructs the flat blade and bends the mesh, and Save writes the pose (source
 form keeps its own `Pose` (its blade coordinates are the world's, the form 1 long). The session's
 curl, roll and twist are per the blade's length (`in_lengths`); the sliders show the roll and
 twist in the Forms dock's terms (gui/qt/bend_sliders.py, `blade_half_width`). A sketch edit bends
-the new leaf by the same pose, about the midrib as it is now.
+the new leaf by the same pose, about the midrib as it is now; a pose fitted to curves in 3D is
+kept whole while the midrib is (`keeps_fit`).
 """
 
 from __future__ import annotations
@@ -168,6 +169,34 @@ def posed(
     return Leaf(bend.apply(flat.boundary), [bend.apply(v) for v in flat.veins], bend=bend)
 
 
+def fitted(bend: Bend | None) -> bool:
+    """Whether `bend` is a pose fitted to curves in 3D about its midrib (core/unfold.py): a
+    PlacedPose whose relief's sheet is the margin's plane (Relief.on_margin)."""
+    relief = getattr(getattr(bend, "pose", None), "relief", None)
+    return isinstance(bend, PlacedPose) and relief is not None and relief.on_margin
+
+
+def keeps_fit(like: Bend | None, before: Any, sketch: Any) -> bool:
+    """Whether a sketch edit from the Sketch `before` to `sketch` keeps the bend `like` whole:
+    a pose fitted to curves in 3D (core/unfold.py: its relief on the margin's plane) while the
+    midrib and the sketch's plane are as they were. Its frame and relief are the fit's (the
+    hinge the midrib flattened about the round before's: unfold._hinge); found again from the
+    sketch's midrib (8 points of it: sketch_model.DERIVED_VEIN_POINTS) and plane, the first
+    edit of ovate folded 60 and rolled 0.4, opened from a CSV, moved its outline 0.016 of its
+    length (test_a_fitted_leafs_first_sketch_edit_keeps_it_where_it_stood). A drawn leaf's
+    relief is its sketch's heights, read again at every edit; a moved midrib reads the fit's
+    kind of relief again about itself (`posed`)."""
+    if not fitted(like):
+        return False
+    if before is None or not (len(before.veins) and len(sketch.veins)):
+        return False
+    same_plane = all(
+        np.array_equal(getattr(before.frame, t), getattr(sketch.frame, t))
+        for t in ("origin", "u", "v", "normal")
+    )
+    return same_plane and np.array_equal(before.veins[0], sketch.veins[0])
+
+
 class Bending:
     """The Session's bend edits (mixed into session.Session, which has the state and history)."""
 
@@ -180,10 +209,14 @@ class Bending:
         return pose_of(self.state.leaf)
 
     def sketch_leaf(self, sketch: Any) -> Leaf | None:
-        """The leaf a sketch draws, bent by the document's pose (Session's sketch edits)."""
+        """The leaf a sketch draws, bent by the document's pose (Session's sketch edits): a
+        fitted leaf's bend kept as it is while its midrib is (`keeps_fit`)."""
         flat = sketch.to_leaf()
         leaf = self.state.leaf
-        return posed(flat, self.pose, None if leaf is None else leaf.bend, sketch.frame)
+        like = None if leaf is None else leaf.bend
+        if flat is not None and keeps_fit(like, self.editable_sketch(), sketch):
+            return Leaf(like.apply(flat.boundary), [like.apply(v) for v in flat.veins], bend=like)
+        return posed(flat, self.pose, like, sketch.frame)
 
     def set_bend(self, pose: Pose, final: bool = True) -> None:
         """A new pose: `final=False` while a slider is held (shown, not an undo step), `True` on
@@ -197,7 +230,10 @@ class Bending:
         base = self._bend_base
         if leaf is not None and not _same_pose(pose, self.pose):
             sketch = self.state.sketch
-            plane = sketch.frame if sketch is not None else None
+            # a fitted bend kept by sketch edits (`keeps_fit`) is re-posed in its own frame and
+            # relief: read again on the sketch's plane, ovate folded 60 and rolled 0.4 moved
+            # 0.016 of its length for a nudge of 1e-6° after a sketch edit
+            plane = sketch.frame if sketch is not None and not fitted(leaf.bend) else None
             bent = posed(flat_leaf(leaf), pose, leaf.bend, plane)
             if self.state.sketch is None and self._derived_leaf is leaf:
                 self._derived_leaf = bent  # the derived sketch still draws this blade

@@ -5,11 +5,14 @@ sketch stayed on "Waiting for the leaf" and the sliders at 0."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
+import pytest
 
 from leafstudio.core.bend import Pose
 from leafstudio.core.placed import PlacedPose
-from leafstudio.forms import make_form
+from leafstudio.forms import Form, make_form
 from leafstudio.model import Leaf
 from leafstudio.sources.files import save_leaf
 
@@ -44,3 +47,55 @@ def test_a_folded_leaf_without_its_pose_opens_unfolded_with_its_sketch_and_pose(
     assert session.leaf.bend is None
     relief = np.ptp(session.result.frame.to_plane(session.result.triangle_mesh.points)[1])
     assert relief < 0.2 * flat_width, relief
+
+
+def outline_gap(a: np.ndarray, b: np.ndarray) -> float:
+    """The largest distance from a point of either closed (n, 3) outline to the other's
+    polyline (its segments, not its points: two samplings of one outline are 0 apart)."""
+
+    def one_way(points: np.ndarray, ring: np.ndarray) -> float:
+        start, step = ring, np.roll(ring, -1, axis=0) - ring
+        offset = points[:, None] - start[None]
+        t = np.clip((offset * step).sum(2) / np.maximum((step * step).sum(1), 1e-300), 0.0, 1.0)
+        return float(np.linalg.norm(offset - t[..., None] * step, axis=2).min(1).max())
+
+    return max(one_way(a, b), one_way(b, a))
+
+
+@pytest.mark.parametrize(
+    ("shape", "terms"),
+    [
+        ("ovate", {"fold": 60.0, "roll": 0.4}),
+        ("ovate", {"fold": 45.0, "curl": 0.5}),
+        ("sagittate", {"fold": 45.0, "curl": 0.5}),  # 0.015, its sketch's outline 5.7e-3 off
+    ],
+)
+def test_a_fitted_leafs_first_sketch_edit_keeps_it_where_it_stood(tmp_path, shape, terms):
+    """A posed form saved as CSV, opened (unfolded), then the tiniest edit of the sketch derived
+    from it, then a slider's nudge. The edit bent the sketch's blade about a frame and relief
+    found again from its midrib (8 points of it) and plane, not the fit's: ovate folded 60 and
+    rolled 0.4 moved 0.018 of its length, where the sketch's own outline (a spline through its
+    control points, curves.OUTLINE_TOLERANCE) is 3.6e-3 off the flat blade's. Kept whole while
+    the midrib is (bending.keeps_fit), the edit moves the leaf no more than its sketch's outline
+    is off, and a nudge after it (kept too) 5e-9. A moved midrib bends about itself again."""
+    from leafstudio.core.bend import flat_leaf
+
+    form = Form(shape, **terms).leaf()
+    path = tmp_path / "posed.csv"
+    save_leaf(Leaf(form.boundary, form.veins), path)
+    session, runner, _ = opened_session()
+    session.open_path(str(path))
+    runner.finish(session)
+    leaf = session.leaf
+    assert isinstance(leaf.bend, PlacedPose)
+    length = float(np.linalg.norm(np.ptp(leaf.boundary, axis=0)))
+    sketch = session.editable_sketch()
+    own = outline_gap(flat_leaf(leaf).boundary, sketch.to_leaf().boundary)
+    session.commit_sketch(sketch.moved(-1, 0, sketch.boundary[0] * (1 + 1e-9)), "Move point")
+    assert outline_gap(leaf.boundary, session.leaf.boundary) <= 1.05 * own + 1e-6 * length
+    edited, pose = session.leaf, session.pose
+    session.set_bend(replace(pose, fold=pose.fold + 1e-6))
+    assert outline_gap(edited.boundary, session.leaf.boundary) < 1e-6 * length
+    midrib = session.state.sketch.veins[0]
+    session.commit_sketch(session.state.sketch.moved(0, 1, midrib[1, :2] * 1.01), "Move midrib")
+    assert isinstance(session.leaf.bend, PlacedPose) and session.leaf.bend != edited.bend
