@@ -393,7 +393,9 @@ def compute_mesh(run: StageRun) -> TriangleMesh:
         layout: Layout = run["layout"]
         xy, triangles, kept, implicit_at = layout
         added = xy[n_outline : len(xy) - int(np.count_nonzero(kept))]  # against slivers
-        z = np.concatenate([rim, surf.surface(added), surf.z[kept[guide.inside]]])
+        # usually none: not read (an empty read cost 0.05 ms of a flat ovate's run at grid 128)
+        z_added = surf.surface(added) if len(added) else np.zeros(0)
+        z = np.concatenate([rim, z_added, surf.z[kept[guide.inside]]])
         world = fs.frame.to_world(xy, z)
     else:
         xy = np.vstack([fs.polygon, guide.nodes])
