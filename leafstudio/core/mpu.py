@@ -334,7 +334,6 @@ def _grid_sums(lattice, slot, n, cells, degree):
 def _fit_cells(
     centers: np.ndarray,
     radii: np.ndarray,
-    tree: cKDTree,
     points: np.ndarray,
     normals: np.ndarray,
     buckets: Buckets,
@@ -343,11 +342,53 @@ def _fit_cells(
     """Linear fits for a batch of cells: coef (m, 3), error (m,), normal agreement (m,), radii
     (`few`: (m,) bool, the balls holding fewer than N_MIN points, grown here)."""
     if few.any():  # grow the ball until it holds N_MIN points
-        dist, _ = tree.query(centers[few], k=N_MIN)
         radii = radii.copy()
-        radii[few] = np.maximum(radii[few], dist[:, -1] * 1.0001)
+        reach = _kth_nearest(points, centers[few], N_MIN, buckets)
+        radii[few] = np.maximum(radii[few], reach * 1.0001)
     coef, error, agreement = _ball_fits(points, normals, centers, radii, buckets)
     return coef, error, agreement, radii
+
+
+@njit(cache=True, nogil=True)
+def _kth_nearest(points, centers, k, b):
+    """(m,) distance from each centre to its k-th nearest of the (n, 2) points (bucketed in
+    the Buckets b; inf when n < k), the square root of dx² + dy² as scipy's cKDTree.query(
+    centers, k)[0][:, -1] gives it: rings of buckets outward from the centre's (clamped to
+    the buckets) until the ring's nearest possible point is farther than the k-th found. In
+    place of the k-d tree's build and queries: build_mpu 1.53 -> 1.20 ms on a flat ovate at
+    grid 128 (best of 40; the same radii to the bit)."""
+    lo, size, nx, ny, starts, order = b
+    out = np.empty(len(centers))
+    best = np.empty(k)  # the k least squared distances so far, ascending
+    for q in range(len(centers)):
+        px, py = centers[q, 0], centers[q, 1]
+        for j in range(k):
+            best[j] = np.inf
+        cx = min(max(math.floor((px - lo[0]) / size), 0), nx - 1)
+        cy = min(max(math.floor((py - lo[1]) / size), 0), ny - 1)
+        ring = 0
+        # a margin over the bound: the buckets' edges are rounded as the points were sorted
+        while ring <= max(nx, ny) and (ring - 1) * size <= np.sqrt(best[k - 1]) * (1 + 1e-9):
+            for by in range(max(cy - ring, 0), min(cy + ring, ny - 1) + 1):
+                on_edge_row = by == cy - ring or by == cy + ring
+                step = 1 if on_edge_row else 2 * ring
+                for bx in range(cx - ring, cx + ring + 1, max(step, 1)):
+                    if bx < 0 or bx >= nx:
+                        continue
+                    cell = by * nx + bx
+                    for s in range(starts[cell], starts[cell + 1]):
+                        j = order[s]
+                        dx, dy = px - points[j, 0], py - points[j, 1]
+                        d2 = dx * dx + dy * dy
+                        if d2 < best[k - 1]:
+                            slot = k - 1
+                            while slot > 0 and best[slot - 1] > d2:
+                                best[slot] = best[slot - 1]
+                                slot -= 1
+                            best[slot] = d2
+            ring += 1
+        out[q] = np.sqrt(best[k - 1])
+    return out
 
 
 @njit(cache=True, nogil=True)
@@ -438,7 +479,6 @@ def build_mpu(
     -------
     MPUImplicit
     """
-    tree = cKDTree(points)
     buckets = bucket_points(points)
     lo, hi = points.min(axis=0), points.max(axis=0)
     half = 0.6 * float((hi - lo).max())
@@ -450,9 +490,7 @@ def build_mpu(
     while len(centers):
         radii = np.full(len(centers), ALPHA * 2 * np.sqrt(2) * half)
         grown = _ball_counts(points, centers, radii, buckets) < N_MIN
-        coef, error, agreement, radii = _fit_cells(
-            centers, radii, tree, points, normals, buckets, grown
-        )
+        coef, error, agreement, radii = _fit_cells(centers, radii, points, normals, buckets, grown)
         bad = (error > tolerance) | (agreement < MIN_NORMAL_AGREEMENT)
         wrong_sign = np.zeros(len(centers), dtype=bool)
         if grown.any():  # a far cell's line must give its own centre the right sign
@@ -467,7 +505,7 @@ def build_mpu(
         keep = ~split
         fix = keep & wrong_sign  # could not be split: a constant of the right sign instead
         if fix.any():
-            dist = tree.query(centers[fix])[0]
+            dist = cKDTree(points).query(centers[fix])[0]  # rare: built only then
             signed = np.where(inside(centers[fix]), dist, -dist)
             coef[fix] = np.column_stack([np.zeros((fix.sum(), 2)), signed])
         kept.append((centers[keep], radii[keep], coef[keep], np.full(keep.sum(), depth)))
