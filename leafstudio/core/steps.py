@@ -108,7 +108,7 @@ def frame_stage(leaf: Leaf, margin: str = "auto", units: Units | None = None) ->
     loop = read_loop(leaf.boundary)  # the boundary as one ordered loop, read once for both
     check_not_a_surface(leaf.boundary, loop)  # a whole scan given as the boundary: an error
     check_boundary(leaf.boundary, scale, offset, loop)  # a figure eight would lose a lobe
-    boundary, notes = keep_outer_loop(leaf.boundary)  # holes, separate loops: dropped, and said
+    boundary, notes = keep_outer_loop(leaf.boundary, loop)  # holes, loops: dropped, and said
     if notes:
         leaf = Leaf(boundary, leaf.veins)
     frame = fit_frame(leaf.boundary, leaf.vein_points)
