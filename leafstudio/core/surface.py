@@ -165,24 +165,28 @@ def _least_squares_rows(
     return xy, weight * taper, weight * target
 
 
-def _fit_amplitudes(mixture: Mixture, xy: np.ndarray, row_scale: np.ndarray, target: np.ndarray):
-    """Linear least squares for a_k (rows already weighted and tapered)."""
-    rows = row_scale[:, None] * mixture.components(xy)
+def _fit_amplitudes(components: np.ndarray, row_scale: np.ndarray, target: np.ndarray):
+    """Linear least squares for a_k (rows already weighted and tapered), from the (n, K)
+    components N_k at the rows."""
+    rows = row_scale[:, None] * components
     gram = rows.T @ rows
     gram[np.diag_indices_from(gram)] += RIDGE * np.trace(gram) + 1e-300
     return np.linalg.solve(gram, rows.T @ target)
 
 
-def _kept(refined: Mixture, fitted: Mixture, rows: tuple, nodes: int) -> tuple[Mixture, np.ndarray]:
+def _kept(
+    refined: Mixture, fitted: Mixture, rows: tuple, nodes: int, fitted_value: np.ndarray
+) -> tuple[Mixture, np.ndarray]:
     """`refined` if it costs no more than `fitted` over the fit's rows (xy, row scales,
     targets: Σ (s_i z(x_i) − y_i)²) and its largest misfit at one of the first `nodes` rows
     (the grid's) is at most REFINE_WORST times `fitted`'s, else `fitted`; with the kept one's
     Σ a_k N_k at those nodes. Each mixture is read once at the rows, the cost, the misfit and
     the nodes' values from the same reads (read for the cost, again for the misfit, and the
     kept one once more at the nodes by the surface stage: 0.83 ms on a flat ovate at grid 128,
-    this 0.35, best of 100; the same figures to the bit)."""
+    this 0.35, best of 100; the same figures to the bit). `fitted_value`: `fitted`'s at the
+    rows, from the components its amplitudes were fitted with."""
     xy, row_scale, target = rows
-    values = [m.value(xy) for m in (refined, fitted)]
+    values = [refined.value(xy), fitted_value]
     misfit = [row_scale * v - target for v in values]
     if not float(np.sum(misfit[0] ** 2)) > float(np.sum(misfit[1] ** 2)):
         worst = [np.max(np.abs(m[:nodes]), initial=0.0) for m in misfit]
@@ -427,7 +431,10 @@ def fit_surface(
     xy, row_scale, target = _least_squares_rows(
         surface, inside_xy, inside_g, inside_p, vein_xy, vein_h, vein_g, None, seed
     )
-    amplitudes = _fit_amplitudes(mixture, xy, row_scale, target)
+    # N_k at the rows once, for the amplitudes and the fit's value there (read twice: 0.07 ms
+    # of a flat ovate's at grid 128; the same figures to the bit)
+    components = mixture.components(xy)
+    amplitudes = _fit_amplitudes(components, row_scale, target)
     fitted = Mixture(mixture.weights, mixture.means, mixture.covariances, amplitudes)
     if refine:
         refined = _refine(
@@ -440,7 +447,8 @@ def fit_surface(
         # blade, K = 7 narrowed a component between the sampled nodes into a spike 11 times
         # the veins' height), and with no node much farther off than before (an ovate at K 48
         # lowered the cost with a spike 4.2 times the veins' height on a node or two)
-        fitted, relief = _kept(refined, fitted, (xy, row_scale, target), len(inside_xy))
+        rows = (xy, row_scale, target)
+        fitted, relief = _kept(refined, fitted, rows, len(inside_xy), components @ amplitudes)
     else:
         relief = fitted.value(inside_xy)
     return HeightSurface(mixture=fitted, implicit=implicit, delta=delta, base=base), relief
