@@ -96,7 +96,7 @@ KERNELS: dict[str, tuple[types.Type, ...]] = {
     "buckets:_counting_sort": (F2, F1, f8, i8, i8),
     "curvature:_graph": (F2, F3),
     "mpu:_ball_counts": (F2, F2, F1, BUCKETS),
-    "mpu:_kth_nearest": (F2, F2, i8, BUCKETS),
+    "buckets:kth_distances": (F2, F2, i8, BUCKETS),
     "kelvin:spline_value": (F2, F2, F1, f8, F2, f8),
     "kelvin:phi_matrix": (F2, F2, f8, F2, f8, F1),
     "bending:_bend_twice": (J1, J1, S1, S2),
