@@ -53,11 +53,12 @@ def _as_points(values: Any, what: str) -> np.ndarray:
         raise LeafError(
             f"{what} must be an (n, 3) array of x, y, z points, got shape {points.shape}"
         )
-    if not np.all(np.isfinite(points)):
-        raise LeafError(f"{what} contains NaN or infinite coordinates")
-    if np.abs(points).max() > COORDINATE_LIMIT:
+    top = np.abs(points).max()  # NaN if any is, inf if any is: one pass for the usual case
+    if not top <= COORDINATE_LIMIT:
+        if not np.all(np.isfinite(points)):
+            raise LeafError(f"{what} contains NaN or infinite coordinates")
         raise LeafError(
-            f"{what} has coordinates as large as {np.abs(points).max():.3g}; rescale the input "
+            f"{what} has coordinates as large as {top:.3g}; rescale the input "
             f"(coordinates up to {COORDINATE_LIMIT:g} are taken)"
         )
     return points

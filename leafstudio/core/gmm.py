@@ -152,9 +152,50 @@ def sample_guide(
     total = mass.sum()
     if total <= 0:
         raise LeafError("the height guide is zero everywhere: nothing to fit")
-    picks = rng.choice(len(xy), size=count, p=mass / total)
+    if np.isfinite(total):  # as rng.choice(len(xy), size=count, p=mass / total) draws them
+        cdf = (mass / total).cumsum()
+        cdf /= cdf[-1]
+        picks = _search_right(cdf, rng.random(count))
+    else:  # its error for NaN
+        picks = rng.choice(len(xy), size=count, p=mass / total)
     # take: numpy's fancy index of the (n, 2) nodes took 0.09 ms for 4000 picks, take 0.004
     return xy.take(picks, axis=0) + rng.uniform(-0.5, 0.5, size=(count, 2)) * spacing
+
+
+@njit(cache=True, nogil=True)
+def _search_right(cdf, u):
+    """np.searchsorted(cdf, u, side="right") for a non-decreasing (n,) cdf and (m,) u in [0, 1),
+    as numpy's Generator.choice picks by it: each search starts from the answers at the ends
+    of u's 1/m-wide bin, by one merge of the bins' edges into the cdf (numpy's binary search
+    over the whole cdf took 0.32 ms for 4000 draws from a flat ovate's 6895 nodes at grid 128,
+    this 0.09, best of 40; the same picks). Where rounding puts u outside its bin's answers,
+    the search takes the whole cdf."""
+    n, m = len(cdf), len(u)
+    bins = max(m, 1)
+    first = np.empty(bins + 1, np.int64)  # first[b]: how many cdf values are <= b / bins
+    i = 0
+    for b in range(bins + 1):
+        edge = b / bins
+        while i < n and cdf[i] <= edge:
+            i += 1
+        first[b] = i
+    out = np.empty(m, np.int64)
+    for q in range(m):
+        x = u[q]
+        b = min(max(int(x * bins), 0), bins - 1)
+        lo, hi = first[b], first[b + 1]
+        if lo > 0 and cdf[lo - 1] > x:
+            lo = 0
+        if hi < n and cdf[hi] <= x:
+            hi = n
+        while lo < hi:  # the first index in [lo, hi) whose cdf is > x
+            mid = (lo + hi) // 2
+            if cdf[mid] <= x:
+                lo = mid + 1
+            else:
+                hi = mid
+        out[q] = lo
+    return out
 
 
 def fit_mixture(samples: np.ndarray, k: int, seed: int) -> Mixture:

@@ -30,6 +30,7 @@ from leafstudio.core.buckets import (
     bucket_points,
     gather,
     kernel_array,
+    kth_distances,
     neighbour_distances,
 )
 from leafstudio.core.grid import Grid
@@ -334,7 +335,6 @@ def _grid_sums(lattice, slot, n, cells, degree):
 def _fit_cells(
     centers: np.ndarray,
     radii: np.ndarray,
-    tree: cKDTree,
     points: np.ndarray,
     normals: np.ndarray,
     buckets: Buckets,
@@ -343,9 +343,9 @@ def _fit_cells(
     """Linear fits for a batch of cells: coef (m, 3), error (m,), normal agreement (m,), radii
     (`few`: (m,) bool, the balls holding fewer than N_MIN points, grown here)."""
     if few.any():  # grow the ball until it holds N_MIN points
-        dist, _ = tree.query(centers[few], k=N_MIN)
         radii = radii.copy()
-        radii[few] = np.maximum(radii[few], dist[:, -1] * 1.0001)
+        reach = kth_distances(points, centers[few], N_MIN, buckets)
+        radii[few] = np.maximum(radii[few], reach * 1.0001)
     coef, error, agreement = _ball_fits(points, normals, centers, radii, buckets)
     return coef, error, agreement, radii
 
@@ -438,7 +438,6 @@ def build_mpu(
     -------
     MPUImplicit
     """
-    tree = cKDTree(points)
     buckets = bucket_points(points)
     lo, hi = points.min(axis=0), points.max(axis=0)
     half = 0.6 * float((hi - lo).max())
@@ -450,9 +449,7 @@ def build_mpu(
     while len(centers):
         radii = np.full(len(centers), ALPHA * 2 * np.sqrt(2) * half)
         grown = _ball_counts(points, centers, radii, buckets) < N_MIN
-        coef, error, agreement, radii = _fit_cells(
-            centers, radii, tree, points, normals, buckets, grown
-        )
+        coef, error, agreement, radii = _fit_cells(centers, radii, points, normals, buckets, grown)
         bad = (error > tolerance) | (agreement < MIN_NORMAL_AGREEMENT)
         wrong_sign = np.zeros(len(centers), dtype=bool)
         if grown.any():  # a far cell's line must give its own centre the right sign
@@ -467,7 +464,7 @@ def build_mpu(
         keep = ~split
         fix = keep & wrong_sign  # could not be split: a constant of the right sign instead
         if fix.any():
-            dist = tree.query(centers[fix])[0]
+            dist = cKDTree(points).query(centers[fix])[0]  # rare: built only then
             signed = np.where(inside(centers[fix]), dist, -dist)
             coef[fix] = np.column_stack([np.zeros((fix.sum(), 2)), signed])
         kept.append((centers[keep], radii[keep], coef[keep], np.full(keep.sum(), depth)))

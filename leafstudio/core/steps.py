@@ -108,7 +108,7 @@ def frame_stage(leaf: Leaf, margin: str = "auto", units: Units | None = None) ->
     loop = read_loop(leaf.boundary)  # the boundary as one ordered loop, read once for both
     check_not_a_surface(leaf.boundary, loop)  # a whole scan given as the boundary: an error
     check_boundary(leaf.boundary, scale, offset, loop)  # a figure eight would lose a lobe
-    boundary, notes = keep_outer_loop(leaf.boundary)  # holes, separate loops: dropped, and said
+    boundary, notes = keep_outer_loop(leaf.boundary, loop)  # holes, loops: dropped, and said
     if notes:
         leaf = Leaf(boundary, leaf.veins)
     frame = fit_frame(leaf.boundary, leaf.vein_points)
@@ -393,7 +393,9 @@ def compute_mesh(run: StageRun) -> TriangleMesh:
         layout: Layout = run["layout"]
         xy, triangles, kept, implicit_at = layout
         added = xy[n_outline : len(xy) - int(np.count_nonzero(kept))]  # against slivers
-        z = np.concatenate([rim, surf.surface(added), surf.z[kept[guide.inside]]])
+        # usually none: not read (an empty read cost 0.05 ms of a flat ovate's run at grid 128)
+        z_added = surf.surface(added) if len(added) else np.zeros(0)
+        z = np.concatenate([rim, z_added, surf.z[kept[guide.inside]]])
         world = fs.frame.to_world(xy, z)
     else:
         xy = np.vstack([fs.polygon, guide.nodes])

@@ -137,11 +137,12 @@ def _least_squares_rows(
     inside_p: np.ndarray,
     vein_xy: np.ndarray,
     vein_h: np.ndarray,
+    vein_g: np.ndarray,
     max_rows: int | None,
     seed: int,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Points, row weights and targets of the fit: grid nodes (p) and vein points (h_v), at most
-    `max_rows` of each."""
+    """Points, row weights and targets of the fit: grid nodes (p) and vein points (h_v, and g
+    there: `vein_g`), at most `max_rows` of each."""
     if max_rows is not None and len(inside_xy) > max_rows:
         pick = np.random.default_rng(seed).choice(len(inside_xy), max_rows, replace=False)
         inside_xy, inside_g, inside_p = inside_xy[pick], inside_g[pick], inside_p[pick]
@@ -149,13 +150,13 @@ def _least_squares_rows(
     xy, weight, target = inside_xy, np.ones(len(inside_xy)), inside_p
     if max_rows is not None and len(vein_xy) > max_rows:  # evenly along the veins
         pick = np.linspace(0, len(vein_xy) - 1, max_rows).astype(np.int64)
-        vein_xy, vein_h = vein_xy[pick], vein_h[pick]
+        vein_xy, vein_h, vein_g = vein_xy[pick], vein_h[pick], vein_g[pick]
     if len(vein_xy):
         scale = np.sqrt(VEIN_WEIGHT * len(inside_xy) / len(vein_xy))
         xy = np.vstack([xy, vein_xy])
         weight = np.concatenate([weight, np.full(len(vein_xy), scale)])
         target = np.concatenate([target, vein_h])
-        taper = np.concatenate([taper, surface.taper(surface.implicit(vein_xy))])
+        taper = np.concatenate([taper, surface.taper(vein_g)])
     # no target above T times RELIEF_CAP times the veins' relief: by a vein raised next to the
     # margin (a basal vein beside a sinus) p rises faster than the taper, and following it took a
     # relief many times the veins' own across the blade (lobes 8 times too high, near vertical)
@@ -164,24 +165,28 @@ def _least_squares_rows(
     return xy, weight * taper, weight * target
 
 
-def _fit_amplitudes(mixture: Mixture, xy: np.ndarray, row_scale: np.ndarray, target: np.ndarray):
-    """Linear least squares for a_k (rows already weighted and tapered)."""
-    rows = row_scale[:, None] * mixture.components(xy)
+def _fit_amplitudes(components: np.ndarray, row_scale: np.ndarray, target: np.ndarray):
+    """Linear least squares for a_k (rows already weighted and tapered), from the (n, K)
+    components N_k at the rows."""
+    rows = row_scale[:, None] * components
     gram = rows.T @ rows
     gram[np.diag_indices_from(gram)] += RIDGE * np.trace(gram) + 1e-300
     return np.linalg.solve(gram, rows.T @ target)
 
 
-def _kept(refined: Mixture, fitted: Mixture, rows: tuple, nodes: int) -> tuple[Mixture, np.ndarray]:
+def _kept(
+    refined: Mixture, fitted: Mixture, rows: tuple, nodes: int, fitted_value: np.ndarray
+) -> tuple[Mixture, np.ndarray]:
     """`refined` if it costs no more than `fitted` over the fit's rows (xy, row scales,
     targets: Σ (s_i z(x_i) − y_i)²) and its largest misfit at one of the first `nodes` rows
     (the grid's) is at most REFINE_WORST times `fitted`'s, else `fitted`; with the kept one's
     Σ a_k N_k at those nodes. Each mixture is read once at the rows, the cost, the misfit and
     the nodes' values from the same reads (read for the cost, again for the misfit, and the
     kept one once more at the nodes by the surface stage: 0.83 ms on a flat ovate at grid 128,
-    this 0.35, best of 100; the same figures to the bit)."""
+    this 0.35, best of 100; the same figures to the bit). `fitted_value`: `fitted`'s at the
+    rows, from the components its amplitudes were fitted with."""
     xy, row_scale, target = rows
-    values = [m.value(xy) for m in (refined, fitted)]
+    values = [refined.value(xy), fitted_value]
     misfit = [row_scale * v - target for v in values]
     if not float(np.sum(misfit[0] ** 2)) > float(np.sum(misfit[1] ** 2)):
         worst = [np.max(np.abs(m[:nodes]), initial=0.0) for m in misfit]
@@ -262,20 +267,35 @@ def _residual_rows(xy, row_scale, target, t, jac):
 @njit(cache=True, nogil=True)
 def _normal_equations(res, jac):
     """|r|² , JᵀJ (p, p) and Jᵀr (p,), in loops: numba's `@` and np.linalg compile its BLAS and
-    LAPACK wrappers, about 4 s of CPU at the first run (benchmarks/bench_first_run.py)."""
+    LAPACK wrappers, about 4 s of CPU at the first run (benchmarks/bench_first_run.py).
+
+    Four rows at a time, each sum still adding row i, then i + 1, ... in turn: every sum is
+    read and written once per four rows (612 rows at K 3: 0.034 -> 0.025 ms a call, best of
+    200, the same sums to the bit; one row at a time with 1D views before)."""
     m, p = jac.shape
     normal, gradient = np.zeros((p, p)), np.zeros(p)
     cost = 0.0
-    for i in range(m):
+    i = 0
+    while i + 4 <= m:
+        r0, r1, r2, r3 = res[i], res[i + 1], res[i + 2], res[i + 3]
+        cost = (((cost + r0 * r0) + r1 * r1) + r2 * r2) + r3 * r3
+        for a in range(p):
+            f0, f1, f2, f3 = jac[i, a], jac[i + 1, a], jac[i + 2, a], jac[i + 3, a]
+            gradient[a] = (((gradient[a] + f0 * r0) + f1 * r1) + f2 * r2) + f3 * r3
+            for b in range(a + 1):
+                normal[a, b] = (
+                    ((normal[a, b] + f0 * jac[i, b]) + f1 * jac[i + 1, b]) + f2 * jac[i + 2, b]
+                ) + f3 * jac[i + 3, b]
+        i += 4
+    while i < m:  # the last rows, one at a time
         r = res[i]
         cost += r * r
-        row = jac[i]  # 1D views, the factors read once (0.042 -> 0.034 ms a call, 612 rows
-        for a in range(p):  # at K 3, best of 200; the same sums in the same order, to the bit)
-            factor = row[a]
+        for a in range(p):
+            factor = jac[i, a]
             gradient[a] += factor * r
-            lower = normal[a]
             for b in range(a + 1):
-                lower[b] += factor * row[b]
+                normal[a, b] += factor * jac[i, b]
+        i += 1
     for a in range(p):
         for b in range(a):
             normal[b, a] = normal[a, b]
@@ -405,23 +425,30 @@ def fit_surface(
     """
     delta = taper_width(taper, inside_g)
     surface = HeightSurface(mixture=mixture, implicit=implicit, delta=delta)
+    # g at the veins, once for both fits' rows (read twice, 0.06 ms of a flat ovate's at grid
+    # 128; g is read point by point, so a subset's is the same to the bit)
+    vein_g = implicit(vein_xy) if len(vein_xy) else np.zeros(0)
     xy, row_scale, target = _least_squares_rows(
-        surface, inside_xy, inside_g, inside_p, vein_xy, vein_h, None, seed
+        surface, inside_xy, inside_g, inside_p, vein_xy, vein_h, vein_g, None, seed
     )
-    amplitudes = _fit_amplitudes(mixture, xy, row_scale, target)
+    # N_k at the rows once, for the amplitudes and the fit's value there (read twice: 0.07 ms
+    # of a flat ovate's at grid 128; the same figures to the bit)
+    components = mixture.components(xy)
+    amplitudes = _fit_amplitudes(components, row_scale, target)
     fitted = Mixture(mixture.weights, mixture.means, mixture.covariances, amplitudes)
     if refine:
         refined = _refine(
             fitted,
             *_least_squares_rows(
-                surface, inside_xy, inside_g, inside_p, vein_xy, vein_h, REFINE_ROWS, seed
+                surface, inside_xy, inside_g, inside_p, vein_xy, vein_h, vein_g, REFINE_ROWS, seed
             ),
         )
         # refined on a sample of the rows: kept only if no worse on all of them (over a small
         # blade, K = 7 narrowed a component between the sampled nodes into a spike 11 times
         # the veins' height), and with no node much farther off than before (an ovate at K 48
         # lowered the cost with a spike 4.2 times the veins' height on a node or two)
-        fitted, relief = _kept(refined, fitted, (xy, row_scale, target), len(inside_xy))
+        rows = (xy, row_scale, target)
+        fitted, relief = _kept(refined, fitted, rows, len(inside_xy), components @ amplitudes)
     else:
         relief = fitted.value(inside_xy)
     return HeightSurface(mixture=fitted, implicit=implicit, delta=delta, base=base), relief

@@ -10,8 +10,8 @@ from shapely.geometry import LinearRing, Polygon
 from sklearn.mixture import GaussianMixture
 
 import leafstudio as ls
-from leafstudio.core.buckets import neighbour_distances
-from leafstudio.core.gmm import Mixture, fit_mixture
+from leafstudio.core.buckets import bucket_points, kth_distances, neighbour_distances
+from leafstudio.core.gmm import Mixture, _search_right, fit_mixture
 from leafstudio.core.grid import make_grid
 from leafstudio.core.height import nearest_in_groups
 from leafstudio.core.mesher import conforming_grid_mesh, inner_nodes
@@ -104,6 +104,36 @@ def test_neighbour_distances_are_the_brute_force_answer():
     d = np.linalg.norm(blob[which, None] - blob[None], axis=2)
     d[np.arange(len(which)), which] = np.inf
     np.testing.assert_allclose(neighbour_distances(blob, which), d.min(axis=1))
+
+
+def test_kth_distances_are_the_k_d_trees_to_the_bit():
+    """mpu's grown balls took their radii from scipy's cKDTree (issue 21): the same figures,
+    for centres inside and outside the points' box, repeated points, and fewer points than k."""
+    from scipy.spatial import cKDTree
+
+    rng = np.random.default_rng(6)
+    t = rng.uniform(0, 2 * np.pi, 500)
+    ring = np.column_stack([np.cos(t), 0.3 * np.sin(t)])
+    repeats = np.round(rng.uniform(0, 1, (300, 2)) * 5) / 5
+    for points in (ring, repeats, ring[:4]):
+        centres = rng.uniform(points.min(axis=0) - 1, points.max(axis=0) + 1, (400, 2))
+        for k in (1, 6):
+            expected = cKDTree(points).query(centres, k=k)[0]
+            expected = expected if k == 1 else expected[:, -1]
+            got = kth_distances(points, centres, k, bucket_points(points))
+            np.testing.assert_array_equal(got, expected)
+
+
+def test_search_right_is_numpys_searchsorted():
+    """sample_guide's picks were rng.choice's, by numpy's searchsorted (issue 21): the same
+    indices for a cdf with flat runs (nodes where p is 0) and draws right on its values."""
+    rng = np.random.default_rng(7)
+    p = rng.uniform(0, 1, 3000)
+    p[rng.uniform(0, 1, 3000) < 0.6] = 0.0
+    cdf = (p / p.sum()).cumsum()
+    cdf /= cdf[-1]
+    u = np.concatenate([rng.uniform(0, 1, 4000), cdf[rng.integers(0, 2999, 500)], [0.0]])
+    np.testing.assert_array_equal(_search_right(cdf, u), cdf.searchsorted(u, side="right"))
 
 
 def test_distinct_indices_drop_repeats_wherever_the_points_lie():
