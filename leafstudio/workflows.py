@@ -26,7 +26,6 @@ from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from leafstudio._shared import progress
 from leafstudio._shared.blas import one_blas_thread
@@ -36,9 +35,8 @@ from leafstudio.core import evaluate
 from leafstudio.core.bend import flat_leaf
 from leafstudio.core.pipeline import Pipeline, Result
 from leafstudio.core.plane import fit_frame
-from leafstudio.core.prepare.outline import ORDERED_STEP_RATIO
+from leafstudio.core.prepare.outline import ordered_crossing
 from leafstudio.core.prepare.plausibility import leaf_warnings
-from leafstudio.core.prepare.polygon import distinct_indices, ring_crossings
 from leafstudio.core.prepare.units import Units
 from leafstudio.core.unfold import unfolded
 from leafstudio.errors import LeafError
@@ -314,17 +312,10 @@ def boundary_crossing(leaf: Leaf) -> np.ndarray | None:
         frame = fit_frame(points, unit.vein_points)
     except LeafError:
         return None
-    xy, _ = frame.to_plane(points)
-    xy = xy[distinct_indices(xy, 1.0)]  # repeats dropped, as the outline drops them (at 1e9 from
-    # the origin, the nested demo's two tip points 6e-8 apart are one, a "crossing")
-    steps = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1)
-    spacing = float(np.median(cKDTree(xy).query(xy, k=2)[0][:, 1]))  # as prepare/outline.py
-    if spacing <= 0 or steps.max() > ORDERED_STEP_RATIO * spacing:
+    found = ordered_crossing(frame.to_plane(points)[0])
+    if found is None:
         return None
-    found = ring_crossings(xy)
-    if not len(found):
-        return None
-    return units.to_world(frame.to_world(found[:1], np.zeros(1)))[0]
+    return units.to_world(frame.to_world(found[None], np.zeros(1)))[0]
 
 
 @dataclass(frozen=True)

@@ -110,6 +110,10 @@ HESSIAN_CUT = 1e-3  # ∇²φ's radial parts are read at max(r, this share of th
 REACH = 0.1  # ℓ, of the length: the correction fades as e^(−r/ℓ√2) past the veins (0.05: a
 # drawn leaf's margin band 9.1° against the paper's 8.3°; 0.3: reniform's lobes 1.44° against 1.36°)
 JUNCTION = 0.011  # of the length: a vein's points this near an earlier vein's are left to it
+STEEPEST = 1.0  # ... and those whose height differs from a kept earlier vein point's by more than
+# this times their distance: two veins drawn across each other at different heights (a bowed
+# midrib over a basal vein, 0.052 of the length apart where they cross) made the correction a
+# wall between them, a triangle edge 5.1 grid cells long in 3D (tests/core/test_sinus.py)
 OVERSHOOT = 6.0  # T·c beyond this many times the largest residual is no smooth correction
 # (the gallery's forms: 0.62-1.21 times; a drawn leaf with hand-raised veins 2.8; a fan of
 # basal veins from a sinus's notch into narrow lobes 17)
@@ -161,10 +165,13 @@ def _thin_vein(vein: np.ndarray, step: float) -> np.ndarray:
     return kept
 
 
-def spline_centers(veins: list[np.ndarray], length: float) -> list[np.ndarray]:
+def spline_centers(
+    veins: list[np.ndarray], length: float, heights: list[np.ndarray] | None = None
+) -> tuple[list[np.ndarray], list[tuple[int, int, float]]]:
     """Indices kept of each vein's (m_i, 2) points: at least CENTER_STEP · length apart along it
     (polygon.thin_curve), at most MOST_CENTERS in all, none within JUNCTION · length of an
-    earlier vein's."""
+    earlier vein's, nor (given each point's height, (m_i,) `heights`) steeper than STEEPEST
+    from one; and the veins that disagreed so, (later, earlier, largest height difference)."""
     step = CENTER_STEP * length
     kept = [_thin_vein(v, step) for v in veins]
     total = sum(len(k) for k in kept)
@@ -178,16 +185,30 @@ def spline_centers(veins: list[np.ndarray], length: float) -> list[np.ndarray]:
     # same centres on every gallery form at four lengths)
     points = kernel_array(np.vstack([v[k] for v, k in zip(veins, kept, strict=True)]))
     sizes = np.array([len(k) for k in kept], dtype=np.int64)
-    laid = _clear_of_earlier(points, sizes, float((JUNCTION * length) ** 2))
+    if heights is None:
+        h = np.zeros(len(points))
+    else:
+        h = np.concatenate([z[k] for z, k in zip(heights, kept, strict=True)]).astype(float)
+    laid, against = _clear_of_earlier(points, h, sizes, float((JUNCTION * length) ** 2), STEEPEST)
     starts = np.concatenate([[0], np.cumsum(sizes)])
-    return [k[laid[a:b]] for k, a, b in zip(kept, starts[:-1], starts[1:], strict=True)]
+    owner = np.repeat(np.arange(len(veins)), sizes)
+    worst: dict[tuple[int, int], float] = {}
+    for i in np.flatnonzero(against >= 0):
+        pair = (int(owner[i]), int(owner[against[i]]))
+        worst[pair] = max(worst.get(pair, 0.0), abs(h[i] - h[against[i]]))
+    disagree = [(later, earlier, apart) for (later, earlier), apart in sorted(worst.items())]
+    kept = [k[laid[a:b]] for k, a, b in zip(kept, starts[:-1], starts[1:], strict=True)]
+    return kept, disagree
 
 
 @njit(cache=True, nogil=True)
-def _clear_of_earlier(points, sizes, reach2):
+def _clear_of_earlier(points, heights, sizes, reach2, steepest):
     """(n,) bool: the (n, 2) `points`, veins of `sizes` points one after another, that lie no
-    nearer than √reach2 to a point of an earlier vein that is itself kept."""
+    nearer than √reach2 to a point of an earlier vein that is itself kept, nor differ in height
+    from one by more than `steepest` times their distance; and (n,) the earlier point a point
+    was that steep from (-1: none)."""
     laid = np.zeros(len(points), dtype=np.bool_)
+    against = np.full(len(points), -1, dtype=np.int64)
     start = 0
     for size in sizes:
         for i in range(start, start + size):
@@ -195,12 +216,18 @@ def _clear_of_earlier(points, sizes, reach2):
             for j in range(start):
                 if laid[j]:
                     dx, dy = points[i, 0] - points[j, 0], points[i, 1] - points[j, 1]
-                    if dx * dx + dy * dy < reach2:
+                    distance2 = dx * dx + dy * dy
+                    if distance2 < reach2:
                         clear = False
+                        break
+                    rise = heights[i] - heights[j]
+                    if rise * rise > steepest * steepest * distance2:
+                        clear = False
+                        against[i] = j
                         break
             laid[i] = clear
         start += size
-    return laid
+    return laid, against
 
 
 def reachable(taper: np.ndarray, residual: np.ndarray, relief: float) -> np.ndarray:
@@ -298,6 +325,15 @@ class Pinning:
     centers: np.ndarray  # (m, 2)
     taper: np.ndarray  # (m,) T(g/δ) at the centres
     bending: Bending  # the lattice (bending.py), with φ for every centre
+    disagree: tuple[tuple[int, int, float], ...] = ()  # veins steeper apart than STEEPEST
+
+    def notes(self, length: float) -> list[str]:
+        """What the leaf is told of veins that disagree: the surface follows the earlier one."""
+        return [
+            f"veins {earlier + 1} and {later + 1} meet {apart / length:.1%} of the length apart "
+            f"in height: the surface follows vein {earlier + 1} there"
+            for later, earlier, apart in self.disagree
+        ]
 
 
 def lattice_bending(
@@ -319,6 +355,7 @@ def lattice_bending(
 
 def pinning(
     veins: list[np.ndarray],
+    heights: list[np.ndarray],
     length: float,
     implicit: MPUImplicit,
     delta: float,
@@ -326,15 +363,16 @@ def pinning(
     inside: np.ndarray,
     node_taper: np.ndarray,
 ) -> Pinning:
-    """The spline's centres on the (m_i, 2) `veins`, T there (T = tanh(g/δ)), and the lattice of
-    the grid's nodes inside the leaf ((ny * nx,) bool `inside`, T there `node_taper`) with φ and
-    the bending gram for every centre (lattice_bending)."""
-    kept = spline_centers(veins, length)
+    """The spline's centres on the (m_i, 2) `veins` (their points' `heights`: spline_centers), T
+    there (T = tanh(g/δ)), and the lattice of the grid's nodes inside the leaf ((ny * nx,) bool
+    `inside`, T there `node_taper`) with φ and the bending gram for every centre
+    (lattice_bending)."""
+    kept, disagree = spline_centers(veins, length, heights)
     centers = np.vstack([v[k] for v, k in zip(veins, kept, strict=True)])
     centers = kernel_array(centers)
     taper = taper_of(implicit(centers), delta)
     bending = lattice_bending(centers, length, grid, inside, node_taper)
-    return Pinning(kept, centers, taper, bending)
+    return Pinning(kept, centers, taper, bending, tuple(disagree))
 
 
 def onto_veins(

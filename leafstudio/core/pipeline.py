@@ -85,6 +85,14 @@ class Pipeline:
         with one_blas_thread():  # its solves are small: a second thread only waits (blas.py)
             return self._result(run)
 
+    @staticmethod
+    def _vein_notes(run: StageRun, fs: FrameStage) -> list[str]:
+        """What the vein correction says of veins that disagree where they meet (correct.py);
+        nothing for the paper's surface, which asks no vein to be met."""
+        if not (run.params.through_veins and fs.veins):
+            return []
+        return run["bending"].notes(fs.length)
+
     def _result(self, run: StageRun) -> Result:
         """Run the stages `run` needs and make its Result (run)."""
         for stage in STAGES:
@@ -113,7 +121,7 @@ class Pipeline:
             length=fs.length,
             timings=run.timings,
             ran=tuple(run.ran),
-            warnings=list(fs.notes),
+            warnings=list(fs.notes) + self._vein_notes(run, fs),
         )
         result = bent_result(in_world(unit, self.flat, self.units), self.leaf, self.units)
         # what is made from the mesh on first use: entries of the store under the mesh's key

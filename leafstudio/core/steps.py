@@ -277,7 +277,8 @@ def compute_bending(run: StageRun) -> Pinning:
     g_in = guide.g[guide.inside]
     delta = taper_width(run.params.taper, g_in)
     taper = taper_of(g_in, delta)
-    return pinning(fs.veins, fs.length, run["implicit"], delta, run["grid"], guide.inside, taper)
+    implicit, grid = run["implicit"], run["grid"]
+    return pinning(fs.veins, fs.heights, fs.length, implicit, delta, grid, guide.inside, taper)
 
 
 def compute_surface(run: StageRun) -> SurfaceStage:

@@ -49,6 +49,7 @@ from leafstudio.core.hinge_fold import fold_share
 from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.pose_relief import Relief, margin_relief, margin_slopes
+from leafstudio.core.prepare.outline import ordered_crossing
 from leafstudio.core.prepare.vein_order import midrib_turned, veins_inside_outline
 from leafstudio.model import Leaf
 
@@ -71,6 +72,10 @@ HINGE_EXPLAINED = 0.05  # a leaf the fits about the margin's plane leave unexpla
 # when the fit about the midrib's hinge leaves at most this share of the quadric's: 0.001-0.007
 # on folded lobed and domed forms (fold ±30-60), 0.19-0.52 on waved blades (ovate, elliptic,
 # linear, lanceolate, cordate; wave 0.1-0.2)
+HINGE_CROSSED = 0.1  # ... at most this share for a leaf whose outline crosses itself on its
+# plane as given (refused as it is): deltoid folded 30 and rolled 0.4, 0.070; a lanceolate folded
+# -60 and rolled 0.3 with two neighbouring boundary points swapped, a real crossing, took any pose
+# that hid it (fold -19.5, 1.08 times its width) when any pose that lay flat was let through
 HINGE_CALLS = 30  # ... each of those fits stops after this many evaluations: a fold the hinge
 # explains took 4-15 from its start (sagittate folded 60, ovate folded -60, sagittate folded 45
 # and curled 0.3), elliptic waved 0.2 wandered for 386 (12.5 s of CPU); and so does every fit
@@ -203,9 +208,9 @@ def _side_on(leaf: Leaf, length: float) -> bool:
 
 def _crosses(leaf: Leaf) -> bool:
     """Whether `leaf`'s boundary, in its order, crosses itself on the boundary's PCA plane: the
-    app and the commands refuse it as given (workflows.boundary_crossing)."""
+    app and the commands refuse it as given (outline.ordered_crossing)."""
     frame = fit_frame(leaf.boundary, leaf.vein_points)
-    return not shapely.LinearRing(frame.to_plane(leaf.boundary)[0]).is_simple
+    return ordered_crossing(frame.to_plane(leaf.boundary)[0]) is not None
 
 
 def fit_pose(leaf: Leaf) -> PlacedPose | None:
@@ -280,12 +285,14 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
     if midrib_turned(list(leaf.veins)):  # written apex first: the frame's origin is the base
         midrib = midrib[::-1]
     before = _off_quadric(boundary)  # the pose must do much better than a height field
-    if _side_on(leaf, length) or _crosses(leaf):  # ... unless the leaf as given is refused:
-        # any pose that lays it flat does better (folded down 70°, the halves nearly closed:
-        # fitted 0.0107 against the quadric's 0.0259, and the pipeline refused its midrib as
-        # outside the outline; deltoid folded 30 and rolled 0.4, its outline crossing itself on
-        # its plane: 0.41 of the quadric's rms about the margin's plane, 0.070 about the hinge)
+    if _side_on(leaf, length):  # ... unless the leaf as given is refused: any pose that lays
+        # it flat does better (folded down 70°, the halves nearly closed: fitted 0.0107 against
+        # the quadric's 0.0259, and the pipeline refused its midrib as outside the outline)
         before = np.inf
+    # an outline crossing itself on its plane as given is refused too, but may be a real
+    # crossing: the hinge may explain a little less (HINGE_CROSSED; deltoid folded 30 and
+    # rolled 0.4: 0.41 of the quadric's rms about the margin's plane, 0.070 about the hinge)
+    hinge_share = HINGE_CROSSED if _crosses(leaf) else HINGE_EXPLAINED
     boundary = boundary[:: max(1, len(boundary) // FIT_POINTS)]  # enough to fit six numbers
     midrib = np.vstack([midrib[:: max(1, len(midrib) // FIT_POINTS)], midrib[-1:]])
     origin = midrib[0]
@@ -354,16 +361,16 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
         return None
 
     def hinge_explains(start: tuple) -> bool:
-        """Whether a fit about the midrib's hinge leaves at most HINGE_EXPLAINED of `before`:
+        """Whether a fit about the midrib's hinge leaves at most `hinge_share` of `before`:
         the fold alone from each frame's folded starts (a fit of one round of `_hinge` a step),
         else all three terms from the fit about the margin's plane's best `start` ((axes, y)):
         on oblanceolate folded -60 that best, fold -31 and roll -24 making up for the shear,
         led the hinge's fit to 0.78 of `before`; the fold alone from -60, to 2e-4."""
         frames = itertools.product(_starts(boundary, midrib), FOLDS[1:])
         starts = [(axes, np.array([0.0] * 4 + [fold])) for axes, fold in frames]
-        if fits_of((0,), starts, True, HINGE_CALLS)[0][0] <= HINGE_EXPLAINED * before:
+        if fits_of((0,), starts, True, HINGE_CALLS)[0][0] <= hinge_share * before:
             return True
-        return fits_of((0, 1, 2), [start], True, HINGE_CALLS)[0][0] <= HINGE_EXPLAINED * before
+        return fits_of((0, 1, 2), [start], True, HINGE_CALLS)[0][0] <= hinge_share * before
 
     def eased(start: tuple, terms: tuple[int, ...]) -> tuple:
         """A fit of `terms` about the midrib's hinge from `start` ((axes, y)), its halves turned
@@ -448,7 +455,7 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
         if again <= HINGE_GAIN * rms and _lies_flat(bend, leaf):
             fits[i] = (again, terms, bend, axes, y)
     best = _simplest(fits, length)
-    if not plane and best[0] > HINGE_EXPLAINED * before:  # nor the hinge
+    if not plane and best[0] > hinge_share * before:  # nor the hinge
         return None
     return best[2]
 

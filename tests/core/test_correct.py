@@ -263,7 +263,7 @@ def test_a_later_veins_centres_near_an_earlier_veins_kept_ones_are_left_to_it():
     midrib = np.column_stack([np.linspace(0, 1, 126), np.zeros(126)])
     side = np.column_stack([np.full(10, 0.5), near + np.linspace(0, 0.2, 10)])
     third = np.array([[0.508, 0.012], [0.9, 0.3]])  # 0.010 from the side vein's first point
-    kept = correct.spline_centers([midrib, side, third], 1.0)
+    kept, _ = correct.spline_centers([midrib, side, third], 1.0)
     side_kept = side[kept[1]]
     assert np.all(side_kept[:, 1] >= correct.JUNCTION)  # none beside the midrib's centres
     assert len(side_kept) >= 2

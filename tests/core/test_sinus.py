@@ -24,6 +24,11 @@ from leafstudio.core.evaluate import triangles_of
 GRID = 128
 LONGEST = 4  # grid cells: no triangle edge longer (finding 4 counted these in 3D)
 STEEP = 5  # ... in 3D over random sinuses, where a bowed vein may run beside a lobe's margin
+LIFT = 2.5  # ... nor a relief more than this many times the veins' own over random sinuses: the
+# lifts this test was written for stood 2.8 times (0.139 under veins 0.05 high) and, before
+# surface.RELIEF_CAP, 8 times; the mixture itself, at K 6 on three basal veins into the lobes and
+# none along the blade, stands 1.9 times (the paper's surface) and 1.96 (ours), and on a single
+# vein 0.0018 high, 1.93 times (Hypothesis 6.170.27's examples)
 
 
 def heart(depth: float, half: float, n: int = 350, lobes: float = 0.0) -> tuple[np.ndarray, int]:
@@ -102,7 +107,8 @@ def test_finding4_a_heart_with_veins_from_its_notch_has_no_cracks(k):
 @settings(
     max_examples=25,
     deadline=None,
-    derandomize=True,  # the same examples in every run; widen max_examples locally to search
+    derandomize=True,  # the same examples in every run (at one Hypothesis version: pyproject pins
+    # it); widen max_examples locally to search
     phases=[Phase.explicit, Phase.generate],  # no shrinking: each example is a grid-128 run
     suppress_health_check=[HealthCheck.too_slow],
 )
@@ -118,7 +124,7 @@ def test_finding4_a_heart_with_veins_from_its_notch_has_no_cracks(k):
 def test_no_cracks_or_slivers_at_any_sinus(depth, half, lobes, fan, bow, rise, k):
     """Random sinus depths and openings, lobes and fans of veins from the notch on the boundary
     (each within the blade's opening there, bowed alike, rising by `rise` of its length): no
-    triangle edge longer than 4 grid cells in 3D or in the plane, and no relief above 1.5 times
+    triangle edge longer than 4 grid cells in 3D or in the plane, and no relief above LIFT times
     the veins' own."""
     outline, notch = heart(depth, half, lobes=lobes)
     opening = 180 - half - 8  # the veins keep 8° off the sinus's sides
@@ -128,4 +134,25 @@ def test_no_cracks_or_slivers_at_any_sinus(depth, half, lobes, fan, bow, rise, k
     in_3d, in_plane = longest_edges(result)
     assert in_plane <= LONGEST and in_3d <= STEEP
     relief = max(float(np.abs(v[:, 2]).max()) for v in veins)
-    assert np.abs(result.triangle_mesh.points[:, 2]).max() <= 1.5 * relief
+    assert np.abs(result.triangle_mesh.points[:, 2]).max() <= LIFT * relief
+
+
+def test_veins_crossing_at_different_heights_make_no_wall_and_are_named():
+    """A midrib bowed across a basal vein from the same notch, 0.052 of the length apart in
+    height where they cross (the property test's example at Hypothesis 6.170): the correction
+    met both and stood a wall between them, a triangle edge 5.1 grid cells long in 3D. The later
+    vein's points steeper than correct.STEEPEST from the earlier's are left to it, and the
+    result says so."""
+    outline, notch = heart(depth=0.1687, half=31.44, lobes=0.0861)
+    opening = 180 - 31.44 - 8
+    fan = [(0.0, 0.2), (0.1813 * opening, -0.2), (0.8265 * opening, -0.2)]
+    veins = [vein_from(outline, notch, angle, bow, 0.0, 0.1452) for angle, bow in fan]
+    crossing = shapely.LineString(veins[0][:, :2]).intersection(
+        shapely.LineString(veins[1][5:, :2])
+    )
+    assert crossing.geom_type == "Point"  # they cross away from the notch
+    boundary = np.column_stack([outline, np.zeros(len(outline))])
+    with pytest.warns(UserWarning, match="veins 1 and 2 meet .* apart in height"):
+        result = ls.reconstruct(ls.Leaf(boundary, veins), ls.Params(grid=GRID, k=2))
+    assert longest_edges(result)[0] <= STEEP - 2
+    assert len(result.warnings) == 1

@@ -253,8 +253,8 @@ def test_a_form_whose_outline_crosses_itself_as_given_opens_unfolded(tmp_path, s
     as a CSV, would not open ("the boundary crosses itself"): no pose was fitted (about the
     margin's plane 0.41 of the quadric height field's rms, past unfold.EXPLAINED; about the
     hinge 0.070, past HINGE_EXPLAINED), so its curves stayed as given, and on their plane the
-    rolled outline crosses itself. A leaf refused as given is unfolded by any pose that lays it
-    flat, as a side-on one is (unfold._crosses): fitted fold 36.8 and roll 2.42 per length (a
+    rolled outline crosses itself. A leaf refused as given is unfolded when the hinge explains
+    it a little less well (unfold.HINGE_CROSSED): fitted fold 36.8 and roll 2.42 per length (a
     roll about the margin's plane where the form rolls about its sections' mean height), 1.036
     times its flat width."""
     from leafstudio.sources.files import save_leaf
@@ -272,6 +272,27 @@ def test_a_form_whose_outline_crosses_itself_as_given_opens_unfolded(tmp_path, s
     form = Form(shape).leaf().boundary
     assert float(np.ptp(flat[:, 1])) == pytest.approx(float(np.ptp(form[:, 1])), rel=0.05)
     assert float(np.ptp(flat[:, 0])) == pytest.approx(float(np.ptp(form[:, 0])), rel=0.01)
+
+
+def test_an_outline_that_really_crosses_itself_is_still_refused(tmp_path):
+    """A posed lanceolate (folded -60, rolled 0.3) with two neighbouring boundary points swapped:
+    its outline crosses itself whatever its pose. When any pose that lay flat was let through,
+    it opened posed to hide the crossing (fold -19.5, 1.08 times its flat width); the app says
+    where the boundary crosses itself, as for the leaf given flat (review of session 29)."""
+    from leafstudio.errors import LeafError
+    from leafstudio.sources.files import save_leaf
+    from leafstudio.workflows import open_file
+
+    posed = Form("lanceolate", fold=-60.0, roll=0.3).leaf()
+    boundary = posed.boundary.copy()
+    i = len(boundary) // 5
+    boundary[[i, i + 1]] = boundary[[i + 1, i]]
+    path = tmp_path / "swapped.csv"
+    save_leaf(ls.Leaf(boundary, posed.veins), path)
+    with pytest.raises(LeafError, match="crosses itself"):
+        open_file(path)
+    save_leaf(ls.Leaf(posed.boundary, posed.veins), path)  # in order, it opens unfolded
+    assert open_file(path).leaf.bend is not None
 
 
 def _unfolds_to_its_flat_width(shape: str, fold: float) -> None:

@@ -30,7 +30,12 @@ from leafstudio.core.prepare.cloud import (
     point_order,
 )
 from leafstudio.core.prepare.plausibility import ZIGZAG
-from leafstudio.core.prepare.polygon import MAX_OUTLINE_VERTICES, distinct_indices, thin_ring
+from leafstudio.core.prepare.polygon import (
+    MAX_OUTLINE_VERTICES,
+    distinct_indices,
+    ring_crossings,
+    thin_ring,
+)
 from leafstudio.errors import LeafError
 
 START_TIE = 1e-9  # of the width: x this near the lowest ties for the outline's start (_orientation)
@@ -371,3 +376,21 @@ def leaf_polygon(points: np.ndarray) -> np.ndarray:
         polygon.thin_outline), the smoothed mean outline for a noisy one.
     """
     return trace_outline(points).polygon
+
+
+def ordered_crossing(xy: np.ndarray) -> np.ndarray | None:
+    """(2,) where the (n, 2) plane points, read in their order as an outline, cross themselves,
+    or None when they do not or are not in order (a step longer than ORDERED_STEP_RATIO times
+    their spacing: a cloud, which the pipeline orders itself). Repeats count once, as the
+    outline drops them (at 1e9 from the origin, the nested demo's two tip points 6e-8 apart
+    are one, not a crossing): what the app, the commands (workflows.boundary_crossing) and the
+    unfolding of a leaf given in 3D (unfold.py) ask alike."""
+    xy = xy[distinct_indices(xy, 1.0)]
+    if len(xy) < 4:
+        return None
+    steps = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1)
+    spacing = float(np.median(cKDTree(xy).query(xy, k=2)[0][:, 1]))  # as trace_outline
+    if spacing <= 0 or steps.max() > ORDERED_STEP_RATIO * spacing:
+        return None
+    found = ring_crossings(xy)
+    return found[0] if len(found) else None
