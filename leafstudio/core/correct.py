@@ -66,8 +66,9 @@ already close to the surface are pinned too: the surface moves there as well.
 The spline's centres are the vein points thinned along each vein (CENTER_STEP), less those of
 a later vein within JUNCTION of an earlier one (where a side vein leaves the midrib, the two
 disagree by a little within a grid cell, and meeting both bent the surface into a ridge tighter
-than a thick solid's sheets can follow), and less the points no smooth correction should chase
-(`reachable`).
+than a thick solid's sheets can follow) or steeper than STEEPEST from one (two veins drawn across
+each other at different heights: the result names them, Pinning.notes), and less the points no
+smooth correction should chase (`reachable`).
 
 φ and its derivatives are read from tables by compiled kernels (kelvin.py); φ's Hessian has a
 log r singularity at each centre, as the thin-plate spline's; ∇²c (curvatures only) reads its
