@@ -8,11 +8,12 @@ blade side-on (a fold of 75°: the mesh 5% of the length off the form's own surf
 `fit_pose` finds the blade's frame (the base at the midrib's base end, u along it) and the
 `Pose` (fold, curl, roll) whose `flatten` brings the margin and the midrib nearest one plane, by
 least squares over the frame's rotation and the pose's three terms. The leaf is unfolded only
-when its margin is well off a plane and the pose lays it much flatter than the best quadratic
-height field over that plane would, or, when that plane sees it side-on (a whole vein outside
-the outline there: the pipeline would refuse it or mesh a side view) or its outline crossing
-itself (the app and the commands refuse it), whenever a pose lays it flat: a flat, cupped or
-gently bent leaf runs as before (its margin's heights go to the paper's base b(x)).
+when its margin is well off a plane, or off the best quadratic height field over it (a fold
+down and a roll up), and the pose lays it much flatter than that height field would, or, when
+that plane sees it side-on (a whole vein outside the outline there: the pipeline would refuse it
+or mesh a side view) or its outline crossing itself (the app and the commands refuse it),
+whenever a pose lays it flat: a flat, cupped or gently bent leaf runs as before (its margin's
+heights go to the paper's base b(x)).
 
 Those fits fold about the margin's plane, which shears each half, and a roll made up for it: an
 ovate folded 60° and saved without its pose was fitted fold 61, curl 0.10 and roll -0.54, whose
@@ -55,6 +56,12 @@ from leafstudio.model import Leaf
 
 OFF_PLANE = 0.12  # a margin this far off its PCA plane (RMS, share of its RMS width) may be bent
 # (0.2 left an ovate form folded 45 degrees and curled 0.5 unbent, 0.17: its curl on a circle)
+OFF_QUADRIC = 0.025  # ... and so may one this far off its best quadratic height field: a fold
+# down and a roll up nearly cancel off the plane (fold -45 roll 0.4: 0.044-0.11 off it, under
+# OFF_PLANE) but not off the quadric (0.027-0.094, elliptic's 0.007): ten of the 14 shapes so
+# posed were 2.4e-3-9.7e-3 of the length off their own surface at p95 as height fields, nine of
+# them now unfolded 0.9e-3-2.7e-3 (oblanceolate 1.7e-3 -> 3.3e-3). Folded 10 the quadric leaves
+# 0.002-0.019, curled 0.2 at most 0.001: they run as before
 FIT_POINTS = 60  # the margin and the midrib thinned to about this many points each for the fit
 EXPLAINED = 0.25  # ... and is unfolded when the fitted pose leaves at most this share of what
 # the best quadratic height field over that plane leaves (the paper's base takes such a margin)
@@ -241,7 +248,11 @@ def fit_pose(leaf: Leaf) -> PlacedPose | None:
     hinged = HINGE_SIZES[0] < 2 * half < HINGE_SIZES[1]
     boundary = unit(leaf.boundary)
     before, width = _off_plane(boundary)
-    if not before > OFF_PLANE * width:  # flat: the unit leaf is not made (0.17 ms of a flat
+    # the quadric's rms is at most the plane's: a flat leaf does not fit it
+    bent = before > OFF_PLANE * width or (
+        before > OFF_QUADRIC * width and _off_quadric(boundary) > OFF_QUADRIC * width
+    )
+    if not bent:  # flat, cupped or gently bent: the unit leaf is not made (0.17 ms of a flat
         return None  # ovate's 0.35, best of 40), nor its midrib's direction asked
     bend = _fit(Leaf(boundary, [unit(v) for v in leaf.veins]), hinged)
     if bend is None:
