@@ -64,6 +64,9 @@ class Relief:
     # the profiles linear past their ends (`profile_spline`); False: a project's relief saved
     # before, whose curves were bent with the end pieces' cubics carried on, flattened so
     linear_ends: bool = True
+    # the sheet is the margin's plane, as a pose fitted to curves in 3D has it (`margin_relief`):
+    # said, not read off the means, which a drawn blade with a flat midrib has all 0 too
+    on_margin: bool = False
     _cache: dict = field(default_factory=dict, init=False, compare=False, repr=False)  # splines
 
     def _spline(self, name: str) -> PPoly:
@@ -99,13 +102,6 @@ class Relief:
         midrib, mean = (tuple(0.0 - v for v in values) for values in (self.midrib, self.mean))
         return replace(self, midrib=midrib, mean=mean, rise=self.fall, fall=self.rise)
 
-    @property
-    def on_margin(self) -> bool:
-        """Whether the sheet is the margin's plane, as a pose fitted to curves in 3D has it
-        (`margin_relief`): no section's mean height (its rise and fall are the margin's off the
-        hinge)."""
-        return not any(self.mean)
-
     def hinge(self, x: np.ndarray) -> Profile:
         """The midrib's height at (n,) x, with its first and second derivatives."""
         return self._profile("midrib", x)
@@ -138,6 +134,7 @@ class Relief:
             "half_width": self.half_width,
             "rise": self.rise,
             "fall": self.fall,
+            "sheet": "margin" if self.on_margin else "mean",  # what a roll bends about
         } | ({"ends": "linear"} if self.linear_ends else {})
 
     @classmethod
@@ -152,7 +149,15 @@ class Relief:
             raise ValueError("a relief's x and heights do not read whole")
         if not (np.isfinite(scalars).all() and min(scalars) >= 0):
             raise ValueError("a relief's half width, rise and fall must be numbers of 0 or more")
-        return cls(along, midrib, knots, mean, *scalars, linear_ends=value.get("ends") == "linear")
+        if "sheet" in value:
+            if value["sheet"] not in ("margin", "mean"):
+                raise ValueError('a relief\'s "sheet" must be "margin" or "mean"')
+            on_margin = value["sheet"] == "margin"
+        else:  # saved before it said: margin_relief's knots, all its means 0 (relief_of's are
+            # KNOTS, so a drawn blade with a flat midrib, its means 0 too, is not read as fitted)
+            on_margin = len(knots) == MARGIN_KNOTS and not any(mean)
+        ends = value.get("ends") == "linear"
+        return cls(along, midrib, knots, mean, *scalars, linear_ends=ends, on_margin=on_margin)
 
     def posed_level(self, pose: Any) -> float:
         """The midrib's mean height as `pose` leaves it before its curl (a `bend.Pose` without
@@ -323,7 +328,7 @@ def margin_relief(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | Non
     knots = np.linspace(x0, x1, MARGIN_KNOTS)
     half_width = float(np.abs(boundary[:, 1]).max())
     zeros = (0.0,) * MARGIN_KNOTS
-    relief = Relief(tuple(along), tuple(heights), tuple(knots), zeros, half_width)
+    relief = Relief(tuple(along), tuple(heights), tuple(knots), zeros, half_width, on_margin=True)
     rise, fall = margin_slopes(relief, boundary)
     return replace(relief, rise=rise, fall=fall)
 

@@ -42,7 +42,7 @@ FRAME_KEYS = ("origin", "u", "v", "normal")  # a bend's frame in a project (core
 def _bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
     """A project's "bend": {"fold": degrees, "curl": c, "roll": curvature, "twist": radians per
     length}, the pose a form was made in, with the "frame" {"origin", "u", "v", "normal"} of a
-    leaf bent in the app (core/placed.py), or {"sheet": ...}, a scan's bend (core/sheet.py)."""
+    leaf bent in the app (core/placed.py), or {"sheet": ...}, a scan's bend (core/sheet_bend.py)."""
     if isinstance(value, dict) and "sheet" in value:
         try:
             return Scaled.from_entry(value, np.vstack([leaf.boundary, leaf.vein_points]))
@@ -68,7 +68,7 @@ def _bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
             f'"bend" must be {{"fold": degrees under 90, "curl", "roll", "twist": numbers}} (a '
             f'"frame": {{"origin", "u", "v", "normal"}}, orthonormal axes; a "relief": '
             f'{{"along", "midrib", "knots", "mean": lists, "half_width", "rise", "fall": '
-            f"numbers}}), got {shorten(value)}",
+            f'numbers, "sheet": "margin" or "mean"}}), got {shorten(value)}',
             source,
         )
     pose = Pose(fold, curl, roll, twist, relief)

@@ -268,3 +268,24 @@ def test_a_margin_relief_hinges_on_the_midrib_over_the_margins_plane():
     assert margin_relief(blade.boundary, [midrib[[0, 5, 3]]]) is None
     big = relief.scaled(8.0)
     np.testing.assert_allclose(big.hinge_height(8 * midrib[:, 0]), 8 * midrib[:, 2], atol=1e-11)
+
+
+def test_a_relief_says_it_is_fitted_not_its_means_and_a_project_keeps_it():
+    """A fitted pose's relief (margin_relief) says its sheet is the margin's plane; a blade's
+    own relief, read from a flat blade, has all its means 0 too, and once counted as fitted
+    (the app then kept a drawn leaf's bend per unit: bending.fitted). A project writes it as
+    "sheet"; one saved before reads it from margin_relief's knots with its means 0."""
+    blade = Form("ovate").blade()
+    flat = [np.column_stack([c[:, :2], np.zeros(len(c))]) for c in (blade.boundary, *blade.veins)]
+    own = relief_of(flat[0], flat[1:])
+    assert own is not None and not any(own.mean) and not own.on_margin
+    fit = margin_relief(blade.boundary, blade.veins)
+    assert fit is not None and fit.on_margin
+    for relief, on_margin in ((own, False), (fit, True)):
+        entry = relief.entry()
+        assert entry["sheet"] == ("margin" if on_margin else "mean")
+        assert Relief.from_entry(entry).on_margin is on_margin
+        del entry["sheet"]  # a project saved before
+        assert Relief.from_entry(entry).on_margin is on_margin
+    with pytest.raises(ValueError, match="sheet"):
+        Relief.from_entry(fit.entry() | {"sheet": "dome"})

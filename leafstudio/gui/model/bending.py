@@ -7,8 +7,9 @@ reconstructs the flat blade and bends the mesh, and Save writes the pose (source
 form keeps its own `Pose` (its blade coordinates are the world's, the form 1 long). The session's
 curl, roll and twist are per the blade's length (`in_lengths`); the sliders show the roll and
 twist in the Forms dock's terms (gui/qt/bend_sliders.py, `blade_half_width`). A sketch edit bends
-the new leaf by the same pose, about the midrib as it is now; a pose fitted to curves in 3D is
-kept whole while the midrib is (`keeps_fit`).
+the new leaf by the same pose, about the midrib as it is now; a pose fitted to curves in 3D keeps
+its frame and relief, its hinge moved with the midrib (`keeps_fit`, `rehinged`), and either way
+the sliders' figures stay.
 """
 
 from __future__ import annotations
@@ -171,30 +172,55 @@ def posed(
 
 def fitted(bend: Bend | None) -> bool:
     """Whether `bend` is a pose fitted to curves in 3D about its midrib (core/unfold.py): a
-    PlacedPose whose relief's sheet is the margin's plane (Relief.on_margin)."""
+    PlacedPose whose relief says its sheet is the margin's plane (Relief.on_margin, set by
+    margin_relief). Read off the means, a drawn blade with a flat midrib curled 0.5 was one,
+    and its apex dragged 30% out, it read a curl of 0.575 (test_bending)."""
     relief = getattr(getattr(bend, "pose", None), "relief", None)
     return isinstance(bend, PlacedPose) and relief is not None and relief.on_margin
 
 
 def keeps_fit(like: Bend | None, before: Any, sketch: Any) -> bool:
-    """Whether a sketch edit from the Sketch `before` to `sketch` keeps the bend `like` whole:
-    a pose fitted to curves in 3D (core/unfold.py: its relief on the margin's plane) while the
-    midrib and the sketch's plane are as they were. Its frame and relief are the fit's (the
-    hinge the midrib flattened about the round before's: unfold._hinge); found again from the
-    sketch's midrib (8 points of it: sketch_model.DERIVED_VEIN_POINTS) and plane, the first
-    edit of ovate folded 60 and rolled 0.4, opened from a CSV, moved its outline 0.016 of its
-    length (test_a_fitted_leafs_first_sketch_edit_keeps_it_where_it_stood). A drawn leaf's
-    relief is its sketch's heights, read again at every edit; a moved midrib reads the fit's
-    kind of relief again about itself (`posed`)."""
+    """Whether a sketch edit from the Sketch `before` to `sketch` keeps the bend `like`'s frame
+    and relief: a pose fitted to curves in 3D (core/unfold.py: its relief on the margin's
+    plane) while the sketch's plane is as it was (a moved midrib moves its hinge: `rehinged`).
+    Its frame and relief are the fit's (the hinge the midrib flattened about the round
+    before's: unfold._hinge); found again from the sketch's midrib (8 points of it:
+    sketch_model.DERIVED_VEIN_POINTS) and plane, the first edit of ovate folded 60 and rolled
+    0.4, opened from a CSV, moved its outline 0.018 of its length
+    (test_a_fitted_leafs_first_sketch_edit_keeps_it_where_it_stood). A drawn leaf's relief is
+    its sketch's heights, read again at every edit."""
     if not fitted(like):
         return False
     if before is None or not (len(before.veins) and len(sketch.veins)):
         return False
-    same_plane = all(
+    return all(
         np.array_equal(getattr(before.frame, t), getattr(sketch.frame, t))
         for t in ("origin", "u", "v", "normal")
     )
-    return same_plane and np.array_equal(before.veins[0], sketch.veins[0])
+
+
+def rehinged(like: PlacedPose, before: Leaf | None, after: Leaf | None) -> PlacedPose | None:
+    """The fitted bend `like` with its hinge moved as a midrib edit from the flat blade
+    `before` to `after` moves it: the fit's hinge plus the change in the hinge read from each
+    blade's midrib in `like`'s frame (margin_relief). Read afresh instead, the fit's hinge was
+    lost: a 1% move of one midrib point moved ovate folded 60 and rolled 0.4 0.0164 of its
+    length, sagittate folded 45 and curled 0.5 9.2e-3, the same read from the midrib unmoved;
+    now 6.6e-4 and 1.8e-4 (test_unfold_in_app). None when either midrib reads no hinge."""
+    fit = like.pose.relief
+    if before is None or after is None or fit is None:
+        return None
+
+    def hinge(leaf: Leaf) -> Any:
+        blade = [np.column_stack(like.frame.to_plane(c)) for c in (leaf.boundary, *leaf.veins)]
+        return margin_relief(blade[0], blade[1:])
+
+    old, new = hinge(before), hinge(after)
+    if old is None or new is None:
+        return None
+    x = np.asarray(fit.along)
+    moved = np.asarray(fit.midrib) + new.hinge_height(x) - old.hinge_height(x)
+    relief = replace(fit, midrib=tuple(float(z) for z in moved))
+    return PlacedPose(replace(like.pose, relief=relief), like.frame)
 
 
 class Bending:
@@ -202,21 +228,42 @@ class Bending:
 
     state: State
     _bend_base: State | None = None
+    derived: Any  # the Session's: a loaded leaf's sketch, derived from its first result
+    _derived_leaf: Leaf | None  # the leaf it draws
 
     @property
     def pose(self) -> Pose:
         """The document's pose (flat when it has none)."""
         return pose_of(self.state.leaf)
 
-    def sketch_leaf(self, sketch: Any) -> Leaf | None:
-        """The leaf a sketch draws, bent by the document's pose (Session's sketch edits): a
-        fitted leaf's bend kept as it is while its midrib is (`keeps_fit`)."""
+    def sketch_leaf(self, sketch: Any, before: Any = None) -> Leaf | None:
+        """The leaf a sketch draws, edited from the Sketch `before` (the editor's; else the one
+        the document's leaf is drawn by, `drawn_sketch`), bent by the document's pose (Session's
+        sketch edits): a fitted leaf's in its own frame and relief, its hinge moved with its
+        midrib (`keeps_fit`, `rehinged`). Either way the sliders' figures stay: a fitted bend's
+        curl, roll and twist are per unit, and kept whole, an apex dragged 15% out took ovate
+        folded 45 and curled 0.4996 to a curl of 0.5745 (test_unfold_in_app)."""
         flat = sketch.to_leaf()
         leaf = self.state.leaf
         like = None if leaf is None else leaf.bend
-        if flat is not None and keeps_fit(like, self.editable_sketch(), sketch):
-            return Leaf(like.apply(flat.boundary), [like.apply(v) for v in flat.veins], bend=like)
+        before = self.drawn_sketch() if before is None else before
+        if flat is not None and keeps_fit(like, before, sketch):
+            same = np.array_equal(before.veins[0], sketch.veins[0])
+            kept = like if same else rehinged(like, before.to_leaf(), flat)
+            if kept is not None:
+                return posed(flat, self.pose, kept)
         return posed(flat, self.pose, like, sketch.frame)
+
+    def drawn_sketch(self) -> Any:
+        """The Sketch the document's leaf is drawn by: its own, else the one derived from its
+        result (editable_sketch), also while a slider's run is pending: the derived sketch
+        draws a leaf the sliders re-posed (`set_bend`). Without it, an edit made in that window
+        found the fit's frame again, and moved ovate folded 60 and rolled 0.4 0.016 of its
+        length (test_unfold_in_app)."""
+        sketch = self.editable_sketch()
+        if sketch is None and self.state.sketch is None and self._derived_leaf is self.state.leaf:
+            return self.derived
+        return sketch
 
     def set_bend(self, pose: Pose, final: bool = True) -> None:
         """A new pose: `final=False` while a slider is held (shown, not an undo step), `True` on

@@ -270,12 +270,14 @@ class Session(FileOpening, Bending, WorkerReports):
         state = replace(self.state, leaf=self.sketch_leaf(sketch), sketch=sketch)
         self._apply(state, "edit", live=True)
 
-    def commit_sketch(self, sketch: Sketch, text: str) -> None:
-        """A finished sketch edit: one undo step from before the edit (or drag) began."""
+    def commit_sketch(self, sketch: Sketch, text: str, before: Sketch | None = None) -> None:
+        """A finished sketch edit, from the editor's sketch `before` (when it says): one undo
+        step from before the edit (or drag) began."""
         base = self._edit_base or self.state
         self._edit_base = None
         if self.state.sketch is not sketch:  # a drag's last preview is requested already
-            self._apply(replace(self.state, leaf=self.sketch_leaf(sketch), sketch=sketch), "edit")
+            leaf = self.sketch_leaf(sketch, before)
+            self._apply(replace(self.state, leaf=leaf, sketch=sketch), "edit")
         self.history.push(Step(text, base, self.state))
 
     def set_symmetric(self, on: bool) -> None:

@@ -135,7 +135,9 @@ class MainWindow(FileCommands, Reports, QMainWindow):
         side.texture_shown.connect(self._on_texture)
         side.note.connect(self._on_side_note)
         self.editor.preview.connect(session.preview_sketch)
-        self.editor.committed.connect(lambda _b, after, text: session.commit_sketch(after, text))
+        self.editor.committed.connect(
+            lambda before, after, text: session.commit_sketch(after, text, before)
+        )
         self.editor.mirror_changed.connect(session.set_symmetric)  # saved with the sketch
 
     # --- chrome: docks and actions -------------------------------------------------------------

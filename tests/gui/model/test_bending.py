@@ -411,3 +411,23 @@ def test_a_fitted_leafs_first_sketch_edit_does_not_turn_it_over(terms):
     session.commit_sketch(sketch.moved(-1, 0, sketch.boundary[0] * (1 + 1e-9)), "Move point")
     length = float(np.linalg.norm(np.ptp(leaf.boundary, axis=0)))
     assert cKDTree(leaf.boundary).query(session.leaf.boundary)[0].max() < 0.01 * length
+
+
+def test_a_drawn_leaf_with_a_flat_midrib_keeps_its_curl_when_its_apex_moves():
+    """A drawn leaf whose midrib lies flat (its relief's means all 0) curled by the slider is
+    not a fitted leaf (bending.fitted): its sketch edits keep the sliders' curl per the
+    blade's length. Counted as fitted, its bend was kept per unit, and its apex dragged 30%
+    out read a curl of 0.575."""
+    from leafstudio.gui.model.bending import fitted
+
+    runner = Runner()
+    session = Session(runner, FAST)
+    midrib = np.array([[-0.45, 0.0, 0.0], [0.0, 0.0, 0.0], [0.45, 0.0, 0.0]])
+    sketch = Sketch(boundary=sketch_ellipse(12) - [0.5, 0], veins=(midrib,))
+    session.commit_sketch(sketch, "Draw")
+    runner.finish(session)
+    session.set_bend(Pose(curl=0.5))
+    assert not fitted(session.leaf.bend)
+    apex = int(np.argmax(sketch.boundary[:, 0]))
+    session.commit_sketch(sketch.moved(-1, apex, sketch.boundary[apex] * [1.3, 1]), "Move point")
+    assert abs(session.pose.curl - 0.5) < 1e-9, session.pose.curl
