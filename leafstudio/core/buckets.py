@@ -121,11 +121,27 @@ def neighbour_distances(points: np.ndarray, which: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True, nogil=True)
+def _ring(cx, cy, ring, nx, ny, cells):
+    """How many buckets lie `ring` steps out from bucket (cx, cy), within the nx × ny buckets:
+    their indices, row by row, in the first slots of `cells` (the searches outward share it)."""
+    count = 0
+    for by in range(max(cy - ring, 0), min(cy + ring, ny - 1) + 1):
+        on_edge_row = by == cy - ring or by == cy + ring
+        step = 1 if on_edge_row else 2 * ring
+        for bx in range(cx - ring, cx + ring + 1, max(step, 1)):
+            if 0 <= bx < nx:
+                cells[count] = by * nx + bx
+                count += 1
+    return count
+
+
+@njit(cache=True, nogil=True)
 def _neighbour_distances(points, which, b):
     """Rings of buckets outward from each query's own until the ring's nearest possible point
     (ring - 1 buckets away) is farther than the best found."""
     lo, size, nx, ny, starts, order = b
     out = np.empty(len(which))
+    cells = np.empty(8 * max(nx, ny) + 8, dtype=np.int64)  # a ring's buckets (_ring)
     for q in range(len(which)):
         i = which[q]
         px, py = points[i, 0], points[i, 1]
@@ -134,18 +150,13 @@ def _neighbour_distances(points, which, b):
         best = np.inf
         ring = 0
         while ring <= max(nx, ny) and (ring - 1) * size <= np.sqrt(best):
-            for by in range(max(cy - ring, 0), min(cy + ring, ny - 1) + 1):
-                on_edge_row = by == cy - ring or by == cy + ring
-                step = 1 if on_edge_row else 2 * ring
-                for bx in range(cx - ring, cx + ring + 1, max(step, 1)):
-                    if bx < 0 or bx >= nx:
-                        continue
-                    k = by * nx + bx
-                    for s in range(starts[k], starts[k + 1]):
-                        j = order[s]
-                        if j != i:
-                            d2 = (points[j, 0] - px) ** 2 + (points[j, 1] - py) ** 2
-                            best = min(best, d2)
+            for c in range(_ring(cx, cy, ring, nx, ny, cells)):
+                k = cells[c]
+                for s in range(starts[k], starts[k + 1]):
+                    j = order[s]
+                    if j != i:
+                        d2 = (points[j, 0] - px) ** 2 + (points[j, 1] - py) ** 2
+                        best = min(best, d2)
             ring += 1
         out[q] = np.sqrt(best)
     return out
@@ -161,6 +172,7 @@ def kth_distances(points, centers, k, b):
     on a flat ovate at grid 128 (best of 40; the same radii to the bit)."""
     lo, size, nx, ny, starts, order = b
     out = np.empty(len(centers))
+    cells = np.empty(8 * max(nx, ny) + 8, dtype=np.int64)  # a ring's buckets (_ring)
     best = np.empty(k)  # the k least squared distances so far, ascending
     for q in range(len(centers)):
         px, py = centers[q, 0], centers[q, 1]
@@ -171,23 +183,18 @@ def kth_distances(points, centers, k, b):
         ring = 0
         # a margin over the bound: the buckets' edges are rounded as the points were sorted
         while ring <= max(nx, ny) and (ring - 1) * size <= np.sqrt(best[k - 1]) * (1 + 1e-9):
-            for by in range(max(cy - ring, 0), min(cy + ring, ny - 1) + 1):
-                on_edge_row = by == cy - ring or by == cy + ring
-                step = 1 if on_edge_row else 2 * ring
-                for bx in range(cx - ring, cx + ring + 1, max(step, 1)):
-                    if bx < 0 or bx >= nx:
-                        continue
-                    cell = by * nx + bx
-                    for s in range(starts[cell], starts[cell + 1]):
-                        j = order[s]
-                        dx, dy = px - points[j, 0], py - points[j, 1]
-                        d2 = dx * dx + dy * dy
-                        if d2 < best[k - 1]:
-                            slot = k - 1
-                            while slot > 0 and best[slot - 1] > d2:
-                                best[slot] = best[slot - 1]
-                                slot -= 1
-                            best[slot] = d2
+            for c in range(_ring(cx, cy, ring, nx, ny, cells)):
+                cell = cells[c]
+                for s in range(starts[cell], starts[cell + 1]):
+                    j = order[s]
+                    dx, dy = px - points[j, 0], py - points[j, 1]
+                    d2 = dx * dx + dy * dy
+                    if d2 < best[k - 1]:
+                        slot = k - 1
+                        while slot > 0 and best[slot - 1] > d2:
+                            best[slot] = best[slot - 1]
+                            slot -= 1
+                        best[slot] = d2
             ring += 1
         out[q] = np.sqrt(best[k - 1])
     return out

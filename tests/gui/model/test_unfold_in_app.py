@@ -80,12 +80,7 @@ def test_a_fitted_leafs_first_sketch_edit_keeps_it_where_it_stood(tmp_path, shap
     is off, and a nudge after it (kept too) 5e-9. A moved midrib moves the fit's hinge."""
     from leafstudio.core.bend import flat_leaf
 
-    form = Form(shape, **terms).leaf()
-    path = tmp_path / "posed.csv"
-    save_leaf(Leaf(form.boundary, form.veins), path)
-    session, runner, _ = opened_session()
-    session.open_path(str(path))
-    runner.finish(session)
+    session, _ = opened_form(tmp_path, shape, terms)
     leaf = session.leaf
     assert isinstance(leaf.bend, PlacedPose)
     length = float(np.linalg.norm(np.ptp(leaf.boundary, axis=0)))
