@@ -152,7 +152,8 @@ def test_veins_crossing_at_different_heights_make_no_wall_and_are_named():
     )
     assert crossing.geom_type == "Point"  # they cross away from the notch
     boundary = np.column_stack([outline, np.zeros(len(outline))])
-    with pytest.warns(UserWarning, match="veins 1 and 2 meet .* apart in height"):
+    named = "veins 1 and 2 meet .* apart in height: the surface follows the earlier vein"
+    with pytest.warns(UserWarning, match=named):
         result = ls.reconstruct(ls.Leaf(boundary, veins), ls.Params(grid=GRID, k=2))
     assert longest_edges(result)[0] <= STEEP - 2
     assert len(result.warnings) == 1
