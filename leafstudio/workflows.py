@@ -38,7 +38,7 @@ from leafstudio.core.plane import fit_frame
 from leafstudio.core.prepare.outline import ordered_crossing
 from leafstudio.core.prepare.plausibility import leaf_warnings
 from leafstudio.core.prepare.units import Units
-from leafstudio.core.unfold import unfolded
+from leafstudio.core.unfolded import unfolded
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf, Params
 from leafstudio.sources import extract

@@ -184,7 +184,7 @@ def run_veins(args: argparse.Namespace) -> int:
     # heavy (the veins' growth: scipy, shapely, numba): not for --help
     from leafstudio.core.bend import flat_curve, flat_leaf
     from leafstudio.core.prepare.vein_order import midrib_turned
-    from leafstudio.core.unfold import unfolded
+    from leafstudio.core.unfolded import unfolded
     from leafstudio.forms.veins import grow_veins
     from leafstudio.sources.files import check_leaf_output, load_leaf, save_leaf
 

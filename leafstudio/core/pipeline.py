@@ -20,7 +20,7 @@ from leafstudio.core.result import Cancelled, Later, Result, in_world
 from leafstudio.core.stages import STAGE_TABLE, STAGES, StageRun
 from leafstudio.core.steps import FrameStage, GuideStage, SurfaceStage
 from leafstudio.core.store import StageStore, leaf_key
-from leafstudio.core.unfold import unfolded
+from leafstudio.core.unfolded import unfolded
 from leafstudio.model import Leaf, Params, as_leaf, as_params
 
 __all__ = ["Cancelled", "Pipeline", "Result", "reconstruct"]

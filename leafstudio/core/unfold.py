@@ -11,9 +11,11 @@ least squares over the frame's rotation and the pose's three terms. The leaf is 
 when its margin is well off a plane, or off the best quadratic height field over it (a fold
 down and a roll up), and the pose lays it much flatter than that height field would, or, when
 that plane sees it side-on (a whole vein outside the outline there: the pipeline would refuse it
-or mesh a side view) or its outline crossing itself (the app and the commands refuse it),
-whenever a pose lays it flat: a flat, cupped or gently bent leaf runs as before (its margin's
-heights go to the paper's base b(x)).
+or mesh a side view), whenever a pose lays it flat; when its outline crosses itself on that
+plane (the app and the commands refuse it), when the hinge explains it a little less strictly
+(HINGE_CROSSED), a real crossing staying refused. A flat, cupped or gently bent leaf runs as
+before (its margin's heights go to the paper's base b(x)); `core/unfolded.py` asks once per
+curves.
 
 Those fits fold about the margin's plane, which shears each half, and a roll made up for it: an
 ovate folded 60° and saved without its pose was fitted fold 61, curl 0.10 and roll -0.54, whose
@@ -476,9 +478,3 @@ def _simplest(fits: list[tuple], length: float) -> tuple:
     the best: a fold mimicked by a roll and a curl is not."""
     enough = SIMPLER * min(f[0] for f in fits) + CLOSE * length
     return min(fits, key=lambda f: (f[0] > enough, len(f[1])))
-
-
-def unfolded(leaf: Leaf) -> Leaf:
-    """`leaf` with the bend `fit_pose` finds for it; the leaf itself when none is needed."""
-    bend = fit_pose(leaf)
-    return leaf if bend is None else Leaf(leaf.boundary, leaf.veins, bend=bend)

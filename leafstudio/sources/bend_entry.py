@@ -51,6 +51,14 @@ def _bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
     fold = curl = roll = twist = math.nan  # stays nan, and is refused below, unless it reads whole
     frame = relief = None
     keys = {"fold", "curl", "roll", "twist", "frame", "relief"}
+    if isinstance(value, dict) and not set(value) - keys and isinstance(value.get("relief"), dict):
+        try:  # a relief that says what is wrong with it says it (a "sheet" neither "margin" nor
+            Relief.from_entry(value["relief"])  # "mean"); else the whole form, below
+        except ValueError as error:
+            if str(error):
+                raise LeafError(f'"bend": {error}', source) from None
+        except (TypeError, KeyError, AttributeError, OverflowError):
+            pass
     if isinstance(value, dict) and not set(value) - keys:
         with contextlib.suppress(TypeError, ValueError, KeyError, AttributeError, OverflowError):
             if "frame" in value:  # read first: a bad frame leaves the fold nan

@@ -107,8 +107,8 @@ def test_finding4_a_heart_with_veins_from_its_notch_has_no_cracks(k):
 @settings(
     max_examples=25,
     deadline=None,
-    derandomize=True,  # the same examples in every run (at one Hypothesis version: pyproject pins
-    # it); widen max_examples locally to search
+    derandomize=True,  # the same examples in every run (at one Hypothesis version:
+    # constraints-dev.txt names it); widen max_examples locally to search
     phases=[Phase.explicit, Phase.generate],  # no shrinking: each example is a grid-128 run
     suppress_health_check=[HealthCheck.too_slow],
 )

@@ -312,3 +312,22 @@ def _unfolds_to_its_flat_width(shape: str, fold: float) -> None:
     flat = bend.frame.to_plane(bend.flat_curve(posed.boundary, ring=True))[0]
     width = float(np.ptp(Form(shape).leaf().boundary[:, 1]))
     assert float(np.ptp(flat[:, 1])) == pytest.approx(width, rel=0.01)
+
+
+def test_curves_that_need_no_bend_are_fitted_once(monkeypatch):
+    """A file's leaf is unfolded when opened and again by its Pipeline: a waved blade given in 3D,
+    fitted and refused, took 0.5-1.4 s of CPU each time. Curves found to need no bend are
+    remembered (core/unfolded.py); a bent leaf's are fitted whenever asked."""
+    from leafstudio.core import unfolded as module
+
+    calls = []
+    real = module.fit_pose
+    monkeypatch.setattr(module, "fit_pose", lambda leaf: calls.append(1) or real(leaf))
+    waved = Form("ovate", wave=0.05).leaf()
+    given = ls.Leaf(waved.boundary + [0.0, 0.0, 1e-7], waved.veins)  # curves no test saw
+    assert module.unfolded(given) is given and module.unfolded(given) is given
+    assert len(calls) == 1
+    folded = Form("ovate", fold=45.0).leaf()
+    bent = ls.Leaf(folded.boundary, folded.veins)
+    assert module.unfolded(bent).bend is not None and module.unfolded(bent).bend is not None
+    assert len(calls) == 3

@@ -95,3 +95,19 @@ def test_a_version_1_curl_past_half_a_turn_is_eased_and_said(tmp_path):
         leaf = load_project(path)[0]
     assert 0 < leaf.bend.curl < 0.05
     np.testing.assert_allclose(leaf.bend.flatten(leaf.boundary), scaled[0], atol=1e-9)
+
+
+@pytest.mark.parametrize("sheet", ["bogus", "MARGIN", None, 1])
+def test_a_reliefs_bad_sheet_is_named_not_the_whole_bend_form(sheet):
+    """A fitted relief's "sheet" must be "margin" or "mean": the error says so, where it gave the
+    whole "bend" form and about 2,800 characters of the value (review of session 29)."""
+    import leafstudio as ls
+    from leafstudio.core.unfold import fit_pose
+    from leafstudio.errors import LeafError
+    from leafstudio.sources.bend_entry import _bend
+
+    posed = Form("ovate", fold=45.0).leaf()
+    pose = fit_pose(ls.Leaf(posed.boundary, posed.veins)).pose
+    relief = pose.relief.entry() | {"sheet": sheet}
+    with pytest.raises(LeafError, match='"bend": a relief\'s "sheet" must be "margin" or "mean"'):
+        _bend({"fold": pose.fold, "relief": relief}, "leaf.leaf.json", posed)

@@ -370,7 +370,7 @@ def test_a_nudge_of_a_fitted_leafs_slider_moves_it_little_and_back_gives_it_agai
     bend's own frame and relief, a nudge moves the outline 4e-9 to 8e-7 of the length, and the
     pose set back gives the leaf again."""
     from leafstudio.core.bend import flat_leaf
-    from leafstudio.core.unfold import unfolded
+    from leafstudio.core.unfolded import unfolded
     from leafstudio.gui.model.bending import pose_of, posed
     from leafstudio.sources.files import load_leaf
 
@@ -398,7 +398,7 @@ def test_a_fitted_leafs_first_sketch_edit_does_not_turn_it_over(terms):
     and the relief read again from its midrib)."""
     from scipy.spatial import cKDTree
 
-    from leafstudio.core.unfold import unfolded
+    from leafstudio.core.unfolded import unfolded
 
     form = Form("ovate", **terms).leaf()
     leaf = unfolded(Leaf(form.boundary, form.veins))
