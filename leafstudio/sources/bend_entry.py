@@ -56,7 +56,7 @@ def _bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
             Relief.from_entry(value["relief"])  # "mean"); else the whole form, below
         except ValueError as error:
             if str(error):
-                raise LeafError(f'"bend": {error}', source) from None
+                raise LeafError(f'"bend": its "relief": {error}', source) from None
         except (TypeError, KeyError, AttributeError, OverflowError):
             pass
     if isinstance(value, dict) and not set(value) - keys:

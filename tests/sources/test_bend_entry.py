@@ -109,5 +109,5 @@ def test_a_reliefs_bad_sheet_is_named_not_the_whole_bend_form(sheet):
     posed = Form("ovate", fold=45.0).leaf()
     pose = fit_pose(ls.Leaf(posed.boundary, posed.veins)).pose
     relief = pose.relief.entry() | {"sheet": sheet}
-    with pytest.raises(LeafError, match='"bend": a relief\'s "sheet" must be "margin" or "mean"'):
+    with pytest.raises(LeafError, match='"relief": a relief\'s "sheet" must be "margin" or "mean"'):
         _bend({"fold": pose.fold, "relief": relief}, "leaf.leaf.json", posed)
