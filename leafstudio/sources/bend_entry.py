@@ -51,14 +51,7 @@ def _bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
     fold = curl = roll = twist = math.nan  # stays nan, and is refused below, unless it reads whole
     frame = relief = None
     keys = {"fold", "curl", "roll", "twist", "frame", "relief"}
-    if isinstance(value, dict) and not set(value) - keys and isinstance(value.get("relief"), dict):
-        try:  # a relief that says what is wrong with it says it (a "sheet" neither "margin" nor
-            Relief.from_entry(value["relief"])  # "mean"); else the whole form, below
-        except ValueError as error:
-            if str(error):
-                raise LeafError(f'"bend": its "relief": {error}', source) from None
-        except (TypeError, KeyError, AttributeError, OverflowError):
-            pass
+    named = ""  # what a relief says is wrong with it (a "sheet" neither "margin" nor "mean")
     if isinstance(value, dict) and not set(value) - keys:
         with contextlib.suppress(TypeError, ValueError, KeyError, AttributeError, OverflowError):
             if "frame" in value:  # read first: a bad frame leaves the fold nan
@@ -68,9 +61,15 @@ def _bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
                     raise ValueError
                 frame = Frame(*axes)
             if "relief" in value:  # read first as well: a bad relief leaves the fold nan
-                relief = Relief.from_entry(value["relief"])
+                try:
+                    relief = Relief.from_entry(value["relief"])
+                except ValueError as error:
+                    named = str(error)
+                    raise
             fold, curl = float(value.get("fold", 0.0)), float(value.get("curl", 0.0))
             roll, twist = float(value.get("roll", 0.0)), float(value.get("twist", 0.0))
+    if named:
+        raise LeafError(f'"bend": its "relief": {named}', source)
     if not (abs(fold) < 90 and all(math.isfinite(t) for t in (curl, roll, twist))):
         raise LeafError(
             f'"bend" must be {{"fold": degrees under 90, "curl", "roll", "twist": numbers}} (a '
