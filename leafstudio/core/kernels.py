@@ -103,6 +103,8 @@ KERNELS: dict[str, tuple[types.Type, ...]] = {
     "bending:_projected_steps": (F2, F1, F1, F1, F1),
     "prepare.polygon:_thin_ring": (F2, I1, f8),
     "prepare.polygon:_hull": (F2, I1),
+    "prepare.polygon:_apart_each": (F2, I1, f8),
+    "prepare.vein_order:_in_order": (F2, I1, f8),
     "bent_curvature:_curvatures": (F3,),
     "prepare.outline:_orientation": (F2, I1),
     "prepare.outline:_ring_length": (F2, I1),

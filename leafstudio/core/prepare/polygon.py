@@ -5,6 +5,7 @@ a polygon (or points along a curve) already in order.
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -47,6 +48,56 @@ def distinct_indices(points: np.ndarray, scale: float) -> np.ndarray:
     links = coo_matrix((np.ones(len(pairs), dtype=bool), (pairs[:, 0], pairs[:, 1])), (n, n))
     _, group = connected_components(links, directed=False)
     return np.sort(np.unique(group, return_index=True)[1])
+
+
+def distinct_each(curves: list[np.ndarray], scale: float) -> list[np.ndarray]:
+    """distinct_indices of each of the (m_i, 2) curves. Those whose points are all apart along
+    an axis (nearly every vein) are found in one compiled pass, the same test to the bit
+    (`_apart_each`: a flat ovate's 13 veins, 0.45 -> 0.03 ms, best of 60); the rest are left to
+    distinct_indices."""
+    if not curves:
+        return []
+    sizes = np.array([len(c) for c in curves], dtype=np.int64)
+    apart = _apart_each(kernel_array(np.vstack(curves)), sizes, float(scale))
+    return [
+        np.arange(len(c)) if ok else distinct_indices(c, scale)
+        for c, ok in zip(curves, apart, strict=True)
+    ]
+
+
+@njit(cache=True, nogil=True)
+def _apart_each(xy, sizes, scale):
+    """(k,) bool: for the curves of `sizes` points one after another in the (n, 2) `xy`, whether
+    distinct_indices would find each apart along an axis at once (unit_power's scale, then
+    _apart_along_an_axis, in the same arithmetic; a point not finite: False, left to it)."""
+    apart = np.zeros(len(sizes), np.bool_)
+    start = 0
+    for c in range(len(sizes)):
+        n = sizes[c]
+        end = start + n
+        top = 0.0
+        for i in range(start, end):
+            top = max(top, abs(xy[i, 0]), abs(xy[i, 1]))
+        if n < 2:
+            apart[c] = True
+        elif np.isfinite(top):
+            unit = 2.0 ** -math.frexp(max(top, 1e-300))[1]
+            limit = 1e-9 * scale * unit * (1 + 1e-6)
+            column = np.empty(n)
+            for axis in range(2):
+                for i in range(n):
+                    column[i] = xy[start + i, axis] * unit
+                column.sort()
+                spread = True
+                for i in range(n - 1):
+                    if not column[i + 1] - column[i] > limit:
+                        spread = False
+                        break
+                if spread:
+                    apart[c] = True
+                    break
+        start = end
+    return apart
 
 
 def _apart_along_an_axis(points: np.ndarray, reach: float) -> bool:

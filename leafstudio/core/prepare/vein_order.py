@@ -13,9 +13,12 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
+from leafstudio.core.buckets import kernel_array
+from leafstudio.core.jit import njit
 from leafstudio.core.plane import fit_frame
 
 ORDERED_PATH = 4.0  # an ordered vein's path is at most this many times its box's diagonal
+ROUNDING = 1e-8  # vein_orders' path, summed in order, is this near numpy's pairwise sum
 
 
 def vein_order(xy: np.ndarray) -> np.ndarray:
@@ -30,6 +33,46 @@ def vein_order(xy: np.ndarray) -> np.ndarray:
     axis = np.linalg.eigh(centred.T @ centred)[1][:, -1]
     axis = axis if axis[np.argmax(np.abs(axis))] > 0 else -axis  # a sign of its own
     return np.lexsort((xy[:, 1], xy[:, 0], xy @ axis))
+
+
+def vein_orders(veins: list[np.ndarray]) -> list[np.ndarray]:
+    """vein_order of each of the (m_i, 2) veins. The veins in order already (nearly always) are
+    found in one compiled pass (`_in_order`: a flat ovate's 13 veins, 0.20 -> 0.03 ms, best of
+    60); one whose path, summed in order rather than by numpy's pairwise sum, comes within
+    ROUNDING of the threshold or past it is left to vein_order, so the orders are its own."""
+    if not veins:
+        return []
+    sizes = np.array([len(v) for v in veins], dtype=np.int64)
+    ordered = _in_order(kernel_array(np.vstack(veins)), sizes, ORDERED_PATH * (1 - ROUNDING))
+    return [
+        np.arange(len(v)) if ok else vein_order(v) for v, ok in zip(veins, ordered, strict=True)
+    ]
+
+
+@njit(cache=True, nogil=True)
+def _in_order(xy, sizes, most):
+    """(k,) bool: for the veins of `sizes` points one after another in the (n, 2) `xy`, whether
+    each has fewer than 3 points or a path no longer than `most` times its box's diagonal (a
+    point not finite: False)."""
+    ordered = np.zeros(len(sizes), np.bool_)
+    start = 0
+    for v in range(len(sizes)):
+        end = start + sizes[v]
+        if sizes[v] < 3:
+            ordered[v] = True
+        else:
+            path = 0.0
+            lo_x = hi_x = xy[start, 0]
+            lo_y = hi_y = xy[start, 1]
+            for i in range(start + 1, end):
+                x, y = xy[i, 0], xy[i, 1]
+                dx, dy = x - xy[i - 1, 0], y - xy[i - 1, 1]
+                path += np.sqrt(dx * dx + dy * dy)
+                lo_x, hi_x = min(lo_x, x), max(hi_x, x)
+                lo_y, hi_y = min(lo_y, y), max(hi_y, y)
+            ordered[v] = path <= most * np.hypot(hi_x - lo_x, hi_y - lo_y)
+        start = end
+    return ordered
 
 
 def veins_inside_outline(
