@@ -51,6 +51,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.sparse
 
+from leafstudio.core.buckets import kernel_array
 from leafstudio.core.grid import Grid
 from leafstudio.core.jit import njit
 
@@ -107,12 +108,11 @@ def lattice(
     nested demo's 3.7 ms at grid 128)."""
     stride = max(1, round(float(np.sqrt(len(index) / LATTICE_NODES))))
     step = stride * grid.spacing
-    row, column = np.divmod(index, grid.shape[1])
-    cell = np.column_stack([column - column.min(), row - row.min()])
-    on = np.flatnonzero((cell[:, 0] % stride == 0) & (cell[:, 1] % stride == 0) & (taper > 0))
+    on, at = _lattice_cells(
+        np.asarray(index, dtype=np.int64), int(grid.shape[1]), stride, kernel_array(taper)
+    )
     if len(on) == 0:
         return on, scipy.sparse.csr_matrix((0, 0), dtype=np.float32), step
-    at = cell[on] // stride
     band = taper[on] < FINE
     even = (at[:, 0] | at[:, 1]) % 2 == 0
     coarse = ~band & even
@@ -140,6 +140,31 @@ def lattice(
         shape=(len(row_sizes), int(used.sum())),
     )
     return on[used], differences, step
+
+
+@njit(cache=True, nogil=True)
+def _lattice_cells(index, nx, stride, taper):
+    """The positions in the (n,) flat indices `index` (rows of `nx`) of the nodes on the lattice,
+    every stride-th row and column from the lowest where T > 0, and their (k, 2) column and row
+    over the stride (numpy's dozen whole-array steps took 0.11 ms of lattice's 0.37 on a flat
+    ovate at grid 128, best of 200; the same nodes, integers)."""
+    n = len(index)
+    row_min, column_min = np.iinfo(np.int64).max, np.iinfo(np.int64).max
+    for i in range(n):
+        row_min = min(row_min, index[i] // nx)
+        column_min = min(column_min, index[i] % nx)
+    on = np.empty(n, np.int64)
+    count = 0
+    for i in range(n):
+        row, column = index[i] // nx - row_min, index[i] % nx - column_min
+        if row % stride == 0 and column % stride == 0 and taper[i] > 0:
+            on[count] = i
+            count += 1
+    at = np.empty((count, 2), np.int64)
+    for s in range(count):
+        at[s, 0] = (index[on[s]] % nx - column_min) // stride
+        at[s, 1] = (index[on[s]] // nx - row_min) // stride
+    return on[:count], at
 
 
 def own_weight(step: float, reach: float) -> float:

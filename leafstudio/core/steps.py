@@ -92,6 +92,8 @@ class GuideStage:
     nodes: np.ndarray  # (n, 2) grid.points[inside], made once: the samples, the surface and
     # the result read them (numpy's boolean index of an (n, 2) array took
     # 0.084 ms at grid 128 (6,895 of 10,790 nodes), np.compress 0.010)
+    g_in: np.ndarray  # (n,) g[inside] and p[inside], made once too: five stages read them (each
+    p_in: np.ndarray  # boolean index took 0.05 ms at grid 128, np.compress 0.012)
 
 
 @dataclass(frozen=True)
@@ -225,20 +227,16 @@ def compute_guide(run: StageRun) -> GuideStage:
     inside = g >= 0
     nodes = grid.points.compress(inside, axis=0)
     p = np.zeros(len(grid.points))
-    p[inside] = height_guide(
-        nodes, fs.polygon, fs.veins, fs.heights, step=GUIDE_STEP * grid.spacing
-    )
-    return GuideStage(g=g, p=p, inside=inside, nodes=nodes)
+    p_in = height_guide(nodes, fs.polygon, fs.veins, fs.heights, step=GUIDE_STEP * grid.spacing)
+    p[inside] = p_in
+    return GuideStage(g=g, p=p, inside=inside, nodes=nodes, g_in=g.compress(inside), p_in=p_in)
 
 
 def compute_samples(run: StageRun) -> np.ndarray:
     """The EM samples drawn from the guide (gmm.sample_guide): a new K refits the same ones."""
     guide: GuideStage = run["guide"]
     grid: Grid = run["grid"]
-    inside = guide.inside
-    drawn = sample_guide(
-        guide.nodes, guide.p[inside], run.params.samples, grid.spacing, run.params.seed
-    )
+    drawn = sample_guide(guide.nodes, guide.p_in, run.params.samples, grid.spacing, run.params.seed)
     _frozen(drawn)
     return drawn
 
@@ -250,7 +248,7 @@ def compute_gmm(run: StageRun) -> tuple[np.ndarray, Mixture]:
     params = run.params
     if fs.flat:
         return np.zeros((0, 2)), _flat_mixture(fs.polygon.mean(axis=0))
-    p_in = guide.p[guide.inside]
+    p_in = guide.p_in
     support = int(np.count_nonzero(p_in))  # grid nodes the samples can come from
     # auto tries from 1: a guide between the grid's nodes said "zero everywhere: nothing to fit"
     least = 1 if params.k == K_AUTO else params.k
@@ -287,7 +285,7 @@ def compute_bending(run: StageRun) -> Pinning:
     that K does not change, so moving K reruns only the correction's solve."""
     fs: FrameStage = run["frame"]
     guide: GuideStage = run["guide"]
-    g_in = guide.g[guide.inside]
+    g_in = guide.g_in
     delta = taper_width(run.params.taper, g_in)
     taper = taper_of(g_in, delta)
     implicit, grid = run["implicit"], run["grid"]
@@ -298,13 +296,13 @@ def compute_surface(run: StageRun) -> SurfaceStage:
     fs: FrameStage = run["frame"]
     guide: GuideStage = run["guide"]
     nodes = guide.nodes
-    g_in = guide.g[guide.inside]
+    g_in = guide.g_in
     surface, relief = fit_surface(  # relief: M at the nodes, once (the correction takes it)
         run["gmm"][1],
         run["implicit"],
         nodes,
         g_in,
-        guide.p[guide.inside],
+        guide.p_in,
         fs.vein_xy,
         fs.vein_h,
         run.params.taper,
@@ -409,7 +407,7 @@ def compute_mesh(run: StageRun) -> TriangleMesh:
         added = xy[n_outline : len(xy) - int(np.count_nonzero(kept))]  # against slivers
         # usually none: not read (an empty read cost 0.05 ms of a flat ovate's run at grid 128)
         z_added = surf.surface(added) if len(added) else np.zeros(0)
-        z = np.concatenate([rim, z_added, surf.z[kept[guide.inside]]])
+        z = np.concatenate([rim, z_added, surf.z.compress(kept.compress(guide.inside))])
         world = fs.frame.to_world(xy, z)
     else:
         xy = np.vstack([fs.polygon, guide.nodes])
