@@ -6,7 +6,13 @@ import numpy as np
 import pytest
 import shapely
 
-from leafstudio.core.prepare.polygon import _qhull_perimeter, hull_perimeter, ring_crossings
+from leafstudio.core.prepare.polygon import (
+    _qhull_perimeter,
+    distinct_each,
+    distinct_indices,
+    hull_perimeter,
+    ring_crossings,
+)
 
 
 def _crosses_by_pairs(ring: np.ndarray) -> bool:
@@ -82,3 +88,19 @@ def test_a_flat_hull_is_left_to_qhull():
         assert hull_perimeter(points) == 0.0
     thin = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 1e-12]])
     assert hull_perimeter(thin) == _qhull_perimeter(thin)
+
+
+def test_the_curves_repeats_found_at_once_are_each_curves_own():
+    """distinct_each (the frame stage's: curves whose points are all apart found in one compiled
+    pass) drops the repeats distinct_indices drops: copies a hair apart, points apart along one
+    axis but not the other, one point and none, and curves at 1e-200 and 1e200."""
+    rng = np.random.default_rng(5)
+    walk = np.cumsum(rng.normal(size=(30, 2)), axis=0)
+    copies = np.insert(walk, [4, 9, 9], walk[[3, 8, 8]] + 1e-14, axis=0)
+    column = np.column_stack([np.zeros(10), np.arange(10.0)])  # apart along y only
+    grid = np.column_stack([np.repeat(np.arange(4.0), 4), np.tile(np.arange(4.0), 4)])
+    curves = [walk, copies, column, grid, walk[:1], walk[:0], walk * 1e-200, walk * 1e200]
+    for scale in (1.0, 1e-3, 1e12):
+        for got, curve in zip(distinct_each(curves, scale), curves, strict=True):
+            np.testing.assert_array_equal(got, distinct_indices(curve, scale))
+    assert len(distinct_each([copies], 1.0)[0]) == len(walk)

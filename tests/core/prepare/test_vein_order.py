@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import leafstudio as ls
-from leafstudio.core.prepare.vein_order import vein_order
+from leafstudio.core.prepare.vein_order import ORDERED_PATH, vein_order, vein_orders
 
 PARAMS = ls.Params(k=3, grid=96)
 
@@ -59,3 +59,19 @@ def test_an_ordered_vein_keeps_its_order_and_a_shuffled_one_runs_along_its_axis(
     order = vein_order(np.random.default_rng(0).permutation(line))
     steps = np.diff(np.random.default_rng(0).permutation(line)[order][:, 0])
     assert np.all(steps > 0) or np.all(steps < 0)
+
+
+def test_the_veins_orders_at_once_are_each_veins_own():
+    """vein_orders (the frame stage's: the veins in order found in one compiled pass) gives
+    vein_order of each vein: ordered, shuffled, short, random, and a zigzag whose path is
+    ORDERED_PATH times its box's diagonal to the bit (ordered, by vein_order's own sum)."""
+    rng = np.random.default_rng(3)
+    t = np.linspace(0, 1, 40)
+    arc = np.column_stack([np.cos(2.5 * t), np.sin(2.5 * t)])
+    back_and_forth = np.array([[0.0, 0.0], [1.0, 0.0]] * 2 + [[0.0, 0.0]])  # path 4, box 1
+    assert ORDERED_PATH == 4.0
+    veins = [arc, rng.permutation(arc), arc[:2], arc[:3], back_and_forth]
+    veins += [rng.normal(size=(n, 2)) for n in (5, 30, 300)]
+    for got, vein in zip(vein_orders(veins), veins, strict=True):
+        np.testing.assert_array_equal(got, vein_order(vein))
+    assert vein_orders([]) == []
