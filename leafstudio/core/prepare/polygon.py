@@ -87,7 +87,7 @@ def _apart_each(xy, sizes, scale):
             for axis in range(2):
                 for i in range(n):
                     column[i] = xy[start + i, axis] * unit
-                column.sort()
+                _shell_sort(column)
                 spread = True
                 for i in range(n - 1):
                     if not column[i + 1] - column[i] > limit:
@@ -98,6 +98,25 @@ def _apart_each(xy, sizes, scale):
                     break
         start = end
     return apart
+
+
+@njit(cache=True, nogil=True)
+def _shell_sort(values):
+    """Sort the (n,) `values` in place: Shell's sort (Knuth's gaps), about linear on a vein's
+    coordinates, nearly in order along it (with numpy's sort _apart_each took 3.0 s of the first
+    run's compile, with this 1.2 s; as evaluate._edge_counts)."""
+    n = len(values)
+    gap = 1
+    while gap < n // 3:
+        gap = 3 * gap + 1
+    while gap > 0:
+        for i in range(gap, n):
+            x, j = values[i], i - gap
+            while j >= 0 and values[j] > x:
+                values[j + gap] = values[j]
+                j -= gap
+            values[j + gap] = x
+        gap //= 3
 
 
 def _apart_along_an_axis(points: np.ndarray, reach: float) -> bool:
