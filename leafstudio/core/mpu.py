@@ -26,7 +26,6 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from leafstudio.core.buckets import (
-    Buckets,
     bucket_points,
     gather,
     kernel_array,
@@ -332,22 +331,28 @@ def _grid_sums(lattice, slot, n, cells, degree):
     return sums
 
 
-def _fit_cells(
-    centers: np.ndarray,
-    radii: np.ndarray,
-    points: np.ndarray,
-    normals: np.ndarray,
-    buckets: Buckets,
-    few: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Linear fits for a batch of cells: coef (m, 3), error (m,), normal agreement (m,), radii
-    (`few`: (m,) bool, the balls holding fewer than N_MIN points, grown here)."""
-    if few.any():  # grow the ball until it holds N_MIN points
-        radii = radii.copy()
-        reach = kth_distances(points, centers[few], N_MIN, buckets)
-        radii[few] = np.maximum(radii[few], reach * 1.0001)
-    coef, error, agreement = _ball_fits(points, normals, centers, radii, buckets)
-    return coef, error, agreement, radii
+@njit(cache=True, nogil=True)
+def _ball_radii(points, centers, radius, b):
+    """(m,) each cell's ball radius, `radius` unless its ball holds fewer than N_MIN points,
+    then grown to hold them (1.0001 times its N_MIN-th nearest point's distance), and (m,) bool:
+    the balls grown. Compiled whole, the count and the search (and numpy's steps between them:
+    build_mpu 1.56 -> 1.40 ms on a flat ovate at grid 128, best of 100, two pairs; the same
+    cells to the bit on every gallery form and a drawn leaf)."""
+    m = len(centers)
+    radii = np.empty(m)
+    for c in range(m):  # not np.full: its own compile at the first run
+        radii[c] = radius
+    counts = _ball_counts(points, centers, radii, b)
+    grown = counts < N_MIN
+    few = np.flatnonzero(grown)
+    if len(few):
+        far = np.empty((len(few), 2))
+        for s in range(len(few)):
+            far[s, 0], far[s, 1] = centers[few[s], 0], centers[few[s], 1]
+        reach = kth_distances(points, far, N_MIN, b)
+        for s in range(len(few)):
+            radii[few[s]] = max(radii[few[s]], reach[s] * 1.0001)
+    return radii, grown
 
 
 @njit(cache=True, nogil=True)
@@ -447,9 +452,9 @@ def build_mpu(
     depth = 0
     second_try = np.zeros(1, dtype=bool)  # the cell's parent was split to mend its sign
     while len(centers):
-        radii = np.full(len(centers), ALPHA * 2 * np.sqrt(2) * half)
-        grown = _ball_counts(points, centers, radii, buckets) < N_MIN
-        coef, error, agreement, radii = _fit_cells(centers, radii, points, normals, buckets, grown)
+        radius = float(ALPHA * 2 * np.sqrt(2) * half)
+        radii, grown = _ball_radii(points, centers, radius, buckets)
+        coef, error, agreement = _ball_fits(points, normals, centers, radii, buckets)
         bad = (error > tolerance) | (agreement < MIN_NORMAL_AGREEMENT)
         wrong_sign = np.zeros(len(centers), dtype=bool)
         if grown.any():  # a far cell's line must give its own centre the right sign
