@@ -92,8 +92,8 @@ class GuideStage:
     nodes: np.ndarray  # (n, 2) grid.points[inside], made once: the samples, the surface and
     # the result read them (numpy's boolean index of an (n, 2) array took
     # 0.084 ms at grid 128 (6,895 of 10,790 nodes), np.compress 0.010)
-    g_in: np.ndarray  # (n,) g[inside] and p[inside], made once too: five stages read them (each
-    p_in: np.ndarray  # boolean index took 0.05 ms at grid 128, np.compress 0.012)
+    g_in: np.ndarray  # (n,) g[inside] and p[inside], made once too: four stages read them five
+    p_in: np.ndarray  # times (each boolean index took 0.05 ms at grid 128, np.compress 0.012)
 
 
 @dataclass(frozen=True)

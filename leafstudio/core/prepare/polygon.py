@@ -69,7 +69,8 @@ def distinct_each(curves: list[np.ndarray], scale: float) -> list[np.ndarray]:
 def _apart_each(xy, sizes, scale):
     """(k,) bool: for the curves of `sizes` points one after another in the (n, 2) `xy`, whether
     distinct_indices would find each apart along an axis at once (unit_power's scale, then
-    _apart_along_an_axis, in the same arithmetic; a point not finite: False, left to it)."""
+    _apart_along_an_axis, in the same arithmetic; an inf: False, left to it; a NaN fails its own
+    axis, as there, but numba's max leaves it out of the scale)."""
     apart = np.zeros(len(sizes), np.bool_)
     start = 0
     for c in range(len(sizes)):

@@ -52,8 +52,8 @@ def vein_orders(veins: list[np.ndarray]) -> list[np.ndarray]:
 @njit(cache=True, nogil=True)
 def _in_order(xy, sizes, most):
     """(k,) bool: for the veins of `sizes` points one after another in the (n, 2) `xy`, whether
-    each has fewer than 3 points or a path no longer than `most` times its box's diagonal (a
-    point not finite: False)."""
+    each has fewer than 3 points or a path no longer than `most` times its box's diagonal (a NaN
+    makes the path NaN: False; an inf point can make both inf: True, as vein_order's own test)."""
     ordered = np.zeros(len(sizes), np.bool_)
     start = 0
     for v in range(len(sizes)):
