@@ -97,8 +97,8 @@ class Pipeline:
         """Run the stages `run` needs and make its Result (run)."""
         # one after another: the bending and layout stages in a second thread beside samples
         # and gmm took a flat ovate's run at grid 128 from 28-30 to 34-39 ms of wall time on this
-        # 2-core machine (gmm 3 -> 7.5 ms, bending 5.3 -> 9: the kernels' GIL is released, the
-        # cores' time is not to be had)
+        # 2-core machine (gmm 3 -> 7.5 ms, bending 5.3 -> 9: the kernels release the GIL, yet the
+        # two threads slowed each other down more than they overlapped)
         for stage in STAGES:
             if not STAGE_TABLE[stage].lazy:
                 run[stage]
