@@ -22,10 +22,9 @@ from typing import Any, TypeVar
 import numpy as np
 
 from leafstudio.core.bend import flat_curves, flat_leaf
-from leafstudio.core.buckets import kernel_array
 from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.distance import mesh_distances
-from leafstudio.core.jit import njit
+from leafstudio.core.edges import edge_table
 from leafstudio.core.kernels import ensure_compiled
 from leafstudio.core.plane import Frame, fit_frame, turned_along
 from leafstudio.core.prepare.units import Units
@@ -59,54 +58,9 @@ def _summary(values: np.ndarray) -> dict[str, float | None]:
 
 def edge_counts(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unique undirected edges (e, 2), each (low, high) and in that order, and how many
-    triangles share each. Compiled: edges bucketed by their lower vertex, each bucket sorted
-    (np.unique on one key per edge sorted all of them: 23 ms at grid 512, now 2 ms)."""
-    triangles = kernel_array(np.asarray(triangles).reshape(-1, 3), np.int64)
+    triangles share each (edges.edge_table)."""
     ensure_compiled()
-    return _edge_counts(triangles, int(triangles.max(initial=-1)) + 1)
-
-
-@njit(cache=True, nogil=True)
-def _edge_counts(triangles, n):
-    m = len(triangles)
-    start = np.zeros(n + 1, np.int64)  # bucket v: other[start[v]:start[v + 1]]
-    for t in range(m):
-        for k in range(3):
-            start[min(triangles[t, k], triangles[t, (k + 1) % 3]) + 1] += 1
-    for v in range(n):
-        start[v + 1] += start[v]
-    fill = start[:-1].copy()
-    other = np.empty(3 * m, np.int64)  # each edge's higher vertex, in its lower vertex's bucket
-    for t in range(m):
-        for k in range(3):
-            a, b = triangles[t, k], triangles[t, (k + 1) % 3]
-            other[fill[min(a, b)]] = max(a, b)
-            fill[min(a, b)] += 1
-    edges = np.empty((3 * m, 2), np.int64)
-    counts = np.empty(3 * m, np.int64)
-    e = 0
-    for v in range(n):
-        lo, hi = start[v], start[v + 1]
-        gap = 1  # Shell's sort: insertion sort (gap 1) for a grid vertex's six neighbours, no
-        while gap < (hi - lo) // 3:  # quadratic one for a hub's fan; np.sort cost 3.5 s of
-            gap = 3 * gap + 1  # the first measuring's compile
-        while gap > 0:
-            for i in range(lo + gap, hi):
-                x, j = other[i], i - gap
-                while j >= lo and other[j] > x:
-                    other[j + gap] = other[j]
-                    j -= gap
-                other[j + gap] = x
-            gap //= 3
-        i = lo
-        while i < hi:
-            j = i
-            while j < hi and other[j] == other[i]:
-                j += 1
-            edges[e, 0], edges[e, 1], counts[e] = v, other[i], j - i
-            e += 1
-            i = j
-    return edges[:e].copy(), counts[:e].copy()
+    return edge_table(triangles)[:2]
 
 
 def count_border_loops(

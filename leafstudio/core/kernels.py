@@ -106,6 +106,8 @@ KERNELS: dict[str, tuple[types.Type, ...]] = {
     "prepare.polygon:_apart_each": (F2, I1, f8),
     "prepare.vein_order:_in_order": (F2, I1, f8),
     "bent_curvature:_curvatures": (F3,),
+    "edges:_edge_table": (I2, i8),
+    "bent_mesh:_sagging": (F2, F2, I2, f8),
     "prepare.outline:_orientation": (F2, I1),
     "prepare.outline:_ring_length": (F2, I1),
 }
@@ -117,7 +119,6 @@ MEASURING: dict[str, tuple[types.Type, ...]] = {
     "distance:_build": (F2, I2, I1),
     "prepare.cloud:_project_kernel": (F2, I1, F2, F2, F1, F1, i8, F1),
     "distance:_morton": (F2,),
-    "evaluate:_edge_counts": (I2, i8),
     "distance:_centroids": (F2, I2),
     "raster:_feature_transform": (B2,),
 }

@@ -80,11 +80,11 @@ def test_measuring_compiles_its_kernels_in_worker_processes(monkeypatch, tmp_pat
     24, #5): the app's process compiled them on its worker thread, holding the GIL for seconds
     (its window stalled, the measurements came ~25 s after the leaf)."""
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))  # the workers inherit it
-    one = "evaluate:_edge_counts"
+    one = "distance:_morton"
     monkeypatch.setattr(kernels, "MEASURING", {one: kernels.MEASURING[one]})
     assert not kernelcache.kernels_cached(kernels.MEASURE)
-    evaluate.edge_counts(np.array([[0, 1, 2], [0, 2, 3]]))
-    assert any(p.name.startswith("evaluate._edge_counts") for p in tmp_path.rglob("*.nbi"))
+    evaluate.edge_counts(np.array([[0, 1, 2], [0, 2, 3]]))  # a mesh's facts: measuring
+    assert any(p.name.startswith("distance._morton") for p in tmp_path.rglob("*.nbi"))
     assert kernelcache.kernels_cached(kernels.MEASURE)
     assert not kernelcache.kernels_cached()  # the run's table is its own
 
