@@ -64,7 +64,7 @@ def sag_splits(
     later round looks at the new faces' edges only. bent_mesh then puts the new points on the
     flat surface (`bent_result._onto_surface`) rather than on the flat chord, which the bend
     stretches (up to 3 times on a folded tube: the last 1.03-1.05e-3 of the pose grid)."""
-    points, faces = np.asarray(points, dtype=float), np.asarray(faces)
+    points, faces = np.asarray(points, dtype=float), kernel_array(faces, np.int64)
     bent, plan, done = carry(points) if bent is None else bent, [], []
     for _ in range(SAG_ROUNDS):  # after the first, over the faces the last one made only
         n = len(points)
@@ -77,14 +77,8 @@ def sag_splits(
         marked = _sagging(kernel_array(there), kernel_array(bent), keys, tolerance)
         if not marked.any():
             break
-        # the new points are numbered in the edges' order
-        hit = marked[edge].reshape(faces.shape)  # (a, b), (b, c), (c, a) halved
-        touched = hit[:, 0] | hit[:, 1] | hit[:, 2]  # few faces: the others kept whole (any
-        # over 3 columns took 0.19 ms of 14,500 faces, this 0.015)
-        done.append(faces.compress(~touched, axis=0))  # [~touched]: 4 times as long
-        rank = (np.cumsum(marked) - 1)[edge].reshape(faces.shape).compress(touched, axis=0)
-        halved = np.where(hit.compress(touched, axis=0), n + rank, -1)
-        faces = _halved(faces.compress(touched, axis=0), halved)
+        whole, faces = _halvings(faces, edge, marked, n)  # the others kept whole
+        done.append(whole)
         points = np.vstack([points, middle.compress(marked, axis=0)])
         bent = np.vstack([bent, there.compress(marked, axis=0)])
         plan.append((keys.compress(marked, axis=0), np.full(np.count_nonzero(marked), 0.5)))
@@ -108,30 +102,69 @@ def _sagging(there: np.ndarray, bent: np.ndarray, keys: np.ndarray, tolerance: f
     return marked
 
 
-def _halved(faces: np.ndarray, middle: np.ndarray) -> np.ndarray:
-    """(f', 3) faces with the (f, 3) `middle` points of their edges (a, b), (b, c), (c, a)
-    (-1: not halved) put in: one edge halved cuts a face in two, two in three, three in four,
-    each piece wound as the face."""
-    count = (middle >= 0).sum(axis=1)
-    pieces = [faces[count == 0]]
-    for halved in (1, 2):  # turned so the halved edges are (a, b), then (b, c)
-        these = count == halved
-        first = np.argmax(middle[these] >= 0, axis=1)
-        if halved == 2:  # the edge after the whole one comes first
-            first = (np.argmax(middle[these] < 0, axis=1) + 1) % 3
-        turn = (first[:, None] + np.arange(3)) % 3
-        a, b, c = np.take_along_axis(faces[these], turn, axis=1).T
-        ab, bc, _ = np.take_along_axis(middle[these], turn, axis=1).T
-        if halved == 1:
-            pieces += [np.column_stack([a, ab, c]), np.column_stack([ab, b, c])]
+@njit(cache=True, nogil=True)
+def _halvings(
+    faces: np.ndarray, edge: np.ndarray, marked: np.ndarray, n: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The (f, 3) faces none of whose sides (a, b), (b, c), (c, a) is a `marked` edge (`edge`:
+    each side's, edges.edge_table), and the others with those halved: the marked edges' new
+    points numbered from `n` in the edges' order; one edge halved cuts a face in two, two in
+    three, three in four, each piece wound as the face, the pieces of each kind together (numpy's
+    gathers over the sides and its turned faces took 0.25-0.27 ms of a grid-128 ovate form's
+    14,500 faces with 13-22 edges halved, this 0.065; 1.04 and 0.11 with 3,392)."""
+    new = np.empty(len(marked), np.int64)  # each marked edge's new point
+    k = n
+    for e in range(len(marked)):
+        new[e] = k
+        k += 1 if marked[e] else 0
+    count = np.zeros(len(faces), np.int64)
+    kinds = np.zeros(4, np.int64)
+    for t in range(len(faces)):
+        for side in range(3):
+            count[t] += 1 if marked[edge[3 * t + side]] else 0
+        kinds[count[t]] += 1
+    whole = np.empty((kinds[0], 3), np.int64)
+    one, two, three = kinds[1], kinds[2], kinds[3]
+    pieces = np.empty((2 * one + 3 * two + 4 * three, 3), np.int64)
+    at = np.array([0, 0, 2 * one, 2 * one + 3 * two])  # each kind's first piece
+    kept = 0
+    for t in range(len(faces)):
+        c = count[t]
+        if c == 0:
+            whole[kept, 0], whole[kept, 1], whole[kept, 2] = faces[t, 0], faces[t, 1], faces[t, 2]
+            kept += 1
+            continue
+        if c == 1:  # turned so the halved edge is (a, b)
+            first = 0 if marked[edge[3 * t]] else (1 if marked[edge[3 * t + 1]] else 2)
+        elif c == 2:  # turned so the halved ones are (a, b) and (b, c): after the whole one
+            first = 1 if not marked[edge[3 * t]] else (2 if not marked[edge[3 * t + 1]] else 0)
         else:
-            pieces += [np.column_stack([ab, b, bc]), np.column_stack([a, ab, bc]),
-                       np.column_stack([a, bc, c])]  # fmt: skip
-    a, b, c = faces[count == 3].T
-    ab, bc, ca = middle[count == 3].T
-    pieces += [np.column_stack([a, ab, ca]), np.column_stack([ab, b, bc]),
-               np.column_stack([ca, bc, c]), np.column_stack([ab, bc, ca])]  # fmt: skip
-    return np.vstack(pieces).astype(faces.dtype)
+            first = 0
+        a, b, cc = faces[t, first], faces[t, (first + 1) % 3], faces[t, (first + 2) % 3]
+        ab = new[edge[3 * t + first]]
+        bc = new[edge[3 * t + (first + 1) % 3]]
+        ca = new[edge[3 * t + (first + 2) % 3]]
+        i = at[c]
+        if c == 1:
+            pieces[i, 0], pieces[i, 1], pieces[i, 2] = a, ab, cc
+            i += one
+            pieces[i, 0], pieces[i, 1], pieces[i, 2] = ab, b, cc
+        elif c == 2:
+            pieces[i, 0], pieces[i, 1], pieces[i, 2] = ab, b, bc
+            i += two
+            pieces[i, 0], pieces[i, 1], pieces[i, 2] = a, ab, bc
+            i += two
+            pieces[i, 0], pieces[i, 1], pieces[i, 2] = a, bc, cc
+        else:
+            pieces[i, 0], pieces[i, 1], pieces[i, 2] = a, ab, ca
+            i += three
+            pieces[i, 0], pieces[i, 1], pieces[i, 2] = ab, b, bc
+            i += three
+            pieces[i, 0], pieces[i, 1], pieces[i, 2] = ca, bc, cc
+            i += three
+            pieces[i, 0], pieces[i, 1], pieces[i, 2] = ab, bc, ca
+        at[c] += 1
+    return whole, pieces
 
 
 Tolerance = Callable[[float], float]  # a mesh's extent -> how far its bent chords may sag

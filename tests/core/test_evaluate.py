@@ -1,7 +1,8 @@
 """evaluate.py: measurements against leaves with known answers; edge_counts, compiled (edges
-bucketed by their lower vertex), gives what one sorted key per edge gives: the same edges in the
-same order, the same counts, on grid meshes, fans (a hub vertex with thousands of edges),
-repeated and degenerate triangles, and no triangles."""
+bucketed by their lower vertex, core/edges.py), gives what one sorted key per edge gives: the
+same edges in the same order, the same counts, on grid meshes, fans (a hub vertex with thousands
+of edges), repeated and degenerate triangles, and no triangles; and each triangle's side its
+edge."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from scipy.spatial.transform import Rotation
 import leafstudio as ls
 from leafstudio.cli import main
 from leafstudio.core.curvature import CURVATURE_ARRAYS
+from leafstudio.core.edges import edge_table
 from leafstudio.core.evaluate import (
     FIELDS,
     count_border_loops,
@@ -179,6 +181,18 @@ def test_edge_counts_match_the_sorted_keys(name):
     np.testing.assert_array_equal(edges, want_edges)
     np.testing.assert_array_equal(counts, want_counts)
     assert edges.dtype == np.int64 and edges.shape == (len(counts), 2)
+
+
+@pytest.mark.parametrize("name", MESHES)
+def test_each_side_of_a_triangle_names_the_edge_of_its_corners(name):
+    """edges.edge_table's sides (what bent_mesh.sag_splits halves by): side k of triangle t is
+    the edge between its corners k and k + 1, and the edges are edge_counts' own."""
+    triangles = MESHES[name]
+    edges, counts, sides = edge_table(triangles)
+    assert np.array_equal(edges, edge_counts(triangles)[0])
+    corners = np.stack([triangles, np.roll(triangles, -1, axis=1)], axis=-1).reshape(-1, 2)
+    np.testing.assert_array_equal(edges[sides], np.sort(corners, axis=1))
+    assert np.array_equal(np.bincount(sides, minlength=len(edges)), counts)
 
 
 def test_a_grid_mesh_has_one_boundary_loop_from_given_counts():
