@@ -55,6 +55,7 @@ from leafstudio.core.carried import carried_vectors
 from leafstudio.core.hinge_fold import BAND, HingeFold, fold_share
 from leafstudio.core.pose_jet import HINGE, PLAIN, posed_jet
 from leafstudio.core.pose_relief import Relief
+from leafstudio.core.prepare.units import Units
 from leafstudio.model import Leaf
 
 ROLL_SAG = 1.25e-3  # of a roll's radius: a bent chord stands no farther off (sag_splits); what
@@ -102,22 +103,25 @@ class Pose:
             points[:, 2] = curled + level
         return points
 
-    def carry(self, points: np.ndarray) -> np.ndarray:
+    def carry(self, points: np.ndarray, units: Units | None = None) -> np.ndarray:
         """`apply` in one compiled kernel (pose_jet.py), to its round-off: a bent run's mesh is
         carried so (bent_result.py; apply took 3.5 ms for the 29,000 points a four-term pose's
         grid-128 run carries, this 1.7). A form's curves stay bent by `apply` (numpy's exp is
-        not the kernel's: the flat run of a blade an ulp off can make another mesh)."""
-        return self._posed(kernel_array(points), np.zeros((0, 5, 3)))[0]
+        not the kernel's: the flat run of a blade an ulp off can make another mesh). `units`:
+        the points at its unit size, carried in the world and returned at it (Units.to_world
+        and to_unit in the kernel, the same sums)."""
+        return self._posed(kernel_array(points), np.zeros((0, 5, 3)), units)[0]
 
-    def carry_jet(self, jet: Jet) -> Jet:
+    def carry_jet(self, jet: Jet, units: Units | None = None) -> Jet:
         """A jet of flat blade points (bent_curvature.py) bent as `apply` bends the points, in
         closed form (pose_jet.py); on a fold's crease (y = 0) from its + side, on a roll's or
-        curl's sheet (height 0) from the relief's."""
-        return self._posed(kernel_array(jet[0]), kernel_array(jet[1]))
+        curl's sheet (height 0) from the relief's. `units` as `carry` takes it: the derivatives
+        times its scale, then over it."""
+        return self._posed(kernel_array(jet[0]), kernel_array(jet[1]), units)
 
-    def _posed(self, points: np.ndarray, d: np.ndarray) -> Jet:
+    def _posed(self, points: np.ndarray, d: np.ndarray, units: Units | None = None) -> Jet:
         """`pose_jet.posed_jet` of (n, 3) points and their (n, 5, 3) derivatives, or (0, 5, 3)
-        for the points alone."""
+        for the points alone (at `units`' unit size)."""
         sheet = midrib = FLAT
         if self.relief is not None:
             sheet, midrib = self.relief.pieces("mean"), self.relief.pieces("midrib")
@@ -132,7 +136,7 @@ class Pose:
         return posed_jet(
             points, d, float(self.roll), *sheet, fold, float(c), float(s), float(tan),
             float(share), float(band), *midrib, float(self.twist), float(self.curl), level,
-            ROUND_OFF,
+            ROUND_OFF, *((np.zeros(3), 1.0) if units is None else (units.offset, units.scale)),
         )  # fmt: skip
 
     def flatten(self, points: np.ndarray) -> np.ndarray:

@@ -61,11 +61,13 @@ RF1, RF2, RF3 = (types.Array(f8, n, "C", readonly=True) for n in (1, 2, 3))
 BUCKETS = types.NamedTuple([F1, f8, i8, i8, I1, I1], Buckets)
 CELLS = types.NamedTuple([F2, F1, F2], Cells)
 LATTICE = types.NamedTuple([f8, f8, f8, i8, i8], Lattice)
+# pose_jet.posed_jet's: a pose's terms and relief, then the units' offset and scale
+POSED = (F2, F3, f8, F1, F2, i8, f8, f8, f8, f8, f8, F1, F2, f8, f8, f8, f8, F1, f8)
 
 # "module:function" -> its argument types; costliest first (compile CPU seconds on the development
 # machine, callees included), so that the workers, each taking the next when free, end together
 KERNELS: dict[str, tuple[types.Type, ...]] = {
-    "pose_jet:posed_jet": (F2, F3, f8, F1, F2, i8, f8, f8, f8, f8, f8, F1, F2, f8, f8, f8, f8),
+    "pose_jet:posed_jet": POSED,
     "surface:_levenberg_marquardt": (F2, F1, F1, F1, i8, f8),
     "height:_nearest_groups": (F2, F2, I1, F1, i8, BUCKETS, F1, F2, F1, F1),
     "gmm:_em": (F2, I1, i8, f8, f8, i8),

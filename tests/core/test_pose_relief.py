@@ -134,7 +134,7 @@ def test_the_hinge_folds_derivatives_in_its_band_are_its_differences():
     flat = (np.array([-1.0, 1.0]), np.zeros((4, 1)))  # the hinge at height 0
     points, jet = posed_jet(
         np.column_stack([np.zeros(n), y, off]), d, 0.0, *flat, HINGE, fold.c, fold.s, 0.0,
-        fold.share, fold.band, *flat, 0.0, 0.0, 0.0, 1e-12,
+        fold.share, fold.band, *flat, 0.0, 0.0, 0.0, 1e-12, np.zeros(3), 1.0,
     )  # fmt: skip
     e = 1e-6
 
