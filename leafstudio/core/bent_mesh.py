@@ -64,15 +64,14 @@ def sag_splits(
     later round looks at the new faces' edges only. bent_mesh then puts the new points on the
     flat surface (`bent_result._onto_surface`) rather than on the flat chord, which the bend
     stretches (up to 3 times on a folded tube: the last 1.03-1.05e-3 of the pose grid)."""
-    points, faces = np.asarray(points, dtype=float), kernel_array(faces, np.int64)
+    points, faces = kernel_array(points), kernel_array(faces, np.int64)
     bent, plan, done = carry(points) if bent is None else bent, [], []
     for _ in range(SAG_ROUNDS):  # after the first, over the faces the last one made only
         n = len(points)
         # each side's edge among the sorted edges (edges.edge_table: a stable argsort of the
         # sides' codes with its inverse took 1.1-1.4 ms of a grid-128 mesh's 14,500 faces)
         keys, _, edge = edge_table(faces, n)
-        # np.take: rows gathered 3 times as fast as by indexing (0.46 ms of 22,000 edges)
-        middle = 0.5 * (np.take(points, keys[:, 0], axis=0) + np.take(points, keys[:, 1], axis=0))
+        middle = _middles(points, keys)
         there = carry(middle)
         marked = _sagging(kernel_array(there), kernel_array(bent), keys, tolerance)
         if not marked.any():
@@ -83,6 +82,19 @@ def sag_splits(
         bent = np.vstack([bent, there.compress(marked, axis=0)])
         plan.append((keys.compress(marked, axis=0), np.full(np.count_nonzero(marked), 0.5)))
     return np.vstack([*done, faces]) if done else faces, plan, bent
+
+
+@njit(cache=True, nogil=True)
+def _middles(points: np.ndarray, keys: np.ndarray) -> np.ndarray:
+    """(e, 3) the midpoints of the (e, 2) `keys` edges between (n, 3) points, 0.5 (a + b) (by
+    np.take, rows gathered 3 times as fast as by indexing: 0.46 ms of 22,000 edges, then
+    0.125 of 21,300 with the sum's two temporaries; here 0.04, best of 100 alternated)."""
+    middle = np.empty((len(keys), 3))
+    for e in range(len(keys)):
+        a, b = keys[e, 0], keys[e, 1]
+        for k in range(3):
+            middle[e, k] = 0.5 * (points[a, k] + points[b, k])
+    return middle
 
 
 @njit(cache=True, nogil=True)

@@ -110,6 +110,7 @@ KERNELS: dict[str, tuple[types.Type, ...]] = {
     "bent_curvature:_curvatures": (F3,),
     "edges:_edge_table": (I2, i8),
     "bent_mesh:_sagging": (F2, F2, I2, f8),
+    "bent_mesh:_middles": (F2, I2),
     "bent_mesh:_halvings": (I2, I1, B1, i8),
     "prepare.outline:_orientation": (F2, I1),
     "prepare.outline:_ring_length": (F2, I1),
