@@ -1,6 +1,6 @@
 """The first run's compile, in parallel and ahead of the run (issue 24, What to build 2).
 
-A reconstruction calls 43 compiled kernels. On a cold cache numba compiles each at its first call,
+A reconstruction calls 47 compiled kernels. On a cold cache numba compiles each at its first call,
 one after another, in the calling thread and holding the GIL: 16 s of CPU (benchmarks/
 bench_first_run.py --kernels; 20.6 s before they were written in scalar loops, without array
 expressions, slices, np.full, np.floor or a literal flag, each of which compiles code of its own,
@@ -51,7 +51,7 @@ from leafstudio.core.buckets import Buckets
 from leafstudio.core.mpu import Cells, Lattice
 
 POLL_S = 0.1  # how often the compile looks whether it should stop
-STAGE = "kernels"  # the name on_stage is called with while compiling ("kernels 3/43" after each)
+STAGE = "kernels"  # the name on_stage is called with while compiling ("kernels 3/47" after each)
 
 f8, i8 = types.float64, types.int64
 F1, F2, F3 = f8[::1], f8[:, ::1], f8[:, :, ::1]
@@ -141,7 +141,7 @@ def table(name: str) -> dict[str, tuple[types.Type, ...]]:
 
 def compiling_notice(stage: str) -> str | None:
     """The app's status while a pipeline's on_stage says `stage`: the CLI's line (NOTICE) while
-    compiling, with the kernels compiled so far ("… 3/43"); None for any other stage."""
+    compiling, with the kernels compiled so far ("… 3/47"); None for any other stage."""
     if stage == STAGE:
         return kernelcache.NOTICE
     if stage.startswith(f"{STAGE} "):
@@ -264,7 +264,7 @@ def compile_kernels(
     ----------
     on_stage : callable, optional
         Called with STAGE before compiling (not when the cache holds the kernels), then with
-        "kernels 1/43", ... as each is compiled, in the calling thread: a pipeline's on_stage,
+        "kernels 1/47", ... as each is compiled, in the calling thread: a pipeline's on_stage,
         for the app to say so (compiling_notice).
     workers : int, optional
         Processes to compile in; default one per core (at most one per kernel). Each takes the
