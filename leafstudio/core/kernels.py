@@ -1,19 +1,19 @@
 """The first run's compile, in parallel and ahead of the run (issue 24, What to build 2).
 
-A reconstruction calls 47 compiled kernels. On a cold cache numba compiles each at its first call,
-one after another, in the calling thread and holding the GIL: 16 s of CPU (benchmarks/
-bench_first_run.py --kernels; 20.6 s before they were written in scalar loops, without array
-expressions, slices, np.full, np.floor or a literal flag, each of which compiles code of its own,
-and before bounds, _nearer_than and _prediction_misses became numpy; 24 s before their LAPACK,
-BLAS and sort calls became loops), during which an app's window would not repaint. Here each
-kernel is compiled for the one signature a run uses (`KERNELS`, explicit) by worker processes
-(one per core: fresh interpreters that import only the kernels' modules, each taking the
-costliest kernel left) into numba's on-disk cache; the run then loads them (about 0.5 s). The
-calling thread only waits, and says how many are done, so the app's window stays responsive and
-its status counts them. A run asked to stop (the app's Cancel, its window closing) ends the
-workers at once (`should_stop`, polled every POLL_S; at exit, any still running): the kernels they
-had compiled stay in the cache (numba writes each file whole, by renaming), the next run compiles
-the rest.
+A flat leaf's reconstruction calls 41 compiled kernels, a bent leaf's 6 more (BENT_KERNELS). On a
+cold cache numba compiles each at its first call, one after another, in the calling thread and
+holding the GIL: 25.6 s of CPU for the flat demo (benchmarks/bench_first_run.py --kernels, session
+30, under load; 16 s when this was first written; 20.6 s before they were written in scalar loops,
+without array expressions, slices, np.full, np.floor or a literal flag, each of which compiles code
+of its own, and before bounds, _nearer_than and _prediction_misses became numpy; 24 s before their
+LAPACK, BLAS and sort calls became loops), during which an app's window would not repaint. Here each
+kernel is compiled for the one signature a run uses (`KERNELS`, explicit) by worker processes (one
+per core: fresh interpreters that import only the kernels' modules, each taking the costliest kernel
+left) into numba's on-disk cache; the run then loads them (about 0.5 s). The calling thread only
+waits, and says how many are done, so the app's window stays responsive and its status counts them.
+A run asked to stop (the app's Cancel, its window closing) ends the workers at once (`should_stop`,
+polled every POLL_S; at exit, any still running): the kernels they had compiled stay in the cache
+(numba writes each file whole, by renaming), the next run compiles the rest.
 
 Compiled only where a loop beats numpy at grid 512 (139,000 points): curvature's and the
 mixture's per-point loops are 5-10 times faster than numpy's whole-array expressions there
@@ -51,7 +51,7 @@ from leafstudio.core.buckets import Buckets
 from leafstudio.core.mpu import Cells, Lattice
 
 POLL_S = 0.1  # how often the compile looks whether it should stop
-STAGE = "kernels"  # the name on_stage is called with while compiling ("kernels 3/47" after each)
+STAGE = "kernels"  # the name on_stage is called with while compiling ("kernels 3/41" after each)
 
 f8, i8 = types.float64, types.int64
 F1, F2, F3 = f8[::1], f8[:, ::1], f8[:, :, ::1]
@@ -67,7 +67,6 @@ POSED = (F2, F3, f8, F1, F2, i8, f8, f8, f8, f8, f8, F1, F2, f8, f8, f8, f8, F1,
 # "module:function" -> its argument types; costliest first (compile CPU seconds on the development
 # machine, callees included), so that the workers, each taking the next when free, end together
 KERNELS: dict[str, tuple[types.Type, ...]] = {
-    "pose_jet:posed_jet": POSED,
     "surface:_levenberg_marquardt": (F2, F1, F1, F1, i8, f8),
     "height:_nearest_groups": (F2, F2, I1, F1, i8, BUCKETS, F1, F2, F1, F1),
     "gmm:_em": (F2, I1, i8, f8, f8, i8),
@@ -107,13 +106,20 @@ KERNELS: dict[str, tuple[types.Type, ...]] = {
     "prepare.polygon:_hull": (F2, I1),
     "prepare.polygon:_apart_each": (F2, I1, f8),
     "prepare.vein_order:_in_order": (F2, I1, f8),
-    "bent_curvature:_curvatures": (F3,),
-    "edges:_edge_table": (I2, i8),
-    "bent_mesh:_sagging": (F2, F2, I2, f8),
-    "bent_mesh:_middles": (F2, I2),
-    "bent_mesh:_halvings": (I2, I1, B1, i8),
     "prepare.outline:_orientation": (F2, I1),
     "prepare.outline:_ring_length": (F2, I1),
+}
+# what a bent leaf's run calls besides (its pose's jets, the bent mesh's halved edges and
+# curvatures), costliest first; compiled with KERNELS ahead of a bent leaf's first run
+# (Pipeline.run), not of a flat one's, which does not wait for them (nor for the edge table,
+# which measuring compiles too: a kernel in two tables is loaded from the cache by the second)
+BENT_KERNELS: dict[str, tuple[types.Type, ...]] = {
+    "pose_jet:posed_jet": POSED,
+    "bent_mesh:_halvings": (I2, I1, B1, i8),
+    "bent_curvature:_curvatures": (F3,),
+    "bent_mesh:_sagging": (F2, F2, I2, f8),
+    "bent_mesh:_middles": (F2, I2),
+    "edges:_edge_table": (I2, i8),  # measuring's too (a mesh's edge counts)
 }
 # what measuring calls (a mesh's distances and edges), a run on some inputs (a cloud's
 # projection onto its outline) and a texture's edge padding (raster), costliest first;
@@ -124,24 +130,26 @@ MEASURING: dict[str, tuple[types.Type, ...]] = {
     "prepare.cloud:_project_kernel": (F2, I1, F2, F2, F1, F1, i8, F1),
     "distance:_morton": (F2,),
     "distance:_centroids": (F2, I2),
+    "edges:_edge_table": (I2, i8),  # a bent leaf's run's too (its sagging edges)
     "raster:_feature_transform": (B2,),
 }
 MEASURE = "measuring"  # MEASURING's name (its stamp's: kernelcache.kernels_cached)
-TABLES = (STAGE, MEASURE)  # every table, by name
-SIGNATURES = {**KERNELS, **MEASURING}  # what a worker process compiles each kernel for
+BENT = "bent"  # BENT_KERNELS' name
+TABLES = (STAGE, BENT, MEASURE)  # every table, by name
+SIGNATURES = {**KERNELS, **BENT_KERNELS, **MEASURING}  # what a worker compiles each kernel for
 _COMPILING = threading.Lock()  # one compile at a time: a second caller waits for the first's
 # (table, cache folder) this process compiles in workers no more: cached, or tried to the end
 _READY: set[tuple[str, str]] = set()
 
 
 def table(name: str) -> dict[str, tuple[types.Type, ...]]:
-    """The kernels of table `name`: STAGE, KERNELS; MEASURE, MEASURING."""
-    return {STAGE: KERNELS, MEASURE: MEASURING}[name]
+    """The kernels of table `name`: STAGE, KERNELS; BENT, BENT_KERNELS; MEASURE, MEASURING."""
+    return {STAGE: KERNELS, BENT: BENT_KERNELS, MEASURE: MEASURING}[name]
 
 
 def compiling_notice(stage: str) -> str | None:
     """The app's status while a pipeline's on_stage says `stage`: the CLI's line (NOTICE) while
-    compiling, with the kernels compiled so far ("… 3/47"); None for any other stage."""
+    compiling, with the kernels compiled so far ("… 3/41"); None for any other stage."""
     if stage == STAGE:
         return kernelcache.NOTICE
     if stage.startswith(f"{STAGE} "):
@@ -264,7 +272,7 @@ def compile_kernels(
     ----------
     on_stage : callable, optional
         Called with STAGE before compiling (not when the cache holds the kernels), then with
-        "kernels 1/47", ... as each is compiled, in the calling thread: a pipeline's on_stage,
+        "kernels 1/41", ... as each is compiled, in the calling thread: a pipeline's on_stage,
         for the app to say so (compiling_notice).
     workers : int, optional
         Processes to compile in; default one per core (at most one per kernel). Each takes the
@@ -274,8 +282,8 @@ def compile_kernels(
         when it returns True they are ended and this returns at once, the cache not marked (the
         run that called it then raises Cancelled at its first stage).
     tables : tuple of str, default: ("kernels",)
-        Which tables (TABLES): the run's kernels (a pipeline's first run), MEASURE (what
-        measuring calls: ensure_compiled), or both (set-up, a batch).
+        Which tables (TABLES): the run's kernels (a pipeline's first run), with BENT's for a
+        bent leaf's, MEASURE (what measuring calls: ensure_compiled), or all (set-up, a batch).
 
     Returns
     -------

@@ -14,7 +14,7 @@ from leafstudio._shared.blas import one_blas_thread
 from leafstudio.core.bend import flat_leaf
 from leafstudio.core.bent_result import bent_result
 from leafstudio.core.grid import Grid
-from leafstudio.core.kernels import compile_kernels
+from leafstudio.core.kernels import BENT, STAGE, compile_kernels
 from leafstudio.core.prepare.units import Units
 from leafstudio.core.result import Cancelled, Later, Result, in_world
 from leafstudio.core.stages import STAGE_TABLE, STAGES, StageRun
@@ -80,8 +80,10 @@ class Pipeline:
             When `should_stop` said so.
         """
         run = StageRun(self, as_params(params), on_stage, should_stop)
-        # the first run only: in parallel, ahead of the stages (stopped, the first stage raises)
-        compile_kernels(on_stage, should_stop=should_stop)
+        # the first run only: in parallel, ahead of the stages (stopped, the first stage raises);
+        # a bent leaf's own kernels with them, a flat leaf's run not waiting for those
+        tables = (STAGE,) if self.leaf.bend is None else (STAGE, BENT)
+        compile_kernels(on_stage, should_stop=should_stop, tables=tables)
         with one_blas_thread():  # its solves are small: a second thread only waits (blas.py)
             return self._result(run)
 
