@@ -195,7 +195,7 @@ def test_the_first_runs_compile_is_said_in_the_status_while_the_window_responds(
 
     compiled = threading.Event()
 
-    def compile_kernels(on_stage=None, workers=None, should_stop=None):  # a cold cache: say so
+    def compile_kernels(on_stage=None, workers=None, should_stop=None, tables=()):  # cold: say so
         on_stage(kernels.STAGE)
         on_stage(f"{kernels.STAGE} 1/2")
         compiled.wait(WAIT_MS / 1000)
