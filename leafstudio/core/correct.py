@@ -78,6 +78,7 @@ point gets a finite curvature.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -173,12 +174,19 @@ def _thin_vein(vein: np.ndarray, step: float) -> np.ndarray:
 
 
 def spline_centers(
-    veins: list[np.ndarray], length: float, heights: list[np.ndarray] | None = None
+    veins: list[np.ndarray],
+    length: float,
+    heights: list[np.ndarray] | None = None,
+    taper: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> tuple[list[np.ndarray], list[tuple[int, int, float]]]:
     """Indices kept of each vein's (m_i, 2) points: at least CENTER_STEP · length apart along it
     (polygon.thin_curve), at most MOST_CENTERS in all, none within JUNCTION · length of an
     earlier vein's, nor (given each point's height, (m_i,) `heights`) steeper than STEEPEST
-    from one; and the veins that disagreed so, (later, earlier, largest height difference)."""
+    from one; and the veins that disagreed so, (later, earlier, largest height difference),
+    where the later's point lies inside the margin band (T at (n, 2) points, `taper`, no less
+    than BAND): in the band the surface comes down to the margin and follows neither vein (a
+    basal vein rising steeply along a sinus's margin from the notch, beside the midrib's start,
+    T under 0.03 there, was named)."""
     step = CENTER_STEP * length
     kept = [_thin_vein(v, step) for v in veins]
     total = sum(len(k) for k in kept)
@@ -201,7 +209,10 @@ def spline_centers(
     starts = np.concatenate([[0], np.cumsum(sizes)])
     owner = np.repeat(np.arange(len(veins)), sizes)
     nearest: dict[tuple[int, int], tuple[float, float]] = {}  # (gap², height apart) where nearest
-    for i in np.flatnonzero(against >= 0):
+    steep = np.flatnonzero(against >= 0)
+    if taper is not None and len(steep):
+        steep = steep[taper(points[steep]) >= BAND]
+    for i in steep:
         pair, here = (int(owner[i]), int(owner[against[i]])), (gap2[i], abs(h[i] - h[against[i]]))
         nearest[pair] = min(nearest.get(pair, here), here)
     disagree = [(later, earlier, apart) for (later, earlier), (_, apart) in sorted(nearest.items())]
@@ -385,7 +396,9 @@ def pinning(
     there (T = tanh(g/δ)), and the lattice of the grid's nodes inside the leaf ((ny * nx,) bool
     `inside`, T there `node_taper`) with φ and the bending gram for every centre
     (lattice_bending)."""
-    kept, disagree = spline_centers(veins, length, heights)
+    kept, disagree = spline_centers(
+        veins, length, heights, lambda xy: taper_of(implicit(xy), delta)
+    )
     centers = np.vstack([v[k] for v, k in zip(veins, kept, strict=True)])
     centers = kernel_array(centers)
     taper = taper_of(implicit(centers), delta)

@@ -107,6 +107,9 @@ def test_finding4_a_heart_with_veins_from_its_notch_has_no_cracks(k):
     result = ls.reconstruct(ls.Leaf(boundary, veins), ls.Params(grid=GRID, k=k))
     assert longest_edges(result)[0] <= LONGEST
     assert np.abs(result.triangle_mesh.points[:, 2]).max() <= 1.5 * 0.05
+    # the basal veins at ±125° rise along the sinus's margin beside the midrib's start, where
+    # T < 0.03 and the surface follows neither: not "veins 1 and 4 meet 2.3% ... apart"
+    assert not result.warnings
 
 
 @settings(
