@@ -64,8 +64,10 @@ class Relief:
     # the profiles linear past their ends (`profile_spline`); False: a project's relief saved
     # before, whose curves were bent with the end pieces' cubics carried on, flattened so
     linear_ends: bool = True
-    # the sheet is the margin's plane, as a pose fitted to curves in 3D has it (`margin_relief`):
-    # said, not read off the means, which a drawn blade with a flat midrib has all 0 too
+    # a pose fitted to curves in 3D (core/unfold.py): its sheet the margin's plane
+    # (`margin_relief`), or for a roll alone, its sections' means read off the curves as it
+    # laid them flat (`sheet_relief`); said, not read off the means, which a drawn blade with a
+    # flat midrib has all 0 too
     on_margin: bool = False
     _cache: dict = field(default_factory=dict, init=False, compare=False, repr=False)  # splines
 
@@ -331,6 +333,14 @@ def margin_relief(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | Non
     relief = Relief(tuple(along), tuple(heights), tuple(knots), zeros, half_width, on_margin=True)
     rise, fall = margin_slopes(relief, boundary)
     return replace(relief, rise=rise, fall=fall)
+
+
+def sheet_relief(knots: tuple[float, ...], mean: tuple[float, ...]) -> Relief:
+    """A relief whose sheet is the sections' mean heights `mean` at increasing `knots` (x), its
+    hinge flat: all a roll alone asks (a pose fitted to curves in 3D, core/unfold.py, reads
+    them off its curves laid flat, as `relief_of` reads a form's; `Relief.on_margin`: fitted)."""
+    ends = (knots[0], knots[-1])
+    return Relief(ends, (0.0, 0.0), tuple(knots), tuple(mean), 1.0, on_margin=True)
 
 
 def margin_slopes(relief: Relief, boundary: np.ndarray) -> tuple[float, float]:
