@@ -183,7 +183,7 @@ def spline_centers(
     (polygon.thin_curve), at most MOST_CENTERS in all, none within JUNCTION · length of an
     earlier vein's, nor (given each point's height, (m_i,) `heights`) steeper than STEEPEST
     from one; and the veins that disagreed so, (later, earlier, largest height difference),
-    where the later's point lies inside the margin band (T at (n, 2) points, `taper`, no less
+    where the later's point lies inward of the margin band (T at (n, 2) points, `taper`, no less
     than BAND): in the band the surface comes down to the margin and follows neither vein (a
     basal vein rising steeply along a sinus's margin from the notch, beside the midrib's start,
     T under 0.03 there, was named)."""
