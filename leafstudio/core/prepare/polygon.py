@@ -105,7 +105,7 @@ def _apart_each(xy, sizes, scale):
 def _shell_sort(values):
     """Sort the (n,) `values` in place: Shell's sort (Knuth's gaps), about linear on a vein's
     coordinates, nearly in order along it (with numpy's sort _apart_each took 3.0 s of the first
-    run's compile, with this 1.2 s; as evaluate._edge_counts)."""
+    run's compile, with this 1.2 s; as edges._edge_table sorts its buckets)."""
     n = len(values)
     gap = 1
     while gap < n // 3:
