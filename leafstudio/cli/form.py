@@ -51,7 +51,7 @@ def add_form_parser(sub: argparse._SubParsersAction) -> None:
         "else the venation's, 6 pinnate)",
     )
     p.add_argument("--aspect", type=float, metavar="L/W", help="length over greatest width")
-    kept = " (the blade's size kept: README, Real size)"
+    kept = " (the blade's area kept, not its margin's length: README, Real size)"
     p.add_argument(
         "--fold", type=float, default=0.0, metavar="DEG", help="halves turned up DEG" + kept
     )

@@ -13,9 +13,10 @@ is the frame's u axis (the boundary's direction of largest variance, see plane.p
 flat blade's outline's (a scan's holes, trimmed from its mesh, are not cut from it: sugar beet
 pot1_7's, the one of the eight scans, reaches neither end nor side). The perimeter is the
 margin's 3D length on the mesh as it is: its outer boundary loops (margin_length), bent with a
-bent leaf; a hole's edges inside the blade are not counted, a tear or notch reaching the margin
-is (the margin follows it). Both meshers put the outline first among a flat mesh's vertices, in
-order, but a bend's cuts do not keep that: a scan's holes trimmed out
+bent leaf (so a posed leaf's depends on its pose: an ovate form's is 6.0% longer folded 60°, 17%
+twisted 1, README's Real size); a hole's edges inside the blade are not counted, a tear or notch
+reaching the margin is (the margin follows it). Both meshers put the outline first among a flat
+mesh's vertices, in order, but a bend's cuts do not keep that: a scan's holes trimmed out
 (core/sheet_bend.Scaled.trim) renumber the vertices, and the ring through the first ones crossed
 sugar beet pot1_7's blade (215.2 mm against its margin's 195.6). A ball-pivoting mesh's margin
 is its own: it bridged a cordate form's sinus, 0.86% shorter than the outline at grid 96 (the

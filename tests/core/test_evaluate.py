@@ -251,6 +251,22 @@ def test_a_blade_trimmed_by_its_bend_measures_its_trimmed_margin():
     assert result.metrics["leaf"]["perimeter"] == pytest.approx(blade.exterior.length, rel=1e-3)
 
 
+@pytest.mark.parametrize(("pose", "longer"), [({"fold": 60.0}, 0.060), ({"twist": 1.0}, 0.171)])
+def test_a_posed_leafs_perimeter_is_its_bent_margins_length(pose, longer):
+    """The perimeter of a posed leaf is its bent margin's 3D length, which the pose changes
+    (README, Real size: the pose bends the blade about its relief; review appreview31, finding
+    5), while its length and width are the flat blade's."""
+    from leafstudio.forms import Form
+
+    flat = ls.reconstruct(Form("ovate").leaf(), ls.Params(k=3, grid=48)).metrics["leaf"]
+    leaf = Form("ovate", **pose).leaf()
+    posed = ls.reconstruct(leaf, ls.Params(k=3, grid=48)).metrics["leaf"]
+    margin = np.linalg.norm(leaf.boundary - np.roll(leaf.boundary, 1, axis=0), axis=1).sum()
+    assert posed["perimeter"] == pytest.approx(margin, rel=1e-4)
+    assert posed["perimeter"] / flat["perimeter"] - 1 == pytest.approx(longer, abs=2e-3)
+    assert (posed["length"], posed["width"]) == pytest.approx((flat["length"], flat["width"]))
+
+
 REAL = Path(__file__).resolve().parents[3] / "shared" / "realleaves"
 
 
