@@ -38,7 +38,7 @@ from leafstudio.core.plane import fit_frame
 from leafstudio.core.prepare.outline import ordered_crossing
 from leafstudio.core.prepare.plausibility import leaf_warnings
 from leafstudio.core.prepare.units import Units
-from leafstudio.core.unfolded import unfolded
+from leafstudio.core.unfolded import unfolded, unposed_hint
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf, Params
 from leafstudio.sources import extract
@@ -274,7 +274,7 @@ def open_file(
             x, y, z = crossing
             raise LeafError(
                 f"the boundary crosses itself near ({x:.4g}, {y:.4g}, {z:.4g}); its points must "
-                "go once around the leaf",
+                f"go once around the leaf{unposed_hint(leaf)}",
                 path,
             )
     return opened

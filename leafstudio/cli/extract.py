@@ -43,7 +43,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Extract the scan's leaf, write it and say what was kept."""
     from leafstudio.core.evaluate import leaf_blade_length  # heavy (numba): not for --help
-    from leafstudio.sources.files import check_leaf_output, save_leaf
+    from leafstudio.sources.files import bend_not_kept, check_leaf_output, save_leaf
     from leafstudio.workflows import open_scan
 
     check_leaf_output(args.output, [args.scan])
@@ -52,11 +52,8 @@ def run(args: argparse.Namespace) -> int:
         log.warning(f"{args.scan}: {note}")
     found, scan = opened.extraction, opened.scan
     save_leaf(found.leaf, args.output)
-    if found.leaf.bend is not None and not str(args.output).lower().endswith(".json"):
-        log.warning(
-            f"{args.output}: a point list keeps the bent points, not the blade's sheet they were "
-            "found on (core/sheet.py); write a .leaf.json to reconstruct the blade unrolled"
-        )
+    if (lost := bend_not_kept(found.leaf, args.output)) is not None:
+        log.warning(lost)
     other = len(scan) - found.blade.sum() - found.petiole.sum()
     length = leaf_blade_length(found.leaf)  # base to apex; a reconstruction's outline is smoother
     print(

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from leafstudio.assets.units import UNITS_SAID
-from leafstudio.cli.options import first_run_said
+from leafstudio.cli.options import first_run_said, log
 from leafstudio.errors import LeafError
 from leafstudio.forms.terms import (
     APEXES,
@@ -51,7 +51,7 @@ def add_form_parser(sub: argparse._SubParsersAction) -> None:
         "else the venation's, 6 pinnate)",
     )
     p.add_argument("--aspect", type=float, metavar="L/W", help="length over greatest width")
-    kept = " (the blade's size kept: README, Real size)"
+    kept = " (the blade's area kept, not its margin's length: README, Real size)"
     p.add_argument(
         "--fold", type=float, default=0.0, metavar="DEG", help="halves turned up DEG" + kept
     )
@@ -104,7 +104,7 @@ def run_form(args: argparse.Namespace) -> int:
         return 0
     # heavy (the outlines' splines, the veins' growth: scipy, numba): not for --help nor --list
     from leafstudio.forms.make import SIDE_ON, Form, seen_on_edge
-    from leafstudio.sources.files import LEAF_SUFFIXES, save_leaf
+    from leafstudio.sources.files import LEAF_SUFFIXES, bend_not_kept, save_leaf
 
     if not args.shape:
         raise LeafError("a shape is needed (leafstudio form --list shows them)")
@@ -151,6 +151,8 @@ def run_form(args: argparse.Namespace) -> int:
         save_mesh(result, out, length=args.length)
     else:
         save_leaf(leaf, out)
+        if (lost := bend_not_kept(leaf, out)) is not None:
+            log.warning(lost)
     print(
         f"{out}: {form.shape} leaf ({form.apex_term} apex, {form.base_term} base, {form.margin} "
         f"margin, {form.venation_term} venation): {len(leaf.boundary)} boundary points, "
@@ -186,13 +188,14 @@ def run_veins(args: argparse.Namespace) -> int:
     from leafstudio.core.prepare.vein_order import midrib_turned
     from leafstudio.core.unfolded import unfolded
     from leafstudio.forms.veins import grow_veins
-    from leafstudio.sources.files import check_leaf_output, load_leaf, save_leaf
+    from leafstudio.sources.files import bend_not_kept, check_leaf_output, load_leaf, save_leaf
 
     check_leaf_output(args.output, [args.leaf])
     # a bent leaf's veins are grown on its flat blade and bent as it is: grown in its outline as
     # seen from above, a form folded 75° got veins across its side view, the bend was dropped,
     # and its mesh had half the blade's area (curves in 3D without a bend are unfolded first)
-    leaf = unfolded(load_leaf(args.leaf))
+    given = load_leaf(args.leaf)
+    leaf = unfolded(given)
     flat = flat_leaf(leaf)
     base = _point(args.base) if args.base else None
     if base is not None and leaf.bend is not None:
@@ -206,7 +209,10 @@ def run_veins(args: argparse.Namespace) -> int:
     if leaf.bend is not None:  # a scan's sheet remembers the points it bent (sheet_bend.Scaled)
         bent = getattr(leaf.bend, "bent", leaf.bend.apply)
         veins = [bent(v) for v in veins]
-    save_leaf(Leaf(boundary=leaf.boundary, veins=veins, bend=leaf.bend), args.output)
+    grown = Leaf(boundary=leaf.boundary, veins=veins, bend=leaf.bend)
+    save_leaf(grown, args.output)
+    if given.bend is not None and (lost := bend_not_kept(grown, args.output)) is not None:
+        log.warning(lost)
     print(
         f"{args.output}: {len(veins)} {args.venation} veins grown inside the outline of "
         f"{Path(args.leaf).name}",

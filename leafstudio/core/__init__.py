@@ -13,7 +13,7 @@ shapely, Triangle and open3d; never Qt.
 | 4-5 surface z (3.4-3.5, eq. 8)    | surface           | surface, base, curvature            |
 | 5 mesh (3.5)                      | layout, mesh      | mesher, trianglemesh                |
 | the stages in order, one cache    | all               | pipeline, stages, steps, store      |
-| results (4, Table 1)              | Result.metrics    | result, evaluate, distance          |
+| results (4, Table 1)              | Result.metrics    | result, evaluate, distance, border  |
 
 Support without a step of its own: buckets (the compiled neighbour searches), raster (the
 nearest set pixel of a mask, for the textures' edge padding) and cuts (a mesh cut along level

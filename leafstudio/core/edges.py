@@ -1,5 +1,5 @@
 """A triangle mesh's edges, each once, compiled: how many triangles share each (a mesh's facts,
-evaluate.edge_counts) and which edge each triangle's side is (a bent mesh's sag halvings,
+border.edge_counts) and which edge each triangle's side is (a bent mesh's sag halvings,
 bent_mesh.sag_splits)."""
 
 from __future__ import annotations

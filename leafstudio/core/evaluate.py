@@ -9,9 +9,18 @@ as `--length` sets it (assets/placement.py): from the base, where the midrib (th
 meets the outline, to the apex, the outline's farthest point along the midrib's direction; a
 cordate leaf's lobes reaching back past the base are not counted. Its width is the outline's
 extent across that direction, so a reniform leaf is wider than long. Without veins the direction
-is the frame's u axis (the boundary's direction of largest variance, see plane.py). Both meshers
-put the outline first among the mesh's vertices, in order, so the margin's 3D length (the
-perimeter) is that closed polyline's.
+is the frame's u axis (the boundary's direction of largest variance, see plane.py). Both are the
+flat blade's outline's (a scan's holes, trimmed from its mesh, are not cut from it: sugar beet
+pot1_7's, the one of the eight scans, reaches neither end nor side). The perimeter is the
+margin's 3D length on the mesh as it is: its outer boundary loops (margin_length), bent with a
+bent leaf (so a posed leaf's depends on its pose: an ovate form's is 6.0% longer folded 60°, 17%
+twisted 1, README's Real size); a hole's edges inside the blade are not counted, a tear or notch
+reaching the margin is (the margin follows it). Both meshers put the outline first among a flat
+mesh's vertices, in order, but a bend's cuts do not keep that: a scan's holes trimmed out
+(core/sheet_bend.Scaled.trim) renumber the vertices, and the ring through the first ones crossed
+sugar beet pot1_7's blade (215.2 mm against its margin's 195.6). A ball-pivoting mesh's margin
+is its own: it bridged a cordate form's sinus, 0.86% shorter than the outline at grid 96 (the
+conforming mesher's margin is the outline's, to the last bit).
 """
 
 from __future__ import annotations
@@ -22,10 +31,14 @@ from typing import Any, TypeVar
 import numpy as np
 
 from leafstudio.core.bend import flat_curves, flat_leaf
+from leafstudio.core.border import (
+    connected_pieces,
+    count_border_loops,
+    edge_counts,
+    margin_length,
+)
 from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.distance import mesh_distances
-from leafstudio.core.edges import edge_table
-from leafstudio.core.kernels import ensure_compiled
 from leafstudio.core.plane import Frame, fit_frame, turned_along
 from leafstudio.core.prepare.units import Units
 from leafstudio.core.prepare.vein_order import midrib_turned, vein_order
@@ -54,49 +67,6 @@ def _summary(values: np.ndarray) -> dict[str, float | None]:
     if len(values) == 0:
         return {"min": None, "max": None, "mean": None}
     return {"min": float(values.min()), "max": float(values.max()), "mean": float(values.mean())}
-
-
-def edge_counts(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unique undirected edges (e, 2), each (low, high) and in that order, and how many
-    triangles share each (edges.edge_table)."""
-    ensure_compiled()
-    return edge_table(triangles)[:2]
-
-
-def count_border_loops(
-    triangles: np.ndarray, counted: tuple[np.ndarray, np.ndarray] | None = None
-) -> int:
-    """Number of closed loops formed by the edges that belong to one triangle only (`counted`:
-    the triangles' edge_counts, when they are known already)."""
-    edges, counts = counted if counted is not None else edge_counts(triangles)
-    border = edges[counts == 1]
-    if len(border) == 0:
-        return 0
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    nodes, inverse = np.unique(border, return_inverse=True)
-    inverse = inverse.reshape(-1, 2)
-    graph = coo_matrix(
-        (np.ones(len(border)), (inverse[:, 0], inverse[:, 1])), shape=(len(nodes),) * 2
-    )
-    return int(connected_components(graph, directed=False)[0])
-
-
-def connected_pieces(triangles: np.ndarray, edges: np.ndarray | None = None) -> int:
-    """Number of edge-connected components of the triangles (`edges`: their unique edges, as
-    edge_counts gives them, when they are known already)."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    n = int(triangles.max(initial=-1)) + 1
-    used = np.zeros(n, bool)
-    used[triangles.ravel()] = True  # vertices no triangle uses are components of their own
-    if edges is None:
-        edges = np.column_stack([triangles.ravel(), triangles[:, [1, 2, 0]].ravel()])
-    ones = np.ones(len(edges), np.int8)
-    graph = coo_matrix((ones, (edges[:, 0], edges[:, 1])), shape=(n, n))
-    return int(connected_components(graph, directed=False)[0]) - int(n - used.sum())
 
 
 def surface_area(points: np.ndarray, triangles: np.ndarray) -> float:
@@ -216,7 +186,7 @@ def margin_creases(
 FIELDS = (
     ("area", "surface area (3D)"),
     ("projected_area", "projected area"),
-    ("perimeter", "perimeter"),
+    ("perimeter", "perimeter (outer margin, 3D)"),
     ("length", "length (base to apex)"),
     ("width", "greatest width (across the midrib)"),
     ("aspect_ratio", "aspect ratio (length / width)"),
@@ -325,14 +295,15 @@ def shape_measurements(
     area: float | None = None,
     midrib: np.ndarray | None = None,
     face_on: bool = False,
+    blade_xy: np.ndarray | None = None,
 ) -> dict[str, float]:
     """The FIELDS measurements of a leaf mesh.
 
     Parameters
     ----------
     mesh : TriangleMesh or pyvista.PolyData
-        The leaf's triangle mesh in world coordinates, its first len(polygon) vertices the
-        outline in order (as both meshers make it), with the point array "height".
+        The leaf's triangle mesh in world coordinates, with the point array "height"; its
+        perimeter is its outer boundary loops' length (margin_length).
     frame : Frame
         The leaf's plane frame (u: the main axis).
     polygon : (b, 2) float array
@@ -348,6 +319,9 @@ def shape_measurements(
         scan's sheet lays it on the world's x-y plane, core/sheet_bend.Scaled.own_plane: its
         projected area was its shadow on the scanner's x-y plane, 137 to 376 for sugar beet
         pot1_1 as it was turned).
+    blade_xy : (n, 2) float array, optional
+        A bent mesh's points on its flat blade, in `frame`'s plane (Result.blade_xy), which
+        margin_length tells the outer loops by; without it, the mesh's points in that plane.
 
     Returns
     -------
@@ -357,7 +331,8 @@ def shape_measurements(
     points = np.asarray(mesh.points)
     triangles = triangles_of(mesh)
     plane_xy, _ = frame.to_plane(points)
-    outline = points[: len(polygon)]
+    kept = blade_xy is not None and len(blade_xy) == len(points)  # else another mesh's
+    flat_xy = blade_xy if kept else plane_xy
     base, direction = blade_axis(polygon, None if midrib is None else frame.to_plane(midrib)[0])
     length, width = blade_length_width(polygon, base, direction)
     return {
@@ -365,7 +340,7 @@ def shape_measurements(
         "projected_area": facing_area(points, triangles)
         if face_on
         else surface_area(plane_xy, triangles),
-        "perimeter": float(np.linalg.norm(outline - np.roll(outline, 1, axis=0), axis=1).sum()),
+        "perimeter": margin_length(points, triangles, flat_xy),
         "length": length,
         "width": width,
         "aspect_ratio": length / width if width > 0 else None,

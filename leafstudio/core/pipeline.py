@@ -15,12 +15,14 @@ from leafstudio.core.bend import flat_leaf
 from leafstudio.core.bent_result import bent_result
 from leafstudio.core.grid import Grid
 from leafstudio.core.kernels import BENT, STAGE, compile_kernels
+from leafstudio.core.prepare.plausibility import BentRefusal
 from leafstudio.core.prepare.units import Units
 from leafstudio.core.result import Cancelled, Later, Result, in_world
 from leafstudio.core.stages import STAGE_TABLE, STAGES, StageRun
 from leafstudio.core.steps import FrameStage, GuideStage, SurfaceStage
 from leafstudio.core.store import StageStore, leaf_key
-from leafstudio.core.unfolded import unfolded
+from leafstudio.core.unfolded import unfolded, unposed_hint
+from leafstudio.errors import LeafError
 from leafstudio.model import Leaf, Params, as_leaf, as_params
 
 __all__ = ["Cancelled", "Pipeline", "Result", "reconstruct"]
@@ -101,9 +103,14 @@ class Pipeline:
         # and gmm took a flat ovate's run at grid 128 from 28-30 to 34-39 ms of wall time on this
         # 2-core machine (gmm 3 -> 7.5 ms, bending 5.3 -> 9: the kernels release the GIL, yet the
         # two threads slowed each other down more than they overlapped)
-        for stage in STAGES:
-            if not STAGE_TABLE[stage].lazy:
-                run[stage]
+        try:
+            for stage in STAGES:
+                if not STAGE_TABLE[stage].lazy:
+                    run[stage]
+        except BentRefusal as exc:  # said why, when the leaf is bent and nothing lays it flat
+            if not (hint := unposed_hint(self.leaf)):
+                raise
+            raise LeafError(exc.problem + hint, exc.source) from exc
         fs: FrameStage = run["frame"]
         grid: Grid = run["grid"]
         guide: GuideStage = run["guide"]

@@ -283,7 +283,7 @@ class Result:
         yield
         area = table["mesh"]["area"]
         shape = shape_measurements(
-            self.triangle_mesh, self.frame, self.polygon, area, midrib(), face_on
+            self.triangle_mesh, self.frame, self.polygon, area, midrib(), face_on, self.blade_xy
         )
         yield
         curvature = curvature_summary(self.triangle_mesh)

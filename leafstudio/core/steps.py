@@ -25,6 +25,7 @@ from leafstudio.core.node_derivatives import node_derivatives
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.prepare.outline import trace_outline
 from leafstudio.core.prepare.plausibility import (
+    BentRefusal,
     check_boundary,
     check_not_a_surface,
     keep_outer_loop,
@@ -184,7 +185,7 @@ def _inside_enough(
     if gap > VEIN_OUTSIDE_TOLERANCE * length:
         share = gap / length
         far = f"{share:.1%} of the leaf length" if share < 1 else f"{share:.3g} leaf lengths"
-        raise LeafError(
+        raise BentRefusal(
             f"vein {i + 1}: {outside.sum()} of {len(v_xy)} points lie outside the boundary "
             f"(up to {far})"
         )

@@ -14,6 +14,7 @@ from collections import OrderedDict
 import numpy as np
 
 from leafstudio.core.unfold import fit_pose
+from leafstudio.core.unfold_checks import bent
 from leafstudio.model import Leaf
 
 UNBENT_KEPT = 32  # curves remembered as needing no bend
@@ -41,3 +42,17 @@ def unfolded(leaf: Leaf) -> Leaf:
         while len(_UNBENT) > UNBENT_KEPT:
             _UNBENT.popitem(last=False)
     return leaf
+
+
+def unposed_hint(leaf: Leaf) -> str:
+    """What to add to a refusal of `leaf` as `unfolded` left it: when its margin stands bent in
+    3D (unfold_checks.bent, the test before a pose is fitted) and no bend lays it flat (none
+    given, none fitted), that it may be a posed or scanned leaf written without its pose or
+    sheet (a lanceolate form twisted 1, saved as .csv, was refused with "vein 1: 2 of 49 points
+    lie outside the boundary" and no word of why); "" otherwise."""
+    if leaf.bend is not None or not bent(np.asarray(leaf.boundary, dtype=float)):
+        return ""
+    return (
+        "; the leaf is bent in 3D and no pose lays it flat: a posed or scanned leaf saved as a "
+        "point list keeps neither its pose nor its sheet (its .leaf.json does)"
+    )

@@ -395,6 +395,21 @@ def project_dict(
     return data
 
 
+def bend_not_kept(leaf: Leaf, path: str | os.PathLike) -> str | None:
+    """The one line saying that writing the bent `leaf` to `path` drops its bend, None when it
+    does not (a flat leaf, a project). A point list or PLY holds the bent points only, not the
+    pose or the scan's sheet that lays them flat: opened again, its curves are unfolded by a
+    fitted pose (core/unfold.py), which a twisted form's may not be (a lanceolate form twisted
+    1 was refused: "vein 1: 2 of 49 points lie outside the boundary")."""
+    if leaf.bend is None or _suffix(Path(path)) in (".leaf.json", ".json"):
+        return None
+    if isinstance(leaf.bend, Pose | PlacedPose):
+        lost = "its pose (fold, curl, roll, twist)"
+    else:
+        lost = "the blade's sheet they were found on (core/sheet.py)"
+    return f"{path}: a point list keeps the bent points, not {lost}; a .leaf.json keeps it"
+
+
 def save_leaf(
     leaf: Leaf,
     path: str | os.PathLike,

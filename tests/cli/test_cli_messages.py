@@ -189,3 +189,39 @@ def test_a_form_with_its_midrib_alone_says_one_vein(tmp_path, capsys):
     """`form ovate --secondaries 0` said "1 veins" (bug hunt, session 27)."""
     assert main(["form", "ovate", "--secondaries", "0", "-o", str(tmp_path / "x.csv")]) == 0
     assert capsys.readouterr().err.rstrip().endswith("502 boundary points, 1 vein")
+
+
+def test_a_posed_form_written_as_a_point_list_says_its_pose_is_not_kept(tmp_path, capsys):
+    """`form lanceolate --twist 1 -o x.csv` wrote the bent points without a word of the pose
+    they lose, where `extract` says so of a scan's sheet (review appreview31, finding 10): one
+    warning line, none for a project or a flat form."""
+    assert main(["form", "lanceolate", "--twist", "1", "-o", str(tmp_path / "x.csv")]) == 0
+    warned = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
+    assert len(warned) == 1
+    assert "x.csv: a point list keeps the bent points, not its pose" in warned[0]
+    assert "a .leaf.json keeps it" in warned[0]
+    for argv in (["lanceolate", "--twist", "1", "-o", "x.leaf.json"], ["ovate", "-o", "y.csv"]):
+        assert main(["form", *argv[:-1], str(tmp_path / argv[-1])]) == 0
+        assert "warning" not in capsys.readouterr().err
+
+
+def test_a_bent_point_list_refused_says_it_may_have_lost_its_pose(tmp_path, capsys):
+    """`reconstruct` of that CSV is refused, "vein 1: 2 of 49 points lie outside the boundary"
+    (its twist is not unfolded, core/unfold.py); the message now says the leaf is bent and no
+    pose lays it flat, as a posed leaf saved as a point list would be. A flat leaf's stray vein
+    is refused without that hint."""
+    from leafstudio.model import Leaf
+    from leafstudio.sources.files import save_leaf
+
+    assert main(["form", "lanceolate", "--twist", "1", "-o", str(tmp_path / "x.csv")]) == 0
+    capsys.readouterr()
+    assert main(["reconstruct", str(tmp_path / "x.csv"), "-o", str(tmp_path / "x.ply")]) == 2
+    line = _error(capsys)
+    assert "vein 1:" in line and "lie outside the boundary" in line
+    assert "bent in 3D and no pose lays it flat" in line and "its .leaf.json does" in line
+    square = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    stray = np.column_stack([np.linspace(0.2, 1.6, 20), np.full(20, 0.5), np.zeros(20)])
+    save_leaf(Leaf(square, [stray]), tmp_path / "flat.csv")
+    assert main(["reconstruct", str(tmp_path / "flat.csv"), "-o", str(tmp_path / "f.ply")]) == 2
+    line = _error(capsys)
+    assert "lie outside the boundary" in line and "no pose" not in line

@@ -7,6 +7,7 @@ edge."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -23,6 +24,7 @@ from leafstudio.core.evaluate import (
     edge_counts,
     format_table,
     leaf_measurements,
+    margin_length,
 )
 from tests.leaves import ellipse as _ellipse
 
@@ -199,6 +201,91 @@ def test_a_grid_mesh_has_one_boundary_loop_from_given_counts():
     triangles = grid_mesh(12)
     counted = edge_counts(triangles)
     assert count_border_loops(triangles, counted) == count_border_loops(triangles) == 1
+
+
+def test_the_margin_is_each_pieces_outer_loop_in_any_vertex_order():
+    """margin_length: a 6 x 6 square with a 2 x 2 hole (24 round, 8 round the hole) and a
+    2 x 2 square apart (8), their vertices shuffled: the outer loops' 32, the hole's not
+    counted; the same mesh stood up in 3D (the length is the points', the pieces told apart
+    on the flat ones)."""
+    big, small = grid_mesh(7), grid_mesh(3) + 49
+    corner = big.min(axis=1)  # each cell's two triangles share their lowest corner's index
+    row, col = corner // 7, corner % 7
+    big = big[~((row >= 2) & (row < 4) & (col >= 2) & (col < 4))]
+    i, j = np.divmod(np.arange(49), 7)
+    k, m = np.divmod(np.arange(9), 3)
+    flat = np.vstack([np.column_stack([i, j]), np.column_stack([k + 10.0, m])]).astype(float)
+    order = np.random.default_rng(3).permutation(len(flat))
+    back = np.argsort(order)
+    triangles, xy = back[np.vstack([big, small])], flat[order]
+    points = np.column_stack([xy, np.zeros(len(xy))])
+    assert margin_length(points, triangles, xy) == pytest.approx(32.0, rel=1e-12)
+    stood = np.column_stack([xy[:, 0], np.zeros(len(xy)), xy[:, 1]])  # turned, lengths kept
+    assert margin_length(stood, triangles, xy) == pytest.approx(32.0, rel=1e-12)
+    assert margin_length(points, np.empty((0, 3), np.int64), xy) == 0.0
+
+
+def test_a_blade_trimmed_by_its_bend_measures_its_trimmed_margin():
+    """A scan's holes are cut out of the bent mesh (sheet_bend.Scaled.trim), which renumbers
+    its vertices: the perimeter was the ring through the first len(polygon) of them, no longer
+    the outline (sugar beet pot1_7: 215.2 mm, its one margin 195.6; here 2.958 for 2.098). A
+    hole torn into the margin is part of it; one inside the blade is not."""
+    from leafstudio.core.sheet import fit_sheet
+    from leafstudio.core.sheet_bend import Scaled
+    from tests.core.test_sheet import _blade, rolled
+
+    sheet = fit_sheet(rolled(_blade(3000), 0.3), np.array([0.0, 0.0, 1.0]), 1.0)
+    turn = np.linspace(0, 2 * np.pi, 33)
+    notch = [0.1, 0.2] + 0.06 * np.column_stack([np.cos(turn), np.sin(turn)])
+    hole = [-0.2, 0.0] + 0.05 * np.column_stack([np.cos(turn), np.sin(turn)])
+    bend = Scaled(sheet, np.zeros(3), 1.0, holes=(notch, hole))
+    t = np.linspace(0, 2 * np.pi, 200, endpoint=False)
+    outline = np.column_stack([0.45 * np.cos(t), 0.18 * np.sin(t), np.zeros_like(t)])
+    x = np.linspace(-0.4, 0.4, 30)
+    midrib = np.column_stack([x, np.zeros_like(x), np.full_like(x, 0.01)])
+    leaf = ls.Leaf(boundary=bend.bent(outline), veins=[bend.bent(midrib)], bend=bend)
+    result = ls.reconstruct(leaf, ls.Params(k=2, grid=64))
+    blade = shapely.Polygon(outline[:, :2]) - shapely.Polygon(notch) - shapely.Polygon(hole)
+    assert result.metrics["mesh"]["boundary_loops"] == 2  # the margin, notched, and the hole
+    # rolled about the blade's length, which keeps lengths: the flat blade's (2.0979)
+    assert result.metrics["leaf"]["perimeter"] == pytest.approx(blade.exterior.length, rel=1e-3)
+
+
+@pytest.mark.parametrize(("pose", "longer"), [({"fold": 60.0}, 0.060), ({"twist": 1.0}, 0.171)])
+def test_a_posed_leafs_perimeter_is_its_bent_margins_length(pose, longer):
+    """The perimeter of a posed leaf is its bent margin's 3D length, which the pose changes
+    (README, Real size: the pose bends the blade about its relief; review appreview31, finding
+    5), while its length and width are the flat blade's."""
+    from leafstudio.forms import Form
+
+    flat = ls.reconstruct(Form("ovate").leaf(), ls.Params(k=3, grid=48)).metrics["leaf"]
+    leaf = Form("ovate", **pose).leaf()
+    posed = ls.reconstruct(leaf, ls.Params(k=3, grid=48)).metrics["leaf"]
+    margin = np.linalg.norm(leaf.boundary - np.roll(leaf.boundary, 1, axis=0), axis=1).sum()
+    assert posed["perimeter"] == pytest.approx(margin, rel=1e-4)
+    assert posed["perimeter"] / flat["perimeter"] - 1 == pytest.approx(longer, abs=2e-3)
+    assert (posed["length"], posed["width"]) == pytest.approx((flat["length"], flat["width"]))
+
+
+REAL = Path(__file__).resolve().parents[3] / "shared" / "realleaves"
+
+
+@pytest.mark.skipif(not REAL.is_dir(), reason="needs ../shared/realleaves")
+def test_a_scan_with_a_hole_torn_into_its_margin_measures_that_margin():
+    """Sugar beet pot1_7 (its one hole torn into the margin): the perimeter is the length of
+    its mesh's one boundary loop, 195.6 mm (it was 215.2: a ring crossing the blade)."""
+    from leafstudio import workflows
+
+    path = next(REAL.glob("sugarbeet_*_pot1_7.txt"))
+    result = workflows.reconstruct(workflows.open_scan(path), ls.Params(grid=96)).result
+    mesh = result.triangle_mesh
+    edges, counts = edge_counts(np.asarray(mesh.regular_faces))
+    border = edges[counts == 1]
+    points = np.asarray(mesh.points)
+    loop = np.linalg.norm(points[border[:, 0]] - points[border[:, 1]], axis=1).sum()
+    assert result.metrics["mesh"]["boundary_loops"] == 1
+    assert result.metrics["leaf"]["perimeter"] == pytest.approx(loop, rel=1e-9)
+    assert 190 < loop < 200
 
 
 @pytest.mark.parametrize(

@@ -298,6 +298,12 @@ def boundary_crossing(boundary: np.ndarray, loop: Loop | None = None) -> np.ndar
     return centre + x * axes[0] + y * axes[1]
 
 
+class BentRefusal(LeafError):
+    """A refusal of curves that a blade's own would not earn but a bent leaf's, given without
+    its bend, may (its boundary crossing itself on its plane, a vein outside it: check_boundary,
+    steps._inside_enough): the pipeline adds that hint when it fits (unfolded.unposed_hint)."""
+
+
 def check_boundary(
     boundary: np.ndarray,
     scale: float = 1.0,
@@ -310,7 +316,7 @@ def check_boundary(
     if where is not None:
         nearest = int(np.argmin(np.linalg.norm(np.asarray(boundary) - where, axis=1)))
         shown = where * scale + (0.0 if shift is None else shift)
-        raise LeafError(
+        raise BentRefusal(
             "the boundary crosses itself near ({:.4g}, {:.4g}, {:.4g}), by boundary point {}; "
             "a leaf's outline must not (it would drop a lobe)".format(*shown, nearest + 1)
         )
