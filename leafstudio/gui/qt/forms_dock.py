@@ -131,8 +131,12 @@ class FormsPanel(QWidget):
         self.roll = self._spin(QDoubleSpinBox(), -1, 1, 0, RELIEF["roll"], "", 0.05)
         self.twist = self._spin(QDoubleSpinBox(), -1, 1, 0, RELIEF["twist"], "", 0.05)
         self.wave = self._spin(QDoubleSpinBox(), 0, 0.2, 0, RELIEF["wave"], "", 0.005)
-        self.pose_boxes = {"fold": self.fold, "curl": self.curl, "roll": self.roll}
-        self.pose_boxes["twist"] = self.twist
+        self.pose_boxes = {
+            "fold": self.fold,
+            "curl": self.curl,
+            "roll": self.roll,
+            "twist": self.twist,
+        }
         self._edited = False  # the open form was edited since the gallery made it
         self.seed = self._spin(QSpinBox(), 0, 1_000_000, 0, RELIEF["seed"])
         self.variant = QPushButton("New variant")
@@ -379,7 +383,8 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
         shown.connect(lambda *_: panel.grow_veins(window.worker.start))
     session = window.session
     gallery = GalleryForms()  # the documents the gallery made, and whether they were edited
-    shown: dict[str, Any] = {"pose": (Pose(), {})}  # the pose the dock shows, and its figures
+    # the pose the dock's Fold, Curl, Roll and Twist show (the document's), and their figures
+    dock_pose: dict[str, Any] = {"shown": (Pose(), {})}
     # the last blade grown (its form without a pose, the blade, its side-on note), and the form
     # waiting for its blade: a blade grows on a lane (60-100 ms, the main thread's before), and
     # a pose slider's change only poses the last one (a few ms)
@@ -406,7 +411,7 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
         panel.show_edited(gallery.edited(state), poseable or state.leaf is None)
         if poseable:
             figures = panel.show_pose(pose_terms(session.pose, session.half_width))
-            shown["pose"] = (session.pose, figures)
+            dock_pose["shown"] = (session.pose, figures)
 
     def grown(blade: tuple[Form, Leaf, str, Sketch]) -> None:
         kept["blade"] = blade
@@ -429,7 +434,7 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
         if growing is None and gallery.action(session.state, picked) == "bend":
             # an edited form, or another leaf: the pose terms bend it (its other terms are kept
             # for the next shape picked), one undo step as the Parameters panel's sliders
-            pose = terms_pose(panel.pose_figures(), session.half_width, shown["pose"])
+            pose = terms_pose(panel.pose_figures(), session.half_width, dock_pose["shown"])
             session.set_bend(pose, final=True)
             return
         if not picked and growing is not None and session.state.serial != waiting["serial"]:
