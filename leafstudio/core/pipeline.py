@@ -19,7 +19,7 @@ from leafstudio.core.prepare.plausibility import BentRefusal
 from leafstudio.core.prepare.units import Units
 from leafstudio.core.result import Cancelled, Later, Result, in_world
 from leafstudio.core.stages import STAGE_TABLE, STAGES, StageRun
-from leafstudio.core.steps import FrameStage, GuideStage, SurfaceStage
+from leafstudio.core.steps import BENT_NOTES, FrameStage, GuideStage, SurfaceStage
 from leafstudio.core.store import StageStore, leaf_key
 from leafstudio.core.unfolded import unfolded, unposed_hint
 from leafstudio.errors import LeafError
@@ -89,6 +89,13 @@ class Pipeline:
         with one_blas_thread():  # its solves are small: a second thread only waits (blas.py)
             return self._result(run)
 
+    def _frame_notes(self, fs: FrameStage) -> list[str]:
+        """The frame stage's notes on the flat blade; a bent leaf's say that its blade, not the
+        leaf, is flat (steps.BENT_NOTES): the stage is the same for every bend of a blade."""
+        if self.leaf.bend is None:
+            return list(fs.notes)
+        return [BENT_NOTES.get(note, note) for note in fs.notes]
+
     @staticmethod
     def _vein_notes(run: StageRun, fs: FrameStage) -> list[str]:
         """What the vein correction says of veins that disagree where they meet (correct.py);
@@ -134,7 +141,7 @@ class Pipeline:
             length=fs.length,
             timings=run.timings,
             ran=tuple(run.ran),
-            warnings=list(fs.notes) + self._vein_notes(run, fs),
+            warnings=self._frame_notes(fs) + self._vein_notes(run, fs),
         )
         result = bent_result(in_world(unit, self.flat, self.units), self.leaf, self.units)
         # what is made from the mesh on first use: entries of the store under the mesh's key

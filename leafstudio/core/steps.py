@@ -52,6 +52,16 @@ if TYPE_CHECKING:
 
 MIN_NODES_PER_COMPONENT = 5
 GUIDE_STEP = 0.5  # the guide's curves are thinned to this fraction of the grid step (height.py)
+NO_VEINS_FLAT = "no veins given: the leaf is flat"
+VEINS_IN_PLANE = "all veins lie in the boundary's plane: the leaf is flat"
+# the same notes for a bent leaf (Leaf.bend), whose stages run on its flat blade: the bend gives
+# it a shape the notes are not about (appreview31, finding 8: ovate-like blade folded 45 stood
+# 0.14 of its length out of its plane, and was "flat")
+BENT_NOTES = {
+    NO_VEINS_FLAT: "no veins given: the blade has no relief of its own, only its bend",
+    VEINS_IN_PLANE: "all veins lie in the blade's plane: the blade has no relief of its own, "
+    "only its bend",
+}
 VEIN_OUTSIDE_TOLERANCE = 0.01  # vein points may stray this fraction of the leaf length outside
 
 
@@ -153,9 +163,9 @@ def frame_stage(leaf: Leaf, margin: str = "auto", units: Units | None = None) ->
         if not veins:
             notes.append("no veins given: the surface only follows the boundary's heights")
     elif not veins:
-        notes.append("no veins given: the leaf is flat")
+        notes.append(NO_VEINS_FLAT)
     elif all(np.allclose(h, 0, atol=1e-9 * length) for h in heights):
-        notes.append("all veins lie in the boundary's plane: the leaf is flat")
+        notes.append(VEINS_IN_PLANE)
     return FrameStage(
         frame=frame,
         polygon=polygon,

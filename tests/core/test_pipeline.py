@@ -218,3 +218,22 @@ def test_the_height_at_one_point_is_the_height_among_others(demo_result):
     single = [float(result.height(np.array([p]))[0]) for p in ([0.4, 0.0], [0.6, 0.02])]
     assert pairs[0] > 0
     np.testing.assert_allclose(single, pairs, rtol=1e-12)
+
+
+def test_a_flat_blade_bent_is_said_to_have_no_relief_of_its_own_not_to_be_flat():
+    """appreview31, finding 8: a blade with its veins in its plane, folded 45 or curled 0.8,
+    stands 0.14-0.62 of its length out of its plane, and its run still said "the leaf is flat".
+    A bent leaf's note is about its blade; an unbent one's is unchanged."""
+    from leafstudio.core.bend import Pose
+    from leafstudio.core.steps import BENT_NOTES, VEINS_IN_PLANE
+
+    t = np.linspace(0, 2 * np.pi, 80, endpoint=False)
+    boundary = np.column_stack([0.5 + 0.5 * np.cos(t), 0.2 * np.sin(t), 0 * t])
+    midrib = np.column_stack([np.linspace(0.02, 0.98, 12), np.zeros(12), np.zeros(12)])
+    flat = ls.Leaf(boundary, [midrib])
+    params = ls.Params(k=3, grid=48)
+    assert ls.Pipeline(flat).run(params).warnings == [VEINS_IN_PLANE]
+    pose = Pose(fold=45.0)
+    bent = ls.Leaf(pose.apply(boundary), [pose.apply(midrib)], bend=pose)
+    warnings = ls.Pipeline(bent).run(params).warnings
+    assert warnings == [BENT_NOTES[VEINS_IN_PLANE]] and "no relief of its own" in warnings[0]

@@ -97,14 +97,47 @@ def _same_pose(a: Pose, b: Pose) -> bool:
     )
 
 
+POSE_TERMS = ("fold", "curl", "roll", "twist")  # the sliders' terms, the Forms dock's too
+
+
+def term_units(half_width: float) -> dict[str, float]:
+    """A slider's figure times this is the Pose's term: the roll's half turn over the blade's
+    half width (`blade_half_width`), the twist's half turn; fold and curl as they are."""
+    return {"fold": 1.0, "curl": 1.0, "roll": np.pi / half_width, "twist": np.pi}
+
+
+def pose_terms(pose: Pose, half_width: float) -> dict[str, float]:
+    """`pose` in the sliders' terms (the Forms dock's, forms/terms.RELIEF): the fold in degrees,
+    the curl per length, the roll as the share of a half turn at the widest, the twist in half
+    turns."""
+    units = term_units(half_width)
+    return {name: getattr(pose, name) / units[name] for name in POSE_TERMS}
+
+
+def terms_pose(
+    terms: dict[str, float], half_width: float, shown: tuple[Pose, dict[str, float]] = (FLAT, {})
+) -> Pose:
+    """The pose the sliders' `terms` ask for. A term still at the figure `shown` set (the pose
+    shown, and the figures its widgets took) keeps that pose's own value to the bit, not its
+    figure through the units and back (a slider's 2 decimals: a curl of 0.4996 read 0.5)."""
+    pose, figures = shown
+    units = term_units(half_width)
+    return Pose(
+        **{
+            name: getattr(pose, name) if figures.get(name) == value else value * units[name]
+            for name, value in terms.items()
+        }
+    )
+
+
 def bend_text(pose: Pose, half_width: float) -> str:
     """A bend's undo text in the sliders' terms (the Forms dock's): the roll as the share of a
     half turn at the widest, the twist in half turns."""
-    roll, twist = pose.roll * half_width / np.pi, pose.twist / np.pi
+    terms = pose_terms(pose, half_width)
     return (
         f"Bend: fold {pose.fold:g}°, curl {pose.curl:g}"
-        + (f", roll {roll:.3g}" if pose.roll else "")
-        + (f", twist {twist:.3g}" if pose.twist else "")
+        + (f", roll {terms['roll']:.3g}" if pose.roll else "")
+        + (f", twist {terms['twist']:.3g}" if pose.twist else "")
     )
 
 
@@ -236,6 +269,13 @@ class Bending:
         """The document's pose (flat when it has none)."""
         return pose_of(self.state.leaf)
 
+    @property
+    def half_width(self) -> float:
+        """The document's blade's half width per its length, on its sketch's plane when it has
+        one (`blade_half_width`): the sliders' roll is in shares of a half turn over it."""
+        sketch = self.state.sketch
+        return blade_half_width(self.state.leaf, None if sketch is None else sketch.frame)
+
     def sketch_leaf(self, sketch: Any, before: Any = None) -> Leaf | None:
         """The leaf a sketch draws, edited from the Sketch `before` (the editor's; else the one
         the document's leaf is drawn by, `drawn_sketch`), bent by the document's pose (Session's
@@ -288,7 +328,5 @@ class Bending:
         if final:
             self._bend_base = None
             if base.leaf is not self.state.leaf:
-                sketch = self.state.sketch
-                plane = sketch.frame if sketch is not None else None
-                text = bend_text(self.pose, blade_half_width(self.state.leaf, plane))
+                text = bend_text(self.pose, self.half_width)
                 self.history.push(Step(text, base, self.state))

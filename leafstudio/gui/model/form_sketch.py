@@ -6,10 +6,12 @@ gallery's canonical leaves. The Forms dock (gui/qt/forms_dock.py) shows and forw
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
 from leafstudio.core.bend import flat_leaf
+from leafstudio.core.plane import fit_frame
 from leafstudio.core.prepare.polygon import ring_crossings
 from leafstudio.forms import Form, grow_veins
 from leafstudio.gui.model.curves import closed_curve
@@ -86,3 +88,16 @@ def with_grown_veins(
     # the grown veins keep grow_veins' heights (not the replaced veins' auto flags)
     grown = tuple(v[p] for v, p in zip(veins, pick, strict=True))
     return replace(sketch, veins=grown, offsets=())
+
+
+def outline_sketch(result: Any, leaf: Leaf) -> Sketch:
+    """A loaded leaf's sketch to grow veins in (the Forms dock's Grow veins): from its shown
+    `result` (None: none shown), else from the leaf itself on the plane of its boundary (its
+    heights kept as relief)."""
+    if result is not None and getattr(result, "leaf", None) is leaf:
+        return Sketch.from_result(result)
+    frame = fit_frame(leaf.boundary, leaf.vein_points)
+    xy, h = frame.to_plane(leaf.boundary)
+    pick = np.unique(np.linspace(0, len(xy), BOUNDARY_CONTROL, endpoint=False).astype(int))
+    relief = np.column_stack([xy, h]) if np.any(np.abs(h) > 0) else np.zeros((0, 3))
+    return Sketch(boundary=xy[pick], frame=frame, relief=relief)

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
 from PySide6.QtCore import QObject, Qt, Signal
 from PySide6.QtWidgets import QFormLayout
 from superqt import QLabeledDoubleSlider
@@ -26,7 +25,7 @@ from superqt.utils import qthrottled
 
 from leafstudio.core.bend import Pose
 from leafstudio.forms.terms import RELIEF
-from leafstudio.gui.model.bending import blade_half_width, can_pose
+from leafstudio.gui.model.bending import can_pose, pose_terms, terms_pose
 
 THROTTLE_MS = 80  # as the parameter sliders (controls.py)
 RANGES = {  # least, most, decimals: the Forms dock's (forms/make.LIMITS)
@@ -70,20 +69,8 @@ class BendSliders(QObject):
     def pose(self) -> Pose:
         """The pose the sliders show (a term its slider still shows as `show_pose` set it keeps
         that pose's value to the bit, not its value through the units and back)."""
-        shown, values = self._shown
-        terms = {}
-        for name, slider in self.sliders.items():
-            value = float(slider.value())
-            if values.get(name) == value:
-                terms[name] = getattr(shown, name)
-            else:
-                terms[name] = value * self._unit(name)
-        return Pose(**terms)
-
-    def _unit(self, name: str) -> float:
-        """A slider's value times this is the Pose's term: a roll's half turn over the blade's
-        half width, a twist's half turn."""
-        return {"roll": np.pi / self.half_width, "twist": np.pi}.get(name, 1.0)
+        terms = {name: float(slider.value()) for name, slider in self.sliders.items()}
+        return terms_pose(terms, self.half_width, self._shown)
 
     def is_dragging(self) -> bool:
         return any(s.isSliderDown() for s in self.sliders.values())
@@ -94,8 +81,8 @@ class BendSliders(QObject):
         at the sliders' own half width of 1) widens that slider's range to hold it, so that
         moving another slider keeps it (clamped, it was lost)."""
         values = {}
-        for name, slider in self.sliders.items():
-            value = getattr(pose, name) / self._unit(name)
+        for name, value in pose_terms(pose, self.half_width).items():
+            slider = self.sliders[name]
             low, high = RANGES[name][:2]
             slider.blockSignals(True)
             slider.setRange(min(low, value), max(high, value))
@@ -142,9 +129,8 @@ def install(window: Any) -> BendSliders:
         leaf = session.leaf
         bend.set_enabled(can_pose(leaf), SHEET_TIP if leaf is not None else "")
         if not bend.is_dragging():
-            sketch = session.state.sketch
             if can_pose(leaf):  # a sheet-bent scan's sliders are off: no width to read
-                bend.half_width = blade_half_width(leaf, None if sketch is None else sketch.frame)
+                bend.half_width = session.half_width
             bend.show_pose(session.pose)
 
     session.state_changed.connect(shown)

@@ -15,11 +15,13 @@ from PySide6.QtWidgets import (
     QDoubleSpinBox,
     QFileDialog,
     QHBoxLayout,
+    QLabel,
     QVBoxLayout,
     QWidget,
 )
 from vtkmodules.vtkCommonMath import vtkMatrix4x4  # one module: `import vtk` loads every one
 
+from leafstudio.gui.model.view_aids import STRETCH_OFF, k_label, stretches
 from leafstudio.gui.qt.actions import Action
 
 # each layer's tooltip: what it shows and which step of the paper it comes from
@@ -63,8 +65,9 @@ K_POSITION = (0.985, 0.98)  # its upper right corner, in the view's normalized c
 
 def stretch_matrix(result, scale: float):
     """A vtkMatrix4x4 stretching the view `scale` times along the leaf's normal, about its plane
-    (None for no stretch or no result): relief is a few percent of a leaf's length."""
-    if result is None or scale == 1.0:
+    (None for no stretch, no result, or a posed leaf: view_aids.stretches): relief is a few
+    percent of a leaf's length."""
+    if result is None or scale == 1.0 or not stretches(result):
         return None
     n, o = np.asarray(result.frame.normal), np.asarray(result.frame.origin)
     linear = np.eye(3) + (scale - 1.0) * np.outer(n, n)  # stretch along the normal only
@@ -113,6 +116,11 @@ class ViewAids(QWidget):
         row.addWidget(self.see_through)
         column.addLayout(row)
         column.addWidget(self.keep)
+        self.stretch_note = QLabel(STRETCH_OFF)
+        self.stretch_note.setWordWrap(True)
+        self.stretch_note.setStyleSheet("color: #b00020;")
+        self.stretch_note.hide()
+        column.addWidget(self.stretch_note)
         self.exaggeration.valueChanged.connect(lambda _: self.apply())
         self.see_through.toggled.connect(lambda _: self.apply())
         self.keep.toggled.connect(self._on_keep)
@@ -144,7 +152,9 @@ class ViewAids(QWidget):
             actor.mapper.scalar_range = self.kept[1]
         result = self.window_.session.result
         if result is not None:
-            self._show_k(f"K = {result.chosen_k}")
+            self._show_k(k_label(result))
+        off = result is not None and self.exaggeration.value() != 1.0 and not stretches(result)
+        self.stretch_note.setVisible(off)  # Height × set, and off for this bent leaf
         # one render at the next paint, with the result's own: a render here would be a second
         # (and a third, from the frame it ends with) full render of the scene per result
         self.window_.viewport.redraw()

@@ -1,7 +1,9 @@
 """The Forms gallery: a thumbnail per shape term, choosers for the other terms, each with its
 definition in plain words beside it. Choosing makes the form the document, as an editable sketch
 (one undo step, through Session.new_document); "Grow veins" fills the current outline with veins
-of the chosen venation (leafstudio.forms.grow_veins), one undo step too.
+of the chosen venation (leafstudio.forms.grow_veins), one undo step too. Fold, Curl, Roll and
+Twist show the document's pose, and bend an edited form or any other leaf as the Parameters
+panel's sliders do (gui/model/form_documents.py).
 
 Thumbnails are drawn once per shape and size with QPainter (outline and veins in the plane) and
 cached for the process.
@@ -9,11 +11,9 @@ cached for the process.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from functools import partial
 from typing import Any
 
-import numpy as np
 from PySide6.QtCore import QSignalBlocker, QSize, Qt, QTimer, Signal
 from PySide6.QtGui import QIcon, QImage, QPixmap
 from PySide6.QtWidgets import (
@@ -32,14 +32,17 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from leafstudio.core.bend import Pose
 from leafstudio.core.evaluate import blade_midrib
 from leafstudio.forms import SHAPES, VENATION_KINDS, Form, definition
 from leafstudio.forms.glossary import COMPARISONS
 from leafstudio.forms.terms import APEXES, DEFAULT_LOBES, MARGINS, RELIEF, TOOTHED, USER_BASES
+from leafstudio.gui.model.bending import can_pose, pose_terms, terms_pose
+from leafstudio.gui.model.form_documents import GalleryForms
 from leafstudio.gui.model.form_sketch import (
-    BOUNDARY_CONTROL,
     canonical_leaves,
     grow_blade,
+    outline_sketch,
     with_grown_veins,
 )
 from leafstudio.gui.model.jobs import Run, describe
@@ -47,6 +50,7 @@ from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.gui.qt.compare_view import FIRST, compare_actions
 from leafstudio.gui.qt.glossary_view import glossary_actions
 from leafstudio.gui.qt.leaf_picture import draw_plane
+from leafstudio.gui.qt.sketch import add_grow_row
 from leafstudio.gui.qt.turns import later
 from leafstudio.model import Leaf
 
@@ -58,6 +62,10 @@ DEBOUNCE_MS = 250
 THUMBNAILS = "thumbnails"  # the worker's job kind (and lane) growing the gallery's veins
 FORM = "form"  # the job kind growing a chosen form's blade (its own lane: never behind those)
 _thumbnails: dict[tuple[str, tuple[int, int]], QImage] = {}
+EDITED = (  # said under the shape of a form edited since it was made (form_documents.py)
+    "<br><i>Edited since it was made: Fold, Curl, Roll and Twist bend it, keeping the edits; the "
+    "other terms make a new leaf when you pick a shape (Undo brings this one back).</i>"
+)
 
 
 def thumbnail(shape: str, size: tuple[int, int] = THUMBNAIL, leaf: Leaf | None = None) -> QImage:
@@ -123,6 +131,13 @@ class FormsPanel(QWidget):
         self.roll = self._spin(QDoubleSpinBox(), -1, 1, 0, RELIEF["roll"], "", 0.05)
         self.twist = self._spin(QDoubleSpinBox(), -1, 1, 0, RELIEF["twist"], "", 0.05)
         self.wave = self._spin(QDoubleSpinBox(), 0, 0.2, 0, RELIEF["wave"], "", 0.005)
+        self.pose_boxes = {
+            "fold": self.fold,
+            "curl": self.curl,
+            "roll": self.roll,
+            "twist": self.twist,
+        }
+        self._edited = False  # the open form was edited since the gallery made it
         self.seed = self._spin(QSpinBox(), 0, 1_000_000, 0, RELIEF["seed"])
         self.variant = QPushButton("New variant")
         self.variant.setToolTip("Another leaf of the same kind: the next seed.")
@@ -225,6 +240,28 @@ class FormsPanel(QWidget):
     def _draw_thumbnail(item: QListWidgetItem, shape: str, leaf: Leaf) -> None:
         item.setIcon(QIcon(QPixmap.fromImage(thumbnail(shape, leaf=leaf))))
 
+    def show_pose(self, terms: dict[str, float]) -> dict[str, float]:
+        """Show the document's pose (bending.pose_terms) on Fold, Curl, Roll and Twist without
+        choosing anything; returns the figures the boxes took (rounded to their decimals)."""
+        for name, value in terms.items():
+            with QSignalBlocker(self.pose_boxes[name]):
+                self.pose_boxes[name].setValue(value)
+        return self.pose_figures()
+
+    def pose_figures(self) -> dict[str, float]:
+        """The figures Fold, Curl, Roll and Twist show."""
+        return {name: float(box.value()) for name, box in self.pose_boxes.items()}
+
+    def show_edited(self, edited: bool, poseable: bool = True) -> None:
+        """Say whether the open form was edited since it was made (its pose terms then bend it,
+        the others wait for a shape picked); the pose terms are off for a leaf they cannot bend
+        (a scan bent by its sheet)."""
+        for box in self.pose_boxes.values():
+            box.setEnabled(poseable)
+        if edited != self._edited:
+            self._edited = edited
+            self._describe()
+
     def show_pose_note(self, text: str) -> None:
         """A note under Fold, Curl and Wave on the chosen pose (none: hidden)."""
         self.pose_note.setText(text[:1].upper() + text[1:])
@@ -293,9 +330,10 @@ class FormsPanel(QWidget):
     def _describe(self) -> None:
         form_ = self.form()
         self.shape_text.setText(
-            f"<b>{form_.shape}</b>: {definition(form_.shape)}"
+            f"<b>{form_.shape}</b>: {definition(form_.shape)}" + (EDITED if self._edited else "")
             if self.gallery.currentItem() is not None
-            else "The leaf open is not a form: pick a shape to make one."
+            else "The leaf open is not a form: Fold, Curl, Roll and Twist bend it; pick a shape "
+            "to make a form."
         )
         self.texts["Apex"].setText(f"{form_.apex_term}: {definition(form_.apex_term, 'apex')}")
         fixed = SHAPES[form_.shape].fixed_base
@@ -321,6 +359,9 @@ class FormsPanel(QWidget):
         picked, self._picked = self._picked, False
         self.chosen.emit(self.form(), picked)
 
+    def change_due(self) -> bool:  # a change of the terms waits to be emitted (debounced)
+        return self._timer.isActive()
+
     def choose_now(self) -> None:
         """Emit the current form at once, as picked (tests, and the gallery's double click)."""
         self._timer.stop()
@@ -332,15 +373,18 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
     """Add the Forms dock to the main window (below the Sketch dock, both in sight at a first
     start as in the README's picture; a saved layout is restored over it): a chosen form
     becomes the document through the window's session (one undo step); Grow veins edits the
-    current sketch (one undo step). Also View > Compare forms and Help > Glossary of leaf
-    terms (compare_view.py, glossary_view.py). Returns the dock's panel."""
+    current sketch (one undo step); the pose terms follow the document (form_documents.py).
+    Also View > Compare forms and Help > Glossary of leaf terms (compare_view.py,
+    glossary_view.py). Returns the dock's panel."""
     panel = FormsPanel()
     # the gallery's veins grow off the main thread once the first leaf is on screen (or could
     # not be): started with the window, they held up its first result by 0.5-1 s (the GIL)
     for shown in (window.result_shown, window.failure_shown):
         shown.connect(lambda *_: panel.grow_veins(window.worker.start))
     session = window.session
-    shapes: dict[int, str] = {}  # the documents the gallery made (serials): their shapes
+    gallery = GalleryForms()  # the documents the gallery made, and whether they were edited
+    # the pose the dock's Fold, Curl, Roll and Twist show (the document's), and their figures
+    dock_pose: dict[str, Any] = {"shown": (Pose(), {})}
     # the last blade grown (its form without a pose, the blade, its side-on note), and the form
     # waiting for its blade: a blade grows on a lane (60-100 ms, the main thread's before), and
     # a pose slider's change only poses the last one (a few ms)
@@ -353,35 +397,48 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
         _unposed, blade, side_on, sketch = kept["blade"]
         panel.show_pose_note(side_on)
         session.new_document(form.leaf(blade), sketch, f"{form.shape} form")
-        shapes[session.state.serial] = form.shape
+        gallery.record(session.state, form.shape)
         panel.show_shape(form.shape)
 
     def follow(state, reason: str) -> None:
-        """The gallery highlights the open document's shape, if the gallery made it."""
+        """The gallery highlights the open document's shape, if the gallery made it, and the
+        pose terms show its pose (not while a form chosen is on its way, or a change waits)."""
         if reason in ("document", "undo", "fallback"):
-            panel.show_shape(shapes.get(state.serial))
+            panel.show_shape(gallery.shape(state))
+        if reason in ("params", "saved") or "form" in waiting or panel.change_due():
+            return
+        poseable = can_pose(state.leaf)
+        panel.show_edited(gallery.edited(state), poseable or state.leaf is None)
+        if poseable:
+            figures = panel.show_pose(pose_terms(session.pose, session.half_width))
+            dock_pose["shown"] = (session.pose, figures)
 
     def grown(blade: tuple[Form, Leaf, str, Sketch]) -> None:
         kept["blade"] = blade
         form = waiting.get("form")
         if form is not None and form.unposed() == blade[0]:
-            if session.state.serial == waiting.pop("serial"):
+            serial = waiting.pop("serial")
+            waiting.clear()  # before the document: the dock's pose then follows it
+            if session.state.serial == serial:
                 show(form)
-            waiting.clear()
 
     def failed(unposed: Form, exc: BaseException) -> None:
         form = waiting.get("form")
         if form is not None and form.unposed() == unposed:
             waiting.clear()
-            panel.show_shape(shapes.get(session.state.serial))  # the picked shape was not made
+            panel.show_shape(gallery.shape(session.state))  # the picked shape was not made
             window.show_error("Forms", describe(exc))
 
     def choose(form: Form, picked: bool) -> None:
         growing = waiting.get("form")
-        serial = session.state.serial  # a form's document, or the one open when it was picked
-        ours = serial == waiting["serial"] if growing is not None else serial in shapes
-        if not picked and not ours:
-            return  # a term changed while another document is open: only its definition shows
+        if growing is None and gallery.action(session.state, picked) == "bend":
+            # an edited form, or another leaf: the pose terms bend it (its other terms are kept
+            # for the next shape picked), one undo step as the Parameters panel's sliders
+            pose = terms_pose(panel.pose_figures(), session.half_width, dock_pose["shown"])
+            session.set_bend(pose, final=True)
+            return
+        if not picked and growing is not None and session.state.serial != waiting["serial"]:
+            return  # another document opened while the form chosen grows: it is not replaced
         unposed = form.unposed()
         if "blade" in kept and kept["blade"][0] == unposed:
             if "job" in waiting:
@@ -402,7 +459,7 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
             if leaf is None:
                 window.show_error("Grow veins", "There is no outline to grow veins in.")
                 return
-            sketch = _sketch_of(session, leaf)
+            sketch = outline_sketch(session.result, leaf)
         if sketch is None or len(sketch.boundary) < 3:
             window.show_error("Grow veins", "Draw an outline first (at least 3 points).")
             return
@@ -421,47 +478,9 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
     panel.chosen.connect(choose)
     session.state_changed.connect(follow)
     panel.grow.connect(grow)
-    _add_grow_row(window.editor, grow)
+    add_grow_row(window.editor, grow)
     window.add_dock("Forms", panel, dock_area)  # stacked below the Sketch dock
     window.compared = COMPARISONS[FIRST]  # the forms compared last (slides show them)
     window.add_actions(compare_actions() + glossary_actions())
     panel.compare_button.clicked.connect(window.actions["view.compare_forms"].trigger)
     return panel
-
-
-def _add_grow_row(editor: QWidget, grow: Callable[[str], None]) -> None:
-    """A "Grow veins" row in the sketch editor, above its drawing (the editor's layout is a
-    column of tool rows, then the view)."""
-    kind = QComboBox()
-    kind.addItems(list(VENATION_KINDS))
-    for i, name in enumerate(VENATION_KINDS):
-        kind.setItemData(i, definition(name, "venation"), Qt.ItemDataRole.ToolTipRole)
-    button = QPushButton("Grow veins")
-    button.setToolTip(
-        "Replace the veins by veins of this kind grown inside the outline (space colonization, "
-        "Runions et al. 2005): an ordinary sketch, editable, one undo step."
-    )
-    button.clicked.connect(lambda: grow(kind.currentText()))
-    row = QHBoxLayout()
-    row.addWidget(button)
-    row.addWidget(kind)
-    row.addStretch(1)
-    layout = editor.layout()
-    views = [i for i in range(layout.count()) if layout.itemAt(i).widget() is editor.view]
-    layout.insertLayout(views[0] if views else layout.count(), row)
-    editor.grow_button, editor.grow_kind = button, kind
-
-
-def _sketch_of(session, leaf: Leaf) -> Sketch | None:
-    """A loaded leaf's sketch: from its shown result, else from the leaf itself on the plane of
-    its boundary (its heights kept as relief)."""
-    result = getattr(session, "result", None)
-    if result is not None and getattr(result, "leaf", None) is leaf:
-        return Sketch.from_result(result)
-    from leafstudio.core.plane import fit_frame
-
-    frame = fit_frame(leaf.boundary, leaf.vein_points)
-    xy, h = frame.to_plane(leaf.boundary)
-    pick = np.unique(np.linspace(0, len(xy), BOUNDARY_CONTROL, endpoint=False).astype(int))
-    relief = np.column_stack([xy, h]) if np.any(np.abs(h) > 0) else np.zeros((0, 3))
-    return Sketch(boundary=xy[pick], frame=frame, relief=relief)

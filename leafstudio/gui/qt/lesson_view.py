@@ -24,6 +24,7 @@ from PySide6.QtWidgets import QHBoxLayout, QLabel, QSizePolicy, QVBoxLayout, QWi
 
 from leafstudio.gui.model.framing import blade_bounds
 from leafstudio.gui.model.lesson import Lesson, equation_png, plan_png
+from leafstudio.gui.model.view_aids import stretches
 from leafstudio.gui.qt.actions import Action
 from leafstudio.gui.qt.explain import stretch_matrix
 from leafstudio.gui.qt.viewport import Viewport
@@ -109,7 +110,10 @@ class LessonWindow(QWidget):
         self.title.setText(step.title)
         result = self.window_.session.result  # a bent leaf's steps run on its blade laid flat
         self.caption.setText(step.words(bent=result is not None and result.leaf.bend is not None))
-        self.footer.setText(FOOTER.format(progress=self.lesson.progress()))
+        footer = FOOTER.format(progress=self.lesson.progress())
+        if result is not None and not stretches(result):  # drawn as bent (view_aids.stretches)
+            footer += "\nThe 3D leaf is drawn as it is bent, its relief not stretched."
+        self.footer.setText(footer)
         ratio = self.devicePixelRatioF()
         pixmap = QPixmap()  # empty for a step without one
         pixmap.loadFromData(equation_png(step.equation, dpi=self.logicalDpiY() * ratio))
@@ -144,7 +148,8 @@ class LessonWindow(QWidget):
         self.show_step()
 
     def _stretch(self) -> None:
-        """The relief exaggerated STRETCH times on every actor of the 3D view."""
+        """The relief exaggerated STRETCH times on every actor of the 3D view (a posed leaf's
+        not: view_aids.stretches)."""
         matrix = stretch_matrix(self.window_.session.result, STRETCH)
         for actor in self.viewport.plotter.actors.values():
             if hasattr(actor, "SetUserMatrix"):

@@ -18,8 +18,10 @@ come back as the sketch it already shows and are ignored.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 
+from PySide6.QtCore import Qt
 from PySide6.QtGui import QPalette, QResizeEvent
 from PySide6.QtWidgets import (
     QCheckBox,
@@ -32,6 +34,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from leafstudio.forms import VENATION_KINDS, definition
 from leafstudio.gui.model.sketch_model import BOUNDARY, Sketch
 from leafstudio.gui.qt.profile_view import ProfileView
 from leafstudio.gui.qt.sketch_view import CROSSING_COLOR, SketchView
@@ -273,3 +276,26 @@ class SketchEditor(QWidget):
                 box.setSingleStep(0.01 * view.sketch.extent())
                 box.setValue(float(value))
                 box.blockSignals(False)
+
+
+def add_grow_row(editor: QWidget, grow: Callable[[str], None]) -> None:
+    """A "Grow veins" row in the sketch editor, above its drawing (the editor's layout is a
+    column of tool rows, then the view)."""
+    kind = QComboBox()
+    kind.addItems(list(VENATION_KINDS))
+    for i, name in enumerate(VENATION_KINDS):
+        kind.setItemData(i, definition(name, "venation"), Qt.ItemDataRole.ToolTipRole)
+    button = QPushButton("Grow veins")
+    button.setToolTip(
+        "Replace the veins by veins of this kind grown inside the outline (space colonization, "
+        "Runions et al. 2005): an ordinary sketch, editable, one undo step."
+    )
+    button.clicked.connect(lambda: grow(kind.currentText()))
+    row = QHBoxLayout()
+    row.addWidget(button)
+    row.addWidget(kind)
+    row.addStretch(1)
+    layout = editor.layout()
+    views = [i for i in range(layout.count()) if layout.itemAt(i).widget() is editor.view]
+    layout.insertLayout(views[0] if views else layout.count(), row)
+    editor.grow_button, editor.grow_kind = button, kind

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from leafstudio.gui.qt import explain
+from leafstudio.model import Leaf
 from tests.gui.qt.conftest import exported, wait_result
 
 
@@ -47,3 +50,34 @@ def test_height_exaggeration_kept_colours_and_k_in_the_view(window, qtbot):
     assert plotter.actors["mesh"].prop.opacity < 0.5  # the layers under it show
     aids.see_through.setChecked(False)
     assert plotter.actors["mesh"].prop.opacity == 1.0
+
+
+def test_a_posed_leaf_is_drawn_unstretched_with_a_note_and_a_flat_blades_k_is_unused(window, qtbot):
+    """appreview31, findings 4 and 8: Height × 3 stretched ovate curled 1 along its flat blade's
+    normal (its midrib drawn 2.37 long instead of 0.99): a posed leaf is now drawn as it is,
+    Height × saying why; and a blade with no relief of its own read "K = 1" beside a K of 3."""
+    from leafstudio.core.bend import Pose
+    from leafstudio.forms import Form
+    from leafstudio.gui.model.view_aids import FLAT_K
+
+    wait_result(qtbot, window)
+    aids = window.view_aids
+    plotter = window.viewport.plotter
+    window.session.new_document(Form("ovate", curl=1.0).leaf(), title="ovate curled")
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.leaf)
+    aids.exaggeration.setValue(3.0)
+    assert plotter.actors["mesh"].GetUserMatrix() is None
+    assert aids.stretch_note.isVisibleTo(aids)
+    aids.exaggeration.setValue(1.0)
+    assert not aids.stretch_note.isVisibleTo(aids)
+    t = np.linspace(0, 2 * np.pi, 80, endpoint=False)
+    boundary = np.column_stack([0.5 + 0.5 * np.cos(t), 0.2 * np.sin(t), 0 * t])
+    midrib = np.column_stack([np.linspace(0.02, 0.98, 12), np.zeros(12), np.zeros(12)])
+    window.session.new_document(Leaf(boundary, [midrib]), title="flat")
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.leaf)
+    window.session.set_bend(Pose(fold=45.0))
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.leaf)
+    assert aids._label[0] == FLAT_K and window.panel.k.value() == 3
+    aids.exaggeration.setValue(3.0)  # the drawn leaf bent by the sliders: not stretched either
+    assert plotter.actors["mesh"].GetUserMatrix() is None and aids.stretch_note.isVisibleTo(aids)
+    aids.exaggeration.setValue(1.0)

@@ -378,3 +378,59 @@ def test_grow_veins_starts_at_the_base_of_a_midrib_written_apex_first(window, pa
         wait_result(qtbot, window, lambda o: o.result.leaf is window.session.leaf)
         starts.append(window.session.leaf.veins[0][0])
     np.testing.assert_allclose(starts[1], starts[0], atol=1e-6)
+
+
+def test_the_docks_pose_bends_an_edited_form_keeping_its_edits_and_the_panels_curl(
+    window, panel, qtbot
+):
+    """appreview31, finding 2: ovate folded 45 in the dock, curled 0.5 in the Parameters panel,
+    a boundary point moved, then the dock's Roll nudged: the document became a pristine "New
+    leaf: ovate form" (the point and the curl gone), and the dock's Curl read 0 meanwhile. The
+    dock's pose now shows the document's and bends the edited leaf, one undo step."""
+    session = window.session
+    panel.gallery.setCurrentRow(list(SHAPES).index("ovate"))
+    panel.fold.setValue(45.0)
+    choose(qtbot, window, panel)
+    window.bend.sliders["curl"].setValue(0.5)  # the Parameters panel's: one step at once
+    assert session.pose.curl == 0.5 and panel.curl.value() == 0.5  # both show the document's
+    sketch = session.editable_sketch()
+    moved = sketch.moved(-1, 5, sketch.boundary[5] + 0.05 * (sketch.boundary[5] - [0.5, 0]))
+    session.commit_sketch(moved, "Move point")
+    assert "Edited since it was made" in panel.shape_text.text()
+    steps = session.history.index
+    panel.roll.setValue(0.3)  # the dock's Roll, debounced
+    qtbot.waitUntil(lambda: session.pose.roll != 0, timeout=WAIT_MS)
+    assert session.state.sketch is moved  # the edit kept
+    pose, width = session.pose, session.half_width
+    assert (pose.fold, pose.curl) == (45.0, 0.5)  # the panel's curl kept
+    assert pose.roll * width / np.pi == pytest.approx(0.3)
+    assert session.history.index == steps + 1 and session.history.undo_text().startswith("Bend")
+    assert window.bend.sliders["roll"].value() == pytest.approx(0.3)
+    session.undo()
+    assert session.state.sketch is moved and session.pose.roll == 0 and panel.roll.value() == 0
+
+
+def test_the_docks_other_terms_wait_for_a_shape_picked_once_the_form_is_edited(
+    window, panel, qtbot
+):
+    """An edited form's margin changed in the dock keeps the edits (its new terms apply to the
+    next shape picked, a new leaf, one undo step); an unedited form bent in the Parameters
+    panel is made anew with that bend."""
+    session = window.session
+    panel.gallery.setCurrentRow(list(SHAPES).index("ovate"))
+    choose(qtbot, window, panel)
+    window.bend.sliders["curl"].setValue(0.4)
+    serial = session.state.serial
+    panel.margin.setCurrentText("serrate")  # unedited: made anew, curled as it was
+    qtbot.waitUntil(lambda: session.state.serial != serial, timeout=WAIT_MS)
+    assert session.state.title == "ovate form" and session.pose.curl == pytest.approx(0.4)
+    sketch = session.editable_sketch()
+    moved = sketch.moved(-1, 3, sketch.boundary[3] * 1.02)
+    session.commit_sketch(moved, "Move point")
+    panel.margin.setCurrentText("entire")
+    qtbot.wait(3 * forms_dock.DEBOUNCE_MS)
+    assert session.state.sketch is moved  # not replaced
+    choose(qtbot, window, panel)  # a shape picked: a new leaf with the dock's terms
+    assert session.state.sketch is not moved and session.pose.curl == pytest.approx(0.4)
+    session.undo()
+    assert session.state.sketch is moved

@@ -1,0 +1,37 @@
+"""The view aids' decisions (gui/model/view_aids.py): K's label on a blade with no relief of its
+own (appreview31, finding 8) and no stretch of a posed leaf's view (finding 4)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from leafstudio.core.bend import Pose
+from leafstudio.core.pipeline import Pipeline
+from leafstudio.forms import Form
+from leafstudio.gui.model.view_aids import FLAT_K, k_label, stretches
+from leafstudio.model import Leaf
+from leafstudio.sources.demos import demo
+from tests.gui.builders import FAST
+
+
+def test_k_reads_unused_on_a_flat_blade_bent_or_not_and_the_mixtures_k_otherwise():
+    """A blade whose veins lie in its plane fits no mixture: the view said "K = 1" beside a K
+    slider at 3, bent or not."""
+    t = np.linspace(0, 2 * np.pi, 80, endpoint=False)
+    boundary = np.column_stack([0.5 + 0.5 * np.cos(t), 0.2 * np.sin(t), 0 * t])
+    midrib = np.column_stack([np.linspace(0.02, 0.98, 12), np.zeros(12), np.zeros(12)])
+    pose = Pose(curl=0.8)
+    for leaf in (
+        Leaf(boundary, [midrib]),
+        Leaf(pose.apply(boundary), [pose.apply(midrib)], bend=pose),
+    ):
+        result = Pipeline(leaf).run(FAST)
+        assert result.chosen_k == 1 and k_label(result) == FLAT_K
+    assert k_label(Pipeline(demo("nested")).run(FAST)) == "K = 3"
+
+
+def test_a_posed_leafs_view_is_not_stretched_a_flat_or_domed_ones_is():
+    """Ovate curled 1 stretched 3 times along its flat blade's normal drew its midrib 2.37 long
+    instead of 0.99: the stretch is off for a posed leaf."""
+    assert not stretches(Pipeline(Form("ovate", curl=1.0).leaf()).run(FAST))
+    assert stretches(Pipeline(Form("ovate").leaf()).run(FAST))
