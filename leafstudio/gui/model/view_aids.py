@@ -8,14 +8,11 @@ from typing import Any
 
 import numpy as np
 
-from leafstudio.core.bend import Pose
-from leafstudio.core.placed import PlacedPose
-
 FLAT_K = "K unused (flat blade)"
 # said where the stretch is set (Height ×, the lesson) while it is off for a posed leaf
 STRETCH_OFF = (
-    "Height × is off for a bent leaf: a stretch along one axis would stretch its fold or curl, "
-    "not its relief."
+    "Height × is off for a bent leaf: a stretch along one axis would stretch its bend (a fold, "
+    "a curl, a scan's curve), not its relief."
 )
 
 
@@ -31,9 +28,11 @@ def k_label(result: Any) -> str:
 
 def stretches(result: Any) -> bool:
     """Whether the view may stretch `result` along its flat blade's normal (explain.
-    stretch_matrix) to exaggerate its relief: not a leaf posed by a form's or the sliders'
-    fold, curl, roll or twist (a Pose or PlacedPose), whose bend that axis carries. Ovate curled
-    1, stretched 3 times (Height × 3, the lesson), drew its midrib 2.37 long instead of 0.99,
-    its extent along the normal 0.765 to 2.295 for a relief of 0.078 (appreview31, finding 4).
-    A scan's sheet stays stretched: its gentle curve is the relief the view shows."""
-    return not isinstance(getattr(result.leaf, "bend", None), (Pose, PlacedPose))
+    stretch_matrix) to exaggerate its relief: only an unbent leaf's. A leaf posed by a form's or
+    the sliders' fold, curl, roll or twist carries its bend along that axis: ovate curled 1,
+    stretched 3 times (Height × 3, the lesson), drew its midrib 2.37 long instead of 0.99, its
+    extent along the normal 0.765 to 2.295 for a relief of 0.078 (appreview31, finding 4). A
+    scan's sheet is no better: its flat blade's normal is 5-36° off the scan's own plane and
+    the curled blade stands 20-26 mm along it (soybean pot1_1 and pot1_15, sugar beet pot2_1,
+    37-48 mm long), which three times over is no relief."""
+    return getattr(result.leaf, "bend", None) is None

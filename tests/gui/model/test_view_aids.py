@@ -35,3 +35,25 @@ def test_a_posed_leafs_view_is_not_stretched_a_flat_or_domed_ones_is():
     instead of 0.99: the stretch is off for a posed leaf."""
     assert not stretches(Pipeline(Form("ovate", curl=1.0).leaf()).run(FAST))
     assert stretches(Pipeline(Form("ovate").leaf()).run(FAST))
+
+
+def test_a_scans_sheet_bent_view_is_not_stretched_either():
+    """A scan bent by its sheet (sheet_bend.Scaled) carries its curve along its flat blade's
+    normal as a pose does: soybean pot1_15's flat normal is 36° off its own plane and the blade
+    stands 26 mm along it, 31 mm long. Stretched, the curve grew, not the relief. Here a blade
+    rolled past the vertical."""
+    from leafstudio.core.sheet import fit_sheet
+    from leafstudio.core.sheet_bend import Scaled
+    from tests.core.test_sheet import _blade, rolled
+
+    bend = Scaled(fit_sheet(rolled(_blade(3000)), np.array([0.0, 0.0, 1.0]), 1.0), np.zeros(3), 1.0)
+    t = np.linspace(0, 2 * np.pi, 120, endpoint=False)
+    outline = np.column_stack([0.45 * np.cos(t), 0.18 * np.sin(t), np.zeros_like(t)])
+    x = np.linspace(-0.4, 0.4, 20)
+    midrib = np.column_stack([x, np.zeros_like(x), np.full_like(x, 0.01)])
+    leaf = Leaf(bend.bent(outline), [bend.bent(midrib)], bend=bend)
+    result = Pipeline(leaf).run(FAST)
+    normal = np.asarray(result.frame.normal)
+    points = np.asarray(result.triangle_mesh.points)
+    assert np.ptp(points @ normal) > 0.1  # its roll stands along the normal, not a relief
+    assert not stretches(result)
