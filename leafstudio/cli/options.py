@@ -101,8 +101,11 @@ def run_pipeline(args: argparse.Namespace, leaf: object):
     args.warnings = [*leaf_warnings(leaf), *result.warnings]  # for --metrics
     for note in args.warnings:
         log.warning(f"{args.input}: {note}")
-    if params.k == "auto":
-        log.info(f"{args.input}: K = {result.chosen_k} (chosen by BIC)")
+    if params.k == "auto":  # a flat blade's K of 1 is a placeholder, chosen by nothing
+        chosen = "unused (the blade is flat)" if result.fits_no_mixture else result.chosen_k
+        log.info(
+            f"{args.input}: K = {chosen}" + ("" if result.fits_no_mixture else " (chosen by BIC)")
+        )
     return params, result
 
 

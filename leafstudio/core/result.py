@@ -229,6 +229,13 @@ class Result:
         return len(self.surface.mixture.weights)
 
     @property
+    def fits_no_mixture(self) -> bool:
+        """Whether the blade had no relief of its own to fit (no veins, or all in its plane):
+        its gmm stage is then one Gaussian of amplitude 0 (steps.compute_gmm), and `chosen_k`'s 1
+        is that placeholder's, whatever K was asked (appreview31, finding 8)."""
+        return not np.any(self.em_mixture.amplitudes)
+
+    @property
     def mesh(self) -> pv.PolyData:
         """The mesh as a pyvista.PolyData with its point arrays, built on first use: a run itself
         never creates a VTK object (the app draws from `triangle_mesh` on its main thread)."""

@@ -6,8 +6,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
 FLAT_K = "K unused (flat blade)"
 # said where the stretch is set (Height ×, the lesson) while it is off for a posed leaf
 STRETCH_OFF = (
@@ -21,7 +19,7 @@ def k_label(result: Any) -> str:
     none is fitted. A blade with no relief of its own (no veins, or all in its plane) fits no
     mixture: its gmm stage is one Gaussian of amplitude 0 (core/steps.compute_gmm), whose
     chosen_k of 1 the view said beside a K slider at 3 (appreview31, finding 8)."""
-    if not np.any(result.em_mixture.amplitudes):
+    if result.fits_no_mixture:
         return FLAT_K
     return f"K = {result.chosen_k}"
 
