@@ -4,7 +4,8 @@ build item 6): they bend the document's leaf live through `Session.set_bend`
 shows its pose on them.
 
 Each reads as the Forms dock's term of the same name (forms/terms.RELIEF), over the same
-range: fold is the angle each half turns up about the midrib, widths kept; curl bends the
+range: fold is the angle each half turns up about the midrib, widths kept (about a straight
+crease from base to apex: a midrib that bows sideways stands off it, README); curl bends the
 midrib on a circle of radius 1 / (2 curl) from the base, its length kept (a leaf curled 0.5
 lifts its apex 0.46 of its length, curled 1 turns it 115°); roll is the share of a half turn
 the widest margins roll through, widths kept (1 closes the blade into a tube); twist is the
