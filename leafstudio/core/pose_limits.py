@@ -13,10 +13,10 @@ Each limit is read off forms posed past the sliders as `Form.leaf` poses them (o
 linear, cordate reconstructed at grid 64: their mesh's area over the flat blade's):
 
 - fold, FOLD each way: folded up, 0.980-1.008 of the area to 80° (82°: reniform 0.958; 85°:
-  0.925-1.007; 89°: 0.83-0.86); folded down the area grows from the sliders' own end (-75°:
-  1.008-1.034, -80°: 1.013-1.076, -85°: 1.04-1.12). 80° leaves room past the sliders' 75° for a
-  pose fitted to a leaf folded there (unfold.py fits ovate folded -75° as -75.03°), and
-  unfold.py fits no farther.
+  0.925-1.007; 88°: 0.86-0.89; 89°: 0.82-0.83, appreview31's s15); folded down the area grows
+  from the sliders' own end (-75°: 1.008-1.034, -80°: 1.013-1.076, -85°: 1.04-1.12). 80° leaves
+  room past the sliders' 75° for a pose fitted to a leaf folded there (unfold.py fits ovate
+  folded -75° as -75.03°), and unfold.py fits no farther.
 - curl, the midrib's turn 2 |curl| x up to MOST_TURN (0.95 of a half turn) at the blade's
   farthest x: past half a turn a curl is not undone (bend.Pose clips it). A curl of 1.5 per the
   length (3 radians) keeps 1.008-1.051 of the area, against 1.006-1.034 at the sliders' 1; at 2
@@ -31,8 +31,9 @@ linear, cordate reconstructed at grid 64: their mesh's area over the flat blade'
 A blade's measures are read so that a term the curves were not bent by (a hand edit) cannot
 hide: its flat blade (the pose's `flatten`) squeezes into the turn the term allows (a roll of
 1000 lays any blade within pi / 1000 of its midrib), so the relief's (the flat blade's own, kept
-in the project), the midrib's length as stored (every term keeps it) and the margin's reach
-from the midrib with the roll's later terms undone count too, the largest of each.
+in the project), the midrib's length as stored (every term keeps it, a twist to a few per cent)
+and the margin's reach from the midrib with the roll's later terms undone count too, the
+largest of each.
 """
 
 from __future__ import annotations
