@@ -17,8 +17,10 @@ origin (the forms' convention) and its apex at +X 1. Without veins, the base is 
 end of the leaf plane's long axis. The leaf's length is from the base to the apex along the
 midrib's direction (the farthest outline point that way): a form's 1, a cordate leaf's lobes not
 counted. A bent leaf's (a posed form, a scan on its sheet) are found on its flat blade and
-carried by the bend: the base bent, the axes the midrib's and the blade's there, the length the
-flat blade's.
+carried by the bend: the base bent, the axes turned as the bend turns the midrib and the blade
+across it at the base, the length the flat blade's. A fold, a roll and a twist keep a form's
+apex on +X (its midrib's chord within 0.12° of it, as flat); a curl lifts or lowers the apex
+off it, the blade leaving the base along +X.
 
 With a length (`--length 8cm`, `length=0.08`), the leaf is scaled to that real size, and written
 in metres for Y-up formats (glTF's unit; USD records metersPerUnit = 1) and in millimetres for
@@ -156,24 +158,33 @@ def result_placement(result: Any) -> Placement:
 
 
 def carried(placement: Placement, bend: Any) -> Placement:
-    """The flat blade's `placement` carried by `bend` (model.Bend): the base bent, the axes the
-    midrib's direction and the blade's across it there (central differences, STEP of the
-    length: a form's pose bends symmetrically about its base and keeps its frame), its length
-    the flat blade's. A scan's sheet unrolls the blade into a plane of its own, nowhere near
-    the scan's (a soybean's base was placed 8.3 mm off its 46 mm mesh)."""
+    """The flat blade's `placement` carried by `bend` (model.Bend): the base bent, the axes
+    turned as the bend turns the midrib and the blade across it at the base, its length the
+    flat blade's. Both are central differences, STEP of the length, on the midrib as it stands
+    (a pose's `on_midrib`, a scan's sheet has none): a fold turns each half about that hinge and
+    leaves it in place, but it turns points off it, and two taken on the flat sheet under a
+    form's raised midrib (slope 0.21 at an ovate form's base) tilted the axes by
+    (1 − cos fold) of it: a glb of ovate folded 60° had its apex 6.0° below +X (appreview31,
+    finding 1). The turn takes the flat midrib's direction and the blade's across it onto the
+    bent ones, so the axes keep their angle to the midrib, which rises off them as on the flat
+    blade. A scan's sheet unrolls the blade into a plane of its own, nowhere near the scan's (a
+    soybean's base was placed 8.3 mm off its 46 mm mesh)."""
     along, across, _ = placement.axes
     step = STEP * placement.length
-    base = placement.base
+    ends = placement.base + step * np.stack([along, -along, across, -across])
+    standing = getattr(bend, "on_midrib", None)
+    flat = ends if standing is None else standing(ends)
+    turn = _chord_frame(flat).T @ _chord_frame(bend.apply(flat))
+    return Placement(bend.apply(placement.base[None])[0], placement.axes @ turn, placement.length)
 
-    def chord(direction: np.ndarray) -> np.ndarray:
-        ends = bend.apply(np.stack([base + step * direction, base - step * direction]))
-        return ends[0] - ends[1]
 
-    bent_along = _unit(chord(along))
-    bent_across = chord(across)
-    bent_across = _unit(bent_across - (bent_across @ bent_along) * bent_along)
-    axes = np.stack([bent_along, bent_across, np.cross(bent_along, bent_across)])
-    return Placement(bend.apply(base[None])[0], axes, placement.length)
+def _chord_frame(ends: np.ndarray) -> np.ndarray:
+    """(3, 3) rows: the unit chord of (4, 3) `ends`' first two, the one across of their last
+    two made square to it, and the third by the right hand."""
+    along = _unit(ends[0] - ends[1])
+    across = ends[2] - ends[3]
+    across = _unit(across - (across @ along) * along)
+    return np.stack([along, across, np.cross(along, across)])
 
 
 def _unit(vector: np.ndarray) -> np.ndarray:

@@ -228,6 +228,16 @@ class Pose:
         """A pose cuts nothing out of the blade (model.Bend.trim)."""
         return None
 
+    def on_midrib(self, points: np.ndarray) -> np.ndarray:
+        """(n, 3) flat blade points moved along z to the midrib's height at their x: the hinge
+        the fold turns each half about, which it leaves in place (an export's axes are found
+        there, assets/placement.py); as given without a relief (the sheet z = 0's fold moves
+        nothing at y = 0)."""
+        points = np.array(points, dtype=float)
+        if self.relief is not None:
+            points[:, 2] = self.relief.hinge_height(points[:, 0])
+        return points
+
     def key(self) -> bytes:
         """Bytes that change with the bend (Leaf.fingerprint); no roll or twist keeps today's."""
         terms = [self.fold, self.curl] + ([self.roll] if self.roll != 0 else [])

@@ -61,6 +61,11 @@ class PlacedPose:
         """A pose cuts nothing out of the blade (model.Bend.trim)."""
         return None
 
+    def on_midrib(self, points: np.ndarray) -> np.ndarray:
+        """(n, 3) flat points moved to the midrib's height over the blade (`Pose.on_midrib`, in
+        the pose's frame)."""
+        return self._world(self.pose.on_midrib(self._blade(points)))
+
     def key(self) -> bytes:
         """Bytes that change with the pose or its frame (Leaf.fingerprint)."""
         f = self.frame

@@ -54,6 +54,7 @@ from leafstudio.core.bend import Pose, flat_leaf
 from leafstudio.core.hinge_fold import fold_share
 from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame, fit_frame
+from leafstudio.core.pose_limits import FOLD as FOLD_LIMIT  # the fold's search range, each way
 from leafstudio.core.pose_relief import (
     Relief,
     margin_relief,
@@ -67,7 +68,6 @@ from leafstudio.model import Leaf
 FIT_POINTS = 60  # the margin and the midrib thinned to about this many points each for the fit
 EXPLAINED = 0.25  # ... and is unfolded when the fitted pose leaves at most this share of what
 # the best quadratic height field over that plane leaves (the paper's base takes such a margin)
-FOLD_LIMIT = 85.0  # degrees: the fold's search range, each way
 FOLDS = (0.0, 60.0, -60.0)  # the fold's first guesses
 CURL_LIMIT = 1.5  # the curl's search range, each way, over the length: the midrib turns at most
 # 3 radians on its circle (bend.Pose: past half a turn a curl is not undone)

@@ -21,19 +21,23 @@ import numpy as np
 from leafstudio.core.bend import Pose, sheared_flatten
 from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame
+from leafstudio.core.pose_limits import FOLD, MOST_TURN, pose_trouble
 from leafstudio.core.pose_relief import Relief
 from leafstudio.core.sheet_bend import Scaled
 from leafstudio.errors import LeafError, shorten
 from leafstudio.model import Leaf
 
-MOST_TURN = 0.95 * np.pi  # radians a version 1 curl may turn the midrib through (rebent)
-
 
 def project_bend(value: Any, source: str, leaf: Leaf, version: int) -> Leaf:
     """`leaf` with the bend of a project's "bend" entry `value` (a format `version` 1 project's
-    curves bent again: `rebent`)."""
+    curves bent again: `rebent`). A pose past what it keeps of the blade is refused, in one line
+    naming the term, its value and its range on this blade (core/pose_limits.py)."""
     leaf = replace(leaf, bend=_bend(value, source, leaf))
-    return rebent(leaf) if version == 1 else leaf
+    leaf = rebent(leaf) if version == 1 else leaf
+    trouble = pose_trouble(leaf.bend, leaf.boundary, list(leaf.veins))
+    if trouble is not None:
+        raise LeafError(f'"bend": {trouble}', source)
+    return leaf
 
 
 FRAME_KEYS = ("origin", "u", "v", "normal")  # a bend's frame in a project (core/placed.py)
@@ -72,8 +76,9 @@ def _bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
         raise LeafError(f'"bend": its "relief": {named}', source)
     if not (abs(fold) < 90 and all(math.isfinite(t) for t in (curl, roll, twist))):
         raise LeafError(
-            f'"bend" must be {{"fold": degrees under 90, "curl", "roll", "twist": numbers}} (a '
-            f'"frame": {{"origin", "u", "v", "normal"}}, orthonormal axes; a "relief": '
+            f'"bend" must be {{"fold": degrees from -{FOLD:g} to {FOLD:g}, "curl", "roll", '
+            f'"twist": numbers}} (a "frame": {{"origin", "u", "v", "normal"}}, orthonormal '
+            f'axes; a "relief": '
             f'{{"along", "midrib", "knots", "mean": lists, "half_width", "rise", "fall": '
             f'numbers, "sheet": "margin" or "mean"}}), got {shorten(value)}',
             source,

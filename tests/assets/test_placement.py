@@ -289,3 +289,21 @@ def test_form_refuses_a_length_for_a_leaf_file(tmp_path: Path, capsys):
     assert code == 2 and err.count("\n") == 1
     assert "--length" in err and "reconstruct" in err
     assert not leaf.exists()
+
+
+@pytest.mark.parametrize("fold", [60, -60])
+def test_a_folded_form_is_written_with_its_apex_on_x(tmp_path: Path, fold):
+    """appreview31 finding 1: a fold turns each half about the midrib as it stands and leaves
+    the midrib where it is, yet the base's axes were carried from two points at the flat
+    sheet's height, below the hinge the relief raises (slope 0.21 at an ovate form's base): the
+    glb of ovate folded 60° put its apex 6.1° below +X. `form`, then `reconstruct --length`."""
+    from leafstudio.cli import main
+
+    leaf, glb = tmp_path / "folded.leaf.json", tmp_path / "folded.glb"
+    assert main(["form", "ovate", "--fold", str(fold), "-o", str(leaf), "-q"]) == 0
+    assert main(["reconstruct", str(leaf), "--grid", "40", "-o", str(glb), "--length", "8cm"]) == 0
+    points = read_points(glb)
+    assert np.linalg.norm(points, axis=1).min() < 1e-3 * 0.08  # the base at the origin
+    apex = points[np.argmax(np.linalg.norm(points, axis=1))]
+    assert apex[0] == pytest.approx(0.08, rel=0.01)
+    assert np.degrees(np.arctan2(np.hypot(apex[1], apex[2]), apex[0])) < 0.5

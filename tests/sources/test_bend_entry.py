@@ -111,3 +111,106 @@ def test_a_reliefs_bad_sheet_is_named_not_the_whole_bend_form(sheet):
     relief = pose.relief.entry() | {"sheet": sheet}
     with pytest.raises(LeafError, match='"relief": a relief\'s "sheet" must be "margin" or "mean"'):
         _bend({"fold": pose.fold, "relief": relief}, "leaf.leaf.json", posed)
+
+
+def _with_bend(tmp_path, bend: dict):
+    """A form's project (ovate folded 30, as `form` writes it) with its "bend" replaced."""
+    from leafstudio.sources.files import save_leaf
+
+    path = tmp_path / "edited.leaf.json"
+    save_leaf(Form("ovate", fold=30).leaf(), path)
+    data = json.loads(path.read_text())
+    data["bend"] = bend
+    path.write_text(json.dumps(data))
+    return path
+
+
+@pytest.mark.parametrize(
+    "bend, term",
+    [
+        ({"fold": 89}, '"fold" 89'),  # 0.83 of the blade's area
+        ({"fold": -85}, '"fold" -85'),  # 1.10
+        ({"roll": 1000}, '"roll" 1000'),  # 54 s, 5.9 GB, 2.35 M triangles
+        ({"roll": 1e9}, '"roll" 1e+09'),  # the boundary 0.34 of the length off the mesh
+        ({"curl": 5}, '"curl" 5'),  # wrapped past a full turn
+        ({"curl": 50}, '"curl" 50'),
+        ({"curl": -1e6}, '"curl" -1e+06'),
+        ({"twist": 100}, '"twist" 100'),  # refused as "is this a scan?"
+        ({"fold": 30, "roll": 1000}, '"roll" 1000'),
+    ],
+)
+def test_a_bend_past_what_the_pose_honours_is_refused_by_name(tmp_path, bend, term):
+    """appreview31 findings 6 and 9: a hand-edited (or another tool's) "bend" beyond what the
+    pose keeps was taken without a word. It is refused in one line that names the term, its
+    value and the range it may take on this blade, in the file's units."""
+    from leafstudio.errors import LeafError
+
+    with pytest.raises(LeafError) as raised:
+        load_project(_with_bend(tmp_path, bend))
+    message = str(raised.value)
+    assert term in message and "\n" not in message
+    assert " to " in message  # the range allowed
+
+
+def test_the_cli_refuses_such_a_bend_in_one_line(tmp_path, capsys):
+    from leafstudio.cli import main
+
+    path = _with_bend(tmp_path, {"roll": 1000})
+    assert main(["measure", str(path), "--grid", "32"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and '"roll" 1000' in err[0]
+
+
+EXTREMES = [(75, 1, 1, 1), (-75, -1, -1, -1), (75, -1, 1, -1), (-75, 1, -1, 1)]
+
+
+@pytest.mark.parametrize("shape", ["ovate", "reniform", "linear", "cordate"])
+@pytest.mark.parametrize("terms", EXTREMES)
+def test_a_form_posed_at_the_sliders_ends_reopens(tmp_path, shape, terms):
+    """Whatever `form` and the Forms dock write reopens: every term at its slider's end."""
+    from leafstudio.sources.files import save_leaf
+
+    fold, curl, roll, twist = terms
+    leaf = Form(shape, fold=fold, curl=curl, roll=roll, twist=twist).leaf()
+    path = tmp_path / "posed.leaf.json"
+    save_leaf(leaf, path)
+    assert load_project(path)[0].bend == leaf.bend
+
+
+@pytest.mark.parametrize("terms", EXTREMES)
+def test_a_drawn_leaf_bent_at_the_sliders_ends_reopens(tmp_path, terms):
+    """The Parameters panel's sliders at their ends (bend_sliders.RANGES, in their units: a roll
+    of 1 closes the blade into a tube, a twist of 1 turns the apex half a turn), saved as the
+    window saves, reopen with the same pose."""
+    from leafstudio.gui.model.bending import blade_half_width
+    from leafstudio.gui.model.session import Session
+    from leafstudio.model import Params
+    from leafstudio.sources.files import save_leaf
+    from tests.gui.builders import Runner
+    from tests.leaves import clicked_sketch
+
+    runner = Runner()
+    session = Session(runner, Params(k=3, grid=32))
+    session.commit_sketch(clicked_sketch(), "Draw")
+    fold, curl, roll, twist = terms
+    half = blade_half_width(session.state.leaf, session.state.sketch.frame)
+    session.set_bend(Pose(fold, curl, roll * np.pi / half, twist * np.pi), final=True)
+    path = tmp_path / "drawn.leaf.json"
+    save_leaf(session.state.leaf, path, session.state.params, session.state.sketch.to_dict())
+    leaf = load_project(path)[0]
+    assert isinstance(leaf.bend, PlacedPose) and leaf.bend.pose == session.state.leaf.bend.pose
+
+
+def test_a_pose_saved_without_its_relief_at_the_sliders_ends_reopens(tmp_path):
+    """A project saved before reliefs (its pose bends the sheet z = 0) at the sliders' ends."""
+    from leafstudio.model import Leaf
+    from leafstudio.sources.files import save_leaf
+
+    blade = Form("ovate").blade()
+    half = float(np.abs(blade.boundary[:, 1]).max())
+    for fold, curl, roll, twist in EXTREMES:
+        pose = Pose(fold, curl, roll * np.pi / half, twist * np.pi)
+        leaf = Leaf(pose.apply(blade.boundary), [pose.apply(v) for v in blade.veins], bend=pose)
+        path = tmp_path / "old.leaf.json"
+        save_leaf(leaf, path)
+        assert load_project(path)[0].bend == pose

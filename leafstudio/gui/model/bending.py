@@ -22,6 +22,7 @@ import shapely
 
 from leafstudio.core.bend import Pose, flat_leaf
 from leafstudio.core.placed import PlacedPose, blade_frame
+from leafstudio.core.pose_limits import eased_roll
 from leafstudio.core.pose_relief import margin_relief, relief_of
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.history import State, Step
@@ -178,7 +179,8 @@ def posed(
     own_relief = margin_relief if getattr(like_relief, "on_margin", False) else relief_of
     if isinstance(like, Pose):  # a form's blade is in its own coordinates
         relief = own_relief(flat.boundary, flat.veins) if about_relief else None
-        bend: Bend = replace(pose, relief=relief)
+        half = float(np.abs(flat.boundary[:, 1]).max())  # a widened tube stays one
+        bend: Bend = eased_roll(replace(pose, relief=relief), half)
     else:  # bent about the blade's own relief, read in its frame (core/pose_relief.py)
         # `flat` re-posed (no sketch's plane: set_bend on `like`'s flat blade) keeps its bend's
         # frame and relief. Found again, a fitted pose's frame (core/unfold.py: its normal the
@@ -199,7 +201,8 @@ def posed(
             relief = kept.pose.relief
         elif about_relief:
             relief = own_relief(blade(flat.boundary), [blade(v) for v in flat.veins])
-        bend = PlacedPose(replace(own, relief=relief), frame)
+        half = float(np.abs(blade(flat.boundary)[:, 1]).max())
+        bend = PlacedPose(eased_roll(replace(own, relief=relief), half), frame)
     return Leaf(bend.apply(flat.boundary), [bend.apply(v) for v in flat.veins], bend=bend)
 
 

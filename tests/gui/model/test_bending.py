@@ -431,3 +431,26 @@ def test_a_drawn_leaf_with_a_flat_midrib_keeps_its_curl_when_its_apex_moves():
     apex = int(np.argmax(sketch.boundary[:, 0]))
     session.commit_sketch(sketch.moved(-1, apex, sketch.boundary[apex] * [1.3, 1]), "Move point")
     assert abs(session.pose.curl - 0.5) < 1e-9, session.pose.curl
+
+
+def test_a_tube_widened_by_a_sketch_edit_stays_a_tube_and_reopens(tmp_path):
+    """A sketch edit keeps the pose per the blade's length, so a blade rolled into a tube (the
+    Roll slider's 1) and then made wider rolled its margins past the tube's seam (1.04 half
+    turns for a point moved 5% out), into itself; the loader refuses such a roll
+    (core/pose_limits.py), and the app wrote a project it could not open. The roll is eased
+    to the tube instead."""
+    session, _, sketch = drawn()
+    half = blade_half_width(session.leaf, sketch.frame)
+    session.set_bend(Pose(roll=np.pi / half))
+    b, midrib = np.asarray(sketch.boundary), np.asarray(sketch.veins[0])[:, :2]
+    chord = (midrib[-1] - midrib[0]) / np.linalg.norm(midrib[-1] - midrib[0])
+    across = (b - midrib[0]) @ [-chord[1], chord[0]]
+    widest = int(np.argmax(np.abs(across)))
+    out = b[widest] + 0.2 * across[widest] * np.array([-chord[1], chord[0]])  # 20% wider
+    session.commit_sketch(sketch.moved(-1, widest, out), "Move")
+    leaf = session.leaf
+    wider = blade_half_width(leaf, session.state.sketch.frame)
+    assert session.pose.roll * wider / np.pi == pytest.approx(1.0)
+    path = tmp_path / "tube.leaf.json"
+    save_leaf(leaf, path, session.params, session.state.sketch.to_dict())
+    assert load_project(path)[0].bend.pose == leaf.bend.pose

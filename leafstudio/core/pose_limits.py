@@ -1,0 +1,132 @@
+"""How far a pose may bend a blade and still be honoured (appreview31, findings 6 and 9).
+
+A project's "bend" (sources/bend_entry.py) holds a pose's terms per unit of the leaf's
+coordinates: the fold in degrees, the curl, the roll (a curvature) and the twist (radians per
+unit). The sliders and `form` keep them to a range per blade (bend_sliders.RANGES: fold 75°,
+curl 1 per the blade's length, a roll closing the blade into a tube, a twist of half a turn), but
+a hand edit or another tool's units can hold any number: a fold of 89° shrank a blade to 0.83 of
+its area, a roll of 1000 took 54 s and 5.9 GB and wrote a blade 7.5 times as large, a curl of 5
+wrapped it past a full turn. `pose_trouble` says which term is past what the pose keeps, its
+value and the range it may take on this blade, in the file's units.
+
+Each limit is read off forms posed past the sliders as `Form.leaf` poses them (ovate, reniform,
+linear, cordate reconstructed at grid 64: their mesh's area over the flat blade's):
+
+- fold, FOLD each way: folded up, 0.980-1.008 of the area to 80° (82°: reniform 0.958; 85°:
+  0.925-1.007; 88°: 0.86-0.89; 89°: 0.82-0.83, appreview31's s15); folded down the area grows
+  from the sliders' own end (-75°: 1.008-1.034, -80°: 1.013-1.076, -85°: 1.04-1.12). 80° leaves
+  room past the sliders' 75° for a pose fitted to a leaf folded there (unfold.py fits ovate
+  folded -75° as -75.03°), and unfold.py fits no farther.
+- curl, the midrib's turn 2 |curl| x up to MOST_TURN (0.95 of a half turn) at the blade's
+  farthest x: past half a turn a curl is not undone (bend.Pose clips it). A curl of 1.5 per the
+  length (3 radians) keeps 1.008-1.051 of the area, against 1.006-1.034 at the sliders' 1; at 2
+  (4 radians) the linear blade keeps 0.82.
+- roll, the widest margin's turn |roll| w (w the half width) up to ROLL_SHARE of a half turn:
+  the blade closed into a tube (the sliders' 1) keeps 0.997-1.000 of the area, 1.01 of a half
+  turn 0.988-0.998, 1.05 0.942-0.984 (the margins pile up where the tube closes).
+- twist, |twist| x at the apex up to TWIST_TURNS half turns: a twist keeps no size (the sliders'
+  half turn gives reniform 1.41 of its area, linear 1.004; a full turn 2.16 and 1.010), but it
+  is undone at any angle; a full turn holds a twisted grass blade's.
+
+A blade's measures are read so that a term the curves were not bent by (a hand edit) cannot
+hide: its flat blade (the pose's `flatten`) squeezes into the turn the term allows (a roll of
+1000 lays any blade within pi / 1000 of its midrib), so the relief's (the flat blade's own, kept
+in the project), the midrib's length as stored (every term keeps it, a twist to a few per cent)
+and the margin's reach from the midrib with the roll's later terms undone count too, the
+largest of each.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from leafstudio.core.bend import Pose
+
+FOLD = 80.0  # degrees each way (module docstring)
+MOST_TURN = 0.95 * np.pi  # radians the curl may turn the midrib through at the blade's end
+ROLL_SHARE = 1.01  # half turns the roll may turn the widest margin through (1: a tube)
+TWIST_TURNS = 2.0  # half turns the twist may turn the apex against the base
+
+
+def pose_trouble(bend: Any, boundary: np.ndarray, veins: list[np.ndarray]) -> str | None:
+    """What of `bend` (a bend.Pose, or a placed.PlacedPose in its frame) a blade whose (n, 3)
+    `boundary` and (m_i, 3) `veins` are bent by it (as a project holds them) cannot take, in
+    one line: the term, its value and the range allowed on this blade, in the file's units.
+    None when every term holds, or for a bend that is no pose (a scan's sheet)."""
+    pose = getattr(bend, "pose", bend)
+    if not isinstance(pose, Pose):
+        return None
+    if abs(pose.fold) > FOLD:
+        return (f'"fold" {pose.fold:g} is past what a fold keeps of the blade; a fold is taken '
+                f"from -{FOLD:g} to {FOLD:g} degrees")  # fmt: skip
+    reach, half = blade_measures(bend, boundary, veins)
+    per_unit = "per unit of the leaf's coordinates"
+    terms = (
+        ("curl", 2 * pose.curl * reach, MOST_TURN / (2 * reach), f"{per_unit}) turns its "
+         f"midrib, {reach:.3g} long, through {{turn:.3g}} radians; a curl is taken up to "
+         f"{MOST_TURN:.3g} radians (under half a turn)"),
+        ("twist", pose.twist * reach / np.pi, TWIST_TURNS * np.pi / reach, f"radians {per_unit})"
+         f" turns its apex, {reach:.3g} from its base, through {{turn:.3g}} half turns; a twist "
+         f"is taken up to {TWIST_TURNS:g} half turns"),
+        ("roll", pose.roll * half / np.pi, ROLL_SHARE * np.pi / half, f"{per_unit}) rolls its "
+         f"margins, {half:.3g} from its midrib, through {{turn:.3g}} half turns; a roll is taken "
+         f"up to {ROLL_SHARE:g} (a closed tube)"),
+    )  # fmt: skip
+    for name, turn, most, says in terms:
+        value = getattr(pose, name)
+        if value != 0 and not abs(value) <= most:  # not: a reach of 0 gives nan
+            return (f'"{name}" {value:g} ({says.format(turn=abs(turn))}: from {-most:.3g} to '
+                    f"{most:.3g} on this blade")  # fmt: skip
+    return None
+
+
+def eased_roll(pose: Pose, half: float) -> Pose:
+    """`pose` with a roll that turns the blade's widest margin, `half` from the midrib in the
+    pose's units, past ROLL_SHARE of a half turn eased to the closed tube: a sketch edit keeps
+    the pose per the blade's length (gui/model/bending.py), so a tube made 20% wider rolled its
+    margins 1.2 half turns, into itself, and its project was refused."""
+    most = np.pi / half if half > 0 else np.inf
+    if abs(pose.roll) <= ROLL_SHARE * most:
+        return pose
+    return replace(pose, roll=float(np.copysign(most, pose.roll)))
+
+
+def blade_measures(bend: Any, boundary: np.ndarray, veins: list[np.ndarray]) -> tuple[float, float]:
+    """The blade's reach along its midrib (its farthest x from the base: how far a curl and a
+    twist turn it) and its half width (how far a roll turns its margins) in the pose's
+    coordinates, from the (n, 3) `boundary` and (m_i, 3) `veins` that `bend` (a Pose or a
+    PlacedPose) bends; each the largest of its flat blade's, its relief's and, as stored, the
+    midrib's length or the margin's reach from it with the roll's later terms undone (module
+    docstring). 1 for a blade with no extent, which the loader refuses on its own."""
+    pose, frame = getattr(bend, "pose", bend), getattr(bend, "frame", None)
+
+    def blade(points: np.ndarray) -> np.ndarray:
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        return points if frame is None else np.column_stack(frame.to_plane(points))
+
+    stored = blade(boundary)
+    midrib = blade(veins[0]) if len(veins) else np.zeros((0, 3))
+    with np.errstate(all="ignore"):
+        flat = pose.flatten(stored)
+        rolled = replace(pose, roll=0.0).flatten(stored) if pose.roll != 0 else flat
+    relief = pose.relief
+    reach = _largest(
+        np.abs(flat[:, 0]),
+        np.linalg.norm(np.diff(midrib, axis=0), axis=1).sum(keepdims=True),
+        np.abs([relief.knots[0], relief.knots[-1]]) if relief is not None else [],
+    )
+    half = _largest(
+        np.abs(flat[:, 1]),
+        np.hypot(rolled[:, 1], rolled[:, 2]),
+        [relief.half_width] if relief is not None else [],
+    )
+    return reach or 1.0, half or 1.0
+
+
+def _largest(*values: Any) -> float:
+    """The largest finite value of any of the arrays, else 0."""
+    finite = [v[np.isfinite(v)] for v in (np.asarray(a, dtype=float).ravel() for a in values)]
+    return max((float(v.max()) for v in finite if len(v)), default=0.0)
