@@ -3,7 +3,8 @@
 Runs ``ls.reconstruct(ls.demo("nested"), ls.Params())`` in a fresh interpreter whose numba cache
 is an empty temporary folder (``NUMBA_CACHE_DIR``), as a new user's first run, and prints:
 
-- ``compile_s``: the wall time of the workers' compile (core/kernels.py) that the run starts with;
+- ``compile_s``: the wall time of the workers' compile (core/kernels.py) that the run starts with,
+  its loading of each kernel from the cache as its worker finishes it included;
 - ``wall_s``: the run's wall time (import excluded), the compile's included;
 - ``cpu_s``: the CPU time of the run, its own and that of any process it waited on;
 - ``workers_cpu_s``: each compiling worker's CPU time (core/kernels.py); on an idle machine with

@@ -9,8 +9,9 @@ of its own, and before bounds, _nearer_than and _prediction_misses became numpy;
 LAPACK, BLAS and sort calls became loops), during which an app's window would not repaint. Here each
 kernel is compiled for the one signature a run uses (`KERNELS`, explicit) by worker processes (one
 per core: fresh interpreters that import only the kernels' modules, each taking the costliest kernel
-left) into numba's on-disk cache; the run then loads them (about 0.5 s). The calling thread only
-waits, and says how many are done, so the app's window stays responsive and its status counts them.
+left) into numba's on-disk cache. The calling thread loads each from there as soon as its worker
+has written it (about 12 ms each: the run loaded all 41 after the compile, 0.4 s of its wall
+time), and says how many are done, so the app's window stays responsive and its status counts them.
 A run asked to stop (the app's Cancel, its window closing) ends the workers at once (`should_stop`,
 polled every POLL_S; at exit, any still running): the kernels they had compiled stay in the cache
 (numba writes each file whole, by renaming), the next run compiles the rest.
@@ -25,6 +26,17 @@ The kernels a run calls on some inputs only (a cloud's projection) and those of 
 first result is on screen, its status saying so), so that the first reconstruction does not
 wait for them and the app's process never compiles them holding the GIL (its window stalled
 while they compiled on the worker thread). Set-up compiles both tables (`./dev setup`).
+
+Where the flat demo's compile goes (session 31; serial CPU on the 2-core machine, which other
+jobs loaded): 19-20 s for KERNELS in one process, of which the 41 kernels' own bodies 11.3 s
+(compiled again, warm), the kernels they call 4.4 s and numba's own overloads they use
+(np.empty, np.zeros, max, ...) 1.8 s; each worker adds 0.5 s of imports and 0.3 s warming
+numba at its first compile, and compiles numba's overloads again (they are not cached), so the
+two workers spend 21 s in all. Measured and left out: numba's O1 (0.8 s less, a warm run 1 ms
+slower), LLVM's per-function pre-pass skipped in the workers but for fastmath code (0.8-1.5 s
+less, the same bits, but the warm run's kernels 0.1-0.4 ms slower), no CFunc wrappers (0.2 s)
+or CPython wrappers for the kernels only kernels call (0.1-0.2 s), numpy's error model (none),
+single-caller kernels inlined (0.2 s), one OpenBLAS thread in the workers (none measured).
 
 tests/core/test_first_compile.py checks that the tables name every kernel core calls from
 Python, with the signature it is called with. A kernel they missed would still work: the
@@ -355,11 +367,16 @@ def _compile(
                     if should_stop is not None and should_stop():
                         break
                     try:
-                        compiled.add(done.get(timeout=POLL_S))
+                        name = done.get(timeout=POLL_S)
                     except queue.Empty:
                         if all(f.done() for f in running) and done.empty():
                             break  # a worker died: the callers compile what is left
                         continue
+                    compiled.add(name)
+                    # loaded from the cache now, while the workers compile the rest: the run
+                    # loaded the 41 after the compile (bench_first_run's wall_s - compile_s,
+                    # 0.53 -> 0.15 s; a kernel missing from the cache compiles here instead)
+                    dispatcher(name).compile(SIGNATURES[name])
                     if on_stage is not None:
                         on_stage(f"{STAGE} {len(compiled)}/{len(names)}")
             finally:  # stopped, or on_stage raised: no worker compiles on

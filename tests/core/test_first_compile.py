@@ -227,3 +227,16 @@ def test_measurings_compile_is_tried_once_per_process_even_when_its_stamp_is_not
     evaluate.edge_counts(np.array([[0, 1, 2]]))
     assert tried == [list(kernels.MEASURING)] * 2  # nothing marked, and tried to the end once
     assert not kernelcache.kernels_cached(kernels.MEASURE)
+
+
+def test_the_compile_loads_each_kernel_as_its_worker_ends_it(monkeypatch, tmp_path):
+    """Each kernel compiled is loaded from the cache at once, while the workers compile the
+    rest: the run loaded all 41 after the compile, 0.4 s of a first run's wall time."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(kernels, "KERNELS", {CHEAP: kernels.KERNELS[CHEAP]})
+    loaded = []
+    real = kernels.dispatcher
+    monkeypatch.setattr(kernels, "dispatcher", lambda name: loaded.append(name) or real(name))
+    kernels.compile_kernels(workers=1)
+    assert loaded == [CHEAP]
+    assert kernels.KERNELS[CHEAP] in real(CHEAP).signatures
