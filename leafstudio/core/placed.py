@@ -11,6 +11,7 @@ and maps them back. It is a `model.Bend`, so the pipeline flattens and bends it 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -110,3 +111,12 @@ def blade_frame(leaf: Leaf, plane: Frame | None = None) -> Frame:
     u = along[0] * plane.u + along[1] * plane.v
     origin = plane.to_world(ends[:1], np.zeros(1))[0]
     return Frame(origin=origin, u=u, v=np.cross(plane.normal, u), normal=plane.normal)
+
+
+def fitted(bend: Any) -> bool:
+    """Whether `bend` is a pose fitted to curves in 3D about its midrib (core/unfold.py): a
+    PlacedPose whose relief says its sheet is the margin's plane (Relief.on_margin, set by
+    margin_relief). Read off the means, a drawn blade with a flat midrib curled 0.5 was one,
+    and its apex dragged 30% out, it read a curl of 0.575 (test_bending)."""
+    relief = getattr(getattr(bend, "pose", None), "relief", None)
+    return isinstance(bend, PlacedPose) and relief is not None and relief.on_margin

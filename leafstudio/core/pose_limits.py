@@ -44,11 +44,16 @@ from typing import Any
 import numpy as np
 
 from leafstudio.core.bend import Pose
+from leafstudio.core.placed import fitted
 
 FOLD = 80.0  # degrees each way (module docstring)
 MOST_TURN = 0.95 * np.pi  # radians the curl may turn the midrib through at the blade's end
 ROLL_SHARE = 1.01  # half turns the roll may turn the widest margin through (1: a tube)
 TWIST_TURNS = 2.0  # half turns the twist may turn the apex against the base
+# a pose fitted to curves in 3D (core/unfold.py, its relief on the margin's plane) was searched
+# to 85° each way before FOLD: the projects the app saved then reopen, their fit reproducing
+# the curves they were fitted to
+FITTED_FOLD = 85.0
 
 
 def pose_trouble(bend: Any, boundary: np.ndarray, veins: list[np.ndarray]) -> str | None:
@@ -59,9 +64,10 @@ def pose_trouble(bend: Any, boundary: np.ndarray, veins: list[np.ndarray]) -> st
     pose = getattr(bend, "pose", bend)
     if not isinstance(pose, Pose):
         return None
-    if abs(pose.fold) > FOLD:
+    most_fold = FITTED_FOLD if fitted(bend) else FOLD
+    if abs(pose.fold) > most_fold:
         return (f'"fold" {pose.fold:g} is past what a fold keeps of the blade; a fold is taken '
-                f"from -{FOLD:g} to {FOLD:g} degrees")  # fmt: skip
+                f"from -{most_fold:g} to {most_fold:g} degrees")  # fmt: skip
     reach, half = blade_measures(bend, boundary, veins)
     per_unit = "per unit of the leaf's coordinates"
     terms = (

@@ -214,3 +214,30 @@ def test_a_pose_saved_without_its_relief_at_the_sliders_ends_reopens(tmp_path):
         path = tmp_path / "old.leaf.json"
         save_leaf(leaf, path)
         assert load_project(path)[0].bend == pose
+
+
+def test_a_fit_the_app_saved_past_the_folds_limit_reopens(tmp_path):
+    """A pose fitted to curves in 3D (core/unfold.py) was searched to 85° each way before the
+    loader took folds to pose_limits.FOLD (80°): a project the app saved with such a fit (a leaf
+    folded past 80° given as curves) was refused on opening. It reopens, its curves as saved;
+    a form's pose at the same fold is still refused."""
+    from dataclasses import replace
+
+    from leafstudio.core.bend import flat_leaf
+    from leafstudio.core.unfold import fit_pose
+    from leafstudio.errors import LeafError
+    from leafstudio.model import Leaf
+
+    form = Form("ovate", fold=75.0).leaf()
+    fit = fit_pose(Leaf(form.boundary, form.veins))
+    assert fit is not None and fit.pose.relief.on_margin
+    flat = flat_leaf(Leaf(form.boundary, form.veins, bend=fit))
+    bend = PlacedPose(replace(fit.pose, fold=83.0), fit.frame)
+    leaf = Leaf(bend.apply(flat.boundary), [bend.apply(v) for v in flat.veins], bend=bend)
+    path = tmp_path / "fitted.leaf.json"
+    save_leaf(leaf, path)
+    opened = load_project(path)[0]
+    assert opened.bend.pose.fold == 83.0
+    assert np.allclose(opened.boundary, leaf.boundary)
+    with pytest.raises(LeafError, match='"fold" 83'):
+        load_project(_with_bend(tmp_path, {"fold": 83}))

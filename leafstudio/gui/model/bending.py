@@ -21,7 +21,7 @@ import numpy as np
 import shapely
 
 from leafstudio.core.bend import Pose, flat_leaf
-from leafstudio.core.placed import PlacedPose, blade_frame
+from leafstudio.core.placed import PlacedPose, blade_frame, fitted
 from leafstudio.core.pose_limits import eased_roll
 from leafstudio.core.pose_relief import margin_relief, relief_of
 from leafstudio.errors import LeafError
@@ -204,15 +204,6 @@ def posed(
         half = float(np.abs(blade(flat.boundary)[:, 1]).max())
         bend = PlacedPose(eased_roll(replace(own, relief=relief), half), frame)
     return Leaf(bend.apply(flat.boundary), [bend.apply(v) for v in flat.veins], bend=bend)
-
-
-def fitted(bend: Bend | None) -> bool:
-    """Whether `bend` is a pose fitted to curves in 3D about its midrib (core/unfold.py): a
-    PlacedPose whose relief says its sheet is the margin's plane (Relief.on_margin, set by
-    margin_relief). Read off the means, a drawn blade with a flat midrib curled 0.5 was one,
-    and its apex dragged 30% out, it read a curl of 0.575 (test_bending)."""
-    relief = getattr(getattr(bend, "pose", None), "relief", None)
-    return isinstance(bend, PlacedPose) and relief is not None and relief.on_margin
 
 
 def keeps_fit(like: Bend | None, before: Any, sketch: Any) -> bool:
