@@ -32,8 +32,12 @@ A blade's measures are read so that a term the curves were not bent by (a hand e
 hide: its flat blade (the pose's `flatten`) squeezes into the turn the term allows (a roll of
 1000 lays any blade within pi / 1000 of its midrib), so the relief's (the flat blade's own, kept
 in the project), the midrib's length as stored (every term keeps it, a twist to a few per cent)
-and the margin's reach from the midrib with the roll's later terms undone count too, the
-largest of each.
+and, for a pose without a relief (whose half width the relief would hold), the margin's reach
+across the midrib with the roll's later terms undone count too, the largest of each. Across
+only: its distance from the midrib counted the blade's own heights, and a wavy form rolled into a
+tube by the sliders (cordate, wave 0.2, roll 1) read 1.41 half turns and its project was refused;
+and across alone, undone without the roll, a fold leaves it off too (hastate, wave 0.2, folded
+75° and rolled 1: 1.08 half turns).
 """
 
 from __future__ import annotations
@@ -105,8 +109,9 @@ def blade_measures(bend: Any, boundary: np.ndarray, veins: list[np.ndarray]) -> 
     twist turn it) and its half width (how far a roll turns its margins) in the pose's
     coordinates, from the (n, 3) `boundary` and (m_i, 3) `veins` that `bend` (a Pose or a
     PlacedPose) bends; each the largest of its flat blade's, its relief's and, as stored, the
-    midrib's length or the margin's reach from it with the roll's later terms undone (module
-    docstring). 1 for a blade with no extent, which the loader refuses on its own."""
+    midrib's length or, without a relief, the margin's reach across it with the roll's later
+    terms undone (module docstring). 1 for a blade with no extent, which the loader refuses on
+    its own."""
     pose, frame = getattr(bend, "pose", bend), getattr(bend, "frame", None)
 
     def blade(points: np.ndarray) -> np.ndarray:
@@ -126,7 +131,7 @@ def blade_measures(bend: Any, boundary: np.ndarray, veins: list[np.ndarray]) -> 
     )
     half = _largest(
         np.abs(flat[:, 1]),
-        np.hypot(rolled[:, 1], rolled[:, 2]),
+        np.abs(rolled[:, 1]) if relief is None else [],
         [relief.half_width] if relief is not None else [],
     )
     return reach or 1.0, half or 1.0

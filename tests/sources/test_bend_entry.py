@@ -241,3 +241,24 @@ def test_a_fit_the_app_saved_past_the_folds_limit_reopens(tmp_path):
     assert np.allclose(opened.boundary, leaf.boundary)
     with pytest.raises(LeafError, match='"fold" 83'):
         load_project(_with_bend(tmp_path, {"fold": 83}))
+
+
+@pytest.mark.parametrize(
+    "form",
+    [
+        {"shape": "cordate", "wave": 0.2, "roll": 1.0},  # read 1.41 half turns, refused
+        {"shape": "ovate", "wave": 0.2, "fold": 75.0, "curl": 1.0, "roll": 1.0, "twist": 1.0},
+        {"shape": "hastate", "wave": 0.2, "fold": 75.0, "roll": 1.0},
+        {"shape": "orbicular", "aspect": 30.0, "fold": -75.0, "roll": -1.0},  # 1.31
+    ],
+)
+def test_a_wavy_or_narrow_form_rolled_at_the_sliders_end_reopens(tmp_path, form):
+    """review31: the roll's measure of the margin's reach counted the blade's own heights (its
+    wave, its relief), so `form cordate --wave 0.2 --roll 1` wrote a project it then refused
+    ("rolls its margins ... through 1.41 half turns")."""
+    from leafstudio.sources.files import save_leaf
+
+    leaf = Form(**form).leaf()
+    path = tmp_path / "rolled.leaf.json"
+    save_leaf(leaf, path)
+    assert load_project(path)[0].bend == leaf.bend
