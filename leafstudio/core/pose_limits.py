@@ -48,7 +48,7 @@ from typing import Any
 import numpy as np
 
 from leafstudio.core.bend import Pose
-from leafstudio.core.placed import fitted
+from leafstudio.core.placed import PlacedPose, fitted
 
 FOLD = 80.0  # degrees each way (module docstring)
 MOST_TURN = 0.95 * np.pi  # radians the curl may turn the midrib through at the blade's end
@@ -58,6 +58,36 @@ TWIST_TURNS = 2.0  # half turns the twist may turn the apex against the base
 # to 85° each way before FOLD: the projects the app saved then reopen, their fit reproducing
 # the curves they were fitted to
 FITTED_FOLD = 85.0
+CURL_SEARCH = 1.5  # the curl core/unfold.py searches to, each way, over the bent outline's
+# diagonal: a strongly curled leaf's diagonal is short, and its fit turned the midrib 3.02
+# radians, past MOST_TURN (review31: cordate curled 1.5, three forms 1.7)
+FIT_POINTS = 60  # the margin and the midrib thinned to about this many points each for the fit
+SEARCH_SLACK = 1.05  # a fit at its search's end, re-posed by a sketch edit, still reopens
+
+
+def fit_bounds(boundary: np.ndarray, midrib: np.ndarray) -> tuple[float, float, float, float]:
+    """What core/unfold.py searches a pose over for curves in 3D, the (n, 3) `boundary` and
+    the (m, 3) `midrib` (either end first) as given: the largest curl (CURL_SEARCH over the
+    outline's diagonal) and roll (a half turn of the margin's farthest point from the midrib's
+    chord: the flat blade is at least as wide), then that diagonal and that farthest reach,
+    over the curves thinned to FIT_POINTS as the fit takes them."""
+    length = float(np.linalg.norm(np.ptp(boundary, axis=0)))
+    boundary = boundary[:: max(1, len(boundary) // FIT_POINTS)]
+    origin = midrib[0]
+    chord = (midrib[-1] - origin) / np.linalg.norm(midrib[-1] - origin)
+    points = boundary - origin
+    reach = float(np.linalg.norm(points - np.outer(points @ chord, chord), axis=1).max())
+    return CURL_SEARCH / length, np.pi / reach, length, reach
+
+
+def fit_like(bend: Any) -> bool:
+    """Whether `bend` may be a pose core/unfold.py fitted to curves in 3D, which the app saves
+    as it found it: a PlacedPose whose relief is on the margin's plane (placed.fitted), or has
+    none (a fit past unfold.HINGE_SIZES: ovate curled 1.7 was fitted a curl turning its midrib
+    3.11 radians). A drawn leaf's, bent by the sliders, has its sketch's relief."""
+    return fitted(bend) or (
+        isinstance(bend, PlacedPose) and getattr(bend.pose, "relief", 0) is None
+    )
 
 
 def pose_trouble(bend: Any, boundary: np.ndarray, veins: list[np.ndarray]) -> str | None:
@@ -68,7 +98,7 @@ def pose_trouble(bend: Any, boundary: np.ndarray, veins: list[np.ndarray]) -> st
     pose = getattr(bend, "pose", bend)
     if not isinstance(pose, Pose):
         return None
-    most_fold = FITTED_FOLD if fitted(bend) else FOLD
+    most_fold = FITTED_FOLD if fit_like(bend) else FOLD
     if abs(pose.fold) > most_fold:
         return (f'"fold" {pose.fold:g} is past what a fold keeps of the blade; a fold is taken '
                 f"from -{most_fold:g} to {most_fold:g} degrees")  # fmt: skip
@@ -85,7 +115,12 @@ def pose_trouble(bend: Any, boundary: np.ndarray, veins: list[np.ndarray]) -> st
          f"margins, {half:.3g} from its midrib, through {{turn:.3g}} half turns; a roll is taken "
          f"up to {ROLL_SHARE:g} (a closed tube)"),
     )  # fmt: skip
+    searched = {}  # a fitted pose's: what the fit searched, which the app saved
+    if fit_like(bend) and len(veins) and len(veins[0]) > 1:
+        most_curl, most_roll = fit_bounds(np.asarray(boundary), np.asarray(veins[0]))[:2]
+        searched = {"curl": SEARCH_SLACK * most_curl, "roll": SEARCH_SLACK * most_roll}
     for name, turn, most, says in terms:
+        most = max(most, searched.get(name, 0.0))
         value = getattr(pose, name)
         if value != 0 and not abs(value) <= most:  # not: a reach of 0 gives nan
             return (f'"{name}" {value:g} ({says.format(turn=abs(turn))}: from {-most:.3g} to '

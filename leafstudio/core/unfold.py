@@ -54,6 +54,8 @@ from leafstudio.core.bend import Pose, flat_leaf
 from leafstudio.core.hinge_fold import fold_share
 from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame, fit_frame
+from leafstudio.core.pose_limits import CURL_SEARCH as CURL_LIMIT  # the curl's, over the length
+from leafstudio.core.pose_limits import FIT_POINTS, fit_bounds  # the fit's points; its roll's
 from leafstudio.core.pose_limits import FOLD as FOLD_LIMIT  # the fold's search range, each way
 from leafstudio.core.pose_relief import (
     Relief,
@@ -65,12 +67,9 @@ from leafstudio.core.pose_relief import (
 from leafstudio.core.prepare.vein_order import midrib_turned
 from leafstudio.model import Leaf
 
-FIT_POINTS = 60  # the margin and the midrib thinned to about this many points each for the fit
 EXPLAINED = 0.25  # ... and is unfolded when the fitted pose leaves at most this share of what
 # the best quadratic height field over that plane leaves (the paper's base takes such a margin)
 FOLDS = (0.0, 60.0, -60.0)  # the fold's first guesses
-CURL_LIMIT = 1.5  # the curl's search range, each way, over the length: the midrib turns at most
-# 3 radians on its circle (bend.Pose: past half a turn a curl is not undone)
 # fold, curl, roll (0, 1, 2): all three first (a leaf no pose explains is left after one fit),
 # then the fewer that may do as well
 TERMS = ((0, 1, 2), (0,), (1,), (2,), (0, 1))
@@ -268,16 +267,16 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
     # crossing: the hinge may explain a little less (HINGE_CROSSED; deltoid folded 30 and
     # rolled 0.4: 0.41 of the quadric's rms about the margin's plane, 0.070 about the hinge)
     hinge_share = HINGE_CROSSED if checks.crosses(leaf) else HINGE_EXPLAINED
+    # the margin's farthest from the midrib's chord: at most the flat blade's half-width, so a
+    # roll up to half a turn each side is within pi / reach, a quarter turn the roll's first
+    # guess (pose_limits.fit_bounds: the loader takes what this searched)
+    reach = fit_bounds(boundary, midrib)[3]
+    most = np.pi * length / reach
     boundary = boundary[:: max(1, len(boundary) // FIT_POINTS)]  # enough to fit six numbers
     midrib = np.vstack([midrib[:: max(1, len(midrib) // FIT_POINTS)], midrib[-1:]])
     origin = midrib[0]
     points = boundary - origin  # the margin lies flat; the midrib, with its relief, need not
     weight = 1.0 / np.sqrt(len(points))
-    # the margin's farthest from the midrib's chord: at most the flat blade's half-width, so a
-    # roll up to half a turn each side is within pi / reach, a quarter turn the roll's first guess
-    chord = (midrib[-1] - origin) / np.linalg.norm(midrib[-1] - origin)
-    reach = float(np.linalg.norm(points - np.outer(points @ chord, chord), axis=1).max())
-    most = np.pi * length / reach
 
     def placed(
         x: np.ndarray,

@@ -262,3 +262,31 @@ def test_a_wavy_or_narrow_form_rolled_at_the_sliders_end_reopens(tmp_path, form)
     path = tmp_path / "rolled.leaf.json"
     save_leaf(leaf, path)
     assert load_project(path)[0].bend == leaf.bend
+
+
+def test_a_strongly_curled_point_list_the_app_fitted_reopens(tmp_path):
+    """Ovate curled 1.7 (as a form's relief bends it) given as curves: the unfold fits a curl
+    turning the midrib 3.11 radians (its search is over the curled outline's short diagonal,
+    pose_limits.CURL_SEARCH), the app saves it, and the loader refused it past MOST_TURN
+    (review31). What the fit searched reopens; ten times that curl is still refused."""
+    from dataclasses import replace
+
+    from leafstudio.core.unfolded import unfolded
+    from leafstudio.errors import LeafError
+    from leafstudio.model import Leaf
+    from leafstudio.sources.files import load_leaf
+
+    form = Form("ovate")
+    blade = form.blade()
+    pose = Pose(curl=1.7, relief=form.with_(curl=1.0).leaf(blade).bend.relief)
+    csv = tmp_path / "curled.csv"
+    save_leaf(Leaf(pose.apply(blade.boundary), [pose.apply(v) for v in blade.veins]), csv)
+    fitted = unfolded(load_leaf(csv))
+    assert isinstance(fitted.bend, PlacedPose) and 2 * fitted.bend.pose.curl > 2.98
+    path = tmp_path / "curled.leaf.json"
+    save_leaf(fitted, path)
+    assert load_project(path)[0].bend.pose.curl == fitted.bend.pose.curl
+    bend = PlacedPose(replace(fitted.bend.pose, curl=10 * fitted.bend.pose.curl), fitted.bend.frame)
+    save_leaf(replace(fitted, bend=bend), path)
+    with pytest.raises(LeafError, match='"curl"'):
+        load_project(path)
