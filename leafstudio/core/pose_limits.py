@@ -71,13 +71,13 @@ def fit_bounds(boundary: np.ndarray, midrib: np.ndarray) -> tuple[float, float, 
     outline's diagonal) and roll (a half turn of the margin's farthest point from the midrib's
     chord: the flat blade is at least as wide), then that diagonal and that farthest reach,
     over the curves thinned to FIT_POINTS as the fit takes them."""
-    length = float(np.linalg.norm(np.ptp(boundary, axis=0)))
+    length = np.linalg.norm(np.ptp(boundary, axis=0))  # numpy's: 0 divides to inf, not raises
     boundary = boundary[:: max(1, len(boundary) // FIT_POINTS)]
     origin = midrib[0]
     chord = (midrib[-1] - origin) / np.linalg.norm(midrib[-1] - origin)
     points = boundary - origin
-    reach = float(np.linalg.norm(points - np.outer(points @ chord, chord), axis=1).max())
-    return CURL_SEARCH / length, np.pi / reach, length, reach
+    reach = np.linalg.norm(points - np.outer(points @ chord, chord), axis=1).max()
+    return float(CURL_SEARCH / length), float(np.pi / reach), float(length), float(reach)
 
 
 def fit_like(bend: Any) -> bool:
@@ -117,8 +117,10 @@ def pose_trouble(bend: Any, boundary: np.ndarray, veins: list[np.ndarray]) -> st
     )  # fmt: skip
     searched = {}  # a fitted pose's: what the fit searched, which the app saved
     if fit_like(bend) and len(veins) and len(veins[0]) > 1:
-        most_curl, most_roll = fit_bounds(np.asarray(boundary), np.asarray(veins[0]))[:2]
-        searched = {"curl": SEARCH_SLACK * most_curl, "roll": SEARCH_SLACK * most_roll}
+        with np.errstate(all="ignore"):  # a degenerate blade's bounds: none (nan) or inf
+            bounds = fit_bounds(np.asarray(boundary, float), np.asarray(veins[0], float))[:2]
+        pairs = zip(("curl", "roll"), bounds, strict=True)
+        searched = {k: SEARCH_SLACK * b for k, b in pairs if b < np.inf}
     for name, turn, most, says in terms:
         most = max(most, searched.get(name, 0.0))
         value = getattr(pose, name)
