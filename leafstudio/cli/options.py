@@ -102,10 +102,9 @@ def run_pipeline(args: argparse.Namespace, leaf: object):
     for note in args.warnings:
         log.warning(f"{args.input}: {note}")
     if params.k == "auto":  # a flat blade's K of 1 is a placeholder, chosen by nothing
-        chosen = "unused (the blade is flat)" if result.fits_no_mixture else result.chosen_k
-        log.info(
-            f"{args.input}: K = {chosen}" + ("" if result.fits_no_mixture else " (chosen by BIC)")
-        )
+        flat = result.fits_no_mixture
+        said = "unused (the blade is flat)" if flat else f"{result.chosen_k} (chosen by BIC)"
+        log.info(f"{args.input}: K = {said}")
     return params, result
 
 
