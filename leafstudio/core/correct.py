@@ -46,29 +46,22 @@ held tight beside a corner or a raised vein end bends the spline just where the 
 2.45°, a drawn leaf's 8.84°, its inside 9.15°; then 2.35°, 2.37°, 8.54°, 9.10°). Where the
 blade is bent, that wider tolerance is divided by the bend's stretch once more (fit_correction).
 bench_bent --veins, 99th-percentile dihedral against the paper's surface, margin band: linear
-7.09° (7.78°), deltoid 1.82° (1.90°), orbicular 0.84° (0.87°), a drawn leaf's 8.46° (8.32°);
-every gallery form's margin band and inside but oblanceolate's inside (2.94° against 2.85°) as
-smooth or smoother, and the clicked sketch's (tests/leaves.clicked_sketch: 1.57° and 1.485°
-against 1.70° and 1.488°, bending.py); every vein point within 8e-4 of the length; 20 of the 84
-apex and margin variants (--variants) rougher in a band, none off by more than 1e-3. Two rows
-stay rougher, each for a cause of its own. The drawn leaf's side vein ends 0.020 of the length
-high 0.010 from the margin, where the paper's surface stands 0.012 high: to come within 1e-3 the
-surface climbs from the margin at a slope of 2, and c there is r/T, 9 times its residual (T =
-0.11), which lifts the blade beyond the vein's end by up to 0.021 of the length: 16 of the
-margin band's 31 edges that crease past the paper's 8.32° lie within 0.05 of the length of that
-end (the paper's: 6 of 29), and farther from it the band is smoother (6.74° against 7.67°;
-inside 9.04° against 9.01°, where the paper's own crease passes by). Oblanceolate's midrib is a
-roof (its own surface, the veins on it, 2.98° inside), which the paper's surface rounds within
-7.8e-4 of its veins; c lowers the side veins by their tolerance where it may and meets the
-midrib, so the ridge grows sharper (TOLERANCE 7e-4 still left 2.87°). The points of the band
+7.09° (7.78°), deltoid 1.82° (1.90°), orbicular 0.84° (0.87°), a drawn leaf's 8.00° (8.32°;
+8.46° before its raised veins' ends had free centres, vein_centers.free_centers); every gallery
+form's margin band and inside but oblanceolate's inside (2.94° against 2.85°) as smooth or
+smoother, and the clicked sketch's (tests/leaves.clicked_sketch: 1.57° and 1.485° against 1.70°
+and 1.488°, bending.py); every vein point within 8e-4 of the length; 20 of the 84 apex and
+margin variants (--variants) rougher in a band, none off by more than 1e-3. Oblanceolate's own
+surface, the dome its veins lie on, is itself rougher inside than the paper's (2.98°): its
+roughest edges lie beside the midrib where the blade narrows (0.3-0.5 of the length from the
+base, within 0.02 of the length of a vein), which the paper's surface rounds within 7.8e-4 of
+its veins; through them within TOLERANCE the surface bends as its dome does (TOLERANCE 7e-4:
+2.87°, 9e-4: 2.84° but a drawn leaf's and linear's veins 1.1e-3 off the mesh). The points of the band
 already close to the surface are pinned too: the surface moves there as well.
 
-The spline's centres are the vein points thinned along each vein (CENTER_STEP), less those of
-a later vein within JUNCTION of an earlier one (where a side vein leaves the midrib, the two
-disagree by a little within a grid cell, and meeting both bent the surface into a ridge tighter
-than a thick solid's sheets can follow) or steeper than STEEPEST from one (two veins drawn across
-each other at different heights: the result names them, Pinning.notes), and less the points no
-smooth correction should chase (`reachable`).
+The spline's centres are the vein points thinned and chosen by vein_centers.py, less the points
+no smooth correction should chase (`reachable`), and a few on no vein about a vein's end that
+stands steeply above the margin band (vein_centers.free_centers), free in value.
 
 φ and its derivatives are read from tables by compiled kernels (kelvin.py); φ's Hessian has a
 log r singularity at each centre, as the thin-plate spline's; ∇²c (curvatures only) reads its
@@ -78,7 +71,6 @@ point gets a finite curvature.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -88,7 +80,6 @@ import scipy.linalg.lapack
 from leafstudio.core.bending import Bending, bending_gram, lattice, least_bending, own_weight
 from leafstudio.core.buckets import kernel_array
 from leafstudio.core.grid import Grid
-from leafstudio.core.jit import njit
 from leafstudio.core.kelvin import (
     KEI,
     KELVIN,
@@ -99,37 +90,19 @@ from leafstudio.core.kelvin import (
     spline_value,
 )
 from leafstudio.core.mpu import MPUImplicit
-from leafstudio.core.prepare.polygon import thin_curve
 from leafstudio.core.surface import HeightSurface, taper_of
+from leafstudio.core.vein_centers import BAND, free_centers, spline_centers
 
-CENTER_STEP = 0.008  # vein points closer than this share of the length are one spline centre
-# (a drawn or clicked leaf's, 0.006-0.009 apart; a form's are 0.02 apart and all kept: at 0.03,
-# every other one, the correction took 6.0 ms of a flat ovate's CPU at grid 128, not 9.9, but 46 of
-# the 84 --variants left a vein point beyond 1e-3 of the length, a drawn leaf's 5.0e-3)
 VEIN_SMOOTHING = 1e-9  # λ (φ is dimensionless: φ(0) = π/4)
-BAND = 0.5  # T below this: the margin band, where a vein point close enough is left as it is
 HESSIAN_CUT = 1e-3  # ∇²φ's radial parts are read at max(r, this share of the length)
 REACH = 0.1  # ℓ, of the length: the correction fades as e^(−r/ℓ√2) past the veins (0.05: a
 # drawn leaf's margin band 9.1° against the paper's 8.3°; 0.3: reniform's lobes 1.44° against 1.36°)
-JUNCTION = 0.011  # of the length: a vein's points this near an earlier vein's are left to it
-STEEPEST = 1.0  # ... and those near one (within MEETS) whose height differs from it by more
-# than this times their distance and by more than APART: two veins drawn across each other at
-# different heights (a bowed midrib over a basal vein, 0.052 of the length apart where they cross)
-# made the correction a wall between them, a triangle edge 5.1 grid cells long in 3D
-# (tests/core/test_sinus.py)
-MEETS = 3 * JUNCTION  # of the length: compared at any distance, a steep but consistent blade
-# (a waved, curled form given in 3D, left unbent) lost up to 144 centres and named 20 pairs
-APART = 0.02  # of the length: a side vein drawn to start 1.2% below a raised midrib is no
-# disagreement; nor one noisy point of a scan's vein (soybean pot1_1, 3.8% off its neighbours
-# at 0.038 of the length from another vein)
 OVERSHOOT = 6.0  # T·c beyond this many times the largest residual is no smooth correction
 # (the gallery's forms: 0.62-1.21 times; a drawn leaf with hand-raised veins 2.8; a fan of
 # basal veins from a sinus's notch into narrow lobes 17)
 TOLERANCE = 4e-4  # of the length: each vein point may stay this far off the surface when that
 # lets the surface bend less (bending.least_bending)
 BAND_TOLERANCE = 7e-4  # ... and this far in the margin band (T < BAND), see the module
-MOST_CENTERS = 800  # beyond this the veins are thinned further: the dense solve grows as its
-# cube (3000 centres took seconds a run; the app reruns this on every slider step)
 
 
 @dataclass(frozen=True)
@@ -163,96 +136,6 @@ class VeinCorrection:
         )
 
 
-def _thin_vein(vein: np.ndarray, step: float) -> np.ndarray:
-    """Indices of a vein's (m, 2) points at least `step` apart along it, its end kept in place
-    of the point before it when that lies within half a step (two centres a hair apart with
-    different residuals take opposite weights of thousands: a spike beside the vein's end)."""
-    kept = thin_curve(vein, step, keep_end=True)
-    if len(kept) > 2 and np.linalg.norm(vein[kept[-1]] - vein[kept[-2]]) < 0.5 * step:
-        kept = np.delete(kept, -2)
-    return kept
-
-
-def spline_centers(
-    veins: list[np.ndarray],
-    length: float,
-    heights: list[np.ndarray] | None = None,
-    taper: Callable[[np.ndarray], np.ndarray] | None = None,
-) -> tuple[list[np.ndarray], list[tuple[int, int, float]]]:
-    """Indices kept of each vein's (m_i, 2) points: at least CENTER_STEP · length apart along it
-    (polygon.thin_curve), at most MOST_CENTERS in all, none within JUNCTION · length of an
-    earlier vein's, nor (given each point's height, (m_i,) `heights`) steeper than STEEPEST
-    from one; and the veins that disagreed so, (later, earlier, largest height difference),
-    where the later's point lies inward of the margin band (T at (n, 2) points, `taper`, no less
-    than BAND): in the band the surface comes down to the margin and follows neither vein (a
-    basal vein rising steeply along a sinus's margin from the notch, beside the midrib's start,
-    T under 0.03 there, was named)."""
-    step = CENTER_STEP * length
-    kept = [_thin_vein(v, step) for v in veins]
-    total = sum(len(k) for k in kept)
-    if total > MOST_CENTERS:
-        step *= total / MOST_CENTERS
-        kept = [_thin_vein(v, step) for v in veins]
-    # at a junction the earlier (longer) vein decides (a k-d tree per vein took 1.6 ms on a
-    # gallery form; the pairs vein by vein, 0.69 ms in all; all pairs at once in numpy, 0.29 ms;
-    # compiled, each point against the points kept before it, 0.017 ms, best of 60: a flat
-    # ovate at grid 128, 13 veins, 212 points thinned; spline_centers 0.29 -> 0.12 ms; the
-    # same centres on every gallery form at four lengths)
-    points = kernel_array(np.vstack([v[k] for v, k in zip(veins, kept, strict=True)]))
-    sizes = np.array([len(k) for k in kept], dtype=np.int64)
-    if heights is None:
-        h = np.zeros(len(points))
-    else:
-        h = np.concatenate([z[k] for z, k in zip(heights, kept, strict=True)]).astype(float)
-    reaches = np.array([JUNCTION, MEETS, APART]) * length
-    laid, against, gap2 = _clear_of_earlier(points, h, sizes, reaches, STEEPEST)
-    starts = np.concatenate([[0], np.cumsum(sizes)])
-    owner = np.repeat(np.arange(len(veins)), sizes)
-    nearest: dict[tuple[int, int], tuple[float, float]] = {}  # (gap², height apart) where nearest
-    steep = np.flatnonzero(against >= 0)
-    if taper is not None and len(steep):
-        steep = steep[taper(points[steep]) >= BAND]
-    for i in steep:
-        pair, here = (int(owner[i]), int(owner[against[i]])), (gap2[i], abs(h[i] - h[against[i]]))
-        nearest[pair] = min(nearest.get(pair, here), here)
-    disagree = [(later, earlier, apart) for (later, earlier), (_, apart) in sorted(nearest.items())]
-    kept = [k[laid[a:b]] for k, a, b in zip(kept, starts[:-1], starts[1:], strict=True)]
-    return kept, disagree
-
-
-@njit(cache=True, nogil=True)
-def _clear_of_earlier(points, heights, sizes, reaches, steepest):
-    """(n,) bool: the (n, 2) `points`, veins of `sizes` points one after another, that lie no
-    nearer than reaches[0] to a point of an earlier vein that is itself kept, nor within
-    reaches[1] of one and more than reaches[2] and `steepest` times their distance apart in
-    height; (n,) the nearest earlier point a point was that steep from (-1: none), and (n,) its
-    squared distance."""
-    near2, meets2, apart = reaches[0] ** 2, reaches[1] ** 2, reaches[2]
-    laid = np.zeros(len(points), dtype=np.bool_)
-    against = np.full(len(points), -1, dtype=np.int64)
-    gap2 = np.full(len(points), np.inf)
-    start = 0
-    for size in sizes:
-        for i in range(start, start + size):
-            clear = True
-            for j in range(start):
-                if laid[j]:
-                    dx, dy = points[i, 0] - points[j, 0], points[i, 1] - points[j, 1]
-                    distance2 = dx * dx + dy * dy
-                    if distance2 < near2:
-                        clear = False
-                        against[i] = -1
-                        break
-                    rise = abs(heights[i] - heights[j])
-                    steep = rise > apart and rise * rise > steepest * steepest * distance2
-                    if distance2 < meets2 and steep and distance2 < gap2[i]:
-                        clear = False
-                        against[i], gap2[i] = j, distance2
-            laid[i] = clear
-        start += size
-    return laid, against, gap2
-
-
 def reachable(taper: np.ndarray, residual: np.ndarray, relief: float) -> np.ndarray:
     """(m,) bool: the vein points the spline is made to pass through: those inside the margin
     (T > 0) but a point that only a correction higher than the veins' own relief could reach
@@ -270,6 +153,7 @@ def fit_correction(
     stretch: np.ndarray | float,
     bending: Bending,
     relief: np.ndarray,
+    free: np.ndarray | None = None,
 ) -> VeinCorrection | None:
     """The spline c with T_i c(v_i) within TOLERANCE of r_i at the vein points (BAND_TOLERANCE
     in the margin band; over their `stretch`, onto_veins), chosen so that the whole surface,
@@ -293,6 +177,8 @@ def fit_correction(
         (Bending.pinned).
     relief : (n,) float array
         M, the mixture alone, at the lattice's nodes.
+    free : (m,) bool array, optional
+        Centres on no vein (free_centers): their values are unbounded, from 0.
 
     Returns
     -------
@@ -324,7 +210,10 @@ def fit_correction(
     # the band's wider tolerance is a flat blade's: where a bend stretches a distance off it,
     # that is shrunk once more (a rolled and folded deltoid's veins 1.04e-3 of the length off)
     tolerance = np.where(taper < BAND, BAND_TOLERANCE / stretch, TOLERANCE)
-    slack = (tolerance * length / (np.maximum(taper, 1e-3) * stretch))[inside]
+    slack = tolerance * length / (np.maximum(taper, 1e-3) * stretch)
+    if free is not None:
+        slack = np.where(free, np.inf, slack)
+    slack = slack[inside]
     start = target[inside]
     values = least_bending(some, relief, start, start - slack, start + slack, spline)
     weights = np.zeros(m)
@@ -349,6 +238,7 @@ class Pinning:
     taper: np.ndarray  # (m,) T(g/δ) at the centres
     bending: Bending  # the lattice (bending.py), with φ for every centre
     disagree: tuple[tuple[int, int, float], ...] = ()  # veins steeper apart than STEEPEST
+    free: int = 0  # the last `free` centres lie on no vein: their values are free (free_centers)
 
     def notes(self, length: float) -> list[str]:
         """What the leaf is told of veins that disagree where they meet (one note: a steeply
@@ -399,11 +289,12 @@ def pinning(
     kept, disagree = spline_centers(
         veins, length, heights, lambda xy: taper_of(implicit(xy), delta)
     )
-    centers = np.vstack([v[k] for v, k in zip(veins, kept, strict=True)])
-    centers = kernel_array(centers)
+    on_veins = np.vstack([v[k] for v, k in zip(veins, kept, strict=True)])
+    free = free_centers(veins, heights, on_veins, length, implicit, delta)
+    centers = kernel_array(np.vstack([on_veins, free]))
     taper = taper_of(implicit(centers), delta)
     bending = lattice_bending(centers, length, grid, inside, node_taper)
-    return Pinning(kept, centers, taper, bending, tuple(disagree))
+    return Pinning(kept, centers, taper, bending, tuple(disagree), len(free))
 
 
 def onto_veins(
@@ -445,20 +336,27 @@ def onto_veins(
         point's tolerance is divided by it.
     """
     kept, centers, taper, bending = pinned.kept, pinned.centers, pinned.taper, pinned.bending
-    h = np.concatenate([z[k] for z, k in zip(heights, kept, strict=True)])
-    residual = h - taper * surface.relief(centers)
+    free = np.arange(len(centers)) >= len(centers) - pinned.free
+    h = np.zeros(len(centers))
+    h[~free] = np.concatenate([z[k] for z, k in zip(heights, kept, strict=True)])
+    residual = np.where(free, 0.0, h - taper * surface.relief(centers))
     relief = float(np.abs(h).max())
-    grows = (
-        np.ones(len(h))
-        if stretch is None
-        else np.concatenate([s[k] for s, k in zip(stretch, kept, strict=True)])
-    )
+    grows = np.ones(len(h))
+    if stretch is not None:
+        grows[~free] = np.concatenate([s[k] for s, k in zip(stretch, kept, strict=True)])
     relief_on = mixture[bending.on]
-    keep = reachable(taper, residual, relief)
-    for pins in (keep, keep & (taper >= BAND)):
+    keep = reachable(taper, residual, relief) | free
+    for pins in (keep, keep & (taper >= BAND) & ~free):
         some = bending.pinned(pins)
         correction = fit_correction(
-            centers[pins], taper[pins], residual[pins], length, grows[pins], some, relief_on
+            centers[pins],
+            taper[pins],
+            residual[pins],
+            length,
+            grows[pins],
+            some,
+            relief_on,
+            free[pins],
         )
         if correction is None:
             return surface, None

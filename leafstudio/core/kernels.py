@@ -100,7 +100,7 @@ KERNELS: dict[str, tuple[types.Type, ...]] = {
     "mpu:_blend_sums": (F2, CELLS, BUCKETS, i8),
     "kelvin:spline_derivatives": (F2, F2, F1, f8, f8, F2, f8),
     "kelvin:spline_gradient": (F2, F2, F1, f8, F2, f8),
-    "correct:_clear_of_earlier": (F2, F1, I1, F1, f8),
+    "vein_centers:_clear_of_earlier": (F2, F1, I1, F1, f8),
     "node_derivatives:_differences": (F1, I1, i8, f8, f8, f8),
     "bending:_rows": (I1, I1, i8, types.UniTuple(B1, 2), I1, F1, I2, F1, I1),
     "gmm:_gaussians": (F2, F2, F3),

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import leafstudio as ls
-from leafstudio.core import correct
+from leafstudio.core import correct, vein_centers
 from leafstudio.core.bending import Bending
 from leafstudio.core.buckets import kernel_array
 from leafstudio.core.evaluate import dihedral_angles, margin_creases, triangles_of
@@ -92,9 +92,10 @@ def test_a_waved_form_passes_through_its_veins(shape):
 
 def test_a_drawn_leaf_with_hand_raised_veins_passes_through_them_without_new_creases():
     """Today 4.9e-3 of the length at K = 7; the creases (99th-percentile dihedral angle in the
-    margin band and inside) stay within 4% of the paper's surface's (the margin band's was 6%
-    rougher, 8.84° against 8.32°, with the vein points in the band held as tight as inside:
-    correct.BAND_TOLERANCE)."""
+    margin band and inside) are no rougher than the paper's surface's. With centres on the veins
+    alone they were (8.46° against 8.32° in the band, 9.04° against 9.01° inside): the side veins
+    end 0.020 of the length high 0.010 from the margin, and the spline lifted each end as a bump
+    that the taper pulled down beside it (vein_centers.free_centers)."""
     leaf = drawn_leaf()
     through = _run(leaf, k=7)
     paper = _run(leaf, k=7, through_veins=False)
@@ -102,7 +103,34 @@ def test_a_drawn_leaf_with_hand_raised_veins_passes_through_them_without_new_cre
     assert through.metrics["veins"]["max"] <= VEIN_TOLERANCE * through.length
     ours, theirs = margin_creases(through), margin_creases(paper)
     for band in ("margin_p99", "interior_p99"):
-        assert ours[band] <= 1.04 * theirs[band]
+        assert ours[band] <= theirs[band]
+
+
+def test_only_a_vein_end_standing_steeply_over_the_margin_gets_free_centres():
+    """On a unit disk (g the distance to its margin, length 2), a side vein ending 0.05 from the
+    margin gets free centres about its end when it stands twice that high there, on no vein,
+    inside the blade and FREE_RING of the length from the end; as high as a form's dome (a
+    quarter of its distance to the margin) it gets none."""
+
+    def distance_in(xy: np.ndarray) -> np.ndarray:
+        return 1.0 - np.linalg.norm(xy, axis=1)
+
+    midrib = np.column_stack([np.linspace(-0.9, 0.9, 60), np.zeros(60)])
+    side = np.column_stack([np.zeros(20), np.linspace(0.0, 0.95, 20)])
+    veins = [midrib, side]
+    on_veins = np.vstack(veins)
+    gentle = [0.25 * distance_in(v) for v in veins]
+    steep = [gentle[0], np.linspace(0.25, 0.1, 20)]  # its end 0.1 high, 0.05 from the margin
+    length, delta = 2.0, 0.2  # T = tanh(0.05 / 0.2) = 0.24 at the side vein's end
+    args = (on_veins, length, distance_in, delta)
+    assert len(vein_centers.free_centers(veins, gentle, *args)) == 0
+    free = vein_centers.free_centers(veins, steep, *args)
+    assert 1 <= len(free) <= vein_centers.FREE_SPOKES
+    ring = vein_centers.FREE_RING * length
+    np.testing.assert_allclose(np.linalg.norm(free - side[-1], axis=1), ring)
+    assert np.all(np.tanh(distance_in(free) / delta) >= vein_centers.FREE_TAPER)
+    gaps = np.linalg.norm(free[:, None] - on_veins[None], axis=2).min(axis=1)
+    assert np.all(gaps >= 0.5 * ring)
 
 
 @pytest.mark.parametrize(
@@ -259,13 +287,13 @@ def test_the_correction_has_closed_form_derivatives():
 def test_a_later_veins_centres_near_an_earlier_veins_kept_ones_are_left_to_it():
     """A side vein leaving the midrib loses its points within JUNCTION of the midrib's centres;
     a third vein near only the side vein's dropped points keeps its own."""
-    near = 0.5 * correct.JUNCTION
+    near = 0.5 * vein_centers.JUNCTION
     midrib = np.column_stack([np.linspace(0, 1, 126), np.zeros(126)])
     side = np.column_stack([np.full(10, 0.5), near + np.linspace(0, 0.2, 10)])
     third = np.array([[0.508, 0.012], [0.9, 0.3]])  # 0.010 from the side vein's first point
-    kept, _ = correct.spline_centers([midrib, side, third], 1.0)
+    kept, _ = vein_centers.spline_centers([midrib, side, third], 1.0)
     side_kept = side[kept[1]]
-    assert np.all(side_kept[:, 1] >= correct.JUNCTION)  # none beside the midrib's centres
+    assert np.all(side_kept[:, 1] >= vein_centers.JUNCTION)  # none beside the midrib's centres
     assert len(side_kept) >= 2
     assert len(kept[2]) == 2
 

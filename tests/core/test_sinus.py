@@ -149,7 +149,7 @@ def test_veins_crossing_at_different_heights_make_no_wall_and_are_named():
     """A midrib bowed across a basal vein from the same notch, 0.052 of the length apart in
     height where they cross (the property test's example at Hypothesis 6.170): the correction
     met both and stood a wall between them, a triangle edge 5.1 grid cells long in 3D. The later
-    vein's points steeper than correct.STEEPEST from the earlier's are left to it, and the
+    vein's points steeper than vein_centers.STEEPEST from the earlier's are left to it, and the
     result says so."""
     outline, notch = heart(depth=0.1687, half=31.44, lobes=0.0861)
     opening = 180 - 31.44 - 8
