@@ -30,6 +30,10 @@ class LessonStep:
     bent_caption : str, default: ""
         The caption for a bent leaf (folded, curled, rolled or twisted), where the step differs
         ("": the same).
+    flat : bool, default: False
+        Whether the step works on the blade laid flat: a bent leaf's 3D view then shows its
+        outline and input points laid flat (the app's "blade" layer) in place of the bent ones,
+        where the step's fields lie (gui/model/lesson.step_layers).
     """
 
     title: str
@@ -39,6 +43,7 @@ class LessonStep:
     picture: str
     edges: bool = False
     bent_caption: str = ""
+    flat: bool = False
 
     def words(self, bent: bool = False) -> str:
         """The caption, for a bent leaf if `bent` (its steps run on the blade laid flat)."""
@@ -66,6 +71,7 @@ LESSON_STEPS: tuple[LessonStep, ...] = (
         "twist, and lay the blade flat, like pressing the leaf onto a table; the edge's points "
         "are joined into an outline. Every height is then measured above that flat blade: the "
         "veins' heights are in colour.",
+        flat=True,
     ),
     LessonStep(
         "3. Inside or outside the leaf",
@@ -75,6 +81,7 @@ LESSON_STEPS: tuple[LessonStep, ...] = (
         r"$g(\mathbf{x}) > 0$ inside,   $g(\mathbf{x}) = 0$ on the edge",
         ("implicit", "contour", "points"),  # g over the surface (gui/model/fields.py)
         "implicit",
+        flat=True,
     ),
     LessonStep(
         "4. Where the leaf rises",
@@ -84,6 +91,7 @@ LESSON_STEPS: tuple[LessonStep, ...] = (
         r"$p(\mathbf{x}) = h_v \, \left(1 - \frac{|v' - \mathbf{x}|}{2\,|v' - v''|}\right)$",
         ("probability", "points"),
         "guide",
+        flat=True,
     ),
     LessonStep(
         "5. Points where the leaf is high",
@@ -93,6 +101,7 @@ LESSON_STEPS: tuple[LessonStep, ...] = (
         r"$\mathbf{x}_i \to \arg\max_k \, \pi_k \, N(\mathbf{x}_i \mid \mu_k, \Sigma_k)$",
         ("em", "points"),
         "em",
+        flat=True,
     ),
     LessonStep(
         "6. The hills make the surface",

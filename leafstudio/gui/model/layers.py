@@ -15,10 +15,11 @@ import pyvista as pv
 
 from leafstudio._shared.extras import missing
 from leafstudio.assets.asset import leaf_uvs
+from leafstudio.core.bend import flat_leaf
 from leafstudio.core.pipeline import Result
 from leafstudio.core.trianglemesh import colour_range, polydata, vertex_normals
 from leafstudio.gui.model.display_mesh import display_subset
-from leafstudio.gui.model.fields import field_layers
+from leafstudio.gui.model.fields import LIFT, field_layers
 from leafstudio.gui.model.pieces import (
     Piece,
     cloud,
@@ -33,6 +34,7 @@ LAYERS: tuple[tuple[str, str, bool], ...] = (
     ("mesh", "Mesh", True),
     ("points", "Input points", True),
     ("curves", "Boundary and vein curves", False),
+    ("blade", "Bent leaf laid flat", False),
     ("contour", "Zero contour of g", False),
     ("implicit", "Implicit g(x): + inside, − outside", False),
     ("probability", "Probability map p(x)", False),
@@ -41,6 +43,9 @@ LAYERS: tuple[tuple[str, str, bool], ...] = (
     ("scan", "Scan points", True),
     ("poisson", "Screened Poisson surface (beside ours)", False),
 )
+# the laid-flat blade's outline and dots above the fields drawn on it (g at LIFT, p(x) at 1.4 LIFT,
+# the EM samples at 2 LIFT): at the surface, half of each dot was under g's sheet in the lesson
+BLADE_LIFT = 3 * LIFT
 SIDE_LAYERS = frozenset({"scan", "poisson"})  # not built from a Result (see scans.py)
 LAYER_EXTRAS = {"poisson": ("open3d", "The screened Poisson surface")}  # module, feature
 
@@ -126,25 +131,38 @@ def _whole_mesh(
     return textured(uv, partial(polydata, points, faces, colourings, normals))
 
 
-def _input_pieces(result: Result) -> list[Piece]:
-    """The input's points, each curve thinned to a share of INPUT_POINTS."""
-    curves = [result.leaf.boundary, *result.leaf.veins]
+def _input_pieces(curves: list[np.ndarray], layer: str = "points") -> list[Piece]:
+    """The (n_i, 3) input `curves` (the boundary first, then each vein) as the dots of `layer`,
+    each curve thinned to a share of INPUT_POINTS."""
     budget = INPUT_POINTS // len(curves)
     shown = [thinned(curve, budget, ordered=True) for curve in curves]
     count = sum(len(points) for points in shown)
     boundary = dots(BOUNDARY_COLOR, 5.0, count)
-    pieces = [Piece("points:boundary", partial(cloud, shown[0]), boundary)]
+    pieces = [Piece(f"{layer}:boundary", partial(cloud, shown[0]), boundary)]
     for i, vein in enumerate(shown[1:]):
         style = dots(vein_color(i), 7.0, count)
-        pieces.append(Piece(f"points:vein{i}", partial(cloud, vein), style))
+        pieces.append(Piece(f"{layer}:vein{i}", partial(cloud, vein), style))
     return pieces
 
 
+def _flat_outline(result: Result) -> np.ndarray:
+    """(n + 1, 3) the closed outline on the flat blade, in world coordinates, at its heights
+    (z = b on the margin: 0 for a planar one)."""
+    polygon = result.polygon
+    base = result.surface.base
+    heights = base(polygon) if base is not None else np.zeros(len(polygon))
+    outline = result.frame.to_world(polygon, heights)
+    return np.vstack([outline, outline[:1]])
+
+
 def _curve_pieces(result: Result) -> list[Piece]:
-    outline = result.frame.to_world(result.polygon, np.zeros(len(result.polygon)))
-    closed = np.vstack([outline, outline[:1]])
+    """The outline and the veins as lines where the input is: a bent leaf's outline bent (drawn
+    flat, it crossed a folded blade's mesh beside the folded veins)."""
+    outline = _flat_outline(result)
+    if result.leaf.bend is not None:
+        outline = result.leaf.bend.apply(outline)
     style = {"color": BOUNDARY_COLOR, "line_width": 3}
-    pieces = [Piece("curves:boundary", partial(polylines, [closed]), style)]
+    pieces = [Piece("curves:boundary", partial(polylines, [outline]), style)]
     for i, vein in enumerate(result.leaf.veins):
         if len(vein) > 1:
             style = {"color": vein_color(i), "line_width": 3}
@@ -152,11 +170,27 @@ def _curve_pieces(result: Result) -> list[Piece]:
     return pieces
 
 
+def _blade_pieces(result: Result) -> list[Piece]:
+    """A bent leaf laid flat, where the method's fields are drawn (g, p(x), the EM samples: the
+    flat blade's, fields.py): its outline and its input points laid flat by its bend (the flat
+    blade its run kept, `Result.blade`), BLADE_LIFT above. Nothing for an unbent leaf: the input
+    layers are it."""
+    if result.leaf.bend is None:
+        return []
+    blade = result.blade if result.blade is not None else flat_leaf(result.leaf)
+    lift = BLADE_LIFT * result.length * np.asarray(result.frame.normal)
+    style = {"color": BOUNDARY_COLOR, "line_width": 3}
+    outline = Piece("blade:outline", partial(polylines, [_flat_outline(result) + lift]), style)
+    curves = [curve + lift for curve in (blade.boundary, *blade.veins)]
+    return [outline, *_input_pieces(curves, "blade")]
+
+
 def build_layers(result: Result) -> dict[str, list[Piece]]:
     """Every layer's pieces for `result`, keyed as in LAYERS."""
     return {
         "mesh": [_mesh_piece(result)],
-        "points": _input_pieces(result),
+        "points": _input_pieces([result.leaf.boundary, *result.leaf.veins]),
         "curves": _curve_pieces(result),
+        "blade": _blade_pieces(result),
         **field_layers(result),  # drawn over the surface (fields.py)
     }

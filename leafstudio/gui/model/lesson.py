@@ -9,10 +9,52 @@ from __future__ import annotations
 
 import io
 
+import numpy as np
+
 from leafstudio.core.pipeline import Result
+from leafstudio.core.plane import Frame
+from leafstudio.gui.model.framing import BladeBounds, blade_bounds
 from leafstudio.render.lesson import LESSON_STEPS, LessonStep
 
 EQUATION_PT = 22  # the equation's size in points (the lesson's words are 18)
+# the layers a bent leaf's flat steps show instead: its input laid flat on the blade (layers.py)
+LAID_FLAT = {"points": "blade", "curves": "blade"}
+
+
+def step_layers(step: LessonStep, bent: bool) -> tuple[str, ...]:
+    """The layers the 3D view shows for `step`: its own, but on a bent leaf (`bent`) a step
+    that works on the blade laid flat (`LessonStep.flat`) shows the input laid flat there,
+    where its fields are (steps 3-5 drew g, p(x) and the EM samples on the flat blade under the
+    folded points: an ovate form folded 60° had its margin's dots 0.095 of its length off the
+    outline they belong on)."""
+    if not (bent and step.flat):
+        return step.layers
+    return tuple(dict.fromkeys(LAID_FLAT.get(key, key) for key in step.layers))
+
+
+def bent_note(steps: tuple[LessonStep, ...] = LESSON_STEPS) -> str:
+    """One plain sentence for a bent leaf's lesson: the steps that show it laid flat, then
+    bent back, its relief unstretched (lesson_view's STRETCH is off for a bent leaf)."""
+    flat = [i + 1 for i, step in enumerate(steps) if step.flat]
+    if not flat or flat[-1] == len(steps):
+        return "The 3D leaf is drawn as it is bent, its relief not stretched."
+    return (
+        f"Steps {flat[0]}–{flat[-1]} work on the leaf laid flat; from step {flat[-1] + 1} on, "
+        "it is bent back, its relief not stretched."
+    )
+
+
+def lesson_bounds(result: Result, frame: Frame) -> BladeBounds:
+    """The lesson's 3D framing of `result` on `frame` (framing.blade_bounds): its mesh's, and a
+    bent leaf's mesh laid flat as well, so that one camera holds the blade both laid flat (the
+    flat steps) and bent, and the class sees it unbend and bend back in place. Framed on the
+    bent mesh alone, an ovate form folded 60° laid flat reached the 3D view's edges: its flat
+    blade is 1/cos 30° = 1.15 times the folded one's width."""
+    points = result.triangle_mesh.points
+    if result.leaf.bend is not None:
+        xy, height = result.mesh_on_blade()
+        points = np.vstack([points, result.frame.to_world(xy, height)])
+    return blade_bounds(points, frame)
 
 
 class Lesson:

@@ -31,6 +31,9 @@ LAYER_HELP: dict[str, str] = {
     "points": "The input: boundary points (black) and vein points (a colour per vein), with the "
     "heights the surface must follow.",
     "curves": "The boundary and vein curves through the input points, in order.",
+    "blade": "A bent leaf laid flat, as the method works on it: its outline and input points "
+    "unbent onto the flat blade, where g, its zero contour, p(x) and the EM samples are drawn "
+    "(the mesh is bent back from it).",
     "contour": "The zero contour of g (eqs. 1-2), drawn on top: the MPU implicit of the "
     "outline is positive inside, negative outside; this line is where the surface is cut.",
     "implicit": "g(x), the MPU implicit of the outline (eqs. 1-2), coloured over the surface "

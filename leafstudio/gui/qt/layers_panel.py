@@ -52,6 +52,7 @@ class LayersPanel(QWidget):
                 self._missing.add(key)
             self.list.addItem(item)
         self.set_available("scan", False)  # until a scan is open
+        self.set_available("blade", False)  # until a bent leaf is shown (reports._show_result)
         self.list.setMaximumHeight(self.list.sizeHintForRow(0) * len(LAYERS) + 8)
         self.edges.setToolTip("Draw the triangles' edges on the mesh.")
         self.coloring = QComboBox()

@@ -22,8 +22,14 @@ from PySide6.QtGui import (
 )
 from PySide6.QtWidgets import QHBoxLayout, QLabel, QSizePolicy, QVBoxLayout, QWidget
 
-from leafstudio.gui.model.framing import blade_bounds
-from leafstudio.gui.model.lesson import Lesson, equation_png, plan_png
+from leafstudio.gui.model.lesson import (
+    Lesson,
+    bent_note,
+    equation_png,
+    lesson_bounds,
+    plan_png,
+    step_layers,
+)
 from leafstudio.gui.model.view_aids import stretches
 from leafstudio.gui.qt.actions import Action
 from leafstudio.gui.qt.explain import stretch_matrix
@@ -108,11 +114,11 @@ class LessonWindow(QWidget):
         """The current step: its layers in the 3D view, its words, equation and plan."""
         step = self.lesson.step
         self.title.setText(step.title)
-        result = self.window_.session.result  # a bent leaf's steps run on its blade laid flat
-        self.caption.setText(step.words(bent=result is not None and result.leaf.bend is not None))
+        self.caption.setText(step.words(bent=self._bent()))  # its steps run on the blade laid flat
         footer = FOOTER.format(progress=self.lesson.progress())
+        result = self.window_.session.result
         if result is not None and not stretches(result):  # drawn as bent (view_aids.stretches)
-            footer += "\nThe 3D leaf is drawn as it is bent, its relief not stretched."
+            footer += "\n" + bent_note(self.lesson.steps)
         self.footer.setText(footer)
         ratio = self.devicePixelRatioF()
         pixmap = QPixmap()  # empty for a step without one
@@ -125,8 +131,9 @@ class LessonWindow(QWidget):
         self.equation.setVisible(not pixmap.isNull())
         if self.viewport.show_edges != step.edges:  # the mesh's triangles, where it says so
             self.viewport.set_edges(step.edges)
+        layers = self._layers()
         for key in self.viewport.visible:  # the step's layers only
-            on = key in step.layers
+            on = key in layers
             if self.viewport.visible[key] != on:
                 self.viewport.set_visible(key, on)
         self._stretch()
@@ -140,12 +147,21 @@ class LessonWindow(QWidget):
             self.show_step()
             return
         result = outcome.result
-        step = self.lesson.step
-        self.viewport.visible.update({key: key in step.layers for key in self.viewport.visible})
+        layers = self._layers()
+        self.viewport.visible.update({key: key in layers for key in self.viewport.visible})
         frame = self.window_.session.view_frame() or result.frame  # as the app shows it
-        bounds = blade_bounds(result.triangle_mesh.points, frame)
+        bounds = lesson_bounds(result, frame)  # a bent leaf's laid flat too
         self.viewport.show_layers(outcome.layers, frame, bounds, "reset")
         self.show_step()
+
+    def _bent(self) -> bool:
+        """Whether the session's result is a bent leaf's."""
+        result = self.window_.session.result
+        return result is not None and result.leaf.bend is not None
+
+    def _layers(self) -> tuple[str, ...]:
+        """The current step's layers (a bent leaf's laid flat where the step works flat)."""
+        return step_layers(self.lesson.step, self._bent())
 
     def _stretch(self) -> None:
         """The relief exaggerated STRETCH times on every actor of the 3D view (a posed leaf's

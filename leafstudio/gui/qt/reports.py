@@ -89,6 +89,7 @@ class Reports:
         if how == "reset" and self.viewport.texture_key not in (None, side.texture_key):
             self.viewport.set_texture(None, None, draw=False)  # another leaf's image
         self.viewport.show_layers(outcome.layers, frame, bounds, how)
+        self.layers.set_available("blade", bool(outcome.layers.get("blade")))  # a bent leaf's
         outcome.timings["draw"] = time.perf_counter() - start
         self._stage_timer.stop()
         self._show_timings(outcome)

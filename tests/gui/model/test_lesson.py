@@ -10,7 +10,7 @@ import pytest
 from PIL import Image
 
 from leafstudio.gui.model.layers import LAYERS
-from leafstudio.gui.model.lesson import Lesson, equation_png, plan_png
+from leafstudio.gui.model.lesson import Lesson, bent_note, equation_png, plan_png, step_layers
 from leafstudio.render.lesson import LESSON_STEPS
 
 
@@ -44,3 +44,70 @@ def test_each_step_has_a_plan_view_and_its_equation_typeset(demo_result, index):
         assert equation.size[0] > 100 and equation.size[1] >= 22  # at EQUATION_PT points
     else:
         assert equation_png(tex) == b""
+
+
+@pytest.fixture(scope="module")
+def folded():
+    """An ovate form folded 60° along its midrib, reconstructed (FAST)."""
+    from leafstudio.core.pipeline import Pipeline
+    from leafstudio.forms.make import Form
+    from tests.gui.builders import FAST
+
+    return Pipeline(Form("ovate", fold=60.0).leaf()).run(FAST)
+
+
+def _drawn_points(result, keys) -> tuple[np.ndarray, np.ndarray]:
+    """The input's dots the 3D view draws among layers `keys` (as given or laid flat): (n, 3)
+    the boundary's and (m, 3) the veins'."""
+    from leafstudio.gui.model.layers import build_layers
+
+    layers = build_layers(result)
+    inputs = [p for key in keys if key in ("points", "blade") for p in layers[key]]
+    dots = [p for p in inputs if "point_size" in p.style]
+    boundary = [np.asarray(p.data.points) for p in dots if p.name.endswith("boundary")]
+    veins = [np.asarray(p.data.points) for p in dots if not p.name.endswith("boundary")]
+    return np.vstack(boundary), np.vstack(veins)
+
+
+@pytest.mark.parametrize("picture", ["implicit", "guide", "em"])
+def test_a_folded_leafs_flat_steps_draw_its_points_laid_flat_on_the_blade(folded, picture):
+    """Steps 3-5 drew g, p(x) and the EM samples on the flat blade and the folded input points
+    over them: an ovate form folded 60° had its margin's dots up to 0.095 of its length off the
+    outline in the blade's plane, its dots up to 0.28 of it off the flat blade's surface. Drawn
+    laid flat (the "blade" layer), each boundary dot is on the outline and each dot on the flat
+    blade's surface (BLADE_LIFT above it, over the fields), and the lesson says so once."""
+    from leafstudio.gui.model.layers import BLADE_LIFT
+
+    step = next(s for s in LESSON_STEPS if s.picture == picture)
+    boundary, veins = _drawn_points(folded, step_layers(step, bent=True))
+    frame, polygon, length = folded.frame, folded.polygon, folded.length
+    for points in (boundary, veins):
+        xy, height = frame.to_plane(points)
+        off = height - folded.height(xy) - BLADE_LIFT * length
+        assert np.abs(off).max() < 2e-3 * length, np.abs(off).max() / length  # measured 7e-4
+    xy, _ = frame.to_plane(boundary)
+    gap = _distance_to_ring(xy, np.vstack([polygon, polygon[:1]]))
+    assert gap.max() < 1e-3 * length, gap.max() / length
+    assert bent_note().startswith("Steps 2–5 work on the leaf laid flat; from step 6 on")
+
+
+def _distance_to_ring(xy: np.ndarray, ring: np.ndarray) -> np.ndarray:
+    """(n,) each point's distance to the closed polyline `ring` ((m + 1, 2), first point last)."""
+    a, b = ring[:-1], ring[1:]
+    d = b - a
+    t = np.clip(((xy[:, None] - a) * d).sum(-1) / np.maximum((d * d).sum(-1), 1e-30), 0, 1)
+    return np.linalg.norm(xy[:, None] - (a + t[..., None] * d), axis=2).min(axis=1)
+
+
+def test_a_folded_leafs_lesson_frames_it_laid_flat_and_bent_alike(folded):
+    """Framed on its folded mesh alone, the laid-flat blade of steps 2-5 reached past the 3D
+    view's box across the blade (1/cos 30° of the folded width); one framing holds both."""
+    from leafstudio.gui.model.framing import blade_bounds
+    from leafstudio.gui.model.lesson import lesson_bounds
+
+    frame, width = folded.frame, np.ptp(folded.polygon[:, 1])
+    alone = blade_bounds(folded.triangle_mesh.points, frame)
+    both = lesson_bounds(folded, frame)
+    assert alone.hi[1] - alone.lo[1] < width  # the flat blade did not fit
+    assert both.lo[1] < folded.polygon[:, 1].min() and both.hi[1] > folded.polygon[:, 1].max()
+    assert both.hi[2] - both.lo[2] > 0.95 * (alone.hi[2] - alone.lo[2])  # the fold's height kept

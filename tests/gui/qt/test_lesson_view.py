@@ -142,3 +142,37 @@ def test_a_bent_leafs_lesson_says_it_is_unbent_first(window, qtbot, tmp_path):
     wait_result(qtbot, window, lambda o: o.result.leaf.bend is not None)
     qtbot.waitUntil(lambda: lesson.caption.text() == STEPS[plane].bent_caption, timeout=10_000)
     lesson.close()
+
+
+def test_a_bent_leafs_flat_steps_show_it_laid_flat_and_say_so(window, qtbot, tmp_path):
+    """Steps 3-5 drew g, p(x) and the EM samples on the flat blade under a folded leaf's folded
+    points. Steps 2-5 now show its outline and points laid flat (the "blade" layer, offered in
+    the app's layer list for a bent leaf only), the others the leaf as bent; one sentence says
+    so."""
+    import leafstudio as ls
+    from leafstudio.forms.make import Form
+    from leafstudio.gui.model.lesson import bent_note
+    from tests.gui.qt.conftest import wait_result
+
+    assert not window.layers._item("blade").flags() & Qt.ItemFlag.ItemIsEnabled  # the demo
+    path = tmp_path / "folded.leaf.json"
+    ls.save_leaf(Form("ovate", fold=60.0).leaf(), path)
+    window.session.history.set_clean()
+    assert window.open_path(str(path))
+    wait_result(qtbot, window, lambda o: o.result.leaf.bend is not None)
+    qtbot.waitUntil(lambda: bool(window.layers._item("blade").flags() & Qt.ItemFlag.ItemIsEnabled))
+    lesson = LessonWindow(window)
+    qtbot.addWidget(lesson)
+    for index, step in enumerate(STEPS):
+        lesson.go(index)
+        shown = _shown_layers(lesson)
+        if step.flat:
+            assert "blade" in shown and not shown & {"points", "curves", "mesh"}, step.title
+        else:
+            assert "blade" not in shown and shown == set(step.layers), step.title
+        assert lesson.footer.text().endswith(bent_note())
+    assert [p.name for p in lesson.viewport._pieces["blade"]][:2] == [
+        "blade:outline",
+        "blade:boundary",
+    ]
+    lesson.close()
