@@ -56,8 +56,8 @@ surface, the dome its veins lie on, is itself rougher inside than the paper's (2
 roughest edges lie beside the midrib where the blade narrows (0.3-0.5 of the length from the
 base, within 0.02 of the length of a vein), which the paper's surface rounds within 7.8e-4 of
 its veins; through them within TOLERANCE the surface bends as its dome does (TOLERANCE 7e-4:
-2.87°, 9e-4: 2.84° but a drawn leaf's and linear's veins 1.1e-3 off the mesh). The points of the band
-already close to the surface are pinned too: the surface moves there as well.
+2.87°, 9e-4: 2.84° but a drawn leaf's and linear's veins 1.1e-3 off the mesh). The points of
+the band already close to the surface are pinned too: the surface moves there as well.
 
 The spline's centres are the vein points thinned and chosen by vein_centers.py, less the points
 no smooth correction should chase (`reachable`), and a few on no vein about a vein's end that
