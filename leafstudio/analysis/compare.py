@@ -103,7 +103,8 @@ def compare(leaf: Leaf, params: Params | None = None) -> dict[str, Any]:
         "ours" and "poisson", each with the Table-1 distances ("boundary", "veins"), the mesh's
         facts ("mesh"), "spill" (spill_area) and "seconds" (the wall time of the
         reconstruction; ours a steady run's, after one that loads the compiled kernels);
-        "ours" also has "k", the K used; "meshes" holds both (TriangleMesh).
+        "ours" also has "k", the K used (None: a flat blade fits no mixture); "meshes" holds
+        both (TriangleMesh).
     """
     params = params or Params()
     Pipeline(leaf).run(params)  # a process's first run loads the compiled kernels: time the next
@@ -142,7 +143,7 @@ def compare(leaf: Leaf, params: Params | None = None) -> dict[str, Any]:
         return TriangleMesh(points=units.to_world(mesh.points), regular_faces=mesh.regular_faces)
 
     return {
-        "ours": {**report(result.triangle_mesh, ours_seconds), "k": result.chosen_k},
+        "ours": {**report(result.triangle_mesh, ours_seconds), "k": result.fitted_k},
         "poisson": report(poisson, poisson_seconds),
         "meshes": {"ours": in_world(result.triangle_mesh), "poisson": in_world(poisson)},
     }
@@ -165,9 +166,9 @@ def format_comparison(report: dict[str, Any]) -> str:
         return "-" if value is None else f"{value:.4g}"
 
     label_width = max(len(label) for label, _ in rows)
-    lines = [
-        f"{'':<{label_width}}  {'ours (K = ' + str(report['ours']['k']) + ')':>14}  {'Poisson':>14}"
-    ]
+    k = report["ours"]["k"]
+    ours = "ours (K unused)" if k is None else f"ours (K = {k})"
+    lines = [f"{'':<{label_width}}  {ours:>14}  {'Poisson':>14}"]
     for label, get in rows:
         lines.append(
             f"{label:<{label_width}}  {cell(get(report['ours'])):>14}  "

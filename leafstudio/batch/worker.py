@@ -103,7 +103,7 @@ def _reconstruct(job: Job) -> dict[str, Any]:
             opened = workflows.Opened(job.path, "leaf", load_leaf(job.path))
         done = workflows.reconstruct(opened, settings.params)
         result = done.result
-        row: dict[str, Any] = {"k": result.chosen_k, "grid": settings.params.grid}
+        row: dict[str, Any] = {"k": result.fitted_k, "grid": settings.params.grid}
         row.update(_traits(result))  # LeafError: a leaf at 1e160 is too large to measure
     except LeafError as exc:
         raise LeafError(exc.problem, job.input) from None

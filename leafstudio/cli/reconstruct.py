@@ -147,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
         metrics = {
             "input": args.input,
             "params": params.to_dict(),
-            "k": result.chosen_k,
+            "k": result.fitted_k,
             **({"units": "mm", **scaled_metrics(measured, mm)} if mm is not None else measured),
             "warnings": args.warnings,
         }

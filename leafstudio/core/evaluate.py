@@ -183,6 +183,7 @@ def margin_creases(
 
 
 #: (key, label) of the scalar measurements, in the order a table shows them
+NO_MIXTURE = "unused (flat blade)"  # K where the blade fits no mixture (Result.fitted_k None)
 FIELDS = (
     ("area", "surface area (3D)"),
     ("projected_area", "projected area"),
@@ -355,8 +356,8 @@ def leaf_measurements(result: Any) -> dict[str, Any]:
     Returns
     -------
     dict
-        The FIELDS keys, "k", "curvature" (curvature_summary) and "boundary"/"veins" (the
-        Table-1 min, max and mean distances).
+        The FIELDS keys, "k" (None: a flat blade fits no mixture), "curvature"
+        (curvature_summary) and "boundary"/"veins" (the Table-1 min, max and mean distances).
     """
     metrics = result.metrics
     return {
@@ -374,7 +375,8 @@ def format_table(values: dict[str, Any]) -> str:
         return "-" if x is None else f"{x:.6g}"
 
     rows = [(label, number(values[key])) for key, label in FIELDS]
-    rows.append(("K (Gaussians)", str(values["k"])))
+    k = values["k"]
+    rows.append(("K (Gaussians)", NO_MIXTURE if k is None else str(k)))
     for name, stats in values["curvature"].items():
         rows.append(
             (

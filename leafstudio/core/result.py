@@ -121,7 +121,10 @@ class Result:
         Table-1 distances ("boundary", "veins"), mesh facts ("mesh"), sizes ("leaf"), curvature
         ranges ("curvature"); measured on first use.
     chosen_k : int
-        The K the surface uses (the BIC's choice when params.k is "auto").
+        The K the surface uses (the BIC's choice when params.k is "auto"); 1 for a blade that
+        fits no mixture (`fits_no_mixture`), whose Gaussian is a placeholder.
+    fitted_k : int or None
+        `chosen_k`, or None when the blade fits no mixture: what the metrics' "k" says.
     em_samples, em_mixture : (s, 2) float array, gmm.Mixture
         The EM samples drawn from the height guide p(x), in the plane, and the mixture EM
         fitted to them (the gmm stage's output); `surface.mixture` is refined from it (its
@@ -236,6 +239,15 @@ class Result:
         return not np.any(self.em_mixture.amplitudes)
 
     @property
+    def fitted_k(self) -> int | None:
+        """The K of the mixture the surface fits, None when it fits none (`fits_no_mixture`):
+        what the metrics, `measure`, `reconstruct --metrics`, `compare` and a batch's trait
+        table say. A flat blade's placeholder Gaussian read "k": 1 there, and in the app's
+        Measurements panel, for a blade where K does nothing (the view's corner said "K
+        unused (flat blade)" beside it: review of session 31)."""
+        return None if self.fits_no_mixture else self.chosen_k
+
+    @property
     def mesh(self) -> pv.PolyData:
         """The mesh as a pyvista.PolyData with its point arrays, built on first use: a run itself
         never creates a VTK object (the app draws from `triangle_mesh` on its main thread)."""
@@ -294,7 +306,7 @@ class Result:
         )
         yield
         curvature = curvature_summary(self.triangle_mesh)
-        return {**table, "leaf": {**shape, "k": self.chosen_k}, "curvature": curvature}
+        return {**table, "leaf": {**shape, "k": self.fitted_k}, "curvature": curvature}
 
 
 def _unit_midrib(blade: Leaf, units: Units | None) -> np.ndarray | None:

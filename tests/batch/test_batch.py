@@ -582,3 +582,29 @@ def test_a_scan_batch_given_the_real_length_gives_its_distances_in_millimetres(s
     for name in ("scan_points", "scan_beyond_1pct", "scan_beyond_2pct", "scan_folded"):
         assert real[name] == own[name]  # counts and shares
     assert 0 <= own["scan_folded"] < 0.01  # the share of the mesh's edges folded back
+
+
+def test_a_flat_blades_k_is_empty_in_csv_and_null_in_json_not_its_placeholder_1(tmp_path):
+    """A blade with its veins in its plane fits no mixture (Result.fits_no_mixture): its
+    placeholder Gaussian's K of 1 was the row's "k", a K that did nothing. The table leaves it
+    empty (CSV) or null (JSON lines), as the README says; a relief's K stays."""
+    t = np.linspace(0, 2 * np.pi, 80, endpoint=False)
+    boundary = np.column_stack([np.cos(t), 0.4 * np.sin(t), 0 * t])
+    x = np.linspace(-0.9, 0.9, 20)
+    flat = ls.Leaf(boundary, [np.column_stack([x, 0 * x, 0 * x])])
+    ls.save_leaf(flat, tmp_path / "flat.csv")
+    ls.save_leaf(ls.demo("nested"), tmp_path / "nested.csv")
+    settings = Settings(ls.Params(k=3, grid=int(GRID)), format="none")
+    jobs = plan([tmp_path / "flat.csv", tmp_path / "nested.csv"], tmp_path / "out", settings)
+    rows = {Path(row["input"]).stem: row for row in map(run_job, jobs)}
+    assert rows["flat"]["k"] is None and rows["nested"]["k"] == 3
+    for name in ("t.csv", "t.json"):
+        table = TraitTable(tmp_path / name, scans=False)
+        table.start()
+        for row in rows.values():
+            table.add(row)
+        table.close()
+    by_input = {Path(r["input"]).stem: r for r in _rows(tmp_path / "t.csv")}
+    assert by_input["flat"]["k"] == "" and by_input["nested"]["k"] == "3"
+    lines = [json.loads(line) for line in (tmp_path / "t.json").read_text().splitlines()]
+    assert {Path(r["input"]).stem: r["k"] for r in lines} == {"flat": None, "nested": 3}

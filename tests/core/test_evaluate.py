@@ -20,6 +20,7 @@ from leafstudio.core.curvature import CURVATURE_ARRAYS
 from leafstudio.core.edges import edge_table
 from leafstudio.core.evaluate import (
     FIELDS,
+    NO_MIXTURE,
     count_border_loops,
     edge_counts,
     format_table,
@@ -64,7 +65,9 @@ def test_flat_ellipse_has_the_ellipse_sizes(flat):
     assert m["width"] == pytest.approx(2 * B, rel=1e-3)
     assert m["aspect_ratio"] == pytest.approx(A / B, rel=1e-3)
     assert m["height"] == pytest.approx(0, abs=1e-12)
-    assert m["k"] == 1
+    # no mixture is fitted on a flat blade: its placeholder Gaussian's K of 1 read as a K
+    assert flat.chosen_k == 1 and flat.fitted_k is None and m["k"] is None
+    assert "K (Gaussians)" in (table := format_table(m)) and NO_MIXTURE in table
 
 
 def test_flat_leaf_has_zero_curvature(flat):

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from leafstudio._shared.safewrite import write_bytes
+from leafstudio.core.evaluate import NO_MIXTURE
 from leafstudio.core.pipeline import Result
 from leafstudio.errors import LeafError
 
@@ -33,9 +34,13 @@ def _label(key: str) -> str:
     return key.replace("_", " ").capitalize()
 
 
-def _value(value: Any) -> str:
+# what a figure of None says, by its key (else "–"): a flat blade's K is not one (fitted_k)
+NONE_TEXTS = {"k": NO_MIXTURE}
+
+
+def _value(value: Any, key: str = "") -> str:
     if value is None:
-        return "–"
+        return NONE_TEXTS.get(key, "–")
     if isinstance(value, (bool, np.bool_)):
         return "yes" if value else "no"
     if isinstance(value, (int, np.integer)):
@@ -51,7 +56,7 @@ def _flatten(values: dict[str, Any]) -> list[tuple[str, str]]:
         if isinstance(value, dict):
             rows.extend((f"{_label(key)} {label.lower()}", text) for label, text in _flatten(value))
         elif not isinstance(value, (list, tuple, np.ndarray)):
-            rows.append((_label(key), _value(value)))
+            rows.append((_label(key), _value(value, key)))
     return rows
 
 

@@ -50,6 +50,20 @@ def _param_text(before: Params, after: Params) -> str:
     return "Change " + ", ".join(changed)
 
 
+def _whose(state: State) -> str:
+    """Whose outline a loaded document's derived sketch approximates."""
+    return "the scan's" if state.scan is not None else "the opened leaf's"
+
+
+def replaced_text(before: State, sketch: Sketch) -> str:
+    """What the first edit of `before`'s derived sketch did: the loaded leaf's (a scan's, a
+    file's) outline and veins replaced by the sketch's curves, and how to get them back."""
+    return (  # short: the status line shows ~170 characters in a 1500-pixel window
+        f"Editing replaced {_whose(before)} outline and veins by the sketch's curves "
+        f"({len(sketch.boundary)} outline points); Undo (Ctrl+Z) brings them back."
+    )
+
+
 class Session(FileOpening, Bending, WorkerReports):
     """The document, parameters, results, pending request and history.
 
@@ -88,6 +102,10 @@ class Session(FileOpening, Bending, WorkerReports):
         The sketch's boundary crossings, (c, 2) plane points (empty when it does not cross).
     noticed(str)
         A message for the user that is not a failure (a project's photo is missing).
+    outline_replaced(str)
+        The first edit of a loaded leaf's derived sketch (a scan's, a file's) replaced the leaf's
+        own outline and veins by the sketch's curves: what to tell the user (`replaced_text`);
+        `outline_note` says it while the document is drawn by that sketch.
     opening(str, str)
         A file is being read: its path, and what it is read as ("photo", "scan" or "file").
     opened(str)
@@ -123,7 +141,9 @@ class Session(FileOpening, Bending, WorkerReports):
         self.message = ""
         self.state_changed, self.result_shown, self.failed = Event(), Event(), Event()
         self.cleared, self.sketch_shown, self.crossing = Event(), Event(), Event()
-        self.noticed, self.sketch_waiting = Event(), Event()
+        self.noticed, self.sketch_waiting, self.outline_replaced = Event(), Event(), Event()
+        self._replaced: dict[int, str] = {}  # serial -> whose outline its first edit replaced
+        self._told: tuple[int, str] = (-1, "")  # the request of the edit that replaced it
         self.opening, self.opened, self.open_failed = Event(), Event(), Event()
         self.open_cancelled, self.open_progress, self.open_ended = Event(), Event(), Event()
         self.chosen_texture: Any = None  # a texture picked for the export, shown too
@@ -177,6 +197,26 @@ class Session(FileOpening, Bending, WorkerReports):
         if sketch is not None and len(sketch.boundary):
             return sketch.frame
         return self.result.frame if self.result is not None else None
+
+    @property
+    def outline_note(self) -> str:
+        """What to say while the document is a loaded leaf drawn by its edited sketch (its own
+        outline and veins replaced at the first edit: `outline_replaced`), "" otherwise; Undo
+        back to before that edit brings the leaf's own curves back, and the note goes."""
+        if self.state.sketch is None or self.state.serial not in self._replaced:
+            return ""
+        return (
+            f"Drawn by the sketch: {self._replaced[self.state.serial]} outline and veins were "
+            "replaced by its curves at its first edit, so the surface may have moved slightly "
+            "(undo the edits to bring them back)."
+        )
+
+    def notes_of(self, request_id: int) -> list[str]:
+        """Notes about result `request_id` said with it on the status line: the edit that
+        replaced a loaded leaf's outline, on its result (the line is rewritten when a result is
+        drawn, which came a moment after the edit's message)."""
+        request, note = self._told
+        return [note] if note and request == request_id else []
 
     def is_modified(self) -> bool:
         """True when there are edits (sketch or parameters) not saved."""
@@ -279,6 +319,15 @@ class Session(FileOpening, Bending, WorkerReports):
             leaf = self.sketch_leaf(sketch, before)
             self._apply(replace(self.state, leaf=leaf, sketch=sketch), "edit")
         self.history.push(Step(text, base, self.state))
+        if base.sketch is None and base.leaf is not None and self.state.sketch is not None:
+            # a loaded leaf's first edit: the leaf is the sketch's from now on, not its own
+            # (soybean pot1_1 at grid 128: its outline through 3,000 points became a curve
+            # through 85, the area 1.4% less, the mesh moved up to 0.93 mm), said once and kept
+            # as a note
+            note = replaced_text(base, self.state.sketch)
+            self._replaced[self.state.serial] = _whose(base)
+            self._told = (self.last_id, note)
+            self.outline_replaced.emit(note)
 
     def set_symmetric(self, on: bool) -> None:
         """Mirror editing on or off. It is a property of the drawing, saved with its sketch

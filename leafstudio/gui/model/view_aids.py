@@ -6,7 +6,9 @@ from __future__ import annotations
 
 from typing import Any
 
-FLAT_K = "K unused (flat blade)"
+from leafstudio.core.evaluate import NO_MIXTURE
+
+FLAT_K = f"K {NO_MIXTURE}"
 # said where the stretch is set (Height ×, the lesson) while it is off for a posed leaf
 STRETCH_OFF = (
     "Height × is off for a bent leaf: a stretch along one axis would stretch its bend (a fold, "

@@ -62,6 +62,11 @@ DEBOUNCE_MS = 250
 THUMBNAILS = "thumbnails"  # the worker's job kind (and lane) growing the gallery's veins
 FORM = "form"  # the job kind growing a chosen form's blade (its own lane: never behind those)
 _thumbnails: dict[tuple[str, tuple[int, int]], QImage] = {}
+# the pose boxes' tip while they are off: the open leaf is a scan bent by its sheet
+NO_POSE = (
+    "This scan is bent by the smooth sheet fitted to its points: no fold, curl, roll or twist "
+    "applies to it (a pose would replace that fit). A shape picked in the gallery starts unbent."
+)
 EDITED = (  # said under the shape of a form edited since it was made (form_documents.py)
     "<br><i>Edited since it was made: Fold, Curl, Roll and Twist bend it, keeping the edits; the "
     "other terms make a new leaf when you pick a shape (Undo brings this one back).</i>"
@@ -255,9 +260,10 @@ class FormsPanel(QWidget):
     def show_edited(self, edited: bool, poseable: bool = True) -> None:
         """Say whether the open form was edited since it was made (its pose terms then bend it,
         the others wait for a shape picked); the pose terms are off for a leaf they cannot bend
-        (a scan bent by its sheet)."""
-        for box in self.pose_boxes.values():
+        (a scan bent by its sheet), and say why."""
+        for name, box in self.pose_boxes.items():
             box.setEnabled(poseable)
+            box.setToolTip(RELIEF[name] if poseable else NO_POSE)
         if edited != self._edited:
             self._edited = edited
             self._describe()
@@ -409,9 +415,13 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
             return
         poseable = can_pose(state.leaf)
         panel.show_edited(gallery.edited(state), poseable or state.leaf is None)
-        if poseable:
-            figures = panel.show_pose(pose_terms(session.pose, session.half_width))
-            dock_pose["shown"] = (session.pose, figures)
+        if poseable or state.leaf is not None:
+            # a scan bent by its sheet has no pose (session.pose is flat): the boxes are cleared.
+            # Kept, the last form's fold of 45 read on the boxes that were off, and the next
+            # shape picked came in folded 45 (session 31)
+            pose = session.pose
+            figures = panel.show_pose(pose_terms(pose, session.half_width if poseable else 1.0))
+            dock_pose["shown"] = (pose, figures)
 
     def grown(blade: tuple[Form, Leaf, str, Sketch]) -> None:
         kept["blade"] = blade

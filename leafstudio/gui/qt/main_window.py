@@ -121,6 +121,7 @@ class MainWindow(FileCommands, Reports, QMainWindow):
         session.sketch_waiting.connect(self.editor.wait_for_sketch)  # a loaded leaf: none yet
         session.crossing.connect(self.editor.view.set_crossings)
         session.noticed.connect(self._on_notice)
+        session.outline_replaced.connect(self._on_outline_replaced)
         session.history.changed.connect(self._on_history)
         session.opening.connect(self._on_opening)
         self.export_progress.connect(self._on_export_progress)

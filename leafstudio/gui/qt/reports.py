@@ -51,6 +51,7 @@ class Reports:
                 later(self, partial(self._set_coloring, coloring, automatic))
             else:
                 self._coloring_automatic = automatic
+        self.editor.show_outline_note(self.session.outline_note)  # a loaded leaf redrawn
         if state.scan is not self._scan_shown:  # after the recolouring above: its new actor's
             self._scan_shown = state.scan  # render sets up its shaders, then the points' (turns.py)
             pieces = state.scan.pieces if state.scan is not None else []
@@ -162,8 +163,18 @@ class Reports:
             f"K={params.k}, grid {params.grid}: shown in {1000 * total:.0f} ms",
             tip=" · ".join(ms) + " (stages not listed came from the cache)",
         )
-        for note in (*outcome.result.warnings, *self.session.side.warnings_of(outcome.request.id)):
+        request, session = outcome.request.id, self.session
+        warned = (*outcome.result.warnings, *session.side.warnings_of(request))
+        for note in (*session.notes_of(request), *warned):  # the edit's first: it was the user's
             self.status_text.setText(self.status_text.text() + f" — note: {note}")
+
+    def _on_outline_replaced(self, message: str) -> None:
+        """A loaded leaf's first sketch edit replaced its own outline and veins: said on the
+        status line now (and with the edit's result, `Session.notes_of`), and as a note over
+        the sketch while it draws the leaf (`_on_state`)."""
+        self.status_text.setStyleSheet("color: #8a5a00")
+        self.status_text.setText(message)
+        self.editor.show_outline_note(self.session.outline_note)
 
     def _show_measurements(self) -> None:
         """Fill the panel once the shown result is measured; with a scan open, its distances

@@ -115,6 +115,13 @@ class SketchEditor(QWidget):
             f"{CROSSING_COLOR}; padding: 3px"
         )
         self.mirror_note.hide()
+        # a loaded leaf drawn by its edited sketch (Session.outline_note), over the view's foot
+        self.outline_note = QLabel(self.view)
+        self.outline_note.setWordWrap(True)
+        self.outline_note.setStyleSheet(
+            "color: #3d2f00; background: #fff4cc; border: 1px solid #c9a227; padding: 3px"
+        )
+        self.outline_note.hide()
         # a new document whose sketch is not known yet (a loaded leaf's comes with its result)
         self.waiting = QLabel("Waiting for the leaf: its sketch shows once it is reconstructed.")
         self.waiting.setParent(self.view)
@@ -196,13 +203,24 @@ class SketchEditor(QWidget):
         self._over_view(self.waiting)
         self.waiting.show()
 
-    def _over_view(self, label: QLabel) -> None:
-        """Lay a note over the view's top, inside the frame and the scroll bars."""
+    def _over_view(self, label: QLabel, foot: bool = False) -> None:
+        """Lay a note over the view's top (or `foot`), inside the frame and the scroll bars."""
         area = self.view.viewport().geometry()
         width = max(120, area.width() - 16)
         label.setFixedSize(width, label.heightForWidth(width))
-        label.move(area.left() + 8, area.top() + 8)
+        top = area.bottom() - 8 - label.height() if foot else area.top() + 8
+        label.move(area.left() + 8, top)
         label.raise_()
+
+    def show_outline_note(self, text: str) -> None:
+        """Say, over the sketch's foot, that the leaf is drawn by this sketch and no longer by
+        the scan's (or file's) own outline and veins (Session.outline_note); "" hides it."""
+        note = self.outline_note
+        if text != note.text():
+            note.setText(text)
+        if text:
+            self._over_view(note, foot=True)
+        note.setVisible(bool(text))
 
     def _set_select_tool(self, on: bool) -> None:
         self.view.select_tool = on
@@ -215,8 +233,10 @@ class SketchEditor(QWidget):
 
     def resizeEvent(self, event: QResizeEvent) -> None:
         super().resizeEvent(event)
-        if self.mirror_note.isVisible():  # the note keeps to the view's width
+        if self.mirror_note.isVisible():  # the notes keep to the view's width
             self._show_mirror_note(self.mirror_note.text())
+        if self.outline_note.isVisible():
+            self.show_outline_note(self.outline_note.text())
         if self._waiting:
             self._over_view(self.waiting)
 

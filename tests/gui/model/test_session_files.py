@@ -254,3 +254,58 @@ def test_a_scan_whose_surface_folds_back_is_warned_of_in_the_window():
     rows = dict(session.shown.fidelity[1][0][1])
     assert float(rows["Mesh edges folded back"].rstrip("%")) / 100 > FOLDED
     assert any("folds back on itself" in note for note in notes)
+
+
+def test_a_scans_first_sketch_edit_says_it_replaces_the_scans_outline_and_one_undo_restores_it():
+    """Session 31, noticed: the first edit of a scan's derived sketch replaced the scan's outline
+    and veins by the sketch's curves (soybean pot1_1 at grid 128: 3,000 outline points by a
+    spline through 85, the area 1.4% less, the mesh moved up to 0.93 mm) without a word. The
+    session says so once, with the edit's result, and as a note while the sketch draws the
+    leaf; one Undo brings the scan's own leaf back, exactly."""
+    from pathlib import Path
+
+    from leafstudio.model import Params
+
+    path = Path(__file__).resolve().parents[3].parent / "shared" / "realleaves"
+    path = path / "soybean_11_20190508T043118_pot1_1.txt"
+    if not path.exists():
+        pytest.skip("the shared scans are not beside us")
+    runner = Runner()
+    session = Session(runner, Params(k=3, grid=64))
+    told: list[str] = []
+    session.outline_replaced.connect(told.append)
+    session.open_path(str(path))
+    runner.finish(session)
+    opened, polygon = session.leaf, session.result.polygon.copy()
+    boundary = opened.boundary.copy()
+    assert session.state.scan is not None and session.outline_note == "" and not told
+    sketch = session.editable_sketch()
+    i = len(sketch.boundary) // 3
+    moved = sketch.moved(-1, i, sketch.boundary[i] + 0.002 * (sketch.boundary[i] - [0, 0]))
+    session.commit_sketch(moved, "Move point")
+    assert len(told) == 1 and "replaced the scan's outline and veins" in told[0]
+    assert f"({len(sketch.boundary)} outline points)" in told[0] and "Undo" in told[0]
+    assert session.notes_of(session.last_id) == told
+    assert "scan's outline and veins were replaced" in session.outline_note
+    session.commit_sketch(moved.moved(-1, i, moved.boundary[i] * 1.001), "Move point")
+    assert len(told) == 1  # said once: the leaf is the sketch's already
+    session.undo()
+    assert "replaced" in session.outline_note  # still drawn by the sketch
+    session.undo()  # back to before the first edit: the scan's own leaf
+    assert session.leaf is opened and np.array_equal(session.leaf.boundary, boundary)
+    assert session.outline_note == ""
+    runner.finish(session)
+    np.testing.assert_array_equal(session.result.polygon, polygon)  # its 3,000-point outline
+    assert len(polygon) > 10 * len(sketch.boundary)
+
+
+def test_an_opened_leafs_first_sketch_edit_says_it_is_redrawn_by_the_sketch(tmp_path):
+    """The same for a leaf read from a file (its derived sketch approximates it too)."""
+    session, runner, _ = opened_session()
+    session.open_demo("nested")
+    runner.finish(session)
+    told: list[str] = []
+    session.outline_replaced.connect(told.append)
+    sketch = session.editable_sketch()
+    session.commit_sketch(sketch.moved(-1, 2, sketch.boundary[2] * 1.01), "Move point")
+    assert len(told) == 1 and "the opened leaf's outline and veins" in told[0]

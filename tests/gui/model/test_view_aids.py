@@ -57,3 +57,19 @@ def test_a_scans_sheet_bent_view_is_not_stretched_either():
     points = np.asarray(result.triangle_mesh.points)
     assert np.ptp(points @ normal) > 0.1  # its roll stands along the normal, not a relief
     assert not stretches(result)
+
+
+def test_the_measurements_panel_says_k_is_unused_on_a_flat_blade_not_1():
+    """The view's corner said "K unused (flat blade)" while the Measurements panel's Leaf
+    section said K 1 beside it (the flat blade's placeholder Gaussian); a relief's K is shown."""
+    from leafstudio.gui.model.measurements import measurement_rows
+
+    t = np.linspace(0, 2 * np.pi, 80, endpoint=False)
+    boundary = np.column_stack([0.5 + 0.5 * np.cos(t), 0.2 * np.sin(t), 0 * t])
+    midrib = np.column_stack([np.linspace(0.02, 0.98, 12), np.zeros(12), np.zeros(12)])
+
+    def leaf_rows(leaf: Leaf) -> dict[str, str]:
+        return dict(dict(measurement_rows(Pipeline(leaf).run(FAST)))["Leaf"])
+
+    assert leaf_rows(Leaf(boundary, [midrib]))["K"] == "unused (flat blade)"
+    assert leaf_rows(demo("nested"))["K"] == "3"

@@ -11,12 +11,16 @@ from PySide6.QtCore import QSize, Qt
 from PySide6.QtGui import QImage
 from PySide6.QtWidgets import QDockWidget
 
+from leafstudio.core.bend import Pose
 from leafstudio.forms import SHAPES, Form
+from leafstudio.forms.terms import RELIEF
+from leafstudio.gui.model.bending import can_pose
 from leafstudio.gui.model.form_sketch import leaf_sketch, with_grown_veins
 from leafstudio.gui.qt import forms_dock
 from leafstudio.gui.qt.forms_dock import FormsPanel, thumbnail
 from leafstudio.model import Leaf
 from leafstudio.sources.demos import demo
+from tests.gui.builders import six_column_scan, write_points
 from tests.gui.qt.conftest import WAIT_MS, close_window, image_pixels, make_window, wait_result
 
 
@@ -434,3 +438,28 @@ def test_the_docks_other_terms_wait_for_a_shape_picked_once_the_form_is_edited(
     assert session.state.sketch is not moved and session.pose.curl == pytest.approx(0.4)
     session.undo()
     assert session.state.sketch is moved
+
+
+def test_a_scans_dock_shows_no_pose_and_a_shape_picked_then_is_not_bent_by_the_last_leaf(
+    window, panel, qtbot, tmp_path
+):
+    """Session 31, noticed: with a scan open (bent by its sheet, which no pose may replace) the
+    dock's pose boxes were off but kept the last form's fold of 45, and a shape picked then came
+    in folded 45 though nobody asked. They show what applies (no pose: cleared, and why), and
+    the shape picked starts from the terms the dock shows."""
+    session = window.session
+    panel.gallery.setCurrentRow(list(SHAPES).index("ovate"))
+    panel.fold.setValue(45.0)
+    choose(qtbot, window, panel)
+    assert session.pose.fold == 45.0 and panel.fold.value() == 45.0
+    assert window.open_path(write_points(tmp_path / "scan.txt", six_column_scan()))
+    qtbot.waitUntil(lambda: session.state.scan is not None, timeout=WAIT_MS)
+    wait_result(qtbot, window, lambda o: o.result.leaf is session.leaf)
+    assert not can_pose(session.leaf)  # bent by the sheet fitted to its points
+    assert not panel.fold.isEnabled()
+    assert panel.pose_figures() == {"fold": 0.0, "curl": 0.0, "roll": 0.0, "twist": 0.0}
+    assert "sheet" in panel.fold.toolTip()
+    panel.gallery.setCurrentRow(list(SHAPES).index("lanceolate"))
+    choose(qtbot, window, panel)
+    assert "lanceolate" in session.state.title and session.pose == Pose()
+    assert panel.fold.isEnabled() and panel.fold.toolTip() == RELIEF["fold"]

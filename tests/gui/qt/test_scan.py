@@ -239,3 +239,33 @@ def test_a_scans_warning_stays_on_the_status_line_whenever_its_distances_come_in
     qtbot.wait(200)  # anything else due on the status line
     assert "folds back on itself" in window.status_text.text()
     close_window(window)
+
+
+def test_a_scans_first_sketch_edit_is_said_in_the_window_and_one_undo_brings_the_scan_back(
+    scan_window, qtbot
+):
+    """Session 31, noticed: the first edit of a scan's sketch replaced the scan's outline and
+    veins by the sketch's curves without a word. The status line says so (still once the
+    edit's result is drawn), a note over the sketch says it while the sketch draws the leaf,
+    and one Undo brings the scan's own outline back, the note gone."""
+    window, session = scan_window, scan_window.session
+    opened, polygon = session.state.leaf, session.result.polygon.copy()
+    boundary = opened.boundary.copy()
+    note = window.editor.outline_note
+    assert not note.isVisible()
+    view = window.editor.view  # the user's edit: a boundary point deleted in the editor
+    view.selected = (-1, 0)
+    view.delete_selected()
+    assert session.state.leaf is not opened
+    assert "replaced the scan's outline and veins" in window.status_text.text()
+    assert note.isVisible() and "Drawn by the sketch" in note.text()
+    wait_result(qtbot, window, lambda o: o.result.leaf is session.leaf)
+    qtbot.waitUntil(lambda: "shown in" in window.status_text.text(), timeout=WAIT_MS)
+    assert "replaced the scan's outline and veins" in window.status_text.text()
+    window.actions["edit.undo"].trigger()  # one Undo
+    assert session.state.leaf is opened and np.array_equal(session.leaf.boundary, boundary)
+    assert not note.isVisible()
+    wait_result(qtbot, window, lambda o: o.result.leaf is opened)
+    np.testing.assert_array_equal(session.result.polygon, polygon)
+    window.actions["edit.redo"].trigger()
+    assert note.isVisible()
