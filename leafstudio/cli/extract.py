@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from leafstudio.cli.options import EXIT_OK, log, whole
+from leafstudio.cli.options import EXIT_OK, log, summary, whole
 from leafstudio.sources.scan import OUTLINE_POINTS
 
 
@@ -56,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
         log.warning(lost)
     other = len(scan) - found.blade.sum() - found.petiole.sum()
     length = leaf_blade_length(found.leaf)  # base to apex; a reconstruction's outline is smoother
-    print(
+    summary(
         f"{args.scan}: blade of {found.blade.sum()} of {len(scan)} points (dropped: petiole "
         f"{found.petiole.sum()}, outliers and clutter {other}), length about {length:.3g} (base "
         f"to apex); wrote "

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from leafstudio.assets.units import UNITS_SAID
-from leafstudio.cli.options import first_run_said, log
+from leafstudio.cli.options import first_run_said, log, summary
 from leafstudio.errors import LeafError
 from leafstudio.forms.terms import (
     APEXES,
@@ -153,7 +153,7 @@ def run_form(args: argparse.Namespace) -> int:
         save_leaf(leaf, out)
         if (lost := bend_not_kept(leaf, out)) is not None:
             log.warning(lost)
-    print(
+    summary(
         f"{out}: {form.shape} leaf ({form.apex_term} apex, {form.base_term} base, {form.margin} "
         f"margin, {form.venation_term} venation): {len(leaf.boundary)} boundary points, "
         f"{len(leaf.veins)} vein{'' if len(leaf.veins) == 1 else 's'}",
@@ -213,7 +213,7 @@ def run_veins(args: argparse.Namespace) -> int:
     save_leaf(grown, args.output)
     if given.bend is not None and (lost := bend_not_kept(grown, args.output)) is not None:
         log.warning(lost)
-    print(
+    summary(
         f"{args.output}: {len(veins)} {args.venation} veins grown inside the outline of "
         f"{Path(args.leaf).name}",
         file=sys.stderr,

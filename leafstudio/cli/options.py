@@ -6,8 +6,9 @@ from __future__ import annotations
 import argparse
 import contextlib
 import logging
+import sys
 from collections.abc import Iterator
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TextIO
 
 from leafstudio._shared.kernelcache import NOTICE, kernels_cached, mark_cached
 from leafstudio.errors import LeafError, shorten
@@ -19,6 +20,15 @@ if TYPE_CHECKING:
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT = 0, 1, 2
 log = logging.getLogger("leafstudio")
+
+
+def summary(line: str, file: TextIO | None = None) -> None:
+    """A command's closing line (what it wrote), on `file` (default stdout), unless -q: said
+    at the logger's INFO level as reconstruct's notes are, but printed where the command has
+    always printed it (extract's on stdout, which scripts read; form's on stderr). Before,
+    `form -q` and `extract -q` printed it all the same (appreview31)."""
+    if log.isEnabledFor(logging.INFO):
+        print(line, file=sys.stdout if file is None else file)
 
 
 def whole(text: str, low: int, high: int) -> int:

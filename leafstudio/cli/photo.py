@@ -6,6 +6,7 @@ import argparse
 import sys
 from typing import TYPE_CHECKING
 
+from leafstudio.cli.options import summary
 from leafstudio.errors import LeafError
 from leafstudio.sources.leafphoto import BASE_ENDS, VEIN_CHOICES
 
@@ -70,7 +71,7 @@ def run_photo(args: argparse.Namespace) -> int:
     )  # fmt: skip
     save_photo_leaf(found, args.image, args.output)
     guess = "; base at the wider end (a guess: --base-end names it)"
-    print(
+    summary(
         f"{args.image}: leaf of {int(found.blade.sum())} pixels"
         f"{', petiole cut off' if found.petiole else ''}"
         f"{guess if found.base_cue == 'wider end' else ''}"

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 
 from leafstudio._shared.safewrite import check_outputs
-from leafstudio.cli.options import EXIT_OK, add_run_options, run_pipeline
+from leafstudio.cli.options import EXIT_OK, add_run_options, run_pipeline, summary
 from leafstudio.errors import LeafError
 from leafstudio.render.lesson import LESSON_STEPS
 from leafstudio.sources.leafphoto import photo_path
@@ -62,5 +62,5 @@ def run(args: argparse.Namespace) -> int:
     _, result = run_pipeline(args, load_leaf(args.input, veins=args.vein))
     shown = lesson_slides(result, compared)
     write_slides(shown, args.output)
-    print(f"{args.output}: {len(shown)} slides")
+    summary(f"{args.output}: {len(shown)} slides")
     return EXIT_OK

@@ -15,6 +15,7 @@ from leafstudio.core.bend import flat_leaf
 from leafstudio.core.bent_result import bent_result
 from leafstudio.core.grid import Grid
 from leafstudio.core.kernels import BENT, STAGE, compile_kernels
+from leafstudio.core.pose_limits import check_pose
 from leafstudio.core.prepare.plausibility import BentRefusal
 from leafstudio.core.prepare.units import Units
 from leafstudio.core.result import Cancelled, Later, Result, in_world
@@ -45,6 +46,9 @@ class Pipeline:
         # a clear TypeError for anything else; curves bent in 3D without a bend get the one
         # that lays them flat (unfold.py)
         self.leaf = leaf = unfolded(as_leaf(leaf))
+        # a pose past what it keeps of the blade (a Leaf built with Pose(fold=89)) is refused
+        # as the loader refuses it, before a bad mesh is made of it (pose_limits.py)
+        check_pose(leaf.bend, leaf.boundary, list(leaf.veins))
         self.flat = flat_leaf(leaf)  # a bent leaf's flat blade (bend.py); else the leaf itself
         self.units = Units.of(self.flat)  # the stages run on the leaf at unit size (units.py)
         self.unit_leaf = self.units.leaf(self.flat)

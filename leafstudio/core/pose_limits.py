@@ -49,6 +49,7 @@ import numpy as np
 
 from leafstudio.core.bend import Pose
 from leafstudio.core.placed import PlacedPose, fitted
+from leafstudio.errors import LeafError
 
 FOLD = 80.0  # degrees each way (module docstring)
 MOST_TURN = 0.95 * np.pi  # radians the curl may turn the midrib through at the blade's end
@@ -90,11 +91,14 @@ def fit_like(bend: Any) -> bool:
     )
 
 
-def pose_trouble(bend: Any, boundary: np.ndarray, veins: list[np.ndarray]) -> str | None:
+def pose_trouble(
+    bend: Any, boundary: np.ndarray, veins: list[np.ndarray], flat: bool = False
+) -> str | None:
     """What of `bend` (a bend.Pose, or a placed.PlacedPose in its frame) a blade whose (n, 3)
-    `boundary` and (m_i, 3) `veins` are bent by it (as a project holds them) cannot take, in
-    one line: the term, its value and the range allowed on this blade, in the file's units.
-    None when every term holds, or for a bend that is no pose (a scan's sheet)."""
+    `boundary` and (m_i, 3) `veins` are bent by it (as a project holds them; `flat`: the flat
+    blade it is about to bend) cannot take, in one line: the term, its value and the range
+    allowed on this blade, in the file's units. None when every term holds, or for a bend that
+    is no pose (a scan's sheet)."""
     pose = getattr(bend, "pose", bend)
     if not isinstance(pose, Pose):
         return None
@@ -102,7 +106,7 @@ def pose_trouble(bend: Any, boundary: np.ndarray, veins: list[np.ndarray]) -> st
     if abs(pose.fold) > most_fold:
         return (f'"fold" {pose.fold:g} is past what a fold keeps of the blade; a fold is taken '
                 f"from -{most_fold:g} to {most_fold:g} degrees")  # fmt: skip
-    reach, half = blade_measures(bend, boundary, veins)
+    reach, half = blade_measures(bend, boundary, veins, flat)
     per_unit = "per unit of the leaf's coordinates"
     terms = (
         ("curl", 2 * pose.curl * reach, MOST_TURN / (2 * reach), f"{per_unit}) turns its "
@@ -117,8 +121,11 @@ def pose_trouble(bend: Any, boundary: np.ndarray, veins: list[np.ndarray]) -> st
     )  # fmt: skip
     searched = {}  # a fitted pose's: what the fit searched, which the app saved
     if fit_like(bend) and len(veins) and len(veins[0]) > 1:
+        curves = [np.asarray(c, dtype=float) for c in (boundary, veins[0])]
         with np.errstate(all="ignore"):  # a degenerate blade's bounds: none (nan) or inf
-            bounds = fit_bounds(np.asarray(boundary, float), np.asarray(veins[0], float))[:2]
+            # read on the bent curves, as the loader reads them (a flat blade's diagonal is
+            # longer than the curled one the fit searched over)
+            bounds = fit_bounds(*[bend.apply(c) for c in curves] if flat else curves)[:2]
         pairs = zip(("curl", "roll"), bounds, strict=True)
         searched = {k: SEARCH_SLACK * b for k, b in pairs if b < np.inf}
     for name, turn, most, says in terms:
@@ -128,6 +135,25 @@ def pose_trouble(bend: Any, boundary: np.ndarray, veins: list[np.ndarray]) -> st
             return (f'"{name}" {value:g} ({says.format(turn=abs(turn))}: from {-most:.3g} to '
                     f"{most:.3g} on this blade")  # fmt: skip
     return None
+
+
+def check_pose(
+    bend: Any, boundary: np.ndarray, veins: list[np.ndarray], flat: bool = False
+) -> None:
+    """Refuse `bend` where a pose enters other than from a file (sources/bend_entry.py names
+    the file): the pipeline's leaf (core/pipeline.py: `ls.reconstruct`, `Leaf(..., bend=...)`),
+    a project about to be saved, the app's sliders (gui/model/bending.py, on the `flat` blade).
+    Before, only loading was guarded: `Pose(fold=89)` through the API or the app was taken and
+    kept 0.83 of the blade's area, silently.
+
+    Raises
+    ------
+    LeafError
+        Naming the term, its value and the range it may take on this blade (`pose_trouble`).
+    """
+    trouble = pose_trouble(bend, boundary, veins, flat)
+    if trouble is not None:
+        raise LeafError(f"the leaf's bend: {trouble}")
 
 
 def eased_roll(pose: Pose, half: float) -> Pose:
@@ -141,14 +167,18 @@ def eased_roll(pose: Pose, half: float) -> Pose:
     return replace(pose, roll=float(np.copysign(most, pose.roll)))
 
 
-def blade_measures(bend: Any, boundary: np.ndarray, veins: list[np.ndarray]) -> tuple[float, float]:
+def blade_measures(
+    bend: Any, boundary: np.ndarray, veins: list[np.ndarray], flat: bool = False
+) -> tuple[float, float]:
     """The blade's reach along its midrib (its farthest x from the base: how far a curl and a
     twist turn it) and its half width (how far a roll turns its margins) in the pose's
     coordinates, from the (n, 3) `boundary` and (m_i, 3) `veins` that `bend` (a Pose or a
-    PlacedPose) bends; each the largest of its flat blade's, its relief's and, as stored, the
-    midrib's length or, without a relief, the margin's reach across it with the roll's later
-    terms undone (module docstring). 1 for a blade with no extent, which the loader refuses on
-    its own."""
+    PlacedPose) bends (`flat`: the flat blade, read as it is, not flattened); each the largest
+    of its flat blade's, its relief's and, as stored, the midrib's length or, without a relief,
+    the margin's reach across it with the roll's later terms undone (module docstring). 1 for a
+    blade with no extent, which the loader refuses on its own. Given flat, a roll past the tube
+    is read as it is: flattened, a pose without a relief lays its margins on the tube's seam
+    (bend._wrapped turns no point past half a turn) and read 1.0 for a blade rolled 1.2."""
     pose, frame = getattr(bend, "pose", bend), getattr(bend, "frame", None)
 
     def blade(points: np.ndarray) -> np.ndarray:
@@ -157,17 +187,20 @@ def blade_measures(bend: Any, boundary: np.ndarray, veins: list[np.ndarray]) -> 
 
     stored = blade(boundary)
     midrib = blade(veins[0]) if len(veins) else np.zeros((0, 3))
-    with np.errstate(all="ignore"):
-        flat = pose.flatten(stored)
-        rolled = replace(pose, roll=0.0).flatten(stored) if pose.roll != 0 else flat
+    if flat:
+        laid = rolled = stored
+    else:
+        with np.errstate(all="ignore"):
+            laid = pose.flatten(stored)
+            rolled = replace(pose, roll=0.0).flatten(stored) if pose.roll != 0 else laid
     relief = pose.relief
     reach = _largest(
-        np.abs(flat[:, 0]),
+        np.abs(laid[:, 0]),
         np.linalg.norm(np.diff(midrib, axis=0), axis=1).sum(keepdims=True),
         np.abs([relief.knots[0], relief.knots[-1]]) if relief is not None else [],
     )
     half = _largest(
-        np.abs(flat[:, 1]),
+        np.abs(laid[:, 1]),
         np.abs(rolled[:, 1]) if relief is None else [],
         [relief.half_width] if relief is not None else [],
     )

@@ -3,6 +3,15 @@
 Curves found to need no bend are remembered (UNBENT_KEPT of them, by their bytes): a file's leaf
 is unfolded when opened (workflows.open_file) and again by its Pipeline, and a waved blade,
 fitted and refused, took 0.5-1.4 s of CPU each time.
+
+A curl fitted alone about the margin's plane is re-expressed about the flat midrib's mean height
+(`levelled`), as a form's and the app's curls bend a blade: the margin's flatness cannot tell
+the two apart, and about the margin's plane the curl stretched the midrib (posed forms written as
+CSVs and read back: ovate curled 0.8 came back 1.064 long, lanceolate 0.6 1.018, cordate 0.5
+1.036; now 0.999, 1.000, 0.999; /work/notes/poses32/csv_traits.py). A curl whose margin lies on
+the level's inner side is carried there along an exponential (bend._rolled_radius), not a
+circle of the same centre, and is left as fitted: ovate curled -0.8, read from its CSV, was
+fitted -0.853 about the margin's plane and measures 0.938 long.
 """
 
 from __future__ import annotations
@@ -10,14 +19,21 @@ from __future__ import annotations
 import hashlib
 import threading
 from collections import OrderedDict
+from dataclasses import replace
 
 import numpy as np
 
+from leafstudio.core.bend import flat_leaf
+from leafstudio.core.placed import PlacedPose
+from leafstudio.core.pose_limits import pose_trouble
+from leafstudio.core.pose_relief import margin_relief
 from leafstudio.core.unfold import fit_pose
 from leafstudio.core.unfold_checks import bent
 from leafstudio.model import Leaf
 
 UNBENT_KEPT = 32  # curves remembered as needing no bend
+LEVEL_ROUNDS = 3  # `levelled`: each round reads the level off the blade the last laid flat (ovate
+# curled 0.8: curl 0.7516, then 0.8010, 0.8010)
 _UNBENT: OrderedDict[bytes, None] = OrderedDict()
 _UNBENT_LOCK = threading.Lock()  # pipelines run on worker threads too
 
@@ -36,12 +52,40 @@ def unfolded(leaf: Leaf) -> Leaf:
             return leaf
     bend = fit_pose(leaf)
     if bend is not None:
-        return Leaf(leaf.boundary, leaf.veins, bend=bend)
+        return Leaf(leaf.boundary, leaf.veins, bend=levelled(bend, leaf))
     with _UNBENT_LOCK:
         _UNBENT[key] = None
         while len(_UNBENT) > UNBENT_KEPT:
             _UNBENT.popitem(last=False)
     return leaf
+
+
+def levelled(bend: PlacedPose, leaf: Leaf) -> PlacedPose:
+    """`bend`, fitted to `leaf`'s curves, with a curl fitted alone about the margin's plane (no
+    relief: its level 0) bent instead about the flat midrib's mean height L (margin_relief's
+    hinge, Relief.posed_level), as a form's curl keeps its midrib's length: the same circle for
+    the margin, its radius 1 / (2 curl) less L. The margin's points then lie where they did to
+    the bit wherever the curl carries heights below the level linearly (bend._rolled_radius:
+    curl and L of one sign); otherwise, for any other pose, and where the curl so found is past
+    what the loader takes of a fit (core/pose_limits.py: ovate curled 1.7, fitted 3.11 radians
+    of turn, would turn 3.16), `bend` as it is."""
+    pose = bend.pose
+    if pose.relief is not None or pose.curl == 0 or (pose.fold, pose.roll, pose.twist) != (0, 0, 0):
+        return bend
+    levelled = bend
+    for _ in range(LEVEL_ROUNDS):
+        flat = flat_leaf(Leaf(leaf.boundary, leaf.veins, bend=levelled))
+        blade = [np.column_stack(bend.frame.to_plane(c)) for c in (flat.boundary, *flat.veins)]
+        relief = margin_relief(blade[0], blade[1:])
+        if relief is None:
+            return bend
+        level = relief.posed_level(replace(pose, curl=0.0, relief=relief))
+        if not pose.curl * level > 0:  # the margin above the level: carried along exp, not kept
+            return bend
+        curl = pose.curl / (1 - 2 * pose.curl * level)
+        levelled = PlacedPose(replace(pose, curl=curl, relief=relief), bend.frame)
+    past = pose_trouble(levelled, leaf.boundary, list(leaf.veins)) is not None
+    return bend if past else levelled
 
 
 def unposed_hint(leaf: Leaf) -> str:

@@ -34,6 +34,7 @@ from leafstudio._shared.safewrite import check_outputs, write_bytes
 from leafstudio._shared.safewrite import staged as staged  # re-exported: outputs replaced together
 from leafstudio.core.bend import Pose
 from leafstudio.core.placed import PlacedPose
+from leafstudio.core.pose_limits import check_pose
 from leafstudio.core.sheet_bend import Scaled
 from leafstudio.errors import LeafError, shorten
 from leafstudio.model import Leaf, Params
@@ -437,7 +438,8 @@ def save_leaf(
     Raises
     ------
     LeafError
-        For an unknown suffix, or a file that cannot be written.
+        For an unknown suffix, a file that cannot be written, or a project whose pose is past
+        what it keeps of the blade (core/pose_limits.py: its loader would refuse it).
 
     Examples
     --------
@@ -458,6 +460,10 @@ def save_leaf(
     ).astype(int)
     xyz = np.vstack([leaf.boundary, *leaf.veins])
     if suffix in (".leaf.json", ".json"):
+        try:  # a project the loader would refuse (its pose past its limits) is not written
+            check_pose(leaf.bend, leaf.boundary, list(leaf.veins))
+        except LeafError as exc:
+            raise LeafError(exc.problem, str(path)) from None
         write_bytes(path, json.dumps(project_dict(leaf, params, sketch, photo), indent=1))
     elif suffix in POINT_SUFFIXES:
         sep = "," if suffix == ".csv" else " "

@@ -287,6 +287,10 @@ def test_a_strongly_curled_point_list_the_app_fitted_reopens(tmp_path):
     save_leaf(fitted, path)
     assert load_project(path)[0].bend.pose.curl == fitted.bend.pose.curl
     bend = PlacedPose(replace(fitted.bend.pose, curl=10 * fitted.bend.pose.curl), fitted.bend.frame)
-    save_leaf(replace(fitted, bend=bend), path)
+    with pytest.raises(LeafError, match='"curl"'):  # not written (core/pose_limits.check_pose)
+        save_leaf(replace(fitted, bend=bend), path)
+    data = json.loads(path.read_text())  # ... nor read, edited by hand
+    data["bend"]["curl"] *= 10
+    path.write_text(json.dumps(data))
     with pytest.raises(LeafError, match='"curl"'):
         load_project(path)

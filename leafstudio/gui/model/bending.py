@@ -22,7 +22,7 @@ import shapely
 
 from leafstudio.core.bend import Pose, flat_leaf
 from leafstudio.core.placed import PlacedPose, blade_frame, fitted
-from leafstudio.core.pose_limits import eased_roll
+from leafstudio.core.pose_limits import check_pose, eased_roll
 from leafstudio.core.pose_relief import margin_relief, relief_of
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.history import State, Step
@@ -160,13 +160,15 @@ def can_pose(leaf: Leaf | None) -> bool:
 
 
 def posed(
-    flat: Leaf | None, pose: Pose, like: Bend | None = None, plane: Any = None
+    flat: Leaf | None, pose: Pose, like: Bend | None = None, plane: Any = None, check: bool = False
 ) -> Leaf | None:
     """The flat blade `flat` bent by `pose`: as a form is when `like` (the bend it had) is a
     plain Pose, else about its midrib on `plane` (a sketch's Frame; without one, `like`'s own
     frame and relief when it is a PlacedPose, `flat` being its flat blade, else the boundary's
     PCA plane); either way about the blade's own relief (core/pose_relief.py: a fold turns each
-    half about the midrib as it stands). The flat pose gives `flat` itself, without a bend."""
+    half about the midrib as it stands). The flat pose gives `flat` itself, without a bend.
+    `check`: a pose asked for (`Bending.set_bend`), refused past what it keeps of this blade
+    (pose_limits.check_pose, a LeafError) rather than a widened tube's roll eased."""
     if flat is None or pose == FLAT:
         return flat
     # a pose without a relief (a project saved before reliefs; curves in 3D unfolded at over
@@ -180,7 +182,7 @@ def posed(
     if isinstance(like, Pose):  # a form's blade is in its own coordinates
         relief = own_relief(flat.boundary, flat.veins) if about_relief else None
         half = float(np.abs(flat.boundary[:, 1]).max())  # a widened tube stays one
-        bend: Bend = eased_roll(replace(pose, relief=relief), half)
+        bend: Bend = _eased(replace(pose, relief=relief), half, flat, check)
     else:  # bent about the blade's own relief, read in its frame (core/pose_relief.py)
         # `flat` re-posed (no sketch's plane: set_bend on `like`'s flat blade) keeps its bend's
         # frame and relief. Found again, a fitted pose's frame (core/unfold.py: its normal the
@@ -202,8 +204,20 @@ def posed(
         elif about_relief:
             relief = own_relief(blade(flat.boundary), [blade(v) for v in flat.veins])
         half = float(np.abs(blade(flat.boundary)[:, 1]).max())
-        bend = PlacedPose(eased_roll(replace(own, relief=relief), half), frame)
+        asked = PlacedPose(replace(own, relief=relief), frame)
+        bend = PlacedPose(_eased(asked, half, flat, check).pose, frame)
     return Leaf(bend.apply(flat.boundary), [bend.apply(v) for v in flat.veins], bend=bend)
+
+
+def _eased(bend: Any, half: float, flat: Leaf, check: bool) -> Any:
+    """`bend` (a Pose, or a PlacedPose) about to bend the flat blade `flat`, whose half width in
+    its coordinates is `half`: refused past the limits when `check` (a pose asked for), else
+    with a widened tube's roll eased (a sketch edit keeps the pose: pose_limits.eased_roll)."""
+    if check:
+        check_pose(bend, flat.boundary, list(flat.veins), flat=True)
+        return bend
+    pose = eased_roll(getattr(bend, "pose", bend), half)
+    return pose if isinstance(bend, Pose) else PlacedPose(pose, bend.frame)
 
 
 def keeps_fit(like: Bend | None, before: Any, sketch: Any) -> bool:
@@ -302,25 +316,45 @@ class Bending:
     def set_bend(self, pose: Pose, final: bool = True) -> None:
         """A new pose: `final=False` while a slider is held (shown, not an undo step), `True` on
         release: one undo step from before the drag. Nothing without a leaf, or for a leaf
-        the sliders may not bend (`can_pose`)."""
+        the sliders may not bend (`can_pose`).
+
+        Raises
+        ------
+        LeafError
+            For a pose past what it keeps of this blade (core/pose_limits.py), naming the term,
+            its value and its range; the document is left as it was (a drag's steps before it
+            made one undo step on release)."""
         leaf = self.state.leaf
         if not can_pose(leaf):
             return
-        if self._bend_base is None:
-            self._bend_base = self.state
-        base = self._bend_base
+        bent = None
         if leaf is not None and not _same_pose(pose, self.pose):
             sketch = self.state.sketch
             # a fitted bend kept by sketch edits (`keeps_fit`) is re-posed in its own frame and
             # relief: read again on the sketch's plane, ovate folded 60 and rolled 0.4 moved
             # 0.016 of its length for a nudge of 1e-6° after a sketch edit
             plane = sketch.frame if sketch is not None and not fitted(leaf.bend) else None
-            bent = posed(flat_leaf(leaf), pose, leaf.bend, plane)
+            # a pose past what it keeps of this blade is refused (a LeafError) and the
+            # document stays as it was: set_bend(Pose(fold=89)) was taken and kept 0.83 of
+            # the blade's area
+            try:
+                bent = posed(flat_leaf(leaf), pose, leaf.bend, plane, check=True)
+            except LeafError:
+                if final:
+                    self._end_bend()
+                raise
+        if self._bend_base is None:
+            self._bend_base = self.state
+        if bent is not None:
             if self.state.sketch is None and self._derived_leaf is leaf:
                 self._derived_leaf = bent  # the derived sketch still draws this blade
             self._apply(replace(self.state, leaf=bent), "edit", live=not final)
         if final:
-            self._bend_base = None
-            if base.leaf is not self.state.leaf:
-                text = bend_text(self.pose, self.half_width)
-                self.history.push(Step(text, base, self.state))
+            self._end_bend()
+
+    def _end_bend(self) -> None:
+        """A drag's end: its bends since the drag began one undo step, if any."""
+        base, self._bend_base = self._bend_base, None
+        if base is not None and base.leaf is not self.state.leaf:
+            text = bend_text(self.pose, self.half_width)
+            self.history.push(Step(text, base, self.state))

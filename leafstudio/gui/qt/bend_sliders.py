@@ -25,8 +25,10 @@ from superqt import QLabeledDoubleSlider
 from superqt.utils import qthrottled
 
 from leafstudio.core.bend import Pose
+from leafstudio.errors import LeafError
 from leafstudio.forms.terms import RELIEF
 from leafstudio.gui.model.bending import can_pose, pose_terms, terms_pose
+from leafstudio.gui.model.jobs import describe
 
 THROTTLE_MS = 80  # as the parameter sliders (controls.py)
 RANGES = {  # least, most, decimals: the Forms dock's (forms/make.LIMITS)
@@ -113,6 +115,19 @@ class BendSliders(QObject):
         self.changed.emit(self.pose(), True)
 
 
+def bend_leaf(window: Any, pose: Pose, final: bool) -> bool:
+    """The window's `session.set_bend`, the Parameters panel's sliders' and the Forms dock's:
+    a pose past what it keeps of the blade (core/pose_limits.py) is refused with a message on
+    release (not at every step of a drag) and the document kept as it was. False when refused."""
+    try:
+        window.session.set_bend(pose, final)
+    except LeafError as exc:
+        if final:
+            window.show_error("Bend", describe(exc))
+        return False
+    return True
+
+
 def install(window: Any) -> BendSliders:
     """Put the sliders in the window's Parameters panel under the Grid row, wired to its
     session both ways. Returns them."""
@@ -124,7 +139,10 @@ def install(window: Any) -> BendSliders:
     for offset, (name, slider) in enumerate(bend.sliders.items()):
         form.insertRow(row + offset, name.capitalize(), slider)
         form.labelForField(slider).setToolTip(TIPS[name])
-    bend.changed.connect(lambda pose, final: session.set_bend(pose, final))
+
+    def bent(pose: Pose, final: bool) -> None:
+        if not bend_leaf(window, pose, final) and final:
+            shown()  # the sliders back on the document's pose
 
     def shown(*_: Any) -> None:
         leaf = session.leaf
@@ -134,6 +152,7 @@ def install(window: Any) -> BendSliders:
                 bend.half_width = session.half_width
             bend.show_pose(session.pose)
 
+    bend.changed.connect(bent)
     session.state_changed.connect(shown)
     shown()
     return bend

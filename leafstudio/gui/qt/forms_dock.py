@@ -47,6 +47,7 @@ from leafstudio.gui.model.form_sketch import (
 )
 from leafstudio.gui.model.jobs import Run, describe
 from leafstudio.gui.model.sketch_model import Sketch
+from leafstudio.gui.qt.bend_sliders import bend_leaf
 from leafstudio.gui.qt.compare_view import FIRST, compare_actions
 from leafstudio.gui.qt.glossary_view import glossary_actions
 from leafstudio.gui.qt.leaf_picture import draw_plane
@@ -445,7 +446,7 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
             # an edited form, or another leaf: the pose terms bend it (its other terms are kept
             # for the next shape picked), one undo step as the Parameters panel's sliders
             pose = terms_pose(panel.pose_figures(), session.half_width, dock_pose["shown"])
-            session.set_bend(pose, final=True)
+            bend_leaf(window, pose, final=True)  # refused past the limits, with a message
             return
         if not picked and growing is not None and session.state.serial != waiting["serial"]:
             return  # another document opened while the form chosen grows: it is not replaced

@@ -454,3 +454,27 @@ def test_a_tube_widened_by_a_sketch_edit_stays_a_tube_and_reopens(tmp_path):
     path = tmp_path / "tube.leaf.json"
     save_leaf(leaf, path, session.params, session.state.sketch.to_dict())
     assert load_project(path)[0].bend.pose == leaf.bend.pose
+
+
+def test_a_pose_past_the_limits_is_refused_and_the_document_kept():
+    """`Session.set_bend(Pose(fold=89))` was taken (0.83 of the blade's area), and a roll past
+    the closed tube was eased to the tube without a word: the Roll slider then read 1.0 for a
+    blade asked to roll 1.2. Both are refused by name (core/pose_limits.py), the document as
+    it was; a drag's moves before a refused release are one undo step."""
+    session, _, sketch = drawn()
+    flat = session.leaf
+    session.set_bend(Pose(fold=30), final=False)  # a drag ...
+    folded = session.leaf
+    with pytest.raises(LeafError, match=r'"fold" 89.*from -80 to 80'):
+        session.set_bend(Pose(fold=89), final=True)  # ... released past the limit
+    assert session.leaf is folded and session.pose == Pose(fold=30)
+    assert session.history.index == 2  # Draw, then the drag's fold of 30
+    half = blade_half_width(session.leaf, sketch.frame)
+    with pytest.raises(LeafError, match=r'"roll" .*1\.2 half turns'):
+        session.set_bend(Pose(fold=30, roll=1.2 * np.pi / half), final=True)
+    assert session.leaf is folded and session.history.index == 2
+    session.set_bend(Pose(fold=30, roll=np.pi / half), final=True)  # the slider's end: taken
+    assert session.pose.roll * half / np.pi == pytest.approx(1.0)
+    session.undo()
+    session.undo()
+    assert session.leaf is flat

@@ -92,3 +92,20 @@ def test_a_project_bent_past_what_the_pose_keeps_is_refused_in_the_window(window
     assert window.status_text.text().startswith("Failed:")
     assert window.session.state.leaf is leaf
     window.last_error_box.close()
+
+
+def test_a_bend_past_what_the_pose_keeps_is_refused_in_the_window(window, qtbot):
+    """The sliders (past their range once a pose widened it: show_pose) and the Forms dock bend
+    the leaf through `Session.set_bend`, which took a fold of 89° (0.83 of the blade's area).
+    The window says which term is past its range on release, keeps the document and puts the
+    sliders back on its pose; a step of a drag past it says nothing yet."""
+    session, bend = window.session, window.bend
+    leaf, steps = session.state.leaf, session.history.index
+    bend.changed.emit(Pose(fold=89.0), False)  # held: no box at every step of a drag
+    assert session.state.leaf is leaf and window.last_error_box is None
+    bend.changed.emit(Pose(fold=89.0), True)
+    box = window.last_error_box
+    assert box is not None and '"fold" 89' in box.text() and "-80 to 80" in box.text()
+    assert session.state.leaf is leaf and session.history.index == steps
+    assert bend.sliders["fold"].value() == 0.0
+    box.close()
