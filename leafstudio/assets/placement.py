@@ -45,6 +45,9 @@ from leafstudio.errors import LeafError
 Y_UP_SUFFIXES = (".glb", ".gltf", ".obj", ".usda", ".usdc", ".usdz", ".usd")
 Y_UP_UNIT, Z_UP_UNIT = 1.0, 1e-3  # metres per unit written with a length: m, mm
 STEP = 1e-3  # carried: the bend's differences at the base, a share of the length
+OFF_HINGE = 0.01  # carried: a flat midrib this share of the length off its bend's hinge is not
+# the pose's (posed forms and poses fitted about the hinge: below 1e-3; poses fitted about the
+# margin's plane to a twist or a roll: 0.04-0.38)
 LARGEST_LEAF_METRES = 5.0  # no leaf blade is longer (Victoria's pads reach 3 m): units, not metres
 
 
@@ -154,10 +157,10 @@ def result_placement(result: Any) -> Placement:
     midrib = blade_midrib(leaf)  # on the flat blade, base first
     veins = [] if midrib is None else [midrib]
     placement = leaf_placement(result.frame, result.polygon, polygon_h, veins)
-    return placement if leaf.bend is None else carried(placement, leaf.bend)
+    return placement if leaf.bend is None else carried(placement, leaf.bend, midrib)
 
 
-def carried(placement: Placement, bend: Any) -> Placement:
+def carried(placement: Placement, bend: Any, midrib: np.ndarray | None = None) -> Placement:
     """The flat blade's `placement` carried by `bend` (model.Bend): the base bent, the axes
     turned as the bend turns the midrib and the blade across it at the base, its length the
     flat blade's. Both are central differences, STEP of the length, on the midrib as it stands
@@ -168,14 +171,45 @@ def carried(placement: Placement, bend: Any) -> Placement:
     finding 1). The turn takes the flat midrib's direction and the blade's across it onto the
     bent ones, so the axes keep their angle to the midrib, which rises off them as on the flat
     blade. A scan's sheet unrolls the blade into a plane of its own, nowhere near the scan's (a
-    soybean's base was placed 8.3 mm off its 46 mm mesh)."""
+    soybean's base was placed 8.3 mm off its 46 mm mesh).
+
+    A pose fitted to curves (core/unfold.py) need not bend about the leaf's own midrib: an ovate
+    folded 60° and twisted 1 was fitted a curl of 1.2 about a turned frame, its flat blade's
+    midrib bowed 0.38 of the length off the pose's hinge for the curl to straighten, and its
+    turn at the base put +X 63° off the bent midrib's chord (fold 75 and roll 1: a curl of 0.36
+    made up for, 19.5°). When the flat `midrib` (base first) stands more than OFF_HINGE of the
+    length off the hinge the bend turns about (`off_hinge`), its terms do not say where that
+    midrib goes, and the axes are turned on, the least, to its chord as bent."""
     along, across, _ = placement.axes
     step = STEP * placement.length
     ends = placement.base + step * np.stack([along, -along, across, -across])
     standing = getattr(bend, "on_midrib", None)
     flat = ends if standing is None else standing(ends)
-    turn = _chord_frame(flat).T @ _chord_frame(bend.apply(flat))
-    return Placement(bend.apply(placement.base[None])[0], placement.axes @ turn, placement.length)
+    axes = placement.axes @ (_chord_frame(flat).T @ _chord_frame(bend.apply(flat)))
+    off_hinge = getattr(bend, "off_hinge", None)  # a pose's; a scan's sheet has no hinge
+    if (
+        off_hinge is not None
+        and midrib is not None
+        and len(midrib) >= 2
+        and float(np.abs(off_hinge(midrib)).max()) > OFF_HINGE * placement.length
+    ):
+        bent = bend.apply(midrib[[0, -1]])
+        axes = axes @ _turn_onto(axes[0], _unit(bent[1] - bent[0])).T
+    return Placement(bend.apply(placement.base[None])[0], axes, placement.length)
+
+
+def _turn_onto(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(3, 3) the least rotation taking the unit vector `a` onto the unit vector `b` (about
+    a x b; half a turn about any axis square to `a` when they are opposite)."""
+    axis, cosine = np.cross(a, b), float(np.clip(a @ b, -1.0, 1.0))
+    if np.linalg.norm(axis) < 1e-12:
+        if cosine > 0:
+            return np.eye(3)
+        axis = np.cross(a, np.eye(3)[np.argmin(np.abs(a))])
+    axis = _unit(axis)
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    sine = np.sqrt(max(0.0, 1.0 - cosine * cosine))
+    return np.eye(3) + sine * k + (1.0 - cosine) * (k @ k)
 
 
 def _chord_frame(ends: np.ndarray) -> np.ndarray:
