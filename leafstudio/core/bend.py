@@ -241,8 +241,9 @@ class Pose:
     def off_hinge(self, points: np.ndarray) -> np.ndarray:
         """(n,) heights of flat blade points over the hinge the pose bends about: the midrib's
         height (`on_midrib`), the sheet z = 0 without a relief. A form's midrib is on it; a
-        pose fitted about the margin's plane bends a midrib standing off it (assets/placement.
-        carried: an ovate folded 60° and twisted 1, fitted a curl of 1.2, 0.38 of the length)."""
+        pose fitted about the margin's plane can bend a midrib standing off it, its heights
+        making up for a term (assets/placement.carried: ovate folded 75 and rolled 1, fitted a
+        curl of 0.36, 0.036 of the length)."""
         points = np.asarray(points, dtype=float)
         if self.relief is None:
             return points[:, 2].copy()

@@ -333,3 +333,19 @@ def test_a_pose_fitted_to_curves_is_written_with_its_apex_on_x(pose):
     midrib = np.asarray(leaf.veins[0])
     assert _off_chord(ls.reconstruct(fitted, params), midrib) < 1.0
     assert _off_chord(ls.reconstruct(leaf, params), midrib) == pytest.approx(0.12, abs=0.02)
+
+
+def test_a_curl_fitted_to_curves_keeps_the_forms_turn_at_the_base():
+    """A curl alone, fitted to a curled form's curves (curl 0.93, no relief: the midrib's own
+    relief stands 0.08 over the pose's sheet), is placed as the form is, the blade leaving the
+    base along +X and the apex lifted (57.2° off the chord, the form's 58.1°), not by the
+    chord as a fold or roll made up for by a curl is."""
+    from leafstudio.core.unfolded import unfolded
+
+    params = ls.Params(k=3, grid=32)
+    leaf = Form("ovate", curl=1).leaf()
+    fitted = unfolded(ls.Leaf(leaf.boundary, leaf.veins))
+    midrib = np.asarray(leaf.veins[0])
+    form = _off_chord(ls.reconstruct(leaf, params), midrib)
+    assert form > 50
+    assert _off_chord(ls.reconstruct(fitted, params), midrib) == pytest.approx(form, abs=1.5)
