@@ -297,7 +297,7 @@ def leaf_asset(result: Result) -> MeshAsset:
     """
     mesh = result.triangle_mesh
     points = np.asarray(mesh.points, dtype=float)
-    margin = np.arange(len(points)) < len(result.polygon)  # both meshers put the outline first
+    margin = result.on_outline()
     xy, height = result.mesh_on_blade()
     normals = mesh_normals(result, xy, height, margin)
     faces = oriented(triangles_of(mesh).astype(np.int64), points, normals)

@@ -45,6 +45,12 @@ from leafstudio.errors import LeafError
 Y_UP_SUFFIXES = (".glb", ".gltf", ".obj", ".usda", ".usdc", ".usdz", ".usd")
 Y_UP_UNIT, Z_UP_UNIT = 1.0, 1e-3  # metres per unit written with a length: m, mm
 STEP = 1e-3  # carried: the bend's differences at the base, a share of the length
+OBLIQUE = 5.0  # carried: degrees; a flat midrib's chord this far from both of its pose's axes
+# is not the pose's (posed forms: 0; poses fitted to a twist, a curl about a turned frame: 28-61)
+OFF_MIDRIB = 0.01  # carried: a flat midrib this share of the length off its pose's is not
+# the pose's (forms: 0; poses fitted about the hinge: 0.0004-0.0066 over it; fitted about the
+# margin's plane, folded 75 and rolled 1: 0.012-0.10 over it but linear's 0.003; folded 60 and
+# twisted 1: 0.03-0.49)
 LARGEST_LEAF_METRES = 5.0  # no leaf blade is longer (Victoria's pads reach 3 m): units, not metres
 
 
@@ -154,10 +160,10 @@ def result_placement(result: Any) -> Placement:
     midrib = blade_midrib(leaf)  # on the flat blade, base first
     veins = [] if midrib is None else [midrib]
     placement = leaf_placement(result.frame, result.polygon, polygon_h, veins)
-    return placement if leaf.bend is None else carried(placement, leaf.bend)
+    return placement if leaf.bend is None else carried(placement, leaf.bend, midrib)
 
 
-def carried(placement: Placement, bend: Any) -> Placement:
+def carried(placement: Placement, bend: Any, midrib: np.ndarray | None = None) -> Placement:
     """The flat blade's `placement` carried by `bend` (model.Bend): the base bent, the axes
     turned as the bend turns the midrib and the blade across it at the base, its length the
     flat blade's. Both are central differences, STEP of the length, on the midrib as it stands
@@ -168,14 +174,65 @@ def carried(placement: Placement, bend: Any) -> Placement:
     finding 1). The turn takes the flat midrib's direction and the blade's across it onto the
     bent ones, so the axes keep their angle to the midrib, which rises off them as on the flat
     blade. A scan's sheet unrolls the blade into a plane of its own, nowhere near the scan's (a
-    soybean's base was placed 8.3 mm off its 46 mm mesh)."""
+    soybean's base was placed 8.3 mm off its 46 mm mesh).
+
+    A pose fitted to curves (core/unfold.py) need not bend about the leaf's own midrib: an ovate
+    folded 60° and twisted 1 was fitted a curl of 1.2 about a turned frame, its flat blade's
+    midrib 0.59 of the length across the pose's and 0.38 over it, and its turn at the base put
+    +X 63° off the bent midrib's chord; folded 75 and rolled 1, a fold, a roll and a curl of
+    0.36 whose flat midrib stands 0.036 over the pose's sheet to make up for it, 19.5°. When
+    the flat `midrib` (base first) is not the pose's (`_off_its_midrib`), its terms do not say
+    where that midrib goes, and the axes are turned on, the least, to its chord as bent. A curl
+    alone keeps its turn at the base (a form curled 1, saved as curves, fitted a curl of 0.93
+    without a relief: its midrib's own relief 0.08 over the sheet; 57.2° as the form's 58.1°)."""
     along, across, _ = placement.axes
     step = STEP * placement.length
     ends = placement.base + step * np.stack([along, -along, across, -across])
     standing = getattr(bend, "on_midrib", None)
     flat = ends if standing is None else standing(ends)
-    turn = _chord_frame(flat).T @ _chord_frame(bend.apply(flat))
-    return Placement(bend.apply(placement.base[None])[0], placement.axes @ turn, placement.length)
+    axes = placement.axes @ (_chord_frame(flat).T @ _chord_frame(bend.apply(flat)))
+    if midrib is not None and len(midrib) >= 2 and _off_its_midrib(bend, midrib, placement):
+        bent = bend.apply(midrib[[0, -1]])
+        axes = axes @ _turn_onto(axes[0], _unit(bent[1] - bent[0])).T
+    return Placement(bend.apply(placement.base[None])[0], axes, placement.length)
+
+
+def _off_its_midrib(bend: Any, midrib: np.ndarray, placement: Placement) -> bool:
+    """Whether the flat `midrib` is not the midrib `bend` bends about (`carried`; a pose's
+    `off_hinge`, a scan's sheet has none). In the pose's frame a midrib runs along u (a curl
+    bends it, a fold or a roll turns the blade about it) or along v (a roll bends it: a
+    reniform form curled 1 was fitted a roll of 1.78 about a frame turned a quarter); its
+    chord oblique to both (more than OBLIQUE from either) leaves the terms nothing to say of
+    it (a twist fitted as a curl about a turned frame: 28-61°), and so does a midrib more than
+    OFF_MIDRIB of the length over the pose's hinge, their heights making up for a term that
+    turns the blade about it (folded 75 and rolled 1: a curl of 0.36)."""
+    off_hinge = getattr(bend, "off_hinge", None)
+    if off_hinge is None:
+        return False
+    frame = getattr(bend, "frame", None)  # a placed pose's; a form's is its world
+    ends = midrib[[0, -1]]
+    chord = ends[1] - ends[0] if frame is None else np.diff(frame.to_plane(ends)[0], axis=0)[0]
+    turned = float(np.degrees(np.arctan2(abs(chord[1]), abs(chord[0]))))
+    if OBLIQUE < turned < 90.0 - OBLIQUE:
+        return True
+    over = float(np.abs(off_hinge(midrib)).max()) / placement.length
+    terms = getattr(bend, "pose", bend)
+    about = (terms.fold or terms.roll) if turned <= OBLIQUE else (terms.fold or terms.curl)
+    return bool(over > OFF_MIDRIB and about)
+
+
+def _turn_onto(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(3, 3) the least rotation taking the unit vector `a` onto the unit vector `b` (about
+    a x b; half a turn about any axis square to `a` when they are opposite)."""
+    axis, cosine = np.cross(a, b), float(np.clip(a @ b, -1.0, 1.0))
+    if np.linalg.norm(axis) < 1e-12:
+        if cosine > 0:
+            return np.eye(3)
+        axis = np.cross(a, np.eye(3)[np.argmin(np.abs(a))])
+    axis = _unit(axis)
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    sine = np.sqrt(max(0.0, 1.0 - cosine * cosine))
+    return np.eye(3) + sine * k + (1.0 - cosine) * (k @ k)
 
 
 def _chord_frame(ends: np.ndarray) -> np.ndarray:

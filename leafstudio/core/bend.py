@@ -238,6 +238,17 @@ class Pose:
             points[:, 2] = self.relief.hinge_height(points[:, 0])
         return points
 
+    def off_hinge(self, points: np.ndarray) -> np.ndarray:
+        """(n,) heights of flat blade points over the hinge the pose bends about: the midrib's
+        height (`on_midrib`), the sheet z = 0 without a relief. A form's midrib is on it; a
+        pose fitted about the margin's plane can bend a midrib standing off it, its heights
+        making up for a term (assets/placement.carried: ovate folded 75 and rolled 1, fitted a
+        curl of 0.36, 0.036 of the length)."""
+        points = np.asarray(points, dtype=float)
+        if self.relief is None:
+            return points[:, 2].copy()
+        return points[:, 2] - self.relief.hinge_height(points[:, 0])
+
     def key(self) -> bytes:
         """Bytes that change with the bend (Leaf.fingerprint); no roll or twist keeps today's."""
         terms = [self.fold, self.curl] + ([self.roll] if self.roll != 0 else [])

@@ -11,7 +11,7 @@ import numpy as np
 
 from leafstudio.core.bent_curvature import Jet, bent_curvatures, carried_jets
 from leafstudio.core.buckets import bounds, kernel_array
-from leafstudio.core.cuts import Plan, carried, carried_data, cut_levels
+from leafstudio.core.cuts import Plan, carried, carried_data, carried_outline, cut_levels
 from leafstudio.core.edges import edge_table
 from leafstudio.core.jit import njit
 from leafstudio.core.plane import Frame
@@ -198,15 +198,27 @@ class BentBy(NamedTuple):
     carry_jet: Callable[[Jet], Jet] | None
 
 
+class Bent(NamedTuple):
+    """bent_mesh's answer: the bent mesh, its points before they were carried (Result.blade_xy:
+    laid flat again, a tube's seam is ambiguous), and which of them lie on the outline
+    (Result.outline_points)."""
+
+    mesh: TriangleMesh
+    flat: np.ndarray
+    outline: np.ndarray
+
+
 def bent_mesh(
-    mesh: TriangleMesh, bend: BentBy, sag: Tolerance | None, lift: Lift | None
-) -> tuple[TriangleMesh, np.ndarray]:
+    mesh: TriangleMesh, bend: BentBy, sag: Tolerance | None, lift: Lift | None, n_outline: int
+) -> Bent:
     """The mesh cut along the bend's creases (`crease`, in its units), trimmed (`trim`, see
     _crease_cuts; the points no face keeps dropped), its edges halved where the bend sags them
-    by more than `sag` of its extent (`sag_splits`) and carried into 3D by `carry`, with its
-    points before they were carried (Result.blade_xy: laid flat again, a tube's seam is
-    ambiguous), and the bent surface's curvatures (bent_curvature.py) where the mesh has its
-    surface's jet."""
+    by more than `sag` of its extent (`sag_splits`) and carried into 3D by `carry`, with the
+    bent surface's curvatures (bent_curvature.py) where the mesh has its surface's jet. The
+    mesh's first `n_outline` points are its outline's (the meshers put it first): the cuts' and
+    halvings' points on its edges are too, and the trim drops some (cuts.carried_outline: the
+    first len(polygon) of a trimmed mesh were not the outline, sugar beet pot1_7's 7 of them up
+    to 0.63 mm inside it, and 2 new points on it were left out)."""
     faces, plan, trimmed, points = _crease_cuts(mesh, bend.crease, bend.trim)
     extra = {} if mesh.jet is None else {JET: mesh.jet}
     # with a jet, the flat curvature arrays are not carried: the bent surface's replace them
@@ -224,6 +236,7 @@ def bent_mesh(
         known = None if jets is None else jets[0]
         faces, more, bent = sag_splits(points, faces, bend.carry, tolerance, known)
         points, data, bent = carried(points, more), carried_data(data, more), bent[:first]
+        plan = plan + more
     if lift is not None and first < len(points):  # the halvings' points on the surface
         points[first:], heights, taylor = lift(points[first:])
         if "height" in data:
@@ -234,10 +247,12 @@ def bent_mesh(
     carried_points = (
         bend.carry(points) if bent is None else np.vstack([bent, bend.carry(points[first:])])
     )
+    outline = carried_outline(n_outline, len(mesh.points), plan)
     if trimmed and len(used := np.unique(faces)) < len(points):
         index = np.zeros(len(points), dtype=faces.dtype)
         index[used] = np.arange(len(used))
         points, carried_points, faces = points[used], carried_points[used], index[faces]
+        outline = outline[used]
         data = {name: values[used] for name, values in data.items()}
     if extra:
         taylor = data.pop(JET)
@@ -246,4 +261,4 @@ def bent_mesh(
             bend.carry, bend.carry_jet, bend.frame, points, carried_points, taylor, known
         )
         data = {k: data[k] for k in mesh.point_data if k in data} | data  # the flat mesh's order
-    return TriangleMesh(carried_points, faces, data), points
+    return Bent(TriangleMesh(carried_points, faces, data), points, outline)

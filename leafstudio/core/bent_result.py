@@ -54,7 +54,7 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
     if unit is None:  # a run at its own size
         lift = None if sag is None else _onto_surface(result)
         by = BentBy(carry, bend.crease, bend.trim, result.frame, carry_jet)
-        mesh, flat = bent_mesh(result.triangle_mesh, by, sag, lift)
+        mesh, flat, outline = bent_mesh(result.triangle_mesh, by, sag, lift, len(result.polygon))
         return replace(
             result,
             leaf=leaf,
@@ -62,6 +62,7 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
             surface_points=carry(result.surface_points),
             triangle_mesh=mesh,
             blade_xy=result.frame.to_plane(flat)[0],
+            outline_points=outline,
         )
 
     def in_units(points: np.ndarray) -> np.ndarray:
@@ -78,7 +79,7 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
         bent, derivatives = bend.carry_jet((units.to_world(points), d * units.scale))
         return units.to_unit(bent), derivatives / units.scale
 
-    mesh, flat = bent_mesh(
+    mesh, flat, outline = bent_mesh(
         unit.triangle_mesh,
         BentBy(
             in_units,
@@ -89,6 +90,7 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
         ),
         None if sag is None else lambda extent: sag(extent * units.scale) / units.scale,
         None if sag is None else _onto_surface(unit),
+        len(unit.polygon),
     )
     surface_points = in_units(unit.surface_points)
     unit = replace(
@@ -97,6 +99,7 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
         surface_points=surface_points,
         triangle_mesh=mesh,
         blade_xy=unit.frame.to_plane(flat)[0],
+        outline_points=outline,
     )
     return replace(
         result,
@@ -106,4 +109,5 @@ def bent_result(result: Result, leaf: Leaf, units: Units) -> Result:
         triangle_mesh=units.mesh(mesh),
         unit=unit,
         blade_xy=result.frame.to_plane(units.to_world(flat))[0],
+        outline_points=outline,
     )

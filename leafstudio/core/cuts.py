@@ -104,3 +104,33 @@ def carried(values: np.ndarray, plan: Plan) -> np.ndarray:
 
 def carried_data(point_data: dict[str, np.ndarray], plan: Plan) -> dict[str, np.ndarray]:
     return {name: carried(v, plan) for name, v in point_data.items()}
+
+
+def carried_outline(n_outline: int, n_points: int, plan: Plan) -> np.ndarray:
+    """(n_points + k,) bool: which of a mesh's points, followed by a `plan`'s new points, lie on
+    its outline, the ring through its first `n_outline` points (both meshers put the outline
+    first, in order): a new point is on it when the edge it cuts is one of the ring's edges or
+    of the pieces the cuts before made of them. Not read off the points' places: an edge
+    joining two outline points across a narrow tip is no outline edge, and a fold's crease cuts
+    it inside the blade."""
+    total = n_points + sum(len(t) for _, t in plan)
+    flags = np.zeros(total, dtype=bool)
+    flags[:n_outline] = True
+    ring = np.arange(n_outline, dtype=np.int64)
+    codes = _edge_codes(ring, np.roll(ring, -1), total)
+    n = n_points
+    for keys, t in plan:
+        a, b = keys[:, 0].astype(np.int64), keys[:, 1].astype(np.int64)
+        on = np.flatnonzero(np.isin(_edge_codes(a, b, total), codes))
+        new = n + on
+        flags[new] = True
+        codes = np.concatenate(
+            [codes, _edge_codes(a[on], new, total), _edge_codes(new, b[on], total)]
+        )
+        n += len(t)
+    return flags
+
+
+def _edge_codes(a: np.ndarray, b: np.ndarray, n: int) -> np.ndarray:
+    """One int64 per edge (a, b) of a mesh of `n` points, whichever way it is walked."""
+    return np.minimum(a, b) * n + np.maximum(a, b)

@@ -67,6 +67,10 @@ class PlacedPose:
         the pose's frame)."""
         return self._world(self.pose.on_midrib(self._blade(points)))
 
+    def off_hinge(self, points: np.ndarray) -> np.ndarray:
+        """(n,) heights of flat points over the pose's hinge (`Pose.off_hinge`, in its frame)."""
+        return self.pose.off_hinge(self._blade(points))
+
     def key(self) -> bytes:
         """Bytes that change with the pose or its frame (Leaf.fingerprint)."""
         f = self.frame

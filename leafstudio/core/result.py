@@ -167,6 +167,9 @@ class Result:
     # a bent leaf's mesh points on its flat blade, in `frame`'s plane (core/bent_result.bent_result:
     # laid flat again, a twisted tube's points by its seam fell on the other margin)
     blade_xy: np.ndarray | None = field(default=None, repr=False, compare=False)
+    # a bent leaf's mesh points on its outline (bent_mesh.bent_mesh: its trim drops some, its
+    # cuts add some); None: the first len(polygon), as the meshers put them (see on_outline)
+    outline_points: np.ndarray | None = field(default=None, repr=False, compare=False)
     # a bent leaf's flat blade (bent_result.bent_result), whose midrib the metrics measure along:
     # not flattened again (0.45 ms of a four-term pose's run); None: `leaf` is flat
     blade: Leaf | None = field(default=None, repr=False, compare=False)
@@ -207,6 +210,16 @@ class Result:
         if kept and "height" in mesh.point_data:
             return self.blade_xy, np.asarray(mesh.point_data["height"], dtype=float)
         return self.on_blade(mesh.points)
+
+    def on_outline(self) -> np.ndarray:
+        """(n,) bool: which of the mesh's points lie on the leaf's outline, the margin where the
+        surface takes its limits from inside (surface.HeightSurface.derivatives): the first
+        len(polygon), as both meshers put them, or a bent leaf's carried through its cuts and
+        trim (bent_mesh.bent_mesh; the exports and the view's lighter mesh read it)."""
+        n = len(self.triangle_mesh.points)
+        if self.outline_points is not None and len(self.outline_points) == n:
+            return self.outline_points
+        return np.arange(n) < len(self.polygon)
 
     def on_blade(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(n, 2) plane coordinates and (n,) heights, in `frame`, of (n, 3) points of this

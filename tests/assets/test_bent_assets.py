@@ -106,3 +106,16 @@ def test_a_twisted_tubes_uvs_keep_each_face_on_its_side_of_the_seam():
     xy = asset.plane_xy
     edges = np.concatenate([xy[asset.faces[:, i]] - xy[asset.faces[:, i - 1]] for i in range(3)])
     assert np.linalg.norm(edges, axis=1).max() < 2 * result.grid.spacing  # flattened: 9 cells
+
+
+def test_a_trimmed_scans_margin_normals_are_on_its_outline():
+    """The asset's margin is Result.on_outline: a scan's trim renumbers the mesh, and the first
+    len(polygon) points got the margin's normal (7 inside the synthetic notched blade, as on
+    sugar beet pot1_7, 2 on its outline did not)."""
+    from leafstudio.assets.asset import mesh_normals
+    from tests.core.test_outline_points import notched_leaf, on_the_outline
+
+    result = ls.reconstruct(notched_leaf(), ls.Params(k=2, grid=64))
+    xy, height = result.mesh_on_blade()
+    expected = mesh_normals(result, xy, height, on_the_outline(result))
+    np.testing.assert_allclose(leaf_asset(result).normals, expected, atol=1e-12)

@@ -14,7 +14,7 @@ import trimesh
 import leafstudio as ls
 from leafstudio.assets.placement import parse_length
 from leafstudio.errors import LeafError
-from leafstudio.forms import make_form
+from leafstudio.forms import Form, make_form
 from tests.leaves import moved
 from tests.photos import error_lines
 
@@ -307,3 +307,45 @@ def test_a_folded_form_is_written_with_its_apex_on_x(tmp_path: Path, fold):
     apex = points[np.argmax(np.linalg.norm(points, axis=1))]
     assert apex[0] == pytest.approx(0.08, rel=0.01)
     assert np.degrees(np.arctan2(np.hypot(apex[1], apex[2]), apex[0])) < 0.5
+
+
+def _off_chord(result: ls.Result, midrib: np.ndarray) -> float:
+    """Degrees between the export's +X (result_placement) and `midrib`'s chord, base to apex."""
+    from leafstudio.assets.placement import result_placement
+
+    chord = midrib[-1] - midrib[0]
+    cosine = result_placement(result).axes[0] @ chord / np.linalg.norm(chord)
+    return float(np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0))))
+
+
+@pytest.mark.parametrize("pose", [{"fold": 60, "twist": 1}, {"fold": 75, "roll": 1}], ids=str)
+def test_a_pose_fitted_to_curves_is_written_with_its_apex_on_x(pose):
+    """A posed form saved as curves and reopened is unfolded by a fitted pose (core/unfold.py),
+    which has no twist and need not bend about the leaf's midrib: ovate folded 60 and twisted 1
+    was fitted a curl of 1.2 about a turned frame, its export's +X 63.1° off the bent midrib's
+    chord (fold 75 and roll 1: 19.5°); the posed form's own stays at 0.12°."""
+    from leafstudio.core.unfolded import unfolded
+
+    params = ls.Params(k=3, grid=32)
+    leaf = Form("ovate", **pose).leaf()
+    fitted = unfolded(ls.Leaf(leaf.boundary, leaf.veins))
+    assert fitted.bend is not None
+    midrib = np.asarray(leaf.veins[0])
+    assert _off_chord(ls.reconstruct(fitted, params), midrib) < 1.0
+    assert _off_chord(ls.reconstruct(leaf, params), midrib) == pytest.approx(0.12, abs=0.02)
+
+
+def test_a_curl_fitted_to_curves_keeps_the_forms_turn_at_the_base():
+    """A curl alone, fitted to a curled form's curves (curl 0.93, no relief: the midrib's own
+    relief stands 0.08 over the pose's sheet), is placed as the form is, the blade leaving the
+    base along +X and the apex lifted (57.2° off the chord, the form's 58.1°), not by the
+    chord as a fold or roll made up for by a curl is."""
+    from leafstudio.core.unfolded import unfolded
+
+    params = ls.Params(k=3, grid=32)
+    leaf = Form("ovate", curl=1).leaf()
+    fitted = unfolded(ls.Leaf(leaf.boundary, leaf.veins))
+    midrib = np.asarray(leaf.veins[0])
+    form = _off_chord(ls.reconstruct(leaf, params), midrib)
+    assert form > 50
+    assert _off_chord(ls.reconstruct(fitted, params), midrib) == pytest.approx(form, abs=1.5)

@@ -26,7 +26,7 @@ def display_subset(
     faces: np.ndarray,
     origin: np.ndarray,
     spacing: float,
-    n_outline: int,
+    outline: np.ndarray,
     max_triangles: int | None = None,
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """The vertices to draw and their triangles, or None when the mesh is small enough.
@@ -39,8 +39,9 @@ def display_subset(
         Its triangles.
     origin, spacing
         The reconstruction grid: its node (0, 0) and the distance between nodes.
-    n_outline : int
-        The first `n_outline` vertices are the outline's (the pipeline puts them first): kept.
+    outline : (n,) bool array
+        Which vertices are the outline's (Result.on_outline; a trimmed scan's are not the first
+        len(polygon)): each kept.
     max_triangles : int, optional
         The blocks are f x f nodes with f the least whole number that brings the triangles
         near or under this (DISPLAY_TRIANGLES if not given).
@@ -61,12 +62,14 @@ def display_subset(
     rel = (np.asarray(xy, float) - np.asarray(origin, float)) / spacing
     ij = np.rint(rel).astype(np.int64)
     on_lattice = (np.abs(rel - ij) < LATTICE_TOLERANCE).all(axis=1)
+    outline = np.asarray(outline, dtype=bool)
+    n_outline = int(np.count_nonzero(outline))
     if np.count_nonzero(on_lattice) < (n - n_outline) / 2:
         return None  # not a mesh over this grid (another mesher, other units): drawn whole
     block = ij // f
     block -= block.min(axis=0)
     key = block[:, 1] * (block[:, 0].max() + 1) + block[:, 0] + n_outline
-    key[:n_outline] = np.arange(n_outline)  # each outline vertex is a block of its own
+    key[outline] = np.arange(n_outline)  # each outline vertex is a block of its own
     # which vertex draws a block: its corner node first, then other nodes, then points the
     # mesher added along the margin
     rank = np.where(on_lattice, ij[:, 0] % f + ij[:, 1] % f, 2 * f)

@@ -108,7 +108,7 @@ def _mesh_piece(result: Result) -> Piece:
     }
     ranges = _color_ranges(mesh.point_data)
     grid = result.grid
-    subset = display_subset(xy, mesh.regular_faces, grid.origin, grid.spacing, len(result.polygon))
+    subset = display_subset(xy, mesh.regular_faces, grid.origin, grid.spacing, result.on_outline())
     if subset is None:
         normals = vertex_normals(mesh.points, mesh.regular_faces)
         whole = partial(polydata, mesh.points, mesh.regular_faces, colourings, normals)

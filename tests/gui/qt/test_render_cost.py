@@ -118,12 +118,14 @@ def test_a_large_mesh_is_drawn_through_a_subset_of_its_own_vertices():
     result = Pipeline(demo("nested")).run(FAST.with_(grid=96))
     mesh = result.triangle_mesh
     xy = result.frame.to_plane(mesh.points)[0]
-    grid, n_outline = result.grid, len(result.polygon)
+    grid, outline = result.grid, result.on_outline()
     faces = mesh.regular_faces
-    assert display_subset(xy, faces, grid.origin, grid.spacing, n_outline, len(faces)) is None
-    keep, drawn = display_subset(xy, faces, grid.origin, grid.spacing, n_outline, len(faces) // 4)
+    assert display_subset(xy, faces, grid.origin, grid.spacing, outline, len(faces)) is None
+    keep, drawn = display_subset(xy, faces, grid.origin, grid.spacing, outline, len(faces) // 4)
     assert len(faces) // 6 < len(drawn) <= len(faces) // 3  # blocks of 2 x 2 nodes
-    assert set(range(n_outline)) <= set(keep.tolist())  # the margin is drawn exactly
+    assert set(np.flatnonzero(outline).tolist()) <= set(
+        keep.tolist()
+    )  # the margin is drawn exactly
     assert len(np.unique(keep)) == len(keep) and drawn.max() < len(keep)
     assert (drawn[:, 0] != drawn[:, 1]).all() and (drawn[:, 1] != drawn[:, 2]).all()
     assert len(np.unique(np.sort(drawn, axis=1), axis=0)) == len(drawn)  # no repeats
@@ -137,7 +139,7 @@ def test_a_mesh_that_is_not_over_the_grid_is_drawn_whole():
     rng = np.random.default_rng(1)
     xy = rng.random((400, 2))
     faces = rng.integers(0, 400, (2000, 3))
-    assert display_subset(xy, faces, np.zeros(2), 0.013, 10, 100) is None
+    assert display_subset(xy, faces, np.zeros(2), 0.013, np.arange(400) < 10, 100) is None
 
 
 def test_the_view_draws_a_lighter_mesh_but_edges_and_exports_are_the_full_one(
