@@ -75,8 +75,7 @@ def test_a_big_boundary_draws_a_capped_number_of_its_points():
     t = np.linspace(0, 2 * np.pi, 300_000, endpoint=False)
     boundary = np.column_stack([np.cos(t), 0.4 * np.sin(t), np.zeros_like(t)])
     vein = np.column_stack([np.linspace(-0.9, 0.9, 50), np.zeros((50, 2))])
-    result = SimpleNamespace(leaf=Leaf(boundary=boundary, veins=[vein]))
-    pieces = layers._input_pieces(result)
+    pieces = layers._input_pieces([boundary, vein])
     drawn = [piece.data.n_points for piece in pieces]
     assert sum(drawn) <= INPUT_POINTS and drawn[1] == 50  # a short vein whole
 
