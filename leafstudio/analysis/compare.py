@@ -168,10 +168,11 @@ def format_comparison(report: dict[str, Any]) -> str:
     label_width = max(len(label) for label, _ in rows)
     k = report["ours"]["k"]
     ours = "ours (K unused)" if k is None else f"ours (K = {k})"
-    lines = [f"{'':<{label_width}}  {ours:>14}  {'Poisson':>14}"]
+    width = max(14, len(ours))  # "ours (K unused)" is 15: at 14 it pushed Poisson's title out
+    lines = [f"{'':<{label_width}}  {ours:>{width}}  {'Poisson':>14}"]
     for label, get in rows:
         lines.append(
-            f"{label:<{label_width}}  {cell(get(report['ours'])):>14}  "
+            f"{label:<{label_width}}  {cell(get(report['ours'])):>{width}}  "
             f"{cell(get(report['poisson'])):>14}"
         )
     return "\n".join(lines)

@@ -87,6 +87,23 @@ def test_comparison_table_has_both_columns(report):
     assert "spill" in table and "time (s)" in table
 
 
+def test_a_flat_blades_comparison_table_keeps_its_columns_aligned():
+    """review32: "ours (K unused)" (a flat blade's K, None) is 15 characters; in the 14 of the
+    column it pushed the Poisson title one character past its figures."""
+    figures = {
+        "boundary": {"mean": 0.0, "max": 0.0},
+        "veins": {"mean": 1e-18, "max": 2e-18},
+        "mesh": {"area": 1.25, "triangles": 618},
+        "spill": 0.0,
+        "seconds": 0.005,
+    }
+    for k in (None, 3):
+        table = format_comparison({"ours": {**figures, "k": k}, "poisson": figures})
+        lines = table.splitlines()
+        assert len({len(line) for line in lines}) == 1, table  # every column's right edge
+        assert ("K unused" if k is None else "K = 3") in lines[0]
+
+
 @pytest.mark.open3d
 def test_cli_compare_prints_json(tmp_path, capsys):
     ls.save_leaf(ls.demo("parallel"), tmp_path / "p.leaf.json")

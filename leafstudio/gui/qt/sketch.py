@@ -121,6 +121,10 @@ class SketchEditor(QWidget):
         self.outline_note.setStyleSheet(
             "color: #3d2f00; background: #fff4cc; border: 1px solid #c9a227; padding: 3px"
         )
+        # it stays while the sketch draws the leaf: clicks, drags and the wheel go through it to
+        # the sketch (it took them: at the window's 1500 x 920 it covers the view's foot, 50 of
+        # its 262 pixels, where a click added no point; review32)
+        self.outline_note.setAttribute(Qt.WidgetAttribute.WA_TransparentForMouseEvents)
         self.outline_note.hide()
         # a new document whose sketch is not known yet (a loaded leaf's comes with its result)
         self.waiting = QLabel("Waiting for the leaf: its sketch shows once it is reconstructed.")

@@ -269,3 +269,23 @@ def test_a_scans_first_sketch_edit_is_said_in_the_window_and_one_undo_brings_the
     np.testing.assert_array_equal(session.result.polygon, polygon)
     window.actions["edit.redo"].trigger()
     assert note.isVisible()
+
+
+def test_the_scans_outline_note_lets_clicks_through_to_the_sketch(scan_window, qtbot):
+    """review32: the note over the sketch's foot stays while the sketch draws the leaf, and it
+    took the clicks over it: at the window's 1500 x 920 it covered 50 of the view's 262 pixels,
+    where a click added no point. A click there reaches the sketch."""
+    from PySide6.QtTest import QTest
+
+    window, session = scan_window, scan_window.session
+    view, note = window.editor.view, window.editor.outline_note
+    view.selected = (-1, 0)
+    view.delete_selected()  # the first edit: the note shows
+    wait_result(qtbot, window, lambda o: o.result.leaf is session.leaf)
+    assert note.isVisible()
+    count = len(session.state.sketch.boundary)
+    under = view.childAt(note.geometry().center())  # what the window system clicks there
+    QTest.mouseClick(
+        under, Qt.MouseButton.LeftButton, pos=under.mapFrom(view, note.geometry().center())
+    )
+    assert under is not note and len(session.state.sketch.boundary) == count + 1
