@@ -21,9 +21,8 @@ def k_label(result: Any) -> str:
     none is fitted. A blade with no relief of its own (no veins, or all in its plane) fits no
     mixture: its gmm stage is one Gaussian of amplitude 0 (core/steps.compute_gmm), whose
     chosen_k of 1 the view said beside a K slider at 3 (appreview31, finding 8)."""
-    if result.fits_no_mixture:
-        return FLAT_K
-    return f"K = {result.chosen_k}"
+    k = result.fitted_k
+    return FLAT_K if k is None else f"K = {k}"
 
 
 def stretches(result: Any) -> bool:
