@@ -233,22 +233,10 @@ def test_a_blade_trimmed_by_its_bend_measures_its_trimmed_margin():
     its vertices: the perimeter was the ring through the first len(polygon) of them, no longer
     the outline (sugar beet pot1_7: 215.2 mm, its one margin 195.6; here 2.958 for 2.098). A
     hole torn into the margin is part of it; one inside the blade is not."""
-    from leafstudio.core.sheet import fit_sheet
-    from leafstudio.core.sheet_bend import Scaled
-    from tests.core.test_sheet import _blade, rolled
+    from tests.core.test_outline_points import notched_blade
 
-    sheet = fit_sheet(rolled(_blade(3000), 0.3), np.array([0.0, 0.0, 1.0]), 1.0)
-    turn = np.linspace(0, 2 * np.pi, 33)
-    notch = [0.1, 0.2] + 0.06 * np.column_stack([np.cos(turn), np.sin(turn)])
-    hole = [-0.2, 0.0] + 0.05 * np.column_stack([np.cos(turn), np.sin(turn)])
-    bend = Scaled(sheet, np.zeros(3), 1.0, holes=(notch, hole))
-    t = np.linspace(0, 2 * np.pi, 200, endpoint=False)
-    outline = np.column_stack([0.45 * np.cos(t), 0.18 * np.sin(t), np.zeros_like(t)])
-    x = np.linspace(-0.4, 0.4, 30)
-    midrib = np.column_stack([x, np.zeros_like(x), np.full_like(x, 0.01)])
-    leaf = ls.Leaf(boundary=bend.bent(outline), veins=[bend.bent(midrib)], bend=bend)
+    leaf, blade = notched_blade()
     result = ls.reconstruct(leaf, ls.Params(k=2, grid=64))
-    blade = shapely.Polygon(outline[:, :2]) - shapely.Polygon(notch) - shapely.Polygon(hole)
     assert result.metrics["mesh"]["boundary_loops"] == 2  # the margin, notched, and the hole
     # rolled about the blade's length, which keeps lengths: the flat blade's (2.0979)
     assert result.metrics["leaf"]["perimeter"] == pytest.approx(blade.exterior.length, rel=1e-3)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import shapely
 
 import leafstudio as ls
 from leafstudio.assets.asset import outline_distance
@@ -16,9 +17,9 @@ ON_OUTLINE = 1e-9  # of the outline's extent: a point this near it lies on it (r
 # cuts' points on the outline's edges are 1e-16 of it off; the nearest other point 2e-3)
 
 
-def notched_leaf() -> ls.Leaf:
+def notched_blade() -> tuple[ls.Leaf, shapely.Polygon]:
     """An ellipse rolled on a scan's sheet, a hole torn into its margin and one inside
-    (sheet_bend.Scaled.trim cuts both out of the bent mesh)."""
+    (sheet_bend.Scaled.trim cuts both out of the bent mesh), and its flat blade less both."""
     from leafstudio.core.sheet import fit_sheet
     from leafstudio.core.sheet_bend import Scaled
     from tests.core.test_sheet import _blade, rolled
@@ -32,7 +33,14 @@ def notched_leaf() -> ls.Leaf:
     outline = np.column_stack([0.45 * np.cos(t), 0.18 * np.sin(t), np.zeros_like(t)])
     x = np.linspace(-0.4, 0.4, 30)
     midrib = np.column_stack([x, np.zeros_like(x), np.full_like(x, 0.01)])
-    return ls.Leaf(boundary=bend.bent(outline), veins=[bend.bent(midrib)], bend=bend)
+    leaf = ls.Leaf(boundary=bend.bent(outline), veins=[bend.bent(midrib)], bend=bend)
+    blade = shapely.Polygon(outline[:, :2]) - shapely.Polygon(notch) - shapely.Polygon(hole)
+    return leaf, blade
+
+
+def notched_leaf() -> ls.Leaf:
+    """notched_blade's leaf."""
+    return notched_blade()[0]
 
 
 def on_the_outline(result: ls.Result) -> np.ndarray:
