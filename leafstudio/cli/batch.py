@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 from leafstudio.assets.units import UNITS_SAID
 from leafstudio.batch.settings import FORMATS
 from leafstudio.cli.options import add_param_flags, compiling_notice, params_for
+from leafstudio.cli.options import summary as closing
 
 if TYPE_CHECKING:
     from leafstudio.batch.run import Batch
@@ -116,7 +117,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"{summary(running, time.perf_counter() - start)}; interrupted (--resume goes on)",
               file=sys.stderr)  # fmt: skip
         raise
-    print(summary(running, time.perf_counter() - start), file=sys.stderr)
+    # silenced by -q, as form's, extract's and slides' closing lines are (options.summary): it
+    # printed all the same (review32b); a failed row's error is said above, the exit code is 1
+    closing(summary(running, time.perf_counter() - start), file=sys.stderr)
     if scans:
         print(f"leafstudio: batch: {scans} of the inputs look like scans of whole leaves: --scans "
               "extracts and reconstructs them", file=sys.stderr)  # fmt: skip

@@ -225,3 +225,17 @@ def test_a_bent_point_list_refused_says_it_may_have_lost_its_pose(tmp_path, caps
     assert main(["reconstruct", str(tmp_path / "flat.csv"), "-o", str(tmp_path / "f.ply")]) == 2
     line = _error(capsys)
     assert "lie outside the boundary" in line and "no pose" not in line
+
+
+def test_quiet_silences_a_batchs_closing_line(tmp_path, capsys):
+    """`batch -q` printed its closing line ("leafstudio: batch: 1 inputs: 1 ok, …") though
+    `form -q` and `extract -q` no longer print theirs (cli/options.summary, review32b); without
+    -q it is still said on stderr."""
+    leaf = str(tmp_path / "f.leaf.json")
+    assert main(["form", "ovate", "-o", leaf, "-q"]) == 0
+    args = ["batch", leaf, "-o", str(tmp_path / "out"), "--grid", "32", "--format", "none"]
+    assert main(args) == 0
+    assert "1 ok, 0 failed" in capsys.readouterr().err
+    assert main([*args, "-q"]) == 0
+    said = capsys.readouterr()
+    assert said.out == "" and "1 ok" not in said.err, said

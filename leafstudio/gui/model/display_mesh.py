@@ -63,6 +63,10 @@ def display_subset(
     ij = np.rint(rel).astype(np.int64)
     on_lattice = (np.abs(rel - ij) < LATTICE_TOLERANCE).all(axis=1)
     outline = np.asarray(outline, dtype=bool)
+    if outline.shape != (n,):  # the count it took before exports32 drew no triangle at all
+        raise ValueError(
+            f"outline must be a ({n},) bool array (Result.on_outline), not {outline.shape}"
+        )
     n_outline = int(np.count_nonzero(outline))
     if np.count_nonzero(on_lattice) < (n - n_outline) / 2:
         return None  # not a mesh over this grid (another mesher, other units): drawn whole

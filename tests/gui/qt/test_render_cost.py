@@ -8,6 +8,7 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+import pytest
 
 from leafstudio.core.pipeline import Pipeline
 from leafstudio.gui.model import display_mesh
@@ -140,6 +141,15 @@ def test_a_mesh_that_is_not_over_the_grid_is_drawn_whole():
     xy = rng.random((400, 2))
     faces = rng.integers(0, 400, (2000, 3))
     assert display_subset(xy, faces, np.zeros(2), 0.013, np.arange(400) < 10, 100) is None
+
+
+def test_the_outline_is_a_flag_per_vertex_not_a_count():
+    """display_subset took the outline's count before exports32; a count given now (a 0-d
+    array) drew the demo's 1667 vertices as 1 and no triangle, silently: it is refused."""
+    xy = np.column_stack([np.repeat(np.arange(40.0), 40), np.tile(np.arange(40.0), 40)])
+    faces = np.column_stack([np.arange(1500), np.arange(1500) + 1, np.arange(1500) + 40])
+    with pytest.raises(ValueError, match=r"\(1600,\) bool array"):
+        display_subset(xy, faces, np.zeros(2), 1.0, 10, 100)
 
 
 def test_the_view_draws_a_lighter_mesh_but_edges_and_exports_are_the_full_one(
