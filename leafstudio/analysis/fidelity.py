@@ -19,6 +19,11 @@ FOLD_ANGLE = 90.0  # degrees: an edge whose two triangles meet more sharply fold
 FOLDED = 0.0025  # a scan's mesh with more of its edges folded back is warned of (the eight shared
 # scans: soybean pot1_1, whose cloud is doubled and V-folded, 0.65%; the other seven 0.05% at
 # most; before the sheet's second fit, core/sheet.py, 3.1% and 0.16%)
+CRUMPLE = 50.0  # |mean curvature| times the length past this: a bend tighter than a radius of 2%
+# of the length, which no blade makes but a surface that chases a doubled or noisy scan does
+CRUMPLED = 0.01  # a scan's mesh with more of its area so crumpled is warned of (the eight shared
+# scans: soybean pot1_1 4.9% of its vertices, the other seven 0.07% at most; before the sheet's
+# smoothing was weighed by each cell's error, core/sheet.py: 8.3% and 0.47%)
 FIN_NEIGHBOURS = 16  # a fin's side: the mean direction to this many nearest scan points ...
 ONE_SIDE = 0.85  # ... at least this long (points all round a triangle: a hole it spans)
 
@@ -72,10 +77,43 @@ def folded_share(mesh: MeshLike) -> float:
     return float(np.mean(angles > FOLD_ANGLE)) if len(angles) else 0.0
 
 
+def crumpled_share(mesh: MeshLike, length: float) -> float:
+    """The share of the mesh's area whose triangles bend tighter than CRUMPLE allows (their
+    corners' mean |mean curvature| times `length`): a surface crumpled between a scan's doubled
+    layers or through its noise, which neither the distances nor the folds show (soybean
+    pot1_1's surface crumpled over 4.9% of its vertices folds back at only 0.12% of its edges).
+    0 for a mesh without curvatures.
+
+    Examples
+    --------
+    >>> import numpy as np, pyvista as pv
+    >>> plane = pv.Plane(i_resolution=4, j_resolution=4).triangulate()
+    >>> plane.point_data["mean_curvature"] = np.where(plane.points[:, 0] < 0, 0.0, 100.0)
+    >>> round(crumpled_share(plane, 1.0), 2)  # x >= 0: its half and the triangles two corners in
+    0.62
+    """
+    if "mean_curvature" not in mesh.point_data or length <= 0:
+        return 0.0
+    bend = np.abs(np.asarray(mesh.point_data["mean_curvature"], dtype=float)) * length
+    triangles = evaluate.triangles_of(mesh)
+    corners = np.asarray(mesh.points, dtype=float)[triangles]
+    area = np.linalg.norm(
+        np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
+    )
+    tight = np.nan_to_num(bend[triangles].mean(axis=1), nan=0.0) > CRUMPLE
+    return float(area[tight].sum() / area.sum()) if area.sum() > 0 else 0.0
+
+
 def with_folds(fit: dict[str, Any], mesh: MeshLike) -> dict[str, Any]:
-    """A scan's fit (distance_summary's figures) with the mesh's `folded_share` as "folded",
-    when it has points (the figures scan_warnings reads)."""
-    return {**fit, "folded": folded_share(mesh)} if fit.get("points") else fit
+    """A scan's fit (distance_summary's figures) with the mesh's `folded_share` as "folded" and
+    its `crumpled_share` as "crumpled", when it has points (the figures scan_warnings reads)."""
+    if not fit.get("points"):
+        return fit
+    return {
+        **fit,
+        "folded": folded_share(mesh),
+        "crumpled": crumpled_share(mesh, fit.get("length", 0.0)),
+    }
 
 
 def scan_warnings(fit: dict[str, Any]) -> list[str]:
@@ -89,11 +127,22 @@ def scan_warnings(fit: dict[str, Any]) -> list[str]:
             f"average (95% of points within {fit['p95'] / length:.1%}): it does not follow this "
             "scan well"
         )
-    if fit.get("folded", 0.0) > FOLDED:
+    folded, crumpled = fit.get("folded", 0.0) > FOLDED, fit.get("crumpled", 0.0) > CRUMPLED
+    if folded or crumpled:
+        said = []
+        if folded:
+            said.append(
+                f"folds back on itself at {fit['folded']:.1%} of its edges (creases past "
+                f"{FOLD_ANGLE:.0f}°)"
+            )
+        if crumpled:
+            said.append(
+                f"crumples over {fit['crumpled']:.1%} of its area (bends tighter than "
+                f"{1 / CRUMPLE:.0%} of the leaf's length)"
+            )
         notes.append(
-            f"the surface folds back on itself at {fit['folded']:.1%} of its edges (creases "
-            f"past {FOLD_ANGLE:.0f}°), where the scan is doubled or its blade curls under: "
-            "compare it with the scan's points before trusting its shape"
+            f"the surface {' and '.join(said)}, where the scan is doubled, noisy or its blade "
+            "curls under: compare it with the scan's points before trusting its shape"
         )
     return notes
 

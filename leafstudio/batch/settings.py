@@ -48,6 +48,7 @@ SCAN_COLUMNS = (
     "scan_beyond_1pct",
     "scan_beyond_2pct",
     "scan_folded",
+    "scan_crumpled",
 )
 INT_COLUMNS = frozenset({"k", "grid", "scan_points"})
 FLOAT_COLUMNS = frozenset(

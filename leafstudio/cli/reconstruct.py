@@ -182,5 +182,6 @@ def run(args: argparse.Namespace) -> int:
                 f"{f['max']:.4g}; beyond 1% of the leaf length {f['beyond_1pct']:.1%}, beyond 2% "
                 f"{f['beyond_2pct']:.1%} (leaf length {f['length']:.4g}{unit})"
                 + (f"; the mesh's edges folded back {f['folded']:.2%}" if "folded" in f else "")
+                + (f", its area crumpled {f['crumpled']:.2%}" if "crumpled" in f else "")
             )
     return EXIT_OK

@@ -27,15 +27,18 @@ from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
 
 from leafstudio._shared import progress
-from leafstudio.core.sheet_cells import VOLUME, cubes, cut
+from leafstudio.core.sheet_cells import VOLUME, cubes, cut, mean_errors
 
 REACH = 1.8  # cells: cell means closer than this are neighbours in the graph
 MIN_CELLS = 30
 LANDMARKS = 120  # geodesic sources for the landmark MDS
 MOST_KEPT = 0.8  # the graph's largest piece must hold this share of the points
-SMOOTHING = 1e-3  # the thin-plate spline's smoothing, at unit length: at 1e-4 the sheet missed
-# its cell means by 0.07-0.13 of their noise (a local quadratic's residual through them): it
-# followed the scanner's noise and the mesh crinkled; at 1e-3 by 0.32-0.50 (fit_sheet's Notes)
+SMOOTHING = 2e-3  # the thin-plate spline's smoothing, at unit length, for a cell of the typical
+# error (refit weighs it by each cell's): at 1e-4 the sheet missed its cell means by 0.07-0.13
+# of their noise (a local quadratic's residual through them): it followed the scanner's noise and
+# the mesh crinkled; at 1e-3 unweighed by 0.32-0.50 (fit_sheet's Notes)
+WEIGHT_RANGE = 30.0  # a cell's smoothing is at most this many times the typical's, or 1/this
+# (10 and 100 moved no scan's 99th-percentile dihedral by more than 2 degrees)
 FIRST = 1e-3  # the smoothing of the sheet through the cube means, at unit length (`refit`)
 NEWTON = 10  # Gauss-Newton steps of `Sheet.flatten`, at most
 SETTLED = 1e-9  # ... a point whose step is shorter than this share of the sheet's size settled
@@ -143,7 +146,7 @@ class Sheet:
 
     centers: np.ndarray
     values: np.ndarray
-    smoothing: float
+    smoothing: float | np.ndarray  # the spline's, one for all centres or (m,) one each (refit)
     up: np.ndarray  # (3,) the side the normal is turned to
     cell: float = 0.0  # the flat blade's cells' side its centres were averaged in (`refit`; 0:
     # not known, a sheet read from a project)
@@ -263,7 +266,8 @@ class Sheet:
 
     def key(self) -> bytes:
         """Bytes that change with the sheet."""
-        return self.centers.tobytes() + self.values.tobytes() + np.float64(self.smoothing).tobytes()
+        smoothing = np.asarray(self.smoothing, dtype=np.float64)
+        return self.centers.tobytes() + self.values.tobytes() + smoothing.tobytes()
 
     def crease(self, points: np.ndarray) -> None:
         """A sheet is smooth: no crease."""
@@ -279,7 +283,9 @@ def refit(
 ) -> Sheet:
     """The sheet through (n, 3) points averaged in square cells of side `cell` of the flat
     blade `sheet` puts them on (from their (n, 2) flat places `start`, their cubes' on the
-    first sheet): each cell's mean flat point (u, v) to its mean point.
+    first sheet): each cell's mean flat point (u, v) to its mean point, the spline's
+    `smoothing` there in proportion to the mean's error across the blade (from the cell's own
+    points in 3D: sheet_cells.mean_errors), within WEIGHT_RANGE times the typical cell's.
 
     The first sheet goes through cube means, each at the flat place the neighbour graph gave
     it: a cube of the 3D cloud splits a doubled layer or a scanner's stripe (soybean pot1_1:
@@ -291,11 +297,15 @@ def refit(
     Each point is flattened from its cube's place, not from the nearest sheet point: between
     two layers of a curl that one changed with the scan's last bits (soybean pot1_1 scaled by
     0.7 and moved split 34 of its points otherwise between blade and petiole)."""
-    uv = sheet.flatten(points, start)[:, :2]
-    which, counts = cubes(uv, cell)
+    flat = sheet.flatten(points, start)
+    which, counts = cubes(flat[:, :2], cell)
     centres, values = np.zeros((len(counts), 2)), np.zeros((len(counts), 3))
-    np.add.at(centres, which, uv)
+    np.add.at(centres, which, flat[:, :2])
     np.add.at(values, which, points)
+    error = mean_errors(points, which, counts)
+    typical = float(np.median(error))
+    if typical > 0:  # each cell's smoothing in proportion to its mean's error (module docstring)
+        smoothing = smoothing * np.clip(error / typical, 1 / WEIGHT_RANGE, WEIGHT_RANGE)
     counts = counts[:, None]
     return Sheet(centres / counts, values / counts, smoothing, sheet.up, cell)
 
@@ -329,12 +339,18 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     0.52%: its surface passes between its doubled layers). That sheet still missed its cell
     means by only 0.07-0.13 of their noise, the residual of a local quadratic through the 24
     nearest (0.11-0.50 cells): it followed the scanner's noise, and the mesh crinkled. At
-    SMOOTHING 1e-3 it misses them by 0.32-0.50 of it, the 99th percentiles are 8-60 degrees
-    (pot1_1 60; pot1_15, 17, 36, pot1_7 and pot2_3 12-21, from 17-29 at 1e-4) and the mean distance
-    0.56%, none above 0.96% (pot1_1); 3e-3 gave 0.58% (0.97%), 1e-2 0.63% (1.12%): a stiffer
-    sheet pulls off the scan. Refitting through the cube means' own sheet (FIRST = SMOOTHING, at
-    1e-4) left pot1_1 at 108 degrees; a stiffer start refitted four times (1e-2 down to 1e-4) gave
-    much the same as one refit, at three times the cost
+    SMOOTHING 1e-3, the same for every cell, it missed them by 0.32-0.50 of it, the 99th
+    percentiles (margin band / inside) were pot1_1 57.9 / 59.0, pot1_15 20.5 / 20.7, the others
+    9.9-17.7, the mean distance 0.56%, none above 0.96% (pot1_1); 3e-3 gave 0.58% (0.97%), 1e-2
+    0.63% (1.12%): a stiffer sheet pulls off the scan, and pot1_1 stayed crumpled (2e-3: 72.9 /
+    73.9), its cells across the doubled layers as sure as clean ones. Each cell's smoothing is
+    now in proportion to its mean's error across the blade (sheet_cells.mean_errors; at 2e-3 for
+    the typical cell): pot1_1 46.1 / 39.8 and its edges folded back 0.33% -> 0.12%, pot1_15 12.9
+    / 17.6, the others 8.0-13.4, at a mean distance of 0.57%, none above 0.93%. (pot1_1's
+    crumples swing with any setting, 39.8-69.5 inside, and its unrolled length 53.2 -> 58.5: its
+    doubled layers make its flat blade uncertain.) A refit through the cube means' own sheet
+    (FIRST = SMOOTHING, at 1e-4) left pot1_1 at 108 degrees; a stiffer start refitted four times
+    (1e-2 down to 1e-4) gave much the same as one refit, at three times the cost
     (benchmarks/bench_bent.py --scan-table).
     """
     points = np.asarray(points, dtype=float)

@@ -89,7 +89,7 @@ class Scaled:
             "sheet": {
                 "centers": sheet.centers.tolist(),
                 "values": sheet.values.tolist(),
-                "smoothing": sheet.smoothing,
+                "smoothing": np.asarray(sheet.smoothing, dtype=float).tolist(),
                 "up": sheet.up.tolist(),
                 "centre": self.centre.tolist(),
                 "scale": self.scale,
@@ -110,12 +110,14 @@ class Scaled:
         sheet = entry["sheet"]
         centers, values = np.array(sheet["centers"], float), np.array(sheet["values"], float)
         flat = np.array(sheet["flat"], float).reshape(-1, 3)
+        smoothing = np.array(sheet["smoothing"], float)  # one for all (older projects) or each
         if (
             centers.shape != (len(values), 2)
             or values.shape[1:] != (3,)
             or len(centers) < MIN_CELLS
+            or smoothing.shape not in ((), (len(centers),))
         ):
-            raise ValueError("the sheet's centres and values do not match")
+            raise ValueError("the sheet's centres, values and smoothing do not match")
         if len(flat) != len(points):
             raise ValueError("the sheet's flat points do not match the leaf's")
         up = np.array(sheet["up"], float).reshape(3)
@@ -123,7 +125,7 @@ class Scaled:
         if any(len(r) < 4 for r in rings):
             raise ValueError("a hole's outline has fewer than three corners")
         bend = cls(
-            Sheet(centers, values, float(sheet["smoothing"]), up),
+            Sheet(centers, values, float(smoothing) if smoothing.ndim == 0 else smoothing, up),
             np.array(sheet["centre"], float).reshape(3),
             float(sheet["scale"]),
             holes=rings,

@@ -20,6 +20,8 @@ CELLS = 28  # the blade's length is cut in this many cubes; each cube's mean is 
 VOLUME = 3  # ... more than VOLUME cells**2 cubes: a volume
 PER_CUBE = 2.5  # a sparser blade is cut in fewer cubes (module docstring)
 FEWEST_CELLS = 8
+FEW = 4  # a cell of fewer points takes the typical cell's spread across the blade (`mean_errors`)
+FLOOR = 0.5  # ... and every cell's spread is taken with this many typical spreads more
 
 
 def cubes(points: np.ndarray, side: float) -> tuple[np.ndarray, np.ndarray]:
@@ -40,3 +42,36 @@ def cut(points: np.ndarray, length: float) -> tuple[int, np.ndarray, np.ndarray]
         if cells <= FEWEST_CELLS or len(points) >= PER_CUBE * len(counts):
             return cells, cube, counts
         cells = max(FEWEST_CELLS, int(cells * np.sqrt(len(points) / (PER_CUBE * len(counts)))))
+
+
+def mean_errors(points: np.ndarray, which: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """Each cell's mean's variance across the blade, (spread + FLOOR typical) / count, from the
+    (n, 3) `points`, their (n,) cells `which` and the cells' `counts`. The spread is the least
+    variance of the cell's points in 3D (their covariance's smallest eigenvalue: across their
+    own best plane, whatever the sheet they were flattened by): a cell across a doubled layer or
+    a scanner's stripe spreads wide and its mean is less sure than a clean patch's, a cell on a
+    tight roll's edge does not (refit weighs the spline's smoothing by it). Cells of fewer than
+    FEW points take the typical (median) spread.
+
+    Examples
+    --------
+    >>> x, y = (a.ravel() for a in np.meshgrid([0.0, 3.0, 6.0, 9.0], [0.0, 3.0, 6.0, 9.0]))
+    >>> tilted = np.column_stack([x, y, x])  # a plane: no spread across it
+    >>> doubled = np.column_stack([x, y, np.tile([-1.0, 1, 1, -1, 1, -1, -1, 1], 2)])  # 2 apart
+    >>> which, counts = np.repeat([0, 1], 16), np.array([16, 16])
+    >>> mean_errors(np.vstack([tilted, doubled]), which, counts).round(4)  # spread 0 and 1
+    array([0.0156, 0.0781])
+    """
+    cells = len(counts)
+    sums, products = np.zeros((cells, 3)), np.zeros((cells, 3, 3))
+    np.add.at(sums, which, points)
+    np.add.at(products, which, points[:, :, None] * points[:, None, :])
+    many = counts >= FEW
+    spread = np.zeros(cells)
+    if many.any():
+        mean = sums[many] / counts[many, None]
+        covariance = products[many] / counts[many, None, None] - mean[:, :, None] * mean[:, None]
+        spread[many] = np.maximum(np.linalg.eigvalsh(covariance)[:, 0], 0.0)
+    typical = float(np.median(spread[many])) if many.any() else 0.0
+    spread = np.where(many, spread, typical)
+    return (spread + FLOOR * typical) / counts

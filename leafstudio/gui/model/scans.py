@@ -86,6 +86,7 @@ def _fidelity_rows(f: dict[str, Any]) -> list[tuple[str, str]]:
         (f"Beyond {FAR:.0%} of length", f"{f['beyond_2pct']:.1%}"),
         ("Leaf length", f"{f['length']:.4g}"),
         *([("Mesh edges folded back", f"{f['folded']:.1%}")] if "folded" in f else []),
+        *([("Mesh area crumpled", f"{f['crumpled']:.1%}")] if "crumpled" in f else []),
     ]
 
 

@@ -232,13 +232,14 @@ def test_a_leaf_beyond_what_the_app_draws_and_measures_is_refused_in_one_line(tm
     assert session.state is before
 
 
-def test_a_scan_whose_surface_folds_back_is_warned_of_in_the_window():
+def test_a_scan_whose_surface_crumples_is_warned_of_in_the_window():
     """As the command line and batch warn (analysis/fidelity.scan_warnings): soybean pot1_1's
-    doubled cloud folds its mesh back on itself, which its distances to the scan hide. The
-    window's status line hears it as a side job's note, and the panel shows the share."""
+    doubled cloud crumples its mesh (and folds it back a little), which its distances to the
+    scan hide. The window's status line hears it as a side job's note, and the panel shows the
+    shares."""
     from pathlib import Path
 
-    from leafstudio.analysis.fidelity import FOLDED
+    from leafstudio.analysis.fidelity import CRUMPLED
     from leafstudio.model import Params
 
     scan = Path(__file__).resolve().parents[3].parent / "shared" / "realleaves"
@@ -252,8 +253,9 @@ def test_a_scan_whose_surface_folds_back_is_warned_of_in_the_window():
     session.open_path(str(path))
     runner.finish(session)
     rows = dict(session.shown.fidelity[1][0][1])
-    assert float(rows["Mesh edges folded back"].rstrip("%")) / 100 > FOLDED
-    assert any("folds back on itself" in note for note in notes)
+    assert float(rows["Mesh area crumpled"].rstrip("%")) / 100 > CRUMPLED
+    assert float(rows["Mesh edges folded back"].rstrip("%")) > 0
+    assert any("crumples over" in note for note in notes)
 
 
 def test_a_scans_first_sketch_edit_says_it_replaces_the_scans_outline_and_one_undo_restores_it():
