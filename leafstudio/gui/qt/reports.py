@@ -16,6 +16,7 @@ from leafstudio.core.kernels import compiling_notice
 from leafstudio.gui.model.measurements import measurement_rows
 from leafstudio.gui.model.session import Framing, State
 from leafstudio.gui.model.textures import coloring_for
+from leafstudio.gui.model.view_aids import k_label
 from leafstudio.gui.qt.turns import later
 from leafstudio.gui.qt.worker import PIPELINE, Outcome
 
@@ -157,10 +158,12 @@ class Reports:
     def _show_timings(self, outcome: Outcome) -> None:
         ms = [f"{name} {1000 * t:.0f} ms" for name, t in outcome.timings.items()]
         total = sum(outcome.timings.values())
-        params = outcome.result.params
+        result = outcome.result
         self.status_text.setStyleSheet("")
         self.status_text.setText(  # short enough for a projector; each stage's time in the tip
-            f"K={params.k}, grid {params.grid}: shown in {1000 * total:.0f} ms",
+            # the K used, as the view's corner says it: a flat blade fits none, whatever K was
+            # asked (the line said "K=3" beside the corner's "K unused (flat blade)": closing32)
+            f"{k_label(result)}, grid {result.params.grid}: shown in {1000 * total:.0f} ms",
             tip=" · ".join(ms) + " (stages not listed came from the cache)",
         )
         request, session = outcome.request.id, self.session
