@@ -159,6 +159,25 @@ def can_pose(leaf: Leaf | None) -> bool:
     return leaf is not None and (leaf.bend is None or isinstance(leaf.bend, (Pose, PlacedPose)))
 
 
+def sheet_tip(scan_open: bool, sliders: bool = False) -> str:
+    """Why the pose terms (the Forms dock's boxes, or the Parameters panel's `sliders`) are off
+    for a leaf bent by a scan's sheet (`can_pose`): the scan open, or a leaf saved from one (a
+    project keeps the sheet, not the scan's points). Both said "This scan" for a saved project
+    too (closing32)."""
+    who = (
+        "This scan is bent by the smooth sheet fitted to its points"
+        if scan_open
+        else "This leaf, saved from a scan, is bent by the smooth sheet fitted to that scan's "
+        "points"
+    )
+    if sliders:
+        return f"{who}; a fold or curl would replace that fit, so the sliders are off for it."
+    return (
+        f"{who}: no fold, curl, roll or twist applies to it (a pose would replace that fit). A "
+        "shape picked in the gallery starts unbent."
+    )
+
+
 def posed(
     flat: Leaf | None, pose: Pose, like: Bend | None = None, plane: Any = None, check: bool = False
 ) -> Leaf | None:

@@ -289,3 +289,24 @@ def test_the_scans_outline_note_lets_clicks_through_to_the_sketch(scan_window, q
         under, Qt.MouseButton.LeftButton, pos=under.mapFrom(view, note.geometry().center())
     )
     assert under is not note and len(session.state.sketch.boundary) == count + 1
+
+
+def test_the_pose_terms_tips_say_scan_for_a_scan_and_saved_from_one_for_its_project(
+    scan_window, qtbot, tmp_path
+):
+    """closing32: the Forms dock's pose boxes and the Fold/Curl/Roll/Twist sliders, off for a
+    leaf bent by its scan's sheet, said "This scan…" for a project saved from a scan too, where
+    no scan is open."""
+    window = scan_window
+    boxes, sliders = window.forms_panel.pose_boxes, window.bend.sliders
+    tips = [w.toolTip() for w in (*boxes.values(), *sliders.values())]
+    assert all(tip.startswith("This scan is bent") for tip in tips)
+    project = str(tmp_path / "scan.leaf.json")
+    assert window.save_to(project)
+    assert window.open_path(project)
+    qtbot.waitUntil(lambda: window.session.state.path == project, timeout=WAIT_MS)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.leaf)
+    assert window.session.state.scan is None and window.session.leaf.bend is not None
+    for widget in (*boxes.values(), *sliders.values()):
+        assert not widget.isEnabled()
+        assert widget.toolTip().startswith("This leaf, saved from a scan, is bent"), widget
