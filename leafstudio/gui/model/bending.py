@@ -22,7 +22,7 @@ import shapely
 
 from leafstudio.core.bend import Pose, flat_leaf
 from leafstudio.core.placed import PlacedPose, blade_frame, fitted
-from leafstudio.core.pose_limits import check_pose, eased_roll
+from leafstudio.core.pose_limits import PoseRefused, check_pose, eased_roll
 from leafstudio.core.pose_relief import margin_relief, relief_of
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.history import State, Step
@@ -128,6 +128,30 @@ def terms_pose(
             name: getattr(pose, name) if figures.get(name) == value else value * units[name]
             for name, value in terms.items()
         }
+    )
+
+
+# what a slider's figure counts, said after a refused figure's range (forms/terms.RELIEF)
+TERM_UNITS = {
+    "fold": "degrees",
+    "curl": "per the blade's length: 1 turns its apex 2 radians",
+    "roll": "half turns of the widest margins: 1 closes the blade into a tube",
+    "twist": "half turns of the apex against the base",
+}
+
+
+def refusal(exc: PoseRefused, pose: Pose, half_width: float) -> str:
+    """A pose refused past the limits (core/pose_limits.check_pose), said in the sliders' terms
+    (the Forms dock's): the term as its slider names it, the figure asked and the range this
+    blade takes. The limits' own line gave a roll and a twist per unit of the leaf's
+    coordinates (closing32). The figures scale as the pose's terms do (`term_units`, and
+    `in_lengths` for a leaf in its own units), so the range is the figure's share of it."""
+    asked = pose_terms(pose, half_width)[exc.term]
+    most = abs(asked * exc.most / exc.value) if exc.value else exc.most
+    name = exc.term.capitalize()
+    return (
+        f"{name} {asked:.3g} is more than this blade takes: {name} goes from {-most:.3g} to "
+        f"{most:.3g} on it ({TERM_UNITS[exc.term]})."
     )
 
 
@@ -358,9 +382,11 @@ class Bending:
             # the blade's area
             try:
                 bent = posed(flat_leaf(leaf), pose, leaf.bend, plane, check=True)
-            except LeafError:
+            except LeafError as exc:
                 if final:
                     self._end_bend()
+                if isinstance(exc, PoseRefused):  # said in the sliders' terms
+                    raise LeafError(refusal(exc, pose, self.half_width)) from None
                 raise
         if self._bend_base is None:
             self._bend_base = self.state
