@@ -304,9 +304,41 @@ def test_the_pose_terms_tips_say_scan_for_a_scan_and_saved_from_one_for_its_proj
     project = str(tmp_path / "scan.leaf.json")
     assert window.save_to(project)
     assert window.open_path(project)
-    qtbot.waitUntil(lambda: window.session.state.path == project, timeout=WAIT_MS)
+    state = window.session.state  # saved: its path is the project's already
+    qtbot.waitUntil(lambda: window.session.state.serial != state.serial, timeout=WAIT_MS)
     wait_result(qtbot, window, lambda o: o.result.leaf is window.session.leaf)
-    assert window.session.state.scan is None and window.session.leaf.bend is not None
+    assert window.session.state.path == project and window.session.state.scan is None
+    assert window.session.leaf.bend is not None
     for widget in (*boxes.values(), *sliders.values()):
         assert not widget.isEnabled()
         assert widget.toolTip().startswith("This leaf, saved from a scan, is bent"), widget
+
+
+def test_the_note_over_the_sketch_closes_and_stays_closed_until_it_says_something_new(
+    scan_window, qtbot
+):
+    """closing32: the note over the sketch's foot after a scan's first sketch edit could not
+    be dismissed. Its close control (inside it; the rest of it lets clicks through to the
+    sketch) hides it, further edits keep it hidden; undone back to the scan and redone, it is
+    said anew."""
+    from PySide6.QtTest import QTest
+
+    window, session = scan_window, scan_window.session
+    editor, view = window.editor, window.editor.view
+    note, close = editor.outline_note, editor.outline_close
+    view.selected = (-1, 0)
+    view.delete_selected()
+    assert note.isVisible() and close.isVisible()
+    assert note.geometry().contains(close.geometry())
+    assert note.testAttribute(Qt.WidgetAttribute.WA_TransparentForMouseEvents)
+    QTest.mouseClick(close, Qt.MouseButton.LeftButton)
+    assert not note.isVisible() and not close.isVisible()
+    wait_result(qtbot, window, lambda o: o.result.leaf is session.leaf)
+    view.selected = (-1, 3)
+    view.delete_selected()  # a second edit: still drawn by the sketch, nothing new to say
+    assert session.outline_note and not note.isVisible()
+    window.actions["edit.undo"].trigger()
+    window.actions["edit.undo"].trigger()  # the scan's own curves back: nothing to say
+    assert not session.outline_note and not note.isVisible()
+    window.actions["edit.redo"].trigger()  # replaced again: said again
+    assert note.isVisible() and close.isVisible()
