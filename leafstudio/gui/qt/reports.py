@@ -92,6 +92,7 @@ class Reports:
             self.viewport.set_texture(None, None, draw=False)  # another leaf's image
         self.viewport.show_layers(outcome.layers, frame, bounds, how)
         self.layers.set_available("blade", bool(outcome.layers.get("blade")))  # a bent leaf's
+        self.follow_blade()  # laid flat under the layers drawn there (main_window.py)
         outcome.timings["draw"] = time.perf_counter() - start
         self._stage_timer.stop()
         self._show_timings(outcome)
