@@ -35,7 +35,7 @@ from leafstudio.gui.qt.layers_panel import LayersPanel
 from leafstudio.gui.qt.measurements_panel import MeasurementsPanel
 from leafstudio.gui.qt.reports import Reports
 from leafstudio.gui.qt.sketch import SketchEditor
-from leafstudio.gui.qt.status import Busy, StatusText
+from leafstudio.gui.qt.status import Busy, NotesButton, StatusText
 from leafstudio.gui.qt.viewport import Viewport
 from leafstudio.gui.qt.worker import Worker
 from leafstudio.model import Params
@@ -92,6 +92,8 @@ class MainWindow(FileCommands, Reports, QMainWindow):
         self.add_actions(WINDOW_ACTIONS)
         self._build_docks()
         self.statusBar().addWidget(self.status_text, 1)
+        self.notes_button = NotesButton(self.status_text)  # how many notes the line has
+        self.statusBar().addPermanentWidget(self.notes_button)
         self.busy = Busy()  # a file opening: its progress and Cancel
         self.statusBar().addPermanentWidget(self.busy)
         self.busy.cancelled.connect(self.session.cancel_open)
@@ -326,7 +328,7 @@ class MainWindow(FileCommands, Reports, QMainWindow):
     def _on_side_note(self, note: str) -> None:
         """A side job's note: it failed without harm (the Poisson surface, the texture), or the
         scan's distances warn of the surface (scans.fidelity_sections)."""
-        self.status_text.setText(f"{self.status_text.text()} — {note}")
+        self.status_text.add_note(note)
 
     def _on_texture(self, image: object, key: tuple) -> None:
         self.viewport.set_texture(image, key)

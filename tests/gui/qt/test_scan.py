@@ -342,3 +342,45 @@ def test_the_note_over_the_sketch_closes_and_stays_closed_until_it_says_somethin
     assert not session.outline_note and not note.isVisible()
     window.actions["edit.redo"].trigger()  # replaced again: said again
     assert note.isVisible() and close.isVisible()
+
+
+def test_a_result_with_many_notes_reads_in_a_window_1280_wide(qtbot, tmp_path):
+    """closing32: with a scan open the status line ran its notes one after another (450
+    characters after a sketch edit), cut at about 150 in a window 1280 wide: the later notes
+    and the measuring time after them were not on screen. The line now says its head (the
+    measuring time in it) and its first note; a button counts the notes, every note whole in
+    its tooltip and in the box it opens."""
+    from PySide6.QtTest import QTest
+
+    window = make_window(qtbot, tmp_path / "settings.ini", FAST)
+    window.resize(1280, 720)
+    t = np.linspace(0, 2 * np.pi, 80, endpoint=False)  # a flat blade: the result notes it
+    boundary = np.column_stack([0.5 + 0.5 * np.cos(t), 0.2 * np.sin(t), 0 * t])
+    midrib = np.column_stack([np.linspace(0.02, 0.98, 12), np.zeros(12), np.zeros(12)])
+    window.session.new_document(Leaf(boundary, [midrib]), title="flat")
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.leaf)
+    status, button = window.status_text, window.notes_button
+    qtbot.waitUntil(lambda: "measured in" in status.text(), timeout=WAIT_MS)
+    first = status.line().notes[0]
+    later = [  # the scan's distances' warnings, as they come (MainWindow._on_side_note)
+        "the surface is 1.0% of the leaf's length from the scan on average (95% of points "
+        "within 2.8%): it does not follow this scan well",
+        "the surface folds back on itself at 0.5% of its edges (creases past 90°), where the "
+        "scan is doubled or its blade curls under: compare it with the scan's points first",
+    ]
+    for note in later:
+        window._on_side_note(note)
+    head, _, rest = status.text().partition(" — ")
+    assert "measured in" in head and rest.lower().startswith(first.lower())
+    shown = status.fontMetrics().elidedText(status.text(), Qt.TextElideMode.ElideRight,
+                                            status.width())  # fmt: skip
+    assert status.width() < 1280 and shown.lower().startswith(f"{head} — {first[:40]}".lower())
+    assert button.isVisible() and button.text().endswith("3 notes")
+    for note in (first, *later):
+        assert note in button.toolTip() and note in status.toolTip()
+    QTest.mouseClick(button, Qt.MouseButton.LeftButton)
+    assert button.box is not None and later[1][1:] in button.box.text()
+    button.box.close()
+    window.status_text.setText("Opening cancelled")  # a message of its own: no notes
+    assert not button.isVisible()
+    close_window(window)
