@@ -91,6 +91,17 @@ def fit_like(bend: Any) -> bool:
     )
 
 
+class PoseRefused(LeafError):
+    """`check_pose`'s refusal, with what a caller in other units needs to say it in its own
+    (the app's sliders, gui/model/bending.py: its message gave a roll per unit of the leaf's
+    coordinates, closing32): the `term` ("fold", "curl", "roll" or "twist"), its `value` and
+    the `most` it may take on this blade, both in the pose's units."""
+
+    def __init__(self, message: str, term: str, value: float, most: float) -> None:
+        super().__init__(message)
+        self.term, self.value, self.most = term, value, most
+
+
 def pose_trouble(
     bend: Any, boundary: np.ndarray, veins: list[np.ndarray], flat: bool = False
 ) -> str | None:
@@ -99,13 +110,22 @@ def pose_trouble(
     blade it is about to bend) cannot take, in one line: the term, its value and the range
     allowed on this blade, in the file's units. None when every term holds, or for a bend that
     is no pose (a scan's sheet)."""
+    trouble = _trouble(bend, boundary, veins, flat)
+    return None if trouble is None else trouble[0]
+
+
+def _trouble(
+    bend: Any, boundary: np.ndarray, veins: list[np.ndarray], flat: bool
+) -> tuple[str, str, float, float] | None:
+    """`pose_trouble`'s line, the term, its value and the most it may take (`PoseRefused`)."""
     pose = getattr(bend, "pose", bend)
     if not isinstance(pose, Pose):
         return None
     most_fold = FITTED_FOLD if fit_like(bend) else FOLD
     if abs(pose.fold) > most_fold:
-        return (f'"fold" {pose.fold:g} is past what a fold keeps of the blade; a fold is taken '
+        says = (f'"fold" {pose.fold:g} is past what a fold keeps of the blade; a fold is taken '
                 f"from -{most_fold:g} to {most_fold:g} degrees")  # fmt: skip
+        return says, "fold", pose.fold, most_fold
     reach, half = blade_measures(bend, boundary, veins, flat)
     per_unit = "per unit of the leaf's coordinates"
     terms = (
@@ -133,7 +153,7 @@ def pose_trouble(
         value = getattr(pose, name)
         if value != 0 and not abs(value) <= most:  # not: a reach of 0 gives nan
             return (f'"{name}" {value:g} ({says.format(turn=abs(turn))}: from {-most:.3g} to '
-                    f"{most:.3g} on this blade")  # fmt: skip
+                    f"{most:.3g} on this blade", name, value, most)  # fmt: skip
     return None
 
 
@@ -148,12 +168,13 @@ def check_pose(
 
     Raises
     ------
-    LeafError
-        Naming the term, its value and the range it may take on this blade (`pose_trouble`).
+    PoseRefused
+        A LeafError naming the term, its value and the range it may take on this blade
+        (`pose_trouble`).
     """
-    trouble = pose_trouble(bend, boundary, veins, flat)
+    trouble = _trouble(bend, boundary, veins, flat)
     if trouble is not None:
-        raise LeafError(f"the leaf's bend: {trouble}")
+        raise PoseRefused(f"the leaf's bend: {trouble[0]}", *trouble[1:])
 
 
 def eased_roll(pose: Pose, half: float) -> Pose:

@@ -111,6 +111,11 @@ LESSON_STEPS: tuple[LessonStep, ...] = (
         r"N(\mathbf{x} \mid \mu_k, \Sigma_k)$",
         ("mesh",),  # coloured by height (lesson_view.py); the samples layer: a pink mass
         "heights",
+        # its plan is z on the flat blade, its 3D view the mesh bent back (closing32: the words
+        # told of the flat blade only, beside a folded leaf)
+        bent_caption="The hills are added up over the flat blade (the map), and tanh(g/δ) "
+        "brings the sum to zero at the edge. In 3D the surface is bent back into the leaf's "
+        "fold, curl, roll or twist, coloured by the same heights.",
     ),
     LessonStep(
         "7. The leaf in 3D",

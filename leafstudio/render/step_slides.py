@@ -30,8 +30,18 @@ DPI = 100  # 1600 x 900 pixels per slide
 TITLE_PT, TEXT_PT, EQUATION_PT = 28, 19, 22
 TITLE_CHARS = 26  # characters per title line
 CAPTION_CHARS = 40  # characters per caption line in the right-hand column
-OWNER_COLOURS = "tab10"
+# a colour per Gaussian, its EM samples' and ellipses' here and in the app's 3D view
+# (gui/model/fields.py): matplotlib's tab10 without its orange, the zero contour's there. The
+# plan took tab10 whole, so a Gaussian was orange in the plan and green in 3D (closing32)
+GAUSSIAN_COLORS = (
+    "#1f77b4", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#bcbd22",
+)  # fmt: skip
 BOUNDARY, VEINS = "#202020", "#d62728"
+
+
+def gaussian_color(k: int) -> str:
+    """The colour of Gaussian k: its EM samples and ellipses, in the plan and in 3D."""
+    return GAUSSIAN_COLORS[k % len(GAUSSIAN_COLORS)]
 
 
 def blade_leaf(result: Any) -> Leaf:
@@ -136,16 +146,13 @@ def step_picture(ax: Any, result: Any, index: int) -> None:
         p = np.asarray(unit.p_grid, dtype=float)
         _field(ax, plane, p, "magma", "p(x): the height guide", clip=True)
     elif picture == "em":
-        from matplotlib import colormaps
-
         mixture = unit.em_mixture  # EM's own: the surface's is refined from it
         samples = np.asarray(unit.em_samples)
         owner = mixture.owners(samples)
-        colours = colormaps[OWNER_COLOURS]
-        ax.scatter(*samples.T, s=6, c=[colours(k % 10) for k in owner], zorder=2)
+        ax.scatter(*samples.T, s=6, c=[gaussian_color(k) for k in owner], zorder=2)
         for k, (mean, cov) in enumerate(zip(mixture.means, mixture.covariances, strict=True)):
             for sigmas in (1, 2):
-                _ellipse(ax, mean, cov, sigmas, colours(k % 10))
+                _ellipse(ax, mean, cov, sigmas, gaussian_color(k))
     elif picture == "heights":
         z = unit.height(unit.grid.points)  # b(x) outside, where tanh(g/δ) is 0: cut off
         inside = z[unit.inside]

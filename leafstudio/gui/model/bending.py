@@ -22,7 +22,7 @@ import shapely
 
 from leafstudio.core.bend import Pose, flat_leaf
 from leafstudio.core.placed import PlacedPose, blade_frame, fitted
-from leafstudio.core.pose_limits import check_pose, eased_roll
+from leafstudio.core.pose_limits import PoseRefused, check_pose, eased_roll
 from leafstudio.core.pose_relief import margin_relief, relief_of
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.history import State, Step
@@ -131,6 +131,30 @@ def terms_pose(
     )
 
 
+# what a slider's figure counts, said after a refused figure's range (forms/terms.RELIEF)
+TERM_UNITS = {
+    "fold": "degrees",
+    "curl": "per the blade's length: 1 turns its apex 2 radians",
+    "roll": "half turns of the widest margins: 1 closes the blade into a tube",
+    "twist": "half turns of the apex against the base",
+}
+
+
+def refusal(exc: PoseRefused, pose: Pose, half_width: float) -> str:
+    """A pose refused past the limits (core/pose_limits.check_pose), said in the sliders' terms
+    (the Forms dock's): the term as its slider names it, the figure asked and the range this
+    blade takes. The limits' own line gave a roll and a twist per unit of the leaf's
+    coordinates (closing32). The figures scale as the pose's terms do (`term_units`, and
+    `in_lengths` for a leaf in its own units), so the range is the figure's share of it."""
+    asked = pose_terms(pose, half_width)[exc.term]
+    most = abs(asked * exc.most / exc.value) if exc.value else exc.most
+    name = exc.term.capitalize()
+    return (
+        f"{name} {asked:.3g} is more than this blade takes: {name} goes from {-most:.3g} to "
+        f"{most:.3g} on it ({TERM_UNITS[exc.term]})."
+    )
+
+
 def bend_text(pose: Pose, half_width: float) -> str:
     """A bend's undo text in the sliders' terms (the Forms dock's): the roll as the share of a
     half turn at the widest, the twist in half turns."""
@@ -157,6 +181,25 @@ def can_pose(leaf: Leaf | None) -> bool:
     """Whether the sliders may bend this leaf: it is flat or bent by a pose. A scan bent by the
     sheet fitted to its points (core/sheet.py) is not: a pose would replace that fit."""
     return leaf is not None and (leaf.bend is None or isinstance(leaf.bend, (Pose, PlacedPose)))
+
+
+def sheet_tip(scan_open: bool, sliders: bool = False) -> str:
+    """Why the pose terms (the Forms dock's boxes, or the Parameters panel's `sliders`) are off
+    for a leaf bent by a scan's sheet (`can_pose`): the scan open, or a leaf saved from one (a
+    project keeps the sheet, not the scan's points). Both said "This scan" for a saved project
+    too (closing32)."""
+    who = (
+        "This scan is bent by the smooth sheet fitted to its points"
+        if scan_open
+        else "This leaf, saved from a scan, is bent by the smooth sheet fitted to that scan's "
+        "points"
+    )
+    if sliders:
+        return f"{who}; a fold or curl would replace that fit, so the sliders are off for it."
+    return (
+        f"{who}: no fold, curl, roll or twist applies to it (a pose would replace that fit). A "
+        "shape picked in the gallery starts unbent."
+    )
 
 
 def posed(
@@ -339,9 +382,11 @@ class Bending:
             # the blade's area
             try:
                 bent = posed(flat_leaf(leaf), pose, leaf.bend, plane, check=True)
-            except LeafError:
+            except LeafError as exc:
                 if final:
                     self._end_bend()
+                if isinstance(exc, PoseRefused):  # said in the sliders' terms
+                    raise LeafError(refusal(exc, pose, self.half_width)) from None
                 raise
         if self._bend_base is None:
             self._bend_base = self.state

@@ -19,15 +19,12 @@ import pyvista as pv
 from leafstudio.core.pipeline import Result
 from leafstudio.core.trianglemesh import polydata
 from leafstudio.gui.model.pieces import Piece, cloud, dots, polylines, thinned
+from leafstudio.render.step_slides import gaussian_color  # the plan view's colours too
 
 LIFT = 0.0025  # fields sit this fraction of the leaf's length above the surface
 LIFT_P = 0.0035  # p(x) a little higher, so that it reads above g where both are shown
 CONTOUR_RADIUS = 0.009  # the zero contour's tube, in leaf lengths (seen at any zoom)
 ZERO_COLOR = "#ff7f0e"
-# a colour per Gaussian (matplotlib's tab10 without its orange, which is the zero contour's)
-GAUSSIAN_COLORS = (
-    "#1f77b4", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#bcbd22",
-)  # fmt: skip
 ELLIPSE_POINTS = 96
 SIGMAS = (1.0, 2.0)
 EM_POINT_SIZE = 6.0
@@ -184,11 +181,6 @@ def _within(result: Result, line: np.ndarray) -> list[np.ndarray]:
     inside = result.surface.implicit(line) >= 0.0
     edges = np.flatnonzero(np.diff(np.r_[0, inside.astype(int), 0]))
     return [line[a:b] for a, b in zip(edges[::2], edges[1::2], strict=True) if b - a > 1]
-
-
-def gaussian_color(k: int) -> str:
-    """The colour of Gaussian k (its samples and ellipses; the plan view's too)."""
-    return GAUSSIAN_COLORS[k % len(GAUSSIAN_COLORS)]
 
 
 def em_pieces(result: Result) -> list[Piece]:

@@ -77,7 +77,7 @@ class SideJobs:
             self._warnings = (request, list(warnings))
             self.fidelity_shown.emit()
             for warning in warnings:  # the surface far from the scan, or folded back on itself
-                self.note.emit(f"note: {warning}")
+                self.note.emit(warning)  # a note of the status line's (status_line.py) as is
 
     def warnings_of(self, request: int) -> list[str]:
         """The scan's warnings about result `request` once its distances are in, [] before: the

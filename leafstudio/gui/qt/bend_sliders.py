@@ -27,7 +27,7 @@ from superqt.utils import qthrottled
 from leafstudio.core.bend import Pose
 from leafstudio.errors import LeafError
 from leafstudio.forms.terms import RELIEF
-from leafstudio.gui.model.bending import can_pose, pose_terms, terms_pose
+from leafstudio.gui.model.bending import can_pose, pose_terms, sheet_tip, terms_pose
 from leafstudio.gui.model.jobs import describe
 
 THROTTLE_MS = 80  # as the parameter sliders (controls.py)
@@ -42,10 +42,6 @@ TIPS = {
     "is bent."
     for name in RANGES
 }
-SHEET_TIP = (
-    "This scan is bent by the smooth sheet fitted to all its points; a fold or curl would "
-    "replace that fit, so the sliders are off for it."
-)
 
 
 class BendSliders(QObject):
@@ -146,7 +142,8 @@ def install(window: Any) -> BendSliders:
 
     def shown(*_: Any) -> None:
         leaf = session.leaf
-        bend.set_enabled(can_pose(leaf), SHEET_TIP if leaf is not None else "")
+        scan_open = session.state.scan is not None
+        bend.set_enabled(can_pose(leaf), sheet_tip(scan_open, True) if leaf is not None else "")
         if not bend.is_dragging():
             if can_pose(leaf):  # a sheet-bent scan's sliders are off: no width to read
                 bend.half_width = session.half_width

@@ -37,7 +37,7 @@ from leafstudio.core.evaluate import blade_midrib
 from leafstudio.forms import SHAPES, VENATION_KINDS, Form, definition
 from leafstudio.forms.glossary import COMPARISONS
 from leafstudio.forms.terms import APEXES, DEFAULT_LOBES, MARGINS, RELIEF, TOOTHED, USER_BASES
-from leafstudio.gui.model.bending import can_pose, pose_terms, terms_pose
+from leafstudio.gui.model.bending import can_pose, pose_terms, sheet_tip, terms_pose
 from leafstudio.gui.model.form_documents import GalleryForms
 from leafstudio.gui.model.form_sketch import (
     canonical_leaves,
@@ -63,11 +63,6 @@ DEBOUNCE_MS = 250
 THUMBNAILS = "thumbnails"  # the worker's job kind (and lane) growing the gallery's veins
 FORM = "form"  # the job kind growing a chosen form's blade (its own lane: never behind those)
 _thumbnails: dict[tuple[str, tuple[int, int]], QImage] = {}
-# the pose boxes' tip while they are off: the open leaf is a scan bent by its sheet
-NO_POSE = (
-    "This scan is bent by the smooth sheet fitted to its points: no fold, curl, roll or twist "
-    "applies to it (a pose would replace that fit). A shape picked in the gallery starts unbent."
-)
 EDITED = (  # said under the shape of a form edited since it was made (form_documents.py)
     "<br><i>Edited since it was made: Fold, Curl, Roll and Twist bend it, keeping the edits; the "
     "other terms make a new leaf when you pick a shape (Undo brings this one back).</i>"
@@ -258,13 +253,13 @@ class FormsPanel(QWidget):
         """The figures Fold, Curl, Roll and Twist show."""
         return {name: float(box.value()) for name, box in self.pose_boxes.items()}
 
-    def show_edited(self, edited: bool, poseable: bool = True) -> None:
+    def show_edited(self, edited: bool, poseable: bool = True, scan_open: bool = True) -> None:
         """Say whether the open form was edited since it was made (its pose terms then bend it,
         the others wait for a shape picked); the pose terms are off for a leaf they cannot bend
-        (a scan bent by its sheet), and say why."""
+        (a scan bent by its sheet: the scan open, or a project saved from it), and say why."""
         for name, box in self.pose_boxes.items():
             box.setEnabled(poseable)
-            box.setToolTip(RELIEF[name] if poseable else NO_POSE)
+            box.setToolTip(RELIEF[name] if poseable else sheet_tip(scan_open))
         if edited != self._edited:
             self._edited = edited
             self._describe()
@@ -415,7 +410,8 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
         if reason in ("params", "saved") or "form" in waiting or panel.change_due():
             return
         poseable = can_pose(state.leaf)
-        panel.show_edited(gallery.edited(state), poseable or state.leaf is None)
+        edited, scan_open = gallery.edited(state), state.scan is not None
+        panel.show_edited(edited, poseable or state.leaf is None, scan_open)
         if poseable or state.leaf is not None:
             # a scan bent by its sheet has no pose (session.pose is flat): the boxes are cleared.
             # Kept, the last form's fold of 45 read on the boxes that were off, and the next

@@ -26,6 +26,7 @@ from leafstudio.errors import LeafError
 from leafstudio.gui.model.layers import LAYERS
 from leafstudio.gui.model.session import Session
 from leafstudio.gui.model.textures import LEAF, SHOWS_TEXTURE
+from leafstudio.gui.model.view_aids import BladeFollow
 from leafstudio.gui.qt import bend_sliders, explain, forms_dock, lesson_view, projector
 from leafstudio.gui.qt.actions import MENU_TITLES, WINDOW_ACTIONS, Action
 from leafstudio.gui.qt.controls import ParamPanel
@@ -34,7 +35,7 @@ from leafstudio.gui.qt.layers_panel import LayersPanel
 from leafstudio.gui.qt.measurements_panel import MeasurementsPanel
 from leafstudio.gui.qt.reports import Reports
 from leafstudio.gui.qt.sketch import SketchEditor
-from leafstudio.gui.qt.status import Busy, StatusText
+from leafstudio.gui.qt.status import Busy, NotesButton, StatusText
 from leafstudio.gui.qt.viewport import Viewport
 from leafstudio.gui.qt.worker import Worker
 from leafstudio.model import Params
@@ -63,6 +64,8 @@ class MainWindow(FileCommands, Reports, QMainWindow):
         self.opened_name = ""  # the file opened last (its name), which a failure may concern
         self._scan_shown: object = None  # the scan whose layer is drawn (scans.ScanData)
         self._coloring_automatic = False  # height set for a scan, not by the user
+        self._blade = BladeFollow()  # the laid-flat layer under g, p(x), EM on a bent leaf
+        self._blade_ticking = False
         # Kept in Python: walking menuBar().actions() can hand back a stale wrapper of another
         # type (a QSurface) under PySide6, seen intermittently in the GUI tests.
         self.menus: dict[str, QMenu] = {}
@@ -89,6 +92,8 @@ class MainWindow(FileCommands, Reports, QMainWindow):
         self.add_actions(WINDOW_ACTIONS)
         self._build_docks()
         self.statusBar().addWidget(self.status_text, 1)
+        self.notes_button = NotesButton(self.status_text)  # how many notes the line has
+        self.statusBar().addPermanentWidget(self.notes_button)
         self.busy = Busy()  # a file opening: its progress and Cancel
         self.statusBar().addPermanentWidget(self.busy)
         self.busy.cancelled.connect(self.session.cancel_open)
@@ -289,9 +294,26 @@ class MainWindow(FileCommands, Reports, QMainWindow):
 
     def _on_layer_item(self, item: QListWidgetItem) -> None:
         key = item.data(Qt.ItemDataRole.UserRole)
-        self.viewport.set_visible(key, item.checkState() == Qt.CheckState.Checked)
+        on = item.checkState() == Qt.CheckState.Checked
+        ticked = on != self.viewport.visible.get(key)  # not a change of flags (set_available)
+        self.viewport.set_visible(key, on)
         if key == "poisson":
             self.session.side.set_poisson(self.viewport.visible["poisson"])
+        if ticked and not self._blade_ticking:  # not the tick follow_blade gives
+            self.follow_blade(key)
+
+    def follow_blade(self, changed: str | None = None) -> None:
+        """Tick or untick the "Bent leaf laid flat" layer as the layers drawn on a bent leaf's
+        flat blade are shown (view_aids.BladeFollow), after layer `changed` (None: a result)."""
+        result = self.session.result
+        bent = result is not None and result.leaf.bend is not None
+        tick = self._blade.ticked(self.viewport.visible, bent, changed)
+        if tick is not None and tick != self.viewport.visible.get("blade"):
+            self._blade_ticking = True
+            try:
+                self.layers.set_checked("blade", tick)
+            finally:
+                self._blade_ticking = False
 
     def _on_coloring(self, row: int) -> None:
         """The Layers dock's colouring: a scalar, or the texture (made on the side lane)."""
@@ -306,7 +328,7 @@ class MainWindow(FileCommands, Reports, QMainWindow):
     def _on_side_note(self, note: str) -> None:
         """A side job's note: it failed without harm (the Poisson surface, the texture), or the
         scan's distances warn of the surface (scans.fidelity_sections)."""
-        self.status_text.setText(f"{self.status_text.text()} — {note}")
+        self.status_text.add_note(note)
 
     def _on_texture(self, image: object, key: tuple) -> None:
         self.viewport.set_texture(image, key)

@@ -15,7 +15,9 @@ from PySide6.QtCore import QTimer
 from leafstudio.core.kernels import compiling_notice
 from leafstudio.gui.model.measurements import measurement_rows
 from leafstudio.gui.model.session import Framing, State
+from leafstudio.gui.model.status_line import StatusLine
 from leafstudio.gui.model.textures import coloring_for
+from leafstudio.gui.model.view_aids import k_label
 from leafstudio.gui.qt.turns import later
 from leafstudio.gui.qt.worker import PIPELINE, Outcome
 
@@ -91,6 +93,7 @@ class Reports:
             self.viewport.set_texture(None, None, draw=False)  # another leaf's image
         self.viewport.show_layers(outcome.layers, frame, bounds, how)
         self.layers.set_available("blade", bool(outcome.layers.get("blade")))  # a bent leaf's
+        self.follow_blade()  # laid flat under the layers drawn there (main_window.py)
         outcome.timings["draw"] = time.perf_counter() - start
         self._stage_timer.stop()
         self._show_timings(outcome)
@@ -145,9 +148,7 @@ class Reports:
             self._show_timings(self.session.shown.outcome)
         if self.session.result is not None:
             if not self.session.message:  # not after a failure's message (Worker._failed)
-                self.status_text.setText(
-                    self.status_text.text() + f" · measurements {1000 * seconds:.0f} ms"
-                )
+                self.status_text.extend(f" · measured in {1000 * seconds:.0f} ms")
             self._show_measurements()
 
     def _on_pipeline_failed(self, kind: str, job_id: int, exc: BaseException) -> None:
@@ -157,16 +158,19 @@ class Reports:
     def _show_timings(self, outcome: Outcome) -> None:
         ms = [f"{name} {1000 * t:.0f} ms" for name, t in outcome.timings.items()]
         total = sum(outcome.timings.values())
-        params = outcome.result.params
-        self.status_text.setStyleSheet("")
-        self.status_text.setText(  # short enough for a projector; each stage's time in the tip
-            f"K={params.k}, grid {params.grid}: shown in {1000 * total:.0f} ms",
-            tip=" · ".join(ms) + " (stages not listed came from the cache)",
-        )
+        result = outcome.result
         request, session = outcome.request.id, self.session
-        warned = (*outcome.result.warnings, *session.side.warnings_of(request))
-        for note in (*session.notes_of(request), *warned):  # the edit's first: it was the user's
-            self.status_text.setText(self.status_text.text() + f" — note: {note}")
+        warned = (*result.warnings, *session.side.warnings_of(request))
+        line = StatusLine(  # short enough for a projector; each stage's time in the tip
+            # the K used, as the view's corner says it: a flat blade fits none, whatever K was
+            # asked (the line said "K=3" beside the corner's "K unused (flat blade)": closing32)
+            f"{k_label(result)}, grid {result.params.grid}: shown in {1000 * total:.0f} ms",
+            # the edit's note first: it was the user's; each whole in the tip (status_line.py)
+            tuple(dict.fromkeys((*session.notes_of(request), *warned))),
+            " · ".join(ms) + " (stages not listed came from the cache)",
+        )
+        self.status_text.setStyleSheet("")
+        self.status_text.show_line(line)
 
     def _on_outline_replaced(self, message: str) -> None:
         """A loaded leaf's first sketch edit replaced its own outline and veins: said on the

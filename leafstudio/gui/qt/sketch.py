@@ -21,7 +21,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import replace
 
-from PySide6.QtCore import Qt
+from PySide6.QtCore import QPoint, Qt
 from PySide6.QtGui import QPalette, QResizeEvent
 from PySide6.QtWidgets import (
     QCheckBox,
@@ -30,6 +30,7 @@ from PySide6.QtWidgets import (
     QHBoxLayout,
     QLabel,
     QPushButton,
+    QToolButton,
     QVBoxLayout,
     QWidget,
 )
@@ -119,13 +120,24 @@ class SketchEditor(QWidget):
         self.outline_note = QLabel(self.view)
         self.outline_note.setWordWrap(True)
         self.outline_note.setStyleSheet(
-            "color: #3d2f00; background: #fff4cc; border: 1px solid #c9a227; padding: 3px"
+            "color: #3d2f00; background: #fff4cc; border: 1px solid #c9a227; padding: 3px; "
+            "padding-right: 22px"  # room for its close control
         )
         # it stays while the sketch draws the leaf: clicks, drags and the wheel go through it to
         # the sketch (it took them: at the window's 1500 x 920 it covers the view's foot, 50 of
         # its 262 pixels, where a click added no point; review32)
         self.outline_note.setAttribute(Qt.WidgetAttribute.WA_TransparentForMouseEvents)
         self.outline_note.hide()
+        # its close control, the one part of it that takes a click: dismissed, the note stays
+        # hidden until it has something new to say (it could not be dismissed, and hid the
+        # sketch's foot while the sketch drew the leaf: closing32)
+        self.outline_close = QToolButton(self.view)
+        self.outline_close.setText("×")
+        self.outline_close.setAutoRaise(True)
+        self.outline_close.setToolTip("Hide this note (the status line's tooltip keeps it)")
+        self.outline_close.clicked.connect(self._dismiss_outline_note)
+        self.outline_close.hide()
+        self._dismissed = ""  # the outline note's text the user closed
         # a new document whose sketch is not known yet (a loaded leaf's comes with its result)
         self.waiting = QLabel("Waiting for the leaf: its sketch shows once it is reconstructed.")
         self.waiting.setParent(self.view)
@@ -219,12 +231,24 @@ class SketchEditor(QWidget):
     def show_outline_note(self, text: str) -> None:
         """Say, over the sketch's foot, that the leaf is drawn by this sketch and no longer by
         the scan's (or file's) own outline and veins (Session.outline_note); "" hides it."""
-        note = self.outline_note
+        note, close = self.outline_note, self.outline_close
         if text != note.text():
             note.setText(text)
-        if text:
+        if not text:  # the leaf's own curves back (an undo), or a new document
+            self._dismissed = ""
+        shown = bool(text) and text != self._dismissed
+        if shown:
             self._over_view(note, foot=True)
-        note.setVisible(bool(text))
+            size = close.sizeHint()
+            close.move(note.geometry().topRight() - QPoint(size.width() - 1, -1))
+            close.raise_()
+        note.setVisible(shown)
+        close.setVisible(shown)
+
+    def _dismiss_outline_note(self) -> None:
+        """The note's close control: hidden while it says the same."""
+        self._dismissed = self.outline_note.text()
+        self.show_outline_note(self._dismissed)
 
     def _set_select_tool(self, on: bool) -> None:
         self.view.select_tool = on

@@ -1,5 +1,5 @@
-"""The status bar's line of text, painted without a layout pass, and the progress of a file
-being read, with Cancel (Busy).
+"""The status bar's line of text, painted without a layout pass, the count of its notes
+(NotesButton), and the progress of a file being read, with Cancel (Busy).
 
 A QLabel asks its layout for new geometry at every `setText`: the status bar is laid out again
 and the main window repaints once more a moment later. In a window holding the 3D view (a
@@ -17,35 +17,56 @@ from PySide6.QtGui import QPainter, QPaintEvent, QPalette
 from PySide6.QtWidgets import (
     QHBoxLayout,
     QLabel,
+    QMessageBox,
     QProgressBar,
     QPushButton,
     QSizePolicy,
+    QToolButton,
     QWidget,
 )
+
+from leafstudio.gui.model.status_line import StatusLine
 
 
 class StatusText(QWidget):
     """A one-line text, elided at the right when too long; `setText`/`text` as a QLabel's, and
-    its colour from the palette (a style sheet's `color` applies)."""
+    its colour from the palette (a style sheet's `color` applies). A result's line comes in
+    parts (`show_line`: gui/model/status_line.py): its head, then its first note, every note
+    in the tooltip; `line_changed` tells the notes button (NotesButton)."""
+
+    line_changed = Signal(object)  # the StatusLine shown
 
     def __init__(self, text: str = "", parent: QWidget | None = None) -> None:
         super().__init__(parent)
-        self._text = text
-        self._tip = ""
+        self._line = StatusLine(text)
         self.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Fixed)
 
     def text(self) -> str:
-        return self._text
+        return self._line.text
+
+    def line(self) -> StatusLine:
+        return self._line
 
     def setText(self, text: str, tip: str = "") -> None:
-        """Show `text`; the tooltip is the whole line, then `tip` (details that would not fit),
-        which a text that extends the line before it (a note added at its end) keeps."""
-        if text != self._text or tip:
-            if not tip and self._text and text.startswith(self._text):
-                tip = self._tip
-            self._text, self._tip = text, tip
-            self.setToolTip(f"{text}\n{tip}" if tip else text)
+        """Show `text`, with no notes; the tooltip is the text, then `tip` (details that would
+        not fit)."""
+        self.show_line(StatusLine(text, details=tip))
+
+    def show_line(self, line: StatusLine) -> None:
+        """Show `line` (repainted only when it changed)."""
+        if line != self._line:
+            self._line = line
+            self.setToolTip(line.tip)
             self.update()
+            self.line_changed.emit(line)
+
+    def add_note(self, note: str) -> None:
+        """A note on what the line says (said once), after those it has."""
+        self.show_line(self._line.noted(note))
+
+    def extend(self, more: str) -> None:
+        """`more` after the line's head, before its notes (the measuring time)."""
+        self.show_line(self._line.extended(more))
 
     def sizeHint(self) -> QSize:
         return QSize(0, self.fontMetrics().height() + 2)
@@ -56,10 +77,43 @@ class StatusText(QWidget):
     def paintEvent(self, event: QPaintEvent) -> None:
         painter = QPainter(self)
         painter.setPen(self.palette().color(QPalette.ColorRole.WindowText))
-        line = self.fontMetrics().elidedText(self._text, Qt.TextElideMode.ElideRight, self.width())
+        text = self._line.text
+        line = self.fontMetrics().elidedText(text, Qt.TextElideMode.ElideRight, self.width())
         painter.drawText(
             self.rect(), Qt.AlignmentFlag.AlignVCenter | Qt.AlignmentFlag.AlignLeft, line
         )
+
+
+class NotesButton(QToolButton):
+    """How many notes the status line has ("3 notes"), at the status bar's right, as napari
+    counts its notifications there; hidden without any. Its tooltip lists them whole, and a
+    click shows them in a box (the line shows the first, cut to its width)."""
+
+    def __init__(self, status: StatusText, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setAutoRaise(True)
+        # the status line's height: a taller button, shown, grew the status bar a pixel and
+        # the sketch view above it re-fitted its drawing (test_drawing.py)
+        self.setFixedHeight(status.sizeHint().height())
+        self._notes: tuple[str, ...] = ()
+        self.box: QMessageBox | None = None  # the last box shown (tests read it)
+        status.line_changed.connect(self._show)
+        self.clicked.connect(self._open)
+        self.hide()
+
+    def _show(self, line: StatusLine) -> None:
+        self._notes = line.notes
+        self.setText(f"⚠ {line.count}" if line.notes else "")
+        self.setToolTip("\n".join(f"• {note}" for note in line.notes))
+        self.setVisible(bool(line.notes))
+
+    def _open(self) -> None:
+        """The notes whole, in a box that does not hold up the window."""
+        box = QMessageBox(QMessageBox.Icon.Information, "Notes", "", parent=self.window())
+        box.setText("\n\n".join(note[:1].upper() + note[1:] for note in self._notes))
+        box.setWindowModality(Qt.WindowModality.NonModal)
+        box.open()
+        self.box = box
 
 
 class Busy(QWidget):

@@ -459,19 +459,23 @@ def test_a_tube_widened_by_a_sketch_edit_stays_a_tube_and_reopens(tmp_path):
 def test_a_pose_past_the_limits_is_refused_and_the_document_kept():
     """`Session.set_bend(Pose(fold=89))` was taken (0.83 of the blade's area), and a roll past
     the closed tube was eased to the tube without a word: the Roll slider then read 1.0 for a
-    blade asked to roll 1.2. Both are refused by name (core/pose_limits.py), the document as
-    it was; a drag's moves before a refused release are one undo step."""
+    blade asked to roll 1.2. Both are refused by name (core/pose_limits.py), in the sliders'
+    terms, the document as it was; a drag's moves before a refused release are one undo step."""
     session, _, sketch = drawn()
     flat = session.leaf
     session.set_bend(Pose(fold=30), final=False)  # a drag ...
     folded = session.leaf
-    with pytest.raises(LeafError, match=r'"fold" 89.*from -80 to 80'):
+    with pytest.raises(LeafError, match=r"^Fold 89 is more than .*Fold goes from -80 to 80 "):
         session.set_bend(Pose(fold=89), final=True)  # ... released past the limit
     assert session.leaf is folded and session.pose == Pose(fold=30)
     assert session.history.index == 2  # Draw, then the drag's fold of 30
     half = blade_half_width(session.leaf, sketch.frame)
-    with pytest.raises(LeafError, match=r'"roll" .*1\.2 half turns'):
+    # in the sliders' terms (closing32: a roll of 18.8 "per unit of the leaf's coordinates")
+    with pytest.raises(LeafError, match=r"^Roll 1\.2 is more .*Roll goes from -1\.01 to 1\.01 "):
         session.set_bend(Pose(fold=30, roll=1.2 * np.pi / half), final=True)
+    assert session.leaf is folded and session.history.index == 2
+    with pytest.raises(LeafError, match=r"^Twist 2\.5 .* goes from -2\.11 to 2\.11 on it \(half"):
+        session.set_bend(Pose(fold=30, twist=2.5 * np.pi), final=True)  # a slider's 2.5
     assert session.leaf is folded and session.history.index == 2
     session.set_bend(Pose(fold=30, roll=np.pi / half), final=True)  # the slider's end: taken
     assert session.pose.roll * half / np.pi == pytest.approx(1.0)

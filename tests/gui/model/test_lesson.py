@@ -111,3 +111,31 @@ def test_a_folded_leafs_lesson_frames_it_laid_flat_and_bent_alike(folded):
     assert alone.hi[1] - alone.lo[1] < width  # the flat blade did not fit
     assert both.lo[1] < folded.polygon[:, 1].min() and both.hi[1] > folded.polygon[:, 1].max()
     assert both.hi[2] - both.lo[2] > 0.95 * (alone.hi[2] - alone.lo[2])  # the fold's height kept
+
+
+def test_a_bent_leafs_step_6_says_its_surface_is_bent_back_beside_the_flat_map():
+    """closing32: step 6's words told of z on the flat blade beside a folded leaf in 3D (its
+    plan is z on the flat blade, its 3D view the mesh bent back, coloured by the same z)."""
+    step = next(s for s in LESSON_STEPS if s.picture == "heights")
+    assert not step.flat and "bent" not in step.words(bent=False)
+    words = step.words(bent=True)
+    assert "flat blade" in words and "bent back" in words and "tanh" in words
+
+
+def test_step_5s_gaussians_have_one_colour_in_the_plan_and_in_3d(folded):
+    """closing32: the plan coloured Gaussian k with tab10's k-th colour, the 3D view with
+    tab10 less its orange: the second hill was orange in the plan and green in 3D."""
+    from matplotlib.colors import to_hex
+    from matplotlib.figure import Figure
+
+    from leafstudio.gui.model.fields import em_pieces
+    from leafstudio.render.step_slides import step_picture
+
+    index = next(i for i, s in enumerate(LESSON_STEPS) if s.picture == "em")
+    ax = Figure().add_subplot()
+    step_picture(ax, folded, index)
+    plan = {to_hex(c) for c in ax.collections[0].get_facecolors()}
+    shown = {p.style["color"] for p in em_pieces(folded) if not p.name.startswith("em:ellipse")}
+    ellipses = {to_hex(p.get_edgecolor()) for p in ax.patches}
+    k = len(folded.em_mixture.weights)
+    assert k >= 2 and plan == shown and ellipses == shown and len(shown) == k

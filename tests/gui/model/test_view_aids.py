@@ -73,3 +73,40 @@ def test_the_measurements_panel_says_k_is_unused_on_a_flat_blade_not_1():
 
     assert leaf_rows(Leaf(boundary, [midrib]))["K"] == "unused (flat blade)"
     assert leaf_rows(demo("nested"))["K"] == "3"
+
+
+def test_the_laid_flat_layer_follows_the_layers_drawn_on_a_bent_leafs_flat_blade():
+    """closing32: a bent leaf's g, p(x) and EM samples are drawn on its flat blade, and the
+    layer laying the leaf flat under them was left off. It comes on with the first of them on
+    a bent leaf and goes with the last, if it came on by itself; the user's own tick stays."""
+    from leafstudio.gui.model.view_aids import BladeFollow
+
+    follow, ticks = BladeFollow(), {"blade": False, "implicit": False, "em": False}
+    assert follow.ticked({**ticks, "implicit": True}, bent=False, changed="implicit") is None
+    ticks["implicit"] = True  # the leaf bent with g on: the result brings the blade
+    assert follow.ticked(ticks, bent=True) is True
+    ticks["blade"] = True
+    ticks["em"] = True
+    assert follow.ticked(ticks, bent=True, changed="em") is None
+    ticks["implicit"] = False
+    assert follow.ticked(ticks, bent=True, changed="implicit") is None  # EM still shows
+    ticks["em"] = False
+    assert follow.ticked(ticks, bent=True, changed="em") is False  # the last off: it goes
+    ticks.update(blade=False, em=True)
+    assert follow.ticked(ticks, bent=True, changed="em") is True
+    ticks["blade"] = False  # the user takes it off: off while EM shows
+    assert follow.ticked(ticks, bent=True, changed="blade") is None
+    assert follow.ticked(ticks, bent=True) is None
+    ticks.update(em=False)
+    assert follow.ticked(ticks, bent=True, changed="em") is None
+    ticks.update(blade=True)  # the user's tick, no field shown: kept when one comes and goes
+    assert follow.ticked(ticks, bent=True, changed="blade") is None
+    for on in (True, False):
+        ticks["em"] = on
+        assert follow.ticked(ticks, bent=True, changed="em") is None
+    ticks.update(blade=False)
+    follow.ticked(ticks, bent=True, changed="blade")
+    ticks["em"] = True
+    assert follow.ticked(ticks, bent=True, changed="em") is True
+    ticks["blade"] = True  # unbent (a flat leaf opened): the blade it ticked goes
+    assert follow.ticked(ticks, bent=False) is False

@@ -105,7 +105,7 @@ def test_a_bend_past_what_the_pose_keeps_is_refused_in_the_window(window, qtbot)
     assert session.state.leaf is leaf and window.last_error_box is None
     bend.changed.emit(Pose(fold=89.0), True)
     box = window.last_error_box
-    assert box is not None and '"fold" 89' in box.text() and "-80 to 80" in box.text()
+    assert box is not None and "Fold 89 " in box.text() and "-80 to 80" in box.text()
     assert session.state.leaf is leaf and session.history.index == steps
     assert bend.sliders["fold"].value() == 0.0
     box.close()

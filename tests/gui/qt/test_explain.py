@@ -81,3 +81,21 @@ def test_a_posed_leaf_is_drawn_unstretched_with_a_note_and_a_flat_blades_k_is_un
     aids.exaggeration.setValue(3.0)  # the drawn leaf bent by the sliders: not stretched either
     assert plotter.actors["mesh"].GetUserMatrix() is None and aids.stretch_note.isVisibleTo(aids)
     aids.exaggeration.setValue(1.0)
+
+
+def test_the_status_line_says_the_k_used_on_a_flat_blade(window, qtbot):
+    """closing32: a flat blade fits no mixture (Result.fitted_k None), yet the status line
+    said "K=3", the K asked for, beside the view's "K unused (flat blade)"."""
+    from leafstudio.gui.model.view_aids import FLAT_K
+
+    wait_result(qtbot, window)
+    assert window.status_text.text().startswith("K = 3,")  # the demo: a mixture of 3
+    t = np.linspace(0, 2 * np.pi, 80, endpoint=False)
+    boundary = np.column_stack([0.5 + 0.5 * np.cos(t), 0.2 * np.sin(t), 0 * t])
+    midrib = np.column_stack([np.linspace(0.02, 0.98, 12), np.zeros(12), np.zeros(12)])
+    window.session.new_document(Leaf(boundary, [midrib]), title="flat")
+    outcome = wait_result(qtbot, window, lambda o: o.result.leaf is window.session.leaf)
+    assert outcome.result.fitted_k is None and window.panel.k.value() == 3
+    qtbot.waitUntil(lambda: "shown in" in window.status_text.text())
+    assert window.status_text.text().startswith(f"{FLAT_K}, grid")
+    assert "K=3" not in window.status_text.text()

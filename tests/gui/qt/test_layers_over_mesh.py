@@ -77,3 +77,26 @@ def test_a_ticked_layer_shows_over_the_mesh(qtbot, lent_window, layer):
     shares = _SHARES[layer]
     assert set(shares) == set(LEAVES)
     assert min(shares.values()) >= CHANGED, shares
+
+
+def test_a_bent_leafs_flat_layers_bring_the_leaf_laid_flat_with_them(window, qtbot):
+    """closing32: a bent leaf's g, p(x) and EM layers are drawn on its flat blade, and the
+    "Bent leaf laid flat" layer, which lines up with them, stayed off. Ticking g on a folded
+    form ticks it; unticking g unticks it."""
+    from leafstudio.core.bend import Pose
+
+    wait_result(qtbot, window)
+    visible = window.viewport.visible
+    window.layers.set_checked("implicit", True)  # on the demo, unbent: nothing laid flat
+    assert not visible["blade"]
+    window.session.set_bend(Pose(fold=45.0))
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.leaf)
+    qtbot.waitUntil(lambda: visible["blade"], timeout=5000)  # the bend's result brings it
+    assert visible["implicit"]
+    assert "blade:outline" in window.viewport.plotter.actors
+    window.layers.set_checked("implicit", False)
+    assert not visible["blade"]
+    window.layers.set_checked("probability", True)
+    assert visible["blade"]
+    window.layers.set_checked("probability", False)
+    assert not visible["blade"]

@@ -289,3 +289,98 @@ def test_the_scans_outline_note_lets_clicks_through_to_the_sketch(scan_window, q
         under, Qt.MouseButton.LeftButton, pos=under.mapFrom(view, note.geometry().center())
     )
     assert under is not note and len(session.state.sketch.boundary) == count + 1
+
+
+def test_the_pose_terms_tips_say_scan_for_a_scan_and_saved_from_one_for_its_project(
+    scan_window, qtbot, tmp_path
+):
+    """closing32: the Forms dock's pose boxes and the Fold/Curl/Roll/Twist sliders, off for a
+    leaf bent by its scan's sheet, said "This scan…" for a project saved from a scan too, where
+    no scan is open."""
+    window = scan_window
+    boxes, sliders = window.forms_panel.pose_boxes, window.bend.sliders
+    tips = [w.toolTip() for w in (*boxes.values(), *sliders.values())]
+    assert all(tip.startswith("This scan is bent") for tip in tips)
+    project = str(tmp_path / "scan.leaf.json")
+    assert window.save_to(project)
+    assert window.open_path(project)
+    state = window.session.state  # saved: its path is the project's already
+    qtbot.waitUntil(lambda: window.session.state.serial != state.serial, timeout=WAIT_MS)
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.leaf)
+    assert window.session.state.path == project and window.session.state.scan is None
+    assert window.session.leaf.bend is not None
+    for widget in (*boxes.values(), *sliders.values()):
+        assert not widget.isEnabled()
+        assert widget.toolTip().startswith("This leaf, saved from a scan, is bent"), widget
+
+
+def test_the_note_over_the_sketch_closes_and_stays_closed_until_it_says_something_new(
+    scan_window, qtbot
+):
+    """closing32: the note over the sketch's foot after a scan's first sketch edit could not
+    be dismissed. Its close control (inside it; the rest of it lets clicks through to the
+    sketch) hides it, further edits keep it hidden; undone back to the scan and redone, it is
+    said anew."""
+    from PySide6.QtTest import QTest
+
+    window, session = scan_window, scan_window.session
+    editor, view = window.editor, window.editor.view
+    note, close = editor.outline_note, editor.outline_close
+    view.selected = (-1, 0)
+    view.delete_selected()
+    assert note.isVisible() and close.isVisible()
+    assert note.geometry().contains(close.geometry())
+    assert note.testAttribute(Qt.WidgetAttribute.WA_TransparentForMouseEvents)
+    QTest.mouseClick(close, Qt.MouseButton.LeftButton)
+    assert not note.isVisible() and not close.isVisible()
+    wait_result(qtbot, window, lambda o: o.result.leaf is session.leaf)
+    view.selected = (-1, 3)
+    view.delete_selected()  # a second edit: still drawn by the sketch, nothing new to say
+    assert session.outline_note and not note.isVisible()
+    window.actions["edit.undo"].trigger()
+    window.actions["edit.undo"].trigger()  # the scan's own curves back: nothing to say
+    assert not session.outline_note and not note.isVisible()
+    window.actions["edit.redo"].trigger()  # replaced again: said again
+    assert note.isVisible() and close.isVisible()
+
+
+def test_a_result_with_many_notes_reads_in_a_window_1280_wide(qtbot, tmp_path):
+    """closing32: with a scan open the status line ran its notes one after another (450
+    characters after a sketch edit), cut at about 150 in a window 1280 wide: the later notes
+    and the measuring time after them were not on screen. The line now says its head (the
+    measuring time in it) and its first note; a button counts the notes, every note whole in
+    its tooltip and in the box it opens."""
+    from PySide6.QtTest import QTest
+
+    window = make_window(qtbot, tmp_path / "settings.ini", FAST)
+    window.resize(1280, 720)
+    t = np.linspace(0, 2 * np.pi, 80, endpoint=False)  # a flat blade: the result notes it
+    boundary = np.column_stack([0.5 + 0.5 * np.cos(t), 0.2 * np.sin(t), 0 * t])
+    midrib = np.column_stack([np.linspace(0.02, 0.98, 12), np.zeros(12), np.zeros(12)])
+    window.session.new_document(Leaf(boundary, [midrib]), title="flat")
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.leaf)
+    status, button = window.status_text, window.notes_button
+    qtbot.waitUntil(lambda: "measured in" in status.text(), timeout=WAIT_MS)
+    first = status.line().notes[0]
+    later = [  # the scan's distances' warnings, as they come (MainWindow._on_side_note)
+        "the surface is 1.0% of the leaf's length from the scan on average (95% of points "
+        "within 2.8%): it does not follow this scan well",
+        "the surface folds back on itself at 0.5% of its edges (creases past 90°), where the "
+        "scan is doubled or its blade curls under: compare it with the scan's points first",
+    ]
+    for note in later:
+        window._on_side_note(note)
+    head, _, rest = status.text().partition(" — ")
+    assert "measured in" in head and rest.lower().startswith(first.lower())
+    shown = status.fontMetrics().elidedText(status.text(), Qt.TextElideMode.ElideRight,
+                                            status.width())  # fmt: skip
+    assert status.width() < 1280 and shown.lower().startswith(f"{head} — {first[:40]}".lower())
+    assert button.isVisible() and button.text().endswith("3 notes")
+    for note in (first, *later):
+        assert note in button.toolTip() and note in status.toolTip()
+    QTest.mouseClick(button, Qt.MouseButton.LeftButton)
+    assert button.box is not None and later[1][1:] in button.box.text()
+    button.box.close()
+    window.status_text.setText("Opening cancelled")  # a message of its own: no notes
+    assert not button.isVisible()
+    close_window(window)
