@@ -119,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
         raise
     # silenced by -q, as form's, extract's and slides' closing lines are (options.summary): it
     # printed all the same (review32b); a failed row's error is said above, the exit code is 1
-    closing(summary(running, time.perf_counter() - start), file=sys.stderr)
+    closing(summary(running, time.perf_counter() - start))
     if scans:
         print(f"leafstudio: batch: {scans} of the inputs look like scans of whole leaves: --scans "
               "extracts and reconstructs them", file=sys.stderr)  # fmt: skip

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -157,7 +156,6 @@ def run_form(args: argparse.Namespace) -> int:
         f"{out}: {form.shape} leaf ({form.apex_term} apex, {form.base_term} base, {form.margin} "
         f"margin, {form.venation_term} venation): {len(leaf.boundary)} boundary points, "
         f"{len(leaf.veins)} vein{'' if len(leaf.veins) == 1 else 's'}",
-        file=sys.stderr,
     )
     return 0
 
@@ -216,6 +214,5 @@ def run_veins(args: argparse.Namespace) -> int:
     summary(
         f"{args.output}: {len(veins)} {args.venation} veins grown inside the outline of "
         f"{Path(args.leaf).name}",
-        file=sys.stderr,
     )
     return 0

@@ -8,7 +8,7 @@ import contextlib
 import logging
 import sys
 from collections.abc import Iterator
-from typing import TYPE_CHECKING, TextIO
+from typing import TYPE_CHECKING
 
 from leafstudio._shared.kernelcache import NOTICE, kernels_cached, mark_cached
 from leafstudio.errors import LeafError, shorten
@@ -22,13 +22,14 @@ EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT = 0, 1, 2
 log = logging.getLogger("leafstudio")
 
 
-def summary(line: str, file: TextIO | None = None) -> None:
-    """A command's closing line (what it wrote), on `file` (default stdout), unless -q: said
-    at the logger's INFO level as reconstruct's notes are, but printed where the command has
-    always printed it (extract's on stdout, which scripts read; form's on stderr). Before,
-    `form -q` and `extract -q` printed it all the same (appreview31)."""
+def summary(line: str) -> None:
+    """A command's closing line (what it wrote) on stderr, unless -q: said at the logger's INFO
+    level as reconstruct's notes are, and on their stream; stdout holds only what a command is
+    asked to print (measure's and compare's tables, reconstruct --against's distances). Before,
+    extract's and slides' were on stdout and form's, veins', photo's and batch's on stderr
+    (assets33), and `form -q` and `extract -q` printed theirs all the same (appreview31)."""
     if log.isEnabledFor(logging.INFO):
-        print(line, file=sys.stdout if file is None else file)
+        print(line, file=sys.stderr)
 
 
 def whole(text: str, low: int, high: int) -> int:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from typing import TYPE_CHECKING
 
 from leafstudio.cli.options import summary
@@ -79,7 +78,6 @@ def run_photo(args: argparse.Namespace) -> int:
         f"; wrote {len(found.leaf.boundary)} "
         f"boundary points and {len(found.leaf.veins)} veins "
         f"({_veins_from(found.veins_from, args.veins)}) to {args.output}",
-        file=sys.stderr,
     )
     return 0
 

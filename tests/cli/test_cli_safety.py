@@ -432,32 +432,6 @@ def test_quiet_hides_warnings_and_verbose_shows_info(tmp_path, capsys):
     assert "K = unused (the blade is flat)" in said and "chosen by BIC" not in said
 
 
-@pytest.mark.parametrize("command", ["form", "extract"])
-def test_quiet_silences_a_commands_closing_line(tmp_path, capsys, command):
-    """`form … -q` and `extract … -q` printed their closing line ("f.leaf.json: ovate leaf
-    (…)", "scan.xyz: blade of … wrote …") all the same (appreview31); -q hides it as it hides
-    reconstruct's notes, and without -q it is still said, where it always was."""
-    from tests.leaves import synthetic_scan
-
-    out = str(tmp_path / "f.leaf.json")
-    if command == "form":
-        args, stream = ["form", "ovate", "-o", out], "err"
-    else:
-        scan = tmp_path / "scan.xyz"
-        np.savetxt(scan, synthetic_scan(seed=4)["blade"])
-        args, stream = ["extract", str(scan), "-o", out, "--points", "150"], "out"
-    assert main(args) == 0
-    said = capsys.readouterr()
-    assert "f.leaf.json" in getattr(said, stream)
-    for quiet in (["-q"], ["-q", "-q"]):
-        assert main([*args, *quiet]) == 0
-        said = capsys.readouterr()
-        assert said.out == "" and said.err == "", (quiet, said)
-    assert main(["-q", *args]) == 0
-    said = capsys.readouterr()
-    assert said.out == "" and said.err == ""
-
-
 @pytest.mark.internal_error
 def test_a_bug_is_one_line_and_debug_shows_its_traceback(monkeypatch, capsys):
     import leafstudio.cli as cli

@@ -36,7 +36,7 @@ def test_slides_writes_a_png_per_step_and_comparison_and_one_pdf(leaf_file, tmp_
     assert first.shape[:2] == (900, 1600) and first.std() > 5 and last.std() > 5
     assert not np.array_equal(iio.imread(pngs[1]), iio.imread(pngs[2]))
     assert (out / "lesson.pdf").stat().st_size > 10_000
-    assert f"{len(LESSON_STEPS) + 2} slides" in capsys.readouterr().out
+    assert f"{len(LESSON_STEPS) + 2} slides" in capsys.readouterr().err
 
 
 def test_slides_to_a_pdf_write_only_the_pdf(leaf_file, tmp_path):
