@@ -21,9 +21,11 @@ linear, cordate reconstructed at grid 64: their mesh's area over the flat blade'
   farthest x: past half a turn a curl is not undone (bend.Pose clips it). A curl of 1.5 per the
   length (3 radians) keeps 1.008-1.051 of the area, against 1.006-1.034 at the sliders' 1; at 2
   (4 radians) the linear blade keeps 0.82.
-- roll, the widest margin's turn |roll| w (w the half width) up to ROLL_SHARE of a half turn:
-  the blade closed into a tube (the sliders' 1) keeps 0.997-1.000 of the area, 1.01 of a half
-  turn 0.988-0.998, 1.05 0.942-0.984 (the margins pile up where the tube closes).
+- roll, the widest margin's turn |roll| w (w the half width) up to ROLL_SHARE of a half turn,
+  the closed tube (the sliders' 1), which keeps 0.997-1.000 of the area: Pose.apply turns no
+  point past half a turn (bend._wrapped), so a roll past it lays the margins beyond on the
+  tube's seam. The limit was 1.01, which lost that strip without a word: a linear blade rolled
+  1.01 half turns kept 0.988 of its area, against 0.998 as a tube (1.05: 0.942-0.984).
 - twist, |twist| x at the apex up to TWIST_TURNS half turns: a twist keeps no size (the sliders'
   half turn gives reniform 1.41 of its area, linear 1.004; a full turn 2.16 and 1.010), but it
   is undone at any angle; a full turn holds a twisted grass blade's.
@@ -53,7 +55,8 @@ from leafstudio.errors import LeafError
 
 FOLD = 80.0  # degrees each way (module docstring)
 MOST_TURN = 0.95 * np.pi  # radians the curl may turn the midrib through at the blade's end
-ROLL_SHARE = 1.01  # half turns the roll may turn the widest margin through (1: a tube)
+ROLL_SHARE = 1.0 + 1e-9  # half turns the roll may turn the widest margin through: the tube
+# (Pose.apply turns no point past it), to the round-off of the blade's measures
 TWIST_TURNS = 2.0  # half turns the twist may turn the apex against the base
 # a pose fitted to curves in 3D (core/unfold.py, its relief on the margin's plane) was searched
 # to 85° each way before FOLD: the projects the app saved then reopen, their fit reproducing

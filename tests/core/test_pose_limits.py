@@ -102,3 +102,21 @@ def test_a_project_posed_past_the_limits_is_not_written(blade, tmp_path):
     with pytest.raises(ls.LeafError, match=r'f\.leaf\.json: .*"fold" 89'):
         ls.save_leaf(leaf, path)
     assert not path.exists()
+
+
+@pytest.mark.parametrize("turn", [1.005, 1.01])
+def test_a_roll_past_the_tube_is_refused_not_laid_on_its_seam(turn):
+    """Pose.apply turns no point past half a turn, but the limit took rolls to 1.01 half
+    turns: the margins past the tube were laid on its seam without a word (a linear blade
+    rolled 1.01 kept 0.988 of its area, 0.998 as a tube). A roll is taken to the tube; the
+    sliders' own tube still is (test_a_pose_within_the_limits_still_reconstructs)."""
+    blade = Form("linear").blade()
+    half = float(np.abs(blade.boundary[:, 1]).max())
+    relief = relief_of(blade.boundary, blade.veins)
+    leaf = _posed(blade, Pose(roll=turn * np.pi / half, relief=relief))
+    said = pose_trouble(leaf.bend, leaf.boundary, list(leaf.veins))
+    assert (
+        said is not None and f"{turn:.3g} half turns" in said and "up to 1 (a closed tube)" in said
+    )
+    tube = _posed(blade, Pose(roll=np.pi / half, relief=relief))
+    assert pose_trouble(tube.bend, tube.boundary, list(tube.veins)) is None
