@@ -21,8 +21,9 @@ ROUND_OFF = 1e-12  # of the mesh's extent: a point this near a crease lies on it
 SAG_ROUNDS = 6  # sag_splits halves the edges that sag too far this many rounds at most (each
 # round a quarter of the sag)
 
-# points onto a surface, with their heights and jets there (bent_curvature.jet_of)
-Lift = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
+# points onto a surface, with their heights and jets there (bent_curvature.jet_of); the (n,)
+# bool flags those on the outline, whose jets are the limits from inside (Result.on_outline)
+Lift = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
 def _extent(points: np.ndarray) -> float:
@@ -237,8 +238,11 @@ def bent_mesh(
         faces, more, bent = sag_splits(points, faces, bend.carry, tolerance, known)
         points, data, bent = carried(points, more), carried_data(data, more), bent[:first]
         plan = plan + more
-    if lift is not None and first < len(points):  # the halvings' points on the surface
-        points[first:], heights, taylor = lift(points[first:])
+    outline = carried_outline(n_outline, len(mesh.points), plan)
+    if lift is not None and first < len(points):  # the halvings' points on the surface, those
+        # on the outline with its limits: without, a linear blade rolled 1 had their mean
+        # curvatures 1.17 off their outline neighbours' (median; the others' 0.016)
+        points[first:], heights, taylor = lift(points[first:], outline[first:])
         if "height" in data:
             data["height"][first:] = heights
         if JET in data:  # the surface's own, not the halved edge's ends' mean
@@ -247,7 +251,6 @@ def bent_mesh(
     carried_points = (
         bend.carry(points) if bent is None else np.vstack([bent, bend.carry(points[first:])])
     )
-    outline = carried_outline(n_outline, len(mesh.points), plan)
     if trimmed and len(used := np.unique(faces)) < len(points):
         index = np.zeros(len(points), dtype=faces.dtype)
         index[used] = np.arange(len(used))

@@ -24,12 +24,13 @@ def _onto_surface(result: Result) -> Lift:
     plane's normal: the points, their heights and their jets (sag_splits' new points, on the
     surface, not on the flat mesh's chord, which the bend stretches: up to 3 times on a folded
     tube; their jets interpolated along the edge moved a crease's curvatures 5% with the leaf's
-    size, where the halvings differ)."""
+    size, where the halvings differ); those flagged in the (n,) bool `margin`, on the outline,
+    the surface's limits from inside, as the mesh's own outline points have them."""
     frame, surface = result.frame, result.surface
 
-    def lift(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def lift(points: np.ndarray, margin: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         xy = frame.to_plane(points)[0]
-        z, grad, hess = surface.derivatives(xy)
+        z, grad, hess = surface.derivatives(xy, margin)
         return frame.to_world(xy, z), z, jet_of(grad, hess)
 
     return lift
