@@ -114,6 +114,9 @@ class MeshAsset:
         The leaf plane's normal (on the normals' side) and its axis along s.
     plane_xy, outline : (n, 2) and (b, 2) float arrays or None
         The vertices, and the leaf's outline if known, in that plane.
+    margin : (n,) bool array or None
+        Which vertices lie on the leaf's margin, if known (a leaf's: Result.on_outline); a
+        trimmed scan's holes are edges of the sheet but no margin (solid.margin_flags).
 
     Examples
     --------
@@ -139,6 +142,7 @@ class MeshAsset:
     plane_xy: np.ndarray | None = None  # (n, 2) the vertices in the leaf plane
     outline: np.ndarray | None = None  # (b, 2) the leaf's outline in that plane, if known
     plane_u: np.ndarray | None = None  # (3,) the leaf plane's axis along s (the tangents' way)
+    margin: np.ndarray | None = None  # (n,) bool: the vertices on the leaf's margin, if known
 
     @property
     def material_name(self) -> str:
@@ -305,9 +309,11 @@ def leaf_asset(result: Result) -> MeshAsset:
     uv = leaf_uvs(result, xy)
     if result.leaf.bend is not None:  # no one plane: tangents from the UVs (the plane's u did
         # not follow a curl), a solid's offsets carried (solid.bent_offsets)
-        return MeshAsset(points, faces, normals, uv, data, plane_xy=xy, outline=result.polygon)
+        return MeshAsset(points, faces, normals, uv, data, plane_xy=xy, outline=result.polygon,
+                         margin=margin)  # fmt: skip
     return MeshAsset(points, faces, normals, uv, data, plane_normal=result.frame.normal,
-                     plane_xy=xy, outline=result.polygon, plane_u=result.frame.u)  # fmt: skip
+                     plane_xy=xy, outline=result.polygon, plane_u=result.frame.u,
+                     margin=margin)  # fmt: skip
 
 
 def outline_distance(polygon: np.ndarray, xy: np.ndarray) -> np.ndarray:

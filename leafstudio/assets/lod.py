@@ -5,8 +5,9 @@ Each level is a quadric decimation of the full mesh (open3d, Garland and Heckber
 quadrics) to half, a quarter, ... of the full mesh's triangles, with the margin's edges weighted
 heavily (BOUNDARY_WEIGHT) so that its vertices stay on the outline and the outline keeps its
 shape. The levels' vertices are then given what the full mesh's have: for a Result, the
-surface's closed-form normals and curvatures at their plane points and the same UV map (one
-texture serves all levels).
+surface's closed-form normals and curvatures at their plane points, the margin's limits at
+those on the margin (a boundary vertex is when the full mesh's nearest boundary vertex is: a
+trimmed scan's holes are no margin), and the same UV map (one texture serves all levels).
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from leafstudio.assets.asset import (
     mesh_normals,
     oriented,
 )
-from leafstudio.assets.solid import boundary_edges
+from leafstudio.assets.solid import boundary_edges, margin_flags
 from leafstudio.core.curvature import surface_curvatures
 from leafstudio.core.trianglemesh import TriangleMesh
 
@@ -52,8 +53,7 @@ def _level(asset: MeshAsset, result: Result | None, points: np.ndarray, faces: n
         level = mesh_asset(TriangleMesh(points, faces))
         return level.with_(faces=oriented(level.faces, level.points, level.normals))
     xy, z = result.on_blade(points)
-    margin = np.zeros(len(points), bool)
-    margin[np.unique(boundary_edges(faces))] = True
+    margin = level_margin(asset, points, faces)
     normals = mesh_normals(result, xy, z, margin)
     data = {"height": z, **surface_curvatures(result.surface, xy, margin)}
     return asset.with_(
@@ -63,7 +63,23 @@ def _level(asset: MeshAsset, result: Result | None, points: np.ndarray, faces: n
         uv=UVMap.around(result.polygon)(xy),
         point_data={k: v for k, v in data.items() if k in SCALARS and k in asset.point_data},
         plane_xy=xy,
+        margin=margin,
     )
+
+
+def level_margin(asset: MeshAsset, points: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(n,) bool: which of a level's (n, 3) `points` (its (m, 3) `faces`) lie on the margin:
+    its boundary vertices whose nearest boundary vertex of the full `asset` does (margin_flags;
+    the decimation keeps the boundary's vertices on it). Every boundary vertex was taken for
+    the margin, a trimmed scan's hole edges too."""
+    from scipy.spatial import cKDTree
+
+    flags = np.zeros(len(points), dtype=bool)
+    rim, full = np.unique(boundary_edges(faces)), np.unique(boundary_edges(asset.faces))
+    if len(rim) and len(full):
+        nearest = cKDTree(asset.points[full]).query(points[rim])[1]
+        flags[rim] = margin_flags(asset)[full[nearest]]
+    return flags
 
 
 def coarser_levels(asset: MeshAsset, result: Result | None, levels: int) -> list[MeshAsset]:

@@ -102,9 +102,23 @@ def boundary_edges(faces: np.ndarray) -> np.ndarray:
     return directed[counts[inverse] == 1]
 
 
+def margin_flags(asset: MeshAsset) -> np.ndarray:
+    """(n,) bool: the asset's vertices on the leaf's margin, where the surface takes its limits
+    from inside (surface.HeightSurface.derivatives): its `margin` when known (a leaf's,
+    Result.on_outline), else every boundary edge's vertices (a bare mesh's). A trimmed scan's
+    holes are edges of the sheet but no margin: sugar beet pot1_7's 185 hole vertices were
+    given the margin's normals (its taper's g = 0 where g is well inside)."""
+    if asset.margin is not None:
+        return np.asarray(asset.margin, dtype=bool)
+    flags = np.zeros(asset.n_points, dtype=bool)
+    flags[np.unique(boundary_edges(asset.faces))] = True
+    return flags
+
+
 def margin_distance(asset: MeshAsset) -> np.ndarray:
     """(n,) each vertex's distance in the leaf plane from the outline (the asset's, else its
-    boundary vertices); 0 on the boundary."""
+    boundary vertices); 0 on the boundary, a hole's edge too: the walls stand on every edge of
+    the sheet (module docstring), a hole's as the outline's."""
     from scipy.spatial import cKDTree
 
     rim = np.unique(boundary_edges(asset.faces))
@@ -197,6 +211,7 @@ def pinches_split(asset: MeshAsset) -> MeshAsset:
         uv=asset.uv[take],
         point_data={k: v[take] for k, v in asset.point_data.items()},
         plane_xy=grown(asset.plane_xy),
+        margin=grown(asset.margin),
     )
 
 
@@ -234,9 +249,7 @@ def bent_offsets(result: Result, asset: MeshAsset, thickness: float = 0.0) -> np
     else:
         xy, height = result.on_blade(asset.points)
     flat_points = result.frame.to_world(xy, height)
-    margin = np.zeros(asset.n_points, dtype=bool)
-    margin[np.unique(boundary_edges(asset.faces))] = True
-    normals = surface_normals(result, xy, margin)
+    normals = surface_normals(result, xy, margin_flags(asset))
     flat = asset.with_(points=flat_points, normals=normals, plane_normal=result.frame.normal,
                        plane_xy=xy, outline=result.polygon)  # fmt: skip
     offset = offsets(flat, 1.0)
@@ -310,5 +323,6 @@ def thicken(
         normals=normals,
         uv=np.vstack([asset.uv, asset.uv]),
         point_data={k: np.concatenate([v, v]) for k, v in asset.point_data.items()},
+        margin=None if asset.margin is None else np.concatenate([asset.margin, asset.margin]),
         solid=True,
     )

@@ -119,3 +119,60 @@ def test_a_trimmed_scans_margin_normals_are_on_its_outline():
     xy, height = result.mesh_on_blade()
     expected = mesh_normals(result, xy, height, on_the_outline(result))
     np.testing.assert_allclose(leaf_asset(result).normals, expected, atol=1e-12)
+
+
+@pytest.fixture(scope="module")
+def holed() -> ls.Result:
+    """A blade on a scan's sheet with a hole torn into its margin and one inside, trimmed out
+    of its bent mesh (tests/core/test_outline_points.notched_blade)."""
+    from tests.core.test_outline_points import notched_leaf
+
+    return ls.reconstruct(notched_leaf(), ls.Params(k=2, grid=64))
+
+
+def _hole_edges(asset_faces: np.ndarray, n: int, margin: np.ndarray) -> np.ndarray:
+    """(n,) bool: the boundary vertices that are not on the margin: the holes' edges."""
+    from leafstudio.assets.solid import boundary_edges
+
+    rim = np.zeros(n, dtype=bool)
+    rim[np.unique(boundary_edges(asset_faces))] = True
+    return rim & ~margin
+
+
+def test_a_solids_normals_at_a_holes_edge_are_the_surfaces_not_the_margins(holed, monkeypatch):
+    """solid.bent_offsets took every boundary vertex for the margin, a trimmed scan's hole
+    edges too (sugar beet pot1_7: 185 vertices at grid 128, their normals 1.8 degrees off,
+    median, 8.3 at most): the surface's limits at the outline (g = 0) where g is well inside.
+    It asks for the margin's limits at the outline's vertices only (Result.on_outline)."""
+    import leafstudio.assets.solid as solid
+
+    asked = []
+    own = solid.surface_normals
+    monkeypatch.setattr(solid, "surface_normals", lambda r, xy, m: asked.append(m) or own(r, xy, m))
+    asset = leaf_asset(holed)
+    solid.thicken(asset, 0.01, lambda a: solid.bent_offsets(holed, a, 0.01))
+    holes = _hole_edges(asset.faces, asset.n_points, holed.on_outline())
+    assert holes.sum() > 20 and len(asked) == 1
+    assert not asked[0][holes].any()
+    np.testing.assert_array_equal(asked[0], holed.on_outline())
+
+
+@pytest.mark.open3d
+def test_a_level_of_detail_gives_a_holes_edge_the_surfaces_normals(holed):
+    """lod.py took every boundary vertex of a level for the margin (sugar beet pot1_7: 80 of
+    level 1's 537, their normals 2.0 degrees off, median): a level's margin is where the full
+    mesh's is, and a hole's edge has the surface's own normal there, as the full mesh has."""
+    from leafstudio.assets.asset import mesh_normals
+    from leafstudio.assets.lod import coarser_levels
+
+    level = coarser_levels(leaf_asset(holed), holed, 1)[0]
+    holes = _hole_edges(level.faces, level.n_points, level.margin)
+    assert holes.sum() > 10 and level.margin.sum() > 20
+    xy, height = holed.on_blade(level.points)
+    inside = mesh_normals(holed, xy, height, np.zeros(level.n_points, dtype=bool))
+    np.testing.assert_allclose(level.normals[holes], inside[holes], atol=1e-12)
+    # and its margin is on the outline, its holes' edges not
+    from leafstudio.assets.asset import outline_distance
+
+    off = outline_distance(holed.polygon, xy) / np.ptp(holed.polygon, axis=0).max()
+    assert off[level.margin].max() < 1e-3 < np.median(off[holes])
