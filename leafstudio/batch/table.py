@@ -224,12 +224,32 @@ class ParquetFormat(JsonLinesFormat):
 
         rows = sorted(self.rows(journal), key=lambda r: str(r.get("input")))
         types = {c: pa.float64() for c in FLOAT_COLUMNS} | {c: pa.int64() for c in INT_COLUMNS}
-        schema = pa.schema([(c, types.get(c, pa.string())) for c in self.columns])
+        fields = [(c, types.get(c, pa.string())) for c in self.columns]
+        schema = pa.schema(fields, metadata={"pandas": _pandas_note(self.columns)})
         table = pa.Table.from_pylist(
             [{c: r.get(c) for c in self.columns} for r in rows], schema=schema
         )
         replace_atomically(path, lambda tmp: pq.write_table(table, tmp))
         journal.unlink(missing_ok=True)
+
+
+def _pandas_note(columns: tuple[str, ...]) -> str:
+    """The note pandas leaves in a Parquet file it writes (pa.Table.from_pandas), for the
+    whole-number columns only: pd.read_parquet reads them as its nullable Int64, as they are
+    written (int64 with nulls), where it took a column with a null (a flat blade's k, a failed
+    row's) for float64: 3.0 and NaN. Arrow's other readers (polars, R) keep them whole as it is."""
+    ints = [
+        {
+            "name": c,
+            "field_name": c,
+            "pandas_type": "int64",
+            "numpy_type": "Int64",
+            "metadata": None,
+        }
+        for c in columns
+        if c in INT_COLUMNS
+    ]
+    return json.dumps({"index_columns": [], "column_indexes": [], "columns": ints})
 
 
 FORMAT_CLASSES: dict[str, type[_LineFormat]] = {

@@ -6,6 +6,7 @@ inputs from conftest.py and read tables with tables.py."""
 from __future__ import annotations
 
 import hashlib
+import importlib.util
 import json
 from pathlib import Path
 
@@ -233,3 +234,26 @@ def test_a_flat_blades_k_is_empty_in_csv_and_null_in_json_not_its_placeholder_1(
     assert by_input["flat"]["k"] == "" and by_input["nested"]["k"] == "3"
     lines = [json.loads(line) for line in (tmp_path / "t.json").read_text().splitlines()]
     assert {Path(r["input"]).stem: r["k"] for r in lines} == {"flat": None, "nested": 3}
+
+
+def test_a_parquet_tables_whole_number_columns_read_back_whole_in_pandas(tmp_path):
+    """A flat blade's k is null (test above): written as Arrow's int64 with a null, pandas'
+    read_parquet took the column for float64 (3.0 and NaN; --resume and Arrow's own readers
+    kept ints). The table carries the note pandas itself writes, so k, grid and scan_points
+    come back as its nullable Int64."""
+    pq = pytest.importorskip("pyarrow.parquet")
+    path = tmp_path / "t.parquet"
+    table = TraitTable(path, scans=True)
+    table.start()
+    for name, k in (("flat.csv", None), ("nested.csv", 3)):
+        table.add({"input": name, "status": "ok", "k": k, "grid": 32, "scan_points": None})
+    table.close()
+    note = json.loads(pq.read_schema(path).metadata[b"pandas"])
+    whole = {c["name"] for c in note["columns"] if c["numpy_type"] == "Int64"}
+    assert whole == {"k", "grid", "scan_points"}
+    assert [r["k"] for r in pq.read_table(path).to_pylist()] == [None, 3]
+    if importlib.util.find_spec("pandas") is not None:  # not a dependency: read where it is
+        import pandas as pd
+
+        frame = pd.read_parquet(path)
+        assert str(frame["k"].dtype) == "Int64" and frame["k"].tolist()[1] == 3
