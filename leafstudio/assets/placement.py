@@ -51,6 +51,9 @@ OFF_MIDRIB = 0.01  # carried: a flat midrib this share of the length off its pos
 # the pose's (forms: 0; poses fitted about the hinge: 0.0004-0.0066 over it; fitted about the
 # margin's plane, folded 75 and rolled 1: 0.012-0.10 over it but linear's 0.003; folded 60 and
 # twisted 1: 0.03-0.49)
+OFF_ROLL = 0.1  # carried: nor is a flat midrib this share of a roll's radius off its pose's
+# (fitted about the margin's plane, folded 75 and rolled 1: 0.23-0.35 of it, 7 shapes, linear's
+# 0.25 at 0.003 of the length; linear folded 45 and rolled 0.5: 0.24; forms and folds: 0)
 LARGEST_LEAF_METRES = 5.0  # no leaf blade is longer (Victoria's pads reach 3 m): units, not metres
 
 
@@ -205,7 +208,10 @@ def _off_its_midrib(bend: Any, midrib: np.ndarray, placement: Placement) -> bool
     chord oblique to both (more than OBLIQUE from either) leaves the terms nothing to say of
     it (a twist fitted as a curl about a turned frame: 28-61°), and so does a midrib more than
     OFF_MIDRIB of the length over the pose's hinge, their heights making up for a term that
-    turns the blade about it (folded 75 and rolled 1: a curl of 0.36)."""
+    turns the blade about it (folded 75 and rolled 1: a curl of 0.36), or along u more than
+    OFF_ROLL of a roll's radius: a narrow blade's roll is tight, and linear folded 75 and
+    rolled 1, its midrib 0.003 of the length over its hinge (0.25 of the roll's radius), was
+    fitted a curl of -0.027 whose turn at the base put +X 1.67° off the chord."""
     off_hinge = getattr(bend, "off_hinge", None)
     if off_hinge is None:
         return False
@@ -215,10 +221,12 @@ def _off_its_midrib(bend: Any, midrib: np.ndarray, placement: Placement) -> bool
     turned = float(np.degrees(np.arctan2(abs(chord[1]), abs(chord[0]))))
     if OBLIQUE < turned < 90.0 - OBLIQUE:
         return True
-    over = float(np.abs(off_hinge(midrib)).max()) / placement.length
+    over = float(np.abs(off_hinge(midrib)).max())
     terms = getattr(bend, "pose", bend)
+    if turned <= OBLIQUE and over * abs(terms.roll) > OFF_ROLL:
+        return True
     about = (terms.fold or terms.roll) if turned <= OBLIQUE else (terms.fold or terms.curl)
-    return bool(over > OFF_MIDRIB and about)
+    return bool(over > OFF_MIDRIB * placement.length and about)
 
 
 def _turn_onto(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -335,6 +335,25 @@ def test_a_pose_fitted_to_curves_is_written_with_its_apex_on_x(pose):
     assert _off_chord(ls.reconstruct(leaf, params), midrib) == pytest.approx(0.12, abs=0.02)
 
 
+def test_a_narrow_blade_folded_and_rolled_saved_as_curves_is_written_with_its_apex_on_x(tmp_path):
+    """linear folded 75 and rolled 1, written as a CSV and reconstructed: its fit's midrib
+    stands 0.003 of the length over the hinge, under placement.OFF_MIDRIB, but a quarter of its
+    tight roll's radius, and the curl of -0.027 the fit made up for it with turned the base's
+    axes: the glb's apex was 1.66 degrees off +X. `form`, then `reconstruct --length`."""
+    from leafstudio.cli import main
+
+    points, glb = tmp_path / "x.csv", tmp_path / "x.glb"
+    assert main(["-q", "form", "linear", "--fold", "75", "--roll", "1", "-o", str(points)]) == 0
+    assert (
+        main(["-q", "reconstruct", str(points), "--grid", "32", "-o", str(glb), "--length", "8cm"])
+        == 0
+    )
+    found = read_points(glb)
+    apex = found[np.argmax(np.linalg.norm(found, axis=1))]
+    assert apex[0] == pytest.approx(0.08, rel=0.01)
+    assert np.degrees(np.arctan2(np.hypot(apex[1], apex[2]), apex[0])) < 0.3
+
+
 def test_a_curl_fitted_to_curves_keeps_the_forms_turn_at_the_base():
     """A curl alone, fitted to a curled form's curves (curl 0.93, no relief: the midrib's own
     relief stands 0.08 over the pose's sheet), is placed as the form is, the blade leaving the
