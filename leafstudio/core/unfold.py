@@ -17,27 +17,15 @@ plane (the app and the commands refuse it), when the hinge explains it a little 
 before (its margin's heights go to the paper's base b(x)); `core/unfolded.py` asks once per
 curves.
 
-Those fits fold about the margin's plane, which shears each half, and a roll made up for it: an
-ovate folded 60° and saved without its pose was fitted fold 61, curl 0.10 and roll -0.54, whose
-flat blade was 43% too large (`leafstudio measure` read it 0.935 wide, with its pose 0.625).
-Once a leaf is to be unfolded, each fit is fitted again with a relief whose hinge is the midrib
-as the pose lays it flat (`_hinge`), so the fold turns each half rigidly about the midrib as a
-form's does (that ovate: fold 59.998, curl 0, roll 0, 0.625 wide), and kept where it lays the
-margin clearly flatter (HINGE_GAIN). Whether to unfold is asked of those only where the fits
-about the margin's plane fall short, and far more strictly (HINGE_EXPLAINED): a fold about the
-midrib's own heights also lays a waved blade's margin flatter (0.19-0.52 of the quadric's rms).
-They fall short on a domed blade folded with its lobes behind the base or folded down: a fold
-about the margin's plane shears it, and a roll makes up for less of that (sagittate folded 60
-left 0.31 of the quadric's rms, cordate 0.21 and its simplest fit more, ovate folded -60 0.66,
-all refused: sagittate measured 0.248 wide against its flat 0.407); the hinge leaves 0.001-0.007.
-A form's dome falls 12-14° from its hinge, and folded hard down the form eases its halves' turn
-(hinge_fold.fold_share); a fit about a hinge turned rigidly was off (ovate folded -75: fitted
--72.2, 1.043 times its flat width). The fit about the hinge is done again with the rise and fall
-of the margin as that fit lays it flat (`_fallen`), until the fold's share of the turn they give
-stays (ovate: -75.03, 1.001). A form rolls each cross-section about its own mean height, 2-8% of
-the length over the margin: a roll alone is fitted again about the sections' means read off the
-curves as the round before laid them flat (`sheeted`, pose_relief.sheet_relief), and asked
-whether to unfold where the others fall short (SHEET_EXPLAINED: a tube a quadric nearly takes).
+Those fits fold about the margin's plane, which shears each half; once a leaf is to be
+unfolded, each fit is fitted again about the midrib's hinge as the pose lays it flat, with the
+margin's rise and fall off it (core/unfold_hinge.py, which says what that changed), and kept
+where it lays the margin clearly flatter (HINGE_GAIN). Whether to unfold is asked of those only
+where the fits about the margin's plane fall short, and far more strictly (HINGE_EXPLAINED).
+A form rolls each cross-section about its own mean height, 2-8% of the length over the margin:
+a roll alone is fitted again about the sections' means read off the curves as the round before
+laid them flat (`sheeted`, pose_relief.sheet_relief), and asked whether to unfold where the
+others fall short (SHEET_EXPLAINED: a tube a quadric nearly takes).
 """
 
 from __future__ import annotations
@@ -51,20 +39,14 @@ from scipy.spatial.transform import Rotation
 
 from leafstudio.core import unfold_checks as checks
 from leafstudio.core.bend import Pose, flat_leaf
-from leafstudio.core.hinge_fold import fold_share
 from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.pose_limits import CURL_SEARCH as CURL_LIMIT  # the curl's, over the length
 from leafstudio.core.pose_limits import FIT_POINTS, fit_bounds  # the fit's points; its roll's
 from leafstudio.core.pose_limits import FOLD as FOLD_LIMIT  # the fold's search range, each way
-from leafstudio.core.pose_relief import (
-    Relief,
-    margin_relief,
-    margin_slopes,
-    relief_of,
-    sheet_relief,
-)
+from leafstudio.core.pose_relief import Relief, relief_of, sheet_relief
 from leafstudio.core.prepare.vein_order import midrib_turned
+from leafstudio.core.unfold_hinge import SHARE_CLOSE, fallen_slopes, hinge_relief, turn_share
 from leafstudio.model import Leaf
 
 EXPLAINED = 0.25  # ... and is unfolded when the fitted pose leaves at most this share of what
@@ -96,7 +78,6 @@ SHEET_ROUNDS = 8  # ... each round reading the sheet off the curves the last lai
 # rolled 0.5 left 8.5e-4, 2.3e-4, 1.1e-4, 5.9e-5 of the length in four
 SHEET_CLOSE = 1e-4  # ... until the sheet moves less than this share of the length,
 SHEET_STALL = 0.9  # ... or the rms falls by less than this (a waved blade's stays)
-HINGE_ROUNDS = 3  # rounds that find a curled midrib's flat heights (_hinge)
 HINGE_GAIN = 0.9  # a fit about the hinge is kept when its rms is at most this share of the
 # fit's about the margin's plane: 0.001-0.30 on the folded test forms, 0.80 on ovate rolled 0.5
 # (its own surface 3.2e-4 -> 2.8e-4 off on average); 0.999 on a rolled grass blade, whose fold of
@@ -104,10 +85,6 @@ HINGE_GAIN = 0.9  # a fit about the hinge is kept when its rms is at most this s
 EASED_FROM = 60.0  # degrees: a fit folded harder than this about the margin's plane is tried
 # about the hinge from its fold alone too (_fit; a form's dome turns rigidly up to 60°): the
 # retry on every fit that gained nothing took a rolled grass blade's fit 1.3 -> 3.6 s of CPU
-FALL_ROUNDS = 6  # rounds that find the flat margin's rise and fall off the hinge (_fallen): on
-# ovate folded -75 at its own pose the fall read 13.36, 13.94, 14.04 and 14.05° (the form's 14.06)
-SHARE_CLOSE = 1e-4  # ... until the fold's share of the turn moves less than this (0.002° of fall
-# at a fold of 75°)
 FALL_FITS = 12  # fits about the hinge, each with the rise and fall the last left (_fit): the
 # fold and curl of lanceolate folded -75 went 75.30, 76.29, 76.07 ... 75.19 in 12 (0.07 s each)
 HINGE_SIZES = (1e-100, 1e100)  # a leaf's extent outside these: its pose has no relief (scipy's
@@ -130,61 +107,6 @@ def _starts(boundary: np.ndarray, midrib: np.ndarray) -> list[np.ndarray]:
         n = n / np.linalg.norm(n)
         frames.append(np.array([u, np.cross(n, u), n]))
     return frames
-
-
-def _hinge(
-    pose: Pose,
-    midrib: np.ndarray,
-    boundary: np.ndarray,
-    slopes: tuple[float, float] = (0.0, 0.0),
-    sheet: tuple[tuple[float, ...], tuple[float, ...]] | None = None,
-) -> Relief | None:
-    """A relief for `pose` (without one) whose hinge is the (m, 3) `midrib`, in the blade's
-    frame, as the pose lays it flat, its sheet the margin's plane (pose_relief.margin_relief)
-    and its rise and fall `slopes` (radians; 0: each half turned rigidly): the fold then turns
-    each half about the midrib, as a form's does, where a pose without a relief sheared it (an
-    ovate folded 60° and saved without its pose was fitted fold 61, curl 0.10 and roll -0.54,
-    which laid its margin flat but its blade out 43% too large).
-    A fold and a roll leave the midrib as it stands; the curl bends about the midrib's mean
-    height as posed (Relief.posed_level), which the hinge's heights set: they are found in
-    HINGE_ROUNDS rounds, each flattening the midrib about the last round's (on ovate folded
-    45° and curled 0.5 the heights moved 2.3e-2, 4.9e-3 and 1.6e-3 of the length; about the
-    margin's plane alone its own surface was 1.3e-3 off at p95, now 2.1e-4). A roll fitted
-    about its sections' own mean heights (`sheet`: knots and means, pose_relief.sheet_relief)
-    keeps them, and flattens the midrib about them. None when the midrib doubles back."""
-    relief = None if sheet is None else sheet_relief(*sheet)
-    for _ in range(HINGE_ROUNDS if pose.curl != 0 else 1):
-        relief = margin_relief(boundary, [replace(pose, relief=relief).flatten(midrib)])
-        if relief is None:
-            return None
-        # each round's too: margin_relief reads them off `boundary` as if it lay flat, and a
-        # hastate folded 75 went 600 steps astray (9.7 s) through a curl's rounds
-        relief = replace(relief, rise=slopes[0], fall=slopes[1])
-        if sheet is not None:
-            relief = replace(relief, knots=sheet[0], mean=sheet[1])
-    return relief
-
-
-def _share(pose: Pose, relief: Relief) -> float:
-    """The share of the relief's turn `pose`'s fold takes about `relief` (bend.Pose)."""
-    return fold_share(pose.fold, relief.fold_room(pose.fold, pose.roll)) if pose.fold else 1.0
-
-
-def _fallen(pose: Pose, boundary: np.ndarray) -> tuple[float, float]:
-    """The rise and the fall (radians) of the (n, 3) `boundary`, in the blade's frame, off
-    `pose`'s relief's hinge as `pose` lays it flat (pose_relief.margin_slopes), in FALL_ROUNDS
-    rounds, each flattening about the last round's: they ease the fold's turn
-    (hinge_fold.fold_share), which sets where the margin lies flat. A round that leaves the
-    share of the turn as it was is the last: a fold of up to 60° turns a form's dome rigidly."""
-    relief = pose.relief
-    for _ in range(FALL_ROUNDS):
-        rise, fall = margin_slopes(relief, replace(pose, relief=relief).flatten(boundary))
-        fallen = replace(relief, rise=rise, fall=fall)
-        same = abs(_share(pose, fallen) - _share(pose, relief)) <= SHARE_CLOSE
-        relief = fallen
-        if same:
-            break
-    return relief.rise, relief.fall
 
 
 def fit_pose(leaf: Leaf) -> PlacedPose | None:
@@ -286,14 +208,14 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
         sheet: tuple | None = None,
     ) -> tuple[PlacedPose, np.ndarray]:
         """The pose of a fit's (7,) `x` in its frame (the (3, 3) `axes` turned), with the
-        hinge's relief (`_hinge`, its rise and fall `slopes`, its roll's `sheet`) when
+        hinge's relief (`hinge_relief`, its rise and fall `slopes`, its roll's `sheet`) when
         `hinged`, and the margin's points in that frame."""
         turned = Rotation.from_rotvec(x[:3]).apply(axes)  # rows u, v, normal
         lift = [0.0, 0.0, x[6] * length]
         blade = points @ turned.T - lift
         pose = Pose(float(x[3]), float(x[4]) / length, float(x[5]) / length)
         if hinged:
-            hinge = _hinge(pose, (midrib - origin) @ turned.T - lift, blade, slopes, sheet)
+            hinge = hinge_relief(pose, (midrib - origin) @ turned.T - lift, blade, slopes, sheet)
             pose = replace(pose, relief=hinge)
         u, v, n = turned
         frame = Frame(origin=origin + x[6] * length * n, u=u, v=v, normal=n)
@@ -342,7 +264,8 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
 
     def hinge_explains(start: tuple) -> bool:
         """Whether a fit about the midrib's hinge leaves at most `hinge_share` of `before`:
-        the fold alone from each frame's folded starts (a fit of one round of `_hinge` a step),
+        the fold alone from each frame's folded starts (a fit of one round of `hinge_relief` a
+        step),
         else all three terms from the fit about the margin's plane's best `start` ((axes, y)):
         on oblanceolate folded -60 that best, fold -31 and roll -24 making up for the shear,
         led the hinge's fit to 0.78 of `before`; the fold alone from -60, to 2e-4."""
@@ -361,7 +284,7 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
     def eased(start: tuple, terms: tuple[int, ...]) -> tuple:
         """A fit of `terms` about the midrib's hinge from `start` ((axes, y)), its halves turned
         rigidly, then again in up to FALL_FITS rounds with the relief's rise and fall as the
-        margin lies flat (`_fallen`), while the share of the fold's turn they give moves: its
+        margin lies flat (`fallen_slopes`), while the share of the fold's turn they give moves: its
         rms, (7,) x, axes and the rise and fall."""
         again, x, axes, y = fits_of(terms, [start], True, HINGE_CALLS)[0]
         slopes = (0.0, 0.0)
@@ -369,9 +292,12 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
             bend, blade = placed(x, axes, True, slopes)
             if bend.pose.relief is None:  # the midrib doubles back: no hinge
                 break
-            fallen = _fallen(bend.pose, blade)
+            fallen = fallen_slopes(bend.pose, blade)
             given = replace(bend.pose.relief, rise=fallen[0], fall=fallen[1])
-            if abs(_share(bend.pose, given) - _share(bend.pose, bend.pose.relief)) <= SHARE_CLOSE:
+            if (
+                abs(turn_share(bend.pose, given) - turn_share(bend.pose, bend.pose.relief))
+                <= SHARE_CLOSE
+            ):
                 break
             slopes = fallen
             again, x, axes, y = fits_of(terms, [(axes, y)], True, HINGE_CALLS, slopes)[0]
@@ -442,7 +368,7 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
     plane = _simplest(fits, length)[0] <= EXPLAINED * before  # the margin's plane explains it
     if not hinged:
         return _simplest(fits, length)[2] if plane else None
-    # each pose found, fitted again folding each half rigidly about the midrib (`_hinge`), is
+    # each pose found, fitted again folding each half rigidly about the midrib (`hinge_relief`), is
     # kept when it lays the margin flatter (a fold's shear, which a roll made up for, is gone);
     # whether the leaf is unfolded at all is the fits' above, or, where they fall short, the
     # hinge's at HINGE_EXPLAINED: the hinge, which follows the midrib's own heights, also lays

@@ -101,7 +101,7 @@ def test_a_midrib_written_apex_first_is_unfolded_from_its_base():
     turned = ls.Leaf(leaf.boundary, [leaf.veins[0][::-1], *leaf.veins[1:]], bend=leaf.bend)
     off, base_first = off_own_surface(turned), off_own_surface(leaf)
     # as near as written base first: 4.6e-5 / 2.2e-4 now that the fitted fold turns each half
-    # about the midrib and the curl bends about the midrib's mean height (unfold._hinge), as
+    # about the midrib and the curl bends about the midrib's mean height (unfold_hinge), as
     # the form's do; 1.8e-4 / 5.4e-4 about the margin's plane, and 2.3e-4 / 1.3e-3 with the
     # hinge's heights read as if the curl bent about that plane (iso26)
     assert off.mean() <= 1.01 * base_first.mean() <= 1e-4
@@ -128,7 +128,7 @@ def test_a_form_folded_down_hard_without_its_pose_is_unfolded_not_refused(shape,
     (the best 0.0107 against 0.25 of 0.0259). A leaf its plane sees side-on is refused as it
     is: any pose that lays it flat now does better. Folded about the margin's plane (sheared),
     these came out 6e-4 to 1.6e-3 of the length off their own surface on average, 5.8e-3 at
-    p95; folded about the midrib's flat heights as the form is (unfold._hinge), 2.9e-6 to
+    p95; folded about the midrib's flat heights as the form is (unfold_hinge), 2.9e-6 to
     2.6e-4, and at most 8.2e-4 at p95."""
     leaf = Form(shape, fold=fold).leaf()
     assert fit_pose(ls.Leaf(leaf.boundary, leaf.veins)) is not None
@@ -172,7 +172,7 @@ def test_a_folded_leaf_without_its_pose_measures_as_wide_as_with_it():
     """Bug hunt (session 26): an ovate folded 60° and saved without its pose (a CSV) measured
     0.935 wide against 0.625: the fitted pose, without a relief, sheared each half and a roll
     of -0.54 made up for it, laying the margin flat but the blade out 43% too large. The fold
-    now turns each half rigidly about the midrib as the pose lays it flat (unfold._hinge)."""
+    now turns each half rigidly about the midrib as the pose lays it flat (unfold_hinge)."""
     posed = Form("ovate", fold=60.0).leaf()
     params = ls.Params(k=3, grid=64)
     with_pose = ls.reconstruct(posed, params).metrics["leaf"]
@@ -245,7 +245,7 @@ def test_a_domed_form_folded_down_hard_without_its_pose_is_unfolded_to_its_flat_
     obovate -33.6 and 0.76. A form's dome falls 12-14° from its hinge, and folded that far down
     the form eases its turn (hinge_fold.fold_share, 0.776 on ovate); the fitted relief had no
     fall and turned rigidly. Its fall is now read off the margin as the pose lays it flat
-    (pose_relief.margin_slopes, unfold._fallen): fitted -75.0 and 1.000 wide. Elliptic stayed
+    (pose_relief.margin_slopes, unfold_hinge): fitted -75.0 and 1.000 wide. Elliptic stayed
     +72.4 and rolled -15, 0.492 of its flat width: the fit about the margin's plane tilted its
     frame 37°, and the fits about the hinge from there went astray; from the frame the margin
     stands on (unfold._starts), -75.05 and 1.000."""
