@@ -350,7 +350,7 @@ def margin_slopes(relief: Relief, boundary: np.ndarray) -> tuple[float, float]:
     `fold_share`). Turned rigidly, a domed blade folded -75 (its margin 12-14° under the
     hinge) was fitted to -72.2 and 1.043 times its flat width (ovate), lanceolate 1.067."""
     clear = np.abs(boundary[:, 1]) > CREASE * np.abs(boundary[:, 1]).max()  # its own: a fitted
-    # relief's half width is the margin's as posed (unfold._hinge), 0.26 of it folded 75°
+    # relief's half width is the margin's as posed (unfold_hinge), 0.26 of it folded 75°
     return _rise_fall(-relief.hinge_height(boundary[clear, 0]), boundary[clear, 1])
 
 

@@ -6,8 +6,8 @@ A leaf's margin and midrib lie on its flat blade (the relief rides on the side v
 curl or roll lifts them off any plane, and the boundary's PCA plane then sees a folded or curled
 blade side-on (a fold of 75°: the mesh 5% of the length off the form's own surface on average).
 `fit_pose` finds the blade's frame (the base at the midrib's base end, u along it) and the
-`Pose` (fold, curl, roll) whose `flatten` brings the margin and the midrib nearest one plane, by
-least squares over the frame's rotation and the pose's three terms. The leaf is unfolded only
+`Pose` (fold, curl, roll, twist) whose `flatten` brings the margin and the midrib nearest one
+plane, by least squares over the frame's rotation and the pose's terms. The leaf is unfolded only
 when its margin is well off a plane, or off the best quadratic height field over it (a fold
 down and a roll up), and the pose lays it much flatter than that height field would, or, when
 that plane sees it side-on (a whole vein outside the outline there: the pipeline would refuse it
@@ -17,27 +17,22 @@ plane (the app and the commands refuse it), when the hinge explains it a little 
 before (its margin's heights go to the paper's base b(x)); `core/unfolded.py` asks once per
 curves.
 
-Those fits fold about the margin's plane, which shears each half, and a roll made up for it: an
-ovate folded 60° and saved without its pose was fitted fold 61, curl 0.10 and roll -0.54, whose
-flat blade was 43% too large (`leafstudio measure` read it 0.935 wide, with its pose 0.625).
-Once a leaf is to be unfolded, each fit is fitted again with a relief whose hinge is the midrib
-as the pose lays it flat (`_hinge`), so the fold turns each half rigidly about the midrib as a
-form's does (that ovate: fold 59.998, curl 0, roll 0, 0.625 wide), and kept where it lays the
-margin clearly flatter (HINGE_GAIN). Whether to unfold is asked of those only where the fits
-about the margin's plane fall short, and far more strictly (HINGE_EXPLAINED): a fold about the
-midrib's own heights also lays a waved blade's margin flatter (0.19-0.52 of the quadric's rms).
-They fall short on a domed blade folded with its lobes behind the base or folded down: a fold
-about the margin's plane shears it, and a roll makes up for less of that (sagittate folded 60
-left 0.31 of the quadric's rms, cordate 0.21 and its simplest fit more, ovate folded -60 0.66,
-all refused: sagittate measured 0.248 wide against its flat 0.407); the hinge leaves 0.001-0.007.
-A form's dome falls 12-14° from its hinge, and folded hard down the form eases its halves' turn
-(hinge_fold.fold_share); a fit about a hinge turned rigidly was off (ovate folded -75: fitted
--72.2, 1.043 times its flat width). The fit about the hinge is done again with the rise and fall
-of the margin as that fit lays it flat (`_fallen`), until the fold's share of the turn they give
-stays (ovate: -75.03, 1.001). A form rolls each cross-section about its own mean height, 2-8% of
-the length over the margin: a roll alone is fitted again about the sections' means read off the
-curves as the round before laid them flat (`sheeted`, pose_relief.sheet_relief), and asked
-whether to unfold where the others fall short (SHEET_EXPLAINED: a tube a quadric nearly takes).
+Those fits fold about the margin's plane, which shears each half; once a leaf is to be
+unfolded, each fit is fitted again about the midrib's hinge as the pose lays it flat, with the
+margin's rise and fall off it (core/unfold_hinge.py, which says what that changed), and kept
+where it lays the margin clearly flatter (HINGE_GAIN). Whether to unfold is asked of those only
+where the fits about the margin's plane fall short, and far more strictly (HINGE_EXPLAINED).
+A form rolls each cross-section about its own mean height, 2-8% of the length over the margin:
+a roll alone is fitted again about the sections' means read off the curves as the round before
+laid them flat (`sheeted`, pose_relief.sheet_relief), and asked whether to unfold where the
+others fall short (SHEET_EXPLAINED: a tube a quadric nearly takes).
+
+The twist (bend.Pose's: each cross-section turned about the midrib by twist · x) is fitted only
+where no pose without it lays the margin flat (TWIST_FROM), over the same subsets with the twist
+added (TWISTED), and kept where it lays it clearly flatter (TWIST_GAIN): without it an ovate
+folded 60 and twisted 1, saved as a CSV, was fitted a curl of 1.2 in a turned frame and came back
+1.28 long; cordate so posed was fitted a roll and refused (a vein outside the outline), ovate
+twisted 1 refused (its outline crossing itself). A leaf laid flat without it is fitted as before.
 """
 
 from __future__ import annotations
@@ -51,20 +46,15 @@ from scipy.spatial.transform import Rotation
 
 from leafstudio.core import unfold_checks as checks
 from leafstudio.core.bend import Pose, flat_leaf
-from leafstudio.core.hinge_fold import fold_share
 from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame, fit_frame
 from leafstudio.core.pose_limits import CURL_SEARCH as CURL_LIMIT  # the curl's, over the length
 from leafstudio.core.pose_limits import FIT_POINTS, fit_bounds  # the fit's points; its roll's
 from leafstudio.core.pose_limits import FOLD as FOLD_LIMIT  # the fold's search range, each way
-from leafstudio.core.pose_relief import (
-    Relief,
-    margin_relief,
-    margin_slopes,
-    relief_of,
-    sheet_relief,
-)
+from leafstudio.core.pose_limits import TWIST_TURNS as TWIST_HALVES  # the loader's twist, at most
+from leafstudio.core.pose_relief import Relief, relief_of, sheet_relief
 from leafstudio.core.prepare.vein_order import midrib_turned
+from leafstudio.core.unfold_hinge import SHARE_CLOSE, fallen_slopes, hinge_relief, turn_share
 from leafstudio.model import Leaf
 
 EXPLAINED = 0.25  # ... and is unfolded when the fitted pose leaves at most this share of what
@@ -73,6 +63,23 @@ FOLDS = (0.0, 60.0, -60.0)  # the fold's first guesses
 # fold, curl, roll (0, 1, 2): all three first (a leaf no pose explains is left after one fit),
 # then the fewer that may do as well
 TERMS = ((0, 1, 2), (0,), (1,), (2,), (0, 1))
+TWISTED = ((0, 1, 3), (3,), (0, 3), (1, 3))  # ... then with the twist (3), the same way. Not a
+# roll and a twist together: with (2, 3) and a twist's start at 0, a leaf no pose explains (four
+# waved blades, reniform curled -1) took 1.6-2.1 times the Pose.flatten calls it took without a
+# twist, without them 1.4-1.9 (/work/notes/unfold33/probe_cost.py)
+TWIST_FROM = 1e-3  # the twist is fitted when no pose without it lays the margin within this
+# share of the length of flat (rms): the 17 untwisted posed forms of csv_traits.py were left
+# 3e-13-6e-4 (ovate folded 75 and curled 1) but for linear rolled 1 (1.3e-3) and cordate folded
+# 60 and rolled 0.5 (2.0e-3), which the twist left as they were; twisted forms 1.7e-3
+# (lanceolate curled 0.6, twisted 0.5), 0.023-0.025 (ovate and cordate folded 60, twisted 1), or
+# none (ovate, linear twisted 1, elliptic folded 30 and twisted 0.5)
+TWIST_GAIN = 0.5  # ... and kept when it lays it flatter than this share of their best: twisted
+# forms 1e-3-0.04 of it; the two untwisted past TWIST_FROM were given no twisted fit
+TWISTS = (2.0, -2.0)  # the twist's first guesses, radians over the outline's diagonal: from 0
+# and 1 the fit of ovate folded 60 and twisted 1 (pi over its length) went to a roll of 2.4; the
+# untwisted pass has tried 0
+TWIST_LIMIT = TWIST_HALVES * np.pi  # the twist's search, radians over that diagonal each way:
+# the apex, no farther than the diagonal from the base, turns at most what the loader takes
 SIMPLER = 1.5  # fewer terms are taken when they leave at most this much more than all three
 CLOSE = 2e-4  # ... plus this share of the length
 HINGE_EXPLAINED = 0.05  # a leaf the fits about the margin's plane leave unexplained is unfolded
@@ -96,7 +103,6 @@ SHEET_ROUNDS = 8  # ... each round reading the sheet off the curves the last lai
 # rolled 0.5 left 8.5e-4, 2.3e-4, 1.1e-4, 5.9e-5 of the length in four
 SHEET_CLOSE = 1e-4  # ... until the sheet moves less than this share of the length,
 SHEET_STALL = 0.9  # ... or the rms falls by less than this (a waved blade's stays)
-HINGE_ROUNDS = 3  # rounds that find a curled midrib's flat heights (_hinge)
 HINGE_GAIN = 0.9  # a fit about the hinge is kept when its rms is at most this share of the
 # fit's about the margin's plane: 0.001-0.30 on the folded test forms, 0.80 on ovate rolled 0.5
 # (its own surface 3.2e-4 -> 2.8e-4 off on average); 0.999 on a rolled grass blade, whose fold of
@@ -104,10 +110,6 @@ HINGE_GAIN = 0.9  # a fit about the hinge is kept when its rms is at most this s
 EASED_FROM = 60.0  # degrees: a fit folded harder than this about the margin's plane is tried
 # about the hinge from its fold alone too (_fit; a form's dome turns rigidly up to 60°): the
 # retry on every fit that gained nothing took a rolled grass blade's fit 1.3 -> 3.6 s of CPU
-FALL_ROUNDS = 6  # rounds that find the flat margin's rise and fall off the hinge (_fallen): on
-# ovate folded -75 at its own pose the fall read 13.36, 13.94, 14.04 and 14.05° (the form's 14.06)
-SHARE_CLOSE = 1e-4  # ... until the fold's share of the turn moves less than this (0.002° of fall
-# at a fold of 75°)
 FALL_FITS = 12  # fits about the hinge, each with the rise and fall the last left (_fit): the
 # fold and curl of lanceolate folded -75 went 75.30, 76.29, 76.07 ... 75.19 in 12 (0.07 s each)
 HINGE_SIZES = (1e-100, 1e100)  # a leaf's extent outside these: its pose has no relief (scipy's
@@ -132,61 +134,6 @@ def _starts(boundary: np.ndarray, midrib: np.ndarray) -> list[np.ndarray]:
     return frames
 
 
-def _hinge(
-    pose: Pose,
-    midrib: np.ndarray,
-    boundary: np.ndarray,
-    slopes: tuple[float, float] = (0.0, 0.0),
-    sheet: tuple[tuple[float, ...], tuple[float, ...]] | None = None,
-) -> Relief | None:
-    """A relief for `pose` (without one) whose hinge is the (m, 3) `midrib`, in the blade's
-    frame, as the pose lays it flat, its sheet the margin's plane (pose_relief.margin_relief)
-    and its rise and fall `slopes` (radians; 0: each half turned rigidly): the fold then turns
-    each half about the midrib, as a form's does, where a pose without a relief sheared it (an
-    ovate folded 60° and saved without its pose was fitted fold 61, curl 0.10 and roll -0.54,
-    which laid its margin flat but its blade out 43% too large).
-    A fold and a roll leave the midrib as it stands; the curl bends about the midrib's mean
-    height as posed (Relief.posed_level), which the hinge's heights set: they are found in
-    HINGE_ROUNDS rounds, each flattening the midrib about the last round's (on ovate folded
-    45° and curled 0.5 the heights moved 2.3e-2, 4.9e-3 and 1.6e-3 of the length; about the
-    margin's plane alone its own surface was 1.3e-3 off at p95, now 2.1e-4). A roll fitted
-    about its sections' own mean heights (`sheet`: knots and means, pose_relief.sheet_relief)
-    keeps them, and flattens the midrib about them. None when the midrib doubles back."""
-    relief = None if sheet is None else sheet_relief(*sheet)
-    for _ in range(HINGE_ROUNDS if pose.curl != 0 else 1):
-        relief = margin_relief(boundary, [replace(pose, relief=relief).flatten(midrib)])
-        if relief is None:
-            return None
-        # each round's too: margin_relief reads them off `boundary` as if it lay flat, and a
-        # hastate folded 75 went 600 steps astray (9.7 s) through a curl's rounds
-        relief = replace(relief, rise=slopes[0], fall=slopes[1])
-        if sheet is not None:
-            relief = replace(relief, knots=sheet[0], mean=sheet[1])
-    return relief
-
-
-def _share(pose: Pose, relief: Relief) -> float:
-    """The share of the relief's turn `pose`'s fold takes about `relief` (bend.Pose)."""
-    return fold_share(pose.fold, relief.fold_room(pose.fold, pose.roll)) if pose.fold else 1.0
-
-
-def _fallen(pose: Pose, boundary: np.ndarray) -> tuple[float, float]:
-    """The rise and the fall (radians) of the (n, 3) `boundary`, in the blade's frame, off
-    `pose`'s relief's hinge as `pose` lays it flat (pose_relief.margin_slopes), in FALL_ROUNDS
-    rounds, each flattening about the last round's: they ease the fold's turn
-    (hinge_fold.fold_share), which sets where the margin lies flat. A round that leaves the
-    share of the turn as it was is the last: a fold of up to 60° turns a form's dome rigidly."""
-    relief = pose.relief
-    for _ in range(FALL_ROUNDS):
-        rise, fall = margin_slopes(relief, replace(pose, relief=relief).flatten(boundary))
-        fallen = replace(relief, rise=rise, fall=fall)
-        same = abs(_share(pose, fallen) - _share(pose, relief)) <= SHARE_CLOSE
-        relief = fallen
-        if same:
-            break
-    return relief.rise, relief.fall
-
-
 def fit_pose(leaf: Leaf) -> PlacedPose | None:
     """The bend that lays `leaf`'s margin and midrib flat, or None when the leaf is flat enough
     as it is or no pose explains its bend (module docstring).
@@ -199,7 +146,7 @@ def fit_pose(leaf: Leaf) -> PlacedPose | None:
     Returns
     -------
     PlacedPose or None
-        The fitted fold, curl and roll in the blade's frame (base at the midrib's base end:
+        The fitted fold, curl, roll and twist in the blade's frame (base at the midrib's base end:
         vein_order.midrib_turned).
     """
     if leaf.bend is not None or not leaf.veins or len(leaf.veins[0]) < 3:
@@ -223,7 +170,7 @@ def fit_pose(leaf: Leaf) -> PlacedPose | None:
     relief = None if pose.relief is None else pose.relief.scaled(2 * half)
     return _upright(
         PlacedPose(
-            Pose(pose.fold, pose.curl / (2 * half), pose.roll / (2 * half), relief=relief),
+            Pose(pose.fold, *(t / (2 * half) for t in (pose.curl, pose.roll, pose.twist)), relief),
             Frame(
                 origin=centre + 2 * half * frame.origin, u=frame.u, v=frame.v, normal=frame.normal
             ),
@@ -236,9 +183,10 @@ def _upright(bend: PlacedPose, leaf: Leaf) -> PlacedPose:
     """`bend`, the same bend of `leaf`, in the frame whose normal is the one the flat blade's
     own plane takes (plane.fit_frame: toward its veins), as the app finds it again (a sketch's
     frame, placed.blade_frame): turned half about the midrib when the fit's normal, whichever
-    way its start pointed, is the other (fold, curl, roll and relief negated; the same points
-    to the last bit). An ovate folded 45 and curled 0.5 was fitted fold -45 and curl -0.5 about
-    a normal down, and its sketch's first edit flipped the leaf over (0.82 of its length)."""
+    way its start pointed, is the other (fold, curl, roll and relief negated; the twist, a turn
+    about the midrib as that half turn is, kept; the same points to the last bit). An ovate
+    folded 45 and curled 0.5 was fitted fold -45 and curl -0.5 about a normal down, and its
+    sketch's first edit flipped the leaf over (0.82 of its length)."""
     flat = flat_leaf(Leaf(leaf.boundary, leaf.veins, bend=bend))
     if fit_frame(flat.boundary, flat.vein_points).normal @ bend.frame.normal >= 0:
         return bend
@@ -285,24 +233,25 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
         slopes: tuple[float, float] = (0.0, 0.0),
         sheet: tuple | None = None,
     ) -> tuple[PlacedPose, np.ndarray]:
-        """The pose of a fit's (7,) `x` in its frame (the (3, 3) `axes` turned), with the
-        hinge's relief (`_hinge`, its rise and fall `slopes`, its roll's `sheet`) when
+        """The pose of a fit's (8,) `x` in its frame (the (3, 3) `axes` turned), with the
+        hinge's relief (`hinge_relief`, its rise and fall `slopes`, its roll's `sheet`) when
         `hinged`, and the margin's points in that frame."""
         turned = Rotation.from_rotvec(x[:3]).apply(axes)  # rows u, v, normal
-        lift = [0.0, 0.0, x[6] * length]
+        lift = [0.0, 0.0, x[7] * length]
         blade = points @ turned.T - lift
-        pose = Pose(float(x[3]), float(x[4]) / length, float(x[5]) / length)
+        pose = Pose(float(x[3]), *(float(t) / length for t in x[4:7]))  # fold; curl, roll, twist
         if hinged:
-            hinge = _hinge(pose, (midrib - origin) @ turned.T - lift, blade, slopes, sheet)
+            hinge = hinge_relief(pose, (midrib - origin) @ turned.T - lift, blade, slopes, sheet)
             pose = replace(pose, relief=hinge)
         u, v, n = turned
-        frame = Frame(origin=origin + x[6] * length * n, u=u, v=v, normal=n)
+        frame = Frame(origin=origin + x[7] * length * n, u=u, v=v, normal=n)
         return PlacedPose(pose, frame), blade
 
     def full(y: np.ndarray, terms: tuple[int, ...]) -> np.ndarray:
-        """(7,) the rotation, fold, curl, roll and the base's height from a fit's (4 + k,)."""
-        x = np.zeros(7)
-        x[:3], x[6] = y[:3], y[3]
+        """(8,) the rotation, fold, curl, roll, twist and the base's height from a fit's
+        (4 + k,)."""
+        x = np.zeros(8)
+        x[:3], x[7] = y[:3], y[3]
         x[[3 + t for t in terms]] = y[4:]
         return x
 
@@ -315,10 +264,10 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
         about: Relief | None = None,
     ) -> list[tuple]:
         """Fits of `terms` from `starts` ((axes, (4 + k,) y) each), best first: each its
-        margin's rms off the flat blade's plane, (7,) x, axes and (4 + k,) y; each fit stops
+        margin's rms off the flat blade's plane, (8,) x, axes and (4 + k,) y; each fit stops
         after `most_calls` evaluations when given; about a hinge of rise and fall `slopes` when
         `hinged`, or bent about the relief `about` when given (a roll alone: `sheeted`)."""
-        hi = [np.pi] * 3 + [1.0] + [(FOLD_LIMIT, CURL_LIMIT, most)[t] for t in terms]
+        hi = [np.pi] * 3 + [1.0] + [(FOLD_LIMIT, CURL_LIMIT, most, TWIST_LIMIT)[t] for t in terms]
         found = []
         for axes, y0 in starts:
 
@@ -340,18 +289,24 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
                 return rms, terms, bend, axes, y
         return None
 
-    def hinge_explains(start: tuple) -> bool:
+    def hinge_explains(start: tuple, terms: tuple[int, ...]) -> bool:
         """Whether a fit about the midrib's hinge leaves at most `hinge_share` of `before`:
-        the fold alone from each frame's folded starts (a fit of one round of `_hinge` a step),
-        else all three terms from the fit about the margin's plane's best `start` ((axes, y)):
-        on oblanceolate folded -60 that best, fold -31 and roll -24 making up for the shear,
-        led the hinge's fit to 0.78 of `before`; the fold alone from -60, to 2e-4."""
+        the fold alone from each frame's folded starts (a fit of one round of `hinge_relief` a
+        step; not for twisted `terms`), else `terms` from the fit about the margin's plane's
+        best `start` ((axes, y)): on oblanceolate folded -60 that best, fold -31 and roll -24
+        making up for the shear, led the hinge's fit to 0.78 of `before`; the fold alone from
+        -60, to 2e-4."""
         frames = itertools.product(_starts(boundary, midrib), FOLDS[1:])
         starts = [(axes, np.array([0.0] * 4 + [fold])) for axes, fold in frames]
-        if fits_of((0,), starts, True, HINGE_CALLS)[0][0] <= hinge_share * before:
+        if (
+            3 not in terms
+            and fits_of((0,), starts, True, HINGE_CALLS)[0][0] <= hinge_share * before
+        ):
             return True
-        if fits_of((0, 1, 2), [start], True, HINGE_CALLS)[0][0] <= hinge_share * before:
+        if fits_of(terms, [start], True, HINGE_CALLS)[0][0] <= hinge_share * before:
             return True
+        if 3 in terms:
+            return False
         # else a roll alone about each section's own mean height, as a form rolls: about the
         # margin's plane, oblong rolled 0.5 was left 0.82 of `before` (8.8e-3 of the length off
         # its own surface at p95 as a height field), about its sections 0.011 (3.5e-5)
@@ -361,17 +316,20 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
     def eased(start: tuple, terms: tuple[int, ...]) -> tuple:
         """A fit of `terms` about the midrib's hinge from `start` ((axes, y)), its halves turned
         rigidly, then again in up to FALL_FITS rounds with the relief's rise and fall as the
-        margin lies flat (`_fallen`), while the share of the fold's turn they give moves: its
-        rms, (7,) x, axes and the rise and fall."""
+        margin lies flat (`fallen_slopes`), while the share of the fold's turn they give moves: its
+        rms, (8,) x, axes and the rise and fall."""
         again, x, axes, y = fits_of(terms, [start], True, HINGE_CALLS)[0]
         slopes = (0.0, 0.0)
         for _ in range(FALL_FITS):
             bend, blade = placed(x, axes, True, slopes)
             if bend.pose.relief is None:  # the midrib doubles back: no hinge
                 break
-            fallen = _fallen(bend.pose, blade)
+            fallen = fallen_slopes(bend.pose, blade)
             given = replace(bend.pose.relief, rise=fallen[0], fall=fallen[1])
-            if abs(_share(bend.pose, given) - _share(bend.pose, bend.pose.relief)) <= SHARE_CLOSE:
+            if (
+                abs(turn_share(bend.pose, given) - turn_share(bend.pose, bend.pose.relief))
+                <= SHARE_CLOSE
+            ):
                 break
             slopes = fallen
             again, x, axes, y = fits_of(terms, [(axes, y)], True, HINGE_CALLS, slopes)[0]
@@ -411,85 +369,107 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
         if terms not in plain:
             folds = FOLDS if 0 in terms else (0.0,)
             rolls = (0.0, most / 2, -most / 2) if 2 in terms else (0.0,)
+            twists = TWISTS if 3 in terms else (0.0,)
             starts = []
-            for axes, fold, roll in itertools.product(_starts(boundary, midrib), folds, rolls):
-                starts.append((axes, np.array([0.0] * 4 + [(fold, 0.0, roll)[t] for t in terms])))
+            frames = itertools.product(_starts(boundary, midrib), folds, rolls, twists)
+            for axes, fold, roll, twist in frames:
+                guess = [(fold, 0.0, roll, twist)[t] for t in terms]
+                starts.append((axes, np.array([0.0] * 4 + guess)))
             plain[terms] = fits_of(terms, starts)
         return plain[terms]
 
-    tried = []  # (terms, its fits_of, best first) per subset of the pose's terms
-    for terms in TERMS:
-        found = found_of(terms)
-        # a domed blade folded about its midrib is not a fold about the margin's plane: that
-        # fit's shear left 0.31 of the quadric's rms on sagittate folded 60, 0.66 on ovate
-        # folded -60; the fold about the hinge leaves 0.0066 and 0.0046 (a waved blade's 0.19
-        # or more). Where the plane's fit falls short, the hinge decides (HINGE_EXPLAINED)
-        explained = found[0][0] <= EXPLAINED * before
-        if len(terms) == 3 and not (explained or (hinged and hinge_explains(found[0][2:]))):
+    def settle(sets: tuple[tuple[int, ...], ...]) -> tuple | None:
+        """The fit over the subsets `sets` of the pose's terms (TERMS or TWISTED), the first
+        asking whether the leaf is unfolded at all: (rms, terms, bend, axes, y), or None."""
+        tried = []  # (terms, its fits_of, best first) per subset of the pose's terms
+        for terms in sets:
+            found = found_of(terms)
+            # a domed blade folded about its midrib is not a fold about the margin's plane: that
+            # fit's shear left 0.31 of the quadric's rms on sagittate folded 60, 0.66 on ovate
+            # folded -60; the fold about the hinge leaves 0.0066 and 0.0046 (a waved blade's 0.19
+            # or more). Where the plane's fit falls short, the hinge decides (HINGE_EXPLAINED)
+            explained = found[0][0] <= EXPLAINED * before
+            if terms == sets[0] and not (
+                explained or (hinged and hinge_explains(found[0][2:], terms))
+            ):
+                return None
+            tried.append((terms, found))
+        # each subset's best start, if it lies flat; when none does, the best start of each that
+        # does: which start was best turns on round-off (an ovate folded -75, written to a CSV of 9
+        # digits, 5e-10 off, was refused; orbicular and reniform folded -75 were refused always).
+        # Not the best that lies flat always: rolled tubes then took three terms where a roll alone
+        # lies flat nearer their own surface (linear roll 1: 7.6e-4 off it on average, not 1.8e-4)
+        for tries in (1, None):
+            fits = [f for terms, found in tried if (f := flat_fit(found[:tries], terms))]
+            if fits:
+                break
+        if not fits:
             return None
-        tried.append((terms, found))
-    # each subset's best start, if it lies flat; when none does, the best start of each that
-    # does: which start was best turns on round-off (an ovate folded -75, written to a CSV of 9
-    # digits, 5e-10 off, was refused; orbicular and reniform folded -75 were refused always).
-    # Not the best that lies flat always: rolled tubes then took three terms where a roll alone
-    # lies flat nearer their own surface (linear roll 1: 7.6e-4 off it on average, not 1.8e-4)
-    for tries in (1, None):
-        fits = [f for terms, found in tried if (f := flat_fit(found[:tries], terms))]
-        if fits:
-            break
-    if not fits:
-        return None
-    plane = _simplest(fits, length)[0] <= EXPLAINED * before  # the margin's plane explains it
-    if not hinged:
-        return _simplest(fits, length)[2] if plane else None
-    # each pose found, fitted again folding each half rigidly about the midrib (`_hinge`), is
-    # kept when it lays the margin flatter (a fold's shear, which a roll made up for, is gone);
-    # whether the leaf is unfolded at all is the fits' above, or, where they fall short, the
-    # hinge's at HINGE_EXPLAINED: the hinge, which follows the midrib's own heights, also lays
-    # a waved flat blade's margin flatter than the quadric (linear, wave 0.1), never so flat
-    for i, (rms, terms, _, axes, y) in enumerate(fits):
-        if terms == (2,):  # a roll alone bends about the sheet, z = 0 with a relief or without
-            continue
-        again, x, axes, slopes = eased((axes, y), terms)
-        hard = 0 in terms and abs(y[4]) > EASED_FROM  # y[4]: the fold, terms in order
-        if again > HINGE_GAIN * rms and hard and len(terms) > 1:  # from its fold alone:
-            # a roll made up for the shear, and obovate folded -75 fitted about the hinge from
-            # its fold 66.8 and roll went to 62.3 (0.0204 off); from its fold alone 75.0, 0.6251
-            # wide (its flat 0.6250)
-            alone = np.where(np.arange(len(y)) > 4, 0.0, y)
-            again, x, axes, slopes = min(
-                (again, x, axes, slopes), eased((axes, alone), terms), key=lambda f: f[0]
-            )
-            if again > HINGE_GAIN * rms:  # from the frame the margin stands on, untilted
-                # (_starts: its normal the margin's side of the midrib, a fold up in it); from
-                # the plane's fit's frame, elliptic folded -75 (fitted 72.4 and rolled -15, its
-                # frame tilted 37°) went to -46.5 and rolled 2.3 about the hinge (0.0044 off),
-                # from its fold alone there to -24.3 (1.9 times the plane's fit's rms)
-                start = np.zeros(len(y))
-                start[4] = abs(y[4])
+        plane = _simplest(fits, length)[0] <= EXPLAINED * before  # the margin's plane explains it
+        if not hinged:
+            return _simplest(fits, length) if plane else None
+        # each pose found, fitted again folding each half rigidly about the midrib
+        # (`hinge_relief`), is kept when it lays the margin flatter (a fold's shear, which a roll
+        # made up for, is gone); whether the leaf is unfolded at all is the fits' above, or,
+        # where they fall short, the hinge's at HINGE_EXPLAINED: the hinge, which follows the
+        # midrib's own heights, also lays a waved flat blade's margin flatter than the quadric
+        # (linear, wave 0.1), never so flat
+        for i, (rms, terms, _, axes, y) in enumerate(fits):
+            if terms == (2,):  # a roll alone bends about the sheet, z = 0 with a relief or without
+                continue
+            again, x, axes, slopes = eased((axes, y), terms)
+            hard = 0 in terms and abs(y[4]) > EASED_FROM  # y[4]: the fold, terms in order
+            if again > HINGE_GAIN * rms and hard and len(terms) > 1:  # from its fold alone:
+                # a roll made up for the shear, and obovate folded -75 fitted about the hinge from
+                # its fold 66.8 and roll went to 62.3 (0.0204 off); from its fold alone 75.0, 0.6251
+                # wide (its flat 0.6250)
+                alone = np.where(np.arange(len(y)) > 4, 0.0, y)
                 again, x, axes, slopes = min(
-                    (again, x, axes, slopes),
-                    eased((_starts(boundary, midrib)[-1], start), terms),
-                    key=lambda f: f[0],
+                    (again, x, axes, slopes), eased((axes, alone), terms), key=lambda f: f[0]
                 )
-        bend = placed(x, axes, True, slopes)[0]
-        if again <= HINGE_GAIN * rms and checks.lies_flat(bend, leaf):
-            fits[i] = (again, terms, bend, axes, y)
-    # a roll alone about each section's own mean height (`sheeted`), kept when it lays the margin
-    # flatter (or when no roll about the plane lay flat: cordate rolled 1 took fold 11): 8 of the
-    # 14 shapes rolled 0.5 were 1.7e-3-8.8e-3 of the length off their own surface at p95, now
-    # at most 4.2e-4 (ovate fitted fold 9.6, curl 0.04 and roll 3.66: 9.0e-4, now 5.2e-5)
-    at = next((i for i, f in enumerate(fits) if f[1] == (2,)), len(fits))
-    rms, start = (fits[at][0], fits[at][3:]) if at < len(fits) else (np.inf, found_of((2,))[0][2:])
-    again, x, axes, y, sheet = rolled[0] if rolled else sheeted(start)
-    bend = placed(x, axes, True, sheet=sheet)[0]
-    if sheet is not None and again <= HINGE_GAIN * rms and checks.lies_flat(bend, leaf):
-        fits[at : at + 1] = [(again, (2,), bend, axes, y)]
-        plane = plane or again <= SHEET_EXPLAINED * before
-    best = _simplest(fits, length)
-    if not plane and best[0] > hinge_share * before:  # nor the hinge
-        return None
-    return best[2]
+                if again > HINGE_GAIN * rms:  # from the frame the margin stands on, untilted
+                    # (_starts: its normal the margin's side of the midrib, a fold up in it); from
+                    # the plane's fit's frame, elliptic folded -75 (fitted 72.4 and rolled -15, its
+                    # frame tilted 37°) went to -46.5 and rolled 2.3 about the hinge (0.0044 off),
+                    # from its fold alone there to -24.3 (1.9 times the plane's fit's rms)
+                    start = np.zeros(len(y))
+                    start[4] = abs(y[4])
+                    again, x, axes, slopes = min(
+                        (again, x, axes, slopes),
+                        eased((_starts(boundary, midrib)[-1], start), terms),
+                        key=lambda f: f[0],
+                    )
+            bend = placed(x, axes, True, slopes)[0]
+            if again <= HINGE_GAIN * rms and checks.lies_flat(bend, leaf):
+                fits[i] = (again, terms, bend, axes, y)
+        if (2,) not in sets:  # twisted: no roll alone
+            best = _simplest(fits, length)
+            return best if plane or best[0] <= hinge_share * before else None
+        # a roll alone about each section's own mean height (`sheeted`), kept when it lays the
+        # margin flatter (or when no roll about the plane lay flat: cordate rolled 1 took fold
+        # 11): 8 of the 14 shapes rolled 0.5 were 1.7e-3-8.8e-3 of the length off their own
+        # surface at p95, now at most 4.2e-4 (ovate fitted fold 9.6, curl 0.04 and roll 3.66:
+        # 9.0e-4, now 5.2e-5)
+        at = next((i for i, f in enumerate(fits) if f[1] == (2,)), len(fits))
+        rms, start = (
+            (fits[at][0], fits[at][3:]) if at < len(fits) else (np.inf, found_of((2,))[0][2:])
+        )
+        again, x, axes, y, sheet = rolled[0] if rolled else sheeted(start)
+        bend = placed(x, axes, True, sheet=sheet)[0]
+        if sheet is not None and again <= HINGE_GAIN * rms and checks.lies_flat(bend, leaf):
+            fits[at : at + 1] = [(again, (2,), bend, axes, y)]
+            plane = plane or again <= SHEET_EXPLAINED * before
+        best = _simplest(fits, length)
+        if not plane and best[0] > hinge_share * before:  # nor the hinge
+            return None
+        return best
+
+    best = settle(TERMS)
+    if best is None or best[0] > TWIST_FROM * length:  # a twist, where the rest fall short
+        twisted = settle(TWISTED)
+        if twisted is not None and (best is None or twisted[0] <= TWIST_GAIN * best[0]):
+            best = twisted
+    return None if best is None else best[2]
 
 
 def _simplest(fits: list[tuple], length: float) -> tuple:

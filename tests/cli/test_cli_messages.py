@@ -208,18 +208,21 @@ def test_a_posed_form_written_as_a_point_list_says_its_pose_is_not_kept(tmp_path
 
 
 def test_a_bent_point_list_refused_says_it_may_have_lost_its_pose(tmp_path, capsys):
-    """`reconstruct` of that CSV is refused, "vein 1: 2 of 49 points lie outside the boundary"
-    (its twist is not unfolded, core/unfold.py); the message now says the leaf is bent and no
-    pose lays it flat, as a posed leaf saved as a point list would be. A flat leaf's stray vein
-    is refused without that hint."""
+    """`reconstruct` of a CSV of lanceolate twisted 1 was refused, "vein 1: 2 of 49 points lie
+    outside the boundary"; the message now says the leaf is bent and no pose lays it flat, as a
+    posed leaf saved as a point list would be. That twist is now unfolded (core/unfold.py,
+    unfold33); rolled 0.8 as well, which the fit does not take (a roll and a twist together),
+    it is refused as its outline crosses itself on its plane, with the same hint. A flat leaf's
+    stray vein is refused without that hint."""
     from leafstudio.model import Leaf
     from leafstudio.sources.files import save_leaf
 
-    assert main(["form", "lanceolate", "--twist", "1", "-o", str(tmp_path / "x.csv")]) == 0
+    argv = ["form", "lanceolate", "--roll", "0.8", "--twist", "1", "-o", str(tmp_path / "x.csv")]
+    assert main(argv) == 0
     capsys.readouterr()
     assert main(["reconstruct", str(tmp_path / "x.csv"), "-o", str(tmp_path / "x.ply")]) == 2
     line = _error(capsys)
-    assert "vein 1:" in line and "lie outside the boundary" in line
+    assert "the boundary crosses itself" in line
     assert "bent in 3D and no pose lays it flat" in line and "its .leaf.json does" in line
     square = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
     stray = np.column_stack([np.linspace(0.2, 1.6, 20), np.full(20, 0.5), np.zeros(20)])

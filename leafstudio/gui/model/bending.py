@@ -232,7 +232,7 @@ def posed(
         # fit's) came back with fit_frame's normal, toward the veins: ovate folded 45 and curled
         # 0.5, fitted -45 about a normal down, flipped over for a nudge of 1e-6 (its outline
         # moved 0.90 of its length); and its relief, read again from the flat midrib, is not the
-        # fit's (whose hinge is the midrib flattened about the round before's: unfold._hinge),
+        # fit's (whose hinge is the midrib flattened about the round before's: unfold_hinge),
         # 7e-4 to 1.1e-3 off: ovate folded 60 and rolled 0.4 moved 0.015, 45 and 0.5 8e-4
         kept = like if plane is None and isinstance(like, PlacedPose) else None
         frame = blade_frame(flat, plane) if kept is None else kept.frame
@@ -268,7 +268,7 @@ def keeps_fit(like: Bend | None, before: Any, sketch: Any) -> bool:
     and relief: a pose fitted to curves in 3D (core/unfold.py: its relief on the margin's
     plane) while the sketch's plane is as it was (a moved midrib moves its hinge: `rehinged`).
     Its frame and relief are the fit's (the hinge the midrib flattened about the round
-    before's: unfold._hinge); found again from the sketch's midrib (8 points of it:
+    before's: unfold_hinge); found again from the sketch's midrib (8 points of it:
     sketch_model.DERIVED_VEIN_POINTS) and plane, the first edit of ovate folded 60 and rolled
     0.4, opened from a CSV, moved its outline 0.018 of its length
     (test_a_fitted_leafs_first_sketch_edit_keeps_it_where_it_stood). A drawn leaf's relief is
