@@ -17,7 +17,7 @@ SCAN = REALLEAVES / "soybean_11_20190508T043118_pot1_1.txt"
 def test_against_counts_the_blade_extract_found(tmp_path, capsys):
     leaf = tmp_path / "s.leaf.json"
     assert main(["extract", str(SCAN), "-o", str(leaf)]) == 0
-    said = capsys.readouterr().out
+    said = capsys.readouterr().err  # extract's closing line is on stderr
     extracted = int(re.search(r"blade of (\d+) of", said).group(1))
     about = float(re.search(r"length about ([\d.]+) \(base to apex\)", said).group(1))
     mesh = tmp_path / "s.ply"
