@@ -19,11 +19,13 @@ FOLD_ANGLE = 90.0  # degrees: an edge whose two triangles meet more sharply fold
 FOLDED = 0.0025  # a scan's mesh with more of its edges folded back is warned of (the eight shared
 # scans: soybean pot1_1, whose cloud is doubled and V-folded, 0.65%; the other seven 0.05% at
 # most; before the sheet's second fit, core/sheet.py, 3.1% and 0.16%)
-CRUMPLE = 50.0  # |mean curvature| times the length past this: a bend tighter than a radius of 2%
-# of the length, which no blade makes but a surface that chases a doubled or noisy scan does
+CRUMPLE = 50.0  # |mean curvature| times the length past this: a roll tighter than a radius of 1%
+# of the length (H = 1 / 2R; a cup bent both ways, H = 1 / R, 2%), which no blade makes but a
+# surface that chases a doubled or noisy scan does
 CRUMPLED = 0.01  # a scan's mesh with more of its area so crumpled is warned of (the eight shared
-# scans: soybean pot1_1 4.9% of its vertices, the other seven 0.07% at most; before the sheet's
-# smoothing was weighed by each cell's error, core/sheet.py: 8.3% and 0.47%)
+# scans: soybean pot1_1 4.0% of its area, 4.9% of its vertices, the other seven 0.04% of their
+# area at most; before the sheet's smoothing was weighed by each cell's error, core/sheet.py:
+# 8.3% and 0.47% of their vertices)
 FIN_NEIGHBOURS = 16  # a fin's side: the mean direction to this many nearest scan points ...
 ONE_SIDE = 0.85  # ... at least this long (points all round a triangle: a hole it spans)
 
@@ -81,7 +83,7 @@ def crumpled_share(mesh: MeshLike, length: float) -> float:
     """The share of the mesh's area whose triangles bend tighter than CRUMPLE allows (their
     corners' mean |mean curvature| times `length`): a surface crumpled between a scan's doubled
     layers or through its noise, which neither the distances nor the folds show (soybean
-    pot1_1's surface crumpled over 4.9% of its vertices folds back at only 0.12% of its edges).
+    pot1_1's surface crumpled over 4.0% of its area folds back at only 0.12% of its edges).
     0 for a mesh without curvatures.
 
     Examples
@@ -137,8 +139,8 @@ def scan_warnings(fit: dict[str, Any]) -> list[str]:
             )
         if crumpled:
             said.append(
-                f"crumples over {fit['crumpled']:.1%} of its area (bends tighter than "
-                f"{1 / CRUMPLE:.0%} of the leaf's length)"
+                f"crumples over {fit['crumpled']:.1%} of its area (bends tighter than a "
+                f"radius of {1 / (2 * CRUMPLE):.0%} of the leaf's length)"
             )
         notes.append(
             f"the surface {' and '.join(said)}, where the scan is doubled, noisy or its blade "

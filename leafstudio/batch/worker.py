@@ -117,7 +117,7 @@ def _reconstruct(job: Job) -> dict[str, Any]:
             scan_beyond_1pct=_number(found.get("beyond_1pct")),
             scan_beyond_2pct=_number(found.get("beyond_2pct")),
             scan_folded=_number(found.get("folded")),  # the mesh's edges folded back
-            scan_crumpled=_number(found.get("crumpled")),  # its area bent tighter than 2% of L
+            scan_crumpled=_number(found.get("crumpled")),  # its area bent to a radius < L/100
         )
     length, placement = settings.length, result_placement(result)
     if length is not None:

@@ -6,11 +6,12 @@ no warning was given. Its mesh's edges folded past 90°: 3.1%, the other seven s
 most; with the sheet refitted through cell means of the flat blade (core/sheet.py) and the
 outline grown to the blade's edge (sources/scan_outline.py), 0.65% and 0.05%; with its smoothing
 weighed by each cell's error (core/sheet.py) 0.12% and 0: but pot1_1's surface still crumples,
-bending tighter than 2% of its length over 4.9% of its vertices (the other seven 0.07% at most),
-and that is said too (fidelity.crumpled_share)."""
+bending tighter than a radius of 1% of its length over 4.0% of its area (the other seven 0.04%
+at most), and that is said too (fidelity.crumpled_share)."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -91,3 +92,18 @@ def test_a_doubled_scans_folded_surface_is_warned_of_by_the_workflow_and_the_cli
     assert code == 0 and "crumples over" in said.err
     assert "the mesh's edges folded back" in said.out  # beside its distances
     assert "its area crumpled" in said.out
+
+
+def test_the_crumple_warning_says_the_radius_it_counts():
+    """A roll's mean curvature is 1 / (2R): CRUMPLE counts a roll tighter than a radius of 1% of
+    the length, but the warning said "bends tighter than 2% of the leaf's length", and a blade
+    rolled to a radius of 1.5% of it, so bent by those words, was not counted. The radius the
+    warning names is the one counted."""
+    (note,) = scan_warnings({"length": 1.0, "mean": 0.0, "p95": 0.0, "crumpled": 0.05})
+    said = re.search(r"tighter than a radius of (\d+(?:\.\d+)?)% of the leaf's length", note)
+    assert said is not None
+    radius = float(said.group(1)) / 100
+    sheet = pv.Plane(i_size=1, j_size=0.5, i_resolution=20, j_resolution=10).triangulate()
+    for r, counted in ((0.9 * radius, True), (1.1 * radius, False)):
+        sheet.point_data["mean_curvature"] = np.full(sheet.n_points, 1 / (2 * r))  # rolled
+        assert (crumpled_share(sheet, 1.0) == 1.0) is counted
