@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from leafstudio._shared.inputs import check_input_file
-from leafstudio.batch.settings import Settings
+from leafstudio.batch.settings import Settings, columns
 from leafstudio.errors import LeafError
 from leafstudio.sources.files import LEAF_SUFFIXES
 from leafstudio.sources.scan import SCAN_SUFFIXES
@@ -150,13 +150,16 @@ def resumable(
     jobs: Sequence[Job], rows: Iterable[dict[str, Any]], settings: Settings, out_dir: Path
 ) -> dict[str, dict[str, Any]]:
     """The rows of an earlier run that stand, by input: ok, made with the same settings from the
-    same content, and their mesh as written (not lost, cut short or edited)."""
-    key = settings.key()
+    same content, and their mesh as written (not lost, cut short or edited), in a table with
+    every column this one has (one written before scan_crumpled was kept that column blank)."""
+    key, needed = settings.key(), set(columns(settings.scans))
     wanted = {job.input: job for job in jobs}
     kept: dict[str, dict[str, Any]] = {}
     for row in rows:
         job = wanted.get(str(row.get("input")))
         if job is None or row.get("status") != "ok" or row.get("settings") != key:
+            continue
+        if not needed <= row.keys():  # an older table's: run again, as a clean run would
             continue
         try:  # the input unchanged, and its mesh as written (not lost, cut short or edited)
             same = row.get("sha256") == file_hash(job.path) and (

@@ -234,6 +234,27 @@ def test_resume_keeps_only_rows_of_unchanged_inputs_and_settings(tmp_path, leave
     assert Batch([inputs], ls.Params(grid=32), out, resume=True)._kept() == {}
 
 
+def test_resume_keeps_no_row_of_a_table_written_before_a_column_was(tmp_path, leaves):
+    """A table written before a column was added (scan_crumpled, assets33) has rows the same key
+    keeps: --resume kept them, that column blank, and a resumed run was no longer a clean one
+    (pot1_1's crumpled surface went unsaid). A row missing a column is run again."""
+    import csv
+
+    inputs = _copy(leaves / "a", tmp_path / "in")
+    out = tmp_path / "out"
+    list(ls.batch([inputs], ls.Params(grid=32), out, jobs=1))
+    assert len(Batch([inputs], ls.Params(grid=32), out, resume=True)._kept()) == 3
+    table = out / "traits.csv"
+    with open(table, newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    with open(table, "w", newline="") as handle:  # as an older LeafStudio wrote it
+        older = [name for name in rows[0] if name != "height"]
+        writer = csv.DictWriter(handle, older, extrasaction="ignore", lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(rows)
+    assert Batch([inputs], ls.Params(grid=32), out, resume=True)._kept() == {}
+
+
 def test_inputs_from_folders_and_patterns_leave_out_the_output_folder(tmp_path, leaves):
     leaves = _copy(leaves, tmp_path / "in")
     out = leaves / "out"
