@@ -25,7 +25,9 @@ linear, cordate reconstructed at grid 64: their mesh's area over the flat blade'
   the closed tube (the sliders' 1), which keeps 0.997-1.000 of the area: Pose.apply turns no
   point past half a turn (bend._wrapped), so a roll past it lays the margins beyond on the
   tube's seam. The limit was 1.01, which lost that strip without a word: a linear blade rolled
-  1.01 half turns kept 0.988 of its area, against 0.998 as a tube (1.05: 0.942-0.984).
+  1.01 half turns kept 0.988 of its area, against 0.998 as a tube (1.05: 0.942-0.984). A leaf's
+  pose as given (a project, the API's) is still taken to SAVED_ROLL_SHARE, 1.01: the app kept a
+  tube's roll when a sketch edit widened the blade under 1%, and saved it so.
 - twist, |twist| x at the apex up to TWIST_TURNS half turns: a twist keeps no size (the sliders'
   half turn gives reniform 1.41 of its area, linear 1.004; a full turn 2.16 and 1.010), but it
   is undone at any angle; a full turn holds a twisted grass blade's.
@@ -57,6 +59,9 @@ FOLD = 80.0  # degrees each way (module docstring)
 MOST_TURN = 0.95 * np.pi  # radians the curl may turn the midrib through at the blade's end
 ROLL_SHARE = 1.0 + 1e-9  # half turns the roll may turn the widest margin through: the tube
 # (Pose.apply turns no point past it), to the round-off of the blade's measures
+SAVED_ROLL_SHARE = 1.01  # ... and a leaf's pose as given (a project, `flat` False): the limit
+# before, to which the app kept a tube's roll when a sketch edit widened it (eased_roll eased
+# only past it), so the projects it saved reopen (a tube widened 0.5%: 1.005, refused by ROLL_SHARE)
 TWIST_TURNS = 2.0  # half turns the twist may turn the apex against the base
 # a pose fitted to curves in 3D (core/unfold.py, its relief on the margin's plane) was searched
 # to 85° each way before FOLD: the projects the app saved then reopen, their fit reproducing
@@ -130,6 +135,7 @@ def _trouble(
                 f"from -{most_fold:g} to {most_fold:g} degrees")  # fmt: skip
         return says, "fold", pose.fold, most_fold
     reach, half = blade_measures(bend, boundary, veins, flat)
+    rolls = ROLL_SHARE if flat else SAVED_ROLL_SHARE  # a pose asked for, or one as given
     per_unit = "per unit of the leaf's coordinates"
     terms = (
         ("curl", 2 * pose.curl * reach, MOST_TURN / (2 * reach), f"{per_unit}) turns its "
@@ -138,9 +144,9 @@ def _trouble(
         ("twist", pose.twist * reach / np.pi, TWIST_TURNS * np.pi / reach, f"radians {per_unit})"
          f" turns its apex, {reach:.3g} from its base, through {{turn:.3g}} half turns; a twist "
          f"is taken up to {TWIST_TURNS:g} half turns"),
-        ("roll", pose.roll * half / np.pi, ROLL_SHARE * np.pi / half, f"{per_unit}) rolls its "
-         f"margins, {half:.3g} from its midrib, through {{turn:.3g}} half turns; a roll is taken "
-         f"up to {ROLL_SHARE:g} (a closed tube)"),
+        ("roll", pose.roll * half / np.pi, rolls * np.pi / half, f"{per_unit}) rolls its "
+         f"margins, {half:.3g} from its midrib, through {{turn:.4g}} half turns; a roll is taken "
+         f"up to {rolls:.3g} (a closed tube{'' if flat else ', widened by a sketch edit'})"),
     )  # fmt: skip
     searched = {}  # a fitted pose's: what the fit searched, which the app saved
     if fit_like(bend) and len(veins) and len(veins[0]) > 1:
