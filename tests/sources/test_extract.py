@@ -193,10 +193,12 @@ def test_extract_writes_a_leaf_that_reconstructs(tmp_path, capsys):
     assert main(["extract", str(scan_file), "-o", str(out), "--points", "150"]) == 0
     leaf = load_leaf(out)
     assert len(leaf.boundary) == 150 and len(leaf.veins) >= 3
+    said = capsys.readouterr()  # the closing line, on stderr as every command's (options.summary)
+    assert said.out == "" and said.err.count("\n") == 1 and "wrote 150 boundary points" in said.err
     assert main(["extract", str(scan_file), "-o", str(out), "--points", "3"]) == 2
     assert main(["extract", str(tmp_path / "missing.ply"), "-o", str(out)]) == 2
     assert main(["extract", str(scan_file), "-o", str(tmp_path / "leaf.doc")]) == 2
-    assert capsys.readouterr().err.count("\n") == 3
+    assert capsys.readouterr().err.count("\n") == 3  # one line an error
 
 
 def test_the_outline_count_changes_only_the_outline(scan):
