@@ -42,7 +42,11 @@ from leafstudio.sources.bend_entry import FRAME_KEYS, project_bend
 
 POINT_SUFFIXES = (".csv", ".txt", ".xyz")
 LEAF_SUFFIXES = (*POINT_SUFFIXES, ".ply", ".leaf.json", ".json")
-FORMAT_NAME, FORMAT_VERSION = "leafstudio", 2  # 2: fold and curl keep the size (bend_entry.py)
+FORMAT_NAME, FORMAT_VERSION = "leafstudio", 3  # 2: fold and curl keep the size (bend_entry.py)
+# 3: a scan's sheet keeps a smoothing per cell (core/sheet.refit); written only by projects that
+# have one, so that an older LeafStudio says the file is newer rather than that its sheet does
+# not read whole (version 2's single value still opens as it was)
+PER_CELL_SMOOTHING = 3
 MAX_LABEL = 100_000  # vein labels 1..MAX_LABEL
 
 
@@ -393,6 +397,8 @@ def project_dict(
         data["bend"]["frame"] = {k: [float(x) for x in a] for k, a in frame.items()}
     elif isinstance(leaf.bend, Scaled):  # a scan's blade, unrolled (core/sheet_bend.py)
         data["bend"] = leaf.bend.entry(np.vstack([leaf.boundary, leaf.vein_points]))
+    if not isinstance(data.get("bend", {}).get("sheet", {}).get("smoothing", 0.0), list):
+        data["version"] = PER_CELL_SMOOTHING - 1  # nothing in it a version 2 reader lacks
     return data
 
 
