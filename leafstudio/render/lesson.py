@@ -67,8 +67,9 @@ LESSON_STEPS: tuple[LessonStep, ...] = (
         r"$\mathrm{height} = (\mathbf{p} - \mathbf{o}) \cdot \mathbf{n}$",
         ("points", "curves"),
         "plane",
-        bent_caption="This leaf is bent. We first unbend it, undoing its fold, curl, roll or "
-        "twist, and lay the blade flat, like pressing the leaf onto a table; the edge's points "
+        bent_caption="This leaf is bent. We first unbend it (its fold, curl, roll or twist, or "
+        "a scanned leaf's own curves) and lay the blade flat, like pressing the leaf onto a "
+        "table; the edge's points "
         "are joined into an outline. Every height is then measured above that flat blade: the "
         "veins' heights are in colour.",
         flat=True,
@@ -113,9 +114,10 @@ LESSON_STEPS: tuple[LessonStep, ...] = (
         "heights",
         # its plan is z on the flat blade, its 3D view the mesh bent back (closing32: the words
         # told of the flat blade only, beside a folded leaf)
+        # (review33: a slide has the map only, and a scan is bent by its sheet, not a pose)
         bent_caption="The hills are added up over the flat blade (the map), and tanh(g/δ) "
-        "brings the sum to zero at the edge. In 3D the surface is bent back into the leaf's "
-        "fold, curl, roll or twist, coloured by the same heights.",
+        "brings the sum to zero at the edge. The surface is then bent back into the leaf's own "
+        "shape, coloured by the same heights.",
     ),
     LessonStep(
         "7. The leaf in 3D",
@@ -126,7 +128,7 @@ LESSON_STEPS: tuple[LessonStep, ...] = (
         "mesh",
         edges=True,
         bent_caption="The surface is cut into small triangles and trimmed at the edge, then "
-        "bent back into the leaf's own fold, curl, roll or twist: this is the mesh, coloured by "
-        "height. With more hills (a larger K) it can follow more veins.",
+        "bent back into the leaf's own shape: this is the mesh, coloured by height. With more "
+        "hills (a larger K) it can follow more veins.",
     ),
 )

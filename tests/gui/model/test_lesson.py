@@ -120,6 +120,12 @@ def test_a_bent_leafs_step_6_says_its_surface_is_bent_back_beside_the_flat_map()
     assert not step.flat and "bent" not in step.words(bent=False)
     words = step.words(bent=True)
     assert "flat blade" in words and "bent back" in words and "tanh" in words
+    # review33: a slide of step 6 has the map only (no "In 3D"), and a scan is bent by its own
+    # sheet, not by a pose: the words name a pose's terms only beside a scan's
+    assert "In 3D" not in words
+    for each in LESSON_STEPS:
+        said = each.words(bent=True)
+        assert "or twist" not in said or "scanned leaf" in said, each.title
 
 
 def test_step_5s_gaussians_have_one_colour_in_the_plan_and_in_3d(folded):
