@@ -19,13 +19,14 @@ FOLD_ANGLE = 90.0  # degrees: an edge whose two triangles meet more sharply fold
 FOLDED = 0.0025  # a scan's mesh with more of its edges folded back is warned of (the eight shared
 # scans: soybean pot1_1, whose cloud is doubled and V-folded, 0.65%; the other seven 0.05% at
 # most; before the sheet's second fit, core/sheet.py, 3.1% and 0.16%)
-CRUMPLE = 50.0  # |mean curvature| times the length past this: a roll tighter than a radius of 1%
-# of the length (H = 1 / 2R; a cup bent both ways, H = 1 / R, 2%), which no blade makes but a
-# surface that chases a doubled or noisy scan does
+CRUMPLE = 0.01  # of the length: a surface bending tighter than this radius in any direction
+# (its largest principal curvature |k1| or |k2| past 1 / (CRUMPLE length)), which no blade makes
+# but a surface that chases a doubled or noisy scan does; a saddle counts as a roll or a cup
+# does (|mean curvature| past 1 / (2 CRUMPLE length) counted no saddle: review33)
 CRUMPLED = 0.01  # a scan's mesh with more of its area so crumpled is warned of (the eight shared
-# scans: soybean pot1_1 4.0% of its area, 4.9% of its vertices, the other seven 0.04% of their
-# area at most; before the sheet's smoothing was weighed by each cell's error, core/sheet.py:
-# 8.3% and 0.47% of their vertices)
+# scans: soybean pot1_1 3.6% of its area, the other seven 0.02% at most; at |H| pot1_1 4.0% and
+# 0.04%; before the sheet's smoothing was weighed by each cell's error, core/sheet.py, pot1_1 was
+# 8.3% of its vertices by |H|, the others 0.47% at most)
 FIN_NEIGHBOURS = 16  # a fin's side: the mean direction to this many nearest scan points ...
 ONE_SIDE = 0.85  # ... at least this long (points all round a triangle: a hole it spans)
 
@@ -80,29 +81,31 @@ def folded_share(mesh: MeshLike) -> float:
 
 
 def crumpled_share(mesh: MeshLike, length: float) -> float:
-    """The share of the mesh's area whose triangles bend tighter than CRUMPLE allows (their
-    corners' mean |mean curvature| times `length`): a surface crumpled between a scan's doubled
-    layers or through its noise, which neither the distances nor the folds show (soybean
-    pot1_1's surface crumpled over 4.0% of its area folds back at only 0.12% of its edges).
-    0 for a mesh without curvatures.
+    """The share of the mesh's area whose triangles bend tighter than a radius of CRUMPLE of
+    `length` (their corners' mean largest |principal curvature|, k1 and k2): a surface crumpled
+    between a scan's doubled layers or through its noise, which neither the distances nor the
+    folds show (soybean pot1_1's surface crumpled over 3.6% of its area folds back at only 0.12%
+    of its edges). 0 for a mesh without curvatures.
 
     Examples
     --------
     >>> import numpy as np, pyvista as pv
     >>> plane = pv.Plane(i_resolution=4, j_resolution=4).triangulate()
-    >>> plane.point_data["mean_curvature"] = np.where(plane.points[:, 0] < 0, 0.0, 100.0)
+    >>> plane.point_data["k1"] = np.where(plane.points[:, 0] < 0, 0.0, 200.0)
+    >>> plane.point_data["k2"] = -plane.point_data["k1"]  # a saddle there: no mean curvature
     >>> round(crumpled_share(plane, 1.0), 2)  # x >= 0: its half and the triangles two corners in
     0.62
     """
-    if "mean_curvature" not in mesh.point_data or length <= 0:
+    if not {"k1", "k2"} <= set(mesh.point_data.keys()) or length <= 0:
         return 0.0
-    bend = np.abs(np.asarray(mesh.point_data["mean_curvature"], dtype=float)) * length
+    k1, k2 = (np.abs(np.asarray(mesh.point_data[k], dtype=float)) for k in ("k1", "k2"))
+    bend = np.maximum(k1, k2) * CRUMPLE * length  # past 1: tighter than the radius
     triangles = evaluate.triangles_of(mesh)
     corners = np.asarray(mesh.points, dtype=float)[triangles]
     area = np.linalg.norm(
         np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
     )
-    tight = np.nan_to_num(bend[triangles].mean(axis=1), nan=0.0) > CRUMPLE
+    tight = np.nan_to_num(bend[triangles].mean(axis=1), nan=0.0) > 1.0
     return float(area[tight].sum() / area.sum()) if area.sum() > 0 else 0.0
 
 
@@ -140,7 +143,7 @@ def scan_warnings(fit: dict[str, Any]) -> list[str]:
         if crumpled:
             said.append(
                 f"crumples over {fit['crumpled']:.1%} of its area (bends tighter than a "
-                f"radius of {1 / (2 * CRUMPLE):.0%} of the leaf's length)"
+                f"radius of {CRUMPLE:.0%} of the leaf's length)"
             )
         notes.append(
             f"the surface {' and '.join(said)}, where the scan is doubled, noisy or its blade "

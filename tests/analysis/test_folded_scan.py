@@ -66,15 +66,19 @@ def test_scan_warnings_name_a_far_or_folded_surface():
 
 def test_a_crumpled_surface_is_told_from_a_smoothly_bent_one():
     """A sheet bent smoothly (a radius of a fifth of its length) is not crumpled however much it
-    bends; the same sheet with a ripple of a wavelength of 3% of its length is, all over."""
+    bends; the same sheet with a ripple of a wavelength of 3% of its length is, all over, and so
+    is an egg-box of saddles, whose mean curvature is nothing (review33)."""
     sheet = pv.Plane(i_size=1, j_size=0.5, i_resolution=100, j_resolution=50).triangulate()
-    x = np.asarray(sheet.points)[:, 0]
-    sheet.point_data["mean_curvature"] = np.full(len(x), 0.5 / 0.2)  # H = 1 / (2 R)
+    x, y = np.asarray(sheet.points)[:, :2].T
+    sheet.point_data["k1"], sheet.point_data["k2"] = np.full(len(x), 1 / 0.2), 0 * x
     assert crumpled_share(sheet, 1.0) == 0.0
     k = 2 * np.pi / 0.03
-    sheet.point_data["mean_curvature"] = 0.5 * 0.01 * k**2 * np.sin(k * x)  # z = 0.01 sin kx
+    sheet.point_data["k1"] = 0.01 * k**2 * np.sin(k * x)  # z = 0.01 sin kx
     assert crumpled_share(sheet, 1.0) > 0.5
-    del sheet.point_data["mean_curvature"]
+    ripple = 0.01 * k**2 * np.sin(k * x) * np.sin(k * y)  # z = 0.01 sin kx sin ky: saddles
+    sheet.point_data["k1"], sheet.point_data["k2"] = ripple, -ripple
+    assert crumpled_share(sheet, 1.0) > 0.3
+    del sheet.point_data["k1"]
     assert crumpled_share(sheet, 1.0) == 0.0  # no curvatures: nothing to say
 
 
@@ -95,15 +99,14 @@ def test_a_doubled_scans_folded_surface_is_warned_of_by_the_workflow_and_the_cli
 
 
 def test_the_crumple_warning_says_the_radius_it_counts():
-    """A roll's mean curvature is 1 / (2R): CRUMPLE counts a roll tighter than a radius of 1% of
-    the length, but the warning said "bends tighter than 2% of the leaf's length", and a blade
-    rolled to a radius of 1.5% of it, so bent by those words, was not counted. The radius the
-    warning names is the one counted."""
+    """The warning said "bends tighter than 2% of the leaf's length" while a roll to a radius of
+    1.5% of it was not counted (review33). The radius the warning names is the one counted."""
     (note,) = scan_warnings({"length": 1.0, "mean": 0.0, "p95": 0.0, "crumpled": 0.05})
     said = re.search(r"tighter than a radius of (\d+(?:\.\d+)?)% of the leaf's length", note)
     assert said is not None
     radius = float(said.group(1)) / 100
     sheet = pv.Plane(i_size=1, j_size=0.5, i_resolution=20, j_resolution=10).triangulate()
     for r, counted in ((0.9 * radius, True), (1.1 * radius, False)):
-        sheet.point_data["mean_curvature"] = np.full(sheet.n_points, 1 / (2 * r))  # rolled
+        sheet.point_data["k1"] = np.full(sheet.n_points, 1 / r)  # rolled
+        sheet.point_data["k2"] = np.zeros(sheet.n_points)
         assert (crumpled_share(sheet, 1.0) == 1.0) is counted
