@@ -22,7 +22,7 @@ import shapely
 
 from leafstudio.core.bend import Pose, flat_leaf
 from leafstudio.core.placed import PlacedPose, blade_frame, fitted
-from leafstudio.core.pose_limits import PoseRefused, check_pose, eased_roll
+from leafstudio.core.pose_limits import TWIST_TURNS, PoseRefused, check_pose, eased_roll
 from leafstudio.core.pose_relief import margin_relief, relief_of
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.history import State, Step
@@ -136,7 +136,9 @@ TERM_UNITS = {
     "fold": "degrees",
     "curl": "per the blade's length: 1 turns its apex 2 radians",
     "roll": "half turns of the widest margins: 1 closes the blade into a tube",
-    "twist": "half turns of the apex against the base",
+    # a figure per the blade's length, the limit at the apex, which may lie short of it (-2.11
+    # to 2.11 read as turning the apex past the limit's 2: review33)
+    "twist": f"half turns per the blade's length: its apex may turn through {TWIST_TURNS:g}",
 }
 
 
