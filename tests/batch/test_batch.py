@@ -255,6 +255,34 @@ def test_resume_keeps_no_row_of_a_table_written_before_a_column_was(tmp_path, le
     assert Batch([inputs], ls.Params(grid=32), out, resume=True)._kept() == {}
 
 
+def test_resume_runs_again_the_rows_an_older_leafstudio_made_with_the_same_settings(
+    tmp_path, leaves, monkeypatch
+):
+    """A change that moves the figures (the scan sheet weighed per cell, session 33) keeps every
+    column: --resume kept an older run's rows beside the new ones (review33: pot1_15's area
+    985.63 from the old sheet, 968.59 from the new). The settings key holds settings.RESULTS."""
+    import csv
+
+    from leafstudio.batch import settings
+
+    inputs = _copy(leaves / "a", tmp_path / "in")
+    out = tmp_path / "out"
+    list(ls.batch([inputs], ls.Params(grid=32), out, jobs=1))
+    assert len(Batch([inputs], ls.Params(grid=32), out, resume=True)._kept()) == 3
+    monkeypatch.setattr(settings, "RESULTS", settings.RESULTS - 1)
+    older = settings.Settings(ls.Params(grid=32)).key()  # the key an older LeafStudio wrote
+    monkeypatch.undo()
+    table = out / "traits.csv"
+    with open(table, newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert older != rows[0]["settings"]
+    with open(table, "w", newline="") as handle:
+        writer = csv.DictWriter(handle, list(rows[0]), lineterminator="\n")
+        writer.writeheader()
+        writer.writerows([{**row, "settings": older} for row in rows])
+    assert Batch([inputs], ls.Params(grid=32), out, resume=True)._kept() == {}
+
+
 def test_inputs_from_folders_and_patterns_leave_out_the_output_folder(tmp_path, leaves):
     leaves = _copy(leaves, tmp_path / "in")
     out = leaves / "out"
