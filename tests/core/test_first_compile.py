@@ -240,3 +240,28 @@ def test_the_compile_loads_each_kernel_as_its_worker_ends_it(monkeypatch, tmp_pa
     kernels.compile_kernels(workers=1)
     assert loaded == [CHEAP]
     assert kernels.KERNELS[CHEAP] in real(CHEAP).signatures
+
+
+def test_a_worker_ended_before_its_first_kernel_leaves_quietly(monkeypatch):
+    """A stopped run ends its workers (_Crew.end) at any moment: one ended before it read its
+    first kernel's name left that name in its pipe's buffer, and leaving the process flushed
+    it into the ended worker and raised BrokenPipeError out of the compile (a full suite's
+    test_a_stopped_compile_ends_its_workers_and_the_next_one_compiles_the_rest, once)."""
+    import queue
+    import subprocess
+
+    started = subprocess.Popen
+
+    def ended_at_once(*args, **kwargs):
+        process = started(*args, **kwargs)
+        process.kill()
+        process.wait()
+        return process
+
+    monkeypatch.setattr(kernels.subprocess, "Popen", ended_at_once)
+    todo, done = queue.SimpleQueue(), queue.SimpleQueue()
+    todo.put(CHEAP)
+    crew = kernels._Crew()
+    pid, seconds = kernels._worker(todo, done, crew)
+    assert pid > 0 and seconds == 0.0 and done.empty()
+    assert not crew.processes
