@@ -101,12 +101,17 @@ def crumpled_share(mesh: MeshLike, length: float) -> float:
     k1, k2 = (np.abs(np.asarray(mesh.point_data[k], dtype=float)) for k in ("k1", "k2"))
     bend = np.maximum(k1, k2) * CRUMPLE * length  # past 1: tighter than the radius
     triangles = evaluate.triangles_of(mesh)
-    corners = np.asarray(mesh.points, dtype=float)[triangles]
-    area = np.linalg.norm(
-        np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
-    )
+    area = _doubled_areas(np.asarray(mesh.points, dtype=float)[triangles])
     tight = np.nan_to_num(bend[triangles].mean(axis=1), nan=0.0) > 1.0
     return float(area[tight].sum() / area.sum()) if area.sum() > 0 else 0.0
+
+
+def _doubled_areas(corners: np.ndarray) -> np.ndarray:
+    """(m,) twice the area of each of the (m, 3, 3) triangles' `corners` (shares of it are
+    all crumpled_share and fin_share need)."""
+    return np.linalg.norm(
+        np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
+    )
 
 
 def with_folds(fit: dict[str, Any], mesh: MeshLike) -> dict[str, Any]:
@@ -193,9 +198,7 @@ def fin_share(mesh: MeshLike, points: np.ndarray, length: float) -> float:
     """
     points = np.asarray(points, dtype=float)
     corners = np.asarray(mesh.points, dtype=float)[evaluate.triangles_of(mesh)]
-    area = np.linalg.norm(
-        np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
-    )
+    area = _doubled_areas(corners)
     centres = corners.mean(axis=1)
     near, which = cKDTree(points).query(centres, k=min(FIN_NEIGHBOURS, len(points)))
     towards = points[which] - centres[:, None]
