@@ -8,7 +8,13 @@ unit size (each step's `picture`): the input's points as given, seen obliquely; 
 the plane with the veins' heights above it; g with its zero contour; p(x); the EM samples
 coloured by the Gaussian of EM's mixture that owns each, with each Gaussian's 1σ and 2σ
 ellipses; the mixture's heights; and the mesh (render/slides.mesh_image, off screen). Each
-field has its colour bar.
+field has its colour bar, its ticks as many as its length holds apart (FittingTicks).
+
+The plane's pictures are drawn on the result's view frame (`plan_frame`: u along its midrib,
+base to apex, a quarter or half turn from the plane's), as the mesh's picture is, and as the
+lesson's 3D view looks at the leaf: on soybean pot1_1's lesson the plan had turned its flat
+blade by the unbent leaf's midrib (`view_frame` of the result at unit size, whose leaf is not
+bent), the 3D view by its flat blade's: the apex at the upper left in one, the right in the other.
 """
 
 from __future__ import annotations
@@ -21,6 +27,8 @@ from typing import Any
 import numpy as np
 
 from leafstudio.core.bend import flat_leaf
+from leafstudio.core.evaluate import view_frame
+from leafstudio.core.plane import Frame
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
 from leafstudio.render.lesson import LESSON_STEPS, LessonStep
@@ -37,6 +45,7 @@ GAUSSIAN_COLORS = (
     "#1f77b4", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#bcbd22",
 )  # fmt: skip
 BOUNDARY, VEINS = "#202020", "#d62728"
+TICK_PT = TEXT_PT - 4  # a colour bar's tick labels
 
 
 def gaussian_color(k: int) -> str:
@@ -53,8 +62,27 @@ def blade_leaf(result: Any) -> Leaf:
     return flat if result.units is None else result.units.leaf(flat)
 
 
-def _plane(result: Any) -> dict[str, Any]:
-    """The arrays a plan view draws, at unit size (every array in one frame)."""
+def plan_frame(result: Any) -> Frame:
+    """The frame the plane's pictures show `result` on, u to the right, v up: its view frame
+    (evaluate.view_frame: the plane's turned so that u runs along the midrib of its flat blade,
+    base to apex), which the lesson's 3D view looks at from across its width."""
+    return view_frame(result)
+
+
+def plan_turn(result: Any) -> np.ndarray:
+    """(2, 2) float array taking the plane's coordinates (unit.frame's, whose axes are the
+    result's) to the picture's (plan_frame's): a quarter or half turn, or none."""
+    shown, plane = plan_frame(result), result.frame
+    return np.array(
+        [[shown.u @ plane.u, shown.u @ plane.v], [shown.v @ plane.u, shown.v @ plane.v]]
+    )
+
+
+def _plane(ax: Any, result: Any) -> dict[str, Any]:
+    """The arrays a plan view draws, at unit size (every array in one frame), and "shown", the
+    transform that draws them on `ax` turned as plan_turn says."""
+    from matplotlib.transforms import Affine2D
+
     unit = result.unit if result.unit is not None else result
     grid = unit.grid
     ny, nx = grid.shape
@@ -62,14 +90,24 @@ def _plane(result: Any) -> dict[str, Any]:
     extent = (x0, x0 + grid.spacing * (nx - 1), y0, y0 + grid.spacing * (ny - 1))
     points = blade_leaf(result).vein_points
     veins, heights = unit.frame.to_plane(points) if len(points) else (None, None)
-    return {"unit": unit, "shape": (ny, nx), "extent": extent, "veins": veins, "heights": heights}
+    turn = np.eye(3)
+    turn[:2, :2] = plan_turn(result)
+    return {
+        "unit": unit,
+        "shape": (ny, nx),
+        "extent": extent,
+        "veins": veins,
+        "heights": heights,
+        "turn": turn[:2, :2],
+        "shown": Affine2D(turn) + ax.transData,
+    }
 
 
 def _outline(ax: Any, plane: dict[str, Any], veins: bool = False) -> None:
-    polygon = plane["unit"].polygon
-    ax.plot(*np.vstack([polygon, polygon[:1]]).T, color=BOUNDARY, linewidth=1.5)
+    polygon, shown = plane["unit"].polygon, plane["shown"]
+    ax.plot(*np.vstack([polygon, polygon[:1]]).T, color=BOUNDARY, linewidth=1.5, transform=shown)
     if veins and plane["veins"] is not None:
-        ax.scatter(*plane["veins"].T, s=10, color=VEINS, zorder=3)
+        ax.scatter(*plane["veins"].T, s=10, color=VEINS, zorder=3, transform=shown)
 
 
 def _field(
@@ -83,20 +121,31 @@ def _field(
         extent=plane["extent"],
         cmap=cmap,
         interpolation="bilinear",
+        transform=plane["shown"],
         **kw,
     )
     if clip:
         from matplotlib.patches import Polygon
 
-        image.set_clip_path(Polygon(plane["unit"].polygon, transform=ax.transData))
-    bar = ax.figure.colorbar(image, ax=ax, orientation="horizontal", fraction=0.06, pad=0.04)
-    bar.set_label(label, fontsize=TEXT_PT)
-    bar.ax.tick_params(labelsize=TEXT_PT - 4)
-    bar.formatter.set_powerlimits((-3, 4))  # 0.0889, not 8.89e-02; tinier ranges in 10^k
+        image.set_clip_path(Polygon(plane["unit"].polygon, transform=plane["shown"]))
+    _colour_bar(ax, image, label)
     return image
 
 
-def _ellipse(ax: Any, mean: np.ndarray, cov: np.ndarray, sigmas: float, colour: Any) -> None:
+def _colour_bar(ax: Any, mappable: Any, label: str) -> None:
+    """A horizontal colour bar under the picture, labelled, its ticks never touching."""
+    from leafstudio.render.ticks import FittingTicks  # matplotlib: only when drawn
+
+    bar = ax.figure.colorbar(mappable, ax=ax, orientation="horizontal", fraction=0.06, pad=0.04)
+    bar.set_label(label, fontsize=TEXT_PT)
+    bar.ax.tick_params(labelsize=TICK_PT)
+    bar.formatter.set_powerlimits((-3, 4))  # 0.0889, not 8.89e-02; tinier ranges in 10^k
+    bar.locator = FittingTicks(TICK_PT)
+
+
+def _ellipse(
+    ax: Any, mean: np.ndarray, cov: np.ndarray, sigmas: float, colour: Any, shown: Any
+) -> None:
     from matplotlib.patches import Ellipse
 
     values, vectors = np.linalg.eigh(cov)
@@ -112,6 +161,7 @@ def _ellipse(ax: Any, mean: np.ndarray, cov: np.ndarray, sigmas: float, colour: 
             color=colour,
             linewidth=2,
             linestyle="-" if sigmas == 1 else "--",
+            transform=shown,
         )
     )
 
@@ -127,8 +177,8 @@ def _cropped(image: np.ndarray, margin: int = 12) -> np.ndarray:
 
 def step_picture(ax: Any, result: Any, index: int) -> None:
     """Draw step `index` (LESSON_STEPS, its `picture`) of `result` on the matplotlib axes `ax`."""
-    plane = _plane(result)
-    unit = plane["unit"]
+    plane = _plane(ax, result)
+    unit, shown = plane["unit"], plane["shown"]
     picture = LESSON_STEPS[index].picture
     if picture == "implicit":
         g = np.asarray(unit.g_grid, dtype=float)
@@ -141,6 +191,7 @@ def step_picture(ax: Any, result: Any, index: int) -> None:
             extent=plane["extent"],
             colors="black",
             linewidths=2.5,
+            transform=shown,
         )
     elif picture == "guide":
         p = np.asarray(unit.p_grid, dtype=float)
@@ -149,10 +200,11 @@ def step_picture(ax: Any, result: Any, index: int) -> None:
         mixture = unit.em_mixture  # EM's own: the surface's is refined from it
         samples = np.asarray(unit.em_samples)
         owner = mixture.owners(samples)
-        ax.scatter(*samples.T, s=6, c=[gaussian_color(k) for k in owner], zorder=2)
+        colours = [gaussian_color(k) for k in owner]
+        ax.scatter(*samples.T, s=6, c=colours, zorder=2, transform=shown)
         for k, (mean, cov) in enumerate(zip(mixture.means, mixture.covariances, strict=True)):
             for sigmas in (1, 2):
-                _ellipse(ax, mean, cov, sigmas, gaussian_color(k))
+                _ellipse(ax, mean, cov, sigmas, gaussian_color(k), shown)
     elif picture == "heights":
         z = unit.height(unit.grid.points)  # b(x) outside, where tanh(g/δ) is 0: cut off
         inside = z[unit.inside]
@@ -178,23 +230,12 @@ def step_picture(ax: Any, result: Any, index: int) -> None:
         if picture != "plane":
             _outline(ax, plane, veins=picture == "guide")
         ax.set_aspect("equal")
-        lo, hi = unit.polygon.min(axis=0), unit.polygon.max(axis=0)
+        outline = unit.polygon @ plane["turn"].T  # as shown
+        lo, hi = outline.min(axis=0), outline.max(axis=0)
         pad = 0.06 * (hi - lo).max()
         ax.set_xlim(lo[0] - pad, hi[0] + pad)  # the leaf fills the picture (a wide Gaussian's
         ax.set_ylim(lo[1] - pad, hi[1] + pad)  # ellipse runs off it)
-        if _half_turned(unit):
-            ax.invert_xaxis()
-            ax.invert_yaxis()
     ax.set_axis_off()
-
-
-def _half_turned(unit: Any) -> bool:
-    """Whether the plane's pictures are drawn turned half a turn, so that they show the leaf
-    base left, apex right, as the mesh's picture and the app do (evaluate.view_frame; a quarter
-    turn, a leaf wider than long across its midrib, is not made)."""
-    from leafstudio.core.evaluate import view_frame
-
-    return float(np.dot(view_frame(unit).u, unit.frame.u)) < -0.5
 
 
 def _points(ax: Any, plane: dict[str, Any]) -> None:
@@ -215,17 +256,15 @@ def _points(ax: Any, plane: dict[str, Any]) -> None:
 def _heights_on_plane(ax: Any, plane: dict[str, Any]) -> None:
     """The outline on the leaf's plane (filled), and the vein points at their heights above it
     (in colour, with its bar)."""
-    unit = plane["unit"]
+    unit, shown = plane["unit"], plane["shown"]
     polygon = np.vstack([unit.polygon, unit.polygon[:1]])
-    ax.fill(*polygon.T, color="#e8f3e0", zorder=1)
-    ax.plot(*polygon.T, color=BOUNDARY, linewidth=1.5, zorder=2)
+    ax.fill(*polygon.T, color="#e8f3e0", zorder=1, transform=shown)
+    ax.plot(*polygon.T, color=BOUNDARY, linewidth=1.5, zorder=2, transform=shown)
     if plane["veins"] is None:
         return
-    dots = ax.scatter(*plane["veins"].T, s=14, c=plane["heights"], cmap="viridis", zorder=3)
-    bar = ax.figure.colorbar(dots, ax=ax, orientation="horizontal", fraction=0.06, pad=0.04)
-    bar.set_label("height above the plane", fontsize=TEXT_PT)
-    bar.ax.tick_params(labelsize=TEXT_PT - 4)
-    bar.formatter.set_powerlimits((-3, 4))
+    veins, heights = plane["veins"], plane["heights"]
+    dots = ax.scatter(*veins.T, s=14, c=heights, cmap="viridis", zorder=3, transform=shown)
+    _colour_bar(ax, dots, "height above the plane")
 
 
 def step_slide(result: Any, index: int, step: LessonStep | None = None) -> Any:

@@ -110,15 +110,21 @@ def iso_direction(elevation: float, azimuth: float, frame: Frame) -> np.ndarray:
 
 
 def best_iso(
-    bounds: BladeBounds, view_angle: float, aspect: float, bottom: float = 0.0
+    bounds: BladeBounds,
+    view_angle: float,
+    aspect: float,
+    bottom: float = 0.0,
+    azimuths: tuple[float, ...] = ISO_AZIMUTHS,
+    elevations: tuple[float, ...] = ISO_ELEVATIONS,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The iso direction and view-up (the normal): the lowest elevation (the most relief) at
-    which some azimuth fills the viewport by ISO_FILL along its less filled axis, else the
-    candidate that fills it best; a long leaf in a tall view is turned to run diagonally.
-    `bottom` as in fit_camera."""
+    """The iso direction and view-up (the normal): the lowest of `elevations` (the most relief)
+    at which some of `azimuths` fills the viewport by ISO_FILL along its less filled axis, else
+    the candidate that fills it best; a long leaf in a tall view is turned to run diagonally
+    (unless `azimuths` is (0,): the lesson's, from across the blade, u to the right as in its
+    plan). `bottom` as in fit_camera."""
     best, best_fill = None, -1.0
-    for elevation in ISO_ELEVATIONS:
-        for azimuth in ISO_AZIMUTHS:
+    for elevation in elevations:
+        for azimuth in azimuths:
             direction = iso_direction(elevation, azimuth, bounds.frame)
             position, focus, up = fit_camera(
                 bounds, direction, bounds.frame.normal, view_angle, aspect, bottom=bottom

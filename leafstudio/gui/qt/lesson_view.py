@@ -4,6 +4,11 @@ by gui/model/lesson.py). The 3D leaf on the left, with the step's layers, in a 3
 own; beside it the step's title, its plan view (the slides' picture of the step), its caption in
 plain words and its equation typeset. Nothing is drawn over the leaf. The arrow keys and the
 space bar move between the steps, Escape leaves.
+
+The 3D view and the plan show the leaf the same way round: both on the plan's frame
+(step_slides.plan_frame), the 3D view from across the blade, base left and apex right as in the
+plan. In step 5 soybean pot1_1's apex was at the plan's upper left and the 3D view's right, and
+the nested demo's ran at 44° across the 3D view (its iso camera turned towards the base).
 """
 
 from __future__ import annotations
@@ -34,6 +39,7 @@ from leafstudio.gui.model.view_aids import stretches
 from leafstudio.gui.qt.actions import Action
 from leafstudio.gui.qt.explain import stretch_matrix
 from leafstudio.gui.qt.viewport import Viewport
+from leafstudio.render.step_slides import plan_frame
 
 TITLE_PT, CAPTION_PT, FOOTER_PT = 26, 18, 14  # at 100% scaling; none under 14 (issue 22)
 STRETCH = 3.0  # the 3D leaf's relief, exaggerated: a few percent of its length is flat to a class
@@ -41,6 +47,10 @@ MINIMUM = (960, 600)  # below this, the words of a step no longer fit beside the
 TEXT_SHARE = 0.44  # the text column's share of the width: the 3D view keeps the rest
 NEXT_KEYS = frozenset({Qt.Key.Key_Right, Qt.Key.Key_Space, Qt.Key.Key_PageDown, Qt.Key.Key_Down})
 BACK_KEYS = frozenset({Qt.Key.Key_Left, Qt.Key.Key_Backspace, Qt.Key.Key_PageUp, Qt.Key.Key_Up})
+# the 3D view's elevations (framing.best_iso), nearer the plan's view from straight above than
+# the app's 35° to 65°: from across the blade at 35°, an ovate form folded 45° showed its near
+# half's underside and hid its crease (the nested demo takes 50° either way)
+ELEVATIONS = (50.0, 65.0)
 FOOTER = "{progress} · → next · ← back · Esc: leave"  # one line at 1024 wide (space: next too)
 
 
@@ -64,6 +74,8 @@ class LessonWindow(QWidget):
         self.viewport = Viewport(self)
         self.viewport.show_bars = False  # the plan view has the step's colour bar, readable
         self.viewport.mesh_coloring = "height"  # as the plans of z(x) and of the mesh beside it
+        self.viewport.iso_azimuths = (0.0,)  # from across the blade: its u runs as the plan's
+        self.viewport.iso_elevations = ELEVATIONS
         self.title = QLabel()
         self.title.setFont(_font(TITLE_PT, bold=True))
         self.title.setWordWrap(True)
@@ -149,8 +161,10 @@ class LessonWindow(QWidget):
         result = outcome.result
         layers = self._layers()
         self.viewport.visible.update({key: key in layers for key in self.viewport.visible})
-        frame = self.window_.session.view_frame() or result.frame  # as the app shows it
-        bounds = lesson_bounds(result, frame)  # a bent leaf's laid flat too
+        # the plan's frame, so that the 3D view turns the leaf as the plan beside it (the app's
+        # sketch frame runs as a leaf was drawn, at any angle); a bent leaf's laid flat framed too
+        frame = plan_frame(result)
+        bounds = lesson_bounds(result, frame)
         self.viewport.show_layers(outcome.layers, frame, bounds, "reset")
         self.show_step()
 

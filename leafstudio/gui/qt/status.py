@@ -25,14 +25,15 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from leafstudio.gui.model.status_line import StatusLine
+from leafstudio.gui.model.status_line import StatusLine, bullets, said
 
 
 class StatusText(QWidget):
     """A one-line text, elided at the right when too long; `setText`/`text` as a QLabel's, and
     its colour from the palette (a style sheet's `color` applies). A result's line comes in
-    parts (`show_line`: gui/model/status_line.py): its head, then its first note, every note
-    in the tooltip; `line_changed` tells the notes button (NotesButton)."""
+    parts (`show_line`: gui/model/status_line.py): its head, then its first note (its headline
+    where the whole does not fit: `shown_text`), every note in the tooltip; `line_changed`
+    tells the notes button (NotesButton)."""
 
     line_changed = Signal(object)  # the StatusLine shown
 
@@ -74,11 +75,17 @@ class StatusText(QWidget):
     def minimumSizeHint(self) -> QSize:
         return self.sizeHint()
 
+    def shown_text(self) -> str:
+        """The line as painted at the widget's width: the whole line, or the head and the first
+        note's headline (StatusLine.fitted), cut with "…" only if even that is too long."""
+        metrics, width = self.fontMetrics(), self.width()
+        text = self._line.fitted(lambda text: metrics.horizontalAdvance(text) <= width)
+        return metrics.elidedText(text, Qt.TextElideMode.ElideRight, width)
+
     def paintEvent(self, event: QPaintEvent) -> None:
         painter = QPainter(self)
         painter.setPen(self.palette().color(QPalette.ColorRole.WindowText))
-        text = self._line.text
-        line = self.fontMetrics().elidedText(text, Qt.TextElideMode.ElideRight, self.width())
+        line = self.shown_text()
         painter.drawText(
             self.rect(), Qt.AlignmentFlag.AlignVCenter | Qt.AlignmentFlag.AlignLeft, line
         )
@@ -104,13 +111,13 @@ class NotesButton(QToolButton):
     def _show(self, line: StatusLine) -> None:
         self._notes = line.notes
         self.setText(f"⚠ {line.count}" if line.notes else "")
-        self.setToolTip("\n".join(f"• {note}" for note in line.notes))
+        self.setToolTip(bullets(line.notes))
         self.setVisible(bool(line.notes))
 
     def _open(self) -> None:
         """The notes whole, in a box that does not hold up the window."""
         box = QMessageBox(QMessageBox.Icon.Information, "Notes", "", parent=self.window())
-        box.setText("\n\n".join(note[:1].upper() + note[1:] for note in self._notes))
+        box.setText("\n\n".join(said(note) for note in self._notes))
         box.setWindowModality(Qt.WindowModality.NonModal)
         box.open()
         self.box = box

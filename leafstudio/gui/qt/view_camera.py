@@ -11,7 +11,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from leafstudio.gui.model.framing import BladeBounds, best_iso, fit_camera, view_direction
+from leafstudio.gui.model.framing import (
+    ISO_AZIMUTHS,
+    ISO_ELEVATIONS,
+    BladeBounds,
+    best_iso,
+    fit_camera,
+    view_direction,
+)
 
 if TYPE_CHECKING:
     from leafstudio.core.plane import Frame
@@ -28,6 +35,10 @@ class CameraPlacing:
     _bounds: BladeBounds | None
     _bars: dict[str, tuple]
     _placed: tuple | None  # the preset and camera the view last framed with
+    # the iso preset's azimuths and elevations (framing.best_iso); the lesson's view looks from
+    # across the blade only, so that it shows the leaf as its plan does, base left, apex right
+    iso_azimuths: tuple[float, ...] = ISO_AZIMUTHS
+    iso_elevations: tuple[float, ...] = ISO_ELEVATIONS
 
     redraw: Callable[[], None]  # a render in a later turn
 
@@ -37,7 +48,12 @@ class CameraPlacing:
         direction, up = view_direction(preset, self._frame)
         if preset == "iso" and self._bounds is not None:
             direction, up = best_iso(
-                self._bounds, self.plotter.camera.view_angle, self._aspect(), self._bottom()
+                self._bounds,
+                self.plotter.camera.view_angle,
+                self._aspect(),
+                self._bottom(),
+                self.iso_azimuths,
+                self.iso_elevations,
             )
         self._place(direction, up)
         self._placed = (preset, self._camera_now())

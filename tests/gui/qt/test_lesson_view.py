@@ -176,3 +176,43 @@ def test_a_bent_leafs_flat_steps_show_it_laid_flat_and_say_so(window, qtbot, tmp
         "blade:boundary",
     ]
     lesson.close()
+
+
+def test_step_5s_3d_view_turns_the_leaf_as_its_plan_does(window, qtbot):
+    """closing33: in step 5 the 3D view and the plan beside it showed the leaf turned
+    differently: the nested demo ran base to apex at 44° across the 3D view (its iso camera
+    turned towards the base), level in the plan; a scan's plan could show its apex on the other
+    side (render/test_step_slides). Both are now on the plan's frame, the 3D view looking from
+    across the blade: base to apex the same way on the screen, within the tilt's foreshortening."""
+    import numpy as np
+    from matplotlib.figure import Figure
+
+    from leafstudio.core.evaluate import leaf_axis
+    from leafstudio.render.step_slides import step_picture
+
+    lesson = LessonWindow(window)
+    qtbot.addWidget(lesson)
+    lesson.resize(1280, 720)
+    lesson.show()
+    qtbot.waitExposed(lesson)
+    em = next(i for i, s in enumerate(STEPS) if s.picture == "em")
+    lesson.go(em)
+    lesson.grab_all()  # framed at its size, as on screen
+    result = window.session.result
+    base, direction = leaf_axis(result.leaf, result.frame, result.polygon)
+    ends = [
+        int(np.argmin(np.linalg.norm(result.polygon - base, axis=1))),
+        int(np.argmax((result.polygon - base) @ direction)),
+    ]
+    in_3d = np.diff(
+        lesson.viewport.display_points(result.frame.to_world(result.polygon[ends], np.zeros(2))),
+        axis=0,
+    )[0]
+    figure = Figure()
+    step_picture(figure.add_subplot(), result, em)
+    figure.draw_without_rendering()
+    outline = figure.axes[0].lines[0]
+    in_plan = np.diff(outline.get_transform().transform(outline.get_xydata()[ends]), axis=0)[0]
+    cosine = in_3d @ in_plan / np.linalg.norm(in_3d) / np.linalg.norm(in_plan)
+    assert np.degrees(np.arccos(min(cosine, 1.0))) < 15, (in_3d, in_plan)
+    lesson.close()

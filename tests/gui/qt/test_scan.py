@@ -377,9 +377,15 @@ def test_a_result_with_many_notes_reads_in_a_window_1280_wide(qtbot, tmp_path):
     assert status.width() < 1280 and shown.lower().startswith(f"{head} — {first[:40]}".lower())
     assert button.isVisible() and button.text().endswith("3 notes")
     for note in (first, *later):
-        assert note in button.toolTip() and note in status.toolTip()
+        assert note[1:] in button.toolTip() and note[1:] in status.toolTip()
     QTest.mouseClick(button, Qt.MouseButton.LeftButton)
     assert button.box is not None and later[1][1:] in button.box.text()
+    # closing33: the tooltips said the notes in lower case, the box capitalised them; each is
+    # said alike in all three (status_line.said), as a sentence
+    boxed = button.box.text().split("\n\n")
+    assert boxed[0][0].isupper() and boxed[1:] == [n[:1].upper() + n[1:] for n in later]
+    for tip in (button.toolTip(), status.toolTip()):
+        assert [line[2:] for line in tip.splitlines() if line.startswith("• ")] == boxed
     button.box.close()
     window.status_text.setText("Opening cancelled")  # a message of its own: no notes
     assert not button.isVisible()
