@@ -147,11 +147,12 @@ class Sheet:
     centers: np.ndarray
     values: np.ndarray
     smoothing: float | np.ndarray  # the spline's, one for all centres or (m,) one each (refit)
-    up: np.ndarray  # (3,) the side the normal is turned to
+    up: np.ndarray  # (3,) the side the blade mostly faces: the normal is on it (`_normal`)
     cell: float = 0.0  # the flat blade's cells' side its centres were averaged in (`refit`; 0:
     # not known, a sheet read from a project)
     _pieces: tuple = field(init=False, repr=False)
     _guess: tuple = field(init=False, repr=False)
+    _side: float = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         spline = RBFInterpolator(
@@ -180,6 +181,11 @@ class Sheet:
         pieces = tuple(RectBivariateSpline(us, vs, at[:, :, k]) for k in range(3))
         object.__setattr__(self, "_pieces", pieces)
         object.__setattr__(self, "_guess", (cKDTree(at.reshape(-1, 3)), grid))
+        # one side for the whole sheet: S_u x S_v turned to `up` where most of the blade's
+        # cell means have it (`_normal`)
+        object.__setattr__(self, "_side", 1.0)
+        ahead = self._normal(self(self.centers, du=1), self(self.centers, dv=1)) @ self.up
+        object.__setattr__(self, "_side", -1.0 if ahead.sum() < 0 else 1.0)
 
     @property
     def size(self) -> float:
@@ -204,11 +210,14 @@ class Sheet:
         return self(uv), su, sv, self._normal(su, sv)
 
     def _normal(self, su: np.ndarray, sv: np.ndarray) -> np.ndarray:
-        """(n, 3) unit normals from (n, 3) tangents, turned to `up`."""
+        """(n, 3) unit normals from (n, 3) tangents, S_u x S_v on the side of `up` the blade
+        mostly faces, the same side everywhere. Turned to `up` point by point, they flipped
+        where a blade curls past upright (sugar beet pot1_7's base): the offsets w n there
+        changed sides from one mesh vertex to the next, the export's normals with them, and a
+        solid's top and bottom sheets crossed (43 pairs of faces at any thickness)."""
         normal = np.cross(su, sv)
         normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-        normal *= np.where(normal @ self.up < 0, -1.0, 1.0)[:, None]
-        return normal
+        return normal * self._side
 
     def apply(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) flat blade points (u, v, w), bent: S(u, v) + w n(u, v)."""
@@ -318,7 +327,7 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     points : (n, 3) float array
         The blade's scan points.
     up : (3,) float array
-        The blade's upper side (the sheet's normal is turned towards it).
+        The blade's upper side (the sheet's normal is on it where most of the blade faces it).
     length : float
         The blade's length, roughly (sets the cells' size).
 

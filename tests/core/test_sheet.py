@@ -49,6 +49,22 @@ def test_bent_points_flatten_back_and_offsets_follow_the_normal():
     assert np.all(bent[mid, 2] > rolled(uv)[mid, 2])
 
 
+def test_offsets_keep_the_blades_upper_side_where_it_curls_past_upright():
+    """The normal was turned to `up` point by point: where the rolled blade's halves curl past
+    upright (|v| > 0.126 on a radius of 0.08) it flipped, and a point lifted off the blade there
+    stood outside the roll rather than inside it (sugar beet pot1_7's base: the export's normals
+    changed sides from vertex to vertex and a solid's two sheets crossed)."""
+    uv = _blade(2000)
+    sheet = fit_sheet(rolled(uv), np.array([0.0, 0.0, 1.0]), 1.0)
+    flat = sheet.flatten(rolled(uv))
+    past = np.abs(uv[:, 1]) > 0.15  # curled 107 degrees and more
+    assert past.sum() > 50
+    lifted = sheet.apply(flat + [0.0, 0.0, 0.01])
+    from_axis = np.linalg.norm(lifted[:, 1:] - [0.0, 0.08], axis=1)
+    on_blade = np.linalg.norm(rolled(uv)[:, 1:] - [0.0, 0.08], axis=1)
+    np.testing.assert_allclose(from_axis - on_blade, -0.01, atol=2e-3)
+
+
 def test_points_that_are_not_one_sheet_are_not_unrolled():
     rng = np.random.default_rng(0)
     two = np.vstack([rng.uniform(0, 0.2, (200, 3)), rng.uniform(0, 0.2, (200, 3)) + 5.0])
