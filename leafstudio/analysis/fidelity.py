@@ -139,20 +139,20 @@ def scan_warnings(fit: dict[str, Any]) -> list[str]:
         )
     folded, crumpled = fit.get("folded", 0.0) > FOLDED, fit.get("crumpled", 0.0) > CRUMPLED
     if folded or crumpled:
-        said = []
+        # what is wrong, then how it was measured in one aside: the status line's headline
+        # (gui/model/status_line.py) reads up to the first aside, and said "The surface folds
+        # back on itself at 1.2% of its edges" of a surface that also crumpled over 3.6%
+        said, measured = [], []
         if folded:
-            said.append(
-                f"folds back on itself at {fit['folded']:.1%} of its edges (creases past "
-                f"{FOLD_ANGLE:.0f}°)"
-            )
+            said.append(f"folds back on itself at {fit['folded']:.1%} of its edges")
+            measured.append(f"creases past {FOLD_ANGLE:.0f}°")
         if crumpled:
-            said.append(
-                f"crumples over {fit['crumpled']:.1%} of its area (bends tighter than a "
-                f"radius of {CRUMPLE:.0%} of the leaf's length)"
-            )
+            said.append(f"crumples over {fit['crumpled']:.1%} of its area")
+            measured.append(f"bends tighter than a radius of {CRUMPLE:.0%} of the leaf's length")
         notes.append(
-            f"the surface {' and '.join(said)}, where the scan is doubled, noisy or its blade "
-            "curls under: compare it with the scan's points before trusting its shape"
+            f"the surface {' and '.join(said)} ({'; '.join(measured)}), where the scan is "
+            "doubled, noisy or its blade curls under: compare it with the scan's points before "
+            "trusting its shape"
         )
     return notes
 

@@ -32,9 +32,14 @@ class FittingTicks(MaxNLocator):
 
     def __call__(self) -> np.ndarray:
         """The ticks at the bar's length as laid out now (matplotlib asks at each draw): the
-        most nice ticks whose labels are apart, else every second or third of them (nice
-        numbers on the nested demo's z(x), 0 to 0.037, are 0.01 apart at least for two ticks
-        on the bar: 39 pixels on a 143-pixel bar, where "0.01" is 45 wide), else one."""
+        most nice ticks whose labels are apart, from runs of nice numbers and every second or
+        third of them (nice numbers on the nested demo's z(x), 0 to 0.037, are 0.01 apart at
+        least for two ticks on the bar: 39 pixels on a 143-pixel bar, where "0.01" is 45
+        wide), 0 among them where it is on the bar, else one tick: 0 where it is on the bar.
+
+        0 is kept because the plans' bars read by it: g's edge, a height above the plane. On
+        a scan's lesson at 960 x 600, g's bar (-0.27 to 0.35, 53 pixels) said "−0.25" alone,
+        and z(x)'s (-0.012 to 0.031, 83 pixels) "0" alone where "0.00 0.02" fit (review34)."""
         lo, hi = sorted(self.axis.get_view_interval())
         length = self.axis.axes.bbox.width  # pixels
         slack = 1e-9 * (hi - lo)
@@ -42,12 +47,19 @@ class FittingTicks(MaxNLocator):
         for bins in range(MOST_TICKS, 0, -1):
             self.set_params(nbins=bins)
             ticks = self.tick_values(lo, hi)
-            runs.append(ticks[(ticks >= lo - slack) & (ticks <= hi + slack)])  # on the bar
-        runs += [runs[-1][::stride] for stride in (2, 3)]
-        for ticks in runs:
-            if len(ticks) >= 2 and self._apart(ticks, lo, hi, length):
-                return ticks
-        return runs[-1][len(runs[-1]) // 2 :][:1]
+            ticks = ticks[(ticks >= lo - slack) & (ticks <= hi + slack)]  # on the bar
+            zero = np.flatnonzero(np.abs(ticks) <= slack)
+            start = int(zero[0]) if len(zero) else 0
+            runs.append(ticks)
+            for stride in (2, 3):  # from the first, and from 0 (kept)
+                runs += [ticks[::stride], ticks[start % stride :: stride]]
+        fitting = [t for t in runs if len(t) >= 2 and self._apart(t, lo, hi, length)]
+        if fitting:  # the most ticks, 0 among them if any has it (max: the first of equals)
+            return max(fitting, key=lambda t: (len(t), bool(np.any(np.abs(t) <= slack))))
+        if lo - slack <= 0 <= hi + slack:
+            return np.zeros(1)
+        coarsest = runs[-5]
+        return coarsest[len(coarsest) // 2 :][:1]  # its middle
 
     def _apart(self, ticks: np.ndarray, lo: float, hi: float, length: float) -> bool:
         """Whether the (n,) ticks' labels, centred on them along `length` pixels from `lo` to

@@ -176,7 +176,9 @@ class SideJobs:
             session.noticed.emit(f"Cannot show the texture: {message}. The generated one is shown.")
             self.update_texture()
         else:
-            self.note.emit(f"texture: {message}")
+            # a sentence before its aside: the status line's headline (status_line.py) read
+            # "Texture (more under ⚠)" of "texture: {message}"
+            self.note.emit(f"the generated texture could not be made: {message}")
 
     def texture_option(self, texture: Any) -> Any:
         """assets.export's `texture` for a choice: None is the session's (Session.texture);
