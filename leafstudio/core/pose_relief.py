@@ -311,6 +311,15 @@ def _rise_fall(above: np.ndarray, across: np.ndarray) -> tuple[float, float]:
     return max(float(angle.max(initial=0.0)), 0.0), max(float(-angle.min(initial=0.0)), 0.0)
 
 
+def slopes_off(relief: Relief, points: np.ndarray, clear: float) -> tuple[float, float]:
+    """The rise and the fall (Relief.rise, .fall) off `relief`'s hinge of the flat (n, 3)
+    `points` farther from the midrib than `clear` of the farthest, as `relief_of` reads a
+    form's past CREASE (core/unfold_rolled.py reads them of curves a fit laid flat)."""
+    across = np.abs(points[:, 1])
+    wide = points[across > clear * across.max()]
+    return _rise_fall(wide[:, 2] - relief.hinge_height(wide[:, 0]), wide[:, 1])
+
+
 def margin_relief(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | None:
     """A relief whose hinge passes through the flat midrib's points (the first of the (m_i, 3)
     `veins`) and whose sheet is the margin's plane (z = 0), the blade's x and half width, and
