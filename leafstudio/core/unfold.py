@@ -76,7 +76,8 @@ TWISTED = ((0, 1, 3), (3,), (0, 3), (1, 3))  # ... then with the twist (3), the 
 TWIST_FROM = 1e-3  # the twist is fitted when no pose without it lays the margin within this
 # share of the length of flat (rms): the 17 untwisted posed forms of csv_traits.py were left
 # 3e-13-6e-4 (ovate folded 75 and curled 1) but for linear rolled 1 (1.3e-3) and cordate folded
-# 60 and rolled 0.5 (2.0e-3), which the twist left as they were; twisted forms 1.7e-3
+# 60 and rolled 0.5 (2.0e-3; 4.6e-4 since unfold_rolled.py), which the twist left as they
+# were; twisted forms 1.7e-3
 # (lanceolate curled 0.6, twisted 0.5), 0.023-0.025 (ovate and cordate folded 60, twisted 1), or
 # none (ovate, linear twisted 1, elliptic folded 30 and twisted 0.5)
 TWIST_GAIN = 0.5  # ... and kept when it lays it flatter than this share of their best: twisted
