@@ -52,6 +52,17 @@ BACK_KEYS = frozenset({Qt.Key.Key_Left, Qt.Key.Key_Backspace, Qt.Key.Key_PageUp,
 # half's underside and hid its crease (the nested demo takes 50° either way)
 ELEVATIONS = (50.0, 65.0)
 FOOTER = "{progress} · → next · ← back · Esc: leave"  # one line at 1024 wide (space: next too)
+PLAN_LEAST = 0.3  # the plan's least share of the column's height: the caption's words are set
+# smaller, down to 14 points, to leave it that (a folded leaf's step 2 at 960 x 600 left the
+# plan 60 pixels high under a 13-line caption and a 3-line footer)
+CAPTION_STEPS = (CAPTION_PT, 16.0, FOOTER_PT)  # the caption's sizes tried, largest first
+
+
+def _label_height(label: QLabel, width: int) -> int:
+    """The height `label` takes at `width` pixels: its words wrapped, or its picture's."""
+    if label.wordWrap():
+        return label.heightForWidth(width)
+    return label.sizeHint().height()
 
 
 def _font(points: float, bold: bool = False) -> QFont:
@@ -149,6 +160,7 @@ class LessonWindow(QWidget):
             if self.viewport.visible[key] != on:
                 self.viewport.set_visible(key, on)
         self._stretch()
+        self._fit_caption()
         self.text.layout().activate()  # the plan's room, with this step's words in place
         self._draw_plan()
 
@@ -185,6 +197,21 @@ class LessonWindow(QWidget):
             if hasattr(actor, "SetUserMatrix"):
                 actor.SetUserMatrix(matrix)
         self.viewport.redraw()
+
+    def _fit_caption(self) -> None:
+        """The caption's words at the largest of CAPTION_STEPS that leaves the plan PLAN_LEAST
+        of the column's height (the smallest where none does)."""
+        column = self.text.layout()
+        margins = column.contentsMargins()
+        width = self.text.width() - margins.left() - margins.right()
+        height = self.height() - margins.top() - margins.bottom()
+        others = [self.title, self.equation, self.footer]
+        fixed = sum(_label_height(label, width) for label in others if not label.isHidden())
+        fixed += column.spacing() * (column.count() - 1)
+        for points in CAPTION_STEPS:
+            self.caption.setFont(_font(points))
+            if height - fixed - _label_height(self.caption, width) >= PLAN_LEAST * height:
+                break
 
     def _refit(self) -> None:
         self.viewport.camera("iso")

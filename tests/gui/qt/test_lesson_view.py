@@ -216,3 +216,38 @@ def test_step_5s_3d_view_turns_the_leaf_as_its_plan_does(window, qtbot):
     cosine = in_3d @ in_plan / np.linalg.norm(in_3d) / np.linalg.norm(in_plan)
     assert np.degrees(np.arccos(min(cosine, 1.0))) < 15, (in_3d, in_plan)
     lesson.close()
+
+
+def test_a_bent_leafs_plan_keeps_its_room_in_the_smallest_lesson(window, qtbot, tmp_path):
+    """At 960 x 600 a folded leaf's step 2 left its plan about 60 pixels high under a 13-line
+    caption and a 3-line footer. The caption's words are set smaller there (never under 14
+    points), so that the plan keeps PLAN_LEAST of the height; the demo at 1280 x 720 keeps its
+    caption's 18 points."""
+    import leafstudio as ls
+    from leafstudio.forms.make import Form
+    from leafstudio.gui.qt.lesson_view import CAPTION_PT, PLAN_LEAST
+    from tests.gui.qt.conftest import wait_result
+
+    lesson = LessonWindow(window)
+    qtbot.addWidget(lesson)
+    lesson.resize(1280, 720)
+    lesson.show()
+    qtbot.waitExposed(lesson)
+    lesson.go(1)
+    qtbot.wait(300)  # the column is sized once the resize rests
+    assert lesson.caption.font().pointSizeF() == CAPTION_PT
+    path = tmp_path / "folded.leaf.json"
+    ls.save_leaf(Form("ovate", fold=45.0).leaf(), path)
+    window.session.history.set_clean()
+    assert window.open_path(str(path))
+    wait_result(qtbot, window, lambda o: o.result.leaf.bend is not None)
+    lesson.resize(960, 600)
+    qtbot.wait(300)
+    qtbot.waitUntil(lambda: lesson.width() == 960)
+    lesson.go(1)
+    qtbot.wait(300)
+    assert lesson.caption.font().pointSizeF() >= 14
+    assert lesson.plan.height() >= PLAN_LEAST * lesson.height() - 30  # the column's margins
+    caption = lesson.caption
+    assert caption.heightForWidth(caption.width()) <= caption.height() + 1  # the words fit
+    lesson.close()
