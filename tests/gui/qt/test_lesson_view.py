@@ -14,12 +14,18 @@ def _shown_layers(lesson: LessonWindow) -> set[str]:
     return {key for key, on in lesson.viewport.visible.items() if on}
 
 
-def test_the_lesson_walks_the_steps_with_the_keys(window, qtbot):
+def _opened(window, qtbot) -> LessonWindow:
+    """A lesson over `window`, shown at 1280 x 720."""
     lesson = LessonWindow(window)
     qtbot.addWidget(lesson)
     lesson.resize(1280, 720)
     lesson.show()
     qtbot.waitExposed(lesson)
+    return lesson
+
+
+def test_the_lesson_walks_the_steps_with_the_keys(window, qtbot):
+    lesson = _opened(window, qtbot)
     seen = []
     for key in ([Qt.Key.Key_Right, Qt.Key.Key_Space] * len(STEPS))[: len(STEPS)]:
         seen.append((lesson.title.text(), _shown_layers(lesson)))
@@ -35,11 +41,7 @@ def test_the_lesson_walks_the_steps_with_the_keys(window, qtbot):
 
 
 def test_the_leaf_is_large_uncovered_and_the_text_readable(window, qtbot):
-    lesson = LessonWindow(window)
-    qtbot.addWidget(lesson)
-    lesson.resize(1280, 720)
-    lesson.show()
-    qtbot.waitExposed(lesson)
+    lesson = _opened(window, qtbot)
     qtbot.wait(300)  # the column is sized once the resize rests
     view = lesson.viewport.geometry()
     assert view.width() >= lesson.width() / 2
@@ -109,11 +111,7 @@ def test_the_surface_steps_show_the_mesh_as_their_words_and_pictures_say(window,
     plan of z(x) in viridis; step 7 said 'the mesh, coloured by height' over the green leaf.
     The lesson's 3D view now draws the mesh coloured by height, as both plans do, in both
     steps, and in step 7 ('cut into small triangles') its triangles' edges."""
-    lesson = LessonWindow(window)
-    qtbot.addWidget(lesson)
-    lesson.resize(1280, 720)
-    lesson.show()
-    qtbot.waitExposed(lesson)
+    lesson = _opened(window, qtbot)
     surface = next(i for i, s in enumerate(STEPS) if s.picture == "heights")
     for index in (surface, surface + 1):
         lesson.go(index)
@@ -190,11 +188,7 @@ def test_step_5s_3d_view_turns_the_leaf_as_its_plan_does(window, qtbot):
     from leafstudio.core.evaluate import leaf_axis
     from leafstudio.render.step_slides import step_picture
 
-    lesson = LessonWindow(window)
-    qtbot.addWidget(lesson)
-    lesson.resize(1280, 720)
-    lesson.show()
-    qtbot.waitExposed(lesson)
+    lesson = _opened(window, qtbot)
     em = next(i for i, s in enumerate(STEPS) if s.picture == "em")
     lesson.go(em)
     lesson.grab_all()  # framed at its size, as on screen
@@ -228,11 +222,7 @@ def test_a_bent_leafs_plan_keeps_its_room_in_the_smallest_lesson(window, qtbot, 
     from leafstudio.gui.qt.lesson_view import CAPTION_PT, PLAN_LEAST
     from tests.gui.qt.conftest import wait_result
 
-    lesson = LessonWindow(window)
-    qtbot.addWidget(lesson)
-    lesson.resize(1280, 720)
-    lesson.show()
-    qtbot.waitExposed(lesson)
+    lesson = _opened(window, qtbot)
     lesson.go(1)
     qtbot.wait(300)  # the column is sized once the resize rests
     assert lesson.caption.font().pointSizeF() == CAPTION_PT
