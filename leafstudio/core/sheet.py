@@ -138,6 +138,12 @@ def spline_on_grid(spline: RBFInterpolator, us: np.ndarray, vs: np.ndarray) -> n
     return out + monomials @ poly
 
 
+def _unit_cross(su: np.ndarray, sv: np.ndarray) -> np.ndarray:
+    """(n, 3) S_u x S_v of (n, 3) tangents, of unit length."""
+    normal = np.cross(su, sv)
+    return normal / np.linalg.norm(normal, axis=1, keepdims=True)
+
+
 @dataclass(frozen=True, eq=False)
 class Sheet:
     """The smooth map S(u, v) from a flat blade into 3D, a thin-plate spline through `centers`
@@ -183,8 +189,7 @@ class Sheet:
         object.__setattr__(self, "_guess", (cKDTree(at.reshape(-1, 3)), grid))
         # one side for the whole sheet: S_u x S_v turned to `up` where most of the blade's
         # cell means have it (`_normal`)
-        object.__setattr__(self, "_side", 1.0)
-        ahead = self._normal(self(self.centers, du=1), self(self.centers, dv=1)) @ self.up
+        ahead = _unit_cross(self(self.centers, du=1), self(self.centers, dv=1)) @ self.up
         object.__setattr__(self, "_side", -1.0 if ahead.sum() < 0 else 1.0)
 
     @property
@@ -215,9 +220,7 @@ class Sheet:
         where a blade curls past upright (sugar beet pot1_7's base): the offsets w n there
         changed sides from one mesh vertex to the next, the export's normals with them, and a
         solid's top and bottom sheets crossed (43 pairs of faces at any thickness)."""
-        normal = np.cross(su, sv)
-        normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-        return normal * self._side
+        return _unit_cross(su, sv) * self._side
 
     def apply(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) flat blade points (u, v, w), bent: S(u, v) + w n(u, v)."""

@@ -54,7 +54,7 @@ ELEVATIONS = (50.0, 65.0)
 FOOTER = "{progress} · → next · ← back · Esc: leave"  # one line at 1024 wide (space: next too)
 PLAN_LEAST = 0.3  # the plan's least share of the column's height: the caption's words are set
 # smaller, down to 14 points, to leave it that (a folded leaf's step 2 at 960 x 600 left the
-# plan 60 pixels high under a 13-line caption and a 3-line footer)
+# plan 67 pixels high under a 13-line caption and a 3-line footer)
 CAPTION_STEPS = (CAPTION_PT, 16.0, FOOTER_PT)  # the caption's sizes tried, largest first
 
 
