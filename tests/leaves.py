@@ -199,21 +199,31 @@ CLICKED_SIDE_VEINS = (
 )
 
 
-def clicked_sketch() -> Sketch:
+def clicked_sketch(turn: float = 0.0) -> Sketch:
     """The leaf benchmarks/story_screens.py draws in the app, as its clicks make it: its outline,
     a midrib and four side veins started on it and clicked out to near the margin, each new
     vein and point as the editor makes them (Sketch.started_vein, default_height): auto veins,
-    on the dome over the outline."""
+    on the dome over the outline. `turn`: every click turned that many degrees about (0.5, 0),
+    a leaf drawn at an angle."""
+    a = np.radians(turn)
+    rotation = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+
+    def clicks(xy) -> np.ndarray:
+        xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+        return xy if turn == 0.0 else (xy - [0.5, 0.0]) @ rotation.T + [0.5, 0.0]
+
     sketch = Sketch()
-    for xy in clicked_outline():
+    for xy in clicks(clicked_outline()):
         sketch, _ = sketch.inserted(BOUNDARY, xy)
-    sketch = sketch.started_vein(CLICKED_MIDRIB[0], 0.01)
-    for xy in CLICKED_MIDRIB[1:]:
+    midrib = clicks(CLICKED_MIDRIB)
+    sketch = sketch.started_vein(midrib[0], 0.01)
+    for xy in midrib[1:]:
         sketch, _ = sketch.inserted(0, xy, sketch.default_height(0, xy))
-    for start, *rest in CLICKED_SIDE_VEINS:
-        sketch = sketch.started_vein(np.array(start), 0.01)
+    for vein_clicks in CLICKED_SIDE_VEINS:
+        start, *rest = clicks(vein_clicks)
+        sketch = sketch.started_vein(start, 0.01)
         vein = len(sketch.veins) - 1
-        for xy in map(np.array, rest):
+        for xy in rest:
             sketch, _ = sketch.inserted(vein, xy, sketch.default_height(vein, xy))
     return sketch
 

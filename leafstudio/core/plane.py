@@ -145,6 +145,25 @@ def fit_frame(boundary: np.ndarray, vein_points: np.ndarray) -> Frame:
     return Frame(origin=origin, u=u, v=v, normal=normal)
 
 
+def turned_like(frame: Frame, like: Frame) -> Frame:
+    """`frame`'s plane seen as `like` sees its own: turned about its normal by any angle so that
+    u runs as `like`'s u projected into it, from `like`'s side (the normal flipped where they
+    face apart), with `like`'s handedness (v across u on the side of `like`'s v). A drawn leaf's
+    result on its sketch's frame (the app's main view). `frame` itself where `like`'s u is
+    within 1e-6 of its normal."""
+    normal = np.asarray(frame.normal, float)
+    if normal @ like.normal < 0:
+        normal = -normal
+    u = like.u - (like.u @ normal) * normal
+    if np.linalg.norm(u) < 1e-6:
+        return frame
+    u = u / np.linalg.norm(u)
+    v = np.cross(normal, u)
+    if v @ like.v < 0:  # `like` is left-handed
+        v = -v
+    return Frame(frame.origin, u, v, normal)
+
+
 def turned_along(frame: Frame, direction: np.ndarray) -> Frame:
     """`frame` turned about its normal by the quarter or half turn that brings u nearest the
     (2,) in-plane `direction` (a midrib's, base to apex: evaluate.view_frame), its axes still

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from leafstudio.core.bend import flat_leaf
+from leafstudio.core.plane import Frame
 from leafstudio.errors import LeafError
 
 TURNTABLE_SUFFIXES = (".gif", ".mp4")
@@ -62,12 +63,12 @@ def _mesh_view(plotter: Any, result: Any, clim: tuple[float, float]) -> None:
     )
 
 
-def _iso_camera(result: Any, azimuth: float = 0.0):
+def _iso_camera(result: Any, azimuth: float = 0.0, frame: Frame | None = None):
     """An oblique camera turned `azimuth` degrees about the leaf's normal (from its base side at
-    0: evaluate.view_frame)."""
+    0 on `frame`, by default evaluate.view_frame's)."""
     from leafstudio.core.evaluate import view_frame
 
-    frame = view_frame(result)
+    frame = frame or view_frame(result)
     pts = np.asarray(result.triangle_mesh.points)
     centre = (pts.min(axis=0) + pts.max(axis=0)) / 2
     size = float(np.linalg.norm(np.ptp(pts, axis=0)))
@@ -112,8 +113,11 @@ def render_turntable(
     return path
 
 
-def mesh_image(result: Any, size: tuple[int, int] = TURNTABLE_SIZE) -> np.ndarray:
-    """The mesh coloured by height from the turntable's first view, off screen.
+def mesh_image(
+    result: Any, size: tuple[int, int] = TURNTABLE_SIZE, frame: Frame | None = None
+) -> np.ndarray:
+    """The mesh coloured by height from the turntable's first view (its camera on `frame`, as
+    _iso_camera), off screen.
 
     Returns
     -------
@@ -126,7 +130,7 @@ def mesh_image(result: Any, size: tuple[int, int] = TURNTABLE_SIZE) -> np.ndarra
         plotter = pv.Plotter(off_screen=True, window_size=list(size))
         plotter.set_background("white")
         _mesh_view(plotter, result, _clim(result))
-        plotter.camera_position = _iso_camera(result)
+        plotter.camera_position = _iso_camera(result, frame=frame)
         plotter.reset_camera()
         image = plotter.screenshot(return_img=True)
         plotter.close()

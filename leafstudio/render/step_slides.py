@@ -4,17 +4,21 @@ compared side by side (render/forms_figure); written as a PNG per slide and one 
 (matplotlib's PdfPages). `leafstudio slides` and the app's File > Export slides write them.
 
 The steps' pictures are plan views of the leaf's plane, drawn with matplotlib at the result's
-unit size (each step's `picture`): the input's points as given, seen obliquely; the outline on
-the plane with the veins' heights above it; g with its zero contour; p(x); the EM samples
-coloured by the Gaussian of EM's mixture that owns each, with each Gaussian's 1σ and 2σ
-ellipses; the mixture's heights; and the mesh (render/slides.mesh_image, off screen). Each
-field has its colour bar, its ticks as many as its length holds apart (FittingTicks).
+unit size (each step's `picture`): the input's points as given, seen from 50° above the plane;
+the outline on the plane with the veins' heights above it; g with its zero contour; p(x); the EM
+samples coloured by the Gaussian of EM's mixture that owns each, with each Gaussian's 1σ and 2σ
+ellipses; the mixture's heights; and the mesh (render/slides.mesh_image, off screen). Each field
+has its colour bar, its ticks as many as its length holds apart (FittingTicks).
 
-The plane's pictures are drawn on the result's view frame (`plan_frame`: u along its midrib,
-base to apex, a quarter or half turn from the plane's), as the mesh's picture is, and as the
-lesson's 3D view looks at the leaf: on soybean pot1_1's lesson the plan had turned its flat
-blade by the unbent leaf's midrib (`view_frame` of the result at unit size, whose leaf is not
-bent), the 3D view by its flat blade's: the apex at the upper left in one, the right in the other.
+Every picture is drawn on one frame of the leaf's plane (`plan_frame`), the input's points of
+step 1 too (they were drawn in the file's own axes: the nested demo turned 90° in its file ran
+55° up step 1's picture and level in the others), as the mesh's picture is, and as the lesson's
+3D view looks at the leaf. By default the result's view frame (u along its midrib, base to apex,
+a quarter or half turn from the plane's): on soybean pot1_1's lesson the plan had turned its
+flat blade by the unbent leaf's midrib (`view_frame` of the result at unit size, whose leaf is
+not bent), the 3D view by its flat blade's: the apex at the upper left in one, the right in the
+other. The lesson gives the frame of the app's main view instead (a drawn leaf's sketch, at the
+angle it was drawn), so that a class sees the leaf as it was drawn.
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ import numpy as np
 
 from leafstudio.core.bend import flat_leaf
 from leafstudio.core.evaluate import view_frame
-from leafstudio.core.plane import Frame
+from leafstudio.core.plane import Frame, turned_like
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf
 from leafstudio.render.lesson import LESSON_STEPS, LessonStep
@@ -46,6 +50,11 @@ GAUSSIAN_COLORS = (
 )  # fmt: skip
 BOUNDARY, VEINS = "#202020", "#d62728"
 TICK_PT = TEXT_PT - 4  # a colour bar's tick labels
+# step 1's view of the points, degrees above the leaf's plane: the lesson's 3D view's lower
+# elevation (gui/qt/lesson_view.ELEVATIONS), so the picture beside it looks as it does (a
+# cabinet view, u + 0.35 v across and h + 0.5 v up, drew soybean pot1_1's curled midrib
+# diagonally beside the 3D view's upright one)
+POINTS_ELEVATION = 50.0
 
 
 def gaussian_color(k: int) -> str:
@@ -62,25 +71,28 @@ def blade_leaf(result: Any) -> Leaf:
     return flat if result.units is None else result.units.leaf(flat)
 
 
-def plan_frame(result: Any) -> Frame:
-    """The frame the plane's pictures show `result` on, u to the right, v up: its view frame
-    (evaluate.view_frame: the plane's turned so that u runs along the midrib of its flat blade,
-    base to apex), which the lesson's 3D view looks at from across its width."""
-    return view_frame(result)
+def plan_frame(result: Any, like: Frame | None = None) -> Frame:
+    """The frame the pictures show `result` on, u to the right, v up, which the lesson's 3D
+    view looks at too: the result's plane turned about its normal so that u runs as `like`'s
+    (the app's main view's: plane.turned_like), or by default its view frame (evaluate.view_frame:
+    u along the midrib of its flat blade, base to apex)."""
+    return view_frame(result) if like is None else turned_like(result.frame, like)
 
 
-def plan_turn(result: Any) -> np.ndarray:
+def plan_turn(result: Any, shown: Frame | None = None) -> np.ndarray:
     """(2, 2) float array taking the plane's coordinates (unit.frame's, whose axes are the
-    result's) to the picture's (plan_frame's): a quarter or half turn, or none."""
-    shown, plane = plan_frame(result), result.frame
+    result's) to the picture's, on `shown` (default: plan_frame's, a quarter or half turn or
+    none; any turn, mirrored where `shown` sees the plane from below)."""
+    shown, plane = shown or plan_frame(result), result.frame
     return np.array(
         [[shown.u @ plane.u, shown.u @ plane.v], [shown.v @ plane.u, shown.v @ plane.v]]
     )
 
 
-def _plane(ax: Any, result: Any) -> dict[str, Any]:
-    """The arrays a plan view draws, at unit size (every array in one frame), and "shown", the
-    transform that draws them on `ax` turned as plan_turn says."""
+def _plane(ax: Any, result: Any, frame: Frame) -> dict[str, Any]:
+    """The arrays a plan view draws, at unit size (every array in one frame), "frame", the one
+    they are shown on, and "shown", the transform that draws them on `ax` turned as plan_turn
+    says."""
     from matplotlib.transforms import Affine2D
 
     unit = result.unit if result.unit is not None else result
@@ -91,9 +103,10 @@ def _plane(ax: Any, result: Any) -> dict[str, Any]:
     points = blade_leaf(result).vein_points
     veins, heights = unit.frame.to_plane(points) if len(points) else (None, None)
     turn = np.eye(3)
-    turn[:2, :2] = plan_turn(result)
+    turn[:2, :2] = plan_turn(result, frame)
     return {
         "unit": unit,
+        "frame": frame,
         "shape": (ny, nx),
         "extent": extent,
         "veins": veins,
@@ -175,9 +188,10 @@ def _cropped(image: np.ndarray, margin: int = 12) -> np.ndarray:
     return image[top : rows.max() + margin, left : cols.max() + margin]
 
 
-def step_picture(ax: Any, result: Any, index: int) -> None:
-    """Draw step `index` (LESSON_STEPS, its `picture`) of `result` on the matplotlib axes `ax`."""
-    plane = _plane(ax, result)
+def step_picture(ax: Any, result: Any, index: int, frame: Frame | None = None) -> None:
+    """Draw step `index` (LESSON_STEPS, its `picture`) of `result` on the matplotlib axes `ax`,
+    on `frame` (default: plan_frame's)."""
+    plane = _plane(ax, result, frame or plan_frame(result))
     unit, shown = plane["unit"], plane["shown"]
     picture = LESSON_STEPS[index].picture
     if picture == "implicit":
@@ -223,7 +237,7 @@ def step_picture(ax: Any, result: Any, index: int) -> None:
     if picture == "mesh":
         from leafstudio.render.slides import mesh_image  # pyvista and VTK: only when asked for
 
-        ax.imshow(_cropped(mesh_image(result, (960, 720))))
+        ax.imshow(_cropped(mesh_image(result, (960, 720), plane["frame"])))
     elif picture == "points":
         _points(ax, plane)
     else:
@@ -239,13 +253,16 @@ def step_picture(ax: Any, result: Any, index: int) -> None:
 
 
 def _points(ax: Any, plane: dict[str, Any]) -> None:
-    """The input's points as given, seen obliquely (x across, y and z up): dots, nothing joined."""
-    unit = plane["unit"]
+    """The input's points as given, seen from POINTS_ELEVATION above the pictures' frame,
+    from its -v side (u across, as the lesson's 3D view looks): dots, nothing joined."""
+    unit, shown = plane["unit"], plane["frame"]
     leaf = unit.leaf
+    axes = Frame(unit.frame.origin, shown.u, shown.v, shown.normal)  # at unit size
+    rise = np.radians(POINTS_ELEVATION)
 
     def oblique(points: np.ndarray) -> np.ndarray:
-        x, y, z = points.T
-        return np.column_stack([x + 0.35 * y, z + 0.5 * y])
+        xy, z = axes.to_plane(points)
+        return np.column_stack([xy[:, 0], np.sin(rise) * xy[:, 1] + np.cos(rise) * z])
 
     ax.scatter(*oblique(leaf.boundary).T, s=12, color=BOUNDARY, zorder=2)
     if len(leaf.vein_points):

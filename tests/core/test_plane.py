@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from leafstudio.core.plane import Frame, fit_frame, turned_along
+from leafstudio.core.plane import Frame, fit_frame, turned_along, turned_like
 from leafstudio.errors import LeafError
 
 
@@ -138,3 +138,21 @@ def test_turned_along_brings_u_nearest_the_direction_by_quarter_turns():
         np.testing.assert_allclose(turned.u[:2], u)
         np.testing.assert_allclose(np.cross(turned.normal, turned.u), turned.v)  # not mirrored
         np.testing.assert_allclose(turned.normal, frame.normal)
+
+
+def test_turned_like_sees_the_plane_as_the_other_frame_sees_its_own():
+    """The lesson shows a drawn leaf's result on its sketch's frame (the app's view): the
+    result's plane, u as the sketch's u projected onto it, at any angle, seen from the sketch's
+    side of it (the normal flipped where the two face apart), with the sketch's handedness."""
+    a = np.radians(40.0)
+    sketch = Frame(np.ones(3), np.array([np.cos(a), np.sin(a), 0.1]), np.zeros(3), np.eye(3)[2])
+    sketch = Frame(sketch.origin, sketch.u, np.cross(sketch.normal, sketch.u), sketch.normal)
+    for normal in (np.eye(3)[2], -np.eye(3)[2]):  # facing the sketch's way, then away
+        plane = Frame(np.zeros(3), np.eye(3)[0], np.cross(normal, np.eye(3)[0]), normal)
+        turned = turned_like(plane, sketch)
+        np.testing.assert_allclose(turned.origin, plane.origin)
+        np.testing.assert_allclose(turned.normal, [0, 0, 1])
+        np.testing.assert_allclose(turned.u, [np.cos(a), np.sin(a), 0], atol=1e-12)
+        np.testing.assert_allclose(np.cross(turned.normal, turned.u), turned.v, atol=1e-12)
+    mirrored = Frame(sketch.origin, sketch.u, -sketch.v, sketch.normal)  # left-handed
+    assert turned_like(plane, mirrored).v @ mirrored.v > 0.99

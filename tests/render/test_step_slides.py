@@ -110,12 +110,16 @@ def test_each_field_has_a_readable_colour_bar(result):
 SUGAR_BEET = REALLEAVES / "sugarbeet_f00012_20170904T115033_pot1_7.txt"
 
 
-def _drawn_base_to_apex(result, picture: str) -> np.ndarray:
-    """Where a plan picture draws its outline's base and apex (evaluate.leaf_axis on the flat
-    blade): the display vector from the one to the other."""
-    from leafstudio.core.evaluate import leaf_axis
+def _drawn_base_to_apex(result, picture: str, frame=None) -> np.ndarray:
+    """Where a plan picture (drawn on `frame`, if given) draws its outline's base and apex
+    (evaluate.leaf_axis on the flat blade): the display vector from the one to the other."""
+    from matplotlib.figure import Figure
 
-    axes = step_slide(result, step_of(picture)).axes[0]
+    from leafstudio.core.evaluate import leaf_axis
+    from leafstudio.render.step_slides import step_picture
+
+    axes = Figure(figsize=(8, 6)).add_subplot()
+    step_picture(axes, result, step_of(picture), frame=frame)
     axes.figure.draw_without_rendering()
     base, direction = leaf_axis(result.leaf, result.frame, result.polygon)
     ends = [
@@ -151,6 +155,63 @@ def test_a_scans_plan_pictures_show_its_flat_blade_base_left_as_the_3d_view():
     for picture in ("implicit", "em"):
         shown = _drawn_base_to_apex(result, picture)
         assert shown[0] > 10 * abs(shown[1]), picture
+
+
+def _degrees(vector: np.ndarray) -> float:
+    return float(np.degrees(np.arctan2(vector[1], vector[0])))
+
+
+def _drawn_midrib(result, frame=None) -> np.ndarray:
+    """Step 1's picture (the input's points, seen from 50° above the plane): the vector from
+    the midrib's first dot to its last."""
+    from matplotlib.figure import Figure
+
+    from leafstudio.render.step_slides import step_picture
+
+    axes = Figure().add_subplot()
+    step_picture(axes, result, step_of("points"), frame=frame)
+    veins = np.asarray(axes.collections[1].get_offsets())  # data units, equal aspect
+    return veins[len(result.leaf.veins[0]) - 1] - veins[0]
+
+
+@pytest.mark.parametrize("degrees", [90.0, 200.0])
+def test_the_points_picture_is_turned_as_the_plane_pictures_are(degrees):
+    """closing34: step 1's picture drew the input's points in the file's own coordinates, the
+    other steps on the plan's frame: the nested demo turned 90° in its file ran 55° up step 1's
+    picture (its midrib along y, seen obliquely), level in step 5's; turned 200°, its apex was
+    at step 1's left. Its points are now seen on the plan's frame: base left, apex right,
+    level as in step 5 (the midrib's own tilt and heights: within 10°)."""
+    a = np.radians(degrees)
+    turn = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+    nested = ls.demo("nested")
+    leaf = ls.Leaf(nested.boundary @ turn.T, [vein @ turn.T for vein in nested.veins])
+    result = ls.reconstruct(leaf, ls.Params(grid=48))
+    points, em = _drawn_midrib(result), _drawn_base_to_apex(result, "em")
+    assert points[0] > 0 and em[0] > 0  # base left, apex right
+    assert abs(_degrees(points) - _degrees(em)) < 10, (points, em)
+
+
+def test_the_pictures_are_drawn_on_the_frame_they_are_given(result):
+    """The lesson shows a leaf as the app's main view does (a drawn leaf on its sketch's frame,
+    at the angle it was drawn): given a frame turned 40° in the leaf's plane, every picture
+    draws the leaf turned 40° the other way, step 1's points too (seen from 50° above the
+    plane: 40° foreshortened to 33°)."""
+    from leafstudio.core.plane import Frame
+    from leafstudio.render.step_slides import plan_frame
+
+    level = plan_frame(result)
+    a = np.radians(40.0)
+    turned = Frame(
+        level.origin,
+        np.cos(a) * level.u + np.sin(a) * level.v,
+        -np.sin(a) * level.u + np.cos(a) * level.v,
+        level.normal,
+    )
+    for picture in ("implicit", "em"):
+        shown = _drawn_base_to_apex(result, picture, turned)
+        assert abs(_degrees(shown) - _degrees(_drawn_base_to_apex(result, picture)) + 40) < 1
+    points = _degrees(_drawn_midrib(result, turned)) - _degrees(_drawn_midrib(result))
+    assert -45 < points < -25, points
 
 
 def test_a_small_plans_colour_bar_labels_never_touch(result):

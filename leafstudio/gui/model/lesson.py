@@ -86,7 +86,13 @@ class Lesson:
         return f"Step {self.index + 1} of {len(self.steps)}"
 
 
-def plan_png(result: Result, index: int, size: tuple[float, float], dpi: float = 96.0) -> bytes:
+def plan_png(
+    result: Result,
+    index: int,
+    size: tuple[float, float],
+    dpi: float = 96.0,
+    frame: Frame | None = None,
+) -> bytes:
     """Step `index`'s plan view of `result` as PNG bytes of `size` pixels.
 
     Parameters
@@ -99,6 +105,8 @@ def plan_png(result: Result, index: int, size: tuple[float, float], dpi: float =
         Width and height in pixels.
     dpi : float
         Pixels per inch (the screen's), so that the labels keep their point sizes.
+    frame : Frame, optional
+        The frame it is drawn on (step_slides.plan_frame), by default the result's view frame.
 
     Returns
     -------
@@ -113,7 +121,7 @@ def plan_png(result: Result, index: int, size: tuple[float, float], dpi: float =
     width, height = max(int(size[0]), 50), max(int(size[1]), 50)
     figure = Figure(figsize=(width / dpi, height / dpi), dpi=dpi, layout="constrained")
     FigureCanvasAgg(figure)
-    step_picture(figure.add_subplot(), result, index)
+    step_picture(figure.add_subplot(), result, index, frame)
     out = io.BytesIO()
     figure.savefig(out, format="png", dpi=dpi, facecolor="white")
     return out.getvalue()

@@ -5,10 +5,18 @@ own; beside it the step's title, its plan view (the slides' picture of the step)
 plain words and its equation typeset. Nothing is drawn over the leaf. The arrow keys and the
 space bar move between the steps, Escape leaves.
 
-The 3D view and the plan show the leaf the same way round: both on the plan's frame
-(step_slides.plan_frame), the 3D view from across the blade, base left and apex right as in the
-plan. In step 5 soybean pot1_1's apex was at the plan's upper left and the 3D view's right, and
-the nested demo's ran at 44° across the 3D view (its iso camera turned towards the base).
+The 3D view and every plan show the leaf the same way round, and as the app's main view does:
+on the result's plane turned as the main view's frame (step_slides.plan_frame of
+Session.view_frame), the 3D view from that frame's -v side. A loaded leaf, a scan or a demo is
+shown base left, apex right (its sketch is derived on its view frame); a drawn leaf at the angle
+it was drawn. In step 5 soybean pot1_1's apex was at the plan's upper left and the 3D view's
+right, and the nested demo's ran at 44° across the 3D view (its iso camera turned towards the
+base); a leaf drawn at 40° ran level in the lesson and at 40° in the app (closing34).
+
+Why the drawing's angle, for a teacher: the class has watched the leaf drawn, and goes back to
+the app with Esc; the same leaf turned 40° on the next screen reads as another leaf, or as a
+step of the method, which does not turn it (its plane's axes are a change of coordinates). The
+app's view cannot be straightened instead: its top view is the sketch the teacher draws in.
 """
 
 from __future__ import annotations
@@ -27,6 +35,7 @@ from PySide6.QtGui import (
 )
 from PySide6.QtWidgets import QHBoxLayout, QLabel, QSizePolicy, QVBoxLayout, QWidget
 
+from leafstudio.core.plane import Frame
 from leafstudio.gui.model.lesson import (
     Lesson,
     bent_note,
@@ -39,7 +48,7 @@ from leafstudio.gui.model.view_aids import stretches
 from leafstudio.gui.qt.actions import Action
 from leafstudio.gui.qt.explain import stretch_matrix
 from leafstudio.gui.qt.viewport import Viewport
-from leafstudio.render.step_slides import plan_frame
+from leafstudio.render.step_slides import POINTS_ELEVATION, plan_frame
 
 TITLE_PT, CAPTION_PT, FOOTER_PT = 26, 18, 14  # at 100% scaling; none under 14 (issue 22)
 STRETCH = 3.0  # the 3D leaf's relief, exaggerated: a few percent of its length is flat to a class
@@ -50,8 +59,15 @@ BACK_KEYS = frozenset({Qt.Key.Key_Left, Qt.Key.Key_Backspace, Qt.Key.Key_PageUp,
 # the 3D view's elevations (framing.best_iso), nearer the plan's view from straight above than
 # the app's 35° to 65°: from across the blade at 35°, an ovate form folded 45° showed its near
 # half's underside and hid its crease (the nested demo takes 50° either way)
-ELEVATIONS = (50.0, 65.0)
-FOOTER = "{progress} · → next · ← back · Esc: leave"  # one line at 1024 wide (space: next too)
+ELEVATIONS = (POINTS_ELEVATION, 65.0)
+# the footer's keys (space: next too), the first that fits the column on one line: at 960 x 600
+# the first took 385 of the column's 374 pixels (14-point Sans under Xvfb) and "Esc: leave"
+# wrapped; the second took 358, the third is for a larger font
+FOOTERS = (
+    "{progress} · → next · ← back · Esc: leave",
+    "{progress} · ← → to move · Esc: leave",
+    "{progress} · Esc: leave",
+)
 PLAN_LEAST = 0.3  # the plan's least share of the column's height: the caption's words are set
 # smaller, down to 14 points, to leave it that (a folded leaf's step 2 at 960 x 600 left the
 # plan 67 pixels high under a 13-line caption and a 3-line footer)
@@ -79,6 +95,7 @@ class LessonWindow(QWidget):
         super().__init__(None, Qt.WindowType.Window)
         self.window_ = window
         self.lesson = Lesson()
+        self.frame: Frame | None = None  # the frame the leaf is shown on (plan_frame)
         self.setWindowTitle("LeafStudio — lesson")
         self.setMinimumSize(*MINIMUM)
         self.setStyleSheet("background: white; color: #202020;")
@@ -138,7 +155,7 @@ class LessonWindow(QWidget):
         step = self.lesson.step
         self.title.setText(step.title)
         self.caption.setText(step.words(bent=self._bent()))  # its steps run on the blade laid flat
-        footer = FOOTER.format(progress=self.lesson.progress())
+        footer = self._footer_keys()
         result = self.window_.session.result
         if result is not None and not stretches(result):  # drawn as bent (view_aids.stretches)
             footer += "\n" + bent_note(self.lesson.steps)
@@ -146,7 +163,7 @@ class LessonWindow(QWidget):
         ratio = self.devicePixelRatioF()
         pixmap = QPixmap()  # empty for a step without one
         pixmap.loadFromData(equation_png(step.equation, dpi=self.logicalDpiY() * ratio))
-        room = int((self.text.width() - 48) * ratio)  # the column less its margins
+        room = int(self._column_width() * ratio)
         if room > 0 and pixmap.width() > room:  # a long equation shrunk to fit, never cut
             pixmap = pixmap.scaledToWidth(room, Qt.TransformationMode.SmoothTransformation)
         pixmap.setDevicePixelRatio(ratio)
@@ -173,11 +190,11 @@ class LessonWindow(QWidget):
         result = outcome.result
         layers = self._layers()
         self.viewport.visible.update({key: key in layers for key in self.viewport.visible})
-        # the plan's frame, so that the 3D view turns the leaf as the plan beside it (the app's
-        # sketch frame runs as a leaf was drawn, at any angle); a bent leaf's laid flat framed too
-        frame = plan_frame(result)
-        bounds = lesson_bounds(result, frame)
-        self.viewport.show_layers(outcome.layers, frame, bounds, "reset")
+        # the plans' frame, so that the 3D view turns the leaf as the plan beside it, and both as
+        # the app's view (its sketch's frame); a bent leaf's laid flat framed too
+        self.frame = plan_frame(result, self.window_.session.view_frame())
+        bounds = lesson_bounds(result, self.frame)
+        self.viewport.show_layers(outcome.layers, self.frame, bounds, "reset")
         self.show_step()
 
     def _bent(self) -> bool:
@@ -198,12 +215,23 @@ class LessonWindow(QWidget):
                 actor.SetUserMatrix(matrix)
         self.viewport.redraw()
 
+    def _column_width(self) -> int:
+        """The text column's width inside its margins: the words' width."""
+        margins = self.text.layout().contentsMargins()
+        return self.text.width() - margins.left() - margins.right()
+
+    def _footer_keys(self) -> str:
+        """The footer's first line: the first of FOOTERS that fits the column (the last else)."""
+        metrics, width = self.footer.fontMetrics(), self._column_width()
+        lines = [keys.format(progress=self.lesson.progress()) for keys in FOOTERS]
+        return next((line for line in lines if metrics.horizontalAdvance(line) <= width), lines[-1])
+
     def _fit_caption(self) -> None:
         """The caption's words at the largest of CAPTION_STEPS that leaves the plan PLAN_LEAST
         of the column's height (the smallest where none does)."""
         column = self.text.layout()
         margins = column.contentsMargins()
-        width = self.text.width() - margins.left() - margins.right()
+        width = self._column_width()
         height = self.height() - margins.top() - margins.bottom()
         others = [self.title, self.equation, self.footer]
         fixed = sum(_label_height(label, width) for label in others if not label.isHidden())
@@ -225,7 +253,8 @@ class LessonWindow(QWidget):
         ratio = self.devicePixelRatioF()
         size = (self.plan.width() * ratio, self.plan.height() * ratio)
         pixmap = QPixmap()
-        pixmap.loadFromData(plan_png(result, self.lesson.index, size, self.logicalDpiX() * ratio))
+        dpi = self.logicalDpiX() * ratio
+        pixmap.loadFromData(plan_png(result, self.lesson.index, size, dpi, frame=self.frame))
         pixmap.setDevicePixelRatio(ratio)
         self.plan.setPixmap(pixmap)
 

@@ -55,12 +55,15 @@ def test_the_leaf_is_large_uncovered_and_the_text_readable(window, qtbot):
                 assert label.font().pointSizeF() >= 14, label.text()
                 hint = label.heightForWidth(label.width()) if label.wordWrap() else 0
                 assert hint <= label.height() + 1, label.text()  # the words fit their box
-    # the footer on one line, at both projector sizes ("Esc: leave" wrapped onto a second line)
-    for size in ((1280, 720), (1024, 768)):
+    # the footer on one line, at every projector size down to the smallest lesson ("Esc: leave"
+    # wrapped onto a second line at 1024 wide, then at 960), the keys to move and leave said
+    for size in ((1280, 720), (1024, 768), (960, 600)):
         lesson.resize(*size)
         qtbot.wait(300)  # the column is sized once the resize rests
+        qtbot.waitUntil(lambda size=size: lesson.width() == size[0])
         footer = lesson.footer
         assert footer.heightForWidth(footer.width()) < 1.5 * footer.fontMetrics().lineSpacing()
+        assert "→" in footer.text() and "Esc: leave" in footer.text(), size
     lesson.close()
 
 
@@ -240,4 +243,39 @@ def test_a_bent_leafs_plan_keeps_its_room_in_the_smallest_lesson(window, qtbot, 
     assert lesson.plan.height() >= PLAN_LEAST * lesson.height() - 30  # the column's margins
     caption = lesson.caption
     assert caption.heightForWidth(caption.width()) <= caption.height() + 1  # the words fit
+    lesson.close()
+
+
+def test_a_leaf_drawn_at_an_angle_is_shown_at_its_angle_as_in_the_app(window, qtbot, monkeypatch):
+    """closing34: a leaf drawn at an angle was shown straightened in the lesson (its plan frame,
+    u along the midrib) while the app's main view showed it as drawn (the sketch's frame): the
+    app's clicked leaf drawn turned 40° ran level in the lesson's top view and at 40° in the
+    app's. The lesson shows it as the app does, in its 3D view and in every plan."""
+    import numpy as np
+
+    from leafstudio.gui.qt import lesson_view
+    from tests.gui.qt.conftest import wait_result
+    from tests.leaves import clicked_sketch
+
+    window.session.new_sketch()
+    sketch = clicked_sketch(turn=40.0)
+    window.session.commit_sketch(sketch, "Draw")
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
+    midrib = sketch.frame.to_world(sketch.veins[0][[0, -1], :2], np.zeros(2))
+
+    def top_view_degrees(viewport) -> float:
+        viewport.camera("top")
+        base, apex = viewport.display_points(midrib)
+        return float(np.degrees(np.arctan2(*(apex - base)[::-1])))
+
+    in_app = top_view_degrees(window.viewport)
+    assert abs(in_app - 40) < 3  # as drawn
+    frames, drawn = [], lesson_view.plan_png
+    monkeypatch.setattr(
+        lesson_view, "plan_png", lambda *a, **k: frames.append(k.get("frame")) or drawn(*a, **k)
+    )
+    lesson = _opened(window, qtbot)
+    lesson.go(4)
+    assert abs(top_view_degrees(lesson.viewport) - in_app) < 3
+    assert frames and all(f is lesson.frame for f in frames)  # the plans drawn on it
     lesson.close()
