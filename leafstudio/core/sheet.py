@@ -27,6 +27,7 @@ from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
 
 from leafstudio._shared import progress
+from leafstudio.core.plane import fixed_sample, grid_frame
 from leafstudio.core.sheet_cells import VOLUME, cubes, cut, mean_errors
 
 REACH = 1.8  # cells: cell means closer than this are neighbours in the graph
@@ -46,6 +47,16 @@ HALVINGS = 4  # a step that goes farther is halved at most this many times
 SAMPLES = 160  # the spline sampled this many times across the flat blade's extent
 PAD = 0.1  # ... and this share of it beyond, on every side
 STEP = 1e-4  # fit_sheet's central differences, a share of the flat blade's extent
+OFF_SHEET = 5.0  # off_share: a point this many local thicknesses from the sheet is off it,
+OFF_FLOOR = 1e-3  # ... and this share of the length (a noise-free scan is no thickness thick)
+THICK_NEIGHBOURS = 32  # ... the thickness of this many nearest points (16: a blade doubled into
+# two layers 2% of its length apart, or rolled on a radius of 8% noise-free, was 11-12% off)
+MOST_OFF = 0.05  # a sheet with a larger share of its points off is not theirs: fit_sheet's None.
+# Off, at THICK_NEIGHBOURS 32: the eight shared scans 0-0.1%, those two blades 0-1.7%, a blade
+# rolled 180-300 degrees 0-0.9% (noise 0.05-0.3% of its length); 320 degrees 0.1-11%, 330
+# 12-24%, 345-360 40-65% (its margins' cube means are neighbours across the gap, the unrolled
+# blade folds, and at noise 0.05% 17-51% of the points were within 0.3% of the sheet)
+CHECKED = 5_000  # ... counted on this many of the points
 UNROLLING = "unrolling the blade"  # what fit_sheet's progress reports say it does
 CHUNKS = 8  # the spline is sampled in this many parts, its progress reported after each
 
@@ -291,13 +302,20 @@ class Sheet:
 
 
 def refit(
-    sheet: Sheet, points: np.ndarray, start: np.ndarray, cell: float, smoothing: float
+    sheet: Sheet,
+    points: np.ndarray,
+    start: np.ndarray,
+    cell: float,
+    smoothing: float,
+    frame: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> Sheet:
     """The sheet through (n, 3) points averaged in square cells of side `cell` of the flat
     blade `sheet` puts them on (from their (n, 2) flat places `start`, their cubes' on the
     first sheet): each cell's mean flat point (u, v) to its mean point, the spline's
     `smoothing` there in proportion to the mean's error across the blade (from the cell's own
     points in 3D: sheet_cells.mean_errors), within WEIGHT_RANGE times the typical cell's.
+    `frame`: the points' origin (3,) and axes (3, 3) in the world (plane.grid_frame), where the
+    sheet returned is (the spline is linear in its values: the same sheet, moved there).
 
     The first sheet goes through cube means, each at the flat place the neighbour graph gave
     it: a cube of the 3D cloud splits a doubled layer or a scanner's stripe (soybean pot1_1:
@@ -319,7 +337,10 @@ def refit(
     if typical > 0:  # each cell's smoothing in proportion to its mean's error (module docstring)
         smoothing = smoothing * np.clip(error / typical, 1 / WEIGHT_RANGE, WEIGHT_RANGE)
     counts = counts[:, None]
-    return Sheet(centres / counts, values / counts, smoothing, sheet.up, cell)
+    values, up = values / counts, sheet.up
+    if frame is not None:
+        values, up = frame[0] + values @ frame[1], up @ frame[1]
+    return Sheet(centres / counts, values, smoothing, up, cell)
 
 
 def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None:
@@ -338,7 +359,11 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     -------
     Sheet or None
         The sheet; `Sheet.flatten` puts the points on their flat blade. None also for points
-        that fill a volume (more than sheet_cells.VOLUME times the cells across, squared, cubes).
+        that fill a volume (more than sheet_cells.VOLUME times the cells across, squared, cubes),
+        and for a sheet more than MOST_OFF of them lie off (`off_share`: a blade rolled into a
+        nearly closed tube, its unrolled blade folded across the gap between its margins).
+        Fitted in the points' own frame (plane.grid_frame), the flat blade is the same for a
+        turned or mirrored copy of them, and the sheet is moved with them.
 
     Notes
     -----
@@ -365,8 +390,13 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     (1e-2 down to 1e-4) gave much the same as one refit, at three times the cost
     (benchmarks/bench_bent.py --scan-table).
     """
-    points = np.asarray(points, dtype=float)
     progress.report(0.0, UNROLLING)
+    # fitted in a frame of the points' own, then moved back: the cubes' grid and order, and so
+    # the flat blade, are the same however the scan was turned or mirrored (plane.grid_frame)
+    given = np.asarray(points, dtype=float)
+    frame = grid_frame(given)
+    points = (given - frame[0]) @ frame[1].T
+    up = np.asarray(up, dtype=float) @ frame[1].T
     cells, cube, counts = cut(points, length)  # CELLS, fewer on a sparse scan (sheet_cells.py)
     cell = length / cells
     sums = np.zeros((len(counts), 3))
@@ -390,7 +420,20 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     du, dv = ((spline(flat + d) - spline(flat - d)) / (2 * h) for d in ([h, 0.0], [0.0, h]))
     stretch = float(np.sqrt(np.median(np.linalg.norm(np.cross(du, dv), axis=1))))
     with progress.share(0.2, 0.6):  # sampling each sheet: the rest of the time
-        sheet = Sheet(flat * stretch, means, smoothing, np.asarray(up, dtype=float))
+        sheet = Sheet(flat * stretch, means, smoothing, up)
     with progress.share(0.6, 1.0):
-        sheet = refit(sheet, points, flat[cube] * stretch, cell, SMOOTHING * length**2)
-    return sheet
+        sheet = refit(sheet, points, flat[cube] * stretch, cell, SMOOTHING * length**2, frame)
+    return sheet if off_share(sheet, given, length) <= MOST_OFF else None
+
+
+def off_share(sheet: Sheet, points: np.ndarray, length: float) -> float:
+    """The share of (n, 3) points (CHECKED of them at most) that lie off `sheet`: farther from
+    it than OFF_SHEET times their local thickness (the rms distance of their THICK_NEIGHBOURS
+    nearest points from those points' own plane) and than OFF_FLOOR of the `length`."""
+    sample = fixed_sample(points, CHECKED)
+    _, near = cKDTree(points).query(sample, k=min(THICK_NEIGHBOURS, len(points)))
+    around = points[near] - points[near].mean(axis=1, keepdims=True)
+    spread = np.linalg.eigvalsh(np.einsum("nki,nkj->nij", around, around) / near.shape[1])[:, 0]
+    thick = np.sqrt(np.maximum(spread, 0.0))
+    off = np.abs(sheet.flatten(sample)[:, 2])
+    return float(np.mean(off > np.maximum(OFF_SHEET * thick, OFF_FLOOR * length)))

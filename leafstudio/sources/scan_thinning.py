@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from leafstudio.core.plane import fixed_sample
+from leafstudio.core.plane import fixed_sample, grid_frame
 
 THINNING_PASSES = 8
 SAMPLE = 50_000  # the voxel size is first sought on this many of the points
@@ -19,7 +19,12 @@ def voxel_thinning(points: np.ndarray, budget: int) -> tuple[np.ndarray, np.ndar
     points, then on all of them), each next one scales by the miss."""
     if len(points) <= budget:
         return points, None, 0.0
-    lo, hi = points.min(axis=0), points.max(axis=0)
+    # the cubes along a frame of the points' own (plane.grid_frame): the same cubes for a turned
+    # or mirrored scan; the centroids are the points' own (2 million points on a bent sheet:
+    # 0.40 s of CPU along the world's axes, 0.67-0.92 s so)
+    origin, axes = grid_frame(points)
+    at_own = (points - origin) @ axes.T
+    lo, hi = at_own.min(axis=0), at_own.max(axis=0)
     size = float(np.max(hi - lo)) / np.sqrt(budget)
 
     def cells_of(at: np.ndarray, size: float) -> tuple[np.ndarray, np.ndarray]:
@@ -33,14 +38,14 @@ def voxel_thinning(points: np.ndarray, budget: int) -> tuple[np.ndarray, np.ndar
         return size * float(np.clip(np.sqrt(count / (0.75 * budget)), 0.5, 4.0))
 
     if len(points) > 2 * SAMPLE:  # a cheap first guess from a sample (it finds fewer cubes)
-        sample = fixed_sample(points, SAMPLE)
+        sample = fixed_sample(at_own, SAMPLE)
         for _ in range(THINNING_PASSES):
             count = len(cells_of(sample, size)[1])
             if budget // 2 <= count <= budget:
                 break
             size = adjust(size, count)
     for _ in range(THINNING_PASSES):
-        cell, counts = cells_of(points, size)
+        cell, counts = cells_of(at_own, size)
         if budget // 2 <= len(counts) <= budget:
             break
         size = adjust(size, len(counts))

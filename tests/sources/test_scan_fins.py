@@ -81,10 +81,13 @@ def test_a_real_hole_stays_open_and_no_other_scan_gains_one(scans):
     pot1_1 0.75%: its surface, refitted on the flat blade (core/sheet.py), passes between its
     doubled layers and under its curl, 3.2% of the length from the nearest scan point (4.1%
     at most) but spanning no hole: on the flat blade each such triangle lies within 2.3 point
-    gaps of a blade point (a hole is 4: sources/scan_holes.py)."""
+    gaps of a blade point (a hole is 4: sources/scan_holes.py). pot1_7's tear is two holes
+    that meet at a point since its whole blade is unrolled (core/sheet.py: the cubes in the
+    scan's own frame; a strip of blade beyond the tear was cut off as petiole before)."""
     holes = {name[-12:]: count for name, (_, _, _, count, _) in scans.items()}
     spans = {name[-12:]: far for name, (_, _, far, _, _) in scans.items()}
-    assert holes == {name: int(name.endswith("pot1_7")) for name in holes}, holes
+    assert holes.pop("15033_pot1_7") >= 1
+    assert not any(holes.values()), holes
     assert spans["15033_pot1_7"] <= 5e-4 and spans["43118_pot1_1"] <= 1e-2, spans
     assert max(far for name, far in spans.items() if name != "43118_pot1_1") <= 2e-3, spans
 
