@@ -13,9 +13,10 @@ from leafstudio.sources.scan import OUTLINE_POINTS
 
 FORMATS = ("ply", "glb", "obj", "vtp", "none")  # mesh types save_mesh writes, or none
 DEFAULT_TABLE = "traits.csv"
-RESULTS = 34  # the session whose change last moved a row's figures for the same input and
-# settings (34: a scan's sheet's normal on one side where the blade curls past upright,
-# core/sheet.py; 33: its sheet weighed per cell; a posed outline's sag points' curvatures):
+RESULTS = 35  # the session whose change last moved a row's figures for the same input and
+# settings (35: a scan's cubes cut in its own frame, core/plane.grid_frame; 34: a scan's
+# sheet's normal on one side where the blade curls past upright, core/sheet.py; 33: its sheet
+# weighed per cell; a posed outline's sag points' curvatures):
 # `--resume` runs the rows of an older table again (review33: it kept pot1_15's area 985.63
 # from the old sheet beside 968.59 from the new); bump it with such a change
 
