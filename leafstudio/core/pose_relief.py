@@ -32,6 +32,7 @@ import shapely
 from scipy.interpolate import CubicSpline, LinearNDInterpolator, PPoly
 from shapely.geometry import Polygon
 
+from leafstudio._shared.blas import one_blas_thread
 from leafstudio.core.prepare.polygon import unit_power
 
 KNOTS = 24  # places along the blade the sections' mean heights are read at
@@ -245,7 +246,10 @@ def relief_of(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | None:
     with _RECENT_LOCK:
         if key in _RECENT:
             return _RECENT[key]
-    relief = _relief_of(boundary, veins)
+    with one_blas_thread():  # the triangulation's barycentric transforms, a tiny LAPACK call a
+        # triangle: with a second OpenBLAS thread waiting for a busy core, 0.01-4.2 s of CPU for
+        # an ovate form's blade (find_simplex's first call, two cores under load), 0.00-0.01
+        relief = _relief_of(boundary, veins)
     with _RECENT_LOCK:
         _RECENT[key] = relief
         while len(_RECENT) > RECENT:

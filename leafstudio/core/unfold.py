@@ -60,6 +60,7 @@ from leafstudio.core.pose_limits import TWIST_TURNS as TWIST_HALVES  # the loade
 from leafstudio.core.pose_relief import Relief, relief_of, sheet_relief
 from leafstudio.core.prepare.vein_order import midrib_turned
 from leafstudio.core.unfold_hinge import SHARE_CLOSE, fallen_slopes, hinge_relief, turn_share
+from leafstudio.core.unfold_mixed import remixed
 from leafstudio.core.unfold_rolled import refolded
 from leafstudio.model import Leaf
 
@@ -482,6 +483,10 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
         twisted = settle(TWISTED)
         if twisted is not None and (best is None or twisted[0] <= TWIST_GAIN * best[0]):
             best = twisted
+    if hinged:  # no fit bends about a relief as a form's, all four terms (unfold_mixed.py)
+        starts = [placed(f[1], f[2], False)[0] for fits in plain.values() for f in fits[:1]]
+        frames = _starts(boundary, midrib)
+        best = remixed(best, starts, leaf, boundary, midrib, frames, length, most, before)
     return None if best is None else best[2]
 
 
