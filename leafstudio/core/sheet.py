@@ -27,7 +27,7 @@ from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
 
 from leafstudio._shared import progress
-from leafstudio.core.plane import fixed_sample, grid_frame
+from leafstudio.core.plane import grid_frame
 from leafstudio.core.sheet_cells import VOLUME, cubes, cut, mean_errors
 
 REACH = 1.8  # cells: cell means closer than this are neighbours in the graph
@@ -47,16 +47,6 @@ HALVINGS = 4  # a step that goes farther is halved at most this many times
 SAMPLES = 160  # the spline sampled this many times across the flat blade's extent
 PAD = 0.1  # ... and this share of it beyond, on every side
 STEP = 1e-4  # fit_sheet's central differences, a share of the flat blade's extent
-OFF_SHEET = 5.0  # off_share: a point this many local thicknesses from the sheet is off it,
-OFF_FLOOR = 1e-3  # ... and this share of the length (a noise-free scan is no thickness thick)
-THICK_NEIGHBOURS = 32  # ... the thickness of this many nearest points (16: a blade doubled into
-# two layers 2% of its length apart, or rolled on a radius of 8% noise-free, was 11-12% off)
-MOST_OFF = 0.05  # a sheet with a larger share of its points off is not theirs: fit_sheet's None.
-# Off, at THICK_NEIGHBOURS 32: the eight shared scans 0-0.1%, those two blades 0-1.7%, a blade
-# rolled 180-300 degrees 0-0.9% (noise 0.05-0.3% of its length); 320 degrees 0.1-11%, 330
-# 12-24%, 345-360 40-65% (its margins' cube means are neighbours across the gap, the unrolled
-# blade folds, and at noise 0.05% 17-51% of the points were within 0.3% of the sheet)
-CHECKED = 5_000  # ... counted on this many of the points
 UNROLLING = "unrolling the blade"  # what fit_sheet's progress reports say it does
 CHUNKS = 8  # the spline is sampled in this many parts, its progress reported after each
 
@@ -359,9 +349,11 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     -------
     Sheet or None
         The sheet; `Sheet.flatten` puts the points on their flat blade. None also for points
-        that fill a volume (more than sheet_cells.VOLUME times the cells across, squared, cubes),
-        and for a sheet more than MOST_OFF of them lie off (`off_share`: a blade rolled into a
-        nearly closed tube, its unrolled blade folded across the gap between its margins).
+        that fill a volume (more than sheet_cells.VOLUME times the cells across, squared, cubes).
+        A blade rolled into a nearly closed tube (330 degrees and more) gets a sheet a share of
+        its points lie off (its margins' cube means are neighbours across the gap and its
+        unrolled blade folds): still its flat area within 3-7%, where the blade laid on its
+        plane had 45% of it (review35), so it is kept.
         Fitted in the points' own frame (plane.grid_frame), the flat blade is the same for a
         turned or mirrored copy of them, and the sheet is moved with them.
 
@@ -423,17 +415,4 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
         sheet = Sheet(flat * stretch, means, smoothing, up)
     with progress.share(0.6, 1.0):
         sheet = refit(sheet, points, flat[cube] * stretch, cell, SMOOTHING * length**2, frame)
-    return sheet if off_share(sheet, given, length) <= MOST_OFF else None
-
-
-def off_share(sheet: Sheet, points: np.ndarray, length: float) -> float:
-    """The share of (n, 3) points (CHECKED of them at most) that lie off `sheet`: farther from
-    it than OFF_SHEET times their local thickness (the rms distance of their THICK_NEIGHBOURS
-    nearest points from those points' own plane) and than OFF_FLOOR of the `length`."""
-    sample = fixed_sample(points, CHECKED)
-    _, near = cKDTree(points).query(sample, k=min(THICK_NEIGHBOURS, len(points)))
-    around = points[near] - points[near].mean(axis=1, keepdims=True)
-    spread = np.linalg.eigvalsh(np.einsum("nki,nkj->nij", around, around) / near.shape[1])[:, 0]
-    thick = np.sqrt(np.maximum(spread, 0.0))
-    off = np.abs(sheet.flatten(sample)[:, 2])
-    return float(np.mean(off > np.maximum(OFF_SHEET * thick, OFF_FLOOR * length)))
+    return sheet

@@ -228,18 +228,6 @@ def _rolled_round(degrees: float) -> np.ndarray:
     return points + np.random.default_rng(1).normal(0, 5e-4, points.shape)
 
 
-@pytest.mark.parametrize("degrees", [330.0, 345.0, 360.0])
-def test_a_nearly_closed_tube_is_fitted_or_refused_never_a_sheet_off_its_points(degrees):
-    """Rolled 330 degrees and more, its margins' cube means are neighbours across the gap, the
-    unrolled blade folds, and the sheet through it missed the points: 38%, 30% and 21% of them
-    within 0.003 (six times the noise). fit_sheet gives None (the caller extracts on the
-    blade's plane) when more than MOST_OFF of the points lie off its sheet (off_share)."""
-    points = _rolled_round(degrees)
-    sheet = fit_sheet(points, np.array([0.0, 0.0, 1.0]), 1.0)
-    if sheet is not None:
-        assert np.mean(np.abs(sheet.flatten(points)[:, 2]) < 0.003) > 0.9
-
-
 def test_a_blade_rolled_300_degrees_is_still_unrolled():
     points = _rolled_round(300.0)
     sheet = fit_sheet(points, np.array([0.0, 0.0, 1.0]), 1.0)
