@@ -73,8 +73,9 @@ def principal_extents(points: np.ndarray) -> np.ndarray:
     return np.ptp(centred @ axes.T, axis=0)
 
 
-# the grid_frame's axes in the points' principal ones (rows): each turned off all three, the
-# blade's normal along the grid's diagonal (1, 1, 1). Cubes along a blade's own axes stack a
+# the points' principal axes in the grid_frame's coordinates (rows; its columns are the grid's
+# axes in the principal ones): each grid axis turned off all three, the blade's normal along
+# the grid's diagonal (1, 1, 1). Cubes along a blade's own axes stack a
 # near-flat blade on their faces: its points split into two layers of cube means, and the
 # unrolled blades came out less isometric (pairs 2-4 mm apart on the eight shared scans, flat
 # over 3D distance: interquartile range 0.043-0.217, sugar beet pot1_1 10% too wide; turned so,
@@ -92,7 +93,10 @@ def grid_frame(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     (and their order) are the same whatever frame the scanner used. Cut along the world's axes
     from the points' lowest corner, they were not: sugar beet pot1_7 with z negated (a
     left-handed scanner's frame) unrolled into another flat blade, 43 units long instead of 61
-    (core/sheet.py). The frame is left-handed for a mirrored copy of a right-handed one's."""
+    (core/sheet.py). The frame is left-handed for a mirrored copy of a right-handed one's.
+    Not where two spreads are equal or a third moment is nil, as across a blade symmetric about
+    its midrib: that axis, or its sign, is rounding's (such a blade turned at random took
+    another frame 23 times in 40, its flat places then 1e-3 apart, Procrustes disparity)."""
     origin = points.mean(axis=0)
     centred = points - origin
     axes = np.linalg.eigh(centred.T @ centred)[1][:, ::-1].T  # SVD: 3.9 s at 2e6 points

@@ -17,8 +17,9 @@ step 1 too (they were drawn in the file's own axes: the nested demo turned 90° 
 a quarter or half turn from the plane's): on soybean pot1_1's lesson the plan had turned its
 flat blade by the unbent leaf's midrib (`view_frame` of the result at unit size, whose leaf is
 not bent), the 3D view by its flat blade's: the apex at the upper left in one, the right in the
-other. The lesson gives the frame of the app's main view instead (a drawn leaf's sketch, at the
-angle it was drawn), so that a class sees the leaf as it was drawn.
+other. The lesson, and the app's File > Export slides, give the frame of the app's main view
+instead (a drawn leaf's sketch, at the angle it was drawn), so that a class sees the leaf as it
+was drawn, on the screen and on the slides alike.
 """
 
 from __future__ import annotations
@@ -284,8 +285,11 @@ def _heights_on_plane(ax: Any, plane: dict[str, Any]) -> None:
     _colour_bar(ax, dots, "height above the plane")
 
 
-def step_slide(result: Any, index: int, step: LessonStep | None = None) -> Any:
-    """One slide: step `index`'s picture on the left, its words and equation on the right.
+def step_slide(
+    result: Any, index: int, step: LessonStep | None = None, frame: Frame | None = None
+) -> Any:
+    """One slide: step `index`'s picture (on `frame`, default plan_frame's) on the left, its
+    words and equation on the right.
 
     Returns
     -------
@@ -296,7 +300,7 @@ def step_slide(result: Any, index: int, step: LessonStep | None = None) -> Any:
     step = step or LESSON_STEPS[index]
     figure = Figure(figsize=SLIDE_SIZE)
     grid = figure.add_gridspec(1, 2, width_ratios=(1.45, 1.0), left=0.02, right=0.98, wspace=0.05)
-    step_picture(figure.add_subplot(grid[0, 0]), result, index)
+    step_picture(figure.add_subplot(grid[0, 0]), result, index, frame)
     words = figure.add_subplot(grid[0, 1])
     words.set_axis_off()
     title = textwrap.fill(step.title, TITLE_CHARS)
@@ -315,11 +319,15 @@ def step_slide(result: Any, index: int, step: LessonStep | None = None) -> Any:
     return figure
 
 
-def lesson_slides(result: Any, comparisons: list[tuple[str, Any]] | tuple = ()) -> list[Any]:
-    """Every step's slide for `result`, then a slide per (title, forms) comparison."""
+def lesson_slides(
+    result: Any, comparisons: list[tuple[str, Any]] | tuple = (), frame: Frame | None = None
+) -> list[Any]:
+    """Every step's slide for `result` (its pictures on `frame`, default plan_frame's: the app
+    gives the lesson's, so that its slides show a drawn leaf as the lesson does), then a slide
+    per (title, forms) comparison."""
     from leafstudio.render.forms_figure import compare_figure
 
-    slides = [step_slide(result, i) for i in range(len(LESSON_STEPS))]
+    slides = [step_slide(result, i, frame=frame) for i in range(len(LESSON_STEPS))]
     slides += [compare_figure(forms, title) for title, forms in comparisons]
     return slides
 

@@ -113,13 +113,9 @@ SUGAR_BEET = REALLEAVES / "sugarbeet_f00012_20170904T115033_pot1_7.txt"
 def _drawn_base_to_apex(result, picture: str, frame=None) -> np.ndarray:
     """Where a plan picture (drawn on `frame`, if given) draws its outline's base and apex
     (evaluate.leaf_axis on the flat blade): the display vector from the one to the other."""
-    from matplotlib.figure import Figure
-
     from leafstudio.core.evaluate import leaf_axis
-    from leafstudio.render.step_slides import step_picture
 
-    axes = Figure(figsize=(8, 6)).add_subplot()
-    step_picture(axes, result, step_of(picture), frame=frame)
+    axes = step_slide(result, step_of(picture), frame=frame).axes[0]
     axes.figure.draw_without_rendering()
     base, direction = leaf_axis(result.leaf, result.frame, result.polygon)
     ends = [
@@ -191,27 +187,42 @@ def test_the_points_picture_is_turned_as_the_plane_pictures_are(degrees):
     assert abs(_degrees(points) - _degrees(em)) < 10, (points, em)
 
 
+def _turned(frame, degrees: float):
+    """`frame` turned `degrees` about its normal."""
+    from leafstudio.core.plane import Frame
+
+    a = np.radians(degrees)
+    u = np.cos(a) * frame.u + np.sin(a) * frame.v
+    return Frame(frame.origin, u, np.cross(frame.normal, u), frame.normal)
+
+
 def test_the_pictures_are_drawn_on_the_frame_they_are_given(result):
     """The lesson shows a leaf as the app's main view does (a drawn leaf on its sketch's frame,
     at the angle it was drawn): given a frame turned 40° in the leaf's plane, every picture
     draws the leaf turned 40° the other way, step 1's points too (seen from 50° above the
     plane: 40° foreshortened to 33°)."""
-    from leafstudio.core.plane import Frame
     from leafstudio.render.step_slides import plan_frame
 
-    level = plan_frame(result)
-    a = np.radians(40.0)
-    turned = Frame(
-        level.origin,
-        np.cos(a) * level.u + np.sin(a) * level.v,
-        -np.sin(a) * level.u + np.cos(a) * level.v,
-        level.normal,
-    )
+    turned = _turned(plan_frame(result), 40.0)
     for picture in ("implicit", "em"):
         shown = _drawn_base_to_apex(result, picture, turned)
         assert abs(_degrees(shown) - _degrees(_drawn_base_to_apex(result, picture)) + 40) < 1
     points = _degrees(_drawn_midrib(result, turned)) - _degrees(_drawn_midrib(result))
     assert -45 < points < -25, points
+
+
+def test_the_lesson_slides_are_drawn_on_the_frame_they_are_given(result, monkeypatch):
+    """review35: the lesson shows a drawn leaf at the angle it was drawn (its sketch's frame),
+    but File > Export slides drew every slide on the result's view frame, the leaf level: the
+    slides a teacher exported beside the lesson showed it turned 40° from the lesson's plans.
+    lesson_slides draws every step on the frame it is given."""
+    from leafstudio.render import step_slides
+    from leafstudio.render.step_slides import lesson_slides, plan_frame
+
+    turned, frames = _turned(plan_frame(result), 40.0), []
+    monkeypatch.setattr(step_slides, "step_picture", lambda *a: frames.append(a[3]))
+    assert len(lesson_slides(result, frame=turned)) == len(LESSON_STEPS)
+    assert len(frames) == len(LESSON_STEPS) and all(f is turned for f in frames)
 
 
 def test_a_small_plans_colour_bar_labels_never_touch(result):

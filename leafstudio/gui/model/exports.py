@@ -22,6 +22,7 @@ from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 from leafstudio._shared.spawn import WorkerContext
+from leafstudio.core.plane import Frame
 from leafstudio.errors import LeafError
 
 POLL_S = 0.05  # how often the waiting thread relays the child's progress
@@ -157,15 +158,20 @@ def slide(kind: str, result: Any, path: str, progress: Callable[[float, str], An
 
 
 def slides(
-    result: Any, compared: list[tuple[str, Any]], path: str, progress: Callable[[float, str], Any]
+    result: Any,
+    compared: list[tuple[str, Any]],
+    path: str,
+    progress: Callable[[float, str], Any],
+    frame: Frame | None = None,
 ) -> Any:
-    """Write the lesson's steps on `result` and the `compared` forms (title, forms) as slides
-    to `path` (render/step_slides.py: a .pdf, or a folder of PNGs with the PDF), telling
-    `progress`; in the export process (matplotlib draws each slide)."""
+    """Write the lesson's steps on `result` (drawn on `frame`: the lesson's,
+    step_slides.plan_frame) and the `compared` forms (title, forms) as slides to `path`
+    (render/step_slides.py: a .pdf, or a folder of PNGs with the PDF), telling `progress`; in
+    the export process (matplotlib draws each slide)."""
     from leafstudio.render.step_slides import lesson_slides, write_slides
 
     progress(0.1, "drawing the slides")
-    made = lesson_slides(result, compared)
+    made = lesson_slides(result, compared, frame)
     progress(0.6, "writing the slides")
     written = write_slides(made, path)
     progress(1.0, "done")

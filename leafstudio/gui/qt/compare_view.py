@@ -9,7 +9,8 @@ slides write. A comparison is chosen from the lessons' list
 window keeps the forms last compared (`window.compared`).
 
 Export slides: the lesson's steps on the shown leaf and the forms compared last
-(render/step_slides.py), as `leafstudio slides --compare` writes them.
+(render/step_slides.py), as `leafstudio slides --compare` writes them, the leaf turned as the
+lesson shows it (a drawn leaf at the angle it was drawn: gui/qt/lesson_view.py).
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ from leafstudio.forms import SHAPES, VENATION_KINDS, Form
 from leafstudio.forms.glossary import COMPARISONS, compared_terms
 from leafstudio.forms.terms import MARGINS
 from leafstudio.gui.qt.actions import Action, show_once
+from leafstudio.render.step_slides import plan_frame
 
 USUAL = "(usual)"  # a venation chooser's entry for the shape's usual one (Form.venation None)
 CHOOSERS = (
@@ -184,7 +186,8 @@ def export_slides(window, path: str):
         window.show_error("Nothing to export", "There is no reconstructed leaf yet.")
         return None
     compared = [(comparison_title(window.compared), window.compared)]
-    return window.run_export(Path(path).name, slides, result, compared, path)
+    frame = plan_frame(result, window.session.view_frame())  # the lesson's: a drawn leaf as drawn
+    return window.run_export(Path(path).name, slides, result, compared, path, frame=frame)
 
 
 def _ask_slides(window) -> None:

@@ -117,3 +117,34 @@ def test_the_glossary_draws_shapes_upright_as_their_words_say(qapp):
         widest = np.argmax(widths)
         below = widest > (rows.min() + rows.max()) / 2  # rows count down
         assert below == (term != "obovate"), term
+
+
+def test_export_slides_draws_a_drawn_leaf_as_the_lesson_shows_it(window, qtbot, monkeypatch):
+    """review35: the lesson shows a leaf drawn at 40° at its angle (the app's view, its
+    sketch's frame: step_slides.plan_frame), but File > Export slides, "the lesson's steps on
+    the shown leaf", drew them on the result's view frame, the leaf level. The export is given
+    the lesson's frame, and its slides are drawn on it."""
+    import numpy as np
+
+    from leafstudio.render import step_slides
+    from leafstudio.render.step_slides import plan_frame
+    from tests.gui.qt.conftest import wait_result
+    from tests.leaves import clicked_sketch
+
+    window.session.new_sketch()
+    sketch = clicked_sketch(turn=40.0)
+    window.session.commit_sketch(sketch, "Draw")
+    wait_result(qtbot, window, lambda o: o.result.leaf is window.session.state.leaf)
+    result = window.session.result
+    runs = []
+    monkeypatch.setattr(window, "run_export", lambda _name, *run, **kw: runs.append((run, kw)))
+    export_slides(window, "lesson.pdf")
+    ((write, *args), given) = runs[0]
+    frame = given["frame"]
+    np.testing.assert_allclose(frame.u, plan_frame(result, sketch.frame).u)  # the lesson's
+    assert abs(frame.u @ plan_frame(result).u - np.cos(np.radians(40.0))) < 0.05  # not level
+    drawn = []
+    monkeypatch.setattr(step_slides, "lesson_slides", lambda *a: drawn.append(a[2]) or [])
+    monkeypatch.setattr(step_slides, "write_slides", lambda *a: [])
+    write(*args, progress=lambda *a: None, **given)
+    assert drawn == [frame]
