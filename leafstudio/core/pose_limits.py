@@ -69,7 +69,10 @@ TWIST_TURNS = 2.0  # half turns the twist may turn the apex against the base
 FITTED_FOLD = 85.0
 CURL_SEARCH = 1.5  # the curl core/unfold.py searches to, each way, over the bent outline's
 # diagonal: a strongly curled leaf's diagonal is short, and its fit turned the midrib 3.02
-# radians, past MOST_TURN (review31: cordate curled 1.5, three forms 1.7)
+# radians, past MOST_TURN (review31: cordate curled 1.5, three forms 1.7); or, where more, the
+# curl that turns the midrib, as long as it stands, through MOST_TURN: a blade wider than long
+# has a diagonal the curl leaves long (reniform curled 1, 1.389 wide: 1.5 over its diagonal
+# was 0.88 of the curl its margin takes about the margin's plane, and a roll across it was fitted)
 FIT_POINTS = 60  # the margin and the midrib thinned to about this many points each for the fit
 SEARCH_SLACK = 1.05  # a fit at its search's end, re-posed by a sketch edit, still reopens
 
@@ -77,16 +80,20 @@ SEARCH_SLACK = 1.05  # a fit at its search's end, re-posed by a sketch edit, sti
 def fit_bounds(boundary: np.ndarray, midrib: np.ndarray) -> tuple[float, float, float, float]:
     """What core/unfold.py searches a pose over for curves in 3D, the (n, 3) `boundary` and
     the (m, 3) `midrib` (either end first) as given: the largest curl (CURL_SEARCH over the
-    outline's diagonal) and roll (a half turn of the margin's farthest point from the midrib's
-    chord: the flat blade is at least as wide), then that diagonal and that farthest reach,
-    over the curves thinned to FIT_POINTS as the fit takes them."""
+    outline's diagonal, or MOST_TURN over twice the midrib's length where more: any curl the
+    loader takes of a blade of that midrib is within it) and roll (a half turn of the margin's
+    farthest point from the midrib's chord: the flat blade is at least as wide), then that
+    diagonal and that farthest reach, over the curves thinned to FIT_POINTS as the fit takes
+    them."""
     length = np.linalg.norm(np.ptp(boundary, axis=0))  # numpy's: 0 divides to inf, not raises
+    along = np.linalg.norm(np.diff(midrib, axis=0), axis=1).sum()  # a curl keeps its length
     boundary = boundary[:: max(1, len(boundary) // FIT_POINTS)]
     origin = midrib[0]
     chord = (midrib[-1] - origin) / np.linalg.norm(midrib[-1] - origin)
     points = boundary - origin
     reach = np.linalg.norm(points - np.outer(points @ chord, chord), axis=1).max()
-    return float(CURL_SEARCH / length), float(np.pi / reach), float(length), float(reach)
+    curl = max(CURL_SEARCH / length, MOST_TURN / (2 * along))
+    return float(curl), float(np.pi / reach), float(length), float(reach)
 
 
 def fit_like(bend: Any) -> bool:

@@ -27,10 +27,11 @@ a roll alone is fitted again about the sections' means read off the curves as th
 laid them flat (`sheeted`, pose_relief.sheet_relief), and asked whether to unfold where the
 others fall short (SHEET_EXPLAINED: a tube a quadric nearly takes).
 
-A fold and a roll that lift the margins the same way are fitted again about a relief as a
-form's (core/unfold_rolled.py: each section rolled about its mean height, the fold eased by the
-flat blade's half width), kept where that lays the margin flatter and lies flat: about the
-hinge alone, oblong folded 45 and rolled 0.5, saved as a CSV, read back 36% too wide.
+A fold and a roll that lift the margins the same way are fitted again about a form's relief
+(core/unfold_rolled.py: about the hinge alone, oblong folded 45 and rolled 0.5, as a CSV, read
+back 36% too wide), a mix the fits leave off flat with all four terms (core/unfold_mixed.py). A
+curl is searched as far as it turns the midrib (pose_limits.fit_bounds), a curl alone from the
+midrib's own turn too (core/unfold_curl.py): reniform curled 1 and -1 read back 1.126 and 0.733.
 
 The twist (bend.Pose's: each cross-section turned about the midrib by twist · x) is fitted only
 where no pose without it lays the margin flat (TWIST_FROM), over the same subsets with the twist
@@ -53,12 +54,12 @@ from leafstudio.core import unfold_checks as checks
 from leafstudio.core.bend import Pose, flat_leaf
 from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame, fit_frame
-from leafstudio.core.pose_limits import CURL_SEARCH as CURL_LIMIT  # the curl's, over the length
-from leafstudio.core.pose_limits import FIT_POINTS, fit_bounds  # the fit's points; its roll's
+from leafstudio.core.pose_limits import FIT_POINTS, fit_bounds  # the fit's points; its bounds
 from leafstudio.core.pose_limits import FOLD as FOLD_LIMIT  # the fold's search range, each way
 from leafstudio.core.pose_limits import TWIST_TURNS as TWIST_HALVES  # the loader's twist, at most
 from leafstudio.core.pose_relief import Relief, relief_of, sheet_relief
 from leafstudio.core.prepare.vein_order import midrib_turned
+from leafstudio.core.unfold_curl import bowed_starts
 from leafstudio.core.unfold_hinge import SHARE_CLOSE, fallen_slopes, hinge_relief, turn_share
 from leafstudio.core.unfold_mixed import remixed
 from leafstudio.core.unfold_rolled import refolded
@@ -226,8 +227,8 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
     # the margin's farthest from the midrib's chord: at most the flat blade's half-width, so a
     # roll up to half a turn each side is within pi / reach, a quarter turn the roll's first
     # guess (pose_limits.fit_bounds: the loader takes what this searched)
-    reach = fit_bounds(boundary, midrib)[3]
-    most = np.pi * length / reach
+    curls, _, _, reach = fit_bounds(boundary, midrib)
+    most, curls = np.pi * length / reach, curls * length  # in the fit's units
     boundary = boundary[:: max(1, len(boundary) // FIT_POINTS)]  # enough to fit six numbers
     midrib = np.vstack([midrib[:: max(1, len(midrib) // FIT_POINTS)], midrib[-1:]])
     origin = midrib[0]
@@ -275,7 +276,7 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
         margin's rms off the flat blade's plane, (8,) x, axes and (4 + k,) y; each fit stops
         after `most_calls` evaluations when given; about a hinge of rise and fall `slopes` when
         `hinged`, or bent about the relief `about` when given (a roll alone: `sheeted`)."""
-        hi = [np.pi] * 3 + [1.0] + [(FOLD_LIMIT, CURL_LIMIT, most, TWIST_LIMIT)[t] for t in terms]
+        hi = [np.pi] * 3 + [1.0] + [(FOLD_LIMIT, curls, most, TWIST_LIMIT)[t] for t in terms]
         found = []
         for axes, y0 in starts:
 
@@ -383,6 +384,8 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
             for axes, fold, roll, twist in frames:
                 guess = [(fold, 0.0, roll, twist)[t] for t in terms]
                 starts.append((axes, np.array([0.0] * 4 + guess)))
+            if terms == (1,):  # and the midrib's own turn, where it turns (unfold_curl)
+                starts += bowed_starts(midrib, _starts(boundary, midrib), terms, length, curls)
             plain[terms] = fits_of(terms, starts)
         return plain[terms]
 

@@ -32,7 +32,12 @@ from leafstudio.core.bend import Pose
 from leafstudio.core.hinge_fold import fold_share
 from leafstudio.core.pose_relief import Relief, margin_relief, margin_slopes, sheet_relief
 
-HINGE_ROUNDS = 3  # rounds that find a curled midrib's flat heights (hinge_relief)
+HINGE_ROUNDS = 6  # rounds that find a curled midrib's flat heights (hinge_relief): at ovate
+# folded 75 and curled 1's own pose the curl's level went 0.021, 0.031, 0.036 and, in five,
+# 0.0405 (its form's 0.0403; ten to forty: 0.042); saved as a CSV, it was fitted fold 74.7 and
+# curl 0.986 in 3 rounds (0.4% long), 74.9 and 1.000 in 6 (0.1%)
+ROLLED_ROUNDS = 3  # ... and with a roll, read with the fold as before (hinge_relief): in 6, oblong
+# folded 45 and rolled 0.5, saved as a CSV, came back 0.2% narrow where it was 0.0%
 FALL_ROUNDS = (
     6  # rounds that find the flat margin's rise and fall off the hinge (fallen_slopes): on
 )
@@ -56,14 +61,26 @@ def hinge_relief(
     which laid its margin flat but its blade out 43% too large).
     A fold and a roll leave the midrib as it stands; the curl bends about the midrib's mean
     height as posed (Relief.posed_level), which the hinge's heights set: they are found in
-    HINGE_ROUNDS rounds, each flattening the midrib about the last round's (on ovate folded
-    45° and curled 0.5 the heights moved 2.3e-2, 4.9e-3 and 1.6e-3 of the length; about the
-    margin's plane alone its own surface was 1.3e-3 off at p95, now 2.1e-4). A roll fitted
-    about its sections' own mean heights (`sheet`: knots and means, pose_relief.sheet_relief)
-    keeps them, and flattens the midrib about them. None when the midrib doubles back."""
+    HINGE_ROUNDS rounds (ROLLED_ROUNDS with a roll), each flattening the midrib about the last
+    round's (on ovate folded 45° and curled 0.5 the heights moved 2.3e-2, 4.9e-3 and 1.6e-3 of
+    the length; about the margin's plane alone its own surface was 1.3e-3 off at p95, now
+    2.1e-4). With a curl the
+    midrib is flattened without the fold, which leaves a midrib on its hinge where it is:
+    unfolded about the last round's hinge, a midrib point over or under it was turned toward a
+    half and read back only part of its height, and at ovate folded 75 and curled 1's own pose
+    the level went 0.021, 0.038, 0.013, 0.006 and -0.030 in 1, 2, 3, 5 and 10 rounds against
+    the form's 0.040 (from its CSV it was fitted fold 74.4, curl 0.93 and roll -0.15: 1.7%
+    long, 2.7% narrow; now 74.9, 1.000 and none, 0.1%). Not with a roll (unfold_rolled.py's
+    fits, a fold and a roll with a curl or without): linear folded 75 and rolled 1 read so was
+    fitted 1.7e-4 of the length off flat, 9.2e-5 as before, its glb's apex 1.70 degrees off +X
+    (0.62), and oblong folded 60 and rolled 0.3 0.9% narrow (0.6). A roll fitted about its
+    sections' own mean heights (`sheet`: knots and means, pose_relief.sheet_relief) keeps them,
+    and flattens the midrib about them. None when the midrib doubles back."""
     relief = None if sheet is None else sheet_relief(*sheet)
-    for _ in range(HINGE_ROUNDS if pose.curl != 0 else 1):
-        relief = margin_relief(boundary, [replace(pose, relief=relief).flatten(midrib)])
+    curled = pose.curl != 0 and pose.roll == 0  # a roll's: unfold_rolled's fits, as before
+    fold = 0.0 if curled else pose.fold
+    for _ in range(HINGE_ROUNDS if curled else ROLLED_ROUNDS if pose.curl != 0 else 1):
+        relief = margin_relief(boundary, [replace(pose, fold=fold, relief=relief).flatten(midrib)])
         if relief is None:
             return None
         # each round's too: margin_relief reads them off `boundary` as if it lay flat, and a

@@ -8,10 +8,13 @@ A curl fitted alone about the margin's plane is re-expressed about the flat midr
 (`levelled`), as a form's and the app's curls bend a blade: the margin's flatness cannot tell
 the two apart, and about the margin's plane the curl stretched the midrib (posed forms written as
 CSVs and read back: ovate curled 0.8 came back 1.064 long, lanceolate 0.6 1.018, cordate 0.5
-1.036; now 0.999, 1.000, 0.999; /work/notes/poses32/csv_traits.py). A curl whose margin lies on
-the level's inner side is carried there along an exponential (bend._rolled_radius), not a
-circle of the same centre, and is left as fitted: ovate curled -0.8, read from its CSV, was
-fitted -0.853 about the margin's plane and measures 0.938 long.
+1.036; now 0.999, 1.000, 0.999; /work/notes/poses32/csv_traits.py). So is a curl whose margin
+lies on the level's inner side (a curl down, the midrib over the margin), which the curl carries
+there along an exponential (bend._rolled_radius): about the same axis the margin lies on one
+circle still, and flat, a little under the margin's plane. It was left as fitted: ovate curled
+-0.8, read from its CSV, was fitted -0.853 and measured 0.938 long (exp(-2 curl L) of the
+length, L its level), reniform curled -1 0.882 long at the fit's pose; now -0.799 and 1.001
+(/work/notes/curl35).
 """
 
 from __future__ import annotations
@@ -63,12 +66,14 @@ def unfolded(leaf: Leaf) -> Leaf:
 def levelled(bend: PlacedPose, leaf: Leaf) -> PlacedPose:
     """`bend`, fitted to `leaf`'s curves, with a curl fitted alone about the margin's plane (no
     relief: its level 0) bent instead about the flat midrib's mean height L (margin_relief's
-    hinge, Relief.posed_level), as a form's curl keeps its midrib's length: the same circle for
-    the margin, its radius 1 / (2 curl) less L. The margin's points then lie where they did to
-    the bit wherever the curl carries heights below the level linearly (bend._rolled_radius:
-    curl and L of one sign); otherwise, for any other pose, and where the curl so found is past
-    what the loader takes of a fit (core/pose_limits.py: ovate curled 1.7, fitted 3.11 radians
-    of turn, would turn 3.16), `bend` as it is."""
+    hinge, Relief.posed_level), as a form's curl keeps its midrib's length: the same axis, its
+    radius 1 / (2 curl) less L. The margin's points then lie where they did (the pose's
+    flatten undone), flat: on the margin's plane where the curl carries heights below the level
+    linearly (bend._rolled_radius: curl and L of one sign), else on the circle of radius
+    R exp(-L / R) about that axis, which lays them flat L² / (2 R) or so under it (ovate curled
+    -0.8: 1.3e-3 of the length). For any other pose, and where the curl so found is past what the
+    loader takes of a fit (core/pose_limits.py: ovate curled 1.7, fitted 3.11 radians of turn,
+    would turn 3.16), `bend` as it is."""
     pose = bend.pose
     if pose.relief is not None or pose.curl == 0 or (pose.fold, pose.roll, pose.twist) != (0, 0, 0):
         return bend
@@ -80,8 +85,6 @@ def levelled(bend: PlacedPose, leaf: Leaf) -> PlacedPose:
         if relief is None:
             return bend
         level = relief.posed_level(replace(pose, curl=0.0, relief=relief))
-        if not pose.curl * level > 0:  # the margin above the level: carried along exp, not kept
-            return bend
         curl = pose.curl / (1 - 2 * pose.curl * level)
         levelled = PlacedPose(replace(pose, curl=curl, relief=relief), bend.frame)
     past = pose_trouble(levelled, leaf.boundary, list(leaf.veins)) is not None
