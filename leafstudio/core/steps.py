@@ -202,11 +202,14 @@ def _beyond_the_given(
     if within.any():
         length = float(np.ptp(polygon[:, 0]))
         beyond = shapely.distance(shapely.LinearRing(polygon), shapely.points(points[within]))
-        notes.append(
-            f"{within.sum()} vein points lie up to {beyond.max() / length:.1%} of the length "
-            "beyond the margin as smoothed (a noisy boundary's mean line), though inside the "
-            "boundary's points: the surface ends at that margin"
-        )
+        if beyond.max() > VEIN_OUTSIDE_TOLERANCE * length:  # nearer ones were kept unsaid before
+            count = int(within.sum())
+            notes.append(
+                f"{count} vein point{'s lie' if count > 1 else ' lies'} up to "
+                f"{beyond.max() / length:.1%} of the length beyond the margin as smoothed (a "
+                "noisy boundary's mean line), though inside the boundary's points: the surface "
+                "ends at that margin"
+            )
     return outside & ~within
 
 

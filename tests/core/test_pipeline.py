@@ -259,3 +259,22 @@ def test_a_vein_inside_the_given_boundary_is_kept_where_the_smoothed_margin_cuts
         else:
             with pytest.raises(ls.LeafError, match=r"vein 1: .* outside the boundary"):
                 ls.reconstruct(leaf, params)
+
+
+def test_a_vein_end_within_the_tolerance_of_the_smoothed_margin_adds_no_note():
+    """Vein points within VEIN_OUTSIDE_TOLERANCE of the outline were always kept unsaid; inside
+    the given boundary they stayed so (review35b: a midrib ending 0.1% of the length beyond a
+    smoothed tip was noted "1 vein points lie up to 0.1% ...", 0.0% at 0.2% of a tip's 15%)."""
+    t = np.linspace(0, 2 * np.pi, 800, endpoint=False)
+    x, y = 0.5 * np.cos(t), 0.2 * np.sin(t)
+    x = x + np.where((np.abs(y) < 0.006) & (x > 0), 0.15 * (1 - np.abs(y) / 0.006), 0.0)
+    boundary = np.column_stack([x, y, np.zeros_like(x)])
+    side = np.column_stack([np.linspace(0, 0.2, 10), np.linspace(0, 0.12, 10), np.full(10, 0.01)])
+    params = ls.Params(k=2, grid=64, margin="smooth")
+    said = {}
+    for end in (0.505, 0.6):
+        midrib = np.column_stack([np.linspace(-0.48, end, 40), np.zeros(40), np.full(40, 0.02)])
+        warnings = ls.Pipeline(ls.Leaf(boundary, [midrib, side])).run(params).warnings
+        said[end] = [w for w in warnings if "beyond the margin as smoothed" in w]
+    assert said[0.505] == []
+    assert len(said[0.6]) == 1 and said[0.6][0].startswith("4 vein points lie up to 5.2%")
