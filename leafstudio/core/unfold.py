@@ -489,7 +489,7 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
     if hinged:  # no fit bends about a relief as a form's, all four terms (unfold_mixed.py)
         starts = [placed(f[1], f[2], False)[0] for fits in plain.values() for f in fits[:1]]
         frames = _starts(boundary, midrib)
-        best = remixed(best, starts, leaf, boundary, midrib, frames, length, most, before)
+        best = remixed(best, starts, leaf, boundary, midrib, frames, length, most, curls, before)
     return None if best is None else best[2]
 
 

@@ -36,7 +36,6 @@ from leafstudio.core import unfold_checks as checks
 from leafstudio.core.bend import Pose
 from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame
-from leafstudio.core.pose_limits import CURL_SEARCH as CURL_LIMIT
 from leafstudio.core.pose_limits import FOLD as FOLD_LIMIT
 from leafstudio.core.pose_limits import TWIST_TURNS
 from leafstudio.core.pose_relief import Relief, relief_of
@@ -84,6 +83,7 @@ def mixed(
     frames: list[np.ndarray],
     length: float,
     most: float,
+    curls: float,
     lead: float = np.inf,
 ) -> list[tuple[float, tuple[int, ...], PlacedPose]]:
     """Fits of the fold, curl, roll and twist about a relief read off the curves (module
@@ -92,12 +92,14 @@ def mixed(
 
     `starts`: unfold.py's fits (their frames' origins on the normal through `midrib[0]`, the
     (m, 3) midrib's base); `curves` the boundary and veins whole; `frames` unfold's first
-    (3, 3) frames; `length` the outline's diagonal and `most` the roll's search, each way, in
-    its units; a start whose first round about a relief leaves more than `lead` is let go."""
+    (3, 3) frames; `length` the outline's diagonal, `most` the roll's search and `curls` the
+    curl's (pose_limits.fit_bounds', as unfold.py's fits: a blade wider than long curls past
+    CURL_SEARCH over its diagonal), each way, in its units; a start whose first round about a
+    relief leaves more than `lead` is let go."""
     origin = midrib[0]
     weight = 1.0 / np.sqrt(len(points))
     # rotation, fold, curl, roll, twist (these three times the length), lift and shift (shares)
-    hi = np.array([np.pi] * 3 + [FOLD_LIMIT, CURL_LIMIT, most, TWIST_TURNS * np.pi, 1.0, 0.5])
+    hi = np.array([np.pi] * 3 + [FOLD_LIMIT, curls, most, TWIST_TURNS * np.pi, 1.0, 0.5])
     chord = float(np.linalg.norm(midrib[-1] - origin))
 
     def placed(y: np.ndarray, axes: np.ndarray, relief: Relief | None) -> tuple:
@@ -214,6 +216,7 @@ def remixed(
     frames: list[np.ndarray],
     length: float,
     most: float,
+    curls: float,
     before: float,
 ) -> tuple | None:
     """unfold.py's `best` fit ((rms, terms, bend, ...) or None), or `mixed`'s best where that
@@ -226,7 +229,7 @@ def remixed(
         return best
     lead = FIRST * before if best is None else LEADS * best[0]
     curves = [leaf.boundary, *leaf.veins]
-    fits = mixed(starts, points, midrib, curves, frames, length, most, lead)
+    fits = mixed(starts, points, midrib, curves, frames, length, most, curls, lead)
     fits = [f for f in fits if checks.lies_flat(f[2], leaf)]
     if not fits:
         return best

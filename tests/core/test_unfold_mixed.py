@@ -21,6 +21,11 @@ MIXED = [
     ("ovate", {"fold": -45.0, "roll": 0.4}),  # fold -38.3, roll 0.76 of the form's
     ("cordate", {"fold": 45.0, "roll": -0.5}),  # none
     ("obovate", {"curl": 0.5, "roll": 0.4}),  # none
+    # a blade wider than long curls past CURL_SEARCH over its diagonal: unfold_mixed searched
+    # only that far, not fit_bounds' curl (review35b: curl 0.976, roll 0.82 of the form's, 7.9%
+    # wide; curl 0.937, twist 0.93 of the form's, 7.2% long)
+    ("reniform", {"curl": 1.0, "roll": 0.3}),
+    ("reniform", {"curl": 1.0, "twist": 0.5}),
 ]
 
 
