@@ -239,42 +239,42 @@ def test_a_flat_blade_bent_is_said_to_have_no_relief_of_its_own_not_to_be_flat()
     assert warnings == [BENT_NOTES[VEINS_IN_PLANE]] and "no relief of its own" in warnings[0]
 
 
-def test_a_vein_inside_the_given_boundary_is_kept_where_the_smoothed_margin_cuts_it():
-    """A noisy boundary's outline is its points' smoothed mean, which can pass inside them: a
-    midrib running into a thin tip the smoothing cuts off was refused ("vein 1: ... outside the
-    boundary", soybean pot1_1's scan resampled); it is kept, and said in a note. A vein outside
-    the boundary as given is still refused."""
+def _thin_tipped(end: float) -> ls.Leaf:
+    """An elliptic blade 1 long with a thin tip 0.15 long at its apex (0.5), its midrib ending
+    at `end` and one side vein: the tip is cut off when its boundary is smoothed."""
     t = np.linspace(0, 2 * np.pi, 800, endpoint=False)
     x, y = 0.5 * np.cos(t), 0.2 * np.sin(t)
     x = x + np.where((np.abs(y) < 0.006) & (x > 0), 0.15 * (1 - np.abs(y) / 0.006), 0.0)
     boundary = np.column_stack([x, y, np.zeros_like(x)])
     side = np.column_stack([np.linspace(0, 0.2, 10), np.linspace(0, 0.12, 10), np.full(10, 0.01)])
-    params = ls.Params(k=2, grid=64, margin="smooth")
+    midrib = np.column_stack([np.linspace(-0.48, end, 40), np.zeros(40), np.full(40, 0.02)])
+    return ls.Leaf(boundary, [midrib, side])
+
+
+SMOOTHED = ls.Params(k=2, grid=64, margin="smooth")  # the boundary taken as noisy
+
+
+def test_a_vein_inside_the_given_boundary_is_kept_where_the_smoothed_margin_cuts_it():
+    """A noisy boundary's outline is its points' smoothed mean, which can pass inside them: a
+    midrib running into a thin tip the smoothing cuts off was refused ("vein 1: ... outside the
+    boundary", soybean pot1_1's scan resampled); it is kept, and said in a note. A vein outside
+    the boundary as given is still refused."""
     for end, kept in ((0.5 + 0.1, True), (0.5 + 0.2, False)):
-        midrib = np.column_stack([np.linspace(-0.48, end, 40), np.zeros(40), np.full(40, 0.02)])
-        leaf = ls.Leaf(boundary, [midrib, side])
         if kept:
             with pytest.warns(UserWarning, match="beyond the margin as smoothed"):
-                ls.reconstruct(leaf, params)
+                ls.reconstruct(_thin_tipped(end), SMOOTHED)
         else:
             with pytest.raises(ls.LeafError, match=r"vein 1: .* outside the boundary"):
-                ls.reconstruct(leaf, params)
+                ls.reconstruct(_thin_tipped(end), SMOOTHED)
 
 
 def test_a_vein_end_within_the_tolerance_of_the_smoothed_margin_adds_no_note():
     """Vein points within VEIN_OUTSIDE_TOLERANCE of the outline were always kept unsaid; inside
     the given boundary they stayed so (review35b: a midrib ending 0.1% of the length beyond a
     smoothed tip was noted "1 vein points lie up to 0.1% ...", 0.0% at 0.2% of a tip's 15%)."""
-    t = np.linspace(0, 2 * np.pi, 800, endpoint=False)
-    x, y = 0.5 * np.cos(t), 0.2 * np.sin(t)
-    x = x + np.where((np.abs(y) < 0.006) & (x > 0), 0.15 * (1 - np.abs(y) / 0.006), 0.0)
-    boundary = np.column_stack([x, y, np.zeros_like(x)])
-    side = np.column_stack([np.linspace(0, 0.2, 10), np.linspace(0, 0.12, 10), np.full(10, 0.01)])
-    params = ls.Params(k=2, grid=64, margin="smooth")
     said = {}
     for end in (0.505, 0.6):
-        midrib = np.column_stack([np.linspace(-0.48, end, 40), np.zeros(40), np.full(40, 0.02)])
-        warnings = ls.Pipeline(ls.Leaf(boundary, [midrib, side])).run(params).warnings
+        warnings = ls.Pipeline(_thin_tipped(end)).run(SMOOTHED).warnings
         said[end] = [w for w in warnings if "beyond the margin as smoothed" in w]
     assert said[0.505] == []
     assert len(said[0.6]) == 1 and said[0.6][0].startswith("4 vein points lie up to 5.2%")
