@@ -25,7 +25,7 @@ from __future__ import annotations
 import hashlib
 import threading
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import shapely
@@ -34,6 +34,10 @@ from shapely.geometry import Polygon
 
 from leafstudio._shared.blas import one_blas_thread
 from leafstudio.core.prepare.polygon import unit_power
+
+if TYPE_CHECKING:  # bend.py imports this module: the types only
+    from leafstudio.core.bend import Pose
+    from leafstudio.core.plane import Frame
 
 KNOTS = 24  # places along the blade the sections' mean heights are read at
 MARGIN_KNOTS = 8  # margin_relief's: its sheet is 0 at each
@@ -255,6 +259,19 @@ def relief_of(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | None:
         while len(_RECENT) > RECENT:
             _RECENT.pop(next(iter(_RECENT)))
     return relief
+
+
+def laid_flat(
+    pose: Pose, frame: Frame, curves: list[np.ndarray]
+) -> tuple[list[np.ndarray], Relief | None]:
+    """The (n_i, 3) world `curves` (the boundary first, then the veins, midrib first) as `pose`
+    lays them flat in `frame`, and the relief relief_of reads off them: how a fit about a
+    form's relief reads it again after each round (unfold_rolled.py, unfold_mixed.py)."""
+    flat = [
+        pose.flat_curve(np.column_stack(frame.to_plane(c)), ring=i == 0)
+        for i, c in enumerate(curves)
+    ]
+    return flat, relief_of(flat[0], flat[1:])
 
 
 def _relief_of(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | None:

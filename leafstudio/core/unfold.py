@@ -416,9 +416,11 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
                 break
         if not fits:
             return None
-        plane = _simplest(fits, length)[0] <= EXPLAINED * before  # the margin's plane explains it
+        plane = (
+            checks.simplest(fits, SIMPLER, CLOSE * length)[0] <= EXPLAINED * before
+        )  # the margin's plane explains it
         if not hinged:
-            return _simplest(fits, length) if plane else None
+            return checks.simplest(fits, SIMPLER, CLOSE * length) if plane else None
         # each pose found, fitted again folding each half rigidly about the midrib
         # (`hinge_relief`), is kept when it lays the margin flatter (a fold's shear, which a roll
         # made up for, is gone); whether the leaf is unfolded at all is the fits' above, or,
@@ -454,7 +456,7 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
             if again <= HINGE_GAIN * rms and checks.lies_flat(bend, leaf):
                 fits[i] = (again, terms, bend, axes, y)
         if (2,) not in sets:  # twisted: no roll alone
-            best = _simplest(fits, length)
+            best = checks.simplest(fits, SIMPLER, CLOSE * length)
             return best if plane or best[0] <= hinge_share * before else None
         # a roll alone about each section's own mean height (`sheeted`), kept when it lays the
         # margin flatter (or when no roll about the plane lay flat: cordate rolled 1 took fold
@@ -470,7 +472,7 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
         if sheet is not None and again <= HINGE_GAIN * rms and checks.lies_flat(bend, leaf):
             fits[at : at + 1] = [(again, (2,), bend, axes, y)]
             plane = plane or again <= SHEET_EXPLAINED * before
-        best = _simplest(fits, length)
+        best = checks.simplest(fits, SIMPLER, CLOSE * length)
         if not plane and best[0] > hinge_share * before:  # nor the hinge
             return None
         return best
@@ -481,7 +483,7 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
         curves = [leaf.boundary, *leaf.veins]
         again = refolded(best[2], boundary, midrib, curves, _starts(boundary, midrib), length, most)
         again = [f for f in again if f[0] <= best[0] and checks.lies_flat(f[2], leaf)]
-        best = _simplest(again, length) if again else best
+        best = checks.simplest(again, SIMPLER, CLOSE * length) if again else best
     if best is None or best[0] > TWIST_FROM * length:  # a twist, where the rest fall short
         twisted = settle(TWISTED)
         if twisted is not None and (best is None or twisted[0] <= TWIST_GAIN * best[0]):
@@ -491,10 +493,3 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
         frames = _starts(boundary, midrib)
         best = remixed(best, starts, leaf, boundary, midrib, frames, length, most, curls, before)
     return None if best is None else best[2]
-
-
-def _simplest(fits: list[tuple], length: float) -> tuple:
-    """Of `fits` ((rms, terms, ...) each), the one of fewest terms that does about as well as
-    the best: a fold mimicked by a roll and a curl is not."""
-    enough = SIMPLER * min(f[0] for f in fits) + CLOSE * length
-    return min(fits, key=lambda f: (f[0] > enough, len(f[1])))

@@ -81,3 +81,11 @@ def crosses(leaf: Leaf) -> bool:
     app and the commands refuse it as given (outline.ordered_crossing)."""
     frame = fit_frame(leaf.boundary, leaf.vein_points)
     return ordered_crossing(frame.to_plane(leaf.boundary)[0]) is not None
+
+
+def simplest(fits: list[tuple], ratio: float, slack: float) -> tuple:
+    """Of `fits` ((rms, terms, ...) each), the one of fewest terms that leaves at most `ratio`
+    times the best's rms plus `slack` (unfold.py's fits, unfold_mixed's): a fold mimicked by a
+    roll and a curl is not taken for one."""
+    enough = ratio * min(f[0] for f in fits) + slack
+    return min(fits, key=lambda f: (f[0] > enough, len(f[1])))

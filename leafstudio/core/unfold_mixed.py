@@ -38,7 +38,7 @@ from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame
 from leafstudio.core.pose_limits import FOLD as FOLD_LIMIT
 from leafstudio.core.pose_limits import TWIST_TURNS
-from leafstudio.core.pose_relief import Relief, relief_of
+from leafstudio.core.pose_relief import Relief, laid_flat
 from leafstudio.model import Leaf
 
 MIXED_FROM = 2e-4  # of the length: unfold.py's best fit leaving the margin farther off flat than
@@ -113,11 +113,7 @@ def mixed(
 
     def read(bend: PlacedPose) -> Relief | None:
         """The relief of the curves as `bend` lays them flat (a form's, relief_of)."""
-        flat = [
-            bend.pose.flat_curve(np.column_stack(bend.frame.to_plane(c)), ring=i == 0)
-            for i, c in enumerate(curves)
-        ]
-        return relief_of(flat[0], flat[1:])
+        return laid_flat(bend.pose, bend.frame, curves)[1]
 
     def fitted(
         axes: np.ndarray, y: np.ndarray, relief: Relief | None, free: list[int], calls: int
@@ -233,8 +229,7 @@ def remixed(
     fits = [f for f in fits if checks.lies_flat(f[2], leaf)]
     if not fits:
         return best
-    enough = SIMPLER * min(f[0] for f in fits) + CLOSE * length
-    rms, terms, bend = min(fits, key=lambda f: (f[0] > enough, len(f[1])))
+    rms, terms, bend = checks.simplest(fits, SIMPLER, CLOSE * length)
     if rms > MIXED_FROM * length:  # not a form's own pose (MIXED_GAIN: tubes)
         return best
     if rms <= (MIXED_GAIN * best[0] if best is not None else MIXED_EXPLAINED * before):

@@ -19,7 +19,7 @@ the midrib's over the margin, as a form's dome stands (the share fitted too), fr
 given, or where that stays off flat (SETTLED) the best of a few starts either way up; then with
 the sections' means, and the rise and fall off the hinge, read off the curves as the last fit
 lays them flat (pose_relief.relief_of, as a form reads its own), in up to READS rounds while
-the margin lies flatter; last, the same without the curl, which unfold._simplest takes when it
+the margin lies flatter; last, the same without the curl, which unfold_checks.simplest takes when it
 does about as well. These four, oblong folded 60 and rolled 0.3 (18.8%) and elliptic folded 30
 and rolled 0.3 (13.9%) read back 0.0-1.2% off their width, their apex exported within 0.05
 degrees of +X (csv_traits.py, /work/notes/foldroll34). unfold.py asks it only of a fit whose
@@ -43,7 +43,7 @@ from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame
 from leafstudio.core.pose_limits import CURL_SEARCH as CURL_LIMIT
 from leafstudio.core.pose_limits import FOLD as FOLD_LIMIT
-from leafstudio.core.pose_relief import KNOTS, Relief, relief_of, slopes_off
+from leafstudio.core.pose_relief import KNOTS, Relief, laid_flat, slopes_off
 from leafstudio.core.unfold_hinge import hinge_relief
 
 ALPHA = 0.6  # a section's mean height over the margin, the midrib's share, at the start: forms
@@ -103,7 +103,7 @@ def refolded(
 ) -> list[tuple[float, tuple[int, ...], PlacedPose]]:
     """`bend`, a fold and a roll fitted to the (n, 3) margin `points` and (m, 3) `midrib` (its
     base first) about unfold.py's hinge, fitted again (module docstring), with its curl and
-    without (unfold._simplest takes the fewer terms when they do about as well): each its
+    without (unfold_checks.simplest takes the fewer terms when they do about as well): each its
     margin's rms off the flat blade's plane, its terms (unfold.TERMS') and the pose. `curves`:
     the boundary and veins whole (the sections' means are read off them), `frames` unfold's
     first (3, 3) frames, `length` the outline's diagonal and `most` the roll's search, each way,
@@ -169,11 +169,7 @@ def refolded(
         pose, frame, _ = placed(y, axes, sheet)
         if pose is None:
             break
-        flat = [
-            pose.flat_curve(np.column_stack(frame.to_plane(c)), ring=i == 0)
-            for i, c in enumerate(curves)
-        ]
-        relief = relief_of(flat[0], flat[1:])
+        flat, relief = laid_flat(pose, frame, curves)
         if relief is None:
             break
         slopes = slopes_off(relief, np.vstack(flat), CLEAR)
