@@ -23,6 +23,7 @@ from leafstudio.assets.asset import (
     UVMap,
     mesh_asset,
     mesh_normals,
+    on_faces_side,
     oriented,
 )
 from leafstudio.assets.solid import boundary_edges, margin_flags
@@ -56,10 +57,11 @@ def _level(asset: MeshAsset, result: Result | None, points: np.ndarray, faces: n
     margin = level_margin(asset, points, faces)
     normals = mesh_normals(result, xy, z, margin)
     data = {"height": z, **surface_curvatures(result.surface, xy, margin)}
+    faces = oriented(faces, points, normals)
     return asset.with_(
         points=points,
-        faces=oriented(faces, points, normals),
-        normals=normals,
+        faces=faces,
+        normals=on_faces_side(points, faces, normals),
         uv=UVMap.around(result.polygon)(xy),
         point_data={k: v for k, v in data.items() if k in SCALARS and k in asset.point_data},
         plane_xy=xy,
