@@ -1,15 +1,20 @@
 """`leafstudio slides`: a lesson on a leaf as slides, a PNG per step and a PDF, with forms
-compared side by side (render/step_slides.py)."""
+compared side by side (render/step_slides.py); a saved project's drawn leaf at the angle it was
+drawn, as the app shows it."""
 
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
 
 from leafstudio._shared.safewrite import check_outputs
 from leafstudio.cli.options import EXIT_OK, add_run_options, run_pipeline, summary
 from leafstudio.errors import LeafError
 from leafstudio.render.lesson import LESSON_STEPS
 from leafstudio.sources.leafphoto import photo_path
+
+if TYPE_CHECKING:
+    from leafstudio.core.plane import Frame
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -49,9 +54,21 @@ def comparisons(specs: list[str]) -> list[tuple[str, tuple]]:
     return found
 
 
+def drawn_frame(path: str) -> Frame | None:
+    """The frame a saved project's sketch was drawn on (sources/sketch_entry.drawn_frame), or
+    None for any other input: the slides then draw a drawn leaf at the angle it was drawn, as
+    the app's lesson and its File > Export slides do (step_slides.plan_frame), not level."""
+    from leafstudio.sources import sketch_entry
+    from leafstudio.sources.files import load_project  # heavy (bends: scipy): not for --help
+
+    if not path.lower().endswith(".json"):
+        return None
+    return sketch_entry.drawn_frame(load_project(path)[2], path)
+
+
 def run(args: argparse.Namespace) -> int:
     """Reconstruct the leaf, then write every slide together (all or none)."""
-    from leafstudio.render.step_slides import lesson_slides, slide_paths, write_slides
+    from leafstudio.render.step_slides import lesson_slides, plan_frame, slide_paths, write_slides
     from leafstudio.sources.files import load_leaf  # heavy (bends: scipy, numba): not for --help
 
     compared = comparisons(args.compare)
@@ -59,8 +76,9 @@ def run(args: argparse.Namespace) -> int:
         [args.input, photo_path(args.input), *args.vein],
         slide_paths(args.output, len(LESSON_STEPS) + len(compared)),
     )
+    like = drawn_frame(args.input)
     _, result = run_pipeline(args, load_leaf(args.input, veins=args.vein))
-    shown = lesson_slides(result, compared)
+    shown = lesson_slides(result, compared, plan_frame(result, like))
     write_slides(shown, args.output)
     summary(f"{args.output}: {len(shown)} slides")
     return EXIT_OK

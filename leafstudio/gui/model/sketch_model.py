@@ -36,18 +36,13 @@ from leafstudio.gui.model.midrib import Midrib
 from leafstudio.gui.model.sketch_mirror import MirrorFold
 from leafstudio.gui.model.thinning import thinned
 from leafstudio.model import Leaf
+from leafstudio.sources.sketch_entry import sketch_plane, world_frame
 
 BOUNDARY = -1  # curve index of the boundary; veins are 0, 1, ...
 DERIVED_VEIN_POINTS = 8
 RELIEF_POINTS = 4000  # a derived sketch keeps at most this many boundary points as its relief
 OUTLINE_POINTS = 4000  # and follows at most this many of the outline's
 RELIEF_NEIGHBOURS = 4  # a boundary point's height: inverse-distance mean of this many relief points
-
-
-def _identity_frame() -> Frame:
-    return Frame(
-        origin=np.zeros(3), u=np.array([1.0, 0, 0]), v=np.array([0, 1.0, 0]), normal=np.eye(3)[2]
-    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -81,7 +76,7 @@ class Sketch:
 
     boundary: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     veins: tuple[np.ndarray, ...] = ()
-    frame: Frame = field(default_factory=_identity_frame)
+    frame: Frame = field(default_factory=world_frame)
     relief: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     symmetric: bool = False
     offsets: tuple[np.ndarray | None, ...] = ()
@@ -347,14 +342,7 @@ class Sketch:
         symmetric = data.get("symmetric", False)
         if not isinstance(symmetric, bool):
             raise ValueError(f'"symmetric" must be true or false, got {symmetric!r:.40}')
-        plane = data.get("plane") or {}
-        frame = (
-            Frame(
-                **{k: np.asarray(plane[k], dtype=float).reshape(3) for k in Frame.__annotations__}
-            )
-            if plane
-            else _identity_frame()
-        )
+        frame = sketch_plane(data) or world_frame()
         veins = data.get("veins", [])
         kept, offsets = [i for i, v in enumerate(veins) if len(v)], dome.stored_offsets(data)
         return cls(
