@@ -32,16 +32,34 @@ def step_layers(step: LessonStep, bent: bool) -> tuple[str, ...]:
     return tuple(dict.fromkeys(LAID_FLAT.get(key, key) for key in step.layers))
 
 
-def bent_note(steps: tuple[LessonStep, ...] = LESSON_STEPS) -> str:
-    """One plain sentence for a bent leaf's lesson: the steps that show it laid flat, then
-    bent back, its relief unstretched (lesson_view's STRETCH is off for a bent leaf)."""
+def bent_notes(steps: tuple[LessonStep, ...] = LESSON_STEPS) -> tuple[str, ...]:
+    """A bent leaf's lesson's note in plain words, fullest first (the lesson's footer shows the
+    first that fits its column on one line, as it does its keys: lesson_view.FOOTERS): the
+    steps that show it laid flat, then bent back, its relief unstretched (lesson_view's STRETCH
+    is off for a bent leaf). The fullest alone made the footer 4 lines tall at 960 x 600 and 3
+    at 1280 x 720 (soybean pot1_1, an ovate form folded 45°); under Xvfb's 14-point Sans the
+    second takes 624 pixels (a 1920 wide lesson's column: 796), the third 465 (1280: 515), the
+    last 323 (960: 374)."""
     flat = [i + 1 for i, step in enumerate(steps) if step.flat]
     if not flat or flat[-1] == len(steps):
-        return "The 3D leaf is drawn as it is bent, its relief not stretched."
+        return (
+            "The 3D leaf is drawn as it is bent, its relief not stretched.",
+            "The 3D leaf is drawn as it is bent.",
+        )
+    laid, after = _span(flat[0], flat[-1]), flat[-1] + 1
+    back = _span(after, len(steps))
     return (
-        f"Steps {flat[0]}–{flat[-1]} work on the leaf laid flat; from step {flat[-1] + 1} on, "
-        "it is bent back, its relief not stretched."
+        f"Steps {laid} work on the leaf laid flat; from step {after} on, it is bent back, its "
+        "relief not stretched.",
+        f"Steps {laid} on the leaf laid flat; {back} bent back, relief not stretched.",
+        f"Steps {laid} laid flat; {back} bent, relief not stretched.",
+        f"Steps {laid} laid flat; {back} bent back.",
     )
+
+
+def _span(first: int, last: int) -> str:
+    """Steps `first` to `last` as a class reads them: "2–5", or "7" alone."""
+    return f"{first}–{last}" if last > first else f"{first}"
 
 
 def lesson_bounds(result: Result, frame: Frame) -> BladeBounds:

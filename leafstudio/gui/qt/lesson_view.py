@@ -22,6 +22,7 @@ app's view cannot be straightened instead: its top view is the sketch the teache
 from __future__ import annotations
 
 import contextlib
+from collections.abc import Sequence
 
 from PySide6.QtCore import QPoint, QRect, Qt, QTimer
 from PySide6.QtGui import (
@@ -38,7 +39,7 @@ from PySide6.QtWidgets import QHBoxLayout, QLabel, QSizePolicy, QVBoxLayout, QWi
 from leafstudio.core.plane import Frame
 from leafstudio.gui.model.lesson import (
     Lesson,
-    bent_note,
+    bent_notes,
     equation_png,
     lesson_bounds,
     plan_png,
@@ -62,7 +63,8 @@ BACK_KEYS = frozenset({Qt.Key.Key_Left, Qt.Key.Key_Backspace, Qt.Key.Key_PageUp,
 ELEVATIONS = (POINTS_ELEVATION, 65.0)
 # the footer's keys (space: next too), the first that fits the column on one line: at 960 x 600
 # the first took 385 of the column's 374 pixels (14-point Sans under Xvfb) and "Esc: leave"
-# wrapped; the second took 358, the third is for a larger font
+# wrapped; the second took 358, the third is for a larger font. A bent leaf's note goes under
+# them, one line too (lesson.bent_notes)
 FOOTERS = (
     "{progress} · → next · ← back · Esc: leave",
     "{progress} · ← → to move · Esc: leave",
@@ -158,7 +160,7 @@ class LessonWindow(QWidget):
         footer = self._footer_keys()
         result = self.window_.session.result
         if result is not None and not stretches(result):  # drawn as bent (view_aids.stretches)
-            footer += "\n" + bent_note(self.lesson.steps)
+            footer += "\n" + self._one_line(bent_notes(self.lesson.steps))
         self.footer.setText(footer)
         ratio = self.devicePixelRatioF()
         pixmap = QPixmap()  # empty for a step without one
@@ -222,8 +224,12 @@ class LessonWindow(QWidget):
 
     def _footer_keys(self) -> str:
         """The footer's first line: the first of FOOTERS that fits the column (the last else)."""
+        return self._one_line([keys.format(progress=self.lesson.progress()) for keys in FOOTERS])
+
+    def _one_line(self, lines: Sequence[str]) -> str:
+        """The first of `lines`, fullest first, that fits the column on one line in the
+        footer's font (the last when none does)."""
         metrics, width = self.footer.fontMetrics(), self._column_width()
-        lines = [keys.format(progress=self.lesson.progress()) for keys in FOOTERS]
         return next((line for line in lines if metrics.horizontalAdvance(line) <= width), lines[-1])
 
     def _fit_caption(self) -> None:

@@ -10,7 +10,7 @@ import pytest
 from PIL import Image
 
 from leafstudio.gui.model.layers import LAYERS
-from leafstudio.gui.model.lesson import Lesson, bent_note, equation_png, plan_png, step_layers
+from leafstudio.gui.model.lesson import Lesson, bent_notes, equation_png, plan_png, step_layers
 from leafstudio.render.lesson import LESSON_STEPS
 
 
@@ -88,7 +88,7 @@ def test_a_folded_leafs_flat_steps_draw_its_points_laid_flat_on_the_blade(folded
     xy, _ = frame.to_plane(boundary)
     gap = _distance_to_ring(xy, np.vstack([polygon, polygon[:1]]))
     assert gap.max() < 1e-3 * length, gap.max() / length
-    assert bent_note().startswith("Steps 2–5 work on the leaf laid flat; from step 6 on")
+    assert bent_notes()[0].startswith("Steps 2–5 work on the leaf laid flat; from step 6 on")
 
 
 def _distance_to_ring(xy: np.ndarray, ring: np.ndarray) -> np.ndarray:

@@ -152,7 +152,7 @@ def test_a_bent_leafs_flat_steps_show_it_laid_flat_and_say_so(window, qtbot, tmp
     so."""
     import leafstudio as ls
     from leafstudio.forms.make import Form
-    from leafstudio.gui.model.lesson import bent_note
+    from leafstudio.gui.model.lesson import bent_notes
     from tests.gui.qt.conftest import wait_result
 
     assert not window.layers._item("blade").flags() & Qt.ItemFlag.ItemIsEnabled  # the demo
@@ -171,7 +171,7 @@ def test_a_bent_leafs_flat_steps_show_it_laid_flat_and_say_so(window, qtbot, tmp
             assert "blade" in shown and not shown & {"points", "curves", "mesh"}, step.title
         else:
             assert "blade" not in shown and shown == set(step.layers), step.title
-        assert lesson.footer.text().endswith(bent_note())
+        assert lesson.footer.text().split("\n")[-1] in bent_notes()
     assert [p.name for p in lesson.viewport._pieces["blade"]][:2] == [
         "blade:outline",
         "blade:boundary",
@@ -243,6 +243,35 @@ def test_a_bent_leafs_plan_keeps_its_room_in_the_smallest_lesson(window, qtbot, 
     assert lesson.plan.height() >= PLAN_LEAST * lesson.height() - 30  # the column's margins
     caption = lesson.caption
     assert caption.heightForWidth(caption.width()) <= caption.height() + 1  # the words fit
+    lesson.close()
+
+
+def test_a_bent_leafs_footer_is_its_keys_and_one_line_of_note(window, qtbot, tmp_path):
+    """lesson36: under the keys' one line a bent leaf's note ("Steps 2–5 work on the leaf laid
+    flat; from step 6 on, it is bent back, its relief not stretched.") made the footer 4 lines
+    tall at 960 x 600 and 3 at 1280 x 720 (soybean pot1_1, an ovate form folded 45°), and the
+    caption went down to 14 points. The note is said in the fullest of its wordings that fits
+    one line: the footer is two lines at every projector size, the keys and the note."""
+    import leafstudio as ls
+    from leafstudio.forms.make import Form
+    from leafstudio.gui.model.lesson import bent_notes
+    from tests.gui.qt.conftest import wait_result
+
+    lesson = _opened(window, qtbot)
+    path = tmp_path / "folded.leaf.json"
+    ls.save_leaf(Form("ovate", fold=45.0).leaf(), path)
+    window.session.history.set_clean()
+    assert window.open_path(str(path))
+    wait_result(qtbot, window, lambda o: o.result.leaf.bend is not None)
+    for size in ((960, 600), (1024, 768), (1280, 720)):
+        lesson.resize(*size)
+        qtbot.wait(300)  # the column is sized once the resize rests
+        qtbot.waitUntil(lambda size=size: lesson.width() == size[0])
+        lesson.go(1)
+        footer = lesson.footer
+        keys, note = footer.text().split("\n")
+        assert "Esc: leave" in keys and note in bent_notes(), size
+        assert footer.heightForWidth(footer.width()) < 2.5 * footer.fontMetrics().lineSpacing()
     lesson.close()
 
 
