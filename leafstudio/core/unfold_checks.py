@@ -55,9 +55,15 @@ SIDE_ON = 0.01  # a whole vein this share of the length outside the outline on t
 def off_plane(points: np.ndarray) -> tuple[float, float]:
     """RMS distance of (n, 3) points from their PCA plane, and their RMS spread across (the
     second)."""
+    return _pca(points)[:2]
+
+
+def _pca(points: np.ndarray) -> tuple[float, float, np.ndarray]:
+    """`off_plane`'s two spreads of (n, 3) points, and their PCA plane's normal (3,)."""
     centred = points - points.mean(axis=0)
-    spreads = np.sqrt(np.maximum(np.linalg.eigvalsh(centred.T @ centred / len(points)), 0))
-    return float(spreads[0]), float(spreads[1])
+    values, vectors = np.linalg.eigh(centred.T @ centred / len(points))
+    spreads = np.sqrt(np.maximum(values, 0))
+    return float(spreads[0]), float(spreads[1]), vectors[:, 0]
 
 
 def off_quadric(points: np.ndarray) -> float:
@@ -76,23 +82,22 @@ def bent(boundary: np.ndarray, midrib: np.ndarray | None = None) -> bool:
     PCA plane (OFF_PLANE), or off it and off the best quadratic height field (OFF_QUADRIC; the
     quadric's rms is at most the plane's: a flat leaf does not fit it), or, given the (m, 3)
     `midrib`, that sunk under the margin's plane as a bowl's (FORESHORTENED)."""
-    before, width = off_plane(boundary)
+    before, width, normal = _pca(boundary)
     if before > OFF_PLANE * width:
         return True
     if before > OFF_QUADRIC * width and off_quadric(boundary) > OFF_QUADRIC * width:
         return True
-    return midrib is not None and foreshortened(boundary, midrib) > FORESHORTENED
+    return midrib is not None and foreshortened(midrib, normal) > FORESHORTENED
 
 
-def foreshortened(boundary: np.ndarray, midrib: np.ndarray) -> float:
+def foreshortened(midrib: np.ndarray, normal: np.ndarray) -> float:
     """How many times the (m, 3) `midrib` (at about SHADOW_POINTS points) is as long as its
-    shadow on the PCA plane of the (n, 3) `boundary`: 1 for a midrib on that plane."""
-    centred = boundary - boundary.mean(axis=0)
-    on_plane = np.linalg.eigh(centred.T @ centred)[1][:, 1:]
+    shadow on a plane of unit (3,) `normal`: 1 for a midrib on that plane."""
     points = np.vstack([midrib[:: max(1, len(midrib) // SHADOW_POINTS)], midrib[-1:]])
     steps = np.diff(points, axis=0)
-    shadow = float(np.linalg.norm(steps @ on_plane, axis=1).sum())
-    along = float(np.linalg.norm(steps, axis=1).sum())
+    squares = np.einsum("ij,ij->i", steps, steps)
+    along = float(np.sqrt(squares).sum())
+    shadow = float(np.sqrt(np.maximum(squares - (steps @ normal) ** 2, 0.0)).sum())
     return along / shadow if shadow > 0 else np.inf
 
 
