@@ -101,9 +101,7 @@ def mixed(
     curl's (pose_limits.fit_bounds', as unfold.py's fits: a blade wider than long curls past
     CURL_SEARCH over its diagonal), each way, in its units; a start whose first round about a
     relief leaves more than `lead` is let go, taken beyond the margin's digitising `noise`
-    (unfold_checks.above_noise, as unfold.py's fits; the rms returned are not: a relief read
-    off noisy curves takes up some of their noise, and cordate folded 45, given 5e-4 of the
-    length of it, so taken was fitted fold 46.3 and roll -0.14, 1.4% narrow, not fold 44.8)."""
+    (unfold_checks.above_noise, as unfold.py's fits; the rms returned are as fitted: `remixed`)."""
     origin = midrib[0]
     weight = 1.0 / np.sqrt(len(points))
 
@@ -236,8 +234,13 @@ def remixed(
     leaves the margin off flat (MIXED_FROM) and `mixed` lays it within that and flatter
     (MIXED_GAIN), or, where there is none, within that and flat enough against `before`, the
     quadric's rms (MIXED_EXPLAINED); its fewer terms where they do about as well (SIMPLER,
-    CLOSE). `best` and `before` are taken beyond the margin's digitising `noise` (`mixed`'s fits
-    are not: they replace `best` only when flatter than that). The arguments as `mixed` takes
+    CLOSE). `best` and `before` are taken beyond the margin's digitising `noise`, and so are
+    `mixed`'s fits where there is no `best`; else they replace it only when flatter than it as
+    fitted (a relief read off noisy curves takes up some of their noise: cordate folded 45 and
+    given 5e-4 of the length of it was fitted fold 46.3, roll -0.14, 1.4% narrow, not fold
+    44.8). With 5e-4 of noise, obovate curled 0.5 and rolled 0.4, reniform curled -1 and rolled
+    -0.3, cordate folded 30, curled 0.8 and rolled 0.3 were fitted none (3 of 3 seeds). The
+    arguments as `mixed` takes
     them; `leaf` the unit leaf (whether a fit lies flat: unfold_checks.lies_flat)."""
     if best is not None and best[0] <= MIXED_FROM * length:
         return best
@@ -247,6 +250,8 @@ def remixed(
     fits = [f for f in fits if checks.lies_flat(f[2], leaf)]
     if not fits:
         return best
+    if best is None:  # nothing to keep: taken beyond the noise as unfold.py's fits
+        fits = [(checks.above_noise(f[0], noise, 9, len(points)), *f[1:]) for f in fits]
     rms, terms, bend = checks.simplest(fits, SIMPLER, CLOSE * length)
     if rms > MIXED_FROM * length:  # not a form's own pose (MIXED_GAIN: tubes)
         return best
