@@ -185,10 +185,9 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
     length = float(np.linalg.norm(np.ptp(boundary, axis=0)))
     if midrib_turned(list(leaf.veins)):  # written apex first: the frame's origin is the base
         midrib = midrib[::-1]
-    noise = checks.margin_noise(
-        boundary, leaf.veins[0]
-    )  # each fit's rms is taken beyond it (above_noise)
-    # the pose must do much better than a height field
+    # each fit's rms is taken beyond the margin's noise (above_noise), and the quadric's: the
+    # pose must do much better than a height field
+    noise = checks.margin_noise(boundary, leaf.veins[0])
     before = checks.above_noise(checks.off_quadric(boundary), noise, 6, len(boundary))
     if checks.side_on(leaf, length):  # ... unless the leaf as given is refused: any pose
         # that lays it flat does better (folded down 70°, the halves nearly closed: fitted
