@@ -33,6 +33,11 @@ back 36% too wide), a mix the fits leave off flat with all four terms (core/unfo
 curl is searched as far as it turns the midrib (pose_limits.fit_bounds), a curl alone from the
 midrib's own turn too (core/unfold_curl.py): reniform curled 1 and -1 read back 1.126 and 0.733.
 
+A margin digitised with noise is no flatter under any pose: each fit's rms, and the quadric's, is
+taken beyond the noise read off the margin (unfold_checks.above_noise); and a bowl, a blade
+curled and rolled one way, whose rim lies nearly on a plane, is asked by its midrib sunk under it
+(unfold_checks.FORESHORTENED).
+
 The twist (bend.Pose's: each cross-section turned about the midrib by twist · x) is fitted only
 where no pose without it lays the margin flat (TWIST_FROM), over the same subsets with the twist
 added (TWISTED), and kept where it lays it clearly flatter (TWIST_GAIN): without it an ovate
@@ -51,15 +56,16 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from leafstudio.core import unfold_checks as checks
-from leafstudio.core.bend import Pose, flat_leaf
+from leafstudio.core.bend import Pose
 from leafstudio.core.placed import PlacedPose
-from leafstudio.core.plane import Frame, fit_frame
+from leafstudio.core.plane import Frame
 from leafstudio.core.pose_limits import FIT_POINTS, fit_bounds  # the fit's points; its bounds
 from leafstudio.core.pose_limits import FOLD as FOLD_LIMIT  # the fold's search range, each way
 from leafstudio.core.pose_limits import TWIST_TURNS as TWIST_HALVES  # the loader's twist, at most
 from leafstudio.core.pose_relief import Relief, relief_of, sheet_relief
 from leafstudio.core.prepare.vein_order import midrib_turned
 from leafstudio.core.unfold_curl import bowed_starts
+from leafstudio.core.unfold_frames import first_frames, upright
 from leafstudio.core.unfold_hinge import SHARE_CLOSE, fallen_slopes, hinge_relief, turn_share
 from leafstudio.core.unfold_mixed import remixed
 from leafstudio.core.unfold_rolled import refolded
@@ -126,23 +132,6 @@ HINGE_SIZES = (1e-100, 1e100)  # a leaf's extent outside these: its pose has no 
 # values" at 1e300; the pose fitted about the margin's plane, as before, runs to 1e150)
 
 
-def _starts(boundary: np.ndarray, midrib: np.ndarray) -> list[np.ndarray]:
-    """(3, 3) first frames (rows u, v, normal): u along the midrib's chord; the normal the
-    boundary's PCA normal, or the way the margin stands from the midrib (a fold's side)."""
-    u = midrib[-1] - midrib[0]
-    u = u / np.linalg.norm(u)
-    centred = boundary - boundary.mean(axis=0)
-    normals = [np.linalg.eigh(centred.T @ centred)[1][:, 0], boundary.mean(0) - midrib.mean(0)]
-    frames = []
-    for n in normals:
-        n = n - (n @ u) * u
-        if np.linalg.norm(n) < 1e-9:
-            continue
-        n = n / np.linalg.norm(n)
-        frames.append(np.array([u, np.cross(n, u), n]))
-    return frames
-
-
 def fit_pose(leaf: Leaf) -> PlacedPose | None:
     """The bend that lays `leaf`'s margin and midrib flat, or None when the leaf is flat enough
     as it is or no pose explains its bend (module docstring).
@@ -170,14 +159,15 @@ def fit_pose(leaf: Leaf) -> PlacedPose | None:
 
     hinged = HINGE_SIZES[0] < 2 * half < HINGE_SIZES[1]
     boundary = unit(leaf.boundary)
-    if not checks.bent(boundary):  # flat, cupped or gently bent: the unit leaf is not made
-        return None  # (0.17 ms of a flat ovate's 0.35, best of 40), nor its midrib's way asked
+    if not checks.bent(boundary, unit(leaf.veins[0])):  # flat, cupped or gently bent: the unit
+        return None  # leaf is not made (0.17 ms of a flat ovate's 0.35, best of 40), nor its
+        # midrib's way asked
     bend = _fit(Leaf(boundary, [unit(v) for v in leaf.veins]), hinged)
     if bend is None:
         return None
     pose, frame = bend.pose, bend.frame
     relief = None if pose.relief is None else pose.relief.scaled(2 * half)
-    return _upright(
+    return upright(
         PlacedPose(
             Pose(pose.fold, *(t / (2 * half) for t in (pose.curl, pose.roll, pose.twist)), relief),
             Frame(
@@ -188,25 +178,6 @@ def fit_pose(leaf: Leaf) -> PlacedPose | None:
     )
 
 
-def _upright(bend: PlacedPose, leaf: Leaf) -> PlacedPose:
-    """`bend`, the same bend of `leaf`, in the frame whose normal is the one the flat blade's
-    own plane takes (plane.fit_frame: toward its veins), as the app finds it again (a sketch's
-    frame, placed.blade_frame): turned half about the midrib when the fit's normal, whichever
-    way its start pointed, is the other (fold, curl, roll and relief negated; the twist, a turn
-    about the midrib as that half turn is, kept; the same points to the last bit). An ovate
-    folded 45 and curled 0.5 was fitted fold -45 and curl -0.5 about a normal down, and its
-    sketch's first edit flipped the leaf over (0.82 of its length)."""
-    flat = flat_leaf(Leaf(leaf.boundary, leaf.veins, bend=bend))
-    if fit_frame(flat.boundary, flat.vein_points).normal @ bend.frame.normal >= 0:
-        return bend
-    pose, frame = bend.pose, bend.frame
-    relief = None if pose.relief is None else pose.relief.mirrored()
-    turned = replace(  # 0.0 - t: no -0.0 for a term the fit left out
-        pose, fold=0.0 - pose.fold, curl=0.0 - pose.curl, roll=0.0 - pose.roll, relief=relief
-    )
-    return PlacedPose(turned, Frame(frame.origin, frame.u, -frame.v, -frame.normal))
-
-
 def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
     """fit_pose on the leaf at about unit size, off its plane (fit_pose asks); the poses fitted
     again about the midrib's hinge when `hinged`."""
@@ -214,7 +185,10 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
     length = float(np.linalg.norm(np.ptp(boundary, axis=0)))
     if midrib_turned(list(leaf.veins)):  # written apex first: the frame's origin is the base
         midrib = midrib[::-1]
-    before = checks.off_quadric(boundary)  # the pose must do much better than a height field
+    # each fit's rms is taken beyond the margin's noise (above_noise), and the quadric's: the
+    # pose must do much better than a height field
+    noise = checks.margin_noise(boundary, leaf.veins[0])
+    before = checks.above_noise(checks.off_quadric(boundary), noise, 6, len(boundary))
     if checks.side_on(leaf, length):  # ... unless the leaf as given is refused: any pose
         # that lays it flat does better (folded down 70°, the halves nearly closed: fitted
         # 0.0107 against the quadric's 0.0259, and the pipeline refused its midrib as outside
@@ -234,6 +208,9 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
     origin = midrib[0]
     points = boundary - origin  # the margin lies flat; the midrib, with its relief, need not
     weight = 1.0 / np.sqrt(len(points))
+
+    def beyond(rms: float, free: int) -> float:
+        return checks.above_noise(rms, noise, free, len(points))
 
     def placed(
         x: np.ndarray,
@@ -287,7 +264,8 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
 
             fit = least_squares(residual, y0, bounds=([-h for h in hi], hi), max_nfev=most_calls)
             found.append((float(np.sqrt(2 * fit.cost)) * length, full(fit.x, terms), axes, fit.x))
-        return sorted(found, key=lambda f: f[0])
+        found.sort(key=lambda f: f[0])  # the best first, then their rms beyond the noise
+        return [(beyond(f[0], len(f[3])), *f[1:]) for f in found]
 
     def flat_fit(tried: list, terms: tuple[int, ...]) -> tuple | None:
         """(rms, terms, bend, axes, y) of the first of the `tried` (`fits_of`) that lies flat,
@@ -305,7 +283,7 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
         best `start` ((axes, y)): on oblanceolate folded -60 that best, fold -31 and roll -24
         making up for the shear, led the hinge's fit to 0.78 of `before`; the fold alone from
         -60, to 2e-4."""
-        frames = itertools.product(_starts(boundary, midrib), FOLDS[1:])
+        frames = itertools.product(first_frames(boundary, midrib), FOLDS[1:])
         starts = [(axes, np.array([0.0] * 4 + [fold])) for axes, fold in frames]
         if (
             3 not in terms
@@ -380,12 +358,12 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
             rolls = (0.0, most / 2, -most / 2) if 2 in terms else (0.0,)
             twists = TWISTS if 3 in terms else (0.0,)
             starts = []
-            frames = itertools.product(_starts(boundary, midrib), folds, rolls, twists)
+            frames = itertools.product(first_frames(boundary, midrib), folds, rolls, twists)
             for axes, fold, roll, twist in frames:
                 guess = [(fold, 0.0, roll, twist)[t] for t in terms]
                 starts.append((axes, np.array([0.0] * 4 + guess)))
             if terms == (1,):  # and the midrib's own turn, where it turns (unfold_curl)
-                starts += bowed_starts(midrib, _starts(boundary, midrib), terms, length, curls)
+                starts += bowed_starts(midrib, first_frames(boundary, midrib), terms, length, curls)
             plain[terms] = fits_of(terms, starts)
         return plain[terms]
 
@@ -441,15 +419,16 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
                     (again, x, axes, slopes), eased((axes, alone), terms), key=lambda f: f[0]
                 )
                 if again > HINGE_GAIN * rms:  # from the frame the margin stands on, untilted
-                    # (_starts: its normal the margin's side of the midrib, a fold up in it); from
-                    # the plane's fit's frame, elliptic folded -75 (fitted 72.4 and rolled -15, its
-                    # frame tilted 37°) went to -46.5 and rolled 2.3 about the hinge (0.0044 off),
-                    # from its fold alone there to -24.3 (1.9 times the plane's fit's rms)
+                    # (first_frames: its normal the margin's side of the midrib, a fold up in
+                    # it); from the plane's fit's frame, elliptic folded -75 (fitted 72.4 and
+                    # rolled -15, its frame tilted 37°) went to -46.5 and rolled 2.3 about the
+                    # hinge (0.0044 off), from its fold alone there to -24.3 (1.9 times the
+                    # plane's fit's rms)
                     start = np.zeros(len(y))
                     start[4] = abs(y[4])
                     again, x, axes, slopes = min(
                         (again, x, axes, slopes),
-                        eased((_starts(boundary, midrib)[-1], start), terms),
+                        eased((first_frames(boundary, midrib)[-1], start), terms),
                         key=lambda f: f[0],
                     )
             bend = placed(x, axes, True, slopes)[0]
@@ -481,7 +460,8 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
     if hinged and best is not None and best[2].pose.fold * best[2].pose.roll > 0:  # a relief's
         # half width eases that fold (unfold_rolled.py): fitted again about a form's relief
         curves = [leaf.boundary, *leaf.veins]
-        again = refolded(best[2], boundary, midrib, curves, _starts(boundary, midrib), length, most)
+        frames = first_frames(boundary, midrib)
+        again = refolded(best[2], boundary, midrib, curves, frames, length, most, noise)
         again = [f for f in again if f[0] <= best[0] and checks.lies_flat(f[2], leaf)]
         best = checks.simplest(again, SIMPLER, CLOSE * length) if again else best
     if best is None or best[0] > TWIST_FROM * length:  # a twist, where the rest fall short
@@ -490,6 +470,8 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
             best = twisted
     if hinged:  # no fit bends about a relief as a form's, all four terms (unfold_mixed.py)
         starts = [placed(f[1], f[2], False)[0] for fits in plain.values() for f in fits[:1]]
-        frames = _starts(boundary, midrib)
-        best = remixed(best, starts, leaf, boundary, midrib, frames, length, most, curls, before)
+        frames = first_frames(boundary, midrib)
+        best = remixed(
+            best, starts, leaf, boundary, midrib, frames, length, most, curls, before, noise
+        )
     return None if best is None else best[2]

@@ -38,6 +38,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
+from leafstudio.core import unfold_checks as checks
 from leafstudio.core.bend import Pose
 from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame
@@ -100,6 +101,7 @@ def refolded(
     frames: list[np.ndarray],
     length: float,
     most: float,
+    noise: float = 0.0,
 ) -> list[tuple[float, tuple[int, ...], PlacedPose]]:
     """`bend`, a fold and a roll fitted to the (n, 3) margin `points` and (m, 3) `midrib` (its
     base first) about unfold.py's hinge, fitted again (module docstring), with its curl and
@@ -107,7 +109,8 @@ def refolded(
     margin's rms off the flat blade's plane, its terms (unfold.TERMS') and the pose. `curves`:
     the boundary and veins whole (the sections' means are read off them), `frames` unfold's
     first (3, 3) frames, `length` the outline's diagonal and `most` the roll's search, each way,
-    in its units."""
+    in its units; each rms the fit's beyond the margin's digitising `noise`
+    (unfold_checks.above_noise)."""
     origin = midrib[0]
     weight = 1.0 / np.sqrt(len(points))
     hi = [np.pi] * 3 + [FOLD_LIMIT, CURL_LIMIT, most, 1.0, 1.0]
@@ -190,5 +193,6 @@ def refolded(
     for terms, fit in (((0, 1, 2), (rms, axes, y)), ((0, 2), flat)):
         pose, frame, _ = placed(fit[2], fit[1], sheet)
         if pose is not None:
-            found.append((fit[0], terms, PlacedPose(pose, frame)))
+            rms = checks.above_noise(fit[0], noise, len(fit[2]), len(points))
+            found.append((rms, terms, PlacedPose(pose, frame)))
     return found

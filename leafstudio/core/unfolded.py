@@ -97,7 +97,8 @@ def unposed_hint(leaf: Leaf) -> str:
     given, none fitted), that it may be a posed or scanned leaf written without its pose or
     sheet (a lanceolate form twisted 1, saved as .csv, was refused with "vein 1: 2 of 49 points
     lie outside the boundary" and no word of why); "" otherwise."""
-    if leaf.bend is not None or not bent(np.asarray(leaf.boundary, dtype=float)):
+    midrib = np.asarray(leaf.veins[0], dtype=float) if leaf.veins else None
+    if leaf.bend is not None or not bent(np.asarray(leaf.boundary, dtype=float), midrib):
         return ""
     return (
         "; the leaf is bent in 3D and no pose lays it flat: a posed or scanned leaf saved as a "

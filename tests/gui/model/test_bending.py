@@ -394,8 +394,8 @@ def test_a_fitted_leafs_first_sketch_edit_does_not_turn_it_over(terms):
     """The sketch derived from a fitted leaf's result has the flat blade's frame (fit_frame's
     normal, toward the veins); the fit's normal was the other way up for these, and a point
     moved 1e-9 turned the leaf over (0.82 and 0.32 of its length off where it stood). Now the
-    fit is read the way up the blade takes (unfold._upright): 3.4e-3 (the sketch's own outline,
-    and the relief read again from its midrib)."""
+    fit is read the way up the blade takes (unfold_frames.upright): 3.4e-3 (the sketch's own
+    outline, and the relief read again from its midrib)."""
     from scipy.spatial import cKDTree
 
     from leafstudio.core.unfolded import unfolded
