@@ -92,12 +92,16 @@ def bent(boundary: np.ndarray, midrib: np.ndarray | None = None) -> bool:
 
 def foreshortened(midrib: np.ndarray, normal: np.ndarray) -> float:
     """How many times the (m, 3) `midrib` (at about SHADOW_POINTS points) is as long as its
-    shadow on a plane of unit (3,) `normal`: 1 for a midrib on that plane."""
+    shadow on a plane of unit (3,) `normal`: 1 for a midrib on that plane, and for one of no
+    length (a vein of one point, as a click starts one: it has no length to lose, and a flat
+    leaf so given was called bent in 3D, its refusal told of a pose it never had)."""
     points = np.vstack([midrib[:: max(1, len(midrib) // SHADOW_POINTS)], midrib[-1:]])
     steps = np.diff(points, axis=0)
     squares = np.einsum("ij,ij->i", steps, steps)
     along = float(np.sqrt(squares).sum())
     shadow = float(np.sqrt(np.maximum(squares - (steps @ normal) ** 2, 0.0)).sum())
+    if along == 0:
+        return 1.0
     return along / shadow if shadow > 0 else np.inf
 
 

@@ -69,3 +69,17 @@ def test_what_a_fit_leaves_is_taken_beyond_the_noise():
     assert above_noise(0.9e-3, 1e-3, 5, 60) == 0.0
     assert above_noise(5e-3, 1e-3, 5, 60) == pytest.approx(np.sqrt(25 - 1.441) * 1e-3, rel=1e-3)
     assert above_noise(2e-3, 0.0, 5, 60) == 2e-3
+
+
+@pytest.mark.parametrize("midrib", [[[0.5, 0.0, 0.0]], [[0.5, 0.0, 0.0], [0.5, 0.0, 0.0]]])
+def test_a_flat_leafs_midrib_of_no_length_is_not_a_bend(midrib):
+    """A first vein of one point (as a click starts one), or of one point repeated, has no
+    shadow: it read as foreshortened without end, and a flat leaf refused for its outline
+    crossing itself was told it "is bent in 3D and no pose lays it flat" (review36)."""
+    import leafstudio as ls
+    from leafstudio.core.unfolded import unposed_hint
+
+    t = np.linspace(0.0, 2 * np.pi, 100, endpoint=False)
+    boundary = np.column_stack([np.cos(t), 0.5 * np.sin(t), 0 * t])
+    assert not bent(boundary, np.array(midrib))
+    assert unposed_hint(ls.Leaf(boundary, [np.array(midrib)])) == ""
