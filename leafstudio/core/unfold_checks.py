@@ -29,6 +29,12 @@ FORESHORTENED = 1.1  # ... or, a margin under both, when its midrib is this many
 # the quadric) and whose midrib sinks under it, 1.40 times its shadow (curled -0.5: 1.15); it ran
 # as a height field 26.5% short. Flat gallery forms' domes give 1.0005-1.036, the drawn and clicked
 # leaves of bench_bent --veins 1.012 and 1.011, waved forms 1.05-1.08 (/work/notes/pose36)
+RIM_ON_PLANE = 1e-3  # ... and its margin off its PCA plane by more than this share of its RMS
+# width: a margin on its plane to rounding is no bowl's rim but a drawn leaf's (its relief flat:
+# 0), whose midrib the side view may lift (the clicked leaf's tip raised 0.5: 1.17 times its
+# shadow; each edit then ran the fit, 0.95 s CPU, to none, and a refusal called it "bent in 3D ...
+# a posed or scanned leaf saved as a point list", review36). The foreshortened bowls' rims: at
+# least 3.9e-3 (orbicular curled -0.4, rolled -0.15; reniform 0.036, a grid of curls and rolls)
 SHADOW_POINTS = 16  # ... the midrib taken at about this many points: digitising noise lengthens
 # a densely sampled curve off the plane and on it alike, not its chords
 SMOOTHING = np.array([-2.0, 3.0, 6.0, 7.0, 6.0, 3.0, -2.0]) / 21  # a quadratic's least squares
@@ -81,13 +87,16 @@ def bent(boundary: np.ndarray, midrib: np.ndarray | None = None) -> bool:
     """Whether a margin's (n, 3) points are bent enough for a pose to be fitted: well off their
     PCA plane (OFF_PLANE), or off it and off the best quadratic height field (OFF_QUADRIC; the
     quadric's rms is at most the plane's: a flat leaf does not fit it), or, given the (m, 3)
-    `midrib`, that sunk under the margin's plane as a bowl's (FORESHORTENED)."""
+    `midrib`, that sunk under the margin's plane as a bowl's (FORESHORTENED) whose rim is not
+    drawn on it (RIM_ON_PLANE)."""
     before, width, normal = _pca(boundary)
     if before > OFF_PLANE * width:
         return True
     if before > OFF_QUADRIC * width and off_quadric(boundary) > OFF_QUADRIC * width:
         return True
-    return midrib is not None and foreshortened(midrib, normal) > FORESHORTENED
+    if midrib is None or before <= RIM_ON_PLANE * width:
+        return False
+    return foreshortened(midrib, normal) > FORESHORTENED
 
 
 def foreshortened(midrib: np.ndarray, normal: np.ndarray) -> float:

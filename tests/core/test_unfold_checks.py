@@ -83,3 +83,16 @@ def test_a_flat_leafs_midrib_of_no_length_is_not_a_bend(midrib):
     boundary = np.column_stack([np.cos(t), 0.5 * np.sin(t), 0 * t])
     assert not bent(boundary, np.array(midrib))
     assert unposed_hint(ls.Leaf(boundary, [np.array(midrib)])) == ""
+
+
+def test_a_drawn_leafs_midrib_lifted_in_the_side_view_is_not_a_bend():
+    """The clicked leaf's midrib raised to 0.5 at its tip in the side view (1.17 times its shadow)
+    over its outline drawn flat: no bowl, whose rim is never on a plane to rounding. It started
+    the fit at every edit (0.95 s CPU, no pose found), and a refusal of it (a side vein dragged
+    out) was told it was "a posed or scanned leaf saved as a point list" (review36)."""
+    from leafstudio.core.unfolded import unposed_hint
+    from tests.leaves import clicked_sketch
+
+    leaf = clicked_sketch().with_profile(0, 0.0, 0.5).to_leaf()
+    assert not _bent(leaf)
+    assert unposed_hint(leaf) == ""
