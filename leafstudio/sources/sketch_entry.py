@@ -25,14 +25,21 @@ def sketch_plane(sketch: dict[str, Any]) -> Frame | None:
 
     Raises
     ------
-    KeyError, ValueError, TypeError
-        If the plane lacks one of its vectors or one is not three numbers.
+    ValueError
+        If the plane lacks one of its vectors or one is not three numbers, saying so: numpy's
+        and Python's own words ("bad sketch ('origin')", "bad sketch (string indices must be
+        integers, not 'str')") named neither the plane nor what it wants (review36).
     """
     plane = sketch.get("plane") or {}
     if not plane:
         return None
     names = ("origin", "u", "v", "normal")
-    return Frame(**{k: np.asarray(plane[k], dtype=float).reshape(3) for k in names})
+    try:
+        return Frame(**{k: np.asarray(plane[k], dtype=float).reshape(3) for k in names})
+    except (KeyError, TypeError, ValueError, IndexError):
+        raise ValueError(
+            f'"plane" must give origin, u, v and normal, three numbers each; got {plane!r:.60}'
+        ) from None
 
 
 def drawn_frame(sketch: dict[str, Any], source: str) -> Frame | None:

@@ -15,6 +15,8 @@ from leafstudio.sources.files import save_leaf
 from leafstudio.sources.sketch_entry import drawn_frame
 from tests.leaves import clicked_sketch
 
+PLANE = {"origin": [0, 0, 0], "u": [1, 0, 0], "v": [0, 1, 0], "normal": [0, 0, 1]}
+
 
 def _slides_frame(argv: list[str], monkeypatch) -> tuple[object, object]:
     """The result and the frame `leafstudio slides` draws the lesson's slides on (nothing
@@ -55,3 +57,23 @@ def test_slides_draw_a_leaf_file_on_its_results_view_frame(tmp_path, monkeypatch
 def test_a_sketchs_unreadable_plane_is_named():
     with pytest.raises(LeafError, match="bad sketch"):
         drawn_frame({"boundary": [[0, 0], [1, 0], [0, 1]], "plane": {"u": [1, 0]}}, "p.leaf.json")
+
+
+@pytest.mark.parametrize("plane", [{"u": [1, 0, 0]}, "tilted", {**PLANE, "origin": [0, 0]}])
+def test_a_projects_unreadable_plane_is_one_line_naming_the_plane(tmp_path, capsys, plane):
+    """A project whose sketch's plane lacks a vector, is a string or has a vector of two numbers:
+    `leafstudio slides` (and the app, which reads it alike) said "bad sketch ('origin')", "bad
+    sketch (string indices must be integers, not 'str')", "... (cannot reshape array of size 2
+    into shape (3,))", not which entry nor what it wants (review36)."""
+    import json
+
+    sketch = clicked_sketch()
+    project = tmp_path / "drawn.leaf.json"
+    save_leaf(sketch.to_leaf(), project, ls.Params(k=3, grid=32), sketch.to_dict())
+    data = json.loads(project.read_text())
+    data["sketch"]["plane"] = plane
+    project.write_text(json.dumps(data))
+    assert main(["slides", str(project), "-o", str(tmp_path / "l.pdf")]) == 2
+    said = capsys.readouterr().err.strip()
+    assert "\n" not in said and "bad sketch" in said
+    assert '"plane" must give origin, u, v and normal, three numbers each' in said
