@@ -311,3 +311,27 @@ def test_an_opened_leafs_first_sketch_edit_says_it_is_redrawn_by_the_sketch(tmp_
     sketch = session.editable_sketch()
     session.commit_sketch(sketch.moved(-1, 2, sketch.boundary[2] * 1.01), "Move point")
     assert len(told) == 1 and "the opened leaf's outline and veins" in told[0]
+
+
+def test_a_project_whose_sketch_plane_is_degenerate_is_refused_in_one_line(tmp_path):
+    """A project whose sketch's plane is all zeros opened, and its sketch made the leaf all at
+    one point; the app says so in one line naming the file and keeps its leaf (review36)."""
+    import json
+
+    from tests.leaves import clicked_sketch
+
+    session, _runner, got = opened_session()
+    session.open_demo("nested")
+    before = session.state
+    sketch = clicked_sketch()
+    path = tmp_path / "flat.leaf.json"
+    save_leaf(sketch.to_leaf(), path, FAST, sketch.to_dict())
+    data = json.loads(path.read_text())
+    data["sketch"]["plane"] = {"origin": [0, 0, 0], "u": [0] * 3, "v": [0] * 3, "normal": [0] * 3}
+    path.write_text(json.dumps(data))
+    session.open_path(str(path))
+    assert got["opened"] == [] and len(got["failed"]) == 1
+    what, message = got["failed"][0]
+    assert what == "file" and "flat.leaf.json" in message and "\n" not in message
+    assert 'bad sketch ("plane"\'s u must be a unit vector' in message
+    assert session.state is before

@@ -251,10 +251,13 @@ def test_a_bent_leafs_footer_is_its_keys_and_one_line_of_note(window, qtbot, tmp
     flat; from step 6 on, it is bent back, its relief not stretched.") made the footer 4 lines
     tall at 960 x 600 and 3 at 1280 x 720 (soybean pot1_1, an ovate form folded 45°), and the
     caption went down to 14 points. The note is said in the fullest of its wordings that fits
-    one line: the footer is two lines at every projector size, the keys and the note."""
+    one line: the footer is two lines at every projector size, the keys and the note, up to
+    1920 wide, where both are said in full, and down again: the footer refits when the window
+    is resized, not only when the step changes (review36)."""
     import leafstudio as ls
     from leafstudio.forms.make import Form
     from leafstudio.gui.model.lesson import bent_notes
+    from leafstudio.gui.qt.lesson_view import FOOTERS
     from tests.gui.qt.conftest import wait_result
 
     lesson = _opened(window, qtbot)
@@ -263,15 +266,21 @@ def test_a_bent_leafs_footer_is_its_keys_and_one_line_of_note(window, qtbot, tmp
     window.session.history.set_clean()
     assert window.open_path(str(path))
     wait_result(qtbot, window, lambda o: o.result.leaf.bend is not None)
-    for size in ((960, 600), (1024, 768), (1280, 720)):
+    lesson.go(1)
+    said: dict[int, list[str]] = {}
+    sizes = ((960, 600), (1024, 768), (1280, 720), (1920, 1080), (1280, 720), (960, 600))
+    for size in sizes:
         lesson.resize(*size)
-        qtbot.wait(300)  # the column is sized once the resize rests
         qtbot.waitUntil(lambda size=size: lesson.width() == size[0])
-        lesson.go(1)
+        qtbot.waitUntil(lambda: not lesson._plan_timer.isActive())  # refitted once resizing rests
         footer = lesson.footer
         keys, note = footer.text().split("\n")
         assert "Esc: leave" in keys and note in bent_notes(), size
         assert footer.heightForWidth(footer.width()) < 2.5 * footer.fontMetrics().lineSpacing()
+        said.setdefault(size[0], []).append(footer.text())
+    assert said[960][0] == said[960][1] and said[1280][0] == said[1280][1]  # refitted going down
+    keys, note = said[1920][0].split("\n")  # room for fuller words than at 960
+    assert keys.endswith(FOOTERS[0].split("}")[1]) and len(note) > len(said[960][0].split("\n")[1])
     lesson.close()
 
 
