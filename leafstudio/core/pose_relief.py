@@ -103,6 +103,15 @@ class Relief:
             self, along=along, midrib=midrib, knots=knots, mean=mean, half_width=half_width
         )
 
+    def sloped(self, rise: float, fall: float) -> Relief:
+        """The same relief with the rise and the fall given, its profiles' splines kept (they
+        are of its profiles alone): core/unfold.py's fits set them afresh each round, and a
+        fresh cache made each spline again (ovate serrate waved 0.1, read from a CSV: 4054
+        splines made in one open, 1722 distinct; /work/notes/open36)."""
+        relief = replace(self, rise=rise, fall=fall)
+        relief._cache.update({k: v for k, v in self._cache.items() if k in ("midrib", "mean")})
+        return relief
+
     def mirrored(self) -> Relief:
         """The same relief seen from the blade's other side (its frame turned half about the
         midrib, y and z negated): the heights negated, the rise and the fall swapped."""
@@ -341,13 +350,17 @@ def slopes_off(relief: Relief, points: np.ndarray, clear: float) -> tuple[float,
     return _rise_fall(wide[:, 2] - relief.hinge_height(wide[:, 0]), wide[:, 1])
 
 
-def margin_relief(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | None:
+def margin_relief(
+    boundary: np.ndarray, veins: list[np.ndarray], slopes: tuple[float, float] | None = None
+) -> Relief | None:
     """A relief whose hinge passes through the flat midrib's points (the first of the (m_i, 3)
     `veins`) and whose sheet is the margin's plane (z = 0), the blade's x and half width, and
     the margin's rise and fall off the hinge (`margin_slopes`), read from the (n, 3) `boundary`
     as it lies flat, in the blade's coordinates as for `relief_of`: a pose fitted to
     curves in 3D (core/unfold.py) folds about it, and the app's sliders bend such a leaf about
-    it again (`Relief.on_margin`). None without a midrib, or when it doubles back."""
+    it again (`Relief.on_margin`). None without a midrib, or when it doubles back. `slopes`:
+    the rise and fall to give it instead of the margin's (unfold_hinge.hinge_relief sets its
+    own: reading them took 0.63 of a waved serrate blade's 4.5 s of fitting, cProfile)."""
     if not veins:
         return None
     midrib = np.asarray(veins[0], dtype=float)
@@ -361,8 +374,7 @@ def margin_relief(boundary: np.ndarray, veins: list[np.ndarray]) -> Relief | Non
     half_width = float(np.abs(boundary[:, 1]).max())
     zeros = (0.0,) * MARGIN_KNOTS
     relief = Relief(tuple(along), tuple(heights), tuple(knots), zeros, half_width, on_margin=True)
-    rise, fall = margin_slopes(relief, boundary)
-    return replace(relief, rise=rise, fall=fall)
+    return relief.sloped(*(margin_slopes(relief, boundary) if slopes is None else slopes))
 
 
 def sheet_relief(knots: tuple[float, ...], mean: tuple[float, ...]) -> Relief:

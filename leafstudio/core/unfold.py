@@ -312,7 +312,7 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
             if bend.pose.relief is None:  # the midrib doubles back: no hinge
                 break
             fallen = fallen_slopes(bend.pose, blade)
-            given = replace(bend.pose.relief, rise=fallen[0], fall=fallen[1])
+            given = bend.pose.relief.sloped(*fallen)
             if (
                 abs(turn_share(bend.pose, given) - turn_share(bend.pose, bend.pose.relief))
                 <= SHARE_CLOSE

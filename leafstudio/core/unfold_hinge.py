@@ -80,12 +80,12 @@ def hinge_relief(
     curled = pose.curl != 0 and pose.roll == 0  # a roll's: unfold_rolled's fits, as before
     fold = 0.0 if curled else pose.fold
     for _ in range(HINGE_ROUNDS if curled else ROLLED_ROUNDS if pose.curl != 0 else 1):
-        relief = margin_relief(boundary, [replace(pose, fold=fold, relief=relief).flatten(midrib)])
+        # each round's `slopes` too: margin_relief reads them off `boundary` as if it lay
+        # flat, and a hastate folded 75 went 600 steps astray (9.7 s) through a curl's rounds
+        flat = replace(pose, fold=fold, relief=relief).flatten(midrib)
+        relief = margin_relief(boundary, [flat], slopes)
         if relief is None:
             return None
-        # each round's too: margin_relief reads them off `boundary` as if it lay flat, and a
-        # hastate folded 75 went 600 steps astray (9.7 s) through a curl's rounds
-        relief = replace(relief, rise=slopes[0], fall=slopes[1])
         if sheet is not None:
             relief = replace(relief, knots=sheet[0], mean=sheet[1])
     return relief
@@ -105,7 +105,7 @@ def fallen_slopes(pose: Pose, boundary: np.ndarray) -> tuple[float, float]:
     relief = pose.relief
     for _ in range(FALL_ROUNDS):
         rise, fall = margin_slopes(relief, replace(pose, relief=relief).flatten(boundary))
-        fallen = replace(relief, rise=rise, fall=fall)
+        fallen = relief.sloped(rise, fall)
         same = abs(turn_share(pose, fallen) - turn_share(pose, relief)) <= SHARE_CLOSE
         relief = fallen
         if same:
