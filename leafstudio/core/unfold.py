@@ -125,6 +125,8 @@ HINGE_GAIN = 0.9  # a fit about the hinge is kept when its rms is at most this s
 EASED_FROM = 60.0  # degrees: a fit folded harder than this about the margin's plane is tried
 # about the hinge from its fold alone too (_fit; a form's dome turns rigidly up to 60°): the
 # retry on every fit that gained nothing took a rolled grass blade's fit 1.3 -> 3.6 s of CPU
+NO_BEND = 1e-6  # degrees of fold, or radians over the unit leaf of curl, roll and twist: a
+# pose whose terms are all under this bends nothing (_no_bend)
 FALL_FITS = 12  # fits about the hinge, each with the rise and fall the last left (_fit): the
 # fold and curl of lanceolate folded -75 went 75.30, 76.29, 76.07 ... 75.19 in 12 (0.07 s each)
 HINGE_SIZES = (1e-100, 1e100)  # a leaf's extent outside these: its pose has no relief (scipy's
@@ -163,7 +165,7 @@ def fit_pose(leaf: Leaf) -> PlacedPose | None:
         return None  # leaf is not made (0.17 ms of a flat ovate's 0.35, best of 40), nor its
         # midrib's way asked
     bend = _fit(Leaf(boundary, [unit(v) for v in leaf.veins]), hinged)
-    if bend is None:
+    if bend is None or _no_bend(bend.pose):
         return None
     pose, frame = bend.pose, bend.frame
     relief = None if pose.relief is None else pose.relief.scaled(2 * half)
@@ -176,6 +178,14 @@ def fit_pose(leaf: Leaf) -> PlacedPose | None:
         ),
         leaf,
     )
+
+
+def _no_bend(pose: Pose) -> bool:
+    """Whether every term of a pose fitted at unit size is nought (NO_BEND): a waved elliptic
+    blade as a point CSV (wave 0.2) was fitted fold 1e-27, curl 4e-44, roll -6e-10 about a
+    relief of zeros, and as so bent its surface came out 22% smaller than the form's own; unbent,
+    as a waved blade of wave 0.1 is left, the base b(x) follows its margin's heights (0.0%)."""
+    return all(abs(t) < NO_BEND for t in (pose.fold, pose.curl, pose.roll, pose.twist))
 
 
 def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:

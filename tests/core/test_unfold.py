@@ -446,3 +446,15 @@ def test_a_leaf_laid_flat_without_a_twist_is_fitted_none(shape, terms):
     folded, curled and rolled forms get no twist, not even a round-off one."""
     leaf = Form(shape, **terms).leaf()
     assert fit_pose(ls.Leaf(leaf.boundary, leaf.veins)).pose.twist == 0
+
+
+def test_a_waved_blade_given_as_curves_is_not_bent_by_a_pose_of_nothing(tmp_path):
+    """A waved elliptic blade (wave 0.2) given as its curves alone was fitted fold 1e-27, curl
+    4e-44, roll -6e-10 about a relief of zeros; so bent, its surface came out 22% smaller than
+    the form's own. A pose of nought is none (unfold.NO_BEND): the base b(x) follows the
+    margin's heights, as it does for the blade waved 0.1."""
+    from leafstudio.sources.files import load_leaf, save_leaf
+
+    path = tmp_path / "waved.csv"  # its curves alone, to 9 digits
+    save_leaf(Form("elliptic", wave=0.2).leaf(), str(path))
+    assert fit_pose(load_leaf(str(path))) is None
