@@ -218,6 +218,7 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
     origin = midrib[0]
     points = boundary - origin  # the margin lies flat; the midrib, with its relief, need not
     weight = 1.0 / np.sqrt(len(points))
+    first_axes = first_frames(boundary, midrib)  # every fit's first frames
 
     def beyond(rms: float, free: int) -> float:
         return checks.above_noise(rms, noise, free, len(points))
@@ -293,7 +294,7 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
         best `start` ((axes, y)): on oblanceolate folded -60 that best, fold -31 and roll -24
         making up for the shear, led the hinge's fit to 0.78 of `before`; the fold alone from
         -60, to 2e-4."""
-        frames = itertools.product(first_frames(boundary, midrib), FOLDS[1:])
+        frames = itertools.product(first_axes, FOLDS[1:])
         starts = [(axes, np.array([0.0] * 4 + [fold])) for axes, fold in frames]
         if (
             3 not in terms
@@ -368,12 +369,12 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
             rolls = (0.0, most / 2, -most / 2) if 2 in terms else (0.0,)
             twists = TWISTS if 3 in terms else (0.0,)
             starts = []
-            frames = itertools.product(first_frames(boundary, midrib), folds, rolls, twists)
+            frames = itertools.product(first_axes, folds, rolls, twists)
             for axes, fold, roll, twist in frames:
                 guess = [(fold, 0.0, roll, twist)[t] for t in terms]
                 starts.append((axes, np.array([0.0] * 4 + guess)))
             if terms == (1,):  # and the midrib's own turn, where it turns (unfold_curl)
-                starts += bowed_starts(midrib, first_frames(boundary, midrib), terms, length, curls)
+                starts += bowed_starts(midrib, first_axes, terms, length, curls)
             plain[terms] = fits_of(terms, starts)
         return plain[terms]
 
@@ -438,7 +439,7 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
                     start[4] = abs(y[4])
                     again, x, axes, slopes = min(
                         (again, x, axes, slopes),
-                        eased((first_frames(boundary, midrib)[-1], start), terms),
+                        eased((first_axes[-1], start), terms),
                         key=lambda f: f[0],
                     )
             bend = placed(x, axes, True, slopes)[0]
@@ -470,8 +471,7 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
     if hinged and best is not None and best[2].pose.fold * best[2].pose.roll > 0:  # a relief's
         # half width eases that fold (unfold_rolled.py): fitted again about a form's relief
         curves = [leaf.boundary, *leaf.veins]
-        frames = first_frames(boundary, midrib)
-        again = refolded(best[2], boundary, midrib, curves, frames, length, most, noise)
+        again = refolded(best[2], boundary, midrib, curves, first_axes, length, most, noise)
         again = [f for f in again if f[0] <= best[0] and checks.lies_flat(f[2], leaf)]
         best = checks.simplest(again, SIMPLER, CLOSE * length) if again else best
     if best is None or best[0] > TWIST_FROM * length:  # a twist, where the rest fall short
@@ -480,8 +480,7 @@ def _fit(leaf: Leaf, hinged: bool = True) -> PlacedPose | None:
             best = twisted
     if hinged:  # no fit bends about a relief as a form's, all four terms (unfold_mixed.py)
         starts = [placed(f[1], f[2], False)[0] for fits in plain.values() for f in fits[:1]]
-        frames = first_frames(boundary, midrib)
         best = remixed(
-            best, starts, leaf, boundary, midrib, frames, length, most, curls, before, noise
+            best, starts, leaf, boundary, midrib, first_axes, length, most, curls, before, noise
         )
     return None if best is None else best[2]

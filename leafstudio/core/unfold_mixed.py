@@ -61,6 +61,7 @@ CALLS = 40  # evaluations of each fit about a relief, at most (they stop after 3
 READS = 16  # rounds of reading the relief: ovate folded 30, curled 0.5, rolled 0.3 and twisted
 # 0.5 went 9.6e-4, 5.9e-4, 3.8e-4 ... 1.9e-5 of the length off flat in 12
 SHEET_CLOSE = 1e-6  # ... until the sections' means move less than this share of the length,
+VALUES = 9  # a fit's numbers: its frame's rotation (3), the four terms, its lift and shift
 STEP = 0.5  # ... reading each next relief this share of the way to the pose the last round fitted,
 # once a round leaves more than the one before: cordate folded 30, curled 0.8 and rolled 0.3
 # swung between fold 29.4 and 32.6 (8.3e-4 and 1.5e-3 of the length off flat) from its own pose
@@ -106,7 +107,7 @@ def mixed(
     weight = 1.0 / np.sqrt(len(points))
 
     def beyond(rms: float) -> float:
-        return checks.above_noise(rms, noise, 9, len(points))
+        return checks.above_noise(rms, noise, VALUES, len(points))
 
     # rotation, fold, curl, roll, twist (these three times the length), lift and shift (shares)
     hi = np.array([np.pi] * 3 + [FOLD_LIMIT, curls, most, TWIST_TURNS * np.pi, 1.0, 0.5])
@@ -184,7 +185,7 @@ def mixed(
         turn = -twist * chord / (2 * length)  # the boundary's plane sees the blade's middle
         turned = Rotation.from_rotvec(turn * axes[0]).apply(axes)
         grid.append((turned, np.array([0.0, 0.0, 0.0, 0.0, 0.0, roll, twist, 0.0, 0.0])))
-    every = list(range(9))
+    every = list(range(VALUES))
     plain = sorted(
         (fitted(axes, y, None, every[:8], PLAIN_CALLS) + (axes,) for axes, y in grid),
         key=lambda f: f[0],
@@ -208,7 +209,7 @@ def mixed(
     fits = [(rms, (0, 1, 2, 3), placed(y, axes, relief)[0])]
     small = [i for i in range(4) if abs(y[3 + i]) < SMALL[i]]
     if small:  # near 0: fitted again at 0 about the relief found
-        again = np.where(np.isin(np.arange(9), [3 + i for i in small]), 0.0, y)
+        again = np.where(np.isin(np.arange(VALUES), [3 + i for i in small]), 0.0, y)
         free = [i for i in every if i - 3 not in small]
         rms, y, relief = settled(axes, again, relief, free, np.inf)
         if relief is not None and np.isfinite(rms):
@@ -251,7 +252,7 @@ def remixed(
     if not fits:
         return best
     if best is None:  # nothing to keep: taken beyond the noise as unfold.py's fits
-        fits = [(checks.above_noise(f[0], noise, 9, len(points)), *f[1:]) for f in fits]
+        fits = [(checks.above_noise(f[0], noise, VALUES, len(points)), *f[1:]) for f in fits]
     rms, terms, bend = checks.simplest(fits, SIMPLER, CLOSE * length)
     if rms > MIXED_FROM * length:  # not a form's own pose (MIXED_GAIN: tubes)
         return best
