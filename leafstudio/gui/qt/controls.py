@@ -276,7 +276,7 @@ class ParamPanel(QWidget):
         self._show_field(name)
 
     def say(self, text: str) -> None:
-        """Show `text` under the controls (why a typed value was refused), or hide it for """ "." ""
+        """Show `text` under the controls (why a typed value was refused); none hides it."""
         self.note.setText(text)
         self.note.setVisible(bool(text))
 
