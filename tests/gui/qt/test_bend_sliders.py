@@ -72,10 +72,17 @@ def test_a_posed_forms_sketch_is_its_flat_blade():
     assert len(sketch.relief) == 0  # the pose bends the 3D result, not the drawing
 
 
-def test_a_project_bent_past_what_the_pose_keeps_is_refused_in_the_window(window, qtbot, tmp_path):
+@pytest.mark.parametrize(
+    "bend, said",
+    [({"roll": 1000}, '"roll" 1000'), ({"fold": True}, '"fold" must be a number, got true')],
+)
+def test_a_project_bent_past_what_the_pose_keeps_is_refused_in_the_window(
+    window, qtbot, tmp_path, bend, said
+):
     """appreview31 finding 9: a project's roll of 1000 (per unit of its coordinates) was
     opened without a word, after 54 s and 5.9 GB; the window now says which term is past its
-    range, and keeps the leaf it shows."""
+    range, and keeps the leaf it shows. A fold of true was read as 1 and refused as veins
+    outside the boundary: the window names the term."""
     import json
 
     from leafstudio.sources.files import save_leaf
@@ -83,12 +90,12 @@ def test_a_project_bent_past_what_the_pose_keeps_is_refused_in_the_window(window
     path = tmp_path / "rolled.leaf.json"
     save_leaf(Form("ovate", fold=30).leaf(), path)
     data = json.loads(path.read_text())
-    data["bend"] = {"roll": 1000}
+    data["bend"] = bend
     path.write_text(json.dumps(data))
     leaf = window.session.state.leaf
     with qtbot.waitSignal(window.failure_shown, timeout=30_000):
         window.open_path(str(path))
-    assert '"roll" 1000' in window.last_error_box.text()
+    assert said in window.last_error_box.text()
     assert window.status_text.text().startswith("Failed:")
     assert window.session.state.leaf is leaf
     window.last_error_box.close()
