@@ -271,7 +271,8 @@ def lattice_bending(
     phi, tapered = phi_matrix(xy, centers, reach, KEI, KELVIN_STEP, taper)
     gram = bending_gram(tapered, differences)
     among = phi_matrix(centers, centers, reach, KEI, KELVIN_STEP, np.ones(len(centers)))[0]
-    return Bending(on, taper, differences, phi, gram, among, own_weight(step, reach))
+    own = own_weight(step, reach)
+    return Bending(on, taper, differences, phi, gram, among, own, tapered)
 
 
 def pinning(
