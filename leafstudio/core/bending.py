@@ -50,7 +50,6 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-import scipy.linalg.blas
 import scipy.sparse
 
 from leafstudio.core.buckets import kernel_array
@@ -347,9 +346,7 @@ def least_bending(
     # (k, m): D T Φ S at those rows, times their extra weight's root, in single precision as the
     # gram (in double: 1.37 of the 2.8 ms the second solve added on a flat ovate at grid 128)
     bent = root * ((sharp @ bending.tapered) @ spline.astype(np.float32))
-    upper = scipy.linalg.blas.ssyrk(1.0, bent.T)  # bentᵀ bent (its upper triangle), no copy
-    normal += upper
-    normal += np.triu(upper, 1).T
+    normal += bent.T @ bent  # (BLAS's syrk, half the products, then mirrored: 0.33 ms, this 0.23)
     normal += (more + SHARP_OWN) * bending.own * spline
     shift += bent.T @ (root[:, 0] * (sharp @ tapered[:, 0]))
     return _projected_steps(normal, shift, values, lo, hi, STEPS)
