@@ -52,7 +52,7 @@ from leafstudio.sources.extract import (
 )
 from leafstudio.sources.files import load_leaf, load_project
 from leafstudio.sources.photo import PhotoLeaf, is_photo, read_photo_leaf
-from leafstudio.sources.scan import is_scan_file, looks_like_scan, read_scan
+from leafstudio.sources.scan import is_scan_file, looks_like_scan, read_scan_returns
 
 Kind = Literal["leaf", "project", "scan", "photo"]
 
@@ -145,7 +145,9 @@ def open_scan(
     >>> opened.kind, opened.leaf.boundary.shape, opened.scan.shape
     ('scan', (200, 3), (4710, 3))
     """
-    return _scan_opened(str(path), read_scan(path), base_end, points, force)
+    scan, returns = read_scan_returns(path)
+    opened = _scan_opened(str(path), scan, base_end, points, force)
+    return replace(opened, notes=returns + opened.notes) if returns else opened
 
 
 def _scan_opened(

@@ -113,6 +113,35 @@ def test_a_scan_with_nan_points_says_how_many_and_the_first(tmp_path):
         read_scan(txt)
 
 
+def _with_missed_returns(points: np.ndarray, every: int = 25) -> np.ndarray:
+    """`points` with a row of NaN before every `every`-th: an organised cloud's pixels without a
+    return, as PCL and Open3D write them."""
+    missed = np.full((len(points) // every, 3), np.nan)
+    where = np.minimum(np.arange(len(missed)) * every + 3, len(points))
+    return np.insert(points, where, missed, axis=0)
+
+
+def test_a_scan_with_missed_returns_opens_without_them_and_says_so(tmp_path, scan):
+    """qa37: a scan with one NaN point was refused whole ("NaN or infinite coordinates"); a
+    scanner's organised cloud writes every pixel without a return so. Opened, the NaN rows are
+    left out, the note says how many and the first, and the leaf is the one without them; too
+    few finite points left are still refused."""
+    from leafstudio.workflows import open_scan, reconstruct
+
+    _, points, found = scan
+    txt = tmp_path / "scan.xyz"
+    np.savetxt(txt, _with_missed_returns(points))
+    opened = open_scan(txt)
+    assert opened.notes[0].startswith(f"left out {len(points) // 25} of its ")
+    assert "the first is point 4)" in opened.notes[0]
+    np.testing.assert_allclose(opened.leaf.boundary, found.leaf.boundary, atol=1e-9)
+    assert opened.notes[0] in reconstruct(opened, {"grid": 48}).warnings
+    few = tmp_path / "few.xyz"
+    np.savetxt(few, _with_missed_returns(points[:40], every=2))
+    with pytest.raises(LeafError, match=r"NaN or infinite coordinates are left out: 40 of 60 "):
+        open_scan(few)
+
+
 def _pcd(path, points: np.ndarray) -> None:
     header = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
     header += f"WIDTH {len(points)}\nHEIGHT 1\nPOINTS {len(points)}\nDATA ascii\n"
