@@ -1,0 +1,58 @@
+"""Posed forms written to a point list (a CSV keeps no pose) and opened again read back their
+flat blade's size and their own pose (issue 21, item 2; core/unfold.py). Session 37 measured
+these off (/work/notes/pose37/repro.py): each test fails on the code before its fix."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from leafstudio.forms.make import Form
+
+
+def _read_back(tmp_path, shape: str, terms: dict):
+    """The leaf `Form(shape, **terms)` opens as from its CSV (workflows.open_file), and the form's
+    own pose (bend.Pose)."""
+    from leafstudio.sources.files import save_leaf
+    from leafstudio.workflows import open_file
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a strong bend warns of the side view
+        posed = Form(shape, **terms).leaf()
+        path = tmp_path / "posed.csv"
+        save_leaf(posed, path)  # as `leafstudio form ... -o posed.csv` writes it
+        return open_file(str(path)).leaf, posed.bend
+
+
+def _assert_flat_size(leaf, shape: str, terms: dict) -> None:
+    """`leaf`'s flat blade, in its fitted frame, as long and wide as the flat form's (1%)."""
+    bend = leaf.bend
+    assert bend is not None
+    flat = bend.frame.to_plane(bend.flat_curve(leaf.boundary, ring=True))[0]
+    flat_terms = {k: v for k, v in terms.items() if k not in ("fold", "curl", "roll", "twist")}
+    own = np.ptp(Form(shape, **flat_terms).leaf().boundary[:, :2], axis=0)
+    assert np.ptp(flat, axis=0) == pytest.approx(own, rel=0.01)
+
+
+@pytest.mark.parametrize(
+    ("shape", "terms"),
+    [
+        ("ovate", {"margin": "serrate", "curl": 0.5, "roll": 0.3}),
+        ("ovate", {"curl": 0.3, "roll": 0.2}),
+        ("ovate", {"fold": 10.0}),
+    ],
+    ids=str,
+)
+def test_a_bowl_curled_and_rolled_up_reads_back_its_pose(tmp_path, shape, terms):
+    """Curled and rolled up, a blade is a bowl whose midrib does not sink under its rim (1.02
+    times its shadow, unfold_checks.FORESHORTENED) and whose margin is 0.09-0.10 of its width off
+    its plane, under OFF_PLANE's 0.12: no pose was fitted, and it ran as a height field (serrate
+    ovate curled 0.5 and rolled 0.3 3.4% narrow; ovate curled 0.3 and rolled 0.2 2.4% wide,
+    folded 10 2.8% wide). Each is now fitted its own pose."""
+    leaf, own = _read_back(tmp_path, shape, terms)
+    _assert_flat_size(leaf, shape, terms)
+    pose = leaf.bend.pose
+    assert pose.fold == pytest.approx(own.fold, abs=0.1)
+    assert (pose.curl, pose.roll) == pytest.approx((own.curl, own.roll), rel=0.01, abs=1e-6)
