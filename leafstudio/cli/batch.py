@@ -4,13 +4,14 @@ line, one summary line, the exit code)."""
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 import time
 from typing import TYPE_CHECKING
 
 from leafstudio.assets.units import UNITS_SAID
 from leafstudio.batch.settings import FORMATS
-from leafstudio.cli.options import add_param_flags, compiling_notice, params_for
+from leafstudio.cli.options import add_param_flags, compiling_notice, log, params_for
 from leafstudio.cli.options import summary as closing
 
 if TYPE_CHECKING:
@@ -51,11 +52,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 SCAN_HINT = "`leafstudio extract"  # in the refusal of a scan given as a leaf file
 
 
-def summary(run: Batch, seconds: float) -> str:
-    """The one line printed at the end of a batch."""
+def summary(run: Batch, seconds: float, warned: int = 0) -> str:
+    """The one line printed at the end of a batch; `warned`: the rows run that carry warnings
+    (a scan's poor fit, a vein off the plane), each said in a line of its own as it finished."""
     ok = run.ok + run.resumed
     ran = run.ok + run.failed
-    parts = [f"{run.total} inputs: {ok} ok, {run.failed} failed"]
+    noted = f" ({warned} with warnings: the table's warnings column)" if warned else ""
+    inputs = "input" if run.total == 1 else "inputs"
+    parts = [f"{run.total} {inputs}: {ok} ok{noted}, {run.failed} failed"]
     if run.resumed:
         parts.append(f"{run.resumed} already done")
     if ok + run.failed < run.total:
@@ -71,7 +75,8 @@ def summary(run: Batch, seconds: float) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """`leafstudio batch`: run the batch with a progress bar on stderr (when it is a terminal),
-    each failure's line as it happens and one summary line. Exit 0, or 1 if any input failed."""
+    each failure's line and each warned row's warnings (one line, as the table has them) as it
+    happens and one summary line. Exit 0, or 1 if any input failed."""
     from tqdm import tqdm
 
     from leafstudio.batch.run import batch  # heavy (the workers' pipeline): not for --help
@@ -102,6 +107,7 @@ def run(args: argparse.Namespace) -> int:
         desc="leafstudio batch",
     )
     scans = 0  # rows refused as scans of whole leaves, whose hint is `leafstudio extract`
+    warned = 0  # ok rows with warnings: said as reconstruct says them (qa37: the table only)
     try:
         with bar:
             for row in running.run():
@@ -111,15 +117,21 @@ def run(args: argparse.Namespace) -> int:
                     bar.write(
                         f"leafstudio: {'' if internal else 'error: '}{row['error']}", sys.stderr
                     )
+                elif row.get("warnings"):
+                    warned += 1
+                    if log.isEnabledFor(logging.WARNING):  # -q -q hides them
+                        line = f"leafstudio: warning: {row['input']}: {row['warnings']}"
+                        bar.write(line, sys.stderr)
                 bar.set_postfix(failed=running.failed, refresh=False)
                 bar.update(1)
     except KeyboardInterrupt:
-        print(f"{summary(running, time.perf_counter() - start)}; interrupted (--resume goes on)",
+        print(f"{summary(running, time.perf_counter() - start, warned)}; interrupted (--resume "
+              "goes on)",
               file=sys.stderr)  # fmt: skip
         raise
     # silenced by -q, as form's, extract's and slides' closing lines are (options.summary): it
     # printed all the same (review32b); a failed row's error is said above, the exit code is 1
-    closing(summary(running, time.perf_counter() - start))
+    closing(summary(running, time.perf_counter() - start, warned))
     if scans:
         print(f"leafstudio: batch: {scans} of the inputs look like scans of whole leaves: --scans "
               "extracts and reconstructs them", file=sys.stderr)  # fmt: skip

@@ -44,12 +44,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def comparisons(specs: list[str]) -> list[tuple[str, tuple]]:
     """Each --compare as (title, forms), checked before any work."""
     from leafstudio.forms.glossary import form_of_term  # heavy (the forms): not for --help
+    from leafstudio.forms.terms import term_key
 
     found = []
     for spec in specs:
         terms = [t.strip() for t in spec.split(",") if t.strip()]
         if not 2 <= len(terms) <= 4:
             raise LeafError(f"--compare takes two to four terms, got {spec!r}")
+        keys = [term_key(t) for t in terms]
+        twice = next((k for i, k in enumerate(keys) if k in keys[:i]), None)
+        if twice is not None:  # a form beside itself compares nothing
+            raise LeafError(f"--compare {spec!r} names {twice!r} twice")
         found.append((" beside ".join(terms), tuple(form_of_term(t) for t in terms)))
     return found
 

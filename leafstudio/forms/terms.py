@@ -235,7 +235,7 @@ VENATIONS: dict[str, str] = {
 
 RELIEF: dict[str, str] = {  # plain words (the app shows them); FLAGS adds the CLI's syntax
     "fold": "the two halves rise from the midrib by this angle, like a half-open book (the "
-    "crease runs straight from base to apex)",
+    "crease runs straight from base to apex; they fall, if negative)",
     "curl": "the midrib arcs up along its length, the apex rising about this many leaf lengths "
     "(0.5: 0.46; 1: the tip turned 115°; droops, if negative)",
     "roll": "the margins roll up across the midrib, as a grass blade rolls: 1 closes the blade "

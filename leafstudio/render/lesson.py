@@ -127,8 +127,10 @@ LESSON_STEPS: tuple[LessonStep, ...] = (
         ("mesh", "points"),
         "mesh",
         edges=True,
+        # coloured as step 6: by the height above the flat blade, not how high it stands now
+        # (qa37: "coloured by height" beside a folded leaf's raised halves, dark, read as low)
         bent_caption="The surface is cut into small triangles and trimmed at the edge, then "
-        "bent back into the leaf's own shape: this is the mesh, coloured by height. With more "
-        "hills (a larger K) it can follow more veins.",
+        "bent back into the leaf's own shape: this is the mesh, coloured by its height above "
+        "the flat blade, as in step 6. With more hills (a larger K) it can follow more veins.",
     ),
 )

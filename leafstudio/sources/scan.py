@@ -169,8 +169,13 @@ def read_scan(path: str | os.PathLike) -> np.ndarray:
         points = _text_rows(path, read_numbers(path))  # decimal commas made points
     if len(points) == 0:
         raise LeafError("holds no points", str(path))
-    if not np.all(np.isfinite(points)):
-        raise LeafError("NaN or infinite coordinates", str(path))
+    bad = np.flatnonzero(~np.isfinite(points).all(axis=1))
+    if len(bad):  # how many and the first, in the file's order (a leaf file names its line)
+        raise LeafError(
+            f"NaN or infinite coordinates at {len(bad)} of {len(points)} points (the first is "
+            f"point {bad[0] + 1})",
+            str(path),
+        )
     if len(points) < MIN_SCAN_POINTS:
         raise LeafError(
             f"too few points for a leaf scan: {len(points)} (need {MIN_SCAN_POINTS})", str(path)

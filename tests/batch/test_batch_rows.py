@@ -96,6 +96,38 @@ def test_a_leaf_row_warns_as_reconstruct_does(tmp_path, capsys):
     assert row["status"] == "ok" and row["warnings"] == "; ".join(warned)
 
 
+def test_batch_says_a_rows_warnings_on_stderr_as_reconstruct_does(tmp_path, capsys):
+    """qa37: a row's warnings (a scan 1.6% of its length from its surface, a vein far off the
+    boundary's plane) went to the table only: the terminal said "1 ok, 0 failed" and nothing
+    else, though reconstruct warns of the same leaf. Each warned row is now one warning line
+    (hidden by -q -q, as reconstruct's), and the summary counts the rows warned."""
+    demo = ls.demo("nested")
+    far = demo.veins[0] + [0.0, 0.0, 5 * np.ptp(demo.boundary[:, 0])]
+    inputs = tmp_path / "in"
+    inputs.mkdir()
+    path = inputs / "far.csv"
+    ls.save_leaf(ls.Leaf(boundary=demo.boundary, veins=[far, *demo.veins[1:]]), path)
+    ls.save_leaf(demo, inputs / "plain.csv")
+    argv = ["batch", str(inputs), "--grid", GRID, "--jobs", "1", "-o"]
+    assert main([*argv, str(tmp_path / "out")]) == 0
+    err = capsys.readouterr().err
+    (row,) = [r for r in _rows(tmp_path / "out" / "traits.csv") if r["input"] == str(path)]
+    assert "from the boundary's plane" in row["warnings"]
+    assert f"leafstudio: warning: {path}: {row['warnings']}" in err.splitlines()
+    assert "plain.csv" not in err
+    assert "2 inputs: 2 ok (1 with warnings: the table's warnings column), 0 failed" in err
+    assert main(["-q", "-q", *argv, str(tmp_path / "quiet")]) == 0
+    assert capsys.readouterr().err == ""
+
+
+def test_a_batch_of_one_says_one_input(tmp_path, capsys):
+    """The summary said "1 inputs"."""
+    path = tmp_path / "leaf.csv"
+    ls.save_leaf(ls.demo("nested"), path)
+    assert main(["batch", str(path), "--grid", GRID, "--jobs", "1", "-o", str(tmp_path / "o")]) == 0
+    assert "batch: 1 input: 1 ok, 0 failed;" in capsys.readouterr().err
+
+
 def test_a_job_run_in_the_callers_process_gives_its_threads_back(tmp_path):
     """run_job pins one BLAS and one numba thread while it runs; in the caller's own process it
     gave them back never, so later fits there differed (a scan's far-area 0.02% -> 0.098%)."""

@@ -152,3 +152,15 @@ def test_veins_grown_on_a_posed_form_lie_on_its_blade(tmp_path, suffix, pose):
     assert off.mean() <= 1e-2 and off.max() <= 4e-2, (off.mean(), off.max())
     area = grown.metrics["mesh"]["area"] / own.metrics["mesh"]["area"]
     assert 0.95 <= area <= 1.08, area
+
+
+def test_each_pose_terms_words_say_what_a_negative_value_does():
+    """qa37: `form --list`, the Forms dock's and the sliders' tooltips said what a negative
+    curl, roll and twist do, but not a negative fold, which the sliders and `form` take down
+    to -75: an ovate form folded -45° turns its halves down (its margin 0.2 below the midrib,
+    0.244 above it folded 45°)."""
+    from leafstudio.forms.terms import RELIEF
+
+    assert Form("ovate", fold=-45).leaf().boundary[:, 2].min() < -0.1
+    for name in ("fold", "curl", "roll", "twist"):
+        assert "if negative" in RELIEF[name], name

@@ -53,6 +53,8 @@ def test_slides_to_a_pdf_write_only_the_pdf(leaf_file, tmp_path):
     [
         (["--compare", "ovate"], "two to four terms"),
         (["--compare", "ovate,pointy"], "unknown term 'pointy'"),
+        # qa37: a slide of ovate beside itself was written without a word
+        (["--compare", "ovate,Ovate"], "names 'ovate' twice"),
         (["-o", "slides.txt"], "a folder (a PNG per slide and lesson.pdf) or a .pdf"),
     ],
 )

@@ -100,6 +100,19 @@ def test_scans_are_read_with_extra_columns_and_headers(tmp_path):
     assert np.allclose(read_scan(tmp_path / "scan.ply"), points)
 
 
+def test_a_scan_with_nan_points_says_how_many_and_the_first(tmp_path):
+    """qa37: a 2,266-point scan with one NaN point was refused as "NaN or infinite
+    coordinates", naming neither how many nor which (a leaf file names its line): a
+    researcher had to search the file for it."""
+    points = np.random.default_rng(3).normal(size=(100, 3))
+    points[[5, 40], 1] = np.nan, np.inf
+    txt = tmp_path / "scan.txt"
+    np.savetxt(txt, points, delimiter=",")
+    with pytest.raises(LeafError, match=r"NaN or infinite coordinates at 2 of 100 points "
+                       r"\(the first is point 6\)"):  # fmt: skip
+        read_scan(txt)
+
+
 def _pcd(path, points: np.ndarray) -> None:
     header = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
     header += f"WIDTH {len(points)}\nHEIGHT 1\nPOINTS {len(points)}\nDATA ascii\n"

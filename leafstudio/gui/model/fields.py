@@ -65,6 +65,24 @@ def nice_range(low: float, high: float) -> tuple[float, float, str]:
     return round(lo, decimals) + 0.0, round(hi, decimals) + 0.0, f"%.{decimals}f"
 
 
+def bar_format(low: float, high: float) -> str:
+    """The printf format of a colour bar's end labels for a range `low` to `high` as it is (the
+    mesh's: its heights' own ends, not rounded): nice_range's, with more decimals until each
+    end is written within BAR_LABEL_SLACK of the span of its value. nice_range's alone wrote
+    the soybean pot1_1 scan's heights, -1.14 to 1.39, as "-1" and "1" (qa37); a rounded range
+    keeps its format."""
+    fmt = nice_range(low, high)[2]
+    if not fmt.endswith("f"):
+        return fmt  # an empty or non-finite range: "%.3g"
+    decimals, slack = int(fmt[2:-1]), BAR_LABEL_SLACK * (high - low)
+    while decimals < 12 and any(abs(round(v, decimals) - v) > slack for v in (low, high)):
+        decimals += 1
+    return f"%.{decimals}f"
+
+
+BAR_LABEL_SLACK = 0.02  # of a bar's span: 8 pixels of a 400-pixel bar
+
+
 def node_heights(result: Result) -> np.ndarray:
     """(ny * nx,) the surface's height at every grid node: z(x) at the kept nodes (computed by
     the run), the base b(x) elsewhere (0 for a planar margin), continuous across the margin

@@ -19,7 +19,7 @@ from PySide6.QtGui import QImage, QPainter, QPalette, QPixmap
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
 from leafstudio.core.plane import Frame
-from leafstudio.gui.model.fields import nice_range
+from leafstudio.gui.model.fields import bar_format
 from leafstudio.gui.model.framing import BladeBounds
 from leafstudio.gui.model.layers import BOUNDARY_COLOR, LAYERS, MESH_COLORINGS, SCALAR_BARS, Piece
 from leafstudio.gui.model.textures import LEAF, SHOWS_TEXTURE
@@ -370,7 +370,7 @@ class Viewport(CameraPlacing, QWidget):
 
     def _sync_scalar_bars(self) -> None:
         """A scalar bar per visible coloured layer, side by side along the bottom, its ends
-        written in plain decimals (fields.nice_range); the bars already there are kept when
+        written in plain decimals (fields.bar_format); the bars already there are kept when
         the same ones are wanted (making one costs several milliseconds)."""
         wanted: dict[str, tuple[str, object]] = {}
         for key, title in SCALAR_BARS.items():
@@ -405,7 +405,7 @@ class Viewport(CameraPlacing, QWidget):
                 width=width,
                 height=0.08,
                 color=self.text_color(),
-                fmt=nice_range(low, high)[2],
+                fmt=bar_format(low, high),
                 n_labels=2,  # the ends only: a middle label would sit under the title
                 title_font_size=14,
                 label_font_size=12,

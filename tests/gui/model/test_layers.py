@@ -132,6 +132,22 @@ def test_colour_ranges_are_round_and_written_whole(low, high, expected):
     assert fields.nice_range(low, high) == expected
 
 
+@pytest.mark.parametrize(
+    "low, high",
+    [(-1.1429, 1.3920), (0.0, 0.0889), (-0.4, 0.4), (3.2, 57.4), (-13.0, 7.0), (0.0123, 0.0131)],
+)
+def test_a_colour_bars_end_labels_write_its_ends(low, high):
+    """qa37: the mesh's bar wrote its unrounded ends with nice_range's format, for the rounded
+    range: the soybean pot1_1 scan's heights, -1.14 to 1.39, read "-1" and "1" (1.39 shown 28%
+    of the span off). Each end label is now within 2% of the bar's span of its value, and a
+    rounded range keeps nice_range's format (0.00 to 0.10)."""
+    fmt = fields.bar_format(low, high)
+    for value in (low, high):
+        assert abs(float(fmt % value) - value) <= 0.02 * (high - low), (fmt, value)
+    nice = fields.nice_range(low, high)
+    assert fields.bar_format(*nice[:2]) == nice[2]
+
+
 def test_the_probability_map_covers_the_leaf_only(result):
     surface = build_layers(result)["probability"][0].data
     corners = np.asarray(surface.regular_faces)

@@ -128,6 +128,18 @@ def test_a_bent_leafs_step_6_says_its_surface_is_bent_back_beside_the_flat_map()
         assert "or twist" not in said or "scanned leaf" in said, each.title
 
 
+def test_a_bent_leafs_step_7_says_its_colours_are_the_relief_not_how_high_it_stands(folded):
+    """qa37: step 7 said "this is the mesh, coloured by height" beside an ovate form folded
+    45°, whose colours are its height above the flat blade (0 to 0.078 of its length, yellow at
+    the midrib) while its halves stand up to 0.244: a class reads the raised halves, dark, as
+    low. The words say which height the colours are."""
+    heights = np.asarray(folded.triangle_mesh.point_data["height"])
+    assert np.allclose(heights, folded.mesh_on_blade()[1])  # the colours: the flat blade's
+    step = next(s for s in LESSON_STEPS if s.picture == "mesh")
+    assert "above the flat blade" in step.words(bent=True)
+    assert "flat blade" not in step.words(bent=False)
+
+
 def test_step_5s_gaussians_have_one_colour_in_the_plan_and_in_3d(folded):
     """closing32: the plan coloured Gaussian k with tab10's k-th colour, the 3D view with
     tab10 less its orange: the second hill was orange in the plan and green in 3D."""
