@@ -365,11 +365,11 @@ def sharpest(bends: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
     paper's surface: 2.94° -> 2.74° against 2.85°, every row as smooth or smoother (margin bands
     rougher than before but not than the paper's: lanceolate 1.73° -> 2.06° against 3.17°; a
     drawn leaf's 8.00° -> 7.88°, its inside 8.59° -> 8.63° against 8.32° and 9.01°); --variants,
-    20 of 84 rougher than the paper's surface in a band, as before, by 3.72° in all, not 4.51°;
+    21 of 84 rougher than the paper's surface in a band (20 before), by 3.72° in all, not 4.51°;
     the forms over every 7th pose, own surface worst p95 1.68e-3 -> 1.62e-3, median 6.99e-4 ->
     6.58e-4. Every row weighed 1 + (b/s)², over their mean, at most 3: 2.82°, but the gram made
     again (2.8 ms more on a flat ovate at grid 128); weighed from the start values, without the
-    first solve: 2.87°; with no HEAVIEST, 20 rougher variants by 4.08°."""
+    first solve: 2.87°; every row weighed and no HEAVIEST, 20 rougher variants by 4.08°."""
     sharp = float(np.percentile(np.abs(bends), SHARP)) if len(bends) else 0.0
     if not np.isfinite(sharp) or sharp <= 0:
         return np.zeros(0, dtype=np.int64), np.zeros(0), 0.0
