@@ -123,8 +123,10 @@ def _mesh_points(path: Path) -> np.ndarray:
         (meshes if len(faces) else points).append(part)
     if meshes:
         mesh = trimesh.util.concatenate(meshes) if len(meshes) > 1 else meshes[0]
-        if not np.isfinite(mesh.vertices).all():
-            raise LeafError("NaN or infinite coordinates", str(path))
+        bad = np.flatnonzero(~np.isfinite(mesh.vertices).all(axis=1))
+        if len(bad):  # refused still: its triangles join them (a cloud's are left out)
+            where = _where(bad, len(mesh.vertices), "vertex", "vertices")
+            raise LeafError(f"NaN or infinite coordinates {where}", str(path))
         if mesh.area > 0:
             count = max(len(np.unique(mesh.vertices, axis=0)), MESH_SCAN_POINTS)
             sampled, _faces = trimesh.sample.sample_surface(mesh, count, seed=0)
@@ -186,9 +188,9 @@ def read_scan_returns(path: str | os.PathLike) -> tuple[np.ndarray, tuple[str, .
     return kept, (note,)
 
 
-def _where(bad: np.ndarray, total: int) -> str:
+def _where(bad: np.ndarray, total: int, one: str = "point", many: str = "points") -> str:
     """Where a scan's non-finite points are: how many, and the first in the file's order."""
-    return f"at {len(bad)} of {total} points (the first is point {bad[0] + 1})"
+    return f"at {len(bad)} of {total} {many} (the first is {one} {bad[0] + 1})"
 
 
 def _scan_rows(path: Path) -> np.ndarray:

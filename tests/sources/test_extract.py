@@ -12,7 +12,7 @@ from leafstudio.cli import main
 from leafstudio.errors import LeafError
 from leafstudio.sources.extract import extract_leaf, lift
 from leafstudio.sources.files import load_leaf
-from leafstudio.sources.scan import read_scan
+from leafstudio.sources.scan import read_scan, read_scan_returns
 from tests.leaves import (
     assert_outline_is_the_blades,
     scan_blade_outline,
@@ -315,3 +315,19 @@ def test_a_scan_of_one_point_repeated_says_so():
 
     with pytest.raises(LeafError, match="too few distinct points for a leaf scan: 1 of its 60"):
         _scan_opened("same.xyz", np.tile([[1.0, 2.0, 3.0]], (60, 1)))
+
+
+@pytest.mark.parametrize("suffix", [".stl", ".obj"])
+def test_a_mesh_with_nan_vertices_says_how_many_and_the_first(tmp_path, suffix):
+    """Review of qa37: a point list's NaN points are named (how many, the first) or left out
+    with a note, but a mesh's were refused as "NaN or infinite coordinates", naming neither.
+    A mesh's triangles join its vertices, so one is still refused, saying where."""
+    import trimesh
+
+    coarse, faces = _scanners_mesh(tmp_path / "good.obj")
+    coarse[[4, 30]] = np.nan
+    trimesh.Trimesh(coarse, faces, process=False).export(tmp_path / f"scan{suffix}")
+    for reader in (read_scan, read_scan_returns):
+        with pytest.raises(LeafError, match=r"NaN or infinite coordinates at \d+ of \d+ vertices "
+                           r"\(the first is vertex \d+\)"):  # fmt: skip
+            reader(tmp_path / f"scan{suffix}")
