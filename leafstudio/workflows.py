@@ -52,7 +52,7 @@ from leafstudio.sources.extract import (
 )
 from leafstudio.sources.files import load_leaf, load_project
 from leafstudio.sources.photo import PhotoLeaf, is_photo, read_photo_leaf
-from leafstudio.sources.scan import is_scan_file, looks_like_scan, read_scan
+from leafstudio.sources.scan import is_scan_file, looks_like_scan, read_scan_returns
 
 Kind = Literal["leaf", "project", "scan", "photo"]
 
@@ -145,7 +145,24 @@ def open_scan(
     >>> opened.kind, opened.leaf.boundary.shape, opened.scan.shape
     ('scan', (200, 3), (4710, 3))
     """
-    return _scan_opened(str(path), read_scan(path), base_end, points, force)
+    scan, returns = read_scan_returns(path)
+    opened = _scan_opened(str(path), scan, base_end, points, force)
+    return replace(opened, notes=returns + opened.notes) if returns else opened
+
+
+def _scan_with_missed_returns(path: str, force: bool) -> Opened | None:
+    """A point list or PLY that load_leaf refused, opened as a scan when it holds NaN or
+    infinite points and its finite ones look like a scan (open_scan's note says how many were
+    left out); None otherwise, for the leaf file's own refusal (review37: File > Open refused
+    an x y z scan with one missed return by its line, the scan reader never asked)."""
+    try:
+        scan, returns = read_scan_returns(path)
+    except LeafError:
+        return None
+    if not returns or not looks_like_scan(Leaf(boundary=scan, veins=[])):
+        return None
+    opened = _scan_opened(path, scan, force=force)
+    return replace(opened, notes=returns + opened.notes)
 
 
 def _scan_opened(
@@ -259,6 +276,8 @@ def open_file(
         except LeafError:
             if is_scan_file(path):
                 return open_scan(path, force=force)
+            if (scan := _scan_with_missed_returns(path, force)) is not None:
+                return scan
             raise
         if looks_like_scan(leaf):  # its points as read (unlabelled): not read a second time
             return _scan_opened(path, leaf.boundary, force=force)

@@ -119,6 +119,9 @@ def run(args: argparse.Namespace) -> int:
     if args.against:  # read (and its blade found, as extract finds it) before the run
         against = open_scan(args.against, force=True)
     params, result = run_pipeline(args, leaf)
+    for note in against.notes if against is not None else ():  # NaN points left out, forced
+        log.warning(f"{args.against}: {note}")  # refusals: as extract says them (review37:
+        args.warnings.append(note)  # they were dropped), and for --metrics
     placement = leaf_placement_of(result)  # where the leaf's base and axes are, found once
     if args.length is None and (note := size_note(placement.length, out.suffix)):
         log.warning(f"{args.input}: {note}")

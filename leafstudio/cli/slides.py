@@ -55,7 +55,14 @@ def comparisons(specs: list[str]) -> list[tuple[str, tuple]]:
         twice = next((k for i, k in enumerate(keys) if k in keys[:i]), None)
         if twice is not None:  # a form beside itself compares nothing
             raise LeafError(f"--compare {spec!r} names {twice!r} twice")
-        found.append((" beside ".join(terms), tuple(form_of_term(t) for t in terms)))
+        forms = [form_of_term(t) for t in terms]
+        same = next(
+            ((i, j) for j in range(len(forms)) for i in range(j) if forms[i] == forms[j]), None
+        )
+        if same is not None:  # two terms of one form: "entire" is elliptic's margin (review37)
+            first, second = terms[same[0]], terms[same[1]]
+            raise LeafError(f"--compare {spec!r}: {second!r} shows the same form as {first!r}")
+        found.append((" beside ".join(terms), tuple(forms)))
     return found
 
 

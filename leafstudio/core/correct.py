@@ -53,13 +53,15 @@ and inside 3.86° -> 3.56° against 3.93°, soybean pot1_1 one, its mesh moved 0
 form's margin band and inside but oblanceolate's inside (2.94° against 2.85°) as smooth or
 smoother, and the clicked sketch's (tests/leaves.clicked_sketch: 1.57° and 1.485° against 1.70°
 and 1.488°, bending.py); every vein point within 8e-4 of the length; 20 of the 84 apex and
-margin variants (--variants) rougher in a band, none off by more than 1e-3. Oblanceolate's own
-surface, the dome its veins lie on, is itself rougher inside than the paper's (2.98°): its
-roughest edges lie beside the midrib where the blade narrows (0.3-0.5 of the length from the
-base, within 0.02 of the length of a vein), which the paper's surface rounds within 7.8e-4 of
-its veins; through them within TOLERANCE the surface bends as its dome does (TOLERANCE 7e-4:
-2.87°, 9e-4: 2.84° but a drawn leaf's and linear's veins 1.1e-3 off the mesh). The points of
-the band already close to the surface are pinned too: the surface moves there as well.
+margin variants (--variants) rougher in a band, none off by more than 1e-3 (solved again with
+the sharpest bends weighed more, bending.sharpest, oblanceolate's inside is 2.74°).
+Oblanceolate's own surface, the dome its veins lie on, is itself rougher inside than the
+paper's (2.98°): its roughest edges lie beside the midrib where the blade narrows (0.3-0.5 of
+the length from the base, within 0.02 of the length of a vein), which the paper's surface
+rounds within 7.8e-4 of its veins; through them within TOLERANCE the surface bends as its dome
+does (TOLERANCE 7e-4: 2.87°, 9e-4: 2.84° but a drawn leaf's and linear's veins 1.1e-3 off the
+mesh). The points of the band already close to the surface are pinned too: the surface moves
+there as well.
 
 The spline's centres are the vein points thinned and chosen by vein_centers.py, less the points
 no smooth correction should chase (`reachable`), and a few on no vein about a vein's end that
@@ -271,7 +273,8 @@ def lattice_bending(
     phi, tapered = phi_matrix(xy, centers, reach, KEI, KELVIN_STEP, taper)
     gram = bending_gram(tapered, differences)
     among = phi_matrix(centers, centers, reach, KEI, KELVIN_STEP, np.ones(len(centers)))[0]
-    return Bending(on, taper, differences, phi, gram, among, own_weight(step, reach))
+    own = own_weight(step, reach)
+    return Bending(on, taper, differences, phi, gram, among, own, tapered)
 
 
 def pinning(

@@ -123,8 +123,10 @@ def _mesh_points(path: Path) -> np.ndarray:
         (meshes if len(faces) else points).append(part)
     if meshes:
         mesh = trimesh.util.concatenate(meshes) if len(meshes) > 1 else meshes[0]
-        if not np.isfinite(mesh.vertices).all():
-            raise LeafError("NaN or infinite coordinates", str(path))
+        bad = np.flatnonzero(~np.isfinite(mesh.vertices).all(axis=1))
+        if len(bad):  # refused still: its triangles join them (a cloud's are left out)
+            where = _where(bad, len(mesh.vertices), "vertex", "vertices")
+            raise LeafError(f"NaN or infinite coordinates {where}", str(path))
         if mesh.area > 0:
             count = max(len(np.unique(mesh.vertices, axis=0)), MESH_SCAN_POINTS)
             sampled, _faces = trimesh.sample.sample_surface(mesh, count, seed=0)
@@ -142,7 +144,7 @@ def _ply_rows(path: Path) -> np.ndarray:
 
 
 def read_scan(path: str | os.PathLike) -> np.ndarray:
-    """The (n, 3) points of a leaf scan.
+    """The (n, 3) points of a leaf scan, every one of them finite.
 
     Raises
     ------
@@ -150,7 +152,49 @@ def read_scan(path: str | os.PathLike) -> np.ndarray:
         With the file's name, if it is missing, unreadable, of an unknown type, holds NaN or
         infinite coordinates, or has fewer than MIN_SCAN_POINTS points.
     """
-    path = Path(path)
+    points = _scan_rows(Path(path))
+    bad = np.flatnonzero(~np.isfinite(points).all(axis=1))
+    if len(bad):  # how many and the first, in the file's order (a leaf file names its line)
+        raise LeafError(f"NaN or infinite coordinates {_where(bad, len(points))}", str(path))
+    return _enough(points, path)
+
+
+def read_scan_returns(path: str | os.PathLike) -> tuple[np.ndarray, tuple[str, ...]]:
+    """The (n, 3) finite points of a leaf scan, less those a scanner wrote as NaN or infinite
+    (an organised cloud's missed returns: PCL and Open3D write a pixel without a return as NaN,
+    and a Kinect-style PCD of a leaf holds thousands), and a note of how many were left out.
+    open_scan reads a scan so: such a file was refused whole over one NaN point (qa37).
+
+    Raises
+    ------
+    LeafError
+        As read_scan, but for NaN or infinite points: when fewer than MIN_SCAN_POINTS are left.
+    """
+    points = _scan_rows(Path(path))
+    bad = np.flatnonzero(~np.isfinite(points).all(axis=1))
+    if not len(bad):
+        return _enough(points, path), ()
+    kept = np.delete(points, bad, axis=0)
+    if len(kept) < MIN_SCAN_POINTS:
+        raise LeafError(
+            "too few points for a leaf scan once those with NaN or infinite coordinates are left "
+            f"out: {len(kept)} of {len(points)} (need {MIN_SCAN_POINTS})",
+            str(path),
+        )
+    note = (
+        f"left out {len(bad)} of its {len(points)} points, whose coordinates are NaN or infinite "
+        f"(a scanner's missed returns; the first is point {bad[0] + 1})"
+    )
+    return kept, (note,)
+
+
+def _where(bad: np.ndarray, total: int, one: str = "point", many: str = "points") -> str:
+    """Where a scan's non-finite points are: how many, and the first in the file's order."""
+    return f"at {len(bad)} of {total} {many} (the first is {one} {bad[0] + 1})"
+
+
+def _scan_rows(path: Path) -> np.ndarray:
+    """The (n >= 1, 3) rows of a scan file, as read (NaN rows kept): read_scan's file checks."""
     check_file_kind(path)
     suffix = path.suffix.lower()
     if suffix not in SCAN_SUFFIXES:
@@ -169,13 +213,11 @@ def read_scan(path: str | os.PathLike) -> np.ndarray:
         points = _text_rows(path, read_numbers(path))  # decimal commas made points
     if len(points) == 0:
         raise LeafError("holds no points", str(path))
-    bad = np.flatnonzero(~np.isfinite(points).all(axis=1))
-    if len(bad):  # how many and the first, in the file's order (a leaf file names its line)
-        raise LeafError(
-            f"NaN or infinite coordinates at {len(bad)} of {len(points)} points (the first is "
-            f"point {bad[0] + 1})",
-            str(path),
-        )
+    return points
+
+
+def _enough(points: np.ndarray, path: str | os.PathLike) -> np.ndarray:
+    """`points`, refused when fewer than MIN_SCAN_POINTS."""
     if len(points) < MIN_SCAN_POINTS:
         raise LeafError(
             f"too few points for a leaf scan: {len(points)} (need {MIN_SCAN_POINTS})", str(path)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from leafstudio.core import correct
-from leafstudio.core.bending import FINE, OWN_BENDING, lattice
+from leafstudio.core.bending import FINE, HEAVIEST, OWN_BENDING, SHARP, lattice, sharpest
 from leafstudio.core.buckets import kernel_array
 from leafstudio.core.grid import make_grid
 
@@ -56,3 +56,23 @@ def test_cs_own_energy_is_weighed_as_the_lattice_measures_c():
         shares.append(measured / (bending.own / OWN_BENDING * (weights @ bending.among @ weights)))
     assert abs(shares[0] - shares[1]) <= 0.1 * shares[0]
     assert 0.3 <= shares[0] <= 1.5
+
+
+def test_only_the_sharpest_rows_weigh_more_and_no_row_past_the_cap():
+    """bending.sharpest: the rows bending more than the SHARP-th percentile s take (b/s)² more
+    weight, the others none; the mean weight's growth is the sum over all rows; one row bending
+    a hundred times s weighs no more than HEAVIEST times the rows' mean weight."""
+    rng = np.random.default_rng(1)
+    bends = rng.normal(size=1000).astype(np.float32)
+    bends[7] = 100.0 * np.percentile(np.abs(bends), SHARP)
+    rows, extra, more = sharpest(bends)
+    s = np.percentile(np.abs(bends), SHARP)
+    assert set(rows) == set(np.flatnonzero(np.abs(bends) > s))
+    assert len(rows) == pytest.approx((100 - SHARP) / 100 * len(bends), abs=2)
+    raw = (bends[rows].astype(float) / s) ** 2
+    assert more == pytest.approx(raw.sum() / len(bends))
+    assert np.all(1 + extra <= HEAVIEST * (1 + more) + 1e-12)
+    np.testing.assert_allclose(extra[rows != 7], raw[rows != 7])
+    assert extra[rows == 7][0] < raw[rows == 7][0]
+    flat = sharpest(np.zeros(10, dtype=np.float32))
+    assert len(flat[0]) == 0 and flat[2] == 0.0

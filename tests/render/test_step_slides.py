@@ -55,6 +55,8 @@ def test_slides_to_a_pdf_write_only_the_pdf(leaf_file, tmp_path):
         (["--compare", "ovate,pointy"], "unknown term 'pointy'"),
         # qa37: a slide of ovate beside itself was written without a word
         (["--compare", "ovate,Ovate"], "names 'ovate' twice"),
+        # review37: two terms of one form (an entire margin is the elliptic form's) did too
+        (["--compare", "elliptic,entire"], "'entire' shows the same form as 'elliptic'"),
         (["-o", "slides.txt"], "a folder (a PNG per slide and lesson.pdf) or a .pdf"),
     ],
 )

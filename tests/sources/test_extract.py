@@ -12,7 +12,7 @@ from leafstudio.cli import main
 from leafstudio.errors import LeafError
 from leafstudio.sources.extract import extract_leaf, lift
 from leafstudio.sources.files import load_leaf
-from leafstudio.sources.scan import read_scan
+from leafstudio.sources.scan import read_scan, read_scan_returns
 from tests.leaves import (
     assert_outline_is_the_blades,
     scan_blade_outline,
@@ -111,6 +111,35 @@ def test_a_scan_with_nan_points_says_how_many_and_the_first(tmp_path):
     with pytest.raises(LeafError, match=r"NaN or infinite coordinates at 2 of 100 points "
                        r"\(the first is point 6\)"):  # fmt: skip
         read_scan(txt)
+
+
+def _with_missed_returns(points: np.ndarray, every: int = 25) -> np.ndarray:
+    """`points` with a row of NaN before every `every`-th: an organised cloud's pixels without a
+    return, as PCL and Open3D write them."""
+    missed = np.full((len(points) // every, 3), np.nan)
+    where = np.minimum(np.arange(len(missed)) * every + 3, len(points))
+    return np.insert(points, where, missed, axis=0)
+
+
+def test_a_scan_with_missed_returns_opens_without_them_and_says_so(tmp_path, scan):
+    """qa37: a scan with one NaN point was refused whole ("NaN or infinite coordinates"); a
+    scanner's organised cloud writes every pixel without a return so. Opened, the NaN rows are
+    left out, the note says how many and the first, and the leaf is the one without them; too
+    few finite points left are still refused."""
+    from leafstudio.workflows import open_scan, reconstruct
+
+    _, points, found = scan
+    txt = tmp_path / "scan.xyz"
+    np.savetxt(txt, _with_missed_returns(points))
+    opened = open_scan(txt)
+    assert opened.notes[0].startswith(f"left out {len(points) // 25} of its ")
+    assert "the first is point 4)" in opened.notes[0]
+    np.testing.assert_allclose(opened.leaf.boundary, found.leaf.boundary, atol=1e-9)
+    assert opened.notes[0] in reconstruct(opened, {"grid": 48}).warnings
+    few = tmp_path / "few.xyz"
+    np.savetxt(few, _with_missed_returns(points[:40], every=2))
+    with pytest.raises(LeafError, match=r"NaN or infinite coordinates are left out: 40 of 60 "):
+        open_scan(few)
 
 
 def _pcd(path, points: np.ndarray) -> None:
@@ -286,3 +315,19 @@ def test_a_scan_of_one_point_repeated_says_so():
 
     with pytest.raises(LeafError, match="too few distinct points for a leaf scan: 1 of its 60"):
         _scan_opened("same.xyz", np.tile([[1.0, 2.0, 3.0]], (60, 1)))
+
+
+@pytest.mark.parametrize("suffix", [".stl", ".obj"])
+def test_a_mesh_with_nan_vertices_says_how_many_and_the_first(tmp_path, suffix):
+    """Review of qa37: a point list's NaN points are named (how many, the first) or left out
+    with a note, but a mesh's were refused as "NaN or infinite coordinates", naming neither.
+    A mesh's triangles join its vertices, so one is still refused, saying where."""
+    import trimesh
+
+    coarse, faces = _scanners_mesh(tmp_path / "good.obj")
+    coarse[[4, 30]] = np.nan
+    trimesh.Trimesh(coarse, faces, process=False).export(tmp_path / f"scan{suffix}")
+    for reader in (read_scan, read_scan_returns):
+        with pytest.raises(LeafError, match=r"NaN or infinite coordinates at \d+ of \d+ vertices "
+                           r"\(the first is vertex \d+\)"):  # fmt: skip
+            reader(tmp_path / f"scan{suffix}")

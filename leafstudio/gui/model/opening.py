@@ -110,7 +110,10 @@ def _read_document(
     if opened.kind == "scan":
         from leafstudio.gui.model.scans import scan_data  # pyvista (layers): not for every session
 
-        return Document(opened.path, opened.leaf, scan=scan_data(opened))
+        # its notes (NaN points left out: open_scan) said as the CLI says them (review37:
+        # extract, reconstruct and batch warned of them, the window said nothing)
+        said = f"{Path(path).name}: {'; '.join(opened.notes)}" if opened.notes else ""
+        return Document(opened.path, opened.leaf, scan=scan_data(opened), notice=said)
     if opened.kind == "photo":  # its texture, kept when the project is saved
         return Document(opened.path, opened.leaf, photo=LeafPhoto.of(opened.photo, path))
     sketch, photo, notice = None, None, ""
