@@ -11,6 +11,7 @@ the blade the user drew is the one they get back.
 from __future__ import annotations
 
 import contextlib
+import json
 import math
 import warnings
 from dataclasses import replace
@@ -52,6 +53,8 @@ def _bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
             return Scaled.from_entry(value, np.vstack([leaf.boundary, leaf.vein_points]))
         except (TypeError, ValueError, KeyError, np.linalg.LinAlgError):
             raise LeafError('"bend": its "sheet" does not read whole', source) from None
+    if isinstance(value, dict):
+        _check_terms(value, source)
     fold = curl = roll = twist = math.nan  # stays nan, and is refused below, unless it reads whole
     frame = relief = None
     keys = {"fold", "curl", "roll", "twist", "frame", "relief"}
@@ -85,6 +88,18 @@ def _bend(value: Any, source: str, leaf: Leaf) -> Pose | PlacedPose | Scaled:
         )
     pose = Pose(fold, curl, roll, twist, relief)
     return pose if frame is None else PlacedPose(pose, frame)
+
+
+def _check_terms(value: dict, source: str) -> None:
+    """Refuse a "fold", "curl", "roll" or "twist" that is no JSON number, in one line naming it:
+    float() read true as a fold of 1 (the project then refused as veins outside its boundary)
+    and "30" as 30, and null or a list gave the whole "bend" form."""
+    for term in ("fold", "curl", "roll", "twist"):
+        if term in value and (
+            isinstance(value[term], bool) or not isinstance(value[term], int | float)
+        ):
+            said = shorten(json.dumps(value[term], default=str))
+            raise LeafError(f'"bend": its "{term}" must be a number, got {said}', source)
 
 
 def rebent(leaf: Leaf) -> Leaf:

@@ -336,3 +336,30 @@ def test_a_scan_project_with_a_smoothing_per_cell_is_version_3_and_an_older_read
         load_project(saved["old"])[0].bend.key()
         == Scaled(replace(sheet, smoothing=2e-3), np.zeros(3), 1.0).key()
     )
+
+
+@pytest.mark.parametrize(
+    "term, value, said",
+    [
+        ("fold", True, "true"),  # was read as a fold of 1, refused as veins outside the boundary
+        ("fold", "30", '"30"'),  # was read as 30
+        ("curl", None, "null"),
+        ("roll", [0.5], "[0.5]"),
+        ("twist", False, "false"),
+    ],
+)
+def test_a_bend_term_that_is_no_number_is_refused_by_name(tmp_path, capsys, term, value, said):
+    """A hand-edited "bend": {"fold": true} was read as a fold of 1 (Python's float(True)) and
+    then refused as veins outside the boundary; a string was read as its number, and null or a
+    list gave the whole "bend" form. Each is refused in one line naming the term (CLI exit 2)."""
+    from leafstudio.cli import main
+
+    path = _with_bend(tmp_path, {"fold": 30.0, term: value})
+    with pytest.raises(LeafError) as raised:
+        load_project(path)
+    message = str(raised.value)
+    assert f'"bend": its "{term}" must be a number, got {said}' in message
+    assert "\n" not in message and "boundary" not in message
+    assert main(["measure", str(path), "--grid", "32"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f'"{term}"' in err[0]

@@ -13,15 +13,20 @@ half turns the apex makes against the base. The pose they set is `core.bend.Pose
 blade's length (gui/model/bending.py): roll a curvature, roll share · π over the blade's half
 width (`half_width`), twist twist · π radians. The panel's roll was that curvature and its twist
 in radians: the dock's grass blade rolled 1 showed a roll of 188, and its twist of 1 read 3.14.
+
+Each slider's number is typed into, as the panel's other sliders' are (controls.py): a value
+past the slider's range is refused with a note under the panel, not clamped (superqt's box bent
+a typed fold of 90 to 75 and -200 to -75 without a word).
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from PySide6.QtCore import QObject, Qt, Signal
-from PySide6.QtWidgets import QFormLayout
-from superqt import QLabeledDoubleSlider
+from PySide6.QtWidgets import QFormLayout, QLineEdit
+from superqt import QLabeledDoubleSlider, QLabeledSlider
 from superqt.utils import qthrottled
 
 from leafstudio.core.bend import Pose
@@ -48,12 +53,14 @@ class BendSliders(QObject):
     """Four superqt sliders; `changed(pose, final)` on every move, final on release."""
 
     changed = Signal(object, bool)  # Pose, final
+    refused = Signal(str)  # why a typed value was not taken; "" when one was
 
     def __init__(self, parent: QObject | None = None) -> None:
         super().__init__(parent)
         self.half_width = 1.0  # the blade's, per its length (bending.blade_half_width)
         self._shown = (Pose(), {})  # the pose show_pose showed, and the values it set
         self.sliders: dict[str, QLabeledDoubleSlider] = {}
+        self.fields: dict[str, QLineEdit] = {}  # each slider's number, typed into
         for name, (low, high, decimals) in RANGES.items():
             slider = QLabeledDoubleSlider(Qt.Orientation.Horizontal)
             slider.setRange(low, high)
@@ -63,7 +70,50 @@ class BendSliders(QObject):
             slider.valueChanged.connect(self._moved)
             slider.sliderReleased.connect(self._released)
             self.sliders[name] = slider
+            self._add_field(name, slider)
         self._throttled = qthrottled(self._emit, timeout=THROTTLE_MS, leading=True)
+
+    def _add_field(self, name: str, slider: QLabeledDoubleSlider) -> None:
+        """A line edit in place of superqt's box (hidden), as controls._field's."""
+        slider.setEdgeLabelMode(QLabeledSlider.EdgeLabelMode.NoLabel)
+        field = self.fields[name] = QLineEdit()
+        field.setAlignment(Qt.AlignmentFlag.AlignRight)
+        field.setFixedWidth(field.fontMetrics().horizontalAdvance("8" * 6) + 12)  # -75.0
+        field.setToolTip(TIPS[name])
+        slider.layout().addWidget(field)
+        slider.valueChanged.connect(lambda *_: self._show_field(name))
+        field.editingFinished.connect(lambda: self._typed(name))
+        self._show_field(name)
+
+    def _text(self, name: str) -> str:
+        return f"{self.sliders[name].value():.{RANGES[name][2]}f}"
+
+    def _show_field(self, name: str) -> None:
+        self.fields[name].setText(self._text(name))
+
+    def _typed(self, name: str) -> None:
+        """A value typed into a slider's field: set on the slider when it is a number within
+        the slider's range (RANGES, the Forms dock's), else refused (`refused`) and the value
+        in force shown again."""
+        text, kept = self.fields[name].text().strip(), self._text(name)
+        if text == kept:
+            return  # left as shown (a pose's exact value stays)
+        low, high = RANGES[name][:2]
+        try:
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        if not math.isfinite(value):
+            why = f"{name} must be a number, got {text!r}"
+        elif not low <= value <= high:
+            why = f"{name} must be between {low:g} and {high:g}, got {text}"
+        else:
+            self.refused.emit("")
+            self.sliders[name].setValue(value)
+            self._show_field(name)
+            return
+        self._show_field(name)
+        self.refused.emit(f"{why}; {name} stays {kept}.")
 
     def pose(self) -> Pose:
         """The pose the sliders show (a term its slider still shows as `show_pose` set it keeps
@@ -150,6 +200,7 @@ def install(window: Any) -> BendSliders:
             bend.show_pose(session.pose)
 
     bend.changed.connect(bent)
+    bend.refused.connect(panel.say)
     session.state_changed.connect(shown)
     shown()
     return bend

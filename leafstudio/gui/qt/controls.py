@@ -209,7 +209,7 @@ class ParamPanel(QWidget):
             if _is_slider(widget):
                 self._add_field(name, widget, param)
             elif isinstance(widget, WholeBox):
-                widget.verdict.connect(self._say)
+                widget.verdict.connect(self.say)
         widest = max((f.width() for f in self.fields.values()), default=0)
         for field in self.fields.values():  # the sliders line up
             field.setFixedWidth(widest)
@@ -261,9 +261,9 @@ class ParamPanel(QWidget):
         except LeafError as exc:
             self._show_field(name)
             kept = _text(param, slider.value())
-            self._say(_refusal(param, exc, kept))
+            self.say(_refusal(param, exc, kept))
             return
-        self._say("")
+        self.say("")
         if name in self.specials and value == getattr(param, "special", None):
             self.specials[name].setChecked(True)
             self._show_field(name)
@@ -275,7 +275,8 @@ class ParamPanel(QWidget):
         slider.setValue(value)
         self._show_field(name)
 
-    def _say(self, text: str) -> None:
+    def say(self, text: str) -> None:
+        """Show `text` under the controls (why a typed value was refused); none hides it."""
         self.note.setText(text)
         self.note.setVisible(bool(text))
 
@@ -324,7 +325,7 @@ class ParamPanel(QWidget):
                 widget.blockSignals(was)
         self._shown, self._shown_values = params, self._read()
         self._sync_enabled()
-        self._say("")  # a refusal concerned the values shown before
+        self.say("")  # a refusal concerned the values shown before
 
     def _show(self, name: str, param: Param, value: Any) -> None:
         widget = self.widgets[name]

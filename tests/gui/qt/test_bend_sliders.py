@@ -72,10 +72,17 @@ def test_a_posed_forms_sketch_is_its_flat_blade():
     assert len(sketch.relief) == 0  # the pose bends the 3D result, not the drawing
 
 
-def test_a_project_bent_past_what_the_pose_keeps_is_refused_in_the_window(window, qtbot, tmp_path):
+@pytest.mark.parametrize(
+    "bend, said",
+    [({"roll": 1000}, '"roll" 1000'), ({"fold": True}, '"fold" must be a number, got true')],
+)
+def test_a_project_bent_past_what_the_pose_keeps_is_refused_in_the_window(
+    window, qtbot, tmp_path, bend, said
+):
     """appreview31 finding 9: a project's roll of 1000 (per unit of its coordinates) was
     opened without a word, after 54 s and 5.9 GB; the window now says which term is past its
-    range, and keeps the leaf it shows."""
+    range, and keeps the leaf it shows. A fold of true was read as 1 and refused as veins
+    outside the boundary: the window names the term."""
     import json
 
     from leafstudio.sources.files import save_leaf
@@ -83,12 +90,12 @@ def test_a_project_bent_past_what_the_pose_keeps_is_refused_in_the_window(window
     path = tmp_path / "rolled.leaf.json"
     save_leaf(Form("ovate", fold=30).leaf(), path)
     data = json.loads(path.read_text())
-    data["bend"] = {"roll": 1000}
+    data["bend"] = bend
     path.write_text(json.dumps(data))
     leaf = window.session.state.leaf
     with qtbot.waitSignal(window.failure_shown, timeout=30_000):
         window.open_path(str(path))
-    assert '"roll" 1000' in window.last_error_box.text()
+    assert said in window.last_error_box.text()
     assert window.status_text.text().startswith("Failed:")
     assert window.session.state.leaf is leaf
     window.last_error_box.close()
@@ -109,3 +116,32 @@ def test_a_bend_past_what_the_pose_keeps_is_refused_in_the_window(window, qtbot)
     assert session.state.leaf is leaf and session.history.index == steps
     assert bend.sliders["fold"].value() == 0.0
     box.close()
+
+
+@pytest.mark.parametrize(
+    ("name", "text", "message"),
+    [
+        ("fold", "90", "fold must be between -75 and 75, got 90"),
+        ("fold", "-200", "fold must be between -75 and 75, got -200"),
+        ("roll", "1.5", "roll must be between -1 and 1, got 1.5"),
+        ("twist", "abc", "twist must be a number, got 'abc'"),
+        ("curl", "nan", "curl must be a number, got 'nan'"),
+    ],
+)
+def test_a_typed_bend_out_of_range_is_refused_not_clamped(window, qtbot, name, text, message):
+    """A typed fold of 90 bent the leaf 75° and -200 bent it -75° without a word (superqt's
+    box clamps); the panel's other sliders refuse such a value with a note (controls.py), and
+    so do these now: nothing applied, the value in force shown again, and why under the panel."""
+    from tests.gui.qt.test_controls import type_into
+
+    session, field = window.session, window.bend.fields[name]
+    steps, pose, shown = session.history.index, session.pose, field.text()
+    type_into(qtbot, field, text)
+    qtbot.wait(50)
+    assert session.history.index == steps and session.pose == pose
+    assert window.bend.sliders[name].value() == 0.0 and field.text() == shown
+    note = window.panel.note
+    assert note.isVisible() and message in note.text() and f"{name} stays {shown}" in note.text()
+    type_into(qtbot, window.bend.fields["fold"], "30")  # a value in range is taken
+    wait_result(qtbot, window, lambda o: o.result.leaf.bend is not None)
+    assert session.pose.fold == 30.0 and note.isHidden()
