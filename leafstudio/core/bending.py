@@ -78,8 +78,8 @@ HEAVIEST = 3.0  # ... at most this many times the rows' mean weight
 # 1.95°; 0.5: 1.83°; 1: 1.75°; 2: 1.77°, a drawn leaf's inside 8.64°)
 SHARP_OWN = 1.0
 STEPS = 25  # projected gradient steps, of each of least_bending's two solves (one solve of 50,
-# as it first was, and 100: the same bench_bent --veins rows, 0.01° apart; two of 50: the same
-# rows within 0.03°, --variants 16 rows rougher than the paper's surface either way)
+# as it first was, and 100: the same bench_bent --veins rows, 0.01° apart; two of 50, before
+# SHARP_OWN: the same rows within 0.03°, --variants 16 rows rougher than the paper's either way)
 
 
 @dataclass(frozen=True)
