@@ -146,8 +146,7 @@ def open_scan(
     ('scan', (200, 3), (4710, 3))
     """
     scan, returns = read_scan_returns(path)
-    opened = _scan_opened(str(path), scan, base_end, points, force)
-    return replace(opened, notes=returns + opened.notes) if returns else opened
+    return _scan_opened(str(path), scan, base_end, points, force, returns)
 
 
 def _scan_with_missed_returns(path: str, force: bool) -> Opened | None:
@@ -161,15 +160,15 @@ def _scan_with_missed_returns(path: str, force: bool) -> Opened | None:
         return None
     if not returns or not looks_like_scan(Leaf(boundary=scan, veins=[])):
         return None
-    opened = _scan_opened(path, scan, force=force)
-    return replace(opened, notes=returns + opened.notes)
+    return _scan_opened(path, scan, force=force, read=returns)
 
 
 def _scan_opened(
     path: str, scan: np.ndarray, base_end: str = "auto", points: int = OUTLINE_POINTS,
-    force: bool = False,
+    force: bool = False, read: tuple[str, ...] = (),
 ) -> Opened:  # fmt: skip
-    """A scan's points read from `path`, checked and extracted (open_scan)."""
+    """A scan's points read from `path`, checked and extracted (open_scan); `read`: the notes of
+    reading it (read_scan_returns), said before the check's."""
     progress.report(0.0, FINDING)
     try:
         with one_blas_thread():  # small solves: a second thread only waits (_shared/blas.py)
@@ -186,7 +185,8 @@ def _scan_opened(
                 found = extract_leaf(scan, base_end, points, at_unit=at_unit)
     except LeafError as exc:
         raise LeafError(exc.problem, path) from None
-    return Opened(path, "scan", found.leaf, scan=scan, extraction=found, notes=tuple(notes))
+    notes = (*read, *notes)
+    return Opened(path, "scan", found.leaf, scan=scan, extraction=found, notes=notes)
 
 
 def _once(scan: np.ndarray) -> np.ndarray:

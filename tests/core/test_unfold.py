@@ -15,6 +15,7 @@ from leafstudio.core.bend import Pose, flat_curve
 from leafstudio.core.evaluate import point_to_mesh_distance
 from leafstudio.core.unfold import fit_pose
 from leafstudio.forms.make import Form
+from tests.leaves import cupped_ovate
 
 BENT = [
     ("ovate", {"fold": 45.0}),
@@ -142,16 +143,8 @@ def test_a_form_folded_down_hard_without_its_pose_is_unfolded_not_refused(shape,
 def test_a_one_point_vein_does_not_make_a_cupped_leaf_side_on():
     """Review finding: a vein of one point has no second point inside the outline, so the
     side-on rule took a cupped ovate (which needs no pose) as seen side-on and fitted it one."""
-    leaf = Form("ovate").leaf()
-    length = float(np.ptp(leaf.boundary, axis=0).max())
-    centre = leaf.boundary[:, :2].mean(axis=0)
-
-    def cup(points: np.ndarray) -> np.ndarray:
-        lifted = points.copy()
-        lifted[:, 2] += 0.6 * length * (((points[:, :2] - centre) / length) ** 2).sum(axis=1)
-        return lifted
-
-    boundary, veins = cup(leaf.boundary), [cup(v) for v in leaf.veins]
+    cup = cupped_ovate(0.6)
+    boundary, veins = cup.boundary, list(cup.veins)
     assert fit_pose(ls.Leaf(boundary, veins)) is None
     assert fit_pose(ls.Leaf(boundary, [*veins, veins[1][:1]])) is None
 
