@@ -1,0 +1,111 @@
+"""A flat leaf's reconstruction time at grid 128, against a reference checkout (issue 21: "flat
+leaves no slower than today", today being the code before it, 45d60f1).
+
+    .venv/bin/python benchmarks/bench_flat.py [--reference DIR] [--rounds 5] [--runs 20]
+                                              [--shapes ovate,oblanceolate,cordate,...]
+
+Each round times this checkout, then the reference (a worktree of another commit, run with its
+own code by PYTHONPATH), each in a fresh interpreter: `ls.reconstruct` of the same flat gallery
+leaves (made here, by this checkout's forms, and passed to both as points, so both reconstruct
+the same input: the forms' vein heights changed since issue 21), K 3, grid 128, the default
+Params (through the veins, where the checkout has it). Each process warms up once per shape,
+then runs `--runs` times; the table gives the minimum and the median wall time over all rounds,
+in milliseconds. The two alternate round by round: a shared host's load falls on both alike.
+Without --reference, this checkout alone.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+SHAPES = ("ovate", "oblanceolate", "cordate", "elliptic", "hastate", "linear")
+
+# runs in the checkout's own interpreter (its code by PYTHONPATH): prints {shape: [seconds]}
+TIMED = """
+import json, sys, time, warnings
+import numpy as np
+import leafstudio as ls
+warnings.simplefilter("ignore")
+saved, runs = np.load(sys.argv[1]), int(sys.argv[2])
+times = {}
+for shape in sys.argv[3].split(","):
+    count = int(saved[shape + ":veins"])
+    leaf = ls.Leaf(saved[shape + ":boundary"], [saved[f"{shape}:{i}"] for i in range(count)])
+    ls.reconstruct(leaf, ls.Params(k=3, grid=128))
+    times[shape] = []
+    for _ in range(runs):
+        start = time.perf_counter()
+        ls.reconstruct(leaf, ls.Params(k=3, grid=128))
+        times[shape].append(time.perf_counter() - start)
+print(json.dumps(times))
+"""
+
+
+def save_leaves(shapes: list[str], path: Path) -> None:
+    """This checkout's flat gallery leaves as points, for both checkouts to read."""
+    from leafstudio.forms.make import Form
+
+    arrays: dict[str, np.ndarray] = {}
+    for shape in shapes:
+        leaf = Form(shape).leaf()
+        arrays[shape + ":boundary"] = np.asarray(leaf.boundary)
+        arrays[shape + ":veins"] = np.array(len(leaf.veins))
+        for i, vein in enumerate(leaf.veins):
+            arrays[f"{shape}:{i}"] = np.asarray(vein)
+    np.savez(path, **arrays)
+
+
+def timed(checkout: Path, leaves: Path, runs: int, shapes: list[str]) -> dict[str, list[float]]:
+    """Wall times of each shape's reconstruct, in a fresh interpreter running `checkout`."""
+    python = checkout / ".venv" / "bin" / "python"
+    env = dict(os.environ, PYTHONPATH=str(checkout), PYTHONDONTWRITEBYTECODE="1")
+    out = subprocess.run(
+        [str(python if python.exists() else sys.executable), "-c", TIMED, str(leaves),
+         str(runs), ",".join(shapes)],
+        cwd=checkout, env=env, capture_output=True, text=True, check=True,
+    )  # fmt: skip
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--reference", type=Path, help="another checkout (a git worktree)")
+    parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--runs", type=int, default=20, help="timed runs per round and shape")
+    parser.add_argument("--shapes", default=",".join(SHAPES))
+    args = parser.parse_args()
+    shapes = args.shapes.split(",")
+    checkouts = {"this": ROOT} | ({"reference": args.reference} if args.reference else {})
+    times: dict[str, dict[str, list[float]]] = {name: {s: [] for s in shapes} for name in checkouts}
+    with tempfile.TemporaryDirectory() as tmp:
+        leaves = Path(tmp) / "leaves.npz"
+        save_leaves(shapes, leaves)
+        for _ in range(args.rounds):
+            for name, checkout in checkouts.items():
+                for shape, seconds in timed(checkout, leaves, args.runs, shapes).items():
+                    times[name][shape] += seconds
+    print(f"\n## flat leaves, K 3, grid 128: wall ms, min / median of {args.rounds} x {args.runs}")
+    print("| shape | " + " | ".join(checkouts) + (" | this over reference (min / median) |"
+          if args.reference else " |"))  # fmt: skip
+    print("|---|" + "---|" * (len(checkouts) + bool(args.reference)))
+    for shape in shapes:
+        cells = [times[name][shape] for name in checkouts]
+        row = [f"{1e3 * min(t):.1f} / {1e3 * float(np.median(t)):.1f}" for t in cells]
+        if args.reference:
+            this, ref = cells
+            row.append(f"{min(this) / min(ref):.2f} / {np.median(this) / np.median(ref):.2f}")
+        print(f"| {shape} | " + " | ".join(row) + " |")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
