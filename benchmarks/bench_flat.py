@@ -1,17 +1,18 @@
 """A flat leaf's reconstruction time at grid 128, against a reference checkout (issue 21: "flat
 leaves no slower than today", today being the code before it, 45d60f1).
 
-    .venv/bin/python benchmarks/bench_flat.py [--reference DIR] [--rounds 5] [--runs 20]
+    .venv/bin/python benchmarks/bench_flat.py [--reference DIR ...] [--rounds 5] [--runs 20]
                                               [--shapes ovate,oblanceolate,cordate,...]
 
-Each round times this checkout, then the reference (a worktree of another commit, run with its
-own code by PYTHONPATH), each in a fresh interpreter: `ls.reconstruct` of the same flat gallery
-leaves (made here, by this checkout's forms, and passed to both as points, so both reconstruct
-the same input: the forms' vein heights changed since issue 21), K 3, grid 128, the default
+Each round times this checkout, then each reference (a worktree of another commit, run with its
+own code by PYTHONPATH; --reference may be given more than once), each in a fresh interpreter:
+`ls.reconstruct` of the same flat gallery leaves (made here, by this checkout's forms, and passed
+to all as points, so all reconstruct the same input: the forms' vein heights changed since issue
+21), K 3, grid 128, the default
 Params (through the veins, where the checkout has it). Each process warms up once per shape,
 then runs `--runs` times; the table gives the minimum and the median wall time over all rounds,
-in milliseconds. The two alternate round by round: a shared host's load falls on both alike.
-Without --reference, this checkout alone.
+in milliseconds, and this checkout's over the first reference's. They alternate round by round: a
+shared host's load falls on all alike. Without --reference, this checkout alone.
 """
 
 from __future__ import annotations
@@ -78,13 +79,15 @@ def timed(checkout: Path, leaves: Path, runs: int, shapes: list[str]) -> dict[st
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--reference", type=Path, help="another checkout (a git worktree)")
+    parser.add_argument(
+        "--reference", type=Path, action="append", default=[], help="another checkout"
+    )
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--runs", type=int, default=20, help="timed runs per round and shape")
     parser.add_argument("--shapes", default=",".join(SHAPES))
     args = parser.parse_args()
     shapes = args.shapes.split(",")
-    checkouts = {"this": ROOT} | ({"reference": args.reference} if args.reference else {})
+    checkouts = {"this": ROOT} | {str(path): path for path in args.reference}
     times: dict[str, dict[str, list[float]]] = {name: {s: [] for s in shapes} for name in checkouts}
     with tempfile.TemporaryDirectory() as tmp:
         leaves = Path(tmp) / "leaves.npz"
@@ -94,14 +97,14 @@ def main() -> int:
                 for shape, seconds in timed(checkout, leaves, args.runs, shapes).items():
                     times[name][shape] += seconds
     print(f"\n## flat leaves, K 3, grid 128: wall ms, min / median of {args.rounds} x {args.runs}")
-    print("| shape | " + " | ".join(checkouts) + (" | this over reference (min / median) |"
-          if args.reference else " |"))  # fmt: skip
+    ratio = " | this over the first reference (min / median) |" if args.reference else " |"
+    print("| shape | " + " | ".join(checkouts) + ratio)
     print("|---|" + "---|" * (len(checkouts) + bool(args.reference)))
     for shape in shapes:
         cells = [times[name][shape] for name in checkouts]
         row = [f"{1e3 * min(t):.1f} / {1e3 * float(np.median(t)):.1f}" for t in cells]
         if args.reference:
-            this, ref = cells
+            this, ref = cells[:2]
             row.append(f"{min(this) / min(ref):.2f} / {np.median(this) / np.median(ref):.2f}")
         print(f"| {shape} | " + " | ".join(row) + " |")
     return 0
