@@ -10,8 +10,10 @@ own code by PYTHONPATH; --reference may be given more than once), each in a fres
 to all as points, so all reconstruct the same input: the forms' vein heights changed since issue
 21), K 3, grid 128, the default
 Params (through the veins, where the checkout has it). Each process warms up once per shape,
-then runs `--runs` times; the table gives the minimum and the median wall time over all rounds,
-in milliseconds, and this checkout's over the first reference's. They alternate round by round: a
+then runs `--runs` times; the tables give the minimum and the median wall time over all rounds,
+in milliseconds, and the same of CPU time (the process's: the pipeline runs on one thread, so on
+a quiet host the two agree, and on a loaded one CPU time strays less), and this checkout's over
+the first reference's. They alternate round by round: a
 shared host's load falls on all alike. Without --reference, this checkout alone.
 """
 
@@ -30,7 +32,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 SHAPES = ("ovate", "oblanceolate", "cordate", "elliptic", "hastate", "linear")
 
-# runs in the checkout's own interpreter (its code by PYTHONPATH): prints {shape: [seconds]}
+# runs in the checkout's own interpreter (its code by PYTHONPATH): prints {shape: [(wall, CPU)]}
 TIMED = """
 import json, sys, time, warnings
 import numpy as np
@@ -44,9 +46,9 @@ for shape in sys.argv[3].split(","):
     ls.reconstruct(leaf, ls.Params(k=3, grid=128))
     times[shape] = []
     for _ in range(runs):
-        start = time.perf_counter()
+        wall, cpu = time.perf_counter(), time.process_time()
         ls.reconstruct(leaf, ls.Params(k=3, grid=128))
-        times[shape].append(time.perf_counter() - start)
+        times[shape].append((time.perf_counter() - wall, time.process_time() - cpu))
 print(json.dumps(times))
 """
 
@@ -65,8 +67,11 @@ def save_leaves(shapes: list[str], path: Path) -> None:
     np.savez(path, **arrays)
 
 
-def timed(checkout: Path, leaves: Path, runs: int, shapes: list[str]) -> dict[str, list[float]]:
-    """Wall times of each shape's reconstruct, in a fresh interpreter running `checkout`."""
+def timed(
+    checkout: Path, leaves: Path, runs: int, shapes: list[str]
+) -> dict[str, list[list[float]]]:
+    """Wall and CPU seconds of each shape's reconstruct, in a fresh interpreter running
+    `checkout`."""
     python = checkout / ".venv" / "bin" / "python"
     env = dict(os.environ, PYTHONPATH=str(checkout), PYTHONDONTWRITEBYTECODE="1")
     out = subprocess.run(
@@ -88,7 +93,7 @@ def main() -> int:
     args = parser.parse_args()
     shapes = args.shapes.split(",")
     checkouts = {"this": ROOT} | {str(path): path for path in args.reference}
-    times: dict[str, dict[str, list[float]]] = {name: {s: [] for s in shapes} for name in checkouts}
+    times: dict[str, dict[str, list[list[float]]]] = {n: {s: [] for s in shapes} for n in checkouts}
     with tempfile.TemporaryDirectory() as tmp:
         leaves = Path(tmp) / "leaves.npz"
         save_leaves(shapes, leaves)
@@ -96,17 +101,19 @@ def main() -> int:
             for name, checkout in checkouts.items():
                 for shape, seconds in timed(checkout, leaves, args.runs, shapes).items():
                     times[name][shape] += seconds
-    print(f"\n## flat leaves, K 3, grid 128: wall ms, min / median of {args.rounds} x {args.runs}")
-    ratio = " | this over the first reference (min / median) |" if args.reference else " |"
-    print("| shape | " + " | ".join(checkouts) + ratio)
-    print("|---|" + "---|" * (len(checkouts) + bool(args.reference)))
-    for shape in shapes:
-        cells = [times[name][shape] for name in checkouts]
-        row = [f"{1e3 * min(t):.1f} / {1e3 * float(np.median(t)):.1f}" for t in cells]
-        if args.reference:
-            this, ref = cells[:2]
-            row.append(f"{min(this) / min(ref):.2f} / {np.median(this) / np.median(ref):.2f}")
-        print(f"| {shape} | " + " | ".join(row) + " |")
+    for column, clock in enumerate(("wall", "CPU")):  # CPU: less of a loaded host's noise
+        print(f"\n## flat leaves, K 3, grid 128: {clock} ms, min / median of "
+              f"{args.rounds} x {args.runs}")  # fmt: skip
+        ratio = " | this over the first reference (min / median) |" if args.reference else " |"
+        print("| shape | " + " | ".join(checkouts) + ratio)
+        print("|---|" + "---|" * (len(checkouts) + bool(args.reference)))
+        for shape in shapes:
+            cells = [[run[column] for run in times[name][shape]] for name in checkouts]
+            row = [f"{1e3 * min(t):.1f} / {1e3 * float(np.median(t)):.1f}" for t in cells]
+            if args.reference:
+                this, ref = cells[:2]
+                row.append(f"{min(this) / min(ref):.2f} / {np.median(this) / np.median(ref):.2f}")
+            print(f"| {shape} | " + " | ".join(row) + " |")
     return 0
 
 
