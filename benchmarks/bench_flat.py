@@ -54,7 +54,7 @@ print(json.dumps(times))
 
 
 def save_leaves(shapes: list[str], path: Path) -> None:
-    """This checkout's flat gallery leaves as points, for both checkouts to read."""
+    """This checkout's flat gallery leaves as points, for every checkout to read."""
     from leafstudio.forms.make import Form
 
     arrays: dict[str, np.ndarray] = {}
