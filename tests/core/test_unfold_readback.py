@@ -95,7 +95,6 @@ def test_a_posed_form_read_back_from_a_csv_has_its_size_and_pose(tmp_path, shape
     assert (pose.curl, pose.roll) == pytest.approx((own.curl, own.roll), rel=0.01, abs=1e-6)
 
 
-
 @pytest.mark.parametrize(
     ("terms", "size"),
     [
