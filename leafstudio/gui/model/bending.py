@@ -260,11 +260,11 @@ def posed(
 
 def _eased(bend: Any, half: float, flat: Leaf, check: bool) -> Any:
     """`bend` (a Pose, or a PlacedPose) about to bend the flat blade `flat`, whose half width in
-    its coordinates is `half`: refused past the limits when `check` (a pose asked for), else
-    with a widened tube's roll eased (a sketch edit keeps the pose: pose_limits.eased_roll)."""
+    its coordinates is `half`: refused past the limits when `check` (a pose asked for); its roll
+    eased to the tube, or short of its seam when folded or twisted (pose_limits.eased_roll: a
+    sketch edit keeps the pose; a fold of a closed tube passed its sheet through itself)."""
     if check:
         check_pose(bend, flat.boundary, list(flat.veins), flat=True)
-        return bend
     pose = eased_roll(getattr(bend, "pose", bend), half)
     return pose if isinstance(bend, Pose) else PlacedPose(pose, bend.frame)
 
