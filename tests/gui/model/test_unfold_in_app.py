@@ -207,4 +207,3 @@ def test_a_refused_leaf_edited_much_further_off_its_plane_is_fitted_again():
     assert not keeps_refusal(State(deeper, None, Params(), unposed=share))
     bent = Leaf(cup.boundary, cup.veins, bend=PlacedPose(Pose(fold=10.0), blade_frame(cup)))
     assert not keeps_refusal(State(bent, None, Params(), unposed=share))  # posed by a slider
-
