@@ -334,8 +334,11 @@ def least_bending(
     # in place: the steps read A by rows, and S, from LAPACK, is in column order (A + μS came out
     # in column order: _projected_steps 0.36 -> 2.1 ms at ovate's 200 centres)
     normal += bending.own * spline
-    tapered = np.ascontiguousarray((taper * relief).astype(np.float32)[:, None])
-    bends = _bend_twice(d.indptr, d.indices, d.data, tapered)[:, 0]
+    tapered = (taper * relief).astype(np.float32)
+    # Dᵀ D T M by scipy's two products: Dᵀ's reads D's rows in order, as _bend_twice does, and
+    # the same bits (_bend_twice on one column, a loop of one per entry: 0.092 ms on a flat ovate
+    # at grid 128; this 0.038, best of 200; /work/notes/perf38/micro_alt.py)
+    bends = d.T @ (d @ tapered)
     shift = spline.T @ (bending.phi.T @ (taper * bends))
     values = _projected_steps(normal, shift, start, lo, hi, STEPS)
     surface = taper * (relief + bending.phi @ (spline @ values))
@@ -348,7 +351,7 @@ def least_bending(
     bent = root * ((sharp @ bending.tapered) @ spline.astype(np.float32))
     normal += bent.T @ bent  # (BLAS's syrk, half the products, then mirrored: 0.33 ms, this 0.23)
     normal += (more + SHARP_OWN) * bending.own * spline
-    shift += bent.T @ (root[:, 0] * (sharp @ tapered[:, 0]))
+    shift += bent.T @ (root[:, 0] * (sharp @ tapered))
     return _projected_steps(normal, shift, values, lo, hi, STEPS)
 
 

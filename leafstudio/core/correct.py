@@ -198,7 +198,9 @@ def fit_correction(
     # 200 centres, a flat ovate at grid 128; this 1.14 ms, best of 80)
     some = bending.pinned(inside)
     system = some.among.copy()
-    system[np.diag_indices_from(system)] += VEIN_SMOOTHING / taper[inside] ** 2
+    # the diagonal as every (m + 1)-th of the flat entries (np.diag_indices_from's index arrays:
+    # 0.029 -> 0.012 ms at a flat ovate's 200 centres, best of 200, the same bits)
+    system.flat[:: len(system) + 1] += VEIN_SMOOTHING / taper[inside] ** 2
     factor, info = scipy.linalg.lapack.dpotrf(system, lower=1)
     if info == 0:
         inverse, info = scipy.linalg.lapack.dpotri(factor, lower=1, overwrite_c=1)
