@@ -207,3 +207,38 @@ def test_a_refused_leaf_edited_much_further_off_its_plane_is_fitted_again():
     assert not keeps_refusal(State(deeper, None, Params(), unposed=share))
     bent = Leaf(cup.boundary, cup.veins, bend=PlacedPose(Pose(fold=10.0), blade_frame(cup)))
     assert not keeps_refusal(State(bent, None, Params(), unposed=share))  # posed by a slider
+
+
+def test_a_cup_saved_as_a_project_keeps_its_refusal_when_reopened(tmp_path, monkeypatch):
+    """The cup 0.6 deep, edited and saved as a project (its sketch's curves, no pose), reopened
+    in a fresh process: its first run fits it once and is refused, and each edit fitted it
+    again (three fits for two edits); the document now learns the refusal as it opens
+    (opening.Document.unposed) and keeps it."""
+    from collections import OrderedDict
+
+    import leafstudio.core.unfold as unfold
+    import leafstudio.core.unfolded as unfolded
+
+    path = tmp_path / "cup.csv"
+    save_leaf(cupped_ovate(0.6), path)
+    session, runner, _ = opened_session()
+    session.open_path(str(path))
+    runner.finish(session)
+    sketch = session.editable_sketch()
+    session.commit_sketch(sketch.moved(-1, 0, sketch.boundary[0] * 1.001), "Move point")
+    project = tmp_path / "cup.leaf.json"
+    save_leaf(session.leaf, project, session.params, session.state.sketch.to_dict())
+    monkeypatch.setattr(unfolded, "_UNBENT", OrderedDict())  # as a fresh process
+    fits: list = []
+    fit = unfold._fit
+    monkeypatch.setattr(unfold, "_fit", lambda *a, **k: fits.append(1) or fit(*a, **k))
+    again, runner, _ = opened_session()
+    again.open_path(str(project))
+    runner.finish(again)
+    assert again.leaf.bend is None and len(fits) == 1
+    for step in (1, 2):
+        sketch = again.editable_sketch()
+        moved = sketch.boundary[0] * (1 + 1e-3 * step)
+        again.commit_sketch(sketch.moved(-1, 0, moved), "Move point")
+        runner.finish(again)
+    assert len(fits) == 1
