@@ -21,7 +21,7 @@ OFF_PLANE = 0.06  # a margin this far off its PCA plane (RMS, share of its RMS w
 # height field: ovate curled 0.5 and rolled 0.3 (0.104; serrate 0.092) 1.9% and 3.4% narrow as
 # CSVs, curled 0.3 and rolled 0.2 (0.076) 2.4% wide, folded 10 (0.076) 2.8% wide; fitted, each
 # its own pose (pose37). A cup (a quadratic height field, 0.066-0.10 off at 0.3 of the length
-# deep) is fitted too, 1.9 s of CPU once, and refused (no pose lays it flatter than the quadric:
+# deep) is fitted too, 1.8-2.4 s of CPU once, and refused (no pose lays it flatter than the quadric:
 # unfold.EXPLAINED); the app's document keeps the refusal for its sketch edits
 # (gui/model/bending.keeps_refusal; review37b had found each edit fitted again)
 OFF_QUADRIC = 0.025  # ... and so may one this far off its best quadratic height field: a fold
