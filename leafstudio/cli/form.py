@@ -139,6 +139,8 @@ def run_form(args: argparse.Namespace) -> int:
         seed=args.seed,
     )
     leaf = form.leaf()
+    if note := form.seam_note():
+        log.warning(note)
     if mesh and seen_on_edge(leaf):
         raise LeafError(f"{SIDE_ON}; write the leaf (.leaf.json), or lower --fold or --curl")
     if mesh:

@@ -63,6 +63,11 @@ SAVED_ROLL_SHARE = 1.01  # ... and a leaf's pose as given (a project, `flat` Fal
 # before, to which the app kept a tube's roll when a sketch edit widened it (eased_roll eased
 # only past it), so the projects it saved reopen (a tube widened 0.5%: 1.005, refused by ROLL_SHARE)
 TWIST_TURNS = 2.0  # half turns the twist may turn the apex against the base
+SEAM_SHARE = 0.99  # half turns a folded or twisted blade's widest margin may roll through
+# (`tube_share`): closed to its seam, a tube folded or twisted however little passes its sheet
+# through itself there (crossing face pairs of the mesh at grid 128, open3d: ovate rolled 1 and
+# folded 75 68, folded 1 82, twisted 0.1 37; cordate folded 75 7; linear 5,875), rolled 0.999 or
+# 0.99 none (ovate, linear, hastate; /work/notes/bowls38/sweep_cross.py): eased to it
 # a pose fitted to curves in 3D (core/unfold.py, its relief on the margin's plane) was searched
 # to 85° each way before FOLD: the projects the app saved then reopen, their fit reproducing
 # the curves they were fitted to
@@ -193,15 +198,25 @@ def check_pose(
         raise PoseRefused(f"the leaf's bend: {trouble[0]}", *trouble[1:])
 
 
+def tube_share(fold: float, twist: float) -> float:
+    """The half turns a pose of this `fold` and `twist` may roll the blade's widest margin
+    through: the closed tube (ROLL_SHARE), kept SEAM_SHARE of it when folded or twisted."""
+    return ROLL_SHARE if fold == 0 and twist == 0 else SEAM_SHARE
+
+
 def eased_roll(pose: Pose, half: float) -> Pose:
     """`pose` with a roll that turns the blade's widest margin, `half` from the midrib in the
-    pose's units, past ROLL_SHARE of a half turn eased to the closed tube: a sketch edit keeps
-    the pose per the blade's length (gui/model/bending.py), so a tube made 20% wider rolled its
-    margins 1.2 half turns, into itself, and its project was refused."""
+    pose's units, past `tube_share` of a half turn eased to it: a sketch edit keeps the pose per
+    the blade's length (gui/model/bending.py), so a tube made 20% wider rolled its margins 1.2
+    half turns, into itself, and its project was refused; and a tube closed to its seam, folded
+    or twisted, passed its sheet through itself there (SEAM_SHARE): a form's (forms/make.py),
+    the sliders' (bending.posed)."""
     most = np.pi / half if half > 0 else np.inf
-    if abs(pose.roll) <= ROLL_SHARE * most:
+    share = tube_share(pose.fold, pose.twist)
+    if abs(pose.roll) <= share * most:
         return pose
-    return replace(pose, roll=float(np.copysign(most, pose.roll)))
+    eased = most if share == ROLL_SHARE else share * most
+    return replace(pose, roll=float(np.copysign(eased, pose.roll)))
 
 
 def blade_measures(

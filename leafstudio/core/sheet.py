@@ -34,10 +34,11 @@ REACH = 1.8  # cells: cell means closer than this are neighbours in the graph
 MIN_CELLS = 30
 LANDMARKS = 120  # geodesic sources for the landmark MDS
 MOST_KEPT = 0.8  # the graph's largest piece must hold this share of the points
-SMOOTHING = 2e-3  # the thin-plate spline's smoothing, at unit length, for a cell of the typical
+SMOOTHING = 1e-3  # the thin-plate spline's smoothing, at unit length, for a cell of the typical
 # error (refit weighs it by each cell's): at 1e-4 the sheet missed its cell means by 0.07-0.13
 # of their noise (a local quadratic's residual through them): it followed the scanner's noise and
-# the mesh crinkled; at 1e-3 unweighed by 0.32-0.50 (fit_sheet's Notes)
+# the mesh crinkled; at 1e-3 unweighed by 0.32-0.50; weighed, 2e-3 until soybean pot1_1's base
+# was put at its stalk's end (1.00% of its length from the scan there; fit_sheet's Notes)
 WEIGHT_RANGE = 30.0  # a cell's smoothing is at most this many times the typical's, or 1/this
 # (10 and 100 moved no scan's 99th-percentile dihedral by more than 2 degrees)
 FIRST = 1e-3  # the smoothing of the sheet through the cube means, at unit length (`refit`)
@@ -380,7 +381,13 @@ def fit_sheet(points: np.ndarray, up: np.ndarray, length: float) -> Sheet | None
     doubled layers make its flat blade uncertain.) A refit through the cube means' own sheet
     (FIRST = SMOOTHING, at 1e-4) left pot1_1 at 108 degrees; a stiffer start refitted four times
     (1e-2 down to 1e-4) gave much the same as one refit, at three times the cost
-    (benchmarks/bench_bent.py --scan-table).
+    (benchmarks/bench_bent.py --scan-table). With pot1_1's base at its stalk's end (its length
+    51.9 there, not 57.3 to a flap of margin behind the stalk: scan_veins.HALF_STATIONS) it
+    stood 1.00% off its scan, 0.93-1.09% over ten 97% resamples, at the noise of its doubled
+    layers (a local quadric through each point's 48 nearest: 0.95%); at 1e-3 0.96% but its p99
+    inside 75.4, the veins' heights from 32 points (extract.LIFT_NEIGHBOURS) 0.97% and 65.3,
+    0.88-0.99% over the resamples, the eight 0.56% on average (0.58%), the others' p99 inside
+    6.8-15.3 (/work/notes/base38/README.md).
     """
     progress.report(0.0, UNROLLING)
     # fitted in a frame of the points' own, then moved back: the cubes' grid and order, and so

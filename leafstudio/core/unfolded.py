@@ -15,6 +15,11 @@ circle still, and flat, a little under the margin's plane. It was left as fitted
 -0.8, read from its CSV, was fitted -0.853 and measured 0.938 long (exp(-2 curl L) of the
 length, L its level), reniform curled -1 0.882 long at the fit's pose; now -0.799 and 1.001
 (/work/notes/curl35).
+
+A document in the app whose curves no pose laid flat (`unposed_share`) keeps that refusal for its
+sketch edits, whose curves are new bytes: gui/model/bending.keeps_refusal has each run's leaf
+taken `as_given`. A cup 0.142 of its width off its plane had paid a refused fit, 2.1-2.7 s of
+CPU, at every edit (/work/notes/bowls38/cup_edit_probe.py).
 """
 
 from __future__ import annotations
@@ -31,7 +36,7 @@ from leafstudio.core.placed import PlacedPose
 from leafstudio.core.pose_limits import pose_trouble
 from leafstudio.core.pose_relief import margin_relief
 from leafstudio.core.unfold import fit_pose
-from leafstudio.core.unfold_checks import bent
+from leafstudio.core.unfold_checks import bent, off_plane
 from leafstudio.model import Leaf
 
 UNBENT_KEPT = 32  # curves remembered as needing no bend
@@ -46,21 +51,55 @@ def unfolded(leaf: Leaf) -> Leaf:
     then remembered: the module docstring)."""
     if leaf.bend is not None:
         return leaf
-    digest = hashlib.blake2b(digest_size=16)
-    for curve in (leaf.boundary, *leaf.veins):
-        digest.update(np.ascontiguousarray(curve, dtype=float).tobytes() + b"|")
-    key = digest.digest()
+    key = _key(leaf)
     with _UNBENT_LOCK:
         if key in _UNBENT:
             return leaf
     bend = fit_pose(leaf)
     if bend is not None:
         return Leaf(leaf.boundary, leaf.veins, bend=levelled(bend, leaf))
+    _remember(key)
+    return leaf
+
+
+def as_given(leaf: Leaf) -> Leaf:
+    """`leaf`, remembered as needing no bend: `unfolded` (its Pipeline's) fits it none. For the
+    app's edits of a document whose curves no pose laid flat (gui/model/bending.keeps_refusal)."""
+    if leaf.bend is None:
+        _remember(_key(leaf))
+    return leaf
+
+
+def unposed_share(leaf: Leaf) -> float | None:
+    """How far `leaf`'s margin lies off its PCA plane (RMS, share of its RMS width, as
+    unfold_checks.OFF_PLANE counts it) when it is bent in 3D and `unfolded` finds no pose that
+    lays it flat (a cup); None when it has a bend, is flat or a pose is found for it."""
+    if leaf.bend is not None or unfolded(leaf) is not leaf or not _unposed(leaf):
+        return None
+    return plane_share(leaf)
+
+
+def plane_share(leaf: Leaf) -> float:
+    """`leaf`'s margin's RMS distance off its PCA plane, per its RMS width (unfold_checks)."""
+    rms, width = off_plane(np.asarray(leaf.boundary, dtype=float))
+    return rms / width if width > 0 else 0.0
+
+
+def _key(leaf: Leaf) -> bytes:
+    """The bytes of `leaf`'s curves, hashed: what `_UNBENT` remembers."""
+    digest = hashlib.blake2b(digest_size=16)
+    for curve in (leaf.boundary, *leaf.veins):
+        digest.update(np.ascontiguousarray(curve, dtype=float).tobytes() + b"|")
+    return digest.digest()
+
+
+def _remember(key: bytes) -> None:
+    """Remember curves of `key` as needing no bend (the newest UNBENT_KEPT)."""
     with _UNBENT_LOCK:
         _UNBENT[key] = None
+        _UNBENT.move_to_end(key)
         while len(_UNBENT) > UNBENT_KEPT:
             _UNBENT.popitem(last=False)
-    return leaf
 
 
 def levelled(bend: PlacedPose, leaf: Leaf) -> PlacedPose:
@@ -97,10 +136,15 @@ def unposed_hint(leaf: Leaf) -> str:
     given, none fitted), that it may be a posed or scanned leaf written without its pose or
     sheet (a lanceolate form twisted 1, saved as .csv, was refused with "vein 1: 2 of 49 points
     lie outside the boundary" and no word of why); "" otherwise."""
-    midrib = np.asarray(leaf.veins[0], dtype=float) if leaf.veins else None
-    if leaf.bend is not None or not bent(np.asarray(leaf.boundary, dtype=float), midrib):
+    if not _unposed(leaf):
         return ""
     return (
         "; the leaf is bent in 3D and no pose lays it flat: a posed or scanned leaf saved as a "
         "point list keeps neither its pose nor its sheet (its .leaf.json does)"
     )
+
+
+def _unposed(leaf: Leaf) -> bool:
+    """Whether `leaf` has no bend and its margin stands bent in 3D (unfold_checks.bent)."""
+    midrib = np.asarray(leaf.veins[0], dtype=float) if leaf.veins else None
+    return leaf.bend is None and bent(np.asarray(leaf.boundary, dtype=float), midrib)

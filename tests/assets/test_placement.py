@@ -342,7 +342,10 @@ def test_a_narrow_blade_folded_and_rolled_saved_as_curves_is_written_with_its_ap
     axes: the glb's apex was 1.66 degrees off +X. `form`, then `reconstruct --length`. Fitted
     again about a relief as the form's (core/unfold_rolled.py: fold 75.0, roll 86.9 of the
     form's 88.0, its flat blade 1.012 times as wide where it was 1.097), the midrib is the
-    pose's own and a curl of 0.011 keeps its turn at the base: 0.62 degrees."""
+    pose's own and a curl of 0.011 keeps its turn at the base: 0.62 degrees. Folded, the tube is
+    now rolled 0.99 of the way closed (pose_limits.SEAM_SHARE: closed, its sheet passed through
+    itself at the seam), which the fit places 1.20 degrees off, as main's code placed `--roll
+    0.99` (/work/notes/bowls38)."""
     from leafstudio.cli import main
 
     points, glb = tmp_path / "x.csv", tmp_path / "x.glb"
@@ -354,7 +357,7 @@ def test_a_narrow_blade_folded_and_rolled_saved_as_curves_is_written_with_its_ap
     found = read_points(glb)
     apex = found[np.argmax(np.linalg.norm(found, axis=1))]
     assert apex[0] == pytest.approx(0.08, rel=0.01)
-    assert np.degrees(np.arctan2(np.hypot(apex[1], apex[2]), apex[0])) < 1.0
+    assert np.degrees(np.arctan2(np.hypot(apex[1], apex[2]), apex[0])) < 1.3
 
 
 def test_a_curl_fitted_to_curves_keeps_the_forms_turn_at_the_base():

@@ -86,21 +86,14 @@ def test_a_curled_leaf_is_recovered_from_its_boundary_and_midrib():
     assert result.metrics["boundary"]["max"] < 1e-9  # the outline at its own heights
 
 
-def test_a_shallow_v_folded_leaf_dips_along_its_midrib():
-    folded = lambda x, y: 0.2 * np.abs(y)  # noqa: E731
+@pytest.mark.parametrize("slope", [0.2, 0.4])
+def test_a_v_folded_leaf_is_unfolded_by_its_fold(slope):
+    """A V fold is fitted as the fold it is. The shallow one (0.2: 11.3°, its margin 0.076 of
+    its width off its plane) was left to the paper's base below unfold_checks.OFF_PLANE 0.12,
+    dipping along its midrib; the gate at 0.06 (session 37, bowls read back from CSVs) fits it."""
+    folded = lambda x, y: slope * np.abs(y)  # noqa: E731
     result = ls.reconstruct(_leaf_on(folded), ls.Params(k=3))
-    assert result.leaf.bend is None  # the paper's base takes it
-    assert _error_to(folded, result).mean() < 3e-3
-    midrib = np.column_stack([np.linspace(-0.3, 0.3, 7), np.zeros((7, 2))])
-    xy, _ = result.frame.to_plane(midrib)
-    relief = (result.height(xy) - result.surface.base(xy)) * result.frame.normal[2]
-    assert np.all(relief < -0.005)  # in the world, the fold lies below the base
-
-
-def test_a_v_folded_leaf_is_unfolded_by_its_fold():
-    folded = lambda x, y: 0.4 * np.abs(y)  # noqa: E731
-    result = ls.reconstruct(_leaf_on(folded), ls.Params(k=3))
-    assert result.leaf.bend.pose.fold == pytest.approx(np.degrees(np.arctan(0.4)), abs=0.1)
+    assert result.leaf.bend.pose.fold == pytest.approx(np.degrees(np.arctan(slope)), abs=0.1)
     points = np.asarray(result.triangle_mesh.points)  # bent: the mesh is the surface
     assert np.abs(points[:, 2] - folded(points[:, 0], points[:, 1])).mean() < 3e-3
 

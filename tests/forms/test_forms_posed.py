@@ -164,3 +164,50 @@ def test_each_pose_terms_words_say_what_a_negative_value_does():
     assert Form("ovate", fold=-45).leaf().boundary[:, 2].min() < -0.1
     for name in ("fold", "curl", "roll", "twist"):
         assert "if negative" in RELIEF[name], name
+
+
+def _crossing_faces(result) -> int:
+    """How many of `result`'s mesh faces cross another (open3d)."""
+    import open3d as o3d
+
+    mesh = result.triangle_mesh
+    vectors = o3d.utility.Vector3dVector(np.asarray(mesh.points))
+    faces = o3d.utility.Vector3iVector(np.asarray(mesh.regular_faces).astype(np.int32))
+    crossing = o3d.geometry.TriangleMesh(vectors, faces).get_self_intersecting_triangles()
+    return len(np.asarray(crossing))
+
+
+@pytest.mark.open3d
+@pytest.mark.parametrize(
+    ("shape", "terms"),
+    [
+        ("ovate", dict(fold=75.0, roll=1.0)),
+        ("ovate", dict(fold=5.0, roll=1.0)),
+        ("ovate", dict(roll=1.0, twist=0.1)),
+        ("cordate", dict(fold=75.0, roll=1.0)),
+        ("linear", dict(fold=-75.0, roll=1.0)),
+    ],
+    ids=str,
+)
+def test_a_folded_or_twisted_tube_does_not_pass_through_itself(shape, terms):
+    """Rolled into a closed tube (roll 1) and folded or twisted however little, a form's sheet
+    passed through itself at the tube's seam (grid 128: ovate folded 75 68 crossing face pairs,
+    folded 1 82; linear 5,875); its roll is eased to pose_limits.SEAM_SHARE, where none cross."""
+    result = ls.reconstruct(make_form(shape, **terms), ls.Params(grid=64))
+    assert _crossing_faces(result) == 0
+
+
+def test_the_form_command_says_a_folded_tube_is_eased_off_its_seam(tmp_path, capsys):
+    """`form ovate --fold 75 --roll 1` wrote a leaf whose sheet passes through itself, silently;
+    it says the roll is eased (Form.seam_note), and a tube neither folded nor twisted is not."""
+    from leafstudio.core.pose_limits import SEAM_SHARE
+
+    out = str(tmp_path / "x.leaf.json")
+    assert main(["form", "ovate", "--fold", "75", "--roll", "1", "-o", out]) == 0
+    said = capsys.readouterr().err
+    assert "roll 1 eased to 0.99" in said and "pass through itself" in said
+    pose = make_form("ovate", fold=75.0, roll=1.0).bend
+    half = float(np.abs(make_form("ovate").boundary[:, 1]).max())
+    assert pose.roll * half / np.pi == pytest.approx(SEAM_SHARE)
+    assert main(["form", "ovate", "--roll", "1", "-o", out]) == 0
+    assert "eased" not in capsys.readouterr().err

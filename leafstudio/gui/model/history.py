@@ -44,6 +44,10 @@ class State:
     scan: Any = None  # gui.scans.ScanData
     serial: int = 0
     photo: Any = None  # assets.leafphoto.LeafPhoto: the photo the leaf was found in
+    # a leaf opened in 3D that no pose laid flat: its margin's share off its plane
+    # (core/unfolded.unposed_share), kept through its edits so they are not fitted again
+    # (bending.keeps_refusal)
+    unposed: float | None = None
 
 
 @dataclass(frozen=True, eq=False)

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from leafstudio.core.evaluate import MEASURABLE
+from leafstudio.core.unfolded import unposed_share
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.jobs import Job, cancel_point, describe
 from leafstudio.gui.model.reading import is_big, read_apart
@@ -51,6 +52,9 @@ class Document:
     notice : str
         What is wrong beside the leaf ("" if nothing): a project's bad photo entry costs the
         texture, never the leaf.
+    unposed : float or None
+        For a leaf in 3D that no pose lays flat (core/unfolded.unposed_share), its margin's
+        share off its plane: the document keeps the refusal (history.State.unposed).
     """
 
     path: str
@@ -60,6 +64,7 @@ class Document:
     scan: Any = None  # scans.ScanData
     photo: LeafPhoto | None = None
     notice: str = ""
+    unposed: float | None = None
 
     @property
     def title(self) -> str:
@@ -123,7 +128,9 @@ def _read_document(
         except (TypeError, ValueError, KeyError) as exc:
             raise LeafError(f"bad sketch ({exc})", path) from None
         photo, notice = _project_photo(path)
-    return Document(opened.path, opened.leaf, sketch, opened.params, None, photo, notice)
+    # the file's leaf is unfolded (a project's sketch's by its first run: then no fit again)
+    unposed = unposed_share(opened.leaf)
+    return Document(opened.path, opened.leaf, sketch, opened.params, None, photo, notice, unposed)
 
 
 def check_drawable(leaf: Any, path: str) -> None:
@@ -229,7 +236,14 @@ class FileOpening:
         d = document
         params = d.params or self.params
         request = self.open_document(
-            d.leaf, d.sketch, d.title, params=params, path=d.path, scan=d.scan, photo=d.photo
+            d.leaf,
+            d.sketch,
+            d.title,
+            params=params,
+            path=d.path,
+            scan=d.scan,
+            photo=d.photo,
+            unposed=d.unposed,
         )
         self.opened.emit(d.path)
         if d.notice:

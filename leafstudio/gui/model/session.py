@@ -28,7 +28,8 @@ import numpy as np
 
 from leafstudio.core.plane import Frame
 from leafstudio.core.prepare.polygon import ring_crossings
-from leafstudio.gui.model.bending import Bending
+from leafstudio.core.unfolded import as_given
+from leafstudio.gui.model.bending import Bending, keeps_refusal
 from leafstudio.gui.model.framing import BladeBounds, Framing
 from leafstudio.gui.model.history import Event, History, State, Step
 from leafstudio.gui.model.jobs import Job, Run, describe, run_now
@@ -234,17 +235,19 @@ class Session(FileOpening, Bending, WorkerReports):
         scan: Any = None,
         photo: Any = None,
         undoable: bool = True,
+        unposed: float | None = None,
     ) -> int:
         """Make a new document current (framed when shown), as one undo step; returns the
         request id (0 when there is nothing to reconstruct). `undoable=False` starts a fresh
         history instead and falls back to the current document if the new one fails. `photo`
-        (a LeafPhoto) is the photo the leaf was found in: its texture."""
+        (a LeafPhoto) is the photo the leaf was found in: its texture; `unposed`, a leaf in 3D
+        no pose lays flat (State.unposed)."""
         if sketch is not None and leaf is None:
             leaf = sketch.to_leaf()
         self._serials += 1
         before = self._drop_edit()  # the step (or the fallback) starts from before it
         params = params or before.params  # a held slider's value is dropped with its drag
-        state = State(leaf, sketch, params, path, title, scan, self._serials, photo)
+        state = State(leaf, sketch, params, path, title, scan, self._serials, photo, unposed)
         self.chosen_texture = None
         self._fallback = None
         if not undoable and leaf is not None and self.result is not None:
@@ -430,6 +433,8 @@ class Session(FileOpening, Bending, WorkerReports):
             self.message = "Add at least 3 boundary points to see the leaf."
             self.cleared.emit()
             return 0
+        if keeps_refusal(self.state):  # its curves edited since no pose was found for them
+            as_given(self.leaf)
         self.last_id = self.submit(self.leaf, self.params, interrupt)
         self._requested[self.last_id] = (self.state.serial, reason)
         for old in [i for i in self._requested if i < self.last_id - 64]:

@@ -14,19 +14,19 @@ blade's length (gui/model/bending.py): roll a curvature, roll share · π over t
 width (`half_width`), twist twist · π radians. The panel's roll was that curvature and its twist
 in radians: the dock's grass blade rolled 1 showed a roll of 188, and its twist of 1 read 3.14.
 
-Each slider's number is typed into, as the panel's other sliders' are (controls.py): a value
-past the slider's range is refused with a note under the panel, not clamped (superqt's box bent
-a typed fold of 90 to 75 and -200 to -75 without a word).
+Each slider's number is typed into, through the panel's own field (typed_field.TypedField) over
+the term declared as a `paramspec.Real` (`TERMS`): a value past the slider's range is refused
+with a note under the panel, not clamped (superqt's box bent a typed fold of 90 to 75 and -200
+to -75 without a word).
 """
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 from PySide6.QtCore import QObject, Qt, Signal
-from PySide6.QtWidgets import QFormLayout, QLineEdit
-from superqt import QLabeledDoubleSlider, QLabeledSlider
+from PySide6.QtWidgets import QFormLayout
+from superqt import QLabeledDoubleSlider
 from superqt.utils import qthrottled
 
 from leafstudio.core.bend import Pose
@@ -34,6 +34,8 @@ from leafstudio.errors import LeafError
 from leafstudio.forms.terms import RELIEF
 from leafstudio.gui.model.bending import can_pose, pose_terms, sheet_tip, terms_pose
 from leafstudio.gui.model.jobs import describe
+from leafstudio.gui.qt.typed_field import TypedField
+from leafstudio.paramspec import Real
 
 THROTTLE_MS = 80  # as the parameter sliders (controls.py)
 RANGES = {  # least, most, decimals: the Forms dock's (forms/make.LIMITS)
@@ -46,6 +48,20 @@ TIPS = {
     name: f"{name.capitalize()}: {RELIEF[name]}. The sketch keeps the flat blade; the 3D leaf "
     "is bent."
     for name in RANGES
+}
+TERMS = {  # each slider's term as its typed field reads it (a Params field's declaration)
+    name: Real(
+        default=0.0,
+        what=name,
+        label=name.capitalize(),
+        help=TIPS[name],
+        stage="bend",  # no pipeline stage: the leaf's bend (gui/model/bending.py)
+        flag=f"--{name}",  # `form`'s
+        low=low,
+        high=high,
+        decimals=decimals,
+    )
+    for name, (low, high, decimals) in RANGES.items()
 }
 
 
@@ -60,7 +76,7 @@ class BendSliders(QObject):
         self.half_width = 1.0  # the blade's, per its length (bending.blade_half_width)
         self._shown = (Pose(), {})  # the pose show_pose showed, and the values it set
         self.sliders: dict[str, QLabeledDoubleSlider] = {}
-        self.fields: dict[str, QLineEdit] = {}  # each slider's number, typed into
+        self.fields: dict[str, TypedField] = {}  # each slider's number, typed into
         for name, (low, high, decimals) in RANGES.items():
             slider = QLabeledDoubleSlider(Qt.Orientation.Horizontal)
             slider.setRange(low, high)
@@ -70,50 +86,9 @@ class BendSliders(QObject):
             slider.valueChanged.connect(self._moved)
             slider.sliderReleased.connect(self._released)
             self.sliders[name] = slider
-            self._add_field(name, slider)
+            field = self.fields[name] = TypedField(slider, TERMS[name])
+            field.refused.connect(self.refused)
         self._throttled = qthrottled(self._emit, timeout=THROTTLE_MS, leading=True)
-
-    def _add_field(self, name: str, slider: QLabeledDoubleSlider) -> None:
-        """A line edit in place of superqt's box (hidden), as controls._field's."""
-        slider.setEdgeLabelMode(QLabeledSlider.EdgeLabelMode.NoLabel)
-        field = self.fields[name] = QLineEdit()
-        field.setAlignment(Qt.AlignmentFlag.AlignRight)
-        field.setFixedWidth(field.fontMetrics().horizontalAdvance("8" * 6) + 12)  # -75.0
-        field.setToolTip(TIPS[name])
-        slider.layout().addWidget(field)
-        slider.valueChanged.connect(lambda *_: self._show_field(name))
-        field.editingFinished.connect(lambda: self._typed(name))
-        self._show_field(name)
-
-    def _text(self, name: str) -> str:
-        return f"{self.sliders[name].value():.{RANGES[name][2]}f}"
-
-    def _show_field(self, name: str) -> None:
-        self.fields[name].setText(self._text(name))
-
-    def _typed(self, name: str) -> None:
-        """A value typed into a slider's field: set on the slider when it is a number within
-        the slider's range (RANGES, the Forms dock's), else refused (`refused`) and the value
-        in force shown again."""
-        text, kept = self.fields[name].text().strip(), self._text(name)
-        if text == kept:
-            return  # left as shown (a pose's exact value stays)
-        low, high = RANGES[name][:2]
-        try:
-            value = float(text)
-        except ValueError:
-            value = math.nan
-        if not math.isfinite(value):
-            why = f"{name} must be a number, got {text!r}"
-        elif not low <= value <= high:
-            why = f"{name} must be between {low:g} and {high:g}, got {text}"
-        else:
-            self.refused.emit("")
-            self.sliders[name].setValue(value)
-            self._show_field(name)
-            return
-        self._show_field(name)
-        self.refused.emit(f"{why}; {name} stays {kept}.")
 
     def pose(self) -> Pose:
         """The pose the sliders show (a term its slider still shows as `show_pose` set it keeps

@@ -6,10 +6,10 @@ inside the valid one, so the panel never offers a value Params refuses. A value 
 project holds widens that slider to show it, and every value the user has not touched is given
 back exactly as it was shown (`params()`), so no valid value is clamped or rounded away.
 
-A slider's number is a field of our own (`fields`), not superqt's label, which clamps what is
-typed to the slider's range: a typed value that Params takes widens the slider as a project's
-value does, and one it refuses is not applied, with Params' message under the controls (`note`).
-Only superqt's public API is used (`setEdgeLabelMode(NoLabel)` hides its label).
+A slider's number is a field of our own (`fields`: typed_field.TypedField, as the bend sliders'),
+not superqt's label, which clamps what is typed to the slider's range: a typed value that Params
+takes widens the slider as a project's value does, and one it refuses is not applied, with
+Params' message under the controls (`note`).
 
 Every change emits `changed(Params)`, throttled so that a slider drag does not flood the worker:
 the first value goes out at once and the last value always follows. `released` marks the end of
@@ -27,31 +27,12 @@ from superqt import QLabeledDoubleSlider, QLabeledSlider, QLargeIntSpinBox
 from superqt.utils import qthrottled
 
 from leafstudio.errors import LeafError
+from leafstudio.gui.qt.typed_field import TypedField, refusal
 from leafstudio.model import PARAMS, Params
 from leafstudio.paramspec import Choice, Param, Ranged, Real, Switch, Whole, read_whole
 
 THROTTLE_MS = 80
 NOTE_COLOR = "#b00020"  # as the status line's failures
-
-
-def _text(param: Ranged, value: Any) -> str:
-    """A slider's value as its field shows it: `decimals` places, or 3 significant digits for a
-    value too small for them (a project's tolerance of 1e-6)."""
-    if isinstance(param, Real):
-        value = float(value)
-        if value == 0 or abs(value) >= 10.0**-param.decimals:
-            return f"{value:.{param.decimals}f}"
-        return f"{value:.3g}"
-    return str(int(value))
-
-
-def _refusal(param: Ranged, exc: LeafError, kept: str) -> str:
-    """Why a typed value was not taken: Params' message, the value kept and, unless the
-    message says it, what the parameter takes."""
-    said = str(exc)
-    takes = "between" not in said or getattr(param, "special", None) is not None
-    also = f" It takes {param.describe()}." if takes else ""
-    return f"{said}; {param.what} stays {kept}.{also}"
 
 
 class _WholeText(QValidator):
@@ -94,7 +75,7 @@ class WholeBox(QLargeIntSpinBox):
             self.param.parse(text)
         except LeafError as exc:
             self.lineEdit().setText(str(self.value()))  # superqt then reads the value kept
-            self.verdict.emit(_refusal(self.param, exc, str(self.value())))
+            self.verdict.emit(refusal(self.param, exc, str(self.value())))
             return False
         self.verdict.emit("")
         return True
@@ -117,18 +98,6 @@ class WholeBox(QLargeIntSpinBox):
     def closeEvent(self, event: Any) -> None:
         self._check_typed()  # superqt reads pending text here too
         super().closeEvent(event)
-
-
-def _field(slider: QLabeledSlider, param: Ranged) -> QLineEdit:
-    """The slider's number, typed into: a line edit in place of superqt's label (hidden), wide
-    enough for any valid value (the panel then gives every field the widest one's width)."""
-    slider.setEdgeLabelMode(QLabeledSlider.EdgeLabelMode.NoLabel)
-    field = QLineEdit()
-    field.setAlignment(Qt.AlignmentFlag.AlignRight)
-    longest = max(len(_text(param, v)) for v in (param.low, param.high, *param.panel_range))
-    field.setFixedWidth(field.fontMetrics().horizontalAdvance("8" * (longest + 1)) + 12)
-    slider.layout().addWidget(field)
-    return field
 
 
 def _widget(param: Param) -> QWidget:
@@ -192,7 +161,7 @@ class ParamPanel(QWidget):
         form.setFieldGrowthPolicy(QFormLayout.FieldGrowthPolicy.AllNonFixedFieldsGrow)
         self.widgets: dict[str, QWidget] = {}
         self.specials: dict[str, QCheckBox] = {}  # a word a number also takes (K's "auto")
-        self.fields: dict[str, QLineEdit] = {}  # a slider's number, typed into
+        self.fields: dict[str, TypedField] = {}  # a slider's number, typed into
         for name, param in PARAMS.items():
             widget = self.widgets[name] = _widget(param)
             setattr(self, name, widget)
@@ -238,42 +207,19 @@ class ParamPanel(QWidget):
             widget.sliderReleased.connect(self.released)
 
     def _add_field(self, name: str, slider: QLabeledSlider, param: Ranged) -> None:
-        field = self.fields[name] = _field(slider, param)
-        field.setToolTip(param.help_text())
-        slider.valueChanged.connect(lambda *_: self._show_field(name))
-        field.editingFinished.connect(lambda: self._typed(name))
-        self._show_field(name)
+        field = self.fields[name] = TypedField(slider, param, lambda v: self._special(name, v))
+        field.refused.connect(self.say)
 
     def _show_field(self, name: str) -> None:
-        field = self.fields[name]
-        field.setText(_text(PARAMS[name], self.widgets[name].value()))  # type: ignore[arg-type]
+        self.fields[name].show_value()
 
-    def _typed(self, name: str) -> None:
-        """A value typed into a slider's field: applied when Params takes it (the slider
-        widens to show it), else refused with Params' own message and the field shown again."""
-        param, slider, field = PARAMS[name], self.widgets[name], self.fields[name]
-        assert isinstance(param, Ranged) and isinstance(slider, QLabeledSlider)
-        text = field.text().strip()
-        if text == _text(param, slider.value()):
-            return  # left as shown (a project's exact value stays)
-        try:
-            value = param.parse(text)
-        except LeafError as exc:
-            self._show_field(name)
-            kept = _text(param, slider.value())
-            self.say(_refusal(param, exc, kept))
-            return
-        self.say("")
-        if name in self.specials and value == getattr(param, "special", None):
-            self.specials[name].setChecked(True)
-            self._show_field(name)
-            return
-        # a number with its word on is never typed here: the field is disabled with its slider
-        low, high = slider.minimum(), slider.maximum()
-        if not low <= value <= high:
-            slider.setRange(min(low, value), max(high, value))
-        slider.setValue(value)
-        self._show_field(name)
+    def _special(self, name: str, value: Any) -> bool:
+        """A typed value that is its parameter's word (K's "auto"): its box checked. A number
+        with its word on is never typed: the field is disabled with its slider."""
+        if name not in self.specials or value != getattr(PARAMS[name], "special", None):
+            return False
+        self.specials[name].setChecked(True)
+        return True
 
     def say(self, text: str) -> None:
         """Show `text` under the controls (why a typed value was refused); none hides it."""
