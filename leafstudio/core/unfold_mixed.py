@@ -57,7 +57,8 @@ MIXED_EXPLAINED = 0.05  # a leaf unfold.py leaves unfolded is unfolded when this
 # this share of the quadric's rms (unfold.HINGE_EXPLAINED's): the six posed forms of
 # extra_rows.py 0.0005-0.022 (ovate rolled 0.5 and twisted 0.5 the most)
 TWISTS = (2.0, -2.0)  # the twist's starts, radians over the outline's diagonal (unfold.TWISTS)
-FOLDED = (60.0, -60.0)  # folds `mixed` starts its relief rounds from, past the plane's fits
+FOLDED = (60.0,)  # the fold `mixed` starts its relief rounds from in each first frame (one of
+# which stands on the margin's side: a fold of either sign is one up in it), past the plane's fits
 PLAIN_CALLS = 200  # evaluations of each fit about the margin's plane, at most
 KEPT = 3  # the best fits about that plane, of distinct rms, fitted about the relief
 SAME = 1e-3  # ... fits whose rms is within this share of one kept are the same (a frame turned)
