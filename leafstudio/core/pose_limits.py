@@ -208,8 +208,9 @@ def seam_note(roll: float, fold: float, twist: float) -> str:
     """What a pose asked to roll its widest margin `roll` half turns (a form's, the sliders'
     share) and fold `fold` and twist `twist` says when `eased_roll` keeps it off its seam
     (SEAM_SHARE), "" when its roll is taken as asked: `form` said so, the app's Roll slider
-    went back from 1 to 0.99 without a word."""
-    if abs(roll) <= tube_share(fold, twist):
+    went back from 1 to 0.99 without a word. A roll at the seam to rounding is taken as asked
+    (the sliders' 0.99 came back from the pose's units 1 ulp over at 257 of 2000 half widths)."""
+    if abs(roll) <= tube_share(fold, twist) + 1e-9:
         return ""
     how = "folded" if fold else "twisted"
     return (
