@@ -8,8 +8,7 @@ Each round times this checkout, then each reference (a worktree of another commi
 own code by PYTHONPATH; --reference may be given more than once), each in a fresh interpreter:
 `ls.reconstruct` of the same flat gallery leaves (made here, by this checkout's forms, and passed
 to all as points, so all reconstruct the same input: the forms' vein heights changed since issue
-21), K 3, grid 128, the default
-Params (through the veins, where the checkout has it). Each process warms up once per shape,
+21), K 3, grid 128, the default Params (through the veins, where the checkout has it). Each process warms up once per shape,
 then runs `--runs` times; the tables give the minimum and the median wall time over all rounds,
 in milliseconds, and the same of CPU time (the process's: the pipeline runs on one thread, so on
 a quiet host the two agree, and on a loaded one CPU time strays less), and this checkout's over
