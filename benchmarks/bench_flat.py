@@ -4,17 +4,16 @@ leaves no slower than today", today being the code before it, 45d60f1).
     .venv/bin/python benchmarks/bench_flat.py [--reference DIR ...] [--rounds 5] [--runs 20]
                                               [--shapes ovate,oblanceolate,cordate,...]
 
-Each round times this checkout, then each reference (a worktree of another commit, run with its
-own code by PYTHONPATH; --reference may be given more than once), each in a fresh interpreter:
+Each round times this checkout, then each reference (a worktree of another commit, run with its own
+code by PYTHONPATH; --reference may be given more than once), each in a fresh interpreter:
 `ls.reconstruct` of the same flat gallery leaves (made here, by this checkout's forms, and passed
 to all as points, so all reconstruct the same input: the forms' vein heights changed since issue
-21), K 3, grid 128, the default
-Params (through the veins, where the checkout has it). Each process warms up once per shape,
-then runs `--runs` times; the tables give the minimum and the median wall time over all rounds,
-in milliseconds, and the same of CPU time (the process's: the pipeline runs on one thread, so on
-a quiet host the two agree, and on a loaded one CPU time strays less), and this checkout's over
-the first reference's. They alternate round by round: a
-shared host's load falls on all alike. Without --reference, this checkout alone.
+21), K 3, grid 128, the default Params (through the veins, where the checkout has it). Each process
+warms up once per shape, then runs `--runs` times; the tables give the minimum and the median wall
+time over all rounds, in milliseconds, and the same of CPU time (the process's: the pipeline runs
+on one thread, so on a quiet host the two agree, and on a loaded one CPU time strays less), and
+this checkout's over the first reference's. They alternate round by round: a shared host's load
+falls on all alike. Without --reference, this checkout alone.
 """
 
 from __future__ import annotations

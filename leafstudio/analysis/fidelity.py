@@ -17,8 +17,9 @@ NEAR, FAR = 0.01, 0.02  # shares of the leaf length for the "beyond" figures
 FAR_FROM_SCAN = 0.01  # of the length: a scan's surface farther on average is warned of
 FOLD_ANGLE = 90.0  # degrees: an edge whose two triangles meet more sharply folds the mesh back
 FOLDED = 0.0025  # a scan's mesh with more of its edges folded back is warned of (the eight shared
-# scans: soybean pot1_1, whose cloud is doubled and V-folded, 0.65%; the other seven 0.05% at
-# most; before the sheet's second fit, core/sheet.py, 3.1% and 0.16%)
+# scans: soybean pot1_1, whose cloud is doubled and V-folded, 0.51% at sheet.SMOOTHING 1e-3
+# (0.16% at 2e-3, 0.65% before; bench_bent.py --scan-table); the other seven 0.05% at most;
+# before the sheet's second fit, core/sheet.py, 3.1% and 0.16%)
 CRUMPLE = 0.01  # of the length: a surface bending tighter than this radius in any direction
 # (its largest principal curvature |k1| or |k2| past 1 / (CRUMPLE length)), which no blade makes
 # but a surface that chases a doubled or noisy scan does; a saddle counts as a roll or a cup

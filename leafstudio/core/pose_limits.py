@@ -204,6 +204,21 @@ def tube_share(fold: float, twist: float) -> float:
     return ROLL_SHARE if fold == 0 and twist == 0 else SEAM_SHARE
 
 
+def seam_note(roll: float, fold: float, twist: float) -> str:
+    """What a pose asked to roll its widest margin `roll` half turns (a form's, the sliders'
+    share) and fold `fold` and twist `twist` says when `eased_roll` keeps it off its seam
+    (SEAM_SHARE), "" when its roll is taken as asked: `form` said so, the app's Roll slider
+    went back from 1 to 0.99 without a word. A roll at the seam to rounding is taken as asked
+    (the sliders' 0.99 came back from the pose's units 1 ulp over at 257 of 2000 half widths)."""
+    if abs(roll) <= tube_share(fold, twist) + 1e-9:
+        return ""
+    how = "folded" if fold else "twisted"
+    return (
+        f"roll {roll:g} eased to {np.copysign(SEAM_SHARE, roll):g}: a tube closed to its seam "
+        f"and {how} would pass through itself there"
+    )
+
+
 def eased_roll(pose: Pose, half: float) -> Pose:
     """`pose` with a roll that turns the blade's widest margin, `half` from the midrib in the
     pose's units, past `tube_share` of a half turn eased to it: a sketch edit keeps the pose per

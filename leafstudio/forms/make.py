@@ -18,7 +18,7 @@ import shapely
 
 from leafstudio.core.base import fit_base
 from leafstudio.core.bend import Pose
-from leafstudio.core.pose_limits import SEAM_SHARE, eased_roll, tube_share
+from leafstudio.core.pose_limits import eased_roll, seam_note
 from leafstudio.core.pose_relief import relief_of
 from leafstudio.core.prepare.vein_order import veins_inside_outline
 from leafstudio.errors import LeafError
@@ -239,15 +239,9 @@ class Form:
         return Leaf(pose.apply(blade.boundary), [pose.apply(v) for v in blade.veins], bend=pose)
 
     def seam_note(self) -> str:
-        """What `leaf` says of its roll when it eased it (pose_limits.SEAM_SHARE): a tube closed
-        to its seam and folded or twisted passes its sheet through itself there (the form rolled
-        1 and folded 75 did, silently); "" when the roll is as asked."""
-        if abs(self.roll) <= tube_share(self.fold, self.twist):
-            return ""
-        return (
-            f"roll {self.roll:g} eased to {SEAM_SHARE:g}: a tube closed to its seam and "
-            f"{'folded' if self.fold else 'twisted'} would pass through itself there"
-        )
+        """What `leaf` says of its roll when it eased it (pose_limits.seam_note); "" when the
+        roll is as asked."""
+        return seam_note(self.roll, self.fold, self.twist)
 
     def unposed(self) -> Form:
         """This form without its fold, curl, roll and twist: the terms its blade depends on."""

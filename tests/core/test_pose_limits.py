@@ -136,3 +136,16 @@ def test_a_tube_the_app_saved_widened_by_a_sketch_edit_still_opens(tmp_path):
     wider = replace(leaf.bend, pose=replace(pose, roll=pose.roll * 1.02))
     said = pose_trouble(wider, wider.apply(flat_leaf(leaf).boundary), [])
     assert said is not None and "up to 1.01 (a closed tube, widened by a sketch edit)" in said
+
+
+def test_a_roll_at_the_seam_through_the_sliders_units_is_not_said_eased():
+    """The sliders' roll of 0.99 (folded) comes back from the pose's units (π over the half
+    width: gui/model/bending.term_units) 1 ulp over at 257 of 2000 half widths
+    (/work/notes/review38): it is at the seam, not eased past it, so `seam_note` says nothing
+    of it; 1 is said eased."""
+    from leafstudio.core.pose_limits import SEAM_SHARE, seam_note
+
+    for half in np.random.default_rng(0).uniform(0.05, 1.0, 200):
+        unit = np.pi / half
+        assert seam_note(SEAM_SHARE * unit / unit, 30.0, 0.0) == ""
+    assert "eased to 0.99" in seam_note(1.0, 30.0, 0.0)

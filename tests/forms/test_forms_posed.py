@@ -211,3 +211,11 @@ def test_the_form_command_says_a_folded_tube_is_eased_off_its_seam(tmp_path, cap
     assert pose.roll * half / np.pi == pytest.approx(SEAM_SHARE)
     assert main(["form", "ovate", "--roll", "1", "-o", out]) == 0
     assert "eased" not in capsys.readouterr().err
+
+
+def test_a_tube_rolled_the_other_way_is_said_eased_to_its_own_side():
+    """`form --roll -1 --twist 0.5` said "roll -1 eased to 0.99": the roll kept is -0.99."""
+    note = Form("ovate", roll=-1.0, twist=0.5).seam_note()
+    assert "roll -1 eased to -0.99" in note and "twisted" in note
+    assert "eased to 0.99:" in Form("ovate", roll=1.0, fold=75.0).seam_note()
+    assert Form("ovate", roll=0.99, fold=75.0).seam_note() == ""

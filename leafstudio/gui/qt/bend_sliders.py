@@ -30,6 +30,7 @@ from superqt import QLabeledDoubleSlider
 from superqt.utils import qthrottled
 
 from leafstudio.core.bend import Pose
+from leafstudio.core.pose_limits import seam_note
 from leafstudio.errors import LeafError
 from leafstudio.forms.terms import RELIEF
 from leafstudio.gui.model.bending import can_pose, pose_terms, sheet_tip, terms_pose
@@ -136,16 +137,21 @@ class BendSliders(QObject):
         self.changed.emit(self.pose(), True)
 
 
-def bend_leaf(window: Any, pose: Pose, final: bool) -> bool:
+def bend_leaf(window: Any, pose: Pose, final: bool, say: Any = None) -> bool:
     """The window's `session.set_bend`, the Parameters panel's sliders' and the Forms dock's:
     a pose past what it keeps of the blade (core/pose_limits.py) is refused with a message on
-    release (not at every step of a drag) and the document kept as it was. False when refused."""
+    release (not at every step of a drag) and the document kept as it was. False when refused.
+    On release `say` (a note's setter) is told of a roll eased off a folded or twisted tube's
+    seam (pose_limits.seam_note), "" when the roll was taken as asked."""
+    session = window.session
     try:
-        window.session.set_bend(pose, final)
+        session.set_bend(pose, final)
     except LeafError as exc:
         if final:
             window.show_error("Bend", describe(exc))
         return False
+    if final and say is not None:
+        say(seam_note(pose_terms(pose, session.half_width)["roll"], pose.fold, pose.twist))
     return True
 
 
@@ -162,7 +168,7 @@ def install(window: Any) -> BendSliders:
         form.labelForField(slider).setToolTip(TIPS[name])
 
     def bent(pose: Pose, final: bool) -> None:
-        if not bend_leaf(window, pose, final) and final:
+        if not bend_leaf(window, pose, final, panel.say) and final:
             shown()  # the sliders back on the document's pose
 
     def shown(*_: Any) -> None:

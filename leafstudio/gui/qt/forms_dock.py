@@ -397,7 +397,7 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
 
     def show(form: Form) -> None:
         _unposed, blade, side_on, sketch = kept["blade"]
-        panel.show_pose_note(side_on)
+        panel.show_pose_note("; ".join(note for note in (side_on, form.seam_note()) if note))
         session.new_document(form.leaf(blade), sketch, f"{form.shape} form")
         gallery.record(session.state, form.shape)
         panel.show_shape(form.shape)
@@ -442,7 +442,8 @@ def install(window, dock_area=Qt.DockWidgetArea.RightDockWidgetArea) -> FormsPan
             # an edited form, or another leaf: the pose terms bend it (its other terms are kept
             # for the next shape picked), one undo step as the Parameters panel's sliders
             pose = terms_pose(panel.pose_figures(), session.half_width, dock_pose["shown"])
-            bend_leaf(window, pose, final=True)  # refused past the limits, with a message
+            # refused past the limits, with a message; a roll eased off its seam said
+            bend_leaf(window, pose, final=True, say=panel.show_pose_note)
             return
         if not picked and growing is not None and session.state.serial != waiting["serial"]:
             return  # another document opened while the form chosen grows: it is not replaced

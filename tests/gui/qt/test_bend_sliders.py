@@ -148,3 +148,20 @@ def test_a_typed_bend_out_of_range_is_refused_not_clamped(window, qtbot, name, t
     type_into(qtbot, window.bend.fields["fold"], "30")  # a value in range is taken
     wait_result(qtbot, window, lambda o: o.result.leaf.bend is not None)
     assert session.pose.fold == 30.0 and note.isHidden()
+
+
+def test_a_folded_tubes_roll_eased_off_its_seam_is_said_in_the_window(window, qtbot):
+    """`form` says when it rolls a folded or twisted tube 0.99 of the way, not 1 (its sheet
+    passed through itself at the seam: pose_limits.SEAM_SHARE); the app's sliders eased it
+    too, the Roll slider going back from 1 to 0.99 without a word (bowls38). A note under
+    the panel says so on release, and is gone when the roll asked for is taken as it is."""
+    session, bend = window.session, window.bend
+    half = bend.half_width
+    bend.changed.emit(Pose(fold=30.0, roll=np.pi / half), True)
+    wait_result(qtbot, window, lambda o: o.result.leaf.bend is not None)
+    note = window.panel.note
+    assert note.isVisible() and "roll 1 eased to 0.99" in note.text(), note.text()
+    assert "folded" in note.text()
+    bend.changed.emit(Pose(fold=30.0, roll=-0.5 * np.pi / half), True)
+    assert note.isHidden()
+    assert session.pose.roll == pytest.approx(-0.5 * np.pi / half)

@@ -272,6 +272,22 @@ def test_every_pose_the_dock_allows_is_shown_without_a_side_on_note(window, pane
     assert not panel.pose_note.isVisibleTo(panel)
 
 
+def test_a_folded_tube_picked_says_its_roll_was_eased_off_its_seam(window, panel, qtbot):
+    """elliptic folded 75 and rolled 1 came in rolled 0.99 (pose_limits.SEAM_SHARE: closed to
+    its seam its sheet passed through itself), as `form` says, but the dock said nothing
+    (bowls38): the note under the pose says so, and is gone for a roll taken as asked."""
+    panel.gallery.setCurrentRow(list(SHAPES).index("elliptic"))
+    panel.fold.setValue(75.0)
+    panel.roll.setValue(1.0)
+    choose(qtbot, window, panel)
+    assert panel.pose_note.isVisibleTo(panel)
+    assert "Roll 1 eased to 0.99" in panel.pose_note.text(), panel.pose_note.text()
+    panel.roll.setValue(0.5)  # the same blade (a blade grown for another would be kept)
+    choose(qtbot, window, panel)
+    assert window.session.pose.roll == pytest.approx(0.5 * np.pi / window.session.half_width)
+    assert not panel.pose_note.isVisibleTo(panel)
+
+
 def test_a_chosen_forms_veins_grow_off_the_main_thread_and_a_pose_change_grows_none(
     window, panel, qtbot, monkeypatch
 ):
