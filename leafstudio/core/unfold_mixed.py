@@ -50,10 +50,15 @@ MIXED_GAIN = 0.5  # ... and replaced when this lays it flatter than this share o
 # length), a fit past it is not the form's: rolled into tubes, whose margins meet at the seam,
 # oblanceolate rolled -1 was fitted 1.3e-3 (fold 11.6 and roll 1.15 times the form's, where
 # unfold.py's 5.8e-3 passed test_unfold's own-surface check), oblong rolled 1 1.3e-3, linear 4.9e-4
+MIXED_KEPT = 3e-4  # ... and kept within this (MIXED_GAIN): ovate folded 60 and twisted 0.2,
+# from a fold of 60 (FOLDED), swung about its own pose 2.2e-4-5.3e-4 of the length off flat
+# (its curl 0.01, -0.02, 0.02, -0.03 over the diagonal) and was fitted none (pose38)
 MIXED_EXPLAINED = 0.05  # a leaf unfold.py leaves unfolded is unfolded when this leaves at most
 # this share of the quadric's rms (unfold.HINGE_EXPLAINED's): the six posed forms of
 # extra_rows.py 0.0005-0.022 (ovate rolled 0.5 and twisted 0.5 the most)
 TWISTS = (2.0, -2.0)  # the twist's starts, radians over the outline's diagonal (unfold.TWISTS)
+FOLDED = (60.0,)  # the fold `mixed` starts its relief rounds from in each first frame (one of
+# which stands on the margin's side: a fold of either sign is one up in it), past the plane's fits
 PLAIN_CALLS = 200  # evaluations of each fit about the margin's plane, at most
 KEPT = 3  # the best fits about that plane, of distinct rms, fitted about the relief
 SAME = 1e-3  # ... fits whose rms is within this share of one kept are the same (a frame turned)
@@ -194,6 +199,15 @@ def mixed(
     for fit in plain:  # distinct basins: the same rms is the same fit (or its frame turned)
         if len(kept) < KEPT and all(abs(fit[0] - k[0]) > SAME * k[0] for k in kept):
             kept.append(fit)
+    # and a fold of either sign from each first frame, read about a relief at once: the fits
+    # about the margin's plane took every start of ovate folded 60 and twisted 0.2 to fold 26-32
+    # and a curl of -1 (the plane's shear), whose relief rounds stalled at 4.2e-3 of the length
+    # off flat; from fold 60 the form's own pose (pose38)
+    kept += [
+        (np.inf, np.array([0.0] * 3 + [fold] + [0.0] * 5), axes)
+        for axes in frames
+        for fold in FOLDED
+    ]
     found: list[tuple] = []  # (rms, y, axes, relief)
     for _, y, axes in kept:
         first = min(lead, LEADS * beyond(found[0][0])) if found else lead
@@ -254,7 +268,7 @@ def remixed(
     if best is None:  # nothing to keep: taken beyond the noise as unfold.py's fits
         fits = [(checks.above_noise(f[0], noise, VALUES, len(points)), *f[1:]) for f in fits]
     rms, terms, bend = checks.simplest(fits, SIMPLER, CLOSE * length)
-    if rms > MIXED_FROM * length:  # not a form's own pose (MIXED_GAIN: tubes)
+    if rms > MIXED_KEPT * length:  # not a form's own pose (MIXED_GAIN: tubes)
         return best
     if rms <= (MIXED_GAIN * best[0] if best is not None else MIXED_EXPLAINED * before):
         return rms, terms, bend

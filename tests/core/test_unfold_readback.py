@@ -92,3 +92,32 @@ def test_a_posed_form_read_back_from_a_csv_has_its_size_and_pose(tmp_path, shape
     pose = leaf.bend.pose
     assert pose.fold == pytest.approx(own.fold, abs=0.5)
     assert (pose.curl, pose.roll) == pytest.approx((own.curl, own.roll), rel=0.01, abs=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("terms", "size"),
+    [
+        # fitted fold 60.6, twist 0.623 (the form's 0.628); veins up to 5.1e-4 of the length
+        # off the mesh (the .leaf.json's 5.2e-4), no veins meeting at different heights
+        ({"fold": 60.0, "twist": 0.2}, 0.01),
+        # none was fitted (71% narrow as a height field); now fold 60.6, curl 0.534, roll 3.27
+        # (the form's 60, 0.5, 3.02), 1.1% wide, veins within 5.6e-4 of the mesh (2.0e-2 before)
+        ({"fold": 60.0, "curl": 0.5, "roll": 0.3}, 0.02),
+    ],
+    ids=str,
+)
+def test_a_fold_of_60_with_more_reads_back_its_pose(tmp_path, terms, size):
+    """Ovate folded 60 and twisted 0.2, or curled and rolled: every fit about the margin's plane
+    went to a fold of 26-32 and a curl of -1 (the plane's shear), unfold_mixed's relief rounds
+    stalled there (4.2e-3 of the length off flat) and none was fitted: as a height field its
+    veins met at different heights in 11-13 places and stood up to 7.9e-3-2.0e-2 of the length
+    off the mesh. unfold_mixed now starts its rounds from a fold of 60 too (FOLDED), and keeps
+    what swings within MIXED_KEPT of flat (/work/notes/pose38)."""
+    leaf, own = _read_back(tmp_path, "ovate", terms)
+    assert leaf.bend is not None
+    flat = leaf.bend.frame.to_plane(leaf.bend.flat_curve(leaf.boundary, ring=True))[0]
+    own_size = np.ptp(Form("ovate").leaf().boundary[:, :2], axis=0)
+    assert np.ptp(flat, axis=0) == pytest.approx(own_size, rel=size)
+    pose = leaf.bend.pose
+    assert abs(pose.fold) == pytest.approx(own.fold, abs=1.0)
+    assert abs(pose.twist) == pytest.approx(own.twist, rel=0.03, abs=1e-6)
