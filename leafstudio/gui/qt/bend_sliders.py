@@ -113,6 +113,7 @@ class BendSliders(QObject):
             slider.setRange(min(low, value), max(high, value))
             slider.setValue(value)
             slider.blockSignals(False)
+            self.fields[name].show_value()  # its valueChanged was blocked: the field too
             values[name] = float(slider.value())
         self._shown = (pose, values)
 

@@ -165,3 +165,17 @@ def test_a_folded_tubes_roll_eased_off_its_seam_is_said_in_the_window(window, qt
     bend.changed.emit(Pose(fold=30.0, roll=-0.5 * np.pi / half), True)
     assert note.isHidden()
     assert session.pose.roll == pytest.approx(-0.5 * np.pi / half)
+
+
+def test_a_pose_shown_is_read_in_the_typed_fields_too(qtbot):
+    """A pose shown on the sliders (a form picked, undo, a project opened) is shown in their
+    typed fields as well: the sliders were set with their signals blocked, and a half-folded
+    leaf's panel read Fold 0.0 beside a slider at 45 (story_screens, session 38)."""
+    from leafstudio.gui.qt.bend_sliders import BendSliders
+
+    sliders = BendSliders()
+    sliders.show_pose(Pose(fold=45.0, curl=0.5))
+    assert sliders.fields["fold"].text() == sliders.fields["fold"].shown() == "45.0"
+    assert sliders.fields["curl"].text() == "0.50"
+    sliders.show_pose(Pose())
+    assert sliders.fields["fold"].text() == "0.0"
