@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import hashlib
 import threading
+import warnings
 from collections import OrderedDict
 from dataclasses import replace
 
@@ -42,6 +43,12 @@ from leafstudio.model import Leaf
 UNBENT_KEPT = 32  # curves remembered as needing no bend
 LEVEL_ROUNDS = 3  # `levelled`: each round reads the level off the blade the last laid flat (ovate
 # curled 0.8: curl 0.7516, then 0.8010, 0.8010)
+OFF_FLAT = 1e-2  # a fitted pose that leaves the margin farther off flat than this share of the
+# outline's diagonal (rms) is warned of (`off_flat`): the 44 poses fitted to the 49 rows of
+# /work/notes/pose37/repro.py and session 38's two (ovate folded 60, twisted 0.2 or curled 0.5
+# and rolled 0.3) leave 1e-10-5.8e-3 (oblanceolate rolled -1; reniform curled -1 2.4e-3), ovate
+# folded 75 and twisted 0.2, fitted fold -31.1 and curl 1.08 (0.633 wide), 1.46e-2
+# (/work/notes/offflat38/measure.py)
 _UNBENT: OrderedDict[bytes, None] = OrderedDict()
 _UNBENT_LOCK = threading.Lock()  # pipelines run on worker threads too
 
@@ -57,7 +64,16 @@ def unfolded(leaf: Leaf) -> Leaf:
             return leaf
     bend = fit_pose(leaf)
     if bend is not None:
-        return Leaf(leaf.boundary, leaf.veins, bend=levelled(bend, leaf))
+        bend = levelled(bend, leaf)
+        share = off_flat(bend, leaf)
+        if share > OFF_FLAT:
+            warnings.warn(
+                f"the leaf's pose could not be read reliably from its 3D curves: the pose fitted "
+                f"leaves its margin {share:.1%} of its size off flat, so the flat blade (its "
+                f"length, width and area) may be distorted; its .leaf.json keeps its pose",
+                stacklevel=2,
+            )
+        return Leaf(leaf.boundary, leaf.veins, bend=bend)
     _remember(key)
     return leaf
 
@@ -83,6 +99,14 @@ def plane_share(leaf: Leaf) -> float:
     """`leaf`'s margin's RMS distance off its PCA plane, per its RMS width (unfold_checks)."""
     rms, width = off_plane(np.asarray(leaf.boundary, dtype=float))
     return rms / width if width > 0 else 0.0
+
+
+def off_flat(bend: PlacedPose, leaf: Leaf) -> float:
+    """How far `bend` leaves `leaf`'s margin off its flat plane: RMS height over the outline's
+    diagonal. A pose fitted wrong lies flat elsewhere (unfold_checks.lies_flat) but not here."""
+    height = bend.frame.to_plane(bend.flat_curve(leaf.boundary, ring=True))[1]
+    size = float(np.linalg.norm(np.ptp(np.asarray(leaf.boundary, dtype=float), axis=0)))
+    return float(np.sqrt(np.mean(height**2))) / size if size > 0 else 0.0
 
 
 def _key(leaf: Leaf) -> bytes:

@@ -121,3 +121,33 @@ def test_a_fold_of_60_with_more_reads_back_its_pose(tmp_path, terms, size):
     pose = leaf.bend.pose
     assert abs(pose.fold) == pytest.approx(own.fold, abs=1.0)
     assert abs(pose.twist) == pytest.approx(own.twist, rel=0.03, abs=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("terms", "warned"),
+    [
+        # fitted fold -31.1, curl 1.08: the margin 1.46e-2 of the diagonal off flat, the flat
+        # blade 0.633 wide and 0.514 of the area, and no word of it (/work/notes/wrongpose38)
+        ({"fold": 75.0, "twist": 0.2}, True),
+        ({"fold": 60.0, "twist": 0.2}, False),  # its own pose (the test above): no warning
+    ],
+    ids=str,
+)
+def test_a_pose_that_leaves_the_margin_off_flat_is_warned_of(tmp_path, terms, warned):
+    """A pose fitted to 3D curves that leaves the margin farther off flat than
+    unfolded.OFF_FLAT is read unreliably: opening the file says so."""
+    from leafstudio.sources.files import save_leaf
+    from leafstudio.workflows import open_file
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        posed = Form("ovate", **terms).leaf()
+    path = tmp_path / "posed.csv"
+    save_leaf(posed, path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        open_file(str(path))
+    said = [str(w.message) for w in caught if "could not be read reliably" in str(w.message)]
+    assert bool(said) == warned
+    if warned:
+        assert "distorted" in said[0]
