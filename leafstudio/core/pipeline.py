@@ -22,7 +22,7 @@ from leafstudio.core.result import Cancelled, Later, Result, in_world
 from leafstudio.core.stages import STAGE_TABLE, STAGES, StageRun
 from leafstudio.core.steps import BENT_NOTES, FrameStage, GuideStage, SurfaceStage
 from leafstudio.core.store import StageStore, leaf_key
-from leafstudio.core.unfolded import unfolded, unposed_hint
+from leafstudio.core.unfolded import pose_note, unfolded, unposed_hint
 from leafstudio.errors import LeafError
 from leafstudio.model import Leaf, Params, as_leaf, as_params
 
@@ -98,7 +98,8 @@ class Pipeline:
         leaf, is flat (steps.BENT_NOTES): the stage is the same for every bend of a blade."""
         if self.leaf.bend is None:
             return list(fs.notes)
-        return [BENT_NOTES.get(note, note) for note in fs.notes]
+        said = pose_note(self.leaf)  # a pose fitted wrong to 3D curves (unfolded.OFF_FLAT)
+        return [BENT_NOTES.get(note, note) for note in fs.notes] + ([said] if said else [])
 
     @staticmethod
     def _vein_notes(run: StageRun, fs: FrameStage) -> list[str]:

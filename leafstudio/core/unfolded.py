@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import hashlib
 import threading
-import warnings
 from collections import OrderedDict
 from dataclasses import replace
 
@@ -64,18 +63,27 @@ def unfolded(leaf: Leaf) -> Leaf:
             return leaf
     bend = fit_pose(leaf)
     if bend is not None:
-        bend = levelled(bend, leaf)
-        share = off_flat(bend, leaf)
-        if share > OFF_FLAT:
-            warnings.warn(
-                f"the leaf's pose could not be read reliably from its 3D curves: the pose fitted "
-                f"leaves its margin {share:.1%} of its size off flat, so the flat blade (its "
-                f"length, width and area) may be distorted; its .leaf.json keeps its pose",
-                stacklevel=2,
-            )
-        return Leaf(leaf.boundary, leaf.veins, bend=bend)
+        return Leaf(leaf.boundary, leaf.veins, bend=levelled(bend, leaf))
     _remember(key)
     return leaf
+
+
+def pose_note(leaf: Leaf) -> str:
+    """What a reader of `leaf` is told of its fitted pose: that it could not be read reliably
+    when it leaves the margin more than OFF_FLAT off flat (`off_flat`); "" otherwise, and for a
+    leaf without a bend (a pose given, not fitted, leaves it flat to rounding). The pipeline's
+    result says it (Pipeline._frame_notes), so the commands and the window do: a warning from
+    the fit alone went unseen (the command line ignores warnings)."""
+    if not isinstance(leaf.bend, PlacedPose):  # unbent, or a form's Pose: given, not fitted
+        return ""
+    share = off_flat(leaf.bend, leaf)
+    if share <= OFF_FLAT:
+        return ""
+    return (
+        f"the leaf's pose could not be read reliably from its 3D curves: the pose fitted leaves "
+        f"its margin {share:.1%} of its size off flat, so its flat blade (length, width, area) "
+        f"may be distorted; a leaf saved as .leaf.json keeps its own pose"
+    )
 
 
 def as_given(leaf: Leaf) -> Leaf:
