@@ -49,6 +49,7 @@ class Pipeline:
         # a pose past what it keeps of the blade (a Leaf built with Pose(fold=89)) is refused
         # as the loader refuses it, before a bad mesh is made of it (pose_limits.py)
         check_pose(leaf.bend, leaf.boundary, list(leaf.veins))
+        self.pose_note = pose_note(leaf)  # once a leaf, not at every run (_frame_notes)
         self.flat = flat_leaf(leaf)  # a bent leaf's flat blade (bend.py); else the leaf itself
         self.units = Units.of(self.flat)  # the stages run on the leaf at unit size (units.py)
         self.unit_leaf = self.units.leaf(self.flat)
@@ -98,7 +99,7 @@ class Pipeline:
         leaf, is flat (steps.BENT_NOTES): the stage is the same for every bend of a blade."""
         if self.leaf.bend is None:
             return list(fs.notes)
-        said = pose_note(self.leaf)  # a pose fitted wrong to 3D curves (unfolded.OFF_FLAT)
+        said = self.pose_note  # a pose fitted wrong to 3D curves (unfolded.OFF_FLAT)
         return [BENT_NOTES.get(note, note) for note in fs.notes] + ([said] if said else [])
 
     @staticmethod
