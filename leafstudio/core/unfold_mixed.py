@@ -246,8 +246,8 @@ def remixed(
     noise: float = 0.0,
 ) -> tuple | None:
     """unfold.py's `best` fit ((rms, terms, bend, ...) or None), or `mixed`'s best where that
-    leaves the margin off flat (MIXED_FROM) and `mixed` lays it within that and flatter
-    (MIXED_GAIN), or, where there is none, within that and flat enough against `before`, the
+    leaves the margin off flat (MIXED_FROM) and `mixed` lays it within MIXED_KEPT and flatter
+    (MIXED_GAIN), or, where there is none, within MIXED_KEPT and flat enough against `before`, the
     quadric's rms (MIXED_EXPLAINED); its fewer terms where they do about as well (SIMPLER,
     CLOSE). `best` and `before` are taken beyond the margin's digitising `noise`, and so are
     `mixed`'s fits where there is no `best`; else they replace it only when flatter than it as
