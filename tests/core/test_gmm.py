@@ -96,3 +96,16 @@ def test_signed_mixture_fits_each_sign_apart():
     joined = fit_signed_mixture(samples, positive, lambda s, k: fit_mixture(s, k, 0), 2)
     np.testing.assert_allclose(joined.means[:, 1], [2.0, -2.0], atol=0.05)
     np.testing.assert_allclose(joined.weights, [0.6, 0.4])
+
+
+def test_a_fit_seeds_k_means_as_a_new_random_state_would():
+    """fit_mixture's reused generator (gmm._seeded) draws what np.random.RandomState(seed) draws,
+    whatever it drew before (its normal's cache too)."""
+    from leafstudio.core.gmm import _seeded
+
+    for seed in (0, 7, 2**31):
+        _seeded(3).standard_normal(3)  # used, and a normal left cached
+        fresh, reused = np.random.RandomState(seed), _seeded(seed)
+        assert fresh.random_sample() == reused.random_sample()
+        np.testing.assert_array_equal(fresh.uniform(size=4), reused.uniform(size=4))
+        assert fresh.standard_normal() == reused.standard_normal()
