@@ -76,3 +76,21 @@ def test_only_the_sharpest_rows_weigh_more_and_no_row_past_the_cap():
     assert extra[rows == 7][0] < raw[rows == 7][0]
     flat = sharpest(np.zeros(10, dtype=np.float32))
     assert len(flat[0]) == 0 and flat[2] == 0.0
+
+
+def test_sharpest_reads_numpys_own_percentile():
+    """bending._percentile (sharpest's threshold) is np.percentile's 'linear' value to the bit,
+    ties and a NaN among the values too, in single precision as the lattice's bends are."""
+    from leafstudio.core.bending import _percentile
+
+    rng = np.random.default_rng(3)
+    for trial in range(600):
+        n = int(rng.integers(1, 40 if trial % 2 else 5000))
+        a = np.abs(rng.standard_normal(n) * rng.choice([1e-3, 1.0, 1e4])).astype(np.float32)
+        if trial % 3 == 0:
+            a = np.round(a, 1)
+        if trial % 97 == 0:
+            a[rng.integers(n)] = np.nan
+        expected = float(np.percentile(a, SHARP))
+        got = _percentile(a, SHARP)
+        assert got == expected or (np.isnan(got) and np.isnan(expected)), (n, got, expected)
