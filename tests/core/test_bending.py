@@ -94,3 +94,23 @@ def test_sharpest_reads_numpys_own_percentile():
         expected = float(np.percentile(a, SHARP))
         got = _percentile(a, SHARP)
         assert got == expected or (np.isnan(got) and np.isnan(expected)), (n, got, expected)
+
+
+def test_the_sharpest_rows_products_are_scipys():
+    """bending._rows_times (least_bending's second solve) gives scipy's D[rows] @ X and
+    D[rows] @ v to the bit, in single precision, on a lattice's D."""
+    from leafstudio.core.bending import _rows_times
+
+    grid = make_grid(np.array([[-1.0, -0.7], [1.0, 0.7]]), 128)
+    x, y = grid.points.T
+    g = 1 - (x / 0.9) ** 2 - (y / 0.6) ** 2
+    index = np.flatnonzero(g > 0)
+    d = lattice(grid, index, np.tanh(g[index] / 0.1))[1]
+    rng = np.random.default_rng(5)
+    many = rng.standard_normal((d.shape[1], 37)).astype(np.float32)
+    one = rng.standard_normal(d.shape[1]).astype(np.float32)
+    rows = np.sort(rng.choice(d.shape[0], d.shape[0] // 10, replace=False))
+    got_many, got_one = _rows_times(d.indptr, d.indices, d.data, rows, many, one)
+    assert got_many.dtype == got_one.dtype == np.float32
+    np.testing.assert_array_equal(got_many, d[rows] @ many)
+    np.testing.assert_array_equal(got_one, d[rows] @ one)
