@@ -113,6 +113,7 @@ KERNELS: dict[str, tuple[types.Type, ...]] = {
     "kelvin:spline_value": (F2, F2, F1, f8, F2, f8),
     "kelvin:phi_matrix": (F2, F2, f8, F2, f8, F1),
     "bending:_bend_twice": (J1, J1, S1, S2),
+    "bending:_rows_times": (J1, J1, S1, I1, S2, S1),
     "bending:_lattice_cells": (I1, i8, i8, F1),
     "bending:_projected_steps": (F2, F1, F1, F1, F1, i8),
     "prepare.polygon:_thin_ring": (F2, I1, f8),
