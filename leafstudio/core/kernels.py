@@ -108,6 +108,7 @@ KERNELS: dict[str, tuple[types.Type, ...]] = {
     "buckets:_mark_near_edges": (F2, F2, f8, BUCKETS, B1),
     "curvature:_product": (F1, F2, F3, F1, F2, F3),
     "buckets:_counting_sort": (F2, F1, f8, i8, i8),
+    "buckets:_bounds": (F2,),
     "curvature:_graph": (F2, F3),
     "mpu:_ball_radii": (F2, F2, f8, BUCKETS),
     "kelvin:spline_value": (F2, F2, F1, f8, F2, f8),

@@ -1,0 +1,35 @@
+"""buckets.bounds: the compiled path gives numpy's own bounds, bit for bit."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from leafstudio.core.buckets import _bounds, bounds
+
+
+def _numpys(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    columns = np.asarray(xy).T
+    return np.array([c.min() for c in columns]), np.array([c.max() for c in columns])
+
+
+def test_bounds_are_numpys_to_the_bit():
+    """Ties, ±0, NaN and infinities, 2 and 3 columns, C and Fortran order: the same bit patterns
+    as numpy's column reductions (a ±0 or NaN bound is left to them: _bounds says so)."""
+    rng = np.random.default_rng(2)
+    for trial in range(3000):
+        n, d = int(rng.integers(1, 200)), int(rng.choice([2, 3]))
+        xy = rng.standard_normal((n, d)) * rng.choice([1e-300, 1.0, 1e300])
+        if trial % 3 == 0:
+            xy = np.round(xy)
+        if trial % 7 == 0:
+            xy[rng.integers(n), rng.integers(d)] = rng.choice([np.nan, np.inf, -np.inf, -0.0])
+        if trial % 11 == 0:
+            xy = np.asfortranarray(xy)
+        for got, expected in zip(bounds(xy), _numpys(xy), strict=True):
+            assert got.tobytes() == expected.tobytes()
+
+
+def test_a_zero_or_nan_bound_goes_to_numpy():
+    assert _bounds(np.array([[0.0, 1.0], [2.0, 3.0]]))[2]
+    assert _bounds(np.array([[np.nan, 1.0], [2.0, 3.0]]))[2]
+    assert not _bounds(np.array([[1.0, 1.0], [2.0, 3.0]]))[2]
