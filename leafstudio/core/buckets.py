@@ -13,6 +13,7 @@ a second), and the app's main thread keeps running while a kernel does.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -71,7 +72,9 @@ def bucket_points(
     return Buckets(lo=lo, size=float(size), nx=int(nx), ny=int(ny), starts=starts, order=order)
 
 
-def bounds(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def bounds(
+    xy: np.ndarray, numpys: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """(d,) lower and upper corners of the box around (n >= 1, d) points, column by column
     (numpy's min(axis=0) on an (n, 2) array is many times slower; np.ptp over axis 0 of a
     grid-128 mesh's 7,300 points took 0.38 ms, numpy's reductions column by column 0.03).
@@ -79,12 +82,15 @@ def bounds(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     31 us at a flat ovate's 500 to 7,300 points at grid 128, where bounds runs 12 times a run,
     _bounds 1.9 to 20, best of 9 x 300 (/work/notes/cpu39/micro_bounds.py). A bound that is ±0
     or NaN is numpy's: any other least or largest value has one bit pattern, whichever element
-    gave it."""
+    gave it. `numpys`: the caller's own numpy reduction for those (a min(axis=0) may give a ±0
+    the other sign), else numpy's column by column."""
     xy = np.asarray(xy)
     if xy.dtype == np.float64 and xy.ndim == 2 and xy.flags.c_contiguous and len(xy):
-        lo, hi, numpys = _bounds(xy)
-        if not numpys:
+        lo, hi, numpy_wanted = _bounds(xy)
+        if not numpy_wanted:
             return lo, hi
+    if numpys is not None:
+        return numpys(xy)
     columns = xy.T
     return np.array([c.min() for c in columns]), np.array([c.max() for c in columns])
 

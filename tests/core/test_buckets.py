@@ -33,3 +33,18 @@ def test_a_zero_or_nan_bound_goes_to_numpy():
     assert _bounds(np.array([[0.0, 1.0], [2.0, 3.0]]))[2]
     assert _bounds(np.array([[np.nan, 1.0], [2.0, 3.0]]))[2]
     assert not _bounds(np.array([[1.0, 1.0], [2.0, 3.0]]))[2]
+
+
+def test_a_callers_own_reduction_takes_a_zero_bound():
+    """bounds(xy, numpys) hands a ±0 bound to the caller's numpy expression (min(axis=0) may
+    give a zero the other sign than a column's min), and no other."""
+    calls = []
+
+    def own(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        calls.append(len(p))
+        return p.min(axis=0), p.max(axis=0)
+
+    lo = bounds(np.array([[-0.0, 1.0], [0.0, 2.0]]), own)[0]
+    assert calls == [2] and lo.tobytes() == np.array([[-0.0, 1.0], [0.0, 2.0]]).min(0).tobytes()
+    bounds(np.array([[-1.0, 1.0], [3.0, 2.0]]), own)
+    assert calls == [2]

@@ -286,7 +286,8 @@ def edge_bands(polygon: np.ndarray) -> EdgeBands:
     n_bands = max(1, len(polygon) // 2)
     y0, y1 = float(polygon[:, 1].min()), float(polygon[:, 1].max())
     height = max(y1 - y0, 1e-300) / n_bands
-    tolerance = 1e-12 * float(np.ptp(polygon, axis=0).max())
+    lo, hi = bounds(polygon, lambda p: (p.min(axis=0), p.max(axis=0)))  # np.ptp's, quicker
+    tolerance = 1e-12 * float((hi - lo).max())
     starts, edges = _file_edges(polygon, y0, height, n_bands)
     return EdgeBands(y0, height, n_bands, tolerance, starts, edges)
 
