@@ -89,6 +89,7 @@ KERNELS: dict[str, tuple[types.Type, ...]] = {
     "prepare.polygon:_file_edges": (F2, f8, f8, i8),
     "gmm:_kmeans": (F2, F2, f8),
     "gmm:_search_right": (F1, F1),
+    "gmm:_column_variances": (F2,),
     "mesher:_grid_inside": (F2, F1, f8, i8, i8),
     "mesher:_crossed_cells": (F2, F1, f8, i8, i8),
     "mesher:_outside_cells": (F2, I2, B2, F1, f8),

@@ -109,3 +109,14 @@ def test_a_fit_seeds_k_means_as_a_new_random_state_would():
         assert fresh.random_sample() == reused.random_sample()
         np.testing.assert_array_equal(fresh.uniform(size=4), reused.uniform(size=4))
         assert fresh.standard_normal() == reused.standard_normal()
+
+
+def test_k_means_tolerance_reads_numpys_own_variance():
+    """gmm._column_variances (k-means' tolerance) is np.var(axis=0) to the bit."""
+    from leafstudio.core.gmm import _column_variances
+
+    rng = np.random.default_rng(4)
+    for trial in range(300):
+        n = int(rng.integers(1, 5000 if trial % 2 else 30))
+        x = rng.standard_normal((n, 2)) * rng.choice([1e-5, 1.0, 1e8]) + rng.choice([0.0, 1e3])
+        assert _column_variances(x).tobytes() == np.var(x, axis=0).tobytes()
