@@ -31,6 +31,7 @@ from leafstudio.core.buckets import (
     gather,
     kernel_array,
     kth_distances,
+    median,
     neighbour_distances,
 )
 from leafstudio.core.grid import Grid
@@ -448,7 +449,7 @@ def build_mpu(
     # (numpy's min(axis=0) and max: 0.05 ms at a flat ovate's outline at grid 128, bounds 0.002)
     lo, hi = bounds(points, lambda p: (p.min(axis=0), p.max(axis=0)))
     half = 0.6 * float((hi - lo).max())
-    spacing = float(np.median(neighbour_distances(points, np.arange(len(points)))))
+    spacing = median(neighbour_distances(points, np.arange(len(points))))
     centers = ((lo + hi) / 2)[None, :]
     kept: list[tuple[np.ndarray, ...]] = []
     depth = 0

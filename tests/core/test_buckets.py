@@ -48,3 +48,21 @@ def test_a_callers_own_reduction_takes_a_zero_bound():
     assert calls == [2] and lo.tobytes() == np.array([[-0.0, 1.0], [0.0, 2.0]]).min(0).tobytes()
     bounds(np.array([[-1.0, 1.0], [3.0, 2.0]]), own)
     assert calls == [2]
+
+
+def test_median_is_numpys_to_the_bit():
+    """buckets.median gives np.median's value, ties, zeros, -0, NaN and infinities among them."""
+    from leafstudio.core.buckets import median
+
+    rng = np.random.default_rng(6)
+    for trial in range(2000):
+        n = int(rng.integers(1, 40 if trial % 2 else 2000))
+        x = np.abs(rng.standard_normal(n)) * rng.choice([1e-300, 1.0, 1e300])
+        if trial % 3 == 0:
+            x = np.round(x, 1)
+        if trial % 5 == 0:
+            x = -x
+        if trial % 13 == 0:
+            x[rng.integers(n)] = rng.choice([np.nan, np.inf, -np.inf, -0.0, 0.0])
+        got, expected = np.float64(median(x)), np.float64(np.median(x))
+        assert got.tobytes() == expected.tobytes()
