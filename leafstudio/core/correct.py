@@ -245,6 +245,9 @@ class Pinning:
     bending: Bending  # the lattice (bending.py), with φ for every centre
     disagree: tuple[tuple[int, int, float], ...] = ()  # veins steeper apart than STEEPEST
     free: int = 0  # the last `free` centres lie on no vein: their values are free (free_centers)
+    # T at the grid's nodes inside the leaf, as the surface stage takes it too (its tanh over a
+    # flat ovate's 6895 nodes at grid 128: 0.02-0.035 ms, twice there; steps.compute_surface)
+    node_taper: np.ndarray | None = None
 
     def notes(self, length: float) -> list[str]:
         """What the leaf is told of veins that disagree where they meet (one note: a steeply
@@ -301,7 +304,7 @@ def pinning(
     centers = kernel_array(np.vstack([on_veins, free]))
     taper = taper_of(implicit(centers), delta)
     bending = lattice_bending(centers, length, grid, inside, node_taper)
-    return Pinning(kept, centers, taper, bending, tuple(disagree), len(free))
+    return Pinning(kept, centers, taper, bending, tuple(disagree), len(free), node_taper)
 
 
 def onto_veins(
