@@ -346,8 +346,10 @@ def compute_surface(run: StageRun) -> SurfaceStage:
     g_in = guide.g_in
     through = run.params.through_veins and bool(fs.veins)  # onto every vein point (correct.py)
     # T at the nodes once a run: the bending stage's (the same δ: its tanh took 0.02-0.035 ms of
-    # a flat ovate's at grid 128 each time), else here
-    node_taper = run["bending"].node_taper if through else None
+    # a flat ovate's at grid 128 each time), else here; and g at the veins, the bending stage's
+    node_taper, vein_g = (
+        (run["bending"].node_taper, run["bending"].vein_g) if through else (None, None)
+    )
     if node_taper is None:
         node_taper = taper_of(g_in, taper_width(run.params.taper, g_in))
     surface, relief = fit_surface(  # relief: M at the nodes, once (the correction takes it)
@@ -363,6 +365,7 @@ def compute_surface(run: StageRun) -> SurfaceStage:
         run.params.seed,
         base=fs.base,
         node_taper=node_taper,
+        vein_g=vein_g,
     )
     correction = None
     if through:

@@ -411,6 +411,7 @@ def fit_surface(
     seed: int = 0,
     base: BaseSurface | None = None,
     node_taper: np.ndarray | None = None,
+    vein_g: np.ndarray | None = None,
 ) -> tuple[HeightSurface, np.ndarray]:
     """Fit the amplitudes a_k (and, with `refine`, the means and covariances) so that z follows p
     inside the leaf and h_v on the veins; the surface, and its Σ a_k N_k at the (n,) nodes.
@@ -432,12 +433,15 @@ def fit_surface(
         The base b(x) under a non-planar boundary; p and vein_h are then heights above it.
     node_taper : (n,) float array, optional
         T(g/δ) at the nodes, if the caller has it (the bending stage's: correct.Pinning).
+    vein_g : (m,) float array, optional
+        g at the vein points, likewise.
     """
     delta = taper_width(taper, inside_g)
     surface = HeightSurface(mixture=mixture, implicit=implicit, delta=delta)
     # g at the veins, once for both fits' rows (read twice, 0.06 ms of a flat ovate's at grid
     # 128; g is read point by point, so a subset's is the same to the bit)
-    vein_g = implicit(vein_xy) if len(vein_xy) else np.zeros(0)
+    if vein_g is None:
+        vein_g = implicit(vein_xy) if len(vein_xy) else np.zeros(0)
     xy, row_scale, target = _least_squares_rows(
         surface, inside_xy, inside_g, inside_p, vein_xy, vein_h, vein_g, None, seed, node_taper
     )

@@ -298,3 +298,21 @@ def test_the_surface_stage_reads_the_nodes_taper_once(through_veins):
     relief = np.linspace(-1.0, 1.0, len(taper))
     z = surf.surface(guide.nodes, guide.g_in, relief, taper)
     assert z.tobytes() == surf.surface(guide.nodes, guide.g_in, relief).tobytes()
+
+
+def test_the_implicit_is_read_at_the_veins_once():
+    """correct.pinning reads g at every vein point in one call (Pinning.vein_g) for the ends,
+    the centres and the surface stage: the same bits as the implicit read at each apart."""
+    from leafstudio.core.surface import taper_of, taper_width
+    from leafstudio.forms.make import Form
+
+    pipeline = ls.Pipeline(Form("ovate").leaf())
+    pipeline.run(ls.Params(k=3, grid=48))
+    entries = pipeline.store._entries
+    implicit = next(iter(entries["implicit"].values()))
+    pinned = next(iter(entries["bending"].values()))
+    guide = next(iter(entries["guide"].values()))
+    frame = next(iter(entries["frame"].values()))
+    assert pinned.vein_g.tobytes() == implicit(frame.vein_xy).tobytes()
+    delta = taper_width(ls.Params().taper, guide.g_in)
+    assert pinned.taper.tobytes() == taper_of(implicit(pinned.centers), delta).tobytes()
