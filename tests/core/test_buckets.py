@@ -66,3 +66,23 @@ def test_median_is_numpys_to_the_bit():
             x[rng.integers(n)] = rng.choice([np.nan, np.inf, -np.inf, -0.0, 0.0])
         got, expected = np.float64(median(x)), np.float64(np.median(x))
         assert got.tobytes() == expected.tobytes()
+
+
+def test_buckets_sides_in_python_floats_are_numpys():
+    """bucket_points' side and counts (buckets._side, Python floats) are numpy's figures."""
+    from leafstudio.core.buckets import PER_BUCKET, _side
+
+    rng = np.random.default_rng(9)
+    for trial in range(500):
+        n = int(rng.integers(1, 300))
+        xy = rng.standard_normal((n, 2)) * rng.choice([1e-300, 1e-5, 1.0, 1e100])
+        if trial % 7 == 0:
+            xy[:] = xy[0]
+        lo, hi = bounds(xy)
+        extent = np.maximum(hi - lo, 1e-300)
+        size = float(np.sqrt(extent[0] * extent[1] * PER_BUCKET / n))
+        size = max(size, float(extent.max()) / 4096)
+        if float(extent.max()) <= 1e-300:
+            size = 1.0
+        nx, ny = (np.floor(extent / size).astype(np.int64) + 1).tolist()
+        assert _side(lo, hi, n, None, PER_BUCKET) == (size, nx, ny)
