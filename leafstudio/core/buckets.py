@@ -127,8 +127,8 @@ def bounds(
 def median(values: np.ndarray) -> float:
     """float(np.median(values)) of a 1-D float array, to the bit: the middle one or two of a
     partition, their mean as numpy's (a + b) / 2; numpy's own for none, a NaN or a zero median
-    (a ±0 sum). np.median's glue took 20-30 us a call at a flat ovate's 500 outline points at
-    grid 128, six calls a run; this 4-6 (/work/notes/cpu39/micro_median.py)."""
+    (a ±0 sum). np.median took 12-23 us a call at 60-2000 values (a flat ovate's 500 outline
+    points at grid 128: 19, six calls a run), this 3.5-15 (/work/notes/cpu39/micro_median.py)."""
     n = len(values)
     if n and values.dtype == np.float64:
         half = n // 2
