@@ -89,7 +89,8 @@ class PoseFits:
         leaf = None if asked is None else asked[2]
         if leaf is None or self.state.leaf is not leaf:
             return
-        explicit, ran = asked[1] == REFIT, outcome.result.leaf
+        explicit, result = asked[1] == REFIT, outcome.result
+        ran = result.leaf
         if not (explicit or pose_fitted(leaf, ran)):
             return
         if self._edit_base is not None:
@@ -101,7 +102,8 @@ class PoseFits:
         def taken(state: State) -> State:
             drawn = state.sketch
             if drawn is not None and fitted:  # the flat blade's, the worker's unless a test's
-                flat[:] = flat or [getattr(outcome, "sketch", None) or Sketch.from_result(outcome.result)]
+                made = flat or [getattr(outcome, "sketch", None) or Sketch.from_result(result)]
+                flat[:] = made
                 drawn = replace(flat[0], symmetric=drawn.symmetric)
             unposed = None if fitted else plane_share(ran)
             return replace(state, leaf=ran, sketch=drawn, unposed=unposed)

@@ -56,7 +56,7 @@ def test_a_pose_fitted_to_an_edited_leaf_is_the_documents(tmp_path, fits, monkey
     draws the flat blade, Save writes the pose, a K change fits nothing again (it fitted each
     time: the worker's pipeline was for the unbent leaf), Undo goes back to the cup and Redo
     to the fitted leaf without a fit."""
-    folded, drawn = folded_curves(monkeypatch)
+    _, drawn = folded_curves(monkeypatch)
     path = tmp_path / "cup.csv"
     save_leaf(cupped_ovate(0.6), path)
     session, runner, _ = opened_session()
@@ -107,7 +107,9 @@ def test_a_fit_due_during_a_sketch_drag_is_taken_at_its_end(tmp_path, fits, monk
     assert session.history.steps[-1].after is session.state
 
 
-def test_a_project_of_curves_in_3d_with_their_sketch_opens_with_their_pose(tmp_path, fits, monkeypatch):
+def test_a_project_of_curves_in_3d_with_their_sketch_opens_with_their_pose(
+    tmp_path, fits, monkeypatch
+):
     """Such an edit saved on main (its sketch, no pose) opened unbent: fitted twice (as it was
     read, then by its run), the view bent, the sliders at 0. It opens fitted, once, drawn by
     the sketch of its flat blade derived from its first result."""
@@ -185,7 +187,7 @@ def test_fit_pose_again_refused_says_so_and_keeps_the_refusal(tmp_path, fits):
 
 def test_fit_pose_again_is_off_where_there_is_nothing_to_fit(tmp_path):
     """A drawn (flat) leaf, a leaf with its pose: nothing to fit, no request."""
-    session, runner, _ = opened_session()
+    session, _, _ = opened_session()
     assert not session.can_fit_pose() and session.fit_pose_again() == 0  # no leaf
     session.open_demo("nested")
     assert not session.can_fit_pose() and session.fit_pose_again() == 0
