@@ -27,7 +27,10 @@ from .test_session_files import opened_session
 
 @pytest.fixture
 def fits(monkeypatch) -> list:
-    """The fits run (unfold._fit, past unfold_checks.bent's gate), one entry each."""
+    """The fits run (unfold._fit, past unfold_checks.bent's gate), one entry each; the curves
+    remembered as needing no bend (core/unfolded.py) this test's own: a refusal here is not
+    another test's (the same ovate folded 60, the same cup)."""
+    monkeypatch.setattr(unfolded, "_UNBENT", OrderedDict())
     done: list = []
     fit = unfold._fit
     monkeypatch.setattr(unfold, "_fit", lambda *a, **k: done.append(1) or fit(*a, **k))
@@ -185,7 +188,7 @@ def test_fit_pose_again_refused_says_so_and_keeps_the_refusal(tmp_path, fits):
     assert len(fits) == 1
 
 
-def test_fit_pose_again_is_off_where_there_is_nothing_to_fit(tmp_path):
+def test_fit_pose_again_is_off_where_there_is_nothing_to_fit(tmp_path, fits):
     """A drawn (flat) leaf, a leaf with its pose: nothing to fit, no request."""
     session, _, _ = opened_session()
     assert not session.can_fit_pose() and session.fit_pose_again() == 0  # no leaf

@@ -188,7 +188,10 @@ def test_fit_pose_again_fits_a_refused_leaf_and_says_a_refusal(
     refused a pose (by a fit that found none) is fitted on the worker: the Fold slider and the
     editor show the fit, one undo step; the cup refused again says so in a note, its sliders
     at 0. Both leave the window's main thread free while they fit (the worker's lane)."""
+    from collections import OrderedDict
+
     import leafstudio.core.unfold as unfold
+    import leafstudio.core.unfolded as unfolded
     from leafstudio.core.placed import PlacedPose
     from leafstudio.model import Leaf
     from leafstudio.sources.files import save_leaf
@@ -199,6 +202,7 @@ def test_fit_pose_again_fits_a_refused_leaf_and_says_a_refusal(
     assert action in window.menu("Edit").actions() and not action.isEnabled()  # the demo
     form = Form("ovate", fold=60.0).leaf()
     save_leaf(Leaf(form.boundary, form.veins), tmp_path / "folded.csv")
+    monkeypatch.setattr(unfolded, "_UNBENT", OrderedDict())  # its refusals kept from the others
     fit = unfold._fit
     monkeypatch.setattr(unfold, "_fit", lambda *a, **k: None)  # refused as it opens
     session.open_path(str(tmp_path / "folded.csv"))
