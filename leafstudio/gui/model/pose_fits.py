@@ -58,6 +58,7 @@ class PoseFits:
     derived: Sketch | None
     _derived_leaf: Leaf | None
     _pose_due: tuple[int, Any] | None = None  # a run's fit held back by a sketch drag
+    _told: tuple[int, str]  # a note said with a request's result (Session.notes_of)
 
     def can_fit_pose(self) -> bool:
         """Whether Fit pose again applies: the document's leaf has no bend and its curves stand
@@ -99,18 +100,22 @@ class PoseFits:
         fitted = ran.bend is not None
         flat: list[Sketch] = []
 
-        def taken(state: State) -> State:
+        def taken(state: State, own: bool = False) -> State:
+            """`state` holding the run's leaf: fitted, with the flat blade's sketch (the
+            worker's, unless a test's runner's) where it had one of its own, or `own`."""
             drawn = state.sketch
-            if drawn is not None and fitted:  # the flat blade's, the worker's unless a test's
+            if fitted and (drawn is not None or own):
                 made = flat or [getattr(outcome, "sketch", None) or Sketch.from_result(result)]
                 flat[:] = made
-                drawn = replace(flat[0], symmetric=drawn.symmetric)
+                mirror = drawn if drawn is not None else self.editable_sketch()
+                drawn = replace(made[0], symmetric=mirror is not None and mirror.symmetric)
             unposed = None if fitted else plane_share(ran)
             return replace(state, leaf=ran, sketch=drawn, unposed=unposed)
 
         before = self.state
-        if explicit and fitted:  # one undo step of its own
-            self.state = taken(before)
+        if explicit and fitted:  # one undo step of its own, drawn by a sketch of its own: Undo
+            # to a loaded leaf drawn by its derived sketch finds that sketch as it was
+            self.state = taken(before, own=True)
             text = bend_text(self.pose, self.half_width).removeprefix("Bend: ")
             self.history.push(Step(f"Fit pose: {text}", before, self.state))
         else:  # the edit's snapshots, or those refused again, hold the run's leaf
@@ -120,7 +125,8 @@ class PoseFits:
         self.state_changed.emit(self.state, "fitted")
         if self.state.sketch is not None and self.state.sketch is not before.sketch:
             self.sketch_shown.emit(self.state.sketch, True)
-        if explicit and not fitted:
+        if explicit and not fitted:  # in a box, and on the status line with its result
+            self._told = (request_id, refused_text(ran))
             self.noticed.emit(refused_text(ran))
 
     def _take_due_pose(self) -> None:
@@ -128,12 +134,6 @@ class PoseFits:
         due, self._pose_due = self._pose_due, None
         if due is not None:
             self._take_pose(*due)
-
-    def _snapshots(self) -> list[State]:
-        """Every State the session holds: the document, an edit's base, the history's steps."""
-        bases = (self._edit_base, self._param_base, self._bend_base)
-        steps = [s for step in self.history.steps for s in (step.before, step.after)]
-        return [self.state, *(b for b in bases if b is not None), *steps]
 
     def _swap(self, leaf: Leaf, taken: Any) -> None:
         """Each snapshot whose leaf is `leaf` replaced by `taken(snapshot)` (one new State per

@@ -143,8 +143,8 @@ def test_fit_pose_again_takes_a_fit_as_one_undo_step(tmp_path, fits, monkeypatch
     session.fitting.connect(said.append)
     session.open_path(str(path))
     runner.finish(session)
-    refused = session.state
-    assert refused.leaf.bend is None and refused.unposed is not None
+    refused, derived = session.state, session.editable_sketch()
+    assert refused.leaf.bend is None and refused.unposed is not None and derived is not None
     assert session.can_fit_pose()
     monkeypatch.setattr(unfold, "_fit", counted)
     fits.clear()
@@ -158,8 +158,11 @@ def test_fit_pose_again_takes_a_fit_as_one_undo_step(tmp_path, fits, monkeypatch
     assert session.history.count() == steps + 1
     assert session.history.undo_text().startswith("Fit pose: fold 59.99")
     assert not session.can_fit_pose()  # posed
+    assert flat_width(session.state.sketch) > 1.2 * flat_width(derived)  # the flat blade's
+    shown: list = []
+    session.sketch_shown.connect(lambda sketch, fit: shown.append(sketch))
     session.undo()
-    assert session.state is refused
+    assert session.state is refused and shown == [derived]  # its own sketch, as it was
     runner.finish(session)
     assert session.result.leaf.bend is None and len(fits) == 1
 
@@ -180,6 +183,7 @@ def test_fit_pose_again_refused_says_so_and_keeps_the_refusal(tmp_path, fits):
     assert len(fits) == 1 and session.leaf.bend is None
     assert len(said) == 1 and said[0].startswith("No fold, curl, roll or twist lays"), said
     assert "14.2% of its width off its plane" in said[0]
+    assert session.notes_of(session.shown_id) == said  # on the status line with its result
     assert session.leaf is session.result.leaf and session.state.unposed is not None
     assert session.history.count() == steps and session.editable_sketch() is not None
     sketch = session.editable_sketch()
