@@ -31,6 +31,10 @@ from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.model import Leaf
 
 REFIT = "refit"  # a request's reason: Fit pose again's run
+STOPPED = (
+    "Fit pose again was stopped by a newer change before its fit was done: the leaf stays "
+    "unposed (Edit > Fit pose again fits it)"
+)
 
 
 def pose_fitted(asked: Leaf, ran: Leaf) -> bool:
@@ -73,7 +77,7 @@ class PoseFits:
         unfolds them, core/unfolded.py), whatever refusal was kept for them; the request's id
         (0: nothing to fit, `can_fit_pose`). Its fit becomes the document as one undo step
         ("Fit pose: fold ..."); a refusal is said (`noticed`) and kept. An Undo past it before
-        the fit is back drops the fit (`_undone_since`): its step would throw the redo away."""
+        the fit is back drops the fit (`_refit_answered`): its step would throw the redo away."""
         if not self.can_fit_pose():
             return 0
         self._drop_edit()  # a drag under way: its base would bring the unposed leaf back
@@ -91,6 +95,7 @@ class PoseFits:
         preview would bend its sketch of the bent curves by the pose."""
         asked = self._requested.get(request_id)
         leaf = None if asked is None else asked[2]
+        undone = self._refit_answered(request_id, leaf)
         if leaf is None or self.state.leaf is not leaf:
             return
         explicit, result = asked[1] == REFIT, outcome.result
@@ -98,7 +103,7 @@ class PoseFits:
         if not (explicit or pose_fitted(leaf, ran)):
             return
         fitted = ran.bend is not None
-        if explicit and fitted and self._undone_since(request_id):
+        if explicit and fitted and undone:
             # its step would be pushed from a state undone to, the redo steps thrown away (Undo
             # of Mirror on while the fit ran: Redo had nothing left): the Undo drops the fit,
             # the refusal kept as it was, the document's leaf shown again (review39)
@@ -139,10 +144,21 @@ class PoseFits:
             self._told = (request_id, refused_text(ran))
             self.noticed.emit(refused_text(ran))
 
-    def _undone_since(self, request_id: int) -> bool:
-        """Whether Undo went back past the Fit pose again that asked `request_id`."""
-        at = self._refit_at
-        return at is not None and at[0] == request_id and self.history.index < at[1]
+    def _refit_answered(self, request_id: int, leaf: Leaf | None) -> bool:
+        """Fit pose again's request forgotten once `request_id`, it or a newer run, is shown
+        (an older answer is dropped: Session.accept_result). A newer run of the same leaf (a K
+        change) stopped its fit on the worker: said with that run's result, the leaf unposed
+        without a word otherwise (review39). Whether an Undo went back past Fit pose again
+        before its own answer (`request_id`) came."""
+        at, self._refit_at = self._refit_at, None
+        if at is None or request_id < at[0]:
+            self._refit_at = at
+            return False
+        refit_asked = self._requested.get(at[0])
+        stopped = request_id > at[0] and refit_asked is not None and refit_asked[2] is leaf
+        if stopped and self._told[0] != request_id:
+            self._told = (request_id, STOPPED)
+        return request_id == at[0] and self.history.index < at[1]
 
     def _take_due_pose(self) -> None:
         """A sketch drag's end: the pose its run fitted meanwhile taken now (`_take_pose`)."""

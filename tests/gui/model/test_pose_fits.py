@@ -235,3 +235,26 @@ def test_an_undo_while_fit_pose_again_runs_keeps_the_redo_steps(tmp_path, fits, 
     assert session.result.leaf is session.leaf and session.result.leaf.bend is None
     session.redo()
     assert session.state is refused
+
+
+def test_fit_pose_again_stopped_by_a_newer_change_says_so(tmp_path, fits, monkeypatch):
+    """Fit pose again, then K changed before the fit is back: the newer run stops the fit's (the
+    worker's interrupt) and is shown first, so the fit's answer is dropped; the leaf stayed
+    unposed without a word (the real window: /work/notes/review39/gui_interleave.txt). Its
+    result says so on the status line."""
+    form = Form("ovate", fold=60.0).leaf()
+    path = tmp_path / "folded.csv"
+    save_leaf(Leaf(form.boundary, form.veins), path)
+    counted = unfold._fit
+    monkeypatch.setattr(unfold, "_fit", lambda *a, **k: fits.append(1))  # no pose found
+    session, runner, _ = opened_session()
+    session.open_path(str(path))
+    runner.finish(session)
+    monkeypatch.setattr(unfold, "_fit", counted)
+    request = session.fit_pose_again()
+    session.set_params(session.params.with_(k=4))
+    runner.finish(session)  # the K change's run, shown first
+    assert session.leaf.bend is None
+    assert any(n.startswith("Fit pose again was stopped") for n in session.notes_of(session.shown_id))
+    runner.finish(session, request - 1)  # older than the shown: dropped
+    assert session.leaf.bend is None and session.history.undo_text() == "Change K"
