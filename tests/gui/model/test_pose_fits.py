@@ -255,6 +255,7 @@ def test_fit_pose_again_stopped_by_a_newer_change_says_so(tmp_path, fits, monkey
     session.set_params(session.params.with_(k=4))
     runner.finish(session)  # the K change's run, shown first
     assert session.leaf.bend is None
-    assert any(n.startswith("Fit pose again was stopped") for n in session.notes_of(session.shown_id))
+    notes = session.notes_of(session.shown_id)
+    assert any(n.startswith("Fit pose again was stopped") for n in notes), notes
     runner.finish(session, request - 1)  # older than the shown: dropped
     assert session.leaf.bend is None and session.history.undo_text() == "Change K"
