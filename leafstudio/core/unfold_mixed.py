@@ -88,6 +88,10 @@ BARE_PATIENCE = 4  # the bare rounds (module docstring) stop after this many rou
 # no flatter: from ovate folded 75 and twisted 0.2 in its own frame turned 0.01 rad about v, or
 # lifted 5e-3 of the length, after 2 they stopped 4.0e-4 and 4.8e-4 of the length off flat,
 # after 4 1.4e-6 and 2.1e-5 (/work/notes/pose39/clean_rounds.py)
+BARE_TURN = 1.0  # ... and not where the best found rolls the margin more than this (radians):
+# a roll bends about its sections' means, which a bare read leaves out, and tubes rolled 1 and
+# -1 (linear, oblong, oblanceolate), their best 8e-4-1.3e-3 of the length off flat and turned
+# 1.7-2.9, took 1.3-3.9 s of CPU more for none kept; folded 70-75 and twisted, 0.04-0.29
 GOOD = 1e-5  # of the length: a fit this flat is kept without fitting the other starts
 LEADS = 4.0  # a start whose first round is this many times the best's rms is let go (the
 # best found here, or unfold.py's: ovate folded 75 and curled 1, fitted 6.0e-4 of the length off
@@ -239,7 +243,11 @@ def mixed(
     ]
     found: list[tuple] = []  # (rms, y, axes, relief, bare)
     for bare in (False, True):  # bare where the others leave it off flat
-        if bare and (not found or found[0][0] <= MIXED_KEPT * length):
+        if bare and (
+            not found
+            or found[0][0] <= MIXED_KEPT * length
+            or np.pi * abs(found[0][1][5]) / most > BARE_TURN  # its roll's turn at the margin
+        ):
             break
         for _, y, axes in kept:
             first = min(lead, LEADS * beyond(found[0][0])) if found else lead
