@@ -160,7 +160,8 @@ def test_a_pose_that_leaves_the_margin_off_flat_is_warned_of(tmp_path, wrong):
     unfolded.OFF_FLAT is read unreliably: opening the file says so. Ovate folded 75 and
     twisted 0.2 was fitted fold -31.1 and curl 1.08 (the margin 1.46e-2 of the diagonal off
     flat, the flat blade 0.633 wide, and no word of it: /work/notes/wrongpose38); it reads its
-    own pose now (the test above), so that pose is given here in the fitted one's place."""
+    own pose now (the test above), whose fold set 5° off leaves the margin 1.72e-2 of the
+    diagonal off flat (/work/notes/pose39/wrong_pose.py)."""
     from dataclasses import replace
 
     from leafstudio.model import Leaf
@@ -177,7 +178,7 @@ def test_a_pose_that_leaves_the_margin_off_flat_is_warned_of(tmp_path, wrong):
         leaf = open_file(str(path)).leaf
     if wrong:
         bend = leaf.bend
-        pose = replace(bend.pose, fold=-31.1, curl=1.08 / 1.1224, twist=0.0)
+        pose = replace(bend.pose, fold=bend.pose.fold - 5.0)
         leaf = Leaf(leaf.boundary, leaf.veins, bend=replace(bend, pose=pose))
     # said in the result's warnings, which the commands and the window say (a warning from
     # the fit alone went unseen: the command line ignores warnings)
