@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from leafstudio.core.evaluate import MEASURABLE
-from leafstudio.core.unfolded import unposed_share
+from leafstudio.core.unfolded import unfolded, unposed_share
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.jobs import Job, cancel_point, describe
 from leafstudio.gui.model.reading import is_big, read_apart
@@ -128,9 +128,15 @@ def _read_document(
         except (TypeError, ValueError, KeyError) as exc:
             raise LeafError(f"bad sketch ({exc})", path) from None
         photo, notice = _project_photo(path)
-    # the file's leaf is unfolded (a project's sketch's by its first run: then no fit again)
-    unposed = unposed_share(opened.leaf)
-    return Document(opened.path, opened.leaf, sketch, opened.params, None, photo, notice, unposed)
+    # the file's leaf is unfolded (open_file, but a project's with a sketch: here). A project
+    # of curves in 3D saved with their sketch and no pose opened unbent, its run bent, its
+    # sliders at 0 (/work/notes/refit39/repro.py): it opens fitted, drawn by the sketch of its
+    # flat blade derived from its first run, as a point list is (that sketch draws the curves
+    # in 3D: posed, they would be bent twice)
+    leaf = unfolded(opened.leaf)
+    sketch = sketch if leaf is opened.leaf else None
+    unposed = unposed_share(leaf)
+    return Document(opened.path, leaf, sketch, opened.params, None, photo, notice, unposed)
 
 
 def check_drawable(leaf: Any, path: str) -> None:

@@ -64,7 +64,8 @@ class WorkerReports:
         if self._fallback is not None and request_id >= self._fallback.request:
             self._fallback = None
         result = outcome.result
-        serial, reason = self._requested.get(request_id, (self.state.serial, "document"))
+        serial, reason, _ = self._requested.get(request_id, (self.state.serial, "document", None))
+        self._take_pose(request_id, outcome)  # a pose its run fitted: the document's
         if self.derives(result.leaf):  # derived by the worker, if it knew (Worker.derives)
             self.derived = getattr(outcome, "sketch", None) or Sketch.from_result(result)
             self._derived_leaf = result.leaf

@@ -34,6 +34,7 @@ from leafstudio.gui.model.framing import BladeBounds, Framing
 from leafstudio.gui.model.history import Event, History, State, Step
 from leafstudio.gui.model.jobs import Job, Run, describe, run_now
 from leafstudio.gui.model.opening import FileOpening, missing_photo_message
+from leafstudio.gui.model.pose_fits import PoseFits
 from leafstudio.gui.model.reports import Fallback, Shown, WorkerReports
 from leafstudio.gui.model.side import SideJobs
 from leafstudio.gui.model.sketch_model import Sketch
@@ -65,7 +66,7 @@ def replaced_text(before: State, sketch: Sketch) -> str:
     )
 
 
-class Session(FileOpening, Bending, WorkerReports):
+class Session(FileOpening, Bending, PoseFits, WorkerReports):
     """The document, parameters, results, pending request and history.
 
     Parameters
@@ -84,7 +85,8 @@ class Session(FileOpening, Bending, WorkerReports):
     Events
     ------
     state_changed(State, str)
-        The document or parameters changed; the reason: "document", "edit", "params", "undo".
+        The document or parameters changed; the reason: "document", "edit", "params", "undo",
+        "fitted" (a run's pose fitted to its curves taken: pose_fits.py).
     result_shown(outcome, Framing | None)
         A result to display, with how to frame it (None: keep the camera).
     failed(str, bool)
@@ -120,6 +122,8 @@ class Session(FileOpening, Bending, WorkerReports):
         Opening the file is over: its first result is shown, or it failed or was cancelled.
     open_failed(str, str)
         A file could not be opened: what it was read as, and why; the document stays.
+    fitting(str)
+        Fit pose again asked the worker to fit the leaf's curves: what to say while it does.
     """
 
     def __init__(
@@ -147,13 +151,15 @@ class Session(FileOpening, Bending, WorkerReports):
         self._told: tuple[int, str] = (-1, "")  # the request of the edit that replaced it
         self.opening, self.opened, self.open_failed = Event(), Event(), Event()
         self.open_cancelled, self.open_progress, self.open_ended = Event(), Event(), Event()
+        self.fitting = Event()
         self.chosen_texture: Any = None  # a texture picked for the export, shown too
         self._open_due: Job | None = None  # the file being read; another open supersedes it
         self._open_run: int | None = None  # the opened file's first run, until it is shown
         self._ignored_upto = 0  # requests of a cancelled first run: their answers are dropped
         self._drawn_due: threading.Event | None = None  # the outcome being drawn (Outcome.drawn)
         self._serials = 0
-        self._requested: dict[int, tuple[int, str]] = {}  # request id -> serial, reason
+        # request id -> serial, reason, the document's leaf it ran (pose_fits.py)
+        self._requested: dict[int, tuple[int, str, Leaf | None]] = {}
         self._framed: tuple[int, BladeBounds] | None = None
         self._edit_base: State | None = None
         self._param_base: State | None = None
@@ -322,6 +328,7 @@ class Session(FileOpening, Bending, WorkerReports):
             leaf = self.sketch_leaf(sketch, before)
             self._apply(replace(self.state, leaf=leaf, sketch=sketch), "edit")
         self.history.push(Step(text, base, self.state))
+        self._take_due_pose()  # a pose its drag's run fitted (pose_fits.py)
         if base.sketch is None and base.leaf is not None and self.state.sketch is not None:
             # a loaded leaf's first edit: the leaf is the sketch's from now on, not its own
             # (soybean pot1_1 at grid 128: its outline through 3,000 points became a curve
@@ -436,7 +443,7 @@ class Session(FileOpening, Bending, WorkerReports):
         if keeps_refusal(self.state):  # its curves edited since no pose was found for them
             as_given(self.leaf)
         self.last_id = self.submit(self.leaf, self.params, interrupt)
-        self._requested[self.last_id] = (self.state.serial, reason)
+        self._requested[self.last_id] = (self.state.serial, reason, self.leaf)
         for old in [i for i in self._requested if i < self.last_id - 64]:
             del self._requested[old]
         return self.last_id

@@ -18,6 +18,10 @@ Each slider's number is typed into, through the panel's own field (typed_field.T
 the term declared as a `paramspec.Real` (`TERMS`): a value past the slider's range is refused
 with a note under the panel, not clamped (superqt's box bent a typed fold of 90 to 75 and -200
 to -75 without a word).
+
+Edit > Fit pose again (`FIT_ACTIONS`) asks the session to fit a pose to the document's curves in
+3D once more (gui/model/pose_fits.py: on the worker, its fit one undo step, its refusal said in
+a note); it is on while the leaf has no bend and its curves stand bent in 3D.
 """
 
 from __future__ import annotations
@@ -35,6 +39,7 @@ from leafstudio.errors import LeafError
 from leafstudio.forms.terms import RELIEF
 from leafstudio.gui.model.bending import can_pose, pose_terms, sheet_tip, terms_pose
 from leafstudio.gui.model.jobs import describe
+from leafstudio.gui.qt.actions import Action
 from leafstudio.gui.qt.typed_field import TypedField
 from leafstudio.paramspec import Real
 
@@ -156,6 +161,19 @@ def bend_leaf(window: Any, pose: Pose, final: bool, say: Any = None) -> bool:
     return True
 
 
+FIT_ACTIONS = (
+    Action(
+        "edit.fit_pose",
+        "Edit",
+        "&Fit pose again",
+        lambda w: w.session.fit_pose_again(),
+        tip="Fit the fold, curl, roll and twist that lay this leaf's 3D curves flat once more "
+        "(a refused fit is otherwise kept through the leaf's edits)",
+        separator=True,
+    ),
+)
+
+
 def install(window: Any) -> BendSliders:
     """Put the sliders in the window's Parameters panel under the Grid row, wired to its
     session both ways. Returns them."""
@@ -176,13 +194,20 @@ def install(window: Any) -> BendSliders:
         leaf = session.leaf
         scan_open = session.state.scan is not None
         bend.set_enabled(can_pose(leaf), sheet_tip(scan_open, True) if leaf is not None else "")
+        window.actions["edit.fit_pose"].setEnabled(session.can_fit_pose())
         if not bend.is_dragging():
             if can_pose(leaf):  # a sheet-bent scan's sliders are off: no width to read
                 bend.half_width = session.half_width
             bend.show_pose(session.pose)
 
+    def fitting(text: str) -> None:  # Fit pose again under way (a run of 2-3 s for a cup)
+        window.status_text.setStyleSheet("")
+        window.status_text.setText(text)
+
+    window.add_actions(FIT_ACTIONS)
     bend.changed.connect(bent)
     bend.refused.connect(panel.say)
     session.state_changed.connect(shown)
+    session.fitting.connect(fitting)
     shown()
     return bend

@@ -38,6 +38,7 @@ from leafstudio.core.store import StageStore
 from leafstudio.errors import LeafError
 from leafstudio.gui.model.jobs import Job, running
 from leafstudio.gui.model.layers import Piece, build_layers
+from leafstudio.gui.model.pose_fits import pose_fitted
 from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.model import Leaf, Params
 
@@ -338,7 +339,10 @@ class Worker(QObject):
         start = time.perf_counter()
         layers = build_layers(result)
         timings["layers"] = time.perf_counter() - start
-        sketch = Sketch.from_result(result) if request.derive else None
+        # a pose fitted to the curves: the document takes it with its flat blade's sketch
+        # (gui/model/pose_fits.py), made here, not on the main thread
+        fitted = pose_fitted(request.leaf, result.leaf)
+        sketch = Sketch.from_result(result) if request.derive or fitted else None
         outcome = Outcome(request, result, layers, timings, threading.get_ident(), sketch)
         yield outcome
         self._shown = outcome  # reported, so shown: a newer request's id is higher

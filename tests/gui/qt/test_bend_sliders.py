@@ -179,3 +179,53 @@ def test_a_pose_shown_is_read_in_the_typed_fields_too(qtbot):
     assert sliders.fields["curl"].text() == "0.50"
     sliders.show_pose(Pose())
     assert sliders.fields["fold"].text() == "0.0"
+
+
+def test_fit_pose_again_fits_a_refused_leaf_and_says_a_refusal(
+    window, qtbot, tmp_path, monkeypatch
+):
+    """Edit > Fit pose again: on for a leaf whose curves stand bent in 3D with no bend. A leaf
+    refused a pose (by a fit that found none) is fitted on the worker: the Fold slider and the
+    editor show the fit, one undo step; the cup refused again says so in a note, its sliders
+    at 0. Both leave the window's main thread free while they fit (the worker's lane)."""
+    from collections import OrderedDict
+
+    import leafstudio.core.unfold as unfold
+    import leafstudio.core.unfolded as unfolded
+    from leafstudio.core.placed import PlacedPose
+    from leafstudio.model import Leaf
+    from leafstudio.sources.files import save_leaf
+    from tests.leaves import cupped_ovate
+
+    session, fold = window.session, window.bend.sliders["fold"]
+    action = window.actions["edit.fit_pose"]
+    assert action in window.menu("Edit").actions() and not action.isEnabled()  # the demo
+    form = Form("ovate", fold=60.0).leaf()
+    save_leaf(Leaf(form.boundary, form.veins), tmp_path / "folded.csv")
+    monkeypatch.setattr(unfolded, "_UNBENT", OrderedDict())  # its refusals kept from the others
+    fit = unfold._fit
+    monkeypatch.setattr(unfold, "_fit", lambda *a, **k: None)  # refused as it opens
+    session.open_path(str(tmp_path / "folded.csv"))
+    wait_result(qtbot, window, lambda o: o.request.id == session.last_id)
+    assert session.leaf.bend is None and fold.value() == 0.0 and action.isEnabled()
+    monkeypatch.setattr(unfold, "_fit", fit)
+    steps = session.history.count()
+    action.trigger()
+    assert window.status_text.text() == "Fitting a pose to the leaf's 3D curves…"
+    wait_result(qtbot, window, lambda o: isinstance(session.leaf.bend, PlacedPose))
+    assert abs(abs(fold.value()) - 60.0) < 1.5 and session.history.count() == steps + 1
+    assert window.actions["edit.undo"].text().startswith("&Undo Fit pose: fold")
+    assert not action.isEnabled()
+    qtbot.waitUntil(lambda: window.editor.view.sketch is session.editable_sketch(), timeout=5000)
+    session.undo()
+    assert fold.value() == 0.0 and action.isEnabled()
+
+    save_leaf(cupped_ovate(0.6), tmp_path / "cup.csv")
+    session.open_path(str(tmp_path / "cup.csv"))
+    wait_result(qtbot, window, lambda o: o.request.id == session.last_id)
+    assert action.isEnabled()
+    action.trigger()
+    wait_result(qtbot, window, lambda o: o.request.id == session.last_id)
+    qtbot.waitUntil(lambda: window.last_error_box is not None, timeout=5000)
+    assert window.last_error_box.text().startswith("No fold, curl, roll or twist lays")
+    assert session.leaf.bend is None and fold.value() == 0.0 and action.isEnabled()
