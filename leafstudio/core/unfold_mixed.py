@@ -23,7 +23,7 @@ folded 30, curled 0.5, rolled 0.3 and twisted 0.5 stalled 2.2e-4 of the length o
 that point, its roll 4% short; from the base the form's own to 1e-5). Terms it finds near 0
 are fitted again without them (`SMALL`), as a form without them has none.
 
-Where those rounds leave the margin off flat (MIXED_KEPT), they are run again bare (BARE): each
+Where those rounds leave the margin off flat (BARE_FROM), they are run again bare: each
 relief read as the pose's terms alone lay the curves flat, its rise and fall past
 unfold_rolled.CLEAR, and each read half way to the pose fitted (STEP). Ovate folded 75 and
 twisted 0.2 is an exact fixed point of both, but read about the relief before, a round 0.01 rad
@@ -84,6 +84,10 @@ STEP = 0.5  # ... reading each next relief this share of the way to the pose the
 # swung between fold 29.4 and 32.6 (8.3e-4 and 1.5e-3 of the length off flat) from its own pose
 # and was fitted none (30.1% narrow); so eased, 2e-7 in 16 rounds, its own pose
 PATIENCE = 2  # ... or this many rounds in a row lay the margin no flatter than the best
+BARE_FROM = 1e-4  # of the length: the bare rounds are run where the others' best leaves the
+# margin farther off flat than this: ovate folded 65-75 and twisted 0.1-0.2, kept within
+# MIXED_KEPT with a roll of -0.03 to -0.28 (65/0.2 9.9% wide, 70/0.1 3.0%), read their own pose
+# at 1e-4, not at MIXED_KEPT (/work/notes/pose39/neighbours_probe_barefrom1e-4.txt)
 BARE_PATIENCE = 4  # the bare rounds (module docstring) stop after this many rounds in a row
 # no flatter: from ovate folded 75 and twisted 0.2 in its own frame turned 0.01 rad about v, or
 # lifted 5e-3 of the length, after 2 they stopped 4.0e-4 and 4.8e-4 of the length off flat,
@@ -245,7 +249,7 @@ def mixed(
     for bare in (False, True):  # bare where the others leave it off flat
         if bare and (
             not found
-            or found[0][0] <= MIXED_KEPT * length
+            or found[0][0] <= BARE_FROM * length
             or np.pi * abs(found[0][1][5]) / most > BARE_TURN  # its roll's turn at the margin
         ):
             break
