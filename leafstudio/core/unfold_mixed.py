@@ -26,12 +26,12 @@ are fitted again without them (`SMALL`), as a form without them has none.
 Where those rounds leave the margin off flat (BARE_FROM), they are run again bare: each
 relief read as the pose's terms alone lay the curves flat, its rise and fall past
 unfold_rolled.CLEAR, and each read half way to the pose fitted (STEP). Ovate folded 75 and
-twisted 0.2 is an exact fixed point of both, but read about the relief before, a round 0.01 rad
-off the form's frame (or 5e-3 of the length) led the next 1.6-4.7° off its fold: the hinge's
-steepest rise, read past pose_relief.CREASE, went from 0 to 0.49-0.76 rad, and the fold took
-0.41 of the relief's turn, not all of it (hinge_fold.fold_share). The rounds stalled 7e-4 of the
-length off flat and unfold.py's fit stood (fold -31.1, curl 1.08: 0.633 wide); bare, from the
-same start, 2e-5 and its own pose (/work/notes/pose39).
+twisted 0.2 is an exact fixed point of both, but a relief read in its frame turned 0.01 rad
+about v or n, or lifted 5e-3 of the length, led the next round 4.7-7.7° off its fold (curl and
+roll held): the hinge's steepest rise, read past pose_relief.CREASE, went from 0 to 0.49-0.76
+rad, and at 0.49 the fold took 0.41 of the relief's turn (hinge_fold.fold_share). The rounds
+stalled 7e-4 of the length off flat and unfold.py's fit stood (fold -31.1, curl 1.08: 0.633
+wide); bare, from the same start, 2e-5 and its own pose (/work/notes/pose39).
 """
 
 from __future__ import annotations

@@ -139,8 +139,8 @@ def test_a_fold_of_70_to_75_twisted_reads_back_its_pose(tmp_path, shape, terms):
     """Folded 70-75 and twisted 0.2: unfold_mixed's rounds, each relief read as the pose before
     laid the curves flat about the relief before, swung off the form's own pose (its exact
     fixed point) from a start 0.01 rad off it and stalled 7e-4 of the length off flat, over
-    MIXED_KEPT, so unfold.py's wrong fit stood. Its bare rounds (unfold_mixed.BARE) reach the
-    form's own pose (/work/notes/pose39)."""
+    MIXED_KEPT, so unfold.py's wrong fit stood. unfold_mixed's bare rounds reach the form's
+    own pose (/work/notes/pose39)."""
     import shapely
 
     leaf, own = _read_back(tmp_path, shape, terms)
