@@ -13,6 +13,7 @@ a second), and the app's main thread keeps running while a kernel does.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -60,6 +61,11 @@ def bucket_points(
     per bucket over their bounding box)."""
     xy = kernel_array(xy)
     lo, hi = bounds(xy) if len(xy) else (np.zeros(2), np.ones(2))
+    side = _side(lo, hi, len(xy), size, per_bucket)  # in Python floats: the same figures
+    if side is not None:
+        size, nx, ny = side
+        starts, order = _counting_sort(xy, lo, size, nx, ny)
+        return Buckets(lo=lo, size=size, nx=nx, ny=ny, starts=starts, order=order)
     extent = np.maximum(hi - lo, 1e-300)
     if size is None:
         size = float(np.sqrt(extent[0] * extent[1] * per_bucket / max(len(xy), 1)))
@@ -71,13 +77,85 @@ def bucket_points(
     return Buckets(lo=lo, size=float(size), nx=int(nx), ny=int(ny), starts=starts, order=order)
 
 
-def bounds(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _side(
+    lo: np.ndarray, hi: np.ndarray, n: int, size: float | None, per_bucket: float
+) -> tuple[float, int, int] | None:
+    """bucket_points' side and bucket counts from the (2,) box `lo`, `hi` of n points, its
+    numpy steps done in Python floats (the same IEEE operations, in the same order; numpy's
+    dozen calls on two-element arrays: bucket_points 36 -> 19 us at a flat ovate's 500
+    outline points at grid 128 on a busy host, nine calls a run; the same buckets on 5000 random
+    sets, /work/notes/cpu39/micro_side.py); None where a figure is not finite or the counts
+    would not fit numpy's int64 (numpy's own steps)."""
+    (x0, y0), (x1, y1) = lo.tolist(), hi.tolist()
+    ex, ey = max(x1 - x0, 1e-300), max(y1 - y0, 1e-300)
+    if not (math.isfinite(ex) and math.isfinite(ey)):
+        return None
+    if size is None:
+        size = math.sqrt(ex * ey * per_bucket / max(n, 1))
+        size = max(size, max(ex, ey) / 4096)
+        if max(ex, ey) <= 1e-300:
+            size = 1.0
+    size = float(size)
+    if not (size > 0 and ex / size < 2**62 and ey / size < 2**62):
+        return None
+    return size, math.floor(ex / size) + 1, math.floor(ey / size) + 1
+
+
+def bounds(
+    xy: np.ndarray, numpys: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """(d,) lower and upper corners of the box around (n >= 1, d) points, column by column
-    (numpy's min(axis=0) on an (n, 2) array is many times slower; a compiled loop was as fast,
-    0.37 against 0.55 ms at 139,000 points, and cost 0.3 s of the first run's compile; np.ptp
-    over axis 0 of a grid-128 mesh's 7,300 points took 0.38 ms, this 0.03)."""
-    columns = np.asarray(xy).T
+    (numpy's min(axis=0) on an (n, 2) array is many times slower; np.ptp over axis 0 of a
+    grid-128 mesh's 7,300 points took 0.38 ms, numpy's reductions column by column 0.03).
+    Compiled (_bounds) for C-ordered doubles: numpy's four reductions and two arrays took 8.3 to
+    31 us at a flat ovate's 500 to 7,300 points at grid 128, where bounds runs 12 times a run,
+    _bounds 1.9 to 20, best of 9 x 300 (/work/notes/cpu39/micro_bounds.py). A bound that is ±0
+    or NaN is numpy's: any other least or largest value has one bit pattern, whichever element
+    gave it. `numpys`: the caller's own numpy reduction for those (a min(axis=0) may give a ±0
+    the other sign), else numpy's column by column."""
+    xy = np.asarray(xy)
+    if xy.dtype == np.float64 and xy.ndim == 2 and xy.flags.c_contiguous and len(xy):
+        lo, hi, numpy_wanted = _bounds(xy)
+        if not numpy_wanted:
+            return lo, hi
+    if numpys is not None:
+        return numpys(xy)
+    columns = xy.T
     return np.array([c.min() for c in columns]), np.array([c.max() for c in columns])
+
+
+def median(values: np.ndarray) -> float:
+    """float(np.median(values)) of a 1-D float array, to the bit: the middle one or two of a
+    partition, their mean as numpy's (a + b) / 2; numpy's own for none, a NaN or a zero median
+    (a ±0 sum). np.median took 12-23 us a call at 60-2000 values (a flat ovate's 500 outline
+    points at grid 128: 19, six calls a run), this 3.5-15 (/work/notes/cpu39/micro_median.py)."""
+    n = len(values)
+    if n and values.dtype == np.float64:
+        half = n // 2
+        part = np.partition(values, (half - 1, half, n - 1) if n % 2 == 0 else (half, n - 1))
+        middle = part[half] if n % 2 else (part[half - 1] + part[half]) / 2
+        if middle != 0 and not np.isnan(part[-1]):  # NaN: sorted last
+            return float(middle)
+    return float(np.median(values))
+
+
+@njit(cache=True, nogil=True)
+def _bounds(xy):
+    """The columns' least and largest values of the (n >= 1, d) `xy`, and whether numpy's are
+    wanted instead (a NaN, or a bound ±0)."""
+    n, d = xy.shape
+    lo, hi = np.empty(d), np.empty(d)
+    numpys = False
+    for k in range(d):
+        least, most = xy[0, k], xy[0, k]
+        for i in range(n):
+            v = xy[i, k]
+            least = v if v < least else least
+            most = v if v > most else most
+            numpys |= v != v
+        lo[k], hi[k] = least, most
+        numpys |= least == 0 or most == 0
+    return lo, hi, numpys
 
 
 @njit(cache=True, nogil=True)

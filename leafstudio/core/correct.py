@@ -75,6 +75,7 @@ point gets a finite curvature.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -245,6 +246,11 @@ class Pinning:
     bending: Bending  # the lattice (bending.py), with φ for every centre
     disagree: tuple[tuple[int, int, float], ...] = ()  # veins steeper apart than STEEPEST
     free: int = 0  # the last `free` centres lie on no vein: their values are free (free_centers)
+    # T at the grid's nodes inside the leaf, as the surface stage takes it too (its tanh over a
+    # flat ovate's 6895 nodes at grid 128: 0.02-0.035 ms, twice there; steps.compute_surface)
+    node_taper: np.ndarray | None = None
+    # g at every vein point, the veins one after another (pinning), as the surface stage reads it
+    vein_g: np.ndarray | None = None
 
     def notes(self, length: float) -> list[str]:
         """What the leaf is told of veins that disagree where they meet (one note: a steeply
@@ -297,11 +303,22 @@ def pinning(
         veins, length, heights, lambda xy: taper_of(implicit(xy), delta)
     )
     on_veins = np.vstack([v[k] for v, k in zip(veins, kept, strict=True)])
-    free = free_centers(veins, heights, on_veins, length, implicit, delta)
+    # g at every vein point once, read for the veins' ends, the centres on the veins and the
+    # surface stage's vein rows: g is read point by point, so a subset's is the same to the bit
+    # (the implicit's three calls at a flat ovate's 26 ends, 200 centres and 212 vein points
+    # took 40, 59 and 73 us, best of 7 x 200, most of it each call's own glue; one call now)
+    vein_g = implicit(kernel_array(np.vstack(veins)))
+    starts = np.cumsum([0] + [len(v) for v in veins])
+    ends = np.array([i for a, b in itertools.pairwise(starts) if b > a for i in (a, b - 1)])
+    free = free_centers(
+        veins, heights, on_veins, length, implicit, delta, vein_g[ends.astype(np.int64)]
+    )
+    on_g = vein_g[np.concatenate([a + k for a, k in zip(starts[:-1], kept, strict=True)])]
+    g = np.concatenate([on_g, implicit(kernel_array(free))]) if len(free) else on_g
     centers = kernel_array(np.vstack([on_veins, free]))
-    taper = taper_of(implicit(centers), delta)
+    taper = taper_of(g, delta)
     bending = lattice_bending(centers, length, grid, inside, node_taper)
-    return Pinning(kept, centers, taper, bending, tuple(disagree), len(free))
+    return Pinning(kept, centers, taper, bending, tuple(disagree), len(free), node_taper, vein_g)
 
 
 def onto_veins(

@@ -344,6 +344,14 @@ def compute_surface(run: StageRun) -> SurfaceStage:
     guide: GuideStage = run["guide"]
     nodes = guide.nodes
     g_in = guide.g_in
+    through = run.params.through_veins and bool(fs.veins)  # onto every vein point (correct.py)
+    # T at the nodes once a run: the bending stage's (the same δ: its tanh took 0.02-0.035 ms of
+    # a flat ovate's at grid 128 each time), else here; and g at the veins, the bending stage's
+    node_taper, vein_g = (
+        (run["bending"].node_taper, run["bending"].vein_g) if through else (None, None)
+    )
+    if node_taper is None:
+        node_taper = taper_of(g_in, taper_width(run.params.taper, g_in))
     surface, relief = fit_surface(  # relief: M at the nodes, once (the correction takes it)
         run["gmm"][1],
         run["implicit"],
@@ -356,15 +364,17 @@ def compute_surface(run: StageRun) -> SurfaceStage:
         run.params.refine,
         run.params.seed,
         base=fs.base,
+        node_taper=node_taper,
+        vein_g=vein_g,
     )
     correction = None
-    if run.params.through_veins and fs.veins:  # onto every vein point (correct.py)
+    if through:
         surface, correction = onto_veins(
             surface, fs.heights, fs.length, run["bending"], nodes, relief, _stretch(run, surface)
         )
         if correction is not None:
             relief = relief + correction
-    return SurfaceStage(surface, surface(nodes, g_in, relief), correction)
+    return SurfaceStage(surface, surface(nodes, g_in, relief, node_taper), correction)
 
 
 def _stretch(run: StageRun, surface: HeightSurface) -> list[np.ndarray] | None:

@@ -89,13 +89,18 @@ class HeightSurface:
         return taper_of(g, self.delta)
 
     def __call__(
-        self, xy: np.ndarray, g: np.ndarray | None = None, relief: np.ndarray | None = None
+        self,
+        xy: np.ndarray,
+        g: np.ndarray | None = None,
+        relief: np.ndarray | None = None,
+        taper: np.ndarray | None = None,
     ) -> np.ndarray:
         """z at (n, 2) plane points; pass `g` if it is already known there, and `relief`,
         M + c there, too (the surface stage has M at the grid's nodes, and c from the
-        correction's lattice: correct.onto_veins)."""
-        g = self.implicit(xy) if g is None else g
-        relief = self.taper(g) * (self.relief(xy) if relief is None else relief)
+        correction's lattice: correct.onto_veins), and T(g/δ) there (`taper`)."""
+        g = self.implicit(xy) if g is None and taper is None else g
+        taper = self.taper(g) if taper is None else taper
+        relief = taper * (self.relief(xy) if relief is None else relief)
         return relief if self.base is None else self.base(xy) + relief
 
     def gradient(self, xy: np.ndarray) -> np.ndarray:
@@ -140,13 +145,15 @@ def _least_squares_rows(
     vein_g: np.ndarray,
     max_rows: int | None,
     seed: int,
+    node_taper: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Points, row weights and targets of the fit: grid nodes (p) and vein points (h_v, and g
-    there: `vein_g`), at most `max_rows` of each."""
+    there: `vein_g`), at most `max_rows` of each (`node_taper`: T at all the nodes, if known)."""
     if max_rows is not None and len(inside_xy) > max_rows:
         pick = np.random.default_rng(seed).choice(len(inside_xy), max_rows, replace=False)
         inside_xy, inside_g, inside_p = inside_xy[pick], inside_g[pick], inside_p[pick]
-    taper = surface.taper(inside_g)
+        node_taper = None  # tanh of a subset: not read from the whole's (SIMD lanes may differ)
+    taper = surface.taper(inside_g) if node_taper is None else node_taper
     xy, weight, target = inside_xy, np.ones(len(inside_xy)), inside_p
     if max_rows is not None and len(vein_xy) > max_rows:  # evenly along the veins
         pick = np.linspace(0, len(vein_xy) - 1, max_rows).astype(np.int64)
@@ -403,6 +410,8 @@ def fit_surface(
     refine: bool = True,
     seed: int = 0,
     base: BaseSurface | None = None,
+    node_taper: np.ndarray | None = None,
+    vein_g: np.ndarray | None = None,
 ) -> tuple[HeightSurface, np.ndarray]:
     """Fit the amplitudes a_k (and, with `refine`, the means and covariances) so that z follows p
     inside the leaf and h_v on the veins; the surface, and its Σ a_k N_k at the (n,) nodes.
@@ -422,14 +431,19 @@ def fit_surface(
         Seed for the choice of grid rows used by the refinement.
     base : BaseSurface, optional
         The base b(x) under a non-planar boundary; p and vein_h are then heights above it.
+    node_taper : (n,) float array, optional
+        T(g/δ) at the nodes, if the caller has it (the bending stage's: correct.Pinning).
+    vein_g : (m,) float array, optional
+        g at the vein points, likewise.
     """
     delta = taper_width(taper, inside_g)
     surface = HeightSurface(mixture=mixture, implicit=implicit, delta=delta)
     # g at the veins, once for both fits' rows (read twice, 0.06 ms of a flat ovate's at grid
     # 128; g is read point by point, so a subset's is the same to the bit)
-    vein_g = implicit(vein_xy) if len(vein_xy) else np.zeros(0)
+    if vein_g is None:
+        vein_g = implicit(vein_xy) if len(vein_xy) else np.zeros(0)
     xy, row_scale, target = _least_squares_rows(
-        surface, inside_xy, inside_g, inside_p, vein_xy, vein_h, vein_g, None, seed
+        surface, inside_xy, inside_g, inside_p, vein_xy, vein_h, vein_g, None, seed, node_taper
     )
     # N_k at the rows once, for the amplitudes and the fit's value there (read twice: 0.07 ms
     # of a flat ovate's at grid 128; the same figures to the bit)

@@ -111,6 +111,7 @@ def free_centers(
     length: float,
     implicit: MPUImplicit,
     delta: float,
+    end_g: np.ndarray | None = None,
 ) -> np.ndarray:
     """(f, 2) spline centres on no vein, FREE_SPOKES of them FREE_RING · length around each
     end of the (m_i, 2) `veins` that lies in the margin band (T < BAND) and stands higher above
@@ -125,10 +126,11 @@ def free_centers(
     inside (9.04° against 9.01°). The free centres' values are chosen with the others for the
     whole surface's bending (bending.least_bending, unbounded), so the climb from the margin
     to the end is shaped, not left to one bump: 8.00° and 8.59° (bench_bent --veins). Forms
-    and gently raised sketches have no such end and are unchanged."""
+    and gently raised sketches have no such end and are unchanged. `end_g`: g at those ends
+    (each vein's first and last point), if known."""
     ends = np.array([v[i] for v in veins if len(v) for i in (0, -1)]).reshape(-1, 2)
     rise = np.array([abs(z[i]) for z in heights if len(z) for i in (0, -1)])
-    g = implicit(ends) if len(ends) else np.zeros(0)
+    g = end_g if end_g is not None else implicit(ends) if len(ends) else np.zeros(0)
     steep = (taper_of(g, delta) < BAND) & (rise > STEEP_END * np.maximum(g, 0.0))
     if not steep.any():
         return np.zeros((0, 2))

@@ -76,3 +76,41 @@ def test_only_the_sharpest_rows_weigh_more_and_no_row_past_the_cap():
     assert extra[rows == 7][0] < raw[rows == 7][0]
     flat = sharpest(np.zeros(10, dtype=np.float32))
     assert len(flat[0]) == 0 and flat[2] == 0.0
+
+
+def test_sharpest_reads_numpys_own_percentile():
+    """bending._percentile (sharpest's threshold) is np.percentile's 'linear' value to the bit,
+    ties and a NaN among the values too, in single precision as the lattice's bends are."""
+    from leafstudio.core.bending import _percentile
+
+    rng = np.random.default_rng(3)
+    for trial in range(600):
+        n = int(rng.integers(1, 40 if trial % 2 else 5000))
+        a = np.abs(rng.standard_normal(n) * rng.choice([1e-3, 1.0, 1e4])).astype(np.float32)
+        if trial % 3 == 0:
+            a = np.round(a, 1)
+        if trial % 97 == 0:
+            a[rng.integers(n)] = np.nan
+        expected = float(np.percentile(a, SHARP))
+        got = _percentile(a, SHARP)
+        assert got == expected or (np.isnan(got) and np.isnan(expected)), (n, got, expected)
+
+
+def test_the_sharpest_rows_products_are_scipys():
+    """bending._rows_times (least_bending's second solve) gives scipy's D[rows] @ X and
+    D[rows] @ v to the bit, in single precision, on a lattice's D."""
+    from leafstudio.core.bending import _rows_times
+
+    grid = make_grid(np.array([[-1.0, -0.7], [1.0, 0.7]]), 128)
+    x, y = grid.points.T
+    g = 1 - (x / 0.9) ** 2 - (y / 0.6) ** 2
+    index = np.flatnonzero(g > 0)
+    d = lattice(grid, index, np.tanh(g[index] / 0.1))[1]
+    rng = np.random.default_rng(5)
+    many = rng.standard_normal((d.shape[1], 37)).astype(np.float32)
+    one = rng.standard_normal(d.shape[1]).astype(np.float32)
+    rows = np.sort(rng.choice(d.shape[0], d.shape[0] // 10, replace=False))
+    got_many, got_one = _rows_times(d.indptr, d.indices, d.data, rows, many, one)
+    assert got_many.dtype == got_one.dtype == np.float32
+    np.testing.assert_array_equal(got_many, d[rows] @ many)
+    np.testing.assert_array_equal(got_one, d[rows] @ one)

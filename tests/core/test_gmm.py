@@ -96,3 +96,27 @@ def test_signed_mixture_fits_each_sign_apart():
     joined = fit_signed_mixture(samples, positive, lambda s, k: fit_mixture(s, k, 0), 2)
     np.testing.assert_allclose(joined.means[:, 1], [2.0, -2.0], atol=0.05)
     np.testing.assert_allclose(joined.weights, [0.6, 0.4])
+
+
+def test_a_fit_seeds_k_means_as_a_new_random_state_would():
+    """fit_mixture's reused generator (gmm._seeded) draws what np.random.RandomState(seed) draws,
+    whatever it drew before (its normal's cache too)."""
+    from leafstudio.core.gmm import _seeded
+
+    for seed in (0, 7, 2**31):
+        _seeded(3).standard_normal(3)  # used, and a normal left cached
+        fresh, reused = np.random.RandomState(seed), _seeded(seed)
+        assert fresh.random_sample() == reused.random_sample()
+        np.testing.assert_array_equal(fresh.uniform(size=4), reused.uniform(size=4))
+        assert fresh.standard_normal() == reused.standard_normal()
+
+
+def test_k_means_tolerance_reads_numpys_own_variance():
+    """gmm._column_variances (k-means' tolerance) is np.var(axis=0) to the bit."""
+    from leafstudio.core.gmm import _column_variances
+
+    rng = np.random.default_rng(4)
+    for trial in range(300):
+        n = int(rng.integers(1, 5000 if trial % 2 else 30))
+        x = rng.standard_normal((n, 2)) * rng.choice([1e-5, 1.0, 1e8]) + rng.choice([0.0, 1e3])
+        assert _column_variances(x).tobytes() == np.var(x, axis=0).tobytes()

@@ -125,3 +125,13 @@ def test_a_finely_resampled_outline_keeps_a_compact_quadtree(vertices):
     xy = grid.reshape(-1, 2)
     far = shapely.distance(LinearRing(outline), shapely.points(xy)) > 0.01
     np.testing.assert_array_equal(implicit(xy[far]) > 0, contains(outline, xy[far]))
+
+
+def test_a_split_cells_children_tile_it():
+    """mpu.QUADRANTS (build_mpu's children's offsets, made once): times half the child's side
+    from the parent's centre, the four children's centres, one in each quadrant."""
+    from leafstudio.core.mpu import QUADRANTS
+
+    assert QUADRANTS.shape == (4, 2)
+    assert {tuple(q) for q in np.sign(QUADRANTS).tolist()} == {(-1, -1), (1, -1), (-1, 1), (1, 1)}
+    np.testing.assert_array_equal(np.abs(QUADRANTS), 1)

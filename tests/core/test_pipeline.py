@@ -278,3 +278,41 @@ def test_a_vein_end_within_the_tolerance_of_the_smoothed_margin_adds_no_note():
         said[end] = [w for w in warnings if "beyond the margin as smoothed" in w]
     assert said[0.505] == []
     assert len(said[0.6]) == 1 and said[0.6][0].startswith("4 vein points lie up to 5.2%")
+
+
+@pytest.mark.parametrize("through_veins", [True, False])
+def test_the_surface_stage_reads_the_nodes_taper_once(through_veins):
+    """The nodes' T(g/δ) is the bending stage's (correct.Pinning.node_taper) and the surface
+    stage's z takes it (HeightSurface's `taper`): the same z to the bit as T made again."""
+    from leafstudio.core.surface import taper_of, taper_width
+    from leafstudio.forms.make import Form
+
+    pipeline = ls.Pipeline(Form("ovate").leaf())
+    pipeline.run(ls.Params(k=3, grid=48, through_veins=through_veins))
+    entries = pipeline.store._entries
+    guide = next(iter(entries["guide"].values()))
+    surf = next(iter(entries["surface"].values()))
+    taper = taper_of(guide.g_in, taper_width(ls.Params().taper, guide.g_in))
+    if through_veins:
+        np.testing.assert_array_equal(next(iter(entries["bending"].values())).node_taper, taper)
+    relief = np.linspace(-1.0, 1.0, len(taper))
+    z = surf.surface(guide.nodes, guide.g_in, relief, taper)
+    assert z.tobytes() == surf.surface(guide.nodes, guide.g_in, relief).tobytes()
+
+
+def test_the_implicit_is_read_at_the_veins_once():
+    """correct.pinning reads g at every vein point in one call (Pinning.vein_g) for the ends,
+    the centres and the surface stage: the same bits as the implicit read at each apart."""
+    from leafstudio.core.surface import taper_of, taper_width
+    from leafstudio.forms.make import Form
+
+    pipeline = ls.Pipeline(Form("ovate").leaf())
+    pipeline.run(ls.Params(k=3, grid=48))
+    entries = pipeline.store._entries
+    implicit = next(iter(entries["implicit"].values()))
+    pinned = next(iter(entries["bending"].values()))
+    guide = next(iter(entries["guide"].values()))
+    frame = next(iter(entries["frame"].values()))
+    assert pinned.vein_g.tobytes() == implicit(frame.vein_xy).tobytes()
+    delta = taper_width(ls.Params().taper, guide.g_in)
+    assert pinned.taper.tobytes() == taper_of(implicit(pinned.centers), delta).tobytes()

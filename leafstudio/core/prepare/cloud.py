@@ -24,7 +24,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from leafstudio.core.buckets import bounds, kernel_array
+from leafstudio.core.buckets import bounds, kernel_array, median
 from leafstudio.core.jit import njit
 from leafstudio.core.kernels import ensure_compiled
 
@@ -70,9 +70,7 @@ def estimate_noise(xy: np.ndarray, z: np.ndarray, sequence: np.ndarray) -> Noise
         kernel_array(xy), kernel_array(z), np.asarray(sequence, dtype=np.int64), step
     )
     scale = (1 + float(PREDICT @ PREDICT)) * CHI2_MEDIAN
-    return Noise(
-        float(np.sqrt(np.median(across) / scale)), float(np.sqrt(np.median(height) / scale))
-    )
+    return Noise(float(np.sqrt(median(across) / scale)), float(np.sqrt(median(height) / scale)))
 
 
 def _prediction_misses(

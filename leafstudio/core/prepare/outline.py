@@ -18,7 +18,13 @@ import shapely
 from scipy.spatial import cKDTree
 from shapely.geometry import MultiPoint, Polygon
 
-from leafstudio.core.buckets import bounds, kernel_array, near_edges, neighbour_distances
+from leafstudio.core.buckets import (
+    bounds,
+    kernel_array,
+    median,
+    near_edges,
+    neighbour_distances,
+)
 from leafstudio.core.jit import njit
 from leafstudio.core.prepare.cloud import (
     Cells,
@@ -62,7 +68,7 @@ def _spacing(points: np.ndarray) -> float:
     points = points[::thin]  # spacing along a curve is thin times as wide
     every = max(1, len(points) // SPACING_QUERIES)
     queries = np.arange(0, len(points), every)
-    return float(np.median(neighbour_distances(points, queries))) / thin
+    return median(neighbour_distances(points, queries)) / thin
 
 
 def _largest_polygon(geom: shapely.Geometry) -> Polygon | None:

@@ -15,6 +15,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from leafstudio.core.buckets import median
 from leafstudio.core.plane import fixed_sample, principal_spreads
 from leafstudio.core.prepare.cover import COVER_SPREAD, FILL_SHARE, surface_cover
 from leafstudio.core.prepare.polygon import hull_perimeter
@@ -224,7 +225,7 @@ def _loop_ratio(xy: np.ndarray) -> float | None:
     hull's perimeter; None unless they are one closed ordered loop (no step longer than JUMP
     median steps: unordered, several loops or an open arc are not)."""
     steps = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1)
-    typical = float(np.median(steps))
+    typical = median(steps)
     perimeter = hull_perimeter(xy)
     if typical <= 0 or perimeter <= 0 or np.any(steps > JUMP * typical):
         return None
@@ -336,7 +337,7 @@ def boundary_loop_indices(
         return None
     xy = _plane_coordinates(points)[0] if xy is None else xy
     steps = np.linalg.norm(np.diff(xy, axis=0), axis=1)
-    typical = float(np.median(steps))
+    typical = median(steps)
     if typical <= 0:
         return None
     cuts = np.flatnonzero(steps > JUMP * typical) + 1

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
-from leafstudio.core.buckets import kernel_array
+from leafstudio.core.buckets import bounds, kernel_array
 from leafstudio.core.jit import njit
 from leafstudio.core.plane import fit_frame
 
@@ -27,7 +27,8 @@ def vein_order(xy: np.ndarray) -> np.ndarray:
     if len(xy) < 3:
         return np.arange(len(xy))
     path = float(np.sqrt((np.diff(xy, axis=0) ** 2).sum(axis=1)).sum())
-    if path <= ORDERED_PATH * float(np.hypot(*np.ptp(xy, axis=0))):
+    lo, hi = bounds(xy, lambda p: (p.min(axis=0), p.max(axis=0)))  # np.ptp's, quicker
+    if path <= ORDERED_PATH * float(np.hypot(*(hi - lo))):
         return np.arange(len(xy))
     centred = xy - xy.mean(axis=0)
     axis = np.linalg.eigh(centred.T @ centred)[1][:, -1]

@@ -104,3 +104,33 @@ def test_the_curves_repeats_found_at_once_are_each_curves_own():
         for got, curve in zip(distinct_each(curves, scale), curves, strict=True):
             np.testing.assert_array_equal(got, distinct_indices(curve, scale))
     assert len(distinct_each([copies], 1.0)[0]) == len(walk)
+
+
+def test_distinct_points_found_by_the_bucket_search_are_the_trees():
+    """distinct_indices' bucket search (polygon._apart_in_the_plane) ahead of the k-d tree keeps
+    the same points as the tree alone, on sets with shared coordinates and near repeats."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    from leafstudio.core.prepare.polygon import distinct_indices, unit_power
+
+    def tree_only(points: np.ndarray) -> np.ndarray:
+        n, unit = len(points), unit_power(points)
+        pairs = cKDTree(points * unit).query_pairs(1e-9 * unit, output_type="ndarray")
+        if not len(pairs):
+            return np.arange(n)
+        links = coo_matrix((np.ones(len(pairs), dtype=bool), (pairs[:, 0], pairs[:, 1])), (n, n))
+        return np.sort(np.unique(connected_components(links, directed=False)[1], True)[1])
+
+    rng = np.random.default_rng(8)
+    for trial in range(300):
+        x = rng.standard_normal((int(rng.integers(2, 300)), 2)) * rng.choice([1e-3, 1.0, 1e5])
+        if trial % 2:
+            x = np.round(x, int(rng.integers(0, 3)))
+        if trial % 3 == 0:
+            k = int(rng.integers(1, len(x) + 1))
+            x = np.vstack(
+                [x, x[:k] + rng.choice([0.0, 1e-12, 1e-10]) * rng.standard_normal((k, 2))]
+            )
+        np.testing.assert_array_equal(distinct_indices(x, 1.0), tree_only(x))
