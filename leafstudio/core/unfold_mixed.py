@@ -22,11 +22,22 @@ form twists and curls from its blade's base, which the midrib's first point is n
 folded 30, curled 0.5, rolled 0.3 and twisted 0.5 stalled 2.2e-4 of the length off flat from
 that point, its roll 4% short; from the base the form's own to 1e-5). Terms it finds near 0
 are fitted again without them (`SMALL`), as a form without them has none.
+
+Where those rounds leave the margin off flat (BARE_FROM), they are run again bare: each
+relief read as the pose's terms alone lay the curves flat, its rise and fall past
+unfold_rolled.CLEAR, and each read half way to the pose fitted (STEP). Ovate folded 75 and
+twisted 0.2 is an exact fixed point of both, but a relief read in its frame turned 0.01 rad
+about v or n, or lifted 5e-3 of the length, led the next round 4.7-7.7° off its fold (curl and
+roll held): the hinge's steepest rise, read past pose_relief.CREASE, went from 0 to 0.49-0.76
+rad, and at 0.49 the fold took 0.41 of the relief's turn (hinge_fold.fold_share). The rounds
+stalled 7e-4 of the length off flat and unfold.py's fit stood (fold -31.1, curl 1.08: 0.633
+wide); bare, from the same start, 2e-5 and its own pose (/work/notes/pose39).
 """
 
 from __future__ import annotations
 
 import itertools
+from dataclasses import replace
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -38,7 +49,8 @@ from leafstudio.core.placed import PlacedPose
 from leafstudio.core.plane import Frame
 from leafstudio.core.pose_limits import FOLD as FOLD_LIMIT
 from leafstudio.core.pose_limits import TWIST_TURNS
-from leafstudio.core.pose_relief import Relief, laid_flat
+from leafstudio.core.pose_relief import Relief, laid_flat, slopes_off
+from leafstudio.core.unfold_rolled import CLEAR
 from leafstudio.model import Leaf
 
 MIXED_FROM = 2e-4  # of the length: unfold.py's best fit leaving the margin farther off flat than
@@ -72,6 +84,18 @@ STEP = 0.5  # ... reading each next relief this share of the way to the pose the
 # swung between fold 29.4 and 32.6 (8.3e-4 and 1.5e-3 of the length off flat) from its own pose
 # and was fitted none (30.1% narrow); so eased, 2e-7 in 16 rounds, its own pose
 PATIENCE = 2  # ... or this many rounds in a row lay the margin no flatter than the best
+BARE_FROM = 1e-4  # of the length: the bare rounds are run where the others' best leaves the
+# margin farther off flat than this: ovate folded 65-75 and twisted 0.1-0.2, kept within
+# MIXED_KEPT with a roll of -0.03 to -0.28 (65/0.2 9.9% wide, 70/0.1 3.0%), read their own pose
+# at 1e-4, not at MIXED_KEPT (/work/notes/pose39/neighbours_probe_barefrom1e-4.txt)
+BARE_PATIENCE = 4  # the bare rounds (module docstring) stop after this many rounds in a row
+# no flatter: from ovate folded 75 and twisted 0.2 in its own frame turned 0.01 rad about v, or
+# lifted 5e-3 of the length, after 2 they stopped 4.0e-4 and 4.8e-4 of the length off flat,
+# after 4 1.4e-6 and 2.1e-5 (/work/notes/pose39/clean_rounds.py)
+BARE_TURN = 1.0  # ... and not where the best found rolls the margin more than this (radians):
+# a roll bends about its sections' means, which a bare read leaves out, and tubes rolled 1 and
+# -1 (linear, oblong, oblanceolate), their best 8e-4-1.3e-3 of the length off flat and turned
+# 1.7-2.9, took 1.3-3.9 s of CPU more for none kept; folded 70-75 and twisted, 0.04-0.29
 GOOD = 1e-5  # of the length: a fit this flat is kept without fitting the other starts
 LEADS = 4.0  # a start whose first round is this many times the best's rms is let go (the
 # best found here, or unfold.py's: ovate folded 75 and curled 1, fitted 6.0e-4 of the length off
@@ -127,9 +151,15 @@ def mixed(
         pose = Pose(float(y[3]), *(float(t) / length for t in y[4:7]), relief)
         return PlacedPose(pose, Frame(origin + offset, *turned)), blade
 
-    def read(bend: PlacedPose) -> Relief | None:
-        """The relief of the curves as `bend` lays them flat (a form's, relief_of)."""
-        return laid_flat(bend.pose, bend.frame, curves)[1]
+    def read(bend: PlacedPose, bare: bool = False) -> Relief | None:
+        """The relief of the curves as `bend` lays them flat (a form's, relief_of); `bare`: as
+        its terms lay them without its relief, its rise and fall past CLEAR (module docstring)."""
+        if not bare:
+            return laid_flat(bend.pose, bend.frame, curves)[1]
+        flat, relief = laid_flat(replace(bend.pose, relief=None), bend.frame, curves)
+        if relief is None:
+            return None
+        return relief.sloped(*slopes_off(relief, np.vstack(flat), CLEAR))
 
     def fitted(
         axes: np.ndarray, y: np.ndarray, relief: Relief | None, free: list[int], calls: int
@@ -150,14 +180,21 @@ def mixed(
         return float(np.sqrt(2 * fit.cost)) * length, found
 
     def settled(
-        axes: np.ndarray, y: np.ndarray, relief: Relief | None, free: list[int], lead: float
+        axes: np.ndarray,
+        y: np.ndarray,
+        relief: Relief | None,
+        free: list[int],
+        lead: float,
+        bare: bool = False,
     ) -> tuple:
         """Rounds of fits of `free` from (9,) `y`, the first about `relief`, each next about
         the relief read off the curves as the last laid them flat: the best's rms, y and
         relief (rms inf when the first round leaves more than `lead`). Once a round leaves
         more than the one before, each next relief is read part way (STEP) from the pose the
-        last was read at to the pose fitted about it."""
-        best, worse, last, step, at = (np.inf, y, relief), 0, np.inf, 1.0, y
+        last was read at to the pose fitted about it; `bare`: each read so, bare (the module
+        docstring)."""
+        best, worse, last, step, at = (np.inf, y, relief), 0, np.inf, (STEP if bare else 1.0), y
+        patience = BARE_PATIENCE if bare else PATIENCE
         for round_ in range(READS):
             if relief is None:
                 break
@@ -168,11 +205,11 @@ def mixed(
                 best, worse = (rms, y, relief), 0
             else:
                 worse += 1
-                if worse > PATIENCE:
+                if worse > patience:
                     break
             step, last = (STEP if rms > last else step), rms
             at = at + step * (y - at)  # the pose the next relief is read at
-            was, relief = relief, read(placed(at, axes, relief)[0])
+            was, relief = relief, read(placed(at, axes, relief)[0], bare)
             if relief is None or (
                 np.abs(np.subtract(relief.mean, was.mean)).max() <= SHEET_CLOSE * length
             ):
@@ -208,24 +245,32 @@ def mixed(
         for axes in frames
         for fold in FOLDED
     ]
-    found: list[tuple] = []  # (rms, y, axes, relief)
-    for _, y, axes in kept:
-        first = min(lead, LEADS * beyond(found[0][0])) if found else lead
-        rms, y, relief = settled(axes, y, read(placed(y, axes, None)[0]), every, first)
-        if relief is not None and np.isfinite(rms):
-            found.append((rms, y, axes, relief))
-            found.sort(key=lambda f: f[0])
-            if beyond(found[0][0]) <= GOOD * length:
-                break
+    found: list[tuple] = []  # (rms, y, axes, relief, bare)
+    for bare in (False, True):  # bare where the others leave it off flat
+        if bare and (
+            not found
+            or found[0][0] <= BARE_FROM * length
+            or np.pi * abs(found[0][1][5]) / most > BARE_TURN  # its roll's turn at the margin
+        ):
+            break
+        for _, y, axes in kept:
+            first = min(lead, LEADS * beyond(found[0][0])) if found else lead
+            relief = read(placed(y, axes, None)[0], bare)
+            rms, y, relief = settled(axes, y, relief, every, first, bare)
+            if relief is not None and np.isfinite(rms):
+                found.append((rms, y, axes, relief, bare))
+                found.sort(key=lambda f: f[0])
+                if beyond(found[0][0]) <= GOOD * length:
+                    break
     if not found:
         return []
-    rms, y, axes, relief = found[0]
+    rms, y, axes, relief, bare = found[0]
     fits = [(rms, (0, 1, 2, 3), placed(y, axes, relief)[0])]
     small = [i for i in range(4) if abs(y[3 + i]) < SMALL[i]]
     if small:  # near 0: fitted again at 0 about the relief found
         again = np.where(np.isin(np.arange(VALUES), [3 + i for i in small]), 0.0, y)
         free = [i for i in every if i - 3 not in small]
-        rms, y, relief = settled(axes, again, relief, free, np.inf)
+        rms, y, relief = settled(axes, again, relief, free, np.inf, bare)
         if relief is not None and np.isfinite(rms):
             terms = tuple(i for i in range(4) if i not in small)
             fits.append((rms, terms, placed(y, axes, relief)[0]))
