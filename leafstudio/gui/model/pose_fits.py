@@ -24,13 +24,17 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
-from leafstudio.core.unfolded import plane_share, refit, stands_unposed
+from leafstudio.core.unfolded import as_given, plane_share, refit, stands_unposed
 from leafstudio.gui.model.bending import bend_text
 from leafstudio.gui.model.history import State, Step
 from leafstudio.gui.model.sketch_model import Sketch
 from leafstudio.model import Leaf
 
 REFIT = "refit"  # a request's reason: Fit pose again's run
+STOPPED = (
+    "Fit pose again was stopped by a newer change before its fit was done: the leaf stays "
+    "unposed (Edit > Fit pose again fits it)"
+)
 
 
 def pose_fitted(asked: Leaf, ran: Leaf) -> bool:
@@ -59,6 +63,7 @@ class PoseFits:
     _derived_leaf: Leaf | None
     _pose_due: tuple[int, Any] | None = None  # a run's fit held back by a sketch drag
     _told: tuple[int, str]  # a note said with a request's result (Session.notes_of)
+    _refit_at: tuple[int, int] | None = None  # Fit pose again's request, the history's index then
 
     def can_fit_pose(self) -> bool:
         """Whether Fit pose again applies: the document's leaf has no bend and its curves stand
@@ -71,13 +76,15 @@ class PoseFits:
         """Fit a pose to the document's curves once more, on the worker (its run's Pipeline
         unfolds them, core/unfolded.py), whatever refusal was kept for them; the request's id
         (0: nothing to fit, `can_fit_pose`). Its fit becomes the document as one undo step
-        ("Fit pose: fold ..."); a refusal is said (`noticed`) and kept."""
+        ("Fit pose: fold ..."); a refusal is said (`noticed`) and kept. An Undo past it before
+        the fit is back drops the fit (`_refit_answered`): its step would throw the redo away."""
         if not self.can_fit_pose():
             return 0
         self._drop_edit()  # a drag under way: its base would bring the unposed leaf back
         leaf = self.state.leaf
         self.last_id = self.submit(refit(leaf), self.params, True)
         self._requested[self.last_id] = (self.state.serial, REFIT, leaf)
+        self._refit_at = (self.last_id, self.history.index)
         self.fitting.emit("Fitting a pose to the leaf's 3D curves…")
         return self.last_id
 
@@ -88,16 +95,24 @@ class PoseFits:
         preview would bend its sketch of the bent curves by the pose."""
         asked = self._requested.get(request_id)
         leaf = None if asked is None else asked[2]
+        undone = self._refit_answered(request_id, leaf)
         if leaf is None or self.state.leaf is not leaf:
             return
         explicit, result = asked[1] == REFIT, outcome.result
         ran = result.leaf
         if not (explicit or pose_fitted(leaf, ran)):
             return
+        fitted = ran.bend is not None
+        if explicit and fitted and undone:
+            # its step would be pushed from a state undone to, the redo steps thrown away (Undo
+            # of Mirror on while the fit ran: Redo had nothing left): the Undo drops the fit,
+            # the refusal kept as it was, the document's leaf shown again (review39)
+            as_given(leaf)
+            self._request(reason="undo")
+            return
         if self._edit_base is not None:
             self._pose_due = (request_id, outcome)
             return
-        fitted = ran.bend is not None
         flat: list[Sketch] = []
 
         def taken(state: State, own: bool = False) -> State:
@@ -128,6 +143,22 @@ class PoseFits:
         if explicit and not fitted:  # in a box, and on the status line with its result
             self._told = (request_id, refused_text(ran))
             self.noticed.emit(refused_text(ran))
+
+    def _refit_answered(self, request_id: int, leaf: Leaf | None) -> bool:
+        """Fit pose again's request forgotten once `request_id`, it or a newer run, is shown
+        (an older answer is dropped: Session.accept_result). A newer run of the same leaf (a K
+        change) stopped its fit on the worker: said with that run's result, the leaf unposed
+        without a word otherwise (review39). Whether an Undo went back past Fit pose again
+        before its own answer (`request_id`) came."""
+        at, self._refit_at = self._refit_at, None
+        if at is None or request_id < at[0]:
+            self._refit_at = at
+            return False
+        refit_asked = self._requested.get(at[0])
+        stopped = request_id > at[0] and refit_asked is not None and refit_asked[2] is leaf
+        if stopped and self._told[0] != request_id:
+            self._told = (request_id, STOPPED)
+        return request_id == at[0] and self.history.index < at[1]
 
     def _take_due_pose(self) -> None:
         """A sketch drag's end: the pose its run fitted meanwhile taken now (`_take_pose`)."""

@@ -203,3 +203,59 @@ def test_fit_pose_again_is_off_where_there_is_nothing_to_fit(tmp_path, fits):
     save_leaf(Leaf(form.boundary, form.veins), path)
     session.open_path(str(path))
     assert isinstance(session.leaf.bend, PlacedPose) and not session.can_fit_pose()
+
+
+def test_an_undo_while_fit_pose_again_runs_keeps_the_redo_steps(tmp_path, fits, monkeypatch):
+    """Fit pose again, then Undo (of Mirror on: the same leaf, no run of its own) before the fit
+    is back: the fit's answer pushed its step from the undone state, and the Redo of Mirror on
+    was gone. The Undo goes back past the request: its fit is dropped, the refusal kept, the
+    redo steps kept, and the leaf shown is the document's again."""
+    form = Form("ovate", fold=60.0).leaf()
+    path = tmp_path / "folded.csv"
+    save_leaf(Leaf(form.boundary, form.veins), path)
+    counted = unfold._fit
+    monkeypatch.setattr(unfold, "_fit", lambda *a, **k: fits.append(1))  # no pose found
+    session, runner, _ = opened_session()
+    session.open_path(str(path))
+    runner.finish(session)
+    sketch = session.editable_sketch()  # a sketch of its own: Mirror on is an undo step
+    session.commit_sketch(sketch.moved(-1, 0, sketch.boundary[0] * 1.0001), "Move point")
+    runner.finish(session)
+    monkeypatch.setattr(unfold, "_fit", counted)
+    session.set_symmetric(True)
+    refused = session.state
+    request = session.fit_pose_again()
+    session.undo()
+    assert session.history.redo_text() == "Mirror on"
+    undone = session.state
+    runner.finish(session, request - 1)
+    assert session.history.redo_text() == "Mirror on" and session.history.count() == 2
+    assert session.state is undone and session.leaf.bend is None
+    runner.finish(session)  # the document's leaf run again, as given: its refusal kept
+    assert session.result.leaf is session.leaf and session.result.leaf.bend is None
+    session.redo()
+    assert session.state is refused
+
+
+def test_fit_pose_again_stopped_by_a_newer_change_says_so(tmp_path, fits, monkeypatch):
+    """Fit pose again, then K changed before the fit is back: the newer run stops the fit's (the
+    worker's interrupt) and is shown first, so the fit's answer is dropped; the leaf stayed
+    unposed without a word (the real window: /work/notes/review39/gui_interleave.txt). Its
+    result says so on the status line."""
+    form = Form("ovate", fold=60.0).leaf()
+    path = tmp_path / "folded.csv"
+    save_leaf(Leaf(form.boundary, form.veins), path)
+    counted = unfold._fit
+    monkeypatch.setattr(unfold, "_fit", lambda *a, **k: fits.append(1))  # no pose found
+    session, runner, _ = opened_session()
+    session.open_path(str(path))
+    runner.finish(session)
+    monkeypatch.setattr(unfold, "_fit", counted)
+    request = session.fit_pose_again()
+    session.set_params(session.params.with_(k=4))
+    runner.finish(session)  # the K change's run, shown first
+    assert session.leaf.bend is None
+    notes = session.notes_of(session.shown_id)
+    assert any(n.startswith("Fit pose again was stopped") for n in notes), notes
+    runner.finish(session, request - 1)  # older than the shown: dropped
+    assert session.leaf.bend is None and session.history.undo_text() == "Change K"

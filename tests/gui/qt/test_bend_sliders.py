@@ -3,13 +3,16 @@ build item 6): one undo step, the sketch unchanged, undo moves the sliders back.
 
 from __future__ import annotations
 
+from pathlib import Path
+from typing import Any
+
 import numpy as np
 import pytest
 
 from leafstudio.core.bend import Pose
 from leafstudio.forms import Form
 from leafstudio.gui.model.form_sketch import leaf_sketch
-from tests.gui.qt.conftest import wait_result
+from tests.gui.qt.conftest import WAIT_MS, wait_result
 
 
 def relief(result) -> float:
@@ -181,6 +184,16 @@ def test_a_pose_shown_is_read_in_the_typed_fields_too(qtbot):
     assert sliders.fields["fold"].text() == "0.0"
 
 
+def opened(qtbot, window: Any, path: Path) -> None:
+    """Open `path` and wait for its first result: the file is read on the side lane, so until
+    it is the shown result is the last document's, its request the newest (waiting for that
+    alone passed on the demo still open, 2 runs in 4 failing, review39)."""
+    session = window.session
+    session.open_path(str(path))
+    qtbot.waitUntil(lambda: session.state.path == str(path), timeout=WAIT_MS)
+    wait_result(qtbot, window, lambda o: o.request.id == session.last_id)
+
+
 def test_fit_pose_again_fits_a_refused_leaf_and_says_a_refusal(
     window, qtbot, tmp_path, monkeypatch
 ):
@@ -205,8 +218,7 @@ def test_fit_pose_again_fits_a_refused_leaf_and_says_a_refusal(
     monkeypatch.setattr(unfolded, "_UNBENT", OrderedDict())  # its refusals kept from the others
     fit = unfold._fit
     monkeypatch.setattr(unfold, "_fit", lambda *a, **k: None)  # refused as it opens
-    session.open_path(str(tmp_path / "folded.csv"))
-    wait_result(qtbot, window, lambda o: o.request.id == session.last_id)
+    opened(qtbot, window, tmp_path / "folded.csv")
     assert session.leaf.bend is None and fold.value() == 0.0 and action.isEnabled()
     monkeypatch.setattr(unfold, "_fit", fit)
     steps = session.history.count()
@@ -221,8 +233,7 @@ def test_fit_pose_again_fits_a_refused_leaf_and_says_a_refusal(
     assert fold.value() == 0.0 and action.isEnabled()
 
     save_leaf(cupped_ovate(0.6), tmp_path / "cup.csv")
-    session.open_path(str(tmp_path / "cup.csv"))
-    wait_result(qtbot, window, lambda o: o.request.id == session.last_id)
+    opened(qtbot, window, tmp_path / "cup.csv")
     assert action.isEnabled()
     action.trigger()
     wait_result(qtbot, window, lambda o: o.request.id == session.last_id)
