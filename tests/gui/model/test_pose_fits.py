@@ -53,18 +53,25 @@ def flat_width(sketch: Sketch) -> float:
     return float(np.ptp(sketch.frame.to_plane(sketch.to_leaf().boundary)[0][:, 1]))
 
 
-def test_a_pose_fitted_to_an_edited_leaf_is_the_documents(tmp_path, fits, monkeypatch):
-    """The cup 0.6 deep opened as a CSV (refused), then an edit whose curves a pose lays flat:
-    the run fits it once, and the document takes it: its sliders read the fold, its sketch
-    draws the flat blade, Save writes the pose, a K change fits nothing again (it fitted each
-    time: the worker's pipeline was for the unbent leaf), Undo goes back to the cup and Redo
-    to the fitted leaf without a fit."""
+def opened_cup(tmp_path, monkeypatch):
+    """A session with the cup 0.6 deep opened from a CSV (its pose fit refused), and the sketch
+    of ovate folded 60's curves an edit may draw (folded_curves)."""
     _, drawn = folded_curves(monkeypatch)
     path = tmp_path / "cup.csv"
     save_leaf(cupped_ovate(0.6), path)
     session, runner, _ = opened_session()
     session.open_path(str(path))
     runner.finish(session)
+    return session, runner, drawn
+
+
+def test_a_pose_fitted_to_an_edited_leaf_is_the_documents(tmp_path, fits, monkeypatch):
+    """The cup 0.6 deep opened as a CSV (refused), then an edit whose curves a pose lays flat:
+    the run fits it once, and the document takes it: its sliders read the fold, its sketch
+    draws the flat blade, Save writes the pose, a K change fits nothing again (it fitted each
+    time: the worker's pipeline was for the unbent leaf), Undo goes back to the cup and Redo
+    to the fitted leaf without a fit."""
+    session, runner, drawn = opened_cup(tmp_path, monkeypatch)
     cup, shares = session.state, session.state.unposed
     assert cup.leaf.bend is None and shares is not None
     fits.clear()
@@ -96,12 +103,7 @@ def test_a_pose_fitted_to_an_edited_leaf_is_the_documents(tmp_path, fits, monkey
 def test_a_fit_due_during_a_sketch_drag_is_taken_at_its_end(tmp_path, fits, monkeypatch):
     """A drag's preview fitted: its pose waits for the drag's end (its next preview would have
     bent the sketch of the bent curves by it), and is then the document's."""
-    _, drawn = folded_curves(monkeypatch)
-    path = tmp_path / "cup.csv"
-    save_leaf(cupped_ovate(0.6), path)
-    session, runner, _ = opened_session()
-    session.open_path(str(path))
-    runner.finish(session)
+    session, runner, drawn = opened_cup(tmp_path, monkeypatch)
     session.preview_sketch(drawn)
     runner.finish(session)
     assert session.leaf.bend is None and session.state.sketch is drawn  # held back
@@ -205,11 +207,9 @@ def test_fit_pose_again_is_off_where_there_is_nothing_to_fit(tmp_path, fits):
     assert isinstance(session.leaf.bend, PlacedPose) and not session.can_fit_pose()
 
 
-def test_an_undo_while_fit_pose_again_runs_keeps_the_redo_steps(tmp_path, fits, monkeypatch):
-    """Fit pose again, then Undo (of Mirror on: the same leaf, no run of its own) before the fit
-    is back: the fit's answer pushed its step from the undone state, and the Redo of Mirror on
-    was gone. The Undo goes back past the request: its fit is dropped, the refusal kept, the
-    redo steps kept, and the leaf shown is the document's again."""
+def _opened_refused(tmp_path, fits, monkeypatch):
+    """A session with the curves of ovate folded 60 opened from a CSV while no pose is found
+    (its refusal remembered), and a function that lets the pose fit find poses again."""
     form = Form("ovate", fold=60.0).leaf()
     path = tmp_path / "folded.csv"
     save_leaf(Leaf(form.boundary, form.veins), path)
@@ -218,10 +218,19 @@ def test_an_undo_while_fit_pose_again_runs_keeps_the_redo_steps(tmp_path, fits, 
     session, runner, _ = opened_session()
     session.open_path(str(path))
     runner.finish(session)
+    return session, runner, lambda: monkeypatch.setattr(unfold, "_fit", counted)
+
+
+def test_an_undo_while_fit_pose_again_runs_keeps_the_redo_steps(tmp_path, fits, monkeypatch):
+    """Fit pose again, then Undo (of Mirror on: the same leaf, no run of its own) before the fit
+    is back: the fit's answer pushed its step from the undone state, and the Redo of Mirror on
+    was gone. The Undo goes back past the request: its fit is dropped, the refusal kept, the
+    redo steps kept, and the leaf shown is the document's again."""
+    session, runner, fit_again = _opened_refused(tmp_path, fits, monkeypatch)
     sketch = session.editable_sketch()  # a sketch of its own: Mirror on is an undo step
     session.commit_sketch(sketch.moved(-1, 0, sketch.boundary[0] * 1.0001), "Move point")
     runner.finish(session)
-    monkeypatch.setattr(unfold, "_fit", counted)
+    fit_again()
     session.set_symmetric(True)
     refused = session.state
     request = session.fit_pose_again()
@@ -242,15 +251,8 @@ def test_fit_pose_again_stopped_by_a_newer_change_says_so(tmp_path, fits, monkey
     worker's interrupt) and is shown first, so the fit's answer is dropped; the leaf stayed
     unposed without a word (the real window: /work/notes/review39/gui_interleave.txt). Its
     result says so on the status line."""
-    form = Form("ovate", fold=60.0).leaf()
-    path = tmp_path / "folded.csv"
-    save_leaf(Leaf(form.boundary, form.veins), path)
-    counted = unfold._fit
-    monkeypatch.setattr(unfold, "_fit", lambda *a, **k: fits.append(1))  # no pose found
-    session, runner, _ = opened_session()
-    session.open_path(str(path))
-    runner.finish(session)
-    monkeypatch.setattr(unfold, "_fit", counted)
+    session, runner, fit_again = _opened_refused(tmp_path, fits, monkeypatch)
+    fit_again()
     request = session.fit_pose_again()
     session.set_params(session.params.with_(k=4))
     runner.finish(session)  # the K change's run, shown first
