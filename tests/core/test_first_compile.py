@@ -88,6 +88,9 @@ def test_each_kernel_of_the_tables_is_the_one_a_run_or_measuring_calls():
     assert ls.Pipeline(ls.demo("nested")).run(ls.Params()).metrics
     ls.Pipeline(noisy("nested")).run(ls.Params(grid=32))  # a cloud: its projection
     ls.Pipeline(Form("ovate", roll=0.3).leaf()).run(ls.Params(grid=32))  # a bent one's curvatures
+    # a blade large on the grid: the bending gram by Dᵀ D TΦ (bending._bend_twice), which none of
+    # the runs above takes (their lattice has fewer rows than nodes): alone, this test failed
+    ls.Pipeline(Form("ovate").leaf()).run(ls.Params(grid=128))
     rgba = np.zeros((8, 8, 4), np.uint8)
     rgba[2:5, 3:6] = 200
     bleed(Image.fromarray(rgba, "RGBA"))  # a texture's edge padding
