@@ -249,7 +249,7 @@ def mixed(
     for bare in (False, True):  # bare where the others leave it off flat
         if bare and (
             not found
-            or found[0][0] <= BARE_FROM * length
+            or beyond(found[0][0]) <= BARE_FROM * length  # as GOOD: noise is no fold to read
             or np.pi * abs(found[0][1][5]) / most > BARE_TURN  # its roll's turn at the margin
         ):
             break
