@@ -142,7 +142,7 @@ class PoseFits:
             self.sketch_shown.emit(self.state.sketch, True)
         if explicit and not fitted:  # in a box, and on the status line with its result
             self._told = (request_id, refused_text(ran))
-            self.noticed.emit(refused_text(ran))
+            self.noticed.emit(self._told[1])
 
     def _refit_answered(self, request_id: int, leaf: Leaf | None) -> bool:
         """Fit pose again's request forgotten once `request_id`, it or a newer run, is shown
